@@ -1,0 +1,17 @@
+"""motionblur: make objects and cameras look as if they moved while the shutter was open.
+
+Conventions (see the README): vertices (V,3) float, faces (F,3) int counter-clockwise front;
+images float32 (H,W,4) linear premultiplied RGBA, row 0 at the top; depth float32 (H,W) view-axis
+distance, inf for background; the shutter spans normalised time [0, 1].
+"""
+
+from __future__ import annotations
+
+from . import geometry as _geometry
+from . import image, meshes
+from . import raster as _raster
+from ._core import __version__
+from .geometry import *  # noqa: F403
+from .raster import *  # noqa: F403
+
+__all__ = ["__version__", "image", "meshes", *_geometry.__all__, *_raster.__all__]

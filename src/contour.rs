@@ -1,0 +1,1 @@
+//! contour: see the crate docs.

@@ -1,0 +1,30 @@
+//! The one error type of the core. The binding layer maps it to Python exceptions.
+use thiserror::Error;
+
+/// Errors raised by the core. Every variant names the offending argument.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum Error {
+    /// An argument has the wrong shape, length or size. Maps to `ValueError`.
+    #[error("{name}: {reason}")]
+    Shape { name: &'static str, reason: String },
+    /// An argument has a value out of its domain (NaN, out of range, unknown name). Maps to `ValueError`.
+    #[error("{name}: {reason}")]
+    Value { name: &'static str, reason: String },
+}
+
+impl Error {
+    pub fn shape(name: &'static str, reason: impl Into<String>) -> Self {
+        Error::Shape {
+            name,
+            reason: reason.into(),
+        }
+    }
+    pub fn value(name: &'static str, reason: impl Into<String>) -> Self {
+        Error::Value {
+            name,
+            reason: reason.into(),
+        }
+    }
+}
+
+pub type Result<T> = std::result::Result<T, Error>;

@@ -1,0 +1,21 @@
+//! motionblur core: object-space motion volumes, blur shells, a CPU rasterizer and
+//! image-space blur, in pure Rust. The Python binding lives in `python/` behind the
+//! `python` feature and is the only place that knows about PyO3.
+//!
+//! One module per pipeline stage: `mesh` (indexed triangle meshes, adjacency), `motion`
+//! (keyframes), `contour` (contour edges, silhouette of motion), `volume` (motion volumes),
+//! `raster` (the software rasterizer), `image` (image-space blur).
+#![allow(dead_code)]
+
+pub mod contour;
+mod error;
+pub mod image;
+pub mod mesh;
+pub mod motion;
+pub mod raster;
+pub mod volume;
+
+pub use error::{Error, Result};
+
+#[cfg(feature = "python")]
+mod python;

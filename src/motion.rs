@@ -1,0 +1,1 @@
+//! motion: see the crate docs.

@@ -1,0 +1,1 @@
+//! The CPU rasterizer: camera, clipping, triangle setup, tiles, blending, buffers.
