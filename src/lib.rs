@@ -3,7 +3,7 @@
 //! `python` feature and is the only place that knows about PyO3.
 //!
 //! One module per pipeline stage: `mesh` (indexed triangle meshes, adjacency), `motion`
-//! (keyframes), `contour` (contour edges, silhouette of motion), `volume` (motion volumes),
+//! (keyframes), `contour` (contour edges, silhouette of motion), `volume` (motion volumes), `shell` (blur shells),
 //! `raster` (the software rasterizer), `image` (image-space blur).
 #![allow(dead_code)]
 
@@ -13,6 +13,7 @@ pub mod image;
 pub mod mesh;
 pub mod motion;
 pub mod raster;
+pub mod shell;
 pub mod volume;
 
 pub use error::{Error, Result};

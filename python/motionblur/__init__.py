@@ -10,8 +10,10 @@ from __future__ import annotations
 from . import geometry as _geometry
 from . import image, meshes
 from . import raster as _raster
+from . import shell as _shell
 from ._core import __version__
 from .geometry import *  # noqa: F403
 from .raster import *  # noqa: F403
+from .shell import *  # noqa: F403
 
-__all__ = ["__version__", "image", "meshes", *_geometry.__all__, *_raster.__all__]
+__all__ = ["__version__", "image", "meshes", *_geometry.__all__, *_raster.__all__, *_shell.__all__]

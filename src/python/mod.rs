@@ -4,6 +4,7 @@ use pyo3::prelude::*;
 mod geometry;
 mod image;
 mod raster;
+mod shell;
 
 /// The one error mapping point: core errors become `ValueError` naming the argument.
 pub(crate) fn to_py_err(e: crate::Error) -> PyErr {
@@ -16,5 +17,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     geometry::register(m)?;
     raster::register(m)?;
     image::register(m)?;
+    shell::register(m)?;
     Ok(())
 }

@@ -1,0 +1,6 @@
+//! Bindings for the blur-shell stage.
+use pyo3::prelude::*;
+
+pub(crate) fn register(_m: &Bound<'_, PyModule>) -> PyResult<()> {
+    Ok(())
+}
