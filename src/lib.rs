@@ -8,6 +8,7 @@
 #![allow(dead_code)]
 
 pub mod contour;
+pub mod contour_table;
 mod error;
 pub mod image;
 pub mod mesh;
@@ -15,6 +16,7 @@ pub mod motion;
 pub mod raster;
 pub mod shell;
 pub mod volume;
+pub mod volume_filter;
 
 pub use error::{Error, Result};
 

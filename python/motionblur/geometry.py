@@ -1,5 +1,400 @@
-"""Object-space geometry: meshes, contour edges, silhouettes of motion, motion volumes, contour tables."""
+"""Object-space geometry of the motion-volume paper (Wloka and Zeleznik 1996, sections 3 and 4).
+
+- :class:`Mesh`: an indexed triangle mesh with a cached edge adjacency (built once in Rust).
+- :func:`contour_edges`: the edges between faces facing the motion and faces facing away.
+- :func:`motion_volume`: leading, trailing and joining surfaces with per-vertex colour and alpha.
+- :class:`ContourTable`: contour sets precomputed for K directions, looked up by the nearest one.
+
+Every function that takes a mesh accepts a :class:`Mesh` or any object with ``.vertices`` and
+``.faces`` (a ``trimesh.Trimesh``); wrap it once in :class:`Mesh` to reuse the adjacency.
+
+Edge rule (boundary and non-manifold edges): for an edge, add +1 for each front face that runs
+it from its lower to its higher vertex index and -1 for the other direction (``net_front``), the
+same over its back faces (``net_back``). It is a contour edge when ``net_front != 0`` or
+``net_back != 0``, oriented as its front faces run it (counter-clockwise), or against its back
+faces when its front faces cancel. On a closed, consistently wound mesh this is exactly the
+paper's rule (one front and one back face). A boundary edge (one face) is therefore always a
+contour edge; a non-manifold edge (three or more faces) is one when the windings of its front
+(or back) faces leave a net border. A degenerate (zero-area) face has a zero normal, so
+``n . m = 0`` and it is front by the paper's ``>=`` rule; it is counted in ``Mesh.stats``.
+"""
 
 from __future__ import annotations
 
-__all__: list[str] = []
+import numpy as np
+
+from . import _core
+from ._validate import as_array, as_int
+
+__all__ = [
+    "Mesh",
+    "MotionVolume",
+    "ContourTable",
+    "contour_edges",
+    "motion_volume",
+    "as_mesh",
+    "LEADING",
+    "TRAILING",
+    "JOINING",
+]
+
+#: ``MotionVolume.part`` values: leading surface (front faces at shutter close).
+LEADING: int = int(_core.LEADING)
+#: trailing surface (back faces at shutter open).
+TRAILING: int = int(_core.TRAILING)
+#: joining surface (contour swept along the path).
+JOINING: int = int(_core.JOINING)
+
+FILTERS = ("ramp", "box", "triangle", "gaussian")
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
+
+
+class Mesh:
+    """An indexed triangle mesh.
+
+    Parameters
+    ----------
+    vertices : (V,3) float32 or float64 array, scene units; copied (float64).
+    faces : (F,3) integer array of any dtype, counter-clockwise seen from the front; copied
+        (int64). Every index must be in ``[0, V)``.
+
+    Or ``Mesh(obj)`` with any object that has ``.vertices`` and ``.faces`` (``trimesh.Trimesh``).
+
+    Attributes
+    ----------
+    vertices : (V,3) float64, read-only (the mesh's own copy).
+    faces : (F,3) int64, read-only.
+    stats : dict with ``faces``, ``vertices``, ``edges``, ``degenerate_faces`` (zero cross
+        product), ``boundary_edges`` (one face), ``nonmanifold_edges`` (three or more faces),
+        ``inconsistent_edges`` (two faces running the edge the same way),
+        ``unreferenced_vertices`` and ``closed`` (no boundary, non-manifold or inconsistent edge).
+
+    The edge adjacency is built in Rust on first use and kept on the object;
+    :meth:`with_vertices` makes a deformed copy that shares it.
+    """
+
+    __slots__ = ("_core", "_vertices", "_faces", "_stats")
+
+    def __init__(self, vertices, faces=None):
+        if faces is None:
+            if isinstance(vertices, Mesh):
+                self._core, self._vertices, self._faces, self._stats = (
+                    vertices._core,
+                    vertices._vertices,
+                    vertices._faces,
+                    vertices._stats,
+                )
+                return
+            if not (hasattr(vertices, "vertices") and hasattr(vertices, "faces")):
+                raise TypeError(
+                    f"mesh: expected a Mesh or an object with .vertices and .faces, got {type(vertices).__name__}"
+                )
+            vertices, faces = vertices.vertices, vertices.faces
+        v = _readonly(np.array(as_array(vertices, "vertices", np.float64, (None, 3)), copy=True))
+        f = as_array(faces, "faces", np.int64, (None, 3))
+        if f.min() < 0:
+            raise ValueError("faces: negative index")
+        if f.max() >= len(v):
+            raise ValueError(f"faces: index {int(f.max())} out of range for {len(v)} vertices")
+        f = _readonly(np.array(f, copy=True))
+        self._core = _core._Mesh(v, f)
+        self._vertices, self._faces, self._stats = v, f, None
+
+    @classmethod
+    def _from_core(cls, core, vertices, faces) -> Mesh:
+        m = cls.__new__(cls)
+        m._core, m._vertices, m._faces, m._stats = core, vertices, faces, None
+        return m
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(V,3) float64 vertex positions, read-only."""
+        return self._vertices
+
+    @property
+    def faces(self) -> np.ndarray:
+        """(F,3) int64 vertex indices, counter-clockwise front, read-only."""
+        return self._faces
+
+    @property
+    def stats(self) -> dict:
+        """Counts of faces, vertices, edges and of degenerate faces and special edges."""
+        if self._stats is None:
+            self._stats = dict(self._core.stats())
+        return dict(self._stats)
+
+    def face_normals(self, unit: bool = True) -> np.ndarray:
+        """(F,3) float64 face normals: unit vectors (zeros for degenerate faces), or with
+        ``unit=False`` the raw cross products ``(b - a) x (c - a)`` (length twice the area)."""
+        return self._core.face_normals(bool(unit))
+
+    def vertex_normals(self) -> np.ndarray:
+        """(V,3) float64 area-weighted unit vertex normals (zeros where undefined)."""
+        return self._core.vertex_normals()
+
+    def edges(self) -> np.ndarray:
+        """(E,2) int64 undirected edges ``a < b``, sorted (zero-length edges excluded)."""
+        return self._core.edges()
+
+    def edge_face_counts(self) -> np.ndarray:
+        """(E,) int64 number of faces on each edge of :meth:`edges` (1 boundary, 3+ non-manifold)."""
+        return self._core.edge_face_counts()
+
+    @property
+    def has_adjacency(self) -> bool:
+        """Whether the cached edge adjacency has been built."""
+        return bool(self._core.has_adjacency())
+
+    def with_vertices(self, vertices) -> Mesh:
+        """A mesh with the same faces and cached adjacency and new (V,3) vertex positions."""
+        v = _readonly(np.array(as_array(vertices, "vertices", np.float64, (len(self._vertices), 3)), copy=True))
+        return Mesh._from_core(self._core.with_vertices(v), v, self._faces)
+
+    def __len__(self) -> int:
+        return len(self._faces)
+
+    def __repr__(self) -> str:
+        return f"Mesh(vertices={len(self._vertices)}, faces={len(self._faces)})"
+
+
+def as_mesh(mesh, name: str = "mesh") -> Mesh:
+    """``mesh`` as a :class:`Mesh` (itself if it is one; else built from ``.vertices``/``.faces``)."""
+    if isinstance(mesh, Mesh):
+        return mesh
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
+        return Mesh(mesh.vertices, mesh.faces)
+    raise TypeError(f"{name}: expected a Mesh or an object with .vertices and .faces, got {type(mesh).__name__}")
+
+
+def _vec3(value, name: str) -> np.ndarray:
+    return as_array(value, name, np.float64, (3,))
+
+
+def contour_edges(mesh, motion, camera_position=None) -> np.ndarray:
+    """The contour edges of ``mesh`` for the motion vector ``motion`` (paper section 3.2).
+
+    Faces with ``n . motion >= 0`` (``n = (b - a) x (c - a)``) are front, the others back; a
+    contour edge joins a front and a back face (see the module docs for boundary, non-manifold
+    and degenerate cases).
+
+    Parameters
+    ----------
+    mesh : Mesh or trimesh-like.
+    motion : (3,) float, the motion vector in the mesh's coordinates (only its direction matters).
+    camera_position : optional (3,) float, scene units. If given, only the contour line: the
+        edges with at least one adjacent face front-facing to the camera, ``n . (eye - a) > 0``.
+
+    Returns
+    -------
+    (E,2) int64 vertex indices ``(a, b)``, oriented as the edge runs counter-clockwise in its
+    front face (so the back face is on the other side); rows in sorted order of ``(min, max)``.
+    """
+    m = as_mesh(mesh)
+    mv = _vec3(motion, "motion")
+    cam = None if camera_position is None else _vec3(camera_position, "camera_position")
+    return _core.contour_edges(m._core, mv, cam)
+
+
+class MotionVolume:
+    """The motion volume of a mesh: leading, trailing and joining surfaces.
+
+    Attributes
+    ----------
+    vertices : (N,3) float64, scene units (world placement given by the keyframes).
+    faces : (M,3) int64, counter-clockwise seen from outside the volume.
+    rgba : (N,4) float32 straight (non-premultiplied) linear RGBA; alpha is the colour's alpha
+        times the temporal filter's opacity at the vertex's shutter time.
+    normals : (N,3) float32 unit lighting normals (zeros where the mesh normal is undefined).
+    part : (M,) uint8, ``LEADING`` (0), ``TRAILING`` (1) or ``JOINING`` (2) per face.
+    ring_alpha : (n+1,) float64 filter opacity of the contour rings, shutter open to close.
+    contour_count : number of contour edges swept.
+    segments : number of joining segments n.
+    """
+
+    __slots__ = ("vertices", "faces", "rgba", "normals", "part", "ring_alpha", "contour_count", "segments")
+
+    def __init__(self, vertices, faces, rgba, normals, part, ring_alpha, contour_count):
+        self.vertices = vertices
+        self.faces = faces
+        self.rgba = rgba
+        self.normals = normals
+        self.part = part
+        self.ring_alpha = ring_alpha
+        self.contour_count = int(contour_count)
+        self.segments = len(ring_alpha) - 1
+
+    def to_trimesh(self):
+        """A ``trimesh.Trimesh`` (``process=False``: no vertex merging) with vertex colours as
+        uint8 straight RGBA and the lighting normals."""
+        import trimesh
+
+        colors = np.clip(np.round(self.rgba * 255.0), 0, 255).astype(np.uint8)
+        return trimesh.Trimesh(
+            vertices=self.vertices,
+            faces=self.faces,
+            vertex_normals=self.normals.astype(np.float64),
+            vertex_colors=colors,
+            process=False,
+        )
+
+    def __repr__(self) -> str:
+        counts = np.bincount(self.part, minlength=3)
+        return (
+            f"MotionVolume(vertices={len(self.vertices)}, faces={len(self.faces)}, leading={counts[0]}, "
+            f"trailing={counts[1]}, joining={counts[2]}, segments={self.segments})"
+        )
+
+
+def _keyframes(motion) -> np.ndarray:
+    arr = np.asarray(motion) if not isinstance(motion, np.ndarray) else motion
+    if arr.ndim == 1:
+        m = _vec3(motion, "motion")
+        k = np.repeat(np.eye(4)[None], 2, axis=0)
+        k[1, :3, 3] = m
+        return k
+    k = as_array(motion, "motion", np.float64, (None, 4, 4))
+    if len(k) < 2:
+        raise ValueError(f"motion: expected at least 2 keyframes, got {len(k)}")
+    return k
+
+
+def _colors(colors, n_vertices: int) -> np.ndarray:
+    if colors is None:
+        return np.ones((1, 4), dtype=np.float32)
+    c = np.asarray(colors)
+    if c.ndim == 1:
+        c = as_array(c, "colors", np.float32, (None,))
+        if len(c) not in (3, 4):
+            raise ValueError(f"colors: expected one RGB/RGBA colour or (V,3)/(V,4), got shape {c.shape}")
+        c = c[None]
+    else:
+        c = as_array(c, "colors", np.float32, (n_vertices, None))
+        if c.shape[1] not in (3, 4):
+            raise ValueError(f"colors: expected shape (V,3) or (V,4), got {c.shape}")
+    if c.shape[1] == 3:
+        c = np.concatenate([c, np.ones((len(c), 1), np.float32)], axis=1)
+    if (c[:, :3] < 0).any() or (c[:, 3] < 0).any() or (c[:, 3] > 1).any():
+        raise ValueError("colors: RGB must be >= 0 and alpha in [0, 1]")
+    return np.ascontiguousarray(c, dtype=np.float32)
+
+
+def motion_volume(
+    mesh,
+    motion,
+    segments: int = 1,
+    filter: str = "ramp",
+    colors=None,
+    normals=None,
+    camera_position=None,
+) -> MotionVolume:
+    """Build the motion volume of ``mesh`` over the shutter (paper sections 3.3-3.4, 4.1-4.3).
+
+    Parameters
+    ----------
+    mesh : Mesh or trimesh-like; vertices in object space (scene units).
+    motion : either a (3,) translation ``m`` over the shutter, meaning the keyframes
+        ``[identity, translate(m)]``: the given vertices are the placement at shutter OPEN and the
+        leading surface sits at ``v + m`` at shutter close; or rigid keyframes (K+1,4,4) float
+        (rotation, positive uniform scale, translation; row-major, acting on column vectors) at
+        the equally spaced shutter times ``i / K``, applied to the vertices.
+    segments : int >= 1. Each keyframe interval is cut into ``segments`` joining segments
+        (translation lerp, rotation slerp, scale lerp); the total is ``K * segments``, so the
+        keyframes are always followed and ``segments`` only subdivides them (at most 4096).
+    filter : ``"ramp"`` (the paper's: leading opaque, ring alpha ``max(0.1, 1 - D/E)`` with D the
+        path length to the leading ring and E the extent along the motion), ``"box"``,
+        ``"triangle"`` or ``"gaussian"`` (coverage of the shutter weight during the time the
+        object covers the swept point, floored at 0.1). See ``src/volume_filter.rs``.
+    colors : None (white, opaque), one RGB/RGBA colour, or (V,3)/(V,4) per vertex; linear,
+        straight alpha, RGB >= 0, alpha in [0, 1].
+    normals : optional (V,3) lighting normals in object space; default area-weighted normals.
+    camera_position : optional (3,) world position of the camera (at shutter close). If given,
+        only the contour line is swept (edges whose front face at close or back face at open
+        faces the camera) and joining vertices take the normal of the visible side when only
+        one side is visible (section 4.1); joining strips then have their own vertices.
+
+    Returns
+    -------
+    MotionVolume. Without a camera, a closed consistently wound mesh gives a closed consistently
+    wound volume. If every keyframe is equal (zero motion), the mesh itself, all ``LEADING`` and
+    opaque.
+    """
+    m = as_mesh(mesh)
+    keys = _keyframes(motion)
+    seg = as_int(segments, "segments", minimum=1, maximum=4096)
+    if not isinstance(filter, str):
+        raise TypeError(f"filter: expected a string, got {type(filter).__name__}")
+    if filter not in FILTERS:
+        raise ValueError(f"filter: unknown filter {filter!r}; expected one of {', '.join(FILTERS)}")
+    nv = len(m.vertices)
+    col = _colors(colors, nv)
+    nrm = None if normals is None else as_array(normals, "normals", np.float64, (nv, 3))
+    cam = None if camera_position is None else _vec3(camera_position, "camera_position")
+    out = _core.motion_volume(m._core, keys, seg, filter, col, nrm, cam)
+    return MotionVolume(*out)
+
+
+class ContourTable:
+    """Contour sets precomputed for K motion directions (paper section 4.4).
+
+    Parameters
+    ----------
+    mesh : Mesh or trimesh-like.
+    directions : int K (1..65536): K directions drawn uniformly on the unit sphere from ``seed``
+        (stochastic, as the paper recommends); or a (K,3) float array of directions (normalised),
+        e.g. clustered around a preferred direction of motion.
+    seed : int >= 0, the generator's seed (splitmix64; the same seed gives the same table).
+
+    ``lookup(motion)`` returns the contour edges of the stored direction nearest to ``motion``
+    (largest cosine) and the angle between the two in radians.
+    """
+
+    __slots__ = ("_core", "mesh")
+
+    def __init__(self, mesh, directions=64, seed: int = 0):
+        self.mesh = as_mesh(mesh)
+        s = as_int(seed, "seed", minimum=0, maximum=2**64 - 1)
+        if isinstance(directions, (int, np.integer)) and not isinstance(directions, bool):
+            k = as_int(directions, "directions", minimum=1, maximum=65536)
+            self._core = _core._ContourTable(self.mesh._core, k, s, None)
+        else:
+            d = as_array(directions, "directions", np.float64, (None, 3))
+            if len(d) > 65536:
+                raise ValueError(f"directions: at most 65536, got {len(d)}")
+            if (np.linalg.norm(d, axis=1) == 0).any():
+                raise ValueError("directions: a direction is zero")
+            self._core = _core._ContourTable(self.mesh._core, len(d), s, d)
+
+    def __len__(self) -> int:
+        return len(self._core)
+
+    @property
+    def directions(self) -> np.ndarray:
+        """(K,3) float64 unit directions."""
+        return self._core.directions()
+
+    def nearest(self, motion) -> tuple[int, float]:
+        """(index of the nearest stored direction, angle to it in radians) for a (3,) motion."""
+        return self._core.nearest(_vec3(motion, "motion"))
+
+    def lookup(self, motion) -> tuple[np.ndarray, float]:
+        """The (E,2) int64 contour edges of the nearest stored direction to the (3,) ``motion``
+        (as :func:`contour_edges` gives for that direction) and the angular error in radians."""
+        i, err = self.nearest(motion)
+        return self._core.edges(i), err
+
+    def edges(self, index: int) -> np.ndarray:
+        """(E,2) int64 contour edges stored for direction ``index``."""
+        return self._core.edges(as_int(index, "index", minimum=0))
+
+    def front_faces(self, index: int) -> np.ndarray:
+        """(F,) bool: the faces facing direction ``index`` (``n . d >= 0``)."""
+        return self._core.front(as_int(index, "index", minimum=0))
+
+    @property
+    def storage_bytes(self) -> int:
+        """Bytes held by the stored sets (8 per edge, 1 per face flag and direction)."""
+        return int(self._core.storage_bytes())
