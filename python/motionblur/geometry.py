@@ -360,6 +360,8 @@ class ContourTable:
         if isinstance(directions, (int, np.integer)) and not isinstance(directions, bool):
             k = as_int(directions, "directions", minimum=1, maximum=65536)
             self._core = _core._ContourTable(self.mesh._core, k, s, None)
+        elif np.ndim(directions) == 0:
+            raise TypeError(f"directions: expected an int or a (K,3) array, got {type(directions).__name__}")
         else:
             d = as_array(directions, "directions", np.float64, (None, 3))
             if len(d) > 65536:
