@@ -16,7 +16,7 @@
 //! at shutter open, leading edge at close) is wound outward.
 use rayon::prelude::*;
 
-use crate::mesh::{dot, face_normal, half_edge, Mesh};
+use crate::mesh::{dot, face_normal, Mesh};
 use crate::{Error, Result};
 
 /// A contour edge: `edge` indexes the mesh adjacency, `(a, b)` is its orientation.
@@ -64,15 +64,13 @@ pub fn camera_facing(mesh: &Mesh, eye: [f64; 3], place: impl Fn([f64; 3]) -> [f6
 /// The oriented contour edges for a face classification, in adjacency (edge) order.
 pub fn contour_from_sides(mesh: &Mesh, front: &[bool]) -> Vec<ContourEdge> {
     let adj = mesh.adjacency();
-    let faces = mesh.faces();
     (0..adj.len())
         .into_par_iter()
         .with_min_len(4096)
         .filter_map(|e| {
             let (mut net_front, mut net_back) = (0i64, 0i64);
-            for &h in adj.incident(e) {
-                let (a, b) = half_edge(faces, h);
-                let s = if a < b { 1 } else { -1 };
+            for (&h, &fw) in adj.incident(e).iter().zip(adj.incident_forward(e)) {
+                let s = if fw { 1 } else { -1 };
                 if front[(h / 3) as usize] {
                     net_front += s;
                 } else {

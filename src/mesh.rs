@@ -19,7 +19,7 @@ use rayon::prelude::*;
 use crate::{Error, Result};
 
 /// Largest number of faces or vertices accepted (indices are stored as `u32`).
-pub const MAX_ELEMENTS: usize = (u32::MAX as usize) / 4;
+pub const MAX_ELEMENTS: usize = (u32::MAX as usize) / 8;
 
 /// The edge adjacency of a mesh.
 ///
@@ -31,6 +31,8 @@ pub struct Adjacency {
     pub edges: Vec<[u32; 2]>,
     pub offsets: Vec<u32>,
     pub half_edges: Vec<u32>,
+    /// Per half-edge (parallel to `half_edges`): runs from the lower to the higher index.
+    pub forward: Vec<bool>,
 }
 
 impl Adjacency {
@@ -44,6 +46,10 @@ impl Adjacency {
     /// The half-edges (`3 * face + k`) of edge `e`.
     pub fn incident(&self, e: usize) -> &[u32] {
         &self.half_edges[self.offsets[e] as usize..self.offsets[e + 1] as usize]
+    }
+    /// The direction flags of the half-edges of edge `e` (see `forward`).
+    pub fn incident_forward(&self, e: usize) -> &[bool] {
+        &self.forward[self.offsets[e] as usize..self.offsets[e + 1] as usize]
     }
 }
 
@@ -181,9 +187,8 @@ impl Mesh {
                 match inc.len() {
                     1 => (1, 0, 0),
                     2 => {
-                        let same = half_edge_forward(&self.faces, inc[0])
-                            == half_edge_forward(&self.faces, inc[1]);
-                        (0, 0, usize::from(same))
+                        let fw = adj.incident_forward(e);
+                        (0, 0, usize::from(fw[0] == fw[1]))
                     }
                     _ => (0, 1, 0),
                 }
@@ -270,70 +275,163 @@ pub fn half_edge(faces: &[[u32; 3]], h: u32) -> (u32, u32) {
     (f[k], f[(k + 1) % 3])
 }
 
-/// Build the adjacency: counting sort of the half-edges by their lower vertex, a sort of each
-/// (small) bucket by (higher vertex, half-edge id) in parallel, then runs of equal keys. The
-/// result does not depend on the thread count.
+/// A raw pointer shared by the scatter threads; each writes its own disjoint slots.
+struct SharedSlots<T>(*mut T);
+unsafe impl<T: Send> Sync for SharedSlots<T> {}
+unsafe impl<T: Send> Send for SharedSlots<T> {}
+
+/// Build the adjacency by a two-level counting sort of the half-edges on their lower vertex:
+/// first into coarse buckets of `width` consecutive vertices (per-chunk counts and disjoint
+/// scatter, few streams so the writes stay in cache), then inside each coarse bucket, in
+/// parallel and cache-resident, by vertex, with each vertex's few half-edges sorted by (higher
+/// vertex, half-edge id); runs of equal keys are the edges. Every bucket ends up sorted whatever
+/// the chunking, so the result does not depend on the thread count.
 pub fn build_adjacency(faces: &[[u32; 3]], n_vertices: usize) -> Adjacency {
-    let mut start = vec![0u32; n_vertices + 1];
-    for f in faces {
-        for k in 0..3 {
-            let (a, b) = (f[k], f[(k + 1) % 3]);
-            if a != b {
-                start[a.min(b) as usize + 1] += 1;
+    let nv = n_vertices.max(1);
+    let width = nv.div_ceil(1024).max(1);
+    let n_coarse = nv.div_ceil(width);
+    let chunks = rayon::current_num_threads().clamp(1, 8);
+    let per = faces.len().div_ceil(chunks).max(1);
+    // (lower, higher, half-edge id * 2 + 1 if it runs lower -> higher); None for a zero-length
+    // edge. Ids are below 3 * MAX_ELEMENTS < 2^31, so the code fits and sorts as the id does.
+    let key = |f: &[u32; 3], h: u32, k: usize| {
+        let (a, b) = (f[k], f[(k + 1) % 3]);
+        (a != b).then(|| [a.min(b), a.max(b), ((h + k as u32) << 1) | u32::from(a < b)])
+    };
+    // 1. Coarse counts per chunk of faces, prefix sums, scatter.
+    let counts: Vec<Vec<u32>> = faces
+        .par_chunks(per)
+        .map(|part| {
+            let mut c = vec![0u32; n_coarse];
+            for f in part {
+                for k in 0..3 {
+                    if f[k] != f[(k + 1) % 3] {
+                        c[f[k].min(f[(k + 1) % 3]) as usize / width] += 1;
+                    }
+                }
             }
+            c
+        })
+        .collect();
+    let mut coarse_start = vec![0usize; n_coarse + 1];
+    let mut cursors: Vec<Vec<usize>> = vec![vec![0usize; n_coarse]; counts.len()];
+    let mut acc = 0usize;
+    for b in 0..n_coarse {
+        coarse_start[b] = acc;
+        for (c, cur) in counts.iter().zip(cursors.iter_mut()) {
+            cur[b] = acc;
+            acc += c[b] as usize;
         }
     }
-    for i in 0..n_vertices {
-        start[i + 1] += start[i];
-    }
-    let total = start[n_vertices] as usize;
-    // (higher vertex, half-edge id) bucketed by lower vertex.
+    coarse_start[n_coarse] = acc;
+    let total = acc;
+    let mut tmp = vec![[0u32; 3]; total];
+    let slots = SharedSlots(tmp.as_mut_ptr());
+    faces
+        .par_chunks(per)
+        .zip(cursors.par_iter_mut())
+        .enumerate()
+        .for_each(|(ci, (part, cur))| {
+            let slots = &slots;
+            for (i, f) in part.iter().enumerate() {
+                let h = 3 * (ci * per + i) as u32;
+                for k in 0..3 {
+                    if let Some(e) = key(f, h, k) {
+                        let slot = &mut cur[e[0] as usize / width];
+                        // SAFETY: chunk `ci` owns slots [cursor_ci[b], cursor_ci[b] + count_ci[b]) of
+                        // every coarse bucket b; these ranges are disjoint and inside `tmp`.
+                        unsafe { *slots.0.add(*slot) = e };
+                        *slot += 1;
+                    }
+                }
+            }
+        });
+    drop(cursors);
+    drop(counts);
+    // 2. Inside every coarse bucket: counting sort by vertex, sort each vertex's half-edges,
+    //    count the edges (runs of equal higher vertex).
     let mut entries = vec![(0u32, 0u32); total];
-    let mut fill = start.clone();
-    for (fi, f) in faces.iter().enumerate() {
-        for k in 0..3 {
-            let (a, b) = (f[k], f[(k + 1) % 3]);
-            if a != b {
-                let slot = &mut fill[a.min(b) as usize];
-                entries[*slot as usize] = (a.max(b), 3 * fi as u32 + k as u32);
+    let mut start = vec![0u32; nv + 1];
+    let mut run_counts = vec![0usize; n_coarse];
+    {
+        let mut jobs = Vec::with_capacity(n_coarse);
+        let (mut t_rest, mut e_rest, mut s_rest): (&[[u32; 3]], &mut [(u32, u32)], &mut [u32]) =
+            (&tmp, &mut entries, &mut start[..nv]);
+        for (b, rc) in run_counts.iter_mut().enumerate() {
+            let len = coarse_start[b + 1] - coarse_start[b];
+            let (th, tt) = t_rest.split_at(len);
+            let (eh, et) = e_rest.split_at_mut(len);
+            let (sh, st) = s_rest.split_at_mut(width.min(s_rest.len()));
+            jobs.push((b, th, eh, sh, rc));
+            (t_rest, e_rest, s_rest) = (tt, et, st);
+        }
+        jobs.into_par_iter().for_each(|(b, src, dst, st, rc)| {
+            let v0 = b * width;
+            let base = coarse_start[b];
+            let mut local = vec![0u32; st.len() + 1];
+            for e in src {
+                local[e[0] as usize - v0 + 1] += 1;
+            }
+            for i in 0..st.len() {
+                local[i + 1] += local[i];
+            }
+            for (s, l) in st.iter_mut().zip(&local) {
+                *s = (base + *l as usize) as u32;
+            }
+            let mut fill = local.clone();
+            for e in src {
+                let slot = &mut fill[e[0] as usize - v0];
+                dst[*slot as usize] = (e[1], e[2]);
                 *slot += 1;
             }
-        }
+            let mut runs = 0;
+            for w in local.windows(2) {
+                let bucket = &mut dst[w[0] as usize..w[1] as usize];
+                bucket.sort_unstable();
+                runs += bucket.iter().enumerate().filter(|(i, e)| *i == 0 || bucket[i - 1].0 != e.0).count();
+            }
+            *rc = runs;
+        });
     }
-    // Sort every bucket; split the buffer into per-vertex slices first.
+    start[nv] = total as u32;
+    drop(tmp);
+    // 3. Fill edges and offsets per coarse bucket.
+    let n_edges: usize = run_counts.iter().sum();
+    let mut edges = vec![[0u32; 2]; n_edges];
+    let mut offsets = vec![0u32; n_edges + 1];
+    offsets[n_edges] = total as u32;
     {
-        let mut buckets: Vec<&mut [(u32, u32)]> = Vec::with_capacity(n_vertices);
-        let mut rest: &mut [(u32, u32)] = &mut entries;
-        for i in 0..n_vertices {
-            let len = (start[i + 1] - start[i]) as usize;
-            let (head, tail) = rest.split_at_mut(len);
-            if len > 1 {
-                buckets.push(head);
-            }
-            rest = tail;
+        let mut jobs = Vec::with_capacity(n_coarse);
+        let (mut e_rest, mut o_rest): (&mut [[u32; 2]], &mut [u32]) = (&mut edges, &mut offsets[..n_edges]);
+        for (b, &n) in run_counts.iter().enumerate() {
+            let (eh, et) = e_rest.split_at_mut(n);
+            let (oh, ot) = o_rest.split_at_mut(n);
+            jobs.push((b, eh, oh));
+            (e_rest, o_rest) = (et, ot);
         }
-        buckets.par_iter_mut().with_min_len(1024).for_each(|b| b.sort_unstable());
-    }
-    let mut edges = Vec::with_capacity(total / 2 + 1);
-    let mut offsets = Vec::with_capacity(total / 2 + 2);
-    let mut half_edges = Vec::with_capacity(total);
-    for a in 0..n_vertices {
-        let bucket = &entries[start[a] as usize..start[a + 1] as usize];
-        let mut prev = u32::MAX;
-        for &(b, h) in bucket {
-            if b != prev {
-                edges.push([a as u32, b]);
-                offsets.push(half_edges.len() as u32);
-                prev = b;
+        let (entries, start) = (&entries, &start);
+        jobs.into_par_iter().for_each(|(b, e_out, o_out)| {
+            let mut j = 0;
+            for a in b * width..((b + 1) * width).min(n_vertices) {
+                let s = start[a] as usize;
+                let bucket = &entries[s..start[a + 1] as usize];
+                for (i, e) in bucket.iter().enumerate() {
+                    if i == 0 || bucket[i - 1].0 != e.0 {
+                        e_out[j] = [a as u32, e.0];
+                        o_out[j] = (s + i) as u32;
+                        j += 1;
+                    }
+                }
             }
-            half_edges.push(h);
-        }
+        });
     }
-    offsets.push(half_edges.len() as u32);
+    let half_edges: Vec<u32> = entries.par_iter().map(|e| e.1 >> 1).collect();
+    let forward: Vec<bool> = entries.par_iter().map(|e| e.1 & 1 == 1).collect();
     Adjacency {
         edges,
         offsets,
         half_edges,
+        forward,
     }
 }
 
@@ -382,13 +480,28 @@ mod tests {
 
     #[test]
     fn adjacency_is_thread_count_independent() {
-        let m = tetra();
-        let faces: Vec<[u32; 3]> = (0..5000u32).map(|i| [i % 97, (i * 7 + 1) % 97, (i * 13 + 5) % 97]).collect();
+        let faces: Vec<[u32; 3]> = (0..50000u32)
+            .map(|i| [i % 4999, (i * 7 + 1) % 4999, (i * 13 + 5) % 4999])
+            .collect();
         let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-        let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
-        let a = one.install(|| build_adjacency(&faces, 97));
-        let b = two.install(|| build_adjacency(&faces, 97));
+        let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+        let a = one.install(|| build_adjacency(&faces, 4999));
+        let b = three.install(|| build_adjacency(&faces, 4999));
         assert_eq!(a, b);
-        drop(m);
+        // Against a plain sort of all half-edges.
+        let mut all: Vec<(u32, u32, u32)> = Vec::new();
+        for (i, f) in faces.iter().enumerate() {
+            for k in 0..3 {
+                let (x, y) = (f[k], f[(k + 1) % 3]);
+                if x != y {
+                    all.push((x.min(y), x.max(y), 3 * i as u32 + k as u32));
+                }
+            }
+        }
+        all.sort_unstable();
+        assert_eq!(a.half_edges, all.iter().map(|t| t.2).collect::<Vec<_>>());
+        let mut keys: Vec<[u32; 2]> = all.iter().map(|t| [t.0, t.1]).collect();
+        keys.dedup();
+        assert_eq!(a.edges, keys);
     }
 }

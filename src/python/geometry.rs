@@ -7,6 +7,7 @@ use std::sync::Arc;
 use numpy::ndarray::Array2;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::prelude::*;
+use rayon::prelude::*;
 use pyo3::types::PyDict;
 
 use super::to_py_err;
@@ -44,6 +45,40 @@ fn rows<const N: usize, T: numpy::Element + Copy + Default>(
     Ok(out)
 }
 
+/// (F,3) int64 faces to owned `u32` triples, in parallel, checking every index is in [0, nv).
+fn face_rows(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>> {
+    if a.as_array().ncols() != 3 {
+        let shape = a.as_array().shape().to_vec();
+        return Err(to_py_err(Error::shape("faces", format!("expected shape (N,3), got {shape:?}"))));
+    }
+    let owned;
+    let flat: &[i64] = match a.as_slice() {
+        Ok(s) => s,
+        Err(_) => {
+            owned = rows::<3, i64>(a, "faces")?.into_iter().flatten().collect::<Vec<_>>();
+            &owned
+        }
+    };
+    let nv = nv as i64;
+    let out: Vec<[u32; 3]> = flat
+        .par_chunks_exact(3)
+        .map(|t| {
+            if t.iter().all(|&x| (0..nv).contains(&x)) {
+                [t[0] as u32, t[1] as u32, t[2] as u32]
+            } else {
+                [u32::MAX; 3]
+            }
+        })
+        .collect();
+    if let Some(i) = out.par_iter().position_first(|t| t[0] == u32::MAX) {
+        return Err(to_py_err(Error::value(
+            "faces",
+            format!("face {i} has an index out of range [0, {nv})"),
+        )));
+    }
+    Ok(out)
+}
+
 fn vec3(a: &PyReadonlyArray1<'_, f64>, name: &'static str) -> PyResult<[f64; 3]> {
     let v = a.as_array();
     if v.len() != 3 {
@@ -74,18 +109,8 @@ impl PyMesh {
     #[new]
     fn new(py: Python<'_>, vertices: PyReadonlyArray2<'_, f64>, faces: PyReadonlyArray2<'_, i64>) -> PyResult<Self> {
         let v = rows::<3, f64>(&vertices, "vertices")?;
-        let f = rows::<3, i64>(&faces, "faces")?;
-        let mesh = py.detach(move || {
-            let nv = v.len() as i64;
-            let mut out = Vec::with_capacity(f.len());
-            for (i, t) in f.iter().enumerate() {
-                if t.iter().any(|&x| x < 0 || x >= nv) {
-                    return Err(Error::value("faces", format!("face {i} has an index out of range [0, {nv})")));
-                }
-                out.push([t[0] as u32, t[1] as u32, t[2] as u32]);
-            }
-            Mesh::new(v, out)
-        });
+        let f = face_rows(&faces, v.len())?;
+        let mesh = py.detach(move || Mesh::new(v, f));
         Ok(PyMesh { inner: Arc::new(mesh.map_err(to_py_err)?) })
     }
 
