@@ -139,7 +139,7 @@ def test_exact_blending_equals_a_numpy_depth_sorted_composite():
     frame = mb.rasterize(cam, draws)
     centre = frame.rgba[24, 24]
     out = np.zeros(4, np.float32)
-    for z, c in sorted(specs):  # far (small z) first
+    for _z, c in sorted(specs):  # far (small z) first
         c = np.asarray(c, np.float32)
         src = np.r_[c[:3] * c[3], c[3]].astype(np.float32)
         out = src + (np.float32(1) - src[3]) * out
