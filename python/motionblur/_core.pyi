@@ -1,3 +1,24 @@
 """Type stubs of the compiled core. The public API wraps these; see the Python modules."""
 
 __version__: str
+
+# --- raster
+import numpy as np
+
+def _rasterize(
+    view: np.ndarray,
+    projection: np.ndarray,
+    width: int,
+    height: int,
+    draws: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, int, bool, np.ndarray | None]],
+    samples: int,
+    blend: str,
+    shading: str,
+    lights: list[tuple[tuple[float, float, float], tuple[float, float, float]]],
+    ambient: tuple[float, float, float],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, float]]:
+    """Render draws (vertices f64 (V,3), faces i64 (F,3), straight rgba f32 (1|V,4), normals f32
+    (V,3) | None, object_id, cull_back, previous_vertices f64 (V,3) | None) seen through view and
+    projection (4,4) f64 into an image of height x width. Returns rgba (H,W,4) f32 premultiplied,
+    depth (H,W) f32 view-axis distance (inf background), ids (H,W) i32 (-1 background), velocity
+    (H,W,2) f32 pixels, and a stats dict. Releases the GIL."""

@@ -1,5 +1,350 @@
-"""The CPU software rasterizer: Camera, Draw, rasterize, Frame."""
+"""The CPU software rasterizer: Camera, Draw, rasterize, Frame.
+
+Conventions (OpenGL / pyrender): the camera pose is camera-to-world, the camera looks down its -Z
+with +Y up, ``yfov`` is the vertical field of view in radians and pixel centres sit at +0.5.
+Faces are counter-clockwise seen from the front. Colours are linear; a Draw takes *straight*
+(non-premultiplied) RGBA, a Frame holds *premultiplied* RGBA.
+
+The rasterizer (Rust, parallel over 64x64-sample screen tiles, bit-identical for any thread count):
+
+* clips triangles against the near and far planes (and a wide guard band), never dropping or
+  wrapping triangles that cross the near plane;
+* sets triangles up in 8-bit sub-pixel fixed point with the top-left fill rule, so a shared edge
+  is drawn exactly once (no seams, no double blending);
+* interpolates colour, alpha, normals and motion perspective-correctly;
+* runs an opaque pass with a z-buffer (fragments with alpha == 1), then a transparent pass
+  (0 < alpha < 1) whose fragments in front of the opaque surface are composited per sample,
+  either in exact depth order (``blend="exact"``, premultiplied *over*, back to front, independent
+  of submission order) or in submission order (``blend="unsorted"``, as unsorted z-buffer hardware);
+* supersamples ``samples`` x ``samples`` per pixel with a box resolve of the colour. Depth, ids and
+  velocity of a pixel come from its nearest sample (the smallest depth), so they always describe
+  one real surface.
+
+The frame's depth is the view-axis distance of the nearest surface with alpha > 0 (transparent
+surfaces included), ``inf`` for background; ids and velocity belong to that same surface.
+"""
 
 from __future__ import annotations
 
-__all__: list[str] = []
+import time
+from collections.abc import Sequence
+
+import numpy as np
+
+from . import _core
+from ._validate import as_array, as_float, as_int
+
+__all__ = ["Camera", "Draw", "Frame", "look_at", "rasterize"]
+
+#: Largest image side in pixels, and largest pixel count (the frame takes 32 bytes a pixel).
+MAX_SIDE = 16384
+MAX_PIXELS = 1 << 25
+_MAX_INTERNAL_SIDE = 32768
+
+
+def look_at(eye, target, up=(0.0, 1.0, 0.0)) -> np.ndarray:
+    """Camera-to-world pose (4,4) float64 at ``eye`` (3,) whose -Z looks at ``target`` (3,), +Y near ``up``."""
+    eye = as_array(eye, "eye", np.float64, (3,))
+    target = as_array(target, "target", np.float64, (3,))
+    up = as_array(up, "up", np.float64, (3,))
+    back = eye - target
+    n = np.linalg.norm(back)
+    if n == 0.0:
+        raise ValueError("target: must differ from eye")
+    z = back / n
+    x = np.cross(up, z)
+    nx = np.linalg.norm(x)
+    if nx < 1e-12 * max(np.linalg.norm(up), 1e-300):
+        raise ValueError("up: must not be parallel to the view direction")
+    x /= nx
+    y = np.cross(z, x)
+    pose = np.eye(4)
+    pose[:3, 0], pose[:3, 1], pose[:3, 2], pose[:3, 3] = x, y, z, eye
+    return pose
+
+
+def _check_size(width, height) -> tuple[int, int]:
+    width = as_int(width, "width", minimum=1, maximum=MAX_SIDE)
+    height = as_int(height, "height", minimum=1, maximum=MAX_SIDE)
+    if width * height > MAX_PIXELS:
+        raise ValueError(f"width: width * height must be <= {MAX_PIXELS}, got {width} x {height}")
+    return width, height
+
+
+class Camera:
+    """A perspective camera (pyrender's ``PerspectiveCamera`` plus an image size).
+
+    Parameters: ``pose`` (4,4) camera-to-world; ``yfov`` vertical field of view in radians, in
+    (0, pi); ``width``, ``height`` in pixels (1..16384, at most 2**25 pixels); ``znear`` > 0 and
+    ``zfar`` > znear in scene units (``zfar=inf`` gives pyrender's infinite projection).
+
+    Attributes: ``pose``, ``yfov``, ``width``, ``height``, ``znear``, ``zfar``, ``aspect``
+    (width / height), ``view`` (4,4) float64 world-to-camera, ``projection`` (4,4) float64 equal
+    to ``pyrender.PerspectiveCamera(yfov, znear, zfar, aspectRatio=width/height)
+    .get_projection_matrix(width, height)``, ``view_projection`` = projection @ view.
+    """
+
+    def __init__(self, pose, yfov, width, height, znear=0.05, zfar=100.0):
+        pose = as_array(pose, "pose", np.float64, (4, 4)).copy()
+        yfov = as_float(yfov, "yfov")
+        if not 0.0 < yfov < np.pi:
+            raise ValueError(f"yfov: must be in (0, pi) radians, got {yfov}")
+        width, height = _check_size(width, height)
+        znear = as_float(znear, "znear")
+        if znear <= 0.0:
+            raise ValueError(f"znear: must be > 0, got {znear}")
+        zfar = as_float(zfar, "zfar", finite=False)
+        if not zfar > znear:
+            raise ValueError(f"zfar: must be > znear, got {zfar}")
+        if abs(np.linalg.det(pose)) < 1e-12:
+            raise ValueError("pose: is singular")
+        self.pose, self.yfov, self.width, self.height = pose, yfov, width, height
+        self.znear, self.zfar = znear, zfar
+        self.aspect = float(width) / float(height)
+        self.view = np.linalg.inv(pose)
+        # pyrender's get_projection_matrix, operation for operation.
+        t = np.tan(yfov / 2.0)
+        p = np.zeros((4, 4))
+        p[0][0] = 1.0 / (self.aspect * t)
+        p[1][1] = 1.0 / t
+        p[3][2] = -1.0
+        if np.isinf(zfar):
+            p[2][2] = -1.0
+            p[2][3] = -2.0 * znear
+        else:
+            p[2][2] = (zfar + znear) / (znear - zfar)
+            p[2][3] = (2 * zfar * znear) / (znear - zfar)
+        self.projection = p
+        self.view_projection = p @ self.view
+        for a in (self.pose, self.view, self.projection, self.view_projection):
+            a.flags.writeable = False
+
+    def __repr__(self) -> str:
+        return (
+            f"Camera(yfov={self.yfov:.4g}, width={self.width}, height={self.height}, "
+            f"znear={self.znear:g}, zfar={self.zfar:g})"
+        )
+
+
+def _readonly(a: np.ndarray | None) -> np.ndarray | None:
+    if a is None:
+        return None
+    a = a.view()
+    a.flags.writeable = False
+    return a
+
+
+class Draw:
+    """One mesh to rasterize.
+
+    ``vertices`` (V,3) float world positions; ``faces`` (F,3) int, counter-clockwise is front;
+    ``rgba`` straight (non-premultiplied) linear colour: one (3,) or (4,), or per vertex (V,3) or
+    (V,4), alpha in [0, 1] (alpha < 1 makes a fragment transparent, alpha 0 invisible);
+    ``normals`` (V,3) for lambert shading (None: area-weighted vertex normals of the faces,
+    computed when rendering); ``object_id`` int32 written to ``Frame.ids``; ``cull_back`` drops
+    back faces; ``previous_vertices`` (V,3) world positions at the previous time, which give the
+    velocity buffer (zero without them).
+
+    The arrays are stored as read-only float64 / int64 / float32 views or copies; the caller's
+    arrays are never written.
+    """
+
+    def __init__(
+        self, vertices, faces, rgba, normals=None, object_id=0, cull_back=True, previous_vertices=None
+    ):
+        v = as_array(vertices, "vertices", np.float64, (None, 3))
+        f = as_array(faces, "faces", np.int64, (None, 3))
+        if f.min() < 0 or f.max() >= len(v):
+            raise ValueError(f"faces: indices must be in [0, {len(v)}), got [{f.min()}, {f.max()}]")
+        c = np.asarray(rgba)
+        if c.ndim == 1:
+            c = as_array(c, "rgba", np.float32, (None,))
+            if c.shape[0] not in (3, 4):
+                raise ValueError(f"rgba: expected shape (3,), (4,), (V,3) or (V,4), got {c.shape}")
+            c = c[None, :]
+        else:
+            c = as_array(c, "rgba", np.float32, (len(v), None))
+            if c.shape[1] not in (3, 4):
+                raise ValueError(f"rgba: expected shape (3,), (4,), (V,3) or (V,4), got {c.shape}")
+        if c.shape[1] == 3:
+            c = np.concatenate([c, np.ones((len(c), 1), np.float32)], axis=1)
+        if (c[:, :3] < 0).any():
+            raise ValueError("rgba: colours must be >= 0")
+        if ((c[:, 3] < 0) | (c[:, 3] > 1)).any():
+            raise ValueError("rgba: alpha must be in [0, 1]")
+        n = None if normals is None else as_array(normals, "normals", np.float32, (len(v), 3))
+        p = (
+            None
+            if previous_vertices is None
+            else as_array(previous_vertices, "previous_vertices", np.float64, (len(v), 3))
+        )
+        self.object_id = as_int(object_id, "object_id", minimum=-(2**31), maximum=2**31 - 1)
+        if not isinstance(cull_back, (bool, np.bool_)):
+            raise TypeError(f"cull_back: expected a bool, got {type(cull_back).__name__}")
+        self.cull_back = bool(cull_back)
+        self.vertices, self.faces, self.rgba = _readonly(v), _readonly(f), _readonly(c)
+        self.normals, self.previous_vertices = _readonly(n), _readonly(p)
+
+    def __repr__(self) -> str:
+        return f"Draw({len(self.vertices)} vertices, {len(self.faces)} faces, object_id={self.object_id})"
+
+    def _args(self):
+        return (
+            self.vertices,
+            self.faces,
+            self.rgba,
+            self.normals,
+            self.object_id,
+            self.cull_back,
+            self.previous_vertices,
+        )
+
+
+class Frame:
+    """A rendered frame.
+
+    ``rgba`` (H,W,4) float32 premultiplied linear RGBA; ``depth`` (H,W) float32 view-axis
+    distance of the nearest surface with alpha > 0, ``inf`` for background; ``ids`` (H,W) int32
+    object id of that surface, -1 for background; ``velocity`` (H,W,2) float32 screen motion of
+    that surface in pixels (+x right, +y down); ``stats`` dict (triangles, fragments, ms per
+    stage). ``coverage`` is the alpha channel (H,W).
+
+    Any code may build a Frame from numpy arrays: ``Frame(rgba, depth, ids, velocity, stats=None)``
+    (dtypes are converted; the arrays are not copied when they already match).
+    """
+
+    def __init__(self, rgba, depth, ids, velocity, stats=None):
+        rgba = as_array(rgba, "rgba", np.float32, (None, None, 4), finite=False)
+        h, w = rgba.shape[:2]
+        self.rgba = rgba
+        self.depth = as_array(depth, "depth", np.float32, (h, w), finite=False)
+        self.ids = as_array(ids, "ids", np.int32, (h, w))
+        self.velocity = as_array(velocity, "velocity", np.float32, (h, w, 2), finite=False)
+        self.stats = dict(stats) if stats is not None else {}
+
+    @property
+    def width(self) -> int:
+        return int(self.rgba.shape[1])
+
+    @property
+    def height(self) -> int:
+        return int(self.rgba.shape[0])
+
+    @property
+    def coverage(self) -> np.ndarray:
+        """(H,W) float32 alpha: the fraction of the pixel covered (premultiplied alpha)."""
+        return self.rgba[..., 3]
+
+    def __repr__(self) -> str:
+        return f"Frame({self.width}x{self.height}, stats={self.stats})"
+
+    def to_srgb8(self) -> np.ndarray:
+        """(H,W,4) uint8: straight (un-premultiplied) colour, sRGB-encoded; alpha stays linear."""
+        a = np.clip(self.rgba[..., 3:4], 0.0, 1.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            c = np.where(a > 0, self.rgba[..., :3] / np.maximum(a, 1e-30), 0.0)
+        c = np.clip(np.nan_to_num(c), 0.0, 1.0)
+        s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
+        out = np.concatenate([s, a], axis=-1)
+        return np.round(out * 255.0).astype(np.uint8)
+
+    def save_png(self, path) -> None:
+        """Writes an 8-bit RGBA PNG (sRGB colour, straight alpha). Creates parent folders."""
+        from pathlib import Path
+
+        from PIL import Image
+
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        Image.fromarray(self.to_srgb8(), mode="RGBA").save(path)
+
+
+def _lights(lights) -> list[tuple[tuple[float, ...], tuple[float, ...]]]:
+    if lights is None:
+        return []
+    out = []
+    for i, light in enumerate(lights):
+        if hasattr(light, "direction") and hasattr(light, "intensity"):
+            d, k = light.direction, light.intensity
+        else:
+            try:
+                d, k = light
+            except (TypeError, ValueError) as exc:
+                raise TypeError(
+                    f"lights: item {i} must have .direction and .intensity or be (direction, intensity)"
+                ) from exc
+        d = as_array(d, "lights", np.float64, (3,))
+        if not np.linalg.norm(d) > 0:
+            raise ValueError(f"lights: item {i} has a zero direction")
+        k = np.asarray(k, dtype=np.float64)
+        k = as_array(np.broadcast_to(k, (3,)) if k.ndim == 0 else k, "lights", np.float64, (3,))
+        if (k < 0).any():
+            raise ValueError(f"lights: item {i} has a negative intensity")
+        out.append((tuple(map(float, d)), tuple(map(float, k))))
+    return out
+
+
+def rasterize(
+    camera: Camera,
+    draws: Draw | Sequence[Draw],
+    samples: int = 1,
+    blend: str = "exact",
+    shading: str = "flat",
+    lights=(),
+    ambient=0.0,
+) -> Frame:
+    """Rasterizes ``draws`` seen by ``camera`` into a Frame of ``camera.height`` x ``camera.width``.
+
+    ``samples``: 1, 2 or 4 samples per pixel along each axis (box resolve). ``blend``: "exact"
+    (transparent fragments composited per sample in depth order) or "unsorted" (in submission
+    order). ``shading``: "flat" (the colour) or "lambert": colour * (ambient + sum over lights of
+    intensity * max(0, n . -direction)), n the interpolated normal (turned towards the camera on
+    back faces when culling is off). ``lights``: objects with ``.direction`` (3,) (the direction
+    the light travels) and ``.intensity`` (float or RGB), or (direction, intensity) pairs.
+    ``ambient``: float or RGB. The GIL is released while rendering.
+    """
+    t0 = time.perf_counter()
+    if not isinstance(camera, Camera):
+        raise TypeError(f"camera: expected a motionblur.Camera, got {type(camera).__name__}")
+    if isinstance(draws, Draw):
+        draws = [draws]
+    try:
+        draws = list(draws)
+    except TypeError as exc:
+        raise TypeError("draws: expected a Draw or a sequence of Draws") from exc
+    for i, d in enumerate(draws):
+        if not isinstance(d, Draw):
+            raise TypeError(f"draws: item {i} is a {type(d).__name__}, not a motionblur.Draw")
+    samples = as_int(samples, "samples")
+    if samples not in (1, 2, 4):
+        raise ValueError(f"samples: must be 1, 2 or 4, got {samples}")
+    if max(camera.width, camera.height) * samples > _MAX_INTERNAL_SIDE:
+        raise ValueError(f"samples: width and height times samples must be <= {_MAX_INTERNAL_SIDE}")
+    for name, value, allowed in (
+        ("blend", blend, ("exact", "unsorted")),
+        ("shading", shading, ("flat", "lambert")),
+    ):
+        if not isinstance(value, str):
+            raise TypeError(f"{name}: expected a string, got {type(value).__name__}")
+        if value not in allowed:
+            raise ValueError(f"{name}: expected one of {allowed}, got {value!r}")
+    amb = np.asarray(ambient, dtype=np.float64) if not isinstance(ambient, str) else None
+    if amb is None or amb.ndim > 1 or (amb.ndim == 1 and amb.shape != (3,)):
+        raise TypeError("ambient: expected a float or an RGB triple")
+    amb = np.broadcast_to(amb, (3,))
+    if not np.isfinite(amb).all() or (amb < 0).any():
+        raise ValueError("ambient: must be finite and >= 0")
+    rgba, depth, ids, velocity, stats = _core._rasterize(
+        camera.view,
+        camera.projection,
+        camera.width,
+        camera.height,
+        [d._args() for d in draws],
+        samples,
+        blend,
+        shading,
+        _lights(lights),
+        tuple(map(float, amb)),
+    )
+    stats["ms"] = (time.perf_counter() - t0) * 1e3
+    return Frame(rgba, depth, ids, velocity, stats)

@@ -1,1 +1,274 @@
-//! The CPU rasterizer: camera, clipping, triangle setup, tiles, blending, buffers.
+//! The CPU rasterizer: camera, clipping, triangle setup, binning, tiles, blending, buffers.
+//!
+//! Pipeline of one frame (`rasterize`):
+//! 1. transform: vertices to clip space (f64), previous positions to homogeneous pixels, normals;
+//! 2. setup (parallel over runs of faces): clip against near/far and a guard band, snap to 8-bit
+//!    fixed point, cull back faces, orient, bound (`setup.rs`, `clip.rs`);
+//! 3. binning into 64x64-sample tiles, in submission order (`bins.rs`);
+//! 4. tiles in parallel (rayon): an opaque pass with a visibility buffer, then a transparent pass
+//!    with per-sample fragment lists composited exactly or unsorted (`tile.rs`, `blend.rs`), then
+//!    the box resolve into the frame (`buffers.rs`).
+//!
+//! Every step is deterministic and no step depends on how work is split between threads, so the
+//! output is bit-identical for any thread count.
+// Index loops over 3- and 4-vectors read better than iterator chains here; NaN-rejecting
+// `!(x > y)` comparisons are intended.
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+mod bins;
+mod blend;
+mod buffers;
+mod camera;
+mod clip;
+mod draw;
+mod interp;
+mod setup;
+mod shade;
+mod tile;
+
+pub use blend::Blend;
+pub use buffers::{Frame, Stats};
+pub use camera::{
+    check_size, look_at, perspective, Camera, MAX_INTERNAL_SIDE, MAX_PIXELS, MAX_SIDE,
+};
+pub use draw::{faces_from_i64, vertex_normals, Draw};
+
+use crate::{Error, Result};
+use glam::DVec4;
+use rayon::prelude::*;
+use setup::{Chunk, Viewport};
+use shade::{homogeneous_pixel, Prepared, Shader};
+use std::time::Instant;
+use tile::{TileScratch, TILE};
+
+/// Faces set up per parallel job (a clipped face may become up to 7 triangles, so a chunk
+/// holds at most 28672 < 2^16 triangles).
+const CHUNK_FACES: usize = 4096;
+
+/// How fragments are shaded.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shading {
+    Flat,
+    Lambert,
+}
+
+/// A directional light: `direction` is the way the light travels (normalised by `Options::new`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    pub direction: [f32; 3],
+    pub intensity: [f32; 3],
+}
+
+/// Options of one frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Options {
+    /// Samples per pixel along each axis: 1, 2 or 4.
+    pub samples: u32,
+    pub blend: Blend,
+    pub shading: Shading,
+    pub lights: Vec<Light>,
+    pub ambient: [f32; 3],
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            samples: 1,
+            blend: Blend::Exact,
+            shading: Shading::Flat,
+            lights: Vec::new(),
+            ambient: [0.0; 3],
+        }
+    }
+}
+
+impl Blend {
+    /// "exact" or "unsorted".
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "exact" => Ok(Blend::Exact),
+            "unsorted" => Ok(Blend::Unsorted),
+            _ => Err(Error::value(
+                "blend",
+                format!("expected 'exact' or 'unsorted', got {name:?}"),
+            )),
+        }
+    }
+}
+
+impl Shading {
+    /// "flat" or "lambert".
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "flat" => Ok(Shading::Flat),
+            "lambert" => Ok(Shading::Lambert),
+            _ => Err(Error::value(
+                "shading",
+                format!("expected 'flat' or 'lambert', got {name:?}"),
+            )),
+        }
+    }
+}
+
+impl Light {
+    /// A light travelling along `direction` (any non-zero length) with RGB `intensity`.
+    pub fn new(direction: [f64; 3], intensity: [f64; 3]) -> Result<Self> {
+        let l = (direction[0] * direction[0]
+            + direction[1] * direction[1]
+            + direction[2] * direction[2])
+            .sqrt();
+        if !(l > 0.0 && l.is_finite()) {
+            return Err(Error::value(
+                "lights",
+                "direction must be finite and non-zero",
+            ));
+        }
+        if intensity.iter().any(|x| !x.is_finite() || *x < 0.0) {
+            return Err(Error::value("lights", "intensity must be finite and >= 0"));
+        }
+        Ok(Light {
+            direction: direction.map(|d| (d / l) as f32),
+            intensity: intensity.map(|x| x as f32),
+        })
+    }
+}
+
+fn check_options(o: &Options) -> Result<()> {
+    if o.ambient.iter().any(|x| !x.is_finite() || *x < 0.0) {
+        return Err(Error::value("ambient", "must be finite and >= 0"));
+    }
+    Ok(())
+}
+
+fn transform(draw: &Draw, vp: glam::DMat4, opts: &Options, w: f64, h: f64) -> Prepared {
+    let project = |p: &[f64; 3]| {
+        let c = vp * DVec4::new(p[0], p[1], p[2], 1.0);
+        [c.x, c.y, c.z, c.w]
+    };
+    let clip: Vec<[f64; 4]> = draw
+        .vertices
+        .par_iter()
+        .with_min_len(4096)
+        .map(project)
+        .collect();
+    let prev = draw.previous.as_ref().map(|prev| {
+        prev.par_iter()
+            .with_min_len(4096)
+            .map(|p| homogeneous_pixel(&project(p), w, h))
+            .collect()
+    });
+    let normals = match (opts.shading, &draw.normals) {
+        (Shading::Flat, _) => None,
+        (Shading::Lambert, Some(n)) => Some(n.clone()),
+        (Shading::Lambert, None) => Some(vertex_normals(&draw.vertices, &draw.faces)),
+    };
+    Prepared {
+        clip,
+        prev,
+        normals,
+    }
+}
+
+/// Renders `draws` seen by `camera`. Errors name the offending argument.
+pub fn rasterize(camera: &Camera, draws: &[Draw], opts: &Options) -> Result<Frame> {
+    let t0 = Instant::now();
+    check_size(camera.width, camera.height, opts.samples)?;
+    check_options(opts)?;
+    for d in draws {
+        d.validate()?;
+    }
+    let n_chunks: usize = draws
+        .iter()
+        .map(|d| d.faces.len().div_ceil(CHUNK_FACES))
+        .sum();
+    if n_chunks >= 1 << 16 {
+        return Err(Error::value(
+            "draws",
+            "too many faces or draws in one frame",
+        ));
+    }
+    let (w, h) = (camera.width, camera.height);
+    let s = opts.samples;
+    let vp_matrix = camera.view_projection();
+    let mut frame = Frame::new(w, h);
+
+    let prepared: Vec<Prepared> = draws
+        .iter()
+        .map(|d| transform(d, vp_matrix, opts, f64::from(w), f64::from(h)))
+        .collect();
+    let t1 = Instant::now();
+
+    let viewport = Viewport::new(w * s, h * s);
+    let jobs: Vec<(usize, std::ops::Range<usize>)> = draws
+        .iter()
+        .enumerate()
+        .flat_map(|(di, d)| {
+            (0..d.faces.len())
+                .step_by(CHUNK_FACES)
+                .map(move |a| (di, a..(a + CHUNK_FACES).min(d.faces.len())))
+        })
+        .collect();
+    let chunks: Vec<Chunk> = jobs
+        .into_par_iter()
+        .map(|(di, range)| {
+            setup::setup_chunk(di as u32, &draws[di], &prepared[di].clip, range, &viewport)
+        })
+        .collect();
+    let t2 = Instant::now();
+
+    let bins = bins::Bins::build(&chunks, viewport.ws, viewport.hs);
+    let t3 = Instant::now();
+
+    let shader = Shader {
+        draws,
+        prepared: &prepared,
+        chunks: &chunks,
+        opts,
+        width: f64::from(w),
+        height: f64::from(h),
+    };
+    let out = frame.output();
+    let tiles_x = bins.tiles_x;
+    let pixels_per_tile = (TILE as u32 / s) as usize;
+    let fragments: u64 = (0..bins.tiles_x * bins.tiles_y)
+        .into_par_iter()
+        .map_init(TileScratch::default, |scratch, t| {
+            let (tx, ty) = (t % tiles_x, t / tiles_x);
+            let px = [
+                tx * pixels_per_tile,
+                ty * pixels_per_tile,
+                ((tx + 1) * pixels_per_tile).min(w as usize),
+                ((ty + 1) * pixels_per_tile).min(h as usize),
+            ];
+            let s = s as usize;
+            let rect = [px[0] * s, px[1] * s, px[2] * s, px[3] * s].map(|v| v as i32);
+            let refs = bins.tile(t);
+            let n = if refs.is_empty() {
+                scratch.samples.fill(blend::Sample::BACKGROUND);
+                0
+            } else {
+                tile::render_tile(rect, refs, &shader, opts.blend, scratch)
+            };
+            // SAFETY: tiles partition the frame, so this rectangle is written by this task only.
+            unsafe { out.write_tile(&scratch.samples, px, s) };
+            n
+        })
+        .sum();
+    let t4 = Instant::now();
+
+    let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+    frame.stats = Stats {
+        triangles: chunks.iter().map(|c| c.tris.len() as u64).sum(),
+        fragments,
+        culled: chunks.iter().map(|c| c.culled).sum(),
+        clipped: chunks.iter().map(|c| c.clipped).sum(),
+        ms_transform: ms(t0, t1),
+        ms_setup: ms(t1, t2),
+        ms_bin: ms(t2, t3),
+        ms_raster: ms(t3, t4),
+        ms_total: ms(t0, t4),
+    };
+    Ok(frame)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,129 @@
+//! The frame's buffers (colour, depth, ids, velocity) and the box resolve of supersampled tiles.
+//!
+//! Resolve: the colour of a pixel is the mean of its s x s samples (a box filter). Depth, id and
+//! velocity come from the pixel's *nearest* sample (smallest depth; the first in row order on
+//! ties), so they always describe one real surface rather than a blend of two.
+use super::blend::Sample;
+use super::tile::TILE;
+
+/// Timings and counts of one frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Stats {
+    /// Triangles after clipping and culling (those rasterized).
+    pub triangles: u64,
+    /// Samples covered by those triangles (both passes).
+    pub fragments: u64,
+    pub culled: u64,
+    pub clipped: u64,
+    pub ms_transform: f64,
+    pub ms_setup: f64,
+    pub ms_bin: f64,
+    pub ms_raster: f64,
+    pub ms_total: f64,
+}
+
+/// A rendered frame: row-major buffers of `height` x `width` pixels.
+#[derive(Clone, Debug, Default)]
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    /// (H,W,4) premultiplied linear RGBA.
+    pub rgba: Vec<f32>,
+    /// (H,W) view-axis distance of the nearest surface, inf for background.
+    pub depth: Vec<f32>,
+    /// (H,W) object id of the nearest surface, -1 for background.
+    pub ids: Vec<i32>,
+    /// (H,W,2) screen motion in pixels of the nearest surface.
+    pub velocity: Vec<f32>,
+    pub stats: Stats,
+}
+
+/// Raw pointers into the frame's buffers, shared by the tile workers. Each tile writes only its
+/// own pixel rectangle, and rectangles of different tiles are disjoint.
+pub struct Output {
+    rgba: *mut f32,
+    depth: *mut f32,
+    ids: *mut i32,
+    velocity: *mut f32,
+    width: usize,
+    height: usize,
+}
+
+// SAFETY: the pointers are only written through `write_tile`, whose callers give each tile a
+// distinct rectangle; no element is ever written by two threads, and none is read.
+unsafe impl Send for Output {}
+unsafe impl Sync for Output {}
+
+impl Frame {
+    /// A frame of the given size with background-initialised buffers.
+    pub fn new(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        Frame {
+            width,
+            height,
+            rgba: vec![0.0; 4 * n],
+            depth: vec![f32::INFINITY; n],
+            ids: vec![-1; n],
+            velocity: vec![0.0; 2 * n],
+            stats: Stats::default(),
+        }
+    }
+
+    /// The pointers the tiles write through. `self` must outlive every use.
+    pub fn output(&mut self) -> Output {
+        Output {
+            rgba: self.rgba.as_mut_ptr(),
+            depth: self.depth.as_mut_ptr(),
+            ids: self.ids.as_mut_ptr(),
+            velocity: self.velocity.as_mut_ptr(),
+            width: self.width as usize,
+            height: self.height as usize,
+        }
+    }
+}
+
+impl Output {
+    /// Resolves the tile's samples (row stride TILE) covering pixels [px0, px1) x [py0, py1)
+    /// with `s` x `s` samples per pixel and writes them.
+    ///
+    /// # Safety
+    /// The pixel rectangle must lie inside the frame and no other thread may write it.
+    pub unsafe fn write_tile(&self, samples: &[Sample], px: [usize; 4], s: usize) {
+        let [px0, py0, px1, py1] = px;
+        debug_assert!(px1 <= self.width && py1 <= self.height);
+        let norm = 1.0 / (s * s) as f32;
+        for y in py0..py1 {
+            for x in px0..px1 {
+                let mut c = [0.0f32; 4];
+                let mut best = Sample::BACKGROUND;
+                for j in 0..s {
+                    let row = ((y - py0) * s + j) * TILE as usize + (x - px0) * s;
+                    for i in 0..s {
+                        let smp = &samples[row + i];
+                        for k in 0..4 {
+                            c[k] += smp.rgba[k];
+                        }
+                        if smp.invw > best.invw {
+                            best = *smp;
+                        }
+                    }
+                }
+                let o = y * self.width + x;
+                // SAFETY: (x, y) is inside the frame and owned by this tile (caller's contract).
+                unsafe {
+                    for k in 0..4 {
+                        *self.rgba.add(4 * o + k) = if s == 1 { c[k] } else { c[k] * norm };
+                    }
+                    *self.depth.add(o) = if best.invw > 0.0 {
+                        1.0 / best.invw
+                    } else {
+                        f32::INFINITY
+                    };
+                    *self.ids.add(o) = best.id;
+                    *self.velocity.add(2 * o) = best.velocity[0];
+                    *self.velocity.add(2 * o + 1) = best.velocity[1];
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,243 @@
+//! Triangle setup: clip, project, snap to fixed point, cull, orient, bound.
+//!
+//! Screen coordinates are snapped to 1/256 of a sample (8 sub-pixel bits). Every later coverage
+//! decision is exact integer arithmetic on these snapped corners, so the result depends on the
+//! vertices alone: a shared edge is drawn exactly once (see `tile.rs` for the top-left rule).
+use super::clip::{outcode, ClipVertex, ClipVolume, MAX_POLY};
+use super::draw::Draw;
+
+/// Sub-pixel bits of the fixed-point screen coordinates.
+pub const SUBPIXEL_BITS: u32 = 8;
+/// One sample in fixed point.
+pub const ONE: i64 = 1 << SUBPIXEL_BITS;
+/// Half a sample: sample centres sit at +0.5.
+pub const HALF: i64 = ONE / 2;
+
+/// The triangle faces the camera (counter-clockwise in OpenGL's y-up window coordinates).
+pub const FRONT: u8 = 1;
+/// Some fragment may be opaque (alpha >= 1 at some corner).
+pub const MAY_OPAQUE: u8 = 2;
+/// Some fragment may be transparent (alpha < 1 at some corner).
+pub const MAY_TRANSPARENT: u8 = 4;
+/// Unclipped: the corners are the face's vertices `verts`.
+pub const NO_CLIP: u32 = u32::MAX;
+
+/// A set-up triangle, oriented so that its fixed-point area is positive (y down).
+#[derive(Clone, Copy, Debug)]
+pub struct Tri {
+    /// Fixed-point sample coordinates of the corners.
+    pub x: [i32; 3],
+    pub y: [i32; 3],
+    /// Unsnapped position minus snapped position, in samples (attributes interpolate from the
+    /// exact positions; only coverage uses the snapped ones).
+    pub rx: [f32; 3],
+    pub ry: [f32; 3],
+    /// 1 / w (the inverse view-axis distance) at the corners.
+    pub iw: [f32; 3],
+    /// Inclusive sample range covered by the bounding box, clamped to the image.
+    pub bbox: [i32; 4],
+    /// The face's vertex index of each corner (unclipped), or the face's vertices (clipped).
+    pub verts: [u32; 3],
+    /// Index of the corners' barycentric coordinates in the chunk's clip table, or NO_CLIP.
+    pub clip: u32,
+    pub draw: u32,
+    pub flags: u8,
+}
+
+/// The set-up triangles of a run of faces, in submission order.
+#[derive(Default, Debug)]
+pub struct Chunk {
+    pub tris: Vec<Tri>,
+    /// For clipped triangles: the barycentric coordinates of each corner in the face.
+    pub clips: Vec<[[f32; 3]; 3]>,
+    pub culled: u64,
+    pub clipped: u64,
+}
+
+/// The internal (supersampled) image the triangles are set up for.
+#[derive(Clone, Copy, Debug)]
+pub struct Viewport {
+    pub ws: u32,
+    pub hs: u32,
+    pub volume: ClipVolume,
+}
+
+impl Viewport {
+    pub fn new(ws: u32, hs: u32) -> Self {
+        Viewport {
+            ws,
+            hs,
+            volume: ClipVolume::for_size(ws, hs),
+        }
+    }
+
+    /// Fixed-point position and the residual (exact minus snapped, in samples).
+    #[inline]
+    fn snap(&self, p: &[f64; 4]) -> Corner {
+        let x = (p[0] / p[3] + 1.0) * 0.5 * f64::from(self.ws);
+        let y = (1.0 - p[1] / p[3]) * 0.5 * f64::from(self.hs);
+        let (fx, fy) = ((x * ONE as f64).round(), (y * ONE as f64).round());
+        Corner {
+            x: fx as i32,
+            y: fy as i32,
+            rx: (x - fx / ONE as f64) as f32,
+            ry: (y - fy / ONE as f64) as f32,
+            iw: 1.0 / p[3],
+        }
+    }
+}
+
+/// A projected corner: fixed-point position, residual, 1/w.
+#[derive(Clone, Copy, Debug)]
+struct Corner {
+    x: i32,
+    y: i32,
+    rx: f32,
+    ry: f32,
+    iw: f64,
+}
+
+#[inline]
+fn floor_div(a: i64, b: i64) -> i64 {
+    a.div_euclid(b)
+}
+
+/// Sets up faces `faces` (indices into `draw.faces`) of draw `draw_index`.
+pub fn setup_chunk(
+    draw_index: u32,
+    draw: &Draw,
+    clip_pos: &[[f64; 4]],
+    faces: std::ops::Range<usize>,
+    vp: &Viewport,
+) -> Chunk {
+    let mut chunk = Chunk {
+        tris: Vec::with_capacity(faces.len()),
+        ..Default::default()
+    };
+    let (gx, gy) = (vp.volume.gx, vp.volume.gy);
+    let mut poly = [ClipVertex {
+        pos: [0.0; 4],
+        bary: [0.0; 3],
+    }; MAX_POLY];
+    for fi in faces {
+        let face = draw.faces[fi];
+        let (amin, amax) = draw.alpha_range(face);
+        if amax <= 0.0 {
+            continue; // fully transparent everywhere: contributes nothing
+        }
+        let mut flags = 0u8;
+        if amax >= 1.0 {
+            flags |= MAY_OPAQUE;
+        }
+        if amin < 1.0 {
+            flags |= MAY_TRANSPARENT;
+        }
+        let p = face.map(|i| clip_pos[i as usize]);
+        // Trivial reject against the viewport itself (all corners outside one plane).
+        if outcode(&p[0], 1.0, 1.0) & outcode(&p[1], 1.0, 1.0) & outcode(&p[2], 1.0, 1.0) != 0 {
+            continue;
+        }
+        let oc = [
+            outcode(&p[0], gx, gy),
+            outcode(&p[1], gx, gy),
+            outcode(&p[2], gx, gy),
+        ];
+        if oc[0] | oc[1] | oc[2] == 0 {
+            let corners = p.map(|q| vp.snap(&q));
+            emit(&mut chunk, vp, draw, draw_index, flags, corners, face, None);
+            continue;
+        }
+        chunk.clipped += 1;
+        let n = vp.volume.clip(p, oc[0] | oc[1] | oc[2], &mut poly);
+        if n < 3
+            || poly[..n]
+                .iter()
+                .any(|v| !(v.pos[3] > 0.0) || !v.pos.iter().all(|c| c.is_finite()))
+        {
+            continue;
+        }
+        for k in 1..n - 1 {
+            let idx = [0, k, k + 1];
+            let corners = idx.map(|j| vp.snap(&poly[j].pos));
+            let bary = idx.map(|j| poly[j].bary.map(|b| b as f32));
+            emit(
+                &mut chunk,
+                vp,
+                draw,
+                draw_index,
+                flags,
+                corners,
+                face,
+                Some(bary),
+            );
+        }
+    }
+    chunk
+}
+
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn emit(
+    chunk: &mut Chunk,
+    vp: &Viewport,
+    draw: &Draw,
+    draw_index: u32,
+    mut flags: u8,
+    mut corners: [Corner; 3],
+    face: [u32; 3],
+    mut bary: Option<[[f32; 3]; 3]>,
+) {
+    let [a, b, c] = corners.map(|k| (i64::from(k.x), i64::from(k.y)));
+    let area = (b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1);
+    if area == 0 {
+        return;
+    }
+    // Counter-clockwise in OpenGL's y-up window is a negative area in y-down raster space.
+    let front = area < 0;
+    if draw.cull_back && !front {
+        chunk.culled += 1;
+        return;
+    }
+    let mut verts = face;
+    if area < 0 {
+        corners.swap(1, 2);
+        verts.swap(1, 2);
+        if let Some(b) = bary.as_mut() {
+            b.swap(1, 2);
+        }
+    }
+    if front {
+        flags |= FRONT;
+    }
+    let xs = corners.map(|k| i64::from(k.x));
+    let ys = corners.map(|k| i64::from(k.y));
+    let lo = |v: [i64; 3]| v[0].min(v[1]).min(v[2]);
+    let hi = |v: [i64; 3]| v[0].max(v[1]).max(v[2]);
+    // Samples whose centre (i * ONE + HALF) lies inside the bounding box.
+    let x0 = (floor_div(lo(xs) - HALF - 1, ONE) + 1).max(0);
+    let y0 = (floor_div(lo(ys) - HALF - 1, ONE) + 1).max(0);
+    let x1 = floor_div(hi(xs) - HALF, ONE).min(i64::from(vp.ws) - 1);
+    let y1 = floor_div(hi(ys) - HALF, ONE).min(i64::from(vp.hs) - 1);
+    if x0 > x1 || y0 > y1 {
+        return; // covers no sample centre
+    }
+    let clip = match bary {
+        Some(b) => {
+            chunk.clips.push(b);
+            (chunk.clips.len() - 1) as u32
+        }
+        None => NO_CLIP,
+    };
+    chunk.tris.push(Tri {
+        x: xs.map(|v| v as i32),
+        y: ys.map(|v| v as i32),
+        rx: corners.map(|k| k.rx),
+        ry: corners.map(|k| k.ry),
+        iw: corners.map(|k| k.iw as f32),
+        bbox: [x0 as i32, y0 as i32, x1 as i32, y1 as i32],
+        verts,
+        clip,
+        draw: draw_index,
+        flags,
+    });
+}

@@ -1,0 +1,172 @@
+//! Attribute interpolation and shading of one sample.
+//!
+//! Perspective-correct: the snapped edge functions give screen-space barycentric weights; divided
+//! by w at the corners and normalised they become the barycentric coordinates of the surface
+//! point in the (original, unclipped) face. Colour, alpha, normals and the homogeneous screen
+//! positions used for velocity are interpolated with them.
+//!
+//! Shading (the definitions the Mitsuba reference reproduces):
+//! - `flat`: the interpolated straight colour.
+//! - `lambert`: colour * (ambient + sum_l intensity_l * max(0, n . -direction_l)), with `n` the
+//!   interpolated, normalised vertex normal, flipped to face the camera on back faces (which only
+//!   reach shading when culling is off). Alpha is never shaded.
+//!
+//! The output colour is premultiplied.
+use super::draw::Draw;
+use super::interp::Planes;
+use super::setup::{Chunk, Tri, FRONT, NO_CLIP};
+use super::{Options, Shading};
+
+/// Per-draw data computed once a frame: clip-space positions, previous homogeneous screen
+/// positions (for velocity) and normals (lambert only).
+#[derive(Debug, Default)]
+pub struct Prepared {
+    pub clip: Vec<[f64; 4]>,
+    pub prev: Option<Vec<[f64; 3]>>,
+    pub normals: Option<Vec<[f32; 3]>>,
+}
+
+/// What shading one sample gives.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Shaded {
+    /// Premultiplied linear RGBA.
+    pub rgba: [f32; 4],
+    pub id: i32,
+    /// Screen motion since the previous positions, pixels, +x right, +y down.
+    pub velocity: [f32; 2],
+}
+
+/// Homogeneous pixel position (x w, y w, w) of a clip-space point in an image of `w` x `h`.
+#[inline]
+pub fn homogeneous_pixel(c: &[f64; 4], w: f64, h: f64) -> [f64; 3] {
+    [(c[0] + c[3]) * 0.5 * w, (c[3] - c[1]) * 0.5 * h, c[3]]
+}
+
+/// Everything shading needs, shared read-only by the tiles.
+pub struct Shader<'a> {
+    pub draws: &'a [Draw],
+    pub prepared: &'a [Prepared],
+    pub chunks: &'a [Chunk],
+    pub opts: &'a Options,
+    pub width: f64,
+    pub height: f64,
+}
+
+/// Chunk index and triangle index packed in a triangle reference.
+#[inline]
+pub fn unpack(r: u32) -> (usize, usize) {
+    ((r >> 16) as usize, (r & 0xffff) as usize)
+}
+
+impl Shader<'_> {
+    #[inline]
+    pub fn tri(&self, r: u32) -> &Tri {
+        let (c, i) = unpack(r);
+        &self.chunks[c].tris[i]
+    }
+
+    /// Barycentric coordinates in the face of sample (ix, iy) of triangle `r` (whose
+    /// interpolation planes are `planes`).
+    #[inline]
+    pub fn lambdas(&self, r: u32, planes: &Planes, ix: i32, iy: i32) -> [f32; 3] {
+        let (c, i) = unpack(r);
+        let tri = &self.chunks[c].tris[i];
+        let l = planes.lambdas(ix, iy);
+        if tri.clip == NO_CLIP {
+            return l.map(|v| v as f32);
+        }
+        let b = &self.chunks[c].clips[tri.clip as usize];
+        [0, 1, 2].map(|j| {
+            (l[0] * f64::from(b[0][j]) + l[1] * f64::from(b[1][j]) + l[2] * f64::from(b[2][j]))
+                as f32
+        })
+    }
+
+    /// Straight alpha at the sample.
+    #[inline]
+    pub fn alpha(&self, tri: &Tri, lam: [f32; 3]) -> f32 {
+        let d = &self.draws[tri.draw as usize];
+        if d.rgba.len() == 1 {
+            return d.rgba[0][3];
+        }
+        (0..3)
+            .map(|k| lam[k] * d.rgba[tri.verts[k] as usize][3])
+            .sum()
+    }
+
+    /// Shades the sample of triangle `tri` with barycentric coordinates `lam`.
+    pub fn shade(&self, tri: &Tri, lam: [f32; 3]) -> Shaded {
+        let di = tri.draw as usize;
+        let d = &self.draws[di];
+        let p = &self.prepared[di];
+        let v = tri.verts;
+        let mut c = if d.rgba.len() == 1 {
+            d.rgba[0]
+        } else {
+            let mut c = [0.0f32; 4];
+            for k in 0..3 {
+                let ck = d.rgba[v[k] as usize];
+                for j in 0..4 {
+                    c[j] += lam[k] * ck[j];
+                }
+            }
+            c
+        };
+        c[3] = c[3].clamp(0.0, 1.0);
+        if let (Shading::Lambert, Some(normals)) = (self.opts.shading, &p.normals) {
+            let mut n = [0.0f32; 3];
+            for k in 0..3 {
+                let nk = normals[v[k] as usize];
+                for j in 0..3 {
+                    n[j] += lam[k] * nk[j];
+                }
+            }
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            let s = if len > 0.0 { 1.0 / len } else { 0.0 };
+            let s = if tri.flags & FRONT == 0 { -s } else { s };
+            let n = n.map(|x| x * s);
+            let mut e = self.opts.ambient;
+            for l in &self.opts.lights {
+                let cos = -(n[0] * l.direction[0] + n[1] * l.direction[1] + n[2] * l.direction[2]);
+                if cos > 0.0 {
+                    for j in 0..3 {
+                        e[j] += l.intensity[j] * cos;
+                    }
+                }
+            }
+            for j in 0..3 {
+                c[j] *= e[j];
+            }
+        }
+        let velocity = match &p.prev {
+            None => [0.0; 2],
+            Some(prev) => {
+                let mut cur = [0.0f64; 3];
+                let mut old = [0.0f64; 3];
+                for k in 0..3 {
+                    let h = homogeneous_pixel(&p.clip[v[k] as usize], self.width, self.height);
+                    let o = prev[v[k] as usize];
+                    let l = f64::from(lam[k]);
+                    for j in 0..3 {
+                        cur[j] += l * h[j];
+                        old[j] += l * o[j];
+                    }
+                }
+                if cur[2] > 0.0 && old[2] > 0.0 {
+                    [
+                        (cur[0] / cur[2] - old[0] / old[2]) as f32,
+                        (cur[1] / cur[2] - old[1] / old[2]) as f32,
+                    ]
+                } else {
+                    [0.0; 2] // the previous position was behind the camera: no defined motion
+                }
+            }
+        };
+        let a = c[3];
+        Shaded {
+            rgba: [c[0] * a, c[1] * a, c[2] * a, a],
+            id: d.object_id,
+            velocity,
+        }
+    }
+}

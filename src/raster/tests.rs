@@ -1,0 +1,196 @@
+//! Whole-pipeline tests of the rasterizer in pure Rust.
+use super::*;
+use glam::{DMat4, DVec3};
+
+fn camera(w: u32, h: u32) -> Camera {
+    let pose = look_at(DVec3::new(0.0, 0.0, 3.0), DVec3::ZERO, DVec3::Y).unwrap();
+    Camera::new(pose, 0.9, w, h, 0.05, 100.0).unwrap()
+}
+
+fn draw(vertices: Vec<[f64; 3]>, faces: Vec<[u32; 3]>, rgba: [f32; 4]) -> Draw {
+    Draw {
+        vertices,
+        faces,
+        rgba: vec![rgba],
+        normals: None,
+        object_id: 7,
+        cull_back: true,
+        previous: None,
+    }
+}
+
+/// A grid of n x n quads (two triangles each) spanning [-1,1]^2 at z = 0, counter-clockwise.
+fn grid(n: usize, jitter: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+    let mut v = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            let inner = i > 0 && i < n && j > 0 && j < n;
+            let d = if inner {
+                jitter * (((i * 7 + j * 13) % 11) as f64 / 11.0 - 0.5)
+            } else {
+                0.0
+            };
+            v.push([
+                -1.0 + 2.0 * i as f64 / n as f64 + d,
+                -1.0 + 2.0 * j as f64 / n as f64 - d,
+                0.0,
+            ]);
+        }
+    }
+    let mut f = Vec::new();
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    for j in 0..n {
+        for i in 0..n {
+            f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    (v, f)
+}
+
+#[test]
+fn a_transparent_mesh_covers_every_sample_exactly_once() {
+    // Every pixel inside the grid must hold alpha 0.5 exactly: 0 would be a seam, 0.75 a sample
+    // blended twice along a shared edge.
+    let (v, f) = grid(9, 0.08);
+    let d = draw(v, f, [1.0, 1.0, 1.0, 0.5]);
+    let cam = camera(97, 61);
+    let frame = rasterize(&cam, &[d], &Options::default()).unwrap();
+    let alphas: Vec<f32> = frame.rgba.chunks(4).map(|c| c[3]).collect();
+    assert!(
+        alphas.iter().all(|&a| a == 0.0 || a == 0.5),
+        "a pixel was blended twice"
+    );
+    // The centre region is inside the grid: no gaps there.
+    for y in 20..40 {
+        for x in 35..60 {
+            assert_eq!(alphas[y * 97 + x], 0.5, "seam at ({x},{y})");
+        }
+    }
+}
+
+#[test]
+fn output_does_not_depend_on_the_thread_count() {
+    let (v, f) = grid(40, 0.03);
+    let mut d = draw(v.clone(), f, [0.2, 0.6, 0.9, 0.4]);
+    d.previous = Some(v.iter().map(|p| [p[0] + 0.01, p[1], p[2] - 0.02]).collect());
+    d.cull_back = false;
+    let (bv, bf) = grid(3, 0.0);
+    let bv = bv.iter().map(|p| [p[0] * 0.7, p[1] * 0.5, -0.3]).collect();
+    let back = draw(bv, bf, [0.9, 0.1, 0.1, 1.0]);
+    let opts = Options {
+        samples: 2,
+        ..Default::default()
+    };
+    let cam = camera(300, 200);
+    let run = |threads| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| rasterize(&cam, &[d.clone(), back.clone()], &opts).unwrap())
+    };
+    let (a, b) = (run(1), run(2));
+    assert_eq!(a.rgba, b.rgba);
+    assert_eq!(a.depth, b.depth);
+    assert_eq!(a.ids, b.ids);
+    assert_eq!(a.velocity, b.velocity);
+    assert!(a.ids.contains(&7));
+}
+
+#[test]
+fn depth_is_the_view_axis_distance() {
+    // A large quad at z = -2 seen from z = 3: depth 5 everywhere.
+    let v = vec![
+        [-9.0, -9.0, -2.0],
+        [9.0, -9.0, -2.0],
+        [9.0, 9.0, -2.0],
+        [-9.0, 9.0, -2.0],
+    ];
+    let d = draw(v, vec![[0, 1, 2], [0, 2, 3]], [0.5, 0.5, 0.5, 1.0]);
+    let frame = rasterize(&camera(32, 24), &[d], &Options::default()).unwrap();
+    for z in &frame.depth {
+        assert!((z - 5.0).abs() < 5e-6, "{z}");
+    }
+    assert!(frame.ids.iter().all(|&i| i == 7));
+}
+
+#[test]
+fn triangles_crossing_the_near_plane_are_clipped_not_dropped() {
+    // A floor through the camera position: half of it lies behind the camera.
+    let v = vec![[-50.0, -1.0, 50.0], [50.0, -1.0, 50.0], [0.0, -1.0, -50.0]];
+    let d = draw(v, vec![[0, 1, 2]], [1.0, 1.0, 1.0, 1.0]);
+    let frame = rasterize(&camera(64, 48), &[d], &Options::default()).unwrap();
+    assert!(frame.stats.clipped >= 1);
+    // The lower half of the image sees the floor; depth grows towards the horizon.
+    let col = 32;
+    let depths: Vec<f32> = (30..48).map(|y| frame.depth[y * 64 + col]).collect();
+    assert!(depths.iter().all(|z| z.is_finite()));
+    assert!(depths.windows(2).all(|p| p[0] >= p[1]));
+    assert!(frame.depth[5 * 64 + col].is_infinite());
+}
+
+#[test]
+fn back_faces_are_culled_only_when_asked() {
+    // Clockwise seen from the camera.
+    let v = vec![[-1.0, -1.0, 0.0], [0.0, 1.0, 0.0], [1.0, -1.0, 0.0]];
+    let mut d = draw(v, vec![[0, 1, 2]], [1.0, 0.0, 0.0, 1.0]);
+    let cam = camera(16, 16);
+    let f = rasterize(&cam, std::slice::from_ref(&d), &Options::default()).unwrap();
+    assert!(f.ids.iter().all(|&i| i == -1));
+    d.cull_back = false;
+    let f = rasterize(&cam, &[d], &Options::default()).unwrap();
+    assert!(f.ids.contains(&7));
+}
+
+#[test]
+fn velocity_is_the_screen_motion_in_pixels() {
+    // A quad at z = 0 moved by dx world units: at distance 3 with yfov 0.9 that is
+    // dx * (h / 2) / tan(0.45) / 3 pixels to the right.
+    let v = vec![
+        [-0.5, -0.5, 0.0],
+        [0.5, -0.5, 0.0],
+        [0.5, 0.5, 0.0],
+        [-0.5, 0.5, 0.0],
+    ];
+    let mut d = draw(v.clone(), vec![[0, 1, 2], [0, 2, 3]], [1.0; 4]);
+    let dx = 0.1;
+    d.previous = Some(v.iter().map(|p| [p[0] - dx, p[1] + dx, p[2]]).collect());
+    let f = rasterize(&camera(64, 64), &[d], &Options::default()).unwrap();
+    let want = dx * 32.0 / (0.45f64).tan() / 3.0;
+    let i = 32 * 64 + 32;
+    assert!((f64::from(f.velocity[2 * i]) - want).abs() < 1e-4);
+    assert!(
+        (f64::from(f.velocity[2 * i + 1]) - want).abs() < 1e-4,
+        "y is down: moving up is +y over time"
+    );
+}
+
+#[test]
+fn a_one_pixel_image_and_far_away_coordinates_work() {
+    let v = vec![[-1e6, -1e6, -1e6], [1e6, -1e6, -1e6], [0.0, 1e6, -1e6]];
+    let d = draw(v, vec![[0, 1, 2]], [1.0; 4]);
+    let pose = DMat4::IDENTITY;
+    let cam = Camera::new(pose, 1.0, 1, 1, 0.05, 1e7).unwrap();
+    let f = rasterize(&cam, &[d], &Options::default()).unwrap();
+    assert_eq!(f.ids, vec![7]);
+    assert!((f.depth[0] - 1e6).abs() < 1.0);
+}
+
+#[test]
+fn bad_options_name_the_argument() {
+    assert!(Blend::parse("sorted")
+        .unwrap_err()
+        .to_string()
+        .starts_with("blend"));
+    assert!(Shading::parse("phong")
+        .unwrap_err()
+        .to_string()
+        .starts_with("shading"));
+    let opts = Options {
+        samples: 3,
+        ..Default::default()
+    };
+    let e = rasterize(&camera(8, 8), &[], &opts).unwrap_err();
+    assert!(e.to_string().starts_with("samples"));
+}

@@ -1,0 +1,238 @@
+//! Coverage and the two passes of one screen tile.
+//!
+//! Coverage: a sample is inside when its three fixed-point edge functions are all >= 0 after
+//! the top-left bias. With the triangle oriented clockwise on screen (positive area, y down), an
+//! edge is *top* when horizontal and running right, *left* when running up; samples exactly on
+//! such an edge belong to the triangle, samples exactly on other edges do not. Two triangles
+//! that share an edge see it with opposite directions, so exactly one of them owns a sample on
+//! it: no gaps (seams) and no double hits.
+//!
+//! Pass 1 (opaque) keeps the nearest opaque fragment of each sample in a visibility buffer
+//! (1/w and a triangle reference), and shades only the winners. Pass 2 (transparent) collects
+//! the transparent fragments in front of the opaque surface; `blend.rs` composites them.
+use super::blend::{Blend, Frag, FragLists, Sample};
+use super::interp::Planes;
+use super::setup::{Tri, HALF, MAY_OPAQUE, MAY_TRANSPARENT, ONE};
+use super::shade::Shader;
+
+/// Tile side in samples.
+pub const TILE: i32 = 64;
+const NONE: u32 = u32::MAX;
+
+/// Edge functions of a triangle, ready to walk samples.
+#[derive(Clone, Copy)]
+pub struct Edges {
+    /// Value change per sample step in x and in y.
+    dx: [i64; 3],
+    dy: [i64; 3],
+    /// 1 for edges that are not top-left (their samples are excluded), else 0.
+    bias: [i64; 3],
+    x: [i64; 3],
+    y: [i64; 3],
+}
+
+impl Edges {
+    #[inline]
+    pub fn new(t: &Tri) -> Self {
+        let x = t.x.map(i64::from);
+        let y = t.y.map(i64::from);
+        let mut e = Edges {
+            dx: [0; 3],
+            dy: [0; 3],
+            bias: [0; 3],
+            x,
+            y,
+        };
+        for k in 0..3 {
+            let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+            let (ex, ey) = (x[j] - x[i], y[j] - y[i]);
+            e.dx[k] = -ey;
+            e.dy[k] = ex;
+            let top = ey == 0 && ex > 0;
+            let left = ey < 0;
+            e.bias[k] = if top || left { 0 } else { 1 };
+        }
+        e
+    }
+
+    /// Unbiased edge values at the centre of sample (ix, iy).
+    #[inline]
+    pub fn at(&self, ix: i32, iy: i32) -> [i64; 3] {
+        let px = i64::from(ix) * ONE + HALF;
+        let py = i64::from(iy) * ONE + HALF;
+        [0, 1, 2].map(|k| {
+            let i = (k + 1) % 3;
+            self.dx[k] * (px - self.x[i]) + self.dy[k] * (py - self.y[i])
+        })
+    }
+
+    /// Calls `f(ix, iy)` for every covered sample in the box.
+    #[inline]
+    pub fn cover(&self, bx: [i32; 4], mut f: impl FnMut(i32, i32)) {
+        let mut row = self.at(bx[0], bx[1]);
+        for k in 0..3 {
+            row[k] -= self.bias[k];
+        }
+        let sx = self.dx.map(|d| d * ONE);
+        let sy = self.dy.map(|d| d * ONE);
+        for iy in bx[1]..=bx[3] {
+            let mut e = row;
+            for ix in bx[0]..=bx[2] {
+                if (e[0] | e[1] | e[2]) >= 0 {
+                    f(ix, iy);
+                }
+                e[0] += sx[0];
+                e[1] += sx[1];
+                e[2] += sx[2];
+            }
+            row[0] += sy[0];
+            row[1] += sy[1];
+            row[2] += sy[2];
+        }
+    }
+}
+
+/// Reusable per-thread buffers of a tile.
+pub struct TileScratch {
+    zbuf: Vec<f32>,
+    winner: Vec<u32>,
+    pub samples: Vec<Sample>,
+    frags: FragLists,
+}
+
+impl Default for TileScratch {
+    fn default() -> Self {
+        let n = (TILE * TILE) as usize;
+        TileScratch {
+            zbuf: vec![0.0; n],
+            winner: vec![NONE; n],
+            samples: vec![Sample::BACKGROUND; n],
+            frags: FragLists::default(),
+        }
+    }
+}
+
+/// Renders the samples `rect` = [x0, y0, x1, y1) of a tile from its triangle references (in
+/// submission order) into `scratch.samples` (row stride TILE). Returns the fragment count.
+pub fn render_tile(
+    rect: [i32; 4],
+    refs: &[u32],
+    sh: &Shader,
+    blend: Blend,
+    scratch: &mut TileScratch,
+) -> u64 {
+    let [tx0, ty0, tx1, ty1] = rect;
+    let clamp = |t: &Tri| {
+        [
+            t.bbox[0].max(tx0),
+            t.bbox[1].max(ty0),
+            t.bbox[2].min(tx1 - 1),
+            t.bbox[3].min(ty1 - 1),
+        ]
+    };
+    let local = |ix: i32, iy: i32| ((iy - ty0) * TILE + (ix - tx0)) as usize;
+    let TileScratch {
+        zbuf,
+        winner,
+        samples,
+        frags,
+    } = scratch;
+    zbuf.fill(0.0);
+    winner.fill(NONE);
+    let mut fragments = 0u64;
+    let mut any_transparent = false;
+
+    // Pass 1: opaque fragments, nearest wins (strictly nearer: the first submitted keeps ties).
+    for &r in refs {
+        let t = sh.tri(r);
+        any_transparent |= t.flags & MAY_TRANSPARENT != 0;
+        if t.flags & MAY_OPAQUE == 0 {
+            continue;
+        }
+        let bx = clamp(t);
+        if bx[0] > bx[2] || bx[1] > bx[3] {
+            continue;
+        }
+        let edges = Edges::new(t);
+        let planes = Planes::new(t);
+        let mixed = t.flags & MAY_TRANSPARENT != 0;
+        edges.cover(bx, |ix, iy| {
+            fragments += 1;
+            if mixed && sh.alpha(t, sh.lambdas(r, &planes, ix, iy)) < 1.0 {
+                return;
+            }
+            let z = planes.invw(ix, iy) as f32;
+            let s = local(ix, iy);
+            if z > zbuf[s] {
+                zbuf[s] = z;
+                winner[s] = r;
+            }
+        });
+    }
+
+    // Shade the opaque winners (neighbouring samples mostly share a triangle: keep its planes).
+    let mut cached = (NONE, None::<Planes>);
+    for iy in ty0..ty1 {
+        for ix in tx0..tx1 {
+            let s = local(ix, iy);
+            let r = winner[s];
+            samples[s] = if r == NONE {
+                Sample::BACKGROUND
+            } else {
+                let t = sh.tri(r);
+                if cached.0 != r {
+                    cached = (r, Some(Planes::new(t)));
+                }
+                let planes = cached.1.as_ref().expect("set above");
+                let sh = sh.shade(t, sh.lambdas(r, planes, ix, iy));
+                Sample {
+                    rgba: sh.rgba,
+                    invw: zbuf[s],
+                    id: sh.id,
+                    velocity: sh.velocity,
+                }
+            };
+        }
+    }
+    if !any_transparent {
+        return fragments;
+    }
+
+    // Pass 2: transparent fragments in front of the opaque surface.
+    frags.clear();
+    for &r in refs {
+        let t = sh.tri(r);
+        if t.flags & MAY_TRANSPARENT == 0 {
+            continue;
+        }
+        let bx = clamp(t);
+        if bx[0] > bx[2] || bx[1] > bx[3] {
+            continue;
+        }
+        let edges = Edges::new(t);
+        let planes = Planes::new(t);
+        let mixed = t.flags & MAY_OPAQUE != 0;
+        edges.cover(bx, |ix, iy| {
+            let s = local(ix, iy);
+            let z = planes.invw(ix, iy) as f32;
+            if z <= zbuf[s] {
+                return;
+            }
+            let lam = sh.lambdas(r, &planes, ix, iy);
+            if mixed && sh.alpha(t, lam) >= 1.0 {
+                return;
+            }
+            fragments += 1;
+            let shaded = sh.shade(t, lam);
+            if shaded.rgba[3] > 0.0 {
+                frags.frags.push(Frag {
+                    sample: s as u32,
+                    invw: z,
+                    shaded,
+                });
+            }
+        });
+    }
+    frags.composite(&mut samples[..(TILE * TILE) as usize], blend);
+    fragments
+}
