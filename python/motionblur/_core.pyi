@@ -1,9 +1,22 @@
 """Type stubs of the compiled core. The public API wraps these; see the Python modules."""
 
+import numpy as np
+
 __version__: str
 
+# --- geometry (mesh, contour, motion volume, contour table)
+
+# --- end geometry
+
+# --- image (motionblur.image kernels)
+
+# --- end image
+
+# --- shell (blur shells, silhouette of motion)
+
+# --- end shell
+
 # --- raster
-import numpy as np
 
 def _rasterize(
     view: np.ndarray,
