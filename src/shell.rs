@@ -1,1 +1,418 @@
-//! Blur shells for deforming meshes (Jones and Keyser): silhouette of motion, history rings, hysteresis, fading.
+//! Blur shells for deforming meshes (Jones and Keyser, "Real-Time Geometric Motion Blur for a
+//! Deforming Polygonal Mesh"): the silhouette of motion, per-polygon history rings, hysteresis
+//! and fading.
+//!
+//! A [`BlurShell`] is fed the mesh's world positions at each *update* and builds, on demand, a
+//! shell of quad strips attached to the current mesh. The rules (the paper leaves some open;
+//! each choice is stated here, in the Python docstring, and tested):
+//!
+//! - **Silhouette of motion** ([`silhouette`]): vertex facing is the sign of
+//!   `n . (p - p_prev)`; a triangle with one front and two back corners has the edge between
+//!   its back corners on the silhouette. A vertex with `n . d == 0` (not moving, or moving in
+//!   its tangent plane) is neutral, so a static polygon never has an edge. The first update has
+//!   no previous positions, so it finds no silhouette.
+//! - **History ring.** Each polygon keeps a ring of `subdivisions` elements, one per update,
+//!   each an edge code (the local edge `k`, and whether it was on the silhouette then). Positions
+//!   and normals are not copied per polygon: the shell keeps the last `subdivisions` snapshots
+//!   of all vertex positions (`f32`) and unit normals (`f32`), and an element's pair is its
+//!   edge's vertices in the snapshot of its update. A polygon off the silhouette records the
+//!   last edge it had (the paper's "positions of the last blurred vertices").
+//! - **Birth.** A polygon whose strip is dead (or that never had one) and gains an edge at
+//!   update `n` starts a strip with two elements: its edge at update `n` and the same edge at
+//!   update `n - 1`, where the motion that put it on the silhouette started. So a shell fed
+//!   `subdivisions + 1` positions spans all of them.
+//! - **Fade level** `d` per polygon (0 = full strength): off the silhouette for more than
+//!   `hysteresis` updates it rises by one per update; on the silhouette it falls by one per
+//!   update (so a strip that comes back fades back in rather than popping). The strip is dead
+//!   at `d == subdivisions`; a dead polygon records nothing.
+//! - **Alpha.** Pair `j` of a strip (`j = 0` the base on the current mesh, `j = i + 1` the ring
+//!   element recorded `i` updates ago) has alpha `initial_alpha * (1 - max(j, d) / subdivisions)`
+//!   (`f32`). With `d = 0` this is the paper's ramp: `initial_alpha / subdivisions` less per
+//!   pair, 0 at the last of `subdivisions + 1` pairs. Every strip vertex that exists in two
+//!   consecutive builds (the base of one build is element 0 of the next) changes alpha by at
+//!   most `initial_alpha / subdivisions`, and a vertex disappears only at alpha <= that step.
+//! - **Attachment.** The base pair is the polygon's last silhouette edge at the current
+//!   positions (those of the last update, or positions given to `build`).
+use rayon::prelude::*;
+
+use crate::mesh::{normalize, MAX_ELEMENTS};
+use crate::{Error, Result};
+
+mod build;
+pub mod silhouette;
+#[cfg(test)]
+mod tests;
+
+pub use build::ShellMesh;
+use silhouette::{face_edge, face_normals_into, facing, VertexFaces, CHUNK, NEUTRAL, NO_EDGE};
+pub use silhouette::{motion_silhouette, BACK, FRONT};
+
+/// Edge-code bit: the element's edge was on the silhouette at its update.
+pub const ON_SILHOUETTE: u8 = 4;
+/// Largest `subdivisions` (the fade level is a `u8`).
+pub const MAX_SUBDIVISIONS: u32 = 255;
+/// Largest `hysteresis` (the count of updates off the silhouette is a saturating `u16`).
+pub const MAX_HYSTERESIS: u32 = 65_000;
+
+/// Shell options (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShellOptions {
+    pub subdivisions: u32,
+    pub hysteresis: u32,
+    pub initial_alpha: f32,
+}
+
+impl Default for ShellOptions {
+    fn default() -> Self {
+        ShellOptions {
+            subdivisions: 10,
+            hysteresis: 3,
+            initial_alpha: 1.0,
+        }
+    }
+}
+
+/// The shell's colour: one RGB for every strip, or the RGB of each mesh vertex.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ShellColor {
+    Uniform([f32; 3]),
+    PerVertex(Vec<[f32; 3]>),
+}
+
+/// Per-polygon state, packed (one stream in the update and build passes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FaceState {
+    /// Local index of the last silhouette edge, or `NO_EDGE`.
+    pub last: u8,
+    /// Fade level `d`; the strip is dead at `d >= subdivisions`.
+    pub fade: u8,
+    /// Number of valid ring elements (newest first), at most `subdivisions`.
+    pub run: u8,
+    /// Updates since the polygon last had a silhouette edge (saturating).
+    pub since: u16,
+}
+
+impl FaceState {
+    const INITIAL: FaceState = FaceState {
+        last: NO_EDGE,
+        fade: u8::MAX,
+        run: 0,
+        since: u16::MAX,
+    };
+}
+
+/// The stateful blur shell of one mesh (fixed faces and vertex count).
+#[derive(Debug)]
+pub struct BlurShell {
+    faces: Vec<[u32; 3]>,
+    n_vertices: usize,
+    opts: ShellOptions,
+    mask: Option<Vec<bool>>,
+    color: ShellColor,
+    vf: VertexFaces,
+    updates: u64,
+    /// Positions at the last update (f64), the previous positions of the next one.
+    prev: Vec<[f64; 3]>,
+    facing: Vec<i8>,
+    face_n: Vec<[f64; 3]>,
+    /// `subdivisions` snapshots of positions and unit normals, slot-major (`slot * V + v`).
+    snap_pos: Vec<[f32; 3]>,
+    snap_nrm: Vec<[f32; 3]>,
+    /// Edge codes, slot-major (`slot * F + f`).
+    ring: Vec<u8>,
+    /// With one subdivision the birth element shares the ring row; it goes here instead.
+    scratch_row: Vec<u8>,
+    state: Vec<FaceState>,
+}
+
+fn check_rows(a: &[[f64; 3]], n: usize, name: &'static str) -> Result<()> {
+    if a.len() != n {
+        return Err(Error::shape(
+            name,
+            format!(
+                "expected {n} rows (the shell's vertex count), got {}; a BlurShell keeps its \
+                 vertex count: make a new shell for a mesh with other vertices",
+                a.len()
+            ),
+        ));
+    }
+    if let Some(bad) = a
+        .par_iter()
+        .position_first(|v| v.iter().any(|x| !x.is_finite()))
+    {
+        return Err(Error::value(name, format!("row {bad} is NaN or inf")));
+    }
+    Ok(())
+}
+
+impl BlurShell {
+    /// A shell for `faces` over `n_vertices` vertices. Errors name `faces`, `subdivisions`,
+    /// `hysteresis`, `initial_alpha`, `mask` or `color`.
+    pub fn new(
+        faces: Vec<[u32; 3]>,
+        n_vertices: usize,
+        opts: ShellOptions,
+        mask: Option<Vec<bool>>,
+        color: ShellColor,
+    ) -> Result<Self> {
+        if faces.is_empty() {
+            return Err(Error::shape("faces", "is empty"));
+        }
+        if faces.len() > MAX_ELEMENTS || n_vertices > MAX_ELEMENTS {
+            return Err(Error::shape("faces", "too many faces or vertices"));
+        }
+        if n_vertices == 0 {
+            return Err(Error::shape("vertices", "is empty"));
+        }
+        let nv = n_vertices as u32;
+        if let Some(bad) = faces
+            .par_iter()
+            .position_first(|f| f.iter().any(|&i| i >= nv))
+        {
+            return Err(Error::value(
+                "faces",
+                format!("face {bad} has an index out of range [0, {nv})"),
+            ));
+        }
+        if !(1..=MAX_SUBDIVISIONS).contains(&opts.subdivisions) {
+            return Err(Error::value(
+                "subdivisions",
+                format!(
+                    "must be in 1..={MAX_SUBDIVISIONS}, got {}",
+                    opts.subdivisions
+                ),
+            ));
+        }
+        if opts.hysteresis > MAX_HYSTERESIS {
+            return Err(Error::value(
+                "hysteresis",
+                format!("must be in 0..={MAX_HYSTERESIS}, got {}", opts.hysteresis),
+            ));
+        }
+        if !(opts.initial_alpha > 0.0 && opts.initial_alpha <= 1.0) {
+            return Err(Error::value(
+                "initial_alpha",
+                format!("must be in (0, 1], got {}", opts.initial_alpha),
+            ));
+        }
+        if let Some(m) = &mask {
+            if m.len() != faces.len() {
+                return Err(Error::shape(
+                    "mask",
+                    format!(
+                        "expected {} values (one per face), got {}",
+                        faces.len(),
+                        m.len()
+                    ),
+                ));
+            }
+        }
+        let bad_rgb = |c: &[f32; 3]| c.iter().any(|x| !x.is_finite() || *x < 0.0);
+        match &color {
+            ShellColor::Uniform(c) if bad_rgb(c) => {
+                return Err(Error::value("color", "must be finite and >= 0"));
+            }
+            ShellColor::PerVertex(v) if v.len() != n_vertices => {
+                return Err(Error::shape(
+                    "color",
+                    format!("expected (3,) or ({n_vertices},3), got {} rows", v.len()),
+                ));
+            }
+            ShellColor::PerVertex(v) if v.iter().any(bad_rgb) => {
+                return Err(Error::value("color", "must be finite and >= 0"));
+            }
+            _ => {}
+        }
+        let s = opts.subdivisions as usize;
+        let nf = faces.len();
+        let vf = VertexFaces::new(&faces, n_vertices);
+        Ok(BlurShell {
+            vf,
+            n_vertices,
+            opts,
+            mask,
+            color,
+            updates: 0,
+            prev: vec![[0.0; 3]; n_vertices],
+            facing: vec![NEUTRAL; n_vertices],
+            face_n: vec![[0.0; 3]; nf],
+            snap_pos: vec![[0.0; 3]; s * n_vertices],
+            snap_nrm: vec![[0.0; 3]; s * n_vertices],
+            ring: vec![NO_EDGE; s * nf],
+            scratch_row: if s == 1 {
+                vec![NO_EDGE; nf]
+            } else {
+                Vec::new()
+            },
+            state: vec![FaceState::INITIAL; nf],
+            faces,
+        })
+    }
+
+    pub fn options(&self) -> ShellOptions {
+        self.opts
+    }
+    pub fn faces(&self) -> &[[u32; 3]] {
+        &self.faces
+    }
+    pub fn n_vertices(&self) -> usize {
+        self.n_vertices
+    }
+    /// Number of updates since construction or the last reset.
+    pub fn updates(&self) -> u64 {
+        self.updates
+    }
+    /// Per-polygon state.
+    pub fn state(&self) -> &[FaceState] {
+        &self.state
+    }
+    /// Vertex facing of the last update (`FRONT`, `BACK`, `NEUTRAL`).
+    pub fn facing(&self) -> &[i8] {
+        &self.facing
+    }
+    /// The update index (ring slot) of the most recent element, as the paper's global index.
+    pub fn update_index(&self) -> Option<usize> {
+        self.updates
+            .checked_sub(1)
+            .map(|m| (m % self.opts.subdivisions as u64) as usize)
+    }
+    /// The ring element of face `f` recorded `i` updates ago (`i < run`): edge code, with
+    /// `ON_SILHOUETTE` set when it was on the silhouette.
+    pub fn element(&self, f: usize, i: usize) -> Option<u8> {
+        let st = self.state.get(f)?;
+        if i >= st.run as usize {
+            return None;
+        }
+        let s = self.opts.subdivisions as u64;
+        let slot = ((self.updates - 1 - i as u64) % s) as usize;
+        Some(self.ring[slot * self.faces.len() + f])
+    }
+
+    /// Forget every update: no strips, and the next update finds no silhouette.
+    pub fn reset(&mut self) {
+        self.updates = 0;
+        self.state.fill(FaceState::INITIAL);
+        self.facing.fill(NEUTRAL);
+    }
+
+    /// Feed the mesh's world positions (V,3) and optionally its normals (V,3) at one update.
+    /// Errors name `vertices` or `normals` (wrong count, NaN or inf); the state is then unchanged.
+    pub fn update(&mut self, vertices: &[[f64; 3]], normals: Option<&[[f64; 3]]>) -> Result<()> {
+        check_rows(vertices, self.n_vertices, "vertices")?;
+        if let Some(n) = normals {
+            check_rows(n, self.n_vertices, "normals")?;
+        }
+        let s = self.opts.subdivisions as usize;
+        let nv = self.n_vertices;
+        let nf = self.faces.len();
+        let n = self.updates;
+        let slot = (n % s as u64) as usize;
+        let has_prev = n > 0;
+        if normals.is_none() {
+            face_normals_into(vertices, &self.faces, &mut self.face_n);
+        }
+        // Vertex pass: facing, snapshots, previous positions.
+        {
+            let (face_n, vf) = (&self.face_n, &self.vf);
+            let sp = &mut self.snap_pos[slot * nv..(slot + 1) * nv];
+            let sn = &mut self.snap_nrm[slot * nv..(slot + 1) * nv];
+            self.facing
+                .par_chunks_mut(CHUNK)
+                .zip(self.prev.par_chunks_mut(CHUNK))
+                .zip(sp.par_chunks_mut(CHUNK))
+                .zip(sn.par_chunks_mut(CHUNK))
+                .enumerate()
+                .for_each(|(c, (((fa, pr), sp), sn))| {
+                    let base = c * CHUNK;
+                    for i in 0..fa.len() {
+                        let v = base + i;
+                        let nrm = match normals {
+                            Some(given) => given[v],
+                            None => vf.normal(v, face_n),
+                        };
+                        let p = vertices[v];
+                        fa[i] = if has_prev {
+                            facing(nrm, p, pr[i])
+                        } else {
+                            NEUTRAL
+                        };
+                        pr[i] = p;
+                        sp[i] = [p[0] as f32, p[1] as f32, p[2] as f32];
+                        let u = normalize(nrm);
+                        sn[i] = [u[0] as f32, u[1] as f32, u[2] as f32];
+                    }
+                });
+        }
+        // Face pass: silhouette edge, state, ring element (and the birth element at n - 1).
+        {
+            let mut rows: Vec<&mut [u8]> = self.ring.chunks_mut(nf).collect();
+            let (row, prev_row): (&mut [u8], &mut [u8]) = if s == 1 {
+                (rows.pop().expect("one row"), &mut self.scratch_row)
+            } else {
+                let pslot = (slot + s - 1) % s;
+                let (lo, hi) = rows.split_at_mut(slot.max(pslot));
+                if slot > pslot {
+                    (&mut *hi[0], &mut *lo[pslot])
+                } else {
+                    (&mut *lo[slot], &mut *hi[0])
+                }
+            };
+            let (facing_v, faces, mask) = (&self.facing, &self.faces, self.mask.as_deref());
+            let h = self.opts.hysteresis;
+            self.state
+                .par_chunks_mut(CHUNK)
+                .zip(row.par_chunks_mut(CHUNK))
+                .zip(prev_row.par_chunks_mut(CHUNK))
+                .enumerate()
+                .for_each(|(c, ((sts, row), prow))| {
+                    let base = c * CHUNK;
+                    for i in 0..sts.len() {
+                        let f = base + i;
+                        let on = mask.is_none_or(|m| m[f]);
+                        let code = if on {
+                            face_edge(facing_v, &faces[f])
+                        } else {
+                            NO_EDGE
+                        };
+                        step_face(&mut sts[i], code, s, h, &mut row[i], &mut prow[i]);
+                    }
+                });
+        }
+        self.updates += 1;
+        Ok(())
+    }
+}
+
+/// One polygon's state change at an update with silhouette edge `code` (or `NO_EDGE`): writes
+/// its ring element for this update into `elem` and, at a birth, the element of the previous
+/// update into `prev_elem`.
+#[inline]
+fn step_face(st: &mut FaceState, code: u8, s: usize, h: u32, elem: &mut u8, prev_elem: &mut u8) {
+    let alive = (st.fade as usize) < s;
+    if code != NO_EDGE {
+        if alive {
+            st.fade = st.fade.saturating_sub(1);
+            st.run = (st.run as usize + 1).min(s) as u8;
+        } else {
+            st.fade = 0;
+            st.run = 2.min(s) as u8;
+            *prev_elem = code;
+        }
+        st.last = code;
+        st.since = 0;
+        *elem = code | ON_SILHOUETTE;
+    } else {
+        st.since = st.since.saturating_add(1);
+        if alive {
+            if u32::from(st.since) > h {
+                st.fade += 1;
+            }
+            if (st.fade as usize) < s {
+                st.run = (st.run as usize + 1).min(s) as u8;
+                *elem = st.last;
+            } else {
+                st.run = 0;
+            }
+        }
+    }
+}

@@ -1,0 +1,153 @@
+//! The silhouette of motion (Jones and Keyser, section 3.2): per-vertex facing and the
+//! back-facing edge of each triangle.
+//!
+//! - The facing of a vertex is the sign of `n . (p - p_prev)`, `n` its normal: `FRONT` (> 0),
+//!   `BACK` (< 0) or `NEUTRAL` (exactly 0: a vertex that does not move, or moves in its tangent
+//!   plane). Neutral vertices are neither front nor back, so a static polygon never has an edge.
+//! - A triangle has a silhouette edge when exactly one corner is front and the other two are
+//!   back: the edge between the two back corners, as the face runs it. It is stored as the
+//!   local index `k` of the edge `face[k] -> face[(k + 1) % 3]`, or `NO_EDGE`.
+//! - Without given normals, the vertex normal is the *unnormalised* sum of the raw face normals
+//!   `(b - a) x (c - a)` of the faces around it, added in increasing face order starting from
+//!   zero (numpy's `np.add.at` order), so the facing signs equal a numpy twin's bit for bit.
+use rayon::prelude::*;
+
+use crate::mesh::{dot, face_normal};
+
+/// Vertex facing values.
+pub const FRONT: i8 = 1;
+pub const BACK: i8 = -1;
+pub const NEUTRAL: i8 = 0;
+/// "No silhouette edge" in a face's edge code.
+pub const NO_EDGE: u8 = 3;
+
+/// Work items per rayon task: fixed, so the split does not depend on the thread count.
+pub(crate) const CHUNK: usize = 8192;
+
+/// The faces around each vertex (a CSR table), in increasing face order; a face that repeats a
+/// vertex is listed once per corner, as `np.add.at` would add it.
+#[derive(Debug, Clone)]
+pub struct VertexFaces {
+    offsets: Vec<u32>,
+    faces: Vec<u32>,
+}
+
+impl VertexFaces {
+    pub fn new(faces: &[[u32; 3]], n_vertices: usize) -> Self {
+        let mut offsets = vec![0u32; n_vertices + 1];
+        for f in faces {
+            for &i in f {
+                offsets[i as usize + 1] += 1;
+            }
+        }
+        for i in 0..n_vertices {
+            offsets[i + 1] += offsets[i];
+        }
+        let mut fill = offsets.clone();
+        let mut out = vec![0u32; 3 * faces.len()];
+        for (fi, f) in faces.iter().enumerate() {
+            for &i in f {
+                out[fill[i as usize] as usize] = fi as u32;
+                fill[i as usize] += 1;
+            }
+        }
+        VertexFaces {
+            offsets,
+            faces: out,
+        }
+    }
+
+    /// Unnormalised vertex normal of `v`: the sum of `face_n` over its faces, in order.
+    #[inline]
+    pub fn normal(&self, v: usize, face_n: &[[f64; 3]]) -> [f64; 3] {
+        let mut acc = [0.0f64; 3];
+        for &f in &self.faces[self.offsets[v] as usize..self.offsets[v + 1] as usize] {
+            let n = face_n[f as usize];
+            acc[0] += n[0];
+            acc[1] += n[1];
+            acc[2] += n[2];
+        }
+        acc
+    }
+}
+
+/// Raw face normals `(b - a) x (c - a)` into `out` (same length as `faces`), in parallel.
+pub fn face_normals_into(vertices: &[[f64; 3]], faces: &[[u32; 3]], out: &mut [[f64; 3]]) {
+    out.par_chunks_mut(CHUNK)
+        .zip(faces.par_chunks(CHUNK))
+        .for_each(|(o, f)| {
+            for (o, f) in o.iter_mut().zip(f) {
+                *o = face_normal(vertices, f);
+            }
+        });
+}
+
+/// Facing of one vertex with normal `n` moving from `prev` to `p`.
+#[inline]
+pub fn facing(n: [f64; 3], p: [f64; 3], prev: [f64; 3]) -> i8 {
+    let s = dot(n, [p[0] - prev[0], p[1] - prev[1], p[2] - prev[2]]);
+    if s > 0.0 {
+        FRONT
+    } else if s < 0.0 {
+        BACK
+    } else {
+        NEUTRAL
+    }
+}
+
+/// The silhouette edge code of a face from its corners' facing: `k` (edge
+/// `face[k] -> face[(k + 1) % 3]`) when one corner is front and two are back, else `NO_EDGE`.
+#[inline]
+pub fn face_edge(facing: &[i8], f: &[u32; 3]) -> u8 {
+    let s = [
+        facing[f[0] as usize],
+        facing[f[1] as usize],
+        facing[f[2] as usize],
+    ];
+    let fronts = s.iter().filter(|&&x| x == FRONT).count();
+    let backs = s.iter().filter(|&&x| x == BACK).count();
+    if fronts != 1 || backs != 2 {
+        return NO_EDGE;
+    }
+    // The edge opposite the front corner j runs from corner j + 1 to corner j + 2.
+    let j = s.iter().position(|&x| x == FRONT).unwrap_or(0);
+    ((j + 1) % 3) as u8
+}
+
+/// The silhouette of motion of a mesh moving from `previous` to `vertices` (both (V,3), checked
+/// by the caller), with the given vertex normals or the unnormalised area-weighted ones.
+/// Returns the facing per vertex and the edge code per face.
+pub fn motion_silhouette(
+    vertices: &[[f64; 3]],
+    previous: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    normals: Option<&[[f64; 3]]>,
+) -> (Vec<i8>, Vec<u8>) {
+    let mut fac = vec![NEUTRAL; vertices.len()];
+    match normals {
+        Some(n) => fac
+            .par_iter_mut()
+            .enumerate()
+            .with_min_len(CHUNK)
+            .for_each(|(i, s)| {
+                *s = facing(n[i], vertices[i], previous[i]);
+            }),
+        None => {
+            let vf = VertexFaces::new(faces, vertices.len());
+            let mut fnr = vec![[0.0; 3]; faces.len()];
+            face_normals_into(vertices, faces, &mut fnr);
+            fac.par_iter_mut()
+                .enumerate()
+                .with_min_len(CHUNK)
+                .for_each(|(i, s)| {
+                    *s = facing(vf.normal(i, &fnr), vertices[i], previous[i]);
+                });
+        }
+    }
+    let edges = faces
+        .par_iter()
+        .with_min_len(CHUNK)
+        .map(|f| face_edge(&fac, f))
+        .collect();
+    (fac, edges)
+}
