@@ -14,6 +14,45 @@ __version__: str
 
 # --- shell (blur shells, silhouette of motion)
 
+class _BlurShell:
+    """Rust blur shell (see motionblur.BlurShell). faces i64 (F,3); mask bool (F,) | None; color
+    f32 (1,3) | (V,3) | None (white)."""
+
+    def __init__(
+        self,
+        faces: np.ndarray,
+        n_vertices: int,
+        subdivisions: int,
+        hysteresis: int,
+        initial_alpha: float,
+        mask: np.ndarray | None = None,
+        color: np.ndarray | None = None,
+    ) -> None: ...
+    def update(self, vertices: np.ndarray, normals: np.ndarray | None = None) -> None:
+        """vertices, normals f64 (V,3) C-contiguous. Releases the GIL."""
+    def build(
+        self, vertices: np.ndarray | None = None, normals: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(vertices f64 (N,3), faces i64 (M,3), rgba f32 (N,4) straight, normals f32 (N,3),
+        face i64 (N,), step i32 (N,)). Releases the GIL."""
+    def reset(self) -> None: ...
+    @property
+    def updates(self) -> int: ...
+    @property
+    def update_index(self) -> int | None: ...
+    @property
+    def n_vertices(self) -> int: ...
+    @property
+    def n_faces(self) -> int: ...
+    def _state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(facing i8 (V,), last edge i8 (F,), since i64 (F,), fade i32 (F,), run i32 (F,))."""
+    def _element(self, face: int, age: int) -> tuple[int, bool] | None: ...
+
+def _motion_silhouette(
+    vertices: np.ndarray, previous_vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(facing i8 (V,) +1/-1/0, edge i8 (F,) k or -1). f64 (V,3) inputs, faces i64 (F,3)."""
+
 # --- end shell
 
 # --- raster
