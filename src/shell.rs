@@ -14,8 +14,8 @@
 //! - **History ring.** Each polygon keeps a ring of `subdivisions` elements, one per update,
 //!   each an edge code (the local edge `k`, and whether it was on the silhouette then). Positions
 //!   and normals are not copied per polygon: the shell keeps the last `subdivisions` snapshots
-//!   of all vertex positions (`f32`) and unit normals (`f32`), and an element's pair is its
-//!   edge's vertices in the snapshot of its update. A polygon off the silhouette records the
+//!   of all vertex positions and normals (`f32`), and an element's pair is its edge's vertices
+//!   in the snapshot of its update. The facing test runs on these float32 positions. A polygon off the silhouette records the
 //!   last edge it had (the paper's "positions of the last blurred vertices").
 //! - **Birth.** A polygon whose strip is dead (or that never had one) and gains an edge at
 //!   update `n` starts a strip with two elements: its edge at update `n` and the same edge at
@@ -32,10 +32,11 @@
 //!   consecutive builds (the base of one build is element 0 of the next) changes alpha by at
 //!   most `initial_alpha / subdivisions`, and a vertex disappears only at alpha <= that step.
 //! - **Attachment.** The base pair is the polygon's last silhouette edge at the current
-//!   positions (those of the last update, or positions given to `build`).
+//!   positions: exactly the positions given to `build`, or else the float32 snapshot of the
+//!   last update.
 use rayon::prelude::*;
 
-use crate::mesh::{normalize, MAX_ELEMENTS};
+use crate::mesh::MAX_ELEMENTS;
 use crate::{Error, Result};
 
 mod build;
@@ -111,13 +112,15 @@ pub struct BlurShell {
     color: ShellColor,
     vf: VertexFaces,
     updates: u64,
-    /// Positions at the last update (f64), the previous positions of the next one.
-    prev: Vec<[f64; 3]>,
     facing: Vec<i8>,
-    face_n: Vec<[f64; 3]>,
-    /// `subdivisions` snapshots of positions and unit normals, slot-major (`slot * V + v`).
-    snap_pos: Vec<[f32; 3]>,
-    snap_nrm: Vec<[f32; 3]>,
+    face_n: Vec<[f32; 3]>,
+    /// `subdivisions + 1` buffers of float32 positions and raw (unnormalised) float32 vertex
+    /// normals: one per ring slot (`buf_of_slot`) and a spare that the next update fills, so a
+    /// failed update leaves every snapshot intact.
+    pos_bufs: Vec<Vec<[f32; 3]>>,
+    nrm_bufs: Vec<Vec<[f32; 3]>>,
+    buf_of_slot: Vec<usize>,
+    spare: usize,
     /// Edge codes, slot-major (`slot * F + f`).
     ring: Vec<u8>,
     /// With one subdivision the birth element shares the ring row; it goes here instead.
@@ -233,11 +236,12 @@ impl BlurShell {
             mask,
             color,
             updates: 0,
-            prev: vec![[0.0; 3]; n_vertices],
             facing: vec![NEUTRAL; n_vertices],
             face_n: vec![[0.0; 3]; nf],
-            snap_pos: vec![[0.0; 3]; s * n_vertices],
-            snap_nrm: vec![[0.0; 3]; s * n_vertices],
+            pos_bufs: vec![vec![[0.0; 3]; n_vertices]; s + 1],
+            nrm_bufs: vec![vec![[0.0; 3]; n_vertices]; s + 1],
+            buf_of_slot: (0..s).collect(),
+            spare: s,
             ring: vec![NO_EDGE; s * nf],
             scratch_row: if s == 1 {
                 vec![NO_EDGE; nf]
@@ -298,52 +302,67 @@ impl BlurShell {
     /// Feed the mesh's world positions (V,3) and optionally its normals (V,3) at one update.
     /// Errors name `vertices` or `normals` (wrong count, NaN or inf); the state is then unchanged.
     pub fn update(&mut self, vertices: &[[f64; 3]], normals: Option<&[[f64; 3]]>) -> Result<()> {
-        check_rows(vertices, self.n_vertices, "vertices")?;
+        if vertices.len() != self.n_vertices {
+            return check_rows(vertices, self.n_vertices, "vertices");
+        }
         if let Some(n) = normals {
             check_rows(n, self.n_vertices, "normals")?;
         }
         let s = self.opts.subdivisions as usize;
-        let nv = self.n_vertices;
         let nf = self.faces.len();
         let n = self.updates;
         let slot = (n % s as u64) as usize;
-        let has_prev = n > 0;
-        if normals.is_none() {
-            face_normals_into(vertices, &self.faces, &mut self.face_n);
+        // Pass A: float32 positions into the spare buffer, checking finiteness on the way.
+        let spare = self.spare;
+        let bad = self.pos_bufs[spare]
+            .par_chunks_mut(CHUNK)
+            .zip(vertices.par_chunks(CHUNK))
+            .map(|(o, v)| {
+                let mut bad = false;
+                for (o, p) in o.iter_mut().zip(v) {
+                    bad |= !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite());
+                    *o = [p[0] as f32, p[1] as f32, p[2] as f32];
+                }
+                bad
+            })
+            .reduce(|| false, |a, b| a || b);
+        if bad {
+            return check_rows(vertices, self.n_vertices, "vertices");
         }
-        // Vertex pass: facing, snapshots, previous positions.
+        let cur = &self.pos_bufs[spare];
+        // Pass B: face normals (unless given).
+        if normals.is_none() {
+            face_normals_into(cur, &self.faces, &mut self.face_n);
+        }
+        // Pass C: vertex normals and facing against the previous update's positions.
         {
+            let prev =
+                (n > 0).then(|| &self.pos_bufs[self.buf_of_slot[((n - 1) % s as u64) as usize]]);
             let (face_n, vf) = (&self.face_n, &self.vf);
-            let sp = &mut self.snap_pos[slot * nv..(slot + 1) * nv];
-            let sn = &mut self.snap_nrm[slot * nv..(slot + 1) * nv];
             self.facing
                 .par_chunks_mut(CHUNK)
-                .zip(self.prev.par_chunks_mut(CHUNK))
-                .zip(sp.par_chunks_mut(CHUNK))
-                .zip(sn.par_chunks_mut(CHUNK))
+                .zip(self.nrm_bufs[spare].par_chunks_mut(CHUNK))
                 .enumerate()
-                .for_each(|(c, (((fa, pr), sp), sn))| {
+                .for_each(|(c, (fa, sn))| {
                     let base = c * CHUNK;
                     for i in 0..fa.len() {
                         let v = base + i;
                         let nrm = match normals {
-                            Some(given) => given[v],
+                            Some(given) => {
+                                [given[v][0] as f32, given[v][1] as f32, given[v][2] as f32]
+                            }
                             None => vf.normal(v, face_n),
                         };
-                        let p = vertices[v];
-                        fa[i] = if has_prev {
-                            facing(nrm, p, pr[i])
-                        } else {
-                            NEUTRAL
+                        fa[i] = match prev {
+                            Some(pr) => facing(nrm, cur[v], pr[v]),
+                            None => NEUTRAL,
                         };
-                        pr[i] = p;
-                        sp[i] = [p[0] as f32, p[1] as f32, p[2] as f32];
-                        let u = normalize(nrm);
-                        sn[i] = [u[0] as f32, u[1] as f32, u[2] as f32];
+                        sn[i] = nrm;
                     }
                 });
         }
-        // Face pass: silhouette edge, state, ring element (and the birth element at n - 1).
+        self.spare = std::mem::replace(&mut self.buf_of_slot[slot], spare);
+        // Pass D: silhouette edge, state, ring element (and the birth element at n - 1).
         {
             let mut rows: Vec<&mut [u8]> = self.ring.chunks_mut(nf).collect();
             let (row, prev_row): (&mut [u8], &mut [u8]) = if s == 1 {

@@ -129,9 +129,8 @@ impl BlurShell {
                 (v, t, c, n, fa, st) = (vt, tt, ct, nt, ft, stl);
             }
         }
-        let base_pos = vertices.unwrap_or(&self.prev);
         jobs.into_par_iter()
-            .for_each(|(ci, v0, out)| self.fill_chunk(ci, v0, out, base_pos, normals));
+            .for_each(|(ci, v0, out)| self.fill_chunk(ci, v0, out, vertices, normals));
         Ok(mesh)
     }
 
@@ -140,11 +139,15 @@ impl BlurShell {
         ci: usize,
         v0: u32,
         o: Out<'_>,
-        base_pos: &[[f64; 3]],
+        base_pos: Option<&[[f64; 3]]>,
         base_nrm: Option<&[[f64; 3]]>,
     ) {
         let s = self.opts.subdivisions as usize;
-        let (nv, nf) = (self.n_vertices, self.faces.len());
+        let nf = self.faces.len();
+        let unit = |n: [f32; 3]| {
+            let u = normalize([n[0] as f64, n[1] as f64, n[2] as f64]);
+            [u[0] as f32, u[1] as f32, u[2] as f32]
+        };
         let a0 = self.opts.initial_alpha;
         let sf = s as f32;
         let m = self.updates - 1;
@@ -169,20 +172,19 @@ impl BlurShell {
                 for (side, &corner) in [k as usize, (k as usize + 1) % 3].iter().enumerate() {
                     let vtx = face[corner] as usize;
                     let w = vi + side;
-                    if j == 0 {
-                        o.vertices[w] = base_pos[vtx];
-                        o.normals[w] = match base_nrm {
-                            Some(n) => {
-                                let u = normalize(n[vtx]);
-                                [u[0] as f32, u[1] as f32, u[2] as f32]
-                            }
-                            None => self.snap_nrm[slot * nv + vtx],
-                        };
-                    } else {
-                        let p = self.snap_pos[slot * nv + vtx];
-                        o.vertices[w] = [p[0] as f64, p[1] as f64, p[2] as f64];
-                        o.normals[w] = self.snap_nrm[slot * nv + vtx];
-                    }
+                    let buf = self.buf_of_slot[slot];
+                    let (p, nrm) = (self.pos_bufs[buf][vtx], self.nrm_bufs[buf][vtx]);
+                    o.vertices[w] = match (j, base_pos) {
+                        (0, Some(b)) => b[vtx],
+                        _ => [p[0] as f64, p[1] as f64, p[2] as f64],
+                    };
+                    o.normals[w] = match (j, base_nrm) {
+                        (0, Some(n)) => {
+                            let u = normalize(n[vtx]);
+                            [u[0] as f32, u[1] as f32, u[2] as f32]
+                        }
+                        _ => unit(nrm),
+                    };
                     let rgb = match &self.color {
                         ShellColor::Uniform(c) => *c,
                         ShellColor::PerVertex(c) => c[vtx],

@@ -9,10 +9,12 @@
 //!   local index `k` of the edge `face[k] -> face[(k + 1) % 3]`, or `NO_EDGE`.
 //! - Without given normals, the vertex normal is the *unnormalised* sum of the raw face normals
 //!   `(b - a) x (c - a)` of the faces around it, added in increasing face order starting from
-//!   zero (numpy's `np.add.at` order), so the facing signs equal a numpy twin's bit for bit.
+//!   zero (numpy's `np.add.at` order).
+//! - Everything is float32: positions are rounded to float32 first, and the displacement, the
+//!   normals and the dot product are float32 operations in a fixed order (no fused
+//!   multiply-add), so the facing signs equal a numpy float32 twin's bit for bit, and a vertex
+//!   whose float32 position does not change is neutral.
 use rayon::prelude::*;
-
-use crate::mesh::{dot, face_normal};
 
 /// Vertex facing values.
 pub const FRONT: i8 = 1;
@@ -57,10 +59,10 @@ impl VertexFaces {
         }
     }
 
-    /// Unnormalised vertex normal of `v`: the sum of `face_n` over its faces, in order.
+    /// Unnormalised vertex normal of `v`: the sum of `face_n` over its faces, in order, from 0.
     #[inline]
-    pub fn normal(&self, v: usize, face_n: &[[f64; 3]]) -> [f64; 3] {
-        let mut acc = [0.0f64; 3];
+    pub fn normal(&self, v: usize, face_n: &[[f32; 3]]) -> [f32; 3] {
+        let mut acc = [0.0f32; 3];
         for &f in &self.faces[self.offsets[v] as usize..self.offsets[v + 1] as usize] {
             let n = face_n[f as usize];
             acc[0] += n[0];
@@ -71,21 +73,37 @@ impl VertexFaces {
     }
 }
 
-/// Raw face normals `(b - a) x (c - a)` into `out` (same length as `faces`), in parallel.
-pub fn face_normals_into(vertices: &[[f64; 3]], faces: &[[u32; 3]], out: &mut [[f64; 3]]) {
+/// `(b - a) x (c - a)` in float32, operation for operation as `np.cross(b - a, c - a)`.
+#[inline]
+pub fn face_normal32(v: &[[f32; 3]], f: &[u32; 3]) -> [f32; 3] {
+    let a = v[f[0] as usize];
+    let b = v[f[1] as usize];
+    let c = v[f[2] as usize];
+    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    let w = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    [
+        u[1] * w[2] - u[2] * w[1],
+        u[2] * w[0] - u[0] * w[2],
+        u[0] * w[1] - u[1] * w[0],
+    ]
+}
+
+/// Raw float32 face normals into `out` (same length as `faces`), in parallel.
+pub fn face_normals_into(vertices: &[[f32; 3]], faces: &[[u32; 3]], out: &mut [[f32; 3]]) {
     out.par_chunks_mut(CHUNK)
         .zip(faces.par_chunks(CHUNK))
         .for_each(|(o, f)| {
             for (o, f) in o.iter_mut().zip(f) {
-                *o = face_normal(vertices, f);
+                *o = face_normal32(vertices, f);
             }
         });
 }
 
-/// Facing of one vertex with normal `n` moving from `prev` to `p`.
+/// Facing of one vertex with normal `n` moving from `prev` to `p` (float32, left to right).
 #[inline]
-pub fn facing(n: [f64; 3], p: [f64; 3], prev: [f64; 3]) -> i8 {
-    let s = dot(n, [p[0] - prev[0], p[1] - prev[1], p[2] - prev[2]]);
+pub fn facing(n: [f32; 3], p: [f32; 3], prev: [f32; 3]) -> i8 {
+    let d = [p[0] - prev[0], p[1] - prev[1], p[2] - prev[2]];
+    let s = n[0] * d[0] + n[1] * d[1] + n[2] * d[2];
     if s > 0.0 {
         FRONT
     } else if s < 0.0 {
@@ -104,9 +122,8 @@ pub fn face_edge(facing: &[i8], f: &[u32; 3]) -> u8 {
         facing[f[1] as usize],
         facing[f[2] as usize],
     ];
-    let fronts = s.iter().filter(|&&x| x == FRONT).count();
-    let backs = s.iter().filter(|&&x| x == BACK).count();
-    if fronts != 1 || backs != 2 {
+    // Sum of facings is -1 with one front and two back (or with one back and two neutral).
+    if s[0] + s[1] + s[2] != -1 || s.contains(&NEUTRAL) {
         return NO_EDGE;
     }
     // The edge opposite the front corner j runs from corner j + 1 to corner j + 2.
@@ -114,33 +131,45 @@ pub fn face_edge(facing: &[i8], f: &[u32; 3]) -> u8 {
     ((j + 1) % 3) as u8
 }
 
+/// Float32 copies of float64 rows (the shell compares positions in float32).
+pub fn to_f32(v: &[[f64; 3]]) -> Vec<[f32; 3]> {
+    v.par_iter()
+        .with_min_len(CHUNK)
+        .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32])
+        .collect()
+}
+
 /// The silhouette of motion of a mesh moving from `previous` to `vertices` (both (V,3), checked
-/// by the caller), with the given vertex normals or the unnormalised area-weighted ones.
-/// Returns the facing per vertex and the edge code per face.
+/// by the caller), with the given vertex normals or the unnormalised area-weighted ones, all in
+/// float32 as in [`crate::shell::BlurShell::update`]. Returns the facing per vertex and the edge
+/// code per face.
 pub fn motion_silhouette(
     vertices: &[[f64; 3]],
     previous: &[[f64; 3]],
     faces: &[[u32; 3]],
     normals: Option<&[[f64; 3]]>,
 ) -> (Vec<i8>, Vec<u8>) {
+    let (v, p) = (to_f32(vertices), to_f32(previous));
     let mut fac = vec![NEUTRAL; vertices.len()];
     match normals {
-        Some(n) => fac
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(CHUNK)
-            .for_each(|(i, s)| {
-                *s = facing(n[i], vertices[i], previous[i]);
-            }),
-        None => {
-            let vf = VertexFaces::new(faces, vertices.len());
-            let mut fnr = vec![[0.0; 3]; faces.len()];
-            face_normals_into(vertices, faces, &mut fnr);
+        Some(n) => {
+            let n = to_f32(n);
             fac.par_iter_mut()
                 .enumerate()
                 .with_min_len(CHUNK)
                 .for_each(|(i, s)| {
-                    *s = facing(vf.normal(i, &fnr), vertices[i], previous[i]);
+                    *s = facing(n[i], v[i], p[i]);
+                })
+        }
+        None => {
+            let vf = VertexFaces::new(faces, vertices.len());
+            let mut fnr = vec![[0.0; 3]; faces.len()];
+            face_normals_into(&v, faces, &mut fnr);
+            fac.par_iter_mut()
+                .enumerate()
+                .with_min_len(CHUNK)
+                .for_each(|(i, s)| {
+                    *s = facing(vf.normal(i, &fnr), v[i], p[i]);
                 });
         }
     }

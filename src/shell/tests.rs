@@ -82,7 +82,13 @@ fn translating_sphere_has_attached_monotone_strips() {
             .unwrap();
     }
     let cur = moved(&v, [0.1 * 7.0, 0.0, 0.0]);
-    let m = sh.build(None, None).unwrap();
+    let m = sh.build(Some(&cur), None).unwrap();
+    // Without positions, the base is the float32 snapshot of the last update.
+    let d = sh.build(None, None).unwrap();
+    assert_eq!(d.faces, m.faces);
+    for (a, b) in d.vertices.iter().zip(&m.vertices) {
+        assert!((0..3).all(|i| (a[i] - b[i]).abs() <= 1e-6));
+    }
     assert!(!m.faces.is_empty());
     let mut by_face: HashMap<u32, Vec<usize>> = HashMap::new();
     for (i, &fi) in m.face.iter().enumerate() {
