@@ -329,6 +329,13 @@ def sample_positions(times, positions, samples: int) -> tuple[np.ndarray, np.nda
     """``samples`` evenly spaced times over [times[0], times[-1]] and the positions there, linear
     between keyframes: ((samples,) float64, (samples,V,3) float64)."""
     t = as_array(times, "times", np.float64, (None,))
+    if isinstance(positions, (list, tuple)):
+        counts = {len(np.asarray(p)) for p in positions}
+        if len(counts) > 1:
+            raise ValueError(
+                f"positions: every time must have the same vertex count, got {sorted(counts)} "
+                "(a mesh that changes vertex count cannot have a blur shell)"
+            )
     p = as_array(positions, "positions", np.float64, (len(t), None, 3))
     if len(t) < 2 or not (np.diff(t) > 0).all():
         raise ValueError("times: need at least 2 strictly increasing times")
