@@ -250,8 +250,13 @@ class Motion:
 
 
 def _as_scene_mesh(mesh) -> Mesh:
+    # C-contiguous copies: geometry.Mesh passes a matching ndarray on without making it contiguous.
     if isinstance(mesh, tuple) and len(mesh) == 2:
-        return Mesh(*mesh)
+        return Mesh(np.ascontiguousarray(mesh[0]), np.ascontiguousarray(mesh[1]))
+    if isinstance(mesh, Mesh):
+        return mesh
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
+        return Mesh(np.ascontiguousarray(mesh.vertices), np.ascontiguousarray(mesh.faces))
     return as_mesh(mesh)
 
 
