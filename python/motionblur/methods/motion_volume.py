@@ -77,7 +77,7 @@ def motion_volume(
                 "(use accumulation or blur_shell)"
             )
         keys = apparent_keyframes(scene, obj, segments)
-        if (keys == keys[-1]).all():
+        if _still(keys):
             deforming = obj.motion is not None and obj.motion.is_deforming
             v = obj.world_vertices(tr) if deforming else _place(obj, keys[-1])
             draws.append((obj, Draw(v, obj.mesh.faces, obj.rgba, object_id=k)))
@@ -92,6 +92,13 @@ def motion_volume(
     frame = resolve(layer, aa)
     frame.stats.update(stats)
     return frame
+
+
+def _still(keys: np.ndarray) -> bool:
+    """No apparent motion: every keyframe equals the last one up to rounding (a camera that
+    follows its object folds to products like ``T P inv(T P)``, equal only to ~1e-15)."""
+    scale = 1.0 + np.abs(keys[:, :3, 3]).max()
+    return bool(np.abs(keys - keys[-1]).max() <= 1e-12 * scale)
 
 
 def _place(obj: Object, m: np.ndarray) -> np.ndarray:
