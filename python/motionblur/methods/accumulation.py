@@ -18,6 +18,7 @@ from collections import deque
 
 import numpy as np
 
+from .. import _core
 from .._validate import as_float, as_int
 from ..raster import Camera, Frame
 from ..render import (
@@ -30,7 +31,7 @@ from ..render import (
     supersampled,
     window_projection,
 )
-from ..scene import Scene
+from ..scene import Object, Scene
 
 __all__ = ["accumulation", "sample_times", "Sequence"]
 
@@ -89,6 +90,72 @@ def _crop(layer: Layer, win) -> Layer:
     return Layer(layer.rgba[y0:y1, x0:x1], layer.depth[y0:y1, x0:x1], layer.ids[y0:y1, x0:x1])
 
 
+class _Painter:
+    """Rasterizes a fixed set of objects at any shutter time with the least per-sample work.
+
+    Faces, colours and object-space normals are converted once. A shading group holding a
+    single rigid object is drawn in object space with the model transform folded into the view
+    matrix (and the lights turned into object space), so no vertex is touched per sample; other
+    groups get world vertices (and rotated normals) per sample."""
+
+    def __init__(self, scene: Scene, objects: list[tuple[int, Object]]):
+        self.scene = scene
+        self.groups: dict[str, list] = {}
+        for k, o in objects:
+            faces = np.ascontiguousarray(o.mesh.faces, dtype=np.int64)
+            rgba = np.ascontiguousarray(np.atleast_2d(o.rgba), dtype=np.float32)
+            normals = o.mesh.vertex_normals().astype(np.float32) if o.shading == "lambert" else None
+            self.groups.setdefault(o.shading, []).append((k, o, faces, rgba, normals))
+        self.lights = [(np.asarray(li.direction), tuple(map(float, li.intensity))) for li in scene.lights]
+        self.ambient = tuple(map(float, scene.ambient))
+
+    def _light_args(self, rotation=None):
+        if rotation is None:
+            return [(tuple(map(float, d)), k) for d, k in self.lights]
+        return [(tuple(map(float, rotation.T @ d)), k) for d, k in self.lights]
+
+    def layer(self, t: float, view: np.ndarray, projection: np.ndarray, width: int, height: int) -> Layer:
+        out = None
+        for shading, items in self.groups.items():
+            if len(items) == 1 and not (items[0][1].motion is not None and items[0][1].motion.is_deforming):
+                k, o, faces, rgba, normals = items[0]
+                m = o.transform_at(t)
+                r = m[:3, :3] / np.cbrt(np.linalg.det(m[:3, :3]))
+                args = [(o.mesh.vertices, faces, rgba, normals, k, True, None)]
+                vm, lights = view @ m, self._light_args(r)
+            else:
+                args = []
+                for k, o, faces, rgba, normals in items:
+                    v = np.ascontiguousarray(o.world_vertices(t))
+                    n = None
+                    if normals is not None and not (o.motion is not None and o.motion.is_deforming):
+                        r = o.transform_at(t)[:3, :3]
+                        n = np.ascontiguousarray(
+                            normals @ (r / np.cbrt(np.linalg.det(r))).T, dtype=np.float32
+                        )
+                    args.append((v, faces, rgba, n, k, True, None))
+                vm, lights = view, self._light_args()
+            rgba_, depth, ids, _vel, _st = _core._rasterize(
+                np.ascontiguousarray(vm),
+                projection,
+                width,
+                height,
+                args,
+                1,
+                "exact",
+                shading,
+                lights,
+                self.ambient,
+            )
+            layer = Layer(rgba_, depth, ids)
+            out = layer if out is None else composite(out, layer)
+        return out if out is not None else Layer.empty(height, width)
+
+
+def _opaque(objects) -> bool:
+    return all(float(np.min(o.rgba[..., 3])) >= 1.0 for o in objects)
+
+
 @register(
     "accumulation",
     sweep=[{"samples": n} for n in (1, 2, 4, 8, 16, 32, 64, 128, 256)],
@@ -103,6 +170,8 @@ def accumulation(
     (``seed`` for the jitter); ``dim`` in (0, 1], the dimmed-blur variant's weight of the moving
     scene (1: plain accumulation); ``aa`` 1, 2 or 4 spatial samples per pixel along each axis.
     Returns a Frame (rgba premultiplied; depth and ids of the sample nearest the reference time).
+    ``stats``: ``samples``, ``draw_calls`` (rasterizer passes over moving geometry),
+    ``static_draws`` (0 or 1) and ``window`` (the pixel rectangle redrawn per sample).
     """
     times, weights = sample_times(scene, samples, sampling, seed)
     dim = as_float(dim, "dim")
@@ -112,57 +181,70 @@ def accumulation(
     if aa not in (1, 2, 4):
         raise ValueError(f"aa: must be 1, 2 or 4, got {aa}")
     ref = int(np.argmin(np.abs(times - scene.reference_t)))
-    stats = {"samples": len(times), "draw_calls": 0, "static_draws": 0}
+    stats = {"samples": len(times), "draw_calls": 0, "static_draws": 0, "window": None}
+    everything = list(enumerate(scene.objects))
 
     if scene.camera_moves:
-        # Everything moves on screen: full frames at every sample.
+        # Everything moves on screen: whole frames at every sample.
+        painter = _Painter(scene, everything)
         acc = None
         keep = None
         for i, t in enumerate(times):
             cam = supersampled(scene.camera_at(t), aa)
-            draws = [(o, object_draw(o, t, k)) for k, o in enumerate(scene.objects)]
-            layer = raster_layer(cam, scene, draws)
+            layer = painter.layer(t, cam.view, cam.projection, cam.width, cam.height)
             stats["draw_calls"] += 1
-            acc = layer.rgba * weights[i] if acc is None else acc + layer.rgba * weights[i]
+            acc = (
+                layer.rgba * np.float32(weights[i])
+                if acc is None
+                else acc + layer.rgba * np.float32(weights[i])
+            )
             if i == ref:
                 keep = layer
         if dim < 1.0:
             cam = supersampled(scene.camera_at(scene.reference_t), aa)
-            static = [
-                (o, object_draw(o, scene.reference_t, k))
-                for k, o in enumerate(scene.objects)
-                if not o.is_moving
-            ]
+            static = [(o, object_draw(o, scene.reference_t, k)) for k, o in everything if not o.is_moving]
             acc = (1.0 - dim) * raster_layer(cam, scene, static).rgba + dim * acc
-        out = Layer(acc.astype(np.float32), keep.depth, keep.ids)
-        frame = resolve(out, aa)
+        frame = resolve(Layer(acc.astype(np.float32), keep.depth, keep.ids), aa)
         frame.stats.update(stats)
         return frame
 
     cam = supersampled(scene.camera, aa)
-    static_objs = [(k, o) for k, o in enumerate(scene.objects) if not o.is_moving]
-    moving = [(k, o) for k, o in enumerate(scene.objects) if o.is_moving]
+    static_objs = [(k, o) for k, o in everything if not o.is_moving]
+    moving = [(k, o) for k, o in everything if o.is_moving]
     static = raster_layer(cam, scene, [(o, object_draw(o, 0.0, k)) for k, o in static_objs])
     stats["static_draws"] = 1 if static_objs else 0
     win = moving_window(scene, cam, times, [o for _, o in moving]) if moving else None
-    stats["window"] = None if win is None else tuple(win)
+    stats["window"] = win
     if win is None:
         frame = resolve(static, aa)
         frame.stats.update(stats)
         return frame
     x0, y0, x1, y1 = win
-    proj = window_projection(cam.projection, cam.width, cam.height, win)
-    wcam = Camera(cam.pose, cam.yfov, x1 - x0, y1 - y0, cam.znear, cam.zfar)
+    proj = np.ascontiguousarray(window_projection(cam.projection, cam.width, cam.height, win))
+    view = np.ascontiguousarray(cam.view)
     base = _crop(static, win)
-    acc = np.zeros((y1 - y0, x1 - x0, 4), np.float64)
+    painter = _Painter(scene, moving)
+    # Per sample i the composite is M_i over S where M_i is nearer, else S (exact for an opaque
+    # static layer), so sum_i w_i out_i = A + S (1 - A.alpha) with A = sum_i w_i M_i [M_i nearer]:
+    # the static layer is composited once, after the loop.
+    linear = _opaque([o for _, o in static_objs])
+    has_static = bool(np.isfinite(base.depth).any())
+    acc = np.zeros((y1 - y0, x1 - x0, 4), np.float32)
     keep = None
     for i, t in enumerate(times):
-        draws = [(o, object_draw(o, t, k)) for k, o in moving]
-        layer = composite(raster_layer(wcam, scene, draws, projection=proj), base)
+        layer = painter.layer(t, view, proj, x1 - x0, y1 - y0)
         stats["draw_calls"] += 1
-        acc += weights[i] * layer.rgba
+        w = np.float32(weights[i])
         if i == ref:
-            keep = layer
+            keep = composite(layer, base)
+        if not has_static:
+            acc += w * layer.rgba
+        elif linear:
+            acc += layer.rgba * (w * (layer.depth < base.depth))[..., None]
+        else:
+            acc += w * (keep.rgba if i == ref else composite(layer, base).rgba)
+    if has_static and linear:
+        acc += base.rgba * (1.0 - acc[..., 3:4])
     if dim < 1.0:
         acc = (1.0 - dim) * base.rgba + dim * acc
     rgba = static.rgba.copy()
