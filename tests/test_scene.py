@@ -36,7 +36,9 @@ def test_rigid_interpolation_matches_scipy_slerp_and_lerp():
         got = motion.transform_at(t)
         j = min(max(np.searchsorted(times, t, side="right") - 1, 0), 2)
         u = (t - times[j]) / (times[j + 1] - times[j])
-        want = _similarity(slerp([t])[0], (1 - u) * scales[j] + u * scales[j + 1], (1 - u) * trans[j] + u * trans[j + 1])
+        want = _similarity(
+            slerp([t])[0], (1 - u) * scales[j] + u * scales[j + 1], (1 - u) * trans[j] + u * trans[j + 1]
+        )
         np.testing.assert_allclose(got, want, atol=1e-10, err_msg=f"t={t}")
     # keyframes are hit exactly and held outside
     np.testing.assert_allclose(motion.transform_at(0.3), mats[1], atol=1e-12)
@@ -193,7 +195,12 @@ def test_registry_has_the_methods_and_a_new_one_plugs_in():
     @mb.register("test_blank", sweep=[{}])
     def blank(scene):
         c = scene.camera
-        return mb.Frame(np.zeros((c.height, c.width, 4)), np.full((c.height, c.width), np.inf), np.full((c.height, c.width), -1), np.zeros((c.height, c.width, 2)))
+        return mb.Frame(
+            np.zeros((c.height, c.width, 4)),
+            np.full((c.height, c.width), np.inf),
+            np.full((c.height, c.width), -1),
+            np.zeros((c.height, c.width, 2)),
+        )
 
     try:
         f = mb.render(mb.Scene([], _cam(), background=(0.0, 0.0, 1.0, 1.0)), "test_blank")
