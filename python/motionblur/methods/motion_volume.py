@@ -46,15 +46,16 @@ def apparent_keyframes(scene: Scene, obj: Object, segments: int) -> np.ndarray:
     applies=_rigid,
 )
 def motion_volume(
-    scene: Scene, segments: int = 1, filter: str | None = None, aa: int = 1, contour_line: bool = False
+    scene: Scene, segments: int = 1, filter: str | None = None, aa: int = 1, contour_line: bool = True
 ):
     """Motion-volume rendering: each moving object becomes its motion volume, drawn transparent.
 
     Options: ``segments`` S >= 1 joining segments (the folded motion sampled at S + 1 times);
     ``filter`` ``"ramp"`` (the paper's), ``"box"``, ``"triangle"`` or ``"gaussian"`` (default:
     the scene's shutter filter when it is a name, else ``"box"``); ``aa`` 1, 2 or 4 spatial
-    samples per pixel along each axis; ``contour_line`` sweeps only the camera-visible contour
-    edges (section 4.1) instead of all of them. Deforming objects raise ValueError (use
+    samples per pixel along each axis; ``contour_line`` (default True) sweeps only the
+    camera-visible contour edges (section 4.1; the same image with back faces culled, fewer
+    triangles) instead of all of them. Deforming objects raise ValueError (use
     accumulation or blur shells). Returns a Frame; ``stats`` counts the volume triangles.
     """
     segments = as_int(segments, "segments", minimum=1, maximum=4096)
