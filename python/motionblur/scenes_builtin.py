@@ -145,3 +145,43 @@ def camera_pan(width: int = 320, height: int = 240) -> Scene:
         objs.append(Object((v + (x, -0.6, -0.4 * i), f), color=colours[i], name=f"column{i}"))
     pan = Motion.linear(np.eye(4), rotate(np.radians(10.0), (0.0, 1.0, 0.0), eye))
     return Scene(objs, cam, camera_motion=pan, shutter="box")
+
+
+# --- deforming scenes (blur shells, branch shell)
+
+
+@builtin_scene("bending_arm")
+def bending_arm_scene(width: int = 320, height: int = 240) -> Scene:
+    """A skinned cylinder (1,200 triangles) bending 60 degrees at the elbow during the shutter,
+    seen from the side (flat): a deforming mesh (``Motion.deforming``, 17 vertex keyframes)."""
+    pos, faces = meshes.bending_arm(17, radius=0.22, length=2.0, angle=np.pi / 3, sections=24, rings=24)
+    cam = Camera(
+        look_at((5.0, -0.5, 1.1), (0.0, -0.5, 1.1), up=(0.0, 0.0, 1.0)),
+        0.62,
+        width,
+        height,
+        znear=0.5,
+        zfar=30.0,
+    )
+    arm = Object(
+        (pos[0], faces),
+        color=(0.95, 0.55, 0.15),
+        motion=Motion.deforming(np.linspace(0.0, 1.0, len(pos)), pos),
+        name="arm",
+    )
+    return Scene([arm], cam, shutter="box")
+
+
+@builtin_scene("deforming_propeller")
+def deforming_propeller(width: int = 320, height: int = 240) -> Scene:
+    """A three-blade propeller spinning 0.08 turns during the shutter, given as vertex keyframes
+    (``Motion.deforming``, 33 keyframes), seen from the front and slightly below (flat)."""
+    pos, faces = meshes.spinning_propeller(33, blades=3, radius=1.0, turns=0.08, chord=0.3)
+    cam = Camera(look_at((0.0, -1.0, 3.6), (0.0, 0.0, 0.0)), 0.75, width, height, znear=0.5, zfar=30.0)
+    prop = Object(
+        (pos[0], faces),
+        color=(0.2, 0.6, 0.95),
+        motion=Motion.deforming(np.linspace(0.0, 1.0, len(pos)), pos),
+        name="propeller",
+    )
+    return Scene([prop], cam, shutter="box")
