@@ -45,7 +45,7 @@ pub mod silhouette;
 mod tests;
 
 pub use build::ShellMesh;
-use silhouette::{face_edge, face_normals_into, facing, VertexFaces, CHUNK, NEUTRAL, NO_EDGE};
+use silhouette::{face_edge, face_normals_into, facing, Locality, CHUNK, NEUTRAL, NO_EDGE};
 pub use silhouette::{motion_silhouette, BACK, FRONT};
 
 /// Edge-code bit: the element's edge was on the silhouette at its update.
@@ -110,7 +110,8 @@ pub struct BlurShell {
     opts: ShellOptions,
     mask: Option<Vec<bool>>,
     color: ShellColor,
-    vf: VertexFaces,
+    /// Internal vertex and face order of the per-update passes (see [`Locality`]).
+    loc: Locality,
     updates: u64,
     facing: Vec<i8>,
     face_n: Vec<[f32; 3]>,
@@ -228,9 +229,9 @@ impl BlurShell {
         }
         let s = opts.subdivisions as usize;
         let nf = faces.len();
-        let vf = VertexFaces::new(&faces, n_vertices);
+        let loc = Locality::new(&faces, n_vertices);
         Ok(BlurShell {
-            vf,
+            loc,
             n_vertices,
             opts,
             mask,
@@ -270,9 +271,13 @@ impl BlurShell {
     pub fn state(&self) -> &[FaceState] {
         &self.state
     }
-    /// Vertex facing of the last update (`FRONT`, `BACK`, `NEUTRAL`).
-    pub fn facing(&self) -> &[i8] {
-        &self.facing
+    /// Vertex facing of the last update (`FRONT`, `BACK`, `NEUTRAL`), in the caller's order.
+    pub fn facing(&self) -> Vec<i8> {
+        let mut out = vec![NEUTRAL; self.n_vertices];
+        for (i, &p) in self.loc.perm.iter().enumerate() {
+            out[p as usize] = self.facing[i];
+        }
+        out
     }
     /// The update index (ring slot) of the most recent element, as the paper's global index.
     pub fn update_index(&self) -> Option<usize> {
@@ -314,12 +319,14 @@ impl BlurShell {
         let slot = (n % s as u64) as usize;
         // Pass A: float32 positions into the spare buffer, checking finiteness on the way.
         let spare = self.spare;
+        let perm = &self.loc.perm;
         let bad = self.pos_bufs[spare]
             .par_chunks_mut(CHUNK)
-            .zip(vertices.par_chunks(CHUNK))
-            .map(|(o, v)| {
+            .zip(perm.par_chunks(CHUNK))
+            .map(|(o, idx)| {
                 let mut bad = false;
-                for (o, p) in o.iter_mut().zip(v) {
+                for (o, &src) in o.iter_mut().zip(idx) {
+                    let p = vertices[src as usize];
                     bad |= !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite());
                     *o = [p[0] as f32, p[1] as f32, p[2] as f32];
                 }
@@ -332,13 +339,13 @@ impl BlurShell {
         let cur = &self.pos_bufs[spare];
         // Pass B: face normals (unless given).
         if normals.is_none() {
-            face_normals_into(cur, &self.faces, &mut self.face_n);
+            face_normals_into(cur, &self.loc.bfaces, &mut self.face_n);
         }
         // Pass C: vertex normals and facing against the previous update's positions.
         {
             let prev =
                 (n > 0).then(|| &self.pos_bufs[self.buf_of_slot[((n - 1) % s as u64) as usize]]);
-            let (face_n, vf) = (&self.face_n, &self.vf);
+            let (face_n, vf, perm) = (&self.face_n, &self.loc.vf, &self.loc.perm);
             self.facing
                 .par_chunks_mut(CHUNK)
                 .zip(self.nrm_bufs[spare].par_chunks_mut(CHUNK))
@@ -349,7 +356,8 @@ impl BlurShell {
                         let v = base + i;
                         let nrm = match normals {
                             Some(given) => {
-                                [given[v][0] as f32, given[v][1] as f32, given[v][2] as f32]
+                                let g = given[perm[v] as usize];
+                                [g[0] as f32, g[1] as f32, g[2] as f32]
                             }
                             None => vf.normal(v, face_n),
                         };
@@ -376,7 +384,7 @@ impl BlurShell {
                     (&mut *lo[slot], &mut *hi[0])
                 }
             };
-            let (facing_v, faces, mask) = (&self.facing, &self.faces, self.mask.as_deref());
+            let (facing_v, faces, mask) = (&self.facing, &self.loc.ifaces, self.mask.as_deref());
             let h = self.opts.hysteresis;
             self.state
                 .par_chunks_mut(CHUNK)

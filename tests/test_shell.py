@@ -76,15 +76,16 @@ def check_no_popping(shell: mb.BlurShell, seq, normals=None) -> int:
 
 
 @pytest.mark.parametrize(
-    "mesh, s, h, a, masked, colored",
+    "mesh, s, h, a, masked, colored, normals",
     [
-        ("icosphere", 10, 3, 1.0, False, False),
-        ("icosphere", 4, 0, 0.6, True, True),
-        ("arm", 1, 2, 1.0, False, True),
-        ("arm", 7, 5, 0.9, True, False),
+        ("icosphere", 10, 3, 1.0, False, False, False),
+        ("icosphere", 4, 0, 0.6, True, True, False),
+        ("icosphere", 6, 1, 1.0, False, False, True),
+        ("arm", 1, 2, 1.0, False, True, False),
+        ("arm", 7, 5, 0.9, True, False, True),
     ],
 )
-def test_rust_shell_matches_numpy_twin(mesh, s, h, a, masked, colored):
+def test_rust_shell_matches_numpy_twin(mesh, s, h, a, masked, colored, normals):
     if mesh == "icosphere":
         v, f = meshes.icosphere(2)
         seq = wobble(v, 14)
@@ -99,8 +100,10 @@ def test_rust_shell_matches_numpy_twin(mesh, s, h, a, masked, colored):
     twin = TwinShell(f, nv, s, h, a, mask=mask, color=None if color is None else np.asarray(color))
     nonempty = 0
     for i, v in enumerate(seq):
-        ours.update(v)
-        twin.update(v)
+        # Given normals: flip every third update and tilt, so they differ from the computed ones.
+        n = (v - v.mean(axis=0)) * (1 if i % 3 else -1) + [0.3, 0.0, 0.1] if normals else None
+        ours.update(v, n)
+        twin.update(v, n)
         st = ours.state()
         np.testing.assert_array_equal(st["facing"], twin.facing)
         np.testing.assert_array_equal(np.where(st["last_edge"] < 0, 3, st["last_edge"]), twin.last)
@@ -108,7 +111,10 @@ def test_rust_shell_matches_numpy_twin(mesh, s, h, a, masked, colored):
         np.testing.assert_array_equal(st["run"], twin.run)
         np.testing.assert_array_equal(st["since"], twin.since)
         cur = v if i % 2 else None
-        m, t = ours.build(cur), twin.build(cur)
+        m, t = (
+            ours.build(cur, n if cur is not None else None),
+            twin.build(cur, n if cur is not None else None),
+        )
         for name in ("vertices", "faces", "rgba", "normals", "face", "step"):
             np.testing.assert_array_equal(getattr(m, name), t[name], err_msg=f"{name} at update {i}")
         nonempty += len(m.faces) > 0

@@ -160,6 +160,7 @@ impl BlurShell {
             }
             let st = self.state[f];
             let face = self.faces[f];
+            let iface = self.loc.ifaces[f];
             let start = vi;
             for j in 0..pairs {
                 let (k, slot) = if j == 0 {
@@ -170,10 +171,10 @@ impl BlurShell {
                 };
                 let alpha = a0 * (1.0 - (j.max(st.fade as usize) as f32) / sf);
                 for (side, &corner) in [k as usize, (k as usize + 1) % 3].iter().enumerate() {
-                    let vtx = face[corner] as usize;
+                    let (vtx, ivtx) = (face[corner] as usize, iface[corner] as usize);
                     let w = vi + side;
                     let buf = self.buf_of_slot[slot];
-                    let (p, nrm) = (self.pos_bufs[buf][vtx], self.nrm_bufs[buf][vtx]);
+                    let (p, nrm) = (self.pos_bufs[buf][ivtx], self.nrm_bufs[buf][ivtx]);
                     o.vertices[w] = match (j, base_pos) {
                         (0, Some(b)) => b[vtx],
                         _ => [p[0] as f64, p[1] as f64, p[2] as f64],
