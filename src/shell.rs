@@ -80,7 +80,7 @@ pub enum ShellColor {
     PerVertex(Vec<[f32; 3]>),
 }
 
-/// Per-polygon state, packed (one stream in the update and build passes).
+/// Per-polygon state as reported by [`BlurShell::state`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct FaceState {
     /// Local index of the last silhouette edge, or `NO_EDGE`.
@@ -93,12 +93,24 @@ pub struct FaceState {
     pub since: u16,
 }
 
-impl FaceState {
-    const INITIAL: FaceState = FaceState {
+/// The rest of a polygon's state, touched only when it has or gains a strip. The fade levels
+/// live in their own byte array, so the update pass reads one byte per polygon and writes
+/// nothing for the (many) polygons without a strip and without an edge.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Hot {
+    last: u8,
+    run: u8,
+    /// Update index of the last silhouette edge (`NEVER`: none); `since` is derived from it.
+    last_on: u32,
+}
+
+const NEVER: u32 = u32::MAX;
+
+impl Hot {
+    const INITIAL: Hot = Hot {
         last: NO_EDGE,
-        fade: u8::MAX,
         run: 0,
-        since: u16::MAX,
+        last_on: NEVER,
     };
 }
 
@@ -126,7 +138,8 @@ pub struct BlurShell {
     ring: Vec<u8>,
     /// With one subdivision the birth element shares the ring row; it goes here instead.
     scratch_row: Vec<u8>,
-    state: Vec<FaceState>,
+    fade: Vec<u8>,
+    hot: Vec<Hot>,
 }
 
 fn check_rows(a: &[[f64; 3]], n: usize, name: &'static str) -> Result<()> {
@@ -249,7 +262,8 @@ impl BlurShell {
             } else {
                 Vec::new()
             },
-            state: vec![FaceState::INITIAL; nf],
+            fade: vec![u8::MAX; nf],
+            hot: vec![Hot::INITIAL; nf],
             faces,
         })
     }
@@ -267,9 +281,23 @@ impl BlurShell {
     pub fn updates(&self) -> u64 {
         self.updates
     }
-    /// Per-polygon state.
-    pub fn state(&self) -> &[FaceState] {
-        &self.state
+    /// Per-polygon state (`since` saturates at 65535; update counts wrap after 2^32 updates).
+    pub fn state(&self) -> Vec<FaceState> {
+        let n = self.updates.wrapping_sub(1) as u32;
+        self.fade
+            .iter()
+            .zip(&self.hot)
+            .map(|(&fade, h)| FaceState {
+                last: h.last,
+                fade,
+                run: h.run,
+                since: if h.last_on == NEVER {
+                    u16::MAX
+                } else {
+                    n.wrapping_sub(h.last_on).min(u16::MAX as u32) as u16
+                },
+            })
+            .collect()
     }
     /// Vertex facing of the last update (`FRONT`, `BACK`, `NEUTRAL`), in the caller's order.
     pub fn facing(&self) -> Vec<i8> {
@@ -288,8 +316,8 @@ impl BlurShell {
     /// The ring element of face `f` recorded `i` updates ago (`i < run`): edge code, with
     /// `ON_SILHOUETTE` set when it was on the silhouette.
     pub fn element(&self, f: usize, i: usize) -> Option<u8> {
-        let st = self.state.get(f)?;
-        if i >= st.run as usize {
+        let st = self.hot.get(f)?;
+        if self.fade[f] as u32 >= self.opts.subdivisions || i >= st.run as usize {
             return None;
         }
         let s = self.opts.subdivisions as u64;
@@ -300,7 +328,8 @@ impl BlurShell {
     /// Forget every update: no strips, and the next update finds no silhouette.
     pub fn reset(&mut self) {
         self.updates = 0;
-        self.state.fill(FaceState::INITIAL);
+        self.fade.fill(u8::MAX);
+        self.hot.fill(Hot::INITIAL);
         self.facing.fill(NEUTRAL);
     }
 
@@ -386,14 +415,16 @@ impl BlurShell {
             };
             let (facing_v, faces, mask) = (&self.facing, &self.loc.ifaces, self.mask.as_deref());
             let h = self.opts.hysteresis;
-            self.state
+            let n = n as u32;
+            self.fade
                 .par_chunks_mut(CHUNK)
+                .zip(self.hot.par_chunks_mut(CHUNK))
                 .zip(row.par_chunks_mut(CHUNK))
                 .zip(prev_row.par_chunks_mut(CHUNK))
                 .enumerate()
-                .for_each(|(c, ((sts, row), prow))| {
+                .for_each(|(c, (((fades, hots), row), prow))| {
                     let base = c * CHUNK;
-                    for i in 0..sts.len() {
+                    for i in 0..fades.len() {
                         let f = base + i;
                         let on = mask.is_none_or(|m| m[f]);
                         let code = if on {
@@ -401,7 +432,11 @@ impl BlurShell {
                         } else {
                             NO_EDGE
                         };
-                        step_face(&mut sts[i], code, s, h, &mut row[i], &mut prow[i]);
+                        if code == NO_EDGE && fades[i] as usize >= s {
+                            continue; // no strip and no edge: nothing changes
+                        }
+                        let step = Step { code, s, h, n };
+                        step.apply(&mut fades[i], &mut hots[i], &mut row[i], &mut prow[i]);
                     }
                 });
         }
@@ -410,31 +445,43 @@ impl BlurShell {
     }
 }
 
-/// One polygon's state change at an update with silhouette edge `code` (or `NO_EDGE`): writes
-/// its ring element for this update into `elem` and, at a birth, the element of the previous
-/// update into `prev_elem`.
-#[inline]
-fn step_face(st: &mut FaceState, code: u8, s: usize, h: u32, elem: &mut u8, prev_elem: &mut u8) {
-    let alive = (st.fade as usize) < s;
-    if code != NO_EDGE {
-        if alive {
-            st.fade = st.fade.saturating_sub(1);
-            st.run = (st.run as usize + 1).min(s) as u8;
-        } else {
-            st.fade = 0;
-            st.run = 2.min(s) as u8;
-            *prev_elem = code;
-        }
-        st.last = code;
-        st.since = 0;
-        *elem = code | ON_SILHOUETTE;
-    } else {
-        st.since = st.since.saturating_add(1);
-        if alive {
-            if u32::from(st.since) > h {
-                st.fade += 1;
+/// One polygon's state change at update `n` with silhouette edge `code` (or `NO_EDGE`).
+struct Step {
+    code: u8,
+    s: usize,
+    h: u32,
+    n: u32,
+}
+
+impl Step {
+    /// Writes the polygon's ring element for this update into `elem` and, at a birth, the
+    /// element of the previous update into `prev_elem`.
+    #[inline]
+    fn apply(&self, fade: &mut u8, st: &mut Hot, elem: &mut u8, prev_elem: &mut u8) {
+        let (code, s) = (self.code, self.s);
+        let alive = (*fade as usize) < s;
+        if code != NO_EDGE {
+            if alive {
+                *fade = fade.saturating_sub(1);
+                st.run = (st.run as usize + 1).min(s) as u8;
+            } else {
+                *fade = 0;
+                st.run = 2.min(s) as u8;
+                *prev_elem = code;
             }
-            if (st.fade as usize) < s {
+            st.last = code;
+            st.last_on = self.n;
+            *elem = code | ON_SILHOUETTE;
+        } else if alive {
+            let since = if st.last_on == NEVER {
+                u32::MAX
+            } else {
+                self.n.wrapping_sub(st.last_on)
+            };
+            if since > self.h {
+                *fade += 1;
+            }
+            if (*fade as usize) < s {
                 st.run = (st.run as usize + 1).min(s) as u8;
                 *elem = st.last;
             } else {

@@ -43,9 +43,9 @@ impl BlurShell {
     /// Pairs emitted by polygon `f` (0 when its strip is dead).
     #[inline]
     fn pairs(&self, f: usize) -> usize {
-        let st = &self.state[f];
-        if (st.fade as u32) < self.opts.subdivisions && st.run > 0 {
-            st.run as usize + 1
+        let run = self.hot[f].run;
+        if (self.fade[f] as u32) < self.opts.subdivisions && run > 0 {
+            run as usize + 1
         } else {
             0
         }
@@ -158,7 +158,7 @@ impl BlurShell {
             if pairs == 0 {
                 continue;
             }
-            let st = self.state[f];
+            let (st, fade) = (self.hot[f], self.fade[f]);
             let face = self.faces[f];
             let iface = self.loc.ifaces[f];
             let start = vi;
@@ -169,7 +169,7 @@ impl BlurShell {
                     let slot = (newest + s - (j - 1) % s) % s;
                     (self.ring[slot * nf + f] & 3, slot)
                 };
-                let alpha = a0 * (1.0 - (j.max(st.fade as usize) as f32) / sf);
+                let alpha = a0 * (1.0 - (j.max(fade as usize) as f32) / sf);
                 for (side, &corner) in [k as usize, (k as usize + 1) % 3].iter().enumerate() {
                     let (vtx, ivtx) = (face[corner] as usize, iface[corner] as usize);
                     let w = vi + side;
