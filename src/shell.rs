@@ -55,6 +55,11 @@ pub const MAX_SUBDIVISIONS: u32 = 255;
 /// Largest `hysteresis` (the count of updates off the silhouette is a saturating `u16`).
 pub const MAX_HYSTERESIS: u32 = 65_000;
 
+/// A raw pointer shared by the scatter of pass A; each row writes its own slot.
+struct SharedSlots<T>(*mut T);
+unsafe impl<T: Send> Sync for SharedSlots<T> {}
+unsafe impl<T: Send> Send for SharedSlots<T> {}
+
 /// Shell options (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ShellOptions {
@@ -346,18 +351,24 @@ impl BlurShell {
         let nf = self.faces.len();
         let n = self.updates;
         let slot = (n % s as u64) as usize;
-        // Pass A: float32 positions into the spare buffer, checking finiteness on the way.
+        // Pass A: float32 positions into the spare buffer, checking finiteness on the way. The
+        // caller's rows are read in order and scattered to their internal slots (stores do not
+        // stall on cache misses as gathered loads do); `inv` is a bijection, so the chunks write
+        // disjoint slots.
         let spare = self.spare;
-        let perm = &self.loc.perm;
-        let bad = self.pos_bufs[spare]
-            .par_chunks_mut(CHUNK)
-            .zip(perm.par_chunks(CHUNK))
-            .map(|(o, idx)| {
+        let inv = &self.loc.inv;
+        let out = SharedSlots(self.pos_bufs[spare].as_mut_ptr());
+        let bad = vertices
+            .par_chunks(CHUNK)
+            .zip(inv.par_chunks(CHUNK))
+            .map(|(v, idx)| {
+                let out = &out;
                 let mut bad = false;
-                for (o, &src) in o.iter_mut().zip(idx) {
-                    let p = vertices[src as usize];
+                for (p, &dst) in v.iter().zip(idx) {
                     bad |= !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite());
-                    *o = [p[0] as f32, p[1] as f32, p[2] as f32];
+                    // SAFETY: `dst < n_vertices` (a permutation of 0..n_vertices) and each
+                    // slot is written by exactly one row, so no two threads write the same slot.
+                    unsafe { *out.0.add(dst as usize) = [p[0] as f32, p[1] as f32, p[2] as f32] };
                 }
                 bad
             })

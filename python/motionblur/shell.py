@@ -57,8 +57,20 @@ def _faces(faces) -> np.ndarray:
 
 
 def _rows(value, name: str, n: int | None = None) -> np.ndarray:
-    a = as_array(value, name, np.float64, (n, 3))
-    return a
+    """(N,3) float64 C-contiguous (no copy when it already is); finiteness is checked in Rust,
+    in parallel, with the same error message."""
+    if (
+        isinstance(value, np.ndarray)
+        and value.dtype == np.float64
+        and value.ndim == 2
+        and value.shape[1] == 3
+    ):
+        if n is not None and len(value) != n:
+            raise ValueError(f"{name}: expected shape ({n},3), got {value.shape}")
+        if value.size == 0:
+            raise ValueError(f"{name}: is empty")
+        return np.ascontiguousarray(value)
+    return as_array(value, name, np.float64, (n, 3))
 
 
 class ShellMesh:
