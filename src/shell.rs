@@ -132,11 +132,14 @@ pub struct BlurShell {
     updates: u64,
     facing: Vec<i8>,
     face_n: Vec<[f32; 3]>,
-    /// `subdivisions + 1` buffers of float32 positions and raw (unnormalised) float32 vertex
-    /// normals: one per ring slot (`buf_of_slot`) and a spare that the next update fills, so a
-    /// failed update leaves every snapshot intact.
+    /// `subdivisions + 1` buffers of float32 positions: one per ring slot (`buf_of_slot`) and
+    /// a spare that the next update fills, so a failed update leaves every snapshot intact.
     pos_bufs: Vec<Vec<[f32; 3]>>,
+    /// Given normals (float32) per buffer, allocated only for updates that were given normals;
+    /// otherwise a strip vertex's normal is recomputed at build time from the positions of its
+    /// buffer, with the same float32 operations as the update (so nothing is stored for them).
     nrm_bufs: Vec<Vec<[f32; 3]>>,
+    has_nrm: Vec<bool>,
     buf_of_slot: Vec<usize>,
     spare: usize,
     /// Edge codes, slot-major (`slot * F + f`).
@@ -258,7 +261,8 @@ impl BlurShell {
             facing: vec![NEUTRAL; n_vertices],
             face_n: vec![[0.0; 3]; nf],
             pos_bufs: vec![vec![[0.0; 3]; n_vertices]; s + 1],
-            nrm_bufs: vec![vec![[0.0; 3]; n_vertices]; s + 1],
+            nrm_bufs: vec![Vec::new(); s + 1],
+            has_nrm: vec![false; s + 1],
             buf_of_slot: (0..s).collect(),
             spare: s,
             ring: vec![NO_EDGE; s * nf],
@@ -271,6 +275,23 @@ impl BlurShell {
             hot: vec![Hot::INITIAL; nf],
             faces,
         })
+    }
+
+    /// Raw float32 normal of internal vertex `iv` in buffer `buf`: the given one, or the sum of
+    /// the face normals around it recomputed from that buffer's positions.
+    fn raw_normal(&self, buf: usize, iv: usize) -> [f32; 3] {
+        if self.has_nrm[buf] {
+            return self.nrm_bufs[buf][iv];
+        }
+        let pos = &self.pos_bufs[buf];
+        let mut acc = [0.0f32; 3];
+        for &b in self.loc.vf.faces_of(iv) {
+            let n = silhouette::face_normal32(pos, &self.loc.bfaces[b as usize]);
+            acc[0] += n[0];
+            acc[1] += n[1];
+            acc[2] += n[2];
+        }
+        acc
     }
 
     pub fn options(&self) -> ShellOptions {
@@ -386,9 +407,23 @@ impl BlurShell {
             let prev =
                 (n > 0).then(|| &self.pos_bufs[self.buf_of_slot[((n - 1) % s as u64) as usize]]);
             let (face_n, vf, perm) = (&self.face_n, &self.loc.vf, &self.loc.perm);
+            self.has_nrm[spare] = normals.is_some();
+            let sn_buf = &mut self.nrm_bufs[spare];
+            if normals.is_some() && sn_buf.len() != self.n_vertices {
+                *sn_buf = vec![[0.0; 3]; self.n_vertices];
+            }
+            let mut empty: Vec<[f32; 3]> = Vec::new();
+            let sn_all: &mut [[f32; 3]] = if normals.is_some() {
+                sn_buf
+            } else {
+                &mut empty
+            };
+            let n_chunks = self.n_vertices.div_ceil(CHUNK);
+            let mut sn_chunks: Vec<&mut [[f32; 3]]> = sn_all.chunks_mut(CHUNK).collect();
+            sn_chunks.resize_with(n_chunks, Default::default);
             self.facing
                 .par_chunks_mut(CHUNK)
-                .zip(self.nrm_bufs[spare].par_chunks_mut(CHUNK))
+                .zip(sn_chunks.into_par_iter())
                 .enumerate()
                 .for_each(|(c, (fa, sn))| {
                     let base = c * CHUNK;
@@ -405,7 +440,9 @@ impl BlurShell {
                             Some(pr) => facing(nrm, cur[v], pr[v]),
                             None => NEUTRAL,
                         };
-                        sn[i] = nrm;
+                        if let Some(slot) = sn.get_mut(i) {
+                            *slot = nrm;
+                        }
                     }
                 });
         }

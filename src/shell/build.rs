@@ -174,7 +174,7 @@ impl BlurShell {
                     let (vtx, ivtx) = (face[corner] as usize, iface[corner] as usize);
                     let w = vi + side;
                     let buf = self.buf_of_slot[slot];
-                    let (p, nrm) = (self.pos_bufs[buf][ivtx], self.nrm_bufs[buf][ivtx]);
+                    let p = self.pos_bufs[buf][ivtx];
                     o.vertices[w] = match (j, base_pos) {
                         (0, Some(b)) => b[vtx],
                         _ => [p[0] as f64, p[1] as f64, p[2] as f64],
@@ -184,7 +184,7 @@ impl BlurShell {
                             let u = normalize(n[vtx]);
                             [u[0] as f32, u[1] as f32, u[2] as f32]
                         }
-                        _ => unit(nrm),
+                        _ => unit(self.raw_normal(buf, ivtx)),
                     };
                     let rgb = match &self.color {
                         ShellColor::Uniform(c) => *c,

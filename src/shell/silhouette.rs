@@ -59,6 +59,12 @@ impl VertexFaces {
         }
     }
 
+    /// The faces of vertex `v`, in order.
+    #[inline]
+    pub fn faces_of(&self, v: usize) -> &[u32] {
+        &self.faces[self.offsets[v] as usize..self.offsets[v + 1] as usize]
+    }
+
     /// Unnormalised vertex normal of `v`: the sum of `face_n` over its faces, in order, from 0.
     #[inline]
     pub fn normal(&self, v: usize, face_n: &[[f32; 3]]) -> [f32; 3] {
