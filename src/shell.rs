@@ -427,7 +427,7 @@ impl BlurShell {
                 .enumerate()
                 .for_each(|(c, (fa, sn))| {
                     let base = c * CHUNK;
-                    for i in 0..fa.len() {
+                    for (i, out) in fa.iter_mut().enumerate() {
                         let v = base + i;
                         let nrm = match normals {
                             Some(given) => {
@@ -436,7 +436,7 @@ impl BlurShell {
                             }
                             None => vf.normal(v, face_n),
                         };
-                        fa[i] = match prev {
+                        *out = match prev {
                             Some(pr) => facing(nrm, cur[v], pr[v]),
                             None => NEUTRAL,
                         };
