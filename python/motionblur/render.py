@@ -137,17 +137,20 @@ def downsample(a: np.ndarray, samples: int) -> np.ndarray:
 
 def resolve_arrays(layer: Layer, samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(rgba, depth, ids) at pixel size from a supersampled layer: colour box-filtered, depth and
-    ids of the nearest sample of each pixel."""
+    ids of the nearest sample of each pixel (the first in row order on ties)."""
     rgba = downsample(layer.rgba, samples)
     if samples == 1:
         return rgba, layer.depth, layer.ids
-    h, w = rgba.shape[:2]
-    d = layer.depth.reshape(h, samples, w, samples).transpose(0, 2, 1, 3).reshape(h, w, -1)
-    k = np.argmin(d, axis=2)[..., None]
-    depth = np.take_along_axis(d, k, 2)[..., 0]
-    ids = np.take_along_axis(
-        layer.ids.reshape(h, samples, w, samples).transpose(0, 2, 1, 3).reshape(h, w, -1), k, 2
-    )[..., 0]
+    depth = layer.depth[::samples, ::samples].copy()
+    ids = layer.ids[::samples, ::samples].copy()
+    for dy in range(samples):
+        for dx in range(samples):
+            if dx == dy == 0:
+                continue
+            d = layer.depth[dy::samples, dx::samples]
+            m = d < depth
+            depth[m] = d[m]
+            ids[m] = layer.ids[dy::samples, dx::samples][m]
     return rgba, depth, ids
 
 
@@ -251,13 +254,19 @@ class Layer:
 
 def composite(a: Layer, b: Layer) -> Layer:
     """Per sample, the nearer layer *over* the farther one (exact for opaque surfaces and for one
-    transparent surface per layer and sample)."""
-    front = (a.depth <= b.depth)[..., None]
-    near = np.where(front, a.rgba, b.rgba)
-    far = np.where(front, b.rgba, a.rgba)
-    rgba = near + (1.0 - near[..., 3:4]) * far
-    depth = np.minimum(a.depth, b.depth)
-    ids = np.where(front[..., 0], a.ids, b.ids)
+    transparent surface per layer and sample). Only the samples ``a`` covers are touched."""
+    cov = a.depth < np.inf
+    rgba, depth, ids = b.rgba.copy(), b.depth.copy(), b.ids.copy()
+    if not cov.any():
+        return Layer(rgba, depth, ids)
+    ar, br = a.rgba[cov], b.rgba[cov]
+    ad, bd = a.depth[cov], b.depth[cov]
+    front = (ad <= bd)[:, None]
+    near = np.where(front, ar, br)
+    far = np.where(front, br, ar)
+    rgba[cov] = near + (1.0 - near[:, 3:4]) * far
+    depth[cov] = np.minimum(ad, bd)
+    ids[cov] = np.where(front[:, 0], a.ids[cov], b.ids[cov])
     return Layer(rgba, depth, ids)
 
 

@@ -226,6 +226,7 @@ def accumulation(
     proj = np.ascontiguousarray(window_projection(cam.projection, cam.width, cam.height, win))
     view = np.ascontiguousarray(cam.view)
     base = _crop(static.layer, win)
+    base = Layer(np.ascontiguousarray(base.rgba), np.ascontiguousarray(base.depth), base.ids)
     painter = _Painter(scene, moving)
     # Per sample i the composite is M_i over S where M_i is nearer, else S (exact for an opaque
     # static layer), so sum_i w_i out_i = A + S (1 - A.alpha) with A = sum_i w_i M_i [M_i nearer]:
@@ -239,14 +240,13 @@ def accumulation(
         w = np.float32(weights[i])
         if i == ref:
             keep = composite(layer, base)
-        if not has_static:
-            acc += w * layer.rgba
-        elif static.opaque:
-            acc += layer.rgba * (w * (layer.depth < base.depth))[..., None]
+        if not has_static or static.opaque:
+            # one fused pass in Rust: acc += w * M where M is in front of the static surface
+            _core._accumulate(acc, layer.rgba, layer.depth, base.depth if has_static else None, float(w))
         else:
             acc += w * (keep.rgba if i == ref else composite(layer, base).rgba)
     if has_static and static.opaque:
-        acc += base.rgba * (1.0 - acc[..., 3:4])
+        _core._over(acc, base.rgba)
     if dim < 1.0:
         acc = (1.0 - dim) * base.rgba + dim * acc
     frame = paste(static, win, Layer(acc, keep.depth, keep.ids), aa)
