@@ -17,6 +17,7 @@ pub mod motion;
 pub mod raster;
 pub mod shell;
 pub mod volume;
+pub mod volume_alpha;
 pub mod volume_filter;
 
 pub use error::{Error, Result};
