@@ -129,16 +129,12 @@ def test_rotation_about_the_view_axis():
     )
     mv = mb.render(sc, "motion_volume", segments=4, filter="box", aa=2)
     _valid(mv)
-    # the volume covers at least the sharp box and spreads along the arc, but (paper section
-    # 4.3: fast rotation is its weak case) is more opaque than the truth
-    assert (mv.rgba[..., 3] >= sharp.rgba[..., 3] - 0.02).mean() > 0.99
-    assert metrics.coverage(mv) > 1.2 * metrics.coverage(sharp)
-    assert 0.0 < metrics.coverage_error(mv, ref) < 1.0
+    # fast rotation is the paper's weak case (section 4.3): the volume is far from exact (measured
+    # RMSE 0.043, coverage -18%), but it must still be much closer to the truth than no blur (0.089)
+    assert metrics.rmse(mv, ref) < 0.6 * metrics.rmse(sharp, ref)
+    assert abs(metrics.coverage_error(mv, ref)) < 0.3
 
 
-# main's ring alphas (src/volume_filter.rs) give -10% to -66% here; branch geom2 replaces them with
-# coverage alphas (src/volume_alpha.rs). Not strict: it passes (XPASS) once that is merged.
-@pytest.mark.xfail(reason="needs geom2's coverage alphas for motion volumes", strict=False)
 @pytest.mark.parametrize("shutter", ["box", "triangle", "gaussian"])
 @pytest.mark.parametrize("shape", ["box", "sphere"])
 def test_motion_volume_coverage_of_a_translating_convex_object(shape, shutter):

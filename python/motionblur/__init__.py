@@ -9,7 +9,9 @@ from __future__ import annotations
 
 from . import geometry as _geometry
 from . import image, meshes
+from . import metrics as metrics
 from . import raster as _raster
+from . import reference as reference
 from . import scene as _scene
 from . import shell as _shell
 from ._core import __version__
@@ -22,4 +24,14 @@ from .scenes_builtin import SCENES, builtin_scene
 from .shell import *  # noqa: F403
 
 __all__ = ["__version__", "image", "meshes", *_geometry.__all__, *_raster.__all__, *_shell.__all__]
-__all__ += [*_scene.__all__, "render", "register", "METHODS", "Sequence", "SCENES", "builtin_scene"]
+__all__ += [
+    *_scene.__all__,
+    "render",
+    "register",
+    "METHODS",
+    "Sequence",
+    "SCENES",
+    "builtin_scene",
+    "metrics",
+    "reference",
+]

@@ -17,6 +17,7 @@ rendering at ``samples`` times the size and box-filtering down, and the backgrou
 from __future__ import annotations
 
 import time
+from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -122,26 +123,114 @@ def supersampled(camera: Camera, samples: int) -> Camera:
 
 
 def downsample(a: np.ndarray, samples: int) -> np.ndarray:
-    """Box-filter (H*s, W*s, ...) down to (H, W, ...) (mean over each s x s block)."""
+    """Box-filter (H*s, W*s, ...) down to (H, W, ...) (mean over each s x s block), float32."""
     if samples == 1:
         return a
-    h, w = a.shape[0] // samples, a.shape[1] // samples
-    return a.reshape(h, samples, w, samples, *a.shape[2:]).mean(axis=(1, 3), dtype=np.float64).astype(a.dtype)
+    out = None
+    for dy in range(samples):
+        for dx in range(samples):
+            part = a[dy::samples, dx::samples]
+            out = part.astype(np.float32, copy=True) if out is None else np.add(out, part, out=out)
+    out *= np.float32(1.0 / (samples * samples))
+    return out
+
+
+def resolve_arrays(layer: Layer, samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(rgba, depth, ids) at pixel size from a supersampled layer: colour box-filtered, depth and
+    ids of the nearest sample of each pixel (the first in row order on ties)."""
+    rgba = downsample(layer.rgba, samples)
+    if samples == 1:
+        return rgba, layer.depth, layer.ids
+    depth = layer.depth[::samples, ::samples].copy()
+    ids = layer.ids[::samples, ::samples].copy()
+    for dy in range(samples):
+        for dx in range(samples):
+            if dx == dy == 0:
+                continue
+            d = layer.depth[dy::samples, dx::samples]
+            m = d < depth
+            depth[m] = d[m]
+            ids[m] = layer.ids[dy::samples, dx::samples][m]
+    return rgba, depth, ids
 
 
 def resolve(layer: Layer, samples: int) -> Frame:
-    """A full-size Frame from a supersampled layer: colour box-filtered, depth and ids of the
-    nearest sample of each pixel."""
-    rgba = downsample(layer.rgba, samples)
-    if samples == 1:
-        depth, ids = layer.depth, layer.ids
-    else:
-        h, w = rgba.shape[:2]
-        d = layer.depth.reshape(h, samples, w, samples).transpose(0, 2, 1, 3).reshape(h, w, -1)
-        k = np.argmin(d, axis=2)
-        depth = np.take_along_axis(d, k[..., None], 2)[..., 0]
-        i = layer.ids.reshape(h, samples, w, samples).transpose(0, 2, 1, 3).reshape(h, w, -1)
-        ids = np.take_along_axis(i, k[..., None], 2)[..., 0]
+    """A full-size Frame from a supersampled layer (see :func:`resolve_arrays`)."""
+    rgba, depth, ids = resolve_arrays(layer, samples)
+    return Frame(rgba, depth, ids, np.zeros((*rgba.shape[:2], 2), np.float32))
+
+
+# ---------------------------------------------------------------- the static layer, kept across frames
+
+_STATIC_CACHE: OrderedDict = OrderedDict()
+_STATIC_CACHE_SIZE = 4
+
+
+def clear_static_cache() -> None:
+    """Forget the static layers kept across frames."""
+    _STATIC_CACHE.clear()
+
+
+def _fingerprint(scene: Scene, camera: Camera, objects, aa: int) -> tuple:
+    parts = []
+    for k, o in objects:
+        motion = None
+        if o.motion is not None:
+            motion = id(o.motion) if o.motion.is_deforming else o.motion.transform_at(0.0).tobytes()
+        parts.append((k, id(o.mesh), o.shading, o.color.tobytes(), motion))
+    lights = tuple((li.direction.tobytes(), li.intensity.tobytes()) for li in scene.lights)
+    cam = (camera.view.tobytes(), camera.projection.tobytes(), camera.width, camera.height)
+    return (cam, aa, tuple(parts), lights, scene.ambient.tobytes())
+
+
+class Static:
+    """The static layer of a frame: ``layer`` (supersampled Layer) and its resolved pixels
+    ``rgba``, ``depth``, ``ids`` (read-only; copy before writing); ``cached`` tells whether it
+    came from the cache."""
+
+    def __init__(self, layer: Layer, aa: int, cached: bool = False):
+        self.layer = layer
+        self.rgba, self.depth, self.ids = resolve_arrays(layer, aa)
+        self.opaque = True
+        self.cached = cached
+
+
+def static_layer(scene: Scene, camera: Camera, objects, aa: int) -> Static:
+    """The static objects ``objects`` (pairs (index, Object), placed at t = 0) rasterized by the
+    supersampled ``camera``; kept (up to 4 entries) across frames while the objects, their colours
+    and placement, the camera, the lights and ``aa`` stay the same, as a real-time loop reuses
+    the static part of its frame."""
+    key = _fingerprint(scene, camera, objects, aa)
+    hit = _STATIC_CACHE.get(key)
+    if hit is not None:
+        _STATIC_CACHE.move_to_end(key)
+        hit[0].cached = True
+        return hit[0]
+    layer = raster_layer(camera, scene, [(o, object_draw(o, 0.0, k)) for k, o in objects])
+    st = Static(layer, aa)
+    st.opaque = all(float(np.min(o.rgba[..., 3])) >= 1.0 for _, o in objects)
+    # keep the objects alive with the entry, so the ids in the key stay theirs
+    _STATIC_CACHE[key] = (st, [o for _, o in objects])
+    while len(_STATIC_CACHE) > _STATIC_CACHE_SIZE:
+        _STATIC_CACHE.popitem(last=False)
+    return st
+
+
+def aligned_window(win, aa: int, width: int, height: int):
+    """``win`` (x0, y0, x1, y1) in supersampled pixels grown to multiples of ``aa``."""
+    x0, y0, x1, y1 = win
+    x0, y0 = (x0 // aa) * aa, (y0 // aa) * aa
+    x1, y1 = min(width, -(-x1 // aa) * aa), min(height, -(-y1 // aa) * aa)
+    return x0, y0, x1, y1
+
+
+def paste(static: Static, window, layer: Layer, aa: int) -> Frame:
+    """A Frame: the static pixels with the supersampled ``layer`` of ``window`` (aligned to
+    ``aa``) resolved and pasted in."""
+    rgba, depth, ids = static.rgba.copy(), static.depth.copy(), static.ids.copy()
+    x0, y0, x1, y1 = (v // aa for v in window)
+    r, d, i = resolve_arrays(layer, aa)
+    rgba[y0:y1, x0:x1], depth[y0:y1, x0:x1], ids[y0:y1, x0:x1] = r, d, i
     return Frame(rgba, depth, ids, np.zeros((*rgba.shape[:2], 2), np.float32))
 
 
@@ -165,13 +254,19 @@ class Layer:
 
 def composite(a: Layer, b: Layer) -> Layer:
     """Per sample, the nearer layer *over* the farther one (exact for opaque surfaces and for one
-    transparent surface per layer and sample)."""
-    front = (a.depth <= b.depth)[..., None]
-    near = np.where(front, a.rgba, b.rgba)
-    far = np.where(front, b.rgba, a.rgba)
-    rgba = near + (1.0 - near[..., 3:4]) * far
-    depth = np.minimum(a.depth, b.depth)
-    ids = np.where(front[..., 0], a.ids, b.ids)
+    transparent surface per layer and sample). Only the samples ``a`` covers are touched."""
+    cov = a.depth < np.inf
+    rgba, depth, ids = b.rgba.copy(), b.depth.copy(), b.ids.copy()
+    if not cov.any():
+        return Layer(rgba, depth, ids)
+    ar, br = a.rgba[cov], b.rgba[cov]
+    ad, bd = a.depth[cov], b.depth[cov]
+    front = (ad <= bd)[:, None]
+    near = np.where(front, ar, br)
+    far = np.where(front, br, ar)
+    rgba[cov] = near + (1.0 - near[:, 3:4]) * far
+    depth[cov] = np.minimum(ad, bd)
+    ids[cov] = np.where(front[:, 0], a.ids[cov], b.ids[cov])
     return Layer(rgba, depth, ids)
 
 

@@ -23,11 +23,14 @@ from .._validate import as_float, as_int
 from ..raster import Camera, Frame
 from ..render import (
     Layer,
+    aligned_window,
     composite,
     object_draw,
+    paste,
     raster_layer,
     register,
     resolve,
+    static_layer,
     supersampled,
     window_projection,
 )
@@ -152,10 +155,6 @@ class _Painter:
         return out if out is not None else Layer.empty(height, width)
 
 
-def _opaque(objects) -> bool:
-    return all(float(np.min(o.rgba[..., 3])) >= 1.0 for o in objects)
-
-
 @register(
     "accumulation",
     sweep=[{"samples": n} for n in (1, 2, 4, 8, 16, 32, 64, 128, 256)],
@@ -211,23 +210,27 @@ def accumulation(
     cam = supersampled(scene.camera, aa)
     static_objs = [(k, o) for k, o in everything if not o.is_moving]
     moving = [(k, o) for k, o in everything if o.is_moving]
-    static = raster_layer(cam, scene, [(o, object_draw(o, 0.0, k)) for k, o in static_objs])
-    stats["static_draws"] = 1 if static_objs else 0
+    static = static_layer(scene, cam, static_objs, aa)
+    stats["static_draws"] = 0 if (static.cached or not static_objs) else 1
+    stats["static_cached"] = static.cached
     win = moving_window(scene, cam, times, [o for _, o in moving]) if moving else None
-    stats["window"] = win
     if win is None:
-        frame = resolve(static, aa)
+        frame = Frame(
+            static.rgba.copy(), static.depth.copy(), static.ids.copy(), np.zeros((*static.ids.shape, 2))
+        )
         frame.stats.update(stats)
         return frame
+    win = aligned_window(win, aa, cam.width, cam.height)
+    stats["window"] = win
     x0, y0, x1, y1 = win
     proj = np.ascontiguousarray(window_projection(cam.projection, cam.width, cam.height, win))
     view = np.ascontiguousarray(cam.view)
-    base = _crop(static, win)
+    base = _crop(static.layer, win)
+    base = Layer(np.ascontiguousarray(base.rgba), np.ascontiguousarray(base.depth), base.ids)
     painter = _Painter(scene, moving)
     # Per sample i the composite is M_i over S where M_i is nearer, else S (exact for an opaque
     # static layer), so sum_i w_i out_i = A + S (1 - A.alpha) with A = sum_i w_i M_i [M_i nearer]:
     # the static layer is composited once, after the loop.
-    linear = _opaque([o for _, o in static_objs])
     has_static = bool(np.isfinite(base.depth).any())
     acc = np.zeros((y1 - y0, x1 - x0, 4), np.float32)
     keep = None
@@ -237,21 +240,16 @@ def accumulation(
         w = np.float32(weights[i])
         if i == ref:
             keep = composite(layer, base)
-        if not has_static:
-            acc += w * layer.rgba
-        elif linear:
-            acc += layer.rgba * (w * (layer.depth < base.depth))[..., None]
+        if not has_static or static.opaque:
+            # one fused pass in Rust: acc += w * M where M is in front of the static surface
+            _core._accumulate(acc, layer.rgba, layer.depth, base.depth if has_static else None, float(w))
         else:
             acc += w * (keep.rgba if i == ref else composite(layer, base).rgba)
-    if has_static and linear:
-        acc += base.rgba * (1.0 - acc[..., 3:4])
+    if has_static and static.opaque:
+        _core._over(acc, base.rgba)
     if dim < 1.0:
         acc = (1.0 - dim) * base.rgba + dim * acc
-    rgba = static.rgba.copy()
-    rgba[y0:y1, x0:x1] = acc
-    depth, ids = static.depth.copy(), static.ids.copy()
-    depth[y0:y1, x0:x1], ids[y0:y1, x0:x1] = keep.depth, keep.ids
-    frame = resolve(Layer(rgba, depth, ids), aa)
+    frame = paste(static, win, Layer(acc, keep.depth, keep.ids), aa)
     frame.stats.update(stats)
     return frame
 
