@@ -19,6 +19,7 @@ the mesh's normals from when each pair was recorded).
 from __future__ import annotations
 
 import time
+from collections import OrderedDict
 
 import numpy as np
 
@@ -29,6 +30,26 @@ from ..scene import Object, Scene
 from ..shell import BlurShell
 
 __all__ = ["blur_shell", "shell_times", "apparent_vertices"]
+
+
+#: Shells kept between renders (their mesh order and vertex-face tables cost a few ms to build
+#: for large meshes): the last 8, keyed by mesh identity and options, reset before reuse (a reset
+#: shell behaves exactly like a new one). The mesh is held so its id stays unique.
+_SHELLS: OrderedDict = OrderedDict()
+
+
+def _shell_for(mesh, nv: int, s: int, h: int, a: float, rgb: np.ndarray) -> BlurShell:
+    key = (id(mesh), nv, s, h, a, rgb.shape, rgb.tobytes())
+    hit = _SHELLS.get(key)
+    if hit is not None and hit[0] is mesh:
+        _SHELLS.move_to_end(key)
+        hit[1].reset()
+        return hit[1]
+    shell = BlurShell(mesh.faces, s, h, a, color=rgb, n_vertices=nv)
+    _SHELLS[key] = (mesh, shell)
+    while len(_SHELLS) > 8:
+        _SHELLS.popitem(last=False)
+    return shell
 
 
 def _applies(scene: Scene) -> bool:
@@ -114,8 +135,8 @@ def blur_shell(
         if not moving or tr == 0.0:
             continue
         t0 = time.perf_counter()
-        rgb = color if color is not None else obj.rgba[..., :3]
-        shell = BlurShell(obj.mesh.faces, s, h, a, color=rgb, n_vertices=len(current))
+        rgb = np.ascontiguousarray(color if color is not None else obj.rgba[..., :3], np.float32)
+        shell = _shell_for(obj.mesh, len(current), s, h, a, rgb)
         for t in times[:-1]:
             shell.update(apparent_vertices(scene, obj, float(t)))
         mesh = shell.build(current)
@@ -127,7 +148,7 @@ def blur_shell(
         stats["shell_triangles"] += len(mesh.faces)
     layer = raster_layer(cam, scene, draws) if draws else Layer.empty(cam.height, cam.width)
     if shells:
-        layer = composite(layer, nearest_layer(cam, scene, shells))
+        layer = over_by_depth(nearest_layer(cam, scene, shells), layer)
     frame = resolve(layer, aa)
     frame.stats.update(stats)
     return frame
@@ -158,6 +179,17 @@ def nearest_layer(cam, scene: Scene, shells: list[tuple[Object, Draw]]) -> Layer
         layer = Layer(rgba, depth, np.where(cov[..., 0] > 0, c.ids, -1).astype(np.int32))
         out = layer if out is None else composite(out, layer)
     return out
+
+
+def over_by_depth(top: Layer, base: Layer) -> Layer:
+    """``top`` (one transparent surface per sample) composited with ``base`` per sample: where
+    ``top`` is nearer it goes *over* ``base``, elsewhere ``base`` hides it. Writes into ``base``."""
+    front = top.depth < base.depth
+    t = top.rgba[front]
+    base.rgba[front] = t + (1.0 - t[:, 3:4]) * base.rgba[front]
+    base.depth[front] = top.depth[front]
+    base.ids[front] = top.ids[front]
+    return base
 
 
 def _with_rgba(d: Draw, rgba: np.ndarray) -> Draw:
