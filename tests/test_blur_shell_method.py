@@ -123,3 +123,25 @@ def test_bad_options_name_the_argument(opts, exc, text):
     scene = mb.SCENES["bending_arm"](width=W, height=H)
     with pytest.raises(exc, match=text):
         mb.render(scene, "blur_shell", **opts)
+
+
+def test_blur_shell_frames_do_not_depend_on_the_thread_count():
+    import hashlib
+    import os
+    import subprocess
+    import sys
+
+    script = (
+        "import hashlib, motionblur as mb\n"
+        "for name in ('bending_arm', 'deforming_propeller'):\n"
+        "    f = mb.render(mb.SCENES[name](width=64, height=48), 'blur_shell', subdivisions=7, aa=2)\n"
+        "    print(name, hashlib.sha256(f.rgba.tobytes() + f.depth.tobytes()).hexdigest())\n"
+    )
+    out = []
+    for n in (1, 2):
+        env = dict(os.environ, RAYON_NUM_THREADS=str(n))
+        r = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        out.append(r.stdout)
+    assert out[0] == out[1] and out[0].count("\n") == 2
+    assert hashlib.sha256(b"").hexdigest() not in out[0]

@@ -11,7 +11,10 @@ Rules (the paper leaves some open; each choice is stated here and tested):
 - **Facing.** A vertex is front (+1) when ``n . (p - p_prev) > 0``, back (-1) when ``< 0`` and
   neutral (0) when exactly 0 (a vertex that does not move, or moves in its tangent plane).
   ``n`` is the given normal, or the unnormalised sum of the raw normals ``(b - a) x (c - a)``
-  of the faces around the vertex. A neutral vertex is neither front nor back.
+  of the faces around the vertex, added in face order. A neutral vertex is neither front nor
+  back. Everything is evaluated in float32 (positions rounded to float32 first, fixed operation
+  order), so a vertex whose float32 position does not change is neutral, and a numpy float32
+  twin gives the same signs bit for bit.
 - **Silhouette edge.** A triangle with exactly one front and two back corners has the edge
   between its back corners on the silhouette, as the face runs it (``face[k] -> face[k+1]``).
   So a static polygon, or a polygon with a neutral corner, has none; the first update (no
@@ -79,10 +82,12 @@ class ShellMesh:
     Attributes
     ----------
     vertices : (N,3) float64, scene units. Each strip's base pair is the polygon's edge on the
-        current mesh (exactly the current positions); older pairs come from float32 snapshots.
+        current mesh: exactly the positions given to ``build``, or else the float32 snapshot of
+        the last update; older pairs come from float32 snapshots.
     faces : (M,3) int64, two triangles per quad; draw with culling off.
     rgba : (N,4) float32 straight (non-premultiplied) linear colour and alpha in [0, 1].
-    normals : (N,3) float32 unit normals (the mesh's vertex normals when the pair was recorded).
+    normals : (N,3) float32 unit normals (the mesh's vertex normals when the pair was recorded:
+        the given ones, or the float32 area-weighted ones of that update's positions).
     face : (N,) int64, the mesh polygon whose strip each vertex belongs to.
     step : (N,) int32, the pair index ``j`` along the strip (0 = base on the current mesh).
 

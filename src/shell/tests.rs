@@ -354,3 +354,43 @@ fn bad_input_names_the_argument() {
     let e = BlurShell::new(vec![[0, 1, 99]], 3, o(3, 1.0), None, c).unwrap_err();
     assert!(e.to_string().starts_with("faces"));
 }
+
+#[test]
+fn locality_is_a_bijection_with_faces_sorted_and_sums_in_original_order() {
+    let (v, f) = sphere(9, 17);
+    let loc = silhouette::Locality::new(&f, v.len());
+    let mut seen = vec![false; v.len()];
+    for (i, &p) in loc.perm.iter().enumerate() {
+        assert!(!seen[p as usize]);
+        seen[p as usize] = true;
+        assert_eq!(loc.inv[p as usize] as usize, i);
+    }
+    assert!(loc
+        .bfaces
+        .windows(2)
+        .all(|w| w[0].iter().min() <= w[1].iter().min()));
+    for (fi, face) in f.iter().enumerate() {
+        let i = face.map(|x| loc.inv[x as usize]);
+        assert_eq!(loc.ifaces[fi], i);
+    }
+    // Every internal vertex lists its faces in increasing original face order.
+    let slot_to_orig: HashMap<[u32; 3], usize> = loc
+        .ifaces
+        .iter()
+        .enumerate()
+        .map(|(k, &x)| (x, k))
+        .collect();
+    for iv in 0..v.len() {
+        let orig: Vec<usize> = loc
+            .vf
+            .faces_of(iv)
+            .iter()
+            .map(|&b| slot_to_orig[&loc.bfaces[b as usize]])
+            .collect();
+        assert!(
+            orig.windows(2).all(|w| w[0] < w[1]),
+            "vertex {iv}: {orig:?}"
+        );
+        assert!(!orig.is_empty());
+    }
+}
