@@ -52,6 +52,8 @@ pub use silhouette::{motion_silhouette, BACK, FRONT};
 pub const ON_SILHOUETTE: u8 = 4;
 /// Largest `subdivisions` (the fade level is a `u8`).
 pub const MAX_SUBDIVISIONS: u32 = 255;
+/// Largest memory a shell may take for its history (snapshots, rings, tables), in bytes.
+pub const MAX_HISTORY_BYTES: u64 = 8_000_000_000;
 /// Largest `hysteresis` (the count of updates off the silhouette is a saturating `u16`).
 pub const MAX_HYSTERESIS: u32 = 65_000;
 
@@ -250,6 +252,20 @@ impl BlurShell {
         }
         let s = opts.subdivisions as usize;
         let nf = faces.len();
+        let bytes =
+            (s as u128 + 1) * n_vertices as u128 * 12 + s as u128 * nf as u128 + 64 * nf as u128;
+        if bytes > MAX_HISTORY_BYTES as u128 {
+            return Err(Error::value(
+                "subdivisions",
+                format!(
+                    "{} subdivisions over {n_vertices} vertices and {nf} faces need {:.1} GB of \
+                     history (limit {} GB); use fewer subdivisions or a smaller mesh",
+                    opts.subdivisions,
+                    bytes as f64 / 1e9,
+                    MAX_HISTORY_BYTES / 1_000_000_000
+                ),
+            ));
+        }
         let loc = Locality::new(&faces, n_vertices);
         Ok(BlurShell {
             loc,

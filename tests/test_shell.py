@@ -489,3 +489,21 @@ def test_shell_mesh_exports():
     assert d.cull_back is False and d.object_id == 3
     with pytest.raises(ValueError, match="empty"):
         mb.ShellMesh.empty().draw()
+
+
+def test_absurd_sizes_and_degenerate_faces():
+    v, f = meshes.icosphere(1)
+    with pytest.raises(ValueError, match="subdivisions: .* GB of history"):
+        mb.BlurShell(f, subdivisions=255, n_vertices=400_000_000)
+    # Repeated indices and zero-area faces: no panic, finite output, degenerate strips allowed.
+    bad = np.concatenate([f, [[0, 0, 1], [2, 2, 2], [3, 4, 3]]])
+    shell = mb.BlurShell(bad, subdivisions=4)
+    for p in wobble(v, 6):
+        shell.update(p)
+    m = shell.build()
+    assert len(m) > 0
+    assert np.isfinite(m.vertices).all() and np.isfinite(m.normals).all() and np.isfinite(m.rgba).all()
+    twin = TwinShell(bad, len(v), 4, 3)
+    for p in wobble(v, 6):
+        twin.update(p)
+    np.testing.assert_array_equal(m.vertices, twin.build()["vertices"])
