@@ -381,38 +381,32 @@ impl BlurShell {
         if vertices.len() != self.n_vertices {
             return check_rows(vertices, self.n_vertices, "vertices");
         }
-        if let Some(n) = normals {
-            check_rows(n, self.n_vertices, "normals")?;
+        if let Some(nr) = normals {
+            if nr.len() != self.n_vertices {
+                return check_rows(nr, self.n_vertices, "normals");
+            }
         }
         let s = self.opts.subdivisions as usize;
         let nf = self.faces.len();
         let n = self.updates;
         let slot = (n % s as u64) as usize;
-        // Pass A: float32 positions into the spare buffer, checking finiteness on the way. The
-        // caller's rows are read in order and scattered to their internal slots (stores do not
-        // stall on cache misses as gathered loads do); `inv` is a bijection, so the chunks write
-        // disjoint slots.
+        // Pass A: float32 positions (and given normals) into the spare buffers, checking
+        // finiteness on the way. The caller's rows are read in order and scattered to their
+        // internal slots (stores do not stall on cache misses as gathered loads do).
         let spare = self.spare;
-        let inv = &self.loc.inv;
-        let out = SharedSlots(self.pos_bufs[spare].as_mut_ptr());
-        let bad = vertices
-            .par_chunks(CHUNK)
-            .zip(inv.par_chunks(CHUNK))
-            .map(|(v, idx)| {
-                let out = &out;
-                let mut bad = false;
-                for (p, &dst) in v.iter().zip(idx) {
-                    bad |= !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite());
-                    // SAFETY: `dst < n_vertices` (a permutation of 0..n_vertices) and each
-                    // slot is written by exactly one row, so no two threads write the same slot.
-                    unsafe { *out.0.add(dst as usize) = [p[0] as f32, p[1] as f32, p[2] as f32] };
-                }
-                bad
-            })
-            .reduce(|| false, |a, b| a || b);
-        if bad {
+        if scatter_f32(vertices, &self.loc.inv, &mut self.pos_bufs[spare]) {
             return check_rows(vertices, self.n_vertices, "vertices");
         }
+        if let Some(nr) = normals {
+            let buf = &mut self.nrm_bufs[spare];
+            if buf.len() != self.n_vertices {
+                *buf = vec![[0.0; 3]; self.n_vertices];
+            }
+            if scatter_f32(nr, &self.loc.inv, buf) {
+                return check_rows(nr, self.n_vertices, "normals");
+            }
+        }
+        self.has_nrm[spare] = normals.is_some();
         let cur = &self.pos_bufs[spare];
         // Pass B: face normals (unless given).
         if normals.is_none() {
@@ -422,43 +416,23 @@ impl BlurShell {
         {
             let prev =
                 (n > 0).then(|| &self.pos_bufs[self.buf_of_slot[((n - 1) % s as u64) as usize]]);
-            let (face_n, vf, perm) = (&self.face_n, &self.loc.vf, &self.loc.perm);
-            self.has_nrm[spare] = normals.is_some();
-            let sn_buf = &mut self.nrm_bufs[spare];
-            if normals.is_some() && sn_buf.len() != self.n_vertices {
-                *sn_buf = vec![[0.0; 3]; self.n_vertices];
-            }
-            let mut empty: Vec<[f32; 3]> = Vec::new();
-            let sn_all: &mut [[f32; 3]] = if normals.is_some() {
-                sn_buf
-            } else {
-                &mut empty
-            };
-            let n_chunks = self.n_vertices.div_ceil(CHUNK);
-            let mut sn_chunks: Vec<&mut [[f32; 3]]> = sn_all.chunks_mut(CHUNK).collect();
-            sn_chunks.resize_with(n_chunks, Default::default);
+            let (face_n, vf) = (&self.face_n, &self.loc.vf);
+            let given = normals.map(|_| &self.nrm_bufs[spare]);
             self.facing
                 .par_chunks_mut(CHUNK)
-                .zip(sn_chunks.into_par_iter())
                 .enumerate()
-                .for_each(|(c, (fa, sn))| {
+                .for_each(|(c, fa)| {
                     let base = c * CHUNK;
                     for (i, out) in fa.iter_mut().enumerate() {
                         let v = base + i;
-                        let nrm = match normals {
-                            Some(given) => {
-                                let g = given[perm[v] as usize];
-                                [g[0] as f32, g[1] as f32, g[2] as f32]
-                            }
+                        let nrm = match given {
+                            Some(g) => g[v],
                             None => vf.normal(v, face_n),
                         };
                         *out = match prev {
                             Some(pr) => facing(nrm, cur[v], pr[v]),
                             None => NEUTRAL,
                         };
-                        if let Some(slot) = sn.get_mut(i) {
-                            *slot = nrm;
-                        }
                     }
                 });
         }
@@ -507,6 +481,26 @@ impl BlurShell {
         self.updates += 1;
         Ok(())
     }
+}
+
+/// Float32 copies of `rows` scattered to `out[inv[i]]`, in parallel; true if a value is NaN or
+/// inf (then `out` is partly written: callers write only to a spare buffer).
+fn scatter_f32(rows: &[[f64; 3]], inv: &[u32], out: &mut [[f32; 3]]) -> bool {
+    let out = SharedSlots(out.as_mut_ptr());
+    rows.par_chunks(CHUNK)
+        .zip(inv.par_chunks(CHUNK))
+        .map(|(v, idx)| {
+            let out = &out;
+            let mut bad = false;
+            for (p, &dst) in v.iter().zip(idx) {
+                bad |= !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite());
+                // SAFETY: `inv` is a permutation of 0..out.len(), so each slot is in bounds and
+                // written by exactly one row: no two threads write the same slot.
+                unsafe { *out.0.add(dst as usize) = [p[0] as f32, p[1] as f32, p[2] as f32] };
+            }
+            bad
+        })
+        .reduce(|| false, |a, b| a || b)
 }
 
 /// One polygon's state change at update `n` with silhouette edge `code` (or `NO_EDGE`).
