@@ -445,16 +445,17 @@ impl BlurShell {
         self.spare = std::mem::replace(&mut self.buf_of_slot[slot], spare);
         // Pass D: silhouette edge, state, ring element (and the birth element at n - 1).
         {
-            let mut rows: Vec<&mut [u8]> = self.ring.chunks_mut(nf).collect();
             let (row, prev_row): (&mut [u8], &mut [u8]) = if s == 1 {
-                (rows.pop().expect("one row"), &mut self.scratch_row)
+                (&mut self.ring[..], &mut self.scratch_row)
             } else {
                 let pslot = (slot + s - 1) % s;
-                let (lo, hi) = rows.split_at_mut(slot.max(pslot));
+                let (lo_slot, hi_slot) = (slot.min(pslot), slot.max(pslot));
+                let (a, b) = self.ring.split_at_mut(hi_slot * nf);
+                let (lo_row, hi_row) = (&mut a[lo_slot * nf..(lo_slot + 1) * nf], &mut b[..nf]);
                 if slot > pslot {
-                    (&mut *hi[0], &mut *lo[pslot])
+                    (hi_row, lo_row)
                 } else {
-                    (&mut *lo[slot], &mut *hi[0])
+                    (lo_row, hi_row)
                 }
             };
             let (facing_v, faces, mask) = (&self.facing, &self.loc.ifaces, self.mask.as_deref());
