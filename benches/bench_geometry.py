@@ -23,10 +23,9 @@ import sys
 import time
 from pathlib import Path
 
+import motionblur as mb
 import numpy as np
 import trimesh
-
-import motionblur as mb
 from motionblur import meshes
 
 
@@ -52,7 +51,11 @@ def np_contour(v, f, adj, adj_edges, m):
     ff = np.where(front[a[:, 0]], a[:, 0], a[:, 1])
     t = f[ff]
     p, q = e[:, 0], e[:, 1]
-    fwd = ((t[:, 0] == p) & (t[:, 1] == q)) | ((t[:, 1] == p) & (t[:, 2] == q)) | ((t[:, 2] == p) & (t[:, 0] == q))
+    fwd = (
+        ((t[:, 0] == p) & (t[:, 1] == q))
+        | ((t[:, 1] == p) & (t[:, 2] == q))
+        | ((t[:, 2] == p) & (t[:, 0] == q))
+    )
     return np.where(fwd[:, None], e, e[:, ::-1]), front
 
 
@@ -60,7 +63,9 @@ def np_volume(v, f, adj, adj_edges, m):
     """numpy twin of a one-segment motion volume (leading, trailing, joining; rgba, normals)."""
     n_v = len(v)
     raw = np_normals(v, f)
-    vn = np.stack([np.bincount(f.ravel(), weights=np.repeat(raw[:, k], 3), minlength=n_v) for k in range(3)], 1)
+    vn = np.stack(
+        [np.bincount(f.ravel(), weights=np.repeat(raw[:, k], 3), minlength=n_v) for k in range(3)], 1
+    )
     vn /= np.linalg.norm(vn, axis=1, keepdims=True)
     e, front = np_contour(v, f, adj, adj_edges, m)
     d = m / np.linalg.norm(m)
@@ -99,11 +104,11 @@ def main() -> None:
         repeat = 5 if len(f) < 500_000 else 3
         m = np.array([0.31, -0.12, 0.94])
 
-        def ours_adj():
+        def ours_adj(v=v, f=f):
             mesh = mb.Mesh(v, f)
             mesh._core.build_adjacency()
 
-        def peer_adj():
+        def peer_adj(v=v, f=f):
             tm = trimesh.Trimesh(v, f, process=False)
             tm.face_adjacency  # noqa: B018
             tm.face_adjacency_edges  # noqa: B018
@@ -124,17 +129,19 @@ def main() -> None:
         pv = np_volume(v, f, adj, adj_edges, m)
         assert len(vol.faces) == len(pv[1]), "volume face count mismatch"
 
-        t_ours_c = best_ms(lambda: mb.contour_edges(mesh, m), repeat)
-        t_peer_c = best_ms(lambda: np_contour(v, f, adj, adj_edges, m), repeat)
-        t_ours_v = best_ms(lambda: mb.motion_volume(mesh, m), repeat)
-        t_peer_v = best_ms(lambda: np_volume(v, f, adj, adj_edges, m), repeat)
+        t_ours_c = best_ms(lambda mesh=mesh, m=m: mb.contour_edges(mesh, m), repeat)
+        t_peer_c = best_ms(lambda v=v, f=f, a=adj, e=adj_edges, m=m: np_contour(v, f, a, e, m), repeat)
+        t_ours_v = best_ms(lambda mesh=mesh, m=m: mb.motion_volume(mesh, m), repeat)
+        t_peer_v = best_ms(lambda v=v, f=f, a=adj, e=adj_edges, m=m: np_volume(v, f, a, e, m), repeat)
         for job, ours, peer, who in [
             ("adjacency", t_ours_adj, t_peer_adj, "trimesh"),
             ("contour (normals recomputed)", t_ours_c, t_peer_c, "numpy"),
             ("motion volume, 1 segment", t_ours_v, t_peer_v, "numpy"),
         ]:
             rows.append((len(f), job, ours, peer, who, peer / ours))
-            print(f"{len(f):>9} faces  {job:<30} ours {ours:9.2f} ms  {who:<8}{peer:10.2f} ms  ratio {peer / ours:7.1f}x")
+            print(
+                f"{len(f):>9} faces  {job:<30} ours {ours:9.2f} ms  {who:<8}{peer:10.2f} ms  ratio {peer / ours:7.1f}x"
+            )
     lines = [
         "# Geometry benchmark",
         "",

@@ -7,6 +7,7 @@
 //! `raster` (the software rasterizer), `image` (image-space blur).
 #![allow(dead_code)]
 
+pub mod accumulate;
 pub mod contour;
 pub mod contour_table;
 mod error;
@@ -16,6 +17,7 @@ pub mod motion;
 pub mod raster;
 pub mod shell;
 pub mod volume;
+pub mod volume_alpha;
 pub mod volume_filter;
 
 pub use error::{Error, Result};

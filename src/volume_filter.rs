@@ -1,22 +1,21 @@
-//! Temporal (shutter) filters of the motion volume: the opacity of each contour ring.
+//! Temporal (shutter) filters of the motion volume.
 //!
 //! A motion volume of `n` segments has `n + 1` contour rings at the shutter times `t_i = i / n`;
 //! ring `n` is the leading contour (shutter close), ring 0 the trailing one (shutter open).
-//! Leading vertices take the alpha of ring `n`, trailing vertices that of ring 0, joining
-//! vertices that of their ring; the rasterizer interpolates linearly in between.
 //!
-//! - `ramp`, the paper's (sections 3.4 and 4.2): `alpha_i = max(0.1, 1 - D_i / E)` where `D_i`
-//!   is the path length from ring `i` to the leading ring (the sum of the segment lengths after
-//!   it) and `E` the object's extent along the summed motion vector. The leading ring is opaque;
-//!   with `E = 0` and a moving object every other ring gets the floor 0.1.
-//! - `box`, `triangle`, `gaussian`: shutter weights `w(t)` on [0, 1] with unit integral (box 1;
-//!   triangle peaking at 0.5; gaussian centred at 0.5 with sigma 1/6, truncated to [0, 1] and
-//!   renormalised). A point the contour passes at time `t` lies inside an object of extent `E`
-//!   moving a path of length `L` during a window of length `tau = E / L` around `t`, so
-//!   `alpha_i = clamp(W(min(1, t_i + tau/2)) - W(max(0, t_i - tau/2)), 0.1, 1)` with `W` the
-//!   cumulative weight; the same 0.1 floor as the paper's ramp keeps long trails visible.
+//! - `ramp`, the paper's (sections 3.4 and 4.2), exactly as stated there: leading vertices are
+//!   opaque, trailing vertices and ring `i` get `alpha_i = max(0.1, 1 - D_i / E)` where `D_i` is
+//!   the path length from ring `i` to the leading ring (the sum of the segment lengths after it)
+//!   and `E` the object's extent along the summed motion vector; the rasterizer interpolates
+//!   linearly in between. With `E = 0` and a moving object every other ring gets the floor 0.1.
+//!   It is a look, not a measurement: its total coverage is not the object's area.
+//! - `box`, `triangle`, `gaussian` (our own design): shutter weights `w(t)` on [0, 1] with unit
+//!   integral (box 1; triangle peaking at 0.5; gaussian centred at 0.5 with sigma 1/6,
+//!   truncated to [0, 1] and renormalised). Each vertex gets the weighted fraction of the
+//!   shutter during which the object covers its image, from the coverage model of
+//!   [`crate::volume_alpha`]; no floor, so a long streak is as faint as it physically is.
 //!
-//! Without motion (`L = 0`) every filter gives alpha 1.
+//! Without motion every filter gives alpha 1.
 use crate::{Error, Result};
 
 /// A temporal filter over the shutter.
@@ -41,7 +40,9 @@ impl Filter {
             "gaussian" => Ok(Filter::Gaussian),
             _ => Err(Error::value(
                 "filter",
-                format!("unknown filter {name:?}; expected 'ramp', 'box', 'triangle' or 'gaussian'"),
+                format!(
+                    "unknown filter {name:?}; expected 'ramp', 'box', 'triangle' or 'gaussian'"
+                ),
             )),
         }
     }
@@ -67,8 +68,8 @@ impl Filter {
         }
     }
 
-    /// Opacity of the `n + 1` rings for segment lengths `lengths` (`n` of them, world units) and
-    /// the extent `extent` along the summed motion vector.
+    /// The paper's ramp opacity of the `n + 1` rings for segment lengths `lengths` (`n` of
+    /// them, world units) and the extent `extent` along the summed motion vector.
     pub fn ring_alphas(self, lengths: &[f64], extent: f64) -> Vec<f64> {
         let n = lengths.len();
         let total: f64 = lengths.iter().sum();
@@ -76,32 +77,30 @@ impl Filter {
         if total == 0.0 {
             return out;
         }
-        match self {
-            Filter::Ramp => {
-                // D_i = sum of the lengths of segments i+1..n, accumulated from the leading end.
-                let mut d = 0.0;
-                for i in (0..n).rev() {
-                    d += lengths[i];
-                    out[i] = if d == 0.0 {
-                        1.0
-                    } else if extent > 0.0 {
-                        (1.0 - d / extent).clamp(ALPHA_FLOOR, 1.0)
-                    } else {
-                        ALPHA_FLOOR
-                    };
-                }
-            }
-            _ => {
-                let tau = extent / total;
-                for (i, a) in out.iter_mut().enumerate() {
-                    let t = i as f64 / n as f64;
-                    let lo = (t - 0.5 * tau).max(0.0);
-                    let hi = (t + 0.5 * tau).min(1.0);
-                    *a = (self.cumulative(hi) - self.cumulative(lo)).clamp(ALPHA_FLOOR, 1.0);
-                }
-            }
+        // D_i = sum of the lengths of segments i+1..n, accumulated from the leading end.
+        let mut d = 0.0;
+        for i in (0..n).rev() {
+            d += lengths[i];
+            out[i] = if d == 0.0 {
+                1.0
+            } else if extent > 0.0 {
+                (1.0 - d / extent).clamp(ALPHA_FLOOR, 1.0)
+            } else {
+                ALPHA_FLOOR
+            };
         }
         out
+    }
+
+    /// Equally spaced cuts of each joining segment for the coverage model (`q`, giving `q - 1`
+    /// cuts, plus two per-vertex cuts): 1 for box (its coverage is piecewise linear), 4 for
+    /// triangle (a cut at its peak) and 6 for gaussian (curved).
+    pub fn knots_per_segment(self) -> usize {
+        match self {
+            Filter::Ramp | Filter::Box => 1,
+            Filter::Triangle => 4,
+            Filter::Gaussian => 6,
+        }
     }
 }
 
@@ -145,7 +144,7 @@ mod tests {
             (1.0, 0.842_700_792_949_714_9),
             (2.0, 0.995_322_265_018_952_7),
             (-1.5, -0.966_105_146_475_310_7),
-            (-2.2, -0.998_137_153_702_018_1),
+            (-2.2, -0.998_137_153_702_018),
         ] {
             assert!((erf(x) - want).abs() < 1e-13, "erf({x}) = {}", erf(x));
         }
@@ -153,7 +152,12 @@ mod tests {
 
     #[test]
     fn cumulative_weights_end_at_one() {
-        for f in [Filter::Ramp, Filter::Box, Filter::Triangle, Filter::Gaussian] {
+        for f in [
+            Filter::Ramp,
+            Filter::Box,
+            Filter::Triangle,
+            Filter::Gaussian,
+        ] {
             assert!(f.cumulative(0.0).abs() < 1e-12);
             assert!((f.cumulative(1.0) - 1.0).abs() < 1e-12);
         }
@@ -166,9 +170,15 @@ mod tests {
         assert!((a[2] - (1.0 - 2.0 / 5.0)).abs() < 1e-15);
         assert!((a[1] - (1.0 - 3.0 / 5.0)).abs() < 1e-15);
         assert!((a[0] - 0.2).abs() < 1e-15);
-        assert_eq!(Filter::Ramp.ring_alphas(&[10.0], 1.0), vec![ALPHA_FLOOR, 1.0]);
-        assert_eq!(Filter::Ramp.ring_alphas(&[1.0], 0.0), vec![ALPHA_FLOOR, 1.0]);
-        assert_eq!(Filter::Box.ring_alphas(&[0.0, 0.0], 1.0), vec![1.0; 3]);
+        assert_eq!(
+            Filter::Ramp.ring_alphas(&[10.0], 1.0),
+            vec![ALPHA_FLOOR, 1.0]
+        );
+        assert_eq!(
+            Filter::Ramp.ring_alphas(&[1.0], 0.0),
+            vec![ALPHA_FLOOR, 1.0]
+        );
+        assert_eq!(Filter::Ramp.ring_alphas(&[0.0, 0.0], 1.0), vec![1.0; 3]);
         assert!(Filter::parse("median").is_err());
     }
 }

@@ -6,6 +6,67 @@ __version__: str
 
 # --- geometry (mesh, contour, motion volume, contour table)
 
+LEADING: int
+TRAILING: int
+JOINING: int
+
+class _Mesh:
+    """Rust mesh: owned float64 vertices (V,3), faces (F,3) and the cached edge adjacency."""
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray) -> None:
+        """vertices (V,3) float64 C-contiguous, faces (F,3) int64 with indices in [0, V)."""
+    def with_vertices(self, vertices: np.ndarray) -> _Mesh:
+        """Same faces and cached adjacency, new (V,3) float64 vertex positions."""
+    def has_adjacency(self) -> bool: ...
+    def stats(self) -> dict[str, int | bool]:
+        """faces, vertices, edges, degenerate_faces, boundary_edges, nonmanifold_edges,
+        inconsistent_edges, unreferenced_vertices (int) and closed (bool)."""
+    def face_normals(self, unit: bool = True) -> np.ndarray:
+        """(F,3) float64 unit face normals (zero if degenerate), or raw (b - a) x (c - a)."""
+    def vertex_normals(self) -> np.ndarray:
+        """(V,3) float64 area-weighted unit vertex normals (zero where undefined)."""
+    def edges(self) -> np.ndarray:
+        """(E,2) int64 undirected edges a < b, sorted."""
+    def edge_face_counts(self) -> np.ndarray:
+        """(E,) int64 number of faces on each edge of edges()."""
+    def build_adjacency(self) -> None:
+        """Build the edge adjacency now (releases the GIL)."""
+
+def contour_edges(mesh: _Mesh, motion: np.ndarray, camera_position: np.ndarray | None = None) -> np.ndarray:
+    """(E,2) int64 oriented contour edges for the (3,) float64 motion; with a (3,) camera
+    position, the contour-line subset. Releases the GIL."""
+
+def motion_volume(
+    mesh: _Mesh,
+    keyframes: np.ndarray,
+    segments: int,
+    filter: str,
+    colors: np.ndarray,
+    normals: np.ndarray | None = None,
+    camera_position: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+    """Motion volume for keyframes (K+1,4,4) float64, each interval cut into segments, filter
+    'ramp' | 'box' | 'triangle' | 'gaussian', colors (1|V,4) float32 straight RGBA, normals
+    (V,3) float64 | None, camera_position (3,) float64 | None. Returns vertices (N,3) f64,
+    faces (M,3) i64, rgba (N,4) f32, normals (N,3) f32, part (M,) u8, ring_alpha (n+1,) f64
+    and the number of contour edges. Releases the GIL."""
+
+class _ContourTable:
+    """Contour sets precomputed for K directions (section 4.4)."""
+
+    def __init__(self, mesh: _Mesh, count: int, seed: int, directions: np.ndarray | None = None) -> None:
+        """count random directions from seed (splitmix64), or the given (K,3) float64 ones."""
+    def __len__(self) -> int: ...
+    def directions(self) -> np.ndarray:
+        """(K,3) float64 unit directions."""
+    def nearest(self, motion: np.ndarray) -> tuple[int, float]:
+        """(index, angle in radians) of the stored direction nearest to the (3,) motion."""
+    def edges(self, index: int) -> np.ndarray:
+        """(E,2) int64 contour edges stored for direction index."""
+    def front(self, index: int) -> np.ndarray:
+        """(F,) bool front faces stored for direction index."""
+    def storage_bytes(self) -> int: ...
+
 # --- end geometry
 
 # --- image (motionblur.image kernels)
@@ -13,6 +74,45 @@ __version__: str
 # --- end image
 
 # --- shell (blur shells, silhouette of motion)
+
+class _BlurShell:
+    """Rust blur shell (see motionblur.BlurShell). faces i64 (F,3); mask bool (F,) | None; color
+    f32 (1,3) | (V,3) | None (white)."""
+
+    def __init__(
+        self,
+        faces: np.ndarray,
+        n_vertices: int,
+        subdivisions: int,
+        hysteresis: int,
+        initial_alpha: float,
+        mask: np.ndarray | None = None,
+        color: np.ndarray | None = None,
+    ) -> None: ...
+    def update(self, vertices: np.ndarray, normals: np.ndarray | None = None) -> None:
+        """vertices, normals f64 (V,3) C-contiguous. Releases the GIL."""
+    def build(
+        self, vertices: np.ndarray | None = None, normals: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(vertices f64 (N,3), faces i64 (M,3), rgba f32 (N,4) straight, normals f32 (N,3),
+        face i64 (N,), step i32 (N,)). Releases the GIL."""
+    def reset(self) -> None: ...
+    @property
+    def updates(self) -> int: ...
+    @property
+    def update_index(self) -> int | None: ...
+    @property
+    def n_vertices(self) -> int: ...
+    @property
+    def n_faces(self) -> int: ...
+    def _state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(facing i8 (V,), last edge i8 (F,), since i64 (F,), fade i32 (F,), run i32 (F,))."""
+    def _element(self, face: int, age: int) -> tuple[int, bool] | None: ...
+
+def _motion_silhouette(
+    vertices: np.ndarray, previous_vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(facing i8 (V,) +1/-1/0, edge i8 (F,) k or -1). f64 (V,3) inputs, faces i64 (F,3)."""
 
 # --- end shell
 
@@ -35,3 +135,16 @@ def _rasterize(
     projection (4,4) f64 into an image of height x width. Returns rgba (H,W,4) f32 premultiplied,
     depth (H,W) f32 view-axis distance (inf background), ids (H,W) i32 (-1 background), velocity
     (H,W,2) f32 pixels, and a stats dict. Releases the GIL."""
+
+# --- scenes (accumulation kernels)
+
+def _accumulate(
+    acc: np.ndarray, rgba: np.ndarray, depth: np.ndarray, limit: np.ndarray | None, weight: float
+) -> None:
+    """In place: acc (H,W,4) f32 += weight * rgba (H,W,4) f32 where depth (H,W) f32 < limit (H,W)
+    f32 (everywhere when limit is None). All C-contiguous. Releases the GIL."""
+
+def _over(acc: np.ndarray, under: np.ndarray) -> None:
+    """In place: acc (H,W,4) f32 += under (H,W,4) f32 * (1 - acc alpha). Releases the GIL."""
+
+# --- end scenes

@@ -156,7 +156,9 @@ class Mesh:
 
     def with_vertices(self, vertices) -> Mesh:
         """A mesh with the same faces and cached adjacency and new (V,3) vertex positions."""
-        v = _readonly(np.array(as_array(vertices, "vertices", np.float64, (len(self._vertices), 3)), copy=True))
+        v = _readonly(
+            np.array(as_array(vertices, "vertices", np.float64, (len(self._vertices), 3)), copy=True)
+        )
         return Mesh._from_core(self._core.with_vertices(v), v, self._faces)
 
     def __len__(self) -> int:
@@ -172,7 +174,9 @@ def as_mesh(mesh, name: str = "mesh") -> Mesh:
         return mesh
     if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
         return Mesh(mesh.vertices, mesh.faces)
-    raise TypeError(f"{name}: expected a Mesh or an object with .vertices and .faces, got {type(mesh).__name__}")
+    raise TypeError(
+        f"{name}: expected a Mesh or an object with .vertices and .faces, got {type(mesh).__name__}"
+    )
 
 
 def _vec3(value, name: str) -> np.ndarray:
@@ -215,7 +219,8 @@ class MotionVolume:
         times the temporal filter's opacity at the vertex's shutter time.
     normals : (N,3) float32 unit lighting normals (zeros where the mesh normal is undefined).
     part : (M,) uint8, ``LEADING`` (0), ``TRAILING`` (1) or ``JOINING`` (2) per face.
-    ring_alpha : (n+1,) float64 filter opacity of the contour rings, shutter open to close.
+    ring_alpha : (n+1,) float64 filter opacity of the contour rings at the keyframe times,
+        shutter open to close (for box/triangle/gaussian: the mean over the ring's vertices).
     contour_count : number of contour edges swept.
     segments : number of joining segments n.
     """
@@ -309,10 +314,21 @@ def motion_volume(
     segments : int >= 1. Each keyframe interval is cut into ``segments`` joining segments
         (translation lerp, rotation slerp, scale lerp); the total is ``K * segments``, so the
         keyframes are always followed and ``segments`` only subdivides them (at most 4096).
-    filter : ``"ramp"`` (the paper's: leading opaque, ring alpha ``max(0.1, 1 - D/E)`` with D the
-        path length to the leading ring and E the extent along the motion), ``"box"``,
-        ``"triangle"`` or ``"gaussian"`` (coverage of the shutter weight during the time the
-        object covers the swept point, floored at 0.1). See ``src/volume_filter.rs``.
+    filter : ``"ramp"``, the paper's, exactly as stated there (leading opaque, trailing and ring
+        alpha ``max(0.1, 1 - D/E)`` with D the path length to the leading ring and E the extent
+        along the motion; a look, its total coverage is not the object's area); or ``"box"``,
+        ``"triangle"``, ``"gaussian"`` shutter weights (our own design): every vertex gets the
+        weighted fraction of the shutter during which the object covers its image, so the
+        volume drawn with back-face culling and exact blending has the coverage of the
+        time-averaged image (within 5% of an accumulation of rasterized renders in the tests,
+        per pixel within 15%). The image is modelled with the convex hull of the object's
+        projection (perspective from ``camera_position``; without one, orthographic along the
+        world axis least aligned with the motion, which is less accurate), so concave objects
+        are approximated. For these filters each joining segment is cut at the two times the
+        object's ends pass each contour vertex (plus 3 more cuts for triangle, 5 for gaussian),
+        and coarse meshes are subdivided (each edge into up to 16 parts, at most 2**20 faces)
+        so that alphas can follow the coverage profile. No 0.1 floor: long streaks are faint.
+        See ``src/volume_alpha.rs``.
     colors : None (white, opaque), one RGB/RGBA colour, or (V,3)/(V,4) per vertex; linear,
         straight alpha, RGB >= 0, alpha in [0, 1].
     normals : optional (V,3) lighting normals in object space; default area-weighted normals.
@@ -323,8 +339,9 @@ def motion_volume(
 
     Returns
     -------
-    MotionVolume. Without a camera, a closed consistently wound mesh gives a closed consistently
-    wound volume. If every keyframe is equal (zero motion), the mesh itself, all ``LEADING`` and
+    MotionVolume, to be drawn with back-face culling (``Draw(..., cull_back=True)``) and
+    ``blend="exact"``. Without a camera, a closed consistently wound mesh gives a closed
+    consistently wound volume. If every keyframe is equal (zero motion), the mesh itself, all ``LEADING`` and
     opaque.
     """
     m = as_mesh(mesh)

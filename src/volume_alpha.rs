@@ -1,0 +1,595 @@
+//! Coverage alphas of the motion volume for the `box`, `triangle` and `gaussian` shutter filters
+//! (our own design; the paper only states its ramp, see [`crate::volume_filter`]).
+//!
+//! The physically correct time-averaged image of an object gives a pixel the weighted fraction of
+//! the shutter during which the object covers it, `integral of w(t) [pixel covered at t] dt`, and
+//! its total coverage equals the object's projected area (the shutter weight `w` has unit
+//! integral). A motion volume drawn with back-face culling shows one surface per pixel, so its
+//! per-vertex alpha should be that fraction at the vertex's image position. We compute it with a
+//! 2D model of the view:
+//!
+//! - the view is an orthographic projection along `view` (from the camera to the object's
+//!   centroid at mid-shutter; without a camera, along the world axis least aligned with the
+//!   motion, made perpendicular to it);
+//! - with a camera the projection is perspective (image-plane coordinates), else orthographic;
+//! - during path segment `j` (keyframes `j` and `j + 1`, times `t_j .. t_{j+1}`) the object's
+//!   image is the convex hull `S_j` of its projected vertices placed at mid-segment, translated
+//!   linearly by the projected displacement `d_j` of the centroid (for a translation path seen
+//!   orthographically every `S_j` is `S_0` moved, and this is exact for a convex object);
+//! - a point `p` of the image is covered at `t = t_j + u (t_{j+1} - t_j)` iff
+//!   `p - (u - 1/2) d_j` lies in `S_j`, an interval of `u` read from the chord of `S_j` along
+//!   `d_j` through `p`; its filter weight is `W(t_hi) - W(t_lo)` with `W` the cumulative
+//!   weight, summed over the segments.
+//!
+//! Along a joining strip this fraction has kinks where the object's ends pass the point, so each
+//! segment of the strip is cut, per contour vertex, at those two times (see [`CoverageModel::knots`])
+//! and at `q - 1` equally spaced times (`q` from [`Filter::knots_per_segment`]) for the curvature
+//! of the triangle and gaussian weights. The chord tables hold 1024 rows per segment (fewer for
+//! long paths, at least 64).
+use rayon::prelude::*;
+
+use crate::mesh::{dot, normalize};
+use crate::motion::Path;
+use crate::volume_filter::Filter;
+
+/// The chord of a convex polygon along a direction: for rows of constant `y` (across the
+/// direction), the interval `[lo, hi]` of `x` (along it) inside the polygon.
+#[derive(Debug, Clone)]
+struct ChordTable {
+    y0: f64,
+    dy: f64,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+}
+
+impl ChordTable {
+    /// `hull`: convex polygon (any orientation) in (x, y) coordinates.
+    fn new(hull: &[[f64; 2]], rows: usize) -> Option<Self> {
+        let (ymin, ymax) = hull
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                (a.min(p[1]), b.max(p[1]))
+            });
+        if hull.len() < 3 || ymax.is_nan() || ymax <= ymin {
+            return None;
+        }
+        let dy = (ymax - ymin) / rows as f64;
+        let mut lo = vec![f64::INFINITY; rows];
+        let mut hi = vec![f64::NEG_INFINITY; rows];
+        for (i, p) in hull.iter().enumerate() {
+            let q = hull[(i + 1) % hull.len()];
+            let (a, b) = if p[1] <= q[1] { (*p, q) } else { (q, *p) };
+            let k0 = ((a[1] - ymin) / dy - 0.5).ceil().max(0.0) as usize;
+            let k1 = ((b[1] - ymin) / dy - 0.5).floor().min(rows as f64 - 1.0);
+            if k1 < 0.0 {
+                continue;
+            }
+            for s in k0..=(k1 as usize) {
+                let y = ymin + (s as f64 + 0.5) * dy;
+                let (x0, x1) = if b[1] > a[1] {
+                    let x = a[0] + (b[0] - a[0]) * ((y - a[1]) / (b[1] - a[1])).clamp(0.0, 1.0);
+                    (x, x)
+                } else {
+                    (a[0].min(b[0]), a[0].max(b[0]))
+                };
+                lo[s] = lo[s].min(x0);
+                hi[s] = hi[s].max(x1);
+            }
+        }
+        // Every row centre lies inside [ymin, ymax], so each row is crossed by the polygon.
+        for s in 0..rows {
+            if lo[s] > hi[s] {
+                let (l, h) = if s > 0 {
+                    (lo[s - 1], hi[s - 1])
+                } else {
+                    (0.0, -1.0)
+                };
+                lo[s] = l;
+                hi[s] = h;
+            }
+        }
+        Some(ChordTable {
+            y0: ymin,
+            dy,
+            lo,
+            hi,
+        })
+    }
+
+    /// `[lo, hi]` at `y`, linear between row centres; `None` outside the polygon's rows.
+    fn chord(&self, y: f64) -> Option<(f64, f64)> {
+        let n = self.lo.len();
+        let f = (y - self.y0) / self.dy;
+        if !(0.0..=n as f64).contains(&f) {
+            return None;
+        }
+        let g = (f - 0.5).clamp(0.0, (n - 1) as f64);
+        let k = (g.floor() as usize).min(n.saturating_sub(2));
+        let w = if n > 1 { g - k as f64 } else { 0.0 };
+        let k1 = (k + 1).min(n - 1);
+        let lo = self.lo[k] + (self.lo[k1] - self.lo[k]) * w;
+        let hi = self.hi[k] + (self.hi[k1] - self.hi[k]) * w;
+        (hi >= lo).then_some((lo, hi))
+    }
+}
+
+/// Andrew's monotone chain: the convex hull, counter-clockwise, without collinear points.
+fn convex_hull(mut pts: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
+    pts.par_sort_unstable_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+    pts.dedup();
+    if pts.len() < 3 {
+        return pts;
+    }
+    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
+    let mut h: Vec<[f64; 2]> = Vec::with_capacity(2 * pts.len());
+    for pass in 0..2 {
+        let start = h.len();
+        let iter: Box<dyn Iterator<Item = &[f64; 2]>> = if pass == 0 {
+            Box::new(pts.iter())
+        } else {
+            Box::new(pts.iter().rev())
+        };
+        for &p in iter {
+            while h.len() >= start + 2 && cross(h[h.len() - 2], h[h.len() - 1], p) <= 0.0 {
+                h.pop();
+            }
+            h.push(p);
+        }
+        h.pop();
+    }
+    h
+}
+
+/// One path segment of the model.
+#[derive(Debug, Clone)]
+struct Segment {
+    t0: f64,
+    t1: f64,
+    /// Unit direction of the projected displacement, its perpendicular, and its length.
+    dir: [f64; 2],
+    perp: [f64; 2],
+    len: f64,
+    table: Option<ChordTable>,
+}
+
+/// The 2D coverage model of a mesh moving along a path (see the module docs).
+#[derive(Debug, Clone)]
+pub struct CoverageModel {
+    filter: Filter,
+    /// Perspective centre (the camera), or `None` for an orthographic view along `d`.
+    eye: Option<[f64; 3]>,
+    d: [f64; 3],
+    e1: [f64; 3],
+    e2: [f64; 3],
+    segments: Vec<Segment>,
+    /// The segments of the path itself (for [`CoverageModel::knots`]).
+    geometric: Vec<Segment>,
+    /// Below this projected length a segment counts as not moving (scene units).
+    still: f64,
+}
+
+fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// Image-plane coordinates: `(p . e1, p . e2)`, or with an eye the perspective ones
+/// `((p - eye) . e1, (p - eye) . e2) / ((p - eye) . d)` (depth clamped to a tiny positive value
+/// for points at or behind the eye).
+#[inline]
+fn project(
+    eye: Option<[f64; 3]>,
+    d: [f64; 3],
+    e1: [f64; 3],
+    e2: [f64; 3],
+    p: [f64; 3],
+) -> [f64; 2] {
+    match eye {
+        None => [dot(p, e1), dot(p, e2)],
+        Some(e) => {
+            let r = [p[0] - e[0], p[1] - e[1], p[2] - e[2]];
+            let z = dot(r, d).max(1e-9 * dot(r, r).sqrt()).max(1e-300);
+            [dot(r, e1) / z, dot(r, e2) / z]
+        }
+    }
+}
+
+/// The default view: the world axis least aligned with `motion`, made perpendicular to it.
+pub fn default_view(motion: [f64; 3]) -> [f64; 3] {
+    let m = normalize(motion);
+    if m == [0.0; 3] {
+        return [0.0, 0.0, -1.0];
+    }
+    let k = (0..3)
+        .min_by(|&a, &b| m[a].abs().total_cmp(&m[b].abs()))
+        .expect("three axes");
+    let mut axis = [0.0; 3];
+    axis[k] = -1.0;
+    let c = dot(axis, m);
+    normalize([axis[0] - c * m[0], axis[1] - c * m[1], axis[2] - c * m[2]])
+}
+
+impl CoverageModel {
+    /// The model of `vertices` (object space) placed along `path` and seen along `view`, from
+    /// the camera at `eye` (perspective) or orthographically.
+    pub fn new(
+        vertices: &[[f64; 3]],
+        path: &Path,
+        filter: Filter,
+        view: [f64; 3],
+        eye: Option<[f64; 3]>,
+    ) -> Self {
+        let d = normalize(view);
+        let d = if d == [0.0; 3] { [0.0, 0.0, -1.0] } else { d };
+        let helper = if d[0].abs() < 0.9 {
+            [1.0, 0.0, 0.0]
+        } else {
+            [0.0, 1.0, 0.0]
+        };
+        let e1 = normalize(cross3(helper, d));
+        let e2 = cross3(d, e1);
+        let n = path.segments();
+        let k = vertices.len() as f64;
+        let centroid = {
+            let s = vertices
+                .iter()
+                .fold([0.0; 3], |a, v| [a[0] + v[0], a[1] + v[1], a[2] + v[2]]);
+            [s[0] / k, s[1] / k, s[2] / k]
+        };
+        let proj = |p: [f64; 3]| project(eye, d, e1, e2, p);
+        let project_all = |f: &crate::motion::Keyframe| -> Vec<[f64; 2]> {
+            vertices.par_iter().map(|v| proj(f.point(*v))).collect()
+        };
+        // Orthographic translation: every segment's silhouette is the first one moved.
+        let pure = path.is_translation() && eye.is_none();
+        let base = if pure {
+            Some(convex_hull(project_all(&path.frames[0])))
+        } else {
+            None
+        };
+        let size = base
+            .as_ref()
+            .map(|h| {
+                h.iter()
+                    .map(|p| p[0].abs().max(p[1].abs()))
+                    .fold(0.0, f64::max)
+            })
+            .unwrap_or(1.0);
+        let still = 1e-12 * size.max(1e-300);
+        let build = |path: &Path| -> Vec<Segment> {
+            let n = path.segments();
+            let rows = (65_536 / n.max(1)).clamp(64, 1024);
+            (0..n)
+                .map(|j| {
+                    let (a, b) = (&path.frames[j], &path.frames[j + 1]);
+                    let (pa, pb) = if pure {
+                        (proj(a.translation), proj(b.translation))
+                    } else {
+                        (proj(a.point(centroid)), proj(b.point(centroid)))
+                    };
+                    let disp = [pb[0] - pa[0], pb[1] - pa[1]];
+                    let len = (disp[0] * disp[0] + disp[1] * disp[1]).sqrt();
+                    let dir = if len > still {
+                        [disp[0] / len, disp[1] / len]
+                    } else {
+                        [1.0, 0.0]
+                    };
+                    let perp = [-dir[1], dir[0]];
+                    let hull: Vec<[f64; 2]> = match &base {
+                        Some(h) => {
+                            let o = proj(path.frames[0].translation);
+                            let off = [0.5 * (pa[0] + pb[0]) - o[0], 0.5 * (pa[1] + pb[1]) - o[1]];
+                            h.iter().map(|p| [p[0] + off[0], p[1] + off[1]]).collect()
+                        }
+                        None => convex_hull(project_all(&a.interpolate(b, 0.5))),
+                    };
+                    let local: Vec<[f64; 2]> = hull
+                        .iter()
+                        .map(|p| {
+                            [
+                                p[0] * dir[0] + p[1] * dir[1],
+                                p[0] * perp[0] + p[1] * perp[1],
+                            ]
+                        })
+                        .collect();
+                    Segment {
+                        t0: j as f64 / n as f64,
+                        t1: (j + 1) as f64 / n as f64,
+                        dir,
+                        perp,
+                        len,
+                        table: ChordTable::new(&local, rows),
+                    }
+                })
+                .collect()
+        };
+        // The coverage integral follows the silhouette's change (perspective, rotation) on at
+        // least 8 sub-segments; the cuts of the joining strips use the path's own segments.
+        let geometric = build(path);
+        let parts = if pure { 1 } else { 8usize.div_ceil(n) };
+        let segments = if parts > 1 {
+            build(&path.subdivide(parts))
+        } else {
+            geometric.clone()
+        };
+        CoverageModel {
+            filter,
+            eye,
+            d,
+            e1,
+            e2,
+            segments,
+            geometric,
+            still,
+        }
+    }
+
+    fn local(&self, s: &Segment, p: [f64; 3]) -> (f64, f64) {
+        let q = project(self.eye, self.d, self.e1, self.e2, p);
+        (
+            q[0] * s.dir[0] + q[1] * s.dir[1],
+            q[0] * s.perp[0] + q[1] * s.perp[1],
+        )
+    }
+
+    /// The filter-weighted fraction of the shutter during which the object covers the image of
+    /// the world point `p`, in [0, 1].
+    pub fn coverage(&self, p: [f64; 3]) -> f64 {
+        let mut sum = 0.0;
+        for s in &self.segments {
+            let Some(table) = &s.table else { continue };
+            let (x, y) = self.local(s, p);
+            let Some((a, b)) = table.chord(y) else {
+                continue;
+            };
+            let (u0, u1) = if s.len > self.still {
+                (
+                    (0.5 + (x - b) / s.len).max(0.0),
+                    (0.5 + (x - a) / s.len).min(1.0),
+                )
+            } else if (a..=b).contains(&x) {
+                (0.0, 1.0)
+            } else {
+                continue;
+            };
+            if u1 > u0 {
+                let dt = s.t1 - s.t0;
+                sum +=
+                    self.filter.cumulative(s.t0 + u1 * dt) - self.filter.cumulative(s.t0 + u0 * dt);
+            }
+        }
+        sum.clamp(0.0, 1.0)
+    }
+
+    /// Cut points in (0, 1) of segment `j`'s joining strip for a contour point placed at `p0`
+    /// (segment start) and `p1` (segment end): the two times at which the object's front and
+    /// back ends pass it (from its own image motion, which under perspective differs from the
+    /// silhouette's), and `q - 1` equally spaced times; sorted, always `q + 1` of them (clipped
+    /// ones repeat an end).
+    pub fn knots(&self, j: usize, p0: [f64; 3], p1: [f64; 3], q: usize) -> Vec<f64> {
+        let s = &self.geometric[j];
+        let mut out: Vec<f64> = (1..q).map(|k| k as f64 / q as f64).collect();
+        let mut kinks = [0.5 / q as f64, 1.0 - 0.5 / q as f64];
+        if let (Some(table), true) = (&s.table, s.len > self.still) {
+            let (x0, y0) = self.local(s, p0);
+            let (x1, y1) = self.local(s, p1);
+            let dx = x1 - x0;
+            if let (Some((a, b)), true) = (table.chord(0.5 * (y0 + y1)), dx.abs() > self.still) {
+                // Window of P(u) = x0 + u dx: [u + 0.5 + (x0 - b)/len, ...]; start hits 0, end hits 1.
+                kinks = [
+                    ((b - x0 - 0.5 * s.len) / dx).clamp(0.0, 1.0),
+                    ((a + 0.5 * s.len - x0) / dx).clamp(0.0, 1.0),
+                ];
+            }
+        }
+        out.extend(kinks);
+        out.sort_by(f64::total_cmp);
+        out
+    }
+}
+
+/// A new vertex of a subdivided mesh: the weights of three original vertices.
+pub type Blend = ([u32; 3], [f64; 3]);
+
+/// The result of [`subdivide`].
+pub struct Subdivision {
+    pub vertices: Vec<[f64; 3]>,
+    pub faces: Vec<[u32; 3]>,
+    /// Per new vertex, its blend of original vertices.
+    pub blend: Vec<Blend>,
+    /// Per new face, the original face it lies in.
+    pub parent: Vec<u32>,
+}
+
+/// Uniform conforming subdivision: every edge into `s` parts, every face into `s * s` faces in
+/// the same orientation. Points on a shared edge are computed once from its lower-index end, so
+/// a closed mesh stays closed. Returns vertices (the originals first, in order), faces and each
+/// vertex's blend of original vertices (for colours and normals).
+pub fn subdivide(vertices: &[[f64; 3]], faces: &[[u32; 3]], s: usize) -> Subdivision {
+    let mut out_v = vertices.to_vec();
+    let mut blend: Vec<Blend> = (0..vertices.len() as u32)
+        .map(|v| ([v, v, v], [1.0, 0.0, 0.0]))
+        .collect();
+    let mut out_f = Vec::with_capacity(faces.len() * s * s);
+    let mut parent = Vec::with_capacity(faces.len() * s * s);
+    let mut edge_points: std::collections::HashMap<(u32, u32, usize), u32> =
+        std::collections::HashMap::new();
+    let lerp = |p: [f64; 3], q: [f64; 3], t: f64| {
+        [
+            p[0] + (q[0] - p[0]) * t,
+            p[1] + (q[1] - p[1]) * t,
+            p[2] + (q[2] - p[2]) * t,
+        ]
+    };
+    let mut grid = vec![0u32; (s + 1) * (s + 1)];
+    for (fi, &[a, b, c]) in faces.iter().enumerate() {
+        let (pa, pb, pc) = (
+            vertices[a as usize],
+            vertices[b as usize],
+            vertices[c as usize],
+        );
+        for j in 0..=s {
+            for i in 0..=(s - j) {
+                let k = s - i - j;
+                // (i, j): weight i/s on b, j/s on c, k/s on a.
+                let on_edge = |p: u32, q: u32, steps: usize| -> (u32, u32, usize) {
+                    if p < q {
+                        (p, q, steps)
+                    } else {
+                        (q, p, s - steps)
+                    }
+                };
+                let key = if (i == 0 && j == 0) || i == s || j == s {
+                    None
+                } else if j == 0 {
+                    Some(on_edge(a, b, i))
+                } else if i == 0 {
+                    Some(on_edge(a, c, j))
+                } else if k == 0 {
+                    Some(on_edge(b, c, j))
+                } else {
+                    Some((u32::MAX, u32::MAX, 0))
+                };
+                let id = match key {
+                    None => [a, b, c][if i == s {
+                        1
+                    } else if j == s {
+                        2
+                    } else {
+                        0
+                    }],
+                    Some((u32::MAX, _, _)) => {
+                        let w = [
+                            k as f64 / s as f64,
+                            i as f64 / s as f64,
+                            j as f64 / s as f64,
+                        ];
+                        out_v.push([
+                            w[0] * pa[0] + w[1] * pb[0] + w[2] * pc[0],
+                            w[0] * pa[1] + w[1] * pb[1] + w[2] * pc[1],
+                            w[0] * pa[2] + w[1] * pb[2] + w[2] * pc[2],
+                        ]);
+                        blend.push(([a, b, c], w));
+                        (out_v.len() - 1) as u32
+                    }
+                    Some((p, q, st)) => *edge_points.entry((p, q, st)).or_insert_with(|| {
+                        let t = st as f64 / s as f64;
+                        out_v.push(lerp(vertices[p as usize], vertices[q as usize], t));
+                        blend.push(([p, q, q], [1.0 - t, t, 0.0]));
+                        (out_v.len() - 1) as u32
+                    }),
+                };
+                grid[j * (s + 1) + i] = id;
+            }
+        }
+        let g = |i: usize, j: usize| grid[j * (s + 1) + i];
+        for j in 0..s {
+            for i in 0..(s - j) {
+                out_f.push([g(i, j), g(i + 1, j), g(i, j + 1)]);
+                parent.push(fi as u32);
+                if i + j + 1 < s {
+                    out_f.push([g(i + 1, j), g(i + 1, j + 1), g(i, j + 1)]);
+                    parent.push(fi as u32);
+                }
+            }
+        }
+    }
+    Subdivision {
+        vertices: out_v,
+        faces: out_f,
+        blend,
+        parent,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::Keyframe;
+
+    fn square() -> Vec<[f64; 3]> {
+        vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ]
+    }
+
+    #[test]
+    fn subdivision_is_conforming_and_keeps_the_area() {
+        let v = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let f = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        let Subdivision {
+            vertices: sv,
+            faces: sf,
+            blend,
+            parent,
+        } = subdivide(&v, &f, 3);
+        assert_eq!(sf.len(), 4 * 9);
+        assert_eq!(parent.len(), sf.len());
+        assert_eq!(parent[9], 1);
+        // 4 corners + 6 edges * 2 + 4 faces * 1 interior point.
+        assert_eq!(sv.len(), 4 + 12 + 4);
+        assert_eq!(blend.len(), sv.len());
+        let mesh = crate::mesh::Mesh::new(sv, sf).unwrap();
+        assert!(mesh.stats().is_closed());
+        let area = |m: &crate::mesh::Mesh| {
+            m.face_normals_raw()
+                .iter()
+                .map(|n| dot(*n, *n).sqrt())
+                .sum::<f64>()
+        };
+        let orig = crate::mesh::Mesh::new(v, f).unwrap();
+        assert!((area(&mesh) - area(&orig)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn hull_of_a_square_with_inner_points() {
+        let h = convex_hull(vec![
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [0.5, 0.5],
+            [1.0, 1.0],
+            [0.0, 1.0],
+            [0.5, 0.0],
+        ]);
+        assert_eq!(h.len(), 4);
+    }
+
+    #[test]
+    fn box_coverage_of_a_translating_square_is_exact() {
+        // A unit square moving 4 along x, seen along -z: a point at x covers the window where the
+        // square's [tx, tx + 1] contains it, so coverage = |[x - 1, x] / 4 ∩ [0, 1]|.
+        let path = Path {
+            frames: vec![
+                Keyframe::translate([0.0; 3]),
+                Keyframe::translate([4.0, 0.0, 0.0]),
+            ],
+        };
+        let m = CoverageModel::new(&square(), &path, Filter::Box, [0.0, 0.0, -1.0], None);
+        for (x, want) in [
+            (-0.5, 0.0),
+            (0.5, 0.125),
+            (2.0, 0.25),
+            (4.5, 0.125),
+            (5.5, 0.0),
+        ] {
+            let got = m.coverage([x, 0.5, 0.0]);
+            assert!((got - want).abs() < 1e-9, "x {x}: {got} vs {want}");
+        }
+        assert_eq!(m.coverage([2.0, 1.5, 0.0]), 0.0);
+        let k = m.knots(0, [0.0, 0.5, 0.0], [4.0, 0.5, 0.0], 1);
+        assert!((k[0] - 0.25).abs() < 1e-12 && (k[1] - 1.0).abs() < 1e-12);
+    }
+}
