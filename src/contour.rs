@@ -46,7 +46,11 @@ pub fn classify_faces(mesh: &Mesh, m: [f64; 3]) -> Vec<bool> {
 
 /// Whether each face is front-facing to a camera at `eye`: `n . (eye - a) > 0`, with vertices
 /// placed by `place`.
-pub fn camera_facing(mesh: &Mesh, eye: [f64; 3], place: impl Fn([f64; 3]) -> [f64; 3] + Sync) -> Vec<bool> {
+pub fn camera_facing(
+    mesh: &Mesh,
+    eye: [f64; 3],
+    place: impl Fn([f64; 3]) -> [f64; 3] + Sync,
+) -> Vec<bool> {
     let v = mesh.vertices();
     mesh.faces()
         .par_iter()
@@ -86,7 +90,11 @@ pub fn contour_from_sides(mesh: &Mesh, front: &[bool]) -> Vec<ContourEdge> {
                 return None;
             };
             let (a, b) = if forward { (lo, hi) } else { (hi, lo) };
-            Some(ContourEdge { edge: e as u32, a, b })
+            Some(ContourEdge {
+                edge: e as u32,
+                a,
+                b,
+            })
         })
         .collect()
 }
@@ -96,13 +104,21 @@ pub fn contour_line(mesh: &Mesh, edges: Vec<ContourEdge>, visible: &[bool]) -> V
     let adj = mesh.adjacency();
     edges
         .into_par_iter()
-        .filter(|c| adj.incident(c.edge as usize).iter().any(|&h| visible[(h / 3) as usize]))
+        .filter(|c| {
+            adj.incident(c.edge as usize)
+                .iter()
+                .any(|&h| visible[(h / 3) as usize])
+        })
         .collect()
 }
 
 /// The paper's contour edges for motion `m`; with `camera`, only the contour line (edges with
 /// at least one adjacent face front-facing to the camera, `n . (camera - a) > 0`).
-pub fn contour_edges(mesh: &Mesh, m: [f64; 3], camera: Option<[f64; 3]>) -> Result<Vec<ContourEdge>> {
+pub fn contour_edges(
+    mesh: &Mesh,
+    m: [f64; 3],
+    camera: Option<[f64; 3]>,
+) -> Result<Vec<ContourEdge>> {
     check_vector(m, "motion")?;
     let front = classify_faces(mesh, m);
     let edges = contour_from_sides(mesh, &front);
@@ -122,11 +138,27 @@ mod tests {
 
     fn cube() -> Mesh {
         let v: Vec<[f64; 3]> = (0..8)
-            .map(|i| [(i >> 2 & 1) as f64 - 0.5, (i >> 1 & 1) as f64 - 0.5, (i & 1) as f64 - 0.5])
+            .map(|i| {
+                [
+                    (i >> 2 & 1) as f64 - 0.5,
+                    (i >> 1 & 1) as f64 - 0.5,
+                    (i & 1) as f64 - 0.5,
+                ]
+            })
             .collect();
         let f = vec![
-            [0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
-            [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3],
+            [0, 1, 3],
+            [0, 3, 2],
+            [4, 6, 7],
+            [4, 7, 5],
+            [0, 4, 5],
+            [0, 5, 1],
+            [2, 3, 7],
+            [2, 7, 6],
+            [0, 2, 6],
+            [0, 6, 4],
+            [1, 5, 7],
+            [1, 7, 3],
         ];
         Mesh::new(v, f).unwrap()
     }
@@ -156,8 +188,14 @@ mod tests {
     #[test]
     fn contour_is_thread_count_independent() {
         let m = cube();
-        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-        let two = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let two = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
         let a = one.install(|| contour_edges(&m, [0.3, -0.2, 0.9], Some([3.0, 1.0, 2.0])).unwrap());
         let b = two.install(|| contour_edges(&m, [0.3, -0.2, 0.9], Some([3.0, 1.0, 2.0])).unwrap());
         assert_eq!(a, b);

@@ -66,7 +66,10 @@ impl ContourTable {
         if directions.is_empty() || directions.len() > MAX_DIRECTIONS {
             return Err(Error::value(
                 "directions",
-                format!("must hold 1..={MAX_DIRECTIONS} directions, got {}", directions.len()),
+                format!(
+                    "must hold 1..={MAX_DIRECTIONS} directions, got {}",
+                    directions.len()
+                ),
             ));
         }
         let mut unit = Vec::with_capacity(directions.len());
@@ -83,17 +86,26 @@ impl ContourTable {
             .par_iter()
             .map(|&d| {
                 let front = classify_faces(mesh, d);
-                let edges = contour_from_sides(mesh, &front).into_iter().map(|c| [c.a, c.b]).collect();
+                let edges = contour_from_sides(mesh, &front)
+                    .into_iter()
+                    .map(|c| [c.a, c.b])
+                    .collect();
                 ContourSet { edges, front }
             })
             .collect();
-        Ok(ContourTable { directions: unit, sets })
+        Ok(ContourTable {
+            directions: unit,
+            sets,
+        })
     }
 
     /// `count` stochastic directions from `seed`.
     pub fn random(mesh: &Mesh, count: usize, seed: u64) -> Result<Self> {
         if count == 0 || count > MAX_DIRECTIONS {
-            return Err(Error::value("directions", format!("must be in 1..={MAX_DIRECTIONS}, got {count}")));
+            return Err(Error::value(
+                "directions",
+                format!("must be in 1..={MAX_DIRECTIONS}, got {count}"),
+            ));
         }
         Self::new(mesh, random_directions(count, seed))
     }
@@ -103,7 +115,10 @@ impl ContourTable {
         check_vector(motion, "motion")?;
         let m = normalize(motion);
         if m == [0.0; 3] {
-            return Err(Error::value("motion", "is zero; a contour needs a direction"));
+            return Err(Error::value(
+                "motion",
+                "is zero; a contour needs a direction",
+            ));
         }
         let (mut best, mut cos) = (0usize, f64::NEG_INFINITY);
         for (i, d) in self.directions.iter().enumerate() {
@@ -118,7 +133,10 @@ impl ContourTable {
 
     /// Bytes held by the stored sets (edges as two u32, one byte per face flag).
     pub fn storage_bytes(&self) -> usize {
-        self.sets.iter().map(|s| s.edges.len() * 8 + s.front.len()).sum()
+        self.sets
+            .iter()
+            .map(|s| s.edges.len() * 8 + s.front.len())
+            .sum()
     }
 }
 
@@ -136,7 +154,12 @@ mod tests {
 
     #[test]
     fn lookup_of_a_stored_direction_is_exact() {
-        let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let v = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
         let f = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
         let mesh = Mesh::new(v, f).unwrap();
         let t = ContourTable::random(&mesh, 32, 1).unwrap();
@@ -144,7 +167,10 @@ mod tests {
         assert_eq!(i, 5);
         assert!(err < 1e-7);
         assert!(t.nearest([0.0; 3]).is_err());
-        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
         let t1 = one.install(|| ContourTable::random(&mesh, 32, 1).unwrap());
         assert_eq!(t1.sets, t.sets);
     }

@@ -90,10 +90,16 @@ impl Mesh {
             return Err(Error::shape("faces", "is empty"));
         }
         if faces.len() > MAX_ELEMENTS {
-            return Err(Error::shape("faces", format!("too many faces ({})", faces.len())));
+            return Err(Error::shape(
+                "faces",
+                format!("too many faces ({})", faces.len()),
+            ));
         }
         let nv = vertices.len() as u32;
-        if let Some(bad) = faces.par_iter().position_first(|f| f.iter().any(|&i| i >= nv)) {
+        if let Some(bad) = faces
+            .par_iter()
+            .position_first(|f| f.iter().any(|&i| i >= nv))
+        {
             return Err(Error::value(
                 "faces",
                 format!("face {bad} has an index out of range [0, {nv})"),
@@ -113,7 +119,11 @@ impl Mesh {
         if vertices.len() != self.vertices.len() {
             return Err(Error::shape(
                 "vertices",
-                format!("expected {} vertices, got {}", self.vertices.len(), vertices.len()),
+                format!(
+                    "expected {} vertices, got {}",
+                    self.vertices.len(),
+                    vertices.len()
+                ),
             ));
         }
         Ok(Mesh {
@@ -132,7 +142,8 @@ impl Mesh {
 
     /// The cached edge adjacency, built on first use.
     pub fn adjacency(&self) -> &Adjacency {
-        self.adjacency.get_or_init(|| build_adjacency(&self.faces, self.vertices.len()))
+        self.adjacency
+            .get_or_init(|| build_adjacency(&self.faces, self.vertices.len()))
     }
 
     /// Whether the adjacency has been built already.
@@ -218,13 +229,19 @@ fn check_vertices(vertices: &[[f64; 3]]) -> Result<()> {
         return Err(Error::shape("vertices", "is empty"));
     }
     if vertices.len() > MAX_ELEMENTS {
-        return Err(Error::shape("vertices", format!("too many vertices ({})", vertices.len())));
+        return Err(Error::shape(
+            "vertices",
+            format!("too many vertices ({})", vertices.len()),
+        ));
     }
     if let Some(bad) = vertices
         .par_iter()
         .position_first(|v| v.iter().any(|x| !x.is_finite()))
     {
-        return Err(Error::value("vertices", format!("vertex {bad} is NaN or inf")));
+        return Err(Error::value(
+            "vertices",
+            format!("vertex {bad} is NaN or inf"),
+        ));
     }
     Ok(())
 }
@@ -388,7 +405,11 @@ pub fn build_adjacency(faces: &[[u32; 3]], n_vertices: usize) -> Adjacency {
             for w in local.windows(2) {
                 let bucket = &mut dst[w[0] as usize..w[1] as usize];
                 bucket.sort_unstable();
-                runs += bucket.iter().enumerate().filter(|(i, e)| *i == 0 || bucket[i - 1].0 != e.0).count();
+                runs += bucket
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, e)| *i == 0 || bucket[i - 1].0 != e.0)
+                    .count();
             }
             *rc = runs;
         });
@@ -402,7 +423,8 @@ pub fn build_adjacency(faces: &[[u32; 3]], n_vertices: usize) -> Adjacency {
     offsets[n_edges] = total as u32;
     {
         let mut jobs = Vec::with_capacity(n_coarse);
-        let (mut e_rest, mut o_rest): (&mut [[u32; 2]], &mut [u32]) = (&mut edges, &mut offsets[..n_edges]);
+        let (mut e_rest, mut o_rest): (&mut [[u32; 2]], &mut [u32]) =
+            (&mut edges, &mut offsets[..n_edges]);
         for (b, &n) in run_counts.iter().enumerate() {
             let (eh, et) = e_rest.split_at_mut(n);
             let (oh, ot) = o_rest.split_at_mut(n);
@@ -440,7 +462,12 @@ mod tests {
     use super::*;
 
     fn tetra() -> Mesh {
-        let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let v = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
         let f = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
         Mesh::new(v, f).unwrap()
     }
@@ -459,7 +486,13 @@ mod tests {
 
     #[test]
     fn open_and_nonmanifold_edges_are_counted() {
-        let v = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]];
+        let v = vec![
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, -1.0, 0.0],
+        ];
         // Three faces on edge (0, 1), one degenerate face with a repeated index.
         let f = vec![[0, 1, 2], [1, 0, 3], [0, 1, 4], [2, 2, 3]];
         let s = Mesh::new(v, f).unwrap().stats();
@@ -483,8 +516,14 @@ mod tests {
         let faces: Vec<[u32; 3]> = (0..50000u32)
             .map(|i| [i % 4999, (i * 7 + 1) % 4999, (i * 13 + 5) % 4999])
             .collect();
-        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-        let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let three = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
         let a = one.install(|| build_adjacency(&faces, 4999));
         let b = three.install(|| build_adjacency(&faces, 4999));
         assert_eq!(a, b);

@@ -30,7 +30,10 @@ impl Keyframe {
     /// positive determinant. `index` names the keyframe in errors about `motion`.
     pub fn from_matrix(m: &[[f64; 4]; 4], index: usize) -> Result<Self> {
         if m.iter().flatten().any(|x| !x.is_finite()) {
-            return Err(Error::value("motion", format!("keyframe {index} is NaN or inf")));
+            return Err(Error::value(
+                "motion",
+                format!("keyframe {index} is NaN or inf"),
+            ));
         }
         if m[3] != [0.0, 0.0, 0.0, 1.0] {
             return Err(Error::value(
@@ -51,7 +54,9 @@ impl Keyframe {
         if det.is_nan() || det <= 0.0 {
             return Err(Error::value(
                 "motion",
-                format!("keyframe {index}: the 3x3 part must have a positive determinant (no mirror)"),
+                format!(
+                    "keyframe {index}: the 3x3 part must have a positive determinant (no mirror)"
+                ),
             ));
         }
         // Similarity: L^T L = s^2 I.
@@ -110,7 +115,10 @@ impl Keyframe {
         if self.has_identity_linear() {
             return d;
         }
-        self.mat3().inverse().mul_vec3(DVec3::from_array(d)).to_array()
+        self.mat3()
+            .inverse()
+            .mul_vec3(DVec3::from_array(d))
+            .to_array()
     }
 
     /// A normal (up to length) in world space: for a similarity, `L n` has the right direction.
@@ -211,7 +219,9 @@ impl Path {
 
     /// Whether every keyframe has the same 3x3 part (a pure translation path).
     pub fn is_translation(&self) -> bool {
-        self.frames.iter().all(|k| k.linear == self.frames[0].linear)
+        self.frames
+            .iter()
+            .all(|k| k.linear == self.frames[0].linear)
     }
 
     /// Motion vectors of the segments, in world units: the difference of the translations for a
@@ -238,13 +248,21 @@ mod tests {
 
     fn rot_z(a: f64, t: [f64; 3]) -> [[f64; 4]; 4] {
         let (s, c) = a.sin_cos();
-        [[c, -s, 0.0, t[0]], [s, c, 0.0, t[1]], [0.0, 0.0, 1.0, t[2]], [0.0, 0.0, 0.0, 1.0]]
+        [
+            [c, -s, 0.0, t[0]],
+            [s, c, 0.0, t[1]],
+            [0.0, 0.0, 1.0, t[2]],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
     }
 
     #[test]
     fn translation_points_are_exact() {
         let p = Path::translation([0.1, 0.2, 0.3]).unwrap();
-        assert_eq!(p.frames[1].point([1.0, 2.0, 3.0]), [1.0 + 0.1, 2.0 + 0.2, 3.0 + 0.3]);
+        assert_eq!(
+            p.frames[1].point([1.0, 2.0, 3.0]),
+            [1.0 + 0.1, 2.0 + 0.2, 3.0 + 0.3]
+        );
         assert_eq!(p.segment_vectors([5.0; 3]), vec![[0.1, 0.2, 0.3]]);
     }
 

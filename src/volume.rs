@@ -23,7 +23,9 @@
 //! mesh itself placed by `T_0`, all leading and opaque (colour alpha only).
 use rayon::prelude::*;
 
-use crate::contour::{camera_facing, check_vector, contour_from_sides, contour_line, classify_faces, ContourEdge};
+use crate::contour::{
+    camera_facing, check_vector, classify_faces, contour_from_sides, contour_line, ContourEdge,
+};
 use crate::mesh::{dot, normalize, Mesh, MAX_ELEMENTS};
 use crate::motion::Path;
 use crate::volume_filter::Filter;
@@ -93,25 +95,39 @@ struct Source {
 fn check_options(mesh: &Mesh, opts: &VolumeOptions) -> Result<()> {
     let nv = mesh.vertices().len();
     let check_rgba = |c: &[f32; 4]| {
-        c.iter().all(|x| x.is_finite()) && c[..3].iter().all(|x| *x >= 0.0) && (0.0..=1.0).contains(&c[3])
+        c.iter().all(|x| x.is_finite())
+            && c[..3].iter().all(|x| *x >= 0.0)
+            && (0.0..=1.0).contains(&c[3])
     };
     match &opts.colors {
         Colors::Uniform(c) if !check_rgba(c) => {
-            return Err(Error::value("colors", "must be finite, RGB >= 0 and alpha in [0, 1]"));
+            return Err(Error::value(
+                "colors",
+                "must be finite, RGB >= 0 and alpha in [0, 1]",
+            ));
         }
         Colors::PerVertex(c) => {
             if c.len() != nv {
-                return Err(Error::shape("colors", format!("expected {nv} colours, got {}", c.len())));
+                return Err(Error::shape(
+                    "colors",
+                    format!("expected {nv} colours, got {}", c.len()),
+                ));
             }
             if !c.par_iter().all(check_rgba) {
-                return Err(Error::value("colors", "must be finite, RGB >= 0 and alpha in [0, 1]"));
+                return Err(Error::value(
+                    "colors",
+                    "must be finite, RGB >= 0 and alpha in [0, 1]",
+                ));
             }
         }
         _ => {}
     }
     if let Some(n) = &opts.normals {
         if n.len() != nv {
-            return Err(Error::shape("normals", format!("expected {nv} normals, got {}", n.len())));
+            return Err(Error::shape(
+                "normals",
+                format!("expected {nv} normals, got {}", n.len()),
+            ));
         }
         if !n.par_iter().all(|x| x.iter().all(|c| c.is_finite())) {
             return Err(Error::value("normals", "is NaN or inf"));
@@ -128,7 +144,10 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
     check_options(mesh, opts)?;
     let n = path.segments();
     if n == 0 || n > MAX_SEGMENTS {
-        return Err(Error::value("segments", format!("total segments must be in 1..={MAX_SEGMENTS}, got {n}")));
+        return Err(Error::value(
+            "segments",
+            format!("total segments must be in 1..={MAX_SEGMENTS}, got {n}"),
+        ));
     }
     let verts = mesh.vertices();
     let faces = mesh.faces();
@@ -141,7 +160,9 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         Colors::Uniform(c) => *c,
         Colors::PerVertex(c) => c[v as usize],
     };
-    let emit = |sources: &[Source], alphas: &[f64]| -> (Vec<[f64; 3]>, Vec<[f32; 4]>, Vec<[f32; 3]>) {
+    let emit = |sources: &[Source],
+                alphas: &[f64]|
+     -> (Vec<[f64; 3]>, Vec<[f32; 4]>, Vec<[f32; 3]>) {
         let pos = sources
             .par_iter()
             .map(|s| frames[s.ring as usize].point(verts[s.v as usize]))
@@ -150,7 +171,12 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
             .par_iter()
             .map(|s| {
                 let c = color(s.v);
-                [c[0], c[1], c[2], (c[3] as f64 * alphas[s.ring as usize]) as f32]
+                [
+                    c[0],
+                    c[1],
+                    c[2],
+                    (c[3] as f64 * alphas[s.ring as usize]) as f32,
+                ]
             })
             .collect();
         let nrm = sources
@@ -164,7 +190,13 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
     };
 
     if path.is_static() {
-        let sources: Vec<Source> = (0..verts.len() as u32).map(|v| Source { v, ring: 0, normal_ring: 0 }).collect();
+        let sources: Vec<Source> = (0..verts.len() as u32)
+            .map(|v| Source {
+                v,
+                ring: 0,
+                normal_ring: 0,
+            })
+            .collect();
         let alphas = vec![1.0; n + 1];
         let (vertices, rgba, normals) = emit(&sources, &alphas);
         return Ok(MotionVolume {
@@ -180,7 +212,9 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
 
     // Motion vector, extent, ring opacities.
     let centroid = {
-        let s = verts.iter().fold([0.0; 3], |a, v| [a[0] + v[0], a[1] + v[1], a[2] + v[2]]);
+        let s = verts
+            .iter()
+            .fold([0.0; 3], |a, v| [a[0] + v[0], a[1] + v[1], a[2] + v[2]]);
         let k = verts.len() as f64;
         [s[0] / k, s[1] / k, s[2] / k]
     };
@@ -193,20 +227,31 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         [q[0] - p[0], q[1] - p[1], q[2] - p[2]]
     };
     let m_obj = last.inverse_vector(total);
-    let lengths: Vec<f64> = path.segment_vectors(centroid).into_iter().map(|s| dot(s, s).sqrt()).collect();
+    let lengths: Vec<f64> = path
+        .segment_vectors(centroid)
+        .into_iter()
+        .map(|s| dot(s, s).sqrt())
+        .collect();
     let dir = normalize(total);
     let extent = if dir == [0.0; 3] {
         0.0
     } else {
         // (L_n v) . d = v . (L_n^T d); the translation cancels in max - min.
-        let d_obj = last.mat3().transpose().mul_vec3(glam::DVec3::from_array(dir)).to_array();
+        let d_obj = last
+            .mat3()
+            .transpose()
+            .mul_vec3(glam::DVec3::from_array(dir))
+            .to_array();
         let (lo, hi) = verts
             .par_iter()
             .map(|v| {
                 let x = dot(*v, d_obj);
                 (x, x)
             })
-            .reduce(|| (f64::INFINITY, f64::NEG_INFINITY), |a, b| (a.0.min(b.0), a.1.max(b.1)));
+            .reduce(
+                || (f64::INFINITY, f64::NEG_INFINITY),
+                |a, b| (a.0.min(b.0), a.1.max(b.1)),
+            );
         hi - lo
     };
     let alphas = opts.filter.ring_alphas(&lengths, extent);
@@ -228,17 +273,33 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
             .par_iter()
             .map(|c| {
                 let inc = adj.incident(c.edge as usize);
-                let lead = inc.iter().any(|&h| front[(h / 3) as usize] && vis_lead[(h / 3) as usize]);
-                let trail = inc.iter().any(|&h| !front[(h / 3) as usize] && vis_trail[(h / 3) as usize]);
+                let lead = inc
+                    .iter()
+                    .any(|&h| front[(h / 3) as usize] && vis_lead[(h / 3) as usize]);
+                let trail = inc
+                    .iter()
+                    .any(|&h| !front[(h / 3) as usize] && vis_trail[(h / 3) as usize]);
                 (lead, trail)
             })
             .collect();
     }
     let joining = contour.len().checked_mul(2 * n).unwrap_or(usize::MAX);
     if joining > MAX_ELEMENTS || faces.len() + joining > MAX_ELEMENTS {
-        return Err(Error::value("segments", format!("{n} segments give too many joining faces")));
+        return Err(Error::value(
+            "segments",
+            format!("{n} segments give too many joining faces"),
+        ));
     }
-    build(mesh, &front, &contour, &edge_visibility, n, opts.camera.is_some(), &alphas, &emit)
+    build(
+        mesh,
+        &front,
+        &contour,
+        &edge_visibility,
+        n,
+        opts.camera.is_some(),
+        &alphas,
+        &emit,
+    )
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -278,13 +339,21 @@ fn build(
     for (v, slot) in lead.iter_mut().enumerate() {
         if *slot == 0 {
             *slot = sources.len() as u32;
-            sources.push(Source { v: v as u32, ring: nr, normal_ring: nr });
+            sources.push(Source {
+                v: v as u32,
+                ring: nr,
+                normal_ring: nr,
+            });
         }
     }
     for (v, slot) in trail.iter_mut().enumerate() {
         if *slot == 0 {
             *slot = sources.len() as u32;
-            sources.push(Source { v: v as u32, ring: 0, normal_ring: 0 });
+            sources.push(Source {
+                v: v as u32,
+                ring: 0,
+                normal_ring: 0,
+            });
         }
     }
     let ring_base = sources.len();
@@ -298,7 +367,11 @@ fn build(
                     _ => i,
                 };
                 for v in [c.a, c.b] {
-                    sources.push(Source { v, ring: i, normal_ring });
+                    sources.push(Source {
+                        v,
+                        ring: i,
+                        normal_ring,
+                    });
                 }
             }
         }
@@ -312,13 +385,20 @@ fn build(
         for i in 1..nr {
             for (v, &slot) in ring.iter().enumerate() {
                 if slot != NONE {
-                    sources.push(Source { v: v as u32, ring: i, normal_ring: i });
+                    sources.push(Source {
+                        v: v as u32,
+                        ring: i,
+                        normal_ring: i,
+                    });
                 }
             }
         }
     }
     if sources.len() > MAX_ELEMENTS {
-        return Err(Error::value("segments", format!("{n} segments give too many vertices")));
+        return Err(Error::value(
+            "segments",
+            format!("{n} segments give too many vertices"),
+        ));
     }
     let id = |k: usize, v: u32, i: usize, which: usize| -> u32 {
         if per_edge {
@@ -336,7 +416,11 @@ fn build(
     for (map, want, tag) in [(&lead, true, LEADING), (&trail, false, TRAILING)] {
         for (f, face) in faces.iter().enumerate() {
             if front[f] == want {
-                out_faces.push([map[face[0] as usize], map[face[1] as usize], map[face[2] as usize]]);
+                out_faces.push([
+                    map[face[0] as usize],
+                    map[face[1] as usize],
+                    map[face[2] as usize],
+                ]);
                 part.push(tag);
             }
         }

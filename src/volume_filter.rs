@@ -41,7 +41,9 @@ impl Filter {
             "gaussian" => Ok(Filter::Gaussian),
             _ => Err(Error::value(
                 "filter",
-                format!("unknown filter {name:?}; expected 'ramp', 'box', 'triangle' or 'gaussian'"),
+                format!(
+                    "unknown filter {name:?}; expected 'ramp', 'box', 'triangle' or 'gaussian'"
+                ),
             )),
         }
     }
@@ -153,7 +155,12 @@ mod tests {
 
     #[test]
     fn cumulative_weights_end_at_one() {
-        for f in [Filter::Ramp, Filter::Box, Filter::Triangle, Filter::Gaussian] {
+        for f in [
+            Filter::Ramp,
+            Filter::Box,
+            Filter::Triangle,
+            Filter::Gaussian,
+        ] {
             assert!(f.cumulative(0.0).abs() < 1e-12);
             assert!((f.cumulative(1.0) - 1.0).abs() < 1e-12);
         }
@@ -166,8 +173,14 @@ mod tests {
         assert!((a[2] - (1.0 - 2.0 / 5.0)).abs() < 1e-15);
         assert!((a[1] - (1.0 - 3.0 / 5.0)).abs() < 1e-15);
         assert!((a[0] - 0.2).abs() < 1e-15);
-        assert_eq!(Filter::Ramp.ring_alphas(&[10.0], 1.0), vec![ALPHA_FLOOR, 1.0]);
-        assert_eq!(Filter::Ramp.ring_alphas(&[1.0], 0.0), vec![ALPHA_FLOOR, 1.0]);
+        assert_eq!(
+            Filter::Ramp.ring_alphas(&[10.0], 1.0),
+            vec![ALPHA_FLOOR, 1.0]
+        );
+        assert_eq!(
+            Filter::Ramp.ring_alphas(&[1.0], 0.0),
+            vec![ALPHA_FLOOR, 1.0]
+        );
         assert_eq!(Filter::Box.ring_alphas(&[0.0, 0.0], 1.0), vec![1.0; 3]);
         assert!(Filter::parse("median").is_err());
     }

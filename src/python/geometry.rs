@@ -7,8 +7,8 @@ use std::sync::Arc;
 use numpy::ndarray::Array2;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::prelude::*;
-use rayon::prelude::*;
 use pyo3::types::PyDict;
+use rayon::prelude::*;
 
 use super::to_py_err;
 use crate::contour::contour_edges as core_contour_edges;
@@ -25,7 +25,10 @@ fn rows<const N: usize, T: numpy::Element + Copy + Default>(
 ) -> PyResult<Vec<[T; N]>> {
     let view = a.as_array();
     if view.ncols() != N {
-        return Err(to_py_err(Error::shape(name, format!("expected shape (N,{N}), got {:?}", view.shape()))));
+        return Err(to_py_err(Error::shape(
+            name,
+            format!("expected shape (N,{N}), got {:?}", view.shape()),
+        )));
     }
     let mut out = vec![[T::default(); N]; view.nrows()];
     match a.as_slice() {
@@ -49,13 +52,19 @@ fn rows<const N: usize, T: numpy::Element + Copy + Default>(
 fn face_rows(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>> {
     if a.as_array().ncols() != 3 {
         let shape = a.as_array().shape().to_vec();
-        return Err(to_py_err(Error::shape("faces", format!("expected shape (N,3), got {shape:?}"))));
+        return Err(to_py_err(Error::shape(
+            "faces",
+            format!("expected shape (N,3), got {shape:?}"),
+        )));
     }
     let owned;
     let flat: &[i64] = match a.as_slice() {
         Ok(s) => s,
         Err(_) => {
-            owned = rows::<3, i64>(a, "faces")?.into_iter().flatten().collect::<Vec<_>>();
+            owned = rows::<3, i64>(a, "faces")?
+                .into_iter()
+                .flatten()
+                .collect::<Vec<_>>();
             &owned
         }
     };
@@ -82,18 +91,27 @@ fn face_rows(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>
 fn vec3(a: &PyReadonlyArray1<'_, f64>, name: &'static str) -> PyResult<[f64; 3]> {
     let v = a.as_array();
     if v.len() != 3 {
-        return Err(to_py_err(Error::shape(name, format!("expected shape (3,), got {:?}", v.shape()))));
+        return Err(to_py_err(Error::shape(
+            name,
+            format!("expected shape (3,), got {:?}", v.shape()),
+        )));
     }
     Ok([v[0], v[1], v[2]])
 }
 
-fn array2<'py, T: numpy::Element + Copy, const N: usize>(py: Python<'py>, v: &[[T; N]]) -> Bound<'py, PyArray2<T>> {
+fn array2<'py, T: numpy::Element + Copy, const N: usize>(
+    py: Python<'py>,
+    v: &[[T; N]],
+) -> Bound<'py, PyArray2<T>> {
     let flat: Vec<T> = v.iter().flatten().copied().collect();
     let arr = Array2::from_shape_vec((v.len(), N), flat).expect("length matches");
     PyArray2::from_owned_array(py, arr)
 }
 
-fn index_pairs<'py>(py: Python<'py>, e: impl Iterator<Item = [u32; 2]>) -> Bound<'py, PyArray2<i64>> {
+fn index_pairs<'py>(
+    py: Python<'py>,
+    e: impl Iterator<Item = [u32; 2]>,
+) -> Bound<'py, PyArray2<i64>> {
     let v: Vec<[i64; 2]> = e.map(|[a, b]| [a as i64, b as i64]).collect();
     array2(py, &v)
 }
@@ -107,19 +125,29 @@ pub struct PyMesh {
 #[pymethods]
 impl PyMesh {
     #[new]
-    fn new(py: Python<'_>, vertices: PyReadonlyArray2<'_, f64>, faces: PyReadonlyArray2<'_, i64>) -> PyResult<Self> {
+    fn new(
+        py: Python<'_>,
+        vertices: PyReadonlyArray2<'_, f64>,
+        faces: PyReadonlyArray2<'_, i64>,
+    ) -> PyResult<Self> {
         let v = rows::<3, f64>(&vertices, "vertices")?;
         let f = face_rows(&faces, v.len())?;
         let mesh = py.detach(move || Mesh::new(v, f));
-        Ok(PyMesh { inner: Arc::new(mesh.map_err(to_py_err)?) })
+        Ok(PyMesh {
+            inner: Arc::new(mesh.map_err(to_py_err)?),
+        })
     }
 
     /// Same faces and adjacency, new vertex positions.
     fn with_vertices(&self, py: Python<'_>, vertices: PyReadonlyArray2<'_, f64>) -> PyResult<Self> {
         let v = rows::<3, f64>(&vertices, "vertices")?;
         let inner = self.inner.clone();
-        let mesh = py.detach(move || inner.with_vertices(v)).map_err(to_py_err)?;
-        Ok(PyMesh { inner: Arc::new(mesh) })
+        let mesh = py
+            .detach(move || inner.with_vertices(v))
+            .map_err(to_py_err)?;
+        Ok(PyMesh {
+            inner: Arc::new(mesh),
+        })
     }
 
     fn has_adjacency(&self) -> bool {
@@ -146,7 +174,13 @@ impl PyMesh {
     #[pyo3(signature = (unit = true))]
     fn face_normals<'py>(&self, py: Python<'py>, unit: bool) -> Bound<'py, PyArray2<f64>> {
         let inner = self.inner.clone();
-        let n = py.detach(move || if unit { inner.face_normals() } else { inner.face_normals_raw() });
+        let n = py.detach(move || {
+            if unit {
+                inner.face_normals()
+            } else {
+                inner.face_normals_raw()
+            }
+        });
         array2(py, &n)
     }
 
@@ -169,7 +203,10 @@ impl PyMesh {
         let inner = self.inner.clone();
         let c: Vec<i64> = py.detach(move || {
             let adj = inner.adjacency();
-            adj.offsets.windows(2).map(|w| (w[1] - w[0]) as i64).collect()
+            adj.offsets
+                .windows(2)
+                .map(|w| (w[1] - w[0]) as i64)
+                .collect()
         });
         PyArray1::from_vec(py, c)
     }
@@ -192,9 +229,14 @@ fn contour_edges<'py>(
     camera_position: Option<PyReadonlyArray1<'_, f64>>,
 ) -> PyResult<Bound<'py, PyArray2<i64>>> {
     let m = vec3(&motion, "motion")?;
-    let cam = camera_position.as_ref().map(|c| vec3(c, "camera_position")).transpose()?;
+    let cam = camera_position
+        .as_ref()
+        .map(|c| vec3(c, "camera_position"))
+        .transpose()?;
     let inner = mesh.inner.clone();
-    let e = py.detach(move || core_contour_edges(&inner, m, cam)).map_err(to_py_err)?;
+    let e = py
+        .detach(move || core_contour_edges(&inner, m, cam))
+        .map_err(to_py_err)?;
     Ok(index_pairs(py, e.into_iter().map(|c| [c.a, c.b])))
 }
 
@@ -224,7 +266,10 @@ fn motion_volume<'py>(
     let filter = Filter::parse(filter).map_err(to_py_err)?;
     let kv = keyframes.as_array();
     if kv.shape()[1] != 4 || kv.shape()[2] != 4 {
-        return Err(to_py_err(Error::shape("motion", format!("expected shape (K,4,4), got {:?}", kv.shape()))));
+        return Err(to_py_err(Error::shape(
+            "motion",
+            format!("expected shape (K,4,4), got {:?}", kv.shape()),
+        )));
     }
     let mats: Vec<[[f64; 4]; 4]> = kv
         .outer_iter()
@@ -239,9 +284,19 @@ fn motion_volume<'py>(
         })
         .collect();
     let c = rows::<4, f32>(&colors, "colors")?;
-    let colors = if c.len() == 1 { Colors::Uniform(c[0]) } else { Colors::PerVertex(c) };
-    let normals = normals.as_ref().map(|n| rows::<3, f64>(n, "normals")).transpose()?;
-    let camera = camera_position.as_ref().map(|c| vec3(c, "camera_position")).transpose()?;
+    let colors = if c.len() == 1 {
+        Colors::Uniform(c[0])
+    } else {
+        Colors::PerVertex(c)
+    };
+    let normals = normals
+        .as_ref()
+        .map(|n| rows::<3, f64>(n, "normals"))
+        .transpose()?;
+    let camera = camera_position
+        .as_ref()
+        .map(|c| vec3(c, "camera_position"))
+        .transpose()?;
     if segments == 0 {
         return Err(to_py_err(Error::value("segments", "must be >= 1")));
     }
@@ -252,14 +307,26 @@ fn motion_volume<'py>(
             if path.segments().saturating_mul(segments) > crate::volume::MAX_SEGMENTS {
                 return Err(Error::value(
                     "segments",
-                    format!("too many segments in total (at most {})", crate::volume::MAX_SEGMENTS),
+                    format!(
+                        "too many segments in total (at most {})",
+                        crate::volume::MAX_SEGMENTS
+                    ),
                 ));
             }
-            let opts = VolumeOptions { filter, colors, normals, camera };
+            let opts = VolumeOptions {
+                filter,
+                colors,
+                normals,
+                camera,
+            };
             core_motion_volume(&inner, &path.subdivide(segments), &opts)
         })
         .map_err(to_py_err)?;
-    let faces: Vec<[i64; 3]> = vol.faces.iter().map(|f| [f[0] as i64, f[1] as i64, f[2] as i64]).collect();
+    let faces: Vec<[i64; 3]> = vol
+        .faces
+        .iter()
+        .map(|f| [f[0] as i64, f[1] as i64, f[2] as i64])
+        .collect();
     Ok((
         array2(py, &vol.vertices),
         array2(py, &faces),
@@ -288,7 +355,10 @@ impl PyContourTable {
         seed: u64,
         directions: Option<PyReadonlyArray2<'_, f64>>,
     ) -> PyResult<Self> {
-        let dirs = directions.as_ref().map(|d| rows::<3, f64>(d, "directions")).transpose()?;
+        let dirs = directions
+            .as_ref()
+            .map(|d| rows::<3, f64>(d, "directions"))
+            .transpose()?;
         let m = mesh.inner.clone();
         let inner = py
             .detach(move || match dirs {
@@ -332,7 +402,10 @@ impl PyContourTable {
 impl PyContourTable {
     fn set(&self, index: usize) -> PyResult<&crate::contour_table::ContourSet> {
         self.inner.sets.get(index).ok_or_else(|| {
-            to_py_err(Error::value("index", format!("must be < {}, got {index}", self.inner.sets.len())))
+            to_py_err(Error::value(
+                "index",
+                format!("must be < {}, got {index}", self.inner.sets.len()),
+            ))
         })
     }
 }

@@ -1,0 +1,162 @@
+//! Filters along a line: turning any direction into rows.
+//!
+//! A direction whose major axis is y is handled by transposing the image (and back). For a
+//! major axis x with slope `t = dy / dx` (|t| <= 1, t != 0) the image is *sheared*: sheared row
+//! `j` samples column `x` of the image at `y = j + x t` with linear interpolation in y, so one
+//! step along a sheared row is one step along the direction (one pixel in x, `t` in y). The row
+//! filter then runs along sheared rows with running sums, and the result is sheared back: output
+//! pixel `(x, y)` interpolates sheared rows `floor(y - x t)` and the next one at column `x`.
+//! Both interpolations are linear in y only; outside the image everything reads as zero.
+//! The cost is a few passes over the image, independent of the filter length.
+use rayon::prelude::*;
+use std::borrow::Cow;
+
+use super::transpose;
+
+/// How a direction maps onto rows: transpose or not, slope of the sheared rows, tap radius.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinePlan {
+    /// The major axis is y: filter the transposed image.
+    pub transpose: bool,
+    /// Minor over major component of the direction, in [-1, 1]; 0 for an axis direction.
+    pub slope: f64,
+    /// Taps reach `radius` major-axis pixels on each side.
+    pub radius: usize,
+}
+
+/// The plan for `direction` (any length, +x right, +y down) and a reach of `reach` pixels along
+/// it: `radius = floor(reach * c)` with `c = max(|dx|, |dy|) / |direction|`. `None` when the
+/// direction is zero or the radius is 0 (the filter is the identity).
+pub fn plan(direction: [f32; 2], reach: f32) -> Option<LinePlan> {
+    let (dx, dy) = (direction[0] as f64, direction[1] as f64);
+    let norm = dx.hypot(dy);
+    if norm <= 0.0 || reach <= 0.0 || norm.is_nan() || reach.is_nan() {
+        return None;
+    }
+    let transpose = dy.abs() > dx.abs();
+    let (major, minor) = if transpose { (dy, dx) } else { (dx, dy) };
+    let radius = (reach as f64 * major.abs() / norm).floor() as usize;
+    if radius == 0 {
+        return None;
+    }
+    Some(LinePlan {
+        transpose,
+        slope: minor / major,
+        radius,
+    })
+}
+
+/// Rows `j0 .. j0 + rows` of the sheared image of a `w x h` image with slope `t`: every row
+/// that some output pixel interpolates.
+pub(crate) fn shear_range(w: usize, h: usize, t: f64) -> (i64, usize) {
+    let e = -(w as f64 - 1.0) * t;
+    let j0 = e.min(0.0).floor() as i64;
+    let j1 = (e.max(0.0) + (h as f64 - 1.0)).floor() as i64 + 1;
+    (j0, (j1 - j0 + 1) as usize)
+}
+
+/// Sheared row `j` of a `(h, w, C)` image: `out[x] = lerp(img[floor(y)][x], img[floor(y)+1][x], frac(y))`
+/// with `y = j + x t`, zero outside the image.
+pub(crate) fn shear_row<const C: usize>(
+    img: &[f32],
+    w: usize,
+    h: usize,
+    t: f64,
+    j: i64,
+    out: &mut [f32],
+) {
+    for x in 0..w {
+        let ys = j as f64 + x as f64 * t;
+        let y0 = ys.floor();
+        let f = (ys - y0) as f32;
+        let y0 = y0 as i64;
+        let o = &mut out[x * C..x * C + C];
+        o.fill(0.0);
+        if y0 >= 0 && y0 < h as i64 {
+            let p = &img[(y0 as usize * w + x) * C..][..C];
+            for c in 0..C {
+                o[c] += (1.0 - f) * p[c];
+            }
+        }
+        if y0 + 1 >= 0 && y0 + 1 < h as i64 {
+            let p = &img[((y0 + 1) as usize * w + x) * C..][..C];
+            for c in 0..C {
+                o[c] += f * p[c];
+            }
+        }
+    }
+}
+
+/// Output row `y` of the un-sheared image from sheared rows `j0 ..`: `out[x]` interpolates
+/// sheared rows `floor(y - x t)` and the next one at column `x`.
+pub(crate) fn unshear_row<const C: usize>(
+    sheared: &[f32],
+    w: usize,
+    j0: i64,
+    rows: usize,
+    t: f64,
+    y: usize,
+    out: &mut [f32],
+) {
+    for x in 0..w {
+        let js = y as f64 - x as f64 * t;
+        let jf = js.floor();
+        let f = (js - jf) as f32;
+        let i = jf as i64 - j0;
+        let o = &mut out[x * C..x * C + C];
+        o.fill(0.0);
+        if i >= 0 && (i as usize) < rows {
+            let p = &sheared[(i as usize * w + x) * C..][..C];
+            for c in 0..C {
+                o[c] += (1.0 - f) * p[c];
+            }
+        }
+        if i + 1 >= 0 && ((i + 1) as usize) < rows {
+            let p = &sheared[((i + 1) as usize * w + x) * C..][..C];
+            for c in 0..C {
+                o[c] += f * p[c];
+            }
+        }
+    }
+}
+
+/// Runs the row filter `f(src_row (n*CI), n, out_row (n*CO), scratch)` along `plan`'s direction
+/// over a `(h, w, CI)` image and returns the `(h, w, CO)` result in the image's orientation.
+pub(crate) fn directional<const CI: usize, const CO: usize, S: Default + Send>(
+    img: &[f32],
+    w: usize,
+    h: usize,
+    plan: &LinePlan,
+    f: impl Fn(&[f32], usize, &mut [f32], &mut S) + Sync + Send,
+) -> Vec<f32> {
+    let (src, w2, h2): (Cow<[f32]>, usize, usize) = if plan.transpose {
+        (Cow::Owned(transpose::<CI>(img, w, h)), h, w)
+    } else {
+        (Cow::Borrowed(img), w, h)
+    };
+    let mut out = vec![0.0f32; w2 * h2 * CO];
+    if plan.slope == 0.0 {
+        out.par_chunks_mut(w2 * CO)
+            .zip(src.par_chunks(w2 * CI))
+            .for_each_init(S::default, |s, (o, i)| f(i, w2, o, s));
+    } else {
+        let t = plan.slope;
+        let (j0, rows) = shear_range(w2, h2, t);
+        let mut sheared = vec![0.0f32; rows * w2 * CO];
+        sheared.par_chunks_mut(w2 * CO).enumerate().for_each_init(
+            || (vec![0.0f32; w2 * CI], S::default()),
+            |(row, s), (k, o)| {
+                shear_row::<CI>(&src, w2, h2, t, j0 + k as i64, row);
+                f(row, w2, o, s);
+            },
+        );
+        out.par_chunks_mut(w2 * CO)
+            .enumerate()
+            .for_each(|(y, o)| unshear_row::<CO>(&sheared, w2, j0, rows, t, y, o));
+    }
+    if plan.transpose {
+        transpose::<CO>(&out, w2, h2)
+    } else {
+        out
+    }
+}
