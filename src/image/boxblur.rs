@@ -12,7 +12,20 @@ use crate::Result;
 /// Calls `emit(x, mean)` for every pixel of a `(n, 4)` row: the mean of the `2r + 1` pixels
 /// `x - r ..= x + r` (zero outside). Sums run in f64, so the error does not grow along the row.
 #[inline(always)]
-pub(crate) fn box_row_each(src: &[f32], n: usize, r: usize, mut emit: impl FnMut(usize, [f32; 4])) {
+pub(crate) fn box_row_each(src: &[f32], n: usize, r: usize, emit: impl FnMut(usize, [f32; 4])) {
+    box_row_range(src, n, r, 0, n, emit)
+}
+
+/// `box_row_each` for the pixels `xa .. xb` only.
+#[inline(always)]
+pub(crate) fn box_row_range(
+    src: &[f32],
+    n: usize,
+    r: usize,
+    xa: usize,
+    xb: usize,
+    mut emit: impl FnMut(usize, [f32; 4]),
+) {
     debug_assert_eq!(src.len(), n * 4);
     let inv = 1.0 / (2 * r + 1) as f64;
     let px = |i: usize| -> [f64; 4] {
@@ -20,13 +33,13 @@ pub(crate) fn box_row_each(src: &[f32], n: usize, r: usize, mut emit: impl FnMut
         [p[0] as f64, p[1] as f64, p[2] as f64, p[3] as f64]
     };
     let mut s = [0.0f64; 4];
-    for i in 0..=r.min(n - 1) {
+    for i in xa.saturating_sub(r)..=(xa + r).min(n - 1) {
         let p = px(i);
         for c in 0..4 {
             s[c] += p[c];
         }
     }
-    for x in 0..n {
+    for x in xa..xb {
         emit(
             x,
             [

@@ -14,79 +14,58 @@ use super::lines::{directional, plan};
 use super::{check_direction, check_finite, check_image, MAX_LENGTH};
 use crate::{Error, Result};
 
-/// Scratch buffers of one thread (padded row, prefix and suffix maxima, window maxima).
+/// Scratch buffers of one thread (block maxima).
 #[derive(Default)]
 pub(crate) struct GlowScratch {
-    pad: Vec<f32>,
-    pre: Vec<f32>,
-    suf: Vec<f32>,
-    max: Vec<f32>,
-}
-
-/// Flat maximum of `a` over `[i - w, i + w]` (zero outside) into `s.max` (van Herk / Gil-Werman).
-fn window_max(a: &[f32], w: usize, s: &mut GlowScratch) {
-    let n = a.len();
-    let k = 2 * w + 1;
-    let len = n + 2 * w;
-    s.pad.clear();
-    s.pad.resize(len, 0.0);
-    s.pad[w..w + n].copy_from_slice(a);
-    s.pre.resize(len, 0.0);
-    s.suf.resize(len, 0.0);
-    for j in 0..len {
-        s.pre[j] = if j % k == 0 {
-            s.pad[j]
-        } else {
-            s.pre[j - 1].max(s.pad[j])
-        };
-    }
-    for j in (0..len).rev() {
-        s.suf[j] = if j % k == k - 1 || j == len - 1 {
-            s.pad[j]
-        } else {
-            s.suf[j + 1].max(s.pad[j])
-        };
-    }
-    s.max.resize(n, 0.0);
-    for i in 0..n {
-        s.max[i] = s.suf[i].max(s.pre[i + k - 1]);
-    }
+    blocks: Vec<f32>,
 }
 
 /// Eq. 10 on one row: `out[i] = max_{|k| <= w} (1 - |k| / w) a[i + k]`; `w = 0` copies.
+///
+/// The row is cut into blocks of `w + 1` pixels; the window of any pixel of block `b` lies in
+/// blocks `b - 1 ..= b + 1`, so the maximum `m` of those three block maxima bounds every tap.
+/// A pixel with `a >= m` keeps `a`; otherwise taps are visited nearest first until
+/// `m (1 - d / w)` cannot beat the best value found.
 pub(crate) fn glow_row(a: &[f32], w: usize, out: &mut [f32], s: &mut GlowScratch) {
     let n = a.len();
     if w == 0 {
         out.copy_from_slice(a);
         return;
     }
-    window_max(a, w, s);
+    let bs = w + 1;
+    let nb = n.div_ceil(bs);
+    s.blocks.clear();
+    s.blocks.extend(a.chunks(bs).map(|c| {
+        c.iter()
+            .fold(f32::NEG_INFINITY, |m, &v| if v > m { v } else { m })
+    }));
     let wf = w as f32;
-    for i in 0..n {
-        let m = s.max[i];
-        let ai = a[i];
-        if ai >= m {
-            out[i] = ai;
-            continue;
-        }
-        if m <= 0.0 {
-            out[i] = ai.max(0.0);
-            continue;
-        }
-        let mut best = ai;
-        for d in 1..=w {
-            let wt = 1.0 - d as f32 / wf;
-            if m * wt <= best || (d > i && i + d >= n) {
-                break;
+    for b in 0..nb {
+        let lo = s.blocks[b.saturating_sub(1)];
+        let hi = s.blocks[(b + 1).min(nb - 1)];
+        let m = lo.max(s.blocks[b]).max(hi).max(0.0);
+        let (x0, x1) = (b * bs, ((b + 1) * bs).min(n));
+        for i in x0..x1 {
+            let ai = a[i];
+            if ai >= m {
+                out[i] = ai;
+                continue;
             }
-            if d <= i {
-                best = best.max(wt * a[i - d]);
+            let mut best = ai;
+            for d in 1..=w {
+                let wt = 1.0 - d as f32 / wf;
+                if m * wt <= best || (d > i && i + d >= n) {
+                    break;
+                }
+                if d <= i {
+                    best = best.max(wt * a[i - d]);
+                }
+                if i + d < n {
+                    best = best.max(wt * a[i + d]);
+                }
             }
-            if i + d < n {
-                best = best.max(wt * a[i + d]);
-            }
+            out[i] = best.max(0.0);
         }
-        out[i] = best;
     }
 }
 

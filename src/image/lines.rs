@@ -48,25 +48,27 @@ pub fn plan(direction: [f32; 2], reach: f32) -> Option<LinePlan> {
 
 /// Rows `j0 .. j0 + rows` of the sheared image of a `w x h` image with slope `t`: every row
 /// that some output pixel interpolates.
-pub(crate) fn shear_range(w: usize, h: usize, t: f64) -> (i64, usize) {
+pub(crate) fn shear_range(w: usize, h: usize, t: f64, c0: f64) -> (i64, usize) {
     let e = -(w as f64 - 1.0) * t;
-    let j0 = e.min(0.0).floor() as i64;
-    let j1 = (e.max(0.0) + (h as f64 - 1.0)).floor() as i64 + 1;
+    let j0 = (e.min(0.0) - c0).floor() as i64;
+    let j1 = (e.max(0.0) + (h as f64 - 1.0) - c0).floor() as i64 + 1;
     (j0, (j1 - j0 + 1) as usize)
 }
 
 /// Sheared row `j` of a `(h, w, C)` image: `out[x] = lerp(img[floor(y)][x], img[floor(y)+1][x], frac(y))`
-/// with `y = j + x t`, zero outside the image.
+/// with `y = j + x t + c0`, zero outside the image. `c0` in [0, 1) is the phase of a crop whose
+/// first column is not column 0 of the full image (0 otherwise).
 pub(crate) fn shear_row<const C: usize>(
     img: &[f32],
     w: usize,
     h: usize,
     t: f64,
+    c0: f64,
     j: i64,
     out: &mut [f32],
 ) {
     for x in 0..w {
-        let ys = j as f64 + x as f64 * t;
+        let ys = j as f64 + x as f64 * t + c0;
         let y0 = ys.floor();
         let f = (ys - y0) as f32;
         let y0 = y0 as i64;
@@ -88,18 +90,20 @@ pub(crate) fn shear_row<const C: usize>(
 }
 
 /// Output row `y` of the un-sheared image from sheared rows `j0 ..`: `out[x]` interpolates
-/// sheared rows `floor(y - x t)` and the next one at column `x`.
+/// sheared rows `floor(y - x t - c0)` and the next one at column `x`.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn unshear_row<const C: usize>(
     sheared: &[f32],
     w: usize,
     j0: i64,
     rows: usize,
     t: f64,
+    c0: f64,
     y: usize,
     out: &mut [f32],
 ) {
     for x in 0..w {
-        let js = y as f64 - x as f64 * t;
+        let js = y as f64 - x as f64 * t - c0;
         let jf = js.floor();
         let f = (js - jf) as f32;
         let i = jf as i64 - j0;
@@ -129,6 +133,19 @@ pub(crate) fn directional<const CI: usize, const CO: usize, S: Default + Send>(
     plan: &LinePlan,
     f: impl Fn(&[f32], usize, &mut [f32], &mut S) + Sync + Send,
 ) -> Vec<f32> {
+    directional_at::<CI, CO, S>(img, w, h, plan, 0.0, f)
+}
+
+/// `directional` on a crop whose first major-axis pixel is pixel `major_offset` of the full
+/// image, so that the shear samples the same positions as on the full image.
+pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send>(
+    img: &[f32],
+    w: usize,
+    h: usize,
+    plan: &LinePlan,
+    major_offset: f64,
+    f: impl Fn(&[f32], usize, &mut [f32], &mut S) + Sync + Send,
+) -> Vec<f32> {
     let (src, w2, h2): (Cow<[f32]>, usize, usize) = if plan.transpose {
         (Cow::Owned(transpose::<CI>(img, w, h)), h, w)
     } else {
@@ -141,18 +158,19 @@ pub(crate) fn directional<const CI: usize, const CO: usize, S: Default + Send>(
             .for_each_init(S::default, |s, (o, i)| f(i, w2, o, s));
     } else {
         let t = plan.slope;
-        let (j0, rows) = shear_range(w2, h2, t);
+        let c0 = (major_offset * t).rem_euclid(1.0);
+        let (j0, rows) = shear_range(w2, h2, t, c0);
         let mut sheared = vec![0.0f32; rows * w2 * CO];
         sheared.par_chunks_mut(w2 * CO).enumerate().for_each_init(
             || (vec![0.0f32; w2 * CI], S::default()),
             |(row, s), (k, o)| {
-                shear_row::<CI>(&src, w2, h2, t, j0 + k as i64, row);
+                shear_row::<CI>(&src, w2, h2, t, c0, j0 + k as i64, row);
                 f(row, w2, o, s);
             },
         );
         out.par_chunks_mut(w2 * CO)
             .enumerate()
-            .for_each(|(y, o)| unshear_row::<CO>(&sheared, w2, j0, rows, t, y, o));
+            .for_each(|(y, o)| unshear_row::<CO>(&sheared, w2, j0, rows, t, c0, y, o));
     }
     if plan.transpose {
         transpose::<CO>(&out, w2, h2)

@@ -89,6 +89,42 @@ pub(crate) fn check_direction(
     Ok(())
 }
 
+/// An output buffer of `n` floats that `fill` writes completely (every element, before any
+/// read). It is not zeroed first: for a full-size image, zeroing costs as much as a blur's own
+/// write pass.
+pub(crate) fn filled(n: usize, fill: impl FnOnce(&mut [std::mem::MaybeUninit<f32>])) -> Vec<f32> {
+    let mut v: Vec<std::mem::MaybeUninit<f32>> = Vec::with_capacity(n);
+    // SAFETY: MaybeUninit needs no initialisation.
+    unsafe { v.set_len(n) };
+    fill(&mut v);
+    let mut v = std::mem::ManuallyDrop::new(v);
+    // SAFETY: `fill` initialised every element (its contract); MaybeUninit<f32> has the layout
+    // of f32, and the allocation is handed over unchanged.
+    unsafe { Vec::from_raw_parts(v.as_mut_ptr() as *mut f32, v.len(), v.capacity()) }
+}
+
+/// Writes four floats at pixel `x` of an uninitialised `(n, 4)` row.
+#[inline(always)]
+pub(crate) fn put4(o: &mut [std::mem::MaybeUninit<f32>], x: usize, v: [f32; 4]) {
+    for (d, s) in o[x * 4..x * 4 + 4].iter_mut().zip(v) {
+        d.write(s);
+    }
+}
+
+/// Copies `v` into an uninitialised slice of the same length.
+#[inline(always)]
+pub(crate) fn put_slice(o: &mut [std::mem::MaybeUninit<f32>], v: &[f32]) {
+    assert_eq!(o.len(), v.len());
+    // SAFETY: same length, distinct allocations (one is uninitialised output).
+    unsafe { std::ptr::copy_nonoverlapping(v.as_ptr(), o.as_mut_ptr() as *mut f32, v.len()) }
+}
+
+/// Views a completely written buffer as floats.
+pub(crate) fn assume_init(o: &mut [std::mem::MaybeUninit<f32>]) -> &mut [f32] {
+    // SAFETY: callers pass buffers whose every element has been written.
+    unsafe { &mut *(o as *mut [std::mem::MaybeUninit<f32>] as *mut [f32]) }
+}
+
 /// Transposes a `(h, w, C)` image into `(w, h, C)`, in cache blocks, in parallel over output rows.
 pub(crate) fn transpose<const C: usize>(src: &[f32], w: usize, h: usize) -> Vec<f32> {
     use rayon::prelude::*;

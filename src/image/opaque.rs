@@ -8,11 +8,14 @@
 //! whole filter is one fused pass (running sums, glow, rescale, composite) per row.
 use rayon::prelude::*;
 
-use super::boxblur::box_row_each;
+use super::boxblur::box_row_range;
 use super::glow::{glow_row, GlowScratch};
-use super::lines::{directional, plan};
-use super::{check_direction, check_finite, check_image, ALPHA_EPS};
+use super::lines::{directional_at, plan, LinePlan};
+use super::{
+    assume_init, check_direction, check_finite, check_image, filled, put4, put_slice, ALPHA_EPS,
+};
 use crate::{Error, Result};
+use std::mem::MaybeUninit;
 
 /// How the blurred layer is combined with the base image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -79,6 +82,146 @@ fn finite_row(r: &[f32]) -> bool {
     r.iter().fold(true, |ok, v| ok & v.is_finite())
 }
 
+/// The result where the blurred layer is empty (`sub = 0`): the base, or 0 without compositing.
+fn empty(base: &[f32], comp: Option<Composite>) -> [f32; 4] {
+    match comp {
+        None => [0.0; 4],
+        Some(_) => [base[0], base[1], base[2], base[3]],
+    }
+}
+
+/// First and last pixel with non-zero alpha in a `(n, 4)` row.
+fn alpha_span(row: &[f32]) -> Option<(usize, usize)> {
+    let lo = row.chunks_exact(4).position(|p| p[3] != 0.0)?;
+    let hi = row.chunks_exact(4).rposition(|p| p[3] != 0.0)?;
+    Some((lo, hi))
+}
+
+/// Bounding box `(x0, x1, y0, y1)` (inclusive) of the pixels with non-zero alpha.
+fn alpha_bbox(rgba: &[f32], w: usize) -> Option<(usize, usize, usize, usize)> {
+    rgba.par_chunks(w * 4)
+        .enumerate()
+        .filter_map(|(y, row)| alpha_span(row).map(|(a, b)| (a, b, y, y)))
+        .reduce_with(|a, b| (a.0.min(b.0), a.1.max(b.1), a.2.min(b.2), a.3.max(b.3)))
+}
+
+/// Along rows: one fused pass per row (glow, running sums, rescale, composite), restricted to
+/// the pixels within reach of non-zero alpha; the rest of the row is the empty result.
+fn rows_path(
+    rgba: &[f32],
+    base: &[f32],
+    w: usize,
+    r: usize,
+    comp: Option<Composite>,
+    out: &mut [MaybeUninit<f32>],
+) -> bool {
+    out.par_chunks_mut(w * 4)
+        .zip(rgba.par_chunks(w * 4))
+        .zip(base.par_chunks(w * 4))
+        .map_init(RowScratch::default, |s, ((o, src), b)| {
+            if !(finite_row(src) && finite_row(b)) {
+                return false;
+            }
+            let fill = |o: &mut [MaybeUninit<f32>], b: &[f32]| match comp {
+                Some(_) => put_slice(o, b),
+                None => o.iter_mut().for_each(|v| {
+                    v.write(0.0);
+                }),
+            };
+            let Some((lo, hi)) = alpha_span(src) else {
+                fill(o, b);
+                return true;
+            };
+            let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(w));
+            fill(&mut o[..xa * 4], &b[..xa * 4]);
+            fill(&mut o[xb * 4..], &b[xb * 4..]);
+            s.a.clear();
+            s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
+            s.g.resize(xb - xa, 0.0);
+            glow_row(&s.a, r, &mut s.g, &mut s.glow);
+            let g = &s.g;
+            box_row_range(src, w, r, xa, xb, |x, m| {
+                put4(o, x, finish(m, g[x - xa], &b[x * 4..x * 4 + 4], comp));
+            });
+            true
+        })
+        .reduce(|| true, |a, b| a & b)
+}
+
+/// Any other direction: the filter runs on the crop that can receive non-zero alpha (the
+/// alpha's bounding box grown by two filter reaches), transposed and/or sheared.
+fn crop_path(
+    rgba: &[f32],
+    base: &[f32],
+    w: usize,
+    h: usize,
+    p: &LinePlan,
+    comp: Option<Composite>,
+    out: &mut [MaybeUninit<f32>],
+) {
+    out.par_chunks_mut(4)
+        .zip(base.par_chunks(4))
+        .for_each(|(o, b)| put4(o, 0, empty(b, comp)));
+    let out = assume_init(out);
+    let Some((x0, x1, y0, y1)) = alpha_bbox(rgba, w) else {
+        return;
+    };
+    let r = p.radius;
+    let major = 2 * r + 2;
+    let minor = (2.0 * r as f64 * p.slope.abs()).ceil() as usize + 2;
+    let (mx, my) = if p.transpose {
+        (minor, major)
+    } else {
+        (major, minor)
+    };
+    let (cx0, cx1) = (x0.saturating_sub(mx), (x1 + 1 + mx).min(w));
+    let (cy0, cy1) = (y0.saturating_sub(my), (y1 + 1 + my).min(h));
+    let cw = cx1 - cx0;
+    let mut crop = vec![0.0f32; cw * (cy1 - cy0) * 4];
+    crop.par_chunks_mut(cw * 4)
+        .enumerate()
+        .for_each(|(k, row)| {
+            let y = cy0 + k;
+            row.copy_from_slice(&rgba[(y * w + cx0) * 4..(y * w + cx1) * 4]);
+        });
+    let offset = if p.transpose { cy0 } else { cx0 } as f64;
+    let five =
+        directional_at::<4, 5, RowScratch>(&crop, cw, cy1 - cy0, p, offset, |src, n, o, s| {
+            let Some((lo, hi)) = alpha_span(src) else {
+                return;
+            };
+            let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(n));
+            s.a.clear();
+            s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
+            s.g.resize(xb - xa, 0.0);
+            glow_row(&s.a, r, &mut s.g, &mut s.glow);
+            let g = &s.g;
+            box_row_range(src, n, r, xa, xb, |x, m| {
+                o[x * 5..x * 5 + 4].copy_from_slice(&m);
+                o[x * 5 + 4] = g[x - xa];
+            });
+        });
+    let oblique = p.slope != 0.0;
+    out.par_chunks_mut(w * 4)
+        .enumerate()
+        .skip(cy0)
+        .take(cy1 - cy0)
+        .for_each(|(y, o)| {
+            for x in cx0..cx1 {
+                let i = y * w + x;
+                let k = (y - cy0) * cw + (x - cx0);
+                let f = &five[k * 5..k * 5 + 5];
+                let g = if oblique {
+                    f[4].max(rgba[i * 4 + 3])
+                } else {
+                    f[4]
+                };
+                let v = finish([f[0], f[1], f[2], f[3]], g, &base[i * 4..i * 4 + 4], comp);
+                o[x * 4..x * 4 + 4].copy_from_slice(&v);
+            }
+        });
+}
+
 fn opaque_impl(
     rgba: &[f32],
     base: Option<&[f32]>,
@@ -94,83 +237,28 @@ fn opaque_impl(
     }
     check_direction(direction, length, "length")?;
     let base_img = base.unwrap_or(rgba);
-    let mut out = vec![0.0f32; w * h * 4];
     let p = plan(direction, length * 0.5);
-    match p {
+    if !matches!(p, Some(p) if !p.transpose && p.slope == 0.0) {
+        check_finite("rgba", rgba)?;
+        check_finite("base", base_img)?;
+    }
+    let mut ok = true;
+    let out = filled(w * h * 4, |out| match p {
         Some(p) if !p.transpose && p.slope == 0.0 => {
-            // One fused pass per row: glow, running sums, rescale, composite.
-            let r = p.radius;
-            let ok = out
-                .par_chunks_mut(w * 4)
-                .zip(rgba.par_chunks(w * 4))
-                .zip(base_img.par_chunks(w * 4))
-                .map_init(RowScratch::default, |s, ((o, src), b)| {
-                    if !(finite_row(src) && finite_row(b)) {
-                        return false;
-                    }
-                    s.a.clear();
-                    s.a.extend(src.chunks_exact(4).map(|px| px[3]));
-                    s.g.resize(w, 0.0);
-                    glow_row(&s.a, r, &mut s.g, &mut s.glow);
-                    let g = &s.g;
-                    box_row_each(src, w, r, |x, m| {
-                        let v = finish(m, g[x], &b[x * 4..x * 4 + 4], comp);
-                        o[x * 4..x * 4 + 4].copy_from_slice(&v);
-                    });
-                    true
-                })
-                .reduce(|| true, |a, b| a & b);
-            if !ok {
-                check_finite("rgba", rgba)?;
-                check_finite("base", base_img)?;
-            }
+            ok = rows_path(rgba, base_img, w, p.radius, comp, out);
         }
-        Some(p) => {
-            check_finite("rgba", rgba)?;
-            if base.is_some() {
-                check_finite("base", base_img)?;
-            }
-            let r = p.radius;
-            let five = directional::<4, 5, RowScratch>(rgba, w, h, &p, |src, n, o, s| {
-                s.a.clear();
-                s.a.extend(src.chunks_exact(4).map(|px| px[3]));
-                s.g.resize(n, 0.0);
-                glow_row(&s.a, r, &mut s.g, &mut s.glow);
-                let g = &s.g;
-                box_row_each(src, n, r, |x, m| {
-                    o[x * 5..x * 5 + 4].copy_from_slice(&m);
-                    o[x * 5 + 4] = g[x];
-                });
-            });
-            let oblique = p.slope != 0.0;
-            out.par_chunks_mut(w * 4).enumerate().for_each(|(y, o)| {
-                for x in 0..w {
-                    let i = y * w + x;
-                    let f = &five[i * 5..i * 5 + 5];
-                    let mut g = f[4];
-                    if oblique {
-                        g = g.max(rgba[i * 4 + 3]);
-                    }
-                    let v = finish(
-                        [f[0], f[1], f[2], f[3]],
-                        g,
-                        &base_img[i * 4..i * 4 + 4],
-                        comp,
-                    );
-                    o[x * 4..x * 4 + 4].copy_from_slice(&v);
-                }
-            });
-        }
-        None => {
-            check_finite("rgba", rgba)?;
-            check_finite("base", base_img)?;
-            out.par_chunks_mut(4)
-                .zip(rgba.par_chunks(4))
-                .zip(base_img.par_chunks(4))
-                .for_each(|((o, px), b)| {
-                    o.copy_from_slice(&finish([px[0], px[1], px[2], px[3]], px[3], b, comp))
-                });
-        }
+        Some(p) => crop_path(rgba, base_img, w, h, &p, comp, out),
+        None => out
+            .par_chunks_mut(4)
+            .zip(rgba.par_chunks(4))
+            .zip(base_img.par_chunks(4))
+            .for_each(|((o, px), b)| {
+                put4(o, 0, finish([px[0], px[1], px[2], px[3]], px[3], b, comp))
+            }),
+    });
+    if !ok {
+        check_finite("rgba", rgba)?;
+        check_finite("base", base_img)?;
     }
     Ok(out)
 }
