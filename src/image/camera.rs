@@ -78,6 +78,10 @@ fn velocity_unchecked(
     let (p00, p11, p02, p12) = (p.x_axis.x, p.y_axis.y, p.z_axis.x, p.z_axis.y);
     let (wf, hf) = (w as f64, h as f64);
     let mut out = vec![0.0f32; w * h * 2];
+    if cur.view == prev.view && cur.projection == prev.projection {
+        // A static camera: exactly no motion (the matrix product would leave ~1e-13 pixels).
+        return out;
+    }
     out.par_chunks_mut(w * 2).enumerate().for_each(|(y, row)| {
         let ny = 1.0 - 2.0 * (y as f64 + 0.5) / hf;
         for x in 0..w {
