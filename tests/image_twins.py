@@ -219,9 +219,7 @@ def depth_of_field(rgba, depth, focal_depth, focal_length, f_number, yfov, layer
     r_inf = h / (2 * focal_depth * math.tan(yfov / 2)) * focal_length / (2 * f_number)
     lo = -(layers // 2)
     ids = [
-        i
-        for i in range(lo, lo + layers)
-        if i == lo or math.isfinite(layer_depth(i - 1, focal_depth, r_inf))
+        i for i in range(lo, lo + layers) if i == lo or math.isfinite(layer_depth(i - 1, focal_depth, r_inf))
     ]
     img = rgba.astype(np.float64)
     d = depth.astype(np.float64)

@@ -6,14 +6,23 @@ from __future__ import annotations
 import math
 
 import image_twins as tw
+import motionblur as mb
+import motionblur.image as mi
 import numpy as np
 import pytest
 
-import motionblur as mb
-import motionblur.image as mi
-
 TOL = 1e-5
-DIRECTIONS = [(1, 0), (-3, 0), (0, 1), (0, -2), (1, 0.3), (-0.4, 1), (1, 1), (1, -math.tan(math.pi / 6)), (0.2, -1)]
+DIRECTIONS = [
+    (1, 0),
+    (-3, 0),
+    (0, 1),
+    (0, -2),
+    (1, 0.3),
+    (-0.4, 1),
+    (1, 1),
+    (1, -math.tan(math.pi / 6)),
+    (0.2, -1),
+]
 
 
 def rgba_image(h=48, w=64, seed=0, mask=True):
@@ -273,7 +282,9 @@ def test_one_pixel_wide_images(shape):
         check(mi.glow(img[..., 3], d, 4), tw.glow(img[..., 3], d, 4), f"glow {shape} {d}")
     check(mi.pyramid_opaque_blur(img, 3), tw.pyramid_opaque_blur(img, 3))
     depth = np.full(shape, 3.0, np.float32)
-    check(mi.depth_of_field(img, depth, 2.0, 0.05, 1.4, 0.8), tw.depth_of_field(img, depth, 2.0, 0.05, 1.4, 0.8))
+    check(
+        mi.depth_of_field(img, depth, 2.0, 0.05, 1.4, 0.8), tw.depth_of_field(img, depth, 2.0, 0.05, 1.4, 0.8)
+    )
     vel = np.full(shape + (2,), 3.0, np.float32)
     check(mi.velocity_blur(img, vel, 4), tw.velocity_blur(img, vel, 4))
 

@@ -62,6 +62,8 @@ def _direction(direction) -> tuple[float, float]:
 
 
 def _length(value, name="length", maximum=MAX_LENGTH) -> float:
+    if isinstance(value, (str, bytes)):
+        raise TypeError(f"{name}: expected a number, got {type(value).__name__}")
     v = as_float(value, name)
     if not 0.0 <= v <= maximum:
         raise ValueError(f"{name}: must be in [0, {maximum:g}] pixels, got {v}")
