@@ -100,6 +100,17 @@ fn velocity_unchecked(
     out
 }
 
+/// `floor(v)` for |v| < 2^31 without a libm call.
+#[inline(always)]
+fn floorf(v: f32) -> f32 {
+    let i = v as i32 as f32;
+    if i > v {
+        i - 1.0
+    } else {
+        i
+    }
+}
+
 /// Largest number of blur samples accepted.
 pub const MAX_SAMPLES: usize = 1024;
 
@@ -154,7 +165,7 @@ fn blur_unchecked(rgba: &[f32], velocity: &[f32], w: usize, h: usize, samples: u
             for s in 0..samples {
                 let t = s as f32 / (samples - 1) as f32 - 0.5;
                 let (px, py) = (x as f32 + vx * t, y as f32 + vy * t);
-                let (x0, y0) = (px.floor(), py.floor());
+                let (x0, y0) = (floorf(px), floorf(py));
                 let (fx, fy) = (px - x0, py - y0);
                 let (x0, y0) = (x0 as i64, y0 as i64);
                 let (a, b) = (fetch(x0, y0), fetch(x0 + 1, y0));

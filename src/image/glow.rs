@@ -1,11 +1,9 @@
 //! The triangle-max glow of Kraus's eq. 10 along a direction:
 //! `A_glow[i] = max_{|k| <= w} (1 - |k| / w) A[i + k]`, zero outside the image.
 //!
-//! Its weight at `k = 0` is 1, so it never lowers alpha. Per pixel it first takes the flat
-//! window maximum `M` (van Herk / Gil-Werman, O(1) per pixel); when `A[i] >= M` the answer is
-//! `A[i]`, when `M = 0` it is 0, and otherwise taps are visited nearest first and the search stops
-//! as soon as `M (1 - d / w)` cannot beat the best value found. On masks and smooth alpha the
-//! search ends after about the distance to the nearest opaque pixel; the worst case is O(w).
+//! Its weight at `k = 0` is 1, so it never lowers alpha. Each row is two sweeps with a monotone
+//! deque of the sources that can still win (see `glow_row`): O(1) per pixel on masks and smooth
+//! alpha, O(w) only for alpha that keeps growing with distance over the whole window.
 //! Along an oblique direction the glow runs on sheared rows (see `lines`) and the result is
 //! `max(glow, A)` so that the interpolation never lowers alpha either.
 use rayon::prelude::*;
@@ -14,58 +12,64 @@ use super::lines::{directional, plan};
 use super::{check_direction, check_finite, check_image, MAX_LENGTH};
 use crate::{Error, Result};
 
-/// Scratch buffers of one thread (block maxima).
+/// Scratch buffers of one thread: the candidate sources of the sweep.
 #[derive(Default)]
 pub(crate) struct GlowScratch {
-    blocks: Vec<f32>,
+    cand: Vec<u32>,
 }
 
 /// Eq. 10 on one row: `out[i] = max_{|k| <= w} (1 - |k| / w) a[i + k]`; `w = 0` copies.
 ///
-/// The row is cut into blocks of `w + 1` pixels; the window of any pixel of block `b` lies in
-/// blocks `b - 1 ..= b + 1`, so the maximum `m` of those three block maxima bounds every tap.
-/// A pixel with `a >= m` keeps `a`; otherwise taps are visited nearest first until
-/// `m (1 - d / w)` cannot beat the best value found.
+/// Two sweeps (sources on the right of the target, then on the left). A source `j` nearer to
+/// the target than a source `j'` with `a[j] >= a[j']` dominates it for every later target, so
+/// each sweep keeps only the sources within reach whose alpha strictly grows with distance (a
+/// monotone deque: `cand[lo..]`, nearest last) and takes the best of those. For masks and smooth
+/// alpha the deque holds one or two sources, so the cost is O(1) per pixel whatever `w` is.
 pub(crate) fn glow_row(a: &[f32], w: usize, out: &mut [f32], s: &mut GlowScratch) {
     let n = a.len();
     if w == 0 {
         out.copy_from_slice(a);
         return;
     }
-    let bs = w + 1;
-    let nb = n.div_ceil(bs);
-    s.blocks.clear();
-    s.blocks.extend(a.chunks(bs).map(|c| {
-        c.iter()
-            .fold(f32::NEG_INFINITY, |m, &v| if v > m { v } else { m })
-    }));
     let wf = w as f32;
-    for b in 0..nb {
-        let lo = s.blocks[b.saturating_sub(1)];
-        let hi = s.blocks[(b + 1).min(nb - 1)];
-        let m = lo.max(s.blocks[b]).max(hi).max(0.0);
-        let (x0, x1) = (b * bs, ((b + 1) * bs).min(n));
-        for i in x0..x1 {
-            let ai = a[i];
-            if ai >= m {
-                out[i] = ai;
-                continue;
-            }
-            let mut best = ai;
-            for d in 1..=w {
-                let wt = 1.0 - d as f32 / wf;
-                if m * wt <= best || (d > i && i + d >= n) {
-                    break;
-                }
-                if d <= i {
-                    best = best.max(wt * a[i - d]);
-                }
-                if i + d < n {
-                    best = best.max(wt * a[i + d]);
-                }
-            }
-            out[i] = best.max(0.0);
+    let q = &mut s.cand;
+    // Sources at or right of the target (sweep right to left).
+    q.clear();
+    let mut lo = 0;
+    for i in (0..n).rev() {
+        let ai = a[i];
+        while q.len() > lo && a[q[q.len() - 1] as usize] <= ai {
+            q.pop();
         }
+        q.push(i as u32);
+        while q[lo] as usize - i >= w {
+            lo += 1;
+        }
+        let mut best = ai;
+        for &j in &q[lo..q.len() - 1] {
+            let j = j as usize;
+            best = best.max((1.0 - (j - i) as f32 / wf) * a[j]);
+        }
+        out[i] = best;
+    }
+    // Sources at or left of the target (sweep left to right).
+    q.clear();
+    lo = 0;
+    for i in 0..n {
+        let ai = a[i];
+        while q.len() > lo && a[q[q.len() - 1] as usize] <= ai {
+            q.pop();
+        }
+        q.push(i as u32);
+        while i - q[lo] as usize >= w {
+            lo += 1;
+        }
+        let mut best = out[i];
+        for &j in &q[lo..q.len() - 1] {
+            let j = j as usize;
+            best = best.max((1.0 - (i - j) as f32 / wf) * a[j]);
+        }
+        out[i] = best.max(0.0);
     }
 }
 

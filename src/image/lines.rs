@@ -46,6 +46,17 @@ pub fn plan(direction: [f32; 2], reach: f32) -> Option<LinePlan> {
     })
 }
 
+/// `floor(v)` for |v| < 2^52 without a libm call (baseline x86-64 has no rounding instruction).
+#[inline(always)]
+pub(crate) fn floor(v: f64) -> f64 {
+    let i = v as i64 as f64;
+    if i > v {
+        i - 1.0
+    } else {
+        i
+    }
+}
+
 /// Rows `j0 .. j0 + rows` of the sheared image of a `w x h` image with slope `t`: every row
 /// that some output pixel interpolates.
 pub(crate) fn shear_range(w: usize, h: usize, t: f64, c0: f64) -> (i64, usize) {
@@ -69,7 +80,7 @@ pub(crate) fn shear_row<const C: usize>(
 ) {
     for x in 0..w {
         let ys = j as f64 + x as f64 * t + c0;
-        let y0 = ys.floor();
+        let y0 = floor(ys);
         let f = (ys - y0) as f32;
         let y0 = y0 as i64;
         let o = &mut out[x * C..x * C + C];
@@ -104,7 +115,7 @@ pub(crate) fn unshear_row<const C: usize>(
 ) {
     for x in 0..w {
         let js = y as f64 - x as f64 * t - c0;
-        let jf = js.floor();
+        let jf = floor(js);
         let f = (js - jf) as f32;
         let i = jf as i64 - j0;
         let o = &mut out[x * C..x * C + C];
@@ -151,26 +162,31 @@ pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send
     } else {
         (Cow::Borrowed(img), w, h)
     };
-    let mut out = vec![0.0f32; w2 * h2 * CO];
+    let mut out = super::pool::take(w2 * h2 * CO);
     if plan.slope == 0.0 {
         out.par_chunks_mut(w2 * CO)
             .zip(src.par_chunks(w2 * CI))
-            .for_each_init(S::default, |s, (o, i)| f(i, w2, o, s));
+            .for_each_init(S::default, |s, (o, i)| {
+                o.fill(0.0);
+                f(i, w2, o, s)
+            });
     } else {
         let t = plan.slope;
         let c0 = (major_offset * t).rem_euclid(1.0);
         let (j0, rows) = shear_range(w2, h2, t, c0);
-        let mut sheared = vec![0.0f32; rows * w2 * CO];
+        let mut sheared = super::pool::take(rows * w2 * CO);
         sheared.par_chunks_mut(w2 * CO).enumerate().for_each_init(
             || (vec![0.0f32; w2 * CI], S::default()),
             |(row, s), (k, o)| {
                 shear_row::<CI>(&src, w2, h2, t, c0, j0 + k as i64, row);
+                o.fill(0.0);
                 f(row, w2, o, s);
             },
         );
         out.par_chunks_mut(w2 * CO)
             .enumerate()
             .for_each(|(y, o)| unshear_row::<CO>(&sheared, w2, j0, rows, t, c0, y, o));
+        super::pool::give(sheared);
     }
     if plan.transpose {
         transpose::<CO>(&out, w2, h2)

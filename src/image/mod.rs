@@ -17,6 +17,7 @@ mod dof;
 mod glow;
 mod lines;
 mod opaque;
+mod pool;
 mod pyramid;
 
 pub use boxblur::box_blur;

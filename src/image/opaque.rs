@@ -119,7 +119,16 @@ fn rows_path(
         .zip(rgba.par_chunks(w * 4))
         .zip(base.par_chunks(w * 4))
         .map_init(RowScratch::default, |s, ((o, src), b)| {
-            if !(finite_row(src) && finite_row(b)) {
+            // One pass over the source row: finiteness and the span of non-zero alpha.
+            let (mut ok, mut lo, mut hi) = (true, usize::MAX, 0);
+            for (x, p) in src.chunks_exact(4).enumerate() {
+                ok &= p[0].is_finite() & p[1].is_finite() & p[2].is_finite() & p[3].is_finite();
+                if p[3] != 0.0 {
+                    lo = lo.min(x);
+                    hi = x;
+                }
+            }
+            if !ok {
                 return false;
             }
             let fill = |o: &mut [MaybeUninit<f32>], b: &[f32]| match comp {
@@ -128,22 +137,24 @@ fn rows_path(
                     v.write(0.0);
                 }),
             };
-            let Some((lo, hi)) = alpha_span(src) else {
+            if lo == usize::MAX {
                 fill(o, b);
-                return true;
-            };
-            let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(w));
-            fill(&mut o[..xa * 4], &b[..xa * 4]);
-            fill(&mut o[xb * 4..], &b[xb * 4..]);
-            s.a.clear();
-            s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
-            s.g.resize(xb - xa, 0.0);
-            glow_row(&s.a, r, &mut s.g, &mut s.glow);
-            let g = &s.g;
-            box_row_range(src, w, r, xa, xb, |x, m| {
-                put4(o, x, finish(m, g[x - xa], &b[x * 4..x * 4 + 4], comp));
-            });
-            true
+            } else {
+                let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(w));
+                fill(&mut o[..xa * 4], &b[..xa * 4]);
+                fill(&mut o[xb * 4..], &b[xb * 4..]);
+                s.a.clear();
+                s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
+                s.g.resize(xb - xa, 0.0);
+                glow_row(&s.a, r, &mut s.g, &mut s.glow);
+                let g = &s.g;
+                box_row_range(src, w, r, xa, xb, |x, m| {
+                    put4(o, x, finish(m, g[x - xa], &b[x * 4..x * 4 + 4], comp));
+                });
+            }
+            // The base reaches every output pixel (over and under): a NaN or inf in it shows
+            // in the row just written, which is still in cache.
+            comp.is_none() || finite_row(assume_init(o))
         })
         .reduce(|| true, |a, b| a & b)
 }
@@ -177,7 +188,7 @@ fn crop_path(
     let (cx0, cx1) = (x0.saturating_sub(mx), (x1 + 1 + mx).min(w));
     let (cy0, cy1) = (y0.saturating_sub(my), (y1 + 1 + my).min(h));
     let cw = cx1 - cx0;
-    let mut crop = vec![0.0f32; cw * (cy1 - cy0) * 4];
+    let mut crop = super::pool::take(cw * (cy1 - cy0) * 4);
     crop.par_chunks_mut(cw * 4)
         .enumerate()
         .for_each(|(k, row)| {
@@ -220,6 +231,8 @@ fn crop_path(
                 o[x * 4..x * 4 + 4].copy_from_slice(&v);
             }
         });
+    super::pool::give(five);
+    super::pool::give(crop);
 }
 
 fn opaque_impl(
