@@ -7,6 +7,7 @@
 //! `raster` (the software rasterizer), `image` (image-space blur).
 #![allow(dead_code)]
 
+pub mod accumulate;
 pub mod contour;
 pub mod contour_table;
 mod error;

@@ -17,7 +17,11 @@ def raw_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
     a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
     u, w = b - a, c - a
     return np.stack(
-        [u[:, 1] * w[:, 2] - u[:, 2] * w[:, 1], u[:, 2] * w[:, 0] - u[:, 0] * w[:, 2], u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]],
+        [
+            u[:, 1] * w[:, 2] - u[:, 2] * w[:, 1],
+            u[:, 2] * w[:, 0] - u[:, 0] * w[:, 2],
+            u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0],
+        ],
         axis=1,
     )
 
@@ -37,7 +41,11 @@ def front_faces(v, f, motion) -> np.ndarray:
 def _orient(f: np.ndarray, face: np.ndarray, p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Rows (p, q) or (q, p): as the edge runs in ``face``."""
     t = f[face]
-    fwd = ((t[:, 0] == p) & (t[:, 1] == q)) | ((t[:, 1] == p) & (t[:, 2] == q)) | ((t[:, 2] == p) & (t[:, 0] == q))
+    fwd = (
+        ((t[:, 0] == p) & (t[:, 1] == q))
+        | ((t[:, 1] == p) & (t[:, 2] == q))
+        | ((t[:, 2] == p) & (t[:, 0] == q))
+    )
     return np.where(fwd[:, None], np.stack([p, q], 1), np.stack([q, p], 1))
 
 
@@ -148,7 +156,9 @@ def test_general_rule_twin_agrees_with_trimesh_twin_on_closed_meshes():
     rng = np.random.default_rng(1)
     for _ in range(5):
         m = rng.normal(size=3)
-        np.testing.assert_array_equal(_sorted_rows(reference_contour_any(tm.vertices, tm.faces, m)), reference_contour(tm, m))
+        np.testing.assert_array_equal(
+            _sorted_rows(reference_contour_any(tm.vertices, tm.faces, m)), reference_contour(tm, m)
+        )
 
 
 def test_volume_twin_matches_trimesh():

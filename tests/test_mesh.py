@@ -116,7 +116,12 @@ def test_adjacency_is_built_once_and_shared_by_deformed_copies():
 @pytest.mark.parametrize(
     "vertices, faces, exc, text",
     [
-        (np.array([[0, 0, np.nan], [1, 0, 0], [0, 1, 0]]), [[0, 1, 2]], ValueError, "vertices: vertex 0 is NaN or inf"),
+        (
+            np.array([[0, 0, np.nan], [1, 0, 0], [0, 1, 0]]),
+            [[0, 1, 2]],
+            ValueError,
+            "vertices: vertex 0 is NaN or inf",
+        ),
         (np.array([[0, 0, np.inf], [1, 0, 0], [0, 1, 0]]), [[0, 1, 2]], ValueError, "vertices"),
         (np.eye(3), [[0, 1, 3]], ValueError, "faces: face 0 has an index out of range"),
         (np.eye(3), [[0, -1, 2]], ValueError, "faces: face 0 has an index out of range"),

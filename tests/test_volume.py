@@ -239,7 +239,9 @@ def test_rotating_keyframes_orient_the_contour_at_every_time():
     assert all(tuple(np.round(p, 9)) in got for p in placed)
     lead = vol.faces[vol.part == LEADING]
     np.testing.assert_allclose(
-        vol.vertices[lead], ((keys[2, :3, :3] @ v.T).T + keys[2, :3, 3])[f[front_faces(v, f, m_obj)]], atol=1e-12
+        vol.vertices[lead],
+        ((keys[2, :3, :3] @ v.T).T + keys[2, :3, 3])[f[front_faces(v, f, m_obj)]],
+        atol=1e-12,
     )
     # Subdividing the rotation (slerp) keeps it closed and adds rings.
     fine = motion_volume(Mesh(v, f), keys, segments=3)

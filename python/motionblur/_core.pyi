@@ -96,3 +96,16 @@ def _rasterize(
     projection (4,4) f64 into an image of height x width. Returns rgba (H,W,4) f32 premultiplied,
     depth (H,W) f32 view-axis distance (inf background), ids (H,W) i32 (-1 background), velocity
     (H,W,2) f32 pixels, and a stats dict. Releases the GIL."""
+
+# --- scenes (accumulation kernels)
+
+def _accumulate(
+    acc: np.ndarray, rgba: np.ndarray, depth: np.ndarray, limit: np.ndarray | None, weight: float
+) -> None:
+    """In place: acc (H,W,4) f32 += weight * rgba (H,W,4) f32 where depth (H,W) f32 < limit (H,W)
+    f32 (everywhere when limit is None). All C-contiguous. Releases the GIL."""
+
+def _over(acc: np.ndarray, under: np.ndarray) -> None:
+    """In place: acc (H,W,4) f32 += under (H,W,4) f32 * (1 - acc alpha). Releases the GIL."""
+
+# --- end scenes

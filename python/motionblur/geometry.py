@@ -156,7 +156,9 @@ class Mesh:
 
     def with_vertices(self, vertices) -> Mesh:
         """A mesh with the same faces and cached adjacency and new (V,3) vertex positions."""
-        v = _readonly(np.array(as_array(vertices, "vertices", np.float64, (len(self._vertices), 3)), copy=True))
+        v = _readonly(
+            np.array(as_array(vertices, "vertices", np.float64, (len(self._vertices), 3)), copy=True)
+        )
         return Mesh._from_core(self._core.with_vertices(v), v, self._faces)
 
     def __len__(self) -> int:
@@ -172,7 +174,9 @@ def as_mesh(mesh, name: str = "mesh") -> Mesh:
         return mesh
     if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
         return Mesh(mesh.vertices, mesh.faces)
-    raise TypeError(f"{name}: expected a Mesh or an object with .vertices and .faces, got {type(mesh).__name__}")
+    raise TypeError(
+        f"{name}: expected a Mesh or an object with .vertices and .faces, got {type(mesh).__name__}"
+    )
 
 
 def _vec3(value, name: str) -> np.ndarray:

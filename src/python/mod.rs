@@ -1,6 +1,7 @@
 //! The binding layer: the only PyO3 code. Conversion, shape checks, error mapping, GIL release.
 use pyo3::prelude::*;
 
+mod accumulate;
 mod geometry;
 mod image;
 mod raster;
@@ -18,5 +19,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     raster::register(m)?;
     image::register(m)?;
     shell::register(m)?;
+    accumulate::register(m)?;
     Ok(())
 }
