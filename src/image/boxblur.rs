@@ -84,5 +84,6 @@ pub fn box_blur(
         box_row_each(src, n, p.radius, |x, m| {
             out[x * 4..x * 4 + 4].copy_from_slice(&m)
         });
+        true
     }))
 }

@@ -92,7 +92,8 @@ pub fn glow(
         return Ok(alpha.to_vec());
     };
     let mut out = directional::<1, 1, GlowScratch>(alpha, w, h, &p, |src, _, o, s| {
-        glow_row(src, p.radius, o, s)
+        glow_row(src, p.radius, o, s);
+        true
     });
     if p.slope != 0.0 {
         out.par_iter_mut()

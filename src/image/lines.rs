@@ -66,24 +66,53 @@ pub(crate) fn shear_range(w: usize, h: usize, t: f64, c0: f64) -> (i64, usize) {
     (j0, (j1 - j0 + 1) as usize)
 }
 
+/// Per-column integer and fractional parts of `x t + c0` (`sign = 1`, the shear) or of
+/// `-x t - c0` (`sign = -1`, the way back). Row `j` of the shear samples image row
+/// `j + floor[x]` and the next one with weight `frac[x]`: the fraction does not depend on `j`.
+pub(crate) struct Phase {
+    floor: Vec<i64>,
+    frac: Vec<f32>,
+}
+
+impl Phase {
+    pub(crate) fn new(w: usize, t: f64, c0: f64, sign: f64) -> Self {
+        let mut p = Phase {
+            floor: Vec::with_capacity(w),
+            frac: Vec::with_capacity(w),
+        };
+        for x in 0..w {
+            let u = sign * (x as f64 * t + c0);
+            let fl = floor(u);
+            p.floor.push(fl as i64);
+            p.frac.push((u - fl) as f32);
+        }
+        p
+    }
+}
+
 /// Sheared row `j` of a `(h, w, C)` image: `out[x] = lerp(img[floor(y)][x], img[floor(y)+1][x], frac(y))`
-/// with `y = j + x t + c0`, zero outside the image. `c0` in [0, 1) is the phase of a crop whose
-/// first column is not column 0 of the full image (0 otherwise).
+/// with `y = j + x t + c0` (`phase` from `Phase::new(w, t, c0, 1.0)`), zero outside the image.
+/// `c0` in [0, 1) is the phase of a crop whose first column is not column 0 of the full image.
 pub(crate) fn shear_row<const C: usize>(
     img: &[f32],
     w: usize,
     h: usize,
-    t: f64,
-    c0: f64,
+    phase: &Phase,
     j: i64,
     out: &mut [f32],
 ) {
     for x in 0..w {
-        let ys = j as f64 + x as f64 * t + c0;
-        let y0 = floor(ys);
-        let f = (ys - y0) as f32;
-        let y0 = y0 as i64;
+        let y0 = j + phase.floor[x];
+        let f = phase.frac[x];
         let o = &mut out[x * C..x * C + C];
+        if y0 >= 0 && y0 + 1 < h as i64 {
+            let a = &img[(y0 as usize * w + x) * C..][..C];
+            let b = &img[((y0 + 1) as usize * w + x) * C..][..C];
+            for c in 0..C {
+                o[c] = (1.0 - f) * a[c] + f * b[c];
+            }
+            continue;
+        }
         o.fill(0.0);
         if y0 >= 0 && y0 < h as i64 {
             let p = &img[(y0 as usize * w + x) * C..][..C];
@@ -100,33 +129,42 @@ pub(crate) fn shear_row<const C: usize>(
     }
 }
 
-/// Output row `y` of the un-sheared image from sheared rows `j0 ..`: `out[x]` interpolates
-/// sheared rows `floor(y - x t - c0)` and the next one at column `x`.
+/// Output row `y` of the un-sheared image from sheared rows `j0 ..` (`used[k]`: row `j0 + k`
+/// holds anything): `out[x]` interpolates sheared rows `floor(y - x t - c0)` and the next one at
+/// column `x` (`phase` from `Phase::new(w, t, c0, -1.0)`).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn unshear_row<const C: usize>(
     sheared: &[f32],
+    used: &[bool],
     w: usize,
     j0: i64,
-    rows: usize,
-    t: f64,
-    c0: f64,
+    phase: &Phase,
     y: usize,
     out: &mut [f32],
 ) {
+    let rows = used.len() as i64;
     for x in 0..w {
-        let js = y as f64 - x as f64 * t - c0;
-        let jf = floor(js);
-        let f = (js - jf) as f32;
-        let i = jf as i64 - j0;
+        let i = y as i64 + phase.floor[x] - j0;
+        let f = phase.frac[x];
         let o = &mut out[x * C..x * C + C];
+        let ua = i >= 0 && i < rows && used[i as usize];
+        let ub = i + 1 >= 0 && i + 1 < rows && used[(i + 1) as usize];
+        if ua && ub {
+            let a = &sheared[(i as usize * w + x) * C..][..C];
+            let b = &sheared[((i + 1) as usize * w + x) * C..][..C];
+            for c in 0..C {
+                o[c] = (1.0 - f) * a[c] + f * b[c];
+            }
+            continue;
+        }
         o.fill(0.0);
-        if i >= 0 && (i as usize) < rows {
+        if ua {
             let p = &sheared[(i as usize * w + x) * C..][..C];
             for c in 0..C {
                 o[c] += (1.0 - f) * p[c];
             }
         }
-        if i + 1 >= 0 && ((i + 1) as usize) < rows {
+        if ub {
             let p = &sheared[((i + 1) as usize * w + x) * C..][..C];
             for c in 0..C {
                 o[c] += f * p[c];
@@ -142,7 +180,7 @@ pub(crate) fn directional<const CI: usize, const CO: usize, S: Default + Send>(
     w: usize,
     h: usize,
     plan: &LinePlan,
-    f: impl Fn(&[f32], usize, &mut [f32], &mut S) + Sync + Send,
+    f: impl Fn(&[f32], usize, &mut [f32], &mut S) -> bool + Sync + Send,
 ) -> Vec<f32> {
     directional_at::<CI, CO, S>(img, w, h, plan, 0.0, f)
 }
@@ -155,7 +193,7 @@ pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send
     h: usize,
     plan: &LinePlan,
     major_offset: f64,
-    f: impl Fn(&[f32], usize, &mut [f32], &mut S) + Sync + Send,
+    f: impl Fn(&[f32], usize, &mut [f32], &mut S) -> bool + Sync + Send,
 ) -> Vec<f32> {
     let (src, w2, h2): (Cow<[f32]>, usize, usize) = if plan.transpose {
         (Cow::Owned(transpose::<CI>(img, w, h)), h, w)
@@ -168,24 +206,31 @@ pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send
             .zip(src.par_chunks(w2 * CI))
             .for_each_init(S::default, |s, (o, i)| {
                 o.fill(0.0);
-                f(i, w2, o, s)
+                f(i, w2, o, s);
             });
     } else {
         let t = plan.slope;
         let c0 = (major_offset * t).rem_euclid(1.0);
         let (j0, rows) = shear_range(w2, h2, t, c0);
+        let fwd = Phase::new(w2, t, c0, 1.0);
+        let back = Phase::new(w2, t, c0, -1.0);
         let mut sheared = super::pool::take(rows * w2 * CO);
-        sheared.par_chunks_mut(w2 * CO).enumerate().for_each_init(
-            || (vec![0.0f32; w2 * CI], S::default()),
-            |(row, s), (k, o)| {
-                shear_row::<CI>(&src, w2, h2, t, c0, j0 + k as i64, row);
-                o.fill(0.0);
-                f(row, w2, o, s);
-            },
-        );
+        let mut used = vec![false; rows];
+        sheared
+            .par_chunks_mut(w2 * CO)
+            .zip(used.par_iter_mut())
+            .enumerate()
+            .for_each_init(
+                || (vec![0.0f32; w2 * CI], S::default()),
+                |(row, s), (k, (o, u))| {
+                    shear_row::<CI>(&src, w2, h2, &fwd, j0 + k as i64, row);
+                    o.fill(0.0);
+                    *u = f(row, w2, o, s);
+                },
+            );
         out.par_chunks_mut(w2 * CO)
             .enumerate()
-            .for_each(|(y, o)| unshear_row::<CO>(&sheared, w2, j0, rows, t, c0, y, o));
+            .for_each(|(y, o)| unshear_row::<CO>(&sheared, &used, w2, j0, &back, y, o));
         super::pool::give(sheared);
     }
     if plan.transpose {

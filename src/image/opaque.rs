@@ -79,7 +79,10 @@ struct RowScratch {
 }
 
 fn finite_row(r: &[f32]) -> bool {
-    r.iter().fold(true, |ok, v| ok & v.is_finite())
+    // Exponent bits all ones: NaN or inf. Integer compares vectorise well.
+    r.iter().fold(0u32, |m, v| {
+        m | ((v.to_bits() & 0x7f80_0000) == 0x7f80_0000) as u32
+    }) == 0
 }
 
 /// The result where the blurred layer is empty (`sub = 0`): the base, or 0 without compositing.
@@ -90,10 +93,21 @@ fn empty(base: &[f32], comp: Option<Composite>) -> [f32; 4] {
     }
 }
 
-/// First and last pixel with non-zero alpha in a `(n, 4)` row.
+/// First and last pixel with non-zero alpha in a `(n, 4)` row (blocks of 16 pixels are tested
+/// with an OR of the alpha bits, then the first and last non-empty blocks are searched).
 fn alpha_span(row: &[f32]) -> Option<(usize, usize)> {
-    let lo = row.chunks_exact(4).position(|p| p[3] != 0.0)?;
-    let hi = row.chunks_exact(4).rposition(|p| p[3] != 0.0)?;
+    const B: usize = 16;
+    let nz = |c: &[f32]| {
+        c.chunks_exact(4)
+            .fold(0u32, |m, p| m | (p[3].to_bits() & 0x7fff_ffff))
+            != 0
+    };
+    let blocks = row.len().div_ceil(4 * B);
+    let block = |b: usize| &row[b * 4 * B..((b + 1) * 4 * B).min(row.len())];
+    let first = (0..blocks).find(|&b| nz(block(b)))?;
+    let last = (first..blocks).rev().find(|&b| nz(block(b)))?;
+    let lo = block(first).chunks_exact(4).position(|p| p[3] != 0.0)? + first * B;
+    let hi = block(last).chunks_exact(4).rposition(|p| p[3] != 0.0)? + last * B;
     Some((lo, hi))
 }
 
@@ -119,15 +133,12 @@ fn rows_path(
         .zip(rgba.par_chunks(w * 4))
         .zip(base.par_chunks(w * 4))
         .map_init(RowScratch::default, |s, ((o, src), b)| {
-            // One pass over the source row: finiteness and the span of non-zero alpha.
-            let (mut ok, mut lo, mut hi) = (true, usize::MAX, 0);
-            for (x, p) in src.chunks_exact(4).enumerate() {
-                ok &= p[0].is_finite() & p[1].is_finite() & p[2].is_finite() & p[3].is_finite();
-                if p[3] != 0.0 {
-                    lo = lo.min(x);
-                    hi = x;
-                }
-            }
+            // Finiteness and the span of non-zero alpha, in branch-free passes over the row.
+            let ok = finite_row(src);
+            let (lo, hi) = match alpha_span(src) {
+                Some(span) => span,
+                None => (usize::MAX, 0),
+            };
             if !ok {
                 return false;
             }
@@ -170,9 +181,14 @@ fn crop_path(
     comp: Option<Composite>,
     out: &mut [MaybeUninit<f32>],
 ) {
-    out.par_chunks_mut(4)
-        .zip(base.par_chunks(4))
-        .for_each(|(o, b)| put4(o, 0, empty(b, comp)));
+    out.par_chunks_mut(w * 4)
+        .zip(base.par_chunks(w * 4))
+        .for_each(|(o, b)| match comp {
+            Some(_) => put_slice(o, b),
+            None => o.iter_mut().for_each(|v| {
+                v.write(0.0);
+            }),
+        });
     let out = assume_init(out);
     let Some((x0, x1, y0, y1)) = alpha_bbox(rgba, w) else {
         return;
@@ -199,7 +215,7 @@ fn crop_path(
     let five =
         directional_at::<4, 5, RowScratch>(&crop, cw, cy1 - cy0, p, offset, |src, n, o, s| {
             let Some((lo, hi)) = alpha_span(src) else {
-                return;
+                return false;
             };
             let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(n));
             s.a.clear();
@@ -211,6 +227,7 @@ fn crop_path(
                 o[x * 5..x * 5 + 4].copy_from_slice(&m);
                 o[x * 5 + 4] = g[x - xa];
             });
+            true
         });
     let oblique = p.slope != 0.0;
     out.par_chunks_mut(w * 4)
