@@ -173,8 +173,10 @@ pub(crate) fn unshear_row<const C: usize>(
     }
 }
 
-/// Runs the row filter `f(src_row (n*CI), n, out_row (n*CO), scratch)` along `plan`'s direction
-/// over a `(h, w, CI)` image and returns the `(h, w, CO)` result in the image's orientation.
+/// Runs the row filter `f(src_row (n*CI), n, out_row (n*CO), scratch) -> bool` along `plan`'s
+/// direction over a `(h, w, CI)` image and returns the `(h, w, CO)` result in the image's
+/// orientation. `f` either writes its whole output row and returns true, or returns false for
+/// a row that is all zero (and need not write it).
 pub(crate) fn directional<const CI: usize, const CO: usize, S: Default + Send>(
     img: &[f32],
     w: usize,
@@ -205,8 +207,9 @@ pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send
         out.par_chunks_mut(w2 * CO)
             .zip(src.par_chunks(w2 * CI))
             .for_each_init(S::default, |s, (o, i)| {
-                o.fill(0.0);
-                f(i, w2, o, s);
+                if !f(i, w2, o, s) {
+                    o.fill(0.0);
+                }
             });
     } else {
         let t = plan.slope;
@@ -224,7 +227,6 @@ pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send
                 || (vec![0.0f32; w2 * CI], S::default()),
                 |(row, s), (k, (o, u))| {
                     shear_row::<CI>(&src, w2, h2, &fwd, j0 + k as i64, row);
-                    o.fill(0.0);
                     *u = f(row, w2, o, s);
                 },
             );

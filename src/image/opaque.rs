@@ -218,6 +218,8 @@ fn crop_path(
                 return false;
             };
             let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(n));
+            o[..xa * 5].fill(0.0);
+            o[xb * 5..].fill(0.0);
             s.a.clear();
             s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
             s.g.resize(xb - xa, 0.0);
