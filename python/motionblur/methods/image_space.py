@@ -13,9 +13,10 @@ the whole shutter, and then blur the frame's pixels:
   in front of a moving one is painted over, and the background behind the object is never
   disoccluded (the blurred object stays opaque where it was).
 * ``camera_velocity`` (Chapman 2011): the velocity of every pixel follows from the frame's depth
-  and the camera at the shutter's start; :func:`motionblur.image.camera_motion_blur` blurs along
-  it (the sky moves only with the camera's rotation). Applies to scenes whose camera moves;
-  moving objects stay sharp at ``t_c``.
+  and the camera at the shutter's start (:func:`motionblur.image.camera_velocity`; the sky moves
+  only with the camera's rotation) and :func:`motionblur.image.velocity_blur` blurs along it.
+  Pixels of moving objects take their rasterized velocity with the camera's motion folded in, so
+  an object the camera follows stays sharp. Applies to scenes whose camera moves.
 """
 
 from __future__ import annotations
@@ -45,18 +46,23 @@ def _aa(aa) -> int:
     return aa
 
 
-def sharp_frame(scene: Scene, t: float, aa: int = 1, velocity: bool = True) -> Frame:
-    """The scene rasterized at shutter time ``t`` by ``scene.camera_at(t)``: ids are object
-    indices, and (``velocity``) each moving object's velocity buffer holds its screen motion over
-    the whole shutter (``previous_vertices = x(t) - (x(1) - x(0))``). One rasterizer call per
-    shading mode, merged per pixel by depth."""
+def sharp_frame(scene: Scene, t: float, aa: int = 1, velocity: str | None = "shutter") -> Frame:
+    """The scene rasterized at shutter time ``t`` by ``scene.camera_at(t)``, ids the object
+    indices. The velocity buffer of each moving object holds (``velocity="shutter"``) its world
+    motion over the whole shutter seen by that camera (``previous_vertices = x(t) - (x(1) -
+    x(0))``), or (``"since_open"``) its apparent motion since the shutter opened, the camera's
+    own motion folded in (``previous_vertices = P(t) P(0)^-1 x(0)``, P the camera pose), or
+    (None) nothing. One rasterizer call per shading mode, merged per pixel by depth."""
     cam = scene.camera_at(t)
+    fold = scene.camera_pose_at(t) @ np.linalg.inv(scene.camera_pose_at(0.0))
     groups: dict[str, list[Draw]] = {}
     for k, o in enumerate(scene.objects):
         v = o.world_vertices(t)
         prev = None
-        if velocity and o.is_moving:
+        if velocity == "shutter" and o.is_moving:
             prev = v - (o.world_vertices(1.0) - o.world_vertices(0.0))
+        elif velocity == "since_open" and o.is_moving:
+            prev = o.world_vertices(0.0) @ fold[:3, :3].T + fold[:3, 3]
         draw = Draw(v, o.mesh.faces, o.rgba, object_id=k, previous_vertices=prev)
         groups.setdefault(o.shading, []).append(draw)
     out = None
@@ -99,7 +105,7 @@ def opaque_image(scene: Scene, aa: int = 1) -> Frame:
     """
     aa = _aa(aa)
     tc = shutter_centroid(scene)
-    frame = sharp_frame(scene, tc, aa)
+    frame = sharp_frame(scene, tc, aa, velocity="shutter")
     rgba = frame.rgba
     order = []
     for k, o in enumerate(scene.objects):
@@ -131,20 +137,22 @@ def camera_velocity(scene: Scene, samples: int = 16, aa: int = 1) -> Frame:
 
     Options: ``samples`` N in [1, 1024] blur taps per pixel; ``aa`` 1, 2 or 4 spatial samples per
     pixel along each axis for the sharp frame. The velocity from the camera at ``t_c`` back to the
-    camera at the shutter's start is scaled by ``1 / t_c`` to span the whole shutter.
+    camera at the shutter's start is scaled by ``1 / t_c`` to span the whole shutter. Pixels of
+    moving objects take the rasterizer's velocity of the object with the camera's motion folded
+    in instead (Chapman's static-scene velocity would blur an object the camera follows).
     ``stats``: ``t``, ``samples``.
     """
     samples = as_int(samples, "samples", minimum=1, maximum=image.MAX_SAMPLES)
     aa = _aa(aa)
     tc = shutter_centroid(scene)
-    frame = sharp_frame(scene, tc, aa, velocity=False)
+    frame = sharp_frame(scene, tc, aa, velocity="since_open")
     rgba = frame.rgba
     if scene.camera_moves and tc > 0.0:
         cam, start = scene.camera_at(tc), scene.camera_at(0.0)
-        fps = 1.0 / tc  # the velocity to the shutter's start covers t_c of the shutter
-        rgba = image.camera_motion_blur(
-            rgba, frame.depth, cam, start, samples=samples, target_fps=1.0, fps=fps
-        )
+        vel = image.camera_velocity(frame.depth, cam, start)
+        moving = np.isin(frame.ids, [k for k, o in enumerate(scene.objects) if o.is_moving])
+        vel = np.where(moving[..., None], frame.velocity, vel) * np.float32(1.0 / tc)
+        rgba = image.velocity_blur(rgba, vel, samples)
     out = Frame(rgba, frame.depth, frame.ids, frame.velocity)
     out.stats.update(t=tc, samples=samples)
     return out
