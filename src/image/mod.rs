@@ -150,3 +150,6 @@ pub(crate) fn transpose<const C: usize>(src: &[f32], w: usize, h: usize) -> Vec<
         });
     out
 }
+
+#[cfg(test)]
+mod tests;
