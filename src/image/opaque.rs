@@ -78,6 +78,16 @@ struct RowScratch {
     g: Vec<f32>,
 }
 
+/// Copies `b` into `o` and tells whether every value is finite (one pass).
+fn copy_checked(o: &mut [MaybeUninit<f32>], b: &[f32]) -> bool {
+    let mut bad = 0u32;
+    for (d, &v) in o.iter_mut().zip(b) {
+        bad |= ((v.to_bits() & 0x7f80_0000) == 0x7f80_0000) as u32;
+        d.write(v);
+    }
+    bad == 0
+}
+
 fn finite_row(r: &[f32]) -> bool {
     // Exponent bits all ones: NaN or inf. Integer compares vectorise well.
     r.iter().fold(0u32, |m, v| {
@@ -142,30 +152,34 @@ fn rows_path(
             if !ok {
                 return false;
             }
-            let fill = |o: &mut [MaybeUninit<f32>], b: &[f32]| match comp {
-                Some(_) => put_slice(o, b),
-                None => o.iter_mut().for_each(|v| {
-                    v.write(0.0);
-                }),
+            // Outside the span the result is the base (or 0): copied and checked in one pass.
+            let fill = |o: &mut [MaybeUninit<f32>], b: &[f32]| -> bool {
+                match comp {
+                    Some(_) => copy_checked(o, b),
+                    None => {
+                        o.iter_mut().for_each(|v| {
+                            v.write(0.0);
+                        });
+                        true
+                    }
+                }
             };
             if lo == usize::MAX {
-                fill(o, b);
-            } else {
-                let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(w));
-                fill(&mut o[..xa * 4], &b[..xa * 4]);
-                fill(&mut o[xb * 4..], &b[xb * 4..]);
-                s.a.clear();
-                s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
-                s.g.resize(xb - xa, 0.0);
-                glow_row(&s.a, r, &mut s.g, &mut s.glow);
-                let g = &s.g;
-                box_row_range(src, w, r, xa, xb, |x, m| {
-                    put4(o, x, finish(m, g[x - xa], &b[x * 4..x * 4 + 4], comp));
-                });
+                return fill(o, b);
             }
-            // The base reaches every output pixel (over and under): a NaN or inf in it shows
-            // in the row just written, which is still in cache.
-            comp.is_none() || finite_row(assume_init(o))
+            let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(w));
+            let mut ok = fill(&mut o[..xa * 4], &b[..xa * 4]);
+            ok &= fill(&mut o[xb * 4..], &b[xb * 4..]);
+            ok &= comp.is_none() || finite_row(&b[xa * 4..xb * 4]);
+            s.a.clear();
+            s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
+            s.g.resize(xb - xa, 0.0);
+            glow_row(&s.a, r, &mut s.g, &mut s.glow);
+            let g = &s.g;
+            box_row_range(src, w, r, xa, xb, |x, m| {
+                put4(o, x, finish(m, g[x - xa], &b[x * 4..x * 4 + 4], comp));
+            });
+            ok
         })
         .reduce(|| true, |a, b| a & b)
 }
