@@ -184,19 +184,29 @@ pub(crate) fn directional<const CI: usize, const CO: usize, S: Default + Send>(
     plan: &LinePlan,
     f: impl Fn(&[f32], usize, &mut [f32], &mut S) -> bool + Sync + Send,
 ) -> Vec<f32> {
-    directional_at::<CI, CO, S>(img, w, h, plan, 0.0, f)
+    directional_at::<CI, CO, S>(img, w, h, plan, 0.0, None, f)
 }
 
 /// `directional` on a crop whose first major-axis pixel is pixel `major_offset` of the full
-/// image, so that the shear samples the same positions as on the full image.
+/// image, so that the shear samples the same positions as on the full image. `live`: the
+/// inclusive box `(x0, x1, y0, y1)` outside of which `f` would see nothing (its rows are all
+/// zero): sheared rows that miss it are neither built nor filtered.
 pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send>(
     img: &[f32],
     w: usize,
     h: usize,
     plan: &LinePlan,
     major_offset: f64,
+    live: Option<[usize; 4]>,
     f: impl Fn(&[f32], usize, &mut [f32], &mut S) -> bool + Sync + Send,
 ) -> Vec<f32> {
+    let live = live.map(|[x0, x1, y0, y1]| {
+        if plan.transpose {
+            [y0, y1, x0, x1]
+        } else {
+            [x0, x1, y0, y1]
+        }
+    });
     let (src, w2, h2): (Cow<[f32]>, usize, usize) = if plan.transpose {
         (Cow::Owned(transpose::<CI>(img, w, h)), h, w)
     } else {
@@ -219,6 +229,17 @@ pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send
         let back = Phase::new(w2, t, c0, -1.0);
         let mut sheared = super::pool::take(rows * w2 * CO);
         let mut used = vec![false; rows];
+        // Sheared rows that can meet the live box: j + x t + c0 in (y0 - 1, y1 + 1), x in [x0, x1].
+        let (jlo, jhi) = match live {
+            Some([x0, x1, y0, y1]) => {
+                let (ua, ub) = (x0 as f64 * t + c0, x1 as f64 * t + c0);
+                (
+                    (y0 as f64 - 1.0 - ua.max(ub)).floor() as i64,
+                    (y1 as f64 + 1.0 - ua.min(ub)).ceil() as i64,
+                )
+            }
+            None => (i64::MIN, i64::MAX),
+        };
         sheared
             .par_chunks_mut(w2 * CO)
             .zip(used.par_iter_mut())
@@ -226,7 +247,11 @@ pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send
             .for_each_init(
                 || (vec![0.0f32; w2 * CI], S::default()),
                 |(row, s), (k, (o, u))| {
-                    shear_row::<CI>(&src, w2, h2, &fwd, j0 + k as i64, row);
+                    let j = j0 + k as i64;
+                    if j < jlo || j > jhi {
+                        return;
+                    }
+                    shear_row::<CI>(&src, w2, h2, &fwd, j, row);
                     *u = f(row, w2, o, s);
                 },
             );

@@ -226,8 +226,15 @@ fn crop_path(
             row.copy_from_slice(&rgba[(y * w + cx0) * 4..(y * w + cx1) * 4]);
         });
     let offset = if p.transpose { cy0 } else { cx0 } as f64;
-    let five =
-        directional_at::<4, 5, RowScratch>(&crop, cw, cy1 - cy0, p, offset, |src, n, o, s| {
+    let live = [x0 - cx0, x1 - cx0, y0 - cy0, y1 - cy0];
+    let five = directional_at::<4, 5, RowScratch>(
+        &crop,
+        cw,
+        cy1 - cy0,
+        p,
+        offset,
+        Some(live),
+        |src, n, o, s| {
             let Some((lo, hi)) = alpha_span(src) else {
                 return false;
             };
@@ -244,7 +251,8 @@ fn crop_path(
                 o[x * 5 + 4] = g[x - xa];
             });
             true
-        });
+        },
+    );
     let oblique = p.slope != 0.0;
     out.par_chunks_mut(w * 4)
         .enumerate()
