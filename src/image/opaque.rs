@@ -78,6 +78,45 @@ struct RowScratch {
     g: Vec<f32>,
 }
 
+/// One pass over a `(n, 4)` row: whether every value is finite, and the first and last pixel
+/// with non-zero alpha (blocks of 16 pixels flagged on the way, then the two ends refined).
+fn scan_row(row: &[f32]) -> (bool, Option<(usize, usize)>) {
+    const B: usize = 16;
+    const EXP: u32 = 0x7f80_0000;
+    let mut bad = [0u32; 4];
+    let (mut first, mut last) = (usize::MAX, 0);
+    for (b, block) in row.chunks(4 * B).enumerate() {
+        let mut nz = 0u32;
+        for p in block.chunks_exact(4) {
+            let bits = [
+                p[0].to_bits(),
+                p[1].to_bits(),
+                p[2].to_bits(),
+                p[3].to_bits(),
+            ];
+            for c in 0..4 {
+                bad[c] |= ((bits[c] & EXP) == EXP) as u32;
+            }
+            nz |= bits[3] & 0x7fff_ffff;
+        }
+        if nz != 0 {
+            first = first.min(b);
+            last = b;
+        }
+    }
+    let ok = (bad[0] | bad[1] | bad[2] | bad[3]) == 0;
+    if first == usize::MAX {
+        return (ok, None);
+    }
+    let block = |b: usize| &row[b * 4 * B..((b + 1) * 4 * B).min(row.len())];
+    let lo = block(first).chunks_exact(4).position(|p| p[3] != 0.0);
+    let hi = block(last).chunks_exact(4).rposition(|p| p[3] != 0.0);
+    match (lo, hi) {
+        (Some(lo), Some(hi)) => (ok, Some((lo + first * B, hi + last * B))),
+        _ => (ok, None),
+    }
+}
+
 /// Copies `b` into `o` and tells whether every value is finite (one pass).
 fn copy_checked(o: &mut [MaybeUninit<f32>], b: &[f32]) -> bool {
     let mut bad = 0u32;
@@ -143,12 +182,9 @@ fn rows_path(
         .zip(rgba.par_chunks(w * 4))
         .zip(base.par_chunks(w * 4))
         .map_init(RowScratch::default, |s, ((o, src), b)| {
-            // Finiteness and the span of non-zero alpha, in branch-free passes over the row.
-            let ok = finite_row(src);
-            let (lo, hi) = match alpha_span(src) {
-                Some(span) => span,
-                None => (usize::MAX, 0),
-            };
+            // Finiteness and the span of non-zero alpha, in one pass over the row.
+            let (ok, span) = scan_row(src);
+            let (lo, hi) = span.unwrap_or((usize::MAX, 0));
             if !ok {
                 return false;
             }
