@@ -5,8 +5,9 @@ use std::sync::Mutex;
 
 static POOL: Mutex<Vec<Vec<f32>>> = Mutex::new(Vec::new());
 
-/// Keeps at most this many buffers.
+/// Keeps at most this many buffers, holding at most `MAX_FLOATS` floats in all (64 MB).
 const KEEP: usize = 4;
+const MAX_FLOATS: usize = 16 << 20;
 
 /// A buffer of exactly `n` floats with unspecified (but initialised) contents.
 pub(crate) fn take(n: usize) -> Vec<f32> {
@@ -30,9 +31,20 @@ pub(crate) fn take(n: usize) -> Vec<f32> {
 /// Returns a buffer to the pool.
 pub(crate) fn give(v: Vec<f32>) {
     let mut pool = POOL.lock().unwrap_or_else(|e| e.into_inner());
-    pool.push(v);
-    if pool.len() > KEEP {
-        pool.sort_by_key(|b| std::cmp::Reverse(b.capacity()));
-        pool.truncate(KEEP);
+    if v.capacity() > MAX_FLOATS {
+        return;
     }
+    pool.push(v);
+    // Keep the smallest buffers within the budget (they serve the common sizes).
+    pool.sort_by_key(|b| b.capacity());
+    let mut total = 0;
+    let keep = pool
+        .iter()
+        .take(KEEP)
+        .take_while(|b| {
+            total += b.capacity();
+            total <= MAX_FLOATS
+        })
+        .count();
+    pool.truncate(keep);
 }
