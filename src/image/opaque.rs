@@ -78,60 +78,66 @@ struct RowScratch {
     g: Vec<f32>,
 }
 
-/// One pass over a `(n, 4)` row: whether every value is finite, and the first and last pixel
-/// with non-zero alpha (blocks of 16 pixels flagged on the way, then the two ends refined).
-fn scan_row(row: &[f32]) -> (bool, Option<(usize, usize)>) {
+/// One pass over a `(n, 4)` source row, its base row and the output row: writes the base (or
+/// zeros when `copy` is false) to the output, and returns whether the source and the base are
+/// finite and the first and last pixel of the source with non-zero alpha.
+fn scan_copy_row(
+    src: &[f32],
+    base: &[f32],
+    out: &mut [MaybeUninit<f32>],
+    copy: bool,
+) -> (bool, Option<(usize, usize)>) {
     const B: usize = 16;
     const EXP: u32 = 0x7f80_0000;
     let mut bad = [0u32; 4];
     let (mut first, mut last) = (usize::MAX, 0);
-    for (b, block) in row.chunks(4 * B).enumerate() {
+    for (k, ((sb, bb), ob)) in src
+        .chunks(4 * B)
+        .zip(base.chunks(4 * B))
+        .zip(out.chunks_mut(4 * B))
+        .enumerate()
+    {
         let mut nz = 0u32;
-        for p in block.chunks_exact(4) {
-            let bits = [
+        for ((p, q), o) in sb
+            .chunks_exact(4)
+            .zip(bb.chunks_exact(4))
+            .zip(ob.chunks_exact_mut(4))
+        {
+            let sp = [
                 p[0].to_bits(),
                 p[1].to_bits(),
                 p[2].to_bits(),
                 p[3].to_bits(),
             ];
+            let bp = [
+                q[0].to_bits(),
+                q[1].to_bits(),
+                q[2].to_bits(),
+                q[3].to_bits(),
+            ];
             for c in 0..4 {
-                bad[c] |= ((bits[c] & EXP) == EXP) as u32;
+                bad[c] |=
+                    ((sp[c] & EXP) == EXP) as u32 | ((bp[c] & EXP) == EXP) as u32 & copy as u32;
+                o[c].write(if copy { q[c] } else { 0.0 });
             }
-            nz |= bits[3] & 0x7fff_ffff;
+            nz |= sp[3] & 0x7fff_ffff;
         }
         if nz != 0 {
-            first = first.min(b);
-            last = b;
+            first = first.min(k);
+            last = k;
         }
     }
     let ok = (bad[0] | bad[1] | bad[2] | bad[3]) == 0;
     if first == usize::MAX {
         return (ok, None);
     }
-    let block = |b: usize| &row[b * 4 * B..((b + 1) * 4 * B).min(row.len())];
+    let block = |b: usize| &src[b * 4 * B..((b + 1) * 4 * B).min(src.len())];
     let lo = block(first).chunks_exact(4).position(|p| p[3] != 0.0);
     let hi = block(last).chunks_exact(4).rposition(|p| p[3] != 0.0);
     match (lo, hi) {
         (Some(lo), Some(hi)) => (ok, Some((lo + first * B, hi + last * B))),
         _ => (ok, None),
     }
-}
-
-/// Copies `b` into `o` and tells whether every value is finite (one pass).
-fn copy_checked(o: &mut [MaybeUninit<f32>], b: &[f32]) -> bool {
-    let mut bad = 0u32;
-    for (d, &v) in o.iter_mut().zip(b) {
-        bad |= ((v.to_bits() & 0x7f80_0000) == 0x7f80_0000) as u32;
-        d.write(v);
-    }
-    bad == 0
-}
-
-fn finite_row(r: &[f32]) -> bool {
-    // Exponent bits all ones: NaN or inf. Integer compares vectorise well.
-    r.iter().fold(0u32, |m, v| {
-        m | ((v.to_bits() & 0x7f80_0000) == 0x7f80_0000) as u32
-    }) == 0
 }
 
 /// The result where the blurred layer is empty (`sub = 0`): the base, or 0 without compositing.
@@ -182,31 +188,14 @@ fn rows_path(
         .zip(rgba.par_chunks(w * 4))
         .zip(base.par_chunks(w * 4))
         .map_init(RowScratch::default, |s, ((o, src), b)| {
-            // Finiteness and the span of non-zero alpha, in one pass over the row.
-            let (ok, span) = scan_row(src);
-            let (lo, hi) = span.unwrap_or((usize::MAX, 0));
-            if !ok {
-                return false;
-            }
-            // Outside the span the result is the base (or 0): copied and checked in one pass.
-            let fill = |o: &mut [MaybeUninit<f32>], b: &[f32]| -> bool {
-                match comp {
-                    Some(_) => copy_checked(o, b),
-                    None => {
-                        o.iter_mut().for_each(|v| {
-                            v.write(0.0);
-                        });
-                        true
-                    }
-                }
+            // One streaming pass over the three rows, as a plain copy would make: finiteness of
+            // the source and the base, the span of non-zero alpha, and the empty result (the
+            // base, or 0) written everywhere; the span is then overwritten from cache.
+            let (ok, span) = scan_copy_row(src, b, o, comp.is_some());
+            let Some((lo, hi)) = span else {
+                return ok;
             };
-            if lo == usize::MAX {
-                return fill(o, b);
-            }
             let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(w));
-            let mut ok = fill(&mut o[..xa * 4], &b[..xa * 4]);
-            ok &= fill(&mut o[xb * 4..], &b[xb * 4..]);
-            ok &= comp.is_none() || finite_row(&b[xa * 4..xb * 4]);
             s.a.clear();
             s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
             s.g.resize(xb - xa, 0.0);
