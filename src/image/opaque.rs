@@ -89,7 +89,18 @@ fn scan_copy_row(
 ) -> (bool, Option<(usize, usize)>) {
     const B: usize = 16;
     const EXP: u32 = 0x7f80_0000;
-    let mut bad = [0u32; 4];
+    // Lane-wise accumulators over 16 floats (4 pixels) so that the loop vectorises.
+    const AMASK: [u32; 16] = {
+        let mut m = [0u32; 16];
+        let mut i = 3;
+        while i < 16 {
+            m[i] = 0x7fff_ffff;
+            i += 4;
+        }
+        m
+    };
+    let cp = copy as u32;
+    let mut bad = [0u32; 16];
     let (mut first, mut last) = (usize::MAX, 0);
     for (k, ((sb, bb), ob)) in src
         .chunks(4 * B)
@@ -97,36 +108,31 @@ fn scan_copy_row(
         .zip(out.chunks_mut(4 * B))
         .enumerate()
     {
-        let mut nz = 0u32;
-        for ((p, q), o) in sb
-            .chunks_exact(4)
-            .zip(bb.chunks_exact(4))
-            .zip(ob.chunks_exact_mut(4))
-        {
-            let sp = [
-                p[0].to_bits(),
-                p[1].to_bits(),
-                p[2].to_bits(),
-                p[3].to_bits(),
-            ];
-            let bp = [
-                q[0].to_bits(),
-                q[1].to_bits(),
-                q[2].to_bits(),
-                q[3].to_bits(),
-            ];
-            for c in 0..4 {
-                bad[c] |=
-                    ((sp[c] & EXP) == EXP) as u32 | ((bp[c] & EXP) == EXP) as u32 & copy as u32;
-                o[c].write(if copy { q[c] } else { 0.0 });
+        let mut nz = [0u32; 16];
+        let mut lane = |i: usize, sv: f32, bv: f32, o: &mut MaybeUninit<f32>| {
+            let (sb, bb) = (sv.to_bits(), bv.to_bits());
+            bad[i] |= ((sb & EXP) == EXP) as u32 | (((bb & EXP) == EXP) as u32 & cp);
+            nz[i] |= sb & AMASK[i];
+            o.write(if copy { bv } else { 0.0 });
+        };
+        let mut sc = sb.chunks_exact(16);
+        let mut bc = bb.chunks_exact(16);
+        let mut oc = ob.chunks_exact_mut(16);
+        for ((s4, b4), o4) in (&mut sc).zip(&mut bc).zip(&mut oc) {
+            for i in 0..16 {
+                lane(i, s4[i], b4[i], &mut o4[i]);
             }
-            nz |= sp[3] & 0x7fff_ffff;
         }
-        if nz != 0 {
+        let (st, bt, ot) = (sc.remainder(), bc.remainder(), oc.into_remainder());
+        for i in 0..st.len() {
+            lane(i, st[i], bt[i], &mut ot[i]);
+        }
+        if nz.iter().fold(0, |a, &v| a | v) != 0 {
             first = first.min(k);
             last = k;
         }
     }
+    let bad = [bad.iter().fold(0, |a, &v| a | v); 4];
     let ok = (bad[0] | bad[1] | bad[2] | bad[3]) == 0;
     if first == usize::MAX {
         return (ok, None);
