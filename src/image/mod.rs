@@ -112,14 +112,6 @@ pub(crate) fn put4(o: &mut [std::mem::MaybeUninit<f32>], x: usize, v: [f32; 4]) 
     }
 }
 
-/// Copies `v` into an uninitialised slice of the same length.
-#[inline(always)]
-pub(crate) fn put_slice(o: &mut [std::mem::MaybeUninit<f32>], v: &[f32]) {
-    assert_eq!(o.len(), v.len());
-    // SAFETY: same length, distinct allocations (one is uninitialised output).
-    unsafe { std::ptr::copy_nonoverlapping(v.as_ptr(), o.as_mut_ptr() as *mut f32, v.len()) }
-}
-
 /// Views a completely written buffer as floats.
 pub(crate) fn assume_init(o: &mut [std::mem::MaybeUninit<f32>]) -> &mut [f32] {
     // SAFETY: callers pass buffers whose every element has been written.

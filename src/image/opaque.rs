@@ -11,9 +11,7 @@ use rayon::prelude::*;
 use super::boxblur::box_row_range;
 use super::glow::{glow_row, GlowScratch};
 use super::lines::{directional_at, plan, LinePlan};
-use super::{
-    assume_init, check_direction, check_finite, check_image, filled, put4, put_slice, ALPHA_EPS,
-};
+use super::{assume_init, check_direction, check_finite, check_image, filled, put4, ALPHA_EPS};
 use crate::{Error, Result};
 use std::mem::MaybeUninit;
 
@@ -146,14 +144,6 @@ fn scan_copy_row(
     }
 }
 
-/// The result where the blurred layer is empty (`sub = 0`): the base, or 0 without compositing.
-fn empty(base: &[f32], comp: Option<Composite>) -> [f32; 4] {
-    match comp {
-        None => [0.0; 4],
-        Some(_) => [base[0], base[1], base[2], base[3]],
-    }
-}
-
 /// First and last pixel with non-zero alpha in a `(n, 4)` row (blocks of 16 pixels are tested
 /// with an OR of the alpha bits, then the first and last non-empty blocks are searched).
 fn alpha_span(row: &[f32]) -> Option<(usize, usize)> {
@@ -170,14 +160,6 @@ fn alpha_span(row: &[f32]) -> Option<(usize, usize)> {
     let lo = block(first).chunks_exact(4).position(|p| p[3] != 0.0)? + first * B;
     let hi = block(last).chunks_exact(4).rposition(|p| p[3] != 0.0)? + last * B;
     Some((lo, hi))
-}
-
-/// Bounding box `(x0, x1, y0, y1)` (inclusive) of the pixels with non-zero alpha.
-fn alpha_bbox(rgba: &[f32], w: usize) -> Option<(usize, usize, usize, usize)> {
-    rgba.par_chunks(w * 4)
-        .enumerate()
-        .filter_map(|(y, row)| alpha_span(row).map(|(a, b)| (a, b, y, y)))
-        .reduce_with(|a, b| (a.0.min(b.0), a.1.max(b.1), a.2.min(b.2), a.3.max(b.3)))
 }
 
 /// Along rows: one fused pass per row (glow, running sums, rescale, composite), restricted to
@@ -225,19 +207,33 @@ fn crop_path(
     p: &LinePlan,
     comp: Option<Composite>,
     out: &mut [MaybeUninit<f32>],
-) {
-    out.par_chunks_mut(w * 4)
-        .zip(base.par_chunks(w * 4))
-        .for_each(|(o, b)| match comp {
-            Some(_) => put_slice(o, b),
-            None => o.iter_mut().for_each(|v| {
-                v.write(0.0);
-            }),
-        });
-    let out = assume_init(out);
-    let Some((x0, x1, y0, y1)) = alpha_bbox(rgba, w) else {
-        return;
+) -> bool {
+    // One streaming pass: finiteness, the empty result everywhere, and the alpha's box.
+    type Scan = (bool, Option<(usize, usize, usize, usize)>);
+    let join = |a: Scan, b: Scan| -> Scan {
+        let bbox = match (a.1, b.1) {
+            (Some(a), Some(b)) => Some((a.0.min(b.0), a.1.max(b.1), a.2.min(b.2), a.3.max(b.3))),
+            (a, b) => a.or(b),
+        };
+        (a.0 & b.0, bbox)
     };
+    let (ok, bbox) = out
+        .par_chunks_mut(w * 4)
+        .zip(rgba.par_chunks(w * 4))
+        .zip(base.par_chunks(w * 4))
+        .enumerate()
+        .map(|(y, ((o, src), b))| {
+            let (ok, span) = scan_copy_row(src, b, o, comp.is_some());
+            (ok, span.map(|(lo, hi)| (lo, hi, y, y)))
+        })
+        .reduce(|| (true, None), join);
+    let out = assume_init(out);
+    let Some((x0, x1, y0, y1)) = bbox else {
+        return ok;
+    };
+    if !ok {
+        return false;
+    }
     let r = p.radius;
     let major = 2 * r + 2;
     let minor = (2.0 * r as f64 * p.slope.abs()).ceil() as usize + 2;
@@ -305,6 +301,7 @@ fn crop_path(
         });
     super::pool::give(five);
     super::pool::give(crop);
+    true
 }
 
 fn opaque_impl(
@@ -323,7 +320,7 @@ fn opaque_impl(
     check_direction(direction, length, "length")?;
     let base_img = base.unwrap_or(rgba);
     let p = plan(direction, length * 0.5);
-    if !matches!(p, Some(p) if !p.transpose && p.slope == 0.0) {
+    if p.is_none() {
         check_finite("rgba", rgba)?;
         check_finite("base", base_img)?;
     }
@@ -332,7 +329,7 @@ fn opaque_impl(
         Some(p) if !p.transpose && p.slope == 0.0 => {
             ok = rows_path(rgba, base_img, w, p.radius, comp, out);
         }
-        Some(p) => crop_path(rgba, base_img, w, h, &p, comp, out),
+        Some(p) => ok = crop_path(rgba, base_img, w, h, &p, comp, out),
         None => out
             .par_chunks_mut(4)
             .zip(rgba.par_chunks(4))
