@@ -222,47 +222,81 @@ pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send
                 }
             });
     } else {
-        let t = plan.slope;
-        let c0 = (major_offset * t).rem_euclid(1.0);
-        let (j0, rows) = shear_range(w2, h2, t, c0);
-        let fwd = Phase::new(w2, t, c0, 1.0);
-        let back = Phase::new(w2, t, c0, -1.0);
-        let mut sheared = super::pool::take(rows * w2 * CO);
-        let mut used = vec![false; rows];
-        // Sheared rows that can meet the live box: j + x t + c0 in (y0 - 1, y1 + 1), x in [x0, x1].
-        let (jlo, jhi) = match live {
-            Some([x0, x1, y0, y1]) => {
-                let (ua, ub) = (x0 as f64 * t + c0, x1 as f64 * t + c0);
-                (
-                    (y0 as f64 - 1.0 - ua.max(ub)).floor() as i64,
-                    (y1 as f64 + 1.0 - ua.min(ub)).ceil() as i64,
-                )
-            }
-            None => (i64::MIN, i64::MAX),
-        };
-        sheared
-            .par_chunks_mut(w2 * CO)
-            .zip(used.par_iter_mut())
-            .enumerate()
-            .for_each_init(
-                || (vec![0.0f32; w2 * CI], S::default()),
-                |(row, s), (k, (o, u))| {
-                    let j = j0 + k as i64;
-                    if j < jlo || j > jhi {
-                        return;
-                    }
-                    shear_row::<CI>(&src, w2, h2, &fwd, j, row);
-                    *u = f(row, w2, o, s);
-                },
-            );
+        let sh = build_sheared::<CI, CO, S>(&src, w2, h2, plan.slope, major_offset, live, &f);
         out.par_chunks_mut(w2 * CO)
             .enumerate()
-            .for_each(|(y, o)| unshear_row::<CO>(&sheared, &used, w2, j0, &back, y, o));
-        super::pool::give(sheared);
+            .for_each(|(y, o)| sh.unshear_row(w2, y, o));
+        super::pool::give(sh.data);
     }
     if plan.transpose {
         transpose::<CO>(&out, w2, h2)
     } else {
         out
+    }
+}
+
+/// A filtered sheared image: rows `j0 ..`, `used[k]` when row `j0 + k` holds anything.
+pub(crate) struct Sheared<const CO: usize> {
+    pub(crate) data: Vec<f32>,
+    used: Vec<bool>,
+    j0: i64,
+    back: Phase,
+}
+
+impl<const CO: usize> Sheared<CO> {
+    /// Output row `y` of the image the sheared rows came from (see `unshear_row`).
+    pub(crate) fn unshear_row(&self, w: usize, y: usize, out: &mut [f32]) {
+        unshear_row::<CO>(&self.data, &self.used, w, self.j0, &self.back, y, out);
+    }
+}
+
+/// Shears a `(h, w, CI)` image with slope `t` (see the module docs; `major_offset` and `live` as
+/// in `directional_at`, `live` already in this orientation) and runs the row filter `f` on every
+/// sheared row that can meet the live box.
+pub(crate) fn build_sheared<const CI: usize, const CO: usize, S: Default + Send>(
+    src: &[f32],
+    w: usize,
+    h: usize,
+    t: f64,
+    major_offset: f64,
+    live: Option<[usize; 4]>,
+    f: &(impl Fn(&[f32], usize, &mut [f32], &mut S) -> bool + Sync + Send),
+) -> Sheared<CO> {
+    let c0 = (major_offset * t).rem_euclid(1.0);
+    let (j0, rows) = shear_range(w, h, t, c0);
+    let fwd = Phase::new(w, t, c0, 1.0);
+    let back = Phase::new(w, t, c0, -1.0);
+    let mut data = super::pool::take(rows * w * CO);
+    let mut used = vec![false; rows];
+    // Sheared rows that can meet the live box: j + x t + c0 in (y0 - 1, y1 + 1), x in [x0, x1].
+    let (jlo, jhi) = match live {
+        Some([x0, x1, y0, y1]) => {
+            let (ua, ub) = (x0 as f64 * t + c0, x1 as f64 * t + c0);
+            (
+                (y0 as f64 - 1.0 - ua.max(ub)).floor() as i64,
+                (y1 as f64 + 1.0 - ua.min(ub)).ceil() as i64,
+            )
+        }
+        None => (i64::MIN, i64::MAX),
+    };
+    data.par_chunks_mut(w * CO)
+        .zip(used.par_iter_mut())
+        .enumerate()
+        .for_each_init(
+            || (vec![0.0f32; w * CI], S::default()),
+            |(row, s), (k, (o, u))| {
+                let j = j0 + k as i64;
+                if j < jlo || j > jhi {
+                    return;
+                }
+                shear_row::<CI>(src, w, h, &fwd, j, row);
+                *u = f(row, w, o, s);
+            },
+        );
+    Sheared {
+        data,
+        used,
+        j0,
+        back,
     }
 }

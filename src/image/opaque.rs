@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use super::boxblur::box_row_range;
 use super::glow::{glow_row, GlowScratch};
-use super::lines::{directional_at, plan, LinePlan};
+use super::lines::{build_sheared, directional_at, plan, LinePlan};
 use super::{assume_init, check_direction, check_finite, check_image, filled, put4, ALPHA_EPS};
 use crate::{Error, Result};
 use std::mem::MaybeUninit;
@@ -244,8 +244,8 @@ fn crop_path(
     };
     let (cx0, cx1) = (x0.saturating_sub(mx), (x1 + 1 + mx).min(w));
     let (cy0, cy1) = (y0.saturating_sub(my), (y1 + 1 + my).min(h));
-    let cw = cx1 - cx0;
-    let mut crop = super::pool::take(cw * (cy1 - cy0) * 4);
+    let (cw, ch) = (cx1 - cx0, cy1 - cy0);
+    let mut crop = super::pool::take(cw * ch * 4);
     crop.par_chunks_mut(cw * 4)
         .enumerate()
         .for_each(|(k, row)| {
@@ -254,52 +254,62 @@ fn crop_path(
         });
     let offset = if p.transpose { cy0 } else { cx0 } as f64;
     let live = [x0 - cx0, x1 - cx0, y0 - cy0, y1 - cy0];
-    let five = directional_at::<4, 5, RowScratch>(
-        &crop,
-        cw,
-        cy1 - cy0,
-        p,
-        offset,
-        Some(live),
-        |src, n, o, s| {
-            let Some((lo, hi)) = alpha_span(src) else {
-                return false;
-            };
-            let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(n));
-            o[..xa * 5].fill(0.0);
-            o[xb * 5..].fill(0.0);
-            s.a.clear();
-            s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
-            s.g.resize(xb - xa, 0.0);
-            glow_row(&s.a, r, &mut s.g, &mut s.glow);
-            let g = &s.g;
-            box_row_range(src, n, r, xa, xb, |x, m| {
-                o[x * 5..x * 5 + 4].copy_from_slice(&m);
-                o[x * 5 + 4] = g[x - xa];
-            });
-            true
-        },
-    );
-    let oblique = p.slope != 0.0;
-    out.par_chunks_mut(w * 4)
-        .enumerate()
-        .skip(cy0)
-        .take(cy1 - cy0)
-        .for_each(|(y, o)| {
-            for x in cx0..cx1 {
-                let i = y * w + x;
-                let k = (y - cy0) * cw + (x - cx0);
-                let f = &five[k * 5..k * 5 + 5];
-                let g = if oblique {
-                    f[4].max(rgba[i * 4 + 3])
-                } else {
-                    f[4]
-                };
-                let v = finish([f[0], f[1], f[2], f[3]], g, &base[i * 4..i * 4 + 4], comp);
-                o[x * 4..x * 4 + 4].copy_from_slice(&v);
-            }
+    let filter = |src: &[f32], n: usize, o: &mut [f32], s: &mut RowScratch| -> bool {
+        let Some((lo, hi)) = alpha_span(src) else {
+            return false;
+        };
+        let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(n));
+        o[..xa * 5].fill(0.0);
+        o[xb * 5..].fill(0.0);
+        s.a.clear();
+        s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
+        s.g.resize(xb - xa, 0.0);
+        glow_row(&s.a, r, &mut s.g, &mut s.glow);
+        let g = &s.g;
+        box_row_range(src, n, r, xa, xb, |x, m| {
+            o[x * 5..x * 5 + 4].copy_from_slice(&m);
+            o[x * 5 + 4] = g[x - xa];
         });
-    super::pool::give(five);
+        true
+    };
+    // Eq. 7 and the composite of crop row `y` (its five values: blur RGBA and glow) into the
+    // full output row `o`.
+    let oblique = p.slope != 0.0;
+    let finish_row = |y: usize, f5: &[f32], o: &mut [f32]| {
+        let gy = cy0 + y;
+        for x in 0..cw {
+            let i = gy * w + cx0 + x;
+            let f = &f5[x * 5..x * 5 + 5];
+            let g = if oblique {
+                f[4].max(rgba[i * 4 + 3])
+            } else {
+                f[4]
+            };
+            let v = finish([f[0], f[1], f[2], f[3]], g, &base[i * 4..i * 4 + 4], comp);
+            o[(cx0 + x) * 4..(cx0 + x) * 4 + 4].copy_from_slice(&v);
+        }
+    };
+    let out_rows = &mut out[cy0 * w * 4..cy1 * w * 4];
+    if oblique && !p.transpose {
+        // Shear, filter, and shear back row by row straight into the output.
+        let sh =
+            build_sheared::<4, 5, RowScratch>(&crop, cw, ch, p.slope, offset, Some(live), &filter);
+        out_rows.par_chunks_mut(w * 4).enumerate().for_each_init(
+            || vec![0.0f32; cw * 5],
+            |row, (y, o)| {
+                sh.unshear_row(cw, y, row);
+                finish_row(y, row, o);
+            },
+        );
+        super::pool::give(sh.data);
+    } else {
+        let five = directional_at::<4, 5, RowScratch>(&crop, cw, ch, p, offset, Some(live), filter);
+        out_rows
+            .par_chunks_mut(w * 4)
+            .enumerate()
+            .for_each(|(y, o)| finish_row(y, &five[y * cw * 5..(y + 1) * cw * 5], o));
+        super::pool::give(five);
+    }
     super::pool::give(crop);
     true
 }
