@@ -31,6 +31,16 @@ pub(crate) fn glow_row(a: &[f32], w: usize, out: &mut [f32], s: &mut GlowScratch
         out.copy_from_slice(a);
         return;
     }
+    // A constant row (an opaque or empty stretch) is its own glow.
+    let (lo, hi) = a
+        .iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &v| {
+            (l.min(v), h.max(v))
+        });
+    if lo == hi && lo >= 0.0 {
+        out.copy_from_slice(a);
+        return;
+    }
     let wf = w as f32;
     let q = &mut s.cand;
     // Sources at or right of the target (sweep right to left).
