@@ -1,5 +1,5 @@
 //! Bindings for the accumulation kernels: in-place on a float32 accumulation buffer, GIL released.
-use super::to_py_err;
+use super::{c_slice, to_py_err};
 use crate::accumulate;
 use crate::Error;
 use numpy::{PyReadonlyArray2, PyReadonlyArray3, PyReadwriteArray3, PyUntypedArrayMethods};
@@ -29,19 +29,15 @@ fn _accumulate(
             return Err(to_py_err(Error::shape("limit", "must be (H,W) like depth")));
         }
     }
-    let r = rgba
-        .as_slice()
-        .map_err(|_| to_py_err(Error::shape("rgba", "must be C-contiguous")))?;
-    let d = depth
-        .as_slice()
-        .map_err(|_| to_py_err(Error::shape("depth", "must be C-contiguous")))?;
+    let r = c_slice(&rgba, "rgba").map_err(to_py_err)?;
+    let d = c_slice(&depth, "depth").map_err(to_py_err)?;
     let l = match &limit {
-        Some(l) => Some(
-            l.as_slice()
-                .map_err(|_| to_py_err(Error::shape("limit", "must be C-contiguous")))?,
-        ),
+        Some(l) => Some(c_slice(&l, "limit").map_err(to_py_err)?),
         None => None,
     };
+    if !acc.is_c_contiguous() {
+        return Err(to_py_err(Error::shape("acc", "must be C-contiguous")));
+    }
     let a = acc
         .as_slice_mut()
         .map_err(|_| to_py_err(Error::shape("acc", "must be C-contiguous")))?;
@@ -62,9 +58,10 @@ fn _over(
             "must have the shape of acc",
         )));
     }
-    let u = under
-        .as_slice()
-        .map_err(|_| to_py_err(Error::shape("under", "must be C-contiguous")))?;
+    let u = c_slice(&under, "under").map_err(to_py_err)?;
+    if !acc.is_c_contiguous() {
+        return Err(to_py_err(Error::shape("acc", "must be C-contiguous")));
+    }
     let a = acc
         .as_slice_mut()
         .map_err(|_| to_py_err(Error::shape("acc", "must be C-contiguous")))?;

@@ -1,7 +1,7 @@
 //! Bindings for the image stage: shape and contiguity checks naming the argument, the GIL
 //! released around every kernel, numpy out. The Python layer (`motionblur.image`) converts
 //! dtypes and checks parameters first; these checks are the second line.
-use super::to_py_err;
+use super::{c_slice, to_py_err};
 use crate::image::{self, CameraMatrices, Composite, DofParams};
 use crate::Error;
 use glam::DMat4;
@@ -25,9 +25,7 @@ fn img3<'a>(
             format!("expected shape (H,W,{channels}), got {s:?}"),
         )));
     }
-    let data = a
-        .as_slice()
-        .map_err(|_| to_py_err(Error::shape(name, "must be C-contiguous")))?;
+    let data = c_slice(&a, name).map_err(to_py_err)?;
     Ok((data, s[1], s[0]))
 }
 
@@ -36,9 +34,7 @@ fn img2<'a>(
     name: &'static str,
 ) -> PyResult<(&'a [f32], usize, usize)> {
     let s = a.shape();
-    let data = a
-        .as_slice()
-        .map_err(|_| to_py_err(Error::shape(name, "must be C-contiguous")))?;
+    let data = c_slice(&a, name).map_err(to_py_err)?;
     Ok((data, s[1], s[0]))
 }
 
@@ -67,9 +63,7 @@ fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<DMat4> 
     if a.shape() != [4, 4] {
         return Err(to_py_err(Error::shape(name, "expected shape (4,4)")));
     }
-    let s = a
-        .as_slice()
-        .map_err(|_| to_py_err(Error::shape(name, "must be C-contiguous")))?;
+    let s = c_slice(&a, name).map_err(to_py_err)?;
     let mut m = [0.0f64; 16];
     m.copy_from_slice(s);
     // numpy rows -> glam columns.

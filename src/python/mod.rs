@@ -7,6 +7,25 @@ mod image;
 mod raster;
 mod shell;
 
+/// The data of `a` in C (row-major) order, or an error naming the argument.
+///
+/// rust-numpy's `as_slice` also accepts Fortran-ordered arrays and hands their memory over in
+/// column order, which silently scrambles (N,3) rows; every binding reads arrays through this.
+pub(crate) fn c_slice<'a, T: numpy::Element, D: numpy::ndarray::Dimension>(
+    a: &'a numpy::PyReadonlyArray<'_, T, D>,
+    name: &'static str,
+) -> Result<&'a [T], crate::Error> {
+    use numpy::PyUntypedArrayMethods;
+    if !a.is_c_contiguous() {
+        return Err(crate::Error::shape(
+            name,
+            "must be C-contiguous (numpy.ascontiguousarray)",
+        ));
+    }
+    a.as_slice()
+        .map_err(|_| crate::Error::shape(name, "must be C-contiguous"))
+}
+
 /// The one error mapping point: core errors become `ValueError` naming the argument.
 pub(crate) fn to_py_err(e: crate::Error) -> PyErr {
     pyo3::exceptions::PyValueError::new_err(e.to_string())
