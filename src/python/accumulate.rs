@@ -32,7 +32,7 @@ fn _accumulate(
     let r = c_slice(&rgba, "rgba").map_err(to_py_err)?;
     let d = c_slice(&depth, "depth").map_err(to_py_err)?;
     let l = match &limit {
-        Some(l) => Some(c_slice(&l, "limit").map_err(to_py_err)?),
+        Some(l) => Some(c_slice(l, "limit").map_err(to_py_err)?),
         None => None,
     };
     if !acc.is_c_contiguous() {

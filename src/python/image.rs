@@ -25,7 +25,7 @@ fn img3<'a>(
             format!("expected shape (H,W,{channels}), got {s:?}"),
         )));
     }
-    let data = c_slice(&a, name).map_err(to_py_err)?;
+    let data = c_slice(a, name).map_err(to_py_err)?;
     Ok((data, s[1], s[0]))
 }
 
@@ -34,7 +34,7 @@ fn img2<'a>(
     name: &'static str,
 ) -> PyResult<(&'a [f32], usize, usize)> {
     let s = a.shape();
-    let data = c_slice(&a, name).map_err(to_py_err)?;
+    let data = c_slice(a, name).map_err(to_py_err)?;
     Ok((data, s[1], s[0]))
 }
 
@@ -63,7 +63,7 @@ fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<DMat4> 
     if a.shape() != [4, 4] {
         return Err(to_py_err(Error::shape(name, "expected shape (4,4)")));
     }
-    let s = c_slice(&a, name).map_err(to_py_err)?;
+    let s = c_slice(a, name).map_err(to_py_err)?;
     let mut m = [0.0f64; 16];
     m.copy_from_slice(s);
     // numpy rows -> glam columns.

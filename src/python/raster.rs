@@ -31,7 +31,7 @@ fn rows<T: numpy::Element + Copy + Default, const K: usize>(
             format!("expected shape (N,{K}), got {shape:?}"),
         ));
     }
-    let flat = c_slice(&a, name)?;
+    let flat = c_slice(a, name)?;
     Ok(flat
         .chunks_exact(K)
         .map(|c| {

@@ -23,7 +23,7 @@ fn rows3<'a>(a: &'a PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<&
             format!("expected shape (N,3), got {shape:?}"),
         )));
     }
-    let flat = c_slice(&a, name).map_err(to_py_err)?;
+    let flat = c_slice(a, name).map_err(to_py_err)?;
     // SAFETY: `[f64; 3]` has the size of three f64 and the alignment of one; `flat` holds
     // exactly `shape[0] * 3` values, so the rows cover it and nothing more.
     Ok(unsafe { std::slice::from_raw_parts(flat.as_ptr().cast::<[f64; 3]>(), shape[0]) })
@@ -38,7 +38,7 @@ fn face_rows(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>
             format!("expected shape (F,3), F > 0, got {shape:?}"),
         )));
     }
-    let flat = c_slice(&a, "faces").map_err(to_py_err)?;
+    let flat = c_slice(a, "faces").map_err(to_py_err)?;
     let nv = nv as i64;
     let out: Vec<[u32; 3]> = flat
         .par_chunks_exact(3)
