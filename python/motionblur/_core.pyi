@@ -100,10 +100,17 @@ def _rasterize(
 # --- scenes (accumulation kernels)
 
 def _accumulate(
-    acc: np.ndarray, rgba: np.ndarray, depth: np.ndarray, limit: np.ndarray | None, weight: float
+    acc: np.ndarray,
+    rgba: np.ndarray,
+    depth: np.ndarray,
+    limit: np.ndarray | None,
+    weight: float,
+    x0: int = 0,
+    y0: int = 0,
 ) -> None:
-    """In place: acc (H,W,4) f32 += weight * rgba (H,W,4) f32 where depth (H,W) f32 < limit (H,W)
-    f32 (everywhere when limit is None). All C-contiguous. Releases the GIL."""
+    """In place: acc[y0:y0+h, x0:x0+w] (acc (H,W,4) f32) += weight * rgba (h,w,4) f32 where depth
+    (h,w) f32 < limit[y0:y0+h, x0:x0+w] (limit (H,W) f32; everywhere when None). All C-contiguous.
+    Releases the GIL."""
 
 def _over(acc: np.ndarray, under: np.ndarray) -> None:
     """In place: acc (H,W,4) f32 += under (H,W,4) f32 * (1 - acc alpha). Releases the GIL."""
