@@ -129,23 +129,26 @@ def pareto_front(rows) -> list[bool]:
     return out
 
 
-def equal_error(rows, method="motion_volume", baseline="accumulation"):
-    """For each ``method`` row of one scene: (row, baseline ms at the same RMSE, bound, factor);
-    bound is ``""``, ``"<="`` or ``">="`` (see the module docs)."""
+def equal_error(rows, method="motion_volume", baseline="accumulation", metric="rmse"):
+    """For each ``method`` row of one scene: (row, baseline ms at the same error, bound, factor);
+    bound is ``""``, ``"<="`` or ``">="`` (see the module docs). ``metric``: ``"rmse"`` or
+    ``"flip"`` (any positive error column of the rows)."""
     base = sorted((r for r in rows if r["method"] == baseline), key=lambda r: r["ms"])
     if not base:
         return []
     # errors of the baseline as its cost grows, made monotone (the best error reached so far)
     pts, best = [], float("inf")
     for r in base:
-        if r["rmse"] < best:
-            best = r["rmse"]
-            pts.append((r["ms"], r["rmse"]))
+        if r[metric] < best:
+            best = r[metric]
+            pts.append((r["ms"], r[metric]))
     out = []
     for r in rows:
         if r["method"] != method:
             continue
-        e = r["rmse"]
+        e = r[metric]
+        if not (e > 0 and math.isfinite(e)):
+            continue
         if e >= pts[0][1]:
             t, bound = pts[0][0], "<="
         elif e < pts[-1][1]:
@@ -208,7 +211,7 @@ def _machine() -> str:
     return f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
 
 
-def _markdown(rows, fronts, comparisons, pyrender_rows, settings) -> str:
+def _markdown(rows, fronts, comparisons, pyrender_rows, settings, flip_comparisons=None) -> str:
     lines = ["# Speed against error", ""]
     lines.append(
         f"Machine: {_machine()} (shared with other jobs: timings are best of {settings['repeat']}). "
@@ -253,6 +256,26 @@ def _markdown(rows, fronts, comparisons, pyrender_rows, settings) -> str:
             f"{bb}{fb:.2f} ({rb['options']}, RMSE {rb['rmse']:.4f}) |"
         )
     lines.append("")
+    if flip_comparisons:
+        lines += [
+            "The same at equal FLIP (NVIDIA's perceptual difference):",
+            "",
+        ]
+        lines += [
+            "| scene | most accurate motion_volume (FLIP) | its ms | its FLIP | accumulation ms at that FLIP | factor | best factor (options) |"
+        ]
+        lines += ["|---|---|---:|---:|---:|---:|---|"]
+        for scene, comp in flip_comparisons.items():
+            if not comp:
+                lines.append(f"| {scene} | (not applicable) | | | | | |")
+                continue
+            r, t, bound, factor = min(comp, key=lambda c: c[0]["flip"])
+            rb, _tb, bb, fb = max(comp, key=lambda c: c[3])
+            lines.append(
+                f"| {scene} | {r['options']} | {r['ms']:.2f} | {r['flip']:.4f} | {bound}{t:.2f} | {bound}{factor:.2f} | "
+                f"{bb}{fb:.2f} ({rb['options']}, FLIP {rb['flip']:.4f}) |"
+            )
+        lines.append("")
     if pyrender_rows:
         lines += ["## accumulation (static drawn once, N = 16) against 16-pose pyrender accumulation", ""]
         lines += [
@@ -309,7 +332,7 @@ def run(
         for m, s in sweeps.items():
             saved[m] = METHODS[m].sweep
             METHODS[m].sweep = [dict(o) for o in s]
-    rows, comparisons, pyr = [], {}, []
+    rows, comparisons, flip_comparisons, pyr = [], {}, {}, []
     images = {} if save_images else None
     try:
         for name in names:
@@ -326,6 +349,7 @@ def run(
             scene_rows = sweep_scene(name, scene, ref, repeat, methods, flip, images, aa)
             rows += scene_rows
             comparisons[name] = equal_error(scene_rows)
+            flip_comparisons[name] = equal_error(scene_rows, metric="flip") if flip else []
             if pyrender_peer:
                 pyr.append(_pyrender_comparison(name, scene, ref, repeat))
             for r in scene_rows:
@@ -353,7 +377,7 @@ def run(
         aa=aa,
         variant=ref_mod.mitsuba_variant(),
     )
-    (out / "results.md").write_text(_markdown(rows, fronts, comparisons, pyr, settings))
+    (out / "results.md").write_text(_markdown(rows, fronts, comparisons, pyr, settings, flip_comparisons))
     (out / "settings.json").write_text(json.dumps({**settings, "machine": _machine()}, indent=1))
     if images:
         for (scene, m, opts), frame in images.items():
