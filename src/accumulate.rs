@@ -117,6 +117,86 @@ pub fn over(acc: &mut [f32], under: &[f32]) -> Result<()> {
     Ok(())
 }
 
+/// Per sample, layer `a` composited with layer `b` by depth, into `b`: the nearer one *over*
+/// the farther one (premultiplied), the smaller depth and the nearer one's id. Exact for
+/// opaque surfaces and for one transparent surface per layer and sample. `a_*` cover `rect`,
+/// `b_*` the whole buffer.
+#[allow(clippy::too_many_arguments)]
+pub fn composite(
+    a_rgba: &[f32],
+    a_depth: &[f32],
+    a_ids: &[i32],
+    b_rgba: &mut [f32],
+    b_depth: &mut [f32],
+    b_ids: &mut [i32],
+    rect: Rect,
+) -> Result<()> {
+    let n = rect.width * rect.height;
+    if a_rgba.len() != 4 * n || a_depth.len() != n || a_ids.len() != n {
+        return Err(Error::shape(
+            "a",
+            "rgba (h,w,4), depth and ids (h,w) must cover the rectangle",
+        ));
+    }
+    let stride = rect.stride;
+    if stride == 0 || b_depth.len() % stride != 0 {
+        return Err(Error::shape("b", "must be (H,W) buffers"));
+    }
+    let rows = b_depth.len() / stride;
+    if b_rgba.len() != 4 * rows * stride || b_ids.len() != rows * stride {
+        return Err(Error::shape(
+            "b",
+            "rgba (H,W,4), depth and ids (H,W) must match",
+        ));
+    }
+    if rect.x0 + rect.width > stride || rect.y0 + rect.height > rows {
+        return Err(Error::shape("a", "the rectangle must lie inside b"));
+    }
+    if n == 0 {
+        return Ok(());
+    }
+    b_rgba
+        .par_chunks_mut(4 * stride)
+        .zip(b_depth.par_chunks_mut(stride))
+        .zip(b_ids.par_chunks_mut(stride))
+        .enumerate()
+        .skip(rect.y0)
+        .take(rect.height)
+        .for_each(|(y, ((rgba, depth), ids))| {
+            let ry = y - rect.y0;
+            for i in 0..rect.width {
+                let s = ry * rect.width + i;
+                let d = rect.x0 + i;
+                let ad = a_depth[s];
+                if ad == f32::INFINITY {
+                    continue; // nothing in a
+                }
+                let a4 = [
+                    a_rgba[4 * s],
+                    a_rgba[4 * s + 1],
+                    a_rgba[4 * s + 2],
+                    a_rgba[4 * s + 3],
+                ];
+                let b4 = [
+                    rgba[4 * d],
+                    rgba[4 * d + 1],
+                    rgba[4 * d + 2],
+                    rgba[4 * d + 3],
+                ];
+                let (near, far) = if ad <= depth[d] { (a4, b4) } else { (b4, a4) };
+                let k = 1.0 - near[3];
+                for j in 0..4 {
+                    rgba[4 * d + j] = near[j] + k * far[j];
+                }
+                if ad <= depth[d] {
+                    depth[d] = ad;
+                    ids[d] = a_ids[s];
+                }
+            }
+        });
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -162,6 +242,57 @@ mod tests {
         accumulate(&mut acc, &[1.0; 8], &[1.0, 1.0], Some(&limit), 1.0, rect).unwrap();
         let alpha: Vec<f32> = acc.chunks_exact(4).map(|c| c[3]).collect();
         assert_eq!(alpha, vec![0.0, 0.0, 0.0, 0.0, 0.0, 1.0]);
+    }
+
+    #[test]
+    fn composite_puts_the_nearer_layer_over() {
+        // b: 2 samples, opaque red at depth 2 and empty
+        let mut b_rgba = vec![1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0];
+        let mut b_depth = vec![2.0, f32::INFINITY];
+        let mut b_ids = vec![7, -1];
+        // a: half-transparent green in front of the first, and behind nothing on the second
+        let a_rgba = [0.0, 0.5, 0.0, 0.5, 0.0, 0.25, 0.0, 0.25];
+        let rect = Rect::whole(2);
+        composite(
+            &a_rgba,
+            &[1.0, 5.0],
+            &[3, 4],
+            &mut b_rgba,
+            &mut b_depth,
+            &mut b_ids,
+            rect,
+        )
+        .unwrap();
+        assert_eq!(b_rgba, vec![0.5, 0.5, 0.0, 1.0, 0.0, 0.25, 0.0, 0.25]);
+        assert_eq!(b_depth, vec![1.0, 5.0]);
+        assert_eq!(b_ids, vec![3, 4]);
+        // a behind an opaque b leaves b
+        let mut b2 = vec![1.0, 0.0, 0.0, 1.0];
+        let (mut d2, mut i2) = (vec![1.0], vec![7]);
+        composite(
+            &[0.0, 1.0, 0.0, 1.0],
+            &[3.0],
+            &[3],
+            &mut b2,
+            &mut d2,
+            &mut i2,
+            Rect::whole(1),
+        )
+        .unwrap();
+        assert_eq!((b2, d2, i2), (vec![1.0, 0.0, 0.0, 1.0], vec![1.0], vec![7]));
+        assert!(composite(
+            &[0.0; 4],
+            &[1.0],
+            &[0],
+            &mut [0.0; 4],
+            &mut [1.0],
+            &mut [0],
+            Rect {
+                x0: 1,
+                ..Rect::whole(1)
+            }
+        )
+        .is_err());
     }
 
     #[test]

@@ -115,4 +115,17 @@ def _accumulate(
 def _over(acc: np.ndarray, under: np.ndarray) -> None:
     """In place: acc (H,W,4) f32 += under (H,W,4) f32 * (1 - acc alpha). Releases the GIL."""
 
+def _composite(
+    a_rgba: np.ndarray,
+    a_depth: np.ndarray,
+    a_ids: np.ndarray,
+    b_rgba: np.ndarray,
+    b_depth: np.ndarray,
+    b_ids: np.ndarray,
+    x0: int = 0,
+    y0: int = 0,
+) -> None:
+    """In place into b (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32): layer a (h,w) at
+    (x0, y0) composited by depth, the nearer over the farther. Releases the GIL."""
+
 # --- end scenes

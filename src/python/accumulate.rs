@@ -2,7 +2,9 @@
 use super::to_py_err;
 use crate::accumulate;
 use crate::Error;
-use numpy::{PyReadonlyArray2, PyReadonlyArray3, PyReadwriteArray3, PyUntypedArrayMethods};
+use numpy::{
+    PyReadonlyArray2, PyReadonlyArray3, PyReadwriteArray2, PyReadwriteArray3, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 
 /// acc[y0:y0+h, x0:x0+w] (H,W,4) f32 += weight * rgba (h,w,4) f32 where depth (h,w) <
@@ -80,7 +82,63 @@ fn _over(
     py.detach(|| accumulate::over(a, u)).map_err(to_py_err)
 }
 
+/// In place into b (b_rgba (H,W,4) f32, b_depth (H,W) f32, b_ids (H,W) i32): layer a (a_rgba
+/// (h,w,4), a_depth (h,w), a_ids (h,w), at (x0, y0) of b) composited by depth, the nearer over
+/// the farther. Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (a_rgba, a_depth, a_ids, b_rgba, b_depth, b_ids, x0=0, y0=0))]
+#[allow(clippy::too_many_arguments)]
+fn _composite(
+    py: Python<'_>,
+    a_rgba: PyReadonlyArray3<'_, f32>,
+    a_depth: PyReadonlyArray2<'_, f32>,
+    a_ids: PyReadonlyArray2<'_, i32>,
+    mut b_rgba: PyReadwriteArray3<'_, f32>,
+    mut b_depth: PyReadwriteArray2<'_, f32>,
+    mut b_ids: PyReadwriteArray2<'_, i32>,
+    x0: usize,
+    y0: usize,
+) -> PyResult<()> {
+    let sub = a_rgba.shape().to_vec();
+    let full = b_rgba.shape().to_vec();
+    if sub[2] != 4 || full[2] != 4 || a_depth.shape() != &sub[..2] || a_ids.shape() != &sub[..2] {
+        return Err(to_py_err(Error::shape(
+            "a_rgba",
+            "a: rgba (h,w,4), depth and ids (h,w) expected",
+        )));
+    }
+    if b_depth.shape() != &full[..2] || b_ids.shape() != &full[..2] {
+        return Err(to_py_err(Error::shape(
+            "b_rgba",
+            "b: rgba (H,W,4), depth and ids (H,W) expected",
+        )));
+    }
+    if y0 + sub[0] > full[0] || x0 + sub[1] > full[1] {
+        return Err(to_py_err(Error::shape(
+            "a_rgba",
+            "the rectangle must lie inside b",
+        )));
+    }
+    let contiguous = |name| move |_| to_py_err(Error::shape(name, "must be C-contiguous"));
+    let ar = a_rgba.as_slice().map_err(contiguous("a_rgba"))?;
+    let ad = a_depth.as_slice().map_err(contiguous("a_depth"))?;
+    let ai = a_ids.as_slice().map_err(contiguous("a_ids"))?;
+    let br = b_rgba.as_slice_mut().map_err(contiguous("b_rgba"))?;
+    let bd = b_depth.as_slice_mut().map_err(contiguous("b_depth"))?;
+    let bi = b_ids.as_slice_mut().map_err(contiguous("b_ids"))?;
+    let rect = accumulate::Rect {
+        x0,
+        y0,
+        width: sub[1],
+        height: sub[0],
+        stride: full[1],
+    };
+    py.detach(|| accumulate::composite(ar, ad, ai, br, bd, bi, rect))
+        .map_err(to_py_err)
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(_composite, m)?)?;
     m.add_function(wrap_pyfunction!(_accumulate, m)?)?;
     m.add_function(wrap_pyfunction!(_over, m)?)?;
     Ok(())
