@@ -402,7 +402,7 @@ def main(argv=None) -> int:
     p.add_argument("--spp", type=int, default=4, help="Mitsuba samples per pixel per time")
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--no-flip", action="store_true")
-    p.add_argument("--quick", action="store_true", help="320x240, K = 64, one timing")
+    p.add_argument("--quick", action="store_true", help="160x120, K = 64, one timing")
     a = p.parse_args(argv)
     w, h = (int(x) for x in a.size.lower().split("x"))
     if a.quick:
