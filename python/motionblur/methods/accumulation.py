@@ -107,6 +107,32 @@ def moving_window(scene: Scene, camera: Camera, times, objects) -> tuple[int, in
     return int(a[:, 0].min()), int(a[:, 1].min()), int(a[:, 2].max()), int(a[:, 3].max())
 
 
+def _facing_faces(obj: Object, faces: np.ndarray, eye: np.ndarray) -> np.ndarray:
+    """The faces of a rigidly translating ``obj`` that face ``eye`` at some time of the shutter
+    (all faces for other motions), conservatively: near edge-on faces are kept."""
+    m = obj.motion
+    if m is None or m.is_deforming:
+        return faces
+    keys = m.transforms
+    if np.abs(keys[:, :3, :3] - keys[0, :3, :3]).max() > 1e-12 * (1.0 + np.abs(keys[0, :3, :3]).max()):
+        return faces
+    lin = keys[0, :3, :3]
+    scale = np.cbrt(np.linalg.det(lin))
+    rot = lin / scale
+    v = obj.mesh.vertices
+    a = v[faces[:, 0]]
+    n = np.cross(v[faces[:, 1]] - a, v[faces[:, 2]] - a)
+    nlen = np.linalg.norm(n, axis=1)
+    keep = np.zeros(len(faces), dtype=bool)
+    for key in keys:  # the held ends and every keyframe in between
+        e = rot.T @ (eye - key[:3, 3]) / scale  # the eye in object space
+        d = e - a
+        keep |= np.einsum("ij,ij->i", n, d) > -1e-9 * nlen * np.linalg.norm(d, axis=1)
+    if keep.all():
+        return faces
+    return np.ascontiguousarray(faces[keep])
+
+
 def _crop(layer: Layer, win) -> Layer:
     x0, y0, x1, y1 = win
     return Layer(layer.rgba[y0:y1, x0:x1], layer.depth[y0:y1, x0:x1], layer.ids[y0:y1, x0:x1])
@@ -118,13 +144,19 @@ class _Painter:
     Faces, colours and object-space normals are converted once. A shading group holding a
     single rigid object is drawn in object space with the model transform folded into the view
     matrix (and the lights turned into object space), so no vertex is touched per sample; other
-    groups get world vertices (and rotated normals) per sample."""
+    groups get world vertices (and rotated normals) per sample. With a still camera ``eye``, a
+    rigidly translating object (every keyframe with the same rotation and scale) loses the faces
+    that face away from the eye during the whole shutter, once, before the sample loop: along a
+    straight segment ``n . (eye - p(t))`` is linear in t, so a face back-facing at every keyframe
+    is back-facing throughout and the rasterizer would cull it at every sample anyway."""
 
-    def __init__(self, scene: Scene, objects: list[tuple[int, Object]]):
+    def __init__(self, scene: Scene, objects: list[tuple[int, Object]], eye=None):
         self.scene = scene
         self.groups: dict[str, list] = {}
         for k, o in objects:
             faces = np.ascontiguousarray(o.mesh.faces, dtype=np.int64)
+            if eye is not None:
+                faces = _facing_faces(o, faces, np.asarray(eye, dtype=np.float64))
             rgba = np.ascontiguousarray(np.atleast_2d(o.rgba), dtype=np.float32)
             normals = o.mesh.vertex_normals().astype(np.float32) if o.shading == "lambert" else None
             self.groups.setdefault(o.shading, []).append((k, o, faces, rgba, normals))
@@ -248,7 +280,7 @@ def accumulation(
     view = np.ascontiguousarray(cam.view)
     base = _crop(static.layer, win)
     base = Layer(np.ascontiguousarray(base.rgba), np.ascontiguousarray(base.depth), base.ids)
-    painter = _Painter(scene, moving)
+    painter = _Painter(scene, moving, eye=cam.pose[:3, 3])
     # Per sample i the composite is M_i over S where M_i is nearer, else S (exact for an opaque
     # static layer), so sum_i w_i out_i = A + S (1 - A.alpha) with A = sum_i w_i M_i [M_i nearer]:
     # the static layer is composited once, after the loop. Each sample is rasterized only inside
