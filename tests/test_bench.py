@@ -41,7 +41,7 @@ def test_a_tiny_run_writes_the_table_csv_and_plot(tmp_path):
                     sweeps=sweeps, flip=False, pyrender_peer=False, log=lambda *a: None)  # fmt: skip
     assert (tmp_path / "pareto_cube.png").stat().st_size > 1000
     md = (tmp_path / "results.md").read_text()
-    assert "## cube" in md and "motion_volume against accumulation" in md
+    assert "## cube" in md and "motion_volume against accumulation" in md and "Re-timed in pairs" in md
     with open(tmp_path / "results.csv") as fh:
         rows = list(csv.DictReader(fh))
     assert [r["method"] for r in rows] == ["accumulation", "accumulation", "motion_volume"]

@@ -104,6 +104,7 @@ def sweep_scene(name: str, scene, ref: np.ndarray, repeat=3, methods=None, flip=
                 "scene": name,
                 "method": mname,
                 "options": _label(opts),
+                "_opts": opts,
                 "ms": ms,
                 "rmse": metrics.rmse(frame, ref),
                 "psnr": metrics.psnr(frame, ref),
@@ -164,6 +165,55 @@ def equal_error(rows, method="motion_volume", baseline="accumulation", metric="r
     return out
 
 
+def paired_factor(scene, rows, metric="rmse", rounds=7):
+    """Re-time the most accurate motion_volume option set against the two accumulation sample
+    counts whose errors bracket it, round-robin (``rounds`` times, best of each), so that both
+    sides see the same machine load; interpolate accumulation's time log-log at that error.
+    Returns a dict (mv options, its error and ms, N_lo, N_hi, accumulation ms, bound, factor) or
+    None when there is nothing to compare."""
+    mv = [r for r in rows if r["method"] == "motion_volume" and r[metric] > 0 and math.isfinite(r[metric])]
+    acc = sorted(
+        (r for r in rows if r["method"] == "accumulation" and "samples" in r["_opts"]),
+        key=lambda r: r["_opts"]["samples"],
+    )
+    if not mv or not acc:
+        return None
+    m = min(mv, key=lambda r: r[metric])
+    e = m[metric]
+    worse = [r for r in acc if r[metric] >= e]
+    better = [r for r in acc if r[metric] < e]
+    lo = max(worse, key=lambda r: r["_opts"]["samples"]) if worse else None
+    hi = min(better, key=lambda r: r["_opts"]["samples"]) if better else None
+    jobs = [("motion_volume", m)] + [("accumulation", r) for r in (lo, hi) if r is not None]
+    best = [float("inf")] * len(jobs)
+    for _ in range(rounds):
+        for j, (method, r) in enumerate(jobs):
+            t0 = time.perf_counter()
+            render(scene, method, **r["_opts"])
+            best[j] = min(best[j], (time.perf_counter() - t0) * 1e3)
+    t_mv = best[0]
+    times = dict(zip([id(r) for _, r in jobs[1:]], best[1:]))
+    if lo is not None and hi is not None:
+        t_lo, t_hi = times[id(lo)], times[id(hi)]
+        e_lo, e_hi = lo[metric], hi[metric]
+        u = (math.log(e_lo) - math.log(e)) / (math.log(e_lo) - math.log(e_hi)) if e_lo != e_hi else 0.0
+        t_acc, bound = math.exp(math.log(t_lo) + u * (math.log(t_hi) - math.log(t_lo))), ""
+    elif hi is not None:  # even N = 1 is as accurate: its time bounds the equal-error time
+        t_acc, bound = times[id(hi)], "<="
+    else:
+        t_acc, bound = times[id(lo)], ">="
+    return {
+        "options": m["options"],
+        "error": e,
+        "mv_ms": t_mv,
+        "n_lo": lo["_opts"]["samples"] if lo else None,
+        "n_hi": hi["_opts"]["samples"] if hi else None,
+        "acc_ms": t_acc,
+        "bound": bound,
+        "factor": t_acc / t_mv,
+    }
+
+
 def _pyrender_comparison(name, scene, ref, repeat):
     ref_mod.pyrender(scene, samples=16)  # context creation and shader compilation
     peer_ms, peer = _best_ms(lambda: ref_mod.pyrender(scene, samples=16), repeat)
@@ -211,7 +261,7 @@ def _machine() -> str:
     return f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
 
 
-def _markdown(rows, fronts, comparisons, pyrender_rows, settings, flip_comparisons=None) -> str:
+def _markdown(rows, fronts, comparisons, pyrender_rows, settings, flip_comparisons=None, paired=None) -> str:
     lines = ["# Speed against error", ""]
     lines.append(
         f"Machine: {_machine()} (shared with other jobs: timings are best of {settings['repeat']}). "
@@ -256,6 +306,25 @@ def _markdown(rows, fronts, comparisons, pyrender_rows, settings, flip_compariso
             f"{bb}{fb:.2f} ({rb['options']}, RMSE {rb['rmse']:.4f}) |"
         )
     lines.append("")
+    if paired:
+        lines += [
+            "Re-timed in pairs (the most accurate motion_volume option set and the two accumulation sample counts "
+            "whose RMSE brackets it, round-robin, best of each), so both sides see the same load; this is the "
+            "headline factor:",
+            "",
+            "| scene | motion_volume options | RMSE | motion_volume ms | accumulation N bracket | "
+            "accumulation ms at that RMSE | factor |",
+            "|---|---|---:|---:|---|---:|---:|",
+        ]
+        for scene, p in paired.items():
+            if p is None:
+                lines.append(f"| {scene} | (not applicable) | | | | | |")
+                continue
+            lines.append(
+                f"| {scene} | {p['options']} | {p['error']:.5f} | {p['mv_ms']:.2f} | {p['n_lo']}..{p['n_hi']} | "
+                f"{p['bound']}{p['acc_ms']:.2f} | {p['bound']}{p['factor']:.2f} |"
+            )
+        lines.append("")
     if flip_comparisons:
         lines += [
             "The same at equal FLIP (NVIDIA's perceptual difference):",
@@ -332,7 +401,7 @@ def run(
         for m, s in sweeps.items():
             saved[m] = METHODS[m].sweep
             METHODS[m].sweep = [dict(o) for o in s]
-    rows, comparisons, flip_comparisons, pyr = [], {}, {}, []
+    rows, comparisons, flip_comparisons, pyr, paired = [], {}, {}, [], {}
     images = {} if save_images else None
     try:
         for name in names:
@@ -350,6 +419,7 @@ def run(
             rows += scene_rows
             comparisons[name] = equal_error(scene_rows)
             flip_comparisons[name] = equal_error(scene_rows, metric="flip") if flip else []
+            paired[name] = paired_factor(scene, scene_rows, "rmse", max(3, repeat))
             if pyrender_peer:
                 pyr.append(_pyrender_comparison(name, scene, ref, repeat))
             for r in scene_rows:
@@ -364,10 +434,11 @@ def run(
         fronts += f
         _plot(name, sel, f, out / f"pareto_{name}.png")
     with open(out / "results.csv", "w", newline="") as fh:
-        wr = csv.DictWriter(fh, fieldnames=[*rows[0].keys(), "pareto"])
+        keys = [k for k in rows[0] if not k.startswith("_")]
+        wr = csv.DictWriter(fh, fieldnames=[*keys, "pareto"])
         wr.writeheader()
         for r, f in zip(rows, fronts):
-            wr.writerow({**r, "pareto": int(f)})
+            wr.writerow({**{k: r[k] for k in keys}, "pareto": int(f)})
     settings = dict(
         width=width,
         height=height,
@@ -377,7 +448,9 @@ def run(
         aa=aa,
         variant=ref_mod.mitsuba_variant(),
     )
-    (out / "results.md").write_text(_markdown(rows, fronts, comparisons, pyr, settings, flip_comparisons))
+    (out / "results.md").write_text(
+        _markdown(rows, fronts, comparisons, pyr, settings, flip_comparisons, paired)
+    )
     (out / "settings.json").write_text(json.dumps({**settings, "machine": _machine()}, indent=1))
     if images:
         for (scene, m, opts), frame in images.items():
@@ -385,6 +458,8 @@ def run(
     return {
         "rows": rows,
         "comparisons": comparisons,
+        "flip_comparisons": flip_comparisons,
+        "paired": paired,
         "pyrender": pyr,
         "paths": {"md": out / "results.md", "csv": out / "results.csv"},
     }
