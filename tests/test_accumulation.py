@@ -70,6 +70,23 @@ def test_static_once_equals_drawing_everything_every_sample(aa, shutter):
     np.testing.assert_allclose(got.rgba, want, atol=2e-5)
     assert got.stats["static_draws"] == 1 and got.stats["draw_calls"] == 12
     assert got.stats["window"] is not None
+    # depth and ids are those of the sample nearest the reference time (shutter close)
+    close = mb.render(
+        sc.with_(objects=[mb.Object((o.world_vertices(1.0), o.mesh.faces), o.color) for o in sc.objects]),
+        "accumulation",
+        samples=1,
+        aa=aa,
+    )
+    t_ref = (11 + 0.5) / 12
+    near = mb.render(
+        sc.with_(objects=[mb.Object((o.world_vertices(t_ref), o.mesh.faces), o.color) for o in sc.objects]),
+        "accumulation",
+        samples=1,
+        aa=aa,
+    )
+    np.testing.assert_array_equal(got.ids, near.ids)
+    np.testing.assert_allclose(got.depth, near.depth, rtol=1e-6)
+    assert (got.ids == 2).sum() > 0 and (close.ids == 2).sum() > 0
 
 
 def test_jittered_and_lambert_and_several_moving_objects_match_the_twin():

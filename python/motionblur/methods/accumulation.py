@@ -288,7 +288,7 @@ def accumulation(
     has_static = bool(np.isfinite(base.depth).any())
     exact_sum = not has_static or static.opaque
     acc = np.zeros((y1 - y0, x1 - x0, 4), np.float32)
-    keep = Layer(base.rgba.copy(), base.depth.copy(), base.ids.copy())
+    keep = Layer(base.rgba, base.depth.copy(), base.ids.copy())  # only depth and ids are written
     for i, (t, sw) in enumerate(zip(times, per_sample)):
         w = np.float32(weights[i])
         if sw is None:
@@ -302,11 +302,7 @@ def accumulation(
         sub = Layer(base.rgba[sy0:sy1, sx0:sx1], base.depth[sy0:sy1, sx0:sx1], base.ids[sy0:sy1, sx0:sx1])
         if i == ref:
             c = composite(layer, sub)
-            keep.rgba[sy0:sy1, sx0:sx1], keep.depth[sy0:sy1, sx0:sx1], keep.ids[sy0:sy1, sx0:sx1] = (
-                c.rgba,
-                c.depth,
-                c.ids,
-            )
+            keep.depth[sy0:sy1, sx0:sx1], keep.ids[sy0:sy1, sx0:sx1] = c.depth, c.ids
         if exact_sum:
             # one fused pass in Rust: acc += w * M where M is in front of the static surface
             limit = base.depth if has_static else None
