@@ -23,9 +23,10 @@ import sys
 import time
 from pathlib import Path
 
-import motionblur as mb
 import numpy as np
 import trimesh
+
+import motionblur as mb
 from motionblur import meshes
 
 

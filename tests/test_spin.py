@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+
 from motionblur import LEADING, Camera, Draw, Mesh, look_at, meshes, motion_volume, rasterize, spin_volume
 
 

@@ -20,8 +20,9 @@ import textwrap
 import numpy as np
 import pytest
 import trimesh
-from motionblur import JOINING, Camera, Draw, Mesh, look_at, meshes, motion_volume, rasterize
 from test_geometry_reference import hull_volume, random_convex, signed_volume
+
+from motionblur import JOINING, Camera, Draw, Mesh, look_at, meshes, motion_volume, rasterize
 
 WEIGHTS = {
     "ramp": lambda t: 2 * t,
@@ -135,7 +136,7 @@ def test_coverage_filters_keep_the_convex_oracle(flt):
     assert len(box.faces) > 12 * 4  # coarse faces are cut so alphas can follow the profile
 
 
-def test_coverage_alphas_do_not_depend_on_the_thread_count():
+def test_coverage_and_spin_alphas_do_not_depend_on_the_thread_count():
     code = textwrap.dedent(
         """
         import hashlib, numpy as np, motionblur as mb
@@ -146,6 +147,10 @@ def test_coverage_alphas_do_not_depend_on_the_thread_count():
                                    camera_position=[0, 0, 5])
             for a in (vol.vertices, vol.faces, vol.rgba, vol.normals, vol.part, vol.ring_alpha):
                 h.update(a.tobytes())
+        bv, bf = mb.meshes.box((0.8, 0.2, 0.05))
+        spin = mb.spin_volume(mb.Mesh(bv + [0.5, 0, 0], bf), [0, 0, 1], 7.0, camera_position=[0, 1, 4])
+        for a in (spin.vertices, spin.faces, spin.rgba, spin.normals, spin.part):
+            h.update(a.tobytes())
         print(h.hexdigest())
         """
     )
