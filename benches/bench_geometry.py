@@ -7,7 +7,9 @@ Three jobs on icospheres of 82k, 328k and 1.3M faces (meshes.icosphere(6/7/8)):
   Ours: ``Mesh(v, f)`` (copy and validation included) and the adjacency build.
 - contour: classify the faces and select and orient the contour edges, with face normals
   recomputed from the vertices every call (as after a deformation), adjacency cached on both
-  sides. Peer: numpy cross products, dots and selection over trimesh's cached face_adjacency.
+  sides (ours includes the face-neighbour table of a closed mesh, built on the first call and
+  cached like trimesh's face_adjacency; best-of-N leaves that first call out on both sides).
+  Peer: numpy cross products, dots and selection over trimesh's cached face_adjacency.
 - volume: a one-segment motion volume with vertex normals, ramp alpha and white colour.
   Peer: the same in numpy (normals by bincount, no vertex compaction) over cached adjacency.
 

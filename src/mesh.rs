@@ -79,6 +79,9 @@ pub struct Mesh {
     vertices: Vec<[f64; 3]>,
     faces: Vec<[u32; 3]>,
     adjacency: std::sync::Arc<OnceLock<Adjacency>>,
+    /// Per face, the face across each of its edges, when every edge has exactly two faces that
+    /// run it in opposite directions (built from the adjacency on first use).
+    neighbors: std::sync::Arc<OnceLock<Option<Vec<[u32; 3]>>>>,
 }
 
 impl Mesh {
@@ -109,6 +112,7 @@ impl Mesh {
             vertices,
             faces,
             adjacency: Default::default(),
+            neighbors: Default::default(),
         })
     }
 
@@ -130,6 +134,7 @@ impl Mesh {
             vertices,
             faces: self.faces.clone(),
             adjacency: self.adjacency.clone(),
+            neighbors: self.neighbors.clone(),
         })
     }
 
@@ -144,6 +149,36 @@ impl Mesh {
     pub fn adjacency(&self) -> &Adjacency {
         self.adjacency
             .get_or_init(|| build_adjacency(&self.faces, self.vertices.len()))
+    }
+
+    /// The face across edge `k` (`faces[f][k] -> faces[f][(k + 1) % 3]`) of every face `f`, or
+    /// `None` unless every face edge has exactly one partner running it the other way (a closed,
+    /// consistently wound, 2-manifold mesh without zero-length edges). Cached.
+    pub fn face_neighbors(&self) -> Option<&[[u32; 3]]> {
+        self.neighbors
+            .get_or_init(|| {
+                use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+                let adj = self.adjacency();
+                let slots: Vec<AtomicU32> = (0..3 * self.faces.len())
+                    .map(|_| AtomicU32::new(u32::MAX))
+                    .collect();
+                // Every half-edge belongs to one edge, so each slot is written at most once.
+                let paired = (0..adj.len()).into_par_iter().with_min_len(4096).all(|e| {
+                    let (inc, fw) = (adj.incident(e), adj.incident_forward(e));
+                    if inc.len() != 2 || fw[0] == fw[1] {
+                        return false;
+                    }
+                    slots[inc[0] as usize].store(inc[1] / 3, Relaxed);
+                    slots[inc[1] as usize].store(inc[0] / 3, Relaxed);
+                    true
+                });
+                let nbr: Vec<[u32; 3]> = slots
+                    .par_chunks(3)
+                    .map(|c| [c[0].load(Relaxed), c[1].load(Relaxed), c[2].load(Relaxed)])
+                    .collect();
+                (paired && nbr.par_iter().all(|n| !n.contains(&u32::MAX))).then_some(nbr)
+            })
+            .as_deref()
     }
 
     /// Whether the adjacency has been built already.
@@ -483,6 +518,23 @@ mod tests {
         let adj = m.adjacency();
         assert!(adj.edges.windows(2).all(|w| w[0] < w[1]));
         assert!((0..adj.len()).all(|e| adj.incident(e).len() == 2));
+        // Each face's neighbour across edge k runs that edge the other way.
+        let nbr = m.face_neighbors().expect("closed");
+        for (f, n) in nbr.iter().enumerate() {
+            for k in 0..3 {
+                let (a, b) = (m.faces()[f][k], m.faces()[f][(k + 1) % 3]);
+                let g = m.faces()[n[k] as usize];
+                assert!((0..3).any(|j| g[j] == b && g[(j + 1) % 3] == a));
+            }
+        }
+        // An open mesh has none; a deformed copy shares the cached table.
+        let open = Mesh::new(m.vertices().to_vec(), m.faces()[..3].to_vec()).unwrap();
+        assert!(open.face_neighbors().is_none());
+        let moved = m.with_vertices(vec![[1.0; 3]; 4]).unwrap();
+        assert_eq!(
+            moved.face_neighbors().map(|x| x.as_ptr()),
+            Some(nbr.as_ptr())
+        );
     }
 
     #[test]
