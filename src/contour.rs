@@ -91,36 +91,51 @@ pub fn camera_facing(
 
 /// The oriented contour edges for a face classification, in adjacency (edge) order.
 ///
-/// On a closed, consistently wound 2-manifold mesh this walks the faces: every edge from a
-/// front face to a back neighbour, oriented as the front face runs it (the rule of the module
-/// docs, which it equals there), then sorted into edge order. Otherwise it walks the edges.
+/// On a closed, consistently wound 2-manifold mesh this walks the faces over the cached
+/// [`Mesh::face_neighbors`]: every edge from a front face to a back neighbour is marked with the
+/// direction the front face runs it (the rule of the module docs, which it equals there), and
+/// the marks are read in edge order. Otherwise it walks the edges.
 pub fn contour_from_sides(mesh: &Mesh, front: &[bool]) -> Vec<ContourEdge> {
     if let Some(nbr) = mesh.face_neighbors() {
-        let faces = mesh.faces();
-        let mut found: Vec<(u32, u32)> = faces
+        use std::sync::atomic::{AtomicU8, Ordering::Relaxed};
+        let adj = mesh.adjacency();
+        // 0: not a contour edge; 1: runs higher -> lower in its front face; 2: lower -> higher.
+        // Each contour edge has one front face, so each mark is written once.
+        let marks: Vec<AtomicU8> = (0..adj.len()).map(|_| AtomicU8::new(0)).collect();
+        mesh.faces()
             .par_iter()
-            .zip(nbr)
+            .zip(&nbr.faces)
+            .zip(&nbr.edges)
             .zip(front)
             .with_min_len(4096)
-            .filter(|(_, &fr)| fr)
-            .flat_map_iter(|((f, n), _)| {
-                (0..3)
-                    .filter(|&k| !front[n[k] as usize])
-                    .map(move |k| (f[k], f[(k + 1) % 3]))
-            })
-            .collect();
-        found.par_sort_unstable_by_key(|&(a, b)| (a.min(b), a.max(b)));
-        let edges = &mesh.adjacency().edges;
-        return found
-            .into_iter()
-            .map(|(a, b)| {
-                let e = edges
-                    .binary_search(&[a.min(b), a.max(b)])
-                    .expect("every face edge is in the adjacency");
-                ContourEdge {
-                    edge: e as u32,
-                    a,
-                    b,
+            .for_each(|(((f, n), e), &fr)| {
+                if fr {
+                    for k in 0..3 {
+                        if !front[n[k] as usize] {
+                            marks[e[k] as usize]
+                                .store(1 + u8::from(f[k] < f[(k + 1) % 3]), Relaxed);
+                        }
+                    }
+                }
+            });
+        return marks
+            .par_iter()
+            .enumerate()
+            .with_min_len(4096)
+            .filter_map(|(e, mark)| {
+                let [lo, hi] = adj.edges[e];
+                match mark.load(Relaxed) {
+                    0 => None,
+                    1 => Some(ContourEdge {
+                        edge: e as u32,
+                        a: hi,
+                        b: lo,
+                    }),
+                    _ => Some(ContourEdge {
+                        edge: e as u32,
+                        a: lo,
+                        b: hi,
+                    }),
                 }
             })
             .collect();
