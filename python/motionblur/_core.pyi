@@ -51,6 +51,22 @@ def motion_volume(
     faces (M,3) i64, rgba (N,4) f32, normals (N,3) f32, part (M,) u8, ring_alpha (n+1,) f64
     and the number of contour edges. Releases the GIL."""
 
+def spin_volume(
+    mesh: _Mesh,
+    axis: np.ndarray,
+    angle: float,
+    center: np.ndarray,
+    translation: np.ndarray,
+    segments: int | None,
+    filter: str,
+    colors: np.ndarray,
+    normals: np.ndarray | None = None,
+    camera_position: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+    """Spin volume (section 4.3): axis (3,) f64, angle radians, center (3,) f64, translation
+    (3,) f64, segments (sweep steps) | None; the rest and the result as motion_volume.
+    Releases the GIL."""
+
 class _ContourTable:
     """Contour sets precomputed for K directions (section 4.4)."""
 
