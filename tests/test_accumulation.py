@@ -12,9 +12,10 @@ import os
 import subprocess
 import sys
 
-import motionblur as mb
 import numpy as np
 import pytest
+
+import motionblur as mb
 from motionblur import meshes
 from motionblur.methods.accumulation import sample_times
 from motionblur.render import downsample, supersampled

@@ -6,6 +6,7 @@ import csv
 import math
 
 import pytest
+
 from motionblur import bench
 
 
