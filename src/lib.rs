@@ -16,6 +16,7 @@ pub mod mesh;
 pub mod motion;
 pub mod raster;
 pub mod shell;
+pub mod spin;
 pub mod volume;
 pub mod volume_alpha;
 pub mod volume_filter;

@@ -73,12 +73,24 @@ impl MeshStats {
     }
 }
 
+/// Per face `f` and edge `k` (`faces[f][k] -> faces[f][(k + 1) % 3]`): the face across it and
+/// the edge's index in the adjacency.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FaceNeighbors {
+    pub faces: Vec<[u32; 3]>,
+    pub edges: Vec<[u32; 3]>,
+}
+
 /// An indexed triangle mesh with a lazily built, cached edge adjacency.
 #[derive(Debug)]
 pub struct Mesh {
     vertices: Vec<[f64; 3]>,
     faces: Vec<[u32; 3]>,
     adjacency: std::sync::Arc<OnceLock<Adjacency>>,
+    /// Per face, the face across each of its edges and that edge's index, when every edge has
+    /// exactly two faces that run it in opposite directions (built from the adjacency on first
+    /// use).
+    neighbors: std::sync::Arc<OnceLock<Option<FaceNeighbors>>>,
 }
 
 impl Mesh {
@@ -109,6 +121,7 @@ impl Mesh {
             vertices,
             faces,
             adjacency: Default::default(),
+            neighbors: Default::default(),
         })
     }
 
@@ -130,6 +143,7 @@ impl Mesh {
             vertices,
             faces: self.faces.clone(),
             adjacency: self.adjacency.clone(),
+            neighbors: self.neighbors.clone(),
         })
     }
 
@@ -144,6 +158,46 @@ impl Mesh {
     pub fn adjacency(&self) -> &Adjacency {
         self.adjacency
             .get_or_init(|| build_adjacency(&self.faces, self.vertices.len()))
+    }
+
+    /// The face across each edge of every face and the edge's index ([`FaceNeighbors`]), or
+    /// `None` unless every face edge has exactly one partner running it the other way (a closed,
+    /// consistently wound, 2-manifold mesh without zero-length edges). Cached, and shared by
+    /// [`Mesh::with_vertices`] copies.
+    pub fn face_neighbors(&self) -> Option<&FaceNeighbors> {
+        self.neighbors
+            .get_or_init(|| {
+                use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+                let adj = self.adjacency();
+                let n = 3 * self.faces.len();
+                let across: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(u32::MAX)).collect();
+                let edge: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(u32::MAX)).collect();
+                // Every half-edge belongs to one edge, so each slot is written at most once.
+                let paired = (0..adj.len()).into_par_iter().with_min_len(4096).all(|e| {
+                    let (inc, fw) = (adj.incident(e), adj.incident_forward(e));
+                    if inc.len() != 2 || fw[0] == fw[1] {
+                        return false;
+                    }
+                    for (h, other) in [(inc[0], inc[1]), (inc[1], inc[0])] {
+                        across[h as usize].store(other / 3, Relaxed);
+                        edge[h as usize].store(e as u32, Relaxed);
+                    }
+                    true
+                });
+                let triples = |a: &[AtomicU32]| -> Vec<[u32; 3]> {
+                    a.par_chunks(3)
+                        .map(|c| [c[0].load(Relaxed), c[1].load(Relaxed), c[2].load(Relaxed)])
+                        .collect()
+                };
+                let faces = triples(&across);
+                (paired && faces.par_iter().all(|n| !n.contains(&u32::MAX))).then(|| {
+                    FaceNeighbors {
+                        faces,
+                        edges: triples(&edge),
+                    }
+                })
+            })
+            .as_ref()
     }
 
     /// Whether the adjacency has been built already.
@@ -483,6 +537,21 @@ mod tests {
         let adj = m.adjacency();
         assert!(adj.edges.windows(2).all(|w| w[0] < w[1]));
         assert!((0..adj.len()).all(|e| adj.incident(e).len() == 2));
+        // Each face's neighbour across edge k runs that edge the other way.
+        let nbr = m.face_neighbors().expect("closed");
+        for (f, n) in nbr.faces.iter().enumerate() {
+            for (k, &across) in n.iter().enumerate() {
+                let (a, b) = (m.faces()[f][k], m.faces()[f][(k + 1) % 3]);
+                let g = m.faces()[across as usize];
+                assert!((0..3).any(|j| g[j] == b && g[(j + 1) % 3] == a));
+                assert_eq!(adj.edges[nbr.edges[f][k] as usize], [a.min(b), a.max(b)]);
+            }
+        }
+        // An open mesh has none; a deformed copy shares the cached table.
+        let open = Mesh::new(m.vertices().to_vec(), m.faces()[..3].to_vec()).unwrap();
+        assert!(open.face_neighbors().is_none());
+        let moved = m.with_vertices(vec![[1.0; 3]; 4]).unwrap();
+        assert!(std::ptr::eq(moved.face_neighbors().unwrap(), nbr));
     }
 
     #[test]

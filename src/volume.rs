@@ -94,7 +94,7 @@ struct Source {
     normal_ring: u32,
 }
 
-fn check_options(mesh: &Mesh, opts: &VolumeOptions) -> Result<()> {
+pub(crate) fn check_options(mesh: &Mesh, opts: &VolumeOptions) -> Result<()> {
     let nv = mesh.vertices().len();
     let check_rgba = |c: &[f32; 4]| {
         c.iter().all(|x| x.is_finite())
@@ -321,7 +321,12 @@ const MAX_SUBDIVIDED_FACES: usize = 1 << 20;
 /// units, at shutter open) is cut to at most `max(min(L, E) / 2, E / 8)`, in 1..=8 parts, and
 /// the result stays under [`MAX_SUBDIVIDED_FACES`].
 fn subdivision_factor(mesh: &Mesh, path: &Path, length: f64, extent: f64) -> usize {
-    let h = (0.25 * length.min(extent)).max(extent / 16.0);
+    subdivision_for_edge(mesh, path, (0.25 * length.min(extent)).max(extent / 16.0))
+}
+
+/// The number of parts (1..=16, within [`MAX_SUBDIVIDED_FACES`]) that cuts every edge of the
+/// mesh placed by the first keyframe to at most `h` (world units).
+pub(crate) fn subdivision_for_edge(mesh: &Mesh, path: &Path, h: f64) -> usize {
     let faces = mesh.faces();
     if h.is_nan() || h <= 0.0 || faces.len() * 4 > MAX_SUBDIVIDED_FACES {
         return 1;
@@ -347,7 +352,7 @@ fn subdivision_factor(mesh: &Mesh, path: &Path, length: f64, extent: f64) -> usi
 }
 
 /// The mesh cut `s` times along every edge, with colours and normals blended to the new vertices.
-fn subdivided(
+pub(crate) fn subdivided(
     mesh: &Mesh,
     opts: &VolumeOptions,
     s: usize,

@@ -113,8 +113,64 @@ impl ChordTable {
     }
 }
 
+/// Akl-Toussaint: drop the points strictly inside the polygon of the extreme points in 32
+/// directions (they cannot be on the hull), so that a dense mesh sorts only its rim (about a
+/// tenth of a sphere's projected vertices).
+fn discard_interior(pts: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
+    const K: usize = 32;
+    if pts.len() < 4 * K {
+        return pts;
+    }
+    let dirs: Vec<[f64; 2]> = (0..K)
+        .map(|k| {
+            let a = std::f64::consts::TAU * k as f64 / K as f64;
+            [a.cos(), a.sin()]
+        })
+        .collect();
+    let key = |p: [f64; 2], d: [f64; 2]| p[0] * d[0] + p[1] * d[1];
+    // The point of largest p . d per direction (ties: the first), counter-clockwise.
+    let ext = pts
+        .par_chunks(8192)
+        .map(|c| {
+            let mut o = [c[0]; K];
+            for p in &c[1..] {
+                for (e, d) in o.iter_mut().zip(&dirs) {
+                    if key(*p, *d) > key(*e, *d) {
+                        *e = *p;
+                    }
+                }
+            }
+            o
+        })
+        .reduce_with(|mut a, b| {
+            for ((e, x), d) in a.iter_mut().zip(b).zip(&dirs) {
+                if key(x, *d) > key(*e, *d) {
+                    *e = x;
+                }
+            }
+            a
+        })
+        .expect("at least one chunk");
+    let mut poly: Vec<[f64; 2]> = ext.to_vec();
+    poly.dedup();
+    while poly.len() > 1 && poly[0] == poly[poly.len() - 1] {
+        poly.pop();
+    }
+    if poly.len() < 3 {
+        return pts;
+    }
+    let inside = |p: &[f64; 2]| {
+        (0..poly.len()).all(|i| {
+            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+            (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) > 0.0
+        })
+    };
+    pts.into_par_iter().filter(|p| !inside(p)).collect()
+}
+
 /// Andrew's monotone chain: the convex hull, counter-clockwise, without collinear points.
-fn convex_hull(mut pts: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
+fn convex_hull(pts: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
+    let mut pts = discard_interior(pts);
     pts.par_sort_unstable_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
     pts.dedup();
     if pts.len() < 3 {
@@ -308,10 +364,16 @@ impl CoverageModel {
                 })
                 .collect()
         };
-        // The coverage integral follows the silhouette's change (perspective, rotation) on at
-        // least 8 sub-segments; the cuts of the joining strips use the path's own segments.
+        // Under perspective the coverage integral follows the silhouette's change on at least 3
+        // sub-segments (8 with rotation); the cuts of the joining strips use the path's own.
         let geometric = build(path);
-        let parts = if pure { 1 } else { 8usize.div_ceil(n) };
+        let parts = if pure {
+            1
+        } else if path.is_translation() {
+            3usize.div_ceil(n)
+        } else {
+            8usize.div_ceil(n)
+        };
         let segments = if parts > 1 {
             build(&path.subdivide(parts))
         } else {

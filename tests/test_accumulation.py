@@ -12,9 +12,10 @@ import os
 import subprocess
 import sys
 
-import motionblur as mb
 import numpy as np
 import pytest
+
+import motionblur as mb
 from motionblur import meshes
 from motionblur.methods.accumulation import sample_times
 from motionblur.render import downsample, supersampled
@@ -70,6 +71,23 @@ def test_static_once_equals_drawing_everything_every_sample(aa, shutter):
     np.testing.assert_allclose(got.rgba, want, atol=2e-5)
     assert got.stats["static_draws"] == 1 and got.stats["draw_calls"] == 12
     assert got.stats["window"] is not None
+    # depth and ids are those of the sample nearest the reference time (shutter close)
+    close = mb.render(
+        sc.with_(objects=[mb.Object((o.world_vertices(1.0), o.mesh.faces), o.color) for o in sc.objects]),
+        "accumulation",
+        samples=1,
+        aa=aa,
+    )
+    t_ref = (11 + 0.5) / 12
+    near = mb.render(
+        sc.with_(objects=[mb.Object((o.world_vertices(t_ref), o.mesh.faces), o.color) for o in sc.objects]),
+        "accumulation",
+        samples=1,
+        aa=aa,
+    )
+    np.testing.assert_array_equal(got.ids, near.ids)
+    np.testing.assert_allclose(got.depth, near.depth, rtol=1e-6)
+    assert (got.ids == 2).sum() > 0 and (close.ids == 2).sum() > 0
 
 
 def test_jittered_and_lambert_and_several_moving_objects_match_the_twin():
@@ -167,3 +185,30 @@ def test_results_do_not_depend_on_the_thread_count():
             subprocess.run([sys.executable, "-c", _THREADS], env=env, capture_output=True, check=True).stdout
         )
     assert len(outs[0]) > 0 and outs[0] == outs[1]
+
+
+def test_faces_turned_away_for_the_whole_shutter_are_dropped_once():
+    from motionblur.methods.accumulation import _facing_faces
+
+    v, f = meshes.icosphere(3, 0.5)
+    obj = mb.Object(
+        (v, f),
+        (0.8, 0.5, 0.2),
+        motion=mb.Motion(
+            [0.0, 0.4, 1.0],
+            np.stack([translate((-1.5, 0, 0)), translate((0, 0.5, 0)), translate((1.5, 0, 0))]),
+        ),
+    )
+    eye = np.array([0.0, 0.3, 5.0])
+    kept = _facing_faces(obj, f, eye)
+    assert len(f) * 0.4 < len(kept) < len(f) * 0.7
+    # every dropped face is turned away at every sample time
+    dropped = np.setdiff1d(np.arange(len(f)), [np.flatnonzero((f == k).all(axis=1))[0] for k in kept])
+    for t in np.linspace(0, 1, 17):
+        w = obj.world_vertices(t)
+        n = np.cross(w[f[dropped, 1]] - w[f[dropped, 0]], w[f[dropped, 2]] - w[f[dropped, 0]])
+        assert (np.einsum("ij,ij->i", n, eye - w[f[dropped, 0]]) < 0).all()
+    spinning = mb.Object((v, f), motion=mb.Motion.linear(np.eye(4), rotate(0.3, (0, 1, 0))))
+    assert len(_facing_faces(spinning, f, eye)) == len(f)  # not a pure translation: all kept
+    sc = mb.Scene([obj], _cam())
+    np.testing.assert_allclose(mb.render(sc, "accumulation", samples=9).rgba, twin(sc, 9), atol=2e-5)

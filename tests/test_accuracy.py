@@ -18,12 +18,13 @@ A diff image goes to out/test-failures/ on failure.
 from __future__ import annotations
 
 import _pyrender_peer as peer
-import motionblur as mb
 import numpy as np
 import pytest
+from scipy import ndimage
+
+import motionblur as mb
 from motionblur import meshes, metrics, reference
 from motionblur.scene import translate
-from scipy import ndimage
 
 W, H = 64, 48
 

@@ -9,7 +9,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-from motionblur import Mesh, contour_edges, meshes
 from test_geometry_reference import (
     _sorted_rows,
     builtin,
@@ -19,6 +18,8 @@ from test_geometry_reference import (
     reference_contour,
     reference_contour_any,
 )
+
+from motionblur import Mesh, contour_edges, meshes
 
 
 def closed_meshes():

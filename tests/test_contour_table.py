@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from motionblur import ContourTable, Mesh, contour_edges, meshes
 from test_geometry_reference import concave_mesh, front_faces
+
+from motionblur import ContourTable, Mesh, contour_edges, meshes
 
 
 @pytest.fixture(scope="module")

@@ -15,9 +15,10 @@ the error.
 
 from __future__ import annotations
 
-import motionblur as mb
 import numpy as np
 import pytest
+
+import motionblur as mb
 from motionblur import meshes, metrics, reference
 from motionblur.scene import rotate, translate
 

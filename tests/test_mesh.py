@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-from motionblur import Mesh, contour_edges, meshes
 from test_geometry_reference import builtin, concave_mesh, raw_normals
+
+from motionblur import Mesh, contour_edges, meshes
 
 
 @pytest.mark.parametrize("vdtype", [np.float32, np.float64])

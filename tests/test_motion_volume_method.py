@@ -7,9 +7,10 @@ which has exact transparency everywhere; tolerance 1e-5.
 
 from __future__ import annotations
 
-import motionblur as mb
 import numpy as np
 import pytest
+
+import motionblur as mb
 from motionblur import meshes
 from motionblur.methods.motion_volume import apparent_keyframes
 from motionblur.render import downsample, supersampled

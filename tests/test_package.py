@@ -1,8 +1,9 @@
 """The package imports, exposes its version, and its argument checks name the argument."""
 
-import motionblur
 import numpy as np
 import pytest
+
+import motionblur
 from motionblur import _validate, meshes
 
 

@@ -11,9 +11,10 @@ import subprocess
 import sys
 import textwrap
 
-import motionblur as mb
 import numpy as np
 import pytest
+
+import motionblur as mb
 from motionblur import meshes
 
 

@@ -10,12 +10,13 @@ every disagreement inside the one-pixel silhouette band; FLAT colours within 1/2
 from __future__ import annotations
 
 import _pyrender_peer as peer
-import motionblur as mb
 import numpy as np
 import pyrender
 import pytest
-from motionblur import meshes
 from scipy import ndimage
+
+import motionblur as mb
+from motionblur import meshes
 
 
 def _random_mesh(seed=3, n=40):

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import math
 
-import motionblur as mb
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation, Slerp
+
+import motionblur as mb
 from motionblur import meshes
 from motionblur.scene import rotate, translate
-from scipy.spatial.transform import Rotation, Slerp
 
 
 def _cam(w=32, h=24, eye=(0.0, 0.0, 5.0)):

@@ -16,7 +16,6 @@ import textwrap
 import numpy as np
 import pytest
 import trimesh
-from motionblur import JOINING, LEADING, TRAILING, Mesh, contour_edges, meshes, motion_volume
 from test_geometry_reference import (
     builtin,
     concave_mesh,
@@ -28,6 +27,8 @@ from test_geometry_reference import (
     signed_volume,
     swept_volume,
 )
+
+from motionblur import JOINING, LEADING, TRAILING, Mesh, contour_edges, meshes, motion_volume
 
 
 def check_closed(vol, what=""):

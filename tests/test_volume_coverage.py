@@ -20,8 +20,9 @@ import textwrap
 import numpy as np
 import pytest
 import trimesh
-from motionblur import JOINING, Camera, Draw, Mesh, look_at, meshes, motion_volume, rasterize
 from test_geometry_reference import hull_volume, random_convex, signed_volume
+
+from motionblur import JOINING, Camera, Draw, Mesh, look_at, meshes, motion_volume, rasterize
 
 WEIGHTS = {
     "ramp": lambda t: 2 * t,
@@ -135,7 +136,7 @@ def test_coverage_filters_keep_the_convex_oracle(flt):
     assert len(box.faces) > 12 * 4  # coarse faces are cut so alphas can follow the profile
 
 
-def test_coverage_alphas_do_not_depend_on_the_thread_count():
+def test_coverage_and_spin_alphas_do_not_depend_on_the_thread_count():
     code = textwrap.dedent(
         """
         import hashlib, numpy as np, motionblur as mb
@@ -146,6 +147,10 @@ def test_coverage_alphas_do_not_depend_on_the_thread_count():
                                    camera_position=[0, 0, 5])
             for a in (vol.vertices, vol.faces, vol.rgba, vol.normals, vol.part, vol.ring_alpha):
                 h.update(a.tobytes())
+        bv, bf = mb.meshes.box((0.8, 0.2, 0.05))
+        spin = mb.spin_volume(mb.Mesh(bv + [0.5, 0, 0], bf), [0, 0, 1], 7.0, camera_position=[0, 1, 4])
+        for a in (spin.vertices, spin.faces, spin.rgba, spin.normals, spin.part):
+            h.update(a.tobytes())
         print(h.hexdigest())
         """
     )
@@ -155,3 +160,39 @@ def test_coverage_alphas_do_not_depend_on_the_thread_count():
         r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
         out.append(r.stdout.strip())
     assert out[0] == out[1] and len(out[0]) == 64
+
+
+def hard_meshes():
+    v, f = meshes.icosphere(2)
+    half = f[v[f].mean(axis=1)[:, 2] > 0]
+    dv = np.vstack([v, [[3.0, 0, 0]], (v[0] + v[1]) / 2])
+    df = np.vstack([f, [[0, 0, 1]], [[0, 1, len(v) + 1]], [[f[0, 0], f[0, 1], len(v)]]])
+    square = (np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float), np.array([[0, 1, 2], [0, 2, 3]]))
+    return {
+        "open": (v, half),
+        "degenerate_nonmanifold": (dv, df),
+        "flat_square": square,
+        "far": (v + 1e6, f),
+        "box": meshes.box(),
+    }
+
+
+@pytest.mark.parametrize("flt", ["box", "triangle", "gaussian"])
+@pytest.mark.parametrize("name", sorted(hard_meshes()))
+def test_coverage_filters_on_hard_cases_stay_finite_and_in_range(name, flt):
+    """Open, degenerate and non-manifold meshes, a flat square moving along its normal and in its
+    plane (a zero-area silhouette), a mesh far from the origin, motions of 1e-12 and 1e6 times
+    the size, a camera inside the path: alphas stay finite and in [0, 1], nothing panics."""
+    v, f = hard_meshes()[name]
+    mesh = Mesh(v, f)
+    c = np.asarray(v).mean(axis=0)
+    for m in ([0.0, 0.0, 2.0], [0.5, 0.0, 0.0], [1e-12, 0, 0], [1e6, 3e5, 0], [0.0, 0.0, 1e-300]):
+        for cam in (None, c + [0.0, 0.0, 5.0], c + [0.1, 0.0, 0.0]):
+            vol = motion_volume(mesh, m, segments=2, filter=flt, camera_position=cam)
+            a = vol.rgba[:, 3]
+            assert np.isfinite(vol.vertices).all() and np.isfinite(vol.rgba).all(), (m, cam)
+            assert (a >= 0).all() and (a <= 1).all(), (m, cam)
+    # The flat square seen edge-on along its motion has no area: it disappears, not NaN.
+    if name == "flat_square":
+        vol = motion_volume(mesh, [0.0, 0.0, 2.0], filter=flt, camera_position=[0.5, 5.0, 1.0])
+        assert np.isfinite(vol.rgba).all()

@@ -9,7 +9,9 @@ import sys
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m motionblur")
     sub = parser.add_subparsers(dest="command", required=True)
-    demo = sub.add_parser("demo", help="render the built-in scenes, write images and a speed/error table")
+    demo = sub.add_parser(
+        "demo", help="a small speed-against-error run on the cube scene: images and a table (under a minute)"
+    )
     demo.add_argument("--out", default="out/demo")
     sub.add_parser(
         "bench", help="the speed-against-error report (python -m motionblur bench --help)", add_help=False

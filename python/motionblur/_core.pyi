@@ -51,6 +51,22 @@ def motion_volume(
     faces (M,3) i64, rgba (N,4) f32, normals (N,3) f32, part (M,) u8, ring_alpha (n+1,) f64
     and the number of contour edges. Releases the GIL."""
 
+def spin_volume(
+    mesh: _Mesh,
+    axis: np.ndarray,
+    angle: float,
+    center: np.ndarray,
+    translation: np.ndarray,
+    segments: int | None,
+    filter: str,
+    colors: np.ndarray,
+    normals: np.ndarray | None = None,
+    camera_position: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+    """Spin volume (section 4.3): axis (3,) f64, angle radians, center (3,) f64, translation
+    (3,) f64, segments (sweep steps) | None; the rest and the result as motion_volume.
+    Releases the GIL."""
+
 class _ContourTable:
     """Contour sets precomputed for K directions (section 4.4)."""
 
@@ -200,12 +216,32 @@ def _rasterize(
 # --- scenes (accumulation kernels)
 
 def _accumulate(
-    acc: np.ndarray, rgba: np.ndarray, depth: np.ndarray, limit: np.ndarray | None, weight: float
+    acc: np.ndarray,
+    rgba: np.ndarray,
+    depth: np.ndarray,
+    limit: np.ndarray | None,
+    weight: float,
+    x0: int = 0,
+    y0: int = 0,
 ) -> None:
-    """In place: acc (H,W,4) f32 += weight * rgba (H,W,4) f32 where depth (H,W) f32 < limit (H,W)
-    f32 (everywhere when limit is None). All C-contiguous. Releases the GIL."""
+    """In place: acc[y0:y0+h, x0:x0+w] (acc (H,W,4) f32) += weight * rgba (h,w,4) f32 where depth
+    (h,w) f32 < limit[y0:y0+h, x0:x0+w] (limit (H,W) f32; everywhere when None). All C-contiguous.
+    Releases the GIL."""
 
 def _over(acc: np.ndarray, under: np.ndarray) -> None:
     """In place: acc (H,W,4) f32 += under (H,W,4) f32 * (1 - acc alpha). Releases the GIL."""
+
+def _composite(
+    a_rgba: np.ndarray,
+    a_depth: np.ndarray,
+    a_ids: np.ndarray,
+    b_rgba: np.ndarray,
+    b_depth: np.ndarray,
+    b_ids: np.ndarray,
+    x0: int = 0,
+    y0: int = 0,
+) -> None:
+    """In place into b (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32): layer a (h,w) at
+    (x0, y0) composited by depth, the nearer over the farther. Releases the GIL."""
 
 # --- end scenes

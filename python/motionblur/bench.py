@@ -16,7 +16,13 @@ Comparisons, measured in the same run:
   (if even N = 1 is better, its time is an upper bound and the factor is marked ``<=``; if even
   the largest N is worse, ``>=``). The factor is accumulation's time over motion_volume's.
 - accumulation with the static layer drawn once (N = 16) against 16-pose accumulation on pyrender
-  (every object at every pose, :func:`motionblur.reference.pyrender`), on the same scene and size.
+  (every object at every pose, :func:`motionblur.reference.pyrender`), on the same scene and size;
+  ours at ``aa=1`` like pyrender under OSMesa, its static layer drawn once per frame (the cache
+  cleared before every run).
+
+In the sweeps the static layer is kept across frames (as a real-time loop keeps it while the
+static objects and the camera do not change), for every method alike; timings are the best of
+``repeat`` runs after one warm-up run.
 """
 
 from __future__ import annotations
@@ -34,7 +40,7 @@ import numpy as np
 
 from . import metrics
 from . import reference as ref_mod
-from .render import METHODS, _load, render
+from .render import METHODS, _load, clear_static_cache, render
 from .scenes_builtin import SCENES
 
 __all__ = ["run", "sweep_scene", "reference_for", "pareto_front", "equal_error", "main"]
@@ -98,6 +104,7 @@ def sweep_scene(name: str, scene, ref: np.ndarray, repeat=3, methods=None, flip=
                 "scene": name,
                 "method": mname,
                 "options": _label(opts),
+                "_opts": opts,
                 "ms": ms,
                 "rmse": metrics.rmse(frame, ref),
                 "psnr": metrics.psnr(frame, ref),
@@ -123,23 +130,26 @@ def pareto_front(rows) -> list[bool]:
     return out
 
 
-def equal_error(rows, method="motion_volume", baseline="accumulation"):
-    """For each ``method`` row of one scene: (row, baseline ms at the same RMSE, bound, factor);
-    bound is ``""``, ``"<="`` or ``">="`` (see the module docs)."""
+def equal_error(rows, method="motion_volume", baseline="accumulation", metric="rmse"):
+    """For each ``method`` row of one scene: (row, baseline ms at the same error, bound, factor);
+    bound is ``""``, ``"<="`` or ``">="`` (see the module docs). ``metric``: ``"rmse"`` or
+    ``"flip"`` (any positive error column of the rows)."""
     base = sorted((r for r in rows if r["method"] == baseline), key=lambda r: r["ms"])
     if not base:
         return []
     # errors of the baseline as its cost grows, made monotone (the best error reached so far)
     pts, best = [], float("inf")
     for r in base:
-        if r["rmse"] < best:
-            best = r["rmse"]
-            pts.append((r["ms"], r["rmse"]))
+        if r[metric] < best:
+            best = r[metric]
+            pts.append((r["ms"], r[metric]))
     out = []
     for r in rows:
         if r["method"] != method:
             continue
-        e = r["rmse"]
+        e = r[metric]
+        if not (e > 0 and math.isfinite(e)):
+            continue
         if e >= pts[0][1]:
             t, bound = pts[0][0], "<="
         elif e < pts[-1][1]:
@@ -155,10 +165,64 @@ def equal_error(rows, method="motion_volume", baseline="accumulation"):
     return out
 
 
+def paired_factor(scene, rows, metric="rmse", rounds=7):
+    """Re-time the most accurate motion_volume option set against the two accumulation sample
+    counts whose errors bracket it, round-robin (``rounds`` times, best of each), so that both
+    sides see the same machine load; interpolate accumulation's time log-log at that error.
+    Returns a dict (mv options, its error and ms, N_lo, N_hi, accumulation ms, bound, factor) or
+    None when there is nothing to compare."""
+    mv = [r for r in rows if r["method"] == "motion_volume" and r[metric] > 0 and math.isfinite(r[metric])]
+    acc = sorted(
+        (r for r in rows if r["method"] == "accumulation" and "samples" in r["_opts"]),
+        key=lambda r: r["_opts"]["samples"],
+    )
+    if not mv or not acc:
+        return None
+    m = min(mv, key=lambda r: r[metric])
+    e = m[metric]
+    worse = [r for r in acc if r[metric] >= e]
+    better = [r for r in acc if r[metric] < e]
+    lo = max(worse, key=lambda r: r["_opts"]["samples"]) if worse else None
+    hi = min(better, key=lambda r: r["_opts"]["samples"]) if better else None
+    jobs = [("motion_volume", m)] + [("accumulation", r) for r in (lo, hi) if r is not None]
+    best = [float("inf")] * len(jobs)
+    for _ in range(rounds):
+        for j, (method, r) in enumerate(jobs):
+            t0 = time.perf_counter()
+            render(scene, method, **r["_opts"])
+            best[j] = min(best[j], (time.perf_counter() - t0) * 1e3)
+    t_mv = best[0]
+    times = dict(zip([id(r) for _, r in jobs[1:]], best[1:]))
+    if lo is not None and hi is not None:
+        t_lo, t_hi = times[id(lo)], times[id(hi)]
+        e_lo, e_hi = lo[metric], hi[metric]
+        u = (math.log(e_lo) - math.log(e)) / (math.log(e_lo) - math.log(e_hi)) if e_lo != e_hi else 0.0
+        t_acc, bound = math.exp(math.log(t_lo) + u * (math.log(t_hi) - math.log(t_lo))), ""
+    elif hi is not None:  # even N = 1 is as accurate: its time bounds the equal-error time
+        t_acc, bound = times[id(hi)], "<="
+    else:
+        t_acc, bound = times[id(lo)], ">="
+    return {
+        "options": m["options"],
+        "error": e,
+        "mv_ms": t_mv,
+        "n_lo": lo["_opts"]["samples"] if lo else None,
+        "n_hi": hi["_opts"]["samples"] if hi else None,
+        "acc_ms": t_acc,
+        "bound": bound,
+        "factor": t_acc / t_mv,
+    }
+
+
 def _pyrender_comparison(name, scene, ref, repeat):
     ref_mod.pyrender(scene, samples=16)  # context creation and shader compilation
     peer_ms, peer = _best_ms(lambda: ref_mod.pyrender(scene, samples=16), repeat)
-    ours_ms, ours = _best_ms(lambda: render(scene, "accumulation", samples=16), repeat)
+
+    def ours_once():  # the static layer drawn once per frame, not kept from the frame before
+        clear_static_cache()
+        return render(scene, "accumulation", samples=16)
+
+    ours_ms, ours = _best_ms(ours_once, repeat)
     return {
         "scene": name,
         "ours_ms": ours_ms,
@@ -197,7 +261,7 @@ def _machine() -> str:
     return f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
 
 
-def _markdown(rows, fronts, comparisons, pyrender_rows, settings) -> str:
+def _markdown(rows, fronts, comparisons, pyrender_rows, settings, flip_comparisons=None, paired=None) -> str:
     lines = ["# Speed against error", ""]
     lines.append(
         f"Machine: {_machine()} (shared with other jobs: timings are best of {settings['repeat']}). "
@@ -242,8 +306,51 @@ def _markdown(rows, fronts, comparisons, pyrender_rows, settings) -> str:
             f"{bb}{fb:.2f} ({rb['options']}, RMSE {rb['rmse']:.4f}) |"
         )
     lines.append("")
+    if paired:
+        lines += [
+            "Re-timed in pairs (the most accurate motion_volume option set and the two accumulation sample counts "
+            "whose RMSE brackets it, round-robin, best of each), so both sides see the same load; this is the "
+            "headline factor:",
+            "",
+            "| scene | motion_volume options | RMSE | motion_volume ms | accumulation N bracket | "
+            "accumulation ms at that RMSE | factor |",
+            "|---|---|---:|---:|---|---:|---:|",
+        ]
+        for scene, p in paired.items():
+            if p is None:
+                lines.append(f"| {scene} | (not applicable) | | | | | |")
+                continue
+            lines.append(
+                f"| {scene} | {p['options']} | {p['error']:.5f} | {p['mv_ms']:.2f} | {p['n_lo']}..{p['n_hi']} | "
+                f"{p['bound']}{p['acc_ms']:.2f} | {p['bound']}{p['factor']:.2f} |"
+            )
+        lines.append("")
+    if flip_comparisons:
+        lines += [
+            "The same at equal FLIP (NVIDIA's perceptual difference):",
+            "",
+        ]
+        lines += [
+            "| scene | most accurate motion_volume (FLIP) | its ms | its FLIP | accumulation ms at that FLIP | factor | best factor (options) |"
+        ]
+        lines += ["|---|---|---:|---:|---:|---:|---|"]
+        for scene, comp in flip_comparisons.items():
+            if not comp:
+                lines.append(f"| {scene} | (not applicable) | | | | | |")
+                continue
+            r, t, bound, factor = min(comp, key=lambda c: c[0]["flip"])
+            rb, _tb, bb, fb = max(comp, key=lambda c: c[3])
+            lines.append(
+                f"| {scene} | {r['options']} | {r['ms']:.2f} | {r['flip']:.4f} | {bound}{t:.2f} | {bound}{factor:.2f} | "
+                f"{bb}{fb:.2f} ({rb['options']}, FLIP {rb['flip']:.4f}) |"
+            )
+        lines.append("")
     if pyrender_rows:
         lines += ["## accumulation (static drawn once, N = 16) against 16-pose pyrender accumulation", ""]
+        lines += [
+            "Ours at aa = 1 (pyrender under OSMesa has no multisampling), static layer drawn once per frame (no cache).",
+            "",
+        ]
         lines += [
             "| scene | ours ms | pyrender ms | factor (pyrender / ours) | ours RMSE | pyrender RMSE |",
             "|---|---:|---:|---:|---:|---:|",
@@ -294,7 +401,7 @@ def run(
         for m, s in sweeps.items():
             saved[m] = METHODS[m].sweep
             METHODS[m].sweep = [dict(o) for o in s]
-    rows, comparisons, pyr = [], {}, []
+    rows, comparisons, flip_comparisons, pyr, paired = [], {}, {}, [], {}
     images = {} if save_images else None
     try:
         for name in names:
@@ -311,6 +418,8 @@ def run(
             scene_rows = sweep_scene(name, scene, ref, repeat, methods, flip, images, aa)
             rows += scene_rows
             comparisons[name] = equal_error(scene_rows)
+            flip_comparisons[name] = equal_error(scene_rows, metric="flip") if flip else []
+            paired[name] = paired_factor(scene, scene_rows, "rmse", max(3, repeat))
             if pyrender_peer:
                 pyr.append(_pyrender_comparison(name, scene, ref, repeat))
             for r in scene_rows:
@@ -325,10 +434,11 @@ def run(
         fronts += f
         _plot(name, sel, f, out / f"pareto_{name}.png")
     with open(out / "results.csv", "w", newline="") as fh:
-        wr = csv.DictWriter(fh, fieldnames=[*rows[0].keys(), "pareto"])
+        keys = [k for k in rows[0] if not k.startswith("_")]
+        wr = csv.DictWriter(fh, fieldnames=[*keys, "pareto"])
         wr.writeheader()
         for r, f in zip(rows, fronts):
-            wr.writerow({**r, "pareto": int(f)})
+            wr.writerow({**{k: r[k] for k in keys}, "pareto": int(f)})
     settings = dict(
         width=width,
         height=height,
@@ -338,7 +448,9 @@ def run(
         aa=aa,
         variant=ref_mod.mitsuba_variant(),
     )
-    (out / "results.md").write_text(_markdown(rows, fronts, comparisons, pyr, settings))
+    (out / "results.md").write_text(
+        _markdown(rows, fronts, comparisons, pyr, settings, flip_comparisons, paired)
+    )
     (out / "settings.json").write_text(json.dumps({**settings, "machine": _machine()}, indent=1))
     if images:
         for (scene, m, opts), frame in images.items():
@@ -346,6 +458,8 @@ def run(
     return {
         "rows": rows,
         "comparisons": comparisons,
+        "flip_comparisons": flip_comparisons,
+        "paired": paired,
         "pyrender": pyr,
         "paths": {"md": out / "results.md", "csv": out / "results.csv"},
     }
@@ -363,7 +477,7 @@ def main(argv=None) -> int:
     p.add_argument("--spp", type=int, default=4, help="Mitsuba samples per pixel per time")
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--no-flip", action="store_true")
-    p.add_argument("--quick", action="store_true", help="320x240, K = 64, one timing")
+    p.add_argument("--quick", action="store_true", help="160x120, K = 64, one timing")
     a = p.parse_args(argv)
     w, h = (int(x) for x in a.size.lower().split("x"))
     if a.quick:

@@ -254,19 +254,12 @@ class Layer:
 
 def composite(a: Layer, b: Layer) -> Layer:
     """Per sample, the nearer layer *over* the farther one (exact for opaque surfaces and for one
-    transparent surface per layer and sample). Only the samples ``a`` covers are touched."""
-    cov = a.depth < np.inf
-    rgba, depth, ids = b.rgba.copy(), b.depth.copy(), b.ids.copy()
-    if not cov.any():
-        return Layer(rgba, depth, ids)
-    ar, br = a.rgba[cov], b.rgba[cov]
-    ad, bd = a.depth[cov], b.depth[cov]
-    front = (ad <= bd)[:, None]
-    near = np.where(front, ar, br)
-    far = np.where(front, br, ar)
-    rgba[cov] = near + (1.0 - near[:, 3:4]) * far
-    depth[cov] = np.minimum(ad, bd)
-    ids[cov] = np.where(front[:, 0], a.ids[cov], b.ids[cov])
+    transparent surface per layer and sample); a new Layer. One pass in Rust."""
+    rgba = np.array(b.rgba, dtype=np.float32, order="C")
+    depth = np.array(b.depth, dtype=np.float32, order="C")
+    ids = np.array(b.ids, dtype=np.int32, order="C")
+    c = np.ascontiguousarray
+    _core._composite(c(a.rgba), c(a.depth), c(a.ids), rgba, depth, ids)
     return Layer(rgba, depth, ids)
 
 

@@ -15,6 +15,7 @@ use crate::contour::contour_edges as core_contour_edges;
 use crate::contour_table::ContourTable;
 use crate::mesh::Mesh;
 use crate::motion::Path;
+use crate::spin::{spin_volume as core_spin_volume, Spin};
 use crate::volume::{motion_volume as core_motion_volume, Colors, VolumeOptions};
 use crate::volume_filter::Filter;
 use crate::Error;
@@ -338,6 +339,76 @@ fn motion_volume<'py>(
     ))
 }
 
+#[pyfunction]
+#[pyo3(signature = (mesh, axis, angle, center, translation, segments, filter, colors, normals = None, camera_position = None))]
+#[allow(clippy::too_many_arguments)]
+fn spin_volume<'py>(
+    py: Python<'py>,
+    mesh: &PyMesh,
+    axis: PyReadonlyArray1<'_, f64>,
+    angle: f64,
+    center: PyReadonlyArray1<'_, f64>,
+    translation: PyReadonlyArray1<'_, f64>,
+    segments: Option<usize>,
+    filter: &str,
+    colors: PyReadonlyArray2<'_, f32>,
+    normals: Option<PyReadonlyArray2<'_, f64>>,
+    camera_position: Option<PyReadonlyArray1<'_, f64>>,
+) -> PyResult<VolumeTuple<'py>> {
+    let filter = Filter::parse(filter).map_err(to_py_err)?;
+    let spin = Spin {
+        axis: vec3(&axis, "axis")?,
+        angle,
+        center: vec3(&center, "center")?,
+        translation: vec3(&translation, "translation")?,
+        segments,
+    };
+    let c = rows::<4, f32>(&colors, "colors")?;
+    let colors = if c.len() == 1 {
+        Colors::Uniform(c[0])
+    } else {
+        Colors::PerVertex(c)
+    };
+    let normals = normals
+        .as_ref()
+        .map(|n| rows::<3, f64>(n, "normals"))
+        .transpose()?;
+    let camera = camera_position
+        .as_ref()
+        .map(|c| vec3(c, "camera_position"))
+        .transpose()?;
+    let inner = mesh.inner.clone();
+    let vol = py
+        .detach(move || {
+            let opts = VolumeOptions {
+                filter,
+                colors,
+                normals,
+                camera,
+            };
+            core_spin_volume(&inner, &spin, &opts)
+        })
+        .map_err(to_py_err)?;
+    Ok(volume_tuple(py, vol))
+}
+
+fn volume_tuple(py: Python<'_>, vol: crate::volume::MotionVolume) -> VolumeTuple<'_> {
+    let faces: Vec<[i64; 3]> = vol
+        .faces
+        .iter()
+        .map(|f| [f[0] as i64, f[1] as i64, f[2] as i64])
+        .collect();
+    (
+        array2(py, &vol.vertices),
+        array2(py, &faces),
+        array2(py, &vol.rgba),
+        array2(py, &vol.normals),
+        PyArray1::from_vec(py, vol.part),
+        PyArray1::from_vec(py, vol.ring_alpha),
+        vol.contour_edges,
+    )
+}
+
 /// Precomputed contour sets (section 4.4).
 #[pyclass(frozen, name = "_ContourTable", module = "motionblur._core")]
 pub struct PyContourTable {
@@ -415,6 +486,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyContourTable>()?;
     m.add_function(wrap_pyfunction!(contour_edges, m)?)?;
     m.add_function(wrap_pyfunction!(motion_volume, m)?)?;
+    m.add_function(wrap_pyfunction!(spin_volume, m)?)?;
     m.add("LEADING", crate::volume::LEADING)?;
     m.add("TRAILING", crate::volume::TRAILING)?;
     m.add("JOINING", crate::volume::JOINING)?;

@@ -26,6 +26,22 @@ pub(crate) fn c_slice<'a, T: numpy::Element, D: numpy::ndarray::Dimension>(
         .map_err(|_| crate::Error::shape(name, "must be C-contiguous"))
 }
 
+/// The mutable data of `a` in C order, or an error naming the argument (see [`c_slice`]).
+pub(crate) fn c_slice_mut<'a, T: numpy::Element, D: numpy::ndarray::Dimension>(
+    a: &'a mut numpy::PyReadwriteArray<'_, T, D>,
+    name: &'static str,
+) -> Result<&'a mut [T], crate::Error> {
+    use numpy::PyUntypedArrayMethods;
+    if !a.is_c_contiguous() {
+        return Err(crate::Error::shape(
+            name,
+            "must be C-contiguous (numpy.ascontiguousarray)",
+        ));
+    }
+    a.as_slice_mut()
+        .map_err(|_| crate::Error::shape(name, "must be C-contiguous"))
+}
+
 /// The one error mapping point: core errors become `ValueError` naming the argument.
 pub(crate) fn to_py_err(e: crate::Error) -> PyErr {
     pyo3::exceptions::PyValueError::new_err(e.to_string())

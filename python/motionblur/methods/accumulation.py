@@ -54,38 +54,83 @@ def sample_times(scene: Scene, n: int, sampling: str = "stratified", seed: int =
     return times, w / w.sum()
 
 
-def moving_window(scene: Scene, camera: Camera, times, objects) -> tuple[int, int, int, int] | None:
-    """Pixel rectangle (x0, y0, x1, y1) of ``camera`` (supersampled size) that holds ``objects``
-    at every time of ``times``, or None when they never reach the image. Rigid objects are bounded
-    by their transformed bounding box; the whole image when a point is behind the camera."""
+def _bounds(camera: Camera, pts: np.ndarray):
+    """(x0, y0, x1, y1) pixel bounds of the points, clamped to the image (None when off the
+    image), or the whole image when a point is behind the camera."""
     w, h = camera.width, camera.height
     vp = camera.view_projection
-    lo = np.array([np.inf, np.inf])
-    hi = -lo
-    for obj in objects:
-        v = obj.mesh.vertices
-        if obj.motion is not None and obj.motion.is_deforming:
-            pts = np.concatenate([obj.world_vertices(t) for t in times])
-        else:
-            a, b = v.min(axis=0), v.max(axis=0)
-            corners = np.array([[x, y, z] for x in (a[0], b[0]) for y in (a[1], b[1]) for z in (a[2], b[2])])
-            mats = np.stack([obj.transform_at(t) for t in times])
-            pts = (np.einsum("kij,cj->kci", mats[:, :3, :3], corners) + mats[:, None, :3, 3]).reshape(-1, 3)
-        clip = pts @ vp[:3, :3].T + vp[:3, 3]
-        wc = pts @ vp[3, :3] + vp[3, 3]
-        if (wc <= 1e-9).any():
-            return 0, 0, w, h
-        x = (clip[:, 0] / wc + 1.0) * 0.5 * w
-        y = (1.0 - clip[:, 1] / wc) * 0.5 * h
-        lo = np.minimum(lo, [x.min(), y.min()])
-        hi = np.maximum(hi, [x.max(), y.max()])
-    if not np.isfinite(lo).all():
-        return None
-    x0, y0 = max(0, int(np.floor(lo[0])) - 1), max(0, int(np.floor(lo[1])) - 1)
-    x1, y1 = min(w, int(np.ceil(hi[0])) + 1), min(h, int(np.ceil(hi[1])) + 1)
+    clip = pts @ vp[:3, :3].T + vp[:3, 3]
+    wc = pts @ vp[3, :3] + vp[3, 3]
+    if (wc <= 1e-9).any():
+        return 0, 0, w, h
+    x = (clip[:, 0] / wc + 1.0) * 0.5 * w
+    y = (1.0 - clip[:, 1] / wc) * 0.5 * h
+    x0, y0 = max(0, int(np.floor(x.min())) - 1), max(0, int(np.floor(y.min())) - 1)
+    x1, y1 = min(w, int(np.ceil(x.max())) + 1), min(h, int(np.ceil(y.max())) + 1)
     if x0 >= x1 or y0 >= y1:
         return None
     return x0, y0, x1, y1
+
+
+def sample_windows(camera: Camera, times, objects) -> list:
+    """Per time of ``times``, the pixel rectangle (x0, y0, x1, y1) of ``camera`` holding
+    ``objects`` at that time (None when they are off the image). Rigid objects are bounded by
+    their transformed bounding box (the projection of a box holds the projection of its content
+    when the box is in front of the camera); the whole image when a point is behind the camera."""
+    corners = {}
+    for obj in objects:
+        if not (obj.motion is not None and obj.motion.is_deforming):
+            v = obj.mesh.vertices
+            a, b = v.min(axis=0), v.max(axis=0)
+            corners[id(obj)] = np.array(
+                [[x, y, z] for x in (a[0], b[0]) for y in (a[1], b[1]) for z in (a[2], b[2])]
+            )
+    out = []
+    for t in times:
+        pts = []
+        for obj in objects:
+            if id(obj) in corners:
+                m = obj.transform_at(t)
+                pts.append(corners[id(obj)] @ m[:3, :3].T + m[:3, 3])
+            else:
+                pts.append(obj.world_vertices(t))
+        out.append(_bounds(camera, np.concatenate(pts)))
+    return out
+
+
+def moving_window(scene: Scene, camera: Camera, times, objects) -> tuple[int, int, int, int] | None:
+    """The union of :func:`sample_windows` (None when the objects never reach the image)."""
+    wins = [w for w in sample_windows(camera, times, objects) if w is not None]
+    if not wins:
+        return None
+    a = np.array(wins)
+    return int(a[:, 0].min()), int(a[:, 1].min()), int(a[:, 2].max()), int(a[:, 3].max())
+
+
+def _facing_faces(obj: Object, faces: np.ndarray, eye: np.ndarray) -> np.ndarray:
+    """The faces of a rigidly translating ``obj`` that face ``eye`` at some time of the shutter
+    (all faces for other motions), conservatively: near edge-on faces are kept."""
+    m = obj.motion
+    if m is None or m.is_deforming:
+        return faces
+    keys = m.transforms
+    if np.abs(keys[:, :3, :3] - keys[0, :3, :3]).max() > 1e-12 * (1.0 + np.abs(keys[0, :3, :3]).max()):
+        return faces
+    lin = keys[0, :3, :3]
+    scale = np.cbrt(np.linalg.det(lin))
+    rot = lin / scale
+    v = obj.mesh.vertices
+    a = v[faces[:, 0]]
+    n = np.cross(v[faces[:, 1]] - a, v[faces[:, 2]] - a)
+    nlen = np.linalg.norm(n, axis=1)
+    keep = np.zeros(len(faces), dtype=bool)
+    for key in keys:  # the held ends and every keyframe in between
+        e = rot.T @ (eye - key[:3, 3]) / scale  # the eye in object space
+        d = e - a
+        keep |= np.einsum("ij,ij->i", n, d) > -1e-9 * nlen * np.linalg.norm(d, axis=1)
+    if keep.all():
+        return faces
+    return np.ascontiguousarray(faces[keep])
 
 
 def _crop(layer: Layer, win) -> Layer:
@@ -99,13 +144,19 @@ class _Painter:
     Faces, colours and object-space normals are converted once. A shading group holding a
     single rigid object is drawn in object space with the model transform folded into the view
     matrix (and the lights turned into object space), so no vertex is touched per sample; other
-    groups get world vertices (and rotated normals) per sample."""
+    groups get world vertices (and rotated normals) per sample. With a still camera ``eye``, a
+    rigidly translating object (every keyframe with the same rotation and scale) loses the faces
+    that face away from the eye during the whole shutter, once, before the sample loop: along a
+    straight segment ``n . (eye - p(t))`` is linear in t, so a face back-facing at every keyframe
+    is back-facing throughout and the rasterizer would cull it at every sample anyway."""
 
-    def __init__(self, scene: Scene, objects: list[tuple[int, Object]]):
+    def __init__(self, scene: Scene, objects: list[tuple[int, Object]], eye=None):
         self.scene = scene
         self.groups: dict[str, list] = {}
         for k, o in objects:
             faces = np.ascontiguousarray(o.mesh.faces, dtype=np.int64)
+            if eye is not None:
+                faces = _facing_faces(o, faces, np.asarray(eye, dtype=np.float64))
             rgba = np.ascontiguousarray(np.atleast_2d(o.rgba), dtype=np.float32)
             normals = o.mesh.vertex_normals().astype(np.float32) if o.shading == "lambert" else None
             self.groups.setdefault(o.shading, []).append((k, o, faces, rgba, normals))
@@ -213,38 +264,53 @@ def accumulation(
     static = static_layer(scene, cam, static_objs, aa)
     stats["static_draws"] = 0 if (static.cached or not static_objs) else 1
     stats["static_cached"] = static.cached
-    win = moving_window(scene, cam, times, [o for _, o in moving]) if moving else None
-    if win is None:
+    per_sample = sample_windows(cam, times, [o for _, o in moving]) if moving else []
+    found = [w for w in per_sample if w is not None]
+    if not found:
         frame = Frame(
             static.rgba.copy(), static.depth.copy(), static.ids.copy(), np.zeros((*static.ids.shape, 2))
         )
         frame.stats.update(stats)
         return frame
+    a = np.array(found)
+    win = (int(a[:, 0].min()), int(a[:, 1].min()), int(a[:, 2].max()), int(a[:, 3].max()))
     win = aligned_window(win, aa, cam.width, cam.height)
     stats["window"] = win
     x0, y0, x1, y1 = win
-    proj = np.ascontiguousarray(window_projection(cam.projection, cam.width, cam.height, win))
     view = np.ascontiguousarray(cam.view)
     base = _crop(static.layer, win)
     base = Layer(np.ascontiguousarray(base.rgba), np.ascontiguousarray(base.depth), base.ids)
-    painter = _Painter(scene, moving)
+    painter = _Painter(scene, moving, eye=cam.pose[:3, 3])
     # Per sample i the composite is M_i over S where M_i is nearer, else S (exact for an opaque
     # static layer), so sum_i w_i out_i = A + S (1 - A.alpha) with A = sum_i w_i M_i [M_i nearer]:
-    # the static layer is composited once, after the loop.
+    # the static layer is composited once, after the loop. Each sample is rasterized only inside
+    # its own rectangle (the moving objects' bounds at that time) and added there.
     has_static = bool(np.isfinite(base.depth).any())
+    exact_sum = not has_static or static.opaque
     acc = np.zeros((y1 - y0, x1 - x0, 4), np.float32)
-    keep = None
-    for i, t in enumerate(times):
-        layer = painter.layer(t, view, proj, x1 - x0, y1 - y0)
-        stats["draw_calls"] += 1
+    keep = Layer(base.rgba, base.depth.copy(), base.ids.copy())  # only depth and ids are written
+    for i, (t, sw) in enumerate(zip(times, per_sample)):
         w = np.float32(weights[i])
+        if sw is None:
+            if not exact_sum:
+                acc += w * base.rgba
+            continue
+        sx0, sy0, sx1, sy1 = sw[0] - x0, sw[1] - y0, sw[2] - x0, sw[3] - y0  # inside the window
+        proj = np.ascontiguousarray(window_projection(cam.projection, cam.width, cam.height, sw))
+        layer = painter.layer(t, view, proj, sx1 - sx0, sy1 - sy0)
+        stats["draw_calls"] += 1
+        sub = Layer(base.rgba[sy0:sy1, sx0:sx1], base.depth[sy0:sy1, sx0:sx1], base.ids[sy0:sy1, sx0:sx1])
         if i == ref:
-            keep = composite(layer, base)
-        if not has_static or static.opaque:
+            c = composite(layer, sub)
+            keep.depth[sy0:sy1, sx0:sx1], keep.ids[sy0:sy1, sx0:sx1] = c.depth, c.ids
+        if exact_sum:
             # one fused pass in Rust: acc += w * M where M is in front of the static surface
-            _core._accumulate(acc, layer.rgba, layer.depth, base.depth if has_static else None, float(w))
+            limit = base.depth if has_static else None
+            _core._accumulate(acc, layer.rgba, layer.depth, limit, float(w), sx0, sy0)
         else:
-            acc += w * (keep.rgba if i == ref else composite(layer, base).rgba)
+            full = base.rgba.copy()
+            full[sy0:sy1, sx0:sx1] = composite(layer, sub).rgba
+            acc += w * full
     if has_static and static.opaque:
         _core._over(acc, base.rgba)
     if dim < 1.0:
