@@ -10,7 +10,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m motionblur")
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser(
-        "demo", help="a small speed-against-error run on the cube scene: images and a table (under a minute)"
+        "demo",
+        help="a small speed-against-error run on three scenes with every method: images and a table (under a minute)",
     )
     demo.add_argument("--out", default="out/demo")
     sub.add_parser(
