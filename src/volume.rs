@@ -39,11 +39,17 @@ pub const JOINING: u8 = 2;
 /// Largest number of segments accepted.
 pub const MAX_SEGMENTS: usize = 4096;
 
-/// Per-vertex colours: one straight RGBA for all, or one per mesh vertex.
+/// Colours: one straight RGBA for all, one per mesh vertex, or one per mesh face.
+///
+/// With per-face colours every leading and trailing face has its own three vertices and every
+/// joining strip its own vertices, coloured from the strip's front face (leading end) to its back
+/// face (trailing end), or with the visible side's colour only when the camera sees one side
+/// (section 4.1); the volume is then closed geometrically but not as an indexed mesh.
 #[derive(Debug, Clone)]
 pub enum Colors {
     Uniform([f32; 4]),
     PerVertex(Vec<[f32; 4]>),
+    PerFace(Vec<[f32; 4]>),
 }
 
 /// Options of [`motion_volume`].
@@ -92,6 +98,11 @@ struct Source {
     seg: u32,
     frac: f64,
     normal_ring: u32,
+    /// Per-face colours: the colour is `face_colors[back]` blended towards `face_colors[front]`
+    /// by `towards_front`; `front == u32::MAX` for vertex colours.
+    front: u32,
+    back: u32,
+    towards_front: f32,
 }
 
 pub(crate) fn check_options(mesh: &Mesh, opts: &VolumeOptions) -> Result<()> {
@@ -107,6 +118,21 @@ pub(crate) fn check_options(mesh: &Mesh, opts: &VolumeOptions) -> Result<()> {
                 "colors",
                 "must be finite, RGB >= 0 and alpha in [0, 1]",
             ));
+        }
+        Colors::PerFace(c) => {
+            let nf = mesh.faces().len();
+            if c.len() != nf {
+                return Err(Error::shape(
+                    "face_colors",
+                    format!("expected {nf} colours, got {}", c.len()),
+                ));
+            }
+            if !c.par_iter().all(check_rgba) {
+                return Err(Error::value(
+                    "face_colors",
+                    "must be finite, RGB >= 0 and alpha in [0, 1]",
+                ));
+            }
         }
         Colors::PerVertex(c) => {
             if c.len() != nv {
@@ -188,12 +214,20 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         ));
     }
     let verts = mesh.vertices();
+    let face_colors = matches!(opts.colors, Colors::PerFace(_));
+    if path.is_static() && face_colors {
+        let front = vec![true; mesh.faces().len()];
+        let alpha = AlphaMode::Rings(vec![1.0; n + 1]);
+        return assemble(mesh, path, &front, &[], &[], false, &alpha, opts);
+    }
     if path.is_static() {
         // The mesh itself (every vertex, in order), placed by T_0, all leading and opaque.
         let f0 = &path.frames[0];
         let c = |v: usize| match &opts.colors {
-            Colors::Uniform(c) => *c,
             Colors::PerVertex(c) => c[v],
+            Colors::Uniform(c) => *c,
+            // Not reached: per-face colours take the assemble path above.
+            Colors::PerFace(c) => c.first().copied().unwrap_or([1.0; 4]),
         };
         let obj_normals = opts
             .normals
@@ -378,6 +412,7 @@ pub(crate) fn subdivided(
     };
     let colors = match &opts.colors {
         Colors::Uniform(c) => Colors::Uniform(*c),
+        Colors::PerFace(c) => Colors::PerFace(parent.iter().map(|&p| c[p as usize]).collect()),
         Colors::PerVertex(c) => Colors::PerVertex(
             blend
                 .iter()
@@ -500,16 +535,21 @@ pub(crate) fn assemble(
             format!("{n} segments give too many joining faces"),
         ));
     }
-    // Sources: leading, trailing, then ring vertices.
+    // Sources: leading, trailing, then ring vertices. Per-face colours give every leading and
+    // trailing face its own corners and every joining strip its own vertices.
+    let face_colors = matches!(opts.colors, Colors::PerFace(_));
+    let strips = per_edge || face_colors;
     let mut lead = vec![NONE; nv];
     let mut trail = vec![NONE; nv];
-    for (f, face) in faces.iter().enumerate() {
-        let map = if front[f] { &mut lead } else { &mut trail };
-        for &i in face {
-            map[i as usize] = 0;
+    if !face_colors {
+        for (f, face) in faces.iter().enumerate() {
+            let map = if front[f] { &mut lead } else { &mut trail };
+            for &i in face {
+                map[i as usize] = 0;
+            }
         }
     }
-    if !per_edge {
+    if !strips {
         for &v in &ring_vertices {
             lead[v as usize] = 0;
             trail[v as usize] = 0;
@@ -522,7 +562,30 @@ pub(crate) fn assemble(
         seg,
         frac,
         normal_ring,
+        front: NONE,
+        back: NONE,
+        towards_front: 1.0,
     };
+    let mut out_faces = Vec::with_capacity(faces.len() + joining);
+    let mut part = Vec::with_capacity(out_faces.capacity());
+    if face_colors {
+        for (want, tag, ring) in [(true, LEADING, nr), (false, TRAILING, 0)] {
+            for (f, face) in faces.iter().enumerate() {
+                if front[f] == want {
+                    let base = sources.len() as u32;
+                    for &v in face {
+                        sources.push(Source {
+                            front: f as u32,
+                            back: f as u32,
+                            ..source(v, (ring, 0.0), ring)
+                        });
+                    }
+                    out_faces.push([base, base + 1, base + 2]);
+                    part.push(tag);
+                }
+            }
+        }
+    }
     for (v, slot) in lead.iter_mut().enumerate() {
         if *slot == 0 {
             *slot = sources.len() as u32;
@@ -538,8 +601,22 @@ pub(crate) fn assemble(
     let nearest = |(seg, frac): (u32, f64)| if frac < 0.5 { seg } else { seg + 1 };
     let ring_base = sources.len();
     let ring_count = ring_vertices.len();
-    if per_edge {
-        for (c, &(vl, vt)) in contour.iter().zip(edge_visibility) {
+    if strips {
+        let adj = mesh.adjacency();
+        for (k, c) in contour.iter().enumerate() {
+            let (vl, vt) = edge_visibility.get(k).copied().unwrap_or((true, true));
+            // The strip's front and back faces (a boundary edge has only one).
+            let inc = adj.incident(c.edge as usize);
+            let pick = |want: bool| {
+                inc.iter()
+                    .map(|&h| h / 3)
+                    .find(|&f| front[f as usize] == want)
+            };
+            let (ff, fb) = match (pick(true), pick(false)) {
+                (Some(x), Some(y)) => (x, y),
+                (Some(x), None) | (None, Some(x)) => (x, x),
+                (None, None) => (NONE, NONE),
+            };
             for r in 0..rings {
                 for v in [c.a, c.b] {
                     let pt = points[ring[v as usize] as usize]
@@ -551,7 +628,18 @@ pub(crate) fn assemble(
                         (false, true) => 0,
                         _ => nearest(pt),
                     };
-                    sources.push(source(v, pt, normal_ring));
+                    let towards_front = match (vl, vt) {
+                        (true, false) => 1.0,
+                        (false, true) => 0.0,
+                        _ => ((pt.0 as f64 + pt.1) / n as f64) as f32,
+                    };
+                    let (front, back) = if face_colors { (ff, fb) } else { (NONE, NONE) };
+                    sources.push(Source {
+                        front,
+                        back,
+                        towards_front,
+                        ..source(v, pt, normal_ring)
+                    });
                 }
             }
         }
@@ -569,7 +657,7 @@ pub(crate) fn assemble(
         ));
     }
     let id = |k: usize, v: u32, r: usize, which: usize| -> u32 {
-        if per_edge {
+        if strips {
             (ring_base + k * 2 * rings + 2 * r + which) as u32
         } else if r == rings - 1 {
             lead[v as usize]
@@ -579,17 +667,17 @@ pub(crate) fn assemble(
             (ring_base + (r - 1) * ring_count + ring[v as usize] as usize) as u32
         }
     };
-    let mut out_faces = Vec::with_capacity(faces.len() + joining);
-    let mut part = Vec::with_capacity(out_faces.capacity());
-    for (map, want, tag) in [(&lead, true, LEADING), (&trail, false, TRAILING)] {
-        for (f, face) in faces.iter().enumerate() {
-            if front[f] == want {
-                out_faces.push([
-                    map[face[0] as usize],
-                    map[face[1] as usize],
-                    map[face[2] as usize],
-                ]);
-                part.push(tag);
+    if !face_colors {
+        for (map, want, tag) in [(&lead, true, LEADING), (&trail, false, TRAILING)] {
+            for (f, face) in faces.iter().enumerate() {
+                if front[f] == want {
+                    out_faces.push([
+                        map[face[0] as usize],
+                        map[face[1] as usize],
+                        map[face[2] as usize],
+                    ]);
+                    part.push(tag);
+                }
             }
         }
     }
@@ -608,9 +696,14 @@ pub(crate) fn assemble(
         Some(nr) => nr.clone(),
         None => mesh.vertex_normals(),
     };
-    let color = |v: u32| match &opts.colors {
+    let color = |s: &Source| match &opts.colors {
         Colors::Uniform(c) => *c,
-        Colors::PerVertex(c) => c[v as usize],
+        Colors::PerVertex(c) => c[s.v as usize],
+        Colors::PerFace(c) if s.front != NONE => {
+            let (f, b, t) = (c[s.front as usize], c[s.back as usize], s.towards_front);
+            [0, 1, 2, 3].map(|i| b[i] + (f[i] - b[i]) * t)
+        }
+        Colors::PerFace(_) => [1.0; 4],
     };
     let place = |s: &Source| {
         let (j, u) = (s.seg as usize, s.frac);
@@ -632,7 +725,7 @@ pub(crate) fn assemble(
         .par_iter()
         .zip(&vertices)
         .map(|(s, p)| {
-            let c = color(s.v);
+            let c = color(s);
             [c[0], c[1], c[2], (c[3] as f64 * filter_alpha(s, *p)) as f32]
         })
         .collect();

@@ -147,6 +147,9 @@ def test_coverage_and_spin_alphas_do_not_depend_on_the_thread_count():
                                    camera_position=[0, 0, 5])
             for a in (vol.vertices, vol.faces, vol.rgba, vol.normals, vol.part, vol.ring_alpha):
                 h.update(a.tobytes())
+        fc = np.random.default_rng(0).uniform(0, 1, (len(f), 3))
+        vol = mb.motion_volume(mb.Mesh(v, f), [0.9, 0.2, -0.4], segments=2, face_colors=fc, camera_position=[0, 0, 5])
+        h.update(vol.rgba.tobytes())
         bv, bf = mb.meshes.box((0.8, 0.2, 0.05))
         spin = mb.spin_volume(mb.Mesh(bv + [0.5, 0, 0], bf), [0, 0, 1], 7.0, camera_position=[0, 1, 4])
         for a in (spin.vertices, spin.faces, spin.rgba, spin.normals, spin.part):

@@ -252,7 +252,7 @@ type VolumeTuple<'py> = (
 );
 
 #[pyfunction]
-#[pyo3(signature = (mesh, keyframes, segments, filter, colors, normals = None, camera_position = None))]
+#[pyo3(signature = (mesh, keyframes, segments, filter, colors, normals = None, camera_position = None, face_colors = false))]
 #[allow(clippy::too_many_arguments)]
 fn motion_volume<'py>(
     py: Python<'py>,
@@ -263,6 +263,7 @@ fn motion_volume<'py>(
     colors: PyReadonlyArray2<'_, f32>,
     normals: Option<PyReadonlyArray2<'_, f64>>,
     camera_position: Option<PyReadonlyArray1<'_, f64>>,
+    face_colors: bool,
 ) -> PyResult<VolumeTuple<'py>> {
     let filter = Filter::parse(filter).map_err(to_py_err)?;
     let kv = keyframes.as_array();
@@ -285,7 +286,9 @@ fn motion_volume<'py>(
         })
         .collect();
     let c = rows::<4, f32>(&colors, "colors")?;
-    let colors = if c.len() == 1 {
+    let colors = if face_colors {
+        Colors::PerFace(c)
+    } else if c.len() == 1 {
         Colors::Uniform(c[0])
     } else {
         Colors::PerVertex(c)
@@ -340,7 +343,7 @@ fn motion_volume<'py>(
 }
 
 #[pyfunction]
-#[pyo3(signature = (mesh, axis, angle, center, translation, segments, filter, colors, normals = None, camera_position = None))]
+#[pyo3(signature = (mesh, axis, angle, center, translation, segments, filter, colors, normals = None, camera_position = None, face_colors = false))]
 #[allow(clippy::too_many_arguments)]
 fn spin_volume<'py>(
     py: Python<'py>,
@@ -354,6 +357,7 @@ fn spin_volume<'py>(
     colors: PyReadonlyArray2<'_, f32>,
     normals: Option<PyReadonlyArray2<'_, f64>>,
     camera_position: Option<PyReadonlyArray1<'_, f64>>,
+    face_colors: bool,
 ) -> PyResult<VolumeTuple<'py>> {
     let filter = Filter::parse(filter).map_err(to_py_err)?;
     let spin = Spin {
@@ -364,7 +368,9 @@ fn spin_volume<'py>(
         segments,
     };
     let c = rows::<4, f32>(&colors, "colors")?;
-    let colors = if c.len() == 1 {
+    let colors = if face_colors {
+        Colors::PerFace(c)
+    } else if c.len() == 1 {
         Colors::Uniform(c[0])
     } else {
         Colors::PerVertex(c)
