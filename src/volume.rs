@@ -60,6 +60,10 @@ pub struct VolumeOptions {
     /// Per-vertex normals in object space; `None`: area-weighted vertex normals.
     pub normals: Option<Vec<[f64; 3]>>,
     pub camera: Option<[f64; 3]>,
+    /// With a camera: sweep only the contour line (section 3.2) and apply the section 4.1
+    /// normal rule (`true`), or sweep every contour edge and use the camera for the coverage
+    /// alphas only (`false`).
+    pub contour_line: bool,
 }
 
 impl Default for VolumeOptions {
@@ -69,6 +73,7 @@ impl Default for VolumeOptions {
             colors: Colors::Uniform([1.0; 4]),
             normals: None,
             camera: None,
+            contour_line: true,
         }
     }
 }
@@ -285,7 +290,8 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
     // A subdivided face takes the sides of its parent face: the split of a face parallel to
     // the motion (n . m = 0) must not depend on the rounding of the new vertices.
     let front = classify_faces(mesh, m_obj);
-    let vis = opts.camera.map(|eye| camera_sides(mesh, path, eye));
+    let line_eye = opts.camera.filter(|_| opts.contour_line);
+    let vis = line_eye.map(|eye| camera_sides(mesh, path, eye));
     let (mesh, opts, front, vis) = match &sub {
         Some((m, o, parent)) => {
             let map = |x: &[bool]| {
@@ -305,7 +311,7 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         &front,
         &contour,
         &vis,
-        opts.camera.is_some(),
+        line_eye.is_some(),
         &alpha,
         opts,
     )
@@ -433,6 +439,7 @@ pub(crate) fn subdivided(
         colors,
         normals: Some(blend.par_iter().map(mix3).collect()),
         camera: opts.camera,
+        contour_line: opts.contour_line,
     };
     Ok((Mesh::new(sv, sf)?, out, parent))
 }

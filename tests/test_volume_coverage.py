@@ -199,3 +199,22 @@ def test_coverage_filters_on_hard_cases_stay_finite_and_in_range(name, flt):
     if name == "flat_square":
         vol = motion_volume(mesh, [0.0, 0.0, 2.0], filter=flt, camera_position=[0.5, 5.0, 1.0])
         assert np.isfinite(vol.rgba).all()
+
+
+def test_contour_line_false_sweeps_every_edge_and_keeps_the_camera_alphas():
+    v, f = SHAPES["sphere"]()
+    v = v - [1.0, 0.0, 0.0]
+    m = np.array([2.5, 0.75, 0.0])
+    cam = camera()
+    line = motion_volume(Mesh(v, f), m, filter="box", camera_position=EYE)
+    every = motion_volume(Mesh(v, f), m, filter="box", camera_position=EYE, contour_line=False)
+    none = motion_volume(Mesh(v, f), m, filter="box")
+    assert every.contour_count == none.contour_count > line.contour_count
+    out = trimesh.Trimesh(every.vertices, every.faces, process=False)
+    assert out.is_watertight  # shared ring vertices again
+    ref = accumulate(v, f, m, "box", cam)
+    for vol in (line, every):
+        got = rasterize(cam, Draw(vol.vertices, vol.faces, vol.rgba), samples=2, blend="exact").coverage
+        assert abs(got.sum() - ref.sum()) < 0.05 * ref.sum()
+    with pytest.raises(TypeError, match="contour_line"):
+        motion_volume(Mesh(v, f), m, camera_position=EYE, contour_line="yes")

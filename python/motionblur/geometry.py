@@ -318,6 +318,7 @@ def motion_volume(
     normals=None,
     camera_position=None,
     face_colors=None,
+    contour_line: bool = True,
 ) -> MotionVolume:
     """Build the motion volume of ``mesh`` over the shutter (paper sections 3.3-3.4, 4.1-4.3).
 
@@ -358,7 +359,10 @@ def motion_volume(
     camera_position : optional (3,) world position of the camera (at shutter close). If given,
         only the contour line is swept (edges whose front face at close or back face at open
         faces the camera) and joining vertices take the normal of the visible side when only
-        one side is visible (section 4.1); joining strips then have their own vertices.
+        one side is visible (section 4.1); joining strips then have their own vertices. The
+        box/triangle/gaussian alphas use it for a perspective view.
+    contour_line : bool, default True. With ``camera_position``, False sweeps every contour
+        edge (shared ring vertices, a closed volume) and uses the camera for the alphas only.
 
     Returns
     -------
@@ -378,7 +382,9 @@ def motion_volume(
     col, per_face = _vertex_or_face_colors(colors, face_colors, nv, len(m.faces))
     nrm = None if normals is None else as_array(normals, "normals", np.float64, (nv, 3))
     cam = None if camera_position is None else _vec3(camera_position, "camera_position")
-    out = _core.motion_volume(m._core, keys, seg, filter, col, nrm, cam, per_face)
+    if not isinstance(contour_line, (bool, np.bool_)):
+        raise TypeError(f"contour_line: expected a bool, got {type(contour_line).__name__}")
+    out = _core.motion_volume(m._core, keys, seg, filter, col, nrm, cam, per_face, bool(contour_line))
     return MotionVolume(*out)
 
 

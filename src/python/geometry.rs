@@ -252,7 +252,7 @@ type VolumeTuple<'py> = (
 );
 
 #[pyfunction]
-#[pyo3(signature = (mesh, keyframes, segments, filter, colors, normals = None, camera_position = None, face_colors = false))]
+#[pyo3(signature = (mesh, keyframes, segments, filter, colors, normals = None, camera_position = None, face_colors = false, contour_line = true))]
 #[allow(clippy::too_many_arguments)]
 fn motion_volume<'py>(
     py: Python<'py>,
@@ -264,6 +264,7 @@ fn motion_volume<'py>(
     normals: Option<PyReadonlyArray2<'_, f64>>,
     camera_position: Option<PyReadonlyArray1<'_, f64>>,
     face_colors: bool,
+    contour_line: bool,
 ) -> PyResult<VolumeTuple<'py>> {
     let filter = Filter::parse(filter).map_err(to_py_err)?;
     let kv = keyframes.as_array();
@@ -322,6 +323,7 @@ fn motion_volume<'py>(
                 colors,
                 normals,
                 camera,
+                contour_line,
             };
             core_motion_volume(&inner, &path.subdivide(segments), &opts)
         })
@@ -343,7 +345,7 @@ fn motion_volume<'py>(
 }
 
 #[pyfunction]
-#[pyo3(signature = (mesh, axis, angle, center, translation, segments, filter, colors, normals = None, camera_position = None, face_colors = false))]
+#[pyo3(signature = (mesh, axis, angle, center, translation, segments, filter, colors, normals = None, camera_position = None, face_colors = false, contour_line = true))]
 #[allow(clippy::too_many_arguments)]
 fn spin_volume<'py>(
     py: Python<'py>,
@@ -358,6 +360,7 @@ fn spin_volume<'py>(
     normals: Option<PyReadonlyArray2<'_, f64>>,
     camera_position: Option<PyReadonlyArray1<'_, f64>>,
     face_colors: bool,
+    contour_line: bool,
 ) -> PyResult<VolumeTuple<'py>> {
     let filter = Filter::parse(filter).map_err(to_py_err)?;
     let spin = Spin {
@@ -391,6 +394,7 @@ fn spin_volume<'py>(
                 colors,
                 normals,
                 camera,
+                contour_line,
             };
             core_spin_volume(&inner, &spin, &opts)
         })
