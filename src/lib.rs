@@ -11,6 +11,7 @@
 //! and `spin` (section 4.3's spinning objects); `adjacency` builds the mesh adjacency.
 #![allow(dead_code)]
 
+pub mod accumulate;
 pub mod adjacency;
 pub mod contour;
 pub mod contour_table;

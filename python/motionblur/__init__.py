@@ -9,11 +9,29 @@ from __future__ import annotations
 
 from . import geometry as _geometry
 from . import image, meshes
+from . import metrics as metrics
 from . import raster as _raster
+from . import reference as reference
+from . import scene as _scene
 from . import shell as _shell
 from ._core import __version__
 from .geometry import *  # noqa: F403
+from .methods.accumulation import Sequence
 from .raster import *  # noqa: F403
+from .render import METHODS, register, render
+from .scene import *  # noqa: F403
+from .scenes_builtin import SCENES, builtin_scene
 from .shell import *  # noqa: F403
 
 __all__ = ["__version__", "image", "meshes", *_geometry.__all__, *_raster.__all__, *_shell.__all__]
+__all__ += [
+    *_scene.__all__,
+    "render",
+    "register",
+    "METHODS",
+    "Sequence",
+    "SCENES",
+    "builtin_scene",
+    "metrics",
+    "reference",
+]

@@ -94,9 +94,109 @@ class _ContourTable:
 
 # --- image (motionblur.image kernels)
 
+def _glow(alpha: np.ndarray, direction: tuple[float, float], width: float) -> np.ndarray:
+    """Eq. 10 glow of alpha (H,W) f32 along direction (pixels) with half-width width (pixels).
+    Returns (H,W) f32 >= alpha. Releases the GIL."""
+
+def _box_blur(rgba: np.ndarray, direction: tuple[float, float], length: float) -> np.ndarray:
+    """Box blur of rgba (H,W,4) f32 over length pixels along direction. Returns (H,W,4) f32."""
+
+def _opaque_blur(rgba: np.ndarray, direction: tuple[float, float], length: float) -> np.ndarray:
+    """Box blur, eq. 10 glow and eq. 7 rescale of premultiplied rgba (H,W,4) f32. Returns (H,W,4) f32."""
+
+def _opaque_motion_blur(
+    rgba: np.ndarray, base: np.ndarray | None, direction: tuple[float, float], length: float, mode: str
+) -> np.ndarray:
+    """_opaque_blur composited 'over' or 'under' base (H,W,4) f32 (None: rgba). Returns (H,W,4) f32."""
+
+def _pyramid_blur(rgba: np.ndarray, levels: int) -> np.ndarray:
+    """4x4-box analysis, biquadratic B-spline synthesis over levels levels. (H,W,4) f32 in and out."""
+
+def _pyramid_glow(alpha: np.ndarray, levels: int) -> np.ndarray:
+    """Pyramid glow (eqs. 8-9) of alpha (H,W) f32. Returns (H,W) f32 >= alpha."""
+
+def _pyramid_opaque_blur(rgba: np.ndarray, levels: int) -> np.ndarray:
+    """Pyramid blur rescaled to the pyramid glow (eq. 7). (H,W,4) f32 in and out."""
+
+def _depth_of_field(
+    rgba: np.ndarray,
+    depth: np.ndarray,
+    focal_depth: float,
+    focal_length: float,
+    f_number: float,
+    yfov: float,
+    layers: int,
+) -> np.ndarray:
+    """Sub-image depth of field of rgba (H,W,4) f32 with view-axis depth (H,W) f32 (inf sky);
+    focal_depth, focal_length in scene units, yfov radians. Returns (H,W,4) f32."""
+
+def _camera_velocity(
+    depth: np.ndarray,
+    view: np.ndarray,
+    projection: np.ndarray,
+    previous_view: np.ndarray,
+    previous_projection: np.ndarray,
+) -> np.ndarray:
+    """Velocity (H,W,2) f32 pixels (current minus previous) of depth (H,W) f32 seen by the camera
+    with view/projection (4,4) f64 when it moved from the previous one."""
+
+def _velocity_blur(rgba: np.ndarray, velocity: np.ndarray, samples: int) -> np.ndarray:
+    """Centred samples-tap blur of rgba (H,W,4) f32 along velocity (H,W,2) f32 pixels."""
+
+def _camera_motion_blur(
+    rgba: np.ndarray,
+    depth: np.ndarray,
+    view: np.ndarray,
+    projection: np.ndarray,
+    previous_view: np.ndarray,
+    previous_projection: np.ndarray,
+    samples: int,
+    scale: float,
+) -> np.ndarray:
+    """Chapman's camera blur: _camera_velocity times scale, then _velocity_blur. (H,W,4) f32."""
+
 # --- end image
 
 # --- shell (blur shells, silhouette of motion)
+
+class _BlurShell:
+    """Rust blur shell (see motionblur.BlurShell). faces i64 (F,3); mask bool (F,) | None; color
+    f32 (1,3) | (V,3) | None (white)."""
+
+    def __init__(
+        self,
+        faces: np.ndarray,
+        n_vertices: int,
+        subdivisions: int,
+        hysteresis: int,
+        initial_alpha: float,
+        mask: np.ndarray | None = None,
+        color: np.ndarray | None = None,
+    ) -> None: ...
+    def update(self, vertices: np.ndarray, normals: np.ndarray | None = None) -> None:
+        """vertices, normals f64 (V,3) C-contiguous. Releases the GIL."""
+    def build(
+        self, vertices: np.ndarray | None = None, normals: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(vertices f64 (N,3), faces i64 (M,3), rgba f32 (N,4) straight, normals f32 (N,3),
+        face i64 (N,), step i32 (N,)). Releases the GIL."""
+    def reset(self) -> None: ...
+    @property
+    def updates(self) -> int: ...
+    @property
+    def update_index(self) -> int | None: ...
+    @property
+    def n_vertices(self) -> int: ...
+    @property
+    def n_faces(self) -> int: ...
+    def _state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(facing i8 (V,), last edge i8 (F,), since i64 (F,), fade i32 (F,), run i32 (F,))."""
+    def _element(self, face: int, age: int) -> tuple[int, bool] | None: ...
+
+def _motion_silhouette(
+    vertices: np.ndarray, previous_vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(facing i8 (V,) +1/-1/0, edge i8 (F,) k or -1). f64 (V,3) inputs, faces i64 (F,3)."""
 
 # --- end shell
 
@@ -119,3 +219,36 @@ def _rasterize(
     projection (4,4) f64 into an image of height x width. Returns rgba (H,W,4) f32 premultiplied,
     depth (H,W) f32 view-axis distance (inf background), ids (H,W) i32 (-1 background), velocity
     (H,W,2) f32 pixels, and a stats dict. Releases the GIL."""
+
+# --- scenes (accumulation kernels)
+
+def _accumulate(
+    acc: np.ndarray,
+    rgba: np.ndarray,
+    depth: np.ndarray,
+    limit: np.ndarray | None,
+    weight: float,
+    x0: int = 0,
+    y0: int = 0,
+) -> None:
+    """In place: acc[y0:y0+h, x0:x0+w] (acc (H,W,4) f32) += weight * rgba (h,w,4) f32 where depth
+    (h,w) f32 < limit[y0:y0+h, x0:x0+w] (limit (H,W) f32; everywhere when None). All C-contiguous.
+    Releases the GIL."""
+
+def _over(acc: np.ndarray, under: np.ndarray) -> None:
+    """In place: acc (H,W,4) f32 += under (H,W,4) f32 * (1 - acc alpha). Releases the GIL."""
+
+def _composite(
+    a_rgba: np.ndarray,
+    a_depth: np.ndarray,
+    a_ids: np.ndarray,
+    b_rgba: np.ndarray,
+    b_depth: np.ndarray,
+    b_ids: np.ndarray,
+    x0: int = 0,
+    y0: int = 0,
+) -> None:
+    """In place into b (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32): layer a (h,w) at
+    (x0, y0) composited by depth, the nearer over the farther. Releases the GIL."""
+
+# --- end scenes

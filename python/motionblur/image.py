@@ -1,8 +1,265 @@
 """Image-space blur kernels (Kraus's opaque image blur, pyramids, depth of field, Chapman's camera blur).
 
-Images are float32 (H,W,4), linear RGB, premultiplied alpha, row 0 at the top.
+Images are float32 (H,W,4), linear RGB, premultiplied alpha, row 0 at the top; single-channel
+images (alpha, depth) are float32 (H,W). Directions are (dx, dy) in pixels, +x right, +y down
+(only the direction matters, not its length). Outside the image everything is transparent black,
+so blurs fade to transparent at the border and the opaque blur's rescale (eq. 7) keeps the colour
+there: the result does not depend on the size of the viewport (Kraus, section 3.3).
+
+The kernels are Rust, run on all cores (bit-identical for any thread count) and release the GIL.
+The caller's arrays are never written: every function returns a new array.
+
+Filter geometry (``box_blur``, ``glow``, ``opaque_blur``, ``opaque_motion_blur``): a box of
+``length`` pixels takes ``2r + 1`` taps one *major-axis* pixel apart with
+``r = floor(length * c / 2)``, ``c = max(|dx|, |dy|) / hypot(dx, dy)``; along an image axis these
+are whole pixels and the cost is O(1) per pixel (running sums). Along any other direction the
+image is sheared so the direction becomes a row (linear interpolation across it), the row is
+filtered with running sums, and the result is sheared back (a second linear interpolation).
 """
 
 from __future__ import annotations
 
-__all__: list[str] = []
+import numpy as np
+
+from . import _core
+from ._validate import as_array, as_float, as_int
+
+__all__ = [
+    "box_blur",
+    "camera_motion_blur",
+    "camera_velocity",
+    "depth_of_field",
+    "glow",
+    "opaque_blur",
+    "opaque_motion_blur",
+    "pyramid_blur",
+    "pyramid_glow",
+    "pyramid_opaque_blur",
+    "velocity_blur",
+]
+
+#: Longest filter accepted, in pixels.
+MAX_LENGTH = 65536.0
+#: Most pyramid levels, depth-of-field sub-images and blur samples accepted.
+MAX_LEVELS = 16
+MAX_LAYERS = 17
+MAX_SAMPLES = 1024
+
+
+def _rgba(value, name="rgba", shape=None) -> np.ndarray:
+    # Finite checks of the big images happen in Rust, fused with the first pass.
+    a = as_array(value, name, np.float32, (None, None, 4) if shape is None else (*shape, 4), finite=False)
+    return a
+
+
+def _plane(value, name, shape=None) -> np.ndarray:
+    return as_array(value, name, np.float32, (None, None) if shape is None else shape, finite=False)
+
+
+def _direction(direction) -> tuple[float, float]:
+    d = as_array(direction, "direction", np.float64, (2,))
+    return float(d[0]), float(d[1])
+
+
+def _length(value, name="length", maximum=MAX_LENGTH) -> float:
+    if isinstance(value, (str, bytes)):
+        raise TypeError(f"{name}: expected a number, got {type(value).__name__}")
+    v = as_float(value, name)
+    if not 0.0 <= v <= maximum:
+        raise ValueError(f"{name}: must be in [0, {maximum:g}] pixels, got {v}")
+    return v
+
+
+def glow(alpha, direction, width) -> np.ndarray:
+    """Triangle-max glow of Kraus's eq. 10 along ``direction``.
+
+    ``A_glow[i] = max_{|k| <= w} (1 - |k| / w) A[i + k]`` with ``w = floor(width * c)`` major-axis
+    taps (module docs). ``alpha``: (H,W) float32 opacity in [0, 1]; ``direction``: (2,) pixels;
+    ``width``: half-width in pixels >= 0. Returns (H,W) float32, never below ``alpha``.
+    """
+    a = _plane(alpha, "alpha")
+    return _core._glow(a, _direction(direction), _length(width, "width", MAX_LENGTH / 2))
+
+
+def box_blur(rgba, direction, length) -> np.ndarray:
+    """Box blur of ``length`` pixels along ``direction`` (module docs for the taps).
+
+    ``rgba``: (H,W,4) float32 premultiplied; ``direction``: (2,) pixels; ``length``: pixels >= 0
+    (0 or a zero direction return a copy). Returns (H,W,4) float32. Along an image axis the cost
+    does not depend on the length (running sums).
+    """
+    return _core._box_blur(_rgba(rgba), _direction(direction), _length(length))
+
+
+def opaque_blur(rgba, direction, length) -> np.ndarray:
+    """Kraus's opaque image blur (section 3.2) along ``direction``: a box blur of ``length``
+    pixels, the eq. 10 glow of the alpha with the same radius, and the rescale of eq. 7
+    ``RGBA_blur * A_glow / A_blur`` (colour 0 where ``A_blur <= 1e-12``; alpha is always the glow,
+    so no pixel loses opacity and the straight colour is kept where alpha grows: no dark halo).
+
+    ``rgba``: (H,W,4) float32 premultiplied; ``direction``: (2,) pixels; ``length``: pixels >= 0.
+    Returns (H,W,4) float32 premultiplied.
+    """
+    return _core._opaque_blur(_rgba(rgba), _direction(direction), _length(length))
+
+
+def opaque_motion_blur(rgba, direction, length, mode="over", base=None) -> np.ndarray:
+    """Image-based opaque motion blur (Kraus section 4.1, figures 6 and 7).
+
+    ``rgba`` (H,W,4) float32 premultiplied is the layer that moves (the masked object for
+    ``mode="over"``, the masked background for ``mode="under"``); it gets ``opaque_blur`` along
+    ``direction`` (2,) over ``length`` pixels and is composited with ``base`` (H,W,4) float32
+    premultiplied (default: ``rgba`` itself): ``"over"`` gives ``sub + (1 - A_sub) base`` (a
+    moving foreground over the sharp image), ``"under"`` gives ``base + (1 - A_base) sub`` (a
+    moving background under the sharp foreground). Returns (H,W,4) float32 premultiplied.
+    """
+    if not isinstance(mode, str):
+        raise TypeError(f"mode: expected a string, got {type(mode).__name__}")
+    if mode not in ("over", "under"):
+        raise ValueError(f"mode: expected 'over' or 'under', got {mode!r}")
+    a = _rgba(rgba)
+    b = None if base is None else _rgba(base, "base", a.shape[:2])
+    return _core._opaque_motion_blur(a, b, _direction(direction), _length(length), mode)
+
+
+def _levels(levels) -> int:
+    return as_int(levels, "levels", minimum=0, maximum=MAX_LEVELS)
+
+
+def pyramid_blur(rgba, levels) -> np.ndarray:
+    """Pyramid blur (section 3.2): ``levels`` analysis steps with a 4x4 box (each halves the size,
+    rounding up, so any size works), then as many biquadratic B-spline expansions.
+
+    ``rgba``: (H,W,4) float32; ``levels``: int in [0, 16] (0 returns a copy; the blur radius is
+    about ``1.7 * 2**(levels - 1)`` pixels). Returns (H,W,4) float32.
+    """
+    return _core._pyramid_blur(_rgba(rgba), _levels(levels))
+
+
+def pyramid_glow(alpha, levels) -> np.ndarray:
+    """Pyramid glow (eqs. 8-9): the analysis pyramid of the blur, synthesised with
+    ``A_syn = A_exp + A_ana - A_exp A_ana`` at every level, so no pixel loses opacity.
+
+    ``alpha``: (H,W) float32 in [0, 1]; ``levels``: int in [0, 16]. Returns (H,W) float32.
+    """
+    return _core._pyramid_glow(_plane(alpha, "alpha"), _levels(levels))
+
+
+def pyramid_opaque_blur(rgba, levels) -> np.ndarray:
+    """Opaque pyramid blur: ``pyramid_blur`` rescaled to ``pyramid_glow`` of the same analysis
+    pyramid (eq. 7). ``rgba``: (H,W,4) float32 premultiplied; ``levels``: int in [0, 16].
+    Returns (H,W,4) float32 premultiplied.
+    """
+    return _core._pyramid_opaque_blur(_rgba(rgba), _levels(levels))
+
+
+def depth_of_field(rgba, depth, focal_depth, focal_length, f_number, yfov, layers=5) -> np.ndarray:
+    """Depth of field by sub-images with the opaque pyramid blur (Kraus section 3.1, eqs. 1-6).
+
+    ``rgba``: (H,W,4) float32 premultiplied pinhole image; ``depth``: (H,W) float32 view-axis
+    distance, > 0, ``inf`` for background (NaN raises); ``focal_depth`` and ``focal_length`` in
+    scene units (> 0); ``f_number`` > 0; ``yfov`` in radians in (0, pi); ``layers``: number of
+    sub-images in [1, 17], indices ``-(layers // 2) .. layers - 1 - layers // 2`` (negative in front
+    of the focal plane). Sub-image ``i`` has the blur radius ``1.7 * 2**(|i| - 1)`` pixels, the
+    thin-lens depth of eqs. 2-4 (infinite where eq. 4 turns negative; sub-images starting beyond
+    infinity are dropped), the matting ramps of figure 2 and ``|i|`` pyramid levels; sub-images are
+    blended over each other from far to near (eq. 6). Returns (H,W,4) float32 premultiplied.
+    """
+    a = _rgba(rgba)
+    d = _plane(depth, "depth", a.shape[:2])
+    if np.isnan(d).any():
+        raise ValueError("depth: contains NaN")
+    if (d <= 0).any():
+        raise ValueError("depth: must be > 0 (inf for background)")
+    fd = as_float(focal_depth, "focal_depth")
+    fl = as_float(focal_length, "focal_length")
+    fn = as_float(f_number, "f_number")
+    for name, v in (("focal_depth", fd), ("focal_length", fl), ("f_number", fn)):
+        if v <= 0:
+            raise ValueError(f"{name}: must be > 0, got {v}")
+    fov = as_float(yfov, "yfov")
+    if not 0.0 < fov < np.pi:
+        raise ValueError(f"yfov: must be in (0, pi) radians, got {fov}")
+    n = as_int(layers, "layers", minimum=1, maximum=MAX_LAYERS)
+    return _core._depth_of_field(a, d, fd, fl, fn, fov, n)
+
+
+def _camera(camera, name, shape) -> tuple[np.ndarray, np.ndarray]:
+    from .raster import Camera
+
+    if not isinstance(camera, Camera):
+        raise TypeError(f"{name}: expected a motionblur.Camera, got {type(camera).__name__}")
+    if (camera.height, camera.width) != tuple(shape):
+        raise ValueError(
+            f"{name}: camera is {camera.width}x{camera.height} but the image is {shape[1]}x{shape[0]}"
+        )
+    return np.ascontiguousarray(camera.view), np.ascontiguousarray(camera.projection)
+
+
+def _depth(depth, shape=None) -> np.ndarray:
+    d = _plane(depth, "depth", shape)
+    if np.isnan(d).any():
+        raise ValueError("depth: contains NaN")
+    if (d <= 0).any():
+        raise ValueError("depth: must be > 0 (inf for background)")
+    return d
+
+
+def camera_velocity(depth, camera, previous_camera) -> np.ndarray:
+    """Per-pixel screen velocity of a static scene seen by a moving camera (Chapman 2011).
+
+    ``depth``: (H,W) float32 view-axis distance seen by ``camera`` (> 0, ``inf`` for the sky,
+    which then moves only with the camera's rotation); ``camera``, ``previous_camera``:
+    ``motionblur.Camera`` of H x W pixels (where the camera is now and where it was when the
+    shutter opened). Each pixel is moved to the previous camera with the combined matrix
+    ``previous.projection @ previous.view @ inv(camera.view)``. Returns (H,W,2) float32 pixels,
+    current minus previous position (+x right, +y down), like ``Frame.velocity``; 0 for points
+    behind the previous camera.
+    """
+    d = _depth(depth)
+    v, p = _camera(camera, "camera", d.shape)
+    pv, pp = _camera(previous_camera, "previous_camera", d.shape)
+    return _core._camera_velocity(d, v, p, pv, pp)
+
+
+def velocity_blur(rgba, velocity, samples=16) -> np.ndarray:
+    """Centred blur along a per-pixel velocity: ``out = mean_i I(p + v (i / (N - 1) - 1/2))`` for
+    ``i = 0 .. N-1``, bilinear samples clamped to the image edge.
+
+    ``rgba``: (H,W,4) float32; ``velocity``: (H,W,2) float32 pixels (+x right, +y down, finite,
+    |v| < 1e6); ``samples``: N in [1, 1024] (1 or a zero velocity keeps the pixel).
+    Returns (H,W,4) float32.
+    """
+    a = _rgba(rgba)
+    v = as_array(velocity, "velocity", np.float32, (*a.shape[:2], 2), finite=False)
+    n = as_int(samples, "samples", minimum=1, maximum=MAX_SAMPLES)
+    return _core._velocity_blur(a, v, n)
+
+
+def camera_motion_blur(
+    rgba, depth, camera, previous_camera, samples=16, target_fps=None, fps=None
+) -> np.ndarray:
+    """Chapman's screen-space camera motion blur: ``camera_velocity`` then ``velocity_blur``.
+
+    ``rgba``: (H,W,4) float32 premultiplied; ``depth``: (H,W) float32 (> 0, ``inf`` sky);
+    ``camera``, ``previous_camera``: ``motionblur.Camera`` of H x W pixels; ``samples``: N in
+    [1, 1024]. ``target_fps`` and ``fps`` (frames per second, both or neither): the velocity is
+    scaled by ``fps / target_fps`` so every frame looks as if rendered at the target rate.
+    A static camera returns the image unchanged. Returns (H,W,4) float32 premultiplied.
+    """
+    a = _rgba(rgba)
+    d = _depth(depth, a.shape[:2])
+    v, p = _camera(camera, "camera", d.shape)
+    pv, pp = _camera(previous_camera, "previous_camera", d.shape)
+    n = as_int(samples, "samples", minimum=1, maximum=MAX_SAMPLES)
+    if (target_fps is None) != (fps is None):
+        raise ValueError("target_fps: give both target_fps and fps, or neither")
+    scale = 1.0
+    if fps is not None:
+        t, f = as_float(target_fps, "target_fps"), as_float(fps, "fps")
+        if t <= 0:
+            raise ValueError(f"target_fps: must be > 0, got {t}")
+        if f <= 0:
+            raise ValueError(f"fps: must be > 0, got {f}")
+        scale = f / t
+    return _core._camera_motion_blur(a, d, v, p, pv, pp, n, scale)

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["icosphere", "box", "torus", "cylinder", "uv_sphere"]
+__all__ += ["bending_arm", "spinning_propeller"]
 
 
 def icosphere(subdivisions: int = 2, radius: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
@@ -124,3 +125,86 @@ def uv_sphere(n_lat: int = 16, n_lon: int = 32, radius: float = 1.0):
     for j in range(n_lon):
         faces.append([south, base + (j + 1) % n_lon, base + j])
     return v, np.array(faces, dtype=np.int64)
+
+
+# --- deforming meshes (blur shells): per-time positions (K,V,3) and faces (F,3)
+
+
+def _shutter_times(times) -> np.ndarray:
+    if isinstance(times, (int, np.integer)) and not isinstance(times, bool):
+        if times < 2:
+            raise ValueError(f"times: need at least 2, got {times}")
+        return np.linspace(0.0, 1.0, int(times))
+    t = np.asarray(times, dtype=np.float64)
+    if t.ndim != 1 or len(t) < 1 or not np.isfinite(t).all():
+        raise ValueError("times: expected an int count or a (K,) finite array")
+    return t
+
+
+def _rot(axis: int, angle: np.ndarray) -> np.ndarray:
+    """(K,3,3) rotations about coordinate axis ``axis`` by ``angle`` (K,) radians."""
+    c, s = np.cos(angle), np.sin(angle)
+    i, j = [(1, 2), (2, 0), (0, 1)][axis]
+    r = np.zeros((len(angle), 3, 3))
+    r[:, axis, axis] = 1.0
+    r[:, i, i], r[:, i, j], r[:, j, i], r[:, j, j] = c, -s, s, c
+    return r
+
+
+def bending_arm(
+    times=9,
+    radius: float = 0.25,
+    length: float = 2.0,
+    angle: float = np.pi / 2,
+    sections: int = 24,
+    rings: int = 24,
+) -> tuple[np.ndarray, np.ndarray]:
+    """A skinned cylinder (an arm along +Z from z=0 to ``length``) whose upper half bends about
+    the elbow at z = length/2 around +X by ``angle * t`` radians (towards -Y).
+
+    Two bones with linear blend skinning: weights go smoothly from the upper bone to the lower
+    one over one radius either side of the elbow, so the mesh deforms (not a rigid motion).
+    ``times``: an int K (K times evenly over [0, 1]) or (K,) times in shutter units.
+    Returns ``(positions, faces)``: (K,V,3) float64 world positions and (F,3) int64 faces
+    (closed, counter-clockwise outward; ``sections * rings * 2 + 2 * sections`` faces).
+    """
+    t = _shutter_times(times)
+    v, f = cylinder(radius=radius, height=length, sections=sections, rings=rings)
+    elbow = np.array([0.0, 0.0, length / 2.0])
+    x = np.clip((v[:, 2] - (elbow[2] - radius)) / (2.0 * radius), 0.0, 1.0)
+    w = (x * x * (3.0 - 2.0 * x))[None, :, None]
+    rot = _rot(0, angle * t)
+    bent = np.einsum("kij,vj->kvi", rot, v - elbow) + elbow
+    return (1.0 - w) * v[None] + w * bent, f
+
+
+def spinning_propeller(
+    times=9,
+    blades: int = 3,
+    radius: float = 1.0,
+    turns: float = 0.25,
+    chord: float = 0.22,
+    pitch: float = 0.35,
+) -> tuple[np.ndarray, np.ndarray]:
+    """A propeller in the XY plane spinning about +Z by ``turns`` revolutions over [0, 1]: a
+    hub box and ``blades`` flat boxes (``radius`` long, ``chord`` wide, pitched by ``pitch``
+    radians about their long axis). Returns ``(positions, faces)``: (K,V,3) float64 and (F,3)
+    int64 (12 faces per box). ``times``: an int K or (K,) times in shutter units.
+    """
+    t = _shutter_times(times)
+    if blades < 1:
+        raise ValueError(f"blades: must be >= 1, got {blades}")
+    verts, faces = [], []
+    hv, hf = box((0.2 * radius, 0.2 * radius, 0.12 * radius))
+    verts.append(hv)
+    faces.append(hf)
+    for b in range(blades):
+        bv, bf = box((radius, chord, 0.03 * radius))
+        bv = bv @ _rot(0, np.array([pitch]))[0].T + [radius / 2.0, 0.0, 0.0]
+        bv = bv @ _rot(2, np.array([2.0 * np.pi * b / blades]))[0].T
+        faces.append(bf + sum(len(x) for x in verts))
+        verts.append(bv)
+    v = np.concatenate(verts)
+    f = np.concatenate(faces)
+    rot = _rot(2, 2.0 * np.pi * turns * t)
+    return np.einsum("kij,vj->kvi", rot, v), f

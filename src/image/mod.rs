@@ -1,1 +1,147 @@
-//! Image-space blur kernels: box and directional blur, glow, opaque blur, pyramids, depth of field, camera blur.
+//! Image-space blur kernels: box and directional blur, glow, opaque blur, pyramids, depth of field,
+//! camera blur (Kraus 2013, "Using opaque image blur..."; Chapman 2011, camera motion blur).
+//!
+//! Conventions: images are row-major float32, `(h, w, 4)` premultiplied RGBA or `(h, w)` single
+//! channel, row 0 at the top. Outside the image everything is transparent black (zero), so a
+//! blur near the border fades to transparent and the opaque blur's rescale (eq. 7) restores the
+//! colour there: the result does not depend on the size of the viewport.
+//!
+//! Every kernel works on rows in parallel (rayon) with no cross-row reduction, so the result is
+//! bit-identical for any thread count. Directional filters run on the "major axis" of their
+//! direction: a mostly vertical direction is handled by transposing the image, and an oblique
+//! one by shearing the image so that the direction becomes a row (see `lines`).
+
+mod boxblur;
+mod camera;
+mod dof;
+mod glow;
+mod lines;
+mod opaque;
+mod pool;
+mod pyramid;
+
+pub use boxblur::box_blur;
+pub use camera::{camera_motion_blur, camera_velocity, velocity_blur, CameraMatrices, MAX_SAMPLES};
+pub use dof::{depth_of_field, layer_depths, r_infinity, DofParams, MAX_LAYERS};
+pub use glow::glow;
+pub use lines::{plan, LinePlan};
+pub use opaque::{opaque_blur, opaque_motion_blur, Composite};
+pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};
+
+use crate::{Error, Result};
+
+/// Largest accepted filter length (pixels); longer filters are absurd for any image we accept.
+pub const MAX_LENGTH: f32 = 65536.0;
+
+/// Below this blurred opacity the rescale of eq. 7 treats the pixel as empty (colour 0).
+pub const ALPHA_EPS: f32 = 1e-12;
+
+/// Checks that `data` holds `h * w * channels` values and that the image is not empty.
+pub(crate) fn check_image(
+    name: &'static str,
+    data: &[f32],
+    w: usize,
+    h: usize,
+    channels: usize,
+) -> Result<()> {
+    if w == 0 || h == 0 {
+        return Err(Error::shape(name, format!("is empty ({h}x{w})")));
+    }
+    if data.len() != w * h * channels {
+        return Err(Error::shape(
+            name,
+            format!(
+                "expected {} values for ({h},{w},{channels}), got {}",
+                w * h * channels,
+                data.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Fails naming `name` when any value is NaN or infinite (in parallel over rows).
+pub(crate) fn check_finite(name: &'static str, data: &[f32]) -> Result<()> {
+    use rayon::prelude::*;
+    let bad = data
+        .par_chunks(1 << 16)
+        .any(|c| c.iter().fold(false, |b, v| b | !v.is_finite()));
+    if bad {
+        return Err(Error::value(name, "contains NaN or inf"));
+    }
+    Ok(())
+}
+
+/// Checks a direction and a length: finite, length in [0, MAX_LENGTH].
+pub(crate) fn check_direction(
+    direction: [f32; 2],
+    length: f32,
+    len_name: &'static str,
+) -> Result<()> {
+    if !direction.iter().all(|v| v.is_finite()) {
+        return Err(Error::value("direction", "must be finite"));
+    }
+    if !length.is_finite() || !(0.0..=MAX_LENGTH).contains(&length) {
+        return Err(Error::value(
+            len_name,
+            format!("must be finite and in [0, {MAX_LENGTH}], got {length}"),
+        ));
+    }
+    Ok(())
+}
+
+/// An output buffer of `n` floats that `fill` writes completely (every element, before any
+/// read). It is not zeroed first: for a full-size image, zeroing costs as much as a blur's own
+/// write pass.
+pub(crate) fn filled(n: usize, fill: impl FnOnce(&mut [std::mem::MaybeUninit<f32>])) -> Vec<f32> {
+    let mut v: Vec<std::mem::MaybeUninit<f32>> = Vec::with_capacity(n);
+    // SAFETY: MaybeUninit needs no initialisation.
+    unsafe { v.set_len(n) };
+    fill(&mut v);
+    let mut v = std::mem::ManuallyDrop::new(v);
+    // SAFETY: `fill` initialised every element (its contract); MaybeUninit<f32> has the layout
+    // of f32, and the allocation is handed over unchanged.
+    unsafe { Vec::from_raw_parts(v.as_mut_ptr() as *mut f32, v.len(), v.capacity()) }
+}
+
+/// Writes four floats at pixel `x` of an uninitialised `(n, 4)` row.
+#[inline(always)]
+pub(crate) fn put4(o: &mut [std::mem::MaybeUninit<f32>], x: usize, v: [f32; 4]) {
+    for (d, s) in o[x * 4..x * 4 + 4].iter_mut().zip(v) {
+        d.write(s);
+    }
+}
+
+/// Views a completely written buffer as floats.
+pub(crate) fn assume_init(o: &mut [std::mem::MaybeUninit<f32>]) -> &mut [f32] {
+    // SAFETY: callers pass buffers whose every element has been written.
+    unsafe { &mut *(o as *mut [std::mem::MaybeUninit<f32>] as *mut [f32]) }
+}
+
+/// Transposes a `(h, w, C)` image into `(w, h, C)`, in cache blocks, in parallel over output rows.
+pub(crate) fn transpose<const C: usize>(src: &[f32], w: usize, h: usize) -> Vec<f32> {
+    use rayon::prelude::*;
+    let mut out = vec![0.0f32; src.len()];
+    const B: usize = 32;
+    out.par_chunks_mut(B * h * C)
+        .enumerate()
+        .for_each(|(bx, block)| {
+            // block = output rows x in [bx*B, bx*B + B) (output row x has h pixels).
+            let x0 = bx * B;
+            let nx = block.len() / (h * C);
+            for y0 in (0..h).step_by(B) {
+                let y1 = (y0 + B).min(h);
+                for y in y0..y1 {
+                    let srow = &src[(y * w + x0) * C..(y * w + x0 + nx) * C];
+                    for dx in 0..nx {
+                        let o = (dx * h + y) * C;
+                        block[o..o + C].copy_from_slice(&srow[dx * C..dx * C + C]);
+                    }
+                }
+            }
+        });
+    out
+}
+
+#[cfg(test)]
+mod tests;

@@ -32,7 +32,7 @@ fn rows<const N: usize, T: numpy::Element + Copy + Default>(
         )));
     }
     let mut out = vec![[T::default(); N]; view.nrows()];
-    match a.as_slice() {
+    match super::c_slice(a, name) {
         Ok(s) => {
             for (o, c) in out.iter_mut().zip(s.chunks_exact(N)) {
                 o.copy_from_slice(c);
@@ -59,7 +59,7 @@ fn face_rows(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>
         )));
     }
     let owned;
-    let flat: &[i64] = match a.as_slice() {
+    let flat: &[i64] = match super::c_slice(a, "faces") {
         Ok(s) => s,
         Err(_) => {
             owned = rows::<3, i64>(a, "faces")?

@@ -1,6 +1,309 @@
-//! Bindings for the image stage.
+//! Bindings for the image stage: shape and contiguity checks naming the argument, the GIL
+//! released around every kernel, numpy out. The Python layer (`motionblur.image`) converts
+//! dtypes and checks parameters first; these checks are the second line.
+use super::{c_slice, to_py_err};
+use crate::image::{self, CameraMatrices, Composite, DofParams};
+use crate::Error;
+use glam::DMat4;
+use numpy::{
+    IntoPyArray, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 
-pub(crate) fn register(_m: &Bound<'_, PyModule>) -> PyResult<()> {
+type PyOut<'py> = PyResult<Bound<'py, PyAny>>;
+
+/// `(h, w, channels)` float32 C-contiguous image: its data, width and height.
+fn img3<'a>(
+    a: &'a PyReadonlyArray3<'_, f32>,
+    name: &'static str,
+    channels: usize,
+) -> PyResult<(&'a [f32], usize, usize)> {
+    let s = a.shape();
+    if s[2] != channels {
+        return Err(to_py_err(Error::shape(
+            name,
+            format!("expected shape (H,W,{channels}), got {s:?}"),
+        )));
+    }
+    let data = c_slice(a, name).map_err(to_py_err)?;
+    Ok((data, s[1], s[0]))
+}
+
+fn img2<'a>(
+    a: &'a PyReadonlyArray2<'_, f32>,
+    name: &'static str,
+) -> PyResult<(&'a [f32], usize, usize)> {
+    let s = a.shape();
+    let data = c_slice(a, name).map_err(to_py_err)?;
+    Ok((data, s[1], s[0]))
+}
+
+fn same_size(name: &'static str, got: (usize, usize), want: (usize, usize)) -> PyResult<()> {
+    if got != want {
+        return Err(to_py_err(Error::shape(
+            name,
+            format!(
+                "expected {}x{} pixels like rgba, got {}x{}",
+                want.1, want.0, got.1, got.0
+            ),
+        )));
+    }
+    Ok(())
+}
+
+fn out3<'py>(py: Python<'py>, v: Vec<f32>, h: usize, w: usize, c: usize) -> PyOut<'py> {
+    Ok(v.into_pyarray(py).reshape([h, w, c])?.into_any())
+}
+
+fn out2<'py>(py: Python<'py>, v: Vec<f32>, h: usize, w: usize) -> PyOut<'py> {
+    Ok(v.into_pyarray(py).reshape([h, w])?.into_any())
+}
+
+fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<DMat4> {
+    if a.shape() != [4, 4] {
+        return Err(to_py_err(Error::shape(name, "expected shape (4,4)")));
+    }
+    let s = c_slice(a, name).map_err(to_py_err)?;
+    let mut m = [0.0f64; 16];
+    m.copy_from_slice(s);
+    // numpy rows -> glam columns.
+    Ok(DMat4::from_cols_array(&m).transpose())
+}
+
+fn cameras(
+    view: &PyReadonlyArray2<'_, f64>,
+    projection: &PyReadonlyArray2<'_, f64>,
+    previous_view: &PyReadonlyArray2<'_, f64>,
+    previous_projection: &PyReadonlyArray2<'_, f64>,
+) -> PyResult<(CameraMatrices, CameraMatrices)> {
+    let cur = CameraMatrices::new(
+        matrix(view, "camera")?,
+        matrix(projection, "camera")?,
+        "camera",
+    )
+    .map_err(to_py_err)?;
+    let prev = CameraMatrices::new(
+        matrix(previous_view, "previous_camera")?,
+        matrix(previous_projection, "previous_camera")?,
+        "previous_camera",
+    )
+    .map_err(to_py_err)?;
+    Ok((cur, prev))
+}
+
+/// Eq. 10 glow of alpha (H,W) f32 along direction over width pixels.
+#[pyfunction]
+fn _glow<'py>(
+    py: Python<'py>,
+    alpha: PyReadonlyArray2<'py, f32>,
+    direction: [f32; 2],
+    width: f32,
+) -> PyOut<'py> {
+    let (a, w, h) = img2(&alpha, "alpha")?;
+    let out = py
+        .detach(|| image::glow(a, w, h, direction, width))
+        .map_err(to_py_err)?;
+    out2(py, out, h, w)
+}
+
+/// Box blur of rgba (H,W,4) f32 along direction over length pixels.
+#[pyfunction]
+fn _box_blur<'py>(
+    py: Python<'py>,
+    rgba: PyReadonlyArray3<'py, f32>,
+    direction: [f32; 2],
+    length: f32,
+) -> PyOut<'py> {
+    let (a, w, h) = img3(&rgba, "rgba", 4)?;
+    let out = py
+        .detach(|| image::box_blur(a, w, h, direction, length))
+        .map_err(to_py_err)?;
+    out3(py, out, h, w, 4)
+}
+
+/// Opaque blur (box, glow, eq. 7) of rgba (H,W,4) f32.
+#[pyfunction]
+fn _opaque_blur<'py>(
+    py: Python<'py>,
+    rgba: PyReadonlyArray3<'py, f32>,
+    direction: [f32; 2],
+    length: f32,
+) -> PyOut<'py> {
+    let (a, w, h) = img3(&rgba, "rgba", 4)?;
+    let out = py
+        .detach(|| image::opaque_blur(a, w, h, direction, length))
+        .map_err(to_py_err)?;
+    out3(py, out, h, w, 4)
+}
+
+/// Opaque motion blur of rgba (H,W,4) f32 composited `mode` base (H,W,4) f32 or rgba itself.
+#[pyfunction]
+#[pyo3(signature = (rgba, base, direction, length, mode))]
+fn _opaque_motion_blur<'py>(
+    py: Python<'py>,
+    rgba: PyReadonlyArray3<'py, f32>,
+    base: Option<PyReadonlyArray3<'py, f32>>,
+    direction: [f32; 2],
+    length: f32,
+    mode: &str,
+) -> PyOut<'py> {
+    let (a, w, h) = img3(&rgba, "rgba", 4)?;
+    let mode = Composite::parse(mode).map_err(to_py_err)?;
+    let b = match &base {
+        Some(b) => {
+            let (b, bw, bh) = img3(b, "base", 4)?;
+            same_size("base", (bh, bw), (h, w))?;
+            Some(b)
+        }
+        None => None,
+    };
+    let out = py
+        .detach(|| image::opaque_motion_blur(a, b, w, h, direction, length, mode))
+        .map_err(to_py_err)?;
+    out3(py, out, h, w, 4)
+}
+
+/// Pyramid blur of rgba (H,W,4) f32 over `levels` levels.
+#[pyfunction]
+fn _pyramid_blur<'py>(
+    py: Python<'py>,
+    rgba: PyReadonlyArray3<'py, f32>,
+    levels: usize,
+) -> PyOut<'py> {
+    let (a, w, h) = img3(&rgba, "rgba", 4)?;
+    let out = py
+        .detach(|| image::pyramid_blur(a, w, h, levels))
+        .map_err(to_py_err)?;
+    out3(py, out, h, w, 4)
+}
+
+/// Pyramid glow (eqs. 8-9) of alpha (H,W) f32 over `levels` levels.
+#[pyfunction]
+fn _pyramid_glow<'py>(
+    py: Python<'py>,
+    alpha: PyReadonlyArray2<'py, f32>,
+    levels: usize,
+) -> PyOut<'py> {
+    let (a, w, h) = img2(&alpha, "alpha")?;
+    let out = py
+        .detach(|| image::pyramid_glow(a, w, h, levels))
+        .map_err(to_py_err)?;
+    out2(py, out, h, w)
+}
+
+/// Opaque pyramid blur of rgba (H,W,4) f32 over `levels` levels.
+#[pyfunction]
+fn _pyramid_opaque_blur<'py>(
+    py: Python<'py>,
+    rgba: PyReadonlyArray3<'py, f32>,
+    levels: usize,
+) -> PyOut<'py> {
+    let (a, w, h) = img3(&rgba, "rgba", 4)?;
+    let out = py
+        .detach(|| image::pyramid_opaque_blur(a, w, h, levels))
+        .map_err(to_py_err)?;
+    out3(py, out, h, w, 4)
+}
+
+/// Depth of field of rgba (H,W,4) f32 with depth (H,W) f32.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+fn _depth_of_field<'py>(
+    py: Python<'py>,
+    rgba: PyReadonlyArray3<'py, f32>,
+    depth: PyReadonlyArray2<'py, f32>,
+    focal_depth: f64,
+    focal_length: f64,
+    f_number: f64,
+    yfov: f64,
+    layers: usize,
+) -> PyOut<'py> {
+    let (a, w, h) = img3(&rgba, "rgba", 4)?;
+    let (d, dw, dh) = img2(&depth, "depth")?;
+    same_size("depth", (dh, dw), (h, w))?;
+    let p = DofParams {
+        focal_depth,
+        focal_length,
+        f_number,
+        yfov,
+        layers,
+    };
+    let out = py
+        .detach(|| image::depth_of_field(a, d, w, h, &p))
+        .map_err(to_py_err)?;
+    out3(py, out, h, w, 4)
+}
+
+/// Per-pixel velocity (H,W,2) f32 from depth (H,W) f32 and two cameras' view/projection (4,4) f64.
+#[pyfunction]
+fn _camera_velocity<'py>(
+    py: Python<'py>,
+    depth: PyReadonlyArray2<'py, f32>,
+    view: PyReadonlyArray2<'py, f64>,
+    projection: PyReadonlyArray2<'py, f64>,
+    previous_view: PyReadonlyArray2<'py, f64>,
+    previous_projection: PyReadonlyArray2<'py, f64>,
+) -> PyOut<'py> {
+    let (d, w, h) = img2(&depth, "depth")?;
+    let (cur, prev) = cameras(&view, &projection, &previous_view, &previous_projection)?;
+    let out = py
+        .detach(|| image::camera_velocity(d, w, h, &cur, &prev))
+        .map_err(to_py_err)?;
+    out3(py, out, h, w, 2)
+}
+
+/// Centred N-sample blur of rgba (H,W,4) f32 along velocity (H,W,2) f32.
+#[pyfunction]
+fn _velocity_blur<'py>(
+    py: Python<'py>,
+    rgba: PyReadonlyArray3<'py, f32>,
+    velocity: PyReadonlyArray3<'py, f32>,
+    samples: usize,
+) -> PyOut<'py> {
+    let (a, w, h) = img3(&rgba, "rgba", 4)?;
+    let (v, vw, vh) = img3(&velocity, "velocity", 2)?;
+    same_size("velocity", (vh, vw), (h, w))?;
+    let out = py
+        .detach(|| image::velocity_blur(a, v, w, h, samples))
+        .map_err(to_py_err)?;
+    out3(py, out, h, w, 4)
+}
+
+/// Chapman's camera motion blur of rgba (H,W,4) f32 with depth (H,W) f32.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+fn _camera_motion_blur<'py>(
+    py: Python<'py>,
+    rgba: PyReadonlyArray3<'py, f32>,
+    depth: PyReadonlyArray2<'py, f32>,
+    view: PyReadonlyArray2<'py, f64>,
+    projection: PyReadonlyArray2<'py, f64>,
+    previous_view: PyReadonlyArray2<'py, f64>,
+    previous_projection: PyReadonlyArray2<'py, f64>,
+    samples: usize,
+    scale: f64,
+) -> PyOut<'py> {
+    let (a, w, h) = img3(&rgba, "rgba", 4)?;
+    let (d, dw, dh) = img2(&depth, "depth")?;
+    same_size("depth", (dh, dw), (h, w))?;
+    let (cur, prev) = cameras(&view, &projection, &previous_view, &previous_projection)?;
+    let out = py
+        .detach(|| image::camera_motion_blur(a, d, w, h, &cur, &prev, samples, scale))
+        .map_err(to_py_err)?;
+    out3(py, out, h, w, 4)
+}
+
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(_glow, m)?)?;
+    m.add_function(wrap_pyfunction!(_box_blur, m)?)?;
+    m.add_function(wrap_pyfunction!(_opaque_blur, m)?)?;
+    m.add_function(wrap_pyfunction!(_opaque_motion_blur, m)?)?;
+    m.add_function(wrap_pyfunction!(_pyramid_blur, m)?)?;
+    m.add_function(wrap_pyfunction!(_pyramid_glow, m)?)?;
+    m.add_function(wrap_pyfunction!(_pyramid_opaque_blur, m)?)?;
+    m.add_function(wrap_pyfunction!(_depth_of_field, m)?)?;
+    m.add_function(wrap_pyfunction!(_camera_velocity, m)?)?;
+    m.add_function(wrap_pyfunction!(_velocity_blur, m)?)?;
+    m.add_function(wrap_pyfunction!(_camera_motion_blur, m)?)?;
     Ok(())
 }

@@ -1,5 +1,5 @@
 //! Bindings for the raster stage: numpy in, owned Rust data, GIL released, numpy out.
-use super::to_py_err;
+use super::{c_slice, to_py_err};
 use crate::raster::{self, Blend, Camera, Draw, Light, Options, Shading};
 use crate::Error;
 use glam::DMat4;
@@ -31,9 +31,7 @@ fn rows<T: numpy::Element + Copy + Default, const K: usize>(
             format!("expected shape (N,{K}), got {shape:?}"),
         ));
     }
-    let flat = a
-        .as_slice()
-        .map_err(|_| Error::shape(name, "must be C-contiguous"))?;
+    let flat = c_slice(a, name)?;
     Ok(flat
         .chunks_exact(K)
         .map(|c| {

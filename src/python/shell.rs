@@ -1,6 +1,282 @@
-//! Bindings for the blur-shell stage.
+//! Bindings for the blur-shell stage: `_BlurShell` and `_motion_silhouette`.
+//!
+//! Inputs arrive from the Python layer already converted to C-contiguous float64 / int64; the
+//! kernels borrow them (no copy) with the GIL released. Shapes are checked again here and every
+//! error names the argument.
+use numpy::ndarray::{Array1, Array2};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
+use rayon::prelude::*;
 
-pub(crate) fn register(_m: &Bound<'_, PyModule>) -> PyResult<()> {
+use super::{c_slice, to_py_err};
+use crate::shell::{motion_silhouette, BlurShell, ShellColor, ShellMesh, ShellOptions};
+use crate::Error;
+
+/// Borrow a C-contiguous (N,3) float64 array as rows.
+fn rows3<'a>(a: &'a PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<&'a [[f64; 3]]> {
+    let shape = a.shape();
+    if shape[1] != 3 {
+        return Err(to_py_err(Error::shape(
+            name,
+            format!("expected shape (N,3), got {shape:?}"),
+        )));
+    }
+    let flat = c_slice(a, name).map_err(to_py_err)?;
+    // SAFETY: `[f64; 3]` has the size of three f64 and the alignment of one; `flat` holds
+    // exactly `shape[0] * 3` values, so the rows cover it and nothing more.
+    Ok(unsafe { std::slice::from_raw_parts(flat.as_ptr().cast::<[f64; 3]>(), shape[0]) })
+}
+
+/// (F,3) int64 faces to `u32` triples, every index in [0, nv).
+fn face_rows(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>> {
+    let shape = a.shape();
+    if shape[1] != 3 || shape[0] == 0 {
+        return Err(to_py_err(Error::shape(
+            "faces",
+            format!("expected shape (F,3), F > 0, got {shape:?}"),
+        )));
+    }
+    let flat = c_slice(a, "faces").map_err(to_py_err)?;
+    let nv = nv as i64;
+    let out: Vec<[u32; 3]> = flat
+        .par_chunks_exact(3)
+        .map(|t| {
+            if t.iter().all(|x| (0..nv).contains(x)) {
+                [t[0] as u32, t[1] as u32, t[2] as u32]
+            } else {
+                [u32::MAX; 3]
+            }
+        })
+        .collect();
+    if let Some(i) = out.par_iter().position_first(|t| t[0] == u32::MAX) {
+        return Err(to_py_err(Error::value(
+            "faces",
+            format!("face {i} has an index out of range [0, {nv})"),
+        )));
+    }
+    Ok(out)
+}
+
+fn array2<'py, T: numpy::Element + Copy, const N: usize>(
+    py: Python<'py>,
+    v: Vec<[T; N]>,
+) -> Bound<'py, PyArray2<T>> {
+    let n = v.len();
+    let flat: Vec<T> = v.into_iter().flatten().collect();
+    Array2::from_shape_vec((n, N), flat)
+        .expect("length matches")
+        .into_pyarray(py)
+}
+
+type I8Pair<'py> = (Bound<'py, PyArray1<i8>>, Bound<'py, PyArray1<i8>>);
+
+type ShellArrays<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<i64>>,
+    Bound<'py, PyArray2<f32>>,
+    Bound<'py, PyArray2<f32>>,
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<i32>>,
+);
+
+fn shell_arrays(py: Python<'_>, m: ShellMesh) -> ShellArrays<'_> {
+    let faces: Vec<[i64; 3]> = m.faces.iter().map(|t| t.map(i64::from)).collect();
+    (
+        array2(py, m.vertices),
+        array2(py, faces),
+        array2(py, m.rgba),
+        array2(py, m.normals),
+        Array1::from_iter(m.face.iter().map(|&f| i64::from(f))).into_pyarray(py),
+        Array1::from_iter(m.step.iter().map(|&s| i32::from(s))).into_pyarray(py),
+    )
+}
+
+/// The Rust blur shell. See `motionblur.BlurShell`.
+#[pyclass(name = "_BlurShell", module = "motionblur._core")]
+pub struct PyBlurShell {
+    inner: BlurShell,
+}
+
+#[pymethods]
+impl PyBlurShell {
+    #[new]
+    #[pyo3(signature = (faces, n_vertices, subdivisions, hysteresis, initial_alpha, mask=None, color=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        faces: PyReadonlyArray2<'_, i64>,
+        n_vertices: usize,
+        subdivisions: u32,
+        hysteresis: u32,
+        initial_alpha: f32,
+        mask: Option<PyReadonlyArray1<'_, bool>>,
+        color: Option<PyReadonlyArray2<'_, f32>>,
+    ) -> PyResult<Self> {
+        let f = face_rows(&faces, n_vertices)?;
+        let mask = mask.map(|m| m.as_array().to_vec());
+        let color = match color {
+            None => ShellColor::Uniform([1.0; 3]),
+            Some(c) => {
+                let view = c.as_array();
+                if view.ncols() != 3 {
+                    let shape = view.shape().to_vec();
+                    return Err(to_py_err(Error::shape(
+                        "color",
+                        format!("expected (3,) or (V,3), got {shape:?}"),
+                    )));
+                }
+                let rows: Vec<[f32; 3]> = view
+                    .rows()
+                    .into_iter()
+                    .map(|r| [r[0], r[1], r[2]])
+                    .collect();
+                if rows.len() == 1 {
+                    ShellColor::Uniform(rows[0])
+                } else {
+                    ShellColor::PerVertex(rows)
+                }
+            }
+        };
+        let opts = ShellOptions {
+            subdivisions,
+            hysteresis,
+            initial_alpha,
+        };
+        let inner = py
+            .detach(move || BlurShell::new(f, n_vertices, opts, mask, color))
+            .map_err(to_py_err)?;
+        Ok(PyBlurShell { inner })
+    }
+
+    #[pyo3(signature = (vertices, normals=None))]
+    fn update(
+        &mut self,
+        py: Python<'_>,
+        vertices: PyReadonlyArray2<'_, f64>,
+        normals: Option<PyReadonlyArray2<'_, f64>>,
+    ) -> PyResult<()> {
+        let v = rows3(&vertices, "vertices")?;
+        let n = normals.as_ref().map(|n| rows3(n, "normals")).transpose()?;
+        let inner = &mut self.inner;
+        py.detach(move || inner.update(v, n)).map_err(to_py_err)
+    }
+
+    #[pyo3(signature = (vertices=None, normals=None))]
+    fn build<'py>(
+        &self,
+        py: Python<'py>,
+        vertices: Option<PyReadonlyArray2<'py, f64>>,
+        normals: Option<PyReadonlyArray2<'py, f64>>,
+    ) -> PyResult<ShellArrays<'py>> {
+        let v = vertices
+            .as_ref()
+            .map(|v| rows3(v, "vertices"))
+            .transpose()?;
+        let n = normals.as_ref().map(|n| rows3(n, "normals")).transpose()?;
+        let inner = &self.inner;
+        let m = py.detach(move || inner.build(v, n)).map_err(to_py_err)?;
+        Ok(shell_arrays(py, m))
+    }
+
+    fn reset(&mut self) {
+        self.inner.reset();
+    }
+
+    #[getter]
+    fn updates(&self) -> u64 {
+        self.inner.updates()
+    }
+
+    #[getter]
+    fn update_index(&self) -> Option<usize> {
+        self.inner.update_index()
+    }
+
+    #[getter]
+    fn n_vertices(&self) -> usize {
+        self.inner.n_vertices()
+    }
+
+    #[getter]
+    fn n_faces(&self) -> usize {
+        self.inner.faces().len()
+    }
+
+    /// (facing i8 (V,), last edge i8 (F,) -1 none, since i64 (F,), fade i32 (F,), run i32 (F,)).
+    #[allow(clippy::type_complexity)]
+    fn _state<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> (
+        Bound<'py, PyArray1<i8>>,
+        Bound<'py, PyArray1<i8>>,
+        Bound<'py, PyArray1<i64>>,
+        Bound<'py, PyArray1<i32>>,
+        Bound<'py, PyArray1<i32>>,
+    ) {
+        let st = self.inner.state();
+        let last = st
+            .iter()
+            .map(|s| if s.last > 2 { -1 } else { s.last as i8 });
+        (
+            Array1::from_vec(self.inner.facing().to_vec()).into_pyarray(py),
+            Array1::from_iter(last).into_pyarray(py),
+            Array1::from_iter(st.iter().map(|s| i64::from(s.since))).into_pyarray(py),
+            Array1::from_iter(st.iter().map(|s| i32::from(s.fade))).into_pyarray(py),
+            Array1::from_iter(st.iter().map(|s| i32::from(s.run))).into_pyarray(py),
+        )
+    }
+
+    /// The ring element of face `face` recorded `age` updates ago: (edge 0..2, on silhouette),
+    /// or None past the strip's run.
+    fn _element(&self, face: usize, age: usize) -> Option<(u8, bool)> {
+        self.inner
+            .element(face, age)
+            .map(|c| (c & 3, c & crate::shell::ON_SILHOUETTE != 0))
+    }
+}
+
+/// (facing i8 (V,): +1 front, -1 back, 0 neutral; edge i8 (F,): k of edge face[k] -> face[k+1],
+/// -1 none). The GIL is released.
+#[pyfunction]
+#[pyo3(signature = (vertices, previous_vertices, faces, normals=None))]
+fn _motion_silhouette<'py>(
+    py: Python<'py>,
+    vertices: PyReadonlyArray2<'py, f64>,
+    previous_vertices: PyReadonlyArray2<'py, f64>,
+    faces: PyReadonlyArray2<'py, i64>,
+    normals: Option<PyReadonlyArray2<'py, f64>>,
+) -> PyResult<I8Pair<'py>> {
+    let v = rows3(&vertices, "vertices")?;
+    let p = rows3(&previous_vertices, "previous_vertices")?;
+    let n = normals.as_ref().map(|n| rows3(n, "normals")).transpose()?;
+    if p.len() != v.len() {
+        return Err(to_py_err(Error::shape(
+            "previous_vertices",
+            format!("expected {} rows (as vertices), got {}", v.len(), p.len()),
+        )));
+    }
+    if let Some(n) = n {
+        if n.len() != v.len() {
+            return Err(to_py_err(Error::shape(
+                "normals",
+                format!("expected {} rows (as vertices), got {}", v.len(), n.len()),
+            )));
+        }
+    }
+    let f = face_rows(&faces, v.len())?;
+    let (fac, edge) = py.detach(move || motion_silhouette(v, p, &f, n));
+    let edge = edge.into_iter().map(|e| if e > 2 { -1 } else { e as i8 });
+    Ok((
+        Array1::from_vec(fac).into_pyarray(py),
+        Array1::from_iter(edge).into_pyarray(py),
+    ))
+}
+
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyBlurShell>()?;
+    m.add_function(wrap_pyfunction!(_motion_silhouette, m)?)?;
     Ok(())
 }

@@ -1,0 +1,378 @@
+"""The accumulation buffer (OpenGL Programming for the Advanced Programmer, section 14.2).
+
+The frame is the weighted mean of N renders at shutter times ``t_i``: stratified ``(i + 0.5) / N``
+or jittered ``(i + u_i) / N``, each weighted by the shutter filter's integral over its stratum
+``[i / N, (i + 1) / N]``. Static objects (and, with a still camera, everything that does not
+move) are rasterized once into a static layer; each time sample then rasterizes only the moving
+objects, inside the pixel window their motion covers, and composites them with the static layer
+per sample by depth before accumulating. The dimmed-blur variant (``dim < 1``) loads the static
+scene with weight ``1 - dim`` and accumulates the full scene with weight ``dim``, which makes the
+blurred objects look faster (fainter).
+
+:class:`Sequence` keeps the accumulation buffer's running total across consecutive frames.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+
+from .. import _core
+from .._validate import as_float, as_int
+from ..raster import Camera, Frame
+from ..render import (
+    Layer,
+    aligned_window,
+    composite,
+    object_draw,
+    paste,
+    raster_layer,
+    register,
+    resolve,
+    static_layer,
+    supersampled,
+    window_projection,
+)
+from ..scene import Object, Scene
+
+__all__ = ["accumulation", "sample_times", "Sequence"]
+
+
+def sample_times(scene: Scene, n: int, sampling: str = "stratified", seed: int = 0):
+    """(times (N,), weights (N,)) of N shutter samples: stratified or jittered times, weights the
+    shutter filter's integral over each stratum (summing to 1)."""
+    n = as_int(n, "samples", minimum=1, maximum=1 << 16)
+    if sampling == "stratified":
+        u = np.full(n, 0.5)
+    elif sampling == "jittered":
+        u = np.random.default_rng(as_int(seed, "seed", minimum=0)).random(n)
+    else:
+        raise ValueError(f"sampling: expected 'stratified' or 'jittered', got {sampling!r}")
+    times = (np.arange(n) + u) / n
+    w = np.diff(scene.shutter_cdf(np.arange(n + 1) / n))
+    return times, w / w.sum()
+
+
+def _bounds(camera: Camera, pts: np.ndarray):
+    """(x0, y0, x1, y1) pixel bounds of the points, clamped to the image (None when off the
+    image), or the whole image when a point is behind the camera."""
+    w, h = camera.width, camera.height
+    vp = camera.view_projection
+    clip = pts @ vp[:3, :3].T + vp[:3, 3]
+    wc = pts @ vp[3, :3] + vp[3, 3]
+    if (wc <= 1e-9).any():
+        return 0, 0, w, h
+    x = (clip[:, 0] / wc + 1.0) * 0.5 * w
+    y = (1.0 - clip[:, 1] / wc) * 0.5 * h
+    x0, y0 = max(0, int(np.floor(x.min())) - 1), max(0, int(np.floor(y.min())) - 1)
+    x1, y1 = min(w, int(np.ceil(x.max())) + 1), min(h, int(np.ceil(y.max())) + 1)
+    if x0 >= x1 or y0 >= y1:
+        return None
+    return x0, y0, x1, y1
+
+
+def sample_windows(camera: Camera, times, objects) -> list:
+    """Per time of ``times``, the pixel rectangle (x0, y0, x1, y1) of ``camera`` holding
+    ``objects`` at that time (None when they are off the image). Rigid objects are bounded by
+    their transformed bounding box (the projection of a box holds the projection of its content
+    when the box is in front of the camera); the whole image when a point is behind the camera."""
+    corners = {}
+    for obj in objects:
+        if not (obj.motion is not None and obj.motion.is_deforming):
+            v = obj.mesh.vertices
+            a, b = v.min(axis=0), v.max(axis=0)
+            corners[id(obj)] = np.array(
+                [[x, y, z] for x in (a[0], b[0]) for y in (a[1], b[1]) for z in (a[2], b[2])]
+            )
+    out = []
+    for t in times:
+        pts = []
+        for obj in objects:
+            if id(obj) in corners:
+                m = obj.transform_at(t)
+                pts.append(corners[id(obj)] @ m[:3, :3].T + m[:3, 3])
+            else:
+                pts.append(obj.world_vertices(t))
+        out.append(_bounds(camera, np.concatenate(pts)))
+    return out
+
+
+def moving_window(scene: Scene, camera: Camera, times, objects) -> tuple[int, int, int, int] | None:
+    """The union of :func:`sample_windows` (None when the objects never reach the image)."""
+    wins = [w for w in sample_windows(camera, times, objects) if w is not None]
+    if not wins:
+        return None
+    a = np.array(wins)
+    return int(a[:, 0].min()), int(a[:, 1].min()), int(a[:, 2].max()), int(a[:, 3].max())
+
+
+def _facing_faces(obj: Object, faces: np.ndarray, eye: np.ndarray) -> np.ndarray:
+    """The faces of a rigidly translating ``obj`` that face ``eye`` at some time of the shutter
+    (all faces for other motions), conservatively: near edge-on faces are kept."""
+    m = obj.motion
+    if m is None or m.is_deforming:
+        return faces
+    keys = m.transforms
+    if np.abs(keys[:, :3, :3] - keys[0, :3, :3]).max() > 1e-12 * (1.0 + np.abs(keys[0, :3, :3]).max()):
+        return faces
+    lin = keys[0, :3, :3]
+    scale = np.cbrt(np.linalg.det(lin))
+    rot = lin / scale
+    v = obj.mesh.vertices
+    a = v[faces[:, 0]]
+    n = np.cross(v[faces[:, 1]] - a, v[faces[:, 2]] - a)
+    nlen = np.linalg.norm(n, axis=1)
+    keep = np.zeros(len(faces), dtype=bool)
+    for key in keys:  # the held ends and every keyframe in between
+        e = rot.T @ (eye - key[:3, 3]) / scale  # the eye in object space
+        d = e - a
+        keep |= np.einsum("ij,ij->i", n, d) > -1e-9 * nlen * np.linalg.norm(d, axis=1)
+    if keep.all():
+        return faces
+    return np.ascontiguousarray(faces[keep])
+
+
+def _crop(layer: Layer, win) -> Layer:
+    x0, y0, x1, y1 = win
+    return Layer(layer.rgba[y0:y1, x0:x1], layer.depth[y0:y1, x0:x1], layer.ids[y0:y1, x0:x1])
+
+
+class _Painter:
+    """Rasterizes a fixed set of objects at any shutter time with the least per-sample work.
+
+    Faces, colours and object-space normals are converted once. A shading group holding a
+    single rigid object is drawn in object space with the model transform folded into the view
+    matrix (and the lights turned into object space), so no vertex is touched per sample; other
+    groups get world vertices (and rotated normals) per sample. With a still camera ``eye``, a
+    rigidly translating object (every keyframe with the same rotation and scale) loses the faces
+    that face away from the eye during the whole shutter, once, before the sample loop: along a
+    straight segment ``n . (eye - p(t))`` is linear in t, so a face back-facing at every keyframe
+    is back-facing throughout and the rasterizer would cull it at every sample anyway."""
+
+    def __init__(self, scene: Scene, objects: list[tuple[int, Object]], eye=None):
+        self.scene = scene
+        self.groups: dict[str, list] = {}
+        for k, o in objects:
+            faces = np.ascontiguousarray(o.mesh.faces, dtype=np.int64)
+            if eye is not None:
+                faces = _facing_faces(o, faces, np.asarray(eye, dtype=np.float64))
+            rgba = np.ascontiguousarray(np.atleast_2d(o.rgba), dtype=np.float32)
+            normals = o.mesh.vertex_normals().astype(np.float32) if o.shading == "lambert" else None
+            self.groups.setdefault(o.shading, []).append((k, o, faces, rgba, normals))
+        self.lights = [(np.asarray(li.direction), tuple(map(float, li.intensity))) for li in scene.lights]
+        self.ambient = tuple(map(float, scene.ambient))
+
+    def _light_args(self, rotation=None):
+        if rotation is None:
+            return [(tuple(map(float, d)), k) for d, k in self.lights]
+        return [(tuple(map(float, rotation.T @ d)), k) for d, k in self.lights]
+
+    def layer(self, t: float, view: np.ndarray, projection: np.ndarray, width: int, height: int) -> Layer:
+        out = None
+        for shading, items in self.groups.items():
+            if len(items) == 1 and not (items[0][1].motion is not None and items[0][1].motion.is_deforming):
+                k, o, faces, rgba, normals = items[0]
+                m = o.transform_at(t)
+                r = m[:3, :3] / np.cbrt(np.linalg.det(m[:3, :3]))
+                args = [(o.mesh.vertices, faces, rgba, normals, k, True, None)]
+                vm, lights = view @ m, self._light_args(r)
+            else:
+                args = []
+                for k, o, faces, rgba, normals in items:
+                    v = np.ascontiguousarray(o.world_vertices(t))
+                    n = None
+                    if normals is not None and not (o.motion is not None and o.motion.is_deforming):
+                        r = o.transform_at(t)[:3, :3]
+                        n = np.ascontiguousarray(
+                            normals @ (r / np.cbrt(np.linalg.det(r))).T, dtype=np.float32
+                        )
+                    args.append((v, faces, rgba, n, k, True, None))
+                vm, lights = view, self._light_args()
+            rgba_, depth, ids, _vel, _st = _core._rasterize(
+                np.ascontiguousarray(vm),
+                projection,
+                width,
+                height,
+                args,
+                1,
+                "exact",
+                shading,
+                lights,
+                self.ambient,
+            )
+            layer = Layer(rgba_, depth, ids)
+            out = layer if out is None else composite(out, layer)
+        return out if out is not None else Layer.empty(height, width)
+
+
+@register(
+    "accumulation",
+    sweep=[{"samples": n} for n in (1, 2, 4, 8, 16, 32, 64, 128, 256)],
+    applies=lambda scene: True,
+)
+def accumulation(
+    scene: Scene, samples: int = 16, sampling: str = "stratified", seed: int = 0, dim=1.0, aa: int = 1
+):
+    """Accumulation buffer: the weighted mean of ``samples`` renders over the shutter.
+
+    Options: ``samples`` N >= 1 time samples; ``sampling`` ``"stratified"`` or ``"jittered"``
+    (``seed`` for the jitter); ``dim`` in (0, 1], the dimmed-blur variant's weight of the moving
+    scene (1: plain accumulation); ``aa`` 1, 2 or 4 spatial samples per pixel along each axis.
+    Returns a Frame (rgba premultiplied; depth and ids of the sample nearest the reference time).
+    ``stats``: ``samples``, ``draw_calls`` (rasterizer passes over moving geometry),
+    ``static_draws`` (0 or 1) and ``window`` (the pixel rectangle redrawn per sample).
+    """
+    times, weights = sample_times(scene, samples, sampling, seed)
+    dim = as_float(dim, "dim")
+    if not 0.0 < dim <= 1.0:
+        raise ValueError(f"dim: must be in (0, 1], got {dim}")
+    aa = as_int(aa, "aa")
+    if aa not in (1, 2, 4):
+        raise ValueError(f"aa: must be 1, 2 or 4, got {aa}")
+    ref = int(np.argmin(np.abs(times - scene.reference_t)))
+    stats = {"samples": len(times), "draw_calls": 0, "static_draws": 0, "window": None}
+    everything = list(enumerate(scene.objects))
+
+    if scene.camera_moves:
+        # Everything moves on screen: whole frames at every sample.
+        painter = _Painter(scene, everything)
+        acc = None
+        keep = None
+        for i, t in enumerate(times):
+            cam = supersampled(scene.camera_at(t), aa)
+            layer = painter.layer(t, cam.view, cam.projection, cam.width, cam.height)
+            stats["draw_calls"] += 1
+            acc = (
+                layer.rgba * np.float32(weights[i])
+                if acc is None
+                else acc + layer.rgba * np.float32(weights[i])
+            )
+            if i == ref:
+                keep = layer
+        if dim < 1.0:
+            cam = supersampled(scene.camera_at(scene.reference_t), aa)
+            static = [(o, object_draw(o, scene.reference_t, k)) for k, o in everything if not o.is_moving]
+            acc = (1.0 - dim) * raster_layer(cam, scene, static).rgba + dim * acc
+        frame = resolve(Layer(acc.astype(np.float32), keep.depth, keep.ids), aa)
+        frame.stats.update(stats)
+        return frame
+
+    cam = supersampled(scene.camera, aa)
+    static_objs = [(k, o) for k, o in everything if not o.is_moving]
+    moving = [(k, o) for k, o in everything if o.is_moving]
+    static = static_layer(scene, cam, static_objs, aa)
+    stats["static_draws"] = 0 if (static.cached or not static_objs) else 1
+    stats["static_cached"] = static.cached
+    per_sample = sample_windows(cam, times, [o for _, o in moving]) if moving else []
+    found = [w for w in per_sample if w is not None]
+    if not found:
+        frame = Frame(
+            static.rgba.copy(), static.depth.copy(), static.ids.copy(), np.zeros((*static.ids.shape, 2))
+        )
+        frame.stats.update(stats)
+        return frame
+    a = np.array(found)
+    win = (int(a[:, 0].min()), int(a[:, 1].min()), int(a[:, 2].max()), int(a[:, 3].max()))
+    win = aligned_window(win, aa, cam.width, cam.height)
+    stats["window"] = win
+    x0, y0, x1, y1 = win
+    view = np.ascontiguousarray(cam.view)
+    base = _crop(static.layer, win)
+    base = Layer(np.ascontiguousarray(base.rgba), np.ascontiguousarray(base.depth), base.ids)
+    painter = _Painter(scene, moving, eye=cam.pose[:3, 3])
+    # Per sample i the composite is M_i over S where M_i is nearer, else S (exact for an opaque
+    # static layer), so sum_i w_i out_i = A + S (1 - A.alpha) with A = sum_i w_i M_i [M_i nearer]:
+    # the static layer is composited once, after the loop. Each sample is rasterized only inside
+    # its own rectangle (the moving objects' bounds at that time) and added there.
+    has_static = bool(np.isfinite(base.depth).any())
+    exact_sum = not has_static or static.opaque
+    acc = np.zeros((y1 - y0, x1 - x0, 4), np.float32)
+    keep = Layer(base.rgba, base.depth.copy(), base.ids.copy())  # only depth and ids are written
+    for i, (t, sw) in enumerate(zip(times, per_sample)):
+        w = np.float32(weights[i])
+        if sw is None:
+            if not exact_sum:
+                acc += w * base.rgba
+            continue
+        sx0, sy0, sx1, sy1 = sw[0] - x0, sw[1] - y0, sw[2] - x0, sw[3] - y0  # inside the window
+        proj = np.ascontiguousarray(window_projection(cam.projection, cam.width, cam.height, sw))
+        layer = painter.layer(t, view, proj, sx1 - sx0, sy1 - sy0)
+        stats["draw_calls"] += 1
+        sub = Layer(base.rgba[sy0:sy1, sx0:sx1], base.depth[sy0:sy1, sx0:sx1], base.ids[sy0:sy1, sx0:sx1])
+        if i == ref:
+            c = composite(layer, sub)
+            keep.depth[sy0:sy1, sx0:sx1], keep.ids[sy0:sy1, sx0:sx1] = c.depth, c.ids
+        if exact_sum:
+            # one fused pass in Rust: acc += w * M where M is in front of the static surface
+            limit = base.depth if has_static else None
+            _core._accumulate(acc, layer.rgba, layer.depth, limit, float(w), sx0, sy0)
+        else:
+            full = base.rgba.copy()
+            full[sy0:sy1, sx0:sx1] = composite(layer, sub).rgba
+            acc += w * full
+    if has_static and static.opaque:
+        _core._over(acc, base.rgba)
+    if dim < 1.0:
+        acc = (1.0 - dim) * base.rgba + dim * acc
+    frame = paste(static, win, Layer(acc, keep.depth, keep.ids), aa)
+    frame.stats.update(stats)
+    return frame
+
+
+class Sequence:
+    """The accumulation buffer's running total across consecutive frames.
+
+    ``render_at(t) -> (H,W,4) array or Frame`` renders the scene sharp at (animation) time ``t``;
+    ``samples`` N renders are averaged per frame, ``step`` apart in time. Frame k (from 0) is the
+    mean of the renders at ``t0 + (k + j) * step``, j = 0..N-1. The first :meth:`next` draws N
+    times; every later one draws twice: it adds the newest render and subtracts the oldest one,
+    rendered again (``keep_images=False``, the book's way) or kept from before
+    (``keep_images=True``: N images of memory, one draw per frame). The total is kept in float64
+    so the subtraction does not drift. ``draws`` counts the calls to ``render_at``.
+    """
+
+    def __init__(
+        self, render_at, samples: int, step: float = 1.0, t0: float = 0.0, keep_images: bool = False
+    ):
+        if not callable(render_at):
+            raise TypeError("render_at: expected a callable t -> image")
+        self.render_at = render_at
+        self.samples = as_int(samples, "samples", minimum=1)
+        self.step = as_float(step, "step")
+        if not self.step > 0:
+            raise ValueError(f"step: must be > 0, got {self.step}")
+        self.t0 = as_float(t0, "t0")
+        self.keep_images = bool(keep_images)
+        self.frame_index = -1
+        self.draws = 0
+        self._total = None
+        self._kept: deque = deque()
+
+    def _draw(self, t: float) -> np.ndarray:
+        self.draws += 1
+        img = self.render_at(t)
+        img = img.rgba if isinstance(img, Frame) else img
+        return np.asarray(img, dtype=np.float64)
+
+    def time(self, j: int) -> float:
+        """Time of the j-th render of the whole sequence."""
+        return self.t0 + j * self.step
+
+    def next(self) -> np.ndarray:
+        """The next frame: (H,W,4) float32 mean of the last N renders."""
+        n = self.samples
+        self.frame_index += 1
+        k = self.frame_index
+        if self._total is None:
+            imgs = [self._draw(self.time(j)) for j in range(n)]
+            self._total = np.sum(imgs, axis=0)
+            if self.keep_images:
+                self._kept.extend(imgs)
+        else:
+            newest = self._draw(self.time(k + n - 1))
+            oldest = self._kept.popleft() if self.keep_images else self._draw(self.time(k - 1))
+            self._total += newest - oldest
+            if self.keep_images:
+                self._kept.append(newest)
+        return (self._total / n).astype(np.float32)

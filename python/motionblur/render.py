@@ -1,0 +1,341 @@
+"""``render(scene, method=..., **options) -> Frame`` and the registry of rendering methods.
+
+Every method lives in its own module of :mod:`motionblur.methods` and registers itself with
+:func:`register`::
+
+    @register("accumulation", sweep=[{"samples": n} for n in (1, 4, 16)], applies=lambda scene: True)
+    def accumulation(scene, samples=16, ...) -> Frame: ...
+
+``sweep`` lists the option sets the speed-against-error report (``motionblur.bench``) runs for
+the method on every built-in scene where ``applies(scene)`` is true.
+
+This module also holds the layer helpers the methods share: drawing objects at a time through
+one rasterizer call per shading mode, compositing layers per sample by depth, supersampling by
+rendering at ``samples`` times the size and box-filtering down, and the background.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import OrderedDict
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import _core
+from .raster import Camera, Draw, Frame, rasterize
+from .scene import Object, Scene
+
+__all__ = ["render", "register", "METHODS", "MethodSpec", "methods_for"]
+
+
+@dataclass
+class MethodSpec:
+    """A registered method: its function ``fn(scene, **options) -> Frame``, the option sets
+    ``sweep`` the benchmark runs, ``applies(scene) -> bool`` and a one-line description."""
+
+    name: str
+    fn: Callable[..., Frame]
+    sweep: list[dict] = field(default_factory=list)
+    applies: Callable[[Scene], bool] = lambda scene: True
+    doc: str = ""
+
+
+#: Every rendering method, by name (filled by ``@register`` when :mod:`motionblur.methods` loads).
+METHODS: dict[str, MethodSpec] = {}
+
+
+def register(name: str, sweep=(), applies: Callable[[Scene], bool] | None = None):
+    """Decorator: register ``fn(scene, **options) -> Frame`` as method ``name`` (see the module docs)."""
+    if not isinstance(name, str) or not name:
+        raise TypeError("name: expected a non-empty string")
+
+    def deco(fn):
+        doc = (fn.__doc__ or "").strip().splitlines()
+        METHODS[name] = MethodSpec(
+            name=name,
+            fn=fn,
+            sweep=[dict(s) for s in sweep],
+            applies=applies if applies is not None else (lambda scene: True),
+            doc=doc[0] if doc else "",
+        )
+        return fn
+
+    return deco
+
+
+def methods_for(scene: Scene) -> list[str]:
+    """Names of the registered methods that apply to ``scene``."""
+    _load()
+    return [n for n, m in METHODS.items() if m.applies(scene)]
+
+
+def _load() -> None:
+    from . import methods  # noqa: F401  (imports every method module, which registers itself)
+
+
+def render(scene: Scene, method: str = "accumulation", **options) -> Frame:
+    """Render ``scene`` with the registered ``method`` (``accumulation``, ``motion_volume``, ...).
+
+    Returns a :class:`Frame` of ``scene.camera`` size: ``rgba`` (H,W,4) float32 premultiplied
+    linear RGBA composited over ``scene.background``, ``depth`` (H,W) float32, ``ids`` (H,W) int32
+    (object index in ``scene.objects``, -1 background), ``velocity`` (H,W,2) and ``stats`` with
+    ``method``, ``options`` and ``ms`` (wall time of the whole call). Unknown methods and options
+    raise ValueError / TypeError.
+    """
+    _load()
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
+    if not isinstance(method, str):
+        raise TypeError(f"method: expected a string, got {type(method).__name__}")
+    if method not in METHODS:
+        raise ValueError(f"method: unknown method {method!r}; expected one of {', '.join(sorted(METHODS))}")
+    t0 = time.perf_counter()
+    frame = METHODS[method].fn(scene, **options)
+    frame = over_background(frame, scene.background)
+    frame.stats["method"] = method
+    frame.stats["options"] = dict(options)
+    frame.stats["ms"] = (time.perf_counter() - t0) * 1e3
+    return frame
+
+
+# ---------------------------------------------------------------- layers shared by the methods
+
+
+def over_background(frame: Frame, background) -> Frame:
+    """``frame`` composited over straight RGBA ``background`` (4,) (premultiplied *over*)."""
+    bg = np.asarray(background, dtype=np.float32)
+    if bg[3] == 0.0 and not bg[:3].any():
+        return frame
+    pre = np.concatenate([bg[:3] * bg[3], bg[3:]]).astype(np.float32)
+    rgba = frame.rgba + (1.0 - frame.rgba[..., 3:4]) * pre
+    return Frame(rgba, frame.depth, frame.ids, frame.velocity, frame.stats)
+
+
+def supersampled(camera: Camera, samples: int) -> Camera:
+    """``camera`` at ``samples`` times its width and height (pixel centres = the sub-samples)."""
+    if samples == 1:
+        return camera
+    return Camera(
+        camera.pose, camera.yfov, camera.width * samples, camera.height * samples, camera.znear, camera.zfar
+    )
+
+
+def downsample(a: np.ndarray, samples: int) -> np.ndarray:
+    """Box-filter (H*s, W*s, ...) down to (H, W, ...) (mean over each s x s block), float32."""
+    if samples == 1:
+        return a
+    out = None
+    for dy in range(samples):
+        for dx in range(samples):
+            part = a[dy::samples, dx::samples]
+            out = part.astype(np.float32, copy=True) if out is None else np.add(out, part, out=out)
+    out *= np.float32(1.0 / (samples * samples))
+    return out
+
+
+def resolve_arrays(layer: Layer, samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(rgba, depth, ids) at pixel size from a supersampled layer: colour box-filtered, depth and
+    ids of the nearest sample of each pixel (the first in row order on ties)."""
+    rgba = downsample(layer.rgba, samples)
+    if samples == 1:
+        return rgba, layer.depth, layer.ids
+    depth = layer.depth[::samples, ::samples].copy()
+    ids = layer.ids[::samples, ::samples].copy()
+    for dy in range(samples):
+        for dx in range(samples):
+            if dx == dy == 0:
+                continue
+            d = layer.depth[dy::samples, dx::samples]
+            m = d < depth
+            depth[m] = d[m]
+            ids[m] = layer.ids[dy::samples, dx::samples][m]
+    return rgba, depth, ids
+
+
+def resolve(layer: Layer, samples: int) -> Frame:
+    """A full-size Frame from a supersampled layer (see :func:`resolve_arrays`)."""
+    rgba, depth, ids = resolve_arrays(layer, samples)
+    return Frame(rgba, depth, ids, np.zeros((*rgba.shape[:2], 2), np.float32))
+
+
+# ---------------------------------------------------------------- the static layer, kept across frames
+
+_STATIC_CACHE: OrderedDict = OrderedDict()
+_STATIC_CACHE_SIZE = 4
+
+
+def clear_static_cache() -> None:
+    """Forget the static layers kept across frames."""
+    _STATIC_CACHE.clear()
+
+
+def _fingerprint(scene: Scene, camera: Camera, objects, aa: int) -> tuple:
+    parts = []
+    for k, o in objects:
+        motion = None
+        if o.motion is not None:
+            motion = id(o.motion) if o.motion.is_deforming else o.motion.transform_at(0.0).tobytes()
+        parts.append((k, id(o.mesh), o.shading, o.color.tobytes(), motion))
+    lights = tuple((li.direction.tobytes(), li.intensity.tobytes()) for li in scene.lights)
+    cam = (camera.view.tobytes(), camera.projection.tobytes(), camera.width, camera.height)
+    return (cam, aa, tuple(parts), lights, scene.ambient.tobytes())
+
+
+class Static:
+    """The static layer of a frame: ``layer`` (supersampled Layer) and its resolved pixels
+    ``rgba``, ``depth``, ``ids`` (read-only; copy before writing); ``cached`` tells whether it
+    came from the cache."""
+
+    def __init__(self, layer: Layer, aa: int, cached: bool = False):
+        self.layer = layer
+        self.rgba, self.depth, self.ids = resolve_arrays(layer, aa)
+        self.opaque = True
+        self.cached = cached
+
+
+def static_layer(scene: Scene, camera: Camera, objects, aa: int) -> Static:
+    """The static objects ``objects`` (pairs (index, Object), placed at t = 0) rasterized by the
+    supersampled ``camera``; kept (up to 4 entries) across frames while the objects, their colours
+    and placement, the camera, the lights and ``aa`` stay the same, as a real-time loop reuses
+    the static part of its frame."""
+    key = _fingerprint(scene, camera, objects, aa)
+    hit = _STATIC_CACHE.get(key)
+    if hit is not None:
+        _STATIC_CACHE.move_to_end(key)
+        hit[0].cached = True
+        return hit[0]
+    layer = raster_layer(camera, scene, [(o, object_draw(o, 0.0, k)) for k, o in objects])
+    st = Static(layer, aa)
+    st.opaque = all(float(np.min(o.rgba[..., 3])) >= 1.0 for _, o in objects)
+    # keep the objects alive with the entry, so the ids in the key stay theirs
+    _STATIC_CACHE[key] = (st, [o for _, o in objects])
+    while len(_STATIC_CACHE) > _STATIC_CACHE_SIZE:
+        _STATIC_CACHE.popitem(last=False)
+    return st
+
+
+def aligned_window(win, aa: int, width: int, height: int):
+    """``win`` (x0, y0, x1, y1) in supersampled pixels grown to multiples of ``aa``."""
+    x0, y0, x1, y1 = win
+    x0, y0 = (x0 // aa) * aa, (y0 // aa) * aa
+    x1, y1 = min(width, -(-x1 // aa) * aa), min(height, -(-y1 // aa) * aa)
+    return x0, y0, x1, y1
+
+
+def paste(static: Static, window, layer: Layer, aa: int) -> Frame:
+    """A Frame: the static pixels with the supersampled ``layer`` of ``window`` (aligned to
+    ``aa``) resolved and pasted in."""
+    rgba, depth, ids = static.rgba.copy(), static.depth.copy(), static.ids.copy()
+    x0, y0, x1, y1 = (v // aa for v in window)
+    r, d, i = resolve_arrays(layer, aa)
+    rgba[y0:y1, x0:x1], depth[y0:y1, x0:x1], ids[y0:y1, x0:x1] = r, d, i
+    return Frame(rgba, depth, ids, np.zeros((*rgba.shape[:2], 2), np.float32))
+
+
+@dataclass
+class Layer:
+    """One sample per pixel: ``rgba`` (H,W,4) float32 premultiplied, ``depth`` (H,W) float32 (inf
+    where empty), ``ids`` (H,W) int32."""
+
+    rgba: np.ndarray
+    depth: np.ndarray
+    ids: np.ndarray
+
+    @classmethod
+    def empty(cls, h: int, w: int) -> Layer:
+        return cls(
+            np.zeros((h, w, 4), np.float32),
+            np.full((h, w), np.inf, np.float32),
+            np.full((h, w), -1, np.int32),
+        )
+
+
+def composite(a: Layer, b: Layer) -> Layer:
+    """Per sample, the nearer layer *over* the farther one (exact for opaque surfaces and for one
+    transparent surface per layer and sample); a new Layer. One pass in Rust."""
+    rgba = np.array(b.rgba, dtype=np.float32, order="C")
+    depth = np.array(b.depth, dtype=np.float32, order="C")
+    ids = np.array(b.ids, dtype=np.int32, order="C")
+    c = np.ascontiguousarray
+    _core._composite(c(a.rgba), c(a.depth), c(a.ids), rgba, depth, ids)
+    return Layer(rgba, depth, ids)
+
+
+def object_draw(obj: Object, t: float, object_id: int, vertices=None) -> Draw:
+    """A Draw of ``obj`` at shutter time ``t`` (world vertices), id ``object_id``."""
+    v = obj.world_vertices(t) if vertices is None else vertices
+    return Draw(v, obj.mesh.faces, obj.rgba, object_id=object_id)
+
+
+def raster_layer(
+    camera: Camera, scene: Scene, draws: list[tuple[Object, Draw]], view=None, projection=None
+) -> Layer:
+    """Rasterize ``draws`` (pairs of the object and its Draw) with one sample per pixel, one
+    rasterizer call per shading mode, composited by depth. ``view``/``projection`` (4,4) override
+    the camera's (the image size stays the camera's)."""
+    groups: dict[str, list[Draw]] = {}
+    for obj, d in draws:
+        groups.setdefault(obj.shading, []).append(d)
+    out = None
+    for shading, ds in groups.items():
+        if view is None and projection is None:
+            f = rasterize(camera, ds, samples=1, shading=shading, lights=scene.lights, ambient=scene.ambient)
+            layer = Layer(f.rgba, f.depth, f.ids)
+        else:
+            layer = raw_layer(
+                camera.width,
+                camera.height,
+                camera.view if view is None else view,
+                camera.projection if projection is None else projection,
+                ds,
+                shading,
+                _lights(scene, None),
+                scene.ambient,
+            )
+        out = layer if out is None else composite(out, layer)
+    if out is None:
+        out = Layer.empty(camera.height, camera.width)
+    return out
+
+
+def _lights(scene: Scene, rotation) -> list:
+    """Scene lights as the rasterizer takes them, directions optionally rotated by ``rotation`` (3,3)."""
+    out = []
+    for light in scene.lights:
+        d = light.direction if rotation is None else rotation @ light.direction
+        out.append((tuple(map(float, d)), tuple(map(float, light.intensity))))
+    return out
+
+
+def raw_layer(width, height, view, projection, draws, shading, lights, ambient) -> Layer:
+    """Direct call of the compiled rasterizer (no checks beyond the core's): one sample per pixel."""
+    rgba, depth, ids, _velocity, _stats = _core._rasterize(
+        np.ascontiguousarray(view, dtype=np.float64),
+        np.ascontiguousarray(projection, dtype=np.float64),
+        int(width),
+        int(height),
+        [d._args() for d in draws],
+        1,
+        "exact",
+        shading,
+        lights,
+        tuple(map(float, np.broadcast_to(ambient, (3,)))),
+    )
+    return Layer(rgba, depth, ids)
+
+
+def window_projection(projection: np.ndarray, width: int, height: int, window) -> np.ndarray:
+    """Projection (4,4) that renders only the pixel rectangle ``window = (x0, y0, x1, y1)`` of a
+    ``width`` x ``height`` image (row 0 at the top) into an image of (x1-x0) x (y1-y0) pixels,
+    with the same pixel centres."""
+    x0, y0, x1, y1 = window
+    xl, xr = 2.0 * x0 / width - 1.0, 2.0 * x1 / width - 1.0
+    yt, yb = 1.0 - 2.0 * y0 / height, 1.0 - 2.0 * y1 / height
+    s = np.eye(4)
+    s[0, 0] = 2.0 / (xr - xl)
+    s[0, 3] = -(xr + xl) / (xr - xl)
+    s[1, 1] = 2.0 / (yt - yb)
+    s[1, 3] = -(yt + yb) / (yt - yb)
+    return s @ projection

@@ -1,0 +1,534 @@
+"""Scenes in motion: Motion, Object, DirectionalLight, Scene and the shutter filters.
+
+Time is normalised: the shutter opens at t = 0 and closes at t = 1. A :class:`Motion` is
+keyframes over that interval, either rigid transforms (K,4,4) interpolated with lerp for the
+translation, slerp for the rotation and linear interpolation of a positive uniform scale, or
+vertex positions (K,V,3) of a deforming mesh interpolated linearly. Before the first keyframe
+and after the last one the motion holds still.
+
+A :class:`Scene` holds objects, a camera (whose pose may move with ``camera_motion``), lights
+and a shutter filter: ``"box"`` (uniform), ``"ramp"`` (weight 2t, rising to the close, the
+motion-volume paper's), ``"triangle"`` (peak at 0.5), ``"gaussian"`` (centred at 0.5, sigma
+1/6, truncated to [0, 1]) or a (M,) array of non-negative weights for M equal strata of the
+shutter. These are the same filters as the motion volume's (``src/volume_filter.rs``).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._validate import as_array, as_float
+from .geometry import Mesh, as_mesh
+from .raster import Camera
+
+__all__ = [
+    "Motion",
+    "Object",
+    "DirectionalLight",
+    "Scene",
+    "SHUTTER_FILTERS",
+    "shutter_cdf",
+    "translate",
+    "rotate",
+]
+
+SHUTTER_FILTERS = ("box", "ramp", "triangle", "gaussian")
+
+_RIGID_TOL = 1e-6
+
+
+def translate(offset) -> np.ndarray:
+    """(4,4) float64 translation by ``offset`` (3,)."""
+    m = np.eye(4)
+    m[:3, 3] = as_array(offset, "offset", np.float64, (3,))
+    return m
+
+
+def rotate(angle: float, axis=(0.0, 0.0, 1.0), center=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """(4,4) float64 rotation by ``angle`` radians (right hand) about ``axis`` (3,) through ``center`` (3,)."""
+    a = as_array(axis, "axis", np.float64, (3,))
+    n = np.linalg.norm(a)
+    if n == 0:
+        raise ValueError("axis: must not be zero")
+    q = _axis_angle_quat(a / n, as_float(angle, "angle"))
+    m = np.eye(4)
+    m[:3, :3] = _quat_to_mat(q)
+    c = as_array(center, "center", np.float64, (3,))
+    m[:3, 3] = c - m[:3, :3] @ c
+    return m
+
+
+# ---------------------------------------------------------------- quaternions (w, x, y, z)
+
+
+def _axis_angle_quat(axis: np.ndarray, angle: float) -> np.ndarray:
+    return np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * axis])
+
+
+def _quat_to_mat(q: np.ndarray) -> np.ndarray:
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def _mat_to_quat(r: np.ndarray) -> np.ndarray:
+    """Unit quaternion of a rotation matrix (Shepperd's method, numerically stable)."""
+    tr = np.trace(r)
+    if tr > 0:
+        s = math.sqrt(tr + 1.0) * 2
+        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
+    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
+        s = math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2]) * 2
+        q = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
+    elif r[1, 1] > r[2, 2]:
+        s = math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2]) * 2
+        q = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
+    else:
+        s = math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1]) * 2
+        q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
+    q = np.asarray(q)
+    return q / np.linalg.norm(q)
+
+
+def _slerp(q0: np.ndarray, q1: np.ndarray, u: float) -> np.ndarray:
+    d = float(q0 @ q1)
+    if d < 0.0:  # the shorter arc
+        q1, d = -q1, -d
+    if d > 0.9995:
+        q = q0 + u * (q1 - q0)
+        return q / np.linalg.norm(q)
+    theta = math.acos(min(1.0, d))
+    s = math.sin(theta)
+    return (math.sin((1 - u) * theta) * q0 + math.sin(u * theta) * q1) / s
+
+
+# ---------------------------------------------------------------- motion
+
+
+def _check_times(times, name: str = "times") -> np.ndarray:
+    t = as_array(times, name, np.float64, (None,))
+    if (t < 0).any() or (t > 1).any():
+        raise ValueError(f"{name}: must lie in the shutter interval [0, 1], got [{t.min():g}, {t.max():g}]")
+    if len(t) > 1 and not (np.diff(t) > 0).all():
+        raise ValueError(f"{name}: must be strictly increasing")
+    return t
+
+
+def _decompose(m: np.ndarray, index: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """(translation (3,), quaternion (4,), scale) of a similarity transform, or ValueError."""
+    if not np.allclose(m[3], [0, 0, 0, 1], atol=1e-12):
+        raise ValueError(f"transforms: keyframe {index}: last row must be [0, 0, 0, 1]")
+    lin = m[:3, :3]
+    det = np.linalg.det(lin)
+    if not det > 0:
+        raise ValueError(
+            f"transforms: keyframe {index} is not rigid (determinant {det:g} <= 0: mirror or singular)"
+        )
+    s = det ** (1.0 / 3.0)
+    r = lin / s
+    if np.abs(r.T @ r - np.eye(3)).max() > _RIGID_TOL:
+        raise ValueError(
+            f"transforms: keyframe {index} is not rigid (rotation times a positive uniform scale); "
+            "shear and non-uniform scale are not supported"
+        )
+    return m[:3, 3].copy(), _mat_to_quat(r), s
+
+
+class Motion:
+    """Keyframed motion over the shutter [0, 1].
+
+    ``Motion(times, transforms)``: rigid keyframes, ``times`` (K,) float strictly increasing in
+    [0, 1], ``transforms`` (K,4,4) float (row-major, acting on column vectors: ``p' = M @ [p, 1]``),
+    each a rotation times a positive uniform scale plus a translation. Between keyframes the
+    translation is lerped, the rotation slerped (shorter arc) and the scale lerped; before the first
+    and after the last keyframe the transform holds. Use :meth:`deforming` for vertex keyframes.
+
+    Raises ValueError for wrong shapes, NaN, unsorted or out-of-range times, K < 1 and
+    non-rigid matrices (shear, non-uniform scale, mirrors). The inputs are copied.
+    """
+
+    def __init__(self, times, transforms):
+        t = _check_times(times)
+        m = as_array(transforms, "transforms", np.float64, (None, 4, 4))
+        if len(m) != len(t):
+            raise ValueError(f"transforms: expected {len(t)} keyframes (one per time), got {len(m)}")
+        parts = [_decompose(m[i], i) for i in range(len(m))]
+        self.times = t
+        self.transforms = m.copy()
+        self._trans = np.array([p[0] for p in parts])
+        self._quat = np.array([p[1] for p in parts])
+        self._scale = np.array([p[2] for p in parts])
+        self.vertices = None
+        for a in (self.times, self.transforms):
+            a.flags.writeable = False
+
+    @classmethod
+    def linear(cls, start, end) -> Motion:
+        """Two keyframes at t = 0 and t = 1. ``start`` and ``end``: (4,4) transforms or (3,) translations."""
+
+        def mat(x, name):
+            a = np.asarray(x, dtype=np.float64) if not isinstance(x, str) else None
+            if a is not None and a.shape == (3,):
+                return translate(a)
+            return as_array(x, name, np.float64, (4, 4))
+
+        return cls([0.0, 1.0], np.stack([mat(start, "start"), mat(end, "end")]))
+
+    @classmethod
+    def deforming(cls, times, vertices) -> Motion:
+        """Vertex keyframes: ``times`` (K,) strictly increasing in [0, 1], ``vertices`` (K,V,3)
+        float world positions (the object's mesh gives the faces, with V vertices). Positions are
+        interpolated linearly between keyframes and held outside them."""
+        t = _check_times(times)
+        v = as_array(vertices, "vertices", np.float64, (None, None, 3))
+        if len(v) != len(t):
+            raise ValueError(f"vertices: expected {len(t)} keyframes (one per time), got {len(v)}")
+        self = cls.__new__(cls)
+        self.times = t
+        self.vertices = v.copy()
+        self.vertices.flags.writeable = False
+        self.transforms = None
+        return self
+
+    @property
+    def is_deforming(self) -> bool:
+        """True for vertex keyframes (:meth:`deforming`), False for rigid ones."""
+        return self.vertices is not None
+
+    @property
+    def is_static(self) -> bool:
+        """True when every keyframe is equal (no motion at all)."""
+        k = self.vertices if self.is_deforming else self.transforms
+        return bool((k == k[0]).all())
+
+    def _segment(self, t: float) -> tuple[int, int, float]:
+        t = as_float(t, "t")
+        ts = self.times
+        if t <= ts[0] or len(ts) == 1:
+            return 0, 0, 0.0
+        if t >= ts[-1]:
+            return len(ts) - 1, len(ts) - 1, 0.0
+        j = int(np.searchsorted(ts, t, side="right"))
+        i = j - 1
+        return i, j, (t - ts[i]) / (ts[j] - ts[i])
+
+    def transform_at(self, t: float) -> np.ndarray:
+        """(4,4) float64 rigid transform at shutter time ``t`` (identity for deforming motion)."""
+        if self.is_deforming:
+            return np.eye(4)
+        i, j, u = self._segment(t)
+        if u == 0.0:
+            return self.transforms[i].copy()
+        out = np.eye(4)
+        s = (1 - u) * self._scale[i] + u * self._scale[j]
+        out[:3, :3] = s * _quat_to_mat(_slerp(self._quat[i], self._quat[j], u))
+        out[:3, 3] = (1 - u) * self._trans[i] + u * self._trans[j]
+        return out
+
+    def vertices_at(self, t: float) -> np.ndarray:
+        """(V,3) float64 positions at ``t`` of a deforming motion (linear between keyframes)."""
+        if not self.is_deforming:
+            raise ValueError("motion: vertices_at needs a deforming motion (Motion.deforming)")
+        i, j, u = self._segment(t)
+        if u == 0.0:
+            return self.vertices[i].copy()
+        return (1 - u) * self.vertices[i] + u * self.vertices[j]
+
+    def __repr__(self) -> str:
+        kind = "deforming" if self.is_deforming else "rigid"
+        return f"Motion({kind}, {len(self.times)} keyframes)"
+
+
+# ---------------------------------------------------------------- objects and lights
+
+
+def _as_scene_mesh(mesh) -> Mesh:
+    # C-contiguous copies: geometry.Mesh passes a matching ndarray on without making it contiguous.
+    if isinstance(mesh, tuple) and len(mesh) == 2:
+        return Mesh(np.ascontiguousarray(mesh[0]), np.ascontiguousarray(mesh[1]))
+    if isinstance(mesh, Mesh):
+        return mesh
+    if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
+        return Mesh(np.ascontiguousarray(mesh.vertices), np.ascontiguousarray(mesh.faces))
+    return as_mesh(mesh)
+
+
+class Object:
+    """A mesh in the scene.
+
+    ``mesh``: :class:`Mesh`, a trimesh-like object or a ``(vertices, faces)`` tuple, in object
+    space. ``color``: linear straight RGB(A), one (3,)/(4,) or per vertex (V,3)/(V,4), RGB >= 0 and
+    alpha in [0, 1]. ``shading``: ``"flat"`` (unlit colour) or ``"lambert"`` (lights + ambient).
+    ``motion``: None (static), a rigid :class:`Motion` (placing the mesh's vertices in the world)
+    or a deforming one (world positions, V must match). ``name``: a label.
+    """
+
+    def __init__(self, mesh, color=(1.0, 1.0, 1.0), shading: str = "flat", motion=None, name=None):
+        self.mesh = _as_scene_mesh(mesh)
+        nv = len(self.mesh.vertices)
+        c = np.asarray(color) if not isinstance(color, str) else None
+        if c is None:
+            raise TypeError("color: expected an RGB(A) colour or per-vertex colours")
+        if c.ndim <= 1:
+            c = as_array(c, "color", np.float32, (None,))
+            if len(c) not in (3, 4):
+                raise ValueError(f"color: expected (3,), (4,), (V,3) or (V,4), got shape {c.shape}")
+        else:
+            c = as_array(c, "color", np.float32, (nv, None))
+            if c.shape[1] not in (3, 4):
+                raise ValueError(f"color: expected (3,), (4,), (V,3) or (V,4), got shape {c.shape}")
+        if (c[..., :3] < 0).any() or (c.shape[-1] == 4 and ((c[..., 3] < 0) | (c[..., 3] > 1)).any()):
+            raise ValueError("color: RGB must be >= 0 and alpha in [0, 1]")
+        self.color = c
+        self.color.flags.writeable = False
+        if not isinstance(shading, str):
+            raise TypeError(f"shading: expected a string, got {type(shading).__name__}")
+        if shading not in ("flat", "lambert"):
+            raise ValueError(f"shading: expected 'flat' or 'lambert', got {shading!r}")
+        self.shading = shading
+        if motion is not None and not isinstance(motion, Motion):
+            raise TypeError(f"motion: expected a motionblur.Motion or None, got {type(motion).__name__}")
+        if motion is not None and motion.is_deforming and motion.vertices.shape[1] != nv:
+            raise ValueError(
+                f"motion: deforming keyframes have {motion.vertices.shape[1]} vertices, the mesh {nv}"
+            )
+        self.motion = motion
+        self.name = None if name is None else str(name)
+
+    @property
+    def is_moving(self) -> bool:
+        """True when the object has a motion whose keyframes differ."""
+        return self.motion is not None and not self.motion.is_static
+
+    @property
+    def rgba(self) -> np.ndarray:
+        """(4,) or (V,4) float32 straight RGBA."""
+        c = self.color
+        if c.shape[-1] == 4:
+            return c
+        return np.concatenate([c, np.ones((*c.shape[:-1], 1), np.float32)], axis=-1)
+
+    def transform_at(self, t: float) -> np.ndarray:
+        """(4,4) rigid placement at ``t`` (identity for static and deforming objects)."""
+        if self.motion is None:
+            return np.eye(4)
+        return self.motion.transform_at(t)
+
+    def world_vertices(self, t: float) -> np.ndarray:
+        """(V,3) float64 world positions at shutter time ``t`` (rigid, deforming or static)."""
+        if self.motion is None:
+            return np.array(self.mesh.vertices, dtype=np.float64)
+        if self.motion.is_deforming:
+            return self.motion.vertices_at(t)
+        m = self.motion.transform_at(t)
+        return self.mesh.vertices @ m[:3, :3].T + m[:3, 3]
+
+    def __repr__(self) -> str:
+        return f"Object({self.name or ''!s}, {len(self.mesh)} faces, {self.shading}, moving={self.is_moving})"
+
+
+class DirectionalLight:
+    """A light at infinity: ``direction`` (3,) the way the light travels (normalised here),
+    ``intensity`` float or RGB (3,) >= 0 (irradiance on a surface facing it, linear)."""
+
+    def __init__(self, direction, intensity=1.0):
+        d = as_array(direction, "direction", np.float64, (3,))
+        n = np.linalg.norm(d)
+        if n == 0:
+            raise ValueError("direction: must not be zero")
+        k = np.asarray(intensity, dtype=np.float64)
+        k = as_array(np.broadcast_to(k, (3,)) if k.ndim == 0 else k, "intensity", np.float64, (3,))
+        if (k < 0).any():
+            raise ValueError("intensity: must be >= 0")
+        self.direction = d / n
+        self.intensity = k
+
+    def __repr__(self) -> str:
+        return f"DirectionalLight(direction={self.direction.round(3).tolist()}, intensity={self.intensity.tolist()})"
+
+
+# ---------------------------------------------------------------- shutter filters
+
+
+def shutter_cdf(shutter, t) -> np.ndarray:
+    """Cumulative shutter weight W(t) (W(0) = 0, W(1) = 1) of a filter name or (M,) weights, at ``t``."""
+    t = np.clip(np.asarray(t, dtype=np.float64), 0.0, 1.0)
+    if isinstance(shutter, str):
+        if shutter == "box":
+            return t.copy()
+        if shutter == "ramp":
+            return t * t
+        if shutter == "triangle":
+            return np.where(t <= 0.5, 2 * t * t, 1 - 2 * (1 - t) ** 2)
+        if shutter == "gaussian":
+            erf = np.vectorize(math.erf)
+            phi = lambda x: 0.5 * (1 + erf(x / math.sqrt(2)))  # noqa: E731
+            lo, hi = phi(-3.0), phi(3.0)
+            return (phi((t - 0.5) * 6.0) - lo) / (hi - lo)
+        raise ValueError(f"shutter: unknown filter {shutter!r}; expected one of {', '.join(SHUTTER_FILTERS)}")
+    w = np.asarray(shutter, dtype=np.float64)
+    cum = np.concatenate([[0.0], np.cumsum(w) / w.sum()])
+    return np.interp(t, np.linspace(0.0, 1.0, len(w) + 1), cum)
+
+
+def _check_shutter(shutter):
+    if isinstance(shutter, str):
+        if shutter not in SHUTTER_FILTERS:
+            raise ValueError(
+                f"shutter: unknown filter {shutter!r}; expected one of {', '.join(SHUTTER_FILTERS)}"
+            )
+        return shutter
+    w = as_array(shutter, "shutter", np.float64, (None,))
+    if (w < 0).any() or not w.sum() > 0:
+        raise ValueError("shutter: weights must be >= 0 with a positive sum")
+    w = w.copy()
+    w.flags.writeable = False
+    return w
+
+
+class Scene:
+    """Objects, a camera, lights and a shutter.
+
+    ``objects``: sequence of :class:`Object`. ``camera``: a :class:`motionblur.Camera` (its pose
+    is the pose at every time unless ``camera_motion`` is given). ``lights``: sequence of
+    :class:`DirectionalLight`. ``camera_motion``: None or a rigid :class:`Motion` without scale
+    that moves the camera as an object's motion moves its mesh: ``pose(t) = M(t) @ camera.pose``.
+    ``shutter``: a filter name (``box``, ``ramp``, ``triangle``, ``gaussian``) or (M,) weights
+    for M equal strata of [0, 1]. ``background``: straight RGBA (4,) behind everything (the
+    methods composite the frame over it; (0,0,0,0) leaves it transparent). ``reference_time``:
+    ``"close"`` (t = 1, as the motion-volume paper), ``"center"`` (0.5), ``"open"`` (0) or a
+    float in [0, 1]: the instant of the sharp geometry and of the camera that motion-volume style
+    methods render with. ``ambient``: float or RGB ambient light of lambert shading.
+    """
+
+    def __init__(
+        self,
+        objects,
+        camera,
+        lights=(),
+        camera_motion=None,
+        shutter="box",
+        background=(0.0, 0.0, 0.0, 0.0),
+        reference_time="close",
+        ambient=0.0,
+    ):
+        if isinstance(objects, Object):
+            objects = [objects]
+        objects = list(objects)
+        for i, o in enumerate(objects):
+            if not isinstance(o, Object):
+                raise TypeError(f"objects: item {i} is a {type(o).__name__}, not a motionblur.Object")
+        if not isinstance(camera, Camera):
+            raise TypeError(f"camera: expected a motionblur.Camera, got {type(camera).__name__}")
+        lights = list(lights or ())
+        for i, light in enumerate(lights):
+            if not isinstance(light, DirectionalLight):
+                raise TypeError(
+                    f"lights: item {i} is a {type(light).__name__}, not a motionblur.DirectionalLight"
+                )
+        if camera_motion is not None:
+            if not isinstance(camera_motion, Motion):
+                raise TypeError(
+                    f"camera_motion: expected a motionblur.Motion, got {type(camera_motion).__name__}"
+                )
+            if camera_motion.is_deforming:
+                raise ValueError("camera_motion: must be rigid, not deforming")
+            if np.abs(camera_motion._scale - 1.0).max() > 1e-9:
+                raise ValueError("camera_motion: must not scale (rotation and translation only)")
+        self.objects = objects
+        self.camera = camera
+        self.lights = lights
+        self.camera_motion = camera_motion
+        self.shutter = _check_shutter(shutter)
+        bg = as_array(background, "background", np.float64, (4,))
+        if (bg < 0).any() or bg[3] > 1:
+            raise ValueError("background: RGB must be >= 0 and alpha in [0, 1]")
+        self.background = bg
+        if isinstance(reference_time, str):
+            named = {"close": 1.0, "center": 0.5, "centre": 0.5, "open": 0.0}
+            if reference_time not in named:
+                raise ValueError(
+                    f"reference_time: expected 'close', 'center', 'open' or a float, got {reference_time!r}"
+                )
+            self.reference_t = named[reference_time]
+        else:
+            rt = as_float(reference_time, "reference_time")
+            if not 0.0 <= rt <= 1.0:
+                raise ValueError(f"reference_time: must be in [0, 1], got {rt}")
+            self.reference_t = rt
+        self.reference_time = reference_time
+        amb = np.asarray(ambient, dtype=np.float64)
+        amb = as_array(np.broadcast_to(amb, (3,)) if amb.ndim == 0 else amb, "ambient", np.float64, (3,))
+        if (amb < 0).any():
+            raise ValueError("ambient: must be >= 0")
+        self.ambient = amb
+
+    @property
+    def camera_moves(self) -> bool:
+        return self.camera_motion is not None and not self.camera_motion.is_static
+
+    @property
+    def moving_objects(self) -> list[Object]:
+        return [o for o in self.objects if o.is_moving]
+
+    @property
+    def static_objects(self) -> list[Object]:
+        return [o for o in self.objects if not o.is_moving]
+
+    def camera_pose_at(self, t: float) -> np.ndarray:
+        """(4,4) camera-to-world pose at shutter time ``t``."""
+        if self.camera_motion is None:
+            return np.array(self.camera.pose)
+        return self.camera_motion.transform_at(t) @ self.camera.pose
+
+    def camera_at(self, t: float) -> Camera:
+        """The :class:`Camera` at shutter time ``t`` (same intrinsics, moved pose)."""
+        if self.camera_motion is None:
+            return self.camera
+        c = self.camera
+        return Camera(self.camera_pose_at(t), c.yfov, c.width, c.height, znear=c.znear, zfar=c.zfar)
+
+    def shutter_cdf(self, t) -> np.ndarray:
+        """Cumulative shutter weight W(t) at ``t`` (scalar or array), W(0) = 0, W(1) = 1."""
+        return shutter_cdf(self.shutter, t)
+
+    def shutter_weights(self, times) -> np.ndarray:
+        """(N,) float64 weights summing to 1 for the sample ``times`` (N,) (strictly increasing in
+        [0, 1]): each time stands for the part of the shutter nearest to it (the cells between the
+        midpoints of neighbouring times), weighted by the shutter filter's integral over it. For
+        stratified times ``(i + 0.5) / N`` the cells are the strata."""
+        t = _check_times(times, "times")
+        edges = np.concatenate([[0.0], 0.5 * (t[1:] + t[:-1]), [1.0]])
+        w = np.diff(self.shutter_cdf(edges))
+        total = w.sum()
+        if not total > 0:  # every sample in a zero-weight part of the shutter
+            raise ValueError("times: the shutter filter gives these times zero total weight")
+        return w / total
+
+    def with_(self, **changes) -> Scene:
+        """A copy of the scene with some constructor arguments changed."""
+        args = dict(
+            objects=self.objects,
+            camera=self.camera,
+            lights=self.lights,
+            camera_motion=self.camera_motion,
+            shutter=self.shutter,
+            background=self.background,
+            reference_time=self.reference_time,
+            ambient=self.ambient,
+        )
+        args.update(changes)
+        return Scene(**args)
+
+    def __repr__(self) -> str:
+        return (
+            f"Scene({len(self.objects)} objects ({len(self.moving_objects)} moving), {len(self.lights)} lights, "
+            f"camera_moves={self.camera_moves}, shutter={self.shutter if isinstance(self.shutter, str) else 'weights'})"
+        )

@@ -1,0 +1,383 @@
+//! Opaque image blur (Kraus section 3.2, eq. 7) and image-based opaque motion blur (section 4.1):
+//! a box blur of the premultiplied colours, the triangle-max glow of the alpha (eq. 10) with the
+//! same radius, and the rescale `RGBA_sub = RGBA_blur * A_glow / A_blur`, optionally composited
+//! over a base image (figure 6, moving foreground) or under it (figure 7, moving background).
+//!
+//! Where `A_blur <= ALPHA_EPS` the colour is 0 (no division by zero, no NaN); the opacity is
+//! always `A_glow`, so the result never has less opacity than the input. Along an image row the
+//! whole filter is one fused pass (running sums, glow, rescale, composite) per row.
+use rayon::prelude::*;
+
+use super::boxblur::box_row_range;
+use super::glow::{glow_row, GlowScratch};
+use super::lines::{build_sheared, directional_at, plan, LinePlan};
+use super::{assume_init, check_direction, check_finite, check_image, filled, put4, ALPHA_EPS};
+use crate::{Error, Result};
+use std::mem::MaybeUninit;
+
+/// How the blurred layer is combined with the base image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Composite {
+    /// `sub + (1 - A_sub) base`: a moving foreground over the sharp image (figure 6).
+    Over,
+    /// `base + (1 - A_base) sub`: a moving background under the sharp foreground (figure 7).
+    Under,
+}
+
+impl Composite {
+    pub fn parse(s: &str) -> Result<Self> {
+        match s {
+            "over" => Ok(Composite::Over),
+            "under" => Ok(Composite::Under),
+            _ => Err(Error::value(
+                "mode",
+                format!("expected 'over' or 'under', got {s:?}"),
+            )),
+        }
+    }
+}
+
+/// Eq. 7 and the composite for one pixel.
+#[inline(always)]
+fn finish(blur: [f32; 4], glow: f32, base: &[f32], comp: Option<Composite>) -> [f32; 4] {
+    let s = if blur[3] > ALPHA_EPS {
+        glow / blur[3]
+    } else {
+        0.0
+    };
+    let sub = [blur[0] * s, blur[1] * s, blur[2] * s, glow];
+    match comp {
+        None => sub,
+        Some(Composite::Over) => {
+            let k = 1.0 - glow;
+            [
+                sub[0] + k * base[0],
+                sub[1] + k * base[1],
+                sub[2] + k * base[2],
+                sub[3] + k * base[3],
+            ]
+        }
+        Some(Composite::Under) => {
+            let k = 1.0 - base[3];
+            [
+                base[0] + k * sub[0],
+                base[1] + k * sub[1],
+                base[2] + k * sub[2],
+                base[3] + k * sub[3],
+            ]
+        }
+    }
+}
+
+#[derive(Default)]
+struct RowScratch {
+    glow: GlowScratch,
+    a: Vec<f32>,
+    g: Vec<f32>,
+}
+
+/// One pass over a `(n, 4)` source row, its base row and the output row: writes the base (or
+/// zeros when `copy` is false) to the output, and returns whether the source and the base are
+/// finite and the first and last pixel of the source with non-zero alpha.
+fn scan_copy_row(
+    src: &[f32],
+    base: &[f32],
+    out: &mut [MaybeUninit<f32>],
+    copy: bool,
+) -> (bool, Option<(usize, usize)>) {
+    const B: usize = 16;
+    const EXP: u32 = 0x7f80_0000;
+    // Lane-wise accumulators over 16 floats (4 pixels) so that the loop vectorises.
+    const AMASK: [u32; 16] = {
+        let mut m = [0u32; 16];
+        let mut i = 3;
+        while i < 16 {
+            m[i] = 0x7fff_ffff;
+            i += 4;
+        }
+        m
+    };
+    let cp = copy as u32;
+    let mut bad = [0u32; 16];
+    let (mut first, mut last) = (usize::MAX, 0);
+    for (k, ((sb, bb), ob)) in src
+        .chunks(4 * B)
+        .zip(base.chunks(4 * B))
+        .zip(out.chunks_mut(4 * B))
+        .enumerate()
+    {
+        let mut nz = [0u32; 16];
+        let mut lane = |i: usize, sv: f32, bv: f32, o: &mut MaybeUninit<f32>| {
+            let (sb, bb) = (sv.to_bits(), bv.to_bits());
+            bad[i] |= ((sb & EXP) == EXP) as u32 | (((bb & EXP) == EXP) as u32 & cp);
+            nz[i] |= sb & AMASK[i];
+            o.write(if copy { bv } else { 0.0 });
+        };
+        let mut sc = sb.chunks_exact(16);
+        let mut bc = bb.chunks_exact(16);
+        let mut oc = ob.chunks_exact_mut(16);
+        for ((s4, b4), o4) in (&mut sc).zip(&mut bc).zip(&mut oc) {
+            for i in 0..16 {
+                lane(i, s4[i], b4[i], &mut o4[i]);
+            }
+        }
+        let (st, bt, ot) = (sc.remainder(), bc.remainder(), oc.into_remainder());
+        for i in 0..st.len() {
+            lane(i, st[i], bt[i], &mut ot[i]);
+        }
+        if nz.iter().fold(0, |a, &v| a | v) != 0 {
+            first = first.min(k);
+            last = k;
+        }
+    }
+    let bad = [bad.iter().fold(0, |a, &v| a | v); 4];
+    let ok = (bad[0] | bad[1] | bad[2] | bad[3]) == 0;
+    if first == usize::MAX {
+        return (ok, None);
+    }
+    let block = |b: usize| &src[b * 4 * B..((b + 1) * 4 * B).min(src.len())];
+    let lo = block(first).chunks_exact(4).position(|p| p[3] != 0.0);
+    let hi = block(last).chunks_exact(4).rposition(|p| p[3] != 0.0);
+    match (lo, hi) {
+        (Some(lo), Some(hi)) => (ok, Some((lo + first * B, hi + last * B))),
+        _ => (ok, None),
+    }
+}
+
+/// First and last pixel with non-zero alpha in a `(n, 4)` row (blocks of 16 pixels are tested
+/// with an OR of the alpha bits, then the first and last non-empty blocks are searched).
+fn alpha_span(row: &[f32]) -> Option<(usize, usize)> {
+    const B: usize = 16;
+    let nz = |c: &[f32]| {
+        c.chunks_exact(4)
+            .fold(0u32, |m, p| m | (p[3].to_bits() & 0x7fff_ffff))
+            != 0
+    };
+    let blocks = row.len().div_ceil(4 * B);
+    let block = |b: usize| &row[b * 4 * B..((b + 1) * 4 * B).min(row.len())];
+    let first = (0..blocks).find(|&b| nz(block(b)))?;
+    let last = (first..blocks).rev().find(|&b| nz(block(b)))?;
+    let lo = block(first).chunks_exact(4).position(|p| p[3] != 0.0)? + first * B;
+    let hi = block(last).chunks_exact(4).rposition(|p| p[3] != 0.0)? + last * B;
+    Some((lo, hi))
+}
+
+/// Along rows: one fused pass per row (glow, running sums, rescale, composite), restricted to
+/// the pixels within reach of non-zero alpha; the rest of the row is the empty result.
+fn rows_path(
+    rgba: &[f32],
+    base: &[f32],
+    w: usize,
+    r: usize,
+    comp: Option<Composite>,
+    out: &mut [MaybeUninit<f32>],
+) -> bool {
+    out.par_chunks_mut(w * 4)
+        .zip(rgba.par_chunks(w * 4))
+        .zip(base.par_chunks(w * 4))
+        .map_init(RowScratch::default, |s, ((o, src), b)| {
+            // One streaming pass over the three rows, as a plain copy would make: finiteness of
+            // the source and the base, the span of non-zero alpha, and the empty result (the
+            // base, or 0) written everywhere; the span is then overwritten from cache.
+            let (ok, span) = scan_copy_row(src, b, o, comp.is_some());
+            let Some((lo, hi)) = span else {
+                return ok;
+            };
+            let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(w));
+            s.a.clear();
+            s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
+            s.g.resize(xb - xa, 0.0);
+            glow_row(&s.a, r, &mut s.g, &mut s.glow);
+            let g = &s.g;
+            box_row_range(src, w, r, xa, xb, |x, m| {
+                put4(o, x, finish(m, g[x - xa], &b[x * 4..x * 4 + 4], comp));
+            });
+            ok
+        })
+        .reduce(|| true, |a, b| a & b)
+}
+
+/// Any other direction: the filter runs on the crop that can receive non-zero alpha (the
+/// alpha's bounding box grown by two filter reaches), transposed and/or sheared.
+fn crop_path(
+    rgba: &[f32],
+    base: &[f32],
+    w: usize,
+    h: usize,
+    p: &LinePlan,
+    comp: Option<Composite>,
+    out: &mut [MaybeUninit<f32>],
+) -> bool {
+    // One streaming pass: finiteness, the empty result everywhere, and the alpha's box.
+    type Scan = (bool, Option<(usize, usize, usize, usize)>);
+    let join = |a: Scan, b: Scan| -> Scan {
+        let bbox = match (a.1, b.1) {
+            (Some(a), Some(b)) => Some((a.0.min(b.0), a.1.max(b.1), a.2.min(b.2), a.3.max(b.3))),
+            (a, b) => a.or(b),
+        };
+        (a.0 & b.0, bbox)
+    };
+    let (ok, bbox) = out
+        .par_chunks_mut(w * 4)
+        .zip(rgba.par_chunks(w * 4))
+        .zip(base.par_chunks(w * 4))
+        .enumerate()
+        .map(|(y, ((o, src), b))| {
+            let (ok, span) = scan_copy_row(src, b, o, comp.is_some());
+            (ok, span.map(|(lo, hi)| (lo, hi, y, y)))
+        })
+        .reduce(|| (true, None), join);
+    let out = assume_init(out);
+    let Some((x0, x1, y0, y1)) = bbox else {
+        return ok;
+    };
+    if !ok {
+        return false;
+    }
+    let r = p.radius;
+    let major = 2 * r + 2;
+    let minor = (2.0 * r as f64 * p.slope.abs()).ceil() as usize + 2;
+    let (mx, my) = if p.transpose {
+        (minor, major)
+    } else {
+        (major, minor)
+    };
+    let (cx0, cx1) = (x0.saturating_sub(mx), (x1 + 1 + mx).min(w));
+    let (cy0, cy1) = (y0.saturating_sub(my), (y1 + 1 + my).min(h));
+    let (cw, ch) = (cx1 - cx0, cy1 - cy0);
+    let mut crop = super::pool::take(cw * ch * 4);
+    crop.par_chunks_mut(cw * 4)
+        .enumerate()
+        .for_each(|(k, row)| {
+            let y = cy0 + k;
+            row.copy_from_slice(&rgba[(y * w + cx0) * 4..(y * w + cx1) * 4]);
+        });
+    let offset = if p.transpose { cy0 } else { cx0 } as f64;
+    let live = [x0 - cx0, x1 - cx0, y0 - cy0, y1 - cy0];
+    let filter = |src: &[f32], n: usize, o: &mut [f32], s: &mut RowScratch| -> bool {
+        let Some((lo, hi)) = alpha_span(src) else {
+            return false;
+        };
+        let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(n));
+        o[..xa * 5].fill(0.0);
+        o[xb * 5..].fill(0.0);
+        s.a.clear();
+        s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
+        s.g.resize(xb - xa, 0.0);
+        glow_row(&s.a, r, &mut s.g, &mut s.glow);
+        let g = &s.g;
+        box_row_range(src, n, r, xa, xb, |x, m| {
+            o[x * 5..x * 5 + 4].copy_from_slice(&m);
+            o[x * 5 + 4] = g[x - xa];
+        });
+        true
+    };
+    // Eq. 7 and the composite of crop row `y` (its five values: blur RGBA and glow) into the
+    // full output row `o`.
+    let oblique = p.slope != 0.0;
+    let finish_row = |y: usize, f5: &[f32], o: &mut [f32]| {
+        let gy = cy0 + y;
+        for x in 0..cw {
+            let i = gy * w + cx0 + x;
+            let f = &f5[x * 5..x * 5 + 5];
+            let g = if oblique {
+                f[4].max(rgba[i * 4 + 3])
+            } else {
+                f[4]
+            };
+            let v = finish([f[0], f[1], f[2], f[3]], g, &base[i * 4..i * 4 + 4], comp);
+            o[(cx0 + x) * 4..(cx0 + x) * 4 + 4].copy_from_slice(&v);
+        }
+    };
+    let out_rows = &mut out[cy0 * w * 4..cy1 * w * 4];
+    if oblique && !p.transpose {
+        // Shear, filter, and shear back row by row straight into the output.
+        let sh =
+            build_sheared::<4, 5, RowScratch>(&crop, cw, ch, p.slope, offset, Some(live), &filter);
+        out_rows.par_chunks_mut(w * 4).enumerate().for_each_init(
+            || vec![0.0f32; cw * 5],
+            |row, (y, o)| {
+                sh.unshear_row(cw, y, row);
+                finish_row(y, row, o);
+            },
+        );
+        super::pool::give(sh.data);
+    } else {
+        let five = directional_at::<4, 5, RowScratch>(&crop, cw, ch, p, offset, Some(live), filter);
+        out_rows
+            .par_chunks_mut(w * 4)
+            .enumerate()
+            .for_each(|(y, o)| finish_row(y, &five[y * cw * 5..(y + 1) * cw * 5], o));
+        super::pool::give(five);
+    }
+    super::pool::give(crop);
+    true
+}
+
+fn opaque_impl(
+    rgba: &[f32],
+    base: Option<&[f32]>,
+    w: usize,
+    h: usize,
+    direction: [f32; 2],
+    length: f32,
+    comp: Option<Composite>,
+) -> Result<Vec<f32>> {
+    check_image("rgba", rgba, w, h, 4)?;
+    if let Some(b) = base {
+        check_image("base", b, w, h, 4)?;
+    }
+    check_direction(direction, length, "length")?;
+    let base_img = base.unwrap_or(rgba);
+    let p = plan(direction, length * 0.5);
+    if p.is_none() {
+        check_finite("rgba", rgba)?;
+        check_finite("base", base_img)?;
+    }
+    let mut ok = true;
+    let out = filled(w * h * 4, |out| match p {
+        Some(p) if !p.transpose && p.slope == 0.0 => {
+            ok = rows_path(rgba, base_img, w, p.radius, comp, out);
+        }
+        Some(p) => ok = crop_path(rgba, base_img, w, h, &p, comp, out),
+        None => out
+            .par_chunks_mut(4)
+            .zip(rgba.par_chunks(4))
+            .zip(base_img.par_chunks(4))
+            .for_each(|((o, px), b)| {
+                put4(o, 0, finish([px[0], px[1], px[2], px[3]], px[3], b, comp))
+            }),
+    });
+    if !ok {
+        check_finite("rgba", rgba)?;
+        check_finite("base", base_img)?;
+    }
+    Ok(out)
+}
+
+/// Opaque image blur of a `(h, w, 4)` premultiplied image along `direction` over `length` pixels:
+/// box blur, glow of the same radius, eq. 7. No compositing.
+pub fn opaque_blur(
+    rgba: &[f32],
+    w: usize,
+    h: usize,
+    direction: [f32; 2],
+    length: f32,
+) -> Result<Vec<f32>> {
+    opaque_impl(rgba, None, w, h, direction, length, None)
+}
+
+/// Opaque motion blur (figures 6 and 7): `opaque_blur(rgba)` composited `mode` the base image
+/// (`rgba` itself when `base` is `None`).
+#[allow(clippy::too_many_arguments)]
+pub fn opaque_motion_blur(
+    rgba: &[f32],
+    base: Option<&[f32]>,
+    w: usize,
+    h: usize,
+    direction: [f32; 2],
+    length: f32,
+    mode: Composite,
+) -> Result<Vec<f32>> {
+    opaque_impl(rgba, base, w, h, direction, length, Some(mode))
+}

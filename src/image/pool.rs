@@ -1,0 +1,50 @@
+//! A small pool of large scratch buffers, reused between calls so that the intermediate images
+//! of the oblique filters do not pay the operating system's page faults and zeroing every call.
+//! Buffers come back with stale contents: users write every element before reading it.
+use std::sync::Mutex;
+
+static POOL: Mutex<Vec<Vec<f32>>> = Mutex::new(Vec::new());
+
+/// Keeps at most this many buffers, holding at most `MAX_FLOATS` floats in all (64 MB).
+const KEEP: usize = 4;
+const MAX_FLOATS: usize = 16 << 20;
+
+/// A buffer of exactly `n` floats with unspecified (but initialised) contents.
+pub(crate) fn take(n: usize) -> Vec<f32> {
+    let mut pool = POOL.lock().unwrap_or_else(|e| e.into_inner());
+    let best = (0..pool.len())
+        .filter(|&i| pool[i].capacity() >= n)
+        .min_by_key(|&i| pool[i].capacity());
+    let mut v = match best {
+        Some(i) => pool.swap_remove(i),
+        None => Vec::new(),
+    };
+    drop(pool);
+    if v.len() >= n {
+        v.truncate(n);
+    } else {
+        v.resize(n, 0.0);
+    }
+    v
+}
+
+/// Returns a buffer to the pool.
+pub(crate) fn give(v: Vec<f32>) {
+    let mut pool = POOL.lock().unwrap_or_else(|e| e.into_inner());
+    if v.capacity() > MAX_FLOATS {
+        return;
+    }
+    pool.push(v);
+    // Keep the smallest buffers within the budget (they serve the common sizes).
+    pool.sort_by_key(|b| b.capacity());
+    let mut total = 0;
+    let keep = pool
+        .iter()
+        .take(KEEP)
+        .take_while(|b| {
+            total += b.capacity();
+            total <= MAX_FLOATS
+        })
+        .count();
+    pool.truncate(keep);
+}

@@ -1,0 +1,115 @@
+//! Unit tests of the image kernels in pure Rust: invariants and thread-count independence.
+//! (The numpy twins in tests/image_twins.py check the values.)
+use super::*;
+
+fn image(w: usize, h: usize, seed: u32) -> Vec<f32> {
+    // A small deterministic generator: an alpha blob with random-ish colours.
+    let mut s = seed.wrapping_mul(2654435761).wrapping_add(1);
+    let mut rnd = move || {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        (s % 10000) as f32 / 10000.0
+    };
+    let mut out = Vec::with_capacity(w * h * 4);
+    for y in 0..h {
+        for x in 0..w {
+            let d =
+                ((x as f32 - w as f32 * 0.4).powi(2) + (y as f32 - h as f32 * 0.5).powi(2)).sqrt();
+            let a = (w.min(h) as f32 * 0.3 - d).clamp(0.0, 1.0);
+            out.extend([rnd() * a, rnd() * a, rnd() * a, a]);
+        }
+    }
+    out
+}
+
+fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
+#[test]
+fn glow_never_lowers_alpha() {
+    let (w, h) = (53, 31);
+    let img = image(w, h, 1);
+    let alpha: Vec<f32> = img.chunks(4).map(|p| p[3]).collect();
+    for d in [[1.0, 0.0], [0.0, 1.0], [1.0, 0.4], [-0.3, 1.0]] {
+        let g = glow(&alpha, w, h, d, 7.0).unwrap();
+        assert!(g.iter().zip(&alpha).all(|(g, a)| g >= a));
+    }
+}
+
+#[test]
+fn opaque_blur_of_a_constant_is_the_constant() {
+    let (w, h) = (40, 30);
+    let img: Vec<f32> = (0..w * h).flat_map(|_| [0.2, 0.4, 0.1, 1.0]).collect();
+    for d in [[1.0, 0.0], [0.0, 1.0], [1.0, 0.6]] {
+        let out = opaque_blur(&img, w, h, d, 11.0).unwrap();
+        assert!(out.iter().zip(&img).all(|(o, i)| (o - i).abs() < 1e-6));
+    }
+}
+
+#[test]
+fn results_do_not_depend_on_the_thread_count() {
+    let (w, h) = (97, 61);
+    let img = image(w, h, 2);
+    let depth: Vec<f32> = (0..w * h).map(|i| 1.0 + (i % w) as f32 * 0.05).collect();
+    let run = || {
+        let mut all = Vec::new();
+        for d in [[1.0, 0.0], [0.0, 1.0], [1.0, 0.577]] {
+            all.extend(opaque_motion_blur(&img, None, w, h, d, 21.0, Composite::Over).unwrap());
+            all.extend(box_blur(&img, w, h, d, 21.0).unwrap());
+        }
+        all.extend(pyramid_opaque_blur(&img, w, h, 3).unwrap());
+        let p = DofParams {
+            focal_depth: 2.0,
+            focal_length: 0.05,
+            f_number: 1.4,
+            yfov: 0.8,
+            layers: 5,
+        };
+        all.extend(depth_of_field(&img, &depth, w, h, &p).unwrap());
+        all
+    };
+    let one = on_threads(1, run);
+    let two = on_threads(2, run);
+    let three = on_threads(3, run);
+    assert!(one
+        .iter()
+        .zip(&two)
+        .all(|(a, b)| a.to_bits() == b.to_bits()));
+    assert!(one
+        .iter()
+        .zip(&three)
+        .all(|(a, b)| a.to_bits() == b.to_bits()));
+}
+
+#[test]
+fn bad_input_names_the_argument() {
+    let img = image(8, 6, 3);
+    let e = box_blur(&img[..10], 8, 6, [1.0, 0.0], 3.0).unwrap_err();
+    assert!(e.to_string().starts_with("rgba"));
+    let e = box_blur(&img, 8, 6, [f32::NAN, 0.0], 3.0).unwrap_err();
+    assert!(e.to_string().starts_with("direction"));
+    let e = box_blur(&img, 8, 6, [1.0, 0.0], -1.0).unwrap_err();
+    assert!(e.to_string().starts_with("length"));
+    let e = pyramid_blur(&img, 8, 6, 99).unwrap_err();
+    assert!(e.to_string().starts_with("levels"));
+    let mut bad = img.clone();
+    bad[5] = f32::INFINITY;
+    let e = opaque_blur(&bad, 8, 6, [1.0, 0.0], 3.0).unwrap_err();
+    assert!(e.to_string().starts_with("rgba"));
+}
+
+#[test]
+fn line_plan_radius_and_axis() {
+    let p = plan([1.0, 0.0], 50.5).unwrap();
+    assert_eq!((p.transpose, p.slope, p.radius), (false, 0.0, 50));
+    let p = plan([0.5, -2.0], 10.0).unwrap();
+    assert!(p.transpose && (p.slope + 0.25).abs() < 1e-12);
+    assert!(plan([0.0, 0.0], 10.0).is_none());
+    assert!(plan([1.0, 0.0], 0.9).is_none());
+}

@@ -1,0 +1,139 @@
+//! Bindings for the accumulation kernels: in-place on a float32 accumulation buffer, GIL released.
+use super::{c_slice, c_slice_mut, to_py_err};
+use crate::accumulate;
+use crate::Error;
+use numpy::{
+    PyReadonlyArray2, PyReadonlyArray3, PyReadwriteArray2, PyReadwriteArray3, PyUntypedArrayMethods,
+};
+use pyo3::prelude::*;
+
+/// acc[y0:y0+h, x0:x0+w] (H,W,4) f32 += weight * rgba (h,w,4) f32 where depth (h,w) <
+/// limit[y0:y0+h, x0:x0+w] (limit (H,W), or everywhere when None). In place; releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (acc, rgba, depth, limit, weight, x0=0, y0=0))]
+#[allow(clippy::too_many_arguments)]
+fn _accumulate(
+    py: Python<'_>,
+    mut acc: PyReadwriteArray3<'_, f32>,
+    rgba: PyReadonlyArray3<'_, f32>,
+    depth: PyReadonlyArray2<'_, f32>,
+    limit: Option<PyReadonlyArray2<'_, f32>>,
+    weight: f32,
+    x0: usize,
+    y0: usize,
+) -> PyResult<()> {
+    let shape = acc.shape().to_vec();
+    let sub = rgba.shape().to_vec();
+    if shape[2] != 4 || sub[2] != 4 || depth.shape() != &sub[..2] {
+        return Err(to_py_err(Error::shape(
+            "rgba",
+            "acc (H,W,4), rgba (h,w,4) and depth (h,w) expected",
+        )));
+    }
+    if y0 + sub[0] > shape[0] || x0 + sub[1] > shape[1] {
+        return Err(to_py_err(Error::shape(
+            "rgba",
+            "the rectangle must lie inside acc",
+        )));
+    }
+    if let Some(l) = &limit {
+        if l.shape() != &shape[..2] {
+            return Err(to_py_err(Error::shape("limit", "must be (H,W) like acc")));
+        }
+    }
+    let r = c_slice(&rgba, "rgba").map_err(to_py_err)?;
+    let d = c_slice(&depth, "depth").map_err(to_py_err)?;
+    let l = match &limit {
+        Some(l) => Some(c_slice(l, "limit").map_err(to_py_err)?),
+        None => None,
+    };
+    let a = c_slice_mut(&mut acc, "acc").map_err(to_py_err)?;
+    let rect = accumulate::Rect {
+        x0,
+        y0,
+        width: sub[1],
+        height: sub[0],
+        stride: shape[1],
+    };
+    py.detach(|| accumulate::accumulate(a, r, d, l, weight, rect))
+        .map_err(to_py_err)
+}
+
+/// acc (H,W,4) f32 += under (H,W,4) f32 * (1 - acc alpha). In place; releases the GIL.
+#[pyfunction]
+fn _over(
+    py: Python<'_>,
+    mut acc: PyReadwriteArray3<'_, f32>,
+    under: PyReadonlyArray3<'_, f32>,
+) -> PyResult<()> {
+    if under.shape() != acc.shape() {
+        return Err(to_py_err(Error::shape(
+            "under",
+            "must have the shape of acc",
+        )));
+    }
+    let u = c_slice(&under, "under").map_err(to_py_err)?;
+    let a = c_slice_mut(&mut acc, "acc").map_err(to_py_err)?;
+    py.detach(|| accumulate::over(a, u)).map_err(to_py_err)
+}
+
+/// In place into b (b_rgba (H,W,4) f32, b_depth (H,W) f32, b_ids (H,W) i32): layer a (a_rgba
+/// (h,w,4), a_depth (h,w), a_ids (h,w), at (x0, y0) of b) composited by depth, the nearer over
+/// the farther. Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (a_rgba, a_depth, a_ids, b_rgba, b_depth, b_ids, x0=0, y0=0))]
+#[allow(clippy::too_many_arguments)]
+fn _composite(
+    py: Python<'_>,
+    a_rgba: PyReadonlyArray3<'_, f32>,
+    a_depth: PyReadonlyArray2<'_, f32>,
+    a_ids: PyReadonlyArray2<'_, i32>,
+    mut b_rgba: PyReadwriteArray3<'_, f32>,
+    mut b_depth: PyReadwriteArray2<'_, f32>,
+    mut b_ids: PyReadwriteArray2<'_, i32>,
+    x0: usize,
+    y0: usize,
+) -> PyResult<()> {
+    let sub = a_rgba.shape().to_vec();
+    let full = b_rgba.shape().to_vec();
+    if sub[2] != 4 || full[2] != 4 || a_depth.shape() != &sub[..2] || a_ids.shape() != &sub[..2] {
+        return Err(to_py_err(Error::shape(
+            "a_rgba",
+            "a: rgba (h,w,4), depth and ids (h,w) expected",
+        )));
+    }
+    if b_depth.shape() != &full[..2] || b_ids.shape() != &full[..2] {
+        return Err(to_py_err(Error::shape(
+            "b_rgba",
+            "b: rgba (H,W,4), depth and ids (H,W) expected",
+        )));
+    }
+    if y0 + sub[0] > full[0] || x0 + sub[1] > full[1] {
+        return Err(to_py_err(Error::shape(
+            "a_rgba",
+            "the rectangle must lie inside b",
+        )));
+    }
+    let ar = c_slice(&a_rgba, "a_rgba").map_err(to_py_err)?;
+    let ad = c_slice(&a_depth, "a_depth").map_err(to_py_err)?;
+    let ai = c_slice(&a_ids, "a_ids").map_err(to_py_err)?;
+    let br = c_slice_mut(&mut b_rgba, "b_rgba").map_err(to_py_err)?;
+    let bd = c_slice_mut(&mut b_depth, "b_depth").map_err(to_py_err)?;
+    let bi = c_slice_mut(&mut b_ids, "b_ids").map_err(to_py_err)?;
+    let rect = accumulate::Rect {
+        x0,
+        y0,
+        width: sub[1],
+        height: sub[0],
+        stride: full[1],
+    };
+    py.detach(|| accumulate::composite(ar, ad, ai, br, bd, bi, rect))
+        .map_err(to_py_err)
+}
+
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(_composite, m)?)?;
+    m.add_function(wrap_pyfunction!(_accumulate, m)?)?;
+    m.add_function(wrap_pyfunction!(_over, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,209 @@
+//! Building the shell mesh (section 3.3): one quad strip per live polygon, attached to the
+//! current mesh, alpha falling by `initial_alpha / subdivisions` per pair.
+//!
+//! Polygons are visited in increasing index in fixed chunks; each chunk counts its vertices,
+//! a prefix sum places the chunks, and every chunk fills its own disjoint slices, so the output
+//! does not depend on the thread count. Only live polygons emit anything.
+use rayon::prelude::*;
+
+use super::silhouette::CHUNK;
+use super::{BlurShell, ShellColor};
+use crate::mesh::normalize;
+use crate::Result;
+
+/// The shell mesh: strips of quads (two triangles each), culling off when drawn.
+///
+/// Strip of polygon `f` with `r` ring elements: `r + 1` pairs of vertices, pair `j` at
+/// `2 * j` (first vertex of the edge as the face runs it) and `2 * j + 1`; quad `j` joins
+/// pairs `j` and `j + 1` as triangles `(2j, 2j+1, 2j+3)` and `(2j, 2j+3, 2j+2)`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ShellMesh {
+    pub vertices: Vec<[f64; 3]>,
+    pub faces: Vec<[u32; 3]>,
+    /// Straight (non-premultiplied) RGBA.
+    pub rgba: Vec<[f32; 4]>,
+    /// Unit normals (zero where the mesh normal was zero).
+    pub normals: Vec<[f32; 3]>,
+    /// Per shell vertex: the mesh polygon whose strip it belongs to.
+    pub face: Vec<u32>,
+    /// Per shell vertex: its pair index `j` along the strip (0 = base on the current mesh).
+    pub step: Vec<u8>,
+}
+
+struct Out<'a> {
+    vertices: &'a mut [[f64; 3]],
+    faces: &'a mut [[u32; 3]],
+    rgba: &'a mut [[f32; 4]],
+    normals: &'a mut [[f32; 3]],
+    face: &'a mut [u32],
+    step: &'a mut [u8],
+}
+
+impl BlurShell {
+    /// Pairs emitted by polygon `f` (0 when its strip is dead).
+    #[inline]
+    fn pairs(&self, f: usize) -> usize {
+        let run = self.hot[f].run;
+        if (self.fade[f] as u32) < self.opts.subdivisions && run > 0 {
+            run as usize + 1
+        } else {
+            0
+        }
+    }
+
+    /// The shell mesh after the last update. `vertices` / `normals` (V,3): the current mesh
+    /// when it has moved since the last update (the paper's frames between updates); by default
+    /// the positions and normals of the last update. Errors name `vertices` or `normals`.
+    pub fn build(
+        &self,
+        vertices: Option<&[[f64; 3]]>,
+        normals: Option<&[[f64; 3]]>,
+    ) -> Result<ShellMesh> {
+        if let Some(v) = vertices {
+            super::check_rows(v, self.n_vertices, "vertices")?;
+        }
+        if let Some(n) = normals {
+            super::check_rows(n, self.n_vertices, "normals")?;
+        }
+        if self.updates == 0 {
+            return Ok(ShellMesh::default());
+        }
+        let nf = self.faces.len();
+        let counts: Vec<usize> = (0..nf.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                (c * CHUNK..((c + 1) * CHUNK).min(nf))
+                    .map(|f| self.pairs(f))
+                    .sum()
+            })
+            .collect();
+        let n_pairs: usize = counts.iter().sum();
+        // Triangles per chunk: two per quad, quads = pairs - strips.
+        let strips: Vec<usize> = (0..nf.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                (c * CHUNK..((c + 1) * CHUNK).min(nf))
+                    .filter(|&f| self.pairs(f) > 0)
+                    .count()
+            })
+            .collect();
+        let total_tris: usize = counts.iter().zip(&strips).map(|(p, s)| 2 * (p - s)).sum();
+        let mut mesh = ShellMesh {
+            vertices: vec![[0.0; 3]; 2 * n_pairs],
+            faces: vec![[0; 3]; total_tris],
+            rgba: vec![[0.0; 4]; 2 * n_pairs],
+            normals: vec![[0.0; 3]; 2 * n_pairs],
+            face: vec![0; 2 * n_pairs],
+            step: vec![0; 2 * n_pairs],
+        };
+        let mut jobs = Vec::with_capacity(counts.len());
+        {
+            let (mut v, mut t, mut c, mut n, mut fa, mut st) = (
+                &mut mesh.vertices[..],
+                &mut mesh.faces[..],
+                &mut mesh.rgba[..],
+                &mut mesh.normals[..],
+                &mut mesh.face[..],
+                &mut mesh.step[..],
+            );
+            let mut v0 = 0u32;
+            for (ci, (&p, &s)) in counts.iter().zip(&strips).enumerate() {
+                let nvx = 2 * p;
+                let ntri = 2 * (p - s);
+                let (vh, vt) = v.split_at_mut(nvx);
+                let (th, tt) = t.split_at_mut(ntri);
+                let (ch, ct) = c.split_at_mut(nvx);
+                let (nh, nt) = n.split_at_mut(nvx);
+                let (fh, ft) = fa.split_at_mut(nvx);
+                let (sh, stl) = st.split_at_mut(nvx);
+                let out = Out {
+                    vertices: vh,
+                    faces: th,
+                    rgba: ch,
+                    normals: nh,
+                    face: fh,
+                    step: sh,
+                };
+                jobs.push((ci, v0, out));
+                v0 += nvx as u32;
+                (v, t, c, n, fa, st) = (vt, tt, ct, nt, ft, stl);
+            }
+        }
+        jobs.into_par_iter()
+            .for_each(|(ci, v0, out)| self.fill_chunk(ci, v0, out, vertices, normals));
+        Ok(mesh)
+    }
+
+    fn fill_chunk(
+        &self,
+        ci: usize,
+        v0: u32,
+        o: Out<'_>,
+        base_pos: Option<&[[f64; 3]]>,
+        base_nrm: Option<&[[f64; 3]]>,
+    ) {
+        let s = self.opts.subdivisions as usize;
+        let nf = self.faces.len();
+        let unit = |n: [f32; 3]| {
+            let u = normalize([n[0] as f64, n[1] as f64, n[2] as f64]);
+            [u[0] as f32, u[1] as f32, u[2] as f32]
+        };
+        let a0 = self.opts.initial_alpha;
+        let sf = s as f32;
+        let m = self.updates - 1;
+        let newest = (m % s as u64) as usize;
+        let (mut vi, mut ti) = (0usize, 0usize);
+        for f in ci * CHUNK..((ci + 1) * CHUNK).min(nf) {
+            let pairs = self.pairs(f);
+            if pairs == 0 {
+                continue;
+            }
+            let (st, fade) = (self.hot[f], self.fade[f]);
+            let face = self.faces[f];
+            let iface = self.loc.ifaces[f];
+            let start = vi;
+            for j in 0..pairs {
+                let (k, slot) = if j == 0 {
+                    (st.last, newest)
+                } else {
+                    let slot = (newest + s - (j - 1) % s) % s;
+                    (self.ring[slot * nf + f] & 3, slot)
+                };
+                let alpha = a0 * (1.0 - (j.max(fade as usize) as f32) / sf);
+                for (side, &corner) in [k as usize, (k as usize + 1) % 3].iter().enumerate() {
+                    let (vtx, ivtx) = (face[corner] as usize, iface[corner] as usize);
+                    let w = vi + side;
+                    let buf = self.buf_of_slot[slot];
+                    let p = self.pos_bufs[buf][ivtx];
+                    o.vertices[w] = match (j, base_pos) {
+                        (0, Some(b)) => b[vtx],
+                        _ => [p[0] as f64, p[1] as f64, p[2] as f64],
+                    };
+                    o.normals[w] = match (j, base_nrm) {
+                        (0, Some(n)) => {
+                            let u = normalize(n[vtx]);
+                            [u[0] as f32, u[1] as f32, u[2] as f32]
+                        }
+                        _ => unit(self.raw_normal(buf, ivtx)),
+                    };
+                    let rgb = match &self.color {
+                        ShellColor::Uniform(c) => *c,
+                        ShellColor::PerVertex(c) => c[vtx],
+                    };
+                    o.rgba[w] = [rgb[0], rgb[1], rgb[2], alpha];
+                    o.face[w] = f as u32;
+                    o.step[w] = j as u8;
+                }
+                vi += 2;
+            }
+            for j in 0..pairs - 1 {
+                let b = v0 + (start + 2 * j) as u32;
+                o.faces[ti] = [b, b + 1, b + 3];
+                o.faces[ti + 1] = [b, b + 3, b + 2];
+                ti += 2;
+            }
+        }
+        debug_assert_eq!(vi, o.vertices.len());
+        debug_assert_eq!(ti, o.faces.len());
+    }
+}

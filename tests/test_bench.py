@@ -1,0 +1,52 @@
+"""The speed-against-error report: Pareto front, equal-error interpolation, outputs of a tiny run."""
+
+from __future__ import annotations
+
+import csv
+import math
+
+import pytest
+
+from motionblur import bench
+
+
+def _row(method, ms, rmse, options="-"):
+    return {"scene": "s", "method": method, "options": options, "ms": ms, "rmse": rmse}
+
+
+def test_pareto_front_keeps_the_undominated_rows():
+    rows = [_row("a", 1, 0.5), _row("a", 2, 0.1), _row("b", 3, 0.2), _row("b", 0.5, 0.9), _row("a", 2, 0.1)]
+    assert bench.pareto_front(rows) == [True, True, False, True, True]
+
+
+def test_equal_error_interpolates_log_log_and_marks_bounds():
+    rows = [
+        _row("accumulation", 1.0, 0.1),
+        _row("accumulation", 4.0, 0.01),
+        _row("accumulation", 16.0, 0.001),
+    ]
+    rows += [_row("motion_volume", 0.5, math.sqrt(0.1 * 0.01), "mid")]  # halfway in log error
+    rows += [_row("motion_volume", 0.5, 0.5, "worse"), _row("motion_volume", 2.0, 0.0001, "better")]
+    out = {r["options"]: (t, bound, f) for r, t, bound, f in bench.equal_error(rows)}
+    assert out["mid"][0] == pytest.approx(2.0) and out["mid"][1] == "" and out["mid"][2] == pytest.approx(4.0)
+    assert out["worse"][:2] == (1.0, "<=")
+    assert out["better"][:2] == (16.0, ">=")
+
+
+def test_a_tiny_run_writes_the_table_csv_and_plot(tmp_path):
+    sweeps = {
+        "accumulation": [{"samples": 1}, {"samples": 4}],
+        "motion_volume": [{"segments": 1, "filter": "box"}],
+    }
+    bench.run(tmp_path, scenes=["cube"], width=32, height=24, times=4, spp=2, repeat=1, methods=list(sweeps),
+                    sweeps=sweeps, flip=False, pyrender_peer=False, log=lambda *a: None)  # fmt: skip
+    assert (tmp_path / "pareto_cube.png").stat().st_size > 1000
+    md = (tmp_path / "results.md").read_text()
+    assert "## cube" in md and "motion_volume against accumulation" in md and "Re-timed in pairs" in md
+    with open(tmp_path / "results.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["method"] for r in rows] == ["accumulation", "accumulation", "motion_volume"]
+    assert all(float(r["rmse"]) >= 0 and float(r["ms"]) > 0 for r in rows)
+    assert list(tmp_path.glob("references/cube_32x24_K4_S2_*.npy"))
+    # the registered sweeps are restored
+    assert len(bench.METHODS["accumulation"].sweep) == 9
