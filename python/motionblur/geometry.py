@@ -343,7 +343,9 @@ def motion_volume(
         per pixel within 15%). The image is modelled with the convex hull of the object's
         projection (perspective from ``camera_position``; without one, orthographic along the
         world axis least aligned with the motion, which is less accurate), so concave objects
-        are approximated. For these filters each joining segment is cut at the two times the
+        are approximated: holes count as covered and a folded contour sweeps overlapping
+        strips (measured +14% to +97% total coverage on a torus and a bumpy blob, the ramp
+        +30% to +230%). For these filters each joining segment is cut at the two times the
         object's ends pass each contour vertex (plus 3 more cuts for triangle, 5 for gaussian),
         and coarse meshes are subdivided (each edge into up to 16 parts, at most 2**20 faces)
         so that alphas can follow the coverage profile. No 0.1 floor: long streaks are faint.
