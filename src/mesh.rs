@@ -108,10 +108,10 @@ impl Mesh {
             ));
         }
         let nv = vertices.len() as u32;
-        if let Some(bad) = faces
-            .par_iter()
-            .position_first(|f| f.iter().any(|&i| i >= nv))
-        {
+        // A parallel `all` first (cheap), the index of the first bad face only on failure.
+        let bad_face = |f: &[u32; 3]| f.iter().any(|&i| i >= nv);
+        if !faces.par_iter().with_min_len(8192).all(|f| !bad_face(f)) {
+            let bad = faces.iter().position(bad_face).unwrap_or(0);
             return Err(Error::value(
                 "faces",
                 format!("face {bad} has an index out of range [0, {nv})"),
@@ -288,10 +288,13 @@ fn check_vertices(vertices: &[[f64; 3]]) -> Result<()> {
             format!("too many vertices ({})", vertices.len()),
         ));
     }
-    if let Some(bad) = vertices
+    let bad_vertex = |v: &[f64; 3]| v.iter().any(|x| !x.is_finite());
+    if !vertices
         .par_iter()
-        .position_first(|v| v.iter().any(|x| !x.is_finite()))
+        .with_min_len(8192)
+        .all(|v| !bad_vertex(v))
     {
+        let bad = vertices.iter().position(bad_vertex).unwrap_or(0);
         return Err(Error::value(
             "vertices",
             format!("vertex {bad} is NaN or inf"),

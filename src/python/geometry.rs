@@ -72,6 +72,7 @@ fn face_rows(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>
     let nv = nv as i64;
     let out: Vec<[u32; 3]> = flat
         .par_chunks_exact(3)
+        .with_min_len(8192)
         .map(|t| {
             if t.iter().all(|&x| (0..nv).contains(&x)) {
                 [t[0] as u32, t[1] as u32, t[2] as u32]
@@ -80,7 +81,8 @@ fn face_rows(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>
             }
         })
         .collect();
-    if let Some(i) = out.par_iter().position_first(|t| t[0] == u32::MAX) {
+    if !out.par_iter().with_min_len(8192).all(|t| t[0] != u32::MAX) {
+        let i = out.iter().position(|t| t[0] == u32::MAX).unwrap_or(0);
         return Err(to_py_err(Error::value(
             "faces",
             format!("face {i} has an index out of range [0, {nv})"),
