@@ -5,9 +5,14 @@
 //! One module per pipeline stage: `mesh` (indexed triangle meshes, adjacency), `motion`
 //! (keyframes), `contour` (contour edges, silhouette of motion), `volume` (motion volumes), `shell` (blur shells),
 //! `raster` (the software rasterizer), `image` (image-space blur).
+//!
+//! The motion volume is split into `volume` (construction), `volume_filter` (the paper's ramp),
+//! `volume_alpha` (coverage alphas), `volume_assemble` (surfaces and attributes), `subdivide`
+//! and `spin` (section 4.3's spinning objects); `adjacency` builds the mesh adjacency.
 #![allow(dead_code)]
 
 pub mod accumulate;
+pub mod adjacency;
 pub mod contour;
 pub mod contour_table;
 mod error;
@@ -17,8 +22,10 @@ pub mod motion;
 pub mod raster;
 pub mod shell;
 pub mod spin;
+pub mod subdivide;
 pub mod volume;
 pub mod volume_alpha;
+pub mod volume_assemble;
 pub mod volume_filter;
 
 pub use error::{Error, Result};

@@ -44,10 +44,9 @@ use rayon::prelude::*;
 use crate::contour::check_vector;
 use crate::mesh::{dot, face_normal, normalize, Mesh};
 use crate::motion::{Keyframe, Path};
-use crate::volume::{
-    assemble, check_options, motion_volume, select_contour, subdivided, subdivision_for_edge,
-    AlphaMode, MotionVolume, VolumeOptions,
-};
+use crate::subdivide::{subdivided, subdivision_for_edge};
+use crate::volume::{check_options, motion_volume, MotionVolume, VolumeOptions};
+use crate::volume_assemble::{assemble, select_contour, AlphaMode};
 use crate::volume_filter::Filter;
 use crate::{Error, Result};
 

@@ -16,19 +16,20 @@
 //! the camera: front faces placed at close, back faces at open) and every joining quad strip has
 //! its own vertices, so that section 4.1's rule can apply per edge: when only the trailing
 //! (leading) side is visible, all joining vertices of the edge take the trailing (leading)
-//! normal. Colours are per mesh vertex, so leading and trailing colours of an edge agree.
+//! normal. Colours are uniform, per mesh vertex (so leading and trailing colours of an edge
+//! agree) or per face (see [`Colors`]).
 //!
 //! Normals are rotated by each ring's keyframe. Alpha comes from [`crate::volume_filter`] and
 //! multiplies the colour's own (straight) alpha. If every keyframe is the same, the result is the
 //! mesh itself placed by `T_0`, all leading and opaque (colour alpha only).
 use rayon::prelude::*;
 
-use crate::contour::{
-    camera_facing, check_vector, classify_faces, contour_from_sides, contour_line, ContourEdge,
-};
-use crate::mesh::{dot, normalize, Mesh, MAX_ELEMENTS};
+use crate::contour::{check_vector, classify_faces};
+use crate::mesh::{dot, normalize, Mesh};
 use crate::motion::Path;
-use crate::volume_alpha::{default_view, subdivide, CoverageModel, Subdivision};
+use crate::subdivide::{subdivided, subdivision_factor};
+use crate::volume_alpha::{default_view, CoverageModel};
+use crate::volume_assemble::{assemble, camera_sides, select_contour, AlphaMode};
 use crate::volume_filter::Filter;
 use crate::{Error, Result};
 
@@ -39,11 +40,17 @@ pub const JOINING: u8 = 2;
 /// Largest number of segments accepted.
 pub const MAX_SEGMENTS: usize = 4096;
 
-/// Per-vertex colours: one straight RGBA for all, or one per mesh vertex.
+/// Colours: one straight RGBA for all, one per mesh vertex, or one per mesh face.
+///
+/// With per-face colours every leading and trailing face has its own three vertices and every
+/// joining strip its own vertices, coloured from the strip's front face (leading end) to its back
+/// face (trailing end), or with the visible side's colour only when the camera sees one side
+/// (section 4.1); the volume is then closed geometrically but not as an indexed mesh.
 #[derive(Debug, Clone)]
 pub enum Colors {
     Uniform([f32; 4]),
     PerVertex(Vec<[f32; 4]>),
+    PerFace(Vec<[f32; 4]>),
 }
 
 /// Options of [`motion_volume`].
@@ -54,6 +61,10 @@ pub struct VolumeOptions {
     /// Per-vertex normals in object space; `None`: area-weighted vertex normals.
     pub normals: Option<Vec<[f64; 3]>>,
     pub camera: Option<[f64; 3]>,
+    /// With a camera: sweep only the contour line (section 3.2) and apply the section 4.1
+    /// normal rule (`true`), or sweep every contour edge and use the camera for the coverage
+    /// alphas only (`false`).
+    pub contour_line: bool,
 }
 
 impl Default for VolumeOptions {
@@ -63,6 +74,7 @@ impl Default for VolumeOptions {
             colors: Colors::Uniform([1.0; 4]),
             normals: None,
             camera: None,
+            contour_line: true,
         }
     }
 }
@@ -84,16 +96,6 @@ pub struct MotionVolume {
     pub contour_edges: usize,
 }
 
-/// Where an output vertex comes from: mesh vertex; placement at `frac` of the way from keyframe
-/// `seg` to `seg + 1` (0: the keyframe itself); keyframe for its normal.
-#[derive(Clone, Copy)]
-struct Source {
-    v: u32,
-    seg: u32,
-    frac: f64,
-    normal_ring: u32,
-}
-
 pub(crate) fn check_options(mesh: &Mesh, opts: &VolumeOptions) -> Result<()> {
     let nv = mesh.vertices().len();
     let check_rgba = |c: &[f32; 4]| {
@@ -107,6 +109,21 @@ pub(crate) fn check_options(mesh: &Mesh, opts: &VolumeOptions) -> Result<()> {
                 "colors",
                 "must be finite, RGB >= 0 and alpha in [0, 1]",
             ));
+        }
+        Colors::PerFace(c) => {
+            let nf = mesh.faces().len();
+            if c.len() != nf {
+                return Err(Error::shape(
+                    "face_colors",
+                    format!("expected {nf} colours, got {}", c.len()),
+                ));
+            }
+            if !c.par_iter().all(check_rgba) {
+                return Err(Error::value(
+                    "face_colors",
+                    "must be finite, RGB >= 0 and alpha in [0, 1]",
+                ));
+            }
         }
         Colors::PerVertex(c) => {
             if c.len() != nv {
@@ -139,16 +156,6 @@ pub(crate) fn check_options(mesh: &Mesh, opts: &VolumeOptions) -> Result<()> {
         check_vector(eye, "camera_position")?;
     }
     Ok(())
-}
-
-/// How the vertices of a volume get their filter opacity.
-pub(crate) enum AlphaMode {
-    /// One opacity per keyframe ring (the paper's ramp); no extra cuts in the joining strips.
-    Rings(Vec<f64>),
-    /// The coverage model; every joining segment is cut at `q + 1` per-vertex times.
-    Coverage(Box<CoverageModel>, usize),
-    /// One opacity per mesh vertex times a weight per keyframe ring (see `crate::spin`).
-    PerVertex(Vec<f64>, Vec<f64>),
 }
 
 /// The view direction of the coverage model: from the camera to the centroid at mid-shutter,
@@ -188,12 +195,20 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         ));
     }
     let verts = mesh.vertices();
+    let face_colors = matches!(opts.colors, Colors::PerFace(_));
+    if path.is_static() && face_colors {
+        let front = vec![true; mesh.faces().len()];
+        let alpha = AlphaMode::Rings(vec![1.0; n + 1]);
+        return assemble(mesh, path, &front, &[], &[], false, &alpha, opts);
+    }
     if path.is_static() {
         // The mesh itself (every vertex, in order), placed by T_0, all leading and opaque.
         let f0 = &path.frames[0];
         let c = |v: usize| match &opts.colors {
-            Colors::Uniform(c) => *c,
             Colors::PerVertex(c) => c[v],
+            Colors::Uniform(c) => *c,
+            // Not reached: per-face colours take the assemble path above.
+            Colors::PerFace(c) => c.first().copied().unwrap_or([1.0; 4]),
         };
         let obj_normals = opts
             .normals
@@ -251,7 +266,8 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
     // A subdivided face takes the sides of its parent face: the split of a face parallel to
     // the motion (n . m = 0) must not depend on the rounding of the new vertices.
     let front = classify_faces(mesh, m_obj);
-    let vis = opts.camera.map(|eye| camera_sides(mesh, path, eye));
+    let line_eye = opts.camera.filter(|_| opts.contour_line);
+    let vis = line_eye.map(|eye| camera_sides(mesh, path, eye));
     let (mesh, opts, front, vis) = match &sub {
         Some((m, o, parent)) => {
             let map = |x: &[bool]| {
@@ -271,18 +287,9 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         &front,
         &contour,
         &vis,
-        opts.camera.is_some(),
+        line_eye.is_some(),
         &alpha,
         opts,
-    )
-}
-
-/// Whether each face faces the camera at `eye` when placed at shutter close and at open.
-pub(crate) fn camera_sides(mesh: &Mesh, path: &Path, eye: [f64; 3]) -> (Vec<bool>, Vec<bool>) {
-    let (first, last) = (&path.frames[0], &path.frames[path.segments()]);
-    (
-        camera_facing(mesh, eye, |p| last.point(p)),
-        camera_facing(mesh, eye, |p| first.point(p)),
     )
 }
 
@@ -311,363 +318,4 @@ fn extent_along(mesh: &Mesh, path: &Path, total: [f64; 3]) -> f64 {
             |a, b| (a.0.min(b.0), a.1.max(b.1)),
         );
     hi - lo
-}
-
-/// Largest number of faces a coverage-filter subdivision may produce.
-const MAX_SUBDIVIDED_FACES: usize = 1 << 20;
-
-/// How finely to cut a coarse mesh so that per-vertex coverage alphas can follow the coverage
-/// profile along the motion, which changes over `min(path length, extent)`: every edge (world
-/// units, at shutter open) is cut to at most `max(min(L, E) / 2, E / 8)`, in 1..=8 parts, and
-/// the result stays under [`MAX_SUBDIVIDED_FACES`].
-fn subdivision_factor(mesh: &Mesh, path: &Path, length: f64, extent: f64) -> usize {
-    subdivision_for_edge(mesh, path, (0.25 * length.min(extent)).max(extent / 16.0))
-}
-
-/// The number of parts (1..=16, within [`MAX_SUBDIVIDED_FACES`]) that cuts every edge of the
-/// mesh placed by the first keyframe to at most `h` (world units).
-pub(crate) fn subdivision_for_edge(mesh: &Mesh, path: &Path, h: f64) -> usize {
-    let faces = mesh.faces();
-    if h.is_nan() || h <= 0.0 || faces.len() * 4 > MAX_SUBDIVIDED_FACES {
-        return 1;
-    }
-    let v = mesh.vertices();
-    let f0 = &path.frames[0];
-    let longest = faces
-        .par_iter()
-        .map(|f| {
-            (0..3)
-                .map(|k| {
-                    let (a, b) = (v[f[k] as usize], v[f[(k + 1) % 3] as usize]);
-                    let d = f0.vector([b[0] - a[0], b[1] - a[1], b[2] - a[2]]);
-                    dot(d, d).sqrt()
-                })
-                .fold(0.0, f64::max)
-        })
-        .reduce(|| 0.0, f64::max);
-    let by_budget = ((MAX_SUBDIVIDED_FACES / faces.len()) as f64).sqrt().floor() as usize;
-    ((longest / h).ceil() as usize)
-        .clamp(1, 16)
-        .min(by_budget.max(1))
-}
-
-/// The mesh cut `s` times along every edge, with colours and normals blended to the new vertices.
-pub(crate) fn subdivided(
-    mesh: &Mesh,
-    opts: &VolumeOptions,
-    s: usize,
-) -> Result<(Mesh, VolumeOptions, Vec<u32>)> {
-    let Subdivision {
-        vertices: sv,
-        faces: sf,
-        blend,
-        parent,
-    } = subdivide(mesh.vertices(), mesh.faces(), s);
-    let normals = opts
-        .normals
-        .clone()
-        .unwrap_or_else(|| mesh.vertex_normals());
-    let mix3 = |(ids, w): &([u32; 3], [f64; 3])| {
-        let mut o = [0.0; 3];
-        for (i, wi) in ids.iter().zip(w) {
-            for (x, y) in o.iter_mut().zip(normals[*i as usize]) {
-                *x += wi * y;
-            }
-        }
-        o
-    };
-    let colors = match &opts.colors {
-        Colors::Uniform(c) => Colors::Uniform(*c),
-        Colors::PerVertex(c) => Colors::PerVertex(
-            blend
-                .iter()
-                .map(|(ids, w)| {
-                    let mut o = [0.0f32; 4];
-                    for (i, wi) in ids.iter().zip(w) {
-                        for (x, y) in o.iter_mut().zip(c[*i as usize]) {
-                            *x += *wi as f32 * y;
-                        }
-                    }
-                    o
-                })
-                .collect(),
-        ),
-    };
-    let out = VolumeOptions {
-        filter: opts.filter,
-        colors,
-        normals: Some(blend.par_iter().map(mix3).collect()),
-        camera: opts.camera,
-    };
-    Ok((Mesh::new(sv, sf)?, out, parent))
-}
-
-/// The contour edges of a face split; with the camera sides of the faces (facing the camera at
-/// close, at open), the contour line and, per edge, whether its leading (front faces at close)
-/// and trailing (back faces at open) sides face the camera.
-pub(crate) fn select_contour(
-    mesh: &Mesh,
-    front: &[bool],
-    sides: Option<&(Vec<bool>, Vec<bool>)>,
-) -> (Vec<ContourEdge>, Vec<(bool, bool)>) {
-    let contour = contour_from_sides(mesh, front);
-    let Some((vis_lead, vis_trail)) = sides else {
-        return (contour, Vec::new());
-    };
-    let visible: Vec<bool> = (0..front.len())
-        .into_par_iter()
-        .map(|f| if front[f] { vis_lead[f] } else { vis_trail[f] })
-        .collect();
-    let contour = contour_line(mesh, contour, &visible);
-    let adj = mesh.adjacency();
-    let vis = contour
-        .par_iter()
-        .map(|c| {
-            let inc = adj.incident(c.edge as usize);
-            let lead = inc
-                .iter()
-                .any(|&h| front[(h / 3) as usize] && vis_lead[(h / 3) as usize]);
-            let trail = inc
-                .iter()
-                .any(|&h| !front[(h / 3) as usize] && vis_trail[(h / 3) as usize]);
-            (lead, trail)
-        })
-        .collect();
-    (contour, vis)
-}
-
-/// The ring points `(segment, fraction)` of one contour vertex, trailing (0, 0) to leading (n, 0).
-fn ring_points(alpha: &AlphaMode, path: &Path, p: [f64; 3]) -> Vec<(u32, f64)> {
-    let n = path.segments();
-    match alpha {
-        AlphaMode::Coverage(model, q) => {
-            let mut out = Vec::with_capacity(n * (q + 2) + 1);
-            for j in 0..n {
-                out.push((j as u32, 0.0));
-                let (p0, p1) = (path.frames[j].point(p), path.frames[j + 1].point(p));
-                out.extend(
-                    model
-                        .knots(j, p0, p1, *q)
-                        .into_iter()
-                        .map(|u| (j as u32, u)),
-                );
-            }
-            out.push((n as u32, 0.0));
-            out
-        }
-        _ => (0..=n as u32).map(|i| (i, 0.0)).collect(),
-    }
-}
-
-/// Assemble leading, trailing and joining surfaces (the module docs) with vertex attributes.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn assemble(
-    mesh: &Mesh,
-    path: &Path,
-    front: &[bool],
-    contour: &[ContourEdge],
-    edge_visibility: &[(bool, bool)],
-    per_edge: bool,
-    alpha: &AlphaMode,
-    opts: &VolumeOptions,
-) -> Result<MotionVolume> {
-    let faces = mesh.faces();
-    let verts = mesh.vertices();
-    let nv = verts.len();
-    let n = path.segments();
-    let frames = &path.frames;
-    const NONE: u32 = u32::MAX;
-    // Ring points per contour vertex.
-    let mut ring = vec![NONE; nv];
-    let mut ring_vertices = Vec::new();
-    for c in contour {
-        for i in [c.a, c.b] {
-            if ring[i as usize] == NONE {
-                ring[i as usize] = ring_vertices.len() as u32;
-                ring_vertices.push(i);
-            }
-        }
-    }
-    let points: Vec<Vec<(u32, f64)>> = ring_vertices
-        .par_iter()
-        .map(|&v| ring_points(alpha, path, verts[v as usize]))
-        .collect();
-    let rings = points.first().map_or(n + 1, |p| p.len());
-    let joining = contour.len().saturating_mul(2 * (rings - 1));
-    if joining > MAX_ELEMENTS || faces.len() + joining > MAX_ELEMENTS {
-        return Err(Error::value(
-            "segments",
-            format!("{n} segments give too many joining faces"),
-        ));
-    }
-    // Sources: leading, trailing, then ring vertices.
-    let mut lead = vec![NONE; nv];
-    let mut trail = vec![NONE; nv];
-    for (f, face) in faces.iter().enumerate() {
-        let map = if front[f] { &mut lead } else { &mut trail };
-        for &i in face {
-            map[i as usize] = 0;
-        }
-    }
-    if !per_edge {
-        for &v in &ring_vertices {
-            lead[v as usize] = 0;
-            trail[v as usize] = 0;
-        }
-    }
-    let mut sources = Vec::new();
-    let nr = n as u32;
-    let source = |v: u32, (seg, frac): (u32, f64), normal_ring: u32| Source {
-        v,
-        seg,
-        frac,
-        normal_ring,
-    };
-    for (v, slot) in lead.iter_mut().enumerate() {
-        if *slot == 0 {
-            *slot = sources.len() as u32;
-            sources.push(source(v as u32, (nr, 0.0), nr));
-        }
-    }
-    for (v, slot) in trail.iter_mut().enumerate() {
-        if *slot == 0 {
-            *slot = sources.len() as u32;
-            sources.push(source(v as u32, (0, 0.0), 0));
-        }
-    }
-    let nearest = |(seg, frac): (u32, f64)| if frac < 0.5 { seg } else { seg + 1 };
-    let ring_base = sources.len();
-    let ring_count = ring_vertices.len();
-    if per_edge {
-        for (c, &(vl, vt)) in contour.iter().zip(edge_visibility) {
-            for r in 0..rings {
-                for v in [c.a, c.b] {
-                    let pt = points[ring[v as usize] as usize]
-                        .get(r)
-                        .copied()
-                        .unwrap_or((0, 0.0));
-                    let normal_ring = match (vl, vt) {
-                        (true, false) => nr,
-                        (false, true) => 0,
-                        _ => nearest(pt),
-                    };
-                    sources.push(source(v, pt, normal_ring));
-                }
-            }
-        }
-    } else {
-        for r in 1..rings.saturating_sub(1) {
-            for (pts, &v) in points.iter().zip(&ring_vertices) {
-                sources.push(source(v, pts[r], nearest(pts[r])));
-            }
-        }
-    }
-    if sources.len() > MAX_ELEMENTS {
-        return Err(Error::value(
-            "segments",
-            format!("{n} segments give too many vertices"),
-        ));
-    }
-    let id = |k: usize, v: u32, r: usize, which: usize| -> u32 {
-        if per_edge {
-            (ring_base + k * 2 * rings + 2 * r + which) as u32
-        } else if r == rings - 1 {
-            lead[v as usize]
-        } else if r == 0 {
-            trail[v as usize]
-        } else {
-            (ring_base + (r - 1) * ring_count + ring[v as usize] as usize) as u32
-        }
-    };
-    let mut out_faces = Vec::with_capacity(faces.len() + joining);
-    let mut part = Vec::with_capacity(out_faces.capacity());
-    for (map, want, tag) in [(&lead, true, LEADING), (&trail, false, TRAILING)] {
-        for (f, face) in faces.iter().enumerate() {
-            if front[f] == want {
-                out_faces.push([
-                    map[face[0] as usize],
-                    map[face[1] as usize],
-                    map[face[2] as usize],
-                ]);
-                part.push(tag);
-            }
-        }
-    }
-    for (k, c) in contour.iter().enumerate() {
-        for r in 1..rings {
-            let (a0, b0) = (id(k, c.a, r - 1, 0), id(k, c.b, r - 1, 1));
-            let (a1, b1) = (id(k, c.a, r, 0), id(k, c.b, r, 1));
-            out_faces.push([a0, b0, b1]);
-            out_faces.push([a0, b1, a1]);
-            part.push(JOINING);
-            part.push(JOINING);
-        }
-    }
-    // Attributes.
-    let obj_normals = match &opts.normals {
-        Some(nr) => nr.clone(),
-        None => mesh.vertex_normals(),
-    };
-    let color = |v: u32| match &opts.colors {
-        Colors::Uniform(c) => *c,
-        Colors::PerVertex(c) => c[v as usize],
-    };
-    let place = |s: &Source| {
-        let (j, u) = (s.seg as usize, s.frac);
-        if u == 0.0 {
-            frames[j].point(verts[s.v as usize])
-        } else {
-            frames[j]
-                .interpolate(&frames[j + 1], u)
-                .point(verts[s.v as usize])
-        }
-    };
-    let vertices: Vec<[f64; 3]> = sources.par_iter().map(place).collect();
-    let filter_alpha = |s: &Source, p: [f64; 3]| match alpha {
-        AlphaMode::Rings(r) => r[s.seg as usize],
-        AlphaMode::Coverage(model, _) => model.coverage(p),
-        AlphaMode::PerVertex(a, w) => (a[s.v as usize] * w[s.seg as usize]).clamp(0.0, 1.0),
-    };
-    let rgba = sources
-        .par_iter()
-        .zip(&vertices)
-        .map(|(s, p)| {
-            let c = color(s.v);
-            [c[0], c[1], c[2], (c[3] as f64 * filter_alpha(s, *p)) as f32]
-        })
-        .collect();
-    let normals = sources
-        .par_iter()
-        .map(|s| {
-            let w = normalize(frames[s.normal_ring as usize].normal(obj_normals[s.v as usize]));
-            [w[0] as f32, w[1] as f32, w[2] as f32]
-        })
-        .collect();
-    let ring_alpha = match alpha {
-        AlphaMode::Rings(r) => r.clone(),
-        _ if ring_vertices.is_empty() => vec![1.0; n + 1],
-        _ => (0..=n)
-            .map(|i| {
-                // Collected first, then summed in order: the same for any thread count.
-                let each: Vec<f64> = ring_vertices
-                    .par_iter()
-                    .map(|&v| {
-                        let s = source(v, (i as u32, 0.0), i as u32);
-                        filter_alpha(&s, place(&s))
-                    })
-                    .collect();
-                let sum: f64 = each.iter().sum();
-                sum / ring_vertices.len() as f64
-            })
-            .collect(),
-    };
-    Ok(MotionVolume {
-        vertices,
-        faces: out_faces,
-        rgba,
-        normals,
-        part,
-        ring_alpha,
-        contour_edges: contour.len(),
-    })
 }

@@ -44,10 +44,14 @@ def motion_volume(
     colors: np.ndarray,
     normals: np.ndarray | None = None,
     camera_position: np.ndarray | None = None,
+    face_colors: bool = False,
+    contour_line: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
     """Motion volume for keyframes (K+1,4,4) float64, each interval cut into segments, filter
-    'ramp' | 'box' | 'triangle' | 'gaussian', colors (1|V,4) float32 straight RGBA, normals
-    (V,3) float64 | None, camera_position (3,) float64 | None. Returns vertices (N,3) f64,
+    'ramp' | 'box' | 'triangle' | 'gaussian', colors (1|V,4) float32 straight RGBA (or (F,4)
+    per face with face_colors=True), normals
+    (V,3) float64 | None, camera_position (3,) float64 | None, contour_line (camera: sweep only the
+    contour line; False: the camera sets the alphas only). Returns vertices (N,3) f64,
     faces (M,3) i64, rgba (N,4) f32, normals (N,3) f32, part (M,) u8, ring_alpha (n+1,) f64
     and the number of contour edges. Releases the GIL."""
 
@@ -62,9 +66,12 @@ def spin_volume(
     colors: np.ndarray,
     normals: np.ndarray | None = None,
     camera_position: np.ndarray | None = None,
+    face_colors: bool = False,
+    contour_line: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
     """Spin volume (section 4.3): axis (3,) f64, angle radians, center (3,) f64, translation
-    (3,) f64, segments (sweep steps) | None; the rest and the result as motion_volume.
+    (3,) f64, segments (sweep steps) | None; the rest and the result as motion_volume
+    (contour_line is ignored: every contour edge is swept).
     Releases the GIL."""
 
 class _ContourTable:

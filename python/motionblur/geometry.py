@@ -294,6 +294,21 @@ def _colors(colors, n_vertices: int) -> np.ndarray:
     return np.ascontiguousarray(c, dtype=np.float32)
 
 
+def _vertex_or_face_colors(colors, face_colors, n_vertices: int, n_faces: int):
+    """(colour array for the core, per-face flag)."""
+    if face_colors is None:
+        return _colors(colors, n_vertices), False
+    if colors is not None:
+        raise ValueError("face_colors: give either colors or face_colors, not both")
+    c = np.asarray(face_colors)
+    if c.ndim != 2:
+        raise ValueError(f"face_colors: expected shape (F,3) or (F,4), got {c.shape}")
+    try:
+        return _colors(c, n_faces), True
+    except (TypeError, ValueError) as exc:
+        raise type(exc)(str(exc).replace("colors:", "face_colors:", 1)) from None
+
+
 def motion_volume(
     mesh,
     motion,
@@ -302,6 +317,8 @@ def motion_volume(
     colors=None,
     normals=None,
     camera_position=None,
+    face_colors=None,
+    contour_line: bool = True,
 ) -> MotionVolume:
     """Build the motion volume of ``mesh`` over the shutter (paper sections 3.3-3.4, 4.1-4.3).
 
@@ -326,18 +343,28 @@ def motion_volume(
         per pixel within 15%). The image is modelled with the convex hull of the object's
         projection (perspective from ``camera_position``; without one, orthographic along the
         world axis least aligned with the motion, which is less accurate), so concave objects
-        are approximated. For these filters each joining segment is cut at the two times the
+        are approximated: holes count as covered and a folded contour sweeps overlapping
+        strips (measured +14% to +97% total coverage on a torus and a bumpy blob, the ramp
+        +30% to +230%). For these filters each joining segment is cut at the two times the
         object's ends pass each contour vertex (plus 3 more cuts for triangle, 5 for gaussian),
         and coarse meshes are subdivided (each edge into up to 16 parts, at most 2**20 faces)
         so that alphas can follow the coverage profile. No 0.1 floor: long streaks are faint.
         See ``src/volume_alpha.rs``.
     colors : None (white, opaque), one RGB/RGBA colour, or (V,3)/(V,4) per vertex; linear,
         straight alpha, RGB >= 0, alpha in [0, 1].
+    face_colors : optional (F,3)/(F,4) colour per face (linear, straight alpha), instead of
+        ``colors``. Every leading and trailing face then has its own three vertices and every
+        joining strip its own vertices, coloured from its front face (leading end) to its back
+        face (trailing end), or all in the visible side's colour when the camera sees only one
+        side (section 4.1). The volume stays closed geometrically, not as an indexed mesh.
     normals : optional (V,3) lighting normals in object space; default area-weighted normals.
     camera_position : optional (3,) world position of the camera (at shutter close). If given,
         only the contour line is swept (edges whose front face at close or back face at open
         faces the camera) and joining vertices take the normal of the visible side when only
-        one side is visible (section 4.1); joining strips then have their own vertices.
+        one side is visible (section 4.1); joining strips then have their own vertices. The
+        box/triangle/gaussian alphas use it for a perspective view.
+    contour_line : bool, default True. With ``camera_position``, False sweeps every contour
+        edge (shared ring vertices, a closed volume) and uses the camera for the alphas only.
 
     Returns
     -------
@@ -354,10 +381,12 @@ def motion_volume(
     if filter not in FILTERS:
         raise ValueError(f"filter: unknown filter {filter!r}; expected one of {', '.join(FILTERS)}")
     nv = len(m.vertices)
-    col = _colors(colors, nv)
+    col, per_face = _vertex_or_face_colors(colors, face_colors, nv, len(m.faces))
     nrm = None if normals is None else as_array(normals, "normals", np.float64, (nv, 3))
     cam = None if camera_position is None else _vec3(camera_position, "camera_position")
-    out = _core.motion_volume(m._core, keys, seg, filter, col, nrm, cam)
+    if not isinstance(contour_line, (bool, np.bool_)):
+        raise TypeError(f"contour_line: expected a bool, got {type(contour_line).__name__}")
+    out = _core.motion_volume(m._core, keys, seg, filter, col, nrm, cam, per_face, bool(contour_line))
     return MotionVolume(*out)
 
 
@@ -372,6 +401,7 @@ def spin_volume(
     colors=None,
     normals=None,
     camera_position=None,
+    face_colors=None,
 ) -> MotionVolume:
     """The motion volume of an object that spins but barely moves (end of paper section 4.3).
 
@@ -400,7 +430,7 @@ def spin_volume(
     translation : optional (3,) float, a (small) translation over the shutter.
     segments : optional int in 1..4096, the number of sweep steps (default one per pi/12).
     filter : ``"box"``, ``"ramp"``, ``"triangle"`` or ``"gaussian"``.
-    colors, normals, camera_position : as in :func:`motion_volume`.
+    colors, normals, camera_position, face_colors : as in :func:`motion_volume`.
 
     Returns
     -------
@@ -419,10 +449,10 @@ def spin_volume(
     if filter not in FILTERS:
         raise ValueError(f"filter: unknown filter {filter!r}; expected one of {', '.join(FILTERS)}")
     nv = len(m.vertices)
-    col = _colors(colors, nv)
+    col, per_face = _vertex_or_face_colors(colors, face_colors, nv, len(m.faces))
     nrm = None if normals is None else as_array(normals, "normals", np.float64, (nv, 3))
     cam = None if camera_position is None else _vec3(camera_position, "camera_position")
-    out = _core.spin_volume(m._core, ax, ang, c, t, seg, filter, col, nrm, cam)
+    out = _core.spin_volume(m._core, ax, ang, c, t, seg, filter, col, nrm, cam, per_face)
     return MotionVolume(*out)
 
 

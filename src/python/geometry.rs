@@ -72,6 +72,7 @@ fn face_rows(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>
     let nv = nv as i64;
     let out: Vec<[u32; 3]> = flat
         .par_chunks_exact(3)
+        .with_min_len(8192)
         .map(|t| {
             if t.iter().all(|&x| (0..nv).contains(&x)) {
                 [t[0] as u32, t[1] as u32, t[2] as u32]
@@ -80,7 +81,8 @@ fn face_rows(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>
             }
         })
         .collect();
-    if let Some(i) = out.par_iter().position_first(|t| t[0] == u32::MAX) {
+    if !out.par_iter().with_min_len(8192).all(|t| t[0] != u32::MAX) {
+        let i = out.iter().position(|t| t[0] == u32::MAX).unwrap_or(0);
         return Err(to_py_err(Error::value(
             "faces",
             format!("face {i} has an index out of range [0, {nv})"),
@@ -252,7 +254,7 @@ type VolumeTuple<'py> = (
 );
 
 #[pyfunction]
-#[pyo3(signature = (mesh, keyframes, segments, filter, colors, normals = None, camera_position = None))]
+#[pyo3(signature = (mesh, keyframes, segments, filter, colors, normals = None, camera_position = None, face_colors = false, contour_line = true))]
 #[allow(clippy::too_many_arguments)]
 fn motion_volume<'py>(
     py: Python<'py>,
@@ -263,6 +265,8 @@ fn motion_volume<'py>(
     colors: PyReadonlyArray2<'_, f32>,
     normals: Option<PyReadonlyArray2<'_, f64>>,
     camera_position: Option<PyReadonlyArray1<'_, f64>>,
+    face_colors: bool,
+    contour_line: bool,
 ) -> PyResult<VolumeTuple<'py>> {
     let filter = Filter::parse(filter).map_err(to_py_err)?;
     let kv = keyframes.as_array();
@@ -285,7 +289,9 @@ fn motion_volume<'py>(
         })
         .collect();
     let c = rows::<4, f32>(&colors, "colors")?;
-    let colors = if c.len() == 1 {
+    let colors = if face_colors {
+        Colors::PerFace(c)
+    } else if c.len() == 1 {
         Colors::Uniform(c[0])
     } else {
         Colors::PerVertex(c)
@@ -319,6 +325,7 @@ fn motion_volume<'py>(
                 colors,
                 normals,
                 camera,
+                contour_line,
             };
             core_motion_volume(&inner, &path.subdivide(segments), &opts)
         })
@@ -340,7 +347,7 @@ fn motion_volume<'py>(
 }
 
 #[pyfunction]
-#[pyo3(signature = (mesh, axis, angle, center, translation, segments, filter, colors, normals = None, camera_position = None))]
+#[pyo3(signature = (mesh, axis, angle, center, translation, segments, filter, colors, normals = None, camera_position = None, face_colors = false, contour_line = true))]
 #[allow(clippy::too_many_arguments)]
 fn spin_volume<'py>(
     py: Python<'py>,
@@ -354,6 +361,8 @@ fn spin_volume<'py>(
     colors: PyReadonlyArray2<'_, f32>,
     normals: Option<PyReadonlyArray2<'_, f64>>,
     camera_position: Option<PyReadonlyArray1<'_, f64>>,
+    face_colors: bool,
+    contour_line: bool,
 ) -> PyResult<VolumeTuple<'py>> {
     let filter = Filter::parse(filter).map_err(to_py_err)?;
     let spin = Spin {
@@ -364,7 +373,9 @@ fn spin_volume<'py>(
         segments,
     };
     let c = rows::<4, f32>(&colors, "colors")?;
-    let colors = if c.len() == 1 {
+    let colors = if face_colors {
+        Colors::PerFace(c)
+    } else if c.len() == 1 {
         Colors::Uniform(c[0])
     } else {
         Colors::PerVertex(c)
@@ -385,6 +396,7 @@ fn spin_volume<'py>(
                 colors,
                 normals,
                 camera,
+                contour_line,
             };
             core_spin_volume(&inner, &spin, &opts)
         })

@@ -1,0 +1,373 @@
+//! Assembly of motion volumes: the leading, trailing and joining surfaces of a face split and
+//! its contour, with placed vertices, colours, normals and filter alphas (see [`crate::volume`]
+//! for the construction and [`crate::spin`] for the spinning case).
+use rayon::prelude::*;
+
+use crate::contour::{camera_facing, contour_from_sides, contour_line, ContourEdge};
+use crate::mesh::{normalize, Mesh, MAX_ELEMENTS};
+use crate::motion::Path;
+use crate::volume::{Colors, MotionVolume, VolumeOptions, JOINING, LEADING, TRAILING};
+use crate::volume_alpha::CoverageModel;
+use crate::{Error, Result};
+
+/// Where an output vertex comes from: mesh vertex; placement at `frac` of the way from keyframe
+/// `seg` to `seg + 1` (0: the keyframe itself); keyframe for its normal.
+#[derive(Clone, Copy)]
+struct Source {
+    v: u32,
+    seg: u32,
+    frac: f64,
+    normal_ring: u32,
+    /// Per-face colours: the colour is `face_colors[back]` blended towards `face_colors[front]`
+    /// by `towards_front`; `front == u32::MAX` for vertex colours.
+    front: u32,
+    back: u32,
+    towards_front: f32,
+}
+
+/// How the vertices of a volume get their filter opacity.
+pub(crate) enum AlphaMode {
+    /// One opacity per keyframe ring (the paper's ramp); no extra cuts in the joining strips.
+    Rings(Vec<f64>),
+    /// The coverage model; every joining segment is cut at `q + 1` per-vertex times.
+    Coverage(Box<CoverageModel>, usize),
+    /// One opacity per mesh vertex times a weight per keyframe ring (see `crate::spin`).
+    PerVertex(Vec<f64>, Vec<f64>),
+}
+
+/// Whether each face faces the camera at `eye` when placed at shutter close and at open.
+pub(crate) fn camera_sides(mesh: &Mesh, path: &Path, eye: [f64; 3]) -> (Vec<bool>, Vec<bool>) {
+    let (first, last) = (&path.frames[0], &path.frames[path.segments()]);
+    (
+        camera_facing(mesh, eye, |p| last.point(p)),
+        camera_facing(mesh, eye, |p| first.point(p)),
+    )
+}
+
+/// The contour edges of a face split; with the camera sides of the faces (facing the camera at
+/// close, at open), the contour line and, per edge, whether its leading (front faces at close)
+/// and trailing (back faces at open) sides face the camera.
+pub(crate) fn select_contour(
+    mesh: &Mesh,
+    front: &[bool],
+    sides: Option<&(Vec<bool>, Vec<bool>)>,
+) -> (Vec<ContourEdge>, Vec<(bool, bool)>) {
+    let contour = contour_from_sides(mesh, front);
+    let Some((vis_lead, vis_trail)) = sides else {
+        return (contour, Vec::new());
+    };
+    let visible: Vec<bool> = (0..front.len())
+        .into_par_iter()
+        .map(|f| if front[f] { vis_lead[f] } else { vis_trail[f] })
+        .collect();
+    let contour = contour_line(mesh, contour, &visible);
+    let adj = mesh.adjacency();
+    let vis = contour
+        .par_iter()
+        .map(|c| {
+            let inc = adj.incident(c.edge as usize);
+            let lead = inc
+                .iter()
+                .any(|&h| front[(h / 3) as usize] && vis_lead[(h / 3) as usize]);
+            let trail = inc
+                .iter()
+                .any(|&h| !front[(h / 3) as usize] && vis_trail[(h / 3) as usize]);
+            (lead, trail)
+        })
+        .collect();
+    (contour, vis)
+}
+
+/// The ring points `(segment, fraction)` of one contour vertex, trailing (0, 0) to leading (n, 0).
+fn ring_points(alpha: &AlphaMode, path: &Path, p: [f64; 3]) -> Vec<(u32, f64)> {
+    let n = path.segments();
+    match alpha {
+        AlphaMode::Coverage(model, q) => {
+            let mut out = Vec::with_capacity(n * (q + 2) + 1);
+            for j in 0..n {
+                out.push((j as u32, 0.0));
+                let (p0, p1) = (path.frames[j].point(p), path.frames[j + 1].point(p));
+                out.extend(
+                    model
+                        .knots(j, p0, p1, *q)
+                        .into_iter()
+                        .map(|u| (j as u32, u)),
+                );
+            }
+            out.push((n as u32, 0.0));
+            out
+        }
+        _ => (0..=n as u32).map(|i| (i, 0.0)).collect(),
+    }
+}
+
+/// Assemble leading, trailing and joining surfaces (the module docs) with vertex attributes.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn assemble(
+    mesh: &Mesh,
+    path: &Path,
+    front: &[bool],
+    contour: &[ContourEdge],
+    edge_visibility: &[(bool, bool)],
+    per_edge: bool,
+    alpha: &AlphaMode,
+    opts: &VolumeOptions,
+) -> Result<MotionVolume> {
+    let faces = mesh.faces();
+    let verts = mesh.vertices();
+    let nv = verts.len();
+    let n = path.segments();
+    let frames = &path.frames;
+    const NONE: u32 = u32::MAX;
+    // Ring points per contour vertex.
+    let mut ring = vec![NONE; nv];
+    let mut ring_vertices = Vec::new();
+    for c in contour {
+        for i in [c.a, c.b] {
+            if ring[i as usize] == NONE {
+                ring[i as usize] = ring_vertices.len() as u32;
+                ring_vertices.push(i);
+            }
+        }
+    }
+    let points: Vec<Vec<(u32, f64)>> = ring_vertices
+        .par_iter()
+        .map(|&v| ring_points(alpha, path, verts[v as usize]))
+        .collect();
+    let rings = points.first().map_or(n + 1, |p| p.len());
+    let joining = contour.len().saturating_mul(2 * (rings - 1));
+    if joining > MAX_ELEMENTS || faces.len() + joining > MAX_ELEMENTS {
+        return Err(Error::value(
+            "segments",
+            format!("{n} segments give too many joining faces"),
+        ));
+    }
+    // Sources: leading, trailing, then ring vertices. Per-face colours give every leading and
+    // trailing face its own corners and every joining strip its own vertices.
+    let face_colors = matches!(opts.colors, Colors::PerFace(_));
+    let strips = per_edge || face_colors;
+    let mut lead = vec![NONE; nv];
+    let mut trail = vec![NONE; nv];
+    if !face_colors {
+        for (f, face) in faces.iter().enumerate() {
+            let map = if front[f] { &mut lead } else { &mut trail };
+            for &i in face {
+                map[i as usize] = 0;
+            }
+        }
+    }
+    if !strips {
+        for &v in &ring_vertices {
+            lead[v as usize] = 0;
+            trail[v as usize] = 0;
+        }
+    }
+    let mut sources = Vec::new();
+    let nr = n as u32;
+    let source = |v: u32, (seg, frac): (u32, f64), normal_ring: u32| Source {
+        v,
+        seg,
+        frac,
+        normal_ring,
+        front: NONE,
+        back: NONE,
+        towards_front: 1.0,
+    };
+    let mut out_faces = Vec::with_capacity(faces.len() + joining);
+    let mut part = Vec::with_capacity(out_faces.capacity());
+    if face_colors {
+        for (want, tag, ring) in [(true, LEADING, nr), (false, TRAILING, 0)] {
+            for (f, face) in faces.iter().enumerate() {
+                if front[f] == want {
+                    let base = sources.len() as u32;
+                    for &v in face {
+                        sources.push(Source {
+                            front: f as u32,
+                            back: f as u32,
+                            ..source(v, (ring, 0.0), ring)
+                        });
+                    }
+                    out_faces.push([base, base + 1, base + 2]);
+                    part.push(tag);
+                }
+            }
+        }
+    }
+    for (v, slot) in lead.iter_mut().enumerate() {
+        if *slot == 0 {
+            *slot = sources.len() as u32;
+            sources.push(source(v as u32, (nr, 0.0), nr));
+        }
+    }
+    for (v, slot) in trail.iter_mut().enumerate() {
+        if *slot == 0 {
+            *slot = sources.len() as u32;
+            sources.push(source(v as u32, (0, 0.0), 0));
+        }
+    }
+    let nearest = |(seg, frac): (u32, f64)| if frac < 0.5 { seg } else { seg + 1 };
+    let ring_base = sources.len();
+    let ring_count = ring_vertices.len();
+    if strips {
+        let adj = mesh.adjacency();
+        for (k, c) in contour.iter().enumerate() {
+            let (vl, vt) = edge_visibility.get(k).copied().unwrap_or((true, true));
+            // The strip's front and back faces (a boundary edge has only one).
+            let inc = adj.incident(c.edge as usize);
+            let pick = |want: bool| {
+                inc.iter()
+                    .map(|&h| h / 3)
+                    .find(|&f| front[f as usize] == want)
+            };
+            let (ff, fb) = match (pick(true), pick(false)) {
+                (Some(x), Some(y)) => (x, y),
+                (Some(x), None) | (None, Some(x)) => (x, x),
+                (None, None) => (NONE, NONE),
+            };
+            for r in 0..rings {
+                for v in [c.a, c.b] {
+                    let pt = points[ring[v as usize] as usize]
+                        .get(r)
+                        .copied()
+                        .unwrap_or((0, 0.0));
+                    let normal_ring = match (vl, vt) {
+                        (true, false) => nr,
+                        (false, true) => 0,
+                        _ => nearest(pt),
+                    };
+                    let towards_front = match (vl, vt) {
+                        (true, false) => 1.0,
+                        (false, true) => 0.0,
+                        _ => ((pt.0 as f64 + pt.1) / n as f64) as f32,
+                    };
+                    let (front, back) = if face_colors { (ff, fb) } else { (NONE, NONE) };
+                    sources.push(Source {
+                        front,
+                        back,
+                        towards_front,
+                        ..source(v, pt, normal_ring)
+                    });
+                }
+            }
+        }
+    } else {
+        for r in 1..rings.saturating_sub(1) {
+            for (pts, &v) in points.iter().zip(&ring_vertices) {
+                sources.push(source(v, pts[r], nearest(pts[r])));
+            }
+        }
+    }
+    if sources.len() > MAX_ELEMENTS {
+        return Err(Error::value(
+            "segments",
+            format!("{n} segments give too many vertices"),
+        ));
+    }
+    let id = |k: usize, v: u32, r: usize, which: usize| -> u32 {
+        if strips {
+            (ring_base + k * 2 * rings + 2 * r + which) as u32
+        } else if r == rings - 1 {
+            lead[v as usize]
+        } else if r == 0 {
+            trail[v as usize]
+        } else {
+            (ring_base + (r - 1) * ring_count + ring[v as usize] as usize) as u32
+        }
+    };
+    if !face_colors {
+        for (map, want, tag) in [(&lead, true, LEADING), (&trail, false, TRAILING)] {
+            for (f, face) in faces.iter().enumerate() {
+                if front[f] == want {
+                    out_faces.push([
+                        map[face[0] as usize],
+                        map[face[1] as usize],
+                        map[face[2] as usize],
+                    ]);
+                    part.push(tag);
+                }
+            }
+        }
+    }
+    for (k, c) in contour.iter().enumerate() {
+        for r in 1..rings {
+            let (a0, b0) = (id(k, c.a, r - 1, 0), id(k, c.b, r - 1, 1));
+            let (a1, b1) = (id(k, c.a, r, 0), id(k, c.b, r, 1));
+            out_faces.push([a0, b0, b1]);
+            out_faces.push([a0, b1, a1]);
+            part.push(JOINING);
+            part.push(JOINING);
+        }
+    }
+    // Attributes.
+    let obj_normals = match &opts.normals {
+        Some(nr) => nr.clone(),
+        None => mesh.vertex_normals(),
+    };
+    let color = |s: &Source| match &opts.colors {
+        Colors::Uniform(c) => *c,
+        Colors::PerVertex(c) => c[s.v as usize],
+        Colors::PerFace(c) if s.front != NONE => {
+            let (f, b, t) = (c[s.front as usize], c[s.back as usize], s.towards_front);
+            [0, 1, 2, 3].map(|i| b[i] + (f[i] - b[i]) * t)
+        }
+        Colors::PerFace(_) => [1.0; 4],
+    };
+    let place = |s: &Source| {
+        let (j, u) = (s.seg as usize, s.frac);
+        if u == 0.0 {
+            frames[j].point(verts[s.v as usize])
+        } else {
+            frames[j]
+                .interpolate(&frames[j + 1], u)
+                .point(verts[s.v as usize])
+        }
+    };
+    let vertices: Vec<[f64; 3]> = sources.par_iter().map(place).collect();
+    let filter_alpha = |s: &Source, p: [f64; 3]| match alpha {
+        AlphaMode::Rings(r) => r[s.seg as usize],
+        AlphaMode::Coverage(model, _) => model.coverage(p),
+        AlphaMode::PerVertex(a, w) => (a[s.v as usize] * w[s.seg as usize]).clamp(0.0, 1.0),
+    };
+    let rgba = sources
+        .par_iter()
+        .zip(&vertices)
+        .map(|(s, p)| {
+            let c = color(s);
+            [c[0], c[1], c[2], (c[3] as f64 * filter_alpha(s, *p)) as f32]
+        })
+        .collect();
+    let normals = sources
+        .par_iter()
+        .map(|s| {
+            let w = normalize(frames[s.normal_ring as usize].normal(obj_normals[s.v as usize]));
+            [w[0] as f32, w[1] as f32, w[2] as f32]
+        })
+        .collect();
+    let ring_alpha = match alpha {
+        AlphaMode::Rings(r) => r.clone(),
+        _ if ring_vertices.is_empty() => vec![1.0; n + 1],
+        _ => (0..=n)
+            .map(|i| {
+                // Collected first, then summed in order: the same for any thread count.
+                let each: Vec<f64> = ring_vertices
+                    .par_iter()
+                    .map(|&v| {
+                        let s = source(v, (i as u32, 0.0), i as u32);
+                        filter_alpha(&s, place(&s))
+                    })
+                    .collect();
+                let sum: f64 = each.iter().sum();
+                sum / ring_vertices.len() as f64
+            })
+            .collect(),
+    };
+    Ok(MotionVolume {
+        vertices,
+        faces: out_faces,
+        rgba,
+        normals,
+        part,
+        ring_alpha,
+        contour_edges: contour.len(),
+    })
+}
