@@ -30,10 +30,11 @@ import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import cv2  # noqa: E402
-import motionblur as mb  # noqa: E402
-import motionblur.image as mi  # noqa: E402
 import numpy as np  # noqa: E402
 import scipy.ndimage as ndi  # noqa: E402
+
+import motionblur as mb  # noqa: E402
+import motionblur.image as mi  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 import image_twins as tw  # noqa: E402

@@ -24,8 +24,9 @@ import sys
 import time
 from pathlib import Path
 
-import motionblur as mb
 import numpy as np
+
+import motionblur as mb
 from motionblur import meshes
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))

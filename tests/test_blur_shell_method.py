@@ -14,9 +14,10 @@ out/test-failures/ on failure.
 from __future__ import annotations
 
 import _pyrender_peer as peer
-import motionblur as mb
 import numpy as np
 import pytest
+
+import motionblur as mb
 from motionblur import metrics, reference
 from motionblur.methods.blur_shell import shell_times
 from motionblur.render import METHODS

@@ -6,10 +6,11 @@ from __future__ import annotations
 import math
 
 import image_twins as tw
-import motionblur as mb
-import motionblur.image as mi
 import numpy as np
 import pytest
+
+import motionblur as mb
+import motionblur.image as mi
 
 TOL = 1e-5
 DIRECTIONS = [

@@ -8,10 +8,11 @@ import subprocess
 import sys
 from pathlib import Path
 
-import motionblur as mb
-import motionblur.image as mi
 import numpy as np
 import pytest
+
+import motionblur as mb
+import motionblur.image as mi
 
 H, W = 24, 32
 

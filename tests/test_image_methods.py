@@ -12,9 +12,10 @@ A diff image goes to out/test-failures/ on failure.
 from __future__ import annotations
 
 import _pyrender_peer as peer
-import motionblur as mb
 import numpy as np
 import pytest
+
+import motionblur as mb
 from motionblur import metrics, reference
 from motionblur.methods.image_space import sharp_frame, shutter_centroid
 from motionblur.render import METHODS

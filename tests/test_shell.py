@@ -9,11 +9,12 @@ import subprocess
 import sys
 import textwrap
 
-import motionblur as mb
 import numpy as np
 import pytest
 import trimesh
 from _shell_twin import TwinShell, twin_face_edge, twin_facing, twin_normals
+
+import motionblur as mb
 from motionblur import meshes
 
 
