@@ -60,9 +60,11 @@ def calls():
 def test_callers_arrays_are_untouched(name, fn, args, kwargs):
     arrays = [a for a in (*args, *kwargs.values()) if isinstance(a, np.ndarray)]
     before = [a.copy() for a in arrays]
+    flags = [a.flags.writeable for a in arrays]
     out = fn(*args, **kwargs)
     for a, b in zip(arrays, before):
         assert np.array_equal(a, b, equal_nan=True), name
+    assert [a.flags.writeable for a in arrays] == flags, name
     assert all(not np.shares_memory(out, a) for a in arrays)
     assert out.dtype == np.float32 and np.isfinite(out).all()
 

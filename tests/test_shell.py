@@ -410,6 +410,10 @@ def test_callers_arrays_are_never_modified():
     nrm_before = nrm.copy()
     mask = np.ones(len(f), bool)
     color = np.full((len(pos[0]), 3), 0.5)
+    f = np.ascontiguousarray(f, np.int64)  # the dtype the shell keeps: no copy on the way in
+    times = np.linspace(0, 1, 5)
+    writeable = [a.flags.writeable for a in (pos, f, nrm, mask, color, times)]
+    assert all(writeable)
     ro = pos[2].copy()
     ro.flags.writeable = False
     shell = mb.BlurShell(f, subdivisions=3, mask=mask, color=color)
@@ -418,12 +422,15 @@ def test_callers_arrays_are_never_modified():
     shell.update(ro)
     m = shell.build(pos[-1], normals=nrm)
     m.vertices[:] = 0.0  # the result is ours to change, not a view of the input
-    mb.shell_over_shutter(f, np.linspace(0, 1, 5), pos)
+    mb.shell_over_shutter(f, times, pos)
     mb.motion_silhouette(mb.Mesh(pos[1], f), pos[0], normals=nrm)
     np.testing.assert_array_equal(pos, pos_before)
     np.testing.assert_array_equal(f, f_before)
     np.testing.assert_array_equal(nrm, nrm_before)
     assert mask.all() and (color == 0.5).all()
+    # Not even the flags: the shell keeps read-only views, never the caller's array made read-only.
+    assert [a.flags.writeable for a in (pos, f, nrm, mask, color, times)] == writeable
+    assert not shell.faces.flags.writeable
 
 
 _THREAD_SCRIPT = textwrap.dedent(

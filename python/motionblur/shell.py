@@ -180,7 +180,8 @@ class BlurShell:
             if n_vertices is None:
                 n_vertices = len(faces.vertices)
             faces = faces.faces
-        self._faces = _faces(faces)
+        # A read-only view: _faces may return the caller's own array (int64, C-contiguous).
+        self._faces = _faces(faces).view()
         self._faces.flags.writeable = False
         self.subdivisions = as_int(subdivisions, "subdivisions", minimum=1, maximum=255)
         self.hysteresis = as_int(hysteresis, "hysteresis", minimum=0, maximum=65000)
