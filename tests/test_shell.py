@@ -403,6 +403,36 @@ def test_bad_arrays_name_the_argument():
         mb.shell_over_shutter(f, [0.0, 1.0], np.stack([v, v, v]))
 
 
+def test_values_that_overflow_float32_name_the_argument():
+    """Finite in float64 but inf in float32 (or whose float32 normals or n.d overflow): rejected
+    with the argument's name instead of giving inf vertices or no silhouette."""
+    v, f = meshes.icosphere(1)
+    mesh = mb.Mesh(v, f)
+    shell = mb.BlurShell(f)
+    shell.update(v)
+    for bad, name in [
+        (lambda: shell.update(v + [1e39, 0, 0]), "vertices"),
+        (lambda: shell.update(v * 1e20), "vertices"),  # cross products of 1e20 overflow float32
+        (lambda: shell.update(v + 0.1, normals=np.full_like(v, 1e39)), "normals"),
+        (lambda: shell.build(v * 1e20), "vertices"),
+        (lambda: shell.build(v, normals=np.full_like(v, 1e39)), "normals"),
+        (lambda: mb.motion_silhouette(mesh, v * 1e300), "previous_vertices"),
+        (lambda: mb.motion_silhouette(mb.Mesh(v * 1e20, f), v), "vertices"),
+        (lambda: mb.motion_silhouette(mesh, v + 0.1, normals=np.full_like(v, 1e39)), "normals"),
+        (lambda: mb.motion_silhouette(mesh, v + np.nan), "previous_vertices"),
+    ]:
+        with pytest.raises(ValueError, match=name):
+            bad()
+    assert shell.updates == 1  # a rejected update changes nothing
+    # Just inside the bounds everything stays finite and the silhouette is found.
+    big = v * (mb.shell.MAX_COORD / 2)
+    sil = mb.motion_silhouette(mb.Mesh(big, f), big - np.array([0.25, 0.13, 0.07]) * mb.shell.MAX_COORD)
+    ref = mb.motion_silhouette(mb.Mesh(v, f), v - [0.5, 0.26, 0.14])
+    assert len(sil.edges) > 0 and (sil.facing != 0).all() and len(sil.edges) == len(ref.edges)
+    m = mb.shell_over_shutter(f, [0.0, 1.0], np.stack([big - [1e8, 3e7, 2e7], big]), subdivisions=2)
+    assert len(m) > 0 and np.isfinite(m.vertices).all() and np.isfinite(m.normals).all()
+
+
 def test_callers_arrays_are_never_modified():
     pos, f = arm(5)
     pos_before, f_before = pos.copy(), f.copy()

@@ -14,7 +14,9 @@ Rules (the paper leaves some open; each choice is stated here and tested):
   of the faces around the vertex, added in face order. A neutral vertex is neither front nor
   back. Everything is evaluated in float32 (positions rounded to float32 first, fixed operation
   order), so a vertex whose float32 position does not change is neutral, and a numpy float32
-  twin gives the same signs bit for bit.
+  twin gives the same signs bit for bit. So that nothing overflows float32, positions must lie
+  within ``MAX_COORD`` (1e9) and given normals within ``MAX_NORMAL`` (1e18) in every component;
+  beyond that (or NaN/inf) a ValueError names the argument.
 - **Silhouette edge.** A triangle with exactly one front and two back corners has the edge
   between its back corners on the silhouette, as the face runs it (``face[k] -> face[k+1]``).
   So a static polygon, or a polygon with a neutral corner, has none; the first update (no
@@ -50,6 +52,13 @@ from . import _core
 from ._validate import as_array, as_float, as_int
 
 __all__ = ["BlurShell", "ShellMesh", "MotionSilhouette", "motion_silhouette", "shell_over_shutter"]
+
+#: Largest accepted |coordinate| of positions (scene units). The facing test runs in float32:
+#: face normals multiply two coordinate differences and ``n . d`` a third, which would overflow
+#: float32 (3.4e38) beyond this (float32 positions near it are 64 units apart anyway).
+MAX_COORD = 1e9
+#: Largest accepted |component| of given normals (``n . d`` stays finite in float32).
+MAX_NORMAL = 1e18
 
 
 def _faces(faces) -> np.ndarray:
@@ -250,7 +259,8 @@ class BlurShell:
         """Feed world positions ``vertices`` (V,3) float (scene units) and optionally the vertex
         normals (V,3) used for the facing test (default: area-weighted face normals). The
         caller's arrays are read, never written. Raises ValueError naming ``vertices`` or
-        ``normals`` (wrong shape, NaN/inf, a vertex count other than the shell's)."""
+        ``normals`` (wrong shape, NaN/inf, a vertex count other than the shell's, a component
+        beyond ``MAX_COORD`` / ``MAX_NORMAL``)."""
         v = _rows(vertices, "vertices")
         if self._core is None:
             self._make(len(v))
@@ -328,7 +338,8 @@ def motion_silhouette(mesh, previous_vertices, normals=None) -> MotionSilhouette
     object with ``.vertices`` (V,3) and ``.faces`` (F,3): its current positions) moving from
     ``previous_vertices`` (V,3) float. ``normals`` (V,3): vertex normals for the facing test
     (default: the unnormalised sums of the face normals around each vertex). Rules in the module
-    docs. Raises ValueError naming the argument; the GIL is released."""
+    docs. Raises ValueError naming the argument (NaN/inf, or a component beyond ``MAX_COORD``
+    for positions or ``MAX_NORMAL`` for normals); the GIL is released."""
     if not (hasattr(mesh, "vertices") and hasattr(mesh, "faces")):
         raise TypeError(
             f"mesh: expected a Mesh or an object with .vertices and .faces, got {type(mesh).__name__}"

@@ -145,16 +145,22 @@ pub fn to_f32(v: &[[f64; 3]]) -> Vec<[f32; 3]> {
         .collect()
 }
 
-/// The silhouette of motion of a mesh moving from `previous` to `vertices` (both (V,3), checked
-/// by the caller), with the given vertex normals or the unnormalised area-weighted ones, all in
-/// float32 as in [`crate::shell::BlurShell::update`]. Returns the facing per vertex and the edge
-/// code per face.
+/// The silhouette of motion of a mesh moving from `previous` to `vertices` (both (V,3), row
+/// counts checked by the caller), with the given vertex normals or the unnormalised
+/// area-weighted ones, all in float32 as in [`crate::shell::BlurShell::update`]. Returns the
+/// facing per vertex and the edge code per face. Fails naming `vertices`, `previous_vertices`
+/// or `normals` for NaN, inf or values beyond [`super::MAX_COORD`] / [`super::MAX_NORMAL`].
 pub fn motion_silhouette(
     vertices: &[[f64; 3]],
     previous: &[[f64; 3]],
     faces: &[[u32; 3]],
     normals: Option<&[[f64; 3]]>,
-) -> (Vec<i8>, Vec<u8>) {
+) -> crate::Result<(Vec<i8>, Vec<u8>)> {
+    super::check_values(vertices, "vertices")?;
+    super::check_values(previous, "previous_vertices")?;
+    if let Some(n) = normals {
+        super::check_values(n, "normals")?;
+    }
     let (v, p) = (to_f32(vertices), to_f32(previous));
     let mut fac = vec![NEUTRAL; vertices.len()];
     match normals {
@@ -184,7 +190,7 @@ pub fn motion_silhouette(
         .with_min_len(CHUNK)
         .map(|f| face_edge(&fac, f))
         .collect();
-    (fac, edges)
+    Ok((fac, edges))
 }
 
 /// A cache-friendly internal order for the per-update passes: vertices renumbered in
