@@ -6,11 +6,11 @@
 //! shell of quad strips attached to the current mesh. The rules (the paper leaves some open;
 //! each choice is stated here, in the Python docstring, and tested):
 //!
-//! - **Silhouette of motion** ([`silhouette`]): vertex facing is the sign of
-//!   `n . (p - p_prev)`; a triangle with one front and two back corners has the edge between
-//!   its back corners on the silhouette. A vertex with `n . d == 0` (not moving, or moving in
-//!   its tangent plane) is neutral, so a static polygon never has an edge. The first update has
-//!   no previous positions, so it finds no silhouette.
+//! - **Silhouette of motion** ([`silhouette`]): a moving vertex is front when
+//!   `n . (p - p_prev) >= 0` and back when `< 0`; a triangle with one front and two back corners
+//!   has the edge between its back corners on the silhouette. A vertex that does not move is
+//!   neutral (neither), so a static polygon never has an edge. The first update has no previous
+//!   positions, so it finds no silhouette.
 //! - **History ring.** Each polygon keeps a ring of `subdivisions` elements, one per update,
 //!   each an edge code (the local edge `k`, and whether it was on the silhouette then).
 //!   Positions are not copied per polygon: the shell keeps the last `subdivisions` snapshots of

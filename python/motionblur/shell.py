@@ -8,18 +8,20 @@ transparency, the shell looks like motion blur (or speed lines, with a colour of
 
 Rules (the paper leaves some open; each choice is stated here and tested):
 
-- **Facing.** A vertex is front (+1) when ``n . (p - p_prev) > 0``, back (-1) when ``< 0`` and
-  neutral (0) when exactly 0 (a vertex that does not move, or moves in its tangent plane).
-  ``n`` is the given normal, or the unnormalised sum of the raw normals ``(b - a) x (c - a)``
-  of the faces around the vertex, added in face order. A neutral vertex is neither front nor
-  back. Everything is evaluated in float32 (positions rounded to float32 first, fixed operation
+- **Facing.** A vertex that does not move (``p == p_prev`` in float32) is neutral (0); a
+  moving vertex is back (-1) when ``n . (p - p_prev) < 0`` and front (+1) otherwise, so one
+  moving in its tangent plane (``n . d == 0``) is front, the ``>= 0`` convention of
+  :func:`motionblur.contour_edges` (a symmetric mesh moving along an axis keeps its whole
+  silhouette). ``n`` is the given normal, or the unnormalised sum of the raw normals
+  ``(b - a) x (c - a)`` of the faces around the vertex, added in face order. A neutral vertex
+  is neither front nor back. Everything is evaluated in float32 (positions rounded to float32 first, fixed operation
   order), so a vertex whose float32 position does not change is neutral, and a numpy float32
   twin gives the same signs bit for bit. So that nothing overflows float32, positions must lie
   within ``MAX_COORD`` (1e9) and given normals within ``MAX_NORMAL`` (1e18) in every component;
   beyond that (or NaN/inf) a ValueError names the argument.
 - **Silhouette edge.** A triangle with exactly one front and two back corners has the edge
   between its back corners on the silhouette, as the face runs it (``face[k] -> face[k+1]``).
-  So a static polygon, or a polygon with a neutral corner, has none; the first update (no
+  So a static polygon, or a polygon with a corner that does not move, has none; the first update (no
   previous positions) finds none; a polygon whose plane is perpendicular to its motion (all
   corners front, or all back) has none, as in the paper.
 - **Ring.** Each polygon keeps ``subdivisions`` elements, one per update: the edge on the
@@ -314,7 +316,8 @@ class BlurShell:
 class MotionSilhouette:
     """The silhouette of motion of a mesh between two positions.
 
-    Attributes: ``facing`` (V,) int8: +1 front, -1 back, 0 neutral; ``face_edge`` (F,) int8: the
+    Attributes: ``facing`` (V,) int8: +1 front (``n . d >= 0``), -1 back, 0 neutral (does not
+    move); ``face_edge`` (F,) int8: the
     local index k of each face's silhouette edge ``face[k] -> face[(k+1) % 3]``, -1 for none;
     ``edges`` (E,2) int64 vertex pairs of the silhouette edges (as their faces run them) and
     ``edge_faces`` (E,) int64 the face of each, in increasing face order.
