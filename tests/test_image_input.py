@@ -123,6 +123,23 @@ BAD = [
     (lambda: mi.camera_motion_blur(img(), depth(), *cams(), target_fps=60), ValueError, "target_fps"),
     (lambda: mi.camera_motion_blur(img(), depth(), *cams(), target_fps=0, fps=30), ValueError, "target_fps"),
     (lambda: mi.camera_motion_blur(img(), depth(), *cams(), target_fps=60, fps=np.inf), ValueError, "fps"),
+    # Lenient inputs that used to pass: complex (ComplexWarning, imaginary part dropped), bools,
+    # numeric strings, and fps ratios whose velocities skip the 1e6 limit.
+    (lambda: mi.box_blur(img().astype(np.complex64), (1, 0), 3), TypeError, "rgba"),
+    (lambda: mi.box_blur(img(), np.array([1 + 1j, 0]), 3), TypeError, "direction"),
+    (lambda: mi.glow(img()[..., 3] + 0j, (1, 0), 3), TypeError, "alpha"),
+    (lambda: mi.box_blur(img(), (1, 0), np.complex128(3)), TypeError, "length"),
+    (lambda: mi.box_blur(img(), (1, 0), True), TypeError, "length"),
+    (lambda: mi.glow(img()[..., 3], (1, 0), np.True_), TypeError, "width"),
+    (
+        lambda: mi.camera_motion_blur(img(), depth(), *cams(), target_fps="60", fps=30),
+        TypeError,
+        "target_fps",
+    ),
+    (lambda: mi.camera_motion_blur(img(), depth(), *cams(), target_fps=60, fps=True), TypeError, "fps"),
+    (lambda: mi.camera_motion_blur(img(), depth(), *cams(), target_fps=1, fps=1e30), ValueError, "fps"),
+    (lambda: mi.camera_motion_blur(img(), depth(), *cams(), target_fps=1e-30, fps=30), ValueError, "fps"),
+    (lambda: mi.depth_of_field(img(), depth(), 2 + 0j, 0.05, 1.4, 0.8), TypeError, "focal_depth"),
 ]
 
 
@@ -132,6 +149,16 @@ def test_bad_input_raises_naming_the_argument(call, exc, name):
         call()
 
 
+def test_no_complex_warning_escapes():
+    # The rejections above raise before numpy can warn about a discarded imaginary part.
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(TypeError, match="rgba"):
+            mi.opaque_blur(img() + 0j, (1, 0.3), 5)
+
+
 def test_compiled_layer_checks_shapes_too():
     # The Rust boundary re-checks what the Python layer already checked.
     with pytest.raises(ValueError, match="rgba"):
@@ -139,6 +166,14 @@ def test_compiled_layer_checks_shapes_too():
     with pytest.raises(ValueError, match="base"):
         mb._core._opaque_motion_blur(
             np.zeros((4, 4, 4), np.float32), np.zeros((4, 5, 4), np.float32), (1.0, 0.0), 3.0, "over"
+        )
+    with pytest.raises(ValueError, match="fps"):
+        mb._core._camera_motion_blur(
+            img(),
+            depth(),
+            *(np.ascontiguousarray(m) for c in cams() for m in (c.view, c.projection)),
+            8,
+            1e30,
         )
     with pytest.raises(ValueError, match="levels"):
         mb._core._pyramid_blur(np.zeros((4, 4, 4), np.float32), 17)

@@ -428,6 +428,22 @@ def test_bad_arrays_name_the_argument():
         mb.motion_silhouette(v, v)
     with pytest.raises(ValueError, match="times"):
         mb.shell_over_shutter(f, [1.0, 0.0], np.stack([v, v]))
+    with pytest.raises(ValueError, match="times"):  # the span overflows: was blamed on vertices
+        mb.shell_over_shutter(f, [-1e308, 1e308], np.stack([v, v]))
+    with pytest.raises(TypeError, match="times"):
+        mb.shell_over_shutter(f, np.array([0.0, 1.0 + 1j]), np.stack([v, v]))
+    with pytest.raises(TypeError, match="positions"):
+        mb.shell_over_shutter(f, [0.0, 1.0], np.stack([v, v]) + 0j)
+    with pytest.raises(TypeError, match="vertices"):
+        mb.BlurShell(f).update(v + 0j)
+    fed = mb.BlurShell(f)
+    fed.update(v)
+    with pytest.raises(ValueError, match="age"):  # was an OverflowError without the name
+        fed.element(0, 10**30)
+    with pytest.raises(ValueError, match="n_vertices"):
+        mb.BlurShell(f, n_vertices=10**30)
+    with pytest.raises(TypeError, match="initial_alpha"):
+        mb.BlurShell(f, initial_alpha=True)
     with pytest.raises(ValueError, match="positions"):
         mb.shell_over_shutter(f, [0.0, 1.0], np.stack([v, v, v]))
 

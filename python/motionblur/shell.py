@@ -220,7 +220,7 @@ class BlurShell:
         self._color = color
         self._core = None
         if n_vertices is not None:
-            self._make(as_int(n_vertices, "n_vertices", minimum=1))
+            self._make(as_int(n_vertices, "n_vertices", minimum=1, maximum=np.iinfo(np.int64).max))
 
     def _make(self, nv: int) -> None:
         if self._faces.max() >= nv:
@@ -303,7 +303,7 @@ class BlurShell:
         if self._core is None:
             return None
         face = as_int(face, "face", minimum=0, maximum=len(self._faces) - 1)
-        age = as_int(age, "age", minimum=0)
+        age = as_int(age, "age", minimum=0, maximum=np.iinfo(np.int64).max)
         return self._core._element(face, age)
 
     def __repr__(self) -> str:
@@ -369,8 +369,12 @@ def sample_positions(times, positions, samples: int) -> tuple[np.ndarray, np.nda
                 "(a mesh that changes vertex count cannot have a blur shell)"
             )
     p = as_array(positions, "positions", np.float64, (len(t), None, 3))
-    if len(t) < 2 or not (np.diff(t) > 0).all():
+    with np.errstate(over="ignore"):
+        steps, span = np.diff(t), t[-1] - t[0]
+    if len(t) < 2 or not (steps > 0).all():
         raise ValueError("times: need at least 2 strictly increasing times")
+    if not np.isfinite(span):
+        raise ValueError(f"times: the span {t[0]:g} .. {t[-1]:g} overflows float64")
     ts = np.linspace(t[0], t[-1], samples)
     i = np.clip(np.searchsorted(t, ts, side="right") - 1, 0, len(t) - 2)
     w = ((ts - t[i]) / (t[i + 1] - t[i]))[:, None, None]
