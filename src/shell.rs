@@ -6,11 +6,11 @@
 //! shell of quad strips attached to the current mesh. The rules (the paper leaves some open;
 //! each choice is stated here, in the Python docstring, and tested):
 //!
-//! - **Silhouette of motion** ([`silhouette`]): vertex facing is the sign of
-//!   `n . (p - p_prev)`; a triangle with one front and two back corners has the edge between
-//!   its back corners on the silhouette. A vertex with `n . d == 0` (not moving, or moving in
-//!   its tangent plane) is neutral, so a static polygon never has an edge. The first update has
-//!   no previous positions, so it finds no silhouette.
+//! - **Silhouette of motion** ([`silhouette`]): a moving vertex is front when
+//!   `n . (p - p_prev) >= 0` and back when `< 0`; a triangle with one front and two back corners
+//!   has the edge between its back corners on the silhouette. A vertex that does not move is
+//!   neutral (neither), so a static polygon never has an edge. The first update has no previous
+//!   positions, so it finds no silhouette.
 //! - **History ring.** Each polygon keeps a ring of `subdivisions` elements, one per update,
 //!   each an edge code (the local edge `k`, and whether it was on the silhouette then).
 //!   Positions are not copied per polygon: the shell keeps the last `subdivisions` snapshots of
@@ -158,6 +158,45 @@ pub struct BlurShell {
     hot: Vec<Hot>,
 }
 
+/// Largest accepted |coordinate| of positions (scene units). Everything runs in float32: a face
+/// normal is a product of two coordinate differences (up to `8 MAX_COORD^2` per component),
+/// a vertex sums at most 2^32 of them and `n . d` multiplies by another difference, which stays
+/// below `f32::MAX` (3.4e38) at this bound; float32 positions near it are 64 units apart anyway.
+pub const MAX_COORD: f64 = 1e9;
+/// Largest accepted |component| of given normals (`3 MAX_NORMAL 2 MAX_COORD` fits in float32).
+pub const MAX_NORMAL: f64 = 1e18;
+
+/// The bound of the rows called `name`: `MAX_NORMAL` for normals, else `MAX_COORD`.
+pub(crate) fn limit_of(name: &str) -> f64 {
+    if name == "normals" {
+        MAX_NORMAL
+    } else {
+        MAX_COORD
+    }
+}
+
+/// Fails naming `name` at the first row with a NaN, an inf or a value beyond `limit_of(name)`.
+pub(crate) fn check_values(a: &[[f64; 3]], name: &'static str) -> Result<()> {
+    let lim = limit_of(name);
+    if let Some(bad) = a
+        .par_iter()
+        .position_first(|v| v.iter().any(|x| x.is_nan() || x.abs() > lim))
+    {
+        let row = a[bad];
+        if row.iter().all(|x| x.is_finite()) {
+            return Err(Error::value(
+                name,
+                format!(
+                    "row {bad} has a value beyond +-{lim:e} ({row:?}): float32 normals or \
+                     dot products would overflow"
+                ),
+            ));
+        }
+        return Err(Error::value(name, format!("row {bad} is NaN or inf")));
+    }
+    Ok(())
+}
+
 fn check_rows(a: &[[f64; 3]], n: usize, name: &'static str) -> Result<()> {
     if a.len() != n {
         return Err(Error::shape(
@@ -169,13 +208,7 @@ fn check_rows(a: &[[f64; 3]], n: usize, name: &'static str) -> Result<()> {
             ),
         ));
     }
-    if let Some(bad) = a
-        .par_iter()
-        .position_first(|v| v.iter().any(|x| !x.is_finite()))
-    {
-        return Err(Error::value(name, format!("row {bad} is NaN or inf")));
-    }
-    Ok(())
+    check_values(a, name)
 }
 
 impl BlurShell {
@@ -382,7 +415,8 @@ impl BlurShell {
     }
 
     /// Feed the mesh's world positions (V,3) and optionally its normals (V,3) at one update.
-    /// Errors name `vertices` or `normals` (wrong count, NaN or inf); the state is then unchanged.
+    /// Errors name `vertices` or `normals` (wrong count, NaN or inf, beyond `MAX_COORD` /
+    /// `MAX_NORMAL`); the state is then unchanged.
     pub fn update(&mut self, vertices: &[[f64; 3]], normals: Option<&[[f64; 3]]>) -> Result<()> {
         if vertices.len() != self.n_vertices {
             return check_rows(vertices, self.n_vertices, "vertices");
@@ -400,7 +434,12 @@ impl BlurShell {
         // finiteness on the way. The caller's rows are read in order and scattered to their
         // internal slots (stores do not stall on cache misses as gathered loads do).
         let spare = self.spare;
-        if scatter_f32(vertices, &self.loc.inv, &mut self.pos_bufs[spare]) {
+        if scatter_f32(
+            vertices,
+            &self.loc.inv,
+            &mut self.pos_bufs[spare],
+            MAX_COORD,
+        ) {
             return check_rows(vertices, self.n_vertices, "vertices");
         }
         if let Some(nr) = normals {
@@ -408,7 +447,7 @@ impl BlurShell {
             if buf.len() != self.n_vertices {
                 *buf = vec![[0.0; 3]; self.n_vertices];
             }
-            if scatter_f32(nr, &self.loc.inv, buf) {
+            if scatter_f32(nr, &self.loc.inv, buf, MAX_NORMAL) {
                 return check_rows(nr, self.n_vertices, "normals");
             }
         }
@@ -490,9 +529,10 @@ impl BlurShell {
     }
 }
 
-/// Float32 copies of `rows` scattered to `out[inv[i]]`, in parallel; true if a value is NaN or
-/// inf (then `out` is partly written: callers write only to a spare buffer).
-fn scatter_f32(rows: &[[f64; 3]], inv: &[u32], out: &mut [[f32; 3]]) -> bool {
+/// Float32 copies of `rows` scattered to `out[inv[i]]`, in parallel; true if a value is NaN,
+/// inf or beyond `lim` in magnitude (then `out` is partly written: callers write only to a
+/// spare buffer).
+fn scatter_f32(rows: &[[f64; 3]], inv: &[u32], out: &mut [[f32; 3]], lim: f64) -> bool {
     let out = SharedSlots(out.as_mut_ptr());
     rows.par_chunks(CHUNK)
         .zip(inv.par_chunks(CHUNK))
@@ -500,7 +540,7 @@ fn scatter_f32(rows: &[[f64; 3]], inv: &[u32], out: &mut [[f32; 3]]) -> bool {
             let out = &out;
             let mut bad = false;
             for (p, &dst) in v.iter().zip(idx) {
-                bad |= !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite());
+                bad |= !(p[0].abs() <= lim && p[1].abs() <= lim && p[2].abs() <= lim);
                 // SAFETY: `inv` is a permutation of 0..out.len(), so each slot is in bounds and
                 // written by exactly one row: no two threads write the same slot.
                 unsafe { *out.0.add(dst as usize) = [p[0] as f32, p[1] as f32, p[2] as f32] };

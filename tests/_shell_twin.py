@@ -20,9 +20,11 @@ def twin_normals(p32: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 def twin_facing(n32: np.ndarray, p32: np.ndarray, prev32: np.ndarray) -> np.ndarray:
+    """0 for a vertex that does not move, else -1 when n . d < 0 and +1 otherwise (n . d >= 0)."""
     d = p32 - prev32
     s = n32[:, 0] * d[:, 0] + n32[:, 1] * d[:, 1] + n32[:, 2] * d[:, 2]
-    return np.sign(s).astype(np.int8)
+    moves = (d != 0).any(axis=1)
+    return np.where(moves, np.where(s < 0, -1, 1), 0).astype(np.int8)
 
 
 def twin_face_edge(facing: np.ndarray, faces: np.ndarray) -> np.ndarray:

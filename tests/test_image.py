@@ -145,8 +145,10 @@ def test_camera_velocity_matches_twin(move, turn):
     _, depth = dof_scene()
     got = mi.camera_velocity(depth, cam, prev)
     want = tw.camera_velocity(depth, cam, prev)
+    # float32 output of velocities up to ~17 px: rounding is ~1e-6, well inside TOL (the
+    # float64 matrices are the same operations in another order).
     err = np.abs(got - want).max()
-    assert err <= 1e-4 * max(1.0, np.abs(want).max()), err
+    assert err <= TOL, err
 
 
 def test_sky_moves_only_with_rotation():
@@ -175,7 +177,7 @@ def test_camera_motion_blur_is_velocity_blur_of_camera_velocity_with_fps_scale()
     vel = tw.camera_velocity(depth, cam, prev) * (30.0 / 60.0)
     got = mi.camera_motion_blur(img, depth, cam, prev, samples=8, target_fps=60, fps=30)
     want = tw.velocity_blur(img, vel.astype(np.float32), 8)
-    assert np.abs(got - want).max() <= 1e-4
+    assert np.abs(got - want).max() <= TOL
     full = mi.camera_motion_blur(img, depth, cam, prev, samples=8)
     assert np.abs(full - got).max() > 1e-3  # the fps scale changed the blur
 

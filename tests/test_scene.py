@@ -119,13 +119,16 @@ def test_non_rigid_transform_is_rejected(bad):
 def test_caller_arrays_are_not_modified():
     v, f = meshes.box()
     mats = np.stack([np.eye(4), translate((1, 0, 0))])
-    keep = (v.copy(), f.copy(), mats.copy())
-    obj = mb.Object((v, f), motion=mb.Motion([0.0, 1.0], mats))
+    times = np.array([0.0, 1.0])
+    color = np.array([0.2, 0.5, 0.9], np.float32)
+    keep = (v.copy(), f.copy(), mats.copy(), times.copy(), color.copy())
+    obj = mb.Object((v, f), color=color, motion=mb.Motion(times, mats))
     sc = mb.Scene([obj], _cam())
     mb.render(sc, "accumulation", samples=3)
     mb.render(sc, "motion_volume")
-    for a, b in zip((v, f, mats), keep):
+    for a, b in zip((v, f, mats, times, color), keep):
         np.testing.assert_array_equal(a, b)
+        assert a.flags.writeable  # the objects keep read-only views, not the caller's arrays
 
 
 @pytest.mark.parametrize("name", ["box", "ramp", "triangle", "gaussian"])

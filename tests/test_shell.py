@@ -138,7 +138,36 @@ def test_motion_silhouette_matches_twin_and_geometry():
     d = v @ m
     assert (d[sil.edges] < 0).all()
     assert (d[f[sil.edge_faces]] > 0).sum(axis=1).min() == 1
-    np.testing.assert_array_equal(np.sign(d).astype(np.int8), sil.facing)
+    np.testing.assert_array_equal(np.where(d < 0, -1, 1).astype(np.int8), sil.facing)
+
+
+@pytest.mark.parametrize("axis", [0, 1, 2])
+def test_a_symmetric_mesh_moving_along_an_axis_keeps_its_silhouette(axis):
+    """Vertices on the icosphere's equator have n . d exactly 0 when it moves along an axis;
+    they count as front (>= 0), so the silhouette is as long as for a generic direction (with
+    n . d == 0 neutral it had 2 edges instead of 24)."""
+    v, f = meshes.icosphere(2)
+    move = np.zeros(3)
+    move[axis] = 0.3
+    generic = mb.motion_silhouette(mb.Mesh(v + [0.21, 0.13, 0.17], f), v)
+    sil = mb.motion_silhouette(mb.Mesh(v + move, f), v)
+    p32, q32 = (v + move).astype(np.float32), v.astype(np.float32)
+    facing = twin_facing(twin_normals(p32, f), p32, q32)
+    np.testing.assert_array_equal(sil.facing, facing)
+    edge = twin_face_edge(facing, f)
+    np.testing.assert_array_equal(sil.face_edge, np.where(edge == 3, -1, edge))
+    assert (sil.facing != 0).all()
+    assert len(sil.edges) >= 0.75 * len(generic.edges), (len(sil.edges), len(generic.edges))
+    # The edges run around the sphere: every silhouette vertex is on the back half, next to the
+    # front half, and the edges form closed loops (each vertex starts and ends as many edges).
+    d = v @ move
+    assert (d[sil.edges] <= 0).all()
+    np.testing.assert_array_equal(
+        np.bincount(sil.edges[:, 0], minlength=len(v)), np.bincount(sil.edges[:, 1], minlength=len(v))
+    )
+    # The same in a blur shell: strips trail the sphere.
+    m = mb.shell_over_shutter(f, [0.0, 1.0], np.stack([v, v + move]), subdivisions=3)
+    assert len(np.unique(m.face)) == len(sil.edges)
 
 
 # --- shell properties ------------------------------------------------------------------------
@@ -303,14 +332,14 @@ def test_a_mesh_that_stops_mid_shutter():
 def test_a_polygon_perpendicular_to_its_motion(direction):
     # A square plate in z = 0: moving along z its plane is perpendicular to the motion (every
     # corner front: no silhouette edge, as in the paper); moving along x it slides in its own
-    # plane (every corner neutral). Either way: no strip, no NaN, no error.
+    # plane (n . d == 0: every corner front too). Either way: no strip, no NaN, no error.
     v = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
     f = np.array([[0, 1, 2], [0, 2, 3]])
     shell = mb.BlurShell(f, subdivisions=3)
     for i in range(5):
         shell.update(v + 0.1 * i * np.array(direction))
     assert shell.build().is_empty
-    assert (shell.state()["facing"] == (1 if direction[2] else 0)).all()
+    assert (shell.state()["facing"] == 1).all()
 
 
 def test_normals_that_flip_during_the_motion():
@@ -399,8 +428,54 @@ def test_bad_arrays_name_the_argument():
         mb.motion_silhouette(v, v)
     with pytest.raises(ValueError, match="times"):
         mb.shell_over_shutter(f, [1.0, 0.0], np.stack([v, v]))
+    with pytest.raises(ValueError, match="times"):  # the span overflows: was blamed on vertices
+        mb.shell_over_shutter(f, [-1e308, 1e308], np.stack([v, v]))
+    with pytest.raises(TypeError, match="times"):
+        mb.shell_over_shutter(f, np.array([0.0, 1.0 + 1j]), np.stack([v, v]))
+    with pytest.raises(TypeError, match="positions"):
+        mb.shell_over_shutter(f, [0.0, 1.0], np.stack([v, v]) + 0j)
+    with pytest.raises(TypeError, match="vertices"):
+        mb.BlurShell(f).update(v + 0j)
+    fed = mb.BlurShell(f)
+    fed.update(v)
+    with pytest.raises(ValueError, match="age"):  # was an OverflowError without the name
+        fed.element(0, 10**30)
+    with pytest.raises(ValueError, match="n_vertices"):
+        mb.BlurShell(f, n_vertices=10**30)
+    with pytest.raises(TypeError, match="initial_alpha"):
+        mb.BlurShell(f, initial_alpha=True)
     with pytest.raises(ValueError, match="positions"):
         mb.shell_over_shutter(f, [0.0, 1.0], np.stack([v, v, v]))
+
+
+def test_values_that_overflow_float32_name_the_argument():
+    """Finite in float64 but inf in float32 (or whose float32 normals or n.d overflow): rejected
+    with the argument's name instead of giving inf vertices or no silhouette."""
+    v, f = meshes.icosphere(1)
+    mesh = mb.Mesh(v, f)
+    shell = mb.BlurShell(f)
+    shell.update(v)
+    for bad, name in [
+        (lambda: shell.update(v + [1e39, 0, 0]), "vertices"),
+        (lambda: shell.update(v * 1e20), "vertices"),  # cross products of 1e20 overflow float32
+        (lambda: shell.update(v + 0.1, normals=np.full_like(v, 1e39)), "normals"),
+        (lambda: shell.build(v * 1e20), "vertices"),
+        (lambda: shell.build(v, normals=np.full_like(v, 1e39)), "normals"),
+        (lambda: mb.motion_silhouette(mesh, v * 1e300), "previous_vertices"),
+        (lambda: mb.motion_silhouette(mb.Mesh(v * 1e20, f), v), "vertices"),
+        (lambda: mb.motion_silhouette(mesh, v + 0.1, normals=np.full_like(v, 1e39)), "normals"),
+        (lambda: mb.motion_silhouette(mesh, v + np.nan), "previous_vertices"),
+    ]:
+        with pytest.raises(ValueError, match=name):
+            bad()
+    assert shell.updates == 1  # a rejected update changes nothing
+    # Just inside the bounds everything stays finite and the silhouette is found.
+    big = v * (mb.shell.MAX_COORD / 2)
+    sil = mb.motion_silhouette(mb.Mesh(big, f), big - np.array([0.25, 0.13, 0.07]) * mb.shell.MAX_COORD)
+    ref = mb.motion_silhouette(mb.Mesh(v, f), v - [0.5, 0.26, 0.14])
+    assert len(sil.edges) > 0 and (sil.facing != 0).all() and len(sil.edges) == len(ref.edges)
+    m = mb.shell_over_shutter(f, [0.0, 1.0], np.stack([big - [1e8, 3e7, 2e7], big]), subdivisions=2)
+    assert len(m) > 0 and np.isfinite(m.vertices).all() and np.isfinite(m.normals).all()
 
 
 def test_callers_arrays_are_never_modified():
@@ -410,6 +485,10 @@ def test_callers_arrays_are_never_modified():
     nrm_before = nrm.copy()
     mask = np.ones(len(f), bool)
     color = np.full((len(pos[0]), 3), 0.5)
+    f = np.ascontiguousarray(f, np.int64)  # the dtype the shell keeps: no copy on the way in
+    times = np.linspace(0, 1, 5)
+    writeable = [a.flags.writeable for a in (pos, f, nrm, mask, color, times)]
+    assert all(writeable)
     ro = pos[2].copy()
     ro.flags.writeable = False
     shell = mb.BlurShell(f, subdivisions=3, mask=mask, color=color)
@@ -418,12 +497,15 @@ def test_callers_arrays_are_never_modified():
     shell.update(ro)
     m = shell.build(pos[-1], normals=nrm)
     m.vertices[:] = 0.0  # the result is ours to change, not a view of the input
-    mb.shell_over_shutter(f, np.linspace(0, 1, 5), pos)
+    mb.shell_over_shutter(f, times, pos)
     mb.motion_silhouette(mb.Mesh(pos[1], f), pos[0], normals=nrm)
     np.testing.assert_array_equal(pos, pos_before)
     np.testing.assert_array_equal(f, f_before)
     np.testing.assert_array_equal(nrm, nrm_before)
     assert mask.all() and (color == 0.5).all()
+    # Not even the flags: the shell keeps read-only views, never the caller's array made read-only.
+    assert [a.flags.writeable for a in (pos, f, nrm, mask, color, times)] == writeable
+    assert not shell.faces.flags.writeable
 
 
 _THREAD_SCRIPT = textwrap.dedent(

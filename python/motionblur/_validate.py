@@ -33,6 +33,9 @@ def as_array(
         raise TypeError(f"{name}: cannot be read as an array ({exc})") from exc
     if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or np.issubdtype(arr.dtype, np.bool_)):
         raise TypeError(f"{name}: expected a numeric array, got dtype {arr.dtype}")
+    if np.issubdtype(arr.dtype, np.complexfloating):
+        # Casting would drop the imaginary part with only a ComplexWarning.
+        raise TypeError(f"{name}: expected a real array, got dtype {arr.dtype}")
     want_int = np.issubdtype(np.dtype(dtype), np.integer)
     if want_int and not np.issubdtype(arr.dtype, np.integer):
         raise TypeError(f"{name}: expected an integer array, got dtype {arr.dtype}")
@@ -53,7 +56,10 @@ def as_array(
 
 
 def as_float(value, name: str, *, finite: bool = True) -> float:
-    """A Python float from a scalar, checked to be finite unless ``finite=False``."""
+    """A Python float from a real scalar (not a bool, a string or a complex), checked to be
+    finite unless ``finite=False``."""
+    if isinstance(value, (bool, np.bool_, str, bytes)) or np.iscomplexobj(value):
+        raise TypeError(f"{name}: expected a real number, got {type(value).__name__}")
     try:
         out = float(value)
     except (TypeError, ValueError) as exc:

@@ -6,6 +6,10 @@ images (alpha, depth) are float32 (H,W). Directions are (dx, dy) in pixels, +x r
 so blurs fade to transparent at the border and the opaque blur's rescale (eq. 7) keeps the colour
 there: the result does not depend on the size of the viewport (Kraus, section 3.3).
 
+Alpha is not checked against [0, 1] (nor colour against alpha): the filters are linear and apply
+as they are, but the opaque blur's rescale and the ``over``/``under`` composites assume premultiplied
+colour with alpha in [0, 1], and give colours and alphas outside that range otherwise.
+
 The kernels are Rust, run on all cores (bit-identical for any thread count) and release the GIL.
 The caller's arrays are never written: every function returns a new array.
 
@@ -40,6 +44,8 @@ __all__ = [
 
 #: Longest filter accepted, in pixels.
 MAX_LENGTH = 65536.0
+#: Largest accepted ``fps`` / ``target_fps`` ratio of ``camera_motion_blur``.
+MAX_FPS_RATIO = 1000.0
 #: Most pyramid levels, depth-of-field sub-images and blur samples accepted.
 MAX_LEVELS = 16
 MAX_LAYERS = 17
@@ -244,7 +250,9 @@ def camera_motion_blur(
     ``rgba``: (H,W,4) float32 premultiplied; ``depth``: (H,W) float32 (> 0, ``inf`` sky);
     ``camera``, ``previous_camera``: ``motionblur.Camera`` of H x W pixels; ``samples``: N in
     [1, 1024]. ``target_fps`` and ``fps`` (frames per second, both or neither): the velocity is
-    scaled by ``fps / target_fps`` so every frame looks as if rendered at the target rate.
+    scaled by ``fps / target_fps`` (at most ``MAX_FPS_RATIO`` = 1000) so every frame looks as if
+    rendered at the target rate. Velocities are then clamped to |v| <= 1e6 pixels (points very
+    close to the previous camera's plane) before the blur.
     A static camera returns the image unchanged. Returns (H,W,4) float32 premultiplied.
     """
     a = _rgba(rgba)
@@ -262,4 +270,6 @@ def camera_motion_blur(
         if f <= 0:
             raise ValueError(f"fps: must be > 0, got {f}")
         scale = f / t
+        if not scale <= MAX_FPS_RATIO:
+            raise ValueError(f"fps: fps / target_fps must be <= {MAX_FPS_RATIO:g}, got {f:g} / {t:g}")
     return _core._camera_motion_blur(a, d, v, p, pv, pp, n, scale)

@@ -160,7 +160,7 @@ class Motion:
         if len(m) != len(t):
             raise ValueError(f"transforms: expected {len(t)} keyframes (one per time), got {len(m)}")
         parts = [_decompose(m[i], i) for i in range(len(m))]
-        self.times = t
+        self.times = t.view()  # read-only below; t may be the caller's own array
         self.transforms = m.copy()
         self._trans = np.array([p[0] for p in parts])
         self._quat = np.array([p[1] for p in parts])
@@ -286,7 +286,7 @@ class Object:
                 raise ValueError(f"color: expected (3,), (4,), (V,3) or (V,4), got shape {c.shape}")
         if (c[..., :3] < 0).any() or (c.shape[-1] == 4 and ((c[..., 3] < 0) | (c[..., 3] > 1)).any()):
             raise ValueError("color: RGB must be >= 0 and alpha in [0, 1]")
-        self.color = c
+        self.color = c.view()  # c may be the caller's own float32 array
         self.color.flags.writeable = False
         if not isinstance(shading, str):
             raise TypeError(f"shading: expected a string, got {type(shading).__name__}")

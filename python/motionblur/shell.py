@@ -8,16 +8,20 @@ transparency, the shell looks like motion blur (or speed lines, with a colour of
 
 Rules (the paper leaves some open; each choice is stated here and tested):
 
-- **Facing.** A vertex is front (+1) when ``n . (p - p_prev) > 0``, back (-1) when ``< 0`` and
-  neutral (0) when exactly 0 (a vertex that does not move, or moves in its tangent plane).
-  ``n`` is the given normal, or the unnormalised sum of the raw normals ``(b - a) x (c - a)``
-  of the faces around the vertex, added in face order. A neutral vertex is neither front nor
-  back. Everything is evaluated in float32 (positions rounded to float32 first, fixed operation
+- **Facing.** A vertex that does not move (``p == p_prev`` in float32) is neutral (0); a
+  moving vertex is back (-1) when ``n . (p - p_prev) < 0`` and front (+1) otherwise, so one
+  moving in its tangent plane (``n . d == 0``) is front, the ``>= 0`` convention of
+  :func:`motionblur.contour_edges` (a symmetric mesh moving along an axis keeps its whole
+  silhouette). ``n`` is the given normal, or the unnormalised sum of the raw normals
+  ``(b - a) x (c - a)`` of the faces around the vertex, added in face order. A neutral vertex
+  is neither front nor back. Everything is evaluated in float32 (positions rounded to float32 first, fixed operation
   order), so a vertex whose float32 position does not change is neutral, and a numpy float32
-  twin gives the same signs bit for bit.
+  twin gives the same signs bit for bit. So that nothing overflows float32, positions must lie
+  within ``MAX_COORD`` (1e9) and given normals within ``MAX_NORMAL`` (1e18) in every component;
+  beyond that (or NaN/inf) a ValueError names the argument.
 - **Silhouette edge.** A triangle with exactly one front and two back corners has the edge
   between its back corners on the silhouette, as the face runs it (``face[k] -> face[k+1]``).
-  So a static polygon, or a polygon with a neutral corner, has none; the first update (no
+  So a static polygon, or a polygon with a corner that does not move, has none; the first update (no
   previous positions) finds none; a polygon whose plane is perpendicular to its motion (all
   corners front, or all back) has none, as in the paper.
 - **Ring.** Each polygon keeps ``subdivisions`` elements, one per update: the edge on the
@@ -50,6 +54,13 @@ from . import _core
 from ._validate import as_array, as_float, as_int
 
 __all__ = ["BlurShell", "ShellMesh", "MotionSilhouette", "motion_silhouette", "shell_over_shutter"]
+
+#: Largest accepted |coordinate| of positions (scene units). The facing test runs in float32:
+#: face normals multiply two coordinate differences and ``n . d`` a third, which would overflow
+#: float32 (3.4e38) beyond this (float32 positions near it are 64 units apart anyway).
+MAX_COORD = 1e9
+#: Largest accepted |component| of given normals (``n . d`` stays finite in float32).
+MAX_NORMAL = 1e18
 
 
 def _faces(faces) -> np.ndarray:
@@ -180,7 +191,8 @@ class BlurShell:
             if n_vertices is None:
                 n_vertices = len(faces.vertices)
             faces = faces.faces
-        self._faces = _faces(faces)
+        # A read-only view: _faces may return the caller's own array (int64, C-contiguous).
+        self._faces = _faces(faces).view()
         self._faces.flags.writeable = False
         self.subdivisions = as_int(subdivisions, "subdivisions", minimum=1, maximum=255)
         self.hysteresis = as_int(hysteresis, "hysteresis", minimum=0, maximum=65000)
@@ -208,7 +220,7 @@ class BlurShell:
         self._color = color
         self._core = None
         if n_vertices is not None:
-            self._make(as_int(n_vertices, "n_vertices", minimum=1))
+            self._make(as_int(n_vertices, "n_vertices", minimum=1, maximum=np.iinfo(np.int64).max))
 
     def _make(self, nv: int) -> None:
         if self._faces.max() >= nv:
@@ -249,7 +261,8 @@ class BlurShell:
         """Feed world positions ``vertices`` (V,3) float (scene units) and optionally the vertex
         normals (V,3) used for the facing test (default: area-weighted face normals). The
         caller's arrays are read, never written. Raises ValueError naming ``vertices`` or
-        ``normals`` (wrong shape, NaN/inf, a vertex count other than the shell's)."""
+        ``normals`` (wrong shape, NaN/inf, a vertex count other than the shell's, a component
+        beyond ``MAX_COORD`` / ``MAX_NORMAL``)."""
         v = _rows(vertices, "vertices")
         if self._core is None:
             self._make(len(v))
@@ -290,7 +303,7 @@ class BlurShell:
         if self._core is None:
             return None
         face = as_int(face, "face", minimum=0, maximum=len(self._faces) - 1)
-        age = as_int(age, "age", minimum=0)
+        age = as_int(age, "age", minimum=0, maximum=np.iinfo(np.int64).max)
         return self._core._element(face, age)
 
     def __repr__(self) -> str:
@@ -303,7 +316,8 @@ class BlurShell:
 class MotionSilhouette:
     """The silhouette of motion of a mesh between two positions.
 
-    Attributes: ``facing`` (V,) int8: +1 front, -1 back, 0 neutral; ``face_edge`` (F,) int8: the
+    Attributes: ``facing`` (V,) int8: +1 front (``n . d >= 0``), -1 back, 0 neutral (does not
+    move); ``face_edge`` (F,) int8: the
     local index k of each face's silhouette edge ``face[k] -> face[(k+1) % 3]``, -1 for none;
     ``edges`` (E,2) int64 vertex pairs of the silhouette edges (as their faces run them) and
     ``edge_faces`` (E,) int64 the face of each, in increasing face order.
@@ -327,7 +341,8 @@ def motion_silhouette(mesh, previous_vertices, normals=None) -> MotionSilhouette
     object with ``.vertices`` (V,3) and ``.faces`` (F,3): its current positions) moving from
     ``previous_vertices`` (V,3) float. ``normals`` (V,3): vertex normals for the facing test
     (default: the unnormalised sums of the face normals around each vertex). Rules in the module
-    docs. Raises ValueError naming the argument; the GIL is released."""
+    docs. Raises ValueError naming the argument (NaN/inf, or a component beyond ``MAX_COORD``
+    for positions or ``MAX_NORMAL`` for normals); the GIL is released."""
     if not (hasattr(mesh, "vertices") and hasattr(mesh, "faces")):
         raise TypeError(
             f"mesh: expected a Mesh or an object with .vertices and .faces, got {type(mesh).__name__}"
@@ -354,8 +369,12 @@ def sample_positions(times, positions, samples: int) -> tuple[np.ndarray, np.nda
                 "(a mesh that changes vertex count cannot have a blur shell)"
             )
     p = as_array(positions, "positions", np.float64, (len(t), None, 3))
-    if len(t) < 2 or not (np.diff(t) > 0).all():
+    with np.errstate(over="ignore"):
+        steps, span = np.diff(t), t[-1] - t[0]
+    if len(t) < 2 or not (steps > 0).all():
         raise ValueError("times: need at least 2 strictly increasing times")
+    if not np.isfinite(span):
+        raise ValueError(f"times: the span {t[0]:g} .. {t[-1]:g} overflows float64")
     ts = np.linspace(t[0], t[-1], samples)
     i = np.clip(np.searchsorted(t, ts, side="right") - 1, 0, len(t) - 2)
     w = ((ts - t[i]) / (t[i + 1] - t[i]))[:, None, None]

@@ -80,10 +80,10 @@ pub fn box_blur(
     let Some(p) = plan(direction, length * 0.5) else {
         return Ok(rgba.to_vec());
     };
-    Ok(directional::<4, 4, ()>(rgba, w, h, &p, |src, n, out, _| {
+    directional::<4, 4, ()>("rgba", rgba, w, h, &p, |src, n, out, _| {
         box_row_each(src, n, p.radius, |x, m| {
             out[x * 4..x * 4 + 4].copy_from_slice(&m)
         });
         true
-    }))
+    })
 }

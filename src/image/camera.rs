@@ -111,6 +111,9 @@ fn floorf(v: f32) -> f32 {
     }
 }
 
+/// Largest `fps / target_fps` factor of `camera_motion_blur`.
+pub const MAX_FPS_RATIO: f64 = 1000.0;
+
 /// Largest number of blur samples accepted.
 pub const MAX_SAMPLES: usize = 1024;
 
@@ -198,10 +201,10 @@ pub fn camera_motion_blur(
     samples: usize,
     scale: f64,
 ) -> Result<Vec<f32>> {
-    if !(scale.is_finite() && scale >= 0.0) {
+    if !(0.0..=MAX_FPS_RATIO).contains(&scale) {
         return Err(Error::value(
             "fps",
-            "fps / target_fps must be finite and >= 0",
+            format!("fps / target_fps must be in [0, {MAX_FPS_RATIO}], got {scale}"),
         ));
     }
     let mut v = camera_velocity(depth, w, h, current, previous)?;

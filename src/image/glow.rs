@@ -101,10 +101,10 @@ pub fn glow(
     let Some(p) = plan(direction, width) else {
         return Ok(alpha.to_vec());
     };
-    let mut out = directional::<1, 1, GlowScratch>(alpha, w, h, &p, |src, _, o, s| {
+    let mut out = directional::<1, 1, GlowScratch>("alpha", alpha, w, h, &p, |src, _, o, s| {
         glow_row(src, p.radius, o, s);
         true
-    });
+    })?;
     if p.slope != 0.0 {
         out.par_iter_mut()
             .zip(alpha.par_iter())

@@ -12,6 +12,7 @@ use rayon::prelude::*;
 use std::borrow::Cow;
 
 use super::transpose;
+use crate::{Error, Result};
 
 /// How a direction maps onto rows: transpose or not, slope of the sheared rows, tap radius.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -93,18 +94,20 @@ impl Phase {
 /// Sheared row `j` of a `(h, w, C)` image: `out[x] = lerp(img[floor(y)][x], img[floor(y)+1][x], frac(y))`
 /// with `y = j + x t + c0` (`phase` from `Phase::new(w, t, c0, 1.0)`), zero outside the image.
 /// `c0` in [0, 1) is the phase of a crop whose first column is not column 0 of the full image.
+/// Only columns `xa .. xa + n` are computed, into `out[(x - xa) * C ..]`.
 pub(crate) fn shear_row<const C: usize>(
     img: &[f32],
     w: usize,
     h: usize,
     phase: &Phase,
     j: i64,
+    (xa, n): (usize, usize),
     out: &mut [f32],
 ) {
-    for x in 0..w {
+    for x in xa..xa + n {
         let y0 = j + phase.floor[x];
         let f = phase.frac[x];
-        let o = &mut out[x * C..x * C + C];
+        let o = &mut out[(x - xa) * C..(x - xa) * C + C];
         if y0 >= 0 && y0 + 1 < h as i64 {
             let a = &img[(y0 as usize * w + x) * C..][..C];
             let b = &img[((y0 + 1) as usize * w + x) * C..][..C];
@@ -129,69 +132,28 @@ pub(crate) fn shear_row<const C: usize>(
     }
 }
 
-/// Output row `y` of the un-sheared image from sheared rows `j0 ..` (`used[k]`: row `j0 + k`
-/// holds anything): `out[x]` interpolates sheared rows `floor(y - x t - c0)` and the next one at
-/// column `x` (`phase` from `Phase::new(w, t, c0, -1.0)`).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn unshear_row<const C: usize>(
-    sheared: &[f32],
-    used: &[bool],
-    w: usize,
-    j0: i64,
-    phase: &Phase,
-    y: usize,
-    out: &mut [f32],
-) {
-    let rows = used.len() as i64;
-    for x in 0..w {
-        let i = y as i64 + phase.floor[x] - j0;
-        let f = phase.frac[x];
-        let o = &mut out[x * C..x * C + C];
-        let ua = i >= 0 && i < rows && used[i as usize];
-        let ub = i + 1 >= 0 && i + 1 < rows && used[(i + 1) as usize];
-        if ua && ub {
-            let a = &sheared[(i as usize * w + x) * C..][..C];
-            let b = &sheared[((i + 1) as usize * w + x) * C..][..C];
-            for c in 0..C {
-                o[c] = (1.0 - f) * a[c] + f * b[c];
-            }
-            continue;
-        }
-        o.fill(0.0);
-        if ua {
-            let p = &sheared[(i as usize * w + x) * C..][..C];
-            for c in 0..C {
-                o[c] += (1.0 - f) * p[c];
-            }
-        }
-        if ub {
-            let p = &sheared[((i + 1) as usize * w + x) * C..][..C];
-            for c in 0..C {
-                o[c] += f * p[c];
-            }
-        }
-    }
-}
-
 /// Runs the row filter `f(src_row (n*CI), n, out_row (n*CO), scratch) -> bool` along `plan`'s
 /// direction over a `(h, w, CI)` image and returns the `(h, w, CO)` result in the image's
 /// orientation. `f` either writes its whole output row and returns true, or returns false for
 /// a row that is all zero (and need not write it).
 pub(crate) fn directional<const CI: usize, const CO: usize, S: Default + Send>(
+    name: &'static str,
     img: &[f32],
     w: usize,
     h: usize,
     plan: &LinePlan,
     f: impl Fn(&[f32], usize, &mut [f32], &mut S) -> bool + Sync + Send,
-) -> Vec<f32> {
-    directional_at::<CI, CO, S>(img, w, h, plan, 0.0, None, f)
+) -> Result<Vec<f32>> {
+    directional_at::<CI, CO, S>(name, img, w, h, plan, 0.0, None, f)
 }
 
 /// `directional` on a crop whose first major-axis pixel is pixel `major_offset` of the full
 /// image, so that the shear samples the same positions as on the full image. `live`: the
 /// inclusive box `(x0, x1, y0, y1)` outside of which `f` would see nothing (its rows are all
 /// zero): sheared rows that miss it are neither built nor filtered.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send>(
+    name: &'static str,
     img: &[f32],
     w: usize,
     h: usize,
@@ -199,7 +161,7 @@ pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send
     major_offset: f64,
     live: Option<[usize; 4]>,
     f: impl Fn(&[f32], usize, &mut [f32], &mut S) -> bool + Sync + Send,
-) -> Vec<f32> {
+) -> Result<Vec<f32>> {
     let live = live.map(|[x0, x1, y0, y1]| {
         if plan.transpose {
             [y0, y1, x0, x1]
@@ -212,7 +174,7 @@ pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send
     } else {
         (Cow::Borrowed(img), w, h)
     };
-    let mut out = super::pool::take(w2 * h2 * CO);
+    let mut out = super::pool::take_for(name, w2 * h2 * CO)?;
     if plan.slope == 0.0 {
         out.par_chunks_mut(w2 * CO)
             .zip(src.par_chunks(w2 * CI))
@@ -222,38 +184,104 @@ pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send
                 }
             });
     } else {
-        let sh = build_sheared::<CI, CO, S>(&src, w2, h2, plan.slope, major_offset, live, &f);
+        let sh =
+            build_sheared::<CI, CO, S>(name, &src, w2, h2, plan.slope, major_offset, live, &f)?;
         out.par_chunks_mut(w2 * CO)
             .enumerate()
             .for_each(|(y, o)| sh.unshear_row(w2, y, o));
         super::pool::give(sh.data);
     }
-    if plan.transpose {
+    Ok(if plan.transpose {
         transpose::<CO>(&out, w2, h2)
     } else {
         out
-    }
+    })
 }
 
-/// A filtered sheared image: rows `j0 ..`, `used[k]` when row `j0 + k` holds anything.
+/// A filtered sheared image: rows `j0 ..`, each stored only over the columns where it can be
+/// non-zero. Row `j0 + k` holds columns `spans[k].0 .. spans[k].0 + spans[k].1` at
+/// `data[offs[k] * CO ..]`; every other value of the row is zero (a span of length 0: the whole
+/// row is zero). A sheared row meets the image only where `j + x t + c0` is in `(-1, h)`, about
+/// `(h + 1) / |t|` columns, so the buffer holds at most `w (h + 1)` pixels whatever the slope
+/// and the width (a full `rows x w` buffer would be `w^2 |t|` for a long thin image).
 pub(crate) struct Sheared<const CO: usize> {
     pub(crate) data: Vec<f32>,
-    used: Vec<bool>,
+    spans: Vec<(usize, usize)>,
+    offs: Vec<usize>,
     j0: i64,
     back: Phase,
 }
 
 impl<const CO: usize> Sheared<CO> {
-    /// Output row `y` of the image the sheared rows came from (see `unshear_row`).
-    pub(crate) fn unshear_row(&self, w: usize, y: usize, out: &mut [f32]) {
-        unshear_row::<CO>(&self.data, &self.used, w, self.j0, &self.back, y, out);
+    /// The `CO` values of sheared row `k` (relative to `j0`) at column `x`, `None` when zero.
+    #[inline(always)]
+    fn at(&self, k: i64, x: usize) -> Option<&[f32]> {
+        if k < 0 || k >= self.spans.len() as i64 {
+            return None;
+        }
+        let (s, n) = self.spans[k as usize];
+        if x < s || x >= s + n {
+            return None;
+        }
+        Some(&self.data[(self.offs[k as usize] + x - s) * CO..][..CO])
     }
+
+    /// Output row `y` of the image the sheared rows came from: `out[x]` interpolates sheared
+    /// rows `floor(y - x t - c0)` and the next one at column `x` (zero where a row is zero).
+    pub(crate) fn unshear_row(&self, w: usize, y: usize, out: &mut [f32]) {
+        for x in 0..w {
+            let i = y as i64 + self.back.floor[x] - self.j0;
+            let f = self.back.frac[x];
+            let o = &mut out[x * CO..x * CO + CO];
+            match (self.at(i, x), self.at(i + 1, x)) {
+                (Some(a), Some(b)) => {
+                    for c in 0..CO {
+                        o[c] = (1.0 - f) * a[c] + f * b[c];
+                    }
+                }
+                (Some(a), None) => {
+                    for c in 0..CO {
+                        o[c] = (1.0 - f) * a[c];
+                    }
+                }
+                (None, Some(b)) => {
+                    for c in 0..CO {
+                        o[c] = f * b[c];
+                    }
+                }
+                (None, None) => o.fill(0.0),
+            }
+        }
+    }
+}
+
+/// Columns `(start, len)` of sheared row `j` that read the image: `y0 = j + floor[x]` in
+/// `[-1, h - 1]` (`floor` is monotone in `x`, so they form one interval).
+fn row_span(fwd: &Phase, t: f64, h: usize, j: i64) -> (usize, usize) {
+    let (lo, hi) = (-1 - j, h as i64 - 1 - j);
+    let fl = &fwd.floor;
+    let (a, b) = if t > 0.0 {
+        (
+            fl.partition_point(|&f| f < lo),
+            fl.partition_point(|&f| f <= hi),
+        )
+    } else {
+        (
+            fl.partition_point(|&f| f > hi),
+            fl.partition_point(|&f| f >= lo),
+        )
+    };
+    (a, b.saturating_sub(a))
 }
 
 /// Shears a `(h, w, CI)` image with slope `t` (see the module docs; `major_offset` and `live` as
 /// in `directional_at`, `live` already in this orientation) and runs the row filter `f` on every
-/// sheared row that can meet the live box.
+/// sheared row that can meet the live box, over the columns where the row meets the image
+/// (the filters read zero outside their row, which is what the rest of the sheared row holds).
+/// Fails naming `name` if the buffer cannot be allocated.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn build_sheared<const CI: usize, const CO: usize, S: Default + Send>(
+    name: &'static str,
     src: &[f32],
     w: usize,
     h: usize,
@@ -261,13 +289,11 @@ pub(crate) fn build_sheared<const CI: usize, const CO: usize, S: Default + Send>
     major_offset: f64,
     live: Option<[usize; 4]>,
     f: &(impl Fn(&[f32], usize, &mut [f32], &mut S) -> bool + Sync + Send),
-) -> Sheared<CO> {
+) -> Result<Sheared<CO>> {
     let c0 = (major_offset * t).rem_euclid(1.0);
     let (j0, rows) = shear_range(w, h, t, c0);
     let fwd = Phase::new(w, t, c0, 1.0);
     let back = Phase::new(w, t, c0, -1.0);
-    let mut data = super::pool::take(rows * w * CO);
-    let mut used = vec![false; rows];
     // Sheared rows that can meet the live box: j + x t + c0 in (y0 - 1, y1 + 1), x in [x0, x1].
     let (jlo, jhi) = match live {
         Some([x0, x1, y0, y1]) => {
@@ -279,24 +305,66 @@ pub(crate) fn build_sheared<const CI: usize, const CO: usize, S: Default + Send>
         }
         None => (i64::MIN, i64::MAX),
     };
-    data.par_chunks_mut(w * CO)
-        .zip(used.par_iter_mut())
-        .enumerate()
-        .for_each_init(
-            || (vec![0.0f32; w * CI], S::default()),
-            |(row, s), (k, (o, u))| {
-                let j = j0 + k as i64;
-                if j < jlo || j > jhi {
-                    return;
-                }
-                shear_row::<CI>(src, w, h, &fwd, j, row);
-                *u = f(row, w, o, s);
-            },
-        );
-    Sheared {
+    let mut spans = Vec::new();
+    let mut offs = Vec::new();
+    spans
+        .try_reserve_exact(rows)
+        .and_then(|_| offs.try_reserve_exact(rows))
+        .map_err(|_| {
+            Error::value(
+                name,
+                format!("is too large to filter ({rows} sheared rows)"),
+            )
+        })?;
+    let mut total = 0usize;
+    for k in 0..rows {
+        let j = j0 + k as i64;
+        let span = if j < jlo || j > jhi {
+            (0, 0)
+        } else {
+            row_span(&fwd, t, h, j)
+        };
+        spans.push(span);
+        offs.push(total);
+        total += span.1;
+    }
+    // Every column meets the image on at most h + 1 sheared rows.
+    debug_assert!(total <= w * (h + 1));
+    let mut data = super::pool::take_for(name, total * CO)?;
+    // One mutable slice per row, then the rows in parallel.
+    let mut parts: Vec<(&mut (usize, usize), &mut [f32])> = Vec::new();
+    parts.try_reserve_exact(rows).map_err(|_| {
+        Error::value(
+            name,
+            format!("is too large to filter ({rows} sheared rows)"),
+        )
+    })?;
+    let mut rest: &mut [f32] = &mut data;
+    for span in spans.iter_mut() {
+        let (head, tail) = rest.split_at_mut(span.1 * CO);
+        parts.push((span, head));
+        rest = tail;
+    }
+    parts.par_iter_mut().enumerate().for_each_init(
+        || (vec![0.0f32; w * CI], S::default()),
+        |(row, s), (k, (span, o))| {
+            let (x0, n) = **span;
+            if n == 0 {
+                return;
+            }
+            let j = j0 + k as i64;
+            let row = &mut row[..n * CI];
+            shear_row::<CI>(src, w, h, &fwd, j, (x0, n), row);
+            if !f(row, n, o, s) {
+                span.1 = 0;
+            }
+        },
+    );
+    Ok(Sheared {
         data,
-        used,
+        spans,
+        offs,
         j0,
         back,
-    }
+    })
 }

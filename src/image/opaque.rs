@@ -207,7 +207,7 @@ fn crop_path(
     p: &LinePlan,
     comp: Option<Composite>,
     out: &mut [MaybeUninit<f32>],
-) -> bool {
+) -> Result<bool> {
     // One streaming pass: finiteness, the empty result everywhere, and the alpha's box.
     type Scan = (bool, Option<(usize, usize, usize, usize)>);
     let join = |a: Scan, b: Scan| -> Scan {
@@ -229,10 +229,10 @@ fn crop_path(
         .reduce(|| (true, None), join);
     let out = assume_init(out);
     let Some((x0, x1, y0, y1)) = bbox else {
-        return ok;
+        return Ok(ok);
     };
     if !ok {
-        return false;
+        return Ok(false);
     }
     let r = p.radius;
     let major = 2 * r + 2;
@@ -245,7 +245,7 @@ fn crop_path(
     let (cx0, cx1) = (x0.saturating_sub(mx), (x1 + 1 + mx).min(w));
     let (cy0, cy1) = (y0.saturating_sub(my), (y1 + 1 + my).min(h));
     let (cw, ch) = (cx1 - cx0, cy1 - cy0);
-    let mut crop = super::pool::take(cw * ch * 4);
+    let mut crop = super::pool::take_for("rgba", cw * ch * 4)?;
     crop.par_chunks_mut(cw * 4)
         .enumerate()
         .for_each(|(k, row)| {
@@ -292,8 +292,16 @@ fn crop_path(
     let out_rows = &mut out[cy0 * w * 4..cy1 * w * 4];
     if oblique && !p.transpose {
         // Shear, filter, and shear back row by row straight into the output.
-        let sh =
-            build_sheared::<4, 5, RowScratch>(&crop, cw, ch, p.slope, offset, Some(live), &filter);
+        let sh = build_sheared::<4, 5, RowScratch>(
+            "rgba",
+            &crop,
+            cw,
+            ch,
+            p.slope,
+            offset,
+            Some(live),
+            &filter,
+        )?;
         out_rows.par_chunks_mut(w * 4).enumerate().for_each_init(
             || vec![0.0f32; cw * 5],
             |row, (y, o)| {
@@ -303,7 +311,16 @@ fn crop_path(
         );
         super::pool::give(sh.data);
     } else {
-        let five = directional_at::<4, 5, RowScratch>(&crop, cw, ch, p, offset, Some(live), filter);
+        let five = directional_at::<4, 5, RowScratch>(
+            "rgba",
+            &crop,
+            cw,
+            ch,
+            p,
+            offset,
+            Some(live),
+            filter,
+        )?;
         out_rows
             .par_chunks_mut(w * 4)
             .enumerate()
@@ -311,7 +328,7 @@ fn crop_path(
         super::pool::give(five);
     }
     super::pool::give(crop);
-    true
+    Ok(true)
 }
 
 fn opaque_impl(
@@ -334,10 +351,10 @@ fn opaque_impl(
         check_finite("rgba", rgba)?;
         check_finite("base", base_img)?;
     }
-    let mut ok = true;
+    let mut ok = Ok(true);
     let out = filled(w * h * 4, |out| match p {
         Some(p) if !p.transpose && p.slope == 0.0 => {
-            ok = rows_path(rgba, base_img, w, p.radius, comp, out);
+            ok = Ok(rows_path(rgba, base_img, w, p.radius, comp, out));
         }
         Some(p) => ok = crop_path(rgba, base_img, w, h, &p, comp, out),
         None => out
@@ -348,7 +365,7 @@ fn opaque_impl(
                 put4(o, 0, finish([px[0], px[1], px[2], px[3]], px[3], b, comp))
             }),
     });
-    if !ok {
+    if !ok? {
         check_finite("rgba", rgba)?;
         check_finite("base", base_img)?;
     }

@@ -9,8 +9,9 @@ static POOL: Mutex<Vec<Vec<f32>>> = Mutex::new(Vec::new());
 const KEEP: usize = 4;
 const MAX_FLOATS: usize = 16 << 20;
 
-/// A buffer of exactly `n` floats with unspecified (but initialised) contents.
-pub(crate) fn take(n: usize) -> Vec<f32> {
+/// A buffer of exactly `n` floats with unspecified (but initialised) contents, or `None` when
+/// the memory cannot be allocated (instead of aborting the process).
+pub(crate) fn try_take(n: usize) -> Option<Vec<f32>> {
     let mut pool = POOL.lock().unwrap_or_else(|e| e.into_inner());
     let best = (0..pool.len())
         .filter(|&i| pool[i].capacity() >= n)
@@ -23,9 +24,10 @@ pub(crate) fn take(n: usize) -> Vec<f32> {
     if v.len() >= n {
         v.truncate(n);
     } else {
+        v.try_reserve_exact(n - v.len()).ok()?;
         v.resize(n, 0.0);
     }
-    v
+    Some(v)
 }
 
 /// Returns a buffer to the pool.
@@ -47,4 +49,11 @@ pub(crate) fn give(v: Vec<f32>) {
         })
         .count();
     pool.truncate(keep);
+}
+
+/// `try_take`, failing with a `ValueError` naming `name` (the image the buffer is for).
+pub(crate) fn take_for(name: &'static str, n: usize) -> crate::Result<Vec<f32>> {
+    try_take(n).ok_or_else(|| {
+        crate::Error::value(name, format!("is too large: cannot allocate {n} floats"))
+    })
 }

@@ -113,3 +113,39 @@ fn line_plan_radius_and_axis() {
     assert!(plan([0.0, 0.0], 10.0).is_none());
     assert!(plan([1.0, 0.0], 0.9).is_none());
 }
+
+#[test]
+fn sheared_buffer_is_bounded_by_the_image() {
+    // Every column meets at most h + 1 sheared rows, so the buffer holds at most w (h + 1)
+    // pixels whatever the slope (a full rows x w buffer is about w^2 |t| for a long thin image).
+    let copy = |src: &[f32], _n: usize, out: &mut [f32], _s: &mut ()| {
+        out.copy_from_slice(src);
+        true
+    };
+    for (w, h) in [(100_000usize, 1usize), (20_000, 2), (300, 7), (5, 40)] {
+        let img = vec![1.0f32; w * h];
+        for t in [0.5, -0.5, 1.0, -0.999, 0.01] {
+            let sh =
+                super::lines::build_sheared::<1, 1, ()>("alpha", &img, w, h, t, 0.0, None, &copy)
+                    .unwrap();
+            assert!(
+                sh.data.len() <= w * (h + 1),
+                "{w}x{h} t={t}: {}",
+                sh.data.len()
+            );
+            // Sheared back, an image of ones is ones away from the top and bottom rows (which
+            // interpolate with the zeros outside) and within [0, 1] everywhere.
+            let mut row = vec![0.0f32; w];
+            for y in 0..h {
+                sh.unshear_row(w, y, &mut row);
+                assert!(row.iter().all(|v| (-1e-6..=1.0 + 1e-5).contains(v)));
+                if y > 0 && y + 1 < h {
+                    assert!(
+                        row.iter().all(|v| (v - 1.0).abs() < 1e-5),
+                        "{w}x{h} t={t} y={y}"
+                    );
+                }
+            }
+        }
+    }
+}

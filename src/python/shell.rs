@@ -267,7 +267,9 @@ fn _motion_silhouette<'py>(
         }
     }
     let f = face_rows(&faces, v.len())?;
-    let (fac, edge) = py.detach(move || motion_silhouette(v, p, &f, n));
+    let (fac, edge) = py
+        .detach(move || motion_silhouette(v, p, &f, n))
+        .map_err(to_py_err)?;
     let edge = edge.into_iter().map(|e| if e > 2 { -1 } else { e as i8 });
     Ok((
         Array1::from_vec(fac).into_pyarray(py),

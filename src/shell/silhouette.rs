@@ -1,9 +1,12 @@
 //! The silhouette of motion (Jones and Keyser, section 3.2): per-vertex facing and the
 //! back-facing edge of each triangle.
 //!
-//! - The facing of a vertex is the sign of `n . (p - p_prev)`, `n` its normal: `FRONT` (> 0),
-//!   `BACK` (< 0) or `NEUTRAL` (exactly 0: a vertex that does not move, or moves in its tangent
-//!   plane). Neutral vertices are neither front nor back, so a static polygon never has an edge.
+//! - The facing of a vertex that moves (`d = p - p_prev != 0`) is `FRONT` when `n . d >= 0`
+//!   (`n` its normal; the `>= 0` convention of `contour_edges`, so a vertex moving in its
+//!   tangent plane is front) and `BACK` when `n . d < 0`. A vertex that does not move is
+//!   `NEUTRAL`, neither front nor back, so a static polygon never has an edge. (Were `n . d == 0`
+//!   neutral too, a symmetric mesh moving along an axis would lose most of its silhouette: the
+//!   equator vertices of an icosphere moving along x have `n . d` exactly 0.)
 //! - A triangle has a silhouette edge when exactly one corner is front and the other two are
 //!   back: the edge between the two back corners, as the face runs it. It is stored as the
 //!   local index `k` of the edge `face[k] -> face[(k + 1) % 3]`, or `NO_EDGE`.
@@ -105,17 +108,19 @@ pub fn face_normals_into(vertices: &[[f32; 3]], faces: &[[u32; 3]], out: &mut [[
         });
 }
 
-/// Facing of one vertex with normal `n` moving from `prev` to `p` (float32, left to right).
+/// Facing of one vertex with normal `n` moving from `prev` to `p` (float32, left to right):
+/// `NEUTRAL` when it does not move, else `BACK` when `n . d < 0` and `FRONT` otherwise.
 #[inline]
 pub fn facing(n: [f32; 3], p: [f32; 3], prev: [f32; 3]) -> i8 {
     let d = [p[0] - prev[0], p[1] - prev[1], p[2] - prev[2]];
+    if d == [0.0; 3] {
+        return NEUTRAL;
+    }
     let s = n[0] * d[0] + n[1] * d[1] + n[2] * d[2];
-    if s > 0.0 {
-        FRONT
-    } else if s < 0.0 {
+    if s < 0.0 {
         BACK
     } else {
-        NEUTRAL
+        FRONT
     }
 }
 
@@ -128,7 +133,8 @@ pub fn face_edge(facing: &[i8], f: &[u32; 3]) -> u8 {
         facing[f[1] as usize],
         facing[f[2] as usize],
     ];
-    // Sum of facings is -1 with one front and two back (or with one back and two neutral).
+    // Sum of facings is -1 with one front and two back (or with one back and two neutral: a
+    // polygon with a corner that does not move has no edge).
     if s[0] + s[1] + s[2] != -1 || s.contains(&NEUTRAL) {
         return NO_EDGE;
     }
@@ -145,16 +151,22 @@ pub fn to_f32(v: &[[f64; 3]]) -> Vec<[f32; 3]> {
         .collect()
 }
 
-/// The silhouette of motion of a mesh moving from `previous` to `vertices` (both (V,3), checked
-/// by the caller), with the given vertex normals or the unnormalised area-weighted ones, all in
-/// float32 as in [`crate::shell::BlurShell::update`]. Returns the facing per vertex and the edge
-/// code per face.
+/// The silhouette of motion of a mesh moving from `previous` to `vertices` (both (V,3), row
+/// counts checked by the caller), with the given vertex normals or the unnormalised
+/// area-weighted ones, all in float32 as in [`crate::shell::BlurShell::update`]. Returns the
+/// facing per vertex and the edge code per face. Fails naming `vertices`, `previous_vertices`
+/// or `normals` for NaN, inf or values beyond [`super::MAX_COORD`] / [`super::MAX_NORMAL`].
 pub fn motion_silhouette(
     vertices: &[[f64; 3]],
     previous: &[[f64; 3]],
     faces: &[[u32; 3]],
     normals: Option<&[[f64; 3]]>,
-) -> (Vec<i8>, Vec<u8>) {
+) -> crate::Result<(Vec<i8>, Vec<u8>)> {
+    super::check_values(vertices, "vertices")?;
+    super::check_values(previous, "previous_vertices")?;
+    if let Some(n) = normals {
+        super::check_values(n, "normals")?;
+    }
     let (v, p) = (to_f32(vertices), to_f32(previous));
     let mut fac = vec![NEUTRAL; vertices.len()];
     match normals {
@@ -184,7 +196,7 @@ pub fn motion_silhouette(
         .with_min_len(CHUNK)
         .map(|f| face_edge(&fac, f))
         .collect();
-    (fac, edges)
+    Ok((fac, edges))
 }
 
 /// A cache-friendly internal order for the per-update passes: vertices renumbered in
