@@ -152,7 +152,8 @@ def motion_volume(
     the scene's shutter filter when it is a name, else ``"box"``); ``aa`` 1, 2 or 4 spatial
     samples per pixel along each axis; ``contour_line`` (default True) sweeps only the
     camera-visible contour edges (section 4.1; the same image with back faces culled, fewer
-    triangles) instead of all of them; ``exact_static`` (default True) redraws the static
+    triangles) instead of all of them (the camera at the reference time gives the perspective
+    of the coverage alphas either way; a spin volume gets the camera only with the contour line); ``exact_static`` (default True) redraws the static
     objects inside the volumes' window with them, one rasterizer pass with exact transparency;
     False composites the volumes over the kept static layer per sample by depth instead (exact
     unless a volume passes through a static surface; with numpy compositing it was the slower
@@ -180,7 +181,7 @@ def motion_volume(
         raise ValueError(f"spin: expected 'auto', True or False, got {spin!r}")
     tr = scene.reference_t
     cam = supersampled(scene.camera_at(tr), aa)
-    eye = cam.pose[:3, 3] if contour_line else None
+    eye = cam.pose[:3, 3]  # the perspective of the coverage alphas, with or without contour_line
     draws: list[tuple[Object, Draw]] = []
     still: list[tuple[int, Object]] = []
     stats = {"volumes": 0, "volume_triangles": 0, "spins": 0, "segments": segments, "filter": filter}
@@ -204,12 +205,13 @@ def motion_volume(
         if turns:
             sp = spin_of(apparent_keyframes(scene, obj, SPIN_STEPS), obj.mesh.vertices)
             if sp is not None and (spin is True or sp["dominance"] >= SPIN_DOMINANCE):
-                vol = _spin_volume(obj, keys[0], sp, filter, eye)
+                vol = _spin_volume(obj, keys[0], sp, filter, eye if contour_line else None)
                 stats["spins"] += 1
         if vol is None:
             vol = build_volume(
-                obj.mesh, keys, segments=1, filter=filter, colors=obj.rgba, camera_position=eye
-            )
+                obj.mesh, keys, segments=1, filter=filter, colors=obj.rgba, camera_position=eye,
+                contour_line=contour_line,
+            )  # fmt: skip
         draws.append(
             (obj, Draw(vol.vertices, vol.faces, vol.rgba, normals=vol.normals, object_id=k, cull_back=True))
         )
