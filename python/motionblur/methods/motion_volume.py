@@ -33,7 +33,7 @@ from ..render import (
 )
 from ..scene import Object, Scene
 
-__all__ = ["motion_volume", "apparent_keyframes", "spin_of"]
+__all__ = ["motion_volume", "apparent_keyframes", "camera_folds", "spin_of"]
 
 FILTERS = ("ramp", "box", "triangle", "gaussian")
 
@@ -42,14 +42,31 @@ def _rigid(scene: Scene) -> bool:
     return not any(o.is_moving and o.motion.is_deforming for o in scene.objects)
 
 
-def apparent_keyframes(scene: Scene, obj: Object, segments: int) -> np.ndarray:
-    """(S+1,4,4) float64 placements of ``obj`` at the times ``i / S`` as the camera at the
-    reference time sees them: ``P(t_r) @ inv(P(t)) @ O(t)`` (paper section 3.1)."""
-    times = np.linspace(0.0, 1.0, segments + 1)
+def camera_folds(scene: Scene, segments: int) -> np.ndarray | None:
+    """(S+1,4,4) float64 ``P(t_r) @ inv(P(t))`` at the times ``i / S``, or None for a still
+    camera (computed once per frame, shared by every object)."""
     if not scene.camera_moves:
-        return np.stack([obj.transform_at(t) for t in times])
+        return None
     ref = scene.camera_pose_at(scene.reference_t)
-    return np.stack([ref @ np.linalg.inv(scene.camera_pose_at(t)) @ obj.transform_at(t) for t in times])
+    return np.stack(
+        [ref @ np.linalg.inv(scene.camera_pose_at(t)) for t in np.linspace(0.0, 1.0, segments + 1)]
+    )
+
+
+def apparent_keyframes(scene: Scene, obj: Object, segments: int, folds=None) -> np.ndarray:
+    """(S+1,4,4) float64 placements of ``obj`` at the times ``i / S`` as the camera at the
+    reference time sees them: ``P(t_r) @ inv(P(t)) @ O(t)`` (paper section 3.1). ``folds``:
+    optional :func:`camera_folds` of the same ``segments``."""
+    times = np.linspace(0.0, 1.0, segments + 1)
+    if not obj.is_moving:
+        own = np.broadcast_to(obj.transform_at(0.0), (len(times), 4, 4))
+    else:
+        own = np.stack([obj.transform_at(t) for t in times])
+    if not scene.camera_moves:
+        return np.array(own)
+    if folds is None:
+        folds = camera_folds(scene, segments)
+    return folds @ own
 
 
 #: Steps the folded motion is sampled at to find a spin (each step must turn less than SPIN_MAX_STEP).
@@ -185,14 +202,16 @@ def motion_volume(
     draws: list[tuple[Object, Draw]] = []
     still: list[tuple[int, Object]] = []
     stats = {"volumes": 0, "volume_triangles": 0, "spins": 0, "segments": segments, "filter": filter}
+    folds = camera_folds(scene, segments)
+    spin_folds = None
     for k, obj in enumerate(scene.objects):
         if obj.is_moving and obj.motion.is_deforming:
             raise ValueError(
                 f"scene: object {k} ({obj.name or 'unnamed'}) deforms; motion_volume needs rigid motion "
                 "(use accumulation or blur_shell)"
             )
-        keys = apparent_keyframes(scene, obj, segments)
-        turns = spin is not False and _rotates(scene, obj)
+        keys = apparent_keyframes(scene, obj, segments, folds)
+        turns = spin is not False and _rotates(scene, obj) and (spin is True or _may_spin(keys, obj))
         if _still(keys) and not turns:
             if not scene.camera_moves:
                 still.append((k, obj))
@@ -203,7 +222,9 @@ def motion_volume(
             continue
         vol = None
         if turns:
-            sp = spin_of(apparent_keyframes(scene, obj, SPIN_STEPS), obj.mesh.vertices)
+            if spin_folds is None and scene.camera_moves:
+                spin_folds = camera_folds(scene, SPIN_STEPS)
+            sp = spin_of(apparent_keyframes(scene, obj, SPIN_STEPS, spin_folds), obj.mesh.vertices)
             if sp is not None and (spin is True or sp["dominance"] >= SPIN_DOMINANCE):
                 vol = _spin_volume(obj, keys[0], sp, filter, eye if contour_line else None)
                 stats["spins"] += 1
@@ -299,6 +320,25 @@ def _spin_volume(obj: Object, open_pose: np.ndarray, sp: dict, filter: str, eye)
     rot = m / np.cbrt(np.linalg.det(m))
     vol.normals = (vol.normals @ rot.T).astype(np.float32)
     return vol
+
+
+def _may_spin(keys: np.ndarray, obj: Object) -> bool:
+    """A cheap necessary test for the auto spin on the coarse placements ``keys``: a spin in
+    place has its axis within R/3 of the centroid (R its farthest vertex), so its farthest arc
+    is at most 4R/3 times the angle; with a margin, run the 32-step test only when
+    ``angle * 2R >= SPIN_DOMINANCE * centroid chord path``."""
+    m3 = keys[:, :3, :3]
+    scale = np.cbrt(abs(np.linalg.det(m3[0])))
+    rots = m3 / scale
+    angle = sum(np.linalg.norm(_rotvec(b @ a.T)) for a, b in zip(rots[:-1], rots[1:]))
+    if not keys.shape[0] > 1 or angle <= 0.0:
+        return False
+    v = obj.mesh.vertices
+    c = v.mean(axis=0)
+    radius = float(np.sqrt(((v - c) ** 2).sum(axis=1).max())) * scale
+    path = m3 @ c + keys[:, :3, 3]
+    chord = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
+    return angle * 2.0 * radius >= SPIN_DOMINANCE * chord
 
 
 def _rotates(scene: Scene, obj: Object) -> bool:
