@@ -197,6 +197,81 @@ pub fn composite(
     Ok(())
 }
 
+/// Resolve a supersampled layer into a rectangle of a pixel-size one: `rgba` (4 per sample),
+/// `depth` and `ids` are `(rect.height * s) x (rect.width * s)` samples; each pixel of `rect`
+/// in `out_*` (whole buffers, `rect.stride` pixels wide) gets the mean colour of its `s x s`
+/// samples and the depth and id of the nearest one (the first in row order on ties).
+#[allow(clippy::too_many_arguments)]
+pub fn resolve(
+    rgba: &[f32],
+    depth: &[f32],
+    ids: &[i32],
+    s: usize,
+    out_rgba: &mut [f32],
+    out_depth: &mut [f32],
+    out_ids: &mut [i32],
+    rect: Rect,
+) -> Result<()> {
+    let (sw, sh) = (rect.width * s, rect.height * s);
+    if s == 0 || rgba.len() != 4 * sw * sh || depth.len() != sw * sh || ids.len() != sw * sh {
+        return Err(Error::shape(
+            "rgba",
+            "rgba (h*s,w*s,4), depth and ids (h*s,w*s) expected",
+        ));
+    }
+    let stride = rect.stride;
+    if stride == 0 || out_depth.len() % stride != 0 {
+        return Err(Error::shape("out", "must be (H,W) buffers"));
+    }
+    let rows = out_depth.len() / stride;
+    if out_rgba.len() != 4 * rows * stride || out_ids.len() != rows * stride {
+        return Err(Error::shape(
+            "out",
+            "rgba (H,W,4), depth and ids (H,W) must match",
+        ));
+    }
+    if rect.x0 + rect.width > stride || rect.y0 + rect.height > rows {
+        return Err(Error::shape("rgba", "the rectangle must lie inside out"));
+    }
+    let norm = 1.0 / (s * s) as f32;
+    out_rgba
+        .par_chunks_mut(4 * stride)
+        .zip(out_depth.par_chunks_mut(stride))
+        .zip(out_ids.par_chunks_mut(stride))
+        .enumerate()
+        .skip(rect.y0)
+        .take(rect.height)
+        .for_each(|(y, ((orow, drow), irow))| {
+            let ry = y - rect.y0;
+            for x in 0..rect.width {
+                let mut c = [0.0f32; 4];
+                let (mut d, mut id) = (f32::INFINITY, -1);
+                let mut first = true;
+                for dy in 0..s {
+                    let row = (ry * s + dy) * sw + x * s;
+                    for dx in 0..s {
+                        let k = row + dx;
+                        for (ch, v) in c.iter_mut().zip(&rgba[4 * k..4 * k + 4]) {
+                            *ch += v;
+                        }
+                        if first || depth[k] < d {
+                            d = depth[k];
+                            id = ids[k];
+                            first = false;
+                        }
+                    }
+                }
+                let o = rect.x0 + x;
+                for (dst, v) in orow[4 * o..4 * o + 4].iter_mut().zip(c) {
+                    *dst = v * norm;
+                }
+                drow[o] = d;
+                irow[o] = id;
+            }
+        });
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
