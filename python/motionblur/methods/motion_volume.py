@@ -170,8 +170,9 @@ def motion_volume(
     samples per pixel along each axis; ``contour_line`` (default True) sweeps only the
     camera-visible contour edges (section 4.1; the same image with back faces culled, fewer
     triangles) instead of all of them (the camera at the reference time gives the perspective
-    of the coverage alphas either way; a spin volume gets the camera only with the contour line); ``exact_static`` (default True) redraws the static
-    objects inside the volumes' window with them, one rasterizer pass with exact transparency;
+    of the coverage alphas either way; a spin volume gets the camera only with the contour
+    line); ``exact_static`` (default True) redraws the static objects inside the volumes'
+    window with them, one rasterizer pass with exact transparency;
     False composites the volumes over the kept static layer per sample by depth instead (exact
     unless a volume passes through a static surface; with numpy compositing it was the slower
     of the two on the built-in scenes); ``spin`` (paper section 4.3, objects that spin but
@@ -182,8 +183,7 @@ def motion_volume(
     pi/12); with ``"auto"`` only those that spin in place: the arc the vertex farthest from the
     axis travels is at least 4 times the path of the object's vertex centroid
     (``|angle| r >= 4 path``: a propeller or wheel, not an object orbiting a far axis nor a
-    camera pan); False never. Deforming
-    objects raise ValueError (use accumulation or blur shells). Returns a Frame; ``stats``
+    camera pan); False never. Deforming objects raise ValueError (use accumulation or blur shells). Returns a Frame; ``stats``
     counts the volume triangles and the spins.
     """
     segments = as_int(segments, "segments", minimum=1, maximum=4096)
