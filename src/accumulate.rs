@@ -390,4 +390,26 @@ mod tests {
         };
         assert_eq!(run(1), run(2));
     }
+
+    #[test]
+    fn resolve_means_colour_and_keeps_the_first_nearest_sample() {
+        // one 2x2 block -> pixel (1, 0) of a 3x1 buffer; samples 1 and 2 tie at depth 1
+        let rgba: Vec<f32> = (0..16).map(|k| k as f32).collect();
+        let depth = [2.0, 1.0, 1.0, f32::INFINITY];
+        let ids = [7, 8, 9, -1];
+        let (mut o, mut d, mut i) = (vec![-1.0f32; 12], vec![-1.0f32; 3], vec![-5i32; 3]);
+        let rect = Rect {
+            x0: 1,
+            y0: 0,
+            width: 1,
+            height: 1,
+            stride: 3,
+        };
+        resolve(&rgba, &depth, &ids, 2, &mut o, &mut d, &mut i, rect).unwrap();
+        assert_eq!(&o[4..8], &[6.0, 7.0, 8.0, 9.0]);
+        assert_eq!((d[1], i[1]), (1.0, 8));
+        assert_eq!((d[0], i[0], d[2], i[2]), (-1.0, -5, -1.0, -5));
+        let bad = Rect { x0: 3, ..rect };
+        assert!(resolve(&rgba, &depth, &ids, 2, &mut o, &mut d, &mut i, bad).is_err());
+    }
 }
