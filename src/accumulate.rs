@@ -197,6 +197,81 @@ pub fn composite(
     Ok(())
 }
 
+/// Resolve a supersampled layer into a rectangle of a pixel-size one: `rgba` (4 per sample),
+/// `depth` and `ids` are `(rect.height * s) x (rect.width * s)` samples; each pixel of `rect`
+/// in `out_*` (whole buffers, `rect.stride` pixels wide) gets the mean colour of its `s x s`
+/// samples and the depth and id of the nearest one (the first in row order on ties).
+#[allow(clippy::too_many_arguments)]
+pub fn resolve(
+    rgba: &[f32],
+    depth: &[f32],
+    ids: &[i32],
+    s: usize,
+    out_rgba: &mut [f32],
+    out_depth: &mut [f32],
+    out_ids: &mut [i32],
+    rect: Rect,
+) -> Result<()> {
+    let (sw, sh) = (rect.width * s, rect.height * s);
+    if s == 0 || rgba.len() != 4 * sw * sh || depth.len() != sw * sh || ids.len() != sw * sh {
+        return Err(Error::shape(
+            "rgba",
+            "rgba (h*s,w*s,4), depth and ids (h*s,w*s) expected",
+        ));
+    }
+    let stride = rect.stride;
+    if stride == 0 || out_depth.len() % stride != 0 {
+        return Err(Error::shape("out", "must be (H,W) buffers"));
+    }
+    let rows = out_depth.len() / stride;
+    if out_rgba.len() != 4 * rows * stride || out_ids.len() != rows * stride {
+        return Err(Error::shape(
+            "out",
+            "rgba (H,W,4), depth and ids (H,W) must match",
+        ));
+    }
+    if rect.x0 + rect.width > stride || rect.y0 + rect.height > rows {
+        return Err(Error::shape("rgba", "the rectangle must lie inside out"));
+    }
+    let norm = 1.0 / (s * s) as f32;
+    out_rgba
+        .par_chunks_mut(4 * stride)
+        .zip(out_depth.par_chunks_mut(stride))
+        .zip(out_ids.par_chunks_mut(stride))
+        .enumerate()
+        .skip(rect.y0)
+        .take(rect.height)
+        .for_each(|(y, ((orow, drow), irow))| {
+            let ry = y - rect.y0;
+            for x in 0..rect.width {
+                let mut c = [0.0f32; 4];
+                let (mut d, mut id) = (f32::INFINITY, -1);
+                let mut first = true;
+                for dy in 0..s {
+                    let row = (ry * s + dy) * sw + x * s;
+                    for dx in 0..s {
+                        let k = row + dx;
+                        for (ch, v) in c.iter_mut().zip(&rgba[4 * k..4 * k + 4]) {
+                            *ch += v;
+                        }
+                        if first || depth[k] < d {
+                            d = depth[k];
+                            id = ids[k];
+                            first = false;
+                        }
+                    }
+                }
+                let o = rect.x0 + x;
+                for (dst, v) in orow[4 * o..4 * o + 4].iter_mut().zip(c) {
+                    *dst = v * norm;
+                }
+                drow[o] = d;
+                irow[o] = id;
+            }
+        });
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -314,5 +389,27 @@ mod tests {
             })
         };
         assert_eq!(run(1), run(2));
+    }
+
+    #[test]
+    fn resolve_means_colour_and_keeps_the_first_nearest_sample() {
+        // one 2x2 block -> pixel (1, 0) of a 3x1 buffer; samples 1 and 2 tie at depth 1
+        let rgba: Vec<f32> = (0..16).map(|k| k as f32).collect();
+        let depth = [2.0, 1.0, 1.0, f32::INFINITY];
+        let ids = [7, 8, 9, -1];
+        let (mut o, mut d, mut i) = (vec![-1.0f32; 12], vec![-1.0f32; 3], vec![-5i32; 3]);
+        let rect = Rect {
+            x0: 1,
+            y0: 0,
+            width: 1,
+            height: 1,
+            stride: 3,
+        };
+        resolve(&rgba, &depth, &ids, 2, &mut o, &mut d, &mut i, rect).unwrap();
+        assert_eq!(&o[4..8], &[6.0, 7.0, 8.0, 9.0]);
+        assert_eq!((d[1], i[1]), (1.0, 8));
+        assert_eq!((d[0], i[0], d[2], i[2]), (-1.0, -5, -1.0, -5));
+        let bad = Rect { x0: 3, ..rect };
+        assert!(resolve(&rgba, &depth, &ids, 2, &mut o, &mut d, &mut i, bad).is_err());
     }
 }

@@ -50,3 +50,56 @@ def test_a_tiny_run_writes_the_table_csv_and_plot(tmp_path):
     assert list(tmp_path.glob("references/cube_32x24_K4_S2_*.npy"))
     # the registered sweeps are restored
     assert len(bench.METHODS["accumulation"].sweep) == 9
+
+
+def test_equal_time_interpolates_accumulations_error_at_each_methods_time():
+    rows = [
+        _row("accumulation", 1.0, 0.1),
+        _row("accumulation", 4.0, 0.01),
+        _row("accumulation", 8.0, 0.05),  # slower and worse: not on accumulation's envelope
+        _row("accumulation", 16.0, 0.001),
+    ]
+    rows += [_row("motion_volume", 2.0, 0.002, "mid")]  # halfway in log time between 1 and 4 ms
+    rows += [_row("blur_shell", 8.0, 0.01, "envelope")]  # between 4 and 16 ms: 0.01 -> 0.001
+    rows += [_row("opaque_image", 0.5, 0.2, "fast"), _row("camera_velocity", 32.0, 0.0005, "slow")]
+    out = {r["options"]: (eb, bound, ratio) for r, eb, bound, ratio in bench.equal_time(rows)}
+    assert set(out) == {"mid", "envelope", "fast", "slow"}
+    assert out["mid"][0] == pytest.approx(math.sqrt(0.1 * 0.01)) and out["mid"][1] == ""
+    assert out["mid"][2] == pytest.approx(math.sqrt(0.1 * 0.01) / 0.002)
+    assert out["envelope"][0] == pytest.approx(math.sqrt(0.01 * 0.001)) and out["envelope"][1] == ""
+    assert out["fast"] == (0.1, ">=", pytest.approx(0.5))  # accumulation cannot run in 0.5 ms
+    assert out["slow"][:2] == (0.001, "<=") and out["slow"][2] == pytest.approx(2.0)
+    only = bench.equal_time(rows, methods=["blur_shell"])
+    assert [r["method"] for r, *_ in only] == ["blur_shell"]
+    assert bench.equal_time([_row("blur_shell", 1.0, 0.1)]) == []
+
+
+def test_a_tiny_run_shows_every_method_beside_accumulation_at_equal_time(tmp_path):
+    sweeps = {
+        "accumulation": [{"samples": 1}, {"samples": 4}, {"samples": 16}],
+        "motion_volume": [{"segments": 1, "filter": "box"}],
+        "blur_shell": [{"subdivisions": 4}],
+        "opaque_image": [{"aa": 1}],
+        "camera_velocity": [{"samples": 4}],
+    }
+    res = bench.run(tmp_path, scenes=["cube", "pan"], width=32, height=24, times=4, spp=2, repeat=1,
+                    methods=list(sweeps), sweeps=sweeps, flip=False, pyrender_peer=False, log=lambda *a: None)  # fmt: skip
+    md = (tmp_path / "results.md").read_text()
+    section = md[md.index("## Each method against accumulation at equal time") :]
+    section = section[: section.index("\n## ")]
+    for scene, methods in {
+        "cube": ("motion_volume", "blur_shell", "opaque_image"),
+        "pan": ("motion_volume", "blur_shell", "camera_velocity"),
+    }.items():
+        comp = res["equal_time"][scene]
+        assert sorted(r["method"] for r, *_ in comp) == sorted(methods)
+        for r, eb, bound, ratio in comp:
+            # the same numbers as recomputed from the scene's rows, and in the table
+            again = bench.equal_time([x for x in res["rows"] if x["scene"] == scene], methods=[r["method"]])
+            assert again[0][1] == pytest.approx(eb) and again[0][2] == bound
+            assert ratio == pytest.approx(eb / r["rmse"])
+            assert (
+                f"| {scene} | {r['method']} | {r['options']} | {r['ms']:.2f} | {r['rmse']:.5f} | {bound}{eb:.5f} |"
+                in section
+            )
+    assert "at equal FLIP" not in md  # no FLIP comparison when FLIP was not computed

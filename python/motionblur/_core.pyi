@@ -251,4 +251,19 @@ def _composite(
     """In place into b (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32): layer a (h,w) at
     (x0, y0) composited by depth, the nearer over the farther. Releases the GIL."""
 
+def _resolve(
+    rgba: np.ndarray,
+    depth: np.ndarray,
+    ids: np.ndarray,
+    samples: int,
+    out_rgba: np.ndarray,
+    out_depth: np.ndarray,
+    out_ids: np.ndarray,
+    x0: int = 0,
+    y0: int = 0,
+) -> None:
+    """In place into out (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32) at pixel (x0, y0):
+    the supersampled layer (h*s,w*s) resolved to (h,w) pixels, the mean colour and the nearest
+    sample's depth and id (the first in row order on ties). Releases the GIL."""
+
 # --- end scenes

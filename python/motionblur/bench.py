@@ -15,6 +15,9 @@ Comparisons, measured in the same run:
   accumulation needs for the same RMSE, interpolated log-log between the two N that bracket it
   (if even N = 1 is better, its time is an upper bound and the factor is marked ``<=``; if even
   the largest N is worse, ``>=``). The factor is accumulation's time over motion_volume's.
+- every method against accumulation at equal time (:func:`equal_time`): for each run of a
+  method, accumulation's RMSE in the same time, interpolated log-log on accumulation's error
+  against time, beside the method's own.
 - accumulation with the static layer drawn once (N = 16) against 16-pose accumulation on pyrender
   (every object at every pose, :func:`motionblur.reference.pyrender`), on the same scene and size;
   ours at ``aa=1`` like pyrender under OSMesa, its static layer drawn once per frame (the cache
@@ -43,7 +46,7 @@ from . import reference as ref_mod
 from .render import METHODS, _load, clear_static_cache, render
 from .scenes_builtin import SCENES
 
-__all__ = ["run", "sweep_scene", "reference_for", "pareto_front", "equal_error", "main"]
+__all__ = ["run", "sweep_scene", "reference_for", "pareto_front", "equal_error", "equal_time", "main"]
 
 
 def _best_ms(fn, repeat: int):
@@ -165,6 +168,53 @@ def equal_error(rows, method="motion_volume", baseline="accumulation", metric="r
     return out
 
 
+def _envelope(rows, baseline: str, metric: str):
+    """(ms, error) of the ``baseline`` rows sorted by time, kept only where the error improves
+    (the best error reached for that time or less)."""
+    pts, best = [], float("inf")
+    for r in sorted((r for r in rows if r["method"] == baseline), key=lambda r: r["ms"]):
+        e = r[metric]
+        if math.isfinite(e) and e > 0 and e < best:
+            best = e
+            pts.append((r["ms"], e))
+    return pts
+
+
+def equal_time(rows, methods=None, baseline="accumulation", metric="rmse"):
+    """Each method's error beside the baseline's at the same time, for the rows of one scene.
+
+    For every row of a method other than ``baseline`` (or of ``methods``): ``(row, baseline
+    error at the row's time, bound, ratio)``. The baseline's error against time is its lower
+    envelope (the best error reached in that time or less), interpolated log-log between the
+    two timings that bracket the row's time. If the row is faster than the fastest baseline
+    run, the baseline cannot be run in that time: its fastest error is a lower bound (``">="``);
+    if slower than the slowest, the slowest's error is an upper bound (``"<="``); else ``""``.
+    ``ratio`` = baseline error / the row's error (> 1: the method is more accurate than the
+    baseline in the same time)."""
+    pts = _envelope(rows, baseline, metric)
+    if not pts:
+        return []
+    out = []
+    for r in rows:
+        if r["method"] == baseline or (methods is not None and r["method"] not in methods):
+            continue
+        e, t = r[metric], r["ms"]
+        if not (e > 0 and math.isfinite(e) and t > 0):
+            continue
+        if t < pts[0][0]:
+            eb, bound = pts[0][1], ">="
+        elif t >= pts[-1][0]:
+            eb, bound = pts[-1][1], "<=" if t > pts[-1][0] else ""
+        else:
+            for (t0, e0), (t1, e1) in zip(pts, pts[1:]):
+                if t0 <= t < t1:
+                    u = (math.log(t) - math.log(t0)) / (math.log(t1) - math.log(t0))
+                    eb, bound = math.exp(math.log(e0) + u * (math.log(e1) - math.log(e0))), ""
+                    break
+        out.append((r, eb, bound, eb / e))
+    return out
+
+
 def paired_factor(scene, rows, metric="rmse", rounds=7):
     """Re-time the most accurate motion_volume option set against the two accumulation sample
     counts whose errors bracket it, round-robin (``rounds`` times, best of each), so that both
@@ -261,7 +311,9 @@ def _machine() -> str:
     return f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
 
 
-def _markdown(rows, fronts, comparisons, pyrender_rows, settings, flip_comparisons=None, paired=None) -> str:
+def _markdown(
+    rows, fronts, comparisons, pyrender_rows, settings, flip_comparisons=None, paired=None, equal_times=None
+) -> str:
     lines = ["# Speed against error", ""]
     lines.append(
         f"Machine: {_machine()} (shared with other jobs: timings are best of {settings['repeat']}). "
@@ -283,6 +335,27 @@ def _markdown(rows, fronts, comparisons, pyrender_rows, settings, flip_compariso
                 f"| {r['method']} | {r['options']} | {r['ms']:.2f} | {r['rmse']:.5f} | {r['psnr']:.2f} | "
                 f"{r['flip']:.4f} | {r['coverage_error']:+.3f} | {'*' if f else ''} |"
             )
+        lines.append("")
+    if equal_times:
+        lines += ["## Each method against accumulation at equal time", ""]
+        lines += [
+            "Accumulation's RMSE in the time each run took (its best RMSE reached in that time or less, "
+            "interpolated log-log between the two accumulation timings that bracket it; `>=`: faster than "
+            "accumulation with N = 1, whose RMSE is then a lower bound; `<=`: slower than the largest N). "
+            "Ratio = accumulation's RMSE / the method's (> 1: the method is more accurate in the same time).",
+            "",
+            "| scene | method | options | ms | RMSE | accumulation RMSE at that time | ratio |",
+            "|---|---|---|---:|---:|---:|---:|",
+        ]
+        for scene, comp in equal_times.items():
+            if not comp:
+                lines.append(f"| {scene} | (no method besides accumulation) | | | | | |")
+                continue
+            for r, eb, bound, ratio in sorted(comp, key=lambda c: (c[0]["method"], c[0]["ms"])):
+                lines.append(
+                    f"| {scene} | {r['method']} | {r['options']} | {r['ms']:.2f} | {r['rmse']:.5f} | "
+                    f"{bound}{eb:.5f} | {bound}{ratio:.2f} |"
+                )
         lines.append("")
     lines += ["## motion_volume against accumulation at equal error", ""]
     lines += [
@@ -325,7 +398,7 @@ def _markdown(rows, fronts, comparisons, pyrender_rows, settings, flip_compariso
                 f"{p['bound']}{p['acc_ms']:.2f} | {p['bound']}{p['factor']:.2f} |"
             )
         lines.append("")
-    if flip_comparisons:
+    if flip_comparisons and any(flip_comparisons.values()):
         lines += [
             "The same at equal FLIP (NVIDIA's perceptual difference):",
             "",
@@ -401,7 +474,7 @@ def run(
         for m, s in sweeps.items():
             saved[m] = METHODS[m].sweep
             METHODS[m].sweep = [dict(o) for o in s]
-    rows, comparisons, flip_comparisons, pyr, paired = [], {}, {}, [], {}
+    rows, comparisons, flip_comparisons, pyr, paired, equal_times = [], {}, {}, [], {}, {}
     images = {} if save_images else None
     try:
         for name in names:
@@ -418,6 +491,7 @@ def run(
             scene_rows = sweep_scene(name, scene, ref, repeat, methods, flip, images, aa)
             rows += scene_rows
             comparisons[name] = equal_error(scene_rows)
+            equal_times[name] = equal_time(scene_rows)
             flip_comparisons[name] = equal_error(scene_rows, metric="flip") if flip else []
             paired[name] = paired_factor(scene, scene_rows, "rmse", max(3, repeat))
             if pyrender_peer:
@@ -449,7 +523,7 @@ def run(
         variant=ref_mod.mitsuba_variant(),
     )
     (out / "results.md").write_text(
-        _markdown(rows, fronts, comparisons, pyr, settings, flip_comparisons, paired)
+        _markdown(rows, fronts, comparisons, pyr, settings, flip_comparisons, paired, equal_times)
     )
     (out / "settings.json").write_text(json.dumps({**settings, "machine": _machine()}, indent=1))
     if images:
@@ -460,6 +534,7 @@ def run(
         "comparisons": comparisons,
         "flip_comparisons": flip_comparisons,
         "paired": paired,
+        "equal_time": equal_times,
         "pyrender": pyr,
         "paths": {"md": out / "results.md", "csv": out / "results.csv"},
     }
@@ -484,6 +559,7 @@ def main(argv=None) -> int:
         w, h, a.times, a.repeat = 160, 120, 64, 1
     res = run(a.out, a.scenes, w, h, a.times, a.spp, a.repeat, flip=not a.no_flip, aa=a.aa)
     md = res["paths"]["md"].read_text()
-    print(md[md.index("## motion_volume against") :])
+    start = md.find("## Each method against")
+    print(md[start if start >= 0 else md.index("## motion_volume against") :])
     print(f"written: {res['paths']['md']}, {res['paths']['csv']}, {a.out}/pareto_*.png")
     return 0

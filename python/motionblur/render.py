@@ -138,20 +138,23 @@ def downsample(a: np.ndarray, samples: int) -> np.ndarray:
 def resolve_arrays(layer: Layer, samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(rgba, depth, ids) at pixel size from a supersampled layer: colour box-filtered, depth and
     ids of the nearest sample of each pixel (the first in row order on ties)."""
-    rgba = downsample(layer.rgba, samples)
     if samples == 1:
-        return rgba, layer.depth, layer.ids
-    depth = layer.depth[::samples, ::samples].copy()
-    ids = layer.ids[::samples, ::samples].copy()
-    for dy in range(samples):
-        for dx in range(samples):
-            if dx == dy == 0:
-                continue
-            d = layer.depth[dy::samples, dx::samples]
-            m = d < depth
-            depth[m] = d[m]
-            ids[m] = layer.ids[dy::samples, dx::samples][m]
+        return layer.rgba, layer.depth, layer.ids
+    h, w = layer.depth.shape[0] // samples, layer.depth.shape[1] // samples
+    rgba = np.empty((h, w, 4), np.float32)
+    depth = np.empty((h, w), np.float32)
+    ids = np.empty((h, w), np.int32)
+    _resolve_into(layer, samples, rgba, depth, ids, 0, 0)
     return rgba, depth, ids
+
+
+def _resolve_into(layer: Layer, samples: int, rgba, depth, ids, x0: int, y0: int) -> None:
+    """Resolve the supersampled ``layer`` into the pixel arrays at pixel (x0, y0), in place (Rust)."""
+    c = np.ascontiguousarray
+    _core._resolve(
+        c(layer.rgba, dtype=np.float32), c(layer.depth, dtype=np.float32), c(layer.ids, dtype=np.int32),
+        samples, rgba, depth, ids, x0, y0,
+    )  # fmt: skip
 
 
 def resolve(layer: Layer, samples: int) -> Frame:
@@ -229,8 +232,10 @@ def paste(static: Static, window, layer: Layer, aa: int) -> Frame:
     ``aa``) resolved and pasted in."""
     rgba, depth, ids = static.rgba.copy(), static.depth.copy(), static.ids.copy()
     x0, y0, x1, y1 = (v // aa for v in window)
-    r, d, i = resolve_arrays(layer, aa)
-    rgba[y0:y1, x0:x1], depth[y0:y1, x0:x1], ids[y0:y1, x0:x1] = r, d, i
+    if aa == 1:
+        rgba[y0:y1, x0:x1], depth[y0:y1, x0:x1], ids[y0:y1, x0:x1] = layer.rgba, layer.depth, layer.ids
+    else:
+        _resolve_into(layer, aa, rgba, depth, ids, x0, y0)
     return Frame(rgba, depth, ids, np.zeros((*rgba.shape[:2], 2), np.float32))
 
 

@@ -185,3 +185,19 @@ def deforming_propeller(width: int = 320, height: int = 240) -> Scene:
         name="propeller",
     )
     return Scene([prop], cam, shutter="box")
+
+
+# --- rotating scenes (spin volumes, paper section 4.3)
+
+
+@builtin_scene("spinning_propeller")
+def spinning_propeller_scene(width: int = 320, height: int = 240) -> Scene:
+    """A rigid three-blade propeller turning 0.15 turns (54 degrees) about its axis (+Z) during
+    the shutter, with no translation (``Motion`` of 9 rotation keyframes), seen from the front
+    and slightly below (flat): the spin case of the motion-volume paper (section 4.3)."""
+    pos, faces = meshes.spinning_propeller(2, blades=3, radius=1.0, turns=0.0, chord=0.3)
+    cam = Camera(look_at((0.0, -1.0, 3.6), (0.0, 0.0, 0.0)), 0.75, width, height, znear=0.5, zfar=30.0)
+    times = np.linspace(0.0, 1.0, 9)
+    spin = Motion(times, np.stack([rotate(2.0 * np.pi * 0.15 * t, (0.0, 0.0, 1.0)) for t in times]))
+    prop = Object((pos[0], faces), color=(0.2, 0.6, 0.95), motion=spin, name="propeller")
+    return Scene([prop], cam, shutter="box")

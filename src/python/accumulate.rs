@@ -131,7 +131,63 @@ fn _composite(
         .map_err(to_py_err)
 }
 
+/// In place into out (out_rgba (H,W,4) f32, out_depth (H,W) f32, out_ids (H,W) i32) at pixel
+/// (x0, y0): the supersampled layer rgba (h*s,w*s,4) f32, depth (h*s,w*s) f32, ids (h*s,w*s)
+/// i32 resolved to (h,w) pixels (mean colour, nearest depth and its id). Releases the GIL.
+#[pyfunction]
+#[pyo3(signature = (rgba, depth, ids, samples, out_rgba, out_depth, out_ids, x0=0, y0=0))]
+#[allow(clippy::too_many_arguments)]
+fn _resolve(
+    py: Python<'_>,
+    rgba: PyReadonlyArray3<'_, f32>,
+    depth: PyReadonlyArray2<'_, f32>,
+    ids: PyReadonlyArray2<'_, i32>,
+    samples: usize,
+    mut out_rgba: PyReadwriteArray3<'_, f32>,
+    mut out_depth: PyReadwriteArray2<'_, f32>,
+    mut out_ids: PyReadwriteArray2<'_, i32>,
+    x0: usize,
+    y0: usize,
+) -> PyResult<()> {
+    let sub = rgba.shape().to_vec();
+    let full = out_rgba.shape().to_vec();
+    if samples == 0 || sub[0] % samples != 0 || sub[1] % samples != 0 {
+        return Err(to_py_err(Error::shape(
+            "samples",
+            "must be >= 1 and divide the layer's height and width",
+        )));
+    }
+    if sub[2] != 4 || full[2] != 4 || depth.shape() != &sub[..2] || ids.shape() != &sub[..2] {
+        return Err(to_py_err(Error::shape(
+            "rgba",
+            "rgba (h,w,4), depth and ids (h,w) expected",
+        )));
+    }
+    if out_depth.shape() != &full[..2] || out_ids.shape() != &full[..2] {
+        return Err(to_py_err(Error::shape(
+            "out_rgba",
+            "out: rgba (H,W,4), depth and ids (H,W) expected",
+        )));
+    }
+    let rect = accumulate::Rect {
+        x0,
+        y0,
+        width: sub[1] / samples,
+        height: sub[0] / samples,
+        stride: full[1],
+    };
+    let r = c_slice(&rgba, "rgba").map_err(to_py_err)?;
+    let d = c_slice(&depth, "depth").map_err(to_py_err)?;
+    let i = c_slice(&ids, "ids").map_err(to_py_err)?;
+    let or = c_slice_mut(&mut out_rgba, "out_rgba").map_err(to_py_err)?;
+    let od = c_slice_mut(&mut out_depth, "out_depth").map_err(to_py_err)?;
+    let oi = c_slice_mut(&mut out_ids, "out_ids").map_err(to_py_err)?;
+    py.detach(|| accumulate::resolve(r, d, i, samples, or, od, oi, rect))
+        .map_err(to_py_err)
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(_resolve, m)?)?;
     m.add_function(wrap_pyfunction!(_composite, m)?)?;
     m.add_function(wrap_pyfunction!(_accumulate, m)?)?;
     m.add_function(wrap_pyfunction!(_over, m)?)?;

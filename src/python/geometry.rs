@@ -327,7 +327,7 @@ fn motion_volume<'py>(
                 camera,
                 contour_line,
             };
-            core_motion_volume(&inner, &path.subdivide(segments), &opts)
+            super::in_pool(|| core_motion_volume(&inner, &path.subdivide(segments), &opts))
         })
         .map_err(to_py_err)?;
     let faces: Vec<[i64; 3]> = vol
@@ -398,7 +398,7 @@ fn spin_volume<'py>(
                 camera,
                 contour_line,
             };
-            core_spin_volume(&inner, &spin, &opts)
+            super::in_pool(|| core_spin_volume(&inner, &spin, &opts))
         })
         .map_err(to_py_err)?;
     Ok(volume_tuple(py, vol))

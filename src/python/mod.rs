@@ -7,6 +7,14 @@ mod image;
 mod raster;
 mod shell;
 
+/// Run `f` on a worker thread of rayon's global pool: the parallel loops inside it then start
+/// from a worker, not one cross-thread hand-over (a futex wake-up and wait) each; on small
+/// meshes those hand-overs were most of the time of a motion-volume build. The loops and
+/// their results are unchanged (no dependence on the thread count).
+pub(crate) fn in_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    rayon::scope(|_| f())
+}
+
 /// The data of `a` in C (row-major) order, or an error naming the argument.
 ///
 /// rust-numpy's `as_slice` also accepts Fortran-ordered arrays and hands their memory over in

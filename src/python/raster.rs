@@ -122,7 +122,7 @@ fn _rasterize<'py>(
         .map_err(to_py_err)?;
     drop(draws);
     let frame = py
-        .detach(|| raster::rasterize(&camera, &owned, &opts))
+        .detach(|| super::in_pool(|| raster::rasterize(&camera, &owned, &opts)))
         .map_err(to_py_err)?;
     let (h, w) = (frame.height as usize, frame.width as usize);
     let stats = PyDict::new(py);

@@ -17,6 +17,7 @@ import numpy as np
 
 from .._validate import as_int
 from ..geometry import motion_volume as build_volume
+from ..geometry import spin_volume as build_spin
 from ..raster import Camera, Draw, Frame
 from ..render import (
     Layer,
@@ -32,7 +33,7 @@ from ..render import (
 )
 from ..scene import Object, Scene
 
-__all__ = ["motion_volume", "apparent_keyframes"]
+__all__ = ["motion_volume", "apparent_keyframes", "camera_folds", "spin_of"]
 
 FILTERS = ("ramp", "box", "triangle", "gaussian")
 
@@ -41,14 +42,110 @@ def _rigid(scene: Scene) -> bool:
     return not any(o.is_moving and o.motion.is_deforming for o in scene.objects)
 
 
-def apparent_keyframes(scene: Scene, obj: Object, segments: int) -> np.ndarray:
-    """(S+1,4,4) float64 placements of ``obj`` at the times ``i / S`` as the camera at the
-    reference time sees them: ``P(t_r) @ inv(P(t)) @ O(t)`` (paper section 3.1)."""
-    times = np.linspace(0.0, 1.0, segments + 1)
+def camera_folds(scene: Scene, segments: int) -> np.ndarray | None:
+    """(S+1,4,4) float64 ``P(t_r) @ inv(P(t))`` at the times ``i / S``, or None for a still
+    camera (computed once per frame, shared by every object)."""
     if not scene.camera_moves:
-        return np.stack([obj.transform_at(t) for t in times])
+        return None
     ref = scene.camera_pose_at(scene.reference_t)
-    return np.stack([ref @ np.linalg.inv(scene.camera_pose_at(t)) @ obj.transform_at(t) for t in times])
+    return np.stack(
+        [ref @ np.linalg.inv(scene.camera_pose_at(t)) for t in np.linspace(0.0, 1.0, segments + 1)]
+    )
+
+
+def apparent_keyframes(scene: Scene, obj: Object, segments: int, folds=None) -> np.ndarray:
+    """(S+1,4,4) float64 placements of ``obj`` at the times ``i / S`` as the camera at the
+    reference time sees them: ``P(t_r) @ inv(P(t)) @ O(t)`` (paper section 3.1). ``folds``:
+    optional :func:`camera_folds` of the same ``segments``."""
+    times = np.linspace(0.0, 1.0, segments + 1)
+    if not obj.is_moving:
+        own = np.broadcast_to(obj.transform_at(0.0), (len(times), 4, 4))
+    else:
+        own = np.stack([obj.transform_at(t) for t in times])
+    if not scene.camera_moves:
+        return np.array(own)
+    if folds is None:
+        folds = camera_folds(scene, segments)
+    return folds @ own
+
+
+#: Steps the folded motion is sampled at to find a spin (each step must turn less than SPIN_MAX_STEP).
+SPIN_STEPS = 32
+SPIN_MAX_STEP = 2.5
+#: auto spin: the arc the farthest vertex travels about the axis over the shutter, at least this
+#: many times the path of the object's vertex centroid (``|angle| r >= SPIN_DOMINANCE * path``).
+SPIN_DOMINANCE = 4.0
+#: largest angle (radians) between a step's rotation axis and the mean axis for a "fixed" axis.
+SPIN_AXIS_TOLERANCE = np.radians(3.0)
+
+
+def _rotvec(m: np.ndarray) -> np.ndarray:
+    """(3,) rotation vector (axis times angle, angle < pi) of the 3x3 rotation ``m``."""
+    c = np.clip((np.trace(m) - 1.0) * 0.5, -1.0, 1.0)
+    ang = np.arccos(c)
+    w = np.array([m[2, 1] - m[1, 2], m[0, 2] - m[2, 0], m[1, 0] - m[0, 1]])
+    s = np.linalg.norm(w)
+    if s < 1e-15:
+        return np.zeros(3)
+    return w / s * ang
+
+
+def spin_of(keys: np.ndarray, vertices: np.ndarray) -> dict | None:
+    """The spin in the (n+1,4,4) placements ``keys`` of an object with local ``vertices`` (V,3),
+    or None when they do not turn about one fixed axis.
+
+    Each step's rotation ``R(i+1) R(i)^T`` is taken as a rotation vector; the axis is their
+    mean direction and must hold every step within ``SPIN_AXIS_TOLERANCE`` (3 degrees), the
+    scale must not change and no step may turn more than ``SPIN_MAX_STEP`` radians. The point on
+    the axis (nearest the vertices' centroid) is the least-squares point that the placements
+    move along a straight line at constant speed. Returns, in the object's LOCAL frame of the shutter-open placement ``keys[0]``:
+    ``axis`` (unit), ``center`` (on the axis, nearest the vertices' centroid) and
+    ``translation`` (of that point, open to close); and ``angle`` (radians, signed about the
+    axis, may exceed 2 pi), ``radius`` (world units: the farthest vertex from the axis),
+    ``centre_path`` (world path length of the vertex centroid over the steps) and
+    ``dominance`` = ``|angle| radius / centre_path`` (inf when the centre does not move).
+    """
+    m3 = keys[:, :3, :3]
+    scale = np.cbrt(np.linalg.det(m3))
+    if np.abs(scale - scale[0]).max() > 1e-9 * abs(scale[0]) or scale[0] <= 0:
+        return None
+    rots = m3 / scale[:, None, None]
+    steps = np.array([_rotvec(b @ a.T) for a, b in zip(rots[:-1], rots[1:])])
+    norms = np.linalg.norm(steps, axis=1)
+    if norms.max() > SPIN_MAX_STEP:
+        return None
+    total = steps.sum(axis=0)
+    if np.linalg.norm(total) < 1e-9:
+        return None
+    axis = total / np.linalg.norm(total)
+    moving = norms > 1e-12
+    if (steps[moving] @ axis / norms[moving]).min() < np.cos(SPIN_AXIS_TOLERANCE):
+        return None
+    angle = float((steps @ axis).sum())
+    # the axis point q (local) moving linearly by T (world): M_i q + t_i = M_0 q + t_0 + u_i T
+    n = len(keys) - 1
+    u = np.arange(1, n + 1) / n
+    a_mat = np.concatenate([m3[1:] - m3[0], -u[:, None, None] * np.eye(3)], axis=2).reshape(-1, 6)
+    b_vec = (keys[0, :3, 3] - keys[1:, :3, 3]).reshape(-1)
+    q = np.linalg.lstsq(a_mat, b_vec, rcond=None)[0][:3]
+    a_loc = rots[0].T @ axis
+    centre = vertices.mean(axis=0)
+    q = q + ((centre - q) @ a_loc) * a_loc
+    trans = (m3[-1] - m3[0]) @ q + keys[-1, :3, 3] - keys[0, :3, 3]
+    rel = vertices - q
+    radius = float(np.linalg.norm(rel - np.outer(rel @ a_loc, a_loc), axis=1).max() * scale[0])
+    cpath = m3 @ centre + keys[:, :3, 3]
+    centre_path = float(np.linalg.norm(np.diff(cpath, axis=0), axis=1).sum())
+    arc = abs(angle) * radius
+    return {
+        "axis": a_loc,
+        "angle": angle,
+        "center": q,
+        "translation": np.linalg.solve(m3[0], trans),
+        "radius": radius,
+        "centre_path": centre_path,
+        "dominance": arc / centre_path if centre_path > 0 else float("inf"),
+    }
 
 
 @register(
@@ -63,6 +160,7 @@ def motion_volume(
     aa: int = 1,
     contour_line: bool = True,
     exact_static: bool = True,
+    spin="auto",
 ):
     """Motion-volume rendering: each moving object becomes its motion volume, drawn transparent.
 
@@ -71,12 +169,22 @@ def motion_volume(
     the scene's shutter filter when it is a name, else ``"box"``); ``aa`` 1, 2 or 4 spatial
     samples per pixel along each axis; ``contour_line`` (default True) sweeps only the
     camera-visible contour edges (section 4.1; the same image with back faces culled, fewer
-    triangles) instead of all of them; ``exact_static`` (default True) redraws the static
-    objects inside the volumes' window with them, one rasterizer pass with exact transparency;
+    triangles) instead of all of them (the camera at the reference time gives the perspective
+    of the coverage alphas either way; a spin volume gets the camera only with the contour
+    line); ``exact_static`` (default True) redraws the static objects inside the volumes'
+    window with them, one rasterizer pass with exact transparency;
     False composites the volumes over the kept static layer per sample by depth instead (exact
     unless a volume passes through a static surface; with numpy compositing it was the slower
-    of the two on the built-in scenes). Deforming objects raise ValueError (use
-    accumulation or blur shells). Returns a Frame; ``stats`` counts the volume triangles.
+    of the two on the built-in scenes); ``spin`` (paper section 4.3, objects that spin but
+    barely move) ``"auto"`` (default), True or False: with True every moving object whose
+    folded motion turns about one fixed axis (see :func:`spin_of`: 32 steps, each step's axis
+    within 3 degrees of the mean) is drawn as :func:`motionblur.spin_volume` (contour from the
+    axis, alpha from the rotational speed; ``segments`` then does not apply, one ring per
+    pi/12); with ``"auto"`` only those that spin in place: the arc the vertex farthest from the
+    axis travels is at least 4 times the path of the object's vertex centroid
+    (``|angle| r >= 4 path``: a propeller or wheel, not an object orbiting a far axis nor a
+    camera pan); False never. Deforming objects raise ValueError (use accumulation or blur shells). Returns a Frame; ``stats``
+    counts the volume triangles and the spins.
     """
     segments = as_int(segments, "segments", minimum=1, maximum=4096)
     if filter is None:
@@ -86,20 +194,25 @@ def motion_volume(
     aa = as_int(aa, "aa")
     if aa not in (1, 2, 4):
         raise ValueError(f"aa: must be 1, 2 or 4, got {aa}")
+    if not (spin == "auto" or isinstance(spin, (bool, np.bool_))):
+        raise ValueError(f"spin: expected 'auto', True or False, got {spin!r}")
     tr = scene.reference_t
     cam = supersampled(scene.camera_at(tr), aa)
-    eye = cam.pose[:3, 3] if contour_line else None
+    eye = cam.pose[:3, 3]  # the perspective of the coverage alphas, with or without contour_line
     draws: list[tuple[Object, Draw]] = []
     still: list[tuple[int, Object]] = []
-    stats = {"volumes": 0, "volume_triangles": 0, "segments": segments, "filter": filter}
+    stats = {"volumes": 0, "volume_triangles": 0, "spins": 0, "segments": segments, "filter": filter}
+    folds = camera_folds(scene, segments)
+    spin_folds = None
     for k, obj in enumerate(scene.objects):
         if obj.is_moving and obj.motion.is_deforming:
             raise ValueError(
                 f"scene: object {k} ({obj.name or 'unnamed'}) deforms; motion_volume needs rigid motion "
                 "(use accumulation or blur_shell)"
             )
-        keys = apparent_keyframes(scene, obj, segments)
-        if _still(keys):
+        keys = apparent_keyframes(scene, obj, segments, folds)
+        turns = spin is not False and _rotates(scene, obj) and (spin is True or _may_spin(keys, obj))
+        if _still(keys) and not turns:
             if not scene.camera_moves:
                 still.append((k, obj))
                 continue
@@ -107,7 +220,19 @@ def motion_volume(
             v = obj.world_vertices(tr) if deforming else _place(obj, keys[-1])
             draws.append((obj, Draw(v, obj.mesh.faces, obj.rgba, object_id=k)))
             continue
-        vol = build_volume(obj.mesh, keys, segments=1, filter=filter, colors=obj.rgba, camera_position=eye)
+        vol = None
+        if turns:
+            if spin_folds is None and scene.camera_moves:
+                spin_folds = camera_folds(scene, SPIN_STEPS)
+            sp = spin_of(apparent_keyframes(scene, obj, SPIN_STEPS, spin_folds), obj.mesh.vertices)
+            if sp is not None and (spin is True or sp["dominance"] >= SPIN_DOMINANCE):
+                vol = _spin_volume(obj, keys[0], sp, filter, eye if contour_line else None)
+                stats["spins"] += 1
+        if vol is None:
+            vol = build_volume(
+                obj.mesh, keys, segments=1, filter=filter, colors=obj.rgba, camera_position=eye,
+                contour_line=contour_line,
+            )  # fmt: skip
         draws.append(
             (obj, Draw(vol.vertices, vol.faces, vol.rgba, normals=vol.normals, object_id=k, cull_back=True))
         )
@@ -179,6 +304,52 @@ def _still(keys: np.ndarray) -> bool:
     follows its object folds to products like ``T P inv(T P)``, equal only to ~1e-15)."""
     scale = 1.0 + np.abs(keys[:, :3, 3]).max()
     return bool(np.abs(keys - keys[-1]).max() <= 1e-12 * scale)
+
+
+def _spin_volume(obj: Object, open_pose: np.ndarray, sp: dict, filter: str, eye):
+    """spin_volume built in the object's local frame (its mesh and adjacency reused), placed
+    in the world by the shutter-open placement."""
+    inv = np.linalg.inv(open_pose)
+    cam_local = None if eye is None else inv[:3, :3] @ eye + inv[:3, 3]
+    vol = build_spin(
+        obj.mesh, sp["axis"], sp["angle"], sp["center"], sp["translation"],
+        filter=filter, colors=obj.rgba, camera_position=cam_local,
+    )  # fmt: skip
+    m = open_pose[:3, :3]
+    vol.vertices = vol.vertices @ m.T + open_pose[:3, 3]
+    rot = m / np.cbrt(np.linalg.det(m))
+    vol.normals = (vol.normals @ rot.T).astype(np.float32)
+    return vol
+
+
+def _may_spin(keys: np.ndarray, obj: Object) -> bool:
+    """A cheap necessary test for the auto spin on the coarse placements ``keys``: a spin in
+    place has its axis within R/3 of the centroid (R its farthest vertex), so its farthest arc
+    is at most 4R/3 times the angle; with a margin, run the 32-step test only when
+    ``angle * 2R >= SPIN_DOMINANCE * centroid chord path``."""
+    m3 = keys[:, :3, :3]
+    scale = np.cbrt(abs(np.linalg.det(m3[0])))
+    rots = m3 / scale
+    angle = sum(np.linalg.norm(_rotvec(b @ a.T)) for a, b in zip(rots[:-1], rots[1:]))
+    if not keys.shape[0] > 1 or angle <= 0.0:
+        return False
+    v = obj.mesh.vertices
+    c = v.mean(axis=0)
+    radius = float(np.sqrt(((v - c) ** 2).sum(axis=1).max())) * scale
+    path = m3 @ c + keys[:, :3, 3]
+    chord = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
+    return angle * 2.0 * radius >= SPIN_DOMINANCE * chord
+
+
+def _rotates(scene: Scene, obj: Object) -> bool:
+    """Whether the object's or the camera's keyframes turn (cheap: a pure translation never
+    spins, and the 32-step spin test is skipped for it)."""
+    mats = []
+    if obj.is_moving:
+        mats.append(obj.motion.transforms[:, :3, :3])
+    if scene.camera_moves:
+        mats.append(scene.camera_motion.transforms[:, :3, :3])
+    return any(np.abs(m - m[0]).max() > 1e-9 for m in mats)
 
 
 def _place(obj: Object, m: np.ndarray) -> np.ndarray:
