@@ -55,7 +55,7 @@ fn _accumulate(
         height: sub[0],
         stride: shape[1],
     };
-    py.detach(|| accumulate::accumulate(a, r, d, l, weight, rect))
+    py.detach(|| super::in_pool(|| accumulate::accumulate(a, r, d, l, weight, rect)))
         .map_err(to_py_err)
 }
 
@@ -74,7 +74,8 @@ fn _over(
     }
     let u = c_slice(&under, "under").map_err(to_py_err)?;
     let a = c_slice_mut(&mut acc, "acc").map_err(to_py_err)?;
-    py.detach(|| accumulate::over(a, u)).map_err(to_py_err)
+    py.detach(|| super::in_pool(|| accumulate::over(a, u)))
+        .map_err(to_py_err)
 }
 
 /// In place into b (b_rgba (H,W,4) f32, b_depth (H,W) f32, b_ids (H,W) i32): layer a (a_rgba
@@ -127,7 +128,7 @@ fn _composite(
         height: sub[0],
         stride: full[1],
     };
-    py.detach(|| accumulate::composite(ar, ad, ai, br, bd, bi, rect))
+    py.detach(|| super::in_pool(|| accumulate::composite(ar, ad, ai, br, bd, bi, rect)))
         .map_err(to_py_err)
 }
 
@@ -182,7 +183,7 @@ fn _resolve(
     let or = c_slice_mut(&mut out_rgba, "out_rgba").map_err(to_py_err)?;
     let od = c_slice_mut(&mut out_depth, "out_depth").map_err(to_py_err)?;
     let oi = c_slice_mut(&mut out_ids, "out_ids").map_err(to_py_err)?;
-    py.detach(|| accumulate::resolve(r, d, i, samples, or, od, oi, rect))
+    py.detach(|| super::in_pool(|| accumulate::resolve(r, d, i, samples, or, od, oi, rect)))
         .map_err(to_py_err)
 }
 

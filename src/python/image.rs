@@ -101,7 +101,7 @@ fn _glow<'py>(
 ) -> PyOut<'py> {
     let (a, w, h) = img2(&alpha, "alpha")?;
     let out = py
-        .detach(|| image::glow(a, w, h, direction, width))
+        .detach(|| super::in_pool(|| image::glow(a, w, h, direction, width)))
         .map_err(to_py_err)?;
     out2(py, out, h, w)
 }
@@ -116,7 +116,7 @@ fn _box_blur<'py>(
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
     let out = py
-        .detach(|| image::box_blur(a, w, h, direction, length))
+        .detach(|| super::in_pool(|| image::box_blur(a, w, h, direction, length)))
         .map_err(to_py_err)?;
     out3(py, out, h, w, 4)
 }
@@ -131,7 +131,7 @@ fn _opaque_blur<'py>(
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
     let out = py
-        .detach(|| image::opaque_blur(a, w, h, direction, length))
+        .detach(|| super::in_pool(|| image::opaque_blur(a, w, h, direction, length)))
         .map_err(to_py_err)?;
     out3(py, out, h, w, 4)
 }
@@ -158,7 +158,9 @@ fn _opaque_motion_blur<'py>(
         None => None,
     };
     let out = py
-        .detach(|| image::opaque_motion_blur(a, b, w, h, direction, length, mode))
+        .detach(|| {
+            super::in_pool(|| image::opaque_motion_blur(a, b, w, h, direction, length, mode))
+        })
         .map_err(to_py_err)?;
     out3(py, out, h, w, 4)
 }
@@ -172,7 +174,7 @@ fn _pyramid_blur<'py>(
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
     let out = py
-        .detach(|| image::pyramid_blur(a, w, h, levels))
+        .detach(|| super::in_pool(|| image::pyramid_blur(a, w, h, levels)))
         .map_err(to_py_err)?;
     out3(py, out, h, w, 4)
 }
@@ -186,7 +188,7 @@ fn _pyramid_glow<'py>(
 ) -> PyOut<'py> {
     let (a, w, h) = img2(&alpha, "alpha")?;
     let out = py
-        .detach(|| image::pyramid_glow(a, w, h, levels))
+        .detach(|| super::in_pool(|| image::pyramid_glow(a, w, h, levels)))
         .map_err(to_py_err)?;
     out2(py, out, h, w)
 }
@@ -200,7 +202,7 @@ fn _pyramid_opaque_blur<'py>(
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
     let out = py
-        .detach(|| image::pyramid_opaque_blur(a, w, h, levels))
+        .detach(|| super::in_pool(|| image::pyramid_opaque_blur(a, w, h, levels)))
         .map_err(to_py_err)?;
     out3(py, out, h, w, 4)
 }
@@ -229,7 +231,7 @@ fn _depth_of_field<'py>(
         layers,
     };
     let out = py
-        .detach(|| image::depth_of_field(a, d, w, h, &p))
+        .detach(|| super::in_pool(|| image::depth_of_field(a, d, w, h, &p)))
         .map_err(to_py_err)?;
     out3(py, out, h, w, 4)
 }
@@ -247,7 +249,7 @@ fn _camera_velocity<'py>(
     let (d, w, h) = img2(&depth, "depth")?;
     let (cur, prev) = cameras(&view, &projection, &previous_view, &previous_projection)?;
     let out = py
-        .detach(|| image::camera_velocity(d, w, h, &cur, &prev))
+        .detach(|| super::in_pool(|| image::camera_velocity(d, w, h, &cur, &prev)))
         .map_err(to_py_err)?;
     out3(py, out, h, w, 2)
 }
@@ -264,7 +266,7 @@ fn _velocity_blur<'py>(
     let (v, vw, vh) = img3(&velocity, "velocity", 2)?;
     same_size("velocity", (vh, vw), (h, w))?;
     let out = py
-        .detach(|| image::velocity_blur(a, v, w, h, samples))
+        .detach(|| super::in_pool(|| image::velocity_blur(a, v, w, h, samples)))
         .map_err(to_py_err)?;
     out3(py, out, h, w, 4)
 }
@@ -288,7 +290,9 @@ fn _camera_motion_blur<'py>(
     same_size("depth", (dh, dw), (h, w))?;
     let (cur, prev) = cameras(&view, &projection, &previous_view, &previous_projection)?;
     let out = py
-        .detach(|| image::camera_motion_blur(a, d, w, h, &cur, &prev, samples, scale))
+        .detach(|| {
+            super::in_pool(|| image::camera_motion_blur(a, d, w, h, &cur, &prev, samples, scale))
+        })
         .map_err(to_py_err)?;
     out3(py, out, h, w, 4)
 }

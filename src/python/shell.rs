@@ -145,7 +145,9 @@ impl PyBlurShell {
             initial_alpha,
         };
         let inner = py
-            .detach(move || BlurShell::new(f, n_vertices, opts, mask, color))
+            .detach(move || {
+                super::in_pool(move || BlurShell::new(f, n_vertices, opts, mask, color))
+            })
             .map_err(to_py_err)?;
         Ok(PyBlurShell { inner })
     }
@@ -160,7 +162,8 @@ impl PyBlurShell {
         let v = rows3(&vertices, "vertices")?;
         let n = normals.as_ref().map(|n| rows3(n, "normals")).transpose()?;
         let inner = &mut self.inner;
-        py.detach(move || inner.update(v, n)).map_err(to_py_err)
+        py.detach(move || super::in_pool(move || inner.update(v, n)))
+            .map_err(to_py_err)
     }
 
     #[pyo3(signature = (vertices=None, normals=None))]
@@ -176,7 +179,9 @@ impl PyBlurShell {
             .transpose()?;
         let n = normals.as_ref().map(|n| rows3(n, "normals")).transpose()?;
         let inner = &self.inner;
-        let m = py.detach(move || inner.build(v, n)).map_err(to_py_err)?;
+        let m = py
+            .detach(move || super::in_pool(move || inner.build(v, n)))
+            .map_err(to_py_err)?;
         Ok(shell_arrays(py, m))
     }
 
@@ -268,7 +273,7 @@ fn _motion_silhouette<'py>(
     }
     let f = face_rows(&faces, v.len())?;
     let (fac, edge) = py
-        .detach(move || motion_silhouette(v, p, &f, n))
+        .detach(move || super::in_pool(move || motion_silhouette(v, p, &f, n)))
         .map_err(to_py_err)?;
     let edge = edge.into_iter().map(|e| if e > 2 { -1 } else { e as i8 });
     Ok((
