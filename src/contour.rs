@@ -175,6 +175,11 @@ pub fn contour_from_sides(mesh: &Mesh, front: &[bool]) -> Vec<ContourEdge> {
     if mesh.face_neighbors().is_some() {
         return closed_contour(mesh, front, |edge, a, b| ContourEdge { edge, a, b });
     }
+    contour_by_edges(mesh, front)
+}
+
+/// The rule of the module docs on any mesh: walks every edge's faces.
+pub(crate) fn contour_by_edges(mesh: &Mesh, front: &[bool]) -> Vec<ContourEdge> {
     let adj = mesh.adjacency();
     (0..adj.len())
         .into_par_iter()
@@ -326,6 +331,64 @@ mod tests {
         let a = one.install(|| contour_edges(&m, [0.3, -0.2, 0.9], Some([3.0, 1.0, 2.0])).unwrap());
         let b = two.install(|| contour_edges(&m, [0.3, -0.2, 0.9], Some([3.0, 1.0, 2.0])).unwrap());
         assert_eq!(a, b);
+    }
+
+    /// A closed torus grid of `n x n` quads (two triangles each), wound outward.
+    fn torus(n: u32) -> Mesh {
+        let tau = std::f64::consts::TAU;
+        let mut v = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                let (u, w) = (tau * i as f64 / n as f64, tau * j as f64 / n as f64);
+                // A little irregular, so some faces are far from any tie.
+                let r = 1.0 + 0.3 * w.cos() + 0.01 * ((i * 7 + j * 13) % 5) as f64;
+                v.push([r * u.cos(), r * u.sin(), 0.3 * w.sin()]);
+            }
+        }
+        let id = |i: u32, j: u32| (i % n) * n + (j % n);
+        let mut f = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        Mesh::new(v, f).unwrap()
+    }
+
+    #[test]
+    fn closed_edge_walk_equals_the_general_rule_over_several_chunks() {
+        let mesh = torus(120);
+        assert!(mesh.face_neighbors().is_some());
+        assert!(mesh.adjacency().len() > 2 * EDGE_CHUNK);
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let two = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        for m in [
+            [0.3, -0.2, 0.9],
+            [1.0, 0.0, 0.0],
+            [0.0, 0.0, -1.0],
+            [-2.0, 5.0, 0.1],
+        ] {
+            let front = classify_faces(&mesh, m);
+            let general = contour_by_edges(&mesh, &front);
+            assert!(general.len() > 100);
+            let fast = contour_from_sides(&mesh, &front);
+            assert_eq!(fast, general);
+            let flat: Vec<i64> = general
+                .iter()
+                .flat_map(|c| [i64::from(c.a), i64::from(c.b)])
+                .collect();
+            let p1 = one.install(|| contour_pairs(&mesh, m, None).unwrap());
+            let p2 = two.install(|| contour_pairs(&mesh, m, None).unwrap());
+            assert_eq!(p1, flat);
+            assert_eq!(p2, flat);
+        }
     }
 
     #[test]
