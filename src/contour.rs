@@ -89,17 +89,19 @@ pub fn camera_facing(
         .collect()
 }
 
-/// Edges per chunk of the closed-mesh selection (a chunk's codes stay in L1).
-const EDGE_CHUNK: usize = 16384;
+/// Edges per chunk of the closed-mesh selection: a chunk-local edge index and its orientation
+/// bit fit in a `u16`.
+const EDGE_CHUNK: usize = 1 << 14;
 
 /// The contour edges of a closed, consistently wound 2-manifold mesh (every edge has exactly
 /// two half-edges, `[2e, 2e + 1]` in the adjacency), in edge order, each made by
 /// `make(edge, a, b)` and written straight into the result.
 ///
-/// Two parallel passes over fixed chunks of edges: the first stores a code per edge (0: not a
-/// contour edge, 1: oriented higher -> lower, 2: lower -> higher, as its front face runs it) and
-/// counts each chunk's edges; the second writes each chunk's edges at its prefix-sum offset. The
-/// chunks are fixed, so the result does not depend on the thread count.
+/// Two parallel passes over fixed chunks of edges. The first compacts, without branches, each
+/// chunk's contour edges into its part of a scratch list as `local index << 1 | direction`
+/// (direction 1: lower -> higher, as its front face runs it) and counts them; the second writes
+/// each chunk's edges at its prefix-sum offset of the result. The chunks are fixed, so the
+/// result does not depend on the thread count.
 fn closed_contour<T: Send>(
     mesh: &Mesh,
     front: &[bool],
@@ -108,26 +110,23 @@ fn closed_contour<T: Send>(
     let adj = mesh.adjacency();
     let n = adj.len();
     debug_assert_eq!(adj.half_edges.len(), 2 * n);
-    let mut codes = vec![0u8; n];
-    let counts: Vec<usize> = codes
+    let mut picks = vec![0u16; n];
+    let counts: Vec<usize> = picks
         .par_chunks_mut(EDGE_CHUNK)
         .zip(adj.half_edges.par_chunks(2 * EDGE_CHUNK))
         .zip(adj.forward.par_chunks(2 * EDGE_CHUNK))
-        .map(|((code, hs), fw)| {
-            let mut count = 0;
-            for ((c, h), f) in code
-                .iter_mut()
-                .zip(hs.chunks_exact(2))
-                .zip(fw.chunks_exact(2))
-            {
+        .map(|((pick, hs), fw)| {
+            let mut j = 0;
+            for (k, (h, f)) in hs.chunks_exact(2).zip(fw.chunks_exact(2)).enumerate() {
                 let f0 = front[(h[0] / 3) as usize];
                 let f1 = front[(h[1] / 3) as usize];
                 // The front half-edge's direction: f[0] when face 0 is the front one.
                 let fwd = if f0 { f[0] } else { f[1] };
-                *c = u8::from(f0 != f1) * (1 + u8::from(fwd));
-                count += usize::from(f0 != f1);
+                // j <= k < pick.len(): always written, kept only when the edge is a contour one.
+                pick[j] = ((k as u16) << 1) | u16::from(fwd);
+                j += usize::from(f0 != f1);
             }
-            count
+            j
         })
         .collect();
     let total: usize = counts.iter().sum();
@@ -142,25 +141,20 @@ fn closed_contour<T: Send>(
         }
         parts
             .into_par_iter()
-            .zip(codes.par_chunks(EDGE_CHUNK))
+            .zip(picks.par_chunks(EDGE_CHUNK))
             .enumerate()
-            .for_each(|(ci, (dst, code))| {
+            .for_each(|(ci, (dst, pick))| {
                 let base = ci * EDGE_CHUNK;
-                let mut slots = dst.iter_mut();
-                for (k, &c) in code.iter().enumerate() {
-                    if c != 0 {
-                        let e = base + k;
-                        let [lo, hi] = adj.edges[e];
-                        let (a, b) = if c == 2 { (lo, hi) } else { (hi, lo) };
-                        if let Some(slot) = slots.next() {
-                            slot.write(make(e as u32, a, b));
-                        }
-                    }
+                for (slot, &p) in dst.iter_mut().zip(pick) {
+                    let e = base + (p >> 1) as usize;
+                    let [lo, hi] = adj.edges[e];
+                    let (a, b) = if p & 1 == 1 { (lo, hi) } else { (hi, lo) };
+                    slot.write(make(e as u32, a, b));
                 }
             });
     }
-    // SAFETY: the chunk slices cover `out[..total]` exactly and chunk `ci` has `counts[ci]`
-    // codes != 0, so every slot was written once above.
+    // SAFETY: the chunk slices cover `out[..total]` exactly and chunk `ci` kept `counts[ci]`
+    // picks, so the zip above wrote every slot once.
     unsafe { out.set_len(total) };
     out
 }
