@@ -89,57 +89,91 @@ pub fn camera_facing(
         .collect()
 }
 
-/// The oriented contour edges for a face classification, in adjacency (edge) order.
+/// Edges per chunk of the closed-mesh selection: a chunk-local edge index and its orientation
+/// bit fit in a `u16`.
+const EDGE_CHUNK: usize = 1 << 14;
+
+/// The contour edges of a closed, consistently wound 2-manifold mesh (every edge has exactly
+/// two half-edges, `[2e, 2e + 1]` in the adjacency), in edge order, each made by
+/// `make(edge, a, b)` and written straight into the result.
 ///
-/// On a closed, consistently wound 2-manifold mesh this walks the faces over the cached
-/// [`Mesh::face_neighbors`]: every edge from a front face to a back neighbour is marked with the
-/// direction the front face runs it (the rule of the module docs, which it equals there), and
-/// the marks are read in edge order. Otherwise it walks the edges.
-pub fn contour_from_sides(mesh: &Mesh, front: &[bool]) -> Vec<ContourEdge> {
-    if let Some(nbr) = mesh.face_neighbors() {
-        use std::sync::atomic::{AtomicU8, Ordering::Relaxed};
-        let adj = mesh.adjacency();
-        // 0: not a contour edge; 1: runs higher -> lower in its front face; 2: lower -> higher.
-        // Each contour edge has one front face, so each mark is written once.
-        let marks: Vec<AtomicU8> = (0..adj.len()).map(|_| AtomicU8::new(0)).collect();
-        mesh.faces()
-            .par_iter()
-            .zip(&nbr.faces)
-            .zip(&nbr.edges)
-            .zip(front)
-            .with_min_len(4096)
-            .for_each(|(((f, n), e), &fr)| {
-                if fr {
-                    for k in 0..3 {
-                        if !front[n[k] as usize] {
-                            marks[e[k] as usize]
-                                .store(1 + u8::from(f[k] < f[(k + 1) % 3]), Relaxed);
-                        }
-                    }
+/// Two parallel passes over fixed chunks of edges. The first compacts, without branches, each
+/// chunk's contour edges into its part of a scratch list as `local index << 1 | direction`
+/// (direction 1: lower -> higher, as its front face runs it) and counts them; the second writes
+/// each chunk's edges at its prefix-sum offset of the result. The chunks are fixed, so the
+/// result does not depend on the thread count.
+fn closed_contour<T: Send>(
+    mesh: &Mesh,
+    front: &[bool],
+    make: impl Fn(u32, u32, u32) -> T + Sync,
+) -> Vec<T> {
+    let adj = mesh.adjacency();
+    let n = adj.len();
+    debug_assert_eq!(adj.half_edges.len(), 2 * n);
+    let mut picks = vec![0u16; n];
+    let counts: Vec<usize> = picks
+        .par_chunks_mut(EDGE_CHUNK)
+        .zip(adj.half_edges.par_chunks(2 * EDGE_CHUNK))
+        .zip(adj.forward.par_chunks(2 * EDGE_CHUNK))
+        .map(|((pick, hs), fw)| {
+            let mut j = 0;
+            for (k, (h, f)) in hs.chunks_exact(2).zip(fw.chunks_exact(2)).enumerate() {
+                let f0 = front[(h[0] / 3) as usize];
+                let f1 = front[(h[1] / 3) as usize];
+                // The front half-edge's direction: f[0] when face 0 is the front one.
+                let fwd = if f0 { f[0] } else { f[1] };
+                // j <= k < pick.len(): always written, kept only when the edge is a contour one.
+                pick[j] = ((k as u16) << 1) | u16::from(fwd);
+                j += usize::from(f0 != f1);
+            }
+            j
+        })
+        .collect();
+    let total: usize = counts.iter().sum();
+    let mut out: Vec<T> = Vec::with_capacity(total);
+    {
+        let mut parts = Vec::with_capacity(counts.len());
+        let mut rest = &mut out.spare_capacity_mut()[..total];
+        for &c in &counts {
+            let (head, tail) = rest.split_at_mut(c);
+            parts.push(head);
+            rest = tail;
+        }
+        parts
+            .into_par_iter()
+            .zip(picks.par_chunks(EDGE_CHUNK))
+            .enumerate()
+            .for_each(|(ci, (dst, pick))| {
+                let base = ci * EDGE_CHUNK;
+                for (slot, &p) in dst.iter_mut().zip(pick) {
+                    let e = base + (p >> 1) as usize;
+                    let [lo, hi] = adj.edges[e];
+                    let (a, b) = if p & 1 == 1 { (lo, hi) } else { (hi, lo) };
+                    slot.write(make(e as u32, a, b));
                 }
             });
-        return marks
-            .par_iter()
-            .enumerate()
-            .with_min_len(4096)
-            .filter_map(|(e, mark)| {
-                let [lo, hi] = adj.edges[e];
-                match mark.load(Relaxed) {
-                    0 => None,
-                    1 => Some(ContourEdge {
-                        edge: e as u32,
-                        a: hi,
-                        b: lo,
-                    }),
-                    _ => Some(ContourEdge {
-                        edge: e as u32,
-                        a: lo,
-                        b: hi,
-                    }),
-                }
-            })
-            .collect();
     }
+    // SAFETY: the chunk slices cover `out[..total]` exactly and chunk `ci` kept `counts[ci]`
+    // picks, so the zip above wrote every slot once.
+    unsafe { out.set_len(total) };
+    out
+}
+
+/// The oriented contour edges for a face classification, in adjacency (edge) order.
+///
+/// On a closed, consistently wound 2-manifold mesh (cached [`Mesh::face_neighbors`] present)
+/// every edge has one face on each side: it is a contour edge when exactly one of them is
+/// front, oriented as that face runs it (the rule of the module docs, which it equals there).
+/// Otherwise it walks each edge's faces.
+pub fn contour_from_sides(mesh: &Mesh, front: &[bool]) -> Vec<ContourEdge> {
+    if mesh.face_neighbors().is_some() {
+        return closed_contour(mesh, front, |edge, a, b| ContourEdge { edge, a, b });
+    }
+    contour_by_edges(mesh, front)
+}
+
+/// The rule of the module docs on any mesh: walks every edge's faces.
+pub(crate) fn contour_by_edges(mesh: &Mesh, front: &[bool]) -> Vec<ContourEdge> {
     let adj = mesh.adjacency();
     (0..adj.len())
         .into_par_iter()
@@ -183,6 +217,25 @@ pub fn contour_line(mesh: &Mesh, edges: Vec<ContourEdge>, visible: &[bool]) -> V
                 .any(|&h| visible[(h / 3) as usize])
         })
         .collect()
+}
+
+/// [`contour_edges`] as flat `a0, b0, a1, b1, ...` int64 pairs (the Python binding's (E,2)
+/// array), written straight into the result on a closed mesh without a camera.
+pub fn contour_pairs(mesh: &Mesh, m: [f64; 3], camera: Option<[f64; 3]>) -> Result<Vec<i64>> {
+    if camera.is_none() && mesh.face_neighbors().is_some() {
+        check_vector(m, "motion")?;
+        let front = classify_faces(mesh, m);
+        let mut pairs = closed_contour(mesh, &front, |_, a, b| [i64::from(a), i64::from(b)]);
+        let (ptr, len, cap) = (pairs.as_mut_ptr(), pairs.len(), pairs.capacity());
+        std::mem::forget(pairs);
+        // SAFETY: `[i64; 2]` is two `i64` with the same alignment and no padding, so the
+        // allocation of `cap` pairs is one of `2 * cap` i64 (same size and alignment).
+        return Ok(unsafe { Vec::from_raw_parts(ptr as *mut i64, 2 * len, 2 * cap) });
+    }
+    Ok(contour_edges(mesh, m, camera)?
+        .into_iter()
+        .flat_map(|c| [i64::from(c.a), i64::from(c.b)])
+        .collect())
 }
 
 /// The paper's contour edges for motion `m`; with `camera`, only the contour line (edges with
@@ -272,6 +325,64 @@ mod tests {
         let a = one.install(|| contour_edges(&m, [0.3, -0.2, 0.9], Some([3.0, 1.0, 2.0])).unwrap());
         let b = two.install(|| contour_edges(&m, [0.3, -0.2, 0.9], Some([3.0, 1.0, 2.0])).unwrap());
         assert_eq!(a, b);
+    }
+
+    /// A closed torus grid of `n x n` quads (two triangles each), wound outward.
+    fn torus(n: u32) -> Mesh {
+        let tau = std::f64::consts::TAU;
+        let mut v = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                let (u, w) = (tau * i as f64 / n as f64, tau * j as f64 / n as f64);
+                // A little irregular, so some faces are far from any tie.
+                let r = 1.0 + 0.3 * w.cos() + 0.01 * ((i * 7 + j * 13) % 5) as f64;
+                v.push([r * u.cos(), r * u.sin(), 0.3 * w.sin()]);
+            }
+        }
+        let id = |i: u32, j: u32| (i % n) * n + (j % n);
+        let mut f = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        Mesh::new(v, f).unwrap()
+    }
+
+    #[test]
+    fn closed_edge_walk_equals_the_general_rule_over_several_chunks() {
+        let mesh = torus(120);
+        assert!(mesh.face_neighbors().is_some());
+        assert!(mesh.adjacency().len() > 2 * EDGE_CHUNK);
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let two = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        for m in [
+            [0.3, -0.2, 0.9],
+            [1.0, 0.0, 0.0],
+            [0.0, 0.0, -1.0],
+            [-2.0, 5.0, 0.1],
+        ] {
+            let front = classify_faces(&mesh, m);
+            let general = contour_by_edges(&mesh, &front);
+            assert!(general.len() > 100);
+            let fast = contour_from_sides(&mesh, &front);
+            assert_eq!(fast, general);
+            let flat: Vec<i64> = general
+                .iter()
+                .flat_map(|c| [i64::from(c.a), i64::from(c.b)])
+                .collect();
+            let p1 = one.install(|| contour_pairs(&mesh, m, None).unwrap());
+            let p2 = two.install(|| contour_pairs(&mesh, m, None).unwrap());
+            assert_eq!(p1, flat);
+            assert_eq!(p2, flat);
+        }
     }
 
     #[test]

@@ -176,3 +176,16 @@ def test_bad_arguments_name_themselves(motion, cam, exc, text):
 def test_bad_mesh_argument():
     with pytest.raises(TypeError, match="mesh"):
         contour_edges(np.zeros((3, 3)), [1, 0, 0])
+
+
+def test_large_closed_mesh_over_several_edge_chunks_equals_reference():
+    """icosphere(5) with radial noise: 30,720 edges, more than one selection chunk (16,384 edges),
+    so the chunk offsets of the closed-mesh edge walk are exercised."""
+    v, f = meshes.icosphere(5)
+    v = v * (1.0 + 0.01 * np.random.default_rng(5).standard_normal((len(v), 1)))
+    tm = trimesh.Trimesh(v, f, process=False)
+    mesh = Mesh(tm)
+    assert len(mesh.edges()) > 16_384
+    for i, m in enumerate(motions(77, 6)):
+        got = contour_edges(mesh, m)
+        np.testing.assert_array_equal(got, reference_contour(tm, m), err_msg=f"motion {i} {m}")

@@ -11,7 +11,7 @@ use pyo3::types::PyDict;
 use rayon::prelude::*;
 
 use super::to_py_err;
-use crate::contour::contour_edges as core_contour_edges;
+use crate::contour::contour_pairs as core_contour_pairs;
 use crate::contour_table::ContourTable;
 use crate::mesh::Mesh;
 use crate::motion::Path;
@@ -237,10 +237,12 @@ fn contour_edges<'py>(
         .map(|c| vec3(c, "camera_position"))
         .transpose()?;
     let inner = mesh.inner.clone();
-    let e = py
-        .detach(move || core_contour_edges(&inner, m, cam))
+    let flat = py
+        .detach(move || super::in_pool(|| core_contour_pairs(&inner, m, cam)))
         .map_err(to_py_err)?;
-    Ok(index_pairs(py, e.into_iter().map(|c| [c.a, c.b])))
+    let n = flat.len() / 2;
+    let arr = Array2::from_shape_vec((n, 2), flat).expect("pairs");
+    Ok(PyArray2::from_owned_array(py, arr))
 }
 
 type VolumeTuple<'py> = (
