@@ -51,7 +51,9 @@ pub mod silhouette;
 mod tests;
 
 pub use build::ShellMesh;
-use silhouette::{face_edge, face_normals_into, facing, Locality, CHUNK, NEUTRAL, NO_EDGE};
+use silhouette::{
+    face_edge, face_normal32, face_normals_into, facing, Locality, CHUNK, NEUTRAL, NO_EDGE,
+};
 pub use silhouette::{motion_silhouette, BACK, FRONT};
 
 /// Edge-code bit: the element's edge was on the silhouette at its update.
@@ -157,6 +159,9 @@ pub struct BlurShell {
     fade: Vec<u8>,
     hot: Vec<Hot>,
 }
+
+/// Meshes with fewer faces run updates and builds sequentially (see [`BlurShell::parallel`]).
+pub const PAR_MIN_FACES: usize = 4 * CHUNK;
 
 /// Largest accepted |coordinate| of positions (scene units). Everything runs in float32: a face
 /// normal is a product of two coordinate differences (up to `8 MAX_COORD^2` per component),
@@ -349,6 +354,13 @@ impl BlurShell {
         acc
     }
 
+    /// Whether updates and builds run their chunks on rayon's pool: only for meshes of at
+    /// least [`PAR_MIN_FACES`] faces. Smaller ones run the same chunks in order on the calling
+    /// thread (fork/join and hand-overs cost more than the work), with the same results.
+    pub fn parallel(&self) -> bool {
+        self.faces.len() >= PAR_MIN_FACES
+    }
+
     pub fn options(&self) -> ShellOptions {
         self.opts
     }
@@ -434,11 +446,13 @@ impl BlurShell {
         // finiteness on the way. The caller's rows are read in order and scattered to their
         // internal slots (stores do not stall on cache misses as gathered loads do).
         let spare = self.spare;
+        let par = self.parallel();
         if scatter_f32(
             vertices,
             &self.loc.inv,
             &mut self.pos_bufs[spare],
             MAX_COORD,
+            par,
         ) {
             return check_rows(vertices, self.n_vertices, "vertices");
         }
@@ -447,7 +461,7 @@ impl BlurShell {
             if buf.len() != self.n_vertices {
                 *buf = vec![[0.0; 3]; self.n_vertices];
             }
-            if scatter_f32(nr, &self.loc.inv, buf, MAX_NORMAL) {
+            if scatter_f32(nr, &self.loc.inv, buf, MAX_NORMAL, par) {
                 return check_rows(nr, self.n_vertices, "normals");
             }
         }
@@ -455,7 +469,13 @@ impl BlurShell {
         let cur = &self.pos_bufs[spare];
         // Pass B: face normals (unless given).
         if normals.is_none() {
-            face_normals_into(cur, &self.loc.bfaces, &mut self.face_n);
+            if par {
+                face_normals_into(cur, &self.loc.bfaces, &mut self.face_n);
+            } else {
+                for (o, f) in self.face_n.iter_mut().zip(&self.loc.bfaces) {
+                    *o = face_normal32(cur, f);
+                }
+            }
         }
         // Pass C: vertex normals and facing against the previous update's positions.
         {
@@ -463,23 +483,28 @@ impl BlurShell {
                 (n > 0).then(|| &self.pos_bufs[self.buf_of_slot[((n - 1) % s as u64) as usize]]);
             let (face_n, vf) = (&self.face_n, &self.loc.vf);
             let given = normals.map(|_| &self.nrm_bufs[spare]);
-            self.facing
-                .par_chunks_mut(CHUNK)
-                .enumerate()
-                .for_each(|(c, fa)| {
-                    let base = c * CHUNK;
-                    for (i, out) in fa.iter_mut().enumerate() {
-                        let v = base + i;
-                        let nrm = match given {
-                            Some(g) => g[v],
-                            None => vf.normal(v, face_n),
-                        };
-                        *out = match prev {
-                            Some(pr) => facing(nrm, cur[v], pr[v]),
-                            None => NEUTRAL,
-                        };
-                    }
-                });
+            let pass_c = |(c, fa): (usize, &mut [i8])| {
+                let base = c * CHUNK;
+                for (i, out) in fa.iter_mut().enumerate() {
+                    let v = base + i;
+                    let nrm = match given {
+                        Some(g) => g[v],
+                        None => vf.normal(v, face_n),
+                    };
+                    *out = match prev {
+                        Some(pr) => facing(nrm, cur[v], pr[v]),
+                        None => NEUTRAL,
+                    };
+                }
+            };
+            if par {
+                self.facing
+                    .par_chunks_mut(CHUNK)
+                    .enumerate()
+                    .for_each(pass_c);
+            } else {
+                self.facing.chunks_mut(CHUNK).enumerate().for_each(pass_c);
+            }
         }
         self.spare = std::mem::replace(&mut self.buf_of_slot[slot], spare);
         // Pass D: silhouette edge, state, ring element (and the birth element at n - 1).
@@ -500,29 +525,41 @@ impl BlurShell {
             let (facing_v, faces, mask) = (&self.facing, &self.loc.ifaces, self.mask.as_deref());
             let h = self.opts.hysteresis;
             let n = n as u32;
-            self.fade
-                .par_chunks_mut(CHUNK)
-                .zip(self.hot.par_chunks_mut(CHUNK))
-                .zip(row.par_chunks_mut(CHUNK))
-                .zip(prev_row.par_chunks_mut(CHUNK))
-                .enumerate()
-                .for_each(|(c, (((fades, hots), row), prow))| {
-                    let base = c * CHUNK;
-                    for i in 0..fades.len() {
-                        let f = base + i;
-                        let on = mask.is_none_or(|m| m[f]);
-                        let code = if on {
-                            face_edge(facing_v, &faces[f])
-                        } else {
-                            NO_EDGE
-                        };
-                        if code == NO_EDGE && fades[i] as usize >= s {
-                            continue; // no strip and no edge: nothing changes
-                        }
-                        let step = Step { code, s, h, n };
-                        step.apply(&mut fades[i], &mut hots[i], &mut row[i], &mut prow[i]);
+            type Rows<'a> = (((&'a mut [u8], &'a mut [Hot]), &'a mut [u8]), &'a mut [u8]);
+            let pass_d = |(c, (((fades, hots), row), prow)): (usize, Rows<'_>)| {
+                let base = c * CHUNK;
+                for i in 0..fades.len() {
+                    let f = base + i;
+                    let on = mask.is_none_or(|m| m[f]);
+                    let code = if on {
+                        face_edge(facing_v, &faces[f])
+                    } else {
+                        NO_EDGE
+                    };
+                    if code == NO_EDGE && fades[i] as usize >= s {
+                        continue; // no strip and no edge: nothing changes
                     }
-                });
+                    let step = Step { code, s, h, n };
+                    step.apply(&mut fades[i], &mut hots[i], &mut row[i], &mut prow[i]);
+                }
+            };
+            if par {
+                self.fade
+                    .par_chunks_mut(CHUNK)
+                    .zip(self.hot.par_chunks_mut(CHUNK))
+                    .zip(row.par_chunks_mut(CHUNK))
+                    .zip(prev_row.par_chunks_mut(CHUNK))
+                    .enumerate()
+                    .for_each(pass_d);
+            } else {
+                self.fade
+                    .chunks_mut(CHUNK)
+                    .zip(self.hot.chunks_mut(CHUNK))
+                    .zip(row.chunks_mut(CHUNK))
+                    .zip(prev_row.chunks_mut(CHUNK))
+                    .enumerate()
+                    .for_each(pass_d);
+            }
         }
         self.updates += 1;
         Ok(())
@@ -532,7 +569,15 @@ impl BlurShell {
 /// Float32 copies of `rows` scattered to `out[inv[i]]`, in parallel; true if a value is NaN,
 /// inf or beyond `lim` in magnitude (then `out` is partly written: callers write only to a
 /// spare buffer).
-fn scatter_f32(rows: &[[f64; 3]], inv: &[u32], out: &mut [[f32; 3]], lim: f64) -> bool {
+fn scatter_f32(rows: &[[f64; 3]], inv: &[u32], out: &mut [[f32; 3]], lim: f64, par: bool) -> bool {
+    if !par {
+        let mut bad = false;
+        for (p, &dst) in rows.iter().zip(inv) {
+            bad |= !(p[0].abs() <= lim && p[1].abs() <= lim && p[2].abs() <= lim);
+            out[dst as usize] = [p[0] as f32, p[1] as f32, p[2] as f32];
+        }
+        return bad;
+    }
     let out = SharedSlots(out.as_mut_ptr());
     rows.par_chunks(CHUNK)
         .zip(inv.par_chunks(CHUNK))

@@ -64,7 +64,12 @@ fn array2<'py, T: numpy::Element + Copy, const N: usize>(
     v: Vec<[T; N]>,
 ) -> Bound<'py, PyArray2<T>> {
     let n = v.len();
-    let flat: Vec<T> = v.into_iter().flatten().collect();
+    let mut v = std::mem::ManuallyDrop::new(v);
+    // SAFETY: `[T; N]` is N contiguous `T` with the alignment of `T`, so the buffer of `n`
+    // rows (capacity `cap` rows) is a buffer of `n * N` values (capacity `cap * N`) allocated
+    // with the same size and alignment: the Vec is reinterpreted in place, without a copy.
+    let flat: Vec<T> =
+        unsafe { Vec::from_raw_parts(v.as_mut_ptr().cast::<T>(), n * N, v.capacity() * N) };
     Array2::from_shape_vec((n, N), flat)
         .expect("length matches")
         .into_pyarray(py)
@@ -162,8 +167,13 @@ impl PyBlurShell {
         let v = rows3(&vertices, "vertices")?;
         let n = normals.as_ref().map(|n| rows3(n, "normals")).transpose()?;
         let inner = &mut self.inner;
-        py.detach(move || super::in_pool(move || inner.update(v, n)))
-            .map_err(to_py_err)
+        if inner.parallel() {
+            py.detach(move || super::in_pool(move || inner.update(v, n)))
+        } else {
+            // Small mesh: sequential kernels on this thread (no hand-over to the pool).
+            py.detach(move || inner.update(v, n))
+        }
+        .map_err(to_py_err)
     }
 
     #[pyo3(signature = (vertices=None, normals=None))]
@@ -179,9 +189,12 @@ impl PyBlurShell {
             .transpose()?;
         let n = normals.as_ref().map(|n| rows3(n, "normals")).transpose()?;
         let inner = &self.inner;
-        let m = py
-            .detach(move || super::in_pool(move || inner.build(v, n)))
-            .map_err(to_py_err)?;
+        let m = if inner.parallel() {
+            py.detach(move || super::in_pool(move || inner.build(v, n)))
+        } else {
+            py.detach(move || inner.build(v, n))
+        }
+        .map_err(to_py_err)?;
         Ok(shell_arrays(py, m))
     }
 

@@ -69,24 +69,20 @@ impl BlurShell {
             return Ok(ShellMesh::default());
         }
         let nf = self.faces.len();
-        let counts: Vec<usize> = (0..nf.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|c| {
-                (c * CHUNK..((c + 1) * CHUNK).min(nf))
-                    .map(|f| self.pairs(f))
-                    .sum()
+        let par = self.parallel();
+        // Pairs and strips per chunk (triangles: two per quad, quads = pairs - strips).
+        let count = |c: usize| {
+            (c * CHUNK..((c + 1) * CHUNK).min(nf)).fold((0, 0), |(p, s), f| {
+                let k = self.pairs(f);
+                (p + k, s + usize::from(k > 0))
             })
-            .collect();
+        };
+        let (counts, strips): (Vec<usize>, Vec<usize>) = if par {
+            (0..nf.div_ceil(CHUNK)).into_par_iter().map(count).unzip()
+        } else {
+            (0..nf.div_ceil(CHUNK)).map(count).unzip()
+        };
         let n_pairs: usize = counts.iter().sum();
-        // Triangles per chunk: two per quad, quads = pairs - strips.
-        let strips: Vec<usize> = (0..nf.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|c| {
-                (c * CHUNK..((c + 1) * CHUNK).min(nf))
-                    .filter(|&f| self.pairs(f) > 0)
-                    .count()
-            })
-            .collect();
         let total_tris: usize = counts.iter().zip(&strips).map(|(p, s)| 2 * (p - s)).sum();
         let mut mesh = ShellMesh {
             vertices: vec![[0.0; 3]; 2 * n_pairs],
@@ -129,8 +125,12 @@ impl BlurShell {
                 (v, t, c, n, fa, st) = (vt, tt, ct, nt, ft, stl);
             }
         }
-        jobs.into_par_iter()
-            .for_each(|(ci, v0, out)| self.fill_chunk(ci, v0, out, vertices, normals));
+        let fill = |(ci, v0, out)| self.fill_chunk(ci, v0, out, vertices, normals);
+        if par {
+            jobs.into_par_iter().for_each(fill);
+        } else {
+            jobs.into_iter().for_each(fill);
+        }
         Ok(mesh)
     }
 

@@ -283,9 +283,11 @@ fn mask_removes_exactly_the_masked_strips() {
 
 #[test]
 fn thread_count_does_not_change_the_shell() {
-    let (v, f) = sphere(40, 80);
+    // Large enough for the parallel path (2 * 119 * 160 faces >= PAR_MIN_FACES).
+    let (v, f) = sphere(120, 160);
     let run = || {
         let mut sh = shell(&f, v.len(), 5, 2);
+        assert!(sh.parallel());
         for i in 0..7 {
             let t = i as f64 * 0.1;
             let p: Vec<[f64; 3]> = v
