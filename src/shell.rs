@@ -51,7 +51,7 @@ pub mod silhouette;
 #[cfg(test)]
 mod tests;
 
-pub use build::ShellMesh;
+pub use build::{BuildPlan, ShellMesh, ShellOut};
 use silhouette::{
     face_edge, face_normal32, face_normals_into, facing, Locality, CHUNK, NEUTRAL, NO_EDGE,
 };

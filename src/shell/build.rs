@@ -30,13 +30,27 @@ pub struct ShellMesh {
     pub step: Vec<u8>,
 }
 
-struct Out<'a> {
-    vertices: &'a mut [[f64; 3]],
-    faces: &'a mut [[u32; 3]],
-    rgba: &'a mut [[f32; 4]],
-    normals: &'a mut [[f32; 3]],
-    face: &'a mut [u32],
-    step: &'a mut [u8],
+/// Output slices of one build, sized by a [`BuildPlan`]. The index types are generic so the
+/// Python binding can fill numpy's int64 / int32 arrays directly (`I`: triangle corners, `J`:
+/// source polygon, `K`: step).
+pub struct ShellOut<'a, I, J, K> {
+    pub vertices: &'a mut [[f64; 3]],
+    pub faces: &'a mut [[I; 3]],
+    pub rgba: &'a mut [[f32; 4]],
+    pub normals: &'a mut [[f32; 3]],
+    pub face: &'a mut [J],
+    pub step: &'a mut [K],
+}
+
+/// The sizes of the next build (and where each chunk of polygons writes).
+#[derive(Debug, Clone, Default)]
+pub struct BuildPlan {
+    /// Pairs and strips per chunk of `CHUNK` polygons.
+    counts: Vec<(usize, usize)>,
+    /// Shell vertices (two per pair).
+    pub n_vertices: usize,
+    /// Shell triangles (two per quad, quads = pairs - strips).
+    pub n_triangles: usize,
 }
 
 impl BlurShell {
@@ -59,6 +73,34 @@ impl BlurShell {
         vertices: Option<&[[f64; 3]]>,
         normals: Option<&[[f64; 3]]>,
     ) -> Result<ShellMesh> {
+        let plan = self.build_plan(vertices, normals)?;
+        let (nv, nt) = (plan.n_vertices, plan.n_triangles);
+        let mut mesh = ShellMesh {
+            vertices: vec![[0.0; 3]; nv],
+            faces: vec![[0; 3]; nt],
+            rgba: vec![[0.0; 4]; nv],
+            normals: vec![[0.0; 3]; nv],
+            face: vec![0; nv],
+            step: vec![0; nv],
+        };
+        let out = ShellOut {
+            vertices: &mut mesh.vertices,
+            faces: &mut mesh.faces,
+            rgba: &mut mesh.rgba,
+            normals: &mut mesh.normals,
+            face: &mut mesh.face,
+            step: &mut mesh.step,
+        };
+        self.build_into(&plan, out, vertices, normals);
+        Ok(mesh)
+    }
+
+    /// Check `vertices` / `normals` as [`BlurShell::build`] does and size the shell.
+    pub fn build_plan(
+        &self,
+        vertices: Option<&[[f64; 3]]>,
+        normals: Option<&[[f64; 3]]>,
+    ) -> Result<BuildPlan> {
         if let Some(v) = vertices {
             super::check_rows(v, self.n_vertices, "vertices")?;
         }
@@ -66,79 +108,87 @@ impl BlurShell {
             super::check_rows(n, self.n_vertices, "normals")?;
         }
         if self.updates == 0 {
-            return Ok(ShellMesh::default());
+            return Ok(BuildPlan::default());
         }
         let nf = self.faces.len();
-        let par = self.parallel();
-        // Pairs and strips per chunk (triangles: two per quad, quads = pairs - strips).
         let count = |c: usize| {
             (c * CHUNK..((c + 1) * CHUNK).min(nf)).fold((0, 0), |(p, s), f| {
                 let k = self.pairs(f);
                 (p + k, s + usize::from(k > 0))
             })
         };
-        let (counts, strips): (Vec<usize>, Vec<usize>) = if par {
-            (0..nf.div_ceil(CHUNK)).into_par_iter().map(count).unzip()
+        let counts: Vec<(usize, usize)> = if self.parallel() {
+            (0..nf.div_ceil(CHUNK)).into_par_iter().map(count).collect()
         } else {
-            (0..nf.div_ceil(CHUNK)).map(count).unzip()
+            (0..nf.div_ceil(CHUNK)).map(count).collect()
         };
-        let n_pairs: usize = counts.iter().sum();
-        let total_tris: usize = counts.iter().zip(&strips).map(|(p, s)| 2 * (p - s)).sum();
-        let mut mesh = ShellMesh {
-            vertices: vec![[0.0; 3]; 2 * n_pairs],
-            faces: vec![[0; 3]; total_tris],
-            rgba: vec![[0.0; 4]; 2 * n_pairs],
-            normals: vec![[0.0; 3]; 2 * n_pairs],
-            face: vec![0; 2 * n_pairs],
-            step: vec![0; 2 * n_pairs],
-        };
-        let mut jobs = Vec::with_capacity(counts.len());
-        {
-            let (mut v, mut t, mut c, mut n, mut fa, mut st) = (
-                &mut mesh.vertices[..],
-                &mut mesh.faces[..],
-                &mut mesh.rgba[..],
-                &mut mesh.normals[..],
-                &mut mesh.face[..],
-                &mut mesh.step[..],
-            );
-            let mut v0 = 0u32;
-            for (ci, (&p, &s)) in counts.iter().zip(&strips).enumerate() {
-                let nvx = 2 * p;
-                let ntri = 2 * (p - s);
-                let (vh, vt) = v.split_at_mut(nvx);
-                let (th, tt) = t.split_at_mut(ntri);
-                let (ch, ct) = c.split_at_mut(nvx);
-                let (nh, nt) = n.split_at_mut(nvx);
-                let (fh, ft) = fa.split_at_mut(nvx);
-                let (sh, stl) = st.split_at_mut(nvx);
-                let out = Out {
-                    vertices: vh,
-                    faces: th,
-                    rgba: ch,
-                    normals: nh,
-                    face: fh,
-                    step: sh,
-                };
-                jobs.push((ci, v0, out));
-                v0 += nvx as u32;
-                (v, t, c, n, fa, st) = (vt, tt, ct, nt, ft, stl);
-            }
+        let n_pairs: usize = counts.iter().map(|c| c.0).sum();
+        let n_triangles = counts.iter().map(|&(p, s)| 2 * (p - s)).sum();
+        Ok(BuildPlan {
+            counts,
+            n_vertices: 2 * n_pairs,
+            n_triangles,
+        })
+    }
+
+    /// Fill `out` (sized by `plan`, from [`BlurShell::build_plan`] with the same arguments and
+    /// no update in between) with the shell mesh; see [`BlurShell::build`].
+    pub fn build_into<I, J, K>(
+        &self,
+        plan: &BuildPlan,
+        out: ShellOut<'_, I, J, K>,
+        vertices: Option<&[[f64; 3]]>,
+        normals: Option<&[[f64; 3]]>,
+    ) where
+        I: From<u32> + Send,
+        J: From<u32> + Send,
+        K: From<u8> + Send,
+    {
+        assert!(out.vertices.len() == plan.n_vertices && out.faces.len() == plan.n_triangles);
+        let mut jobs = Vec::with_capacity(plan.counts.len());
+        let (mut v, mut t, mut c, mut n, mut fa, mut st) = (
+            out.vertices,
+            out.faces,
+            out.rgba,
+            out.normals,
+            out.face,
+            out.step,
+        );
+        let mut v0 = 0u32;
+        for (ci, &(p, s)) in plan.counts.iter().enumerate() {
+            let nvx = 2 * p;
+            let ntri = 2 * (p - s);
+            let (vh, vt) = v.split_at_mut(nvx);
+            let (th, tt) = t.split_at_mut(ntri);
+            let (ch, ct) = c.split_at_mut(nvx);
+            let (nh, nt) = n.split_at_mut(nvx);
+            let (fh, ft) = fa.split_at_mut(nvx);
+            let (sh, stl) = st.split_at_mut(nvx);
+            let out = ShellOut {
+                vertices: vh,
+                faces: th,
+                rgba: ch,
+                normals: nh,
+                face: fh,
+                step: sh,
+            };
+            jobs.push((ci, v0, out));
+            v0 += nvx as u32;
+            (v, t, c, n, fa, st) = (vt, tt, ct, nt, ft, stl);
         }
         let fill = |(ci, v0, out)| self.fill_chunk(ci, v0, out, vertices, normals);
-        if par {
+        if self.parallel() {
             jobs.into_par_iter().for_each(fill);
         } else {
             jobs.into_iter().for_each(fill);
         }
-        Ok(mesh)
     }
 
-    fn fill_chunk(
+    fn fill_chunk<I: From<u32>, J: From<u32>, K: From<u8>>(
         &self,
         ci: usize,
         v0: u32,
-        o: Out<'_>,
+        o: ShellOut<'_, I, J, K>,
         base_pos: Option<&[[f64; 3]]>,
         base_nrm: Option<&[[f64; 3]]>,
     ) {
@@ -191,15 +241,15 @@ impl BlurShell {
                         ShellColor::PerVertex(c) => c[vtx],
                     };
                     o.rgba[w] = [rgb[0], rgb[1], rgb[2], alpha];
-                    o.face[w] = f as u32;
-                    o.step[w] = j as u8;
+                    o.face[w] = J::from(f as u32);
+                    o.step[w] = K::from(j as u8);
                 }
                 vi += 2;
             }
             for j in 0..pairs - 1 {
                 let b = v0 + (start + 2 * j) as u32;
-                o.faces[ti] = [b, b + 1, b + 3];
-                o.faces[ti + 1] = [b, b + 3, b + 2];
+                o.faces[ti] = [b, b + 1, b + 3].map(I::from);
+                o.faces[ti + 1] = [b, b + 3, b + 2].map(I::from);
                 ti += 2;
             }
         }
