@@ -57,11 +57,13 @@ impl BlurShell {
     /// Pairs emitted by polygon `f` (0 when its strip is dead).
     #[inline]
     fn pairs(&self, f: usize) -> usize {
-        let run = self.hot[f].run;
-        if (self.fade[f] as u32) < self.opts.subdivisions && run > 0 {
-            run as usize + 1
-        } else {
-            0
+        // The fade byte first: most polygons have a dead strip and their `hot` is not read.
+        if (self.fade[f] as u32) >= self.opts.subdivisions {
+            return 0;
+        }
+        match self.hot[f].run {
+            0 => 0,
+            run => run as usize + 1,
         }
     }
 
@@ -194,10 +196,6 @@ impl BlurShell {
     ) {
         let s = self.opts.subdivisions as usize;
         let nf = self.faces.len();
-        let unit = |n: [f32; 3]| {
-            let u = normalize([n[0] as f64, n[1] as f64, n[2] as f64]);
-            [u[0] as f32, u[1] as f32, u[2] as f32]
-        };
         let a0 = self.opts.initial_alpha;
         let sf = s as f32;
         let m = self.updates - 1;
@@ -220,10 +218,16 @@ impl BlurShell {
                     (self.ring[slot * nf + f] & 3, slot)
                 };
                 let alpha = a0 * (1.0 - (j.max(fade as usize) as f32) / sf);
-                for (side, &corner) in [k as usize, (k as usize + 1) % 3].iter().enumerate() {
+                let corners = [k as usize, (k as usize + 1) % 3];
+                let buf = self.buf_of_slot[slot];
+                // Both unit normals of the pair at once (two square roots per instruction).
+                let units = unit2(
+                    self.raw_normal(buf, iface[corners[0]] as usize),
+                    self.raw_normal(buf, iface[corners[1]] as usize),
+                );
+                for (side, &corner) in corners.iter().enumerate() {
                     let (vtx, ivtx) = (face[corner] as usize, iface[corner] as usize);
                     let w = vi + side;
-                    let buf = self.buf_of_slot[slot];
                     let p = self.pos_bufs[buf][ivtx];
                     o.vertices[w] = match (j, base_pos) {
                         (0, Some(b)) => b[vtx],
@@ -234,7 +238,7 @@ impl BlurShell {
                             let u = normalize(n[vtx]);
                             [u[0] as f32, u[1] as f32, u[2] as f32]
                         }
-                        _ => unit(self.raw_normal(buf, ivtx)),
+                        _ => units[side],
                     };
                     let rgb = match &self.color {
                         ShellColor::Uniform(c) => *c,
@@ -255,5 +259,50 @@ impl BlurShell {
         }
         debug_assert_eq!(vi, o.vertices.len());
         debug_assert_eq!(ti, o.faces.len());
+    }
+}
+
+/// Two float32 vectors made unit in float64 and rounded back, bit for bit as
+/// `crate::mesh::normalize` (zero when the length is zero or not finite): on x86-64 in the
+/// two lanes of SSE2 registers (IEEE square root and division, so the same values).
+#[inline]
+pub(crate) fn unit2(a: [f32; 3], b: [f32; 3]) -> [[f32; 3]; 2] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        // SAFETY: SSE2 is part of the x86-64 baseline.
+        unsafe {
+            let x = _mm_set_pd(b[0] as f64, a[0] as f64);
+            let y = _mm_set_pd(b[1] as f64, a[1] as f64);
+            let z = _mm_set_pd(b[2] as f64, a[2] as f64);
+            // (x x + y y) + z z, as `dot`.
+            let l2 = _mm_add_pd(
+                _mm_add_pd(_mm_mul_pd(x, x), _mm_mul_pd(y, y)),
+                _mm_mul_pd(z, z),
+            );
+            let l = _mm_sqrt_pd(l2);
+            let ok = _mm_and_pd(
+                _mm_cmpgt_pd(l, _mm_setzero_pd()),
+                _mm_cmplt_pd(l, _mm_set1_pd(f64::INFINITY)),
+            );
+            let q = |v| _mm_and_pd(_mm_div_pd(v, l), ok);
+            let (qx, qy, qz) = (q(x), q(y), q(z));
+            let mut out = [[0.0f64; 2]; 3];
+            _mm_storeu_pd(out[0].as_mut_ptr(), qx);
+            _mm_storeu_pd(out[1].as_mut_ptr(), qy);
+            _mm_storeu_pd(out[2].as_mut_ptr(), qz);
+            [
+                [out[0][0] as f32, out[1][0] as f32, out[2][0] as f32],
+                [out[0][1] as f32, out[1][1] as f32, out[2][1] as f32],
+            ]
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let unit = |n: [f32; 3]| {
+            let u = normalize([n[0] as f64, n[1] as f64, n[2] as f64]);
+            [u[0] as f32, u[1] as f32, u[2] as f32]
+        };
+        [unit(a), unit(b)]
     }
 }
