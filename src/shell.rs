@@ -14,15 +14,16 @@
 //! - **History ring.** Each polygon keeps a ring of `subdivisions` elements, one per update,
 //!   each an edge code (the local edge `k`, and whether it was on the silhouette then).
 //!   Positions are not copied per polygon: the shell keeps the last `subdivisions` snapshots of
-//!   all vertex positions (`f32`; normals only when given, else recomputed for the strip
-//!   vertices at build time), and an element's pair is its edge's vertices in the snapshot of
-//!   its update. The facing test runs on these float32 positions. A polygon off the silhouette
+//!   all vertex positions and raw normals (`f32`: the given normals, or the area-weighted ones
+//!   the facing test computed), and an element's pair is its edge's vertices in the snapshot
+//!   of its update. The facing test runs on these float32 positions. A polygon off the silhouette
 //!   records the last edge it had (the paper's "positions of the last blurred vertices").
 //! - **Performance.** Four parallel passes per update over fixed chunks (results independent
 //!   of the thread count): scatter the positions to a breadth-first vertex order
 //!   ([`silhouette::Locality`]), face normals, vertex normals and facing, then the per-polygon
 //!   step, which reads one fade byte per polygon and touches nothing else for polygons without
-//!   a strip or an edge. No allocation per update (after the first given normals).
+//!   a strip or an edge. No allocation per update. Meshes under [`PAR_MIN_FACES`] faces run
+//!   the same chunks in order on the calling thread.
 //! - **Birth.** A polygon whose strip is dead (or that never had one) and gains an edge at
 //!   update `n` starts a strip with two elements: its edge at update `n` and the same edge at
 //!   update `n - 1`, where the motion that put it on the silhouette started. So a shell fed
@@ -50,8 +51,10 @@ pub mod silhouette;
 #[cfg(test)]
 mod tests;
 
-pub use build::ShellMesh;
-use silhouette::{face_edge, face_normals_into, facing, Locality, CHUNK, NEUTRAL, NO_EDGE};
+pub use build::{BuildPlan, ShellMesh, ShellOut};
+use silhouette::{
+    face_edge, face_normal32, face_normals_into, facing, Locality, CHUNK, NEUTRAL, NO_EDGE,
+};
 pub use silhouette::{motion_silhouette, BACK, FRONT};
 
 /// Edge-code bit: the element's edge was on the silhouette at its update.
@@ -143,11 +146,10 @@ pub struct BlurShell {
     /// `subdivisions + 1` buffers of float32 positions: one per ring slot (`buf_of_slot`) and
     /// a spare that the next update fills, so a failed update leaves every snapshot intact.
     pos_bufs: Vec<Vec<[f32; 3]>>,
-    /// Given normals (float32) per buffer, allocated only for updates that were given normals;
-    /// otherwise a strip vertex's normal is recomputed at build time from the positions of its
-    /// buffer, with the same float32 operations as the update (so nothing is stored for them).
+    /// Raw float32 vertex normals per buffer: the given ones, or the unnormalised area-weighted
+    /// ones the update computed for the facing test (stored as it goes, so build() reads them
+    /// instead of recomputing face normals around every strip vertex).
     nrm_bufs: Vec<Vec<[f32; 3]>>,
-    has_nrm: Vec<bool>,
     buf_of_slot: Vec<usize>,
     spare: usize,
     /// Edge codes, slot-major (`slot * F + f`).
@@ -157,6 +159,9 @@ pub struct BlurShell {
     fade: Vec<u8>,
     hot: Vec<Hot>,
 }
+
+/// Meshes with fewer faces run updates and builds sequentially (see [`BlurShell::parallel`]).
+pub const PAR_MIN_FACES: usize = 4 * CHUNK;
 
 /// Largest accepted |coordinate| of positions (scene units). Everything runs in float32: a face
 /// normal is a product of two coordinate differences (up to `8 MAX_COORD^2` per component),
@@ -291,8 +296,9 @@ impl BlurShell {
         }
         let s = opts.subdivisions as usize;
         let nf = faces.len();
+        // Positions and normals (12 bytes each per vertex and buffer), ring, per-face state.
         let bytes =
-            (s as u128 + 1) * n_vertices as u128 * 12 + s as u128 * nf as u128 + 64 * nf as u128;
+            (s as u128 + 1) * n_vertices as u128 * 24 + s as u128 * nf as u128 + 64 * nf as u128;
         if bytes > MAX_HISTORY_BYTES as u128 {
             return Err(Error::value(
                 "subdivisions",
@@ -316,8 +322,7 @@ impl BlurShell {
             facing: vec![NEUTRAL; n_vertices],
             face_n: vec![[0.0; 3]; nf],
             pos_bufs: vec![vec![[0.0; 3]; n_vertices]; s + 1],
-            nrm_bufs: vec![Vec::new(); s + 1],
-            has_nrm: vec![false; s + 1],
+            nrm_bufs: vec![vec![[0.0; 3]; n_vertices]; s + 1],
             buf_of_slot: (0..s).collect(),
             spare: s,
             ring: vec![NO_EDGE; s * nf],
@@ -333,20 +338,17 @@ impl BlurShell {
     }
 
     /// Raw float32 normal of internal vertex `iv` in buffer `buf`: the given one, or the sum of
-    /// the face normals around it recomputed from that buffer's positions.
+    /// the face normals around it that the update of that buffer computed.
+    #[inline]
     fn raw_normal(&self, buf: usize, iv: usize) -> [f32; 3] {
-        if self.has_nrm[buf] {
-            return self.nrm_bufs[buf][iv];
-        }
-        let pos = &self.pos_bufs[buf];
-        let mut acc = [0.0f32; 3];
-        for &b in self.loc.vf.faces_of(iv) {
-            let n = silhouette::face_normal32(pos, &self.loc.bfaces[b as usize]);
-            acc[0] += n[0];
-            acc[1] += n[1];
-            acc[2] += n[2];
-        }
-        acc
+        self.nrm_bufs[buf][iv]
+    }
+
+    /// Whether updates and builds run their chunks on rayon's pool: only for meshes of at
+    /// least [`PAR_MIN_FACES`] faces. Smaller ones run the same chunks in order on the calling
+    /// thread (fork/join and hand-overs cost more than the work), with the same results.
+    pub fn parallel(&self) -> bool {
+        self.faces.len() >= PAR_MIN_FACES
     }
 
     pub fn options(&self) -> ShellOptions {
@@ -434,52 +436,75 @@ impl BlurShell {
         // finiteness on the way. The caller's rows are read in order and scattered to their
         // internal slots (stores do not stall on cache misses as gathered loads do).
         let spare = self.spare;
+        let par = self.parallel();
         if scatter_f32(
             vertices,
             &self.loc.inv,
             &mut self.pos_bufs[spare],
             MAX_COORD,
+            par,
         ) {
             return check_rows(vertices, self.n_vertices, "vertices");
         }
         if let Some(nr) = normals {
-            let buf = &mut self.nrm_bufs[spare];
-            if buf.len() != self.n_vertices {
-                *buf = vec![[0.0; 3]; self.n_vertices];
-            }
-            if scatter_f32(nr, &self.loc.inv, buf, MAX_NORMAL) {
+            if scatter_f32(
+                nr,
+                &self.loc.inv,
+                &mut self.nrm_bufs[spare],
+                MAX_NORMAL,
+                par,
+            ) {
                 return check_rows(nr, self.n_vertices, "normals");
             }
         }
-        self.has_nrm[spare] = normals.is_some();
         let cur = &self.pos_bufs[spare];
         // Pass B: face normals (unless given).
         if normals.is_none() {
-            face_normals_into(cur, &self.loc.bfaces, &mut self.face_n);
+            if par {
+                face_normals_into(cur, &self.loc.bfaces, &mut self.face_n);
+            } else {
+                for (o, f) in self.face_n.iter_mut().zip(&self.loc.bfaces) {
+                    *o = face_normal32(cur, f);
+                }
+            }
         }
         // Pass C: vertex normals and facing against the previous update's positions.
         {
             let prev =
                 (n > 0).then(|| &self.pos_bufs[self.buf_of_slot[((n - 1) % s as u64) as usize]]);
             let (face_n, vf) = (&self.face_n, &self.loc.vf);
-            let given = normals.map(|_| &self.nrm_bufs[spare]);
-            self.facing
-                .par_chunks_mut(CHUNK)
-                .enumerate()
-                .for_each(|(c, fa)| {
-                    let base = c * CHUNK;
-                    for (i, out) in fa.iter_mut().enumerate() {
-                        let v = base + i;
-                        let nrm = match given {
-                            Some(g) => g[v],
-                            None => vf.normal(v, face_n),
-                        };
-                        *out = match prev {
-                            Some(pr) => facing(nrm, cur[v], pr[v]),
-                            None => NEUTRAL,
-                        };
-                    }
-                });
+            let given = normals.is_some();
+            let nb = &mut self.nrm_bufs[spare];
+            let pass_c = |(c, (fa, nb)): (usize, (&mut [i8], &mut [[f32; 3]]))| {
+                let base = c * CHUNK;
+                for (i, (out, nb)) in fa.iter_mut().zip(nb).enumerate() {
+                    let v = base + i;
+                    let nrm = if given {
+                        *nb
+                    } else {
+                        let n = vf.normal(v, face_n);
+                        *nb = n;
+                        n
+                    };
+                    *out = match prev {
+                        Some(pr) => facing(nrm, cur[v], pr[v]),
+                        None => NEUTRAL,
+                    };
+                }
+            };
+            if par {
+                self.facing
+                    .par_chunks_mut(CHUNK)
+                    .zip(nb.par_chunks_mut(CHUNK))
+                    .enumerate()
+                    .for_each(pass_c);
+            } else {
+                self.facing
+                    .chunks_mut(CHUNK)
+                    .zip(nb.chunks_mut(CHUNK))
+                    .enumerate()
+                    .for_each(pass_c);
+            }
         }
         self.spare = std::mem::replace(&mut self.buf_of_slot[slot], spare);
         // Pass D: silhouette edge, state, ring element (and the birth element at n - 1).
@@ -500,29 +525,41 @@ impl BlurShell {
             let (facing_v, faces, mask) = (&self.facing, &self.loc.ifaces, self.mask.as_deref());
             let h = self.opts.hysteresis;
             let n = n as u32;
-            self.fade
-                .par_chunks_mut(CHUNK)
-                .zip(self.hot.par_chunks_mut(CHUNK))
-                .zip(row.par_chunks_mut(CHUNK))
-                .zip(prev_row.par_chunks_mut(CHUNK))
-                .enumerate()
-                .for_each(|(c, (((fades, hots), row), prow))| {
-                    let base = c * CHUNK;
-                    for i in 0..fades.len() {
-                        let f = base + i;
-                        let on = mask.is_none_or(|m| m[f]);
-                        let code = if on {
-                            face_edge(facing_v, &faces[f])
-                        } else {
-                            NO_EDGE
-                        };
-                        if code == NO_EDGE && fades[i] as usize >= s {
-                            continue; // no strip and no edge: nothing changes
-                        }
-                        let step = Step { code, s, h, n };
-                        step.apply(&mut fades[i], &mut hots[i], &mut row[i], &mut prow[i]);
+            type Rows<'a> = (((&'a mut [u8], &'a mut [Hot]), &'a mut [u8]), &'a mut [u8]);
+            let pass_d = |(c, (((fades, hots), row), prow)): (usize, Rows<'_>)| {
+                let base = c * CHUNK;
+                for i in 0..fades.len() {
+                    let f = base + i;
+                    let on = mask.is_none_or(|m| m[f]);
+                    let code = if on {
+                        face_edge(facing_v, &faces[f])
+                    } else {
+                        NO_EDGE
+                    };
+                    if code == NO_EDGE && fades[i] as usize >= s {
+                        continue; // no strip and no edge: nothing changes
                     }
-                });
+                    let step = Step { code, s, h, n };
+                    step.apply(&mut fades[i], &mut hots[i], &mut row[i], &mut prow[i]);
+                }
+            };
+            if par {
+                self.fade
+                    .par_chunks_mut(CHUNK)
+                    .zip(self.hot.par_chunks_mut(CHUNK))
+                    .zip(row.par_chunks_mut(CHUNK))
+                    .zip(prev_row.par_chunks_mut(CHUNK))
+                    .enumerate()
+                    .for_each(pass_d);
+            } else {
+                self.fade
+                    .chunks_mut(CHUNK)
+                    .zip(self.hot.chunks_mut(CHUNK))
+                    .zip(row.chunks_mut(CHUNK))
+                    .zip(prev_row.chunks_mut(CHUNK))
+                    .enumerate()
+                    .for_each(pass_d);
+            }
         }
         self.updates += 1;
         Ok(())
@@ -532,7 +569,15 @@ impl BlurShell {
 /// Float32 copies of `rows` scattered to `out[inv[i]]`, in parallel; true if a value is NaN,
 /// inf or beyond `lim` in magnitude (then `out` is partly written: callers write only to a
 /// spare buffer).
-fn scatter_f32(rows: &[[f64; 3]], inv: &[u32], out: &mut [[f32; 3]], lim: f64) -> bool {
+fn scatter_f32(rows: &[[f64; 3]], inv: &[u32], out: &mut [[f32; 3]], lim: f64, par: bool) -> bool {
+    if !par {
+        let mut bad = false;
+        for (p, &dst) in rows.iter().zip(inv) {
+            bad |= !(p[0].abs() <= lim && p[1].abs() <= lim && p[2].abs() <= lim);
+            out[dst as usize] = [p[0] as f32, p[1] as f32, p[2] as f32];
+        }
+        return bad;
+    }
     let out = SharedSlots(out.as_mut_ptr());
     rows.par_chunks(CHUNK)
         .zip(inv.par_chunks(CHUNK))

@@ -512,7 +512,7 @@ _THREAD_SCRIPT = textwrap.dedent(
     """
     import hashlib, numpy as np, motionblur as mb
     from motionblur import meshes
-    v, f = meshes.icosphere(5)
+    v, f = meshes.icosphere(6)  # 81920 faces: the parallel path
     shell = mb.BlurShell(f, subdivisions=6, hysteresis=1)
     h = hashlib.sha256()
     for i in range(8):
@@ -535,6 +535,30 @@ def test_results_do_not_depend_on_the_thread_count():
     assert int(out[0][0]) > 1000
     assert out[0] == out[1]
     assert hashlib.sha256(b"").hexdigest() not in out[0]
+
+
+def test_small_meshes_run_sequentially_with_the_same_results():
+    """Meshes under the parallel threshold run the same chunks in order on the calling thread.
+    A mesh of k identical disconnected copies of a small mesh (parallel) must give, per copy,
+    exactly the small mesh's shell (sequential), with indices shifted."""
+    v, f = meshes.icosphere(3)
+    k = 40  # 40 * 1280 faces: parallel; one copy: sequential
+    vk, fk = np.tile(v, (k, 1)), np.concatenate([f + i * len(v) for i in range(k)])
+    one, many = mb.BlurShell(f, subdivisions=5, hysteresis=2), mb.BlurShell(fk, subdivisions=5, hysteresis=2)
+    for i in range(7):
+        d = [0.1 * i, 0.03 * np.sin(i), 0.0] + 0.05 * np.sin(4 * v[:, 2:3] + i) * [1.0, 0.0, 0.0]
+        one.update(v + d)
+        many.update(vk + np.tile(d, (k, 1)))
+    a, b = one.build(), many.build()
+    assert len(a) > 50 and len(b) == k * len(a)
+    nv = len(a.vertices)
+    assert np.array_equal(many.state()["facing"], np.tile(one.state()["facing"], k))
+    assert np.array_equal(b.vertices, np.tile(a.vertices, (k, 1)))
+    assert np.array_equal(b.rgba, np.tile(a.rgba, (k, 1)))
+    assert np.array_equal(b.normals, np.tile(a.normals, (k, 1)))
+    assert np.array_equal(b.step, np.tile(a.step, k))
+    assert np.array_equal(b.face, np.concatenate([a.face + i * len(f) for i in range(k)]))
+    assert np.array_equal(b.faces, np.concatenate([a.faces + i * nv for i in range(k)]))
 
 
 # --- meshes ----------------------------------------------------------------------------------

@@ -3,15 +3,16 @@
 //! Inputs arrive from the Python layer already converted to C-contiguous float64 / int64; the
 //! kernels borrow them (no copy) with the GIL released. Shapes are checked again here and every
 //! error names the argument.
-use numpy::ndarray::{Array1, Array2};
+use numpy::ndarray::{Array1, Array2, ArrayView1, ArrayView2};
 use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
+    IntoPyArray, PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2,
+    PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 use rayon::prelude::*;
 
 use super::{c_slice, to_py_err};
-use crate::shell::{motion_silhouette, BlurShell, ShellColor, ShellMesh, ShellOptions};
+use crate::shell::{motion_silhouette, BlurShell, ShellColor, ShellOptions, ShellOut};
 use crate::Error;
 
 /// Borrow a C-contiguous (N,3) float64 array as rows.
@@ -59,17 +60,6 @@ fn face_rows(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>
     Ok(out)
 }
 
-fn array2<'py, T: numpy::Element + Copy, const N: usize>(
-    py: Python<'py>,
-    v: Vec<[T; N]>,
-) -> Bound<'py, PyArray2<T>> {
-    let n = v.len();
-    let flat: Vec<T> = v.into_iter().flatten().collect();
-    Array2::from_shape_vec((n, N), flat)
-        .expect("length matches")
-        .into_pyarray(py)
-}
-
 type I8Pair<'py> = (Bound<'py, PyArray1<i8>>, Bound<'py, PyArray1<i8>>);
 
 type ShellArrays<'py> = (
@@ -81,16 +71,103 @@ type ShellArrays<'py> = (
     Bound<'py, PyArray1<i32>>,
 );
 
-fn shell_arrays(py: Python<'_>, m: ShellMesh) -> ShellArrays<'_> {
-    let faces: Vec<[i64; 3]> = m.faces.iter().map(|t| t.map(i64::from)).collect();
-    (
-        array2(py, m.vertices),
-        array2(py, faces),
-        array2(py, m.rgba),
-        array2(py, m.normals),
-        Array1::from_iter(m.face.iter().map(|&f| i64::from(f))).into_pyarray(py),
-        Array1::from_iter(m.step.iter().map(|&s| i32::from(s))).into_pyarray(py),
-    )
+/// Numpy views of one shell build, all over a single buffer: one allocation per build (the
+/// kernel writes numpy's int64 / int32 indices directly). Separate arrays per output cost a
+/// page-faulting allocation each: most of a small build under perf.
+struct OneBuffer {
+    words: Vec<u64>,
+    nv: usize,
+    nt: usize,
+}
+
+/// Word offsets in [`OneBuffer`]: 8-byte values (vertices, faces, face) then 4-byte ones
+/// (rgba, normals, step).
+fn layout(nv: usize, nt: usize) -> [usize; 7] {
+    let o_faces = 3 * nv;
+    let o_face = o_faces + 3 * nt;
+    let o_rgba = o_face + nv;
+    let o_nrm = o_rgba + 2 * nv;
+    let o_step = o_nrm + (3 * nv).div_ceil(2);
+    let end = o_step + nv.div_ceil(2);
+    [0, o_faces, o_face, o_rgba, o_nrm, o_step, end]
+}
+
+impl OneBuffer {
+    fn new(nv: usize, nt: usize) -> Self {
+        OneBuffer {
+            words: vec![0u64; layout(nv, nt)[6]],
+            nv,
+            nt,
+        }
+    }
+
+    #[allow(clippy::type_complexity)]
+    fn slices(&mut self) -> ShellOut<'_, i64, i64, i32> {
+        let (nv, nt) = (self.nv, self.nt);
+        let o = layout(nv, nt);
+        let base = self.words.as_mut_ptr();
+        // SAFETY: the regions [o[k], o[k+1]) are disjoint and inside `words` (layout's end is
+        // its length); every type has alignment <= 8 (u64) and no invalid bit patterns, and
+        // each region holds at least the bytes of its slice.
+        unsafe {
+            ShellOut {
+                vertices: std::slice::from_raw_parts_mut(base.add(o[0]).cast(), nv),
+                faces: std::slice::from_raw_parts_mut(base.add(o[1]).cast(), nt),
+                face: std::slice::from_raw_parts_mut(base.add(o[2]).cast(), nv),
+                rgba: std::slice::from_raw_parts_mut(base.add(o[3]).cast(), nv),
+                normals: std::slice::from_raw_parts_mut(base.add(o[4]).cast(), nv),
+                step: std::slice::from_raw_parts_mut(base.add(o[5]).cast(), nv),
+            }
+        }
+    }
+
+    fn into_arrays(self, py: Python<'_>) -> ShellArrays<'_> {
+        let (nv, nt) = (self.nv, self.nt);
+        if self.words.is_empty() {
+            return (
+                Array2::zeros((0, 3)).into_pyarray(py),
+                Array2::zeros((0, 3)).into_pyarray(py),
+                Array2::zeros((0, 4)).into_pyarray(py),
+                Array2::zeros((0, 3)).into_pyarray(py),
+                Array1::zeros(0).into_pyarray(py),
+                Array1::zeros(0).into_pyarray(py),
+            );
+        }
+        let o = layout(nv, nt);
+        let owner = PyArray1::from_vec(py, self.words);
+        let base = owner.data();
+        // SAFETY: `owner` keeps the buffer (never reallocated) alive as the base object of
+        // every view; the views cover the disjoint, aligned regions of `layout`.
+        unsafe {
+            let p = |k: usize| base.add(o[k]);
+            (
+                PyArray2::borrow_from_array(
+                    &ArrayView2::<f64>::from_shape_ptr((nv, 3), p(0).cast()),
+                    owner.clone().into_any(),
+                ),
+                PyArray2::borrow_from_array(
+                    &ArrayView2::<i64>::from_shape_ptr((nt, 3), p(1).cast()),
+                    owner.clone().into_any(),
+                ),
+                PyArray2::borrow_from_array(
+                    &ArrayView2::<f32>::from_shape_ptr((nv, 4), p(3).cast()),
+                    owner.clone().into_any(),
+                ),
+                PyArray2::borrow_from_array(
+                    &ArrayView2::<f32>::from_shape_ptr((nv, 3), p(4).cast()),
+                    owner.clone().into_any(),
+                ),
+                PyArray1::borrow_from_array(
+                    &ArrayView1::<i64>::from_shape_ptr(nv, p(2).cast()),
+                    owner.clone().into_any(),
+                ),
+                PyArray1::borrow_from_array(
+                    &ArrayView1::<i32>::from_shape_ptr(nv, p(5).cast()),
+                    owner.into_any(),
+                ),
+            )
+        }
+    }
 }
 
 /// The Rust blur shell. See `motionblur.BlurShell`.
@@ -162,8 +239,13 @@ impl PyBlurShell {
         let v = rows3(&vertices, "vertices")?;
         let n = normals.as_ref().map(|n| rows3(n, "normals")).transpose()?;
         let inner = &mut self.inner;
-        py.detach(move || super::in_pool(move || inner.update(v, n)))
-            .map_err(to_py_err)
+        if inner.parallel() {
+            py.detach(move || super::in_pool(move || inner.update(v, n)))
+        } else {
+            // Small mesh: sequential kernels on this thread (no hand-over to the pool).
+            py.detach(move || inner.update(v, n))
+        }
+        .map_err(to_py_err)
     }
 
     #[pyo3(signature = (vertices=None, normals=None))]
@@ -179,10 +261,16 @@ impl PyBlurShell {
             .transpose()?;
         let n = normals.as_ref().map(|n| rows3(n, "normals")).transpose()?;
         let inner = &self.inner;
-        let m = py
-            .detach(move || super::in_pool(move || inner.build(v, n)))
-            .map_err(to_py_err)?;
-        Ok(shell_arrays(py, m))
+        let plan = inner.build_plan(v, n).map_err(to_py_err)?;
+        let mut buf = OneBuffer::new(plan.n_vertices, plan.n_triangles);
+        let out = buf.slices();
+        let plan = &plan;
+        if inner.parallel() {
+            py.detach(move || super::in_pool(move || inner.build_into(plan, out, v, n)));
+        } else {
+            py.detach(move || inner.build_into(plan, out, v, n));
+        }
+        Ok(buf.into_arrays(py))
     }
 
     fn reset(&mut self) {

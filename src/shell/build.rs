@@ -30,24 +30,40 @@ pub struct ShellMesh {
     pub step: Vec<u8>,
 }
 
-struct Out<'a> {
-    vertices: &'a mut [[f64; 3]],
-    faces: &'a mut [[u32; 3]],
-    rgba: &'a mut [[f32; 4]],
-    normals: &'a mut [[f32; 3]],
-    face: &'a mut [u32],
-    step: &'a mut [u8],
+/// Output slices of one build, sized by a [`BuildPlan`]. The index types are generic so the
+/// Python binding can fill numpy's int64 / int32 arrays directly (`I`: triangle corners, `J`:
+/// source polygon, `K`: step).
+pub struct ShellOut<'a, I, J, K> {
+    pub vertices: &'a mut [[f64; 3]],
+    pub faces: &'a mut [[I; 3]],
+    pub rgba: &'a mut [[f32; 4]],
+    pub normals: &'a mut [[f32; 3]],
+    pub face: &'a mut [J],
+    pub step: &'a mut [K],
+}
+
+/// The sizes of the next build (and where each chunk of polygons writes).
+#[derive(Debug, Clone, Default)]
+pub struct BuildPlan {
+    /// Pairs and strips per chunk of `CHUNK` polygons.
+    counts: Vec<(usize, usize)>,
+    /// Shell vertices (two per pair).
+    pub n_vertices: usize,
+    /// Shell triangles (two per quad, quads = pairs - strips).
+    pub n_triangles: usize,
 }
 
 impl BlurShell {
     /// Pairs emitted by polygon `f` (0 when its strip is dead).
     #[inline]
     fn pairs(&self, f: usize) -> usize {
-        let run = self.hot[f].run;
-        if (self.fade[f] as u32) < self.opts.subdivisions && run > 0 {
-            run as usize + 1
-        } else {
-            0
+        // The fade byte first: most polygons have a dead strip and their `hot` is not read.
+        if (self.fade[f] as u32) >= self.opts.subdivisions {
+            return 0;
+        }
+        match self.hot[f].run {
+            0 => 0,
+            run => run as usize + 1,
         }
     }
 
@@ -59,6 +75,34 @@ impl BlurShell {
         vertices: Option<&[[f64; 3]]>,
         normals: Option<&[[f64; 3]]>,
     ) -> Result<ShellMesh> {
+        let plan = self.build_plan(vertices, normals)?;
+        let (nv, nt) = (plan.n_vertices, plan.n_triangles);
+        let mut mesh = ShellMesh {
+            vertices: vec![[0.0; 3]; nv],
+            faces: vec![[0; 3]; nt],
+            rgba: vec![[0.0; 4]; nv],
+            normals: vec![[0.0; 3]; nv],
+            face: vec![0; nv],
+            step: vec![0; nv],
+        };
+        let out = ShellOut {
+            vertices: &mut mesh.vertices,
+            faces: &mut mesh.faces,
+            rgba: &mut mesh.rgba,
+            normals: &mut mesh.normals,
+            face: &mut mesh.face,
+            step: &mut mesh.step,
+        };
+        self.build_into(&plan, out, vertices, normals);
+        Ok(mesh)
+    }
+
+    /// Check `vertices` / `normals` as [`BlurShell::build`] does and size the shell.
+    pub fn build_plan(
+        &self,
+        vertices: Option<&[[f64; 3]]>,
+        normals: Option<&[[f64; 3]]>,
+    ) -> Result<BuildPlan> {
         if let Some(v) = vertices {
             super::check_rows(v, self.n_vertices, "vertices")?;
         }
@@ -66,88 +110,92 @@ impl BlurShell {
             super::check_rows(n, self.n_vertices, "normals")?;
         }
         if self.updates == 0 {
-            return Ok(ShellMesh::default());
+            return Ok(BuildPlan::default());
         }
         let nf = self.faces.len();
-        let counts: Vec<usize> = (0..nf.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|c| {
-                (c * CHUNK..((c + 1) * CHUNK).min(nf))
-                    .map(|f| self.pairs(f))
-                    .sum()
+        let count = |c: usize| {
+            (c * CHUNK..((c + 1) * CHUNK).min(nf)).fold((0, 0), |(p, s), f| {
+                let k = self.pairs(f);
+                (p + k, s + usize::from(k > 0))
             })
-            .collect();
-        let n_pairs: usize = counts.iter().sum();
-        // Triangles per chunk: two per quad, quads = pairs - strips.
-        let strips: Vec<usize> = (0..nf.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|c| {
-                (c * CHUNK..((c + 1) * CHUNK).min(nf))
-                    .filter(|&f| self.pairs(f) > 0)
-                    .count()
-            })
-            .collect();
-        let total_tris: usize = counts.iter().zip(&strips).map(|(p, s)| 2 * (p - s)).sum();
-        let mut mesh = ShellMesh {
-            vertices: vec![[0.0; 3]; 2 * n_pairs],
-            faces: vec![[0; 3]; total_tris],
-            rgba: vec![[0.0; 4]; 2 * n_pairs],
-            normals: vec![[0.0; 3]; 2 * n_pairs],
-            face: vec![0; 2 * n_pairs],
-            step: vec![0; 2 * n_pairs],
         };
-        let mut jobs = Vec::with_capacity(counts.len());
-        {
-            let (mut v, mut t, mut c, mut n, mut fa, mut st) = (
-                &mut mesh.vertices[..],
-                &mut mesh.faces[..],
-                &mut mesh.rgba[..],
-                &mut mesh.normals[..],
-                &mut mesh.face[..],
-                &mut mesh.step[..],
-            );
-            let mut v0 = 0u32;
-            for (ci, (&p, &s)) in counts.iter().zip(&strips).enumerate() {
-                let nvx = 2 * p;
-                let ntri = 2 * (p - s);
-                let (vh, vt) = v.split_at_mut(nvx);
-                let (th, tt) = t.split_at_mut(ntri);
-                let (ch, ct) = c.split_at_mut(nvx);
-                let (nh, nt) = n.split_at_mut(nvx);
-                let (fh, ft) = fa.split_at_mut(nvx);
-                let (sh, stl) = st.split_at_mut(nvx);
-                let out = Out {
-                    vertices: vh,
-                    faces: th,
-                    rgba: ch,
-                    normals: nh,
-                    face: fh,
-                    step: sh,
-                };
-                jobs.push((ci, v0, out));
-                v0 += nvx as u32;
-                (v, t, c, n, fa, st) = (vt, tt, ct, nt, ft, stl);
-            }
-        }
-        jobs.into_par_iter()
-            .for_each(|(ci, v0, out)| self.fill_chunk(ci, v0, out, vertices, normals));
-        Ok(mesh)
+        let counts: Vec<(usize, usize)> = if self.parallel() {
+            (0..nf.div_ceil(CHUNK)).into_par_iter().map(count).collect()
+        } else {
+            (0..nf.div_ceil(CHUNK)).map(count).collect()
+        };
+        let n_pairs: usize = counts.iter().map(|c| c.0).sum();
+        let n_triangles = counts.iter().map(|&(p, s)| 2 * (p - s)).sum();
+        Ok(BuildPlan {
+            counts,
+            n_vertices: 2 * n_pairs,
+            n_triangles,
+        })
     }
 
-    fn fill_chunk(
+    /// Fill `out` (sized by `plan`, from [`BlurShell::build_plan`] with the same arguments and
+    /// no update in between) with the shell mesh; see [`BlurShell::build`].
+    pub fn build_into<I, J, K>(
+        &self,
+        plan: &BuildPlan,
+        out: ShellOut<'_, I, J, K>,
+        vertices: Option<&[[f64; 3]]>,
+        normals: Option<&[[f64; 3]]>,
+    ) where
+        I: From<u32> + Send,
+        J: From<u32> + Send,
+        K: From<u8> + Send,
+    {
+        assert!(out.vertices.len() == plan.n_vertices && out.faces.len() == plan.n_triangles);
+        let mut jobs = Vec::with_capacity(plan.counts.len());
+        let (mut v, mut t, mut c, mut n, mut fa, mut st) = (
+            out.vertices,
+            out.faces,
+            out.rgba,
+            out.normals,
+            out.face,
+            out.step,
+        );
+        let mut v0 = 0u32;
+        for (ci, &(p, s)) in plan.counts.iter().enumerate() {
+            let nvx = 2 * p;
+            let ntri = 2 * (p - s);
+            let (vh, vt) = v.split_at_mut(nvx);
+            let (th, tt) = t.split_at_mut(ntri);
+            let (ch, ct) = c.split_at_mut(nvx);
+            let (nh, nt) = n.split_at_mut(nvx);
+            let (fh, ft) = fa.split_at_mut(nvx);
+            let (sh, stl) = st.split_at_mut(nvx);
+            let out = ShellOut {
+                vertices: vh,
+                faces: th,
+                rgba: ch,
+                normals: nh,
+                face: fh,
+                step: sh,
+            };
+            jobs.push((ci, v0, out));
+            v0 += nvx as u32;
+            (v, t, c, n, fa, st) = (vt, tt, ct, nt, ft, stl);
+        }
+        let fill = |(ci, v0, out)| self.fill_chunk(ci, v0, out, vertices, normals);
+        if self.parallel() {
+            jobs.into_par_iter().for_each(fill);
+        } else {
+            jobs.into_iter().for_each(fill);
+        }
+    }
+
+    fn fill_chunk<I: From<u32>, J: From<u32>, K: From<u8>>(
         &self,
         ci: usize,
         v0: u32,
-        o: Out<'_>,
+        o: ShellOut<'_, I, J, K>,
         base_pos: Option<&[[f64; 3]]>,
         base_nrm: Option<&[[f64; 3]]>,
     ) {
         let s = self.opts.subdivisions as usize;
         let nf = self.faces.len();
-        let unit = |n: [f32; 3]| {
-            let u = normalize([n[0] as f64, n[1] as f64, n[2] as f64]);
-            [u[0] as f32, u[1] as f32, u[2] as f32]
-        };
         let a0 = self.opts.initial_alpha;
         let sf = s as f32;
         let m = self.updates - 1;
@@ -170,10 +218,16 @@ impl BlurShell {
                     (self.ring[slot * nf + f] & 3, slot)
                 };
                 let alpha = a0 * (1.0 - (j.max(fade as usize) as f32) / sf);
-                for (side, &corner) in [k as usize, (k as usize + 1) % 3].iter().enumerate() {
+                let corners = [k as usize, (k as usize + 1) % 3];
+                let buf = self.buf_of_slot[slot];
+                // Both unit normals of the pair at once (two square roots per instruction).
+                let units = unit2(
+                    self.raw_normal(buf, iface[corners[0]] as usize),
+                    self.raw_normal(buf, iface[corners[1]] as usize),
+                );
+                for (side, &corner) in corners.iter().enumerate() {
                     let (vtx, ivtx) = (face[corner] as usize, iface[corner] as usize);
                     let w = vi + side;
-                    let buf = self.buf_of_slot[slot];
                     let p = self.pos_bufs[buf][ivtx];
                     o.vertices[w] = match (j, base_pos) {
                         (0, Some(b)) => b[vtx],
@@ -184,26 +238,71 @@ impl BlurShell {
                             let u = normalize(n[vtx]);
                             [u[0] as f32, u[1] as f32, u[2] as f32]
                         }
-                        _ => unit(self.raw_normal(buf, ivtx)),
+                        _ => units[side],
                     };
                     let rgb = match &self.color {
                         ShellColor::Uniform(c) => *c,
                         ShellColor::PerVertex(c) => c[vtx],
                     };
                     o.rgba[w] = [rgb[0], rgb[1], rgb[2], alpha];
-                    o.face[w] = f as u32;
-                    o.step[w] = j as u8;
+                    o.face[w] = J::from(f as u32);
+                    o.step[w] = K::from(j as u8);
                 }
                 vi += 2;
             }
             for j in 0..pairs - 1 {
                 let b = v0 + (start + 2 * j) as u32;
-                o.faces[ti] = [b, b + 1, b + 3];
-                o.faces[ti + 1] = [b, b + 3, b + 2];
+                o.faces[ti] = [b, b + 1, b + 3].map(I::from);
+                o.faces[ti + 1] = [b, b + 3, b + 2].map(I::from);
                 ti += 2;
             }
         }
         debug_assert_eq!(vi, o.vertices.len());
         debug_assert_eq!(ti, o.faces.len());
+    }
+}
+
+/// Two float32 vectors made unit in float64 and rounded back, bit for bit as
+/// `crate::mesh::normalize` (zero when the length is zero or not finite): on x86-64 in the
+/// two lanes of SSE2 registers (IEEE square root and division, so the same values).
+#[inline]
+pub(crate) fn unit2(a: [f32; 3], b: [f32; 3]) -> [[f32; 3]; 2] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::*;
+        // SAFETY: SSE2 is part of the x86-64 baseline.
+        unsafe {
+            let x = _mm_set_pd(b[0] as f64, a[0] as f64);
+            let y = _mm_set_pd(b[1] as f64, a[1] as f64);
+            let z = _mm_set_pd(b[2] as f64, a[2] as f64);
+            // (x x + y y) + z z, as `dot`.
+            let l2 = _mm_add_pd(
+                _mm_add_pd(_mm_mul_pd(x, x), _mm_mul_pd(y, y)),
+                _mm_mul_pd(z, z),
+            );
+            let l = _mm_sqrt_pd(l2);
+            let ok = _mm_and_pd(
+                _mm_cmpgt_pd(l, _mm_setzero_pd()),
+                _mm_cmplt_pd(l, _mm_set1_pd(f64::INFINITY)),
+            );
+            let q = |v| _mm_and_pd(_mm_div_pd(v, l), ok);
+            let (qx, qy, qz) = (q(x), q(y), q(z));
+            let mut out = [[0.0f64; 2]; 3];
+            _mm_storeu_pd(out[0].as_mut_ptr(), qx);
+            _mm_storeu_pd(out[1].as_mut_ptr(), qy);
+            _mm_storeu_pd(out[2].as_mut_ptr(), qz);
+            [
+                [out[0][0] as f32, out[1][0] as f32, out[2][0] as f32],
+                [out[0][1] as f32, out[1][1] as f32, out[2][1] as f32],
+            ]
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let unit = |n: [f32; 3]| {
+            let u = normalize([n[0] as f64, n[1] as f64, n[2] as f64]);
+            [u[0] as f32, u[1] as f32, u[2] as f32]
+        };
+        [unit(a), unit(b)]
     }
 }

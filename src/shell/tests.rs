@@ -283,9 +283,11 @@ fn mask_removes_exactly_the_masked_strips() {
 
 #[test]
 fn thread_count_does_not_change_the_shell() {
-    let (v, f) = sphere(40, 80);
+    // Large enough for the parallel path (2 * 119 * 160 faces >= PAR_MIN_FACES).
+    let (v, f) = sphere(120, 160);
     let run = || {
         let mut sh = shell(&f, v.len(), 5, 2);
+        assert!(sh.parallel());
         for i in 0..7 {
             let t = i as f64 * 0.1;
             let p: Vec<[f64; 3]> = v
@@ -392,5 +394,38 @@ fn locality_is_a_bijection_with_faces_sorted_and_sums_in_original_order() {
             "vertex {iv}: {orig:?}"
         );
         assert!(!orig.is_empty());
+    }
+}
+
+#[test]
+fn paired_unit_normals_equal_normalize_bit_for_bit() {
+    let one = |n: [f32; 3]| {
+        let u = crate::mesh::normalize([n[0] as f64, n[1] as f64, n[2] as f64]);
+        [u[0] as f32, u[1] as f32, u[2] as f32]
+    };
+    let mut cases: Vec<[f32; 3]> = vec![
+        [0.0; 3],
+        [-0.0, 0.0, -0.0],
+        [1e-45, 0.0, 0.0],
+        [3e38, 3e38, -3e38],
+        [f32::INFINITY, 0.0, 0.0],
+        [f32::NAN, 1.0, 0.0],
+        [0.0, 0.0, -2.5],
+    ];
+    let mut x = 0x2545_f491_u32;
+    for _ in 0..2000 {
+        let mut r = || {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            f32::from_bits(x & 0x8000_0000 | (x % 0x4000_0000 + 0x1000_0000))
+        };
+        cases.push([r(), r(), r()]);
+    }
+    for w in cases.windows(2) {
+        let got = super::build::unit2(w[0], w[1]);
+        for (g, n) in got.iter().zip([w[0], w[1]]) {
+            assert_eq!(g.map(f32::to_bits), one(n).map(f32::to_bits), "{n:?}");
+        }
     }
 }
