@@ -303,9 +303,13 @@ fn check_vertices(vertices: &[[f64; 3]]) -> Result<()> {
     Ok(())
 }
 
-/// `(b - a) x (c - a)`, evaluated exactly as numpy's `np.cross(b - a, c - a)`.
+/// `(b - a) x (c - a)`, evaluated exactly as numpy's `np.cross(b - a, c - a)` in the vertices'
+/// own precision (f64 for meshes, f32 for the blur shell's snapshots).
 #[inline]
-pub fn face_normal(v: &[[f64; 3]], f: &[u32; 3]) -> [f64; 3] {
+pub fn face_normal<T>(v: &[[T; 3]], f: &[u32; 3]) -> [T; 3]
+where
+    T: Copy + std::ops::Sub<Output = T> + std::ops::Mul<Output = T>,
+{
     let a = v[f[0] as usize];
     let b = v[f[1] as usize];
     let c = v[f[2] as usize];

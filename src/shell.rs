@@ -52,9 +52,7 @@ pub mod silhouette;
 mod tests;
 
 pub use build::{BuildPlan, ShellMesh, ShellOut};
-use silhouette::{
-    face_edge, face_normal32, face_normals_into, facing, Locality, CHUNK, NEUTRAL, NO_EDGE,
-};
+use silhouette::{face_edge, face_normals_into, facing, Locality, CHUNK, NEUTRAL, NO_EDGE};
 pub use silhouette::{motion_silhouette, BACK, FRONT};
 
 /// Edge-code bit: the element's edge was on the silhouette at its update.
@@ -464,7 +462,7 @@ impl BlurShell {
                 face_normals_into(cur, &self.loc.bfaces, &mut self.face_n);
             } else {
                 for (o, f) in self.face_n.iter_mut().zip(&self.loc.bfaces) {
-                    *o = face_normal32(cur, f);
+                    *o = crate::mesh::face_normal(cur, f);
                 }
             }
         }

@@ -290,22 +290,14 @@ fn motion_volume<'py>(
             out
         })
         .collect();
-    let c = rows::<4, f32>(&colors, "colors")?;
-    let colors = if face_colors {
-        Colors::PerFace(c)
-    } else if c.len() == 1 {
-        Colors::Uniform(c[0])
-    } else {
-        Colors::PerVertex(c)
-    };
-    let normals = normals
-        .as_ref()
-        .map(|n| rows::<3, f64>(n, "normals"))
-        .transpose()?;
-    let camera = camera_position
-        .as_ref()
-        .map(|c| vec3(c, "camera_position"))
-        .transpose()?;
+    let opts = volume_options(
+        filter,
+        &colors,
+        face_colors,
+        normals.as_ref(),
+        camera_position.as_ref(),
+        contour_line,
+    )?;
     if segments == 0 {
         return Err(to_py_err(Error::value("segments", "must be >= 1")));
     }
@@ -322,30 +314,10 @@ fn motion_volume<'py>(
                     ),
                 ));
             }
-            let opts = VolumeOptions {
-                filter,
-                colors,
-                normals,
-                camera,
-                contour_line,
-            };
             super::in_pool(|| core_motion_volume(&inner, &path.subdivide(segments), &opts))
         })
         .map_err(to_py_err)?;
-    let faces: Vec<[i64; 3]> = vol
-        .faces
-        .iter()
-        .map(|f| [f[0] as i64, f[1] as i64, f[2] as i64])
-        .collect();
-    Ok((
-        array2(py, &vol.vertices),
-        array2(py, &faces),
-        array2(py, &vol.rgba),
-        array2(py, &vol.normals),
-        PyArray1::from_vec(py, vol.part),
-        PyArray1::from_vec(py, vol.ring_alpha),
-        vol.contour_edges,
-    ))
+    Ok(volume_tuple(py, vol))
 }
 
 #[pyfunction]
@@ -374,7 +346,32 @@ fn spin_volume<'py>(
         translation: vec3(&translation, "translation")?,
         segments,
     };
-    let c = rows::<4, f32>(&colors, "colors")?;
+    let opts = volume_options(
+        filter,
+        &colors,
+        face_colors,
+        normals.as_ref(),
+        camera_position.as_ref(),
+        contour_line,
+    )?;
+    let inner = mesh.inner.clone();
+    let vol = py
+        .detach(move || super::in_pool(|| core_spin_volume(&inner, &spin, &opts)))
+        .map_err(to_py_err)?;
+    Ok(volume_tuple(py, vol))
+}
+
+/// The options both volume bindings share: colours (one, per vertex, or per face), normals and
+/// the camera position, each checked and named.
+fn volume_options(
+    filter: Filter,
+    colors: &PyReadonlyArray2<'_, f32>,
+    face_colors: bool,
+    normals: Option<&PyReadonlyArray2<'_, f64>>,
+    camera_position: Option<&PyReadonlyArray1<'_, f64>>,
+    contour_line: bool,
+) -> PyResult<VolumeOptions> {
+    let c = rows::<4, f32>(colors, "colors")?;
     let colors = if face_colors {
         Colors::PerFace(c)
     } else if c.len() == 1 {
@@ -382,28 +379,15 @@ fn spin_volume<'py>(
     } else {
         Colors::PerVertex(c)
     };
-    let normals = normals
-        .as_ref()
-        .map(|n| rows::<3, f64>(n, "normals"))
-        .transpose()?;
-    let camera = camera_position
-        .as_ref()
-        .map(|c| vec3(c, "camera_position"))
-        .transpose()?;
-    let inner = mesh.inner.clone();
-    let vol = py
-        .detach(move || {
-            let opts = VolumeOptions {
-                filter,
-                colors,
-                normals,
-                camera,
-                contour_line,
-            };
-            super::in_pool(|| core_spin_volume(&inner, &spin, &opts))
-        })
-        .map_err(to_py_err)?;
-    Ok(volume_tuple(py, vol))
+    Ok(VolumeOptions {
+        filter,
+        colors,
+        normals: normals.map(|n| rows::<3, f64>(n, "normals")).transpose()?,
+        camera: camera_position
+            .map(|c| vec3(c, "camera_position"))
+            .transpose()?,
+        contour_line,
+    })
 }
 
 fn volume_tuple(py: Python<'_>, vol: crate::volume::MotionVolume) -> VolumeTuple<'_> {

@@ -82,28 +82,13 @@ impl VertexFaces {
     }
 }
 
-/// `(b - a) x (c - a)` in float32, operation for operation as `np.cross(b - a, c - a)`.
-#[inline]
-pub fn face_normal32(v: &[[f32; 3]], f: &[u32; 3]) -> [f32; 3] {
-    let a = v[f[0] as usize];
-    let b = v[f[1] as usize];
-    let c = v[f[2] as usize];
-    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-    let w = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-    [
-        u[1] * w[2] - u[2] * w[1],
-        u[2] * w[0] - u[0] * w[2],
-        u[0] * w[1] - u[1] * w[0],
-    ]
-}
-
 /// Raw float32 face normals into `out` (same length as `faces`), in parallel.
 pub fn face_normals_into(vertices: &[[f32; 3]], faces: &[[u32; 3]], out: &mut [[f32; 3]]) {
     out.par_chunks_mut(CHUNK)
         .zip(faces.par_chunks(CHUNK))
         .for_each(|(o, f)| {
             for (o, f) in o.iter_mut().zip(f) {
-                *o = face_normal32(vertices, f);
+                *o = crate::mesh::face_normal(vertices, f);
             }
         });
 }
