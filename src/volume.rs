@@ -170,6 +170,14 @@ fn view_direction(
         let c = path.at(0.5).point(centroid);
         let d = normalize([c[0] - eye[0], c[1] - eye[1], c[2] - eye[2]]);
         if d != [0.0; 3] {
+            // A translation seen on a picture plane parallel to the motion moves every image
+            // point along parallel lines (its vanishing point at infinity), as the model's
+            // translated hull assumes; on the camera's own plane they converge.
+            let m = normalize(total);
+            let c = dot(d, m);
+            if path.is_translation() && m != [0.0; 3] && c.abs() < 0.8 {
+                return normalize([d[0] - c * m[0], d[1] - c * m[1], d[2] - c * m[2]]);
+            }
             return d;
         }
     }
