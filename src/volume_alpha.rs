@@ -198,6 +198,10 @@ fn convex_hull(pts: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
     h
 }
 
+/// Above this many vertices a translation's coverage model uses 3 sub-segments instead of 8
+/// (each one projects every vertex and takes its hull).
+const DENSE_VERTICES: usize = 20_000;
+
 /// One path segment of the model.
 #[derive(Debug, Clone)]
 struct Segment {
@@ -364,12 +368,14 @@ impl CoverageModel {
                 })
                 .collect()
         };
-        // Under perspective the coverage integral follows the silhouette's change on at least 3
-        // sub-segments (8 with rotation); the cuts of the joining strips use the path's own.
+        // Under perspective the silhouette changes along the path and its points move at speeds
+        // that differ with depth, so the coverage integral follows it on at least 8
+        // sub-segments; a translated dense mesh (hull of many points per sub-segment) gets 3.
+        // The cuts of the joining strips use the path's own segments.
         let geometric = build(path);
         let parts = if pure {
             1
-        } else if path.is_translation() {
+        } else if path.is_translation() && vertices.len() > DENSE_VERTICES {
             3usize.div_ceil(n)
         } else {
             8usize.div_ceil(n)
