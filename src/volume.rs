@@ -158,8 +158,9 @@ pub(crate) fn check_options(mesh: &Mesh, opts: &VolumeOptions) -> Result<()> {
     Ok(())
 }
 
-/// The view direction of the coverage model: from the camera to the centroid at mid-shutter,
-/// else [`default_view`] of the summed motion.
+/// The view direction of the coverage model: from the camera to the centroid at mid-shutter
+/// (for a translation, made perpendicular to the motion unless within 37 degrees of it, see
+/// [`crate::volume_alpha`]), else [`default_view`] of the summed motion.
 fn view_direction(
     path: &Path,
     centroid: [f64; 3],

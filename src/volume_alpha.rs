@@ -11,7 +11,12 @@
 //! - the view is an orthographic projection along `view` (from the camera to the object's
 //!   centroid at mid-shutter; without a camera, along the world axis least aligned with the
 //!   motion, made perpendicular to it);
-//! - with a camera the projection is perspective (image-plane coordinates), else orthographic;
+//! - with a camera the projection is perspective, onto a picture plane perpendicular to `view`;
+//!   for a translation `view` is first made perpendicular to the motion (unless they are within
+//!   37 degrees), so that the plane is parallel to the motion and every image point moves along
+//!   parallel lines, as the translated hull below assumes (on the camera's own plane the paths
+//!   converge to the motion's vanishing point and a rim moving along itself would be swept
+//!   across); without a camera it is orthographic;
 //! - during path segment `j` (keyframes `j` and `j + 1`, times `t_j .. t_{j+1}`) the object's
 //!   image is the convex hull `S_j` of its projected vertices placed at mid-segment, translated
 //!   linearly by the projected displacement `d_j` of the centroid (for a translation path seen
