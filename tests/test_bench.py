@@ -103,3 +103,24 @@ def test_a_tiny_run_shows_every_method_beside_accumulation_at_equal_time(tmp_pat
                 in section
             )
     assert "at equal FLIP" not in md  # no FLIP comparison when FLIP was not computed
+
+
+def test_the_paired_factor_re_times_the_option_set_a_user_would_pick():
+    """Not the most accurate motion_volume row but the one with the best equal-error factor in the
+    sweep; the most accurate one only when every factor is a bound."""
+    scene = bench.SCENES["cube"](width=32, height=24)
+
+    def row(method, ms, rmse, opts):
+        return {**_row(method, ms, rmse, bench._label(opts)), "_opts": opts}
+
+    acc = [row("accumulation", 1.0, 0.1, {"samples": 1}), row("accumulation", 16.0, 0.001, {"samples": 16})]
+    fast = row("motion_volume", 0.5, 0.01, {"segments": 1, "filter": "box"})  # factor 8
+    exact = row("motion_volume", 8.0, 0.002, {"segments": 2, "filter": "box"})  # more accurate, factor ~1.5
+    p = bench.paired_factor(scene, acc + [exact, fast], rounds=1)
+    assert p["options"] == fast["options"] and (p["n_lo"], p["n_hi"]) == (1, 16) and p["bound"] == ""
+    assert p["factor"] == pytest.approx(p["acc_ms"] / p["mv_ms"])
+    # every factor a bound (both more accurate than N = 16): the most accurate is re-timed
+    a = row("motion_volume", 2.0, 0.0005, {"segments": 1, "filter": "box"})
+    b = row("motion_volume", 1.0, 0.0002, {"segments": 2, "filter": "box"})
+    p = bench.paired_factor(scene, acc + [a, b], rounds=1)
+    assert p["options"] == b["options"] and p["bound"] == ">=" and p["n_lo"] == 16 and p["n_hi"] is None
