@@ -37,9 +37,11 @@ def _plain(scene: mb.Scene, segments: int, filt: str, aa: int = 1) -> np.ndarray
 def test_method_equals_one_plain_rasterization(name):
     sc = mb.SCENES[name](width=80, height=60)
     for aa in (1, 2):
-        got = mb.render(sc, "motion_volume", segments=3, filter="box", aa=aa)
+        got = mb.render(sc, "motion_volume", segments=3, filter="box", aa=aa, colors="contour")
         np.testing.assert_allclose(got.rgba, _plain(sc, 3, "box", aa), atol=1e-5, err_msg=f"aa={aa}")
-        exact = mb.render(sc, "motion_volume", segments=3, filter="box", aa=aa, exact_static=True)
+        exact = mb.render(
+            sc, "motion_volume", segments=3, filter="box", aa=aa, exact_static=True, colors="contour"
+        )
         np.testing.assert_allclose(exact.rgba, got.rgba, atol=1e-5)
 
 

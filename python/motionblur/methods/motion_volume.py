@@ -13,8 +13,11 @@ transparency.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 
+from .. import image
 from .._validate import as_int
 from ..geometry import motion_volume as build_volume
 from ..geometry import spin_volume as build_spin
@@ -150,7 +153,9 @@ def spin_of(keys: np.ndarray, vertices: np.ndarray) -> dict | None:
 
 @register(
     "motion_volume",
-    sweep=[{"segments": s, "filter": f} for f in FILTERS for s in (1, 2, 4, 8)],
+    # every filter and segment count; and the paper's surface colours, with its ramp and with box
+    sweep=[{"segments": s, "filter": f} for f in FILTERS for s in (1, 2, 4, 8)]
+    + [{"segments": 1, "filter": f, "colors": "contour"} for f in ("ramp", "box")],
     applies=_rigid,
 )
 def motion_volume(
@@ -161,6 +166,7 @@ def motion_volume(
     contour_line: bool = True,
     exact_static: bool = True,
     spin="auto",
+    colors: str = "averaged",
 ):
     """Motion-volume rendering: each moving object becomes its motion volume, drawn transparent.
 
@@ -183,8 +189,17 @@ def motion_volume(
     pi/12); with ``"auto"`` only those that spin in place: the arc the vertex farthest from the
     axis travels is at least 4 times the path of the object's vertex centroid
     (``|angle| r >= 4 path``: a propeller or wheel, not an object orbiting a far axis nor a
-    camera pan); False never. Deforming objects raise ValueError (use accumulation or blur shells). Returns a Frame; ``stats``
-    counts the volume triangles and the spins.
+    camera pan); False never; ``colors`` ``"averaged"`` (default) or ``"contour"``: the
+    paper's volume carries the object's own surface colours (joining surfaces take theirs from
+    the contour edges, section 4.1, which the paper itself names a weakness: a shaded sphere's
+    streak shows its rim's shading, not the average of its surface). With ``"averaged"`` every
+    vertex of a translation volume (not a spin volume) takes the time-averaged colour the camera
+    sees at its image instead: the object is rendered sharp at mid-shutter inside the volume's
+    window (one extra pass, one sample a pixel), box-blurred along its centroid's image path and
+    sampled at the vertices (exact for a translation seen orthographically), and the volume is
+    drawn unlit with those shaded colours. Objects of one flat colour skip it (nothing to
+    average). Deforming objects raise ValueError (use accumulation or blur shells). Returns a
+    Frame; ``stats`` counts the volume triangles, the spins and the averaged volumes.
     """
     segments = as_int(segments, "segments", minimum=1, maximum=4096)
     if filter is None:
@@ -196,12 +211,21 @@ def motion_volume(
         raise ValueError(f"aa: must be 1, 2 or 4, got {aa}")
     if not (spin == "auto" or isinstance(spin, (bool, np.bool_))):
         raise ValueError(f"spin: expected 'auto', True or False, got {spin!r}")
+    if not isinstance(colors, str) or colors not in ("averaged", "contour"):
+        raise ValueError(f"colors: expected 'averaged' or 'contour', got {colors!r}")
     tr = scene.reference_t
     cam = supersampled(scene.camera_at(tr), aa)
     eye = cam.pose[:3, 3]  # the perspective of the coverage alphas, with or without contour_line
     draws: list[tuple[Object, Draw]] = []
     still: list[tuple[int, Object]] = []
-    stats = {"volumes": 0, "volume_triangles": 0, "spins": 0, "segments": segments, "filter": filter}
+    stats = {
+        "volumes": 0,
+        "volume_triangles": 0,
+        "spins": 0,
+        "averaged": 0,
+        "segments": segments,
+        "filter": filter,
+    }
     folds = camera_folds(scene, segments)
     spin_folds = None
     for k, obj in enumerate(scene.objects):
@@ -228,13 +252,26 @@ def motion_volume(
             if sp is not None and (spin is True or sp["dominance"] >= SPIN_DOMINANCE):
                 vol = _spin_volume(obj, keys[0], sp, filter, eye if contour_line else None)
                 stats["spins"] += 1
+        drawn_as = obj
         if vol is None:
             vol = build_volume(
                 obj.mesh, keys, segments=1, filter=filter, colors=obj.rgba, camera_position=eye,
                 contour_line=contour_line,
             )  # fmt: skip
+            rgb = (
+                _averaged_colors(scene, k, obj, keys, vol)
+                if colors == "averaged" and not _uniform(obj)
+                else None
+            )
+            if rgb is not None:
+                vol.rgba = np.concatenate([rgb, vol.rgba[:, 3:]], axis=1)
+                drawn_as = _UNLIT  # the colours are shaded already
+                stats["averaged"] += 1
         draws.append(
-            (obj, Draw(vol.vertices, vol.faces, vol.rgba, normals=vol.normals, object_id=k, cull_back=True))
+            (
+                drawn_as,
+                Draw(vol.vertices, vol.faces, vol.rgba, normals=vol.normals, object_id=k, cull_back=True),
+            )
         )
         stats["volumes"] += 1
         stats["volume_triangles"] += len(vol.faces)
@@ -354,3 +391,67 @@ def _rotates(scene: Scene, obj: Object) -> bool:
 
 def _place(obj: Object, m: np.ndarray) -> np.ndarray:
     return obj.mesh.vertices @ m[:3, :3].T + m[:3, 3]
+
+
+#: Stand-in for an object drawn unlit: colours already shaded (``raster_layer`` groups by it).
+_UNLIT = SimpleNamespace(shading="flat")
+
+
+def _uniform(obj: Object) -> bool:
+    """Flat shading and one colour: the time-averaged colour is that colour."""
+    c = obj.rgba
+    return obj.shading == "flat" and (c.ndim == 1 or bool((c == c[0]).all()))
+
+
+def _averaged_colors(scene: Scene, k: int, obj: Object, keys: np.ndarray, vol) -> np.ndarray | None:
+    """Straight RGB (N,3) float32 for the N volume vertices: the time-averaged colour the camera
+    sees at each one's image, or None (leave the volume's own colours).
+
+    The object alone is rendered sharp (shaded, one sample a pixel) at its mid-shutter placement
+    as the camera at the reference time sees it, inside the volume's pixel window, and box-blurred
+    along the image path of its centroid from shutter open to close: for a translation seen
+    orthographically that blurred layer is exactly the time average of the object's image. Each
+    vertex takes the blurred colour over the blurred alpha at its image (bilinear); where that
+    alpha is below 1e-3 (outside every position of the object) or the vertex is behind the camera
+    it keeps its own colour."""
+    cam = scene.camera_at(scene.reference_t)
+    win = _window(cam, [vol.vertices])
+    if win is None:
+        return None
+    x0, y0, x1, y1 = win
+    w, h = x1 - x0, y1 - y0
+    proj = window_projection(cam.projection, cam.width, cam.height, win)
+    wcam = Camera(cam.pose, cam.yfov, w, h, cam.znear, cam.zfar)
+    n = len(keys) - 1
+    mid = keys[n // 2] if n % 2 == 0 else apparent_keyframes(scene, obj, 2)[1]
+    draw = Draw(_place(obj, mid), obj.mesh.faces, obj.rgba, object_id=k)
+    sharp = raster_layer(wcam, scene, [(obj, draw)], projection=proj).rgba
+    vp = proj @ cam.view
+    c = obj.mesh.vertices.mean(axis=0)
+    ex, ey, ok = _pixels(vp, np.array([m[:3, :3] @ c + m[:3, 3] for m in (keys[0], keys[-1])]), w, h)
+    length = float(np.hypot(ex[1] - ex[0], ey[1] - ey[0]))
+    if not ok.all():
+        return None
+    if length >= 1.0:
+        sharp = image.box_blur(sharp, (ex[1] - ex[0], ey[1] - ey[0]), length)
+    px, py, front = _pixels(vp, vol.vertices, w, h)
+    px, py = px - 0.5, py - 0.5  # pixel centres sit at +0.5
+    i0 = np.clip(np.floor(px), 0, max(w - 2, 0)).astype(np.int64)
+    j0 = np.clip(np.floor(py), 0, max(h - 2, 0)).astype(np.int64)
+    i1, j1 = np.minimum(i0 + 1, w - 1), np.minimum(j0 + 1, h - 1)
+    fx = np.clip(px - i0, 0.0, 1.0)[:, None]
+    fy = np.clip(py - j0, 0.0, 1.0)[:, None]
+    b = sharp.astype(np.float64)
+    s = (b[j0, i0] * (1 - fx) + b[j0, i1] * fx) * (1 - fy) + (b[j1, i0] * (1 - fx) + b[j1, i1] * fx) * fy
+    keep = (s[:, 3] < 1e-3) | ~front
+    return np.where(keep[:, None], vol.rgba[:, :3], s[:, :3] / np.maximum(s[:, 3:], 1e-3)).astype(np.float32)
+
+
+def _pixels(vp: np.ndarray, p: np.ndarray, width: int, height: int):
+    """Pixel coordinates ``x``, ``y`` (N,) of the points ``p`` (N,3) under the view-projection
+    ``vp`` of a ``width`` x ``height`` image, and whether each is in front of the camera."""
+    clip = p @ vp[:3, :3].T + vp[:3, 3]
+    wc = p @ vp[3, :3] + vp[3, 3]
+    front = wc > 1e-9
+    wc = np.where(front, wc, 1.0)
+    return (clip[:, 0] / wc + 1.0) * 0.5 * width, (1.0 - clip[:, 1] / wc) * 0.5 * height, front
