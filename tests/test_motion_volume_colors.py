@@ -80,3 +80,27 @@ def test_bad_colors_option_is_refused():
         mb.render(sc, "motion_volume", colors="mean")
     with pytest.raises(ValueError, match="colors"):
         mb.render(sc, "motion_volume", colors=None)
+
+
+def test_an_object_leaving_the_view_still_colours_its_streak():
+    """Red left half, green right half, centred on the right border at mid-shutter: the green
+    half is outside the view in the sharp image, yet it passes the pixels near the border during
+    the shutter. The sharp render reaches beyond the view, so the averaged colours still beat the
+    paper's against accumulation."""
+    sc = _sphere_scene(shading="flat", move=(2.0, 0.0, 0.0))
+    obj = sc.objects[0]
+    v = obj.mesh.vertices
+    rgb = np.where(v[:, :1] < 0, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]]).astype(np.float32)
+    edge = 5.0 * np.tan(0.35) * 96 / 72  # the right border at the sphere's depth
+    motion = mb.Motion.linear(translate((edge - 1.0, 0.0, 0.0)), translate((edge + 1.0, 0.0, 0.0)))
+    sc = sc.with_(objects=[mb.Object(obj.mesh, color=rgb, shading="flat", motion=motion)])
+    ref = mb.render(sc, "accumulation", samples=128, aa=2).rgba
+    ours = mb.render(sc, "motion_volume", filter="box", aa=2)
+    paper = mb.render(sc, "motion_volume", filter="box", aa=2, colors="contour").rgba
+    assert ours.stats["averaged"] == 1
+    assert rmse(ours.rgba, ref) < 0.6 * rmse(paper, ref), (rmse(ours.rgba, ref), rmse(paper, ref))
+    # next to the border green passes for about a third of the covered time (its sharp image at
+    # mid-shutter is all outside the view: a window cut at the border would give no green)
+    got = ours.rgba[30:42, 88:95, 1] / ours.rgba[30:42, 88:95, 3]
+    want = ref[30:42, 88:95, 1] / ref[30:42, 88:95, 3]
+    assert want.min() > 0.25 and np.abs(got - want).max() < 0.1, (got, want)

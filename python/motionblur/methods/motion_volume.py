@@ -410,15 +410,26 @@ def _averaged_colors(scene: Scene, k: int, obj: Object, keys: np.ndarray, vol) -
     The object alone is rendered sharp (shaded, one sample a pixel) at its mid-shutter placement
     as the camera at the reference time sees it, inside the volume's pixel window, and box-blurred
     along the image path of its centroid from shutter open to close: for a translation seen
-    orthographically that blurred layer is exactly the time average of the object's image. Each
+    orthographically that blurred layer is exactly the time average of the object's image (the
+    window reaches up to one image size beyond the view, so an object leaving the view still
+    colours its streak). Each
     vertex takes the blurred colour over the blurred alpha at its image (bilinear); where that
     alpha is below 1e-3 (outside every position of the object) or the vertex is behind the camera
     it keeps its own colour."""
     cam = scene.camera_at(scene.reference_t)
-    win = _window(cam, [vol.vertices])
-    if win is None:
+    # the volume's pixel box, beyond the image by up to one image size each way (the parts of
+    # the object outside the view still colour the streak inside it)
+    x, y, front = _pixels(cam.view_projection, vol.vertices, cam.width, cam.height)
+    if front.all():
+        x0 = int(np.clip(np.floor(x.min()) - 1, -cam.width, 2 * cam.width))
+        y0 = int(np.clip(np.floor(y.min()) - 1, -cam.height, 2 * cam.height))
+        x1 = int(np.clip(np.ceil(x.max()) + 1, -cam.width, 2 * cam.width))
+        y1 = int(np.clip(np.ceil(y.max()) + 1, -cam.height, 2 * cam.height))
+    else:
+        x0, y0, x1, y1 = 0, 0, cam.width, cam.height
+    if x1 <= x0 or y1 <= y0:
         return None
-    x0, y0, x1, y1 = win
+    win = (x0, y0, x1, y1)
     w, h = x1 - x0, y1 - y0
     proj = window_projection(cam.projection, cam.width, cam.height, win)
     wcam = Camera(cam.pose, cam.yfov, w, h, cam.znear, cam.zfar)
