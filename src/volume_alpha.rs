@@ -38,14 +38,20 @@ use crate::motion::Path;
 use crate::volume_filter::Filter;
 
 /// The chord of a convex polygon along a direction: for rows of constant `y` (across the
-/// direction), the interval `[lo, hi]` of `x` (along it) inside the polygon.
+/// direction), the interval `[lo, hi]` of `x` (along it) inside the polygon. A polygon of at
+/// most [`EXACT_HULL`] vertices keeps its edges and answers exactly; a larger one is tabulated.
 #[derive(Debug, Clone)]
 struct ChordTable {
     y0: f64,
     dy: f64,
     lo: Vec<f64>,
     hi: Vec<f64>,
+    /// The edges `(a, b)` with `a.y <= b.y`, for a small polygon (then `lo`, `hi` are empty).
+    edges: Vec<([f64; 2], [f64; 2])>,
 }
+
+/// Largest hull answered edge by edge instead of by a table (a box's hull has at most 8).
+const EXACT_HULL: usize = 16;
 
 impl ChordTable {
     /// `hull`: convex polygon (any orientation) in (x, y) coordinates.
@@ -57,6 +63,20 @@ impl ChordTable {
             });
         if hull.len() < 3 || ymax.is_nan() || ymax <= ymin {
             return None;
+        }
+        if hull.len() <= EXACT_HULL {
+            let edges = hull
+                .iter()
+                .zip(hull.iter().cycle().skip(1))
+                .map(|(p, q)| if p[1] <= q[1] { (*p, *q) } else { (*q, *p) })
+                .collect();
+            return Some(ChordTable {
+                y0: ymin,
+                dy: ymax - ymin,
+                lo: Vec::new(),
+                hi: Vec::new(),
+                edges,
+            });
         }
         let dy = (ymax - ymin) / rows as f64;
         let mut lo = vec![f64::INFINITY; rows];
@@ -98,11 +118,32 @@ impl ChordTable {
             dy,
             lo,
             hi,
+            edges: Vec::new(),
         })
     }
 
-    /// `[lo, hi]` at `y`, linear between row centres; `None` outside the polygon's rows.
+    /// `[lo, hi]` at `y`: exact for a small polygon, else linear between row centres; `None`
+    /// outside the polygon's rows.
     fn chord(&self, y: f64) -> Option<(f64, f64)> {
+        if !self.edges.is_empty() {
+            if !(self.y0..=self.y0 + self.dy).contains(&y) {
+                return None;
+            }
+            let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+            for (a, b) in &self.edges {
+                if a[1] <= y && y <= b[1] {
+                    let (x0, x1) = if b[1] > a[1] {
+                        let x = a[0] + (b[0] - a[0]) * ((y - a[1]) / (b[1] - a[1]));
+                        (x, x)
+                    } else {
+                        (a[0].min(b[0]), a[0].max(b[0]))
+                    };
+                    lo = lo.min(x0);
+                    hi = hi.max(x1);
+                }
+            }
+            return (hi >= lo).then_some((lo, hi));
+        }
         let n = self.lo.len();
         let f = (y - self.y0) / self.dy;
         if !(0.0..=n as f64).contains(&f) {
