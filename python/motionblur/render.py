@@ -275,18 +275,30 @@ def object_draw(obj: Object, t: float, object_id: int, vertices=None) -> Draw:
 
 
 def raster_layer(
-    camera: Camera, scene: Scene, draws: list[tuple[Object, Draw]], view=None, projection=None
+    camera: Camera,
+    scene: Scene,
+    draws: list[tuple[Object, Draw]],
+    view=None,
+    projection=None,
+    background=None,
 ) -> Layer:
     """Rasterize ``draws`` (pairs of the object and its Draw) with one sample per pixel, one
     rasterizer call per shading mode, composited by depth. ``view``/``projection`` (4,4) override
-    the camera's (the image size stays the camera's)."""
+    the camera's (the image size stays the camera's). ``background``: an opaque Layer of the
+    camera's size the draws are rasterized over (the rasterizer's ``background``: exact per
+    sample depth test and transparency); with several shading modes the first group is drawn
+    over it and the others are composited by depth."""
     groups: dict[str, list[Draw]] = {}
     for obj, d in draws:
         groups.setdefault(obj.shading, []).append(d)
     out = None
     for shading, ds in groups.items():
+        under = background if out is None else None
         if view is None and projection is None:
-            f = rasterize(camera, ds, samples=1, shading=shading, lights=scene.lights, ambient=scene.ambient)
+            f = rasterize(
+                camera, ds, samples=1, shading=shading, lights=scene.lights, ambient=scene.ambient,
+                background=under,
+            )  # fmt: skip
             layer = Layer(f.rgba, f.depth, f.ids)
         else:
             layer = raw_layer(
@@ -298,11 +310,18 @@ def raster_layer(
                 shading,
                 _lights(scene, None),
                 scene.ambient,
+                background=under,
             )
         out = layer if out is None else composite(out, layer)
     if out is None:
-        out = Layer.empty(camera.height, camera.width)
+        out = Layer.empty(camera.height, camera.width) if background is None else _copy(background)
     return out
+
+
+def _copy(layer: Layer) -> Layer:
+    return Layer(
+        np.array(layer.rgba, np.float32), np.array(layer.depth, np.float32), np.array(layer.ids, np.int32)
+    )
 
 
 def _lights(scene: Scene, rotation) -> list:
@@ -314,8 +333,16 @@ def _lights(scene: Scene, rotation) -> list:
     return out
 
 
-def raw_layer(width, height, view, projection, draws, shading, lights, ambient) -> Layer:
-    """Direct call of the compiled rasterizer (no checks beyond the core's): one sample per pixel."""
+def raw_layer(width, height, view, projection, draws, shading, lights, ambient, background=None) -> Layer:
+    """Direct call of the compiled rasterizer (no checks beyond the core's): one sample per pixel,
+    over the opaque Layer ``background`` of ``height`` x ``width`` when given (copied to
+    contiguous arrays when it is a window of a larger layer; never written)."""
+    if background is not None:
+        c = np.ascontiguousarray
+        background = (
+            c(background.rgba, dtype=np.float32), c(background.depth, dtype=np.float32),
+            c(background.ids, dtype=np.int32),
+        )  # fmt: skip
     rgba, depth, ids, _velocity, _stats = _core._rasterize(
         np.ascontiguousarray(view, dtype=np.float64),
         np.ascontiguousarray(projection, dtype=np.float64),
@@ -327,6 +354,7 @@ def raw_layer(width, height, view, projection, draws, shading, lights, ambient) 
         shading,
         lights,
         tuple(map(float, np.broadcast_to(ambient, (3,)))),
+        background,
     )
     return Layer(rgba, depth, ids)
 

@@ -14,6 +14,7 @@
 // Index loops over 3- and 4-vectors read better than iterator chains here; NaN-rejecting
 // `!(x > y)` comparisons are intended.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+mod background;
 mod bins;
 mod blend;
 mod buffers;
@@ -25,6 +26,7 @@ mod setup;
 mod shade;
 mod tile;
 
+pub use background::Background;
 pub use blend::Blend;
 pub use buffers::{Frame, Stats};
 pub use camera::{
@@ -170,9 +172,24 @@ fn transform(draw: &Draw, vp: glam::DMat4, opts: &Options, w: f64, h: f64) -> Pr
 
 /// Renders `draws` seen by `camera`. Errors name the offending argument.
 pub fn rasterize(camera: &Camera, draws: &[Draw], opts: &Options) -> Result<Frame> {
+    rasterize_over(camera, draws, opts, None)
+}
+
+/// Renders `draws` seen by `camera` over the opaque `background` (one entry per sample, see
+/// `background.rs`), or over nothing when None. Errors name the offending argument.
+pub fn rasterize_over(
+    camera: &Camera,
+    draws: &[Draw],
+    opts: &Options,
+    background: Option<&Background>,
+) -> Result<Frame> {
     let t0 = Instant::now();
     check_size(camera.width, camera.height, opts.samples)?;
     check_options(opts)?;
+    if let Some(bg) = background {
+        let s = opts.samples as usize;
+        bg.validate(camera.width as usize * s, camera.height as usize * s)?;
+    }
     for d in draws {
         d.validate()?;
     }
@@ -242,11 +259,16 @@ pub fn rasterize(camera: &Camera, draws: &[Draw], opts: &Options) -> Result<Fram
             let s = s as usize;
             let rect = [px[0] * s, px[1] * s, px[2] * s, px[3] * s].map(|v| v as i32);
             let refs = bins.tile(t);
-            let n = if refs.is_empty() {
-                scratch.samples.fill(blend::Sample::BACKGROUND);
-                0
-            } else {
-                tile::render_tile(rect, refs, &shader, opts.blend, scratch)
+            let n = match (refs.is_empty(), background) {
+                (true, None) => {
+                    scratch.samples.fill(blend::Sample::BACKGROUND);
+                    0
+                }
+                (true, Some(bg)) => {
+                    bg.load(rect, &mut scratch.zbuf, &mut scratch.samples);
+                    0
+                }
+                _ => tile::render_tile(rect, refs, &shader, opts.blend, background, scratch),
             };
             // SAFETY: tiles partition the frame, so this rectangle is written by this task only.
             unsafe { out.write_tile(&scratch.samples, px, s) };

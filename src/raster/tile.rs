@@ -10,6 +10,7 @@
 //! Pass 1 (opaque) keeps the nearest opaque fragment of each sample in a visibility buffer
 //! (1/w and a triangle reference), and shades only the winners. Pass 2 (transparent) collects
 //! the transparent fragments in front of the opaque surface; `blend.rs` composites them.
+use super::background::Background;
 use super::blend::{Blend, Frag, FragLists, Sample};
 use super::interp::Planes;
 use super::setup::{Tri, HALF, MAY_OPAQUE, MAY_TRANSPARENT, ONE};
@@ -94,7 +95,7 @@ impl Edges {
 
 /// Reusable per-thread buffers of a tile.
 pub struct TileScratch {
-    zbuf: Vec<f32>,
+    pub zbuf: Vec<f32>,
     winner: Vec<u32>,
     pub samples: Vec<Sample>,
     frags: FragLists,
@@ -113,12 +114,14 @@ impl Default for TileScratch {
 }
 
 /// Renders the samples `rect` = [x0, y0, x1, y1) of a tile from its triangle references (in
-/// submission order) into `scratch.samples` (row stride TILE). Returns the fragment count.
+/// submission order) into `scratch.samples` (row stride TILE), starting from `bg` when given
+/// (else from the empty background). Returns the fragment count.
 pub fn render_tile(
     rect: [i32; 4],
     refs: &[u32],
     sh: &Shader,
     blend: Blend,
+    bg: Option<&Background>,
     scratch: &mut TileScratch,
 ) -> u64 {
     let [tx0, ty0, tx1, ty1] = rect;
@@ -137,8 +140,12 @@ pub fn render_tile(
         samples,
         frags,
     } = scratch;
-    zbuf.fill(0.0);
     winner.fill(NONE);
+    match bg {
+        // Samples outside `rect` are never read back; the opaque pass only touches `rect`.
+        Some(bg) => bg.load(rect, zbuf, samples),
+        None => zbuf.fill(0.0),
+    }
     let mut fragments = 0u64;
     let mut any_transparent = false;
 
@@ -176,6 +183,9 @@ pub fn render_tile(
         for ix in tx0..tx1 {
             let s = local(ix, iy);
             let r = winner[s];
+            if r == NONE && bg.is_some() {
+                continue; // the background sample loaded above stays
+            }
             samples[s] = if r == NONE {
                 Sample::BACKGROUND
             } else {

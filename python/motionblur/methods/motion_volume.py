@@ -265,6 +265,10 @@ def motion_volume(
     )
     if not still or not np.isfinite(base.depth).any():
         layer = raster_layer(wcam, scene, draws, projection=proj)
+    elif exact_static and static.opaque and len({o.shading for o, _ in draws}) == 1:
+        # the opaque static layer of the window pre-loads the rasterizer (colour and depth per
+        # sample): only the volumes are drawn, depth-tested and composited over it exactly
+        layer = raster_layer(wcam, scene, draws, projection=proj, background=base)
     elif exact_static:
         # the static objects redrawn with the volumes in the window: exact transparency always
         statics = [(o, Draw(o.world_vertices(0.0), o.mesh.faces, o.rgba, object_id=k)) for k, o in still]
