@@ -39,6 +39,7 @@ use glam::DVec4;
 use rayon::prelude::*;
 use setup::{Chunk, Viewport};
 use shade::{homogeneous_pixel, Prepared, Shader};
+use std::cell::RefCell;
 use std::time::Instant;
 use tile::{TileScratch, TILE};
 
@@ -170,6 +171,21 @@ fn transform(draw: &Draw, vp: glam::DMat4, opts: &Options, w: f64, h: f64) -> Pr
     }
 }
 
+thread_local! {
+    /// Each thread's tile buffers, kept across tiles and frames: a tile resets what it reads, so
+    /// reuse changes no result, and the ~300 KB of buffers (and the fragment lists grown to the
+    /// frame's depth complexity) are not allocated and page-faulted again per frame.
+    static SCRATCH: RefCell<TileScratch> = RefCell::new(TileScratch::default());
+}
+
+/// Runs `f` with this thread's tile buffers (fresh ones if they are already in use).
+fn with_scratch<R>(f: impl FnOnce(&mut TileScratch) -> R) -> R {
+    SCRATCH.with(|cell| match cell.try_borrow_mut() {
+        Ok(mut scratch) => f(&mut scratch),
+        Err(_) => f(&mut TileScratch::default()),
+    })
+}
+
 /// Renders `draws` seen by `camera`. Errors name the offending argument.
 pub fn rasterize(camera: &Camera, draws: &[Draw], opts: &Options) -> Result<Frame> {
     rasterize_over(camera, draws, opts, None)
@@ -248,7 +264,7 @@ pub fn rasterize_over(
     let pixels_per_tile = (TILE as u32 / s) as usize;
     let fragments: u64 = (0..bins.tiles_x * bins.tiles_y)
         .into_par_iter()
-        .map_init(TileScratch::default, |scratch, t| {
+        .map(|t| {
             let (tx, ty) = (t % tiles_x, t / tiles_x);
             let px = [
                 tx * pixels_per_tile,
@@ -259,20 +275,22 @@ pub fn rasterize_over(
             let s = s as usize;
             let rect = [px[0] * s, px[1] * s, px[2] * s, px[3] * s].map(|v| v as i32);
             let refs = bins.tile(t);
-            let n = match (refs.is_empty(), background) {
-                (true, None) => {
-                    scratch.samples.fill(blend::Sample::BACKGROUND);
-                    0
-                }
-                (true, Some(bg)) => {
-                    bg.load(rect, &mut scratch.zbuf, &mut scratch.samples);
-                    0
-                }
-                _ => tile::render_tile(rect, refs, &shader, opts.blend, background, scratch),
-            };
-            // SAFETY: tiles partition the frame, so this rectangle is written by this task only.
-            unsafe { out.write_tile(&scratch.samples, px, s) };
-            n
+            with_scratch(|scratch| {
+                let n = match (refs.is_empty(), background) {
+                    (true, None) => {
+                        scratch.samples.fill(blend::Sample::BACKGROUND);
+                        0
+                    }
+                    (true, Some(bg)) => {
+                        bg.load(rect, &mut scratch.zbuf, &mut scratch.samples);
+                        0
+                    }
+                    _ => tile::render_tile(rect, refs, &shader, opts.blend, background, scratch),
+                };
+                // SAFETY: tiles partition the frame, so this rectangle is written by this task only.
+                unsafe { out.write_tile(&scratch.samples, px, s) };
+                n
+            })
         })
         .sum();
     let t4 = Instant::now();
