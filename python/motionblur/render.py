@@ -281,13 +281,16 @@ def raster_layer(
     view=None,
     projection=None,
     background=None,
+    samples: int = 1,
 ) -> Layer:
-    """Rasterize ``draws`` (pairs of the object and its Draw) with one sample per pixel, one
-    rasterizer call per shading mode, composited by depth. ``view``/``projection`` (4,4) override
-    the camera's (the image size stays the camera's). ``background``: an opaque Layer of the
-    camera's size the draws are rasterized over (the rasterizer's ``background``: exact per
-    sample depth test and transparency); with several shading modes the first group is drawn
-    over it and the others are composited by depth."""
+    """Rasterize ``draws`` (pairs of the object and its Draw), one rasterizer call per shading
+    mode, composited by depth. ``view``/``projection`` (4,4) override the camera's (the image
+    size stays the camera's). ``samples`` (1, 2 or 4) per pixel along each axis, box-resolved
+    by the rasterizer (depth and id of each pixel's nearest sample). ``background``: an opaque
+    Layer of the camera's size times ``samples`` (one entry per sample) the draws are rasterized
+    over (the rasterizer's ``background``: exact per-sample depth test and transparency); with
+    several shading modes the first group is drawn over it and the others are composited by
+    depth. Returns a Layer of the camera's size."""
     groups: dict[str, list[Draw]] = {}
     for obj, d in draws:
         groups.setdefault(obj.shading, []).append(d)
@@ -296,7 +299,7 @@ def raster_layer(
         under = background if out is None else None
         if view is None and projection is None:
             f = rasterize(
-                camera, ds, samples=1, shading=shading, lights=scene.lights, ambient=scene.ambient,
+                camera, ds, samples=samples, shading=shading, lights=scene.lights, ambient=scene.ambient,
                 background=under,
             )  # fmt: skip
             layer = Layer(f.rgba, f.depth, f.ids)
@@ -311,10 +314,14 @@ def raster_layer(
                 _lights(scene, None),
                 scene.ambient,
                 background=under,
+                samples=samples,
             )
         out = layer if out is None else composite(out, layer)
     if out is None:
-        out = Layer.empty(camera.height, camera.width) if background is None else _copy(background)
+        if background is None:
+            out = Layer.empty(camera.height, camera.width)
+        else:
+            out = _copy(background) if samples == 1 else Layer(*resolve_arrays(background, samples))
     return out
 
 
@@ -333,10 +340,13 @@ def _lights(scene: Scene, rotation) -> list:
     return out
 
 
-def raw_layer(width, height, view, projection, draws, shading, lights, ambient, background=None) -> Layer:
-    """Direct call of the compiled rasterizer (no checks beyond the core's): one sample per pixel,
-    over the opaque Layer ``background`` of ``height`` x ``width`` when given (copied to
-    contiguous arrays when it is a window of a larger layer; never written)."""
+def raw_layer(
+    width, height, view, projection, draws, shading, lights, ambient, background=None, samples: int = 1
+) -> Layer:
+    """Direct call of the compiled rasterizer (no checks beyond the core's): ``samples`` per
+    pixel along each axis, over the opaque Layer ``background`` of ``height * samples`` x
+    ``width * samples`` when given (copied to contiguous arrays when it is a window of a larger
+    layer; never written)."""
     if background is not None:
         c = np.ascontiguousarray
         background = (
@@ -349,7 +359,7 @@ def raw_layer(width, height, view, projection, draws, shading, lights, ambient, 
         int(width),
         int(height),
         [d._args() for d in draws],
-        1,
+        int(samples),
         "exact",
         shading,
         lights,

@@ -267,8 +267,13 @@ def motion_volume(
         layer = raster_layer(wcam, scene, draws, projection=proj)
     elif exact_static and static.opaque and len({o.shading for o, _ in draws}) == 1:
         # the opaque static layer of the window pre-loads the rasterizer (colour and depth per
-        # sample): only the volumes are drawn, depth-tested and composited over it exactly
-        layer = raster_layer(wcam, scene, draws, projection=proj, background=base)
+        # sample): only the volumes are drawn, depth-tested and composited over it exactly, and
+        # the rasterizer resolves the aa x aa samples of each pixel itself
+        pcam = Camera(cam.pose, cam.yfov, (x1 - x0) // aa, (y1 - y0) // aa, cam.znear, cam.zfar)
+        layer = raster_layer(pcam, scene, draws, projection=proj, background=base, samples=aa)
+        frame = paste(static, tuple(v // aa for v in win), layer, 1)
+        frame.stats.update(stats)
+        return frame
     elif exact_static:
         # the static objects redrawn with the volumes in the window: exact transparency always
         statics = [(o, Draw(o.world_vertices(0.0), o.mesh.faces, o.rgba, object_id=k)) for k, o in still]
