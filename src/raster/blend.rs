@@ -78,6 +78,7 @@ pub struct FragLists {
     pub frags: Vec<Frag>,
     sorted: Vec<Frag>,
     start: Vec<u32>,
+    next: Vec<u32>,
 }
 
 impl FragLists {
@@ -102,13 +103,12 @@ impl FragLists {
         }
         self.sorted.clear();
         self.sorted.resize(self.frags.len(), Frag::default());
-        {
-            let mut next = self.start.clone();
-            for f in &self.frags {
-                let slot = &mut next[f.sample as usize];
-                self.sorted[*slot as usize] = *f;
-                *slot += 1;
-            }
+        self.next.clear();
+        self.next.extend_from_slice(&self.start[..n]);
+        for f in &self.frags {
+            let slot = &mut self.next[f.sample as usize];
+            self.sorted[*slot as usize] = *f;
+            *slot += 1;
         }
         for (s, sample) in samples.iter_mut().enumerate() {
             let (lo, hi) = (self.start[s] as usize, self.start[s + 1] as usize);

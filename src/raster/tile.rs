@@ -14,7 +14,7 @@ use super::background::Background;
 use super::blend::{Blend, Frag, FragLists, Sample};
 use super::interp::Planes;
 use super::setup::{Tri, HALF, MAY_OPAQUE, MAY_TRANSPARENT, ONE};
-use super::shade::Shader;
+use super::shade::{Shader, TriShade};
 
 /// Tile side in samples.
 pub const TILE: i32 = 64;
@@ -202,11 +202,14 @@ pub fn render_tile(
         }
         let edges = Edges::new(t);
         let planes = Planes::new(t);
-        let mixed = t.flags & MAY_TRANSPARENT != 0;
+        // only a triangle that may also be transparent needs its alpha per sample
+        let mixed = (t.flags & MAY_TRANSPARENT != 0).then(|| sh.prepare(r));
         edges.cover(bx, |ix, iy| {
             fragments += 1;
-            if mixed && sh.alpha(t, sh.lambdas(r, &planes, ix, iy)) < 1.0 {
-                return;
+            if let Some(ts) = &mixed {
+                if ts.alpha(ts.lambdas(&planes, ix, iy)) < 1.0 {
+                    return;
+                }
             }
             let z = planes.invw(ix, iy) as f32;
             let s = local(ix, iy);
@@ -218,7 +221,7 @@ pub fn render_tile(
     }
 
     // Shade the opaque winners (neighbouring samples mostly share a triangle: keep its planes).
-    let mut cached = (NONE, None::<Planes>);
+    let mut cached = (NONE, None::<(Planes, TriShade)>);
     for iy in ty0..ty1 {
         for ix in tx0..tx1 {
             let s = local(ix, iy);
@@ -229,12 +232,11 @@ pub fn render_tile(
             samples[s] = if r == NONE {
                 Sample::BACKGROUND
             } else {
-                let t = sh.tri(r);
                 if cached.0 != r {
-                    cached = (r, Some(Planes::new(t)));
+                    cached = (r, Some((Planes::new(sh.tri(r)), sh.prepare(r))));
                 }
-                let planes = cached.1.as_ref().expect("set above");
-                let sh = sh.shade(t, sh.lambdas(r, planes, ix, iy));
+                let (planes, ts) = cached.1.as_ref().expect("set above");
+                let sh = ts.shade(ts.lambdas(planes, ix, iy));
                 Sample {
                     rgba: sh.rgba,
                     invw: zbuf[s],
@@ -262,18 +264,19 @@ pub fn render_tile(
         let edges = Edges::new(t);
         let planes = Planes::new(t);
         let mixed = t.flags & MAY_OPAQUE != 0;
+        let ts = sh.prepare(r);
         edges.cover(bx, |ix, iy| {
             let s = local(ix, iy);
             let z = planes.invw(ix, iy) as f32;
             if z <= zbuf[s] {
                 return;
             }
-            let lam = sh.lambdas(r, &planes, ix, iy);
-            if mixed && sh.alpha(t, lam) >= 1.0 {
+            let lam = ts.lambdas(&planes, ix, iy);
+            if mixed && ts.alpha(lam) >= 1.0 {
                 return;
             }
             fragments += 1;
-            let shaded = sh.shade(t, lam);
+            let shaded = ts.shade(lam);
             if shaded.rgba[3] > 0.0 {
                 frags.frags.push(Frag {
                     sample: s as u32,
