@@ -197,20 +197,48 @@ def test_the_core_rechecks_the_background():
     cam = mb.Camera(np.eye(4), 0.8, 8, 8)
     args = (cam.view, cam.projection, 8, 8, [], 1, "exact", "flat", [], (0.0, 0.0, 0.0))
     rgba, depth, ids = _bg()
+    big = _bg(16, 16)
     for bad in [
-        (rgba[:, :4], depth, ids),
-        (rgba, depth[:4], ids),
-        (rgba, np.full((8, 8), np.nan, np.float32), ids),
-        (rgba, np.zeros((8, 8), np.float32), ids),
-        (np.full((8, 8, 4), np.inf, np.float32), depth, ids),
-        (rgba, np.asfortranarray(np.ones((8, 8), np.float32)), ids),
-        (_bg(16, 16)),  # a supersampled background for samples=1
+        (rgba[:, :4], depth, ids, 0, 0),
+        (rgba, depth[:4], ids, 0, 0),
+        (rgba, np.full((8, 8), np.nan, np.float32), ids, 0, 0),
+        (rgba, np.zeros((8, 8), np.float32), ids, 0, 0),
+        (np.full((8, 8, 4), np.inf, np.float32), depth, ids, 0, 0),
+        (rgba, np.asfortranarray(np.ones((8, 8), np.float32)), ids, 0, 0),
+        (*big, 9, 0),  # the window runs past the right edge
+        (*big, 0, 9),
+        (rgba, depth, ids, 1, 0),
     ]:
         with pytest.raises(ValueError, match="background"):
             _core._rasterize(*args, bad)
     with pytest.raises(TypeError):
-        _core._rasterize(*args, (rgba.astype(np.float64), depth, ids))
-    _core._rasterize(*args, _bg())  # the right one passes
+        _core._rasterize(*args, (rgba.astype(np.float64), depth, ids, 0, 0))
+    with pytest.raises(OverflowError):
+        _core._rasterize(*args, (*big, -1, 0))
+    _core._rasterize(*args, (rgba, depth, ids, 0, 0))  # the right ones pass
+    _core._rasterize(*args, (*big, 8, 8))
+
+
+def test_a_window_of_a_larger_background_is_read_in_place():
+    """raw_layer over a window of a kept layer (origin x0, y0) equals the copied window."""
+    from motionblur.render import Layer, raw_layer, window_projection
+
+    statics, moving = _scene_draws()
+    cam = _camera(96, 72)
+    bg = mb.rasterize(cam, statics)
+    layer = Layer(bg.rgba, bg.depth, bg.ids)
+    x0, y0, x1, y1 = 20, 12, 76, 52
+    proj = window_projection(cam.projection, 96, 72, (x0, y0, x1, y1))
+    run = dict(draws=moving, shading="flat", lights=[], ambient=(0.0, 0.0, 0.0))
+    window = Layer(bg.rgba[y0:y1, x0:x1], bg.depth[y0:y1, x0:x1], bg.ids[y0:y1, x0:x1])
+    copied = raw_layer(x1 - x0, y1 - y0, cam.view, proj, background=window, **run)
+    in_place = raw_layer(
+        x1 - x0, y1 - y0, cam.view, proj, background=layer, background_origin=(x0, y0), **run
+    )
+    for a, b in zip((copied.rgba, copied.depth, copied.ids), (in_place.rgba, in_place.depth, in_place.ids)):
+        np.testing.assert_array_equal(a, b)
+    full = mb.rasterize(cam, statics + moving)
+    np.testing.assert_array_equal(in_place.rgba, full.rgba[y0:y1, x0:x1])
 
 
 def test_callers_background_arrays_are_never_written():

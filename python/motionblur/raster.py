@@ -374,7 +374,7 @@ def rasterize(
     if not np.isfinite(amb).all() or (amb < 0).any():
         raise ValueError("ambient: must be finite and >= 0")
     if background is not None:
-        background = _background(background, camera.height * samples, camera.width * samples)
+        background = (*_background(background, camera.height * samples, camera.width * samples), 0, 0)
     rgba, depth, ids, velocity, stats = _core._rasterize(
         camera.view,
         camera.projection,

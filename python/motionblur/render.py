@@ -282,15 +282,18 @@ def raster_layer(
     projection=None,
     background=None,
     samples: int = 1,
+    background_origin=(0, 0),
 ) -> Layer:
     """Rasterize ``draws`` (pairs of the object and its Draw), one rasterizer call per shading
     mode, composited by depth. ``view``/``projection`` (4,4) override the camera's (the image
     size stays the camera's). ``samples`` (1, 2 or 4) per pixel along each axis, box-resolved
     by the rasterizer (depth and id of each pixel's nearest sample). ``background``: an opaque
-    Layer of the camera's size times ``samples`` (one entry per sample) the draws are rasterized
-    over (the rasterizer's ``background``: exact per-sample depth test and transparency); with
-    several shading modes the first group is drawn over it and the others are composited by
-    depth. Returns a Layer of the camera's size."""
+    Layer, one entry per sample, the draws are rasterized over (the rasterizer's
+    ``background``: exact per-sample depth test and transparency): the camera's size times
+    ``samples``, or a larger Layer whose sample ``background_origin`` (x0, y0) lies under the
+    frame's first sample (a window of a kept layer, read without a copy). With several shading
+    modes the first group is drawn over it and the others are composited by depth. Returns a
+    Layer of the camera's size."""
     groups: dict[str, list[Draw]] = {}
     for obj, d in draws:
         groups.setdefault(obj.shading, []).append(d)
@@ -298,6 +301,8 @@ def raster_layer(
     for shading, ds in groups.items():
         under = background if out is None else None
         if view is None and projection is None:
+            if under is not None and tuple(background_origin) != (0, 0):
+                raise ValueError("background_origin: needs view or projection (the raw rasterizer call)")
             f = rasterize(
                 camera, ds, samples=samples, shading=shading, lights=scene.lights, ambient=scene.ambient,
                 background=under,
@@ -315,13 +320,20 @@ def raster_layer(
                 scene.ambient,
                 background=under,
                 samples=samples,
+                background_origin=background_origin,
             )
         out = layer if out is None else composite(out, layer)
     if out is None:
         if background is None:
             out = Layer.empty(camera.height, camera.width)
         else:
-            out = _copy(background) if samples == 1 else Layer(*resolve_arrays(background, samples))
+            (x0, y0), hs, ws = background_origin, camera.height * samples, camera.width * samples
+            window = Layer(
+                background.rgba[y0 : y0 + hs, x0 : x0 + ws],
+                background.depth[y0 : y0 + hs, x0 : x0 + ws],
+                background.ids[y0 : y0 + hs, x0 : x0 + ws],
+            )
+            out = _copy(window) if samples == 1 else Layer(*resolve_arrays(window, samples))
     return out
 
 
@@ -341,17 +353,28 @@ def _lights(scene: Scene, rotation) -> list:
 
 
 def raw_layer(
-    width, height, view, projection, draws, shading, lights, ambient, background=None, samples: int = 1
+    width,
+    height,
+    view,
+    projection,
+    draws,
+    shading,
+    lights,
+    ambient,
+    background=None,
+    samples: int = 1,
+    background_origin=(0, 0),
 ) -> Layer:
     """Direct call of the compiled rasterizer (no checks beyond the core's): ``samples`` per
-    pixel along each axis, over the opaque Layer ``background`` of ``height * samples`` x
-    ``width * samples`` when given (copied to contiguous arrays when it is a window of a larger
-    layer; never written)."""
+    pixel along each axis, over the opaque Layer ``background`` (one entry per sample) when
+    given: the frame's samples are its window from sample ``background_origin`` (x0, y0),
+    read in place when its arrays are C-contiguous float32 / float32 / int32 (else copied);
+    never written."""
     if background is not None:
         c = np.ascontiguousarray
         background = (
             c(background.rgba, dtype=np.float32), c(background.depth, dtype=np.float32),
-            c(background.ids, dtype=np.int32),
+            c(background.ids, dtype=np.int32), *map(int, background_origin),
         )  # fmt: skip
     rgba, depth, ids, _velocity, _stats = _core._rasterize(
         np.ascontiguousarray(view, dtype=np.float64),

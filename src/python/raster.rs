@@ -44,33 +44,27 @@ fn rows<T: numpy::Element + Copy + Default, const K: usize>(
         .collect())
 }
 
-/// The background as the Python layer passes it: (rgba f32 (Hs,Ws,4), depth f32 (Hs,Ws),
-/// ids i32 (Hs,Ws)), one entry per sample.
+/// The background as the Python layer passes it: (rgba f32 (R,S,4), depth f32 (R,S), ids i32
+/// (R,S), x0, y0), one entry per sample; the frame reads the window from sample (x0, y0).
 type BackgroundArgs<'py> = (
     PyReadonlyArray3<'py, f32>,
     PyReadonlyArray2<'py, f32>,
     PyReadonlyArray2<'py, i32>,
+    usize,
+    usize,
 );
 
-/// Borrows the background's data after checking its shapes against `hs` x `ws` samples.
-fn background<'a>(
-    b: &'a BackgroundArgs<'_>,
-    ws: usize,
-    hs: usize,
-) -> Result<Background<'a>, Error> {
-    let want = [hs, ws];
-    if b.0.shape() != [hs, ws, 4] {
-        return Err(Error::shape(
-            "background",
-            format!("rgba: expected shape ({hs},{ws},4), got {:?}", b.0.shape()),
-        ));
-    }
-    if b.1.shape() != want || b.2.shape() != want {
+/// Borrows the background's data after checking its shapes (the window of `hs` x `ws` samples
+/// is checked by the core).
+fn background<'a>(b: &'a BackgroundArgs<'_>) -> Result<Background<'a>, Error> {
+    let [rows, cols] = [b.1.shape()[0], b.1.shape()[1]];
+    if b.0.shape() != [rows, cols, 4] || b.2.shape() != [rows, cols] {
         return Err(Error::shape(
             "background",
             format!(
-                "depth and ids: expected shape ({hs},{ws}), got {:?} and {:?}",
+                "rgba (R,S,4) and ids (R,S) must match depth {:?}, got {:?} and {:?}",
                 b.1.shape(),
+                b.0.shape(),
                 b.2.shape()
             ),
         ));
@@ -79,7 +73,9 @@ fn background<'a>(
         rgba: c_slice(&b.0, "background")?,
         depth: c_slice(&b.1, "background")?,
         ids: c_slice(&b.2, "background")?,
-        stride: ws,
+        stride: cols,
+        x0: b.3,
+        y0: b.4,
     })
 }
 
@@ -163,13 +159,9 @@ fn _rasterize<'py>(
         .collect::<Result<_, _>>()
         .map_err(to_py_err)?;
     drop(draws);
-    let (ws, hs) = (
-        width as usize * samples as usize,
-        height as usize * samples as usize,
-    );
     let bg = background
         .as_ref()
-        .map(|b| self::background(b, ws, hs))
+        .map(self::background)
         .transpose()
         .map_err(to_py_err)?;
     let frame = py

@@ -270,7 +270,15 @@ def motion_volume(
         # sample): only the volumes are drawn, depth-tested and composited over it exactly, and
         # the rasterizer resolves the aa x aa samples of each pixel itself
         pcam = Camera(cam.pose, cam.yfov, (x1 - x0) // aa, (y1 - y0) // aa, cam.znear, cam.zfar)
-        layer = raster_layer(pcam, scene, draws, projection=proj, background=base, samples=aa)
+        layer = raster_layer(
+            pcam,
+            scene,
+            draws,
+            projection=proj,
+            background=static.layer,
+            background_origin=(x0, y0),
+            samples=aa,
+        )
         frame = paste(static, tuple(v // aa for v in win), layer, 1)
         frame.stats.update(stats)
         return frame
