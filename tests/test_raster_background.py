@@ -9,7 +9,6 @@ the static objects with the volumes (``exact_static`` with a non-opaque static l
 
 from __future__ import annotations
 
-import copy
 import os
 import subprocess
 import sys
@@ -111,15 +110,9 @@ def test_an_empty_draw_list_returns_the_background():
 
 
 def _old_exact_path(monkeypatch):
-    """Force motion_volume's redraw of the static objects (taken when a static is not opaque)."""
-    orig = mv_module.static_layer
-
-    def not_opaque(*args, **kwargs):
-        st = copy.copy(orig(*args, **kwargs))
-        st.opaque = False
-        return st
-
-    monkeypatch.setattr(mv_module, "static_layer", not_opaque)
+    """Force motion_volume's previous still-camera path (static objects redrawn with the
+    volumes at sample resolution, resolved apart)."""
+    monkeypatch.setattr(mv_module, "ONE_PASS", False)
 
 
 @pytest.mark.parametrize("name", ["cube", "curved", "sphere80k", "airplane"])
