@@ -81,9 +81,21 @@ pub struct FragLists {
     next: Vec<u32>,
 }
 
+/// Fragments a thread keeps room for between tiles (36 bytes each, twice): a tile of extreme
+/// depth complexity may grow the lists further, and they are released after it.
+const KEEP_FRAGS: usize = 1 << 18;
+
 impl FragLists {
     pub fn clear(&mut self) {
         self.frags.clear();
+    }
+
+    /// Releases the lists' memory beyond `KEEP_FRAGS` fragments (kept buffers stay bounded).
+    pub fn trim(&mut self) {
+        if self.frags.capacity() > KEEP_FRAGS || self.sorted.capacity() > KEEP_FRAGS {
+            self.frags = Vec::new();
+            self.sorted = Vec::new();
+        }
     }
 
     /// Composites the fragments over `samples` (the opaque result, `n` samples). Fragments were

@@ -174,14 +174,19 @@ fn transform(draw: &Draw, vp: glam::DMat4, opts: &Options, w: f64, h: f64) -> Pr
 thread_local! {
     /// Each thread's tile buffers, kept across tiles and frames: a tile resets what it reads, so
     /// reuse changes no result, and the ~300 KB of buffers (and the fragment lists grown to the
-    /// frame's depth complexity) are not allocated and page-faulted again per frame.
+    /// frame's depth complexity, up to 2^18 fragments) are not allocated and page-faulted again
+    /// per frame.
     static SCRATCH: RefCell<TileScratch> = RefCell::new(TileScratch::default());
 }
 
 /// Runs `f` with this thread's tile buffers (fresh ones if they are already in use).
 fn with_scratch<R>(f: impl FnOnce(&mut TileScratch) -> R) -> R {
     SCRATCH.with(|cell| match cell.try_borrow_mut() {
-        Ok(mut scratch) => f(&mut scratch),
+        Ok(mut scratch) => {
+            let out = f(&mut scratch);
+            scratch.trim();
+            out
+        }
         Err(_) => f(&mut TileScratch::default()),
     })
 }

@@ -153,6 +153,13 @@ impl Default for TileScratch {
     }
 }
 
+impl TileScratch {
+    /// Releases fragment-list memory beyond what a thread keeps between tiles.
+    pub fn trim(&mut self) {
+        self.frags.trim();
+    }
+}
+
 /// Renders the samples `rect` = [x0, y0, x1, y1) of a tile from its triangle references (in
 /// submission order) into `scratch.samples` (row stride TILE), starting from `bg` when given
 /// (else from the empty background). Returns the fragment count.
