@@ -335,8 +335,10 @@ def rasterize(
     (Hs,Ws) int32. Its depth pre-loads the z-buffer: the draws are depth-tested against it
     per sample and transparent fragments in front of it are composited over its colour, as if
     its surfaces had been drawn first in the same call (exactly so for opaque surfaces, up to
-    depth ties within one float32 ulp), so only the new draws are rasterized. Where no draw
-    covers a sample the frame keeps the background's rgba, depth and id (velocity 0). The
+    depth ties within one float32 ulp), so only the new draws are rasterized. A sample of the
+    background with a finite depth acts as an opaque surface at that depth whatever its alpha
+    (draws behind it are hidden). Where no draw covers a sample the frame keeps the
+    background's rgba, depth and id (velocity 0). The
     background arrays are read, never written. Wrong shapes, dtypes that do not convert, NaN
     colours and NaN or non-positive depths raise ValueError / TypeError naming ``background``.
 
