@@ -153,6 +153,31 @@ def test_motion_volume_through_a_static_wall(monkeypatch):
     assert cut.any() and hidden.any()
 
 
+def test_a_transparent_static_object_keeps_the_redraw_path(monkeypatch):
+    """The background holds opaque surfaces only: with a half-transparent wall the static objects
+    are redrawn with the volumes (no background reaches the rasterizer), as before."""
+    sc = mb.SCENES["cube"](width=64, height=48)
+    wall = sc.objects[2]
+    sc = sc.with_(objects=[*sc.objects[:2], mb.Object(wall.mesh, (*wall.color[:3], 0.5), name="wall")])
+    seen = []
+    raw = _core._rasterize
+
+    def spy(*args):
+        seen.append(len(args) > 10 and args[10] is not None)
+        return raw(*args)
+
+    monkeypatch.setattr(_core, "_rasterize", spy)
+    new = mb.render(sc, "motion_volume", segments=2, filter="box", aa=2)
+    assert seen and not any(seen)
+    with monkeypatch.context() as m:
+        _old_exact_path(m)
+        old = mb.render(sc, "motion_volume", segments=2, filter="box", aa=2)
+    np.testing.assert_array_equal(new.rgba, old.rgba)
+    seen.clear()
+    mb.render(sc.with_(objects=[*sc.objects[:2], wall]), "motion_volume", segments=2, filter="box", aa=2)
+    assert any(seen), "with an opaque wall the volumes are drawn over the static layer"
+
+
 # --- bad input
 
 
