@@ -292,8 +292,9 @@ def raster_layer(
     ``background``: exact per-sample depth test and transparency): the camera's size times
     ``samples``, or a larger Layer whose sample ``background_origin`` (x0, y0) lies under the
     frame's first sample (a window of a kept layer, read without a copy). With several shading
-    modes the first group is drawn over it and the others are composited by depth. Returns a
-    Layer of the camera's size."""
+    modes the first group is drawn over it and the others are composited by depth (per resolved
+    pixel when ``samples`` > 1: use one shading mode, or ``samples=1`` on a supersampled camera,
+    where exactness per sample matters). Returns a Layer of the camera's size."""
     groups: dict[str, list[Draw]] = {}
     for obj, d in draws:
         groups.setdefault(obj.shading, []).append(d)
