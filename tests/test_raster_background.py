@@ -290,6 +290,10 @@ _THREAD_SCRIPT = textwrap.dedent(
         fr = mb.rasterize(cam, glass, samples=samples, background=bg)
         for a in (fr.rgba, fr.depth, fr.ids):
             h.update(np.ascontiguousarray(a).tobytes())
+    for name in ("cube", "curved"):  # the volumes over a window of the kept static layer
+        fr = mb.render(mb.SCENES[name](width=96, height=72), "motion_volume", segments=2, aa=2)
+        for a in (fr.rgba, fr.depth, fr.ids):
+            h.update(np.ascontiguousarray(a).tobytes())
     print(h.hexdigest())
     """
 )
