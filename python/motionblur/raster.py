@@ -284,6 +284,29 @@ def _lights(lights) -> list[tuple[tuple[float, ...], tuple[float, ...]]]:
     return out
 
 
+def _background(background, height: int, width: int):
+    """(rgba, depth, ids) C-contiguous float32 / float32 / int32 arrays of a background given as
+    an object with ``.rgba``, ``.depth``, ``.ids`` (a Frame) or as such a triple, shapes checked
+    against ``height`` x ``width`` samples; new arrays or read-only views, never the caller's
+    arrays made writable."""
+    if hasattr(background, "rgba") and hasattr(background, "depth") and hasattr(background, "ids"):
+        parts = (background.rgba, background.depth, background.ids)
+    else:
+        try:
+            parts = tuple(background)
+        except TypeError as exc:
+            raise TypeError("background: expected a Frame or an (rgba, depth, ids) triple") from exc
+        if len(parts) != 3:
+            raise TypeError(f"background: expected an (rgba, depth, ids) triple, got {len(parts)} items")
+    rgba = as_array(parts[0], "background rgba", np.float32, (height, width, 4))
+    depth = as_array(parts[1], "background depth", np.float32, (height, width), finite=False)
+    if not (depth > 0).all():
+        bad = depth[~(depth > 0)][0]
+        raise ValueError(f"background depth: must be > 0 (inf where empty), got {bad}")
+    ids = as_array(parts[2], "background ids", np.int32, (height, width))
+    return _readonly(rgba), _readonly(depth), _readonly(ids)
+
+
 def rasterize(
     camera: Camera,
     draws: Draw | Sequence[Draw],
@@ -292,6 +315,7 @@ def rasterize(
     shading: str = "flat",
     lights=(),
     ambient=0.0,
+    background=None,
 ) -> Frame:
     """Rasterizes ``draws`` seen by ``camera`` into a Frame of ``camera.height`` x ``camera.width``.
 
@@ -301,7 +325,24 @@ def rasterize(
     intensity * max(0, n . -direction)), n the interpolated normal (turned towards the camera on
     back faces when culling is off). ``lights``: objects with ``.direction`` (3,) (the direction
     the light travels) and ``.intensity`` (float or RGB), or (direction, intensity) pairs.
-    ``ambient``: float or RGB. The GIL is released while rendering.
+    ``ambient``: float or RGB.
+
+    ``background`` (default None: the frame starts empty): opaque surfaces the frame starts
+    from, one entry per *sample* (``H*samples`` rows of ``W*samples``): a Frame (e.g. of an
+    earlier ``rasterize`` call with ``samples=1`` and the same camera) or an ``(rgba, depth,
+    ids)`` triple with ``rgba`` (Hs,Ws,4) float32 premultiplied linear RGBA (finite), ``depth``
+    (Hs,Ws) float32 view-axis distance in scene units, > 0, ``inf`` where empty, and ``ids``
+    (Hs,Ws) int32. Its depth pre-loads the z-buffer: the draws are depth-tested against it
+    per sample and transparent fragments in front of it are composited over its colour, as if
+    its surfaces had been drawn first in the same call (exactly so for opaque surfaces, up to
+    depth ties within one float32 ulp), so only the new draws are rasterized. A sample of the
+    background with a finite depth acts as an opaque surface at that depth whatever its alpha
+    (draws behind it are hidden). Where no draw covers a sample the frame keeps the
+    background's rgba, depth and id (velocity 0). The
+    background arrays are read, never written. Wrong shapes, dtypes that do not convert, NaN
+    colours and NaN or non-positive depths raise ValueError / TypeError naming ``background``.
+
+    The GIL is released while rendering.
     """
     t0 = time.perf_counter()
     if not isinstance(camera, Camera):
@@ -334,6 +375,8 @@ def rasterize(
     amb = np.broadcast_to(amb, (3,))
     if not np.isfinite(amb).all() or (amb < 0).any():
         raise ValueError("ambient: must be finite and >= 0")
+    if background is not None:
+        background = (*_background(background, camera.height * samples, camera.width * samples), 0, 0)
     rgba, depth, ids, velocity, stats = _core._rasterize(
         camera.view,
         camera.projection,
@@ -345,6 +388,7 @@ def rasterize(
         shading,
         _lights(lights),
         tuple(map(float, amb)),
+        background,
     )
     stats["ms"] = (time.perf_counter() - t0) * 1e3
     return Frame(rgba, depth, ids, velocity, stats)

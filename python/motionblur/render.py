@@ -275,18 +275,39 @@ def object_draw(obj: Object, t: float, object_id: int, vertices=None) -> Draw:
 
 
 def raster_layer(
-    camera: Camera, scene: Scene, draws: list[tuple[Object, Draw]], view=None, projection=None
+    camera: Camera,
+    scene: Scene,
+    draws: list[tuple[Object, Draw]],
+    view=None,
+    projection=None,
+    background=None,
+    samples: int = 1,
+    background_origin=(0, 0),
 ) -> Layer:
-    """Rasterize ``draws`` (pairs of the object and its Draw) with one sample per pixel, one
-    rasterizer call per shading mode, composited by depth. ``view``/``projection`` (4,4) override
-    the camera's (the image size stays the camera's)."""
+    """Rasterize ``draws`` (pairs of the object and its Draw), one rasterizer call per shading
+    mode, composited by depth. ``view``/``projection`` (4,4) override the camera's (the image
+    size stays the camera's). ``samples`` (1, 2 or 4) per pixel along each axis, box-resolved
+    by the rasterizer (depth and id of each pixel's nearest sample). ``background``: an opaque
+    Layer, one entry per sample, the draws are rasterized over (the rasterizer's
+    ``background``: exact per-sample depth test and transparency): the camera's size times
+    ``samples``, or a larger Layer whose sample ``background_origin`` (x0, y0) lies under the
+    frame's first sample (a window of a kept layer, read without a copy). With several shading
+    modes the first group is drawn over it and the others are composited by depth (per resolved
+    pixel when ``samples`` > 1: use one shading mode, or ``samples=1`` on a supersampled camera,
+    where exactness per sample matters). Returns a Layer of the camera's size."""
     groups: dict[str, list[Draw]] = {}
     for obj, d in draws:
         groups.setdefault(obj.shading, []).append(d)
     out = None
     for shading, ds in groups.items():
+        under = background if out is None else None
         if view is None and projection is None:
-            f = rasterize(camera, ds, samples=1, shading=shading, lights=scene.lights, ambient=scene.ambient)
+            if under is not None and tuple(background_origin) != (0, 0):
+                raise ValueError("background_origin: needs view or projection (the raw rasterizer call)")
+            f = rasterize(
+                camera, ds, samples=samples, shading=shading, lights=scene.lights, ambient=scene.ambient,
+                background=under,
+            )  # fmt: skip
             layer = Layer(f.rgba, f.depth, f.ids)
         else:
             layer = raw_layer(
@@ -298,11 +319,29 @@ def raster_layer(
                 shading,
                 _lights(scene, None),
                 scene.ambient,
+                background=under,
+                samples=samples,
+                background_origin=background_origin,
             )
         out = layer if out is None else composite(out, layer)
     if out is None:
-        out = Layer.empty(camera.height, camera.width)
+        if background is None:
+            out = Layer.empty(camera.height, camera.width)
+        else:
+            (x0, y0), hs, ws = background_origin, camera.height * samples, camera.width * samples
+            window = Layer(
+                background.rgba[y0 : y0 + hs, x0 : x0 + ws],
+                background.depth[y0 : y0 + hs, x0 : x0 + ws],
+                background.ids[y0 : y0 + hs, x0 : x0 + ws],
+            )
+            out = _copy(window) if samples == 1 else Layer(*resolve_arrays(window, samples))
     return out
+
+
+def _copy(layer: Layer) -> Layer:
+    return Layer(
+        np.array(layer.rgba, np.float32), np.array(layer.depth, np.float32), np.array(layer.ids, np.int32)
+    )
 
 
 def _lights(scene: Scene, rotation) -> list:
@@ -314,19 +353,42 @@ def _lights(scene: Scene, rotation) -> list:
     return out
 
 
-def raw_layer(width, height, view, projection, draws, shading, lights, ambient) -> Layer:
-    """Direct call of the compiled rasterizer (no checks beyond the core's): one sample per pixel."""
+def raw_layer(
+    width,
+    height,
+    view,
+    projection,
+    draws,
+    shading,
+    lights,
+    ambient,
+    background=None,
+    samples: int = 1,
+    background_origin=(0, 0),
+) -> Layer:
+    """Direct call of the compiled rasterizer (no checks beyond the core's): ``samples`` per
+    pixel along each axis, over the opaque Layer ``background`` (one entry per sample) when
+    given: the frame's samples are its window from sample ``background_origin`` (x0, y0),
+    read in place when its arrays are C-contiguous float32 / float32 / int32 (else copied);
+    never written."""
+    if background is not None:
+        c = np.ascontiguousarray
+        background = (
+            c(background.rgba, dtype=np.float32), c(background.depth, dtype=np.float32),
+            c(background.ids, dtype=np.int32), *map(int, background_origin),
+        )  # fmt: skip
     rgba, depth, ids, _velocity, _stats = _core._rasterize(
         np.ascontiguousarray(view, dtype=np.float64),
         np.ascontiguousarray(projection, dtype=np.float64),
         int(width),
         int(height),
         [d._args() for d in draws],
-        1,
+        int(samples),
         "exact",
         shading,
         lights,
         tuple(map(float, np.broadcast_to(ambient, (3,)))),
+        background,
     )
     return Layer(rgba, depth, ids)
 

@@ -1,9 +1,11 @@
 //! Bindings for the raster stage: numpy in, owned Rust data, GIL released, numpy out.
 use super::{c_slice, to_py_err};
-use crate::raster::{self, Blend, Camera, Draw, Light, Options, Shading};
+use crate::raster::{self, Background, Blend, Camera, Draw, Light, Options, Shading};
 use crate::Error;
 use glam::DMat4;
-use numpy::{IntoPyArray, PyArrayMethods, PyReadonlyArray2, PyUntypedArrayMethods};
+use numpy::{
+    IntoPyArray, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -42,6 +44,41 @@ fn rows<T: numpy::Element + Copy + Default, const K: usize>(
         .collect())
 }
 
+/// The background as the Python layer passes it: (rgba f32 (R,S,4), depth f32 (R,S), ids i32
+/// (R,S), x0, y0), one entry per sample; the frame reads the window from sample (x0, y0).
+type BackgroundArgs<'py> = (
+    PyReadonlyArray3<'py, f32>,
+    PyReadonlyArray2<'py, f32>,
+    PyReadonlyArray2<'py, i32>,
+    usize,
+    usize,
+);
+
+/// Borrows the background's data after checking its shapes (the window of `hs` x `ws` samples
+/// is checked by the core).
+fn background<'a>(b: &'a BackgroundArgs<'_>) -> Result<Background<'a>, Error> {
+    let [rows, cols] = [b.1.shape()[0], b.1.shape()[1]];
+    if b.0.shape() != [rows, cols, 4] || b.2.shape() != [rows, cols] {
+        return Err(Error::shape(
+            "background",
+            format!(
+                "rgba (R,S,4) and ids (R,S) must match depth {:?}, got {:?} and {:?}",
+                b.1.shape(),
+                b.0.shape(),
+                b.2.shape()
+            ),
+        ));
+    }
+    Ok(Background {
+        rgba: c_slice(&b.0, "background")?,
+        depth: c_slice(&b.1, "background")?,
+        ids: c_slice(&b.2, "background")?,
+        stride: cols,
+        x0: b.3,
+        y0: b.4,
+    })
+}
+
 fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> Result<DMat4, Error> {
     let m: Vec<[f64; 4]> = rows(a, name)?;
     if m.len() != 4 {
@@ -73,10 +110,10 @@ fn owned_draw(d: &DrawArgs<'_>) -> Result<Draw, Error> {
     })
 }
 
-/// Renders draws; returns (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32, velocity (H,W,2)
-/// f32, stats dict). The GIL is released while rendering.
+/// Renders draws, over `background` when given; returns (rgba (H,W,4) f32, depth (H,W) f32,
+/// ids (H,W) i32, velocity (H,W,2) f32, stats dict). The GIL is released while rendering.
 #[pyfunction]
-#[pyo3(signature = (view, projection, width, height, draws, samples, blend, shading, lights, ambient))]
+#[pyo3(signature = (view, projection, width, height, draws, samples, blend, shading, lights, ambient, background=None))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn _rasterize<'py>(
     py: Python<'py>,
@@ -90,6 +127,7 @@ fn _rasterize<'py>(
     shading: &str,
     lights: Vec<([f64; 3], [f64; 3])>,
     ambient: [f64; 3],
+    background: Option<BackgroundArgs<'py>>,
 ) -> PyResult<(
     Bound<'py, PyAny>,
     Bound<'py, PyAny>,
@@ -121,8 +159,13 @@ fn _rasterize<'py>(
         .collect::<Result<_, _>>()
         .map_err(to_py_err)?;
     drop(draws);
+    let bg = background
+        .as_ref()
+        .map(self::background)
+        .transpose()
+        .map_err(to_py_err)?;
     let frame = py
-        .detach(|| super::in_pool(|| raster::rasterize(&camera, &owned, &opts)))
+        .detach(|| super::in_pool(|| raster::rasterize_over(&camera, &owned, &opts, bg.as_ref())))
         .map_err(to_py_err)?;
     let (h, w) = (frame.height as usize, frame.width as usize);
     let stats = PyDict::new(py);

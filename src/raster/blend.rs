@@ -78,11 +78,24 @@ pub struct FragLists {
     pub frags: Vec<Frag>,
     sorted: Vec<Frag>,
     start: Vec<u32>,
+    next: Vec<u32>,
 }
+
+/// Fragments a thread keeps room for between tiles (36 bytes each, twice): a tile of extreme
+/// depth complexity may grow the lists further, and they are released after it.
+const KEEP_FRAGS: usize = 1 << 18;
 
 impl FragLists {
     pub fn clear(&mut self) {
         self.frags.clear();
+    }
+
+    /// Releases the lists' memory beyond `KEEP_FRAGS` fragments (kept buffers stay bounded).
+    pub fn trim(&mut self) {
+        if self.frags.capacity() > KEEP_FRAGS || self.sorted.capacity() > KEEP_FRAGS {
+            self.frags = Vec::new();
+            self.sorted = Vec::new();
+        }
     }
 
     /// Composites the fragments over `samples` (the opaque result, `n` samples). Fragments were
@@ -102,13 +115,12 @@ impl FragLists {
         }
         self.sorted.clear();
         self.sorted.resize(self.frags.len(), Frag::default());
-        {
-            let mut next = self.start.clone();
-            for f in &self.frags {
-                let slot = &mut next[f.sample as usize];
-                self.sorted[*slot as usize] = *f;
-                *slot += 1;
-            }
+        self.next.clear();
+        self.next.extend_from_slice(&self.start[..n]);
+        for f in &self.frags {
+            let slot = &mut self.next[f.sample as usize];
+            self.sorted[*slot as usize] = *f;
+            *slot += 1;
         }
         for (s, sample) in samples.iter_mut().enumerate() {
             let (lo, hi) = (self.start[s] as usize, self.start[s + 1] as usize);

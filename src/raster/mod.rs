@@ -14,6 +14,7 @@
 // Index loops over 3- and 4-vectors read better than iterator chains here; NaN-rejecting
 // `!(x > y)` comparisons are intended.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+mod background;
 mod bins;
 mod blend;
 mod buffers;
@@ -25,6 +26,7 @@ mod setup;
 mod shade;
 mod tile;
 
+pub use background::Background;
 pub use blend::Blend;
 pub use buffers::{Frame, Stats};
 pub use camera::{
@@ -37,6 +39,7 @@ use glam::DVec4;
 use rayon::prelude::*;
 use setup::{Chunk, Viewport};
 use shade::{homogeneous_pixel, Prepared, Shader};
+use std::cell::RefCell;
 use std::time::Instant;
 use tile::{TileScratch, TILE};
 
@@ -168,11 +171,46 @@ fn transform(draw: &Draw, vp: glam::DMat4, opts: &Options, w: f64, h: f64) -> Pr
     }
 }
 
+thread_local! {
+    /// Each thread's tile buffers, kept across tiles and frames: a tile resets what it reads, so
+    /// reuse changes no result, and the ~300 KB of buffers (and the fragment lists grown to the
+    /// frame's depth complexity, up to 2^18 fragments) are not allocated and page-faulted again
+    /// per frame.
+    static SCRATCH: RefCell<TileScratch> = RefCell::new(TileScratch::default());
+}
+
+/// Runs `f` with this thread's tile buffers (fresh ones if they are already in use).
+fn with_scratch<R>(f: impl FnOnce(&mut TileScratch) -> R) -> R {
+    SCRATCH.with(|cell| match cell.try_borrow_mut() {
+        Ok(mut scratch) => {
+            let out = f(&mut scratch);
+            scratch.trim();
+            out
+        }
+        Err(_) => f(&mut TileScratch::default()),
+    })
+}
+
 /// Renders `draws` seen by `camera`. Errors name the offending argument.
 pub fn rasterize(camera: &Camera, draws: &[Draw], opts: &Options) -> Result<Frame> {
+    rasterize_over(camera, draws, opts, None)
+}
+
+/// Renders `draws` seen by `camera` over the opaque `background` (one entry per sample, see
+/// `background.rs`), or over nothing when None. Errors name the offending argument.
+pub fn rasterize_over(
+    camera: &Camera,
+    draws: &[Draw],
+    opts: &Options,
+    background: Option<&Background>,
+) -> Result<Frame> {
     let t0 = Instant::now();
     check_size(camera.width, camera.height, opts.samples)?;
     check_options(opts)?;
+    if let Some(bg) = background {
+        let s = opts.samples as usize;
+        bg.validate(camera.width as usize * s, camera.height as usize * s)?;
+    }
     for d in draws {
         d.validate()?;
     }
@@ -231,7 +269,7 @@ pub fn rasterize(camera: &Camera, draws: &[Draw], opts: &Options) -> Result<Fram
     let pixels_per_tile = (TILE as u32 / s) as usize;
     let fragments: u64 = (0..bins.tiles_x * bins.tiles_y)
         .into_par_iter()
-        .map_init(TileScratch::default, |scratch, t| {
+        .map(|t| {
             let (tx, ty) = (t % tiles_x, t / tiles_x);
             let px = [
                 tx * pixels_per_tile,
@@ -242,15 +280,22 @@ pub fn rasterize(camera: &Camera, draws: &[Draw], opts: &Options) -> Result<Fram
             let s = s as usize;
             let rect = [px[0] * s, px[1] * s, px[2] * s, px[3] * s].map(|v| v as i32);
             let refs = bins.tile(t);
-            let n = if refs.is_empty() {
-                scratch.samples.fill(blend::Sample::BACKGROUND);
-                0
-            } else {
-                tile::render_tile(rect, refs, &shader, opts.blend, scratch)
-            };
-            // SAFETY: tiles partition the frame, so this rectangle is written by this task only.
-            unsafe { out.write_tile(&scratch.samples, px, s) };
-            n
+            with_scratch(|scratch| {
+                let n = match (refs.is_empty(), background) {
+                    (true, None) => {
+                        scratch.samples.fill(blend::Sample::BACKGROUND);
+                        0
+                    }
+                    (true, Some(bg)) => {
+                        bg.load(rect, &mut scratch.zbuf, &mut scratch.samples);
+                        0
+                    }
+                    _ => tile::render_tile(rect, refs, &shader, opts.blend, background, scratch),
+                };
+                // SAFETY: tiles partition the frame, so this rectangle is written by this task only.
+                unsafe { out.write_tile(&scratch.samples, px, s) };
+                n
+            })
         })
         .sum();
     let t4 = Instant::now();

@@ -58,72 +58,116 @@ pub fn unpack(r: u32) -> (usize, usize) {
     ((r >> 16) as usize, (r & 0xffff) as usize)
 }
 
-impl Shader<'_> {
+impl<'a> Shader<'a> {
     #[inline]
-    pub fn tri(&self, r: u32) -> &Tri {
+    pub fn tri(&self, r: u32) -> &'a Tri {
         let (c, i) = unpack(r);
         &self.chunks[c].tris[i]
     }
 
-    /// Barycentric coordinates in the face of sample (ix, iy) of triangle `r` (whose
-    /// interpolation planes are `planes`).
+    /// What shading the samples of triangle `r` needs, gathered once for the triangle.
     #[inline]
-    pub fn lambdas(&self, r: u32, planes: &Planes, ix: i32, iy: i32) -> [f32; 3] {
+    pub fn prepare(&self, r: u32) -> TriShade<'a> {
         let (c, i) = unpack(r);
         let tri = &self.chunks[c].tris[i];
-        let l = planes.lambdas(ix, iy);
-        if tri.clip == NO_CLIP {
-            return l.map(|v| v as f32);
-        }
-        let b = &self.chunks[c].clips[tri.clip as usize];
-        [0, 1, 2].map(|j| {
-            (l[0] * f64::from(b[0][j]) + l[1] * f64::from(b[1][j]) + l[2] * f64::from(b[2][j]))
-                as f32
-        })
-    }
-
-    /// Straight alpha at the sample.
-    #[inline]
-    pub fn alpha(&self, tri: &Tri, lam: [f32; 3]) -> f32 {
-        let d = &self.draws[tri.draw as usize];
-        if d.rgba.len() == 1 {
-            return d.rgba[0][3];
-        }
-        (0..3)
-            .map(|k| lam[k] * d.rgba[tri.verts[k] as usize][3])
-            .sum()
-    }
-
-    /// Shades the sample of triangle `tri` with barycentric coordinates `lam`.
-    pub fn shade(&self, tri: &Tri, lam: [f32; 3]) -> Shaded {
         let di = tri.draw as usize;
         let d = &self.draws[di];
         let p = &self.prepared[di];
         let v = tri.verts;
-        let mut c = if d.rgba.len() == 1 {
-            d.rgba[0]
+        let colors = if d.rgba.len() == 1 {
+            None
         } else {
-            let mut c = [0.0f32; 4];
-            for k in 0..3 {
-                let ck = d.rgba[v[k] as usize];
-                for j in 0..4 {
-                    c[j] += lam[k] * ck[j];
+            Some(v.map(|k| d.rgba[k as usize]))
+        };
+        let normals = match (self.opts.shading, &p.normals) {
+            (Shading::Lambert, Some(n)) => Some(v.map(|k| n[k as usize])),
+            _ => None,
+        };
+        TriShade {
+            clip: (tri.clip != NO_CLIP).then(|| self.chunks[c].clips[tri.clip as usize]),
+            color: d.rgba[0],
+            colors,
+            normals,
+            front: tri.flags & FRONT != 0,
+            id: d.object_id,
+            verts: v,
+            prepared: p,
+            opts: self.opts,
+            width: self.width,
+            height: self.height,
+        }
+    }
+}
+
+/// The shading inputs of one triangle: its corners' colours and normals, its clip table, its
+/// draw's id. Per sample only the interpolation remains.
+pub struct TriShade<'a> {
+    clip: Option<[[f32; 3]; 3]>,
+    /// The draw's colour when it has one for all vertices (`colors` None).
+    color: [f32; 4],
+    colors: Option<[[f32; 4]; 3]>,
+    normals: Option<[[f32; 3]; 3]>,
+    front: bool,
+    id: i32,
+    verts: [u32; 3],
+    prepared: &'a Prepared,
+    opts: &'a Options,
+    width: f64,
+    height: f64,
+}
+
+impl TriShade<'_> {
+    /// Barycentric coordinates in the face of sample (ix, iy), whose interpolation planes are
+    /// `planes`.
+    #[inline]
+    pub fn lambdas(&self, planes: &Planes, ix: i32, iy: i32) -> [f32; 3] {
+        let l = planes.lambdas(ix, iy);
+        match &self.clip {
+            None => l.map(|v| v as f32),
+            Some(b) => [0, 1, 2].map(|j| {
+                (l[0] * f64::from(b[0][j]) + l[1] * f64::from(b[1][j]) + l[2] * f64::from(b[2][j]))
+                    as f32
+            }),
+        }
+    }
+
+    /// Straight alpha at the sample.
+    #[inline]
+    pub fn alpha(&self, lam: [f32; 3]) -> f32 {
+        match &self.colors {
+            None => self.color[3],
+            Some(c) => (0..3).map(|k| lam[k] * c[k][3]).sum(),
+        }
+    }
+
+    /// Shades the sample with barycentric coordinates `lam`.
+    #[inline]
+    pub fn shade(&self, lam: [f32; 3]) -> Shaded {
+        let mut c = match &self.colors {
+            None => self.color,
+            Some(cs) => {
+                let mut c = [0.0f32; 4];
+                for k in 0..3 {
+                    let ck = cs[k];
+                    for j in 0..4 {
+                        c[j] += lam[k] * ck[j];
+                    }
                 }
+                c
             }
-            c
         };
         c[3] = c[3].clamp(0.0, 1.0);
-        if let (Shading::Lambert, Some(normals)) = (self.opts.shading, &p.normals) {
+        if let Some(normals) = &self.normals {
             let mut n = [0.0f32; 3];
             for k in 0..3 {
-                let nk = normals[v[k] as usize];
+                let nk = normals[k];
                 for j in 0..3 {
                     n[j] += lam[k] * nk[j];
                 }
             }
             let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
             let s = if len > 0.0 { 1.0 / len } else { 0.0 };
-            let s = if tri.flags & FRONT == 0 { -s } else { s };
+            let s = if self.front { s } else { -s };
             let n = n.map(|x| x * s);
             let mut e = self.opts.ambient;
             for l in &self.opts.lights {
@@ -138,6 +182,8 @@ impl Shader<'_> {
                 c[j] *= e[j];
             }
         }
+        let p = self.prepared;
+        let v = self.verts;
         let velocity = match &p.prev {
             None => [0.0; 2],
             Some(prev) => {
@@ -165,7 +211,7 @@ impl Shader<'_> {
         let a = c[3];
         Shaded {
             rgba: [c[0] * a, c[1] * a, c[2] * a, a],
-            id: d.object_id,
+            id: self.id,
             velocity,
         }
     }

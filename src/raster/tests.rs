@@ -194,3 +194,40 @@ fn bad_options_name_the_argument() {
     let e = rasterize(&camera(8, 8), &[], &opts).unwrap_err();
     assert!(e.to_string().starts_with("samples"));
 }
+
+#[test]
+fn kept_tile_buffers_change_no_result_even_after_a_very_deep_tile() {
+    // 80 transparent layers over a 64x64 image: one tile of 327,680 fragments, more than a
+    // thread keeps between tiles, so its lists are released after it. The same frame rendered
+    // again, and a shallow frame before and after, must not change.
+    let layers: Vec<Draw> = (0..80)
+        .map(|k| {
+            let z = -0.5 + k as f64 / 80.0;
+            let v = vec![
+                [-3.0, -3.0, z],
+                [3.0, -3.0, z],
+                [3.0, 3.0, z],
+                [-3.0, 3.0, z],
+            ];
+            let a = 0.02 + 0.01 * (k % 7) as f32;
+            draw(
+                v,
+                vec![[0, 1, 2], [0, 2, 3]],
+                [0.9, 0.5, 0.1 * (k % 5) as f32, a],
+            )
+        })
+        .collect();
+    let (v, f) = grid(5, 0.05);
+    let shallow = [draw(v, f, [0.2, 0.4, 0.8, 0.5])];
+    let cam = camera(64, 64);
+    let opts = Options::default();
+    let s0 = rasterize(&cam, &shallow, &opts).unwrap();
+    let d0 = rasterize(&cam, &layers, &opts).unwrap();
+    assert!(d0.stats.fragments >= 80 * 64 * 64);
+    let d1 = rasterize(&cam, &layers, &opts).unwrap();
+    let s1 = rasterize(&cam, &shallow, &opts).unwrap();
+    assert_eq!(d0.rgba, d1.rgba);
+    assert_eq!(d0.ids, d1.ids);
+    assert_eq!(s0.rgba, s1.rgba);
+    assert_eq!(s0.depth, s1.depth);
+}

@@ -10,10 +10,11 @@
 //! Pass 1 (opaque) keeps the nearest opaque fragment of each sample in a visibility buffer
 //! (1/w and a triangle reference), and shades only the winners. Pass 2 (transparent) collects
 //! the transparent fragments in front of the opaque surface; `blend.rs` composites them.
+use super::background::Background;
 use super::blend::{Blend, Frag, FragLists, Sample};
 use super::interp::Planes;
 use super::setup::{Tri, HALF, MAY_OPAQUE, MAY_TRANSPARENT, ONE};
-use super::shade::Shader;
+use super::shade::{Shader, TriShade};
 
 /// Tile side in samples.
 pub const TILE: i32 = 64;
@@ -66,7 +67,13 @@ impl Edges {
         })
     }
 
-    /// Calls `f(ix, iy)` for every covered sample in the box.
+    /// Calls `f(ix, iy)` for every covered sample in the box, row by row, left to right.
+    ///
+    /// Each edge function is affine along a row, so the covered samples of a row form one span
+    /// whose ends follow from exact integer division; boxes wider than `SPAN_MIN` samples walk
+    /// only the span (long thin triangles, such as a motion volume's swept sides, have large
+    /// boxes and few covered samples), narrower ones test every sample. Both visit exactly the
+    /// samples whose three biased edge values are >= 0, in the same order.
     #[inline]
     pub fn cover(&self, bx: [i32; 4], mut f: impl FnMut(i32, i32)) {
         let mut row = self.at(bx[0], bx[1]);
@@ -75,15 +82,23 @@ impl Edges {
         }
         let sx = self.dx.map(|d| d * ONE);
         let sy = self.dy.map(|d| d * ONE);
+        let last = i64::from(bx[2] - bx[0]);
         for iy in bx[1]..=bx[3] {
-            let mut e = row;
-            for ix in bx[0]..=bx[2] {
-                if (e[0] | e[1] | e[2]) >= 0 {
-                    f(ix, iy);
+            if last >= SPAN_MIN {
+                let (lo, hi) = span(row, sx, last);
+                for i in lo..=hi {
+                    f(bx[0] + i as i32, iy);
                 }
-                e[0] += sx[0];
-                e[1] += sx[1];
-                e[2] += sx[2];
+            } else {
+                let mut e = row;
+                for ix in bx[0]..=bx[2] {
+                    if (e[0] | e[1] | e[2]) >= 0 {
+                        f(ix, iy);
+                    }
+                    e[0] += sx[0];
+                    e[1] += sx[1];
+                    e[2] += sx[2];
+                }
             }
             row[0] += sy[0];
             row[1] += sy[1];
@@ -92,9 +107,35 @@ impl Edges {
     }
 }
 
+/// Boxes at least this many samples wide (minus one) are walked by spans.
+const SPAN_MIN: i64 = 8;
+
+/// The steps i in [0, last] where `e[k] + i * d[k] >= 0` for every edge k, as an inclusive range
+/// (empty when lo > hi).
+#[inline]
+fn span(e: [i64; 3], d: [i64; 3], last: i64) -> (i64, i64) {
+    let (mut lo, mut hi) = (0i64, last);
+    for k in 0..3 {
+        let (e, d) = (e[k], d[k]);
+        if d > 0 {
+            if e < 0 {
+                // first i with e + i d >= 0: ceil(-e / d)
+                let a = -e;
+                lo = lo.max(a / d + i64::from(a % d != 0));
+            }
+        } else if d < 0 {
+            // last i with e + i d >= 0: floor(e / -d), none when e < 0
+            hi = if e < 0 { -1 } else { hi.min(e / -d) };
+        } else if e < 0 {
+            hi = -1;
+        }
+    }
+    (lo, hi)
+}
+
 /// Reusable per-thread buffers of a tile.
 pub struct TileScratch {
-    zbuf: Vec<f32>,
+    pub zbuf: Vec<f32>,
     winner: Vec<u32>,
     pub samples: Vec<Sample>,
     frags: FragLists,
@@ -112,13 +153,22 @@ impl Default for TileScratch {
     }
 }
 
+impl TileScratch {
+    /// Releases fragment-list memory beyond what a thread keeps between tiles.
+    pub fn trim(&mut self) {
+        self.frags.trim();
+    }
+}
+
 /// Renders the samples `rect` = [x0, y0, x1, y1) of a tile from its triangle references (in
-/// submission order) into `scratch.samples` (row stride TILE). Returns the fragment count.
+/// submission order) into `scratch.samples` (row stride TILE), starting from `bg` when given
+/// (else from the empty background). Returns the fragment count.
 pub fn render_tile(
     rect: [i32; 4],
     refs: &[u32],
     sh: &Shader,
     blend: Blend,
+    bg: Option<&Background>,
     scratch: &mut TileScratch,
 ) -> u64 {
     let [tx0, ty0, tx1, ty1] = rect;
@@ -137,8 +187,12 @@ pub fn render_tile(
         samples,
         frags,
     } = scratch;
-    zbuf.fill(0.0);
     winner.fill(NONE);
+    match bg {
+        // Samples outside `rect` are never read back; the opaque pass only touches `rect`.
+        Some(bg) => bg.load(rect, zbuf, samples),
+        None => zbuf.fill(0.0),
+    }
     let mut fragments = 0u64;
     let mut any_transparent = false;
 
@@ -155,11 +209,14 @@ pub fn render_tile(
         }
         let edges = Edges::new(t);
         let planes = Planes::new(t);
-        let mixed = t.flags & MAY_TRANSPARENT != 0;
+        // only a triangle that may also be transparent needs its alpha per sample
+        let mixed = (t.flags & MAY_TRANSPARENT != 0).then(|| sh.prepare(r));
         edges.cover(bx, |ix, iy| {
             fragments += 1;
-            if mixed && sh.alpha(t, sh.lambdas(r, &planes, ix, iy)) < 1.0 {
-                return;
+            if let Some(ts) = &mixed {
+                if ts.alpha(ts.lambdas(&planes, ix, iy)) < 1.0 {
+                    return;
+                }
             }
             let z = planes.invw(ix, iy) as f32;
             let s = local(ix, iy);
@@ -171,20 +228,22 @@ pub fn render_tile(
     }
 
     // Shade the opaque winners (neighbouring samples mostly share a triangle: keep its planes).
-    let mut cached = (NONE, None::<Planes>);
+    let mut cached = (NONE, None::<(Planes, TriShade)>);
     for iy in ty0..ty1 {
         for ix in tx0..tx1 {
             let s = local(ix, iy);
             let r = winner[s];
+            if r == NONE && bg.is_some() {
+                continue; // the background sample loaded above stays
+            }
             samples[s] = if r == NONE {
                 Sample::BACKGROUND
             } else {
-                let t = sh.tri(r);
                 if cached.0 != r {
-                    cached = (r, Some(Planes::new(t)));
+                    cached = (r, Some((Planes::new(sh.tri(r)), sh.prepare(r))));
                 }
-                let planes = cached.1.as_ref().expect("set above");
-                let sh = sh.shade(t, sh.lambdas(r, planes, ix, iy));
+                let (planes, ts) = cached.1.as_ref().expect("set above");
+                let sh = ts.shade(ts.lambdas(planes, ix, iy));
                 Sample {
                     rgba: sh.rgba,
                     invw: zbuf[s],
@@ -212,18 +271,19 @@ pub fn render_tile(
         let edges = Edges::new(t);
         let planes = Planes::new(t);
         let mixed = t.flags & MAY_OPAQUE != 0;
+        let ts = sh.prepare(r);
         edges.cover(bx, |ix, iy| {
             let s = local(ix, iy);
             let z = planes.invw(ix, iy) as f32;
             if z <= zbuf[s] {
                 return;
             }
-            let lam = sh.lambdas(r, &planes, ix, iy);
-            if mixed && sh.alpha(t, lam) >= 1.0 {
+            let lam = ts.lambdas(&planes, ix, iy);
+            if mixed && ts.alpha(lam) >= 1.0 {
                 return;
             }
             fragments += 1;
-            let shaded = sh.shade(t, lam);
+            let shaded = ts.shade(lam);
             if shaded.rgba[3] > 0.0 {
                 frags.frags.push(Frag {
                     sample: s as u32,
@@ -235,4 +295,80 @@ pub fn render_tile(
     }
     frags.composite(&mut samples[..(TILE * TILE) as usize], blend);
     fragments
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Edges of the triangle with fixed-point corners (x, y), as `Edges::new` builds them.
+    fn edges(x: [i32; 3], y: [i32; 3]) -> Edges {
+        let mut e = Edges {
+            dx: [0; 3],
+            dy: [0; 3],
+            bias: [0; 3],
+            x: x.map(i64::from),
+            y: y.map(i64::from),
+        };
+        for k in 0..3 {
+            let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+            let (ex, ey) = (e.x[j] - e.x[i], e.y[j] - e.y[i]);
+            e.dx[k] = -ey;
+            e.dy[k] = ex;
+            e.bias[k] = if (ey == 0 && ex > 0) || ey < 0 { 0 } else { 1 };
+        }
+        e
+    }
+
+    /// Every sample of the box tested on its own.
+    fn brute(e: &Edges, bx: [i32; 4]) -> Vec<(i32, i32)> {
+        let mut out = Vec::new();
+        for iy in bx[1]..=bx[3] {
+            for ix in bx[0]..=bx[2] {
+                let v = e.at(ix, iy);
+                if (0..3).all(|k| v[k] - e.bias[k] >= 0) {
+                    out.push((ix, iy));
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn spans_visit_exactly_the_covered_samples_in_order() {
+        // xorshift: reproducible corners, slivers and axis-aligned edges included
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = |m: i32| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % m as u64) as i32
+        };
+        let mut covered = 0;
+        for n in 0..4000 {
+            let scale = [ONE as i32 * 70, ONE as i32 * 8, 3 * ONE as i32][n % 3];
+            let mut x = [0; 3].map(|_| next(scale) - scale / 8);
+            let mut y = [0; 3].map(|_| next(scale) - scale / 8);
+            if n % 7 == 0 {
+                y[1] = y[0]; // a horizontal edge
+            }
+            if n % 11 == 0 {
+                x[2] = x[1]; // a vertical edge
+            }
+            let area = i64::from(x[1] - x[0]) * i64::from(y[2] - y[0])
+                - i64::from(x[2] - x[0]) * i64::from(y[1] - y[0]);
+            if area < 0 {
+                x.swap(1, 2);
+                y.swap(1, 2);
+            }
+            let e = edges(x, y);
+            let bx = [next(5) - 2, next(5) - 2, next(70), next(70)];
+            let mut got = Vec::new();
+            e.cover(bx, |ix, iy| got.push((ix, iy)));
+            let want = brute(&e, bx);
+            covered += want.len();
+            assert_eq!(got, want, "triangle {x:?} {y:?} box {bx:?}");
+        }
+        assert!(covered > 10_000, "the test triangles must cover samples");
+    }
 }
