@@ -7,8 +7,12 @@ distance, inf for background; the shutter spans normalised time [0, 1].
 
 from __future__ import annotations
 
+from . import (
+    _malloc,  # noqa: F401  (keeps freed frame buffers in the process; see the module)
+    image,
+    meshes,
+)
 from . import geometry as _geometry
-from . import image, meshes
 from . import metrics as metrics
 from . import raster as _raster
 from . import reference as reference
