@@ -240,6 +240,9 @@ def motion_volume(
                 f"scene: object {k} ({obj.name or 'unnamed'}) deforms; motion_volume needs rigid motion "
                 "(use accumulation or blur_shell)"
             )
+        if not obj.is_moving and not scene.camera_moves:
+            still.append((k, obj))  # no apparent motion, nothing to fold
+            continue
         keys = apparent_keyframes(scene, obj, segments, folds)
         turns = spin is not False and _rotates(scene, obj) and (spin is True or _may_spin(keys, obj))
         if _still(keys) and not turns:
