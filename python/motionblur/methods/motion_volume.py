@@ -434,20 +434,30 @@ def _averaged_colors(scene: Scene, k: int, obj: Object, keys: np.ndarray, vol) -
     as the camera at the reference time sees it, inside the volume's pixel window, and box-blurred
     along the image path of its centroid from shutter open to close: for a translation seen
     orthographically that blurred layer is exactly the time average of the object's image (the
-    window reaches up to one image size beyond the view, so an object leaving the view still
-    colours its streak). Each
-    vertex takes the blurred colour over the blurred alpha at its image (bilinear); where that
+    window reaches beyond the view by the image path, at most one image size, so an object
+    leaving the view still colours its streak). Each vertex takes the blurred colour over the blurred alpha at its image (bilinear); where that
     alpha is below 1e-3 (outside every position of the object) or the vertex is behind the camera
     it keeps its own colour."""
     cam = scene.camera_at(scene.reference_t)
-    # the volume's pixel box, beyond the image by up to one image size each way (the parts of
-    # the object outside the view still colour the streak inside it)
+    c = obj.mesh.vertices.mean(axis=0)
+    ex, ey, ok = _pixels(
+        cam.view_projection,
+        np.array([m[:3, :3] @ c + m[:3, 3] for m in (keys[0], keys[-1])]),
+        cam.width,
+        cam.height,
+    )
+    if not ok.all():
+        return None
+    dx, dy = float(ex[1] - ex[0]), float(ey[1] - ey[0])
+    # The volume's pixel box, cut to the view grown by the image path (what passes the view
+    # during the shutter, also from outside it) and at most one image size beyond each side.
     x, y, front = _pixels(cam.view_projection, vol.vertices, cam.width, cam.height)
     if front.all():
-        x0 = int(np.clip(np.floor(x.min()) - 1, -cam.width, 2 * cam.width))
-        y0 = int(np.clip(np.floor(y.min()) - 1, -cam.height, 2 * cam.height))
-        x1 = int(np.clip(np.ceil(x.max()) + 1, -cam.width, 2 * cam.width))
-        y1 = int(np.clip(np.ceil(y.max()) + 1, -cam.height, 2 * cam.height))
+        mx, my = min(abs(dx) + 1.0, cam.width), min(abs(dy) + 1.0, cam.height)
+        x0 = int(max(np.floor(x.min()) - 1, -mx))
+        y0 = int(max(np.floor(y.min()) - 1, -my))
+        x1 = int(min(np.ceil(x.max()) + 1, cam.width + mx))
+        y1 = int(min(np.ceil(y.max()) + 1, cam.height + my))
     else:
         x0, y0, x1, y1 = 0, 0, cam.width, cam.height
     if x1 <= x0 or y1 <= y0:
@@ -460,14 +470,10 @@ def _averaged_colors(scene: Scene, k: int, obj: Object, keys: np.ndarray, vol) -
     mid = keys[n // 2] if n % 2 == 0 else apparent_keyframes(scene, obj, 2)[1]
     draw = Draw(_place(obj, mid), obj.mesh.faces, obj.rgba, object_id=k)
     sharp = raster_layer(wcam, scene, [(obj, draw)], projection=proj).rgba
-    vp = proj @ cam.view
-    c = obj.mesh.vertices.mean(axis=0)
-    ex, ey, ok = _pixels(vp, np.array([m[:3, :3] @ c + m[:3, 3] for m in (keys[0], keys[-1])]), w, h)
-    length = float(np.hypot(ex[1] - ex[0], ey[1] - ey[0]))
-    if not ok.all():
-        return None
+    length = float(np.hypot(dx, dy))
     if length >= 1.0:
-        sharp = image.box_blur(sharp, (ex[1] - ex[0], ey[1] - ey[0]), length)
+        sharp = image.box_blur(sharp, (dx, dy), length)
+    vp = proj @ cam.view
     px, py, front = _pixels(vp, vol.vertices, w, h)
     px, py = px - 0.5, py - 0.5  # pixel centres sit at +0.5
     i0 = np.clip(np.floor(px), 0, max(w - 2, 0)).astype(np.int64)
