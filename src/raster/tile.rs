@@ -258,7 +258,7 @@ pub fn render_tile(
     }
 
     // Pass 2: transparent fragments in front of the opaque surface.
-    frags.clear();
+    frags.clear((TILE * TILE) as usize);
     for &r in refs {
         let t = sh.tri(r);
         if t.flags & MAY_TRANSPARENT == 0 {
@@ -285,7 +285,7 @@ pub fn render_tile(
             fragments += 1;
             let shaded = ts.shade(lam);
             if shaded.rgba[3] > 0.0 {
-                frags.frags.push(Frag {
+                frags.push(Frag {
                     sample: s as u32,
                     invw: z,
                     shaded,
