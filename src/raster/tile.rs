@@ -68,14 +68,25 @@ impl Edges {
     }
 
     /// Calls `f(ix, iy)` for every covered sample in the box, row by row, left to right.
-    ///
-    /// Each edge function is affine along a row, so the covered samples of a row form one span
-    /// whose ends follow from exact integer division; boxes wider than `SPAN_MIN` samples walk
-    /// only the span (long thin triangles, such as a motion volume's swept sides, have large
-    /// boxes and few covered samples), narrower ones test every sample. Both visit exactly the
-    /// samples whose three biased edge values are >= 0, in the same order.
     #[inline]
     pub fn cover(&self, bx: [i32; 4], mut f: impl FnMut(i32, i32)) {
+        self.spans(bx, |iy, x0, x1| {
+            for ix in x0..=x1 {
+                f(ix, iy);
+            }
+        });
+    }
+
+    /// Calls `f(iy, x0, x1)` for every row of the box holding covered samples, top to bottom,
+    /// with the covered samples x0..=x1 of the row.
+    ///
+    /// Each edge function is affine along a row, so the covered samples of a row form one span
+    /// whose ends follow from exact integer division; boxes wider than `SPAN_MIN` samples compute
+    /// the span (long thin triangles, such as a motion volume's swept sides, have large boxes and
+    /// few covered samples), narrower ones test every sample. Both give exactly the samples whose
+    /// three biased edge values are >= 0.
+    #[inline]
+    pub fn spans(&self, bx: [i32; 4], mut f: impl FnMut(i32, i32, i32)) {
         let mut row = self.at(bx[0], bx[1]);
         for k in 0..3 {
             row[k] -= self.bias[k];
@@ -84,27 +95,36 @@ impl Edges {
         let sy = self.dy.map(|d| d * ONE);
         let last = i64::from(bx[2] - bx[0]);
         for iy in bx[1]..=bx[3] {
-            if last >= SPAN_MIN {
-                let (lo, hi) = span(row, sx, last);
-                for i in lo..=hi {
-                    f(bx[0] + i as i32, iy);
-                }
+            let (lo, hi) = if last >= SPAN_MIN {
+                span(row, sx, last)
             } else {
-                let mut e = row;
-                for ix in bx[0]..=bx[2] {
-                    if (e[0] | e[1] | e[2]) >= 0 {
-                        f(ix, iy);
-                    }
-                    e[0] += sx[0];
-                    e[1] += sx[1];
-                    e[2] += sx[2];
-                }
+                scan(row, sx, last)
+            };
+            if lo <= hi {
+                f(iy, bx[0] + lo as i32, bx[0] + hi as i32);
             }
             row[0] += sy[0];
             row[1] += sy[1];
             row[2] += sy[2];
         }
     }
+}
+
+/// `span` by testing every step: the first and last steps where all three values are >= 0
+/// (the covered steps between them are all covered, the set being an interval).
+#[inline]
+fn scan(mut e: [i64; 3], d: [i64; 3], last: i64) -> (i64, i64) {
+    let (mut lo, mut hi) = (i64::MAX, -1);
+    for i in 0..=last {
+        if (e[0] | e[1] | e[2]) >= 0 {
+            lo = lo.min(i);
+            hi = i;
+        }
+        e[0] += d[0];
+        e[1] += d[1];
+        e[2] += d[2];
+    }
+    (lo, hi)
 }
 
 /// Boxes at least this many samples wide (minus one) are walked by spans.
@@ -272,24 +292,26 @@ pub fn render_tile(
         let planes = Planes::new(t);
         let mixed = t.flags & MAY_OPAQUE != 0;
         let ts = sh.prepare(r);
-        edges.cover(bx, |ix, iy| {
-            let s = local(ix, iy);
-            let z = planes.invw(ix, iy) as f32;
-            if z <= zbuf[s] {
-                return;
-            }
-            let lam = ts.lambdas(&planes, ix, iy);
-            if mixed && ts.alpha(lam) >= 1.0 {
-                return;
-            }
-            fragments += 1;
-            let shaded = ts.shade(lam);
-            if shaded.rgba[3] > 0.0 {
-                frags.push(Frag {
-                    sample: s as u32,
-                    invw: z,
-                    shaded,
-                });
+        edges.spans(bx, |iy, x0, x1| {
+            for ix in x0..=x1 {
+                let s = local(ix, iy);
+                let z = planes.invw(ix, iy) as f32;
+                if z <= zbuf[s] {
+                    continue;
+                }
+                let lam = ts.lambdas(&planes, ix, iy);
+                if mixed && ts.alpha(lam) >= 1.0 {
+                    continue;
+                }
+                fragments += 1;
+                let shaded = ts.shade(lam);
+                if shaded.rgba[3] > 0.0 {
+                    frags.push(Frag {
+                        sample: s as u32,
+                        invw: z,
+                        shaded,
+                    });
+                }
             }
         });
     }
