@@ -207,7 +207,6 @@ pub fn render_tile(
         samples,
         frags,
     } = scratch;
-    winner.fill(NONE);
     match bg {
         // Samples outside `rect` are never read back; the opaque pass only touches `rect`.
         Some(bg) => bg.load(rect, zbuf, samples),
@@ -215,6 +214,8 @@ pub fn render_tile(
     }
     let mut fragments = 0u64;
     let mut any_transparent = false;
+    // Whether a triangle that may be opaque reaches the tile (`winner` is reset then only).
+    let mut any_opaque = false;
 
     // Pass 1: opaque fragments, nearest wins (strictly nearer: the first submitted keeps ties).
     for &r in refs {
@@ -226,6 +227,10 @@ pub fn render_tile(
         let bx = clamp(t);
         if bx[0] > bx[2] || bx[1] > bx[3] {
             continue;
+        }
+        if !any_opaque {
+            winner.fill(NONE);
+            any_opaque = true;
         }
         let edges = Edges::new(t);
         let planes = Planes::new(t);
@@ -248,29 +253,39 @@ pub fn render_tile(
     }
 
     // Shade the opaque winners (neighbouring samples mostly share a triangle: keep its planes).
-    let mut cached = (NONE, None::<(Planes, TriShade)>);
-    for iy in ty0..ty1 {
-        for ix in tx0..tx1 {
-            let s = local(ix, iy);
-            let r = winner[s];
-            if r == NONE && bg.is_some() {
-                continue; // the background sample loaded above stays
+    // Without opaque triangles every sample keeps the background.
+    if !any_opaque {
+        if bg.is_none() {
+            for iy in ty0..ty1 {
+                let row = local(tx0, iy);
+                samples[row..row + (tx1 - tx0) as usize].fill(Sample::BACKGROUND);
             }
-            samples[s] = if r == NONE {
-                Sample::BACKGROUND
-            } else {
-                if cached.0 != r {
-                    cached = (r, Some((Planes::new(sh.tri(r)), sh.prepare(r))));
+        }
+    } else {
+        let mut cached = (NONE, None::<(Planes, TriShade)>);
+        for iy in ty0..ty1 {
+            for ix in tx0..tx1 {
+                let s = local(ix, iy);
+                let r = winner[s];
+                if r == NONE && bg.is_some() {
+                    continue; // the background sample loaded above stays
                 }
-                let (planes, ts) = cached.1.as_ref().expect("set above");
-                let sh = ts.shade(ts.lambdas(planes, ix, iy));
-                Sample {
-                    rgba: sh.rgba,
-                    invw: zbuf[s],
-                    id: sh.id,
-                    velocity: sh.velocity,
-                }
-            };
+                samples[s] = if r == NONE {
+                    Sample::BACKGROUND
+                } else {
+                    if cached.0 != r {
+                        cached = (r, Some((Planes::new(sh.tri(r)), sh.prepare(r))));
+                    }
+                    let (planes, ts) = cached.1.as_ref().expect("set above");
+                    let sh = ts.shade(ts.lambdas(planes, ix, iy));
+                    Sample {
+                        rgba: sh.rgba,
+                        invw: zbuf[s],
+                        id: sh.id,
+                        velocity: sh.velocity,
+                    }
+                };
+            }
         }
     }
     if !any_transparent {
