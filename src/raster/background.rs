@@ -106,15 +106,29 @@ impl Background<'_> {
     }
 
     /// Loads the frame's samples `rect` = [x0, y0, x1, y1) into a tile's buffers (row stride
-    /// TILE): `samples` gets the background, `zbuf` its 1/w (0 where empty).
+    /// TILE): `samples` gets the background, `zbuf` its 1/w (0 where empty), as `sample` gives
+    /// them.
     pub fn load(&self, rect: [i32; 4], zbuf: &mut [f32], samples: &mut [Sample]) {
         let [x0, y0, x1, y1] = rect.map(|v| v as usize);
+        let w = x1 - x0;
         for iy in y0..y1 {
             let row = (iy - y0) * TILE as usize;
-            for ix in x0..x1 {
-                let s = self.sample(ix, iy);
-                zbuf[row + ix - x0] = s.invw;
-                samples[row + ix - x0] = s;
+            let i = (iy + self.y0) * self.stride + x0 + self.x0;
+            let z = &mut zbuf[row..row + w];
+            for (z, d) in z.iter_mut().zip(&self.depth[i..i + w]) {
+                *z = 1.0 / d;
+            }
+            let rgba = self.rgba[4 * i..4 * (i + w)].chunks_exact(4);
+            let ids = &self.ids[i..i + w];
+            for (((smp, c), &id), &invw) in
+                samples[row..row + w].iter_mut().zip(rgba).zip(ids).zip(&*z)
+            {
+                *smp = Sample {
+                    rgba: [c[0], c[1], c[2], c[3]],
+                    invw,
+                    id,
+                    velocity: [0.0; 2],
+                };
             }
         }
     }
