@@ -182,7 +182,8 @@ impl TileScratch {
 
 /// Renders the samples `rect` = [x0, y0, x1, y1) of a tile from its triangle references (in
 /// submission order) into `scratch.samples` (row stride TILE), starting from `bg` when given
-/// (else from the empty background). Returns the fragment count.
+/// (else from the empty background). Returns the fragment count, and whether `bg` holds a bad
+/// value in the rectangle (`Background::load`).
 pub fn render_tile(
     rect: [i32; 4],
     refs: &[u32],
@@ -190,7 +191,7 @@ pub fn render_tile(
     blend: Blend,
     bg: Option<&Background>,
     scratch: &mut TileScratch,
-) -> u64 {
+) -> (u64, bool) {
     let [tx0, ty0, tx1, ty1] = rect;
     let clamp = |t: &Tri| {
         [
@@ -207,11 +208,14 @@ pub fn render_tile(
         samples,
         frags,
     } = scratch;
-    match bg {
+    let bad_background = match bg {
         // Samples outside `rect` are never read back; the opaque pass only touches `rect`.
         Some(bg) => bg.load(rect, zbuf, samples),
-        None => zbuf.fill(0.0),
-    }
+        None => {
+            zbuf.fill(0.0);
+            false
+        }
+    };
     let mut fragments = 0u64;
     let mut any_transparent = false;
     // Whether a triangle that may be opaque reaches the tile (`winner` is reset then only).
@@ -289,7 +293,7 @@ pub fn render_tile(
         }
     }
     if !any_transparent {
-        return fragments;
+        return (fragments, bad_background);
     }
 
     // Pass 2: transparent fragments in front of the opaque surface.
@@ -331,7 +335,7 @@ pub fn render_tile(
         });
     }
     frags.composite(&mut samples[..(TILE * TILE) as usize], blend);
-    fragments
+    (fragments, bad_background)
 }
 
 #[cfg(test)]
