@@ -443,6 +443,25 @@ def test_frame_from_arrays_and_png(tmp_path):
         mb.Frame(rgba, np.zeros((4, 4)), np.zeros((4, 5)), np.zeros((4, 5, 2)))
 
 
+def test_frame_takes_ready_arrays_as_they_are_and_checks_the_others():
+    rgba, depth = np.zeros((4, 5, 4), np.float32), np.full((4, 5), np.inf, np.float32)
+    ids, vel = np.zeros((4, 5), np.int32), np.zeros((4, 5, 2), np.float32)
+    frame = mb.Frame(rgba, depth, ids, vel)
+    assert frame.rgba is rgba and frame.depth is depth and frame.ids is ids and frame.velocity is vel
+    # strided, other dtypes, subclasses: converted to C-contiguous float32 / int32
+    strided = mb.Frame(np.zeros((4, 10, 4), np.float32)[:, ::2], depth.astype(np.float64), ids, vel)
+    assert strided.rgba.flags.c_contiguous and strided.depth.dtype == np.float32
+    for args, err, name in (
+        ((rgba[..., :3], depth, ids, vel), ValueError, "rgba"),
+        ((rgba, depth[:, :4], ids, vel), ValueError, "depth"),
+        ((rgba, depth, ids.astype(np.float32), vel), TypeError, "ids"),
+        ((rgba, depth, ids, vel[..., :1]), ValueError, "velocity"),
+        ((rgba[:0], depth[:0], ids[:0], vel[:0]), ValueError, "rgba"),
+    ):
+        with pytest.raises(err, match=name):
+            mb.Frame(*args)
+
+
 # --- threads
 
 

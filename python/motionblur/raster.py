@@ -200,6 +200,22 @@ class Draw:
         )
 
 
+def _frame_array(value, name: str, dtype, shape) -> np.ndarray:
+    """``as_array`` (any values allowed), taking an array that already is a non-empty C-contiguous
+    ``dtype`` ndarray of ``shape`` as it is without the general checks (the same result: the
+    renderers build every frame from such arrays)."""
+    if (
+        type(value) is np.ndarray
+        and value.dtype == dtype
+        and value.flags.c_contiguous
+        and value.ndim == len(shape)
+        and value.size
+        and all(s is None or s == n for s, n in zip(shape, value.shape))
+    ):
+        return value
+    return as_array(value, name, dtype, shape, finite=False)
+
+
 class Frame:
     """A rendered frame.
 
@@ -214,12 +230,12 @@ class Frame:
     """
 
     def __init__(self, rgba, depth, ids, velocity, stats=None):
-        rgba = as_array(rgba, "rgba", np.float32, (None, None, 4), finite=False)
+        rgba = _frame_array(rgba, "rgba", np.float32, (None, None, 4))
         h, w = rgba.shape[:2]
         self.rgba = rgba
-        self.depth = as_array(depth, "depth", np.float32, (h, w), finite=False)
-        self.ids = as_array(ids, "ids", np.int32, (h, w))
-        self.velocity = as_array(velocity, "velocity", np.float32, (h, w, 2), finite=False)
+        self.depth = _frame_array(depth, "depth", np.float32, (h, w))
+        self.ids = _frame_array(ids, "ids", np.int32, (h, w))
+        self.velocity = _frame_array(velocity, "velocity", np.float32, (h, w, 2))
         self.stats = dict(stats) if stats is not None else {}
 
     @property

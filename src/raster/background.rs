@@ -34,6 +34,13 @@ pub struct Background<'a> {
 impl Background<'_> {
     /// Checks the lengths against a `ws` x `hs`-sample frame and the values in its window.
     pub fn validate(&self, ws: usize, hs: usize) -> Result<()> {
+        self.validate_shape(ws, hs)?;
+        self.validate_values(ws, hs)
+    }
+
+    /// Checks the lengths against a `ws` x `hs`-sample frame (the values are left to `load`,
+    /// which reports bad ones of the samples it reads, and to `validate_values`).
+    pub fn validate_shape(&self, ws: usize, hs: usize) -> Result<()> {
         let rows = self.depth.len().checked_div(self.stride).unwrap_or(0);
         if self.stride * rows != self.depth.len()
             || self.x0 + ws > self.stride
@@ -61,20 +68,23 @@ impl Background<'_> {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    /// Checks the values in the window of a `ws` x `hs`-sample frame (lengths already checked).
+    pub fn validate_values(&self, ws: usize, hs: usize) -> Result<()> {
         // Branch-free integer tests over the bits (they vectorize; the arrays are a frame big):
         // a depth d > 0, inf included, has bits in [1, 0x7f80_0000]; NaN and inf have all
         // exponent bits set.
         let (mut bad_depth, mut bad_rgba) = (false, false);
         for iy in self.y0..self.y0 + hs {
             let row = iy * self.stride + self.x0;
-            bad_depth |= self.depth[row..row + ws].iter().fold(false, |bad, d| {
-                bad | (d.to_bits().wrapping_sub(1) >= 0x7f80_0000)
-            });
+            bad_depth |= self.depth[row..row + ws]
+                .iter()
+                .fold(false, |bad, d| bad | bad_depth_bits(*d));
             bad_rgba |= self.rgba[4 * row..4 * (row + ws)]
                 .iter()
-                .fold(false, |bad, c| {
-                    bad | (c.to_bits() & 0x7f80_0000 == 0x7f80_0000)
-                });
+                .fold(false, |bad, c| bad | bad_colour_bits(*c));
         }
         if bad_depth {
             let d = (self.y0..self.y0 + hs)
@@ -106,18 +116,52 @@ impl Background<'_> {
     }
 
     /// Loads the frame's samples `rect` = [x0, y0, x1, y1) into a tile's buffers (row stride
-    /// TILE): `samples` gets the background, `zbuf` its 1/w (0 where empty).
-    pub fn load(&self, rect: [i32; 4], zbuf: &mut [f32], samples: &mut [Sample]) {
+    /// TILE): `samples` gets the background, `zbuf` its 1/w (0 where empty), as `sample` gives
+    /// them. Returns true when one of these samples holds a value `validate_values` rejects
+    /// (a depth not > 0, a colour NaN or inf); the frame is then an error.
+    pub fn load(&self, rect: [i32; 4], zbuf: &mut [f32], samples: &mut [Sample]) -> bool {
         let [x0, y0, x1, y1] = rect.map(|v| v as usize);
+        let w = x1 - x0;
+        let mut bad = false;
         for iy in y0..y1 {
             let row = (iy - y0) * TILE as usize;
-            for ix in x0..x1 {
-                let s = self.sample(ix, iy);
-                zbuf[row + ix - x0] = s.invw;
-                samples[row + ix - x0] = s;
+            let i = (iy + self.y0) * self.stride + x0 + self.x0;
+            let z = &mut zbuf[row..row + w];
+            for (z, &d) in z.iter_mut().zip(&self.depth[i..i + w]) {
+                *z = 1.0 / d;
+                bad |= bad_depth_bits(d);
+            }
+            let rgba = &self.rgba[4 * i..4 * (i + w)];
+            bad |= rgba.iter().fold(false, |bad, c| bad | bad_colour_bits(*c));
+            let ids = &self.ids[i..i + w];
+            for (((smp, c), &id), &invw) in samples[row..row + w]
+                .iter_mut()
+                .zip(rgba.chunks_exact(4))
+                .zip(ids)
+                .zip(&*z)
+            {
+                *smp = Sample {
+                    rgba: [c[0], c[1], c[2], c[3]],
+                    invw,
+                    id,
+                    velocity: [0.0; 2],
+                };
             }
         }
+        bad
     }
+}
+
+/// A depth d > 0 (inf included) has bits in [1, 0x7f80_0000]; anything else is bad.
+#[inline(always)]
+fn bad_depth_bits(d: f32) -> bool {
+    d.to_bits().wrapping_sub(1) >= 0x7f80_0000
+}
+
+/// NaN and inf have all exponent bits set.
+#[inline(always)]
+fn bad_colour_bits(c: f32) -> bool {
+    c.to_bits() & 0x7f80_0000 == 0x7f80_0000
 }
 
 #[cfg(test)]

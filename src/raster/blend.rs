@@ -73,21 +73,44 @@ pub fn over(src: [f32; 4], dst: [f32; 4]) -> [f32; 4] {
 }
 
 /// Reusable buffers of the transparent pass.
+///
+/// Fragments are pushed in submission order with a per-sample count. Most samples of a typical
+/// frame hold at most one transparent fragment (a convex surface drawn with back faces culled):
+/// those are composited straight from the list, and only the fragments of samples holding
+/// several are grouped per sample (in submission order) and sorted.
 #[derive(Default)]
 pub struct FragLists {
-    pub frags: Vec<Frag>,
+    frags: Vec<Frag>,
+    /// Fragments per tile sample; while grouping, `SEEN` marks a sample given its slots.
+    count: Vec<u32>,
+    /// The fragments of samples with several, grouped per sample.
     sorted: Vec<Frag>,
-    start: Vec<u32>,
+    /// Next free slot in `sorted` of a sample being grouped (valid once `SEEN`).
     next: Vec<u32>,
+    /// (sample, first slot, fragment count) of each group in `sorted`.
+    groups: Vec<(u32, u32, u32)>,
 }
 
 /// Fragments a thread keeps room for between tiles (36 bytes each, twice): a tile of extreme
 /// depth complexity may grow the lists further, and they are released after it.
 const KEEP_FRAGS: usize = 1 << 18;
 
+/// Flag of `FragLists::count` for a sample whose slots in `sorted` are assigned.
+const SEEN: u32 = 1 << 31;
+
 impl FragLists {
-    pub fn clear(&mut self) {
+    /// Empties the lists for a tile of `n` samples.
+    pub fn clear(&mut self, n: usize) {
         self.frags.clear();
+        self.count.clear();
+        self.count.resize(n, 0);
+    }
+
+    /// Appends a fragment (fragments arrive in submission order).
+    #[inline(always)]
+    pub fn push(&mut self, f: Frag) {
+        self.count[f.sample as usize] += 1;
+        self.frags.push(f);
     }
 
     /// Releases the lists' memory beyond `KEEP_FRAGS` fragments (kept buffers stay bounded).
@@ -98,39 +121,58 @@ impl FragLists {
         }
     }
 
-    /// Composites the fragments over `samples` (the opaque result, `n` samples). Fragments were
-    /// pushed in submission order; a counting sort by sample keeps that order within a sample.
+    /// Composites the fragments over `samples` (the opaque result, the `n` samples of `clear`).
     pub fn composite(&mut self, samples: &mut [Sample], blend: Blend) {
         if self.frags.is_empty() {
             return;
         }
-        let n = samples.len();
-        self.start.clear();
-        self.start.resize(n + 1, 0);
+        debug_assert_eq!(samples.len(), self.count.len());
+        // A sample's only fragment: its list needs no grouping and no sort.
+        let mut several = 0usize;
         for f in &self.frags {
-            self.start[f.sample as usize + 1] += 1;
+            let s = f.sample as usize;
+            if self.count[s] == 1 {
+                let sample = &mut samples[s];
+                sample.rgba = over(f.shaded.rgba, sample.rgba);
+                sample.invw = f.invw;
+                sample.id = f.shaded.id;
+                sample.velocity = f.shaded.velocity;
+            } else {
+                several += 1;
+            }
         }
-        for i in 0..n {
-            self.start[i + 1] += self.start[i];
+        if several == 0 {
+            return;
         }
+        // Group the others per sample in submission order: a sample gets its slots when its
+        // first fragment comes (groups in order of first appearance; samples are independent).
         self.sorted.clear();
-        self.sorted.resize(self.frags.len(), Frag::default());
-        self.next.clear();
-        self.next.extend_from_slice(&self.start[..n]);
+        self.sorted.resize(several, Frag::default());
+        self.next.resize(samples.len(), 0);
+        self.groups.clear();
+        let mut cursor = 0u32;
         for f in &self.frags {
-            let slot = &mut self.next[f.sample as usize];
+            let s = f.sample as usize;
+            let c = self.count[s];
+            if c == 1 {
+                continue;
+            }
+            if c & SEEN == 0 {
+                self.groups.push((f.sample, cursor, c));
+                self.next[s] = cursor;
+                cursor += c;
+                self.count[s] = c | SEEN;
+            }
+            let slot = &mut self.next[s];
             self.sorted[*slot as usize] = *f;
             *slot += 1;
         }
-        for (s, sample) in samples.iter_mut().enumerate() {
-            let (lo, hi) = (self.start[s] as usize, self.start[s + 1] as usize);
-            if lo == hi {
-                continue;
-            }
-            let list = &mut self.sorted[lo..hi];
-            if blend == Blend::Exact && list.len() > 1 {
+        for &(s, lo, len) in &self.groups {
+            let list = &mut self.sorted[lo as usize..(lo + len) as usize];
+            if blend == Blend::Exact {
                 insertion_sort(list);
             }
+            let sample = &mut samples[s as usize];
             let mut c = sample.rgba;
             let mut nearest = list[0];
             for f in list.iter() {
@@ -190,10 +232,11 @@ mod tests {
         let mut b = a.clone();
         b.reverse();
         let run = |frags: Vec<Frag>| {
-            let mut l = FragLists {
-                frags,
-                ..Default::default()
-            };
+            let mut l = FragLists::default();
+            l.clear(2);
+            for f in frags {
+                l.push(f);
+            }
             let mut s = [Sample::BACKGROUND; 2];
             l.composite(&mut s, Blend::Exact);
             s
@@ -219,10 +262,11 @@ mod tests {
     #[test]
     fn unsorted_blending_keeps_submission_order() {
         let frags = vec![frag(0, 0.9, 0.5, 1), frag(0, 0.2, 0.5, 2)];
-        let mut l = FragLists {
-            frags,
-            ..Default::default()
-        };
+        let mut l = FragLists::default();
+        l.clear(1);
+        for f in frags {
+            l.push(f);
+        }
         let mut s = [Sample::BACKGROUND; 1];
         l.composite(&mut s, Blend::Unsorted);
         let want = over(
@@ -231,5 +275,105 @@ mod tests {
         );
         assert_eq!(s[0].rgba, want);
         assert_eq!(s[0].id, 1);
+    }
+
+    /// Per sample on its own: its fragments in submission order, sorted (exact), composited.
+    fn reference(frags: &[Frag], samples: &mut [Sample], blend: Blend) {
+        for (s, sample) in samples.iter_mut().enumerate() {
+            let mut list: Vec<Frag> = frags
+                .iter()
+                .filter(|f| f.sample as usize == s)
+                .copied()
+                .collect();
+            if list.is_empty() {
+                continue;
+            }
+            if blend == Blend::Exact {
+                list.sort_by(far_to_near);
+            }
+            let mut nearest = list[0];
+            for f in &list {
+                sample.rgba = over(f.shaded.rgba, sample.rgba);
+                if f.invw > nearest.invw {
+                    nearest = *f;
+                }
+            }
+            sample.invw = nearest.invw;
+            sample.id = nearest.shaded.id;
+            sample.velocity = nearest.shaded.velocity;
+        }
+    }
+
+    #[test]
+    fn lone_fragments_and_lists_composite_like_each_sample_on_its_own() {
+        // Tiles mixing empty samples, samples with one fragment (composited straight from the
+        // list) and samples with several (grouped and sorted), depth ties included, over
+        // opaque samples; the lists are reused across tiles as a thread's scratch is.
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = |m: u32| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % u64::from(m)) as u32
+        };
+        let mut l = FragLists::default();
+        let (mut lone, mut listed) = (0, 0);
+        for round in 0..300 {
+            let n = 1 + next(200) as usize;
+            let count = next(3 * n as u32);
+            let frags: Vec<Frag> = (0..count)
+                .map(|_| {
+                    // few samples get most fragments in some rounds, all samples in others
+                    let s = if round % 3 == 0 {
+                        next(n as u32) % 7
+                    } else {
+                        next(n as u32)
+                    };
+                    let mut f = frag(
+                        s.min(n as u32 - 1),
+                        0.1 * (1 + next(4)) as f32,
+                        0.05 * (1 + next(19)) as f32,
+                        next(5) as i32,
+                    );
+                    f.shaded.velocity = [next(3) as f32, 0.0];
+                    f
+                })
+                .collect();
+            let start: Vec<Sample> = (0..n)
+                .map(|i| Sample {
+                    rgba: [0.1 * (i % 5) as f32, 0.2, 0.3, 1.0],
+                    invw: 0.05,
+                    id: 100 + i as i32,
+                    velocity: [0.0, 1.0],
+                })
+                .collect();
+            for blend in [Blend::Exact, Blend::Unsorted] {
+                let mut got = start.clone();
+                l.clear(n);
+                for f in &frags {
+                    l.push(*f);
+                }
+                l.composite(&mut got, blend);
+                let mut want = start.clone();
+                reference(&frags, &mut want, blend);
+                for s in 0..n {
+                    let k = frags.iter().filter(|f| f.sample as usize == s).count();
+                    lone += usize::from(k == 1);
+                    listed += usize::from(k > 1);
+                    let (g, w) = (got[s], want[s]);
+                    assert_eq!(
+                        g.rgba.map(f32::to_bits),
+                        w.rgba.map(f32::to_bits),
+                        "round {round} sample {s}"
+                    );
+                    assert_eq!((g.invw.to_bits(), g.id), (w.invw.to_bits(), w.id));
+                    assert_eq!(g.velocity.map(f32::to_bits), w.velocity.map(f32::to_bits));
+                }
+            }
+        }
+        assert!(
+            lone > 1000 && listed > 1000,
+            "both paths must be exercised: {lone} {listed}"
+        );
     }
 }

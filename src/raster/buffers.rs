@@ -89,30 +89,50 @@ impl Output {
     /// # Safety
     /// The pixel rectangle must lie inside the frame and no other thread may write it.
     pub unsafe fn write_tile(&self, samples: &[Sample], px: [usize; 4], s: usize) {
+        // SAFETY: the caller's contract, passed on.
+        unsafe {
+            match s {
+                1 => self.resolve::<1>(samples, px),
+                2 => self.resolve::<2>(samples, px),
+                4 => self.resolve::<4>(samples, px),
+                _ => unreachable!("samples are checked to be 1, 2 or 4"),
+            }
+        }
+    }
+
+    /// `write_tile` for `S` x `S` samples a pixel.
+    ///
+    /// # Safety
+    /// As `write_tile`.
+    #[inline(always)]
+    unsafe fn resolve<const S: usize>(&self, samples: &[Sample], px: [usize; 4]) {
         let [px0, py0, px1, py1] = px;
         debug_assert!(px1 <= self.width && py1 <= self.height);
-        let norm = 1.0 / (s * s) as f32;
+        let norm = 1.0 / (S * S) as f32;
         for y in py0..py1 {
             for x in px0..px1 {
                 let mut c = [0.0f32; 4];
-                let mut best = Sample::BACKGROUND;
-                for j in 0..s {
-                    let row = ((y - py0) * s + j) * TILE as usize + (x - px0) * s;
-                    for i in 0..s {
-                        let smp = &samples[row + i];
+                // the nearest sample: the first of the largest 1/w, none when all are 0
+                let mut best = None;
+                let mut best_invw = Sample::BACKGROUND.invw;
+                for j in 0..S {
+                    let row = ((y - py0) * S + j) * TILE as usize + (x - px0) * S;
+                    for (i, smp) in samples[row..row + S].iter().enumerate() {
                         for k in 0..4 {
                             c[k] += smp.rgba[k];
                         }
-                        if smp.invw > best.invw {
-                            best = *smp;
+                        if smp.invw > best_invw {
+                            best_invw = smp.invw;
+                            best = Some(row + i);
                         }
                     }
                 }
+                let best = best.map_or(Sample::BACKGROUND, |i| samples[i]);
                 let o = y * self.width + x;
                 // SAFETY: (x, y) is inside the frame and owned by this tile (caller's contract).
                 unsafe {
                     for k in 0..4 {
-                        *self.rgba.add(4 * o + k) = if s == 1 { c[k] } else { c[k] * norm };
+                        *self.rgba.add(4 * o + k) = if S == 1 { c[k] } else { c[k] * norm };
                     }
                     *self.depth.add(o) = if best.invw > 0.0 {
                         1.0 / best.invw

@@ -79,18 +79,19 @@ impl Planes {
     }
 
     /// 1/w at the centre of sample (ix, iy).
-    #[inline]
+    #[inline(always)]
     pub fn invw(&self, ix: i32, iy: i32) -> f64 {
         let (dx, dy) = (f64::from(ix) + 0.5 - self.ox, f64::from(iy) + 0.5 - self.oy);
         self.wx * dx + self.wy * dy + self.w0
     }
 
     /// Perspective-correct barycentric coordinates of the corners at sample (ix, iy).
-    #[inline]
+    #[inline(always)]
     pub fn lambdas(&self, ix: i32, iy: i32) -> [f64; 3] {
         let (dx, dy) = (f64::from(ix) + 0.5 - self.ox, f64::from(iy) + 0.5 - self.oy);
-        let q = [0, 1, 2].map(|k| (self.gx[k] * dx + self.gy[k] * dy + self.g0[k]) * self.iw[k]);
+        let q = |k: usize| (self.gx[k] * dx + self.gy[k] * dy + self.g0[k]) * self.iw[k];
+        let q = [q(0), q(1), q(2)];
         let s = q[0] + q[1] + q[2];
-        q.map(|v| v / s)
+        [q[0] / s, q[1] / s, q[2] / s]
     }
 }

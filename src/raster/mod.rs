@@ -207,9 +207,10 @@ pub fn rasterize_over(
     let t0 = Instant::now();
     check_size(camera.width, camera.height, opts.samples)?;
     check_options(opts)?;
+    // The background's values are checked by the tiles as they load them (see below).
+    let bg_size = [camera.width, camera.height].map(|v| v as usize * opts.samples as usize);
     if let Some(bg) = background {
-        let s = opts.samples as usize;
-        bg.validate(camera.width as usize * s, camera.height as usize * s)?;
+        bg.validate_shape(bg_size[0], bg_size[1])?;
     }
     for d in draws {
         d.validate()?;
@@ -267,7 +268,7 @@ pub fn rasterize_over(
     let out = frame.output();
     let tiles_x = bins.tiles_x;
     let pixels_per_tile = (TILE as u32 / s) as usize;
-    let fragments: u64 = (0..bins.tiles_x * bins.tiles_y)
+    let (fragments, bad_background) = (0..bins.tiles_x * bins.tiles_y)
         .into_par_iter()
         .map(|t| {
             let (tx, ty) = (t % tiles_x, t / tiles_x);
@@ -284,12 +285,9 @@ pub fn rasterize_over(
                 let n = match (refs.is_empty(), background) {
                     (true, None) => {
                         scratch.samples.fill(blend::Sample::BACKGROUND);
-                        0
+                        (0, false)
                     }
-                    (true, Some(bg)) => {
-                        bg.load(rect, &mut scratch.zbuf, &mut scratch.samples);
-                        0
-                    }
+                    (true, Some(bg)) => (0, bg.load(rect, &mut scratch.zbuf, &mut scratch.samples)),
                     _ => tile::render_tile(rect, refs, &shader, opts.blend, background, scratch),
                 };
                 // SAFETY: tiles partition the frame, so this rectangle is written by this task only.
@@ -297,7 +295,17 @@ pub fn rasterize_over(
                 n
             })
         })
-        .sum();
+        .reduce(|| (0, false), |a, b| (a.0 + b.0, a.1 | b.1));
+    // The tiles partition the frame, so together they loaded every sample of the background's
+    // window: a bad value anywhere in it was seen (rendering over it reads no value as an index
+    // and cannot fail). The full check names it.
+    if let (true, Some(bg)) = (bad_background, background) {
+        bg.validate_values(bg_size[0], bg_size[1])?;
+        return Err(Error::value(
+            "background",
+            "depth must be > 0 and rgba finite",
+        ));
+    }
     let t4 = Instant::now();
 
     let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;

@@ -119,15 +119,19 @@ pub struct TriShade<'a> {
 impl TriShade<'_> {
     /// Barycentric coordinates in the face of sample (ix, iy), whose interpolation planes are
     /// `planes`.
-    #[inline]
+    #[inline(always)]
     pub fn lambdas(&self, planes: &Planes, ix: i32, iy: i32) -> [f32; 3] {
         let l = planes.lambdas(ix, iy);
         match &self.clip {
-            None => l.map(|v| v as f32),
-            Some(b) => [0, 1, 2].map(|j| {
-                (l[0] * f64::from(b[0][j]) + l[1] * f64::from(b[1][j]) + l[2] * f64::from(b[2][j]))
-                    as f32
-            }),
+            None => [l[0] as f32, l[1] as f32, l[2] as f32],
+            Some(b) => {
+                let m = |j: usize| {
+                    (l[0] * f64::from(b[0][j])
+                        + l[1] * f64::from(b[1][j])
+                        + l[2] * f64::from(b[2][j])) as f32
+                };
+                [m(0), m(1), m(2)]
+            }
         }
     }
 
@@ -141,7 +145,7 @@ impl TriShade<'_> {
     }
 
     /// Shades the sample with barycentric coordinates `lam`.
-    #[inline]
+    #[inline(always)]
     pub fn shade(&self, lam: [f32; 3]) -> Shaded {
         let mut c = match &self.colors {
             None => self.color,

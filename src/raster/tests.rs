@@ -231,3 +231,60 @@ fn kept_tile_buffers_change_no_result_even_after_a_very_deep_tile() {
     assert_eq!(s0.rgba, s1.rgba);
     assert_eq!(s0.depth, s1.depth);
 }
+
+#[test]
+fn a_bad_background_value_anywhere_in_the_window_is_an_error() {
+    // The tiles check the background's values as they load them: one bad value in a tile with
+    // triangles, in an empty tile or at the last sample fails the frame; outside the window it
+    // is never read. 150 x 70 samples: tiles of 64, the triangle in the centre one.
+    let (w, h, stride, rows, x0, y0) = (150usize, 70usize, 160usize, 80usize, 5usize, 5usize);
+    let d = draw(
+        vec![[-0.1, -0.1, 0.0], [0.1, -0.1, 0.0], [0.0, 0.1, 0.0]],
+        vec![[0, 1, 2]],
+        [0.3, 0.6, 0.9, 0.5],
+    );
+    let cam = camera(w as u32, h as u32);
+    let rgba = vec![0.25f32; 4 * stride * rows];
+    let depth = vec![5.0f32; stride * rows]; // behind the triangle (at 3)
+    let ids = vec![3i32; stride * rows];
+    let render = |rgba: &[f32], depth: &[f32]| {
+        let bg = Background {
+            rgba,
+            depth,
+            ids: &ids,
+            stride,
+            x0,
+            y0,
+        };
+        rasterize_over(
+            &cam,
+            std::slice::from_ref(&d),
+            &Options::default(),
+            Some(&bg),
+        )
+    };
+    let good = render(&rgba, &depth).unwrap();
+    assert!(good.stats.fragments > 0 && good.ids.contains(&7) && good.ids.contains(&3));
+    let index = |x: usize, y: usize| (y + y0) * stride + x + x0;
+    for (x, y) in [(75, 35), (70, 30), (10, 66), (w - 1, h - 1), (0, 0)] {
+        for bad in [f32::NAN, 0.0, -1.0, f32::NEG_INFINITY] {
+            let mut dd = depth.clone();
+            dd[index(x, y)] = bad;
+            let err = render(&rgba, &dd).expect_err("bad depth");
+            assert!(err.to_string().starts_with("background"), "{err}");
+        }
+        for bad in [f32::NAN, f32::INFINITY] {
+            let mut c = rgba.clone();
+            c[4 * index(x, y) + 2] = bad;
+            let err = render(&c, &depth).expect_err("bad colour");
+            assert!(err.to_string().starts_with("background"), "{err}");
+        }
+    }
+    // outside the window: not read, not checked, no change
+    let mut dd = depth.clone();
+    dd[0] = f32::NAN;
+    dd[stride * rows - 1] = -1.0;
+    let same = render(&rgba, &dd).unwrap();
+    assert_eq!(same.rgba, good.rgba);
+    assert_eq!(same.ids, good.ids);
+}

@@ -68,14 +68,25 @@ impl Edges {
     }
 
     /// Calls `f(ix, iy)` for every covered sample in the box, row by row, left to right.
-    ///
-    /// Each edge function is affine along a row, so the covered samples of a row form one span
-    /// whose ends follow from exact integer division; boxes wider than `SPAN_MIN` samples walk
-    /// only the span (long thin triangles, such as a motion volume's swept sides, have large
-    /// boxes and few covered samples), narrower ones test every sample. Both visit exactly the
-    /// samples whose three biased edge values are >= 0, in the same order.
     #[inline]
     pub fn cover(&self, bx: [i32; 4], mut f: impl FnMut(i32, i32)) {
+        self.spans(bx, |iy, x0, x1| {
+            for ix in x0..=x1 {
+                f(ix, iy);
+            }
+        });
+    }
+
+    /// Calls `f(iy, x0, x1)` for every row of the box holding covered samples, top to bottom,
+    /// with the covered samples x0..=x1 of the row.
+    ///
+    /// Each edge function is affine along a row, so the covered samples of a row form one span
+    /// whose ends follow from exact integer division; boxes wider than `SPAN_MIN` samples compute
+    /// the span (long thin triangles, such as a motion volume's swept sides, have large boxes and
+    /// few covered samples), narrower ones test every sample. Both give exactly the samples whose
+    /// three biased edge values are >= 0.
+    #[inline]
+    pub fn spans(&self, bx: [i32; 4], mut f: impl FnMut(i32, i32, i32)) {
         let mut row = self.at(bx[0], bx[1]);
         for k in 0..3 {
             row[k] -= self.bias[k];
@@ -84,27 +95,36 @@ impl Edges {
         let sy = self.dy.map(|d| d * ONE);
         let last = i64::from(bx[2] - bx[0]);
         for iy in bx[1]..=bx[3] {
-            if last >= SPAN_MIN {
-                let (lo, hi) = span(row, sx, last);
-                for i in lo..=hi {
-                    f(bx[0] + i as i32, iy);
-                }
+            let (lo, hi) = if last >= SPAN_MIN {
+                span(row, sx, last)
             } else {
-                let mut e = row;
-                for ix in bx[0]..=bx[2] {
-                    if (e[0] | e[1] | e[2]) >= 0 {
-                        f(ix, iy);
-                    }
-                    e[0] += sx[0];
-                    e[1] += sx[1];
-                    e[2] += sx[2];
-                }
+                scan(row, sx, last)
+            };
+            if lo <= hi {
+                f(iy, bx[0] + lo as i32, bx[0] + hi as i32);
             }
             row[0] += sy[0];
             row[1] += sy[1];
             row[2] += sy[2];
         }
     }
+}
+
+/// `span` by testing every step: the first and last steps where all three values are >= 0
+/// (the covered steps between them are all covered, the set being an interval).
+#[inline]
+fn scan(mut e: [i64; 3], d: [i64; 3], last: i64) -> (i64, i64) {
+    let (mut lo, mut hi) = (i64::MAX, -1);
+    for i in 0..=last {
+        if (e[0] | e[1] | e[2]) >= 0 {
+            lo = lo.min(i);
+            hi = i;
+        }
+        e[0] += d[0];
+        e[1] += d[1];
+        e[2] += d[2];
+    }
+    (lo, hi)
 }
 
 /// Boxes at least this many samples wide (minus one) are walked by spans.
@@ -162,7 +182,8 @@ impl TileScratch {
 
 /// Renders the samples `rect` = [x0, y0, x1, y1) of a tile from its triangle references (in
 /// submission order) into `scratch.samples` (row stride TILE), starting from `bg` when given
-/// (else from the empty background). Returns the fragment count.
+/// (else from the empty background). Returns the fragment count, and whether `bg` holds a bad
+/// value in the rectangle (`Background::load`).
 pub fn render_tile(
     rect: [i32; 4],
     refs: &[u32],
@@ -170,7 +191,7 @@ pub fn render_tile(
     blend: Blend,
     bg: Option<&Background>,
     scratch: &mut TileScratch,
-) -> u64 {
+) -> (u64, bool) {
     let [tx0, ty0, tx1, ty1] = rect;
     let clamp = |t: &Tri| {
         [
@@ -187,14 +208,18 @@ pub fn render_tile(
         samples,
         frags,
     } = scratch;
-    winner.fill(NONE);
-    match bg {
+    let bad_background = match bg {
         // Samples outside `rect` are never read back; the opaque pass only touches `rect`.
         Some(bg) => bg.load(rect, zbuf, samples),
-        None => zbuf.fill(0.0),
-    }
+        None => {
+            zbuf.fill(0.0);
+            false
+        }
+    };
     let mut fragments = 0u64;
     let mut any_transparent = false;
+    // Whether a triangle that may be opaque reaches the tile (`winner` is reset then only).
+    let mut any_opaque = false;
 
     // Pass 1: opaque fragments, nearest wins (strictly nearer: the first submitted keeps ties).
     for &r in refs {
@@ -206,6 +231,10 @@ pub fn render_tile(
         let bx = clamp(t);
         if bx[0] > bx[2] || bx[1] > bx[3] {
             continue;
+        }
+        if !any_opaque {
+            winner.fill(NONE);
+            any_opaque = true;
         }
         let edges = Edges::new(t);
         let planes = Planes::new(t);
@@ -228,37 +257,47 @@ pub fn render_tile(
     }
 
     // Shade the opaque winners (neighbouring samples mostly share a triangle: keep its planes).
-    let mut cached = (NONE, None::<(Planes, TriShade)>);
-    for iy in ty0..ty1 {
-        for ix in tx0..tx1 {
-            let s = local(ix, iy);
-            let r = winner[s];
-            if r == NONE && bg.is_some() {
-                continue; // the background sample loaded above stays
+    // Without opaque triangles every sample keeps the background.
+    if !any_opaque {
+        if bg.is_none() {
+            for iy in ty0..ty1 {
+                let row = local(tx0, iy);
+                samples[row..row + (tx1 - tx0) as usize].fill(Sample::BACKGROUND);
             }
-            samples[s] = if r == NONE {
-                Sample::BACKGROUND
-            } else {
-                if cached.0 != r {
-                    cached = (r, Some((Planes::new(sh.tri(r)), sh.prepare(r))));
+        }
+    } else {
+        let mut cached = (NONE, None::<(Planes, TriShade)>);
+        for iy in ty0..ty1 {
+            for ix in tx0..tx1 {
+                let s = local(ix, iy);
+                let r = winner[s];
+                if r == NONE && bg.is_some() {
+                    continue; // the background sample loaded above stays
                 }
-                let (planes, ts) = cached.1.as_ref().expect("set above");
-                let sh = ts.shade(ts.lambdas(planes, ix, iy));
-                Sample {
-                    rgba: sh.rgba,
-                    invw: zbuf[s],
-                    id: sh.id,
-                    velocity: sh.velocity,
-                }
-            };
+                samples[s] = if r == NONE {
+                    Sample::BACKGROUND
+                } else {
+                    if cached.0 != r {
+                        cached = (r, Some((Planes::new(sh.tri(r)), sh.prepare(r))));
+                    }
+                    let (planes, ts) = cached.1.as_ref().expect("set above");
+                    let sh = ts.shade(ts.lambdas(planes, ix, iy));
+                    Sample {
+                        rgba: sh.rgba,
+                        invw: zbuf[s],
+                        id: sh.id,
+                        velocity: sh.velocity,
+                    }
+                };
+            }
         }
     }
     if !any_transparent {
-        return fragments;
+        return (fragments, bad_background);
     }
 
     // Pass 2: transparent fragments in front of the opaque surface.
-    frags.clear();
+    frags.clear((TILE * TILE) as usize);
     for &r in refs {
         let t = sh.tri(r);
         if t.flags & MAY_TRANSPARENT == 0 {
@@ -272,29 +311,31 @@ pub fn render_tile(
         let planes = Planes::new(t);
         let mixed = t.flags & MAY_OPAQUE != 0;
         let ts = sh.prepare(r);
-        edges.cover(bx, |ix, iy| {
-            let s = local(ix, iy);
-            let z = planes.invw(ix, iy) as f32;
-            if z <= zbuf[s] {
-                return;
-            }
-            let lam = ts.lambdas(&planes, ix, iy);
-            if mixed && ts.alpha(lam) >= 1.0 {
-                return;
-            }
-            fragments += 1;
-            let shaded = ts.shade(lam);
-            if shaded.rgba[3] > 0.0 {
-                frags.frags.push(Frag {
-                    sample: s as u32,
-                    invw: z,
-                    shaded,
-                });
+        edges.spans(bx, |iy, x0, x1| {
+            for ix in x0..=x1 {
+                let s = local(ix, iy);
+                let z = planes.invw(ix, iy) as f32;
+                if z <= zbuf[s] {
+                    continue;
+                }
+                let lam = ts.lambdas(&planes, ix, iy);
+                if mixed && ts.alpha(lam) >= 1.0 {
+                    continue;
+                }
+                fragments += 1;
+                let shaded = ts.shade(lam);
+                if shaded.rgba[3] > 0.0 {
+                    frags.push(Frag {
+                        sample: s as u32,
+                        invw: z,
+                        shaded,
+                    });
+                }
             }
         });
     }
     frags.composite(&mut samples[..(TILE * TILE) as usize], blend);
-    fragments
+    (fragments, bad_background)
 }
 
 #[cfg(test)]
