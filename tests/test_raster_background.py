@@ -9,13 +9,11 @@ the static objects with the volumes (``exact_static`` with a non-opaque static l
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 import textwrap
 
 import numpy as np
 import pytest
+from _threads import digests, ticks_during
 
 import motionblur as mb
 from motionblur import _core, meshes
@@ -300,41 +298,17 @@ _THREAD_SCRIPT = textwrap.dedent(
 
 
 def test_background_output_is_bit_identical_for_any_thread_count():
-    digests = []
-    for threads in ("1", "2", "3"):
-        env = dict(os.environ, RAYON_NUM_THREADS=threads)
-        out = subprocess.run([sys.executable, "-c", _THREAD_SCRIPT], env=env, capture_output=True, text=True)
-        assert out.returncode == 0, out.stderr
-        digests.append(out.stdout.strip())
-    assert len(digests[0]) == 64
-    assert digests[0] == digests[1] == digests[2]
+    got = digests(_THREAD_SCRIPT)
+    assert len(got[0]) == 64
+    assert got[0] == got[1] == got[2]
 
 
 def test_the_gil_is_released_while_rasterizing_over_a_background():
     """A Python thread keeps ticking while rasterize runs in another thread: with the GIL held
     it could tick only between the calls."""
-    import threading
-    import time
-
     v, f = meshes.icosphere(5)
     cam = mb.Camera(mb.look_at((0.0, 0.0, 2.6), (0, 0, 0)), 0.9, 640, 480)
     fine = mb.Camera(cam.pose, cam.yfov, 1280, 960)
     bg = mb.rasterize(fine, mb.Draw(*meshes.box((3.0, 3.0, 0.1)), (0.3, 0.3, 0.3)))
     glass = mb.Draw(v, f, (0.8, 0.4, 0.2, 0.4), cull_back=False)
-    ticks = []
-    stop = threading.Event()
-
-    def ticker():
-        while not stop.is_set():
-            ticks.append(time.perf_counter())
-            time.sleep(0.0005)
-
-    t = threading.Thread(target=ticker)
-    t.start()
-    time.sleep(0.01)
-    n0 = len(ticks)
-    for _ in range(3):
-        mb.rasterize(cam, glass, samples=2, background=bg)
-    stop.set()
-    t.join()
-    assert len(ticks) - n0 >= 6
+    assert ticks_during(lambda: mb.rasterize(cam, glass, samples=2, background=bg)) >= 6
