@@ -377,11 +377,7 @@ mod tests {
         let depth: Vec<f32> = (0..n).map(|i| (i % 7) as f32).collect();
         let limit: Vec<f32> = (0..n).map(|i| (i % 5) as f32).collect();
         let run = |threads| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| {
+            crate::on_threads(threads, || {
                 let mut acc = vec![0.0f32; 4 * n];
                 accumulate(&mut acc, &rgba, &depth, Some(&limit), 0.3, Rect::whole(n)).unwrap();
                 over(&mut acc, &rgba).unwrap();

@@ -314,16 +314,12 @@ mod tests {
     #[test]
     fn contour_is_thread_count_independent() {
         let m = cube();
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let two = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
-        let a = one.install(|| contour_edges(&m, [0.3, -0.2, 0.9], Some([3.0, 1.0, 2.0])).unwrap());
-        let b = two.install(|| contour_edges(&m, [0.3, -0.2, 0.9], Some([3.0, 1.0, 2.0])).unwrap());
+        let a = crate::on_threads(1, || {
+            contour_edges(&m, [0.3, -0.2, 0.9], Some([3.0, 1.0, 2.0])).unwrap()
+        });
+        let b = crate::on_threads(2, || {
+            contour_edges(&m, [0.3, -0.2, 0.9], Some([3.0, 1.0, 2.0])).unwrap()
+        });
         assert_eq!(a, b);
     }
 
@@ -355,14 +351,6 @@ mod tests {
         let mesh = torus(120);
         assert!(mesh.face_neighbors().is_some());
         assert!(mesh.adjacency().len() > 2 * EDGE_CHUNK);
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let two = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
         for m in [
             [0.3, -0.2, 0.9],
             [1.0, 0.0, 0.0],
@@ -378,8 +366,8 @@ mod tests {
                 .iter()
                 .flat_map(|c| [i64::from(c.a), i64::from(c.b)])
                 .collect();
-            let p1 = one.install(|| contour_pairs(&mesh, m, None).unwrap());
-            let p2 = two.install(|| contour_pairs(&mesh, m, None).unwrap());
+            let p1 = crate::on_threads(1, || contour_pairs(&mesh, m, None).unwrap());
+            let p2 = crate::on_threads(2, || contour_pairs(&mesh, m, None).unwrap());
             assert_eq!(p1, flat);
             assert_eq!(p2, flat);
         }

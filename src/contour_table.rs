@@ -167,11 +167,7 @@ mod tests {
         assert_eq!(i, 5);
         assert!(err < 1e-7);
         assert!(t.nearest([0.0; 3]).is_err());
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let t1 = one.install(|| ContourTable::random(&mesh, 32, 1).unwrap());
+        let t1 = crate::on_threads(1, || ContourTable::random(&mesh, 32, 1).unwrap());
         assert_eq!(t1.sets, t.sets);
     }
 }

@@ -28,6 +28,16 @@ pub mod volume_alpha;
 pub mod volume_assemble;
 pub mod volume_filter;
 
+/// `f` run on a rayon pool of `n` threads (tests of thread-count independence).
+#[cfg(test)]
+pub(crate) fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .unwrap()
+        .install(f)
+}
+
 pub use error::{Error, Result};
 
 #[cfg(feature = "python")]

@@ -429,16 +429,8 @@ mod tests {
         let faces: Vec<[u32; 3]> = (0..50000u32)
             .map(|i| [i % 4999, (i * 7 + 1) % 4999, (i * 13 + 5) % 4999])
             .collect();
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let three = rayon::ThreadPoolBuilder::new()
-            .num_threads(3)
-            .build()
-            .unwrap();
-        let a = one.install(|| build_adjacency(&faces, 4999));
-        let b = three.install(|| build_adjacency(&faces, 4999));
+        let a = crate::on_threads(1, || build_adjacency(&faces, 4999));
+        let b = crate::on_threads(3, || build_adjacency(&faces, 4999));
         assert_eq!(a, b);
         // Against a plain sort of all half-edges.
         let mut all: Vec<(u32, u32, u32)> = Vec::new();

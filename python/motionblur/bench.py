@@ -318,6 +318,27 @@ def _machine() -> str:
     return f"{platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
 
 
+def _equal_error_table(comparisons: dict, metric: str, label: str, fmt: str) -> list[str]:
+    """Markdown lines: per scene the most accurate motion_volume row by ``metric`` and its
+    :func:`equal_error` factor, and the best factor over all the scene's option sets."""
+    most = "most accurate motion_volume" + ("" if metric == "rmse" else f" ({label})")
+    lines = [
+        f"| scene | {most} | its ms | its {label} | accumulation ms at that {label} | factor | best factor (options) |",
+        "|---|---|---:|---:|---:|---:|---|",
+    ]
+    for scene, comp in comparisons.items():
+        if not comp:
+            lines.append(f"| {scene} | (not applicable) | | | | | |")
+            continue
+        r, t, bound, factor = min(comp, key=lambda c: c[0][metric])
+        rb, _tb, bb, fb = max(comp, key=lambda c: c[3])
+        lines.append(
+            f"| {scene} | {r['options']} | {r['ms']:.2f} | {r[metric]:{fmt}} | {bound}{t:.2f} | {bound}{factor:.2f} | "
+            f"{bb}{fb:.2f} ({rb['options']}, {label} {rb[metric]:.4f}) |"
+        )
+    return [*lines, ""]
+
+
 def _markdown(
     rows, fronts, comparisons, pyrender_rows, settings, flip_comparisons=None, paired=None, equal_times=None
 ) -> str:
@@ -372,20 +393,8 @@ def _markdown(
     lines += [
         "Per scene: the most accurate motion_volume option set, and the best factor over all its option sets.",
         "",
-        "| scene | most accurate motion_volume | its ms | its RMSE | accumulation ms at that RMSE | factor | best factor (options) |",
-        "|---|---|---:|---:|---:|---:|---|",
     ]
-    for scene, comp in comparisons.items():
-        if not comp:
-            lines.append(f"| {scene} | (not applicable) | | | | | |")
-            continue
-        r, t, bound, factor = min(comp, key=lambda c: c[0]["rmse"])
-        rb, _tb, bb, fb = max(comp, key=lambda c: c[3])
-        lines.append(
-            f"| {scene} | {r['options']} | {r['ms']:.2f} | {r['rmse']:.5f} | {bound}{t:.2f} | {bound}{factor:.2f} | "
-            f"{bb}{fb:.2f} ({rb['options']}, RMSE {rb['rmse']:.4f}) |"
-        )
-    lines.append("")
+    lines += _equal_error_table(comparisons, "rmse", "RMSE", ".5f")
     if paired:
         lines += [
             "Re-timed in pairs (the motion_volume option set with the best factor in the sweep above, or the most "
@@ -407,25 +416,8 @@ def _markdown(
             )
         lines.append("")
     if flip_comparisons and any(flip_comparisons.values()):
-        lines += [
-            "The same at equal FLIP (NVIDIA's perceptual difference):",
-            "",
-        ]
-        lines += [
-            "| scene | most accurate motion_volume (FLIP) | its ms | its FLIP | accumulation ms at that FLIP | factor | best factor (options) |"
-        ]
-        lines += ["|---|---|---:|---:|---:|---:|---|"]
-        for scene, comp in flip_comparisons.items():
-            if not comp:
-                lines.append(f"| {scene} | (not applicable) | | | | | |")
-                continue
-            r, t, bound, factor = min(comp, key=lambda c: c[0]["flip"])
-            rb, _tb, bb, fb = max(comp, key=lambda c: c[3])
-            lines.append(
-                f"| {scene} | {r['options']} | {r['ms']:.2f} | {r['flip']:.4f} | {bound}{t:.2f} | {bound}{factor:.2f} | "
-                f"{bb}{fb:.2f} ({rb['options']}, FLIP {rb['flip']:.4f}) |"
-            )
-        lines.append("")
+        lines += ["The same at equal FLIP (NVIDIA's perceptual difference):", ""]
+        lines += _equal_error_table(flip_comparisons, "flip", "FLIP", ".4f")
     if pyrender_rows:
         lines += ["## accumulation (static drawn once, N = 16) against 16-pose pyrender accumulation", ""]
         lines += [

@@ -1,6 +1,7 @@
 //! Unit tests of the image kernels in pure Rust: invariants and thread-count independence.
 //! (The numpy twins in tests/image_twins.py check the values.)
 use super::*;
+use crate::on_threads;
 
 fn image(w: usize, h: usize, seed: u32) -> Vec<f32> {
     // A small deterministic generator: an alpha blob with random-ish colours.
@@ -21,14 +22,6 @@ fn image(w: usize, h: usize, seed: u32) -> Vec<f32> {
         }
     }
     out
-}
-
-fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(n)
-        .build()
-        .unwrap()
-        .install(f)
 }
 
 #[test]

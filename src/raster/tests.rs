@@ -84,11 +84,9 @@ fn output_does_not_depend_on_the_thread_count() {
     };
     let cam = camera(300, 200);
     let run = |threads| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| rasterize(&cam, &[d.clone(), back.clone()], &opts).unwrap())
+        crate::on_threads(threads, || {
+            rasterize(&cam, &[d.clone(), back.clone()], &opts).unwrap()
+        })
     };
     let (a, b) = (run(1), run(2));
     assert_eq!(a.rgba, b.rgba);

@@ -298,16 +298,8 @@ fn thread_count_does_not_change_the_shell() {
         }
         sh.build(None, None).unwrap()
     };
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
-    let three = rayon::ThreadPoolBuilder::new()
-        .num_threads(3)
-        .build()
-        .unwrap();
-    let a = one.install(run);
-    let b = three.install(run);
+    let a = crate::on_threads(1, run);
+    let b = crate::on_threads(3, run);
     assert!(!a.faces.is_empty());
     assert_eq!(a, b);
 }

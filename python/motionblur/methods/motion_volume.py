@@ -341,15 +341,11 @@ def _window(cam: Camera, vertex_sets):
     vertex is behind the camera; None when there is nothing."""
     if not vertex_sets:
         return None
-    vp = cam.view_projection
     lo, hi = np.array([np.inf, np.inf]), np.array([-np.inf, -np.inf])
     for v in vertex_sets:
-        clip = v @ vp[:3, :3].T + vp[:3, 3]
-        wc = v @ vp[3, :3] + vp[3, 3]
-        if (wc <= 1e-9).any():
+        x, y, front = _pixels(cam.view_projection, v, cam.width, cam.height)
+        if not front.all():
             return 0, 0, cam.width, cam.height
-        x = (clip[:, 0] / wc + 1.0) * 0.5 * cam.width
-        y = (1.0 - clip[:, 1] / wc) * 0.5 * cam.height
         lo = np.minimum(lo, [x.min(), y.min()])
         hi = np.maximum(hi, [x.max(), y.max()])
     x0, y0 = max(0, int(np.floor(lo[0])) - 1), max(0, int(np.floor(lo[1])) - 1)
@@ -473,9 +469,7 @@ def _averaged_colors(scene: Scene, k: int, obj: Object, keys: np.ndarray, vol) -
     length = float(np.hypot(dx, dy))
     if length >= 1.0:
         sharp = image.box_blur(sharp, (dx, dy), length)
-    vp = proj @ cam.view
-    px, py, front = _pixels(vp, vol.vertices, w, h)
-    px, py = px - 0.5, py - 0.5  # pixel centres sit at +0.5
+    px, py = x - x0 - 0.5, y - y0 - 0.5  # in the window (same pixel centres), centres at +0.5
     i0 = np.clip(np.floor(px), 0, max(w - 2, 0)).astype(np.int64)
     j0 = np.clip(np.floor(py), 0, max(h - 2, 0)).astype(np.int64)
     i1, j1 = np.minimum(i0 + 1, w - 1), np.minimum(j0 + 1, h - 1)
