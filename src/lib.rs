@@ -7,7 +7,7 @@
 //! `raster` (the software rasterizer), `image` (image-space blur).
 //!
 //! The motion volume is split into `volume` (construction), `volume_filter` (the paper's ramp),
-//! `volume_alpha` (coverage alphas), `volume_assemble` (surfaces and attributes), `subdivide`
+//! `volume_alpha` (coverage alphas), `hull` (projected hulls), `volume_assemble` (surfaces and attributes), `subdivide`
 //! and `spin` (section 4.3's spinning objects); `adjacency` builds the mesh adjacency.
 #![allow(dead_code)]
 
@@ -16,6 +16,7 @@ pub mod adjacency;
 pub mod contour;
 pub mod contour_table;
 mod error;
+pub mod hull;
 pub mod image;
 pub mod mesh;
 pub mod motion;

@@ -33,6 +33,7 @@
 //! long paths, at least 64).
 use rayon::prelude::*;
 
+use crate::hull::{convex_hull, rim_points, Rim};
 use crate::mesh::{dot, normalize};
 use crate::motion::Path;
 use crate::volume_filter::Filter;
@@ -159,91 +160,6 @@ impl ChordTable {
     }
 }
 
-/// Akl-Toussaint: drop the points strictly inside the polygon of the extreme points in 32
-/// directions (they cannot be on the hull), so that a dense mesh sorts only its rim (about a
-/// tenth of a sphere's projected vertices).
-fn discard_interior(pts: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
-    const K: usize = 32;
-    if pts.len() < 4 * K {
-        return pts;
-    }
-    let dirs: Vec<[f64; 2]> = (0..K)
-        .map(|k| {
-            let a = std::f64::consts::TAU * k as f64 / K as f64;
-            [a.cos(), a.sin()]
-        })
-        .collect();
-    let key = |p: [f64; 2], d: [f64; 2]| p[0] * d[0] + p[1] * d[1];
-    // The point of largest p . d per direction (ties: the first), counter-clockwise.
-    let ext = pts
-        .par_chunks(8192)
-        .map(|c| {
-            let mut o = [c[0]; K];
-            for p in &c[1..] {
-                for (e, d) in o.iter_mut().zip(&dirs) {
-                    if key(*p, *d) > key(*e, *d) {
-                        *e = *p;
-                    }
-                }
-            }
-            o
-        })
-        .reduce_with(|mut a, b| {
-            for ((e, x), d) in a.iter_mut().zip(b).zip(&dirs) {
-                if key(x, *d) > key(*e, *d) {
-                    *e = x;
-                }
-            }
-            a
-        })
-        .expect("at least one chunk");
-    let mut poly: Vec<[f64; 2]> = ext.to_vec();
-    poly.dedup();
-    while poly.len() > 1 && poly[0] == poly[poly.len() - 1] {
-        poly.pop();
-    }
-    if poly.len() < 3 {
-        return pts;
-    }
-    let inside = |p: &[f64; 2]| {
-        (0..poly.len()).all(|i| {
-            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-            (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) > 0.0
-        })
-    };
-    pts.into_par_iter().filter(|p| !inside(p)).collect()
-}
-
-/// Andrew's monotone chain: the convex hull, counter-clockwise, without collinear points.
-fn convex_hull(pts: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
-    let mut pts = discard_interior(pts);
-    pts.par_sort_unstable_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
-    pts.dedup();
-    if pts.len() < 3 {
-        return pts;
-    }
-    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
-        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-    };
-    let mut h: Vec<[f64; 2]> = Vec::with_capacity(2 * pts.len());
-    for pass in 0..2 {
-        let start = h.len();
-        let iter: Box<dyn Iterator<Item = &[f64; 2]>> = if pass == 0 {
-            Box::new(pts.iter())
-        } else {
-            Box::new(pts.iter().rev())
-        };
-        for &p in iter {
-            while h.len() >= start + 2 && cross(h[h.len() - 2], h[h.len() - 1], p) <= 0.0 {
-                h.pop();
-            }
-            h.push(p);
-        }
-        h.pop();
-    }
-    h
-}
-
 /// Above this many vertices a translation's coverage model uses 3 sub-segments instead of 8
 /// (each one projects every vertex and takes its hull).
 const DENSE_VERTICES: usize = 20_000;
@@ -322,9 +238,12 @@ pub fn default_view(motion: [f64; 3]) -> [f64; 3] {
 
 impl CoverageModel {
     /// The model of `vertices` (object space) placed along `path` and seen along `view`, from
-    /// the camera at `eye` (perspective) or orthographically.
+    /// the camera at `eye` (perspective) or orthographically. With `rim` (the faces of a closed
+    /// mesh on these vertices) each hull is taken over the projected silhouette only
+    /// ([`rim_points`]), unless a vertex is not in front of the eye.
     pub fn new(
         vertices: &[[f64; 3]],
+        rim: Option<Rim>,
         path: &Path,
         filter: Filter,
         view: [f64; 3],
@@ -348,13 +267,31 @@ impl CoverageModel {
             [s[0] / k, s[1] / k, s[2] / k]
         };
         let proj = |p: [f64; 3]| project(eye, d, e1, e2, p);
-        let project_all = |f: &crate::motion::Keyframe| -> Vec<[f64; 2]> {
-            vertices.par_iter().map(|v| proj(f.point(*v))).collect()
+        // The projected vertices, and whether every one is in front of the eye (depth along `d`
+        // above 1e-6 of its distance; the projection clamps the others).
+        let project_all = |f: &crate::motion::Keyframe| -> (Vec<[f64; 2]>, bool) {
+            let placed = |v: &[f64; 3]| f.point(*v);
+            let pts = vertices.par_iter().map(|v| proj(placed(v))).collect();
+            let front = match eye {
+                None => true,
+                Some(e) => vertices.par_iter().all(|v| {
+                    let p = placed(v);
+                    let r = [p[0] - e[0], p[1] - e[1], p[2] - e[2]];
+                    dot(r, d) > 1e-6 * dot(r, r).sqrt()
+                }),
+            };
+            (pts, front)
+        };
+        let hull_at = |f: &crate::motion::Keyframe| -> Vec<[f64; 2]> {
+            match (project_all(f), rim) {
+                ((pts, true), Some(rim)) => convex_hull(rim_points(rim, &pts)),
+                ((pts, _), _) => convex_hull(pts),
+            }
         };
         // Orthographic translation: every segment's silhouette is the first one moved.
         let pure = path.is_translation() && eye.is_none();
         let base = if pure {
-            Some(convex_hull(project_all(&path.frames[0])))
+            Some(hull_at(&path.frames[0]))
         } else {
             None
         };
@@ -392,7 +329,7 @@ impl CoverageModel {
                             let off = [0.5 * (pa[0] + pb[0]) - o[0], 0.5 * (pa[1] + pb[1]) - o[1]];
                             h.iter().map(|p| [p[0] + off[0], p[1] + off[1]]).collect()
                         }
-                        None => convex_hull(project_all(&a.interpolate(b, 0.5))),
+                        None => hull_at(&a.interpolate(b, 0.5)),
                     };
                     let local: Vec<[f64; 2]> = hull
                         .iter()
@@ -522,19 +459,6 @@ mod tests {
     }
 
     #[test]
-    fn hull_of_a_square_with_inner_points() {
-        let h = convex_hull(vec![
-            [0.0, 0.0],
-            [1.0, 0.0],
-            [0.5, 0.5],
-            [1.0, 1.0],
-            [0.0, 1.0],
-            [0.5, 0.0],
-        ]);
-        assert_eq!(h.len(), 4);
-    }
-
-    #[test]
     fn box_coverage_of_a_translating_square_is_exact() {
         // A unit square moving 4 along x, seen along -z: a point at x covers the window where the
         // square's [tx, tx + 1] contains it, so coverage = |[x - 1, x] / 4 ∩ [0, 1]|.
@@ -544,7 +468,7 @@ mod tests {
                 Keyframe::translate([4.0, 0.0, 0.0]),
             ],
         };
-        let m = CoverageModel::new(&square(), &path, Filter::Box, [0.0, 0.0, -1.0], None);
+        let m = CoverageModel::new(&square(), None, &path, Filter::Box, [0.0, 0.0, -1.0], None);
         for (x, want) in [
             (-0.5, 0.0),
             (0.5, 0.125),
