@@ -101,6 +101,12 @@ def _glow(alpha: np.ndarray, direction: tuple[float, float], width: float) -> np
 def _box_blur(rgba: np.ndarray, direction: tuple[float, float], length: float) -> np.ndarray:
     """Box blur of rgba (H,W,4) f32 over length pixels along direction. Returns (H,W,4) f32."""
 
+def _splat_paths(colors: np.ndarray, paths: np.ndarray, width: int, height: int) -> np.ndarray:
+    """Time average of sources moving along image paths: colors (N,4) f32 premultiplied, paths
+    (N,P,2) f32 pixel coordinates (centres at +0.5), the shutter split equally among the P - 1
+    segments (P = 1: still). Returns (height, width, 4) f32. Non-finite path points drop their
+    segments. Releases the GIL; the same sums for any thread count."""
+
 def _opaque_blur(rgba: np.ndarray, direction: tuple[float, float], length: float) -> np.ndarray:
     """Box blur, eq. 10 glow and eq. 7 rescale of premultiplied rgba (H,W,4) f32. Returns (H,W,4) f32."""
 

@@ -1,5 +1,6 @@
 //! Image-space blur kernels: box and directional blur, glow, opaque blur, pyramids, depth of field,
-//! camera blur (Kraus 2013, "Using opaque image blur..."; Chapman 2011, camera motion blur).
+//! camera blur (Kraus 2013, "Using opaque image blur..."; Chapman 2011, camera motion blur), and
+//! splatting along per-source image paths (`splat`).
 //!
 //! Conventions: images are row-major float32, `(h, w, 4)` premultiplied RGBA or `(h, w)` single
 //! channel, row 0 at the top. Outside the image everything is transparent black (zero), so a
@@ -19,6 +20,7 @@ mod lines;
 mod opaque;
 mod pool;
 mod pyramid;
+mod splat;
 
 pub use boxblur::box_blur;
 pub use camera::{camera_motion_blur, camera_velocity, velocity_blur, CameraMatrices, MAX_SAMPLES};
@@ -27,6 +29,7 @@ pub use glow::glow;
 pub use lines::{plan, LinePlan};
 pub use opaque::{opaque_blur, opaque_motion_blur, Composite};
 pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};
+pub use splat::{splat_paths, MAX_PATH_POINTS};
 
 use crate::{Error, Result};
 

@@ -121,6 +121,41 @@ fn _box_blur<'py>(
     out3(py, out, h, w, 4)
 }
 
+/// Splat colors (N,4) f32 along paths (N,P,2) f32 into a (height, width, 4) f32 image.
+#[pyfunction]
+fn _splat_paths<'py>(
+    py: Python<'py>,
+    colors: PyReadonlyArray2<'py, f32>,
+    paths: PyReadonlyArray3<'py, f32>,
+    width: usize,
+    height: usize,
+) -> PyOut<'py> {
+    let (cs, ps) = (colors.shape(), paths.shape());
+    if cs[1] != 4 {
+        return Err(to_py_err(Error::shape(
+            "colors",
+            format!("expected shape (N,4), got {cs:?}"),
+        )));
+    }
+    if ps[2] != 2 || ps[0] != cs[0] {
+        return Err(to_py_err(Error::shape(
+            "paths",
+            format!("expected shape ({},P,2) like colors, got {ps:?}", cs[0]),
+        )));
+    }
+    let c = c_slice(&colors, "colors").map_err(to_py_err)?;
+    let p = c_slice(&paths, "paths").map_err(to_py_err)?;
+    let c4: Vec<[f32; 4]> = c
+        .chunks_exact(4)
+        .map(|x| [x[0], x[1], x[2], x[3]])
+        .collect();
+    let p2: Vec<[f32; 2]> = p.chunks_exact(2).map(|x| [x[0], x[1]]).collect();
+    let out = py
+        .detach(|| super::in_pool(|| image::splat_paths(width, height, &c4, &p2, ps[1])))
+        .map_err(to_py_err)?;
+    out3(py, out, height, width, 4)
+}
+
 /// Opaque blur (box, glow, eq. 7) of rgba (H,W,4) f32.
 #[pyfunction]
 fn _opaque_blur<'py>(
@@ -300,6 +335,7 @@ fn _camera_motion_blur<'py>(
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_glow, m)?)?;
     m.add_function(wrap_pyfunction!(_box_blur, m)?)?;
+    m.add_function(wrap_pyfunction!(_splat_paths, m)?)?;
     m.add_function(wrap_pyfunction!(_opaque_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_opaque_motion_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_pyramid_blur, m)?)?;
