@@ -2,6 +2,7 @@
 use pyo3::prelude::*;
 
 mod accumulate;
+mod facing;
 mod geometry;
 mod image;
 mod raster;
@@ -63,5 +64,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     image::register(m)?;
     shell::register(m)?;
     accumulate::register(m)?;
+    facing::register(m)?;
     Ok(())
 }

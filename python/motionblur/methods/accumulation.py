@@ -14,12 +14,14 @@ blurred objects look faster (fainter).
 
 from __future__ import annotations
 
+import weakref
 from collections import deque
 
 import numpy as np
 
 from .. import _core
 from .._validate import as_float, as_int
+from ..geometry import Mesh
 from ..raster import Camera, Frame
 from ..render import (
     Layer,
@@ -54,6 +56,44 @@ def sample_times(scene: Scene, n: int, sampling: str = "stratified", seed: int =
     return times, w / w.sum()
 
 
+# Per-mesh constants kept across frames: {(id(vertices), id(faces)): (weak refs to both, {name:
+# read-only array})}, an entry dropped with its vertex array. Nothing here holds a mesh alive.
+_CONSTANTS: dict[tuple[int, int], tuple] = {}
+
+
+def _mesh_constant(mesh: Mesh, name: str, compute) -> np.ndarray:
+    """``compute(mesh)`` kept across frames for ``mesh``. A Mesh owns read-only copies of its
+    vertices and faces (and its Rust side, which gives the normals, another copy), so what is
+    computed from them is a constant of the mesh; should a caller unlock an array
+    (``flags.writeable = True``) to edit it in place, nothing is kept or reused for that mesh."""
+    v, f = mesh.vertices, mesh.faces
+    if v.flags.writeable or f.flags.writeable:
+        return compute(mesh)
+    key = (id(v), id(f))
+    hit = _CONSTANTS.get(key)
+    if hit is None or hit[0]() is not v or hit[1]() is not f:
+        hit = (weakref.ref(v, lambda _r, k=key: _CONSTANTS.pop(k, None)), weakref.ref(f), {})
+        _CONSTANTS[key] = hit
+    values = hit[2]
+    if name not in values:
+        a = compute(mesh)
+        a.flags.writeable = False
+        values[name] = a
+    return values[name]
+
+
+def _box_corners(mesh: Mesh) -> np.ndarray:
+    """(8,3) float64 corners of the mesh's axis-aligned bounding box."""
+    v = mesh.vertices
+    a, b = v.min(axis=0), v.max(axis=0)
+    return np.array([[x, y, z] for x in (a[0], b[0]) for y in (a[1], b[1]) for z in (a[2], b[2])])
+
+
+def _normals32(mesh: Mesh) -> np.ndarray:
+    """(V,3) float32 vertex normals."""
+    return mesh.vertex_normals().astype(np.float32)
+
+
 def _bounds(camera: Camera, pts: np.ndarray):
     """(x0, y0, x1, y1) pixel bounds of the points, clamped to the image (None when off the
     image), or the whole image when a point is behind the camera."""
@@ -80,11 +120,7 @@ def sample_windows(camera: Camera, times, objects) -> list:
     corners = {}
     for obj in objects:
         if not (obj.motion is not None and obj.motion.is_deforming):
-            v = obj.mesh.vertices
-            a, b = v.min(axis=0), v.max(axis=0)
-            corners[id(obj)] = np.array(
-                [[x, y, z] for x in (a[0], b[0]) for y in (a[1], b[1]) for z in (a[2], b[2])]
-            )
+            corners[id(obj)] = _mesh_constant(obj.mesh, "corners", _box_corners)
     out = []
     for t in times:
         pts = []
@@ -109,7 +145,9 @@ def moving_window(scene: Scene, camera: Camera, times, objects) -> tuple[int, in
 
 def _facing_faces(obj: Object, faces: np.ndarray, eye: np.ndarray) -> np.ndarray:
     """The faces of a rigidly translating ``obj`` that face ``eye`` at some time of the shutter
-    (all faces for other motions), conservatively: near edge-on faces are kept."""
+    (all faces for other motions), conservatively: near edge-on faces are kept. A face is kept
+    when ``n . (e_k - a) > -1e-9 |n| |e_k - a|`` at some keyframe's object-space eye ``e_k``
+    (``n`` its normal, ``a`` its first vertex), computed in Rust (``_core._facing_faces``)."""
     m = obj.motion
     if m is None or m.is_deforming:
         return faces
@@ -119,18 +157,10 @@ def _facing_faces(obj: Object, faces: np.ndarray, eye: np.ndarray) -> np.ndarray
     lin = keys[0, :3, :3]
     scale = np.cbrt(np.linalg.det(lin))
     rot = lin / scale
-    v = obj.mesh.vertices
-    a = v[faces[:, 0]]
-    n = np.cross(v[faces[:, 1]] - a, v[faces[:, 2]] - a)
-    nlen = np.linalg.norm(n, axis=1)
-    keep = np.zeros(len(faces), dtype=bool)
-    for key in keys:  # the held ends and every keyframe in between
-        e = rot.T @ (eye - key[:3, 3]) / scale  # the eye in object space
-        d = e - a
-        keep |= np.einsum("ij,ij->i", n, d) > -1e-9 * nlen * np.linalg.norm(d, axis=1)
-    if keep.all():
-        return faces
-    return np.ascontiguousarray(faces[keep])
+    # the eye in object space at the held ends and every keyframe in between
+    eyes = np.array([rot.T @ (eye - key[:3, 3]) / scale for key in keys])
+    kept = _core._facing_faces(np.ascontiguousarray(obj.mesh.vertices), faces, eyes)
+    return faces if len(kept) == len(faces) else kept
 
 
 def _crop(layer: Layer, win) -> Layer:
@@ -158,7 +188,7 @@ class _Painter:
             if eye is not None:
                 faces = _facing_faces(o, faces, np.asarray(eye, dtype=np.float64))
             rgba = np.ascontiguousarray(np.atleast_2d(o.rgba), dtype=np.float32)
-            normals = o.mesh.vertex_normals().astype(np.float32) if o.shading == "lambert" else None
+            normals = _mesh_constant(o.mesh, "normals32", _normals32) if o.shading == "lambert" else None
             self.groups.setdefault(o.shading, []).append((k, o, faces, rgba, normals))
         self.lights = [(np.asarray(li.direction), tuple(map(float, li.intensity))) for li in scene.lights]
         self.ambient = tuple(map(float, scene.ambient))
@@ -243,11 +273,10 @@ def accumulation(
             cam = supersampled(scene.camera_at(t), aa)
             layer = painter.layer(t, cam.view, cam.projection, cam.width, cam.height)
             stats["draw_calls"] += 1
-            acc = (
-                layer.rgba * np.float32(weights[i])
-                if acc is None
-                else acc + layer.rgba * np.float32(weights[i])
-            )
+            if acc is None:
+                acc = layer.rgba * np.float32(weights[i])
+            else:  # acc += w * rgba in one pass, in place (the same float32 products and sums)
+                _core._accumulate(acc, layer.rgba, layer.depth, None, float(weights[i]))
             if i == ref:
                 keep = layer
         if dim < 1.0:
