@@ -62,11 +62,13 @@ pub fn facing_faces(
     if eyes.iter().flatten().any(|x| !x.is_finite()) {
         return Err(Error::value("eyes", "must be finite"));
     }
-    if vertices.par_iter().flatten().any(|x| !x.is_finite()) {
+    let finite = |c: &[[f64; 3]]| c.iter().flatten().all(|x| x.is_finite());
+    if !vertices.par_chunks(CHUNK).all(finite) {
         return Err(Error::value("vertices", "must be finite"));
     }
     let nv = vertices.len() as i64;
-    if faces.par_iter().flatten().any(|&i| i < 0 || i >= nv) {
+    let in_range = |c: &[[i64; 3]]| c.iter().flatten().all(|&i| (0..nv).contains(&i));
+    if !faces.par_chunks(CHUNK).all(in_range) {
         return Err(Error::value(
             "faces",
             format!("indices must be in [0, {nv}) (the vertex count)"),
