@@ -49,42 +49,52 @@ fn faces_an_eye(a: [f64; 3], b: [f64; 3], c: [f64; 3], eyes: &[[f64; 3]]) -> boo
 }
 
 /// The faces (in their order) of the mesh `vertices`/`faces` that face one of the object-space
-/// eye positions `eyes` (K >= 1), conservatively. Errors for non-finite vertices or eyes, no
-/// eye, and face indices outside `[0, V)`.
-pub fn facing_faces(
-    vertices: &[[f64; 3]],
-    faces: &[[i64; 3]],
-    eyes: &[[f64; 3]],
-) -> Result<Vec<[i64; 3]>> {
+/// eye positions `eyes` (K >= 1), conservatively. All three are flat row-major (N,3) arrays
+/// (`3 N` values); so is the result. Errors for lengths that are not multiples of 3, non-finite
+/// vertices or eyes, no eye, and face indices outside `[0, V)`.
+pub fn facing_faces(vertices: &[f64], faces: &[i64], eyes: &[f64]) -> Result<Vec<i64>> {
+    for (name, len) in [
+        ("vertices", vertices.len()),
+        ("faces", faces.len()),
+        ("eyes", eyes.len()),
+    ] {
+        if len % 3 != 0 {
+            return Err(Error::shape(name, "expected (N,3) rows"));
+        }
+    }
     if eyes.is_empty() {
         return Err(Error::shape("eyes", "needs at least one eye position"));
     }
-    if eyes.iter().flatten().any(|x| !x.is_finite()) {
+    if eyes.iter().any(|x| !x.is_finite()) {
         return Err(Error::value("eyes", "must be finite"));
     }
-    let finite = |c: &[[f64; 3]]| c.iter().flatten().all(|x| x.is_finite());
-    if !vertices.par_chunks(CHUNK).all(finite) {
+    let eyes: Vec<[f64; 3]> = eyes.chunks_exact(3).map(|e| [e[0], e[1], e[2]]).collect();
+    let finite = |c: &[f64]| c.iter().all(|x| x.is_finite());
+    if !vertices.par_chunks(3 * CHUNK).all(finite) {
         return Err(Error::value("vertices", "must be finite"));
     }
-    let nv = vertices.len() as i64;
-    let in_range = |c: &[[i64; 3]]| c.iter().flatten().all(|&i| (0..nv).contains(&i));
-    if !faces.par_chunks(CHUNK).all(in_range) {
+    let nv = (vertices.len() / 3) as i64;
+    let in_range = |c: &[i64]| c.iter().all(|&i| (0..nv).contains(&i));
+    if !faces.par_chunks(3 * CHUNK).all(in_range) {
         return Err(Error::value(
             "faces",
             format!("indices must be in [0, {nv}) (the vertex count)"),
         ));
     }
-    let kept: Vec<Vec<[i64; 3]>> = faces
-        .par_chunks(CHUNK)
+    let p = |i: i64| {
+        let i = 3 * i as usize;
+        [vertices[i], vertices[i + 1], vertices[i + 2]]
+    };
+    let kept: Vec<Vec<i64>> = faces
+        .par_chunks(3 * CHUNK)
         .map(|chunk| {
-            chunk
-                .iter()
-                .filter(|f| {
-                    let p = |k: usize| vertices[f[k] as usize];
-                    faces_an_eye(p(0), p(1), p(2), eyes)
-                })
-                .copied()
-                .collect()
+            let mut out = Vec::new();
+            for f in chunk.chunks_exact(3) {
+                if faces_an_eye(p(f[0]), p(f[1]), p(f[2]), &eyes) {
+                    out.extend_from_slice(f);
+                }
+            }
+            out
         })
         .collect();
     Ok(kept.concat())
@@ -94,6 +104,12 @@ pub fn facing_faces(
 mod tests {
     use super::*;
     use crate::on_threads;
+
+    /// `facing_faces` on row arrays.
+    fn facing(v: &[[f64; 3]], f: &[[i64; 3]], eyes: &[[f64; 3]]) -> Result<Vec<[i64; 3]>> {
+        let kept = facing_faces(v.as_flattened(), f.as_flattened(), eyes.as_flattened())?;
+        Ok(kept.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+    }
 
     fn grid(n: usize) -> (Vec<[f64; 3]>, Vec<[i64; 3]>) {
         // a bumpy closed-ish sheet: faces of both orientations
@@ -119,16 +135,16 @@ mod tests {
     fn keeps_faces_facing_any_eye_in_order() {
         let (v, f) = grid(40);
         // a height field seen from far above (every face) and far below (none)
-        let above = facing_faces(&v, &f, &[[0.5, 0.5, 10.0]]).unwrap();
-        let below = facing_faces(&v, &f, &[[0.5, 0.5, -10.0]]).unwrap();
+        let above = facing(&v, &f, &[[0.5, 0.5, 10.0]]).unwrap();
+        let below = facing(&v, &f, &[[0.5, 0.5, -10.0]]).unwrap();
         assert_eq!(above, f);
         assert!(below.is_empty());
         assert_eq!(
-            facing_faces(&v, &f, &[[0.5, 0.5, -10.0], [0.5, 0.5, 10.0]]).unwrap(),
+            facing(&v, &f, &[[0.5, 0.5, -10.0], [0.5, 0.5, 10.0]]).unwrap(),
             f
         );
         // from just above the bumps, some faces turn away; the kept ones keep their order
-        let low = facing_faces(&v, &f, &[[0.5, 0.5, 0.02]]).unwrap();
+        let low = facing(&v, &f, &[[0.5, 0.5, 0.02]]).unwrap();
         assert!(!low.is_empty() && low.len() < f.len());
         let pos: Vec<usize> = low
             .iter()
@@ -141,23 +157,26 @@ mod tests {
     fn thread_count_independent() {
         let (v, f) = grid(120);
         let eyes = [[0.3, 0.2, 2.0], [0.9, 0.4, 1.5]];
-        let one = on_threads(1, || facing_faces(&v, &f, &eyes).unwrap());
-        let two = on_threads(2, || facing_faces(&v, &f, &eyes).unwrap());
+        let one = on_threads(1, || facing(&v, &f, &eyes).unwrap());
+        let two = on_threads(2, || facing(&v, &f, &eyes).unwrap());
         assert_eq!(one, two);
     }
 
     #[test]
     fn rejects_bad_input() {
         let (v, f) = grid(2);
-        assert!(facing_faces(&v, &f, &[]).is_err());
-        assert!(facing_faces(&v, &f, &[[f64::NAN, 0.0, 0.0]]).is_err());
+        assert!(facing(&v, &f, &[]).is_err());
+        assert!(facing_faces(&[0.0; 4], &[0; 3], &[0.0; 3]).is_err());
+        assert!(facing_faces(&[0.0; 9], &[0; 4], &[0.0; 3]).is_err());
+        assert!(facing_faces(&[0.0; 9], &[0; 3], &[0.0; 4]).is_err());
+        assert!(facing(&v, &f, &[[f64::NAN, 0.0, 0.0]]).is_err());
         let mut bad = f.clone();
         bad[0][1] = v.len() as i64;
-        assert!(facing_faces(&v, &bad, &[[0.0, 0.0, 1.0]]).is_err());
+        assert!(facing(&v, &bad, &[[0.0, 0.0, 1.0]]).is_err());
         bad[0][1] = -1;
-        assert!(facing_faces(&v, &bad, &[[0.0, 0.0, 1.0]]).is_err());
+        assert!(facing(&v, &bad, &[[0.0, 0.0, 1.0]]).is_err());
         let mut nan = v.clone();
         nan[0][2] = f64::INFINITY;
-        assert!(facing_faces(&nan, &f, &[[0.0, 0.0, 1.0]]).is_err());
+        assert!(facing(&nan, &f, &[[0.0, 0.0, 1.0]]).is_err());
     }
 }

@@ -8,21 +8,18 @@ use super::{c_slice, to_py_err};
 use crate::facing;
 use crate::Error;
 
-/// The (N,3) rows of `a` as `[T; 3]` triples, borrowed (C-contiguous only).
-fn triples<'a, T: numpy::Element>(
+/// The data of the (N,3) array `a`, row-major (C-contiguous only).
+fn rows3<'a, T: numpy::Element>(
     a: &'a PyReadonlyArray2<'_, T>,
     name: &'static str,
-) -> PyResult<&'a [[T; 3]]> {
+) -> PyResult<&'a [T]> {
     if a.shape()[1] != 3 {
         return Err(to_py_err(Error::shape(
             name,
             format!("expected shape (N,3), got {:?}", a.shape()),
         )));
     }
-    let s = c_slice(a, name).map_err(to_py_err)?;
-    let (rows, rest) = s.as_chunks::<3>();
-    debug_assert!(rest.is_empty());
-    Ok(rows)
+    c_slice(a, name).map_err(to_py_err)
 }
 
 /// The faces (F',3) int64 of vertices (V,3) f64 / faces (F,3) int64 that face one of the
@@ -34,15 +31,13 @@ fn _facing_faces<'py>(
     faces: PyReadonlyArray2<'py, i64>,
     eyes: PyReadonlyArray2<'py, f64>,
 ) -> PyResult<Bound<'py, PyArray2<i64>>> {
-    let v = triples(&vertices, "vertices")?;
-    let f = triples(&faces, "faces")?;
-    let e = triples(&eyes, "eyes")?;
+    let v = rows3(&vertices, "vertices")?;
+    let f = rows3(&faces, "faces")?;
+    let e = rows3(&eyes, "eyes")?;
     let kept = py
         .detach(|| super::in_pool(|| facing::facing_faces(v, f, e)))
         .map_err(to_py_err)?;
-    let n = kept.len();
-    let flat: Vec<i64> = kept.into_flattened();
-    let arr = Array2::from_shape_vec((n, 3), flat).expect("n rows of 3");
+    let arr = Array2::from_shape_vec((kept.len() / 3, 3), kept).expect("rows of 3");
     Ok(PyArray2::from_owned_array(py, arr))
 }
 
