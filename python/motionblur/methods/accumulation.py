@@ -112,11 +112,30 @@ def _bounds(camera: Camera, pts: np.ndarray):
     return x0, y0, x1, y1
 
 
-def sample_windows(camera: Camera, times, objects) -> list:
+class _Placements:
+    """``placement(obj, t)``: ``obj.transform_at(t)``, computed once per object and time (the
+    sample windows and the painter both place every moving rigid object at every sample time;
+    deforming vertices are not kept: N of them would be N meshes of memory). The matrices are
+    shared: read them, do not write them."""
+
+    def __init__(self):
+        self._memo: dict[tuple[int, float], np.ndarray] = {}
+
+    def __call__(self, obj: Object, t: float) -> np.ndarray:
+        key = (id(obj), float(t))
+        m = self._memo.get(key)
+        if m is None:
+            m = self._memo[key] = obj.transform_at(t)
+        return m
+
+
+def sample_windows(camera: Camera, times, objects, placement=None) -> list:
     """Per time of ``times``, the pixel rectangle (x0, y0, x1, y1) of ``camera`` holding
     ``objects`` at that time (None when they are off the image). Rigid objects are bounded by
     their transformed bounding box (the projection of a box holds the projection of its content
-    when the box is in front of the camera); the whole image when a point is behind the camera."""
+    when the box is in front of the camera); the whole image when a point is behind the camera.
+    ``placement`` (a :class:`_Placements`) may carry the transforms over to the painter."""
+    place = placement if placement is not None else _Placements()
     corners = {}
     for obj in objects:
         if not (obj.motion is not None and obj.motion.is_deforming):
@@ -126,7 +145,7 @@ def sample_windows(camera: Camera, times, objects) -> list:
         pts = []
         for obj in objects:
             if id(obj) in corners:
-                m = obj.transform_at(t)
+                m = place(obj, t)
                 pts.append(corners[id(obj)] @ m[:3, :3].T + m[:3, 3])
             else:
                 pts.append(obj.world_vertices(t))
@@ -180,8 +199,9 @@ class _Painter:
     straight segment ``n . (eye - p(t))`` is linear in t, so a face back-facing at every keyframe
     is back-facing throughout and the rasterizer would cull it at every sample anyway."""
 
-    def __init__(self, scene: Scene, objects: list[tuple[int, Object]], eye=None):
+    def __init__(self, scene: Scene, objects: list[tuple[int, Object]], eye=None, placement=None):
         self.scene = scene
+        self.place = placement if placement is not None else _Placements()
         self.groups: dict[str, list] = {}
         for k, o in objects:
             faces = np.ascontiguousarray(o.mesh.faces, dtype=np.int64)
@@ -203,7 +223,7 @@ class _Painter:
         for shading, items in self.groups.items():
             if len(items) == 1 and not (items[0][1].motion is not None and items[0][1].motion.is_deforming):
                 k, o, faces, rgba, normals = items[0]
-                m = o.transform_at(t)
+                m = self.place(o, t)
                 r = m[:3, :3] / np.cbrt(np.linalg.det(m[:3, :3]))
                 args = [(o.mesh.vertices, faces, rgba, normals, k, True, None)]
                 vm, lights = view @ m, self._light_args(r)
@@ -213,7 +233,7 @@ class _Painter:
                     v = np.ascontiguousarray(o.world_vertices(t))
                     n = None
                     if normals is not None and not (o.motion is not None and o.motion.is_deforming):
-                        r = o.transform_at(t)[:3, :3]
+                        r = self.place(o, t)[:3, :3]
                         n = np.ascontiguousarray(
                             normals @ (r / np.cbrt(np.linalg.det(r))).T, dtype=np.float32
                         )
@@ -293,7 +313,8 @@ def accumulation(
     static = static_layer(scene, cam, static_objs, aa)
     stats["static_draws"] = 0 if (static.cached or not static_objs) else 1
     stats["static_cached"] = static.cached
-    per_sample = sample_windows(cam, times, [o for _, o in moving]) if moving else []
+    placement = _Placements()
+    per_sample = sample_windows(cam, times, [o for _, o in moving], placement) if moving else []
     found = [w for w in per_sample if w is not None]
     if not found:
         frame = Frame(
@@ -309,7 +330,7 @@ def accumulation(
     view = np.ascontiguousarray(cam.view)
     base = _crop(static.layer, win)
     base = Layer(np.ascontiguousarray(base.rgba), np.ascontiguousarray(base.depth), base.ids)
-    painter = _Painter(scene, moving, eye=cam.pose[:3, 3])
+    painter = _Painter(scene, moving, eye=cam.pose[:3, 3], placement=placement)
     # Per sample i the composite is M_i over S where M_i is nearer, else S (exact for an opaque
     # static layer), so sum_i w_i out_i = A + S (1 - A.alpha) with A = sum_i w_i M_i [M_i nearer]:
     # the static layer is composited once, after the loop. Each sample is rasterized only inside
