@@ -148,3 +148,24 @@ def test_unlocked_and_edited_mesh_is_not_served_from_the_cache():
     fresh_obj = mb.Object((verts.copy(), f), color=(0.9, 0.4, 0.2), motion=motion)
     fresh = mb.render(mb.Scene([fresh_obj, backdrop], cam), "accumulation", samples=4).rgba
     np.testing.assert_array_equal(edited, fresh)
+
+
+def test_the_per_mesh_cache_lets_meshes_go():
+    import gc
+
+    from motionblur.methods import accumulation as acc
+
+    cam = mb.Camera(mb.look_at((0.0, 0.0, 4.0), (0.0, 0.0, 0.0)), 0.7, 48, 36)
+    before = len(acc._CONSTANTS)
+    for k in range(5):
+        v, f = meshes.icosphere(1, 0.3 + 0.1 * k)
+        obj = mb.Object(
+            (v, f),
+            shading="lambert",
+            motion=mb.Motion.linear(translate((-0.5, 0, 0)), translate((0.5, 0, 0))),
+        )
+        mb.render(mb.Scene([obj], cam, lights=[mb.DirectionalLight((0, 0, -1))]), "accumulation", samples=2)
+        assert len(acc._CONSTANTS) == before + 1  # this mesh's entry, the previous one's gone
+        del obj
+        gc.collect()
+    assert len(acc._CONSTANTS) == before
