@@ -2,7 +2,6 @@
 use pyo3::prelude::*;
 
 mod accumulate;
-mod facing;
 mod geometry;
 mod image;
 mod raster;
@@ -64,6 +63,5 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     image::register(m)?;
     shell::register(m)?;
     accumulate::register(m)?;
-    facing::register(m)?;
     Ok(())
 }
