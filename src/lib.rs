@@ -16,6 +16,7 @@ pub mod adjacency;
 pub mod contour;
 pub mod contour_table;
 mod error;
+pub mod facing;
 pub mod hull;
 pub mod image;
 pub mod mesh;

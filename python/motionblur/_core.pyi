@@ -278,3 +278,13 @@ def _resolve(
     sample's depth and id (the first in row order on ties). Releases the GIL."""
 
 # --- end scenes
+
+# --- acc-frame (accumulation's per-frame kernels)
+
+def _facing_faces(vertices: np.ndarray, faces: np.ndarray, eyes: np.ndarray) -> np.ndarray:
+    """The faces (F',3) int64, in order, of the mesh vertices (V,3) float64 / faces (F,3) int64
+    (object space) that face one of the object-space eye positions eyes (K,3) float64, K >= 1:
+    ``n . (e_k - a) > -1e-9 |n| |e_k - a|`` for some k (n = (b - a) x (c - a)). All C-contiguous.
+    ValueError for wrong shapes, non-finite values or indices outside [0, V). Releases the GIL."""
+
+# --- end acc-frame

@@ -14,12 +14,14 @@ blurred objects look faster (fainter).
 
 from __future__ import annotations
 
+import weakref
 from collections import deque
 
 import numpy as np
 
 from .. import _core
 from .._validate import as_float, as_int
+from ..geometry import Mesh
 from ..raster import Camera, Frame
 from ..render import (
     Layer,
@@ -54,6 +56,44 @@ def sample_times(scene: Scene, n: int, sampling: str = "stratified", seed: int =
     return times, w / w.sum()
 
 
+# Per-mesh constants kept across frames: {(id(vertices), id(faces)): (weak refs to both, {name:
+# read-only array})}, an entry dropped with its vertex array. Nothing here holds a mesh alive.
+_CONSTANTS: dict[tuple[int, int], tuple] = {}
+
+
+def _mesh_constant(mesh: Mesh, name: str, compute) -> np.ndarray:
+    """``compute(mesh)`` kept across frames for ``mesh``. A Mesh owns read-only copies of its
+    vertices and faces (and its Rust side, which gives the normals, another copy), so what is
+    computed from them is a constant of the mesh; should a caller unlock an array
+    (``flags.writeable = True``) to edit it in place, nothing is kept or reused for that mesh."""
+    v, f = mesh.vertices, mesh.faces
+    if v.flags.writeable or f.flags.writeable:
+        return compute(mesh)
+    key = (id(v), id(f))
+    hit = _CONSTANTS.get(key)
+    if hit is None or hit[0]() is not v or hit[1]() is not f:
+        hit = (weakref.ref(v, lambda _r, k=key: _CONSTANTS.pop(k, None)), weakref.ref(f), {})
+        _CONSTANTS[key] = hit
+    values = hit[2]
+    if name not in values:
+        a = compute(mesh)
+        a.flags.writeable = False
+        values[name] = a
+    return values[name]
+
+
+def _box_corners(mesh: Mesh) -> np.ndarray:
+    """(8,3) float64 corners of the mesh's axis-aligned bounding box."""
+    v = mesh.vertices
+    a, b = v.min(axis=0), v.max(axis=0)
+    return np.array([[x, y, z] for x in (a[0], b[0]) for y in (a[1], b[1]) for z in (a[2], b[2])])
+
+
+def _normals32(mesh: Mesh) -> np.ndarray:
+    """(V,3) float32 vertex normals."""
+    return mesh.vertex_normals().astype(np.float32)
+
+
 def _bounds(camera: Camera, pts: np.ndarray):
     """(x0, y0, x1, y1) pixel bounds of the points, clamped to the image (None when off the
     image), or the whole image when a point is behind the camera."""
@@ -72,25 +112,40 @@ def _bounds(camera: Camera, pts: np.ndarray):
     return x0, y0, x1, y1
 
 
-def sample_windows(camera: Camera, times, objects) -> list:
+class _Placements:
+    """``placement(obj, t)``: ``obj.transform_at(t)``, computed once per object and time (the
+    sample windows and the painter both place every moving rigid object at every sample time;
+    deforming vertices are not kept: N of them would be N meshes of memory). The matrices are
+    shared: read them, do not write them."""
+
+    def __init__(self):
+        self._memo: dict[tuple[int, float], np.ndarray] = {}
+
+    def __call__(self, obj: Object, t: float) -> np.ndarray:
+        key = (id(obj), float(t))
+        m = self._memo.get(key)
+        if m is None:
+            m = self._memo[key] = obj.transform_at(t)
+        return m
+
+
+def sample_windows(camera: Camera, times, objects, placement=None) -> list:
     """Per time of ``times``, the pixel rectangle (x0, y0, x1, y1) of ``camera`` holding
     ``objects`` at that time (None when they are off the image). Rigid objects are bounded by
     their transformed bounding box (the projection of a box holds the projection of its content
-    when the box is in front of the camera); the whole image when a point is behind the camera."""
+    when the box is in front of the camera); the whole image when a point is behind the camera.
+    ``placement`` (a :class:`_Placements`) may carry the transforms over to the painter."""
+    place = placement if placement is not None else _Placements()
     corners = {}
     for obj in objects:
         if not (obj.motion is not None and obj.motion.is_deforming):
-            v = obj.mesh.vertices
-            a, b = v.min(axis=0), v.max(axis=0)
-            corners[id(obj)] = np.array(
-                [[x, y, z] for x in (a[0], b[0]) for y in (a[1], b[1]) for z in (a[2], b[2])]
-            )
+            corners[id(obj)] = _mesh_constant(obj.mesh, "corners", _box_corners)
     out = []
     for t in times:
         pts = []
         for obj in objects:
             if id(obj) in corners:
-                m = obj.transform_at(t)
+                m = place(obj, t)
                 pts.append(corners[id(obj)] @ m[:3, :3].T + m[:3, 3])
             else:
                 pts.append(obj.world_vertices(t))
@@ -109,7 +164,9 @@ def moving_window(scene: Scene, camera: Camera, times, objects) -> tuple[int, in
 
 def _facing_faces(obj: Object, faces: np.ndarray, eye: np.ndarray) -> np.ndarray:
     """The faces of a rigidly translating ``obj`` that face ``eye`` at some time of the shutter
-    (all faces for other motions), conservatively: near edge-on faces are kept."""
+    (all faces for other motions), conservatively: near edge-on faces are kept. A face is kept
+    when ``n . (e_k - a) > -1e-9 |n| |e_k - a|`` at some keyframe's object-space eye ``e_k``
+    (``n`` its normal, ``a`` its first vertex), computed in Rust (``_core._facing_faces``)."""
     m = obj.motion
     if m is None or m.is_deforming:
         return faces
@@ -119,18 +176,10 @@ def _facing_faces(obj: Object, faces: np.ndarray, eye: np.ndarray) -> np.ndarray
     lin = keys[0, :3, :3]
     scale = np.cbrt(np.linalg.det(lin))
     rot = lin / scale
-    v = obj.mesh.vertices
-    a = v[faces[:, 0]]
-    n = np.cross(v[faces[:, 1]] - a, v[faces[:, 2]] - a)
-    nlen = np.linalg.norm(n, axis=1)
-    keep = np.zeros(len(faces), dtype=bool)
-    for key in keys:  # the held ends and every keyframe in between
-        e = rot.T @ (eye - key[:3, 3]) / scale  # the eye in object space
-        d = e - a
-        keep |= np.einsum("ij,ij->i", n, d) > -1e-9 * nlen * np.linalg.norm(d, axis=1)
-    if keep.all():
-        return faces
-    return np.ascontiguousarray(faces[keep])
+    # the eye in object space at the held ends and every keyframe in between
+    eyes = np.array([rot.T @ (eye - key[:3, 3]) / scale for key in keys])
+    kept = _core._facing_faces(np.ascontiguousarray(obj.mesh.vertices), faces, eyes)
+    return faces if len(kept) == len(faces) else kept
 
 
 def _crop(layer: Layer, win) -> Layer:
@@ -150,15 +199,16 @@ class _Painter:
     straight segment ``n . (eye - p(t))`` is linear in t, so a face back-facing at every keyframe
     is back-facing throughout and the rasterizer would cull it at every sample anyway."""
 
-    def __init__(self, scene: Scene, objects: list[tuple[int, Object]], eye=None):
+    def __init__(self, scene: Scene, objects: list[tuple[int, Object]], eye=None, placement=None):
         self.scene = scene
+        self.place = placement if placement is not None else _Placements()
         self.groups: dict[str, list] = {}
         for k, o in objects:
             faces = np.ascontiguousarray(o.mesh.faces, dtype=np.int64)
             if eye is not None:
                 faces = _facing_faces(o, faces, np.asarray(eye, dtype=np.float64))
             rgba = np.ascontiguousarray(np.atleast_2d(o.rgba), dtype=np.float32)
-            normals = o.mesh.vertex_normals().astype(np.float32) if o.shading == "lambert" else None
+            normals = _mesh_constant(o.mesh, "normals32", _normals32) if o.shading == "lambert" else None
             self.groups.setdefault(o.shading, []).append((k, o, faces, rgba, normals))
         self.lights = [(np.asarray(li.direction), tuple(map(float, li.intensity))) for li in scene.lights]
         self.ambient = tuple(map(float, scene.ambient))
@@ -173,7 +223,7 @@ class _Painter:
         for shading, items in self.groups.items():
             if len(items) == 1 and not (items[0][1].motion is not None and items[0][1].motion.is_deforming):
                 k, o, faces, rgba, normals = items[0]
-                m = o.transform_at(t)
+                m = self.place(o, t)
                 r = m[:3, :3] / np.cbrt(np.linalg.det(m[:3, :3]))
                 args = [(o.mesh.vertices, faces, rgba, normals, k, True, None)]
                 vm, lights = view @ m, self._light_args(r)
@@ -183,7 +233,7 @@ class _Painter:
                     v = np.ascontiguousarray(o.world_vertices(t))
                     n = None
                     if normals is not None and not (o.motion is not None and o.motion.is_deforming):
-                        r = o.transform_at(t)[:3, :3]
+                        r = self.place(o, t)[:3, :3]
                         n = np.ascontiguousarray(
                             normals @ (r / np.cbrt(np.linalg.det(r))).T, dtype=np.float32
                         )
@@ -243,11 +293,10 @@ def accumulation(
             cam = supersampled(scene.camera_at(t), aa)
             layer = painter.layer(t, cam.view, cam.projection, cam.width, cam.height)
             stats["draw_calls"] += 1
-            acc = (
-                layer.rgba * np.float32(weights[i])
-                if acc is None
-                else acc + layer.rgba * np.float32(weights[i])
-            )
+            if acc is None:
+                acc = layer.rgba * np.float32(weights[i])
+            else:  # acc += w * rgba in one pass, in place (the same float32 products and sums)
+                _core._accumulate(acc, layer.rgba, layer.depth, None, float(weights[i]))
             if i == ref:
                 keep = layer
         if dim < 1.0:
@@ -264,7 +313,8 @@ def accumulation(
     static = static_layer(scene, cam, static_objs, aa)
     stats["static_draws"] = 0 if (static.cached or not static_objs) else 1
     stats["static_cached"] = static.cached
-    per_sample = sample_windows(cam, times, [o for _, o in moving]) if moving else []
+    placement = _Placements()
+    per_sample = sample_windows(cam, times, [o for _, o in moving], placement) if moving else []
     found = [w for w in per_sample if w is not None]
     if not found:
         frame = Frame(
@@ -280,7 +330,7 @@ def accumulation(
     view = np.ascontiguousarray(cam.view)
     base = _crop(static.layer, win)
     base = Layer(np.ascontiguousarray(base.rgba), np.ascontiguousarray(base.depth), base.ids)
-    painter = _Painter(scene, moving, eye=cam.pose[:3, 3])
+    painter = _Painter(scene, moving, eye=cam.pose[:3, 3], placement=placement)
     # Per sample i the composite is M_i over S where M_i is nearer, else S (exact for an opaque
     # static layer), so sum_i w_i out_i = A + S (1 - A.alpha) with A = sum_i w_i M_i [M_i nearer]:
     # the static layer is composited once, after the loop. Each sample is rasterized only inside
