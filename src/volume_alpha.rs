@@ -269,24 +269,44 @@ impl CoverageModel {
         let proj = |p: [f64; 3]| project(eye, d, e1, e2, p);
         // The projected vertices, and whether every one is in front of the eye (depth along `d`
         // above 1e-6 of its distance; the projection clamps the others).
+        let front_of = |p: [f64; 3]| match eye {
+            None => true,
+            Some(e) => {
+                let r = [p[0] - e[0], p[1] - e[1], p[2] - e[2]];
+                dot(r, d) > 1e-6 * dot(r, r).sqrt()
+            }
+        };
         let project_all = |f: &crate::motion::Keyframe| -> (Vec<[f64; 2]>, bool) {
-            let placed = |v: &[f64; 3]| f.point(*v);
-            let pts = vertices.par_iter().map(|v| proj(placed(v))).collect();
-            let front = match eye {
-                None => true,
-                Some(e) => vertices.par_iter().all(|v| {
-                    let p = placed(v);
-                    let r = [p[0] - e[0], p[1] - e[1], p[2] - e[2]];
-                    dot(r, d) > 1e-6 * dot(r, r).sqrt()
-                }),
-            };
-            (pts, front)
+            let both: Vec<([f64; 2], bool)> = vertices
+                .par_iter()
+                .map(|v| {
+                    let p = f.point(*v);
+                    (proj(p), front_of(p))
+                })
+                .collect();
+            let front = both.iter().all(|b| b.1);
+            (both.into_iter().map(|b| b.0).collect(), front)
+        };
+        // Hulls by placement: the middle sub-segment of an odd subdivision is placed (up to
+        // rounding) where its path segment's middle is, and shares that hull.
+        let hulls: std::cell::RefCell<Vec<(crate::motion::Keyframe, Vec<[f64; 2]>)>> =
+            std::cell::RefCell::new(Vec::new());
+        let same = |a: &crate::motion::Keyframe, b: &crate::motion::Keyframe| {
+            let scale = 1.0 + a.translation.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            let lin = a.linear.iter().flatten().zip(b.linear.iter().flatten());
+            let tr = a.translation.iter().zip(&b.translation);
+            lin.chain(tr).all(|(x, y)| (x - y).abs() <= 1e-12 * scale)
         };
         let hull_at = |f: &crate::motion::Keyframe| -> Vec<[f64; 2]> {
-            match (project_all(f), rim) {
+            if let Some((_, h)) = hulls.borrow().iter().find(|(k, _)| same(k, f)) {
+                return h.clone();
+            }
+            let h = match (project_all(f), rim) {
                 ((pts, true), Some(rim)) => convex_hull(rim_points(rim, &pts)),
                 ((pts, _), _) => convex_hull(pts),
-            }
+            };
+            hulls.borrow_mut().push((*f, h.clone()));
+            h
         };
         // Orthographic translation: every segment's silhouette is the first one moved.
         let pure = path.is_translation() && eye.is_none();

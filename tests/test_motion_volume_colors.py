@@ -1,6 +1,6 @@
-"""The motion volume's time-averaged colours (``colors="averaged"``, the default) against the
-paper's surface colours (``colors="contour"``), both measured against accumulation with many
-samples, which converges to the time-averaged image."""
+"""The motion volume's time-averaged colours (``colors="pixel"``, the default, and
+``"averaged"``, per vertex) against the paper's surface colours (``colors="contour"``), all
+measured against accumulation with many samples, which converges to the time-averaged image."""
 
 from __future__ import annotations
 

@@ -103,33 +103,37 @@ fn segment(
     let per = time / d[k].abs(); // time per unit of the major axis
     let slope = d[m] / d[k];
     let (size_k, size_m) = if k == 0 { (w, h) } else { (h, w) };
+    // offsets of one step along the major and the minor axis
+    let (sk, sm) = if k == 0 { (4, 4 * w) } else { (4 * w, 4) };
+    // y >= -1.5 after clipping: the truncation of y + 2 is floor(y) + 2 (no libm floor call)
+    let base = a[m] - slope * a[k] - 0.5 + 2.0;
     let first = s0.floor().max(0.0) as i64;
     let last = (s1.ceil() as i64).min(size_k as i64);
+    let add = |out: &mut [f32], o: usize, s: f32| {
+        for (v, x) in out[o..o + 4].iter_mut().zip(c) {
+            *v += x * s;
+        }
+    };
     for i in first..last {
         let (x0, x1) = ((i as f32).max(s0), (i as f32 + 1.0).min(s1));
         if x1 <= x0 {
             continue;
         }
         let wgt = per * (x1 - x0);
-        let mid = 0.5 * (x0 + x1);
-        // y >= -1.5 after clipping: the truncation of y + 2 is floor(y) + 2 (no libm floor call)
-        let y = a[m] + slope * (mid - a[k]) - 0.5 + 2.0;
-        let j0 = y as i64;
-        let t = y - j0 as f32;
-        let j0 = j0 - 2;
-        for (j, wy) in [(j0, 1.0 - t), (j0 + 1, t)] {
-            if j < 0 || j >= size_m as i64 || wy == 0.0 {
-                continue;
-            }
-            let (col, row) = if k == 0 {
-                (i as usize, j as usize)
-            } else {
-                (j as usize, i as usize)
-            };
-            let o = 4 * (row * w + col);
-            let s = wgt * wy;
-            for ch in 0..4 {
-                out[o + ch] += c[ch] * s;
+        let y = base + slope * (0.5 * (x0 + x1));
+        let jt = y as i64;
+        let t = y - jt as f32;
+        let j0 = jt - 2;
+        let o = i as usize * sk;
+        if j0 >= 0 && j0 + 1 < size_m as i64 {
+            let o0 = o + j0 as usize * sm;
+            add(out, o0, wgt * (1.0 - t));
+            add(out, o0 + sm, wgt * t);
+        } else {
+            for (j, wy) in [(j0, 1.0 - t), (j0 + 1, t)] {
+                if (0..size_m as i64).contains(&j) {
+                    add(out, o + j as usize * sm, wgt * wy);
+                }
             }
         }
     }

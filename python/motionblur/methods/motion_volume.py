@@ -13,11 +13,8 @@ transparency.
 
 from __future__ import annotations
 
-from types import SimpleNamespace
-
 import numpy as np
 
-from .. import image
 from .._validate import as_int
 from ..geometry import motion_volume as build_volume
 from ..geometry import spin_volume as build_spin
@@ -35,6 +32,7 @@ from ..render import (
     window_projection,
 )
 from ..scene import Object, Scene
+from ._volume_colors import MIN_ALPHA, UNLIT, averaged_colors, pixels, place, sample, scattered, uniform
 
 __all__ = ["motion_volume", "apparent_keyframes", "camera_folds", "spin_of"]
 
@@ -161,7 +159,9 @@ def spin_of(keys: np.ndarray, vertices: np.ndarray) -> dict | None:
     "motion_volume",
     # every filter and segment count; and the paper's surface colours, with its ramp and with box
     sweep=[{"segments": s, "filter": f} for f in FILTERS for s in (1, 2, 4, 8)]
-    + [{"segments": 1, "filter": f, "colors": "contour"} for f in ("ramp", "box")],
+    + [{"segments": 1, "filter": f, "colors": "contour"} for f in ("ramp", "box")]
+    + [{"segments": 1, "filter": "box", "colors": "averaged"}]
+    + [{"segments": 1, "filter": "box", "color_renders": k} for k in (1, 3, 4)],
     applies=_rigid,
 )
 def motion_volume(
@@ -172,7 +172,8 @@ def motion_volume(
     contour_line: bool = True,
     exact_static: bool = True,
     spin="auto",
-    colors: str = "averaged",
+    colors: str = "pixel",
+    color_renders: int = 2,
 ):
     """Motion-volume rendering: each moving object becomes its motion volume, drawn transparent.
 
@@ -195,17 +196,23 @@ def motion_volume(
     pi/12); with ``"auto"`` only those that spin in place: the arc the vertex farthest from the
     axis travels is at least 4 times the path of the object's vertex centroid
     (``|angle| r >= 4 path``: a propeller or wheel, not an object orbiting a far axis nor a
-    camera pan); False never; ``colors`` ``"averaged"`` (default) or ``"contour"``: the
-    paper's volume carries the object's own surface colours (joining surfaces take theirs from
-    the contour edges, section 4.1, which the paper itself names a weakness: a shaded sphere's
-    streak shows its rim's shading, not the average of its surface). With ``"averaged"`` every
-    vertex of a translation volume (not a spin volume) takes the time-averaged colour the camera
-    sees at its image instead: the object is rendered sharp at mid-shutter inside the volume's
-    window (one extra pass, one sample a pixel), box-blurred along its centroid's image path and
-    sampled at the vertices (exact for a translation seen orthographically), and the volume is
-    drawn unlit with those shaded colours. Objects of one flat colour skip it (nothing to
-    average). Deforming objects raise ValueError (use accumulation or blur shells). Returns a
-    Frame; ``stats`` counts the volume triangles, the spins and the averaged volumes.
+    camera pan); False never; ``colors`` ``"pixel"`` (default), ``"averaged"`` or
+    ``"contour"``: the paper's volume (``"contour"``) carries the object's own surface colours
+    (joining surfaces take theirs from the contour edges, section 4.1, which the paper itself
+    names a weakness: a shaded sphere's streak shows its rim's shading, not the average of its
+    surface). The other two give a translation volume (not a spin volume) the time-averaged
+    colour the camera sees, drawn unlit (see :mod:`motionblur.methods._volume_colors`):
+    ``"averaged"`` per volume vertex, from one sharp render at mid-shutter box-blurred along the
+    centroid's image path (one extra pass); ``"pixel"`` per pixel, from ``color_renders`` K >= 1
+    sharp renders of the moving objects at the middles of K equal pieces of the shutter, each
+    pixel splatted along its own 3D point's image path (K extra passes): the volume gives each
+    pixel its coverage alpha A (its geometry, the coverage model and the depth test against the
+    static scene) and the splatted image its colour C, the pixel is A C over the static scene
+    (where the splatted alpha is below 1e-3 the volume's vertex colours, sampled from the same
+    image, stand in). Scenes whose moving objects all have one flat colour skip it (nothing to
+    average); with a spin volume in the frame ``"pixel"`` falls back to ``"averaged"``.
+    Deforming objects raise ValueError (use accumulation or blur shells). Returns a Frame;
+    ``stats`` counts the volume triangles, the spins and the volumes with averaged colours.
     """
     segments = as_int(segments, "segments", minimum=1, maximum=4096)
     if filter is None:
@@ -217,8 +224,9 @@ def motion_volume(
         raise ValueError(f"aa: must be 1, 2 or 4, got {aa}")
     if not (spin == "auto" or isinstance(spin, (bool, np.bool_))):
         raise ValueError(f"spin: expected 'auto', True or False, got {spin!r}")
-    if not isinstance(colors, str) or colors not in ("averaged", "contour"):
-        raise ValueError(f"colors: expected 'averaged' or 'contour', got {colors!r}")
+    if not isinstance(colors, str) or colors not in ("pixel", "averaged", "contour"):
+        raise ValueError(f"colors: expected 'pixel', 'averaged' or 'contour', got {colors!r}")
+    color_renders = as_int(color_renders, "color_renders", minimum=1, maximum=64)
     tr = scene.reference_t
     cam = supersampled(scene.camera_at(tr), aa)
     eye = cam.pose[:3, 3]  # the perspective of the coverage alphas, with or without contour_line
@@ -234,6 +242,8 @@ def motion_volume(
     }
     folds = camera_folds(scene, segments)
     spin_folds = None
+    movers: list[tuple[int, Object]] = []  # drawn with their apparent motion (pixel colours)
+    pending: list[tuple[int, int, Object, object]] = []  # (draw index, k, obj, vol): pixel colours
     for k, obj in enumerate(scene.objects):
         if obj.is_moving and obj.motion.is_deforming:
             raise ValueError(
@@ -250,8 +260,9 @@ def motion_volume(
                 still.append((k, obj))
                 continue
             deforming = obj.motion is not None and obj.motion.is_deforming
-            v = obj.world_vertices(tr) if deforming else _place(obj, keys[-1])
+            v = obj.world_vertices(tr) if deforming else place(obj, keys[-1])
             draws.append((obj, Draw(v, obj.mesh.faces, obj.rgba, object_id=k)))
+            movers.append((k, obj))
             continue
         vol = None
         if turns:
@@ -267,15 +278,11 @@ def motion_volume(
                 obj.mesh, keys, segments=1, filter=filter, colors=obj.rgba, camera_position=eye,
                 contour_line=contour_line,
             )  # fmt: skip
-            rgb = (
-                _averaged_colors(scene, k, obj, keys, vol)
-                if colors == "averaged" and not _uniform(obj)
-                else None
-            )
-            if rgb is not None:
-                vol.rgba = np.concatenate([rgb, vol.rgba[:, 3:]], axis=1)
-                drawn_as = _UNLIT  # the colours are shaded already
-                stats["averaged"] += 1
+            if colors == "pixel":
+                pending.append((len(draws), k, obj, vol))
+            elif colors == "averaged" and not uniform(obj):
+                drawn_as = _averaged(scene, k, obj, keys, segments, vol, stats)
+        movers.append((k, obj))
         draws.append(
             (
                 drawn_as,
@@ -284,10 +291,26 @@ def motion_volume(
         )
         stats["volumes"] += 1
         stats["volume_triangles"] += len(vol.faces)
+    scatter = bool(pending) and not all(uniform(o) for _, o in movers)
+    if scatter and stats["spins"]:
+        scatter = False
+        for i, k, obj, vol in pending:  # the fallback named in the docstring
+            if not uniform(obj):
+                keys = apparent_keyframes(scene, obj, segments, folds)
+                draws[i] = (_averaged(scene, k, obj, keys, segments, vol, stats), draws[i][1])
+    pcam = scene.camera_at(tr)  # the colours' camera: one sample a pixel
     if scene.camera_moves:
         # every object that moves on screen has a volume: one full frame
+        averaged = None
+        if scatter:
+            averaged = _scatter(
+                scene, pcam, movers, pending, draws, (0, 0, pcam.width, pcam.height), color_renders
+            )
+            stats["averaged"] += len(pending)
         layer = raster_layer(cam, scene, draws) if draws else Layer.empty(cam.height, cam.width)
         frame = resolve(layer, aa)
+        if averaged is not None:
+            frame.rgba = _colored(frame.rgba, averaged, None)
         frame.stats.update(stats)
         return frame
     # Still camera: the static layer is kept across frames; the volumes are rasterized inside
@@ -309,17 +332,43 @@ def motion_volume(
         static.layer.rgba[y0:y1, x0:x1], static.layer.depth[y0:y1, x0:x1], static.layer.ids[y0:y1, x0:x1]
     )
     empty = not still or not np.isfinite(base.depth).any()
+    pwin = tuple(v // aa for v in win)
+    averaged = None
+    if scatter:
+        averaged = _scatter(scene, pcam, movers, pending, draws, pwin, color_renders)
+        stats["averaged"] += len(pending)
+    if averaged is not None and empty:
+        # nothing behind the volumes: A times the averaged colour per resolved pixel
+        wcam = Camera(cam.pose, cam.yfov, (x1 - x0) // aa, (y1 - y0) // aa, cam.znear, cam.zfar)
+        layer = raster_layer(wcam, scene, draws, projection=proj, samples=aa)
+        layer.rgba = _colored(layer.rgba, averaged, None)
+        frame = paste(static, pwin, layer, 1)
+        frame.stats.update(stats)
+        return frame
+    if averaged is not None and static.opaque:
+        # The volumes alone, per sample, over no colour but the static scene's depth (which
+        # hides them): their coverage A per sample; each sample is A times the averaged colour
+        # of its pixel over the static sample, then the samples are resolved.
+        scam = Camera(cam.pose, cam.yfov, x1 - x0, y1 - y0, cam.znear, cam.zfar)
+        depth = np.ascontiguousarray(base.depth)
+        under = Layer(np.zeros((*depth.shape, 4), np.float32), depth, np.ascontiguousarray(base.ids))
+        layer = raster_layer(scam, scene, draws, projection=proj, background=under)
+        per_sample = np.repeat(np.repeat(averaged, aa, axis=0), aa, axis=1) if aa > 1 else averaged
+        layer.rgba = _colored(layer.rgba, per_sample, base.rgba)
+        frame = paste(static, win, layer, aa)
+        frame.stats.update(stats)
+        return frame
     one_call = ONE_PASS and len({o.shading for o, _ in draws}) == 1
     if one_call and (empty or (exact_static and static.opaque)):
         # One rasterizer call, which resolves the aa x aa samples of each pixel itself. The
         # opaque static layer (read in place at the window) pre-loads it, colour and depth per
         # sample: only the volumes are drawn, depth-tested and composited over it exactly.
-        pcam = Camera(cam.pose, cam.yfov, (x1 - x0) // aa, (y1 - y0) // aa, cam.znear, cam.zfar)
+        wcam = Camera(cam.pose, cam.yfov, (x1 - x0) // aa, (y1 - y0) // aa, cam.znear, cam.zfar)
         under = None if empty else static.layer
         layer = raster_layer(
-            pcam, scene, draws, projection=proj, background=under, background_origin=(x0, y0), samples=aa
+            wcam, scene, draws, projection=proj, background=under, background_origin=(x0, y0), samples=aa
         )  # fmt: skip
-        frame = paste(static, tuple(v // aa for v in win), layer, 1)
+        frame = paste(static, pwin, layer, 1)
         frame.stats.update(stats)
         return frame
     wcam = Camera(cam.pose, cam.yfov, x1 - x0, y1 - y0, cam.znear, cam.zfar)
@@ -343,7 +392,7 @@ def _window(cam: Camera, vertex_sets):
         return None
     lo, hi = np.array([np.inf, np.inf]), np.array([-np.inf, -np.inf])
     for v in vertex_sets:
-        x, y, front = _pixels(cam.view_projection, v, cam.width, cam.height)
+        x, y, front = pixels(cam.view_projection, v, cam.width, cam.height)
         if not front.all():
             return 0, 0, cam.width, cam.height
         lo = np.minimum(lo, [x.min(), y.min()])
@@ -408,84 +457,50 @@ def _rotates(scene: Scene, obj: Object) -> bool:
     return any(np.abs(m - m[0]).max() > 1e-9 for m in mats)
 
 
-def _place(obj: Object, m: np.ndarray) -> np.ndarray:
-    return obj.mesh.vertices @ m[:3, :3].T + m[:3, 3]
+def _averaged(scene: Scene, k: int, obj: Object, keys: np.ndarray, segments: int, vol, stats) -> object:
+    """``colors="averaged"``: the volume's vertex colours set to :func:`averaged_colors`; returns
+    what the volume is drawn as (unlit when the colours were set)."""
+    mid = keys[segments // 2] if segments % 2 == 0 else apparent_keyframes(scene, obj, 2)[1]
+    rgb = averaged_colors(scene, k, obj, keys, mid, vol)
+    if rgb is None:
+        return obj
+    vol.rgba = np.concatenate([rgb, vol.rgba[:, 3:]], axis=1)
+    stats["averaged"] += 1
+    return UNLIT  # the colours are shaded already
 
 
-#: Stand-in for an object drawn unlit: colours already shaded (``raster_layer`` groups by it).
-_UNLIT = SimpleNamespace(shading="flat")
+def _scatter(scene: Scene, pcam: Camera, movers, pending, draws, pwin, pieces: int) -> np.ndarray:
+    """``colors="pixel"``: the movers' time-averaged image in the pixel window ``pwin`` of
+    ``pcam`` (:func:`scattered`); every pending volume is redrawn unlit with its vertex colours
+    sampled from it (the stand-in where the per-pixel colour is not trusted)."""
+    folds: dict[int, np.ndarray | None] = {}
+
+    def keys_of(obj, n):
+        if n not in folds:
+            folds[n] = camera_folds(scene, n)
+        return apparent_keyframes(scene, obj, n, folds[n])
+
+    img = scattered(scene, pcam, movers, keys_of, pwin, pieces)
+    for i, k, _, vol in pending:
+        x, y, front = pixels(pcam.view_projection, vol.vertices, pcam.width, pcam.height)
+        rgb = sample(img, x - pwin[0], y - pwin[1], front, vol.rgba[:, :3], nearest=True)
+        vol.rgba = np.concatenate([rgb, vol.rgba[:, 3:]], axis=1)
+        draws[i] = (
+            UNLIT,
+            Draw(vol.vertices, vol.faces, vol.rgba, normals=vol.normals, object_id=k, cull_back=True),
+        )
+    return img
 
 
-def _uniform(obj: Object) -> bool:
-    """Flat shading and one colour: the time-averaged colour is that colour."""
-    c = obj.rgba
-    return obj.shading == "flat" and (c.ndim == 1 or bool((c == c[0]).all()))
-
-
-def _averaged_colors(scene: Scene, k: int, obj: Object, keys: np.ndarray, vol) -> np.ndarray | None:
-    """Straight RGB (N,3) float32 for the N volume vertices: the time-averaged colour the camera
-    sees at each one's image, or None (leave the volume's own colours).
-
-    The object alone is rendered sharp (shaded, one sample a pixel) at its mid-shutter placement
-    as the camera at the reference time sees it, inside the volume's pixel window, and box-blurred
-    along the image path of its centroid from shutter open to close: for a translation seen
-    orthographically that blurred layer is exactly the time average of the object's image (the
-    window reaches beyond the view by the image path, at most one image size, so an object
-    leaving the view still colours its streak). Each vertex takes the blurred colour over the blurred alpha at its image (bilinear); where that
-    alpha is below 1e-3 (outside every position of the object) or the vertex is behind the camera
-    it keeps its own colour."""
-    cam = scene.camera_at(scene.reference_t)
-    c = obj.mesh.vertices.mean(axis=0)
-    ex, ey, ok = _pixels(
-        cam.view_projection,
-        np.array([m[:3, :3] @ c + m[:3, 3] for m in (keys[0], keys[-1])]),
-        cam.width,
-        cam.height,
-    )
-    if not ok.all():
-        return None
-    dx, dy = float(ex[1] - ex[0]), float(ey[1] - ey[0])
-    # The volume's pixel box, cut to the view grown by the image path (what passes the view
-    # during the shutter, also from outside it) and at most one image size beyond each side.
-    x, y, front = _pixels(cam.view_projection, vol.vertices, cam.width, cam.height)
-    if front.all():
-        mx, my = min(abs(dx) + 1.0, cam.width), min(abs(dy) + 1.0, cam.height)
-        x0 = int(max(np.floor(x.min()) - 1, -mx))
-        y0 = int(max(np.floor(y.min()) - 1, -my))
-        x1 = int(min(np.ceil(x.max()) + 1, cam.width + mx))
-        y1 = int(min(np.ceil(y.max()) + 1, cam.height + my))
-    else:
-        x0, y0, x1, y1 = 0, 0, cam.width, cam.height
-    if x1 <= x0 or y1 <= y0:
-        return None
-    win = (x0, y0, x1, y1)
-    w, h = x1 - x0, y1 - y0
-    proj = window_projection(cam.projection, cam.width, cam.height, win)
-    wcam = Camera(cam.pose, cam.yfov, w, h, cam.znear, cam.zfar)
-    n = len(keys) - 1
-    mid = keys[n // 2] if n % 2 == 0 else apparent_keyframes(scene, obj, 2)[1]
-    draw = Draw(_place(obj, mid), obj.mesh.faces, obj.rgba, object_id=k)
-    sharp = raster_layer(wcam, scene, [(obj, draw)], projection=proj).rgba
-    length = float(np.hypot(dx, dy))
-    if length >= 1.0:
-        sharp = image.box_blur(sharp, (dx, dy), length)
-    px, py = x - x0 - 0.5, y - y0 - 0.5  # in the window (same pixel centres), centres at +0.5
-    i0 = np.clip(np.floor(px), 0, max(w - 2, 0)).astype(np.int64)
-    j0 = np.clip(np.floor(py), 0, max(h - 2, 0)).astype(np.int64)
-    i1, j1 = np.minimum(i0 + 1, w - 1), np.minimum(j0 + 1, h - 1)
-    fx = np.clip(px - i0, 0.0, 1.0)[:, None]
-    fy = np.clip(py - j0, 0.0, 1.0)[:, None]
-    b = sharp.astype(np.float64)
-    s = (b[j0, i0] * (1 - fx) + b[j0, i1] * fx) * (1 - fy) + (b[j1, i0] * (1 - fx) + b[j1, i1] * fx) * fy
-    keep = (s[:, 3] < 1e-3) | ~front
-    return np.where(keep[:, None], vol.rgba[:, :3], s[:, :3] / np.maximum(s[:, 3:], 1e-3)).astype(np.float32)
-
-
-def _pixels(vp: np.ndarray, p: np.ndarray, width: int, height: int):
-    """Pixel coordinates ``x``, ``y`` (N,) of the points ``p`` (N,3) under the view-projection
-    ``vp`` of a ``width`` x ``height`` image, and whether each is in front of the camera."""
-    clip = p @ vp[:3, :3].T + vp[:3, 3]
-    wc = p @ vp[3, :3] + vp[3, 3]
-    front = wc > 1e-9
-    wc = np.where(front, wc, 1.0)
-    return (clip[:, 0] / wc + 1.0) * 0.5 * width, (1.0 - clip[:, 1] / wc) * 0.5 * height, front
+def _colored(rgba: np.ndarray, averaged: np.ndarray, static_rgba) -> np.ndarray:
+    """Per pixel, the volumes' coverage alpha A (``rgba`` drawn over nothing) times the averaged
+    colour where its alpha is at least MIN_ALPHA (``rgba``'s own colour elsewhere), over
+    ``static_rgba`` (None: nothing)."""
+    a = rgba[..., 3:]
+    w = averaged[..., 3:]
+    ok = w >= MIN_ALPHA
+    out = rgba.copy()
+    out[..., :3] = np.where(ok, averaged[..., :3] * (a / np.maximum(w, MIN_ALPHA)), rgba[..., :3])
+    if static_rgba is not None:
+        out += (1.0 - a) * static_rgba
+    return out

@@ -1,0 +1,249 @@
+"""Colours of motion volumes: the time-averaged colour the camera sees, per volume vertex or per
+pixel (used by :mod:`motionblur.methods.motion_volume`).
+
+The paper's volume carries the object's own surface colours, the joining surfaces those of the
+contour. A motion-blurred pixel instead shows the shutter-average of the surfaces passing over
+it. Two estimates of that average are made here from sharp renders of the moving objects:
+
+- :func:`averaged_colors` (``colors="averaged"``): one sharp render at mid-shutter, box-blurred
+  along the image path of the object's centroid (exact for a translation seen orthographically),
+  sampled at the volume's vertices.
+- :func:`scattered` (``colors="pixel"``): K sharp renders, at the middle of K equal pieces of the
+  shutter, each pixel carried back to its 3D point (from the depth buffer) and splatted along the
+  image path that point follows during its piece (``_core._splat_paths``). Every point blurs by
+  its own motion (nearer points faster under perspective, rotation, several objects), and the
+  surfaces hidden at one piece's middle are seen at another's.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+
+from .. import _core, image
+from ..raster import Camera, Draw
+from ..render import raster_layer, window_projection
+from ..scene import Object, Scene
+from .accumulation import _box_corners, _mesh_constant, _Painter
+
+#: Stand-in for an object drawn unlit: colours already shaded (``raster_layer`` groups by it).
+UNLIT = SimpleNamespace(shading="flat")
+
+#: Path points per piece of the shutter in :func:`scattered` (4 straight segments: perspective
+#: speed changes and rotation follow them).
+PATH_STEPS = 4
+
+#: Below this time-averaged alpha a pixel's scattered colour is not trusted.
+MIN_ALPHA = 1e-3
+
+
+def uniform(obj: Object) -> bool:
+    """Flat shading and one colour: the time-averaged colour is that colour."""
+    c = obj.rgba
+    return obj.shading == "flat" and (c.ndim == 1 or bool((c == c[0]).all()))
+
+
+def place(obj: Object, m: np.ndarray) -> np.ndarray:
+    return obj.mesh.vertices @ m[:3, :3].T + m[:3, 3]
+
+
+def pixels(vp: np.ndarray, p: np.ndarray, width: int, height: int):
+    """Pixel coordinates ``x``, ``y`` (N,) of the points ``p`` (N,3) under the view-projection
+    ``vp`` of a ``width`` x ``height`` image, and whether each is in front of the camera."""
+    clip = p @ vp[:3, :3].T + vp[:3, 3]
+    wc = p @ vp[3, :3] + vp[3, 3]
+    front = wc > 1e-9
+    wc = np.where(front, wc, 1.0)
+    return (clip[:, 0] / wc + 1.0) * 0.5 * width, (1.0 - clip[:, 1] / wc) * 0.5 * height, front
+
+
+def sample(img: np.ndarray, x, y, front, fallback: np.ndarray, nearest: bool = False) -> np.ndarray:
+    """Straight RGB (N,3) float32 at image positions ``x``, ``y`` (N,) (pixel centres at +0.5) of
+    the premultiplied ``img`` (H,W,4), bilinear (``nearest``: the pixel's own), clamped to its
+    edge; ``fallback`` (N,3) where the sampled alpha is below :data:`MIN_ALPHA` or the point is
+    behind the camera."""
+    h, w = img.shape[:2]
+    flat = img.reshape(-1, 4)
+    if nearest:
+        i = np.clip(x.astype(np.int64), 0, w - 1)
+        j = np.clip(y.astype(np.int64), 0, h - 1)
+        s = flat[j * w + i]
+    else:
+        px, py = x - 0.5, y - 0.5
+        i0 = np.clip(np.floor(px), 0, max(w - 2, 0)).astype(np.int64)
+        j0 = np.clip(np.floor(py), 0, max(h - 2, 0)).astype(np.int64)
+        i1, j1 = np.minimum(i0 + 1, w - 1), np.minimum(j0 + 1, h - 1)
+        fx = np.clip(px - i0, 0.0, 1.0)[:, None]
+        fy = np.clip(py - j0, 0.0, 1.0)[:, None]
+
+        def at(j, i):  # gathered in float32, weighted in float64
+            return flat[j * w + i].astype(np.float64)
+
+        s = (at(j0, i0) * (1 - fx) + at(j0, i1) * fx) * (1 - fy) + (
+            at(j1, i0) * (1 - fx) + at(j1, i1) * fx
+        ) * fy
+    keep = (s[:, 3] < MIN_ALPHA) | ~front
+    return np.where(keep[:, None], fallback, s[:, :3] / np.maximum(s[:, 3:], MIN_ALPHA)).astype(np.float32)
+
+
+def averaged_colors(
+    scene: Scene, k: int, obj: Object, keys: np.ndarray, mid: np.ndarray, vol
+) -> np.ndarray | None:
+    """Straight RGB (N,3) float32 for the N volume vertices: the time-averaged colour the camera
+    sees at each one's image, or None (leave the volume's own colours). ``keys`` (S+1,4,4) the
+    object's apparent placements, ``mid`` (4,4) its placement at mid-shutter.
+
+    The object alone is rendered sharp (shaded, one sample a pixel) at ``mid`` as the camera at
+    the reference time sees it, inside the volume's pixel window, and box-blurred along the image
+    path of its centroid from shutter open to close: for a translation seen orthographically that
+    blurred layer is exactly the time average of the object's image (the window reaches beyond the
+    view by the image path, at most one image size, so an object leaving the view still colours
+    its streak). Each vertex takes the blurred colour at its image (:func:`sample`)."""
+    cam = scene.camera_at(scene.reference_t)
+    c = obj.mesh.vertices.mean(axis=0)
+    ex, ey, ok = pixels(
+        cam.view_projection,
+        np.array([m[:3, :3] @ c + m[:3, 3] for m in (keys[0], keys[-1])]),
+        cam.width,
+        cam.height,
+    )
+    if not ok.all():
+        return None
+    dx, dy = float(ex[1] - ex[0]), float(ey[1] - ey[0])
+    x, y, front = pixels(cam.view_projection, vol.vertices, cam.width, cam.height)
+    win = _grown_window(cam, x, y, front, abs(dx), abs(dy))
+    if win is None:
+        return None
+    x0, y0, x1, y1 = win
+    proj = window_projection(cam.projection, cam.width, cam.height, win)
+    wcam = Camera(cam.pose, cam.yfov, x1 - x0, y1 - y0, cam.znear, cam.zfar)
+    draw = Draw(place(obj, mid), obj.mesh.faces, obj.rgba, object_id=k)
+    sharp = raster_layer(wcam, scene, [(obj, draw)], projection=proj).rgba
+    length = float(np.hypot(dx, dy))
+    if length >= 1.0:
+        sharp = image.box_blur(sharp, (dx, dy), length)
+    return sample(sharp, x - x0, y - y0, front, vol.rgba[:, :3])
+
+
+def _grown_window(cam: Camera, x, y, front, mx: float, my: float):
+    """The pixel box of the points (x, y), cut to the view grown by (mx, my) pixels and at most one
+    image size beyond each side (the whole view when a point is behind the camera); None when
+    empty."""
+    if front.all():
+        mx, my = min(mx + 1.0, cam.width), min(my + 1.0, cam.height)
+        x0 = int(max(np.floor(x.min()) - 1, -mx))
+        y0 = int(max(np.floor(y.min()) - 1, -my))
+        x1 = int(min(np.ceil(x.max()) + 1, cam.width + mx))
+        y1 = int(min(np.ceil(y.max()) + 1, cam.height + my))
+    else:
+        x0, y0, x1, y1 = 0, 0, cam.width, cam.height
+    if x1 <= x0 or y1 <= y0:
+        return None
+    return x0, y0, x1, y1
+
+
+def _centroid(mesh) -> np.ndarray:
+    return mesh.vertices.mean(axis=0)
+
+
+def _bounds(cam: Camera, point_sets, limit):
+    """The pixel box (x0, y0, x1, y1) of the points of ``point_sets`` under ``cam``, cut to
+    ``limit`` (all of ``limit`` when a point is behind the camera); None when empty."""
+    pts = np.concatenate(point_sets)
+    x, y, front = pixels(cam.view_projection, pts, cam.width, cam.height)
+    if not front.all():
+        return tuple(limit)
+    box = (
+        max(int(np.floor(x.min())) - 1, limit[0]),
+        max(int(np.floor(y.min())) - 1, limit[1]),
+        min(int(np.ceil(x.max())) + 1, limit[2]),
+        min(int(np.ceil(y.max())) + 1, limit[3]),
+    )
+    return box if box[0] < box[2] and box[1] < box[3] else None
+
+
+def scattered(scene: Scene, cam: Camera, movers, keys_of, win, pieces: int) -> np.ndarray:
+    """The time-averaged premultiplied image (H,W,4) float32 of the objects ``movers`` (pairs
+    (index, Object)) inside the pixel window ``win`` (x0, y0, x1, y1) of ``cam`` (one sample a
+    pixel), from ``pieces`` sharp renders.
+
+    ``keys_of(obj, n)`` gives the object's apparent placements (n+1,4,4) at the times i/n. The
+    shutter is cut into ``pieces`` equal pieces weighted by the shutter filter; for each, the
+    movers are rendered sharp together (so they hide each other as at that time) at the piece's
+    middle, in the window grown by their image motion; every covered pixel is carried to its 3D
+    point by its depth and splatted with its premultiplied colour along the image path of that
+    point through the piece (:data:`PATH_STEPS` straight segments)."""
+    x0, y0, x1, y1 = win
+    n = pieces * 2 * PATH_STEPS  # placements: piece p spans [2 p S, 2 (p + 1) S], middle (2 p + 1) S
+    keys = [keys_of(o, n) for _, o in movers]
+    corners = [_mesh_constant(o.mesh, "corners", _box_corners) for _, o in movers]
+    # the sources: what passes the output window during the shutter (its bounds grown by the
+    # movers' image motion, at most one image size beyond the view)
+    reach = np.zeros(2)
+    for (_, o), ks in zip(movers, keys):
+        c = _mesh_constant(o.mesh, "centroid", _centroid)
+        px, py, ok = pixels(cam.view_projection, ks[:, :3, :3] @ c + ks[:, :3, 3], cam.width, cam.height)
+        if ok.all():
+            reach = np.maximum(reach, [px.max() - px.min(), py.max() - py.min()])
+        else:
+            reach = np.array([cam.width, cam.height], float)
+    grown = (
+        int(max(x0 - np.ceil(reach[0]) - 1, -cam.width)),
+        int(max(y0 - np.ceil(reach[1]) - 1, -cam.height)),
+        int(min(x1 + np.ceil(reach[0]) + 1, 2 * cam.width)),
+        int(min(y1 + np.ceil(reach[1]) + 1, 2 * cam.height)),
+    )
+    cdf = scene.shutter_cdf(np.arange(pieces + 1) / pieces)
+    # accumulation's painter: object-space draws, faces turned away the whole shutter dropped
+    painter = _Painter(scene, movers, eye=None if scene.camera_moves else cam.pose[:3, 3])
+    index = np.full(max(k for k, _ in movers) + 2, -1)
+    index[[k for k, _ in movers]] = np.arange(len(movers))
+    tan = np.tan(cam.yfov / 2.0)
+    colors, paths = [], []
+    for p in range(pieces):
+        weight = float(cdf[p + 1] - cdf[p])
+        if weight <= 0.0:
+            continue
+        mid = (2 * p + 1) * PATH_STEPS
+        rwin = _bounds(cam, [b @ ks[mid][:3, :3].T + ks[mid][:3, 3] for b, ks in zip(corners, keys)], grown)
+        if rwin is None:
+            continue
+        # Drawn where they are at that time, seen by the camera of that time (the apparent
+        # placements seen by the reference camera give the same image but turn the objects
+        # against the lights when the camera turns).
+        tm = mid / n
+        pose = scene.camera_pose_at(tm)
+        at = [o.transform_at(tm) for _, o in movers]
+        proj = window_projection(cam.projection, cam.width, cam.height, rwin)
+        lay = painter.layer(tm, np.linalg.inv(pose), proj, rwin[2] - rwin[0], rwin[3] - rwin[1])
+        jj, ii = np.nonzero(lay.rgba[..., 3] > 0.0)
+        if len(jj) == 0:
+            continue
+        z = lay.depth[jj, ii].astype(np.float64)
+        nx = ((ii + rwin[0] + 0.5) / cam.width * 2.0 - 1.0) * tan * cam.aspect
+        ny = (1.0 - (jj + rwin[1] + 0.5) / cam.height * 2.0) * tan
+        world = np.stack([nx * z, ny * z, -z], axis=1) @ pose[:3, :3].T + pose[:3, 3]
+        ids = index[lay.ids[jj, ii]]
+        steps = np.arange(2 * p * PATH_STEPS, 2 * (p + 1) * PATH_STEPS + 1)
+        path = np.full((len(jj), len(steps), 2), np.nan, np.float32)
+        for i, ks in enumerate(keys):
+            sel = np.nonzero(ids == i)[0]
+            if len(sel) == 0:
+                continue
+            back = np.linalg.inv(at[i])
+            local = world[sel] @ back[:3, :3].T + back[:3, 3]
+            for q, s in enumerate(steps):
+                m = ks[s]
+                qx, qy, ok = pixels(
+                    cam.view_projection, local @ m[:3, :3].T + m[:3, 3], cam.width, cam.height
+                )
+                path[sel, q, 0] = np.where(ok, qx - x0, np.nan)
+                path[sel, q, 1] = np.where(ok, qy - y0, np.nan)
+        colors.append(lay.rgba[jj, ii] * np.float32(weight))
+        paths.append(path)
+    if not colors:
+        return np.zeros((y1 - y0, x1 - x0, 4), np.float32)
+    return _core._splat_paths(
+        np.ascontiguousarray(np.concatenate(colors)), np.concatenate(paths), x1 - x0, y1 - y0
+    )
