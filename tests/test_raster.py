@@ -485,3 +485,22 @@ def test_output_is_bit_identical_for_any_thread_count():
     got = digests(_THREAD_SCRIPT)
     assert len(got[0]) == 64
     assert got[0] == got[1] == got[2]
+
+
+@pytest.mark.parametrize("size", [(1, 1), (640, 90), (33, 700)])
+def test_a_resized_camera_equals_a_new_camera_of_that_size(size):
+    cam = mb.Camera(mb.look_at((0.3, 1.0, 4.0), (0.0, 0.0, 0.0)), 0.8, 160, 120, znear=0.2, zfar=40.0)
+    new = mb.Camera(cam.pose, cam.yfov, *size, znear=cam.znear, zfar=cam.zfar)
+    got = cam.resized(*size)
+    assert (got.width, got.height, got.aspect) == (new.width, new.height, new.aspect)
+    for name in ("pose", "view", "projection", "view_projection"):
+        np.testing.assert_array_equal(getattr(got, name), getattr(new, name))
+        assert not getattr(got, name).flags.writeable
+    assert (cam.width, cam.height) == (160, 120)  # the original is untouched
+
+
+@pytest.mark.parametrize("size", [(0, 10), (10, -1), (1 << 20, 1 << 20)])
+def test_a_resized_camera_checks_its_size(size):
+    cam = mb.Camera(np.eye(4), 0.8, 16, 12)
+    with pytest.raises(ValueError, match="width|height|pixels"):
+        cam.resized(*size)

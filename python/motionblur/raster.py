@@ -98,16 +98,22 @@ class Camera:
             raise ValueError(f"zfar: must be > znear, got {zfar}")
         if abs(np.linalg.det(pose)) < 1e-12:
             raise ValueError("pose: is singular")
-        self.pose, self.yfov, self.width, self.height = pose, yfov, width, height
-        self.znear, self.zfar = znear, zfar
-        self.aspect = float(width) / float(height)
+        self.pose, self.yfov, self.znear, self.zfar = pose, yfov, znear, zfar
         self.view = np.linalg.inv(pose)
+        self.pose.flags.writeable = False
+        self.view.flags.writeable = False
+        self._size(width, height)
+
+    def _size(self, width: int, height: int) -> None:
+        self.width, self.height = width, height
+        self.aspect = float(width) / float(height)
         # pyrender's get_projection_matrix, operation for operation.
-        t = np.tan(yfov / 2.0)
+        t = np.tan(self.yfov / 2.0)
         p = np.zeros((4, 4))
         p[0][0] = 1.0 / (self.aspect * t)
         p[1][1] = 1.0 / t
         p[3][2] = -1.0
+        znear, zfar = self.znear, self.zfar
         if np.isinf(zfar):
             p[2][2] = -1.0
             p[2][3] = -2.0 * znear
@@ -116,8 +122,17 @@ class Camera:
             p[2][3] = (2 * zfar * znear) / (znear - zfar)
         self.projection = p
         self.view_projection = p @ self.view
-        for a in (self.pose, self.view, self.projection, self.view_projection):
-            a.flags.writeable = False
+        self.projection.flags.writeable = False
+        self.view_projection.flags.writeable = False
+
+    def resized(self, width: int, height: int) -> Camera:
+        """The same camera (pose, field of view, clip planes) with an image of ``width`` x
+        ``height`` pixels; only the size is checked (the rest was when this camera was made)."""
+        width, height = _check_size(width, height)
+        c = object.__new__(Camera)
+        c.pose, c.yfov, c.znear, c.zfar, c.view = self.pose, self.yfov, self.znear, self.zfar, self.view
+        c._size(width, height)
+        return c
 
     def __repr__(self) -> str:
         return (

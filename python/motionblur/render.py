@@ -117,9 +117,7 @@ def supersampled(camera: Camera, samples: int) -> Camera:
     """``camera`` at ``samples`` times its width and height (pixel centres = the sub-samples)."""
     if samples == 1:
         return camera
-    return Camera(
-        camera.pose, camera.yfov, camera.width * samples, camera.height * samples, camera.znear, camera.zfar
-    )
+    return camera.resized(camera.width * samples, camera.height * samples)
 
 
 def downsample(a: np.ndarray, samples: int) -> np.ndarray:

@@ -117,7 +117,7 @@ def averaged_colors(
         return None
     x0, y0, x1, y1 = win
     proj = window_projection(cam.projection, cam.width, cam.height, win)
-    wcam = Camera(cam.pose, cam.yfov, x1 - x0, y1 - y0, cam.znear, cam.zfar)
+    wcam = cam.resized(x1 - x0, y1 - y0)
     draw = Draw(place(obj, mid), obj.mesh.faces, obj.rgba, object_id=k)
     sharp = raster_layer(wcam, scene, [(obj, draw)], projection=proj).rgba
     length = float(np.hypot(dx, dy))

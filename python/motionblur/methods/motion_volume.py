@@ -339,7 +339,7 @@ def motion_volume(
         stats["averaged"] += len(pending)
     if averaged is not None and empty:
         # nothing behind the volumes: A times the averaged colour per resolved pixel
-        wcam = Camera(cam.pose, cam.yfov, (x1 - x0) // aa, (y1 - y0) // aa, cam.znear, cam.zfar)
+        wcam = cam.resized((x1 - x0) // aa, (y1 - y0) // aa)
         layer = raster_layer(wcam, scene, draws, projection=proj, samples=aa)
         layer.rgba = _colored(layer.rgba, averaged, None)
         frame = paste(static, pwin, layer, 1)
@@ -349,7 +349,7 @@ def motion_volume(
         # The volumes alone, per sample, over no colour but the static scene's depth (which
         # hides them): their coverage A per sample; each sample is A times the averaged colour
         # of its pixel over the static sample, then the samples are resolved.
-        scam = Camera(cam.pose, cam.yfov, x1 - x0, y1 - y0, cam.znear, cam.zfar)
+        scam = cam.resized(x1 - x0, y1 - y0)
         depth = np.ascontiguousarray(base.depth)
         under = Layer(np.zeros((*depth.shape, 4), np.float32), depth, np.ascontiguousarray(base.ids))
         layer = raster_layer(scam, scene, draws, projection=proj, background=under)
@@ -363,7 +363,7 @@ def motion_volume(
         # One rasterizer call, which resolves the aa x aa samples of each pixel itself. The
         # opaque static layer (read in place at the window) pre-loads it, colour and depth per
         # sample: only the volumes are drawn, depth-tested and composited over it exactly.
-        wcam = Camera(cam.pose, cam.yfov, (x1 - x0) // aa, (y1 - y0) // aa, cam.znear, cam.zfar)
+        wcam = cam.resized((x1 - x0) // aa, (y1 - y0) // aa)
         under = None if empty else static.layer
         layer = raster_layer(
             wcam, scene, draws, projection=proj, background=under, background_origin=(x0, y0), samples=aa
@@ -371,7 +371,7 @@ def motion_volume(
         frame = paste(static, pwin, layer, 1)
         frame.stats.update(stats)
         return frame
-    wcam = Camera(cam.pose, cam.yfov, x1 - x0, y1 - y0, cam.znear, cam.zfar)
+    wcam = cam.resized(x1 - x0, y1 - y0)
     if empty:
         layer = raster_layer(wcam, scene, draws, projection=proj)
     elif exact_static:
