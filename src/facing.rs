@@ -120,15 +120,8 @@ mod tests {
                 v.push([x, y, 0.1 * (7.0 * x).sin() * (5.0 * y).cos()]);
             }
         }
-        let mut f = Vec::new();
-        let id = |i: usize, j: usize| (j * (n + 1) + i) as i64;
-        for j in 0..n {
-            for i in 0..n {
-                f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        (v, f)
+        let f = crate::test_meshes::grid_faces(n);
+        (v, f.iter().map(|t| t.map(i64::from)).collect())
     }
 
     #[test]

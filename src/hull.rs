@@ -184,37 +184,15 @@ mod tests {
         assert_eq!(h.len(), 4);
     }
 
-    /// A closed, consistently wound UV sphere with `n` rings and `2n` segments, jittered so
-    /// that no projection is symmetric.
+    /// A closed, consistently wound UV sphere with `n` rings and `2n` segments, its vertices
+    /// pushed in and out a little so that it is not convex and no projection is symmetric.
     fn sphere(n: usize) -> Mesh {
-        let mut v = vec![[0.0, 0.0, 1.0]];
-        for i in 1..n {
-            let th = std::f64::consts::PI * i as f64 / n as f64;
-            for j in 0..2 * n {
-                let ph = std::f64::consts::PI * (j as f64 + 0.37 * (i % 3) as f64) / n as f64;
-                let r = 1.0 + 0.004 * ((7 * i + 3 * j) % 5) as f64;
-                v.push([
-                    r * th.sin() * ph.cos(),
-                    r * th.sin() * ph.sin(),
-                    r * th.cos(),
-                ]);
-            }
-        }
-        v.push([0.0, 0.0, -1.0]);
-        let m = 2 * n as u32;
-        let at = |i: u32, j: u32| 1 + (i - 1) * m + j % m;
-        let mut f = Vec::new();
-        for j in 0..m {
-            f.push([0, at(1, j), at(1, j + 1)]);
-            let last = v.len() as u32 - 1;
-            f.push([last, at(n as u32 - 1, j + 1), at(n as u32 - 1, j)]);
-        }
-        for i in 1..n as u32 - 1 {
-            for j in 0..m {
-                f.push([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
-                f.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
-            }
-        }
+        let (v, f) = crate::test_meshes::uv_sphere(n, 2 * n);
+        let v = v
+            .iter()
+            .enumerate()
+            .map(|(k, p)| p.map(|x| x * (1.0 + 0.004 * ((7 * k) % 5) as f64)))
+            .collect();
         Mesh::new(v, f).unwrap()
     }
 

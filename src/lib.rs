@@ -32,6 +32,8 @@ pub mod volume_filter;
 
 /// `f` run on a rayon pool of `n` threads (tests of thread-count independence).
 #[cfg(test)]
+mod test_meshes;
+#[cfg(test)]
 pub(crate) fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
     rayon::ThreadPoolBuilder::new()
         .num_threads(n)

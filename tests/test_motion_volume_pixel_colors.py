@@ -75,14 +75,6 @@ def test_more_colour_renders_see_more_of_the_surface():
     assert errs[1] < errs[0], errs
 
 
-def test_one_flat_colour_skips_the_colour_renders():
-    sc = _sphere_scene(shading="flat", color=(0.8, 0.3, 0.1))
-    ours = mb.render(sc, "motion_volume", filter="box", aa=2)
-    paper = mb.render(sc, "motion_volume", filter="box", aa=2, colors="contour")
-    assert ours.stats["averaged"] == 0
-    np.testing.assert_array_equal(ours.rgba, paper.rgba)
-
-
 @pytest.mark.parametrize("bad", [0, -1, 65, 1.5, "two", None])
 def test_bad_color_renders_is_refused(bad):
     with pytest.raises((ValueError, TypeError), match="color_renders"):

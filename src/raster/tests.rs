@@ -37,15 +37,7 @@ fn grid(n: usize, jitter: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
             ]);
         }
     }
-    let mut f = Vec::new();
-    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    for j in 0..n {
-        for i in 0..n {
-            f.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            f.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    (v, f)
+    (v, crate::test_meshes::grid_faces(n))
 }
 
 #[test]

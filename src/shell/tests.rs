@@ -2,41 +2,7 @@
 use std::collections::HashMap;
 
 use super::*;
-
-/// Latitude-longitude sphere (poles on +-z), outward counter-clockwise faces.
-fn sphere(n_lat: usize, n_lon: usize) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
-    let mut v = vec![[0.0, 0.0, 1.0]];
-    for i in 1..n_lat {
-        let la = std::f64::consts::PI * i as f64 / n_lat as f64;
-        for j in 0..n_lon {
-            let lo = 2.0 * std::f64::consts::PI * j as f64 / n_lon as f64;
-            v.push([la.sin() * lo.cos(), la.sin() * lo.sin(), la.cos()]);
-        }
-    }
-    v.push([0.0, 0.0, -1.0]);
-    let south = (v.len() - 1) as u32;
-    let ring = |i: usize, j: usize| (1 + i * n_lon + j % n_lon) as u32;
-    let mut f = Vec::new();
-    for j in 0..n_lon {
-        f.push([0, ring(0, j), ring(0, j + 1)]);
-    }
-    for i in 0..n_lat - 2 {
-        for j in 0..n_lon {
-            let (a, b, c, d) = (
-                ring(i, j),
-                ring(i, j + 1),
-                ring(i + 1, j + 1),
-                ring(i + 1, j),
-            );
-            f.push([a, d, c]);
-            f.push([a, c, b]);
-        }
-    }
-    for j in 0..n_lon {
-        f.push([south, ring(n_lat - 2, j + 1), ring(n_lat - 2, j)]);
-    }
-    (v, f)
-}
+use crate::test_meshes::uv_sphere as sphere;
 
 fn moved(v: &[[f64; 3]], t: [f64; 3]) -> Vec<[f64; 3]> {
     v.iter()
