@@ -47,7 +47,15 @@ fn clip(a: [f32; 2], b: [f32; 2], lo: [f32; 2], hi: [f32; 2]) -> Option<(f32, f3
 
 /// Adds `c * wgt` at image position `(x, y)` (pixel centres at +0.5), bilinearly.
 #[inline]
-fn splat(out: &mut [f32], w: usize, h: usize, x: f32, y: f32, c: [f32; 4], wgt: f32) {
+pub(super) fn splat(
+    out: &mut [[f32; 4]],
+    w: usize,
+    h: usize,
+    x: f32,
+    y: f32,
+    c: [f32; 4],
+    wgt: f32,
+) {
     let (px, py) = (x - 0.5, y - 0.5);
     let (fx, fy) = (px.floor(), py.floor());
     let (ax, ay) = (px - fx, py - fy);
@@ -62,22 +70,36 @@ fn splat(out: &mut [f32], w: usize, h: usize, x: f32, y: f32, c: [f32; 4], wgt: 
             if i < 0 || i >= w as i64 || wx == 0.0 {
                 continue;
             }
-            let k = 4 * (j as usize * w + i as usize);
-            let s = wgt * wx * wy;
-            for ch in 0..4 {
-                out[k + ch] += c[ch] * s;
-            }
+            add(out, j as usize * w + i as usize, c, wgt * wx * wy);
         }
     }
+}
+
+/// Adds `c * wgt` to pixel `o` (an index into the `(h, w)` pixels of `out`).
+#[inline(always)]
+fn add(out: &mut [[f32; 4]], o: usize, c: [f32; 4], wgt: f32) {
+    // one 4-wide load and store per pixel (split stores would stall the next 4-wide load of a
+    // pixel the neighbouring sources just wrote)
+    let p = &mut out[o];
+    *p = [
+        p[0] + c[0] * wgt,
+        p[1] + c[1] * wgt,
+        p[2] + c[2] * wgt,
+        p[3] + c[3] * wgt,
+    ];
 }
 
 /// Adds `c * time` spread along the segment `a -> b` at uniform speed: per pixel column (rows
 /// for a mostly vertical segment) the share of the segment's extent inside it, at the segment's
 /// height at the column's centre, split between the two nearest rows (a line drawn with
 /// Xiaolin Wu's weights, the time in each column exact).
+///
+/// The columns the segment crosses completely (weight `per`, height at `i + 0.5`) run in a
+/// tight loop; the partial columns at its ends take the general form. Both give the same
+/// floats as evaluating the general form everywhere.
 #[allow(clippy::too_many_arguments)]
-fn segment(
-    out: &mut [f32],
+pub(super) fn segment(
+    out: &mut [[f32; 4]],
     w: usize,
     h: usize,
     a: [f32; 2],
@@ -103,37 +125,77 @@ fn segment(
     let per = time / d[k].abs(); // time per unit of the major axis
     let slope = d[m] / d[k];
     let (size_k, size_m) = if k == 0 { (w, h) } else { (h, w) };
-    // offsets of one step along the major and the minor axis
-    let (sk, sm) = if k == 0 { (4, 4 * w) } else { (4 * w, 4) };
+    // offsets of one step along the major and the minor axis (pixels)
+    let (sk, sm) = if k == 0 { (1, w) } else { (w, 1) };
     // y >= -1.5 after clipping: the truncation of y + 2 is floor(y) + 2 (no libm floor call)
     let base = a[m] - slope * a[k] - 0.5 + 2.0;
-    let first = s0.floor().max(0.0) as i64;
-    let last = (s1.ceil() as i64).min(size_k as i64);
-    let add = |out: &mut [f32], o: usize, s: f32| {
-        for (v, x) in out[o..o + 4].iter_mut().zip(c) {
-            *v += x * s;
+    let rows = size_m as i64;
+    let partial = |out: &mut [[f32; 4]], i: i64| {
+        let (x0, x1) = ((i as f32).max(s0), (i as f32 + 1.0).min(s1));
+        if x1 > x0 {
+            let y = base + slope * (0.5 * (x0 + x1));
+            column(out, i as usize * sk, sm, rows, c, per * (x1 - x0), y);
         }
     };
-    for i in first..last {
-        let (x0, x1) = ((i as f32).max(s0), (i as f32 + 1.0).min(s1));
-        if x1 <= x0 {
-            continue;
+    let first = floor(s0).max(0);
+    let last = ceil(s1).min(size_k as i64);
+    // the columns inside [s0, s1] completely: [ceil(s0), floor(s1))
+    let (full0, full1) = (ceil(s0).max(first), floor(s1).min(last));
+    if full0 >= full1 {
+        for i in first..last {
+            partial(out, i);
         }
-        let wgt = per * (x1 - x0);
-        let y = base + slope * (0.5 * (x0 + x1));
-        let jt = y as i64;
-        let t = y - jt as f32;
-        let j0 = jt - 2;
-        let o = i as usize * sk;
-        if j0 >= 0 && j0 + 1 < size_m as i64 {
-            let o0 = o + j0 as usize * sm;
-            add(out, o0, wgt * (1.0 - t));
-            add(out, o0 + sm, wgt * t);
-        } else {
-            for (j, wy) in [(j0, 1.0 - t), (j0 + 1, t)] {
-                if (0..size_m as i64).contains(&j) {
-                    add(out, o + j as usize * sm, wgt * wy);
-                }
+        return;
+    }
+    for i in first..full0 {
+        partial(out, i);
+    }
+    for i in full0..full1 {
+        let y = base + slope * (i as f32 + 0.5);
+        column(out, i as usize * sk, sm, rows, c, per, y);
+    }
+    for i in full1..last {
+        partial(out, i);
+    }
+}
+
+/// `v.floor()` as an integer for finite `v` of moderate size (no libm call).
+#[inline(always)]
+fn floor(v: f32) -> i64 {
+    let t = v as i64;
+    if (t as f32) > v {
+        t - 1
+    } else {
+        t
+    }
+}
+
+/// `v.ceil()` as an integer for finite `v` of moderate size (no libm call).
+#[inline(always)]
+fn ceil(v: f32) -> i64 {
+    let t = v as i64;
+    if (t as f32) < v {
+        t + 1
+    } else {
+        t
+    }
+}
+
+/// One column of [`segment`] starting at pixel `o` (rows `sm` pixels apart, `rows` of them):
+/// `c * wgt` at minor coordinate `y` (+ 2), split between the two nearest rows.
+#[inline(always)]
+fn column(out: &mut [[f32; 4]], o: usize, sm: usize, rows: i64, c: [f32; 4], wgt: f32, y: f32) {
+    let jt = y as i64;
+    let t = y - jt as f32;
+    let j0 = jt - 2;
+    if j0 >= 0 && j0 + 1 < rows {
+        let o0 = o + j0 as usize * sm;
+        add(out, o0, c, wgt * (1.0 - t));
+        add(out, o0 + sm, c, wgt * t);
+    } else {
+        for (j, wy) in [(j0, 1.0 - t), (j0 + 1, t)] {
+            if (0..rows).contains(&j) {
+                add(out, o + j as usize * sm, c, wgt * wy);
             }
         }
     }
@@ -180,40 +242,54 @@ pub fn splat_paths(
     }
     let n = colors.len();
     let run = n.div_ceil(RUNS).max(1);
-    let (lo, hi) = ([-1.0f32, -1.0], [w as f32 + 1.0, h as f32 + 1.0]);
-    let seg_time = if p > 1 { 1.0 / (p - 1) as f32 } else { 1.0 };
-    let buffers: Vec<Vec<f32>> = (0..n.div_ceil(run))
+    let buffers: Vec<Vec<[f32; 4]>> = (0..n.div_ceil(run))
         .into_par_iter()
         .map(|r| {
-            let mut out = vec![0.0f32; 4 * w * h];
+            let mut out = vec![[0.0f32; 4]; w * h];
             for i in r * run..((r + 1) * run).min(n) {
-                let (c, path) = (colors[i], &paths[i * p..(i + 1) * p]);
-                if c == [0.0; 4] {
-                    continue;
-                }
-                if p == 1 {
-                    if path[0].iter().all(|v| v.is_finite()) {
-                        splat(&mut out, w, h, path[0][0], path[0][1], c, 1.0);
-                    }
-                    continue;
-                }
-                for s in path.windows(2) {
-                    let (a, b) = (s[0], s[1]);
-                    if !(a.iter().chain(&b).all(|v| v.is_finite())) {
-                        continue;
-                    }
-                    segment(&mut out, w, h, a, b, lo, hi, c, seg_time);
-                }
+                trace(&mut out, w, h, colors[i], &paths[i * p..(i + 1) * p]);
             }
             out
         })
         .collect();
-    let mut it = buffers.into_iter();
-    let mut sum = it.next().unwrap_or_else(|| vec![0.0f32; 4 * w * h]);
-    for b in it {
-        sum.par_iter_mut().zip(b).for_each(|(s, v)| *s += v);
+    Ok(sum_buffers(buffers, w * h))
+}
+
+/// Splats `c` along the polyline `path` into `out` (`w` x `h` pixels), the shutter split
+/// equally among its segments; see [`splat_paths`].
+pub(super) fn trace(out: &mut [[f32; 4]], w: usize, h: usize, c: [f32; 4], path: &[[f32; 2]]) {
+    if c == [0.0; 4] {
+        return;
     }
-    Ok(sum)
+    if path.len() == 1 {
+        if path[0].iter().all(|v| v.is_finite()) {
+            splat(out, w, h, path[0][0], path[0][1], c, 1.0);
+        }
+        return;
+    }
+    let (lo, hi) = ([-1.0f32, -1.0], [w as f32 + 1.0, h as f32 + 1.0]);
+    let seg_time = 1.0 / (path.len() - 1) as f32;
+    for s in path.windows(2) {
+        let (a, b) = (s[0], s[1]);
+        if a.iter().chain(&b).all(|v| v.is_finite()) {
+            segment(out, w, h, a, b, lo, hi, c, seg_time);
+        }
+    }
+}
+
+/// The per-run buffers (each `n` pixels) summed in run order (the same sums for any thread
+/// count), flattened to `(n, 4)` floats.
+pub(super) fn sum_buffers(buffers: Vec<Vec<[f32; 4]>>, n: usize) -> Vec<f32> {
+    let mut it = buffers.into_iter();
+    let mut sum = it.next().unwrap_or_else(|| vec![[0.0f32; 4]; n]);
+    for b in it {
+        sum.par_iter_mut().zip(b).for_each(|(s, v)| {
+            for ch in 0..4 {
+                s[ch] += v[ch];
+            }
+        });
+    }
+    sum.into_flattened()
 }
 
 #[cfg(test)]
