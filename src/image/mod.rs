@@ -20,6 +20,7 @@ mod lines;
 mod opaque;
 mod pool;
 mod pyramid;
+mod scatter;
 mod splat;
 
 pub use boxblur::box_blur;
@@ -29,6 +30,7 @@ pub use glow::glow;
 pub use lines::{plan, LinePlan};
 pub use opaque::{opaque_blur, opaque_motion_blur, Composite};
 pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};
+pub use scatter::{scatter_pieces, Piece};
 pub use splat::{splat_paths, MAX_PATH_POINTS};
 
 use crate::{Error, Result};

@@ -98,7 +98,7 @@ fn add(out: &mut [[f32; 4]], o: usize, c: [f32; 4], wgt: f32) {
 /// tight loop; the partial columns at its ends take the general form. Both give the same
 /// floats as evaluating the general form everywhere.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn segment(
+fn segment(
     out: &mut [[f32; 4]],
     w: usize,
     h: usize,

@@ -6,7 +6,8 @@ use crate::image::{self, CameraMatrices, Composite, DofParams};
 use crate::Error;
 use glam::DMat4;
 use numpy::{
-    IntoPyArray, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
+    IntoPyArray, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
+    PyReadonlyArray4, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 
@@ -152,6 +153,62 @@ fn _splat_paths<'py>(
     let p2: Vec<[f32; 2]> = p.chunks_exact(2).map(|x| [x[0], x[1]]).collect();
     let out = py
         .detach(|| super::in_pool(|| image::splat_paths(width, height, &c4, &p2, ps[1])))
+        .map_err(to_py_err)?;
+    out3(py, out, height, width, 4)
+}
+
+/// One piece of `_scatter_pieces`: rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32, ray (4,)
+/// f64, weight, objects (M,) i32, maps (M,P,4,4) f64.
+type PyPiece<'py> = (
+    PyReadonlyArray3<'py, f32>,
+    PyReadonlyArray2<'py, f32>,
+    PyReadonlyArray2<'py, i32>,
+    [f64; 4],
+    f32,
+    PyReadonlyArray1<'py, i32>,
+    PyReadonlyArray4<'py, f64>,
+);
+
+/// Splat the pieces' covered pixels along their paths into a (height, width, 4) f32 image.
+#[pyfunction]
+fn _scatter_pieces<'py>(
+    py: Python<'py>,
+    pieces: Vec<PyPiece<'py>>,
+    points: usize,
+    width: usize,
+    height: usize,
+) -> PyOut<'py> {
+    let mut views = Vec::with_capacity(pieces.len());
+    for (rgba, depth, ids, ray, weight, objects, maps) in &pieces {
+        let (c, w, h) = img3(rgba, "rgba", 4)?;
+        let (d, dw, dh) = img2(depth, "depth")?;
+        same_size("depth", (dh, dw), (h, w))?;
+        let s = ids.shape();
+        same_size("ids", (s[0], s[1]), (h, w))?;
+        let ms = maps.shape();
+        if ms[0] != objects.len() || ms[1] != points || ms[2] != 4 || ms[3] != 4 {
+            return Err(to_py_err(Error::shape(
+                "maps",
+                format!(
+                    "expected shape ({},{points},4,4) (objects, points), got {ms:?}",
+                    objects.len()
+                ),
+            )));
+        }
+        views.push(image::Piece {
+            rgba: c,
+            depth: d,
+            ids: c_slice(ids, "ids").map_err(to_py_err)?,
+            width: w,
+            height: h,
+            ray: *ray,
+            weight: *weight,
+            objects: c_slice(objects, "objects").map_err(to_py_err)?,
+            maps: c_slice(maps, "maps").map_err(to_py_err)?,
+        });
+    }
+    let out = py
+        .detach(|| super::in_pool(|| image::scatter_pieces(width, height, &views, points)))
         .map_err(to_py_err)?;
     out3(py, out, height, width, 4)
 }
@@ -336,6 +393,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_glow, m)?)?;
     m.add_function(wrap_pyfunction!(_box_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_splat_paths, m)?)?;
+    m.add_function(wrap_pyfunction!(_scatter_pieces, m)?)?;
     m.add_function(wrap_pyfunction!(_opaque_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_opaque_motion_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_pyramid_blur, m)?)?;

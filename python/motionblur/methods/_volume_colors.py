@@ -197,10 +197,19 @@ def scattered(scene: Scene, cam: Camera, movers, keys_of, win, pieces: int) -> n
     cdf = scene.shutter_cdf(np.arange(pieces + 1) / pieces)
     # accumulation's painter: object-space draws, faces turned away the whole shutter dropped
     painter = _Painter(scene, movers, eye=None if scene.camera_moves else cam.pose[:3, 3])
-    index = np.full(max(k for k, _ in movers) + 2, -1)
-    index[[k for k, _ in movers]] = np.arange(len(movers))
+    objects = np.array([k for k, _ in movers], np.int32)
     tan = np.tan(cam.yfov / 2.0)
-    colors, paths = [], []
+    # homogeneous clip coordinates -> pixel coordinates of the output window
+    viewport = np.array(
+        [
+            [0.5 * cam.width, 0.0, 0.0, 0.5 * cam.width - x0],
+            [0.0, -0.5 * cam.height, 0.0, 0.5 * cam.height - y0],
+            [0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    )
+    to_pixels = viewport @ cam.view_projection
+    work = []
     for p in range(pieces):
         weight = float(cdf[p + 1] - cdf[p])
         if weight <= 0.0:
@@ -214,36 +223,23 @@ def scattered(scene: Scene, cam: Camera, movers, keys_of, win, pieces: int) -> n
         # against the lights when the camera turns).
         tm = mid / n
         pose = scene.camera_pose_at(tm)
-        at = [o.transform_at(tm) for _, o in movers]
         proj = window_projection(cam.projection, cam.width, cam.height, rwin)
         lay = painter.layer(tm, np.linalg.inv(pose), proj, rwin[2] - rwin[0], rwin[3] - rwin[1])
-        jj, ii = np.nonzero(lay.rgba[..., 3] > 0.0)
-        if len(jj) == 0:
-            continue
-        z = lay.depth[jj, ii].astype(np.float64)
-        nx = ((ii + rwin[0] + 0.5) / cam.width * 2.0 - 1.0) * tan * cam.aspect
-        ny = (1.0 - (jj + rwin[1] + 0.5) / cam.height * 2.0) * tan
-        world = np.stack([nx * z, ny * z, -z], axis=1) @ pose[:3, :3].T + pose[:3, 3]
-        ids = index[lay.ids[jj, ii]]
-        steps = np.arange(2 * p * PATH_STEPS, 2 * (p + 1) * PATH_STEPS + 1)
-        path = np.full((len(jj), len(steps), 2), np.nan, np.float32)
-        for i, ks in enumerate(keys):
-            sel = np.nonzero(ids == i)[0]
-            if len(sel) == 0:
-                continue
-            back = np.linalg.inv(at[i])
-            local = world[sel] @ back[:3, :3].T + back[:3, 3]
-            for q, s in enumerate(steps):
-                m = ks[s]
-                qx, qy, ok = pixels(
-                    cam.view_projection, local @ m[:3, :3].T + m[:3, 3], cam.width, cam.height
-                )
-                path[sel, q, 0] = np.where(ok, qx - x0, np.nan)
-                path[sel, q, 1] = np.where(ok, qy - y0, np.nan)
-        colors.append(lay.rgba[jj, ii] * np.float32(weight))
-        paths.append(path)
-    if not colors:
+        # pixel (i, j) at depth z: camera-space z (ray0 (i + 0.5) + ray1, ray2 (j + 0.5) + ray3, -1)
+        ray = (
+            2.0 * tan * cam.aspect / cam.width,
+            (2.0 * rwin[0] / cam.width - 1.0) * tan * cam.aspect,
+            -2.0 * tan / cam.height,
+            (1.0 - 2.0 * rwin[1] / cam.height) * tan,
+        )
+        # per object and path time: camera point at the piece's middle -> its object's local
+        # point -> its apparent placement at that time -> output pixel (homogeneous)
+        steps = slice(2 * p * PATH_STEPS, 2 * (p + 1) * PATH_STEPS + 1)
+        maps = np.stack(
+            [to_pixels @ ks[steps] @ (np.linalg.inv(o.transform_at(tm)) @ pose) for (_, o), ks in zip(movers, keys)]
+        )
+        work.append((lay.rgba, lay.depth, lay.ids, ray, np.float32(weight), objects, maps))
+    if not work:
         return np.zeros((y1 - y0, x1 - x0, 4), np.float32)
-    return _core._splat_paths(
-        np.ascontiguousarray(np.concatenate(colors)), np.concatenate(paths), x1 - x0, y1 - y0
-    )
+    return _core._scatter_pieces(work, 2 * PATH_STEPS + 1, x1 - x0, y1 - y0)
+
