@@ -117,6 +117,22 @@ def _scatter_pieces(pieces: list[tuple], points: int, width: int, height: int) -
     ``maps[obj, s] @ (point, 1)`` (dropped when W <= 1e-9); then as ``_splat_paths``. Releases
     the GIL; the same sums for any thread count."""
 
+def _pixel_bounds(map: np.ndarray, points: np.ndarray) -> tuple[float, float, float, float] | None:
+    """(x_min, y_min, x_max, y_max) pixel bounds of points (N,3) f64 under map (4,4) f64 (rows to
+    homogeneous pixels ``(x w, y w, ., w)``), or None when a point has ``w <= 1e-9`` (behind the
+    camera). Releases the GIL."""
+
+def _sample_colors(img: np.ndarray, map: np.ndarray, points: np.ndarray, rgba: np.ndarray) -> np.ndarray:
+    """rgba (N,4) f32 with each point's colour replaced by the straight colour of the pixel of the
+    premultiplied img (H,W,4) f32 it falls in under map (4,4) f64 (position truncated, clamped
+    to the image), where that pixel's alpha is >= 1e-3 and the point is in front. Points (N,3)
+    f64. Returns a new (N,4) f32. Releases the GIL."""
+
+def _colored(rgba: np.ndarray, averaged: np.ndarray, static_rgba: np.ndarray | None = None) -> np.ndarray:
+    """Per pixel of (H,W,4) f32 premultiplied images: rgba's alpha A times averaged's straight
+    colour where averaged's alpha is >= 1e-3 (rgba's colour elsewhere), alpha A, plus
+    (1 - A) static_rgba when given. Returns a new (H,W,4) f32. Releases the GIL."""
+
 def _opaque_blur(rgba: np.ndarray, direction: tuple[float, float], length: float) -> np.ndarray:
     """Box blur, eq. 10 glow and eq. 7 rescale of premultiplied rgba (H,W,4) f32. Returns (H,W,4) f32."""
 

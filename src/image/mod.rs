@@ -14,6 +14,7 @@
 
 mod boxblur;
 mod camera;
+mod colors;
 mod dof;
 mod glow;
 mod lines;
@@ -25,6 +26,7 @@ mod splat;
 
 pub use boxblur::box_blur;
 pub use camera::{camera_motion_blur, camera_velocity, velocity_blur, CameraMatrices, MAX_SAMPLES};
+pub use colors::{colored, pixel_bounds, sample_colors};
 pub use dof::{depth_of_field, layer_depths, r_infinity, DofParams, MAX_LAYERS};
 pub use glow::glow;
 pub use lines::{plan, LinePlan};

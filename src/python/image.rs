@@ -213,6 +213,97 @@ fn _scatter_pieces<'py>(
     out3(py, out, height, width, 4)
 }
 
+/// A row-major (4,4) f64 matrix as 16 numbers.
+fn map16(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<[f64; 16]> {
+    if a.shape() != [4, 4] {
+        return Err(to_py_err(Error::shape(name, "expected shape (4,4)")));
+    }
+    let mut m = [0.0f64; 16];
+    m.copy_from_slice(c_slice(a, name).map_err(to_py_err)?);
+    Ok(m)
+}
+
+/// (N,3) f64 points as rows.
+fn points3<'a>(a: &'a PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<Vec<[f64; 3]>> {
+    if a.shape()[1] != 3 {
+        return Err(to_py_err(Error::shape(
+            name,
+            format!("expected shape (N,3), got {:?}", a.shape()),
+        )));
+    }
+    let s = c_slice(a, name).map_err(to_py_err)?;
+    Ok(s.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect())
+}
+
+/// (x_min, y_min, x_max, y_max) of points (N,3) f64 under map (4,4) f64, or None (one behind).
+#[pyfunction]
+fn _pixel_bounds(
+    py: Python<'_>,
+    map: PyReadonlyArray2<'_, f64>,
+    points: PyReadonlyArray2<'_, f64>,
+) -> PyResult<Option<[f64; 4]>> {
+    let m = map16(&map, "map")?;
+    let p = points3(&points, "points")?;
+    py.detach(|| super::in_pool(|| image::pixel_bounds(&m, &p)))
+        .map_err(to_py_err)
+}
+
+/// rgba (N,4) f32 with the colours sampled from img (H,W,4) f32 at points (N,3) f64 under map.
+#[pyfunction]
+fn _sample_colors<'py>(
+    py: Python<'py>,
+    img: PyReadonlyArray3<'py, f32>,
+    map: PyReadonlyArray2<'py, f64>,
+    points: PyReadonlyArray2<'py, f64>,
+    rgba: PyReadonlyArray2<'py, f32>,
+) -> PyOut<'py> {
+    let (a, w, h) = img3(&img, "img", 4)?;
+    let m = map16(&map, "map")?;
+    let p = points3(&points, "points")?;
+    if rgba.shape()[1] != 4 {
+        return Err(to_py_err(Error::shape(
+            "rgba",
+            format!("expected shape (N,4), got {:?}", rgba.shape()),
+        )));
+    }
+    let c: Vec<[f32; 4]> = c_slice(&rgba, "rgba")
+        .map_err(to_py_err)?
+        .chunks_exact(4)
+        .map(|x| [x[0], x[1], x[2], x[3]])
+        .collect();
+    let n = p.len();
+    let out = py
+        .detach(|| super::in_pool(|| image::sample_colors(a, w, h, &m, &p, &c)))
+        .map_err(to_py_err)?;
+    Ok(out.into_pyarray(py).reshape([n, 4])?.into_any())
+}
+
+/// Coverage alpha of rgba (H,W,4) f32 times the colour of averaged (H,W,4) f32, over static_rgba.
+#[pyfunction]
+#[pyo3(signature = (rgba, averaged, static_rgba=None))]
+fn _colored<'py>(
+    py: Python<'py>,
+    rgba: PyReadonlyArray3<'py, f32>,
+    averaged: PyReadonlyArray3<'py, f32>,
+    static_rgba: Option<PyReadonlyArray3<'py, f32>>,
+) -> PyOut<'py> {
+    let (r, w, h) = img3(&rgba, "rgba", 4)?;
+    let (s, sw, sh) = img3(&averaged, "averaged", 4)?;
+    same_size("averaged", (sh, sw), (h, w))?;
+    let u = match &static_rgba {
+        Some(u) => {
+            let (u, uw, uh) = img3(u, "static_rgba", 4)?;
+            same_size("static_rgba", (uh, uw), (h, w))?;
+            Some(u)
+        }
+        None => None,
+    };
+    let out = py
+        .detach(|| super::in_pool(|| image::colored(r, s, u)))
+        .map_err(to_py_err)?;
+    out3(py, out, h, w, 4)
+}
+
 /// Opaque blur (box, glow, eq. 7) of rgba (H,W,4) f32.
 #[pyfunction]
 fn _opaque_blur<'py>(
@@ -394,6 +485,9 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_box_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_splat_paths, m)?)?;
     m.add_function(wrap_pyfunction!(_scatter_pieces, m)?)?;
+    m.add_function(wrap_pyfunction!(_pixel_bounds, m)?)?;
+    m.add_function(wrap_pyfunction!(_sample_colors, m)?)?;
+    m.add_function(wrap_pyfunction!(_colored, m)?)?;
     m.add_function(wrap_pyfunction!(_opaque_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_opaque_motion_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_pyramid_blur, m)?)?;

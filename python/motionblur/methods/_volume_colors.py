@@ -58,6 +58,21 @@ def pixels(vp: np.ndarray, p: np.ndarray, width: int, height: int):
     return (clip[:, 0] / wc + 1.0) * 0.5 * width, (1.0 - clip[:, 1] / wc) * 0.5 * height, front
 
 
+def to_pixels(cam: Camera, x0: float = 0.0, y0: float = 0.0) -> np.ndarray:
+    """(4,4) float64 taking a world point (x, y, z, 1) to homogeneous pixel coordinates
+    ``(X, Y, ., W)`` of ``cam``'s image shifted by (x0, y0): the pixel is (X/W, Y/W) (as
+    :func:`pixels` gives, minus the shift), in front of the camera where W > 1e-9."""
+    viewport = np.array(
+        [
+            [0.5 * cam.width, 0.0, 0.0, 0.5 * cam.width - x0],
+            [0.0, -0.5 * cam.height, 0.0, 0.5 * cam.height - y0],
+            [0.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    )
+    return viewport @ cam.view_projection
+
+
 def sample(img: np.ndarray, x, y, front, fallback: np.ndarray, nearest: bool = False) -> np.ndarray:
     """Straight RGB (N,3) float32 at image positions ``x``, ``y`` (N,) (pixel centres at +0.5) of
     the premultiplied ``img`` (H,W,4), bilinear (``nearest``: the pixel's own), clamped to its
@@ -199,16 +214,7 @@ def scattered(scene: Scene, cam: Camera, movers, keys_of, win, pieces: int) -> n
     painter = _Painter(scene, movers, eye=None if scene.camera_moves else cam.pose[:3, 3])
     objects = np.array([k for k, _ in movers], np.int32)
     tan = np.tan(cam.yfov / 2.0)
-    # homogeneous clip coordinates -> pixel coordinates of the output window
-    viewport = np.array(
-        [
-            [0.5 * cam.width, 0.0, 0.0, 0.5 * cam.width - x0],
-            [0.0, -0.5 * cam.height, 0.0, 0.5 * cam.height - y0],
-            [0.0, 0.0, 1.0, 0.0],
-            [0.0, 0.0, 0.0, 1.0],
-        ]
-    )
-    to_pixels = viewport @ cam.view_projection
+    world_to_window = to_pixels(cam, x0, y0)
     work = []
     for p in range(pieces):
         weight = float(cdf[p + 1] - cdf[p])
@@ -236,10 +242,12 @@ def scattered(scene: Scene, cam: Camera, movers, keys_of, win, pieces: int) -> n
         # point -> its apparent placement at that time -> output pixel (homogeneous)
         steps = slice(2 * p * PATH_STEPS, 2 * (p + 1) * PATH_STEPS + 1)
         maps = np.stack(
-            [to_pixels @ ks[steps] @ (np.linalg.inv(o.transform_at(tm)) @ pose) for (_, o), ks in zip(movers, keys)]
+            [
+                world_to_window @ ks[steps] @ (np.linalg.inv(o.transform_at(tm)) @ pose)
+                for (_, o), ks in zip(movers, keys)
+            ]
         )
         work.append((lay.rgba, lay.depth, lay.ids, ray, np.float32(weight), objects, maps))
     if not work:
         return np.zeros((y1 - y0, x1 - x0, 4), np.float32)
     return _core._scatter_pieces(work, 2 * PATH_STEPS + 1, x1 - x0, y1 - y0)
-

@@ -13,8 +13,11 @@ transparency.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
+from .. import _core
 from .._validate import as_int
 from ..geometry import motion_volume as build_volume
 from ..geometry import spin_volume as build_spin
@@ -32,7 +35,7 @@ from ..render import (
     window_projection,
 )
 from ..scene import Object, Scene
-from ._volume_colors import MIN_ALPHA, UNLIT, averaged_colors, pixels, place, sample, scattered, uniform
+from ._volume_colors import UNLIT, averaged_colors, place, scattered, to_pixels, uniform
 
 __all__ = ["motion_volume", "apparent_keyframes", "camera_folds", "spin_of"]
 
@@ -391,12 +394,13 @@ def _window(cam: Camera, vertex_sets):
     if not vertex_sets:
         return None
     lo, hi = np.array([np.inf, np.inf]), np.array([-np.inf, -np.inf])
+    world_to_pixels = to_pixels(cam)
     for v in vertex_sets:
-        x, y, front = pixels(cam.view_projection, v, cam.width, cam.height)
-        if not front.all():
+        b = _core._pixel_bounds(world_to_pixels, np.ascontiguousarray(v, dtype=np.float64))
+        if b is None:
             return 0, 0, cam.width, cam.height
-        lo = np.minimum(lo, [x.min(), y.min()])
-        hi = np.maximum(hi, [x.max(), y.max()])
+        lo = np.minimum(lo, b[:2])
+        hi = np.maximum(hi, b[2:])
     x0, y0 = max(0, int(np.floor(lo[0])) - 1), max(0, int(np.floor(lo[1])) - 1)
     x1, y1 = min(cam.width, int(np.ceil(hi[0])) + 1), min(cam.height, int(np.ceil(hi[1])) + 1)
     if x0 >= x1 or y0 >= y1:
@@ -481,14 +485,20 @@ def _scatter(scene: Scene, pcam: Camera, movers, pending, draws, pwin, pieces: i
         return apparent_keyframes(scene, obj, n, folds[n])
 
     img = scattered(scene, pcam, movers, keys_of, pwin, pieces)
-    for i, k, _, vol in pending:
-        x, y, front = pixels(pcam.view_projection, vol.vertices, pcam.width, pcam.height)
-        rgb = sample(img, x - pwin[0], y - pwin[1], front, vol.rgba[:, :3], nearest=True)
-        vol.rgba = np.concatenate([rgb, vol.rgba[:, 3:]], axis=1)
-        draws[i] = (
-            UNLIT,
-            Draw(vol.vertices, vol.faces, vol.rgba, normals=vol.normals, object_id=k, cull_back=True),
+    world_to_window = to_pixels(pcam, pwin[0], pwin[1])
+    for i, _, _, vol in pending:
+        # each vertex's colour: its pixel's (nearest), where the splatted alpha is enough
+        vol.rgba = _core._sample_colors(
+            img,
+            world_to_window,
+            np.ascontiguousarray(vol.vertices, dtype=np.float64),
+            np.ascontiguousarray(vol.rgba, dtype=np.float32),
         )
+        # the volume's Draw (validated when made) with these colours: >= 0, the same alphas
+        d = copy.copy(draws[i][1])
+        d.rgba = vol.rgba.view()
+        d.rgba.flags.writeable = False
+        draws[i] = (UNLIT, d)
     return img
 
 
@@ -496,11 +506,10 @@ def _colored(rgba: np.ndarray, averaged: np.ndarray, static_rgba) -> np.ndarray:
     """Per pixel, the volumes' coverage alpha A (``rgba`` drawn over nothing) times the averaged
     colour where its alpha is at least MIN_ALPHA (``rgba``'s own colour elsewhere), over
     ``static_rgba`` (None: nothing)."""
-    a = rgba[..., 3:]
-    w = averaged[..., 3:]
-    ok = w >= MIN_ALPHA
-    out = rgba.copy()
-    out[..., :3] = np.where(ok, averaged[..., :3] * (a / np.maximum(w, MIN_ALPHA)), rgba[..., :3])
     if static_rgba is not None:
-        out += (1.0 - a) * static_rgba
-    return out
+        static_rgba = np.ascontiguousarray(static_rgba, dtype=np.float32)
+    return _core._colored(
+        np.ascontiguousarray(rgba, dtype=np.float32),
+        np.ascontiguousarray(averaged, dtype=np.float32),
+        static_rgba,
+    )
