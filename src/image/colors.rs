@@ -19,17 +19,24 @@ fn check_map(map: &[f64; 16]) -> Result<()> {
     Ok(())
 }
 
-fn check_points(points: &[[f64; 3]]) -> Result<()> {
-    if points.par_iter().any(|p| !p.iter().all(|v| v.is_finite())) {
+/// `points` (flat `(n, 3)`) as `n`, checked finite.
+fn check_points(points: &[f64]) -> Result<usize> {
+    if points.len() % 3 != 0 {
+        return Err(Error::shape("points", "expected (N,3) values"));
+    }
+    if points
+        .par_chunks(3 * CHUNK)
+        .any(|c| c.iter().any(|v| !v.is_finite()))
+    {
         return Err(Error::value("points", "contains NaN or inf"));
     }
-    Ok(())
+    Ok(points.len() / 3)
 }
 
 /// Pixel position of `p` under the row-major homogeneous `map` (to `(x w, y w, ., w)`), or
 /// None when `w <= 1e-9` (behind the camera).
 #[inline(always)]
-fn project(map: &[f64; 16], p: &[f64; 3]) -> Option<[f64; 2]> {
+fn project(map: &[f64; 16], p: &[f64]) -> Option<[f64; 2]> {
     let row = |r: usize| {
         map[4 * r] * p[0] + map[4 * r + 1] * p[1] + map[4 * r + 2] * p[2] + map[4 * r + 3]
     };
@@ -37,9 +44,9 @@ fn project(map: &[f64; 16], p: &[f64; 3]) -> Option<[f64; 2]> {
     (w > 1e-9).then(|| [row(0) / w, row(1) / w])
 }
 
-/// `(x_min, y_min, x_max, y_max)` of the pixel positions of `points` under `map`, or None when
-/// a point is behind the camera (or there are none: `Some` of infinities then, as numpy's).
-pub fn pixel_bounds(map: &[f64; 16], points: &[[f64; 3]]) -> Result<Option<[f64; 4]>> {
+/// `(x_min, y_min, x_max, y_max)` of the pixel positions of `points` (flat `(n, 3)`) under
+/// `map`, or None when a point is behind the camera (none: infinities).
+pub fn pixel_bounds(map: &[f64; 16], points: &[f64]) -> Result<Option<[f64; 4]>> {
     check_map(map)?;
     check_points(points)?;
     let empty = Some([
@@ -58,16 +65,16 @@ pub fn pixel_bounds(map: &[f64; 16], points: &[[f64; 3]]) -> Result<Option<[f64;
         _ => None,
     };
     Ok(points
-        .par_chunks(CHUNK)
+        .par_chunks(3 * CHUNK)
         .map(|c| {
-            c.iter().try_fold(empty.unwrap(), |b, p| {
+            c.chunks_exact(3).try_fold(empty.unwrap(), |b, p| {
                 project(map, p).map(|[x, y]| [b[0].min(x), b[1].min(y), b[2].max(x), b[3].max(y)])
             })
         })
         .reduce(|| empty, merge))
 }
 
-/// Per point, its `rgba` with the colour replaced by the straight colour of the pixel of the
+/// Per point of `points` (flat `(n, 3)`), its `rgba` (flat `(n, 4)`) with the colour replaced by the straight colour of the pixel of the
 /// premultiplied `img` (`w` x `h`) it falls in under `map` (the truncated position, clamped to
 /// the image), where that pixel's alpha is at least [`MIN_ALPHA`] and the point is in front of
 /// the camera. Returns `(n, 4)` floats.
@@ -76,28 +83,28 @@ pub fn sample_colors(
     w: usize,
     h: usize,
     map: &[f64; 16],
-    points: &[[f64; 3]],
-    rgba: &[[f32; 4]],
+    points: &[f64],
+    rgba: &[f32],
 ) -> Result<Vec<f32>> {
     super::check_image("img", img, w, h, 4)?;
     check_map(map)?;
-    check_points(points)?;
-    if rgba.len() != points.len() {
+    let n = check_points(points)?;
+    if rgba.len() != 4 * n {
         return Err(Error::shape(
             "rgba",
-            format!(
-                "expected {} rows like points, got {}",
-                points.len(),
-                rgba.len()
-            ),
+            format!("expected {n} rows like points, got {} values", rgba.len()),
         ));
     }
-    let mut out = vec![[0.0f32; 4]; points.len()];
-    out.par_chunks_mut(CHUNK)
-        .zip(points.par_chunks(CHUNK).zip(rgba.par_chunks(CHUNK)))
+    let mut out = vec![0.0f32; 4 * n];
+    out.par_chunks_mut(4 * CHUNK)
+        .zip(points.par_chunks(3 * CHUNK).zip(rgba.par_chunks(4 * CHUNK)))
         .for_each(|(o, (ps, cs))| {
-            for ((o, p), c) in o.iter_mut().zip(ps).zip(cs) {
-                *o = *c;
+            let each = o
+                .chunks_exact_mut(4)
+                .zip(ps.chunks_exact(3))
+                .zip(cs.chunks_exact(4));
+            for ((o, p), c) in each {
+                o.copy_from_slice(c);
                 let Some([x, y]) = project(map, p) else {
                     continue;
                 };
@@ -107,11 +114,11 @@ pub fn sample_colors(
                 let s = &img[4 * (j * w + i)..4 * (j * w + i) + 4];
                 if s[3] >= MIN_ALPHA {
                     let a = s[3].max(MIN_ALPHA);
-                    *o = [s[0] / a, s[1] / a, s[2] / a, c[3]];
+                    o[..3].iter_mut().zip(s).for_each(|(o, s)| *o = s / a);
                 }
             }
         });
-    Ok(out.into_flattened())
+    Ok(out)
 }
 
 /// Per pixel: the volumes' coverage alpha `A` (alpha of `rgba`, drawn over nothing) times the
@@ -182,13 +189,13 @@ mod tests {
 
     #[test]
     fn bounds_and_samples() {
-        let pts = [[0.5, 0.5, 1.0], [1.25, -0.5, 1.0], [-1.7, 2.9, 1.0]];
+        let pts = [0.5, 0.5, 1.0, 1.25, -0.5, 1.0, -1.7, 2.9, 1.0];
         let b = pixel_bounds(&MAP, &pts).unwrap().unwrap();
         for (a, b) in b.iter().zip([0.3, 0.1, 3.25, 3.5]) {
             assert!((a - b).abs() < 1e-12, "{a} {b}");
         }
-        assert_eq!(pixel_bounds(&MAP, &[[0.0, 0.0, -1.0]]).unwrap(), None);
-        assert!(pixel_bounds(&MAP, &[[f64::NAN, 0.0, 1.0]]).is_err());
+        assert_eq!(pixel_bounds(&MAP, &[0.0, 0.0, -1.0]).unwrap(), None);
+        assert!(pixel_bounds(&MAP, &[f64::NAN, 0.0, 1.0]).is_err());
         // a 4x4 image, pixel (2, 2) red at alpha 0.5, pixel (3, 3) alpha below MIN_ALPHA
         let mut img = vec![0.0f32; 64];
         img[4 * 10..4 * 10 + 4].copy_from_slice(&[0.5, 0.0, 0.0, 0.5]);
@@ -198,14 +205,15 @@ mod tests {
             [1.9, -0.9, 1.0],
             [0.5, 0.5, -1.0],
             [-9.0, 9.0, 1.0],
-        ];
-        let rgba = [[0.0, 0.0, 1.0, 0.25]; 4];
+        ]
+        .concat();
+        let rgba = [0.0, 0.0, 1.0, 0.25].repeat(4);
         let out = sample_colors(&img, 4, 4, &MAP, &pts, &rgba).unwrap();
         assert_eq!(&out[..4], &[1.0, 0.0, 0.0, 0.25]); // pixel (2, 2)
         assert_eq!(&out[4..8], &[0.0, 0.0, 1.0, 0.25]); // pixel (3, 3): too thin
         assert_eq!(&out[8..12], &[0.0, 0.0, 1.0, 0.25]); // behind
         assert_eq!(&out[12..], &[0.0, 0.0, 1.0, 0.25]); // clamped to (0, 0): empty
-        assert!(sample_colors(&img, 4, 4, &MAP, &pts, &rgba[..3]).is_err());
+        assert!(sample_colors(&img, 4, 4, &MAP, &pts, &rgba[..12]).is_err());
         assert!(sample_colors(&img, 5, 4, &MAP, &pts, &rgba).is_err());
     }
 

@@ -223,16 +223,19 @@ fn map16(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<[f64; 16
     Ok(m)
 }
 
-/// (N,3) f64 points as rows.
-fn points3<'a>(a: &'a PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<Vec<[f64; 3]>> {
-    if a.shape()[1] != 3 {
+/// (N,cols) C-contiguous rows, flat.
+fn flat_rows<'a, T: numpy::Element>(
+    a: &'a PyReadonlyArray2<'_, T>,
+    name: &'static str,
+    cols: usize,
+) -> PyResult<&'a [T]> {
+    if a.shape()[1] != cols {
         return Err(to_py_err(Error::shape(
             name,
-            format!("expected shape (N,3), got {:?}", a.shape()),
+            format!("expected shape (N,{cols}), got {:?}", a.shape()),
         )));
     }
-    let s = c_slice(a, name).map_err(to_py_err)?;
-    Ok(s.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect())
+    c_slice(a, name).map_err(to_py_err)
 }
 
 /// (x_min, y_min, x_max, y_max) of points (N,3) f64 under map (4,4) f64, or None (one behind).
@@ -243,8 +246,8 @@ fn _pixel_bounds(
     points: PyReadonlyArray2<'_, f64>,
 ) -> PyResult<Option<[f64; 4]>> {
     let m = map16(&map, "map")?;
-    let p = points3(&points, "points")?;
-    py.detach(|| super::in_pool(|| image::pixel_bounds(&m, &p)))
+    let p = flat_rows(&points, "points", 3)?;
+    py.detach(|| super::in_pool(|| image::pixel_bounds(&m, p)))
         .map_err(to_py_err)
 }
 
@@ -259,21 +262,11 @@ fn _sample_colors<'py>(
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&img, "img", 4)?;
     let m = map16(&map, "map")?;
-    let p = points3(&points, "points")?;
-    if rgba.shape()[1] != 4 {
-        return Err(to_py_err(Error::shape(
-            "rgba",
-            format!("expected shape (N,4), got {:?}", rgba.shape()),
-        )));
-    }
-    let c: Vec<[f32; 4]> = c_slice(&rgba, "rgba")
-        .map_err(to_py_err)?
-        .chunks_exact(4)
-        .map(|x| [x[0], x[1], x[2], x[3]])
-        .collect();
-    let n = p.len();
+    let p = flat_rows(&points, "points", 3)?;
+    let c = flat_rows(&rgba, "rgba", 4)?;
+    let n = p.len() / 3;
     let out = py
-        .detach(|| super::in_pool(|| image::sample_colors(a, w, h, &m, &p, &c)))
+        .detach(|| super::in_pool(|| image::sample_colors(a, w, h, &m, p, c)))
         .map_err(to_py_err)?;
     Ok(out.into_pyarray(py).reshape([n, 4])?.into_any())
 }
