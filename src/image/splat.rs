@@ -130,12 +130,10 @@ fn segment(
     // y >= -1.5 after clipping: the truncation of y + 2 is floor(y) + 2 (no libm floor call)
     let base = a[m] - slope * a[k] - 0.5 + 2.0;
     let rows = size_m as i64;
-    let partial = |out: &mut [[f32; 4]], i: i64| {
+    // a column the segment crosses in part: its weight and its height at the part's middle
+    let part = |i: i64| {
         let (x0, x1) = ((i as f32).max(s0), (i as f32 + 1.0).min(s1));
-        if x1 > x0 {
-            let y = base + slope * (0.5 * (x0 + x1));
-            column(out, i as usize * sk, sm, rows, c, per * (x1 - x0), y);
-        }
+        (x1 > x0).then(|| (per * (x1 - x0), base + slope * (0.5 * (x0 + x1))))
     };
     let first = floor(s0).max(0);
     let last = ceil(s1).min(size_k as i64);
@@ -143,19 +141,26 @@ fn segment(
     let (full0, full1) = (ceil(s0).max(first), floor(s1).min(last));
     if full0 >= full1 {
         for i in first..last {
-            partial(out, i);
+            if let Some((wgt, y)) = part(i) {
+                column(out, i as usize * sk, sm, rows, c, wgt, y);
+            }
         }
         return;
     }
-    for i in first..full0 {
-        partial(out, i);
+    // at most one partial column at each end
+    if first < full0 {
+        if let Some((wgt, y)) = part(first) {
+            column(out, first as usize * sk, sm, rows, c, wgt, y);
+        }
     }
     for i in full0..full1 {
         let y = base + slope * (i as f32 + 0.5);
         column(out, i as usize * sk, sm, rows, c, per, y);
     }
-    for i in full1..last {
-        partial(out, i);
+    if full1 < last {
+        if let Some((wgt, y)) = part(full1) {
+            column(out, full1 as usize * sk, sm, rows, c, wgt, y);
+        }
     }
 }
 
