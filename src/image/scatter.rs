@@ -10,7 +10,7 @@
 //! every path and calling `splat_paths`, without the arrays.
 use rayon::prelude::*;
 
-use super::splat::{sum_buffers, trace, MAX_PATH_POINTS};
+use super::splat::{sum_buffers, trace, trace_straight, MAX_PATH_POINTS};
 use crate::{Error, Result};
 
 /// Largest image accepted (pixels), output or piece, as for the rasterizer.
@@ -43,6 +43,37 @@ pub struct Piece<'a> {
     /// Per object, `points` row-major 4x4 maps from the camera-space point to homogeneous
     /// output pixel coordinates `(x w, y w, ., w)` at each path time (`w > 1e-9`: in front).
     pub maps: &'a [f64],
+}
+
+/// A path is splatted as one segment from its first to its last point, cut at its inner points
+/// (see `splat::trace_straight`), when every point lies within this many pixels of the uniform
+/// motion between them (a translation without perspective change of speed).
+pub const STRAIGHT_TOLERANCE: f32 = 1e-3;
+
+/// Whether `path` (3 points or more, all finite) is a uniform straight motion up to
+/// [`STRAIGHT_TOLERANCE`] whose segments all have the whole path's major axis and are longer
+/// than a point splat's 1e-6 along it (so that splatting it whole changes only the rounding).
+fn straight(path: &[[f32; 2]]) -> bool {
+    let n = path.len();
+    if n < 3 {
+        return false;
+    }
+    let (a, b) = (path[0], path[n - 1]);
+    if !(a.iter().chain(&b).all(|v| v.is_finite())) {
+        return false;
+    }
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let k = usize::from(d[1].abs() > d[0].abs());
+    let step = 1.0 / (n - 1) as f32;
+    let on_line = path[1..n - 1].iter().enumerate().all(|(s, p)| {
+        let u = (s + 1) as f32 * step;
+        (0..2).all(|k| (p[k] - (a[k] + u * (b[k] - a[k]))).abs() <= STRAIGHT_TOLERANCE)
+    });
+    on_line
+        && path.windows(2).all(|s| {
+            let e = [s[1][0] - s[0][0], s[1][1] - s[0][1]];
+            usize::from(e[1].abs() > e[0].abs()) == k && e[k].abs() >= 1e-6
+        })
 }
 
 fn check_piece(k: usize, p: &Piece, points: usize) -> Result<()> {
@@ -182,7 +213,12 @@ pub fn scatter_pieces(
                         [f32::NAN; 2]
                     };
                 }
-                trace(&mut out, width, height, c, &path[..points]);
+                let path = &path[..points];
+                if straight(path) {
+                    trace_straight(&mut out, width, height, c, path);
+                } else {
+                    trace(&mut out, width, height, c, path);
+                }
             }
             out
         })

@@ -94,9 +94,13 @@ fn add(out: &mut [[f32; 4]], o: usize, c: [f32; 4], wgt: f32) {
 /// height at the column's centre, split between the two nearest rows (a line drawn with
 /// Xiaolin Wu's weights, the time in each column exact).
 ///
-/// The columns the segment crosses completely (weight `per`, height at `i + 0.5`) run in a
-/// tight loop; the partial columns at its ends take the general form. Both give the same
-/// floats as evaluating the general form everywhere.
+/// `breaks`: points on the segment (in order from `a` to `b`) where it is cut into parts, each column evaluated per part as if the parts were separate segments (a
+/// uniform straight polyline drawn as one segment, with its joins' columns split as its own
+/// segments would split them).
+///
+/// The columns a part crosses completely (weight `per`, height at `i + 0.5`) run in a tight
+/// loop; the partial columns at its ends take the general form. Both give the same floats as
+/// evaluating the general form everywhere.
 #[allow(clippy::too_many_arguments)]
 fn segment(
     out: &mut [[f32; 4]],
@@ -108,6 +112,7 @@ fn segment(
     hi: [f32; 2],
     c: [f32; 4],
     time: f32,
+    breaks: &[[f32; 2]],
 ) {
     let d = [b[0] - a[0], b[1] - a[1]];
     // major axis k, minor axis 1 - k
@@ -122,44 +127,98 @@ fn segment(
     };
     let (s0, s1) = (a[k] + u0 * d[k], a[k] + u1 * d[k]);
     let (s0, s1) = (s0.min(s1), s0.max(s1));
-    let per = time / d[k].abs(); // time per unit of the major axis
-    let slope = d[m] / d[k];
     let (size_k, size_m) = if k == 0 { (w, h) } else { (h, w) };
-    // offsets of one step along the major and the minor axis (pixels)
-    let (sk, sm) = if k == 0 { (1, w) } else { (w, 1) };
-    // y >= -1.5 after clipping: the truncation of y + 2 is floor(y) + 2 (no libm floor call)
-    let base = a[m] - slope * a[k] - 0.5 + 2.0;
-    let rows = size_m as i64;
-    // a column the segment crosses in part: its weight and its height at the part's middle
-    let part = |i: i64| {
-        let (x0, x1) = ((i as f32).max(s0), (i as f32 + 1.0).min(s1));
-        (x1 > x0).then(|| (per * (x1 - x0), base + slope * (0.5 * (x0 + x1))))
+    let slope = d[m] / d[k];
+    let line = Line {
+        per: time / d[k].abs(), // time per unit of the major axis
+        slope,
+        // y >= -1.5 after clipping: the truncation of y + 2 is floor(y) + 2 (no libm floor call)
+        base: a[m] - slope * a[k] - 0.5 + 2.0,
+        size_k: size_k as i64,
+        rows: size_m as i64,
+        // offsets of one step along the major and the minor axis (pixels)
+        sk: if k == 0 { 1 } else { w },
+        sm: if k == 0 { w } else { 1 },
+        c,
     };
-    let first = floor(s0).max(0);
-    let last = ceil(s1).min(size_k as i64);
-    // the columns inside [s0, s1] completely: [ceil(s0), floor(s1))
-    let (full0, full1) = (ceil(s0).max(first), floor(s1).min(last));
-    if full0 >= full1 {
-        for i in first..last {
-            if let Some((wgt, y)) = part(i) {
-                column(out, i as usize * sk, sm, rows, c, wgt, y);
-            }
-        }
+    if breaks.is_empty() {
+        line.run(out, s0, s1);
         return;
     }
-    // at most one partial column at each end
-    if first < full0 {
-        if let Some((wgt, y)) = part(first) {
-            column(out, first as usize * sk, sm, rows, c, wgt, y);
+    // the parts in increasing major coordinate, cut to [s0, s1]
+    let mut from = s0;
+    let mut cut = |out: &mut [[f32; 4]], x: f32| {
+        let x = x.min(s1);
+        if x > from {
+            line.run(out, from, x);
+            from = x;
         }
+    };
+    if d[k] > 0.0 {
+        breaks.iter().for_each(|x| cut(out, x[k]));
+    } else {
+        breaks.iter().rev().for_each(|x| cut(out, x[k]));
     }
-    for i in full0..full1 {
-        let y = base + slope * (i as f32 + 0.5);
-        column(out, i as usize * sk, sm, rows, c, per, y);
-    }
-    if full1 < last {
-        if let Some((wgt, y)) = part(full1) {
-            column(out, full1 as usize * sk, sm, rows, c, wgt, y);
+    cut(out, s1);
+}
+
+/// The straight line of [`segment`] in its major axis frame.
+struct Line {
+    per: f32,
+    slope: f32,
+    base: f32,
+    size_k: i64,
+    rows: i64,
+    sk: usize,
+    sm: usize,
+    c: [f32; 4],
+}
+
+impl Line {
+    /// The columns of the major range `[s0, s1]`.
+    #[inline(always)]
+    fn run(&self, out: &mut [[f32; 4]], s0: f32, s1: f32) {
+        let &Line {
+            per,
+            slope,
+            base,
+            size_k,
+            rows,
+            sk,
+            sm,
+            c,
+        } = self;
+        // a column crossed in part: its weight and its height at the part's middle
+        let part = |i: i64| {
+            let (x0, x1) = ((i as f32).max(s0), (i as f32 + 1.0).min(s1));
+            (x1 > x0).then(|| (per * (x1 - x0), base + slope * (0.5 * (x0 + x1))))
+        };
+        let first = floor(s0).max(0);
+        let last = ceil(s1).min(size_k);
+        // the columns inside [s0, s1] completely: [ceil(s0), floor(s1))
+        let (full0, full1) = (ceil(s0).max(first), floor(s1).min(last));
+        if full0 >= full1 {
+            for i in first..last {
+                if let Some((wgt, y)) = part(i) {
+                    column(out, i as usize * sk, sm, rows, c, wgt, y);
+                }
+            }
+            return;
+        }
+        // at most one partial column at each end
+        if first < full0 {
+            if let Some((wgt, y)) = part(first) {
+                column(out, first as usize * sk, sm, rows, c, wgt, y);
+            }
+        }
+        for i in full0..full1 {
+            let y = base + slope * (i as f32 + 0.5);
+            column(out, i as usize * sk, sm, rows, c, per, y);
+        }
+        if full1 < last {
+            if let Some((wgt, y)) = part(full1) {
+                column(out, full1 as usize * sk, sm, rows, c, wgt, y);
+            }
         }
     }
 }
@@ -277,9 +336,39 @@ pub(super) fn trace(out: &mut [[f32; 4]], w: usize, h: usize, c: [f32; 4], path:
     for s in path.windows(2) {
         let (a, b) = (s[0], s[1]);
         if a.iter().chain(&b).all(|v| v.is_finite()) {
-            segment(out, w, h, a, b, lo, hi, c, seg_time);
+            segment(out, w, h, a, b, lo, hi, c, seg_time, &[]);
         }
     }
+}
+
+/// [`trace`] of a path of 3 points or more, all finite, whose points lie (near enough) on the
+/// uniform straight motion from its first to its last and whose segments share their major
+/// axis and are no point splats: drawn as one segment cut at the path's inner points, the same
+/// sums as `trace` up to rounding without a segment's set-up per path point.
+pub(super) fn trace_straight(
+    out: &mut [[f32; 4]],
+    w: usize,
+    h: usize,
+    c: [f32; 4],
+    path: &[[f32; 2]],
+) {
+    if c == [0.0; 4] {
+        return;
+    }
+    let (lo, hi) = ([-1.0f32, -1.0], [w as f32 + 1.0, h as f32 + 1.0]);
+    let n = path.len();
+    segment(
+        out,
+        w,
+        h,
+        path[0],
+        path[n - 1],
+        lo,
+        hi,
+        c,
+        1.0,
+        &path[1..n - 1],
+    );
 }
 
 /// The per-run buffers (each `n` pixels) summed in run order (the same sums for any thread
