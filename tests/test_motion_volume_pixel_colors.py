@@ -13,6 +13,7 @@ from test_motion_volume_colors import _sphere_scene
 
 import motionblur as mb
 from motionblur import _core, meshes
+from motionblur.methods import _volume_colors as vc
 from motionblur.metrics import rmse
 from motionblur.scene import rotate
 
@@ -124,3 +125,138 @@ def test_splat_is_the_same_for_any_thread_count_and_releases_the_gil():
     assert len(set(digests(script))) == 1
     c, p = _splat_inputs()
     assert ticks_during(lambda: _core._splat_paths(c, p, 320, 240)) > 0
+
+
+def _piece(seed=5, w=40, h=30, straight=True):
+    """A sharp render (w x h pixels, two objects and empty pixels) with its maps: object 3
+    translates across the image (a straight uniform path), object 8 moves towards the camera
+    too (perspective: a non-uniform path) unless ``straight``."""
+    rng = np.random.default_rng(seed)
+    rgba = rng.random((h, w, 4), dtype=np.float32) * np.float32(0.8)
+    rgba[..., 3] = np.where(rng.random((h, w)) < 0.2, 0.0, rgba[..., 3] + 0.1)
+    rgba[..., :3] *= rgba[..., 3:]
+    depth = (3.0 + rng.random((h, w))).astype(np.float32)
+    ids = np.where(rng.random((h, w)) < 0.5, 3, 8).astype(np.int32)
+    tan, aspect = 0.4, w / h
+    ray = (2 * tan * aspect / w, -tan * aspect, -2 * tan / h, tan)
+    proj = np.array([[1 / (tan * aspect), 0, 0, 0], [0, 1 / tan, 0, 0], [0, 0, -1, -0.2], [0, 0, -1, 0]])
+    viewport = np.array([[w / 2, 0, 0, w / 2 + 4], [0, -h / 2, 0, h / 2 - 2], [0, 0, 1, 0], [0, 0, 0, 1]])
+    maps = []
+    for move in ((0.3, 0.1, 0.0), (0.2, -0.1, 0.0 if straight else 0.5)):
+        steps = []
+        for s in np.linspace(-0.5, 0.5, 9):
+            t = np.eye(4)
+            t[:3, 3] = np.multiply(move, s)
+            steps.append(viewport @ proj @ t)
+        maps.append(steps)
+    return rgba, depth, ids, ray, np.float32(0.75), np.array([3, 8], np.int32), np.array(maps)
+
+
+def _explicit(piece, w, h):
+    """The same splat with every path made in numpy (the previous implementation's way)."""
+    rgba, depth, ids, ray, weight, objects, maps = piece
+    jj, ii = np.nonzero(rgba[..., 3] > 0)
+    z = depth[jj, ii].astype(np.float64)
+    q = np.stack(
+        [z * (ray[0] * (ii + 0.5) + ray[1]), z * (ray[2] * (jj + 0.5) + ray[3]), -z, np.ones_like(z)], 1
+    )
+    slot = np.searchsorted(objects, ids[jj, ii])
+    hom = np.einsum("npij,nj->npi", maps[slot], q)
+    paths = (hom[..., :2] / hom[..., 3:]).astype(np.float32)
+    return _core._splat_paths(np.ascontiguousarray(rgba[jj, ii] * weight), paths, w, h)
+
+
+@pytest.mark.parametrize("straight", [True, False])
+def test_scatter_pieces_is_the_splat_of_explicit_paths(straight):
+    piece = _piece(straight=straight)
+    before = [np.array(a, copy=True) for a in piece if isinstance(a, np.ndarray)]
+    out = _core._scatter_pieces([piece], 9, 48, 36)
+    np.testing.assert_allclose(out, _explicit(piece, 48, 36), atol=2e-6)
+    assert out[..., 3].sum() > 100.0
+    for a, b in zip([a for a in piece if isinstance(a, np.ndarray)], before):
+        np.testing.assert_array_equal(a, b)  # the caller's arrays are left alone
+
+
+def test_scatter_pieces_checks_its_input():
+    piece = _piece()
+
+    def with_(k, v):
+        p = list(piece)
+        p[k] = v
+        return [tuple(p)]
+
+    for pieces, name in [
+        (with_(0, piece[0][..., :3].copy()), "rgba"),
+        (with_(1, piece[1][:-1].copy()), "depth"),
+        (with_(2, piece[2][:, :-1].copy()), "ids"),
+        (with_(6, piece[6][:1].copy()), "maps"),
+        (with_(6, np.full_like(piece[6], np.nan)), "maps"),
+        (with_(4, float("nan")), "weight"),
+        (with_(3, (np.inf, 0.0, 0.0, 0.0)), "ray"),
+    ]:
+        with pytest.raises(ValueError, match=name):
+            _core._scatter_pieces(pieces, 9, 48, 36)
+    bad = piece[0].copy()
+    bad[0, 0] = np.inf
+    with pytest.raises(ValueError, match="rgba"):
+        _core._scatter_pieces(with_(0, bad), 9, 48, 36)
+    with pytest.raises(ValueError, match="points"):
+        _core._scatter_pieces([piece], 0, 48, 36)
+    with pytest.raises(ValueError, match="size"):
+        _core._scatter_pieces([piece], 9, 0, 36)
+    assert not _core._scatter_pieces([], 9, 8, 6).any()
+
+
+def test_scatter_pieces_is_the_same_for_any_thread_count_and_releases_the_gil():
+    script = (
+        "import hashlib, sys; sys.path.insert(0, 'tests')\n"
+        "from test_motion_volume_pixel_colors import _piece\n"
+        "from motionblur import _core\n"
+        "ps = [_piece(seed=s, w=160, h=120, straight=s % 2 == 0) for s in range(3)]\n"
+        "print(hashlib.sha256(_core._scatter_pieces(ps, 9, 170, 130).tobytes()).hexdigest())\n"
+    )
+    assert len(set(digests(script))) == 1
+    ps = [_piece(seed=s, w=160, h=120) for s in range(3)]
+    assert ticks_during(lambda: _core._scatter_pieces(ps, 9, 170, 130)) > 0
+
+
+def test_vertex_colour_kernels_match_their_numpy_forms_and_check_input():
+    from motionblur.methods._volume_colors import MIN_ALPHA, pixels, sample
+
+    rng = np.random.default_rng(2)
+    cam = mb.Camera(mb.look_at((0.0, 0.0, 5.0), (0.0, 0.0, 0.0)), 0.7, 64, 48)
+    pts = rng.normal(0, 1, (500, 3))
+    img = rng.random((20, 30, 4), dtype=np.float32)
+    img[..., 3] = np.where(rng.random((20, 30)) < 0.3, 0.0, img[..., 3])
+    rgba = rng.random((500, 4), dtype=np.float32)
+    p0, r0, i0 = pts.copy(), rgba.copy(), img.copy()
+    x, y, front = pixels(cam.view_projection, pts, 64, 48)
+    b = _core._pixel_bounds(vc.to_pixels(cam), pts)
+    np.testing.assert_allclose(b, [x.min(), y.min(), x.max(), y.max()], atol=1e-9)
+    got = _core._sample_colors(img, vc.to_pixels(cam, 10, 12), pts, rgba)
+    want = sample(img, x - 10, y - 12, front, rgba[:, :3], nearest=True)
+    np.testing.assert_allclose(got[:, :3], want, rtol=1e-6)
+    np.testing.assert_array_equal(got[:, 3], rgba[:, 3])
+    behind = pts.copy()
+    behind[0] = (0.0, 0.0, 9.0)
+    assert _core._pixel_bounds(vc.to_pixels(cam), behind) is None
+    for a, b0 in ((pts, p0), (rgba, r0), (img, i0)):
+        np.testing.assert_array_equal(a, b0)
+    with pytest.raises(ValueError, match="points"):
+        _core._pixel_bounds(vc.to_pixels(cam), np.full((3, 3), np.nan))
+    with pytest.raises(ValueError, match="points"):
+        _core._pixel_bounds(vc.to_pixels(cam), pts[:, :2].copy())
+    with pytest.raises(ValueError, match="map"):
+        _core._sample_colors(img, np.eye(3), pts, rgba)
+    with pytest.raises(ValueError, match="rgba"):
+        _core._sample_colors(img, vc.to_pixels(cam), pts, rgba[:10].copy())
+    # coverage times colour over the static layer, as the numpy form
+    cov = rng.random((20, 30, 4), dtype=np.float32)
+    under = rng.random((20, 30, 4), dtype=np.float32)
+    a, w = cov[..., 3:], img[..., 3:]
+    want = cov.copy()
+    want[..., :3] = np.where(w >= MIN_ALPHA, img[..., :3] * (a / np.maximum(w, MIN_ALPHA)), cov[..., :3])
+    want += (1.0 - a) * under
+    np.testing.assert_allclose(_core._colored(cov, img, under), want, rtol=1e-6, atol=1e-7)
+    with pytest.raises(ValueError, match="static_rgba"):
+        _core._colored(cov, img, under[:5].copy())

@@ -49,12 +49,12 @@ fn project(map: &[f64; 16], p: &[f64]) -> Option<[f64; 2]> {
 pub fn pixel_bounds(map: &[f64; 16], points: &[f64]) -> Result<Option<[f64; 4]>> {
     check_map(map)?;
     check_points(points)?;
-    let empty = Some([
+    let none = [
         f64::INFINITY,
         f64::INFINITY,
         f64::NEG_INFINITY,
         f64::NEG_INFINITY,
-    ]);
+    ];
     let merge = |a: Option<[f64; 4]>, b: Option<[f64; 4]>| match (a, b) {
         (Some(a), Some(b)) => Some([
             a[0].min(b[0]),
@@ -67,11 +67,11 @@ pub fn pixel_bounds(map: &[f64; 16], points: &[f64]) -> Result<Option<[f64; 4]>>
     Ok(points
         .par_chunks(3 * CHUNK)
         .map(|c| {
-            c.chunks_exact(3).try_fold(empty.unwrap(), |b, p| {
+            c.chunks_exact(3).try_fold(none, |b, p| {
                 project(map, p).map(|[x, y]| [b[0].min(x), b[1].min(y), b[2].max(x), b[3].max(y)])
             })
         })
-        .reduce(|| empty, merge))
+        .reduce(|| Some(none), merge))
 }
 
 /// Per point of `points` (flat `(n, 3)`), its `rgba` (flat `(n, 4)`) with the colour replaced by the straight colour of the pixel of the

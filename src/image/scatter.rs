@@ -135,7 +135,7 @@ fn sources(k: usize, piece: &Piece, out: &mut Vec<[u32; 3]>) -> Result<()> {
     slots.sort_by_key(|&(id, s)| (id, s));
     slots.dedup_by_key(|v| v.0); // the first slot of a repeated id
     for (px, c) in piece.rgba.chunks_exact(4).enumerate() {
-        if !(c[3] > 0.0) {
+        if c[3].is_nan() || c[3] <= 0.0 {
             continue;
         }
         if !c.iter().all(|v| v.is_finite()) {

@@ -191,7 +191,7 @@ impl Line {
         // a column crossed in part: its weight and its height at the part's middle
         let part = |i: i64| {
             let (x0, x1) = ((i as f32).max(s0), (i as f32 + 1.0).min(s1));
-            (x1 > x0).then(|| (per * (x1 - x0), base + slope * (0.5 * (x0 + x1))))
+            (x1 > x0).then_some((per * (x1 - x0), base + slope * (0.5 * (x0 + x1))))
         };
         let first = floor(s0).max(0);
         let last = ceil(s1).min(size_k);
