@@ -425,6 +425,31 @@ mod tests {
     }
 
     #[test]
+    fn a_straight_path_drawn_whole_is_its_segments_drawn_apart() {
+        // uniform straight paths (shallow, steep, leaving the image, slower than a pixel per
+        // segment) give the segment-by-segment sums up to rounding
+        for (a, d) in [
+            ([2.3f32, 3.1f32], [3.7f32, 1.3f32]),
+            ([20.2, 1.4], [-1.1, 2.9]),
+            ([-3.0, 5.5], [4.9, -0.2]),
+            ([5.5, 5.2], [0.31, 0.07]),
+        ] {
+            let path: Vec<[f32; 2]> = (0..9)
+                .map(|s| [a[0] + s as f32 * d[0], a[1] + s as f32 * d[1]])
+                .collect();
+            let c = [0.3, 0.6, 0.9, 1.0];
+            let mut apart = vec![[0.0f32; 4]; 24 * 20];
+            let mut whole = apart.clone();
+            trace(&mut apart, 24, 20, c, &path);
+            trace_straight(&mut whole, 24, 20, c, &path);
+            for (p, q) in apart.iter().flatten().zip(whole.iter().flatten()) {
+                assert!((p - q).abs() < 2e-6, "{a:?} {d:?}: {p} {q}");
+            }
+            assert!(apart.iter().map(|p| p[3]).sum::<f32>() > 0.2);
+        }
+    }
+
+    #[test]
     fn bad_input_is_an_error_and_threads_do_not_change_the_sums() {
         let c = [[1.0f32; 4]];
         assert!(splat_paths(0, 3, &c, &[[0.0, 0.0]], 1).is_err());
