@@ -19,7 +19,7 @@ const MAX_PIXELS: usize = 1 << 25;
 /// Most sources per run: the sources are cut into runs of this size (at most [`RUNS`] runs,
 /// longer ones then), each splatted into its own buffer, the buffers summed in run order: the
 /// same sums for any thread count.
-const RUN_SOURCES: usize = 2048;
+const RUN_SOURCES: usize = 1024;
 const RUNS: usize = 8;
 
 /// One sharp render of the movers and how its pixels move.
