@@ -10,7 +10,8 @@ it. Two estimates of that average are made here from sharp renders of the moving
   sampled at the volume's vertices.
 - :func:`scattered` (``colors="pixel"``): K sharp renders, at the middle of K equal pieces of the
   shutter, each pixel carried back to its 3D point (from the depth buffer) and splatted along the
-  image path that point follows during its piece (``_core._splat_paths``). Every point blurs by
+  image path that point follows during its piece (``_core._scatter_pieces``, the paths made and
+  splatted in Rust as ``_core._splat_paths`` splats them). Every point blurs by
   its own motion (nearer points faster under perspective, rotation, several objects), and the
   surfaces hidden at one piece's middle are seen at another's.
 """
@@ -188,7 +189,10 @@ def scattered(scene: Scene, cam: Camera, movers, keys_of, win, pieces: int) -> n
     movers are rendered sharp together (so they hide each other as at that time) at the piece's
     middle, in the window grown by their image motion; every covered pixel is carried to its 3D
     point by its depth and splatted with its premultiplied colour along the image path of that
-    point through the piece (:data:`PATH_STEPS` straight segments)."""
+    point through the piece (:data:`PATH_STEPS` straight segments). Per piece only its layer and
+    one (4,4) map per mover and path time (camera point at the piece's middle to output pixel)
+    are made here; the sources and their paths are made and splatted by
+    ``_core._scatter_pieces`` (a uniform straight path as one segment cut at its points)."""
     x0, y0, x1, y1 = win
     n = pieces * 2 * PATH_STEPS  # placements: piece p spans [2 p S, 2 (p + 1) S], middle (2 p + 1) S
     keys = [keys_of(o, n) for _, o in movers]
