@@ -211,9 +211,11 @@ impl Line {
                 column(out, first as usize * sk, sm, rows, c, wgt, y);
             }
         }
+        let mut o = full0 as usize * sk;
         for i in full0..full1 {
             let y = base + slope * (i as f32 + 0.5);
-            column(out, i as usize * sk, sm, rows, c, per, y);
+            column(out, o, sm, rows, c, per, y);
+            o += sk;
         }
         if full1 < last {
             if let Some((wgt, y)) = part(full1) {
@@ -249,10 +251,11 @@ fn ceil(v: f32) -> i64 {
 /// `c * wgt` at minor coordinate `y` (+ 2), split between the two nearest rows.
 #[inline(always)]
 fn column(out: &mut [[f32; 4]], o: usize, sm: usize, rows: i64, c: [f32; 4], wgt: f32, y: f32) {
-    let jt = y as i64;
+    // y is finite and within a few pixels of the image after clipping: i32 holds it
+    let jt = y as i32;
     let t = y - jt as f32;
-    let j0 = jt - 2;
-    if j0 >= 0 && j0 + 1 < rows {
+    let j0 = jt as i64 - 2;
+    if (j0 as u64) < (rows - 1) as u64 {
         let o0 = o + j0 as usize * sm;
         add(out, o0, c, wgt * (1.0 - t));
         add(out, o0 + sm, c, wgt * t);
