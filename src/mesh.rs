@@ -91,6 +91,10 @@ pub struct Mesh {
     /// exactly two faces that run it in opposite directions (built from the adjacency on first
     /// use).
     neighbors: std::sync::Arc<OnceLock<Option<FaceNeighbors>>>,
+    /// [`Mesh::face_planes`], built on first use (not shared with deformed copies).
+    planes: OnceLock<crate::hull::FacePlanes>,
+    /// [`Mesh::vertex_normals`], kept by [`Mesh::cached_vertex_normals`].
+    normals: OnceLock<Vec<[f64; 3]>>,
 }
 
 impl Mesh {
@@ -122,6 +126,8 @@ impl Mesh {
             faces,
             adjacency: Default::default(),
             neighbors: Default::default(),
+            planes: Default::default(),
+            normals: Default::default(),
         })
     }
 
@@ -144,6 +150,8 @@ impl Mesh {
             faces: self.faces.clone(),
             adjacency: self.adjacency.clone(),
             neighbors: self.neighbors.clone(),
+            planes: Default::default(),
+            normals: Default::default(),
         })
     }
 
@@ -198,6 +206,18 @@ impl Mesh {
                 })
             })
             .as_ref()
+    }
+
+    /// The per-face planes of the rim pre-selection ([`crate::hull::rim_candidates`]), built
+    /// on first use.
+    pub fn face_planes(&self) -> &crate::hull::FacePlanes {
+        self.planes
+            .get_or_init(|| crate::hull::FacePlanes::new(&self.vertices, &self.faces))
+    }
+
+    /// [`Mesh::vertex_normals`], computed on first use and kept (the same values).
+    pub fn cached_vertex_normals(&self) -> &[[f64; 3]] {
+        self.normals.get_or_init(|| self.vertex_normals())
     }
 
     /// Whether the adjacency has been built already.

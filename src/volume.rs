@@ -276,6 +276,7 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
                 .map(|neighbors| Rim {
                     faces: mesh.faces(),
                     neighbors,
+                    planes: Some(mesh.face_planes()),
                 });
             let model = CoverageModel::new(verts, rim, path, f, view, opts.camera);
             let s = subdivision_factor(mesh, path, lengths.iter().sum(), extent);
