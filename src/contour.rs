@@ -17,6 +17,7 @@
 use rayon::prelude::*;
 
 use crate::mesh::{dot, face_normal, Mesh};
+use crate::motion::{Keyframe, Placer};
 use crate::{Error, Result};
 
 /// A contour edge: `edge` indexes the mesh adjacency, `(a, b)` is its orientation.
@@ -66,6 +67,57 @@ pub fn classify_faces(mesh: &Mesh, m: [f64; 3]) -> Vec<bool> {
             }
         });
     out
+}
+
+/// [`classify_faces`] for `m` and, in the same pass over the faces (each face's corners
+/// gathered once), whether each face faces the camera at `eye` when placed by `close` and by
+/// `open` (the values of [`camera_facing`] with those placements).
+pub fn classify_faces_seen(
+    mesh: &Mesh,
+    m: [f64; 3],
+    eye: [f64; 3],
+    close: &Keyframe,
+    open: &Keyframe,
+) -> (Vec<bool>, Vec<bool>, Vec<bool>) {
+    const CHUNK: usize = 8192;
+    const AHEAD: usize = 24;
+    let v = mesh.vertices();
+    let faces = mesh.faces();
+    let n = faces.len();
+    let (mut front, mut lead, mut trail) = (vec![false; n], vec![false; n], vec![false; n]);
+    let (close, open) = (close.placer(), open.placer());
+    let facing = |k: &Placer, p: [[f64; 3]; 3]| {
+        let q = p.map(|x| k.point(x));
+        let nq = face_normal(&q, &[0, 1, 2]);
+        let a = q[0];
+        dot(nq, [eye[0] - a[0], eye[1] - a[1], eye[2] - a[2]]) > 0.0
+    };
+    front
+        .par_chunks_mut(CHUNK)
+        .zip(lead.par_chunks_mut(CHUNK))
+        .zip(trail.par_chunks_mut(CHUNK))
+        .enumerate()
+        .for_each(|(ci, ((fr, le), tr))| {
+            let base = ci * CHUNK;
+            for k in 0..fr.len() {
+                let i = base + k;
+                #[cfg(target_arch = "x86_64")]
+                if let Some(g) = faces.get(i + AHEAD) {
+                    for &x in g {
+                        // SAFETY: as in `classify_faces`: a valid vertex index, a prefetch only.
+                        unsafe {
+                            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+                            _mm_prefetch(v.as_ptr().add(x as usize) as *const i8, _MM_HINT_T0);
+                        }
+                    }
+                }
+                let p = faces[i].map(|x| v[x as usize]);
+                fr[k] = dot(face_normal(&p, &[0, 1, 2]), m) >= 0.0;
+                le[k] = facing(&close, p);
+                tr[k] = facing(&open, p);
+            }
+        });
+    (front, lead, trail)
 }
 
 /// Whether each face is front-facing to a camera at `eye`: `n . (eye - a) > 0`, with vertices
@@ -370,6 +422,42 @@ mod tests {
             let p2 = crate::on_threads(2, || contour_pairs(&mesh, m, None).unwrap());
             assert_eq!(p1, flat);
             assert_eq!(p2, flat);
+        }
+    }
+
+    #[test]
+    fn one_pass_sides_equal_the_separate_tests() {
+        let mesh = torus(100);
+        let turn = |a: f64, t: [f64; 3]| {
+            let (s, c) = a.sin_cos();
+            let m = [
+                [c, 0.0, s, t[0]],
+                [0.0, 1.0, 0.0, t[1]],
+                [-s, 0.0, c, t[2]],
+                [0.0, 0.0, 0.0, 1.0],
+            ];
+            Keyframe::from_matrix(&m, 0).unwrap()
+        };
+        for (open, close) in [
+            (
+                Keyframe::translate([0.0; 3]),
+                Keyframe::translate([0.7, -0.2, 0.1]),
+            ),
+            (turn(0.1, [0.0, 0.0, -1.0]), turn(0.9, [0.5, 0.3, -1.2])),
+        ] {
+            let (m, eye) = ([0.3, -0.2, 0.9], [0.4, 1.5, 3.0]);
+            let want = (
+                classify_faces(&mesh, m),
+                camera_facing(&mesh, eye, |p| close.point(p)),
+                camera_facing(&mesh, eye, |p| open.point(p)),
+            );
+            for threads in [1, 2] {
+                let got = crate::on_threads(threads, || {
+                    classify_faces_seen(&mesh, m, eye, &close, &open)
+                });
+                assert!(got == want, "{threads} threads");
+            }
+            assert!(want.1 != want.2 && want.1.iter().any(|x| *x) && want.2.iter().any(|x| !*x));
         }
     }
 

@@ -215,7 +215,13 @@ pub(crate) fn project(
         None => [dot(p, e1), dot(p, e2)],
         Some(e) => {
             let r = [p[0] - e[0], p[1] - e[1], p[2] - e[2]];
-            let z = dot(r, d).max(1e-9 * dot(r, r).sqrt()).max(1e-300);
+            let (a, rr) = (dot(r, d), dot(r, r));
+            // `a` is the clamped depth itself when a^2 clearly exceeds (1e-9 |r|)^2 (no root).
+            let z = if a > 1e-150 && a * a > 2e-18 * rr {
+                a
+            } else {
+                a.max(1e-9 * rr.sqrt()).max(1e-300)
+            };
             [dot(r, e1) / z, dot(r, e2) / z]
         }
     }
@@ -393,7 +399,12 @@ impl CoverageModel {
     }
 
     fn local(&self, s: &Segment, p: [f64; 3]) -> (f64, f64) {
-        let q = project(self.eye, self.d, self.e1, self.e2, p);
+        Self::rotated(s, project(self.eye, self.d, self.e1, self.e2, p))
+    }
+
+    /// The image point `q` in the segment's frame (along its motion, across it).
+    #[inline]
+    fn rotated(s: &Segment, q: [f64; 2]) -> (f64, f64) {
         (
             q[0] * s.dir[0] + q[1] * s.dir[1],
             q[0] * s.perp[0] + q[1] * s.perp[1],
@@ -404,9 +415,11 @@ impl CoverageModel {
     /// the world point `p`, in [0, 1].
     pub fn coverage(&self, p: [f64; 3]) -> f64 {
         let mut sum = 0.0;
+        // One projection for every segment (the view does not change along the path).
+        let q = project(self.eye, self.d, self.e1, self.e2, p);
         for s in &self.segments {
             let Some(table) = &s.table else { continue };
-            let (x, y) = self.local(s, p);
+            let (x, y) = Self::rotated(s, q);
             let Some((a, b)) = table.chord(y) else {
                 continue;
             };

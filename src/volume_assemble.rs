@@ -3,7 +3,7 @@
 //! for the construction and [`crate::spin`] for the spinning case).
 use rayon::prelude::*;
 
-use crate::contour::{camera_facing, contour_from_sides, contour_line, ContourEdge};
+use crate::contour::{contour_from_sides, contour_line, ContourEdge};
 use crate::mesh::{normalize, Mesh, MAX_ELEMENTS};
 use crate::motion::Path;
 use crate::volume::{Colors, MotionVolume, VolumeOptions, JOINING, LEADING, TRAILING};
@@ -33,15 +33,6 @@ pub(crate) enum AlphaMode {
     Coverage(Box<CoverageModel>, usize),
     /// One opacity per mesh vertex times a weight per keyframe ring (see `crate::spin`).
     PerVertex(Vec<f64>, Vec<f64>),
-}
-
-/// Whether each face faces the camera at `eye` when placed at shutter close and at open.
-pub(crate) fn camera_sides(mesh: &Mesh, path: &Path, eye: [f64; 3]) -> (Vec<bool>, Vec<bool>) {
-    let (first, last) = (&path.frames[0], &path.frames[path.segments()]);
-    (
-        camera_facing(mesh, eye, |p| last.point(p)),
-        camera_facing(mesh, eye, |p| first.point(p)),
-    )
 }
 
 /// The contour edges of a face split; with the camera sides of the faces (facing the camera at
@@ -162,7 +153,10 @@ pub(crate) fn assemble(
             trail[v as usize] = 0;
         }
     }
-    let mut sources = Vec::new();
+    // At most every mesh vertex twice (or three corners a face), and the strips' vertices.
+    let mut sources = Vec::with_capacity(
+        if face_colors { 3 * faces.len() } else { 2 * nv } + 2 * rings * contour.len(),
+    );
     let nr = n as u32;
     let source = |v: u32, (seg, frac): (u32, f64), normal_ring: u32| Source {
         v,
@@ -276,16 +270,16 @@ pub(crate) fn assemble(
     };
     if !face_colors {
         for (map, want, tag) in [(&lead, true, LEADING), (&trail, false, TRAILING)] {
-            for (f, face) in faces.iter().enumerate() {
-                if front[f] == want {
-                    out_faces.push([
-                        map[face[0] as usize],
-                        map[face[1] as usize],
-                        map[face[2] as usize],
-                    ]);
-                    part.push(tag);
-                }
-            }
+            // In face order (an ordered parallel collect).
+            let side: Vec<[u32; 3]> = faces
+                .par_iter()
+                .zip(front)
+                .with_min_len(8192)
+                .filter(|(_, &f)| f == want)
+                .map(|(face, _)| face.map(|i| map[i as usize]))
+                .collect();
+            part.resize(part.len() + side.len(), tag);
+            out_faces.extend(side);
         }
     }
     for (k, c) in contour.iter().enumerate() {
@@ -299,9 +293,9 @@ pub(crate) fn assemble(
         }
     }
     // Attributes.
-    let obj_normals = match &opts.normals {
-        Some(nr) => nr.clone(),
-        None => mesh.vertex_normals(),
+    let obj_normals: &[[f64; 3]] = match &opts.normals {
+        Some(nr) => nr,
+        None => mesh.cached_vertex_normals(),
     };
     let color = |s: &Source| match &opts.colors {
         Colors::Uniform(c) => *c,
@@ -312,10 +306,11 @@ pub(crate) fn assemble(
         }
         Colors::PerFace(_) => [1.0; 4],
     };
+    let placers: Vec<_> = frames.iter().map(|f| f.placer()).collect();
     let place = |s: &Source| {
         let (j, u) = (s.seg as usize, s.frac);
         if u == 0.0 {
-            frames[j].point(verts[s.v as usize])
+            placers[j].point(verts[s.v as usize])
         } else {
             frames[j]
                 .interpolate(&frames[j + 1], u)
@@ -339,7 +334,7 @@ pub(crate) fn assemble(
     let normals = sources
         .par_iter()
         .map(|s| {
-            let w = normalize(frames[s.normal_ring as usize].normal(obj_normals[s.v as usize]));
+            let w = normalize(placers[s.normal_ring as usize].normal(obj_normals[s.v as usize]));
             [w[0] as f32, w[1] as f32, w[2] as f32]
         })
         .collect();

@@ -78,6 +78,7 @@ pub(crate) fn hulls_of(
         }
     };
     let project_all = |f: &Keyframe| -> (Vec<[f64; 2]>, bool) {
+        let f = f.placer();
         let both: Vec<([f64; 2], bool)> = vertices
             .par_iter()
             .map(|v| {
@@ -107,6 +108,7 @@ pub(crate) fn hulls_of(
         .map(|(f, view)| match (view, rim) {
             (Some(_), Some(rim)) => {
                 let faces = candidates.next().unwrap_or_default();
+                let f = f.placer();
                 convex_hull(rim_points_of(rim, &faces, |v| {
                     proj(f.point(vertices[v as usize]))
                 }))
