@@ -97,19 +97,27 @@ pub(crate) fn hulls_of(
         })
         .collect();
     let picked: Vec<ObjectView> = views.iter().flatten().copied().collect();
-    let mut candidates = match (rim, rim.and_then(|r| r.planes)) {
+    let candidates = match (rim, rim.and_then(|r| r.planes)) {
         (Some(r), Some(p)) if !picked.is_empty() => rim_candidates(r, p, &picked),
         _ => Vec::new(),
-    }
-    .into_iter();
-    placements
+    };
+    // The k-th placement with a view takes the k-th candidate list.
+    let slot: Vec<usize> = views
         .iter()
+        .scan(0, |k, v| {
+            *k += usize::from(v.is_some());
+            Some(*k - 1)
+        })
+        .collect();
+    // Placements in parallel (each hull is small work with little parallelism of its own).
+    placements
+        .par_iter()
         .zip(&views)
-        .map(|(f, view)| match (view, rim) {
+        .zip(&slot)
+        .map(|((f, view), &k)| match (view, rim) {
             (Some(_), Some(rim)) => {
-                let faces = candidates.next().unwrap_or_default();
                 let f = f.placer();
-                convex_hull(rim_points_of(rim, &faces, |v| {
+                convex_hull(rim_points_of(rim, &candidates[k], |v| {
                     proj(f.point(vertices[v as usize]))
                 }))
             }
