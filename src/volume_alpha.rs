@@ -246,7 +246,7 @@ impl CoverageModel {
     /// The model of `vertices` (object space) placed along `path` and seen along `view`, from
     /// the camera at `eye` (perspective) or orthographically. With `rim` (the faces of a closed
     /// mesh on these vertices) each hull is taken over the projected silhouette only
-    /// ([`rim_points`]), unless a vertex is not in front of the eye.
+    /// ([`crate::hull::rim_points`]), unless a vertex is not in front of the eye.
     pub fn new(
         vertices: &[[f64; 3]],
         rim: Option<Rim>,

@@ -3,7 +3,7 @@
 //!
 //! For a dense closed mesh the faces that can lie on a placement's rim are first picked without
 //! projecting anything ([`crate::hull::rim_candidates`], from the mesh's cached face planes),
-//! when the view keeps robustly oriented faces robustly apart from degenerate ([`object_view`]);
+//! when the view keeps robustly oriented faces robustly apart from degenerate (`object_view`);
 //! the hull is then exactly the one of every projected vertex's rim, from a few thousand
 //! projections instead of one per vertex and placement.
 use rayon::prelude::*;
