@@ -17,6 +17,7 @@
 use rayon::prelude::*;
 
 use crate::mesh::{dot, face_normal, Mesh};
+use crate::motion::Keyframe;
 use crate::{Error, Result};
 
 /// A contour edge: `edge` indexes the mesh adjacency, `(a, b)` is its orientation.
@@ -66,6 +67,59 @@ pub fn classify_faces(mesh: &Mesh, m: [f64; 3]) -> Vec<bool> {
             }
         });
     out
+}
+
+/// [`classify_faces`] for `m` and, in the same pass over the faces (each face's corners
+/// gathered once, prefetched), whether each face faces the camera at `eye` when placed by `close`
+/// and by `open`: [`camera_facing`]'s test `n . (eye - a) > 0` made in object space, against the
+/// eye brought back by each keyframe (`L^-1 (eye - t)`; a similarity with a positive
+/// determinant keeps the sign), so nothing is placed. It can differ from the world-space test
+/// only on faces edge-on to the eye within rounding.
+pub fn classify_faces_seen(
+    mesh: &Mesh,
+    m: [f64; 3],
+    eye: [f64; 3],
+    close: &Keyframe,
+    open: &Keyframe,
+) -> (Vec<bool>, Vec<bool>, Vec<bool>) {
+    const CHUNK: usize = 8192;
+    const AHEAD: usize = 24;
+    let v = mesh.vertices();
+    let faces = mesh.faces();
+    let n = faces.len();
+    let back = |k: &Keyframe| {
+        let t = k.translation;
+        k.inverse_vector([eye[0] - t[0], eye[1] - t[1], eye[2] - t[2]])
+    };
+    let (ec, eo) = (back(close), back(open));
+    let (mut front, mut lead, mut trail) = (vec![false; n], vec![false; n], vec![false; n]);
+    front
+        .par_chunks_mut(CHUNK)
+        .zip(lead.par_chunks_mut(CHUNK))
+        .zip(trail.par_chunks_mut(CHUNK))
+        .enumerate()
+        .for_each(|(ci, ((fr, le), tr))| {
+            let base = ci * CHUNK;
+            for k in 0..fr.len() {
+                let i = base + k;
+                #[cfg(target_arch = "x86_64")]
+                if let Some(g) = faces.get(i + AHEAD) {
+                    for &x in g {
+                        // SAFETY: as in `classify_faces`: a valid vertex index, a prefetch only.
+                        unsafe {
+                            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+                            _mm_prefetch(v.as_ptr().add(x as usize) as *const i8, _MM_HINT_T0);
+                        }
+                    }
+                }
+                let nf = face_normal(v, &faces[i]);
+                let a = v[faces[i][0] as usize];
+                fr[k] = dot(nf, m) >= 0.0;
+                le[k] = dot(nf, [ec[0] - a[0], ec[1] - a[1], ec[2] - a[2]]) > 0.0;
+                tr[k] = dot(nf, [eo[0] - a[0], eo[1] - a[1], eo[2] - a[2]]) > 0.0;
+            }
+        });
+    (front, lead, trail)
 }
 
 /// Whether each face is front-facing to a camera at `eye`: `n . (eye - a) > 0`, with vertices
@@ -370,6 +424,62 @@ mod tests {
             let p2 = crate::on_threads(2, || contour_pairs(&mesh, m, None).unwrap());
             assert_eq!(p1, flat);
             assert_eq!(p2, flat);
+        }
+    }
+
+    #[test]
+    fn object_space_sides_agree_with_the_world_space_tests() {
+        let mesh = torus(100);
+        let turn = |a: f64, s: f64, t: [f64; 3]| {
+            let (sn, c) = a.sin_cos();
+            let m = [
+                [s * c, 0.0, s * sn, t[0]],
+                [0.0, s, 0.0, t[1]],
+                [-s * sn, 0.0, s * c, t[2]],
+                [0.0, 0.0, 0.0, 1.0],
+            ];
+            Keyframe::from_matrix(&m, 0).unwrap()
+        };
+        let (m, eye) = ([0.3, -0.2, 0.9], [0.4, 1.5, 3.0]);
+        let world = |k: &Keyframe, tests: &[bool]| {
+            // Faces edge-on to the eye within 1e-9 may go either way.
+            let (mut checked, mut agree) = (0, 0);
+            for (f, &got) in mesh.faces().iter().zip(tests) {
+                let p = f.map(|i| k.point(mesh.vertices()[i as usize]));
+                let n = face_normal(&p, &[0, 1, 2]);
+                let r = [eye[0] - p[0][0], eye[1] - p[0][1], eye[2] - p[0][2]];
+                let c = dot(n, r);
+                if c.abs() > 1e-9 * dot(n, n).sqrt() * dot(r, r).sqrt() {
+                    checked += 1;
+                    agree += usize::from((c > 0.0) == got);
+                }
+            }
+            (checked, agree)
+        };
+        for (open, close) in [
+            (
+                Keyframe::translate([0.0; 3]),
+                Keyframe::translate([0.7, -0.2, 0.1]),
+            ),
+            (
+                turn(0.1, 1.0, [0.0, 0.0, -1.0]),
+                turn(0.9, 1.3, [0.5, 0.3, -1.2]),
+            ),
+        ] {
+            let got = crate::on_threads(1, || classify_faces_seen(&mesh, m, eye, &close, &open));
+            let two = crate::on_threads(2, || classify_faces_seen(&mesh, m, eye, &close, &open));
+            assert!(got == two);
+            assert_eq!(got.0, classify_faces(&mesh, m));
+            for (k, tests) in [(&close, &got.1), (&open, &got.2)] {
+                let (checked, agree) = world(k, tests);
+                assert!(checked > mesh.faces().len() * 99 / 100, "{checked}");
+                assert_eq!(checked, agree);
+                // and the camera_facing test itself
+                let w = camera_facing(&mesh, eye, |p| k.point(p));
+                let differ = w.iter().zip(tests.iter()).filter(|(a, b)| a != b).count();
+                assert!(differ <= mesh.faces().len() - checked);
+            }
+            assert!(got.1 != got.2 && got.1.iter().any(|x| *x) && got.2.iter().any(|x| !*x));
         }
     }
 

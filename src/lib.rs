@@ -29,6 +29,7 @@ pub mod volume;
 pub mod volume_alpha;
 pub mod volume_assemble;
 pub mod volume_filter;
+pub mod volume_hulls;
 
 /// `f` run on a rayon pool of `n` threads (tests of thread-count independence).
 #[cfg(test)]

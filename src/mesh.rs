@@ -91,6 +91,12 @@ pub struct Mesh {
     /// exactly two faces that run it in opposite directions (built from the adjacency on first
     /// use).
     neighbors: std::sync::Arc<OnceLock<Option<FaceNeighbors>>>,
+    /// [`Mesh::face_planes`], built on first use (not shared with deformed copies).
+    planes: OnceLock<crate::hull::FacePlanes>,
+    /// [`Mesh::vertex_normals`], kept by [`Mesh::cached_vertex_normals`].
+    normals: OnceLock<Vec<[f64; 3]>>,
+    /// [`Mesh::longest_edge`], computed on first use.
+    longest: OnceLock<f64>,
 }
 
 impl Mesh {
@@ -122,6 +128,9 @@ impl Mesh {
             faces,
             adjacency: Default::default(),
             neighbors: Default::default(),
+            planes: Default::default(),
+            normals: Default::default(),
+            longest: Default::default(),
         })
     }
 
@@ -144,6 +153,9 @@ impl Mesh {
             faces: self.faces.clone(),
             adjacency: self.adjacency.clone(),
             neighbors: self.neighbors.clone(),
+            planes: Default::default(),
+            normals: Default::default(),
+            longest: Default::default(),
         })
     }
 
@@ -198,6 +210,38 @@ impl Mesh {
                 })
             })
             .as_ref()
+    }
+
+    /// The per-face planes of the rim pre-selection ([`crate::hull::rim_candidates`]), built
+    /// on first use.
+    pub fn face_planes(&self) -> &crate::hull::FacePlanes {
+        self.planes
+            .get_or_init(|| crate::hull::FacePlanes::new(&self.vertices, &self.faces))
+    }
+
+    /// [`Mesh::vertex_normals`], computed on first use and kept (the same values).
+    pub fn cached_vertex_normals(&self) -> &[[f64; 3]] {
+        self.normals.get_or_init(|| self.vertex_normals())
+    }
+
+    /// The length of the longest face edge (`|b - a|` over the three edges of every face),
+    /// computed on first use and kept.
+    pub fn longest_edge(&self) -> f64 {
+        *self.longest.get_or_init(|| {
+            let v = &self.vertices;
+            self.faces
+                .par_iter()
+                .map(|f| {
+                    (0..3)
+                        .map(|k| {
+                            let (a, b) = (v[f[k] as usize], v[f[(k + 1) % 3] as usize]);
+                            let d = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+                            dot(d, d).sqrt()
+                        })
+                        .fold(0.0, f64::max)
+                })
+                .reduce(|| 0.0, f64::max)
+        })
     }
 
     /// Whether the adjacency has been built already.

@@ -161,6 +161,56 @@ impl Keyframe {
     }
 }
 
+/// A keyframe with its identity test made once: [`Placer::point`] gives exactly
+/// [`Keyframe::point`]'s values without comparing the 3x3 part at every point.
+#[derive(Debug, Clone, Copy)]
+pub struct Placer {
+    key: Keyframe,
+    identity: bool,
+}
+
+impl Placer {
+    #[inline]
+    pub fn point(&self, p: [f64; 3]) -> [f64; 3] {
+        let t = self.key.translation;
+        if self.identity {
+            return [p[0] + t[0], p[1] + t[1], p[2] + t[2]];
+        }
+        let l = &self.key.linear;
+        [
+            l[0][0] * p[0] + l[0][1] * p[1] + l[0][2] * p[2] + t[0],
+            l[1][0] * p[0] + l[1][1] * p[1] + l[1][2] * p[2] + t[1],
+            l[2][0] * p[0] + l[2][1] * p[1] + l[2][2] * p[2] + t[2],
+        ]
+    }
+}
+
+impl Placer {
+    /// Exactly [`Keyframe::normal`].
+    #[inline]
+    pub fn normal(&self, p: [f64; 3]) -> [f64; 3] {
+        if self.identity {
+            return p;
+        }
+        let l = &self.key.linear;
+        [
+            l[0][0] * p[0] + l[0][1] * p[1] + l[0][2] * p[2],
+            l[1][0] * p[0] + l[1][1] * p[1] + l[1][2] * p[2],
+            l[2][0] * p[0] + l[2][1] * p[1] + l[2][2] * p[2],
+        ]
+    }
+}
+
+impl Keyframe {
+    /// This keyframe as a [`Placer`].
+    pub fn placer(&self) -> Placer {
+        Placer {
+            key: *self,
+            identity: self.has_identity_linear(),
+        }
+    }
+}
+
 /// Keyframes at the equally spaced shutter times `i / (len - 1)`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Path {
@@ -288,6 +338,21 @@ mod tests {
         n[1][3] = f64::NAN;
         assert!(Path::from_matrices(&[rot_z(0.0, [0.0; 3]), n]).is_err());
         assert!(Path::from_matrices(&[rot_z(0.0, [0.0; 3])]).is_err());
+    }
+
+    #[test]
+    fn placers_place_as_their_keyframes() {
+        let keys = [
+            Keyframe::translate([0.1, -2.0, 3.5]),
+            Keyframe::from_matrix(&rot_z(0.7, [1.0, 2.0, -0.5]), 0).unwrap(),
+        ];
+        for k in keys {
+            let pl = k.placer();
+            for p in [[0.3, -0.1, 7.0], [-1e5, 2.5e-3, 0.0], [0.0, -0.0, 1.0]] {
+                assert_eq!(pl.point(p), k.point(p));
+                assert_eq!(pl.normal(p), k.normal(p));
+            }
+        }
     }
 
     #[test]

@@ -141,18 +141,23 @@ pub(crate) fn subdivision_for_edge(mesh: &Mesh, path: &Path, h: f64) -> usize {
     }
     let v = mesh.vertices();
     let f0 = &path.frames[0];
-    let longest = faces
-        .par_iter()
-        .map(|f| {
-            (0..3)
-                .map(|k| {
-                    let (a, b) = (v[f[k] as usize], v[f[(k + 1) % 3] as usize]);
-                    let d = f0.vector([b[0] - a[0], b[1] - a[1], b[2] - a[2]]);
-                    dot(d, d).sqrt()
-                })
-                .fold(0.0, f64::max)
-        })
-        .reduce(|| 0.0, f64::max);
+    // Without a rotation or scale the edges keep their object-space lengths (the same values).
+    let longest = if f0.has_identity_linear() {
+        mesh.longest_edge()
+    } else {
+        faces
+            .par_iter()
+            .map(|f| {
+                (0..3)
+                    .map(|k| {
+                        let (a, b) = (v[f[k] as usize], v[f[(k + 1) % 3] as usize]);
+                        let d = f0.vector([b[0] - a[0], b[1] - a[1], b[2] - a[2]]);
+                        dot(d, d).sqrt()
+                    })
+                    .fold(0.0, f64::max)
+            })
+            .reduce(|| 0.0, f64::max)
+    };
     let by_budget = ((MAX_SUBDIVIDED_FACES / faces.len()) as f64).sqrt().floor() as usize;
     ((longest / h).ceil() as usize)
         .clamp(1, 16)
@@ -173,8 +178,8 @@ pub(crate) fn subdivided(
     } = subdivide(mesh.vertices(), mesh.faces(), s);
     let normals = opts
         .normals
-        .clone()
-        .unwrap_or_else(|| mesh.vertex_normals());
+        .as_deref()
+        .unwrap_or_else(|| mesh.cached_vertex_normals());
     let mix3 = |(ids, w): &([u32; 3], [f64; 3])| {
         let mut o = [0.0; 3];
         for (i, wi) in ids.iter().zip(w) {

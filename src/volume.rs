@@ -24,13 +24,13 @@
 //! mesh itself placed by `T_0`, all leading and opaque (colour alpha only).
 use rayon::prelude::*;
 
-use crate::contour::{check_vector, classify_faces};
+use crate::contour::{check_vector, classify_faces, classify_faces_seen};
 use crate::hull::Rim;
 use crate::mesh::{dot, normalize, Mesh};
 use crate::motion::Path;
 use crate::subdivide::{subdivided, subdivision_factor};
 use crate::volume_alpha::{default_view, CoverageModel};
-use crate::volume_assemble::{assemble, camera_sides, select_contour, AlphaMode};
+use crate::volume_assemble::{assemble, select_contour, AlphaMode};
 use crate::volume_filter::Filter;
 use crate::{Error, Result};
 
@@ -226,8 +226,8 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         };
         let obj_normals = opts
             .normals
-            .clone()
-            .unwrap_or_else(|| mesh.vertex_normals());
+            .as_deref()
+            .unwrap_or_else(|| mesh.cached_vertex_normals());
         return Ok(MotionVolume {
             vertices: verts.par_iter().map(|v| f0.point(*v)).collect(),
             faces: mesh.faces().to_vec(),
@@ -276,6 +276,7 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
                 .map(|neighbors| Rim {
                     faces: mesh.faces(),
                     neighbors,
+                    planes: Some(mesh.face_planes()),
                 });
             let model = CoverageModel::new(verts, rim, path, f, view, opts.camera);
             let s = subdivision_factor(mesh, path, lengths.iter().sum(), extent);
@@ -288,9 +289,14 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
     };
     // A subdivided face takes the sides of its parent face: the split of a face parallel to
     // the motion (n . m = 0) must not depend on the rounding of the new vertices.
-    let front = classify_faces(mesh, m_obj);
     let line_eye = opts.camera.filter(|_| opts.contour_line);
-    let vis = line_eye.map(|eye| camera_sides(mesh, path, eye));
+    let (front, vis) = match line_eye {
+        Some(eye) => {
+            let (f, lead, trail) = classify_faces_seen(mesh, m_obj, eye, last, first);
+            (f, Some((lead, trail)))
+        }
+        None => (classify_faces(mesh, m_obj), None),
+    };
     let (mesh, opts, front, vis) = match &sub {
         Some((m, o, parent)) => {
             let map = |x: &[bool]| {

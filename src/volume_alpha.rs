@@ -31,12 +31,12 @@
 //! and at `q - 1` equally spaced times (`q` from [`Filter::knots_per_segment`]) for the curvature
 //! of the triangle and gaussian weights. The chord tables hold 1024 rows per segment (fewer for
 //! long paths, at least 64).
-use rayon::prelude::*;
 
-use crate::hull::{convex_hull, rim_points, Rim};
+use crate::hull::Rim;
 use crate::mesh::{dot, normalize};
-use crate::motion::Path;
+use crate::motion::{Keyframe, Path};
 use crate::volume_filter::Filter;
+use crate::volume_hulls::hulls_of;
 
 /// The chord of a convex polygon along a direction: for rows of constant `y` (across the
 /// direction), the interval `[lo, hi]` of `x` (along it) inside the polygon. A polygon of at
@@ -204,7 +204,7 @@ fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 /// `((p - eye) . e1, (p - eye) . e2) / ((p - eye) . d)` (depth clamped to a tiny positive value
 /// for points at or behind the eye).
 #[inline]
-fn project(
+pub(crate) fn project(
     eye: Option<[f64; 3]>,
     d: [f64; 3],
     e1: [f64; 3],
@@ -215,7 +215,13 @@ fn project(
         None => [dot(p, e1), dot(p, e2)],
         Some(e) => {
             let r = [p[0] - e[0], p[1] - e[1], p[2] - e[2]];
-            let z = dot(r, d).max(1e-9 * dot(r, r).sqrt()).max(1e-300);
+            let (a, rr) = (dot(r, d), dot(r, r));
+            // `a` is the clamped depth itself when a^2 clearly exceeds (1e-9 |r|)^2 (no root).
+            let z = if a > 1e-150 && a * a > 2e-18 * rr {
+                a
+            } else {
+                a.max(1e-9 * rr.sqrt()).max(1e-300)
+            };
             [dot(r, e1) / z, dot(r, e2) / z]
         }
     }
@@ -240,7 +246,7 @@ impl CoverageModel {
     /// The model of `vertices` (object space) placed along `path` and seen along `view`, from
     /// the camera at `eye` (perspective) or orthographically. With `rim` (the faces of a closed
     /// mesh on these vertices) each hull is taken over the projected silhouette only
-    /// ([`rim_points`]), unless a vertex is not in front of the eye.
+    /// ([`crate::hull::rim_points`]), unless a vertex is not in front of the eye.
     pub fn new(
         vertices: &[[f64; 3]],
         rim: Option<Rim>,
@@ -267,49 +273,53 @@ impl CoverageModel {
             [s[0] / k, s[1] / k, s[2] / k]
         };
         let proj = |p: [f64; 3]| project(eye, d, e1, e2, p);
-        // The projected vertices, and whether every one is in front of the eye (depth along `d`
-        // above 1e-6 of its distance; the projection clamps the others).
-        let front_of = |p: [f64; 3]| match eye {
-            None => true,
-            Some(e) => {
-                let r = [p[0] - e[0], p[1] - e[1], p[2] - e[2]];
-                dot(r, d) > 1e-6 * dot(r, r).sqrt()
-            }
-        };
-        let project_all = |f: &crate::motion::Keyframe| -> (Vec<[f64; 2]>, bool) {
-            let both: Vec<([f64; 2], bool)> = vertices
-                .par_iter()
-                .map(|v| {
-                    let p = f.point(*v);
-                    (proj(p), front_of(p))
-                })
-                .collect();
-            let front = both.iter().all(|b| b.1);
-            (both.into_iter().map(|b| b.0).collect(), front)
-        };
         // Hulls by placement: the middle sub-segment of an odd subdivision is placed (up to
-        // rounding) where its path segment's middle is, and shares that hull.
-        let hulls: std::cell::RefCell<Vec<(crate::motion::Keyframe, Vec<[f64; 2]>)>> =
-            std::cell::RefCell::new(Vec::new());
-        let same = |a: &crate::motion::Keyframe, b: &crate::motion::Keyframe| {
+        // rounding) where its path segment's middle is, and shares that hull (the first placement
+        // asked for, in the order the segments below ask).
+        let same = |a: &Keyframe, b: &Keyframe| {
             let scale = 1.0 + a.translation.iter().fold(0.0f64, |m, x| m.max(x.abs()));
             let lin = a.linear.iter().flatten().zip(b.linear.iter().flatten());
             let tr = a.translation.iter().zip(&b.translation);
             lin.chain(tr).all(|(x, y)| (x - y).abs() <= 1e-12 * scale)
         };
-        let hull_at = |f: &crate::motion::Keyframe| -> Vec<[f64; 2]> {
-            if let Some((_, h)) = hulls.borrow().iter().find(|(k, _)| same(k, f)) {
-                return h.clone();
-            }
-            let h = match (project_all(f), rim) {
-                ((pts, true), Some(rim)) => convex_hull(rim_points(rim, &pts)),
-                ((pts, _), _) => convex_hull(pts),
-            };
-            hulls.borrow_mut().push((*f, h.clone()));
-            h
-        };
         // Orthographic translation: every segment's silhouette is the first one moved.
         let pure = path.is_translation() && eye.is_none();
+        // Under perspective the silhouette changes along the path and its points move at speeds
+        // that differ with depth, so the coverage integral follows it on at least 8
+        // sub-segments; a translated dense mesh (hull of many points per sub-segment) gets 3.
+        // The cuts of the joining strips use the path's own segments.
+        let parts = if pure {
+            1
+        } else if path.is_translation() && vertices.len() > DENSE_VERTICES {
+            3usize.div_ceil(n)
+        } else {
+            8usize.div_ceil(n)
+        };
+        let sub = (parts > 1).then(|| path.subdivide(parts));
+        let mids = |p: &Path| -> Vec<Keyframe> {
+            p.frames
+                .windows(2)
+                .map(|w| w[0].interpolate(&w[1], 0.5))
+                .collect()
+        };
+        let mut placements: Vec<Keyframe> = Vec::new();
+        let wanted = if pure {
+            vec![path.frames[0]]
+        } else {
+            let mut w = mids(path);
+            w.extend(sub.as_ref().map(mids).unwrap_or_default());
+            w
+        };
+        for f in wanted {
+            if !placements.iter().any(|k| same(k, &f)) {
+                placements.push(f);
+            }
+        }
+        let hulls = hulls_of(vertices, rim, &placements, eye, [d, e1, e2]);
+        let hull_at = |f: &Keyframe| -> Vec<[f64; 2]> {
+            let k = placements.iter().position(|k| same(k, f)).unwrap_or(0);
+            hulls[k].clone()
+        };
         let base = if pure {
             Some(hull_at(&path.frames[0]))
         } else {
@@ -371,22 +381,10 @@ impl CoverageModel {
                 })
                 .collect()
         };
-        // Under perspective the silhouette changes along the path and its points move at speeds
-        // that differ with depth, so the coverage integral follows it on at least 8
-        // sub-segments; a translated dense mesh (hull of many points per sub-segment) gets 3.
-        // The cuts of the joining strips use the path's own segments.
         let geometric = build(path);
-        let parts = if pure {
-            1
-        } else if path.is_translation() && vertices.len() > DENSE_VERTICES {
-            3usize.div_ceil(n)
-        } else {
-            8usize.div_ceil(n)
-        };
-        let segments = if parts > 1 {
-            build(&path.subdivide(parts))
-        } else {
-            geometric.clone()
+        let segments = match &sub {
+            Some(s) => build(s),
+            None => geometric.clone(),
         };
         CoverageModel {
             filter,
@@ -401,7 +399,12 @@ impl CoverageModel {
     }
 
     fn local(&self, s: &Segment, p: [f64; 3]) -> (f64, f64) {
-        let q = project(self.eye, self.d, self.e1, self.e2, p);
+        Self::rotated(s, project(self.eye, self.d, self.e1, self.e2, p))
+    }
+
+    /// The image point `q` in the segment's frame (along its motion, across it).
+    #[inline]
+    fn rotated(s: &Segment, q: [f64; 2]) -> (f64, f64) {
         (
             q[0] * s.dir[0] + q[1] * s.dir[1],
             q[0] * s.perp[0] + q[1] * s.perp[1],
@@ -412,9 +415,11 @@ impl CoverageModel {
     /// the world point `p`, in [0, 1].
     pub fn coverage(&self, p: [f64; 3]) -> f64 {
         let mut sum = 0.0;
+        // One projection for every segment (the view does not change along the path).
+        let q = project(self.eye, self.d, self.e1, self.e2, p);
         for s in &self.segments {
             let Some(table) = &s.table else { continue };
-            let (x, y) = self.local(s, p);
+            let (x, y) = Self::rotated(s, q);
             let Some((a, b)) = table.chord(y) else {
                 continue;
             };

@@ -3,7 +3,7 @@
 //! for the construction and [`crate::spin`] for the spinning case).
 use rayon::prelude::*;
 
-use crate::contour::{camera_facing, contour_from_sides, contour_line, ContourEdge};
+use crate::contour::{contour_from_sides, contour_line, ContourEdge};
 use crate::mesh::{normalize, Mesh, MAX_ELEMENTS};
 use crate::motion::Path;
 use crate::volume::{Colors, MotionVolume, VolumeOptions, JOINING, LEADING, TRAILING};
@@ -33,15 +33,6 @@ pub(crate) enum AlphaMode {
     Coverage(Box<CoverageModel>, usize),
     /// One opacity per mesh vertex times a weight per keyframe ring (see `crate::spin`).
     PerVertex(Vec<f64>, Vec<f64>),
-}
-
-/// Whether each face faces the camera at `eye` when placed at shutter close and at open.
-pub(crate) fn camera_sides(mesh: &Mesh, path: &Path, eye: [f64; 3]) -> (Vec<bool>, Vec<bool>) {
-    let (first, last) = (&path.frames[0], &path.frames[path.segments()]);
-    (
-        camera_facing(mesh, eye, |p| last.point(p)),
-        camera_facing(mesh, eye, |p| first.point(p)),
-    )
 }
 
 /// The contour edges of a face split; with the camera sides of the faces (facing the camera at
@@ -101,6 +92,91 @@ fn ring_points(alpha: &AlphaMode, path: &Path, p: [f64; 3]) -> Vec<(u32, f64)> {
     }
 }
 
+/// Faces per chunk of the parallel passes over the faces below (fixed: the same for any
+/// thread count).
+const FACE_CHUNK: usize = 8192;
+
+/// Set `lead[v]` (`trail[v]`) to 0 for every corner of a front (back) face.
+fn mark_sides(faces: &[[u32; 3]], front: &[bool], lead: &mut [u32], trail: &mut [u32]) {
+    use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
+    if faces.len() <= FACE_CHUNK {
+        for (face, &f) in faces.iter().zip(front) {
+            let map = if f { &mut *lead } else { &mut *trail };
+            for &i in face {
+                map[i as usize] = 0;
+            }
+        }
+        return;
+    }
+    // Plain (relaxed) stores of `true` only: the result does not depend on their order.
+    let (l, t): (Vec<AtomicBool>, Vec<AtomicBool>) = (0..lead.len())
+        .map(|_| (AtomicBool::new(false), AtomicBool::new(false)))
+        .unzip();
+    faces
+        .par_chunks(FACE_CHUNK)
+        .zip(front.par_chunks(FACE_CHUNK))
+        .for_each(|(fs, fr)| {
+            for (face, &f) in fs.iter().zip(fr) {
+                let map = if f { &l } else { &t };
+                for &i in face {
+                    map[i as usize].store(true, Relaxed);
+                }
+            }
+        });
+    for (m, flags) in [(lead, &l), (trail, &t)] {
+        for (x, b) in m.iter_mut().zip(flags) {
+            if b.load(Relaxed) {
+                *x = 0;
+            }
+        }
+    }
+}
+
+/// The front faces through `lead`, in order, then the back faces through `trail`, in order
+/// and the number of front faces: chunks counted, then written at their prefix offsets.
+fn leading_then_trailing(
+    faces: &[[u32; 3]],
+    front: &[bool],
+    lead: &[u32],
+    trail: &[u32],
+) -> (Vec<[u32; 3]>, usize) {
+    let mut out = vec![[0u32; 3]; faces.len()];
+    let counts: Vec<usize> = front
+        .par_chunks(FACE_CHUNK)
+        .map(|c| c.iter().filter(|&&f| f).count())
+        .collect();
+    let leading = counts.iter().sum();
+    let (mut lo, mut hi) = out.split_at_mut(leading);
+    let mut parts = Vec::with_capacity(counts.len());
+    for (ci, &c) in counts.iter().enumerate() {
+        let size = FACE_CHUNK.min(faces.len() - ci * FACE_CHUNK);
+        let (a, rest_lo) = std::mem::take(&mut lo).split_at_mut(c);
+        let (b, rest_hi) = std::mem::take(&mut hi).split_at_mut(size - c);
+        parts.push((a, b));
+        (lo, hi) = (rest_lo, rest_hi);
+    }
+    parts
+        .into_par_iter()
+        .zip(
+            faces
+                .par_chunks(FACE_CHUNK)
+                .zip(front.par_chunks(FACE_CHUNK)),
+        )
+        .for_each(|((a, b), (fs, fr))| {
+            let (mut i, mut j) = (0, 0);
+            for (face, &f) in fs.iter().zip(fr) {
+                if f {
+                    a[i] = face.map(|v| lead[v as usize]);
+                    i += 1;
+                } else {
+                    b[j] = face.map(|v| trail[v as usize]);
+                    j += 1;
+                }
+            }
+        });
+    (out, leading)
+}
+
 /// Assemble leading, trailing and joining surfaces (the module docs) with vertex attributes.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn assemble(
@@ -149,12 +225,7 @@ pub(crate) fn assemble(
     let mut lead = vec![NONE; nv];
     let mut trail = vec![NONE; nv];
     if !face_colors {
-        for (f, face) in faces.iter().enumerate() {
-            let map = if front[f] { &mut lead } else { &mut trail };
-            for &i in face {
-                map[i as usize] = 0;
-            }
-        }
+        mark_sides(faces, front, &mut lead, &mut trail);
     }
     if !strips {
         for &v in &ring_vertices {
@@ -162,7 +233,10 @@ pub(crate) fn assemble(
             trail[v as usize] = 0;
         }
     }
-    let mut sources = Vec::new();
+    // At most every mesh vertex twice (or three corners a face), and the strips' vertices.
+    let mut sources = Vec::with_capacity(
+        if face_colors { 3 * faces.len() } else { 2 * nv } + 2 * rings * contour.len(),
+    );
     let nr = n as u32;
     let source = |v: u32, (seg, frac): (u32, f64), normal_ring: u32| Source {
         v,
@@ -275,18 +349,11 @@ pub(crate) fn assemble(
         }
     };
     if !face_colors {
-        for (map, want, tag) in [(&lead, true, LEADING), (&trail, false, TRAILING)] {
-            for (f, face) in faces.iter().enumerate() {
-                if front[f] == want {
-                    out_faces.push([
-                        map[face[0] as usize],
-                        map[face[1] as usize],
-                        map[face[2] as usize],
-                    ]);
-                    part.push(tag);
-                }
-            }
-        }
+        let (sides, leading) = leading_then_trailing(faces, front, &lead, &trail);
+        out_faces = sides;
+        out_faces.reserve(joining);
+        part.resize(leading, LEADING);
+        part.resize(faces.len(), TRAILING);
     }
     for (k, c) in contour.iter().enumerate() {
         for r in 1..rings {
@@ -299,9 +366,9 @@ pub(crate) fn assemble(
         }
     }
     // Attributes.
-    let obj_normals = match &opts.normals {
-        Some(nr) => nr.clone(),
-        None => mesh.vertex_normals(),
+    let obj_normals: &[[f64; 3]] = match &opts.normals {
+        Some(nr) => nr,
+        None => mesh.cached_vertex_normals(),
     };
     let color = |s: &Source| match &opts.colors {
         Colors::Uniform(c) => *c,
@@ -312,10 +379,11 @@ pub(crate) fn assemble(
         }
         Colors::PerFace(_) => [1.0; 4],
     };
+    let placers: Vec<_> = frames.iter().map(|f| f.placer()).collect();
     let place = |s: &Source| {
         let (j, u) = (s.seg as usize, s.frac);
         if u == 0.0 {
-            frames[j].point(verts[s.v as usize])
+            placers[j].point(verts[s.v as usize])
         } else {
             frames[j]
                 .interpolate(&frames[j + 1], u)
@@ -339,7 +407,7 @@ pub(crate) fn assemble(
     let normals = sources
         .par_iter()
         .map(|s| {
-            let w = normalize(frames[s.normal_ring as usize].normal(obj_normals[s.v as usize]));
+            let w = normalize(placers[s.normal_ring as usize].normal(obj_normals[s.v as usize]));
             [w[0] as f32, w[1] as f32, w[2] as f32]
         })
         .collect();
@@ -370,4 +438,59 @@ pub(crate) fn assemble(
         ring_alpha,
         contour_edges: contour.len(),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn chunked_side_passes_equal_the_serial_loops() {
+        // Three chunks of faces with pseudo-random corners and sides.
+        let nv = 5000u32;
+        let faces: Vec<[u32; 3]> = (0..(2 * FACE_CHUNK + 77) as u32)
+            .map(|i| [i % nv, (i * 7 + 3) % nv, (i * 13 + 11) % nv])
+            .collect();
+        let front: Vec<bool> = (0..faces.len()).map(|i| (i * 2654435761) % 7 < 3).collect();
+        let (mut lead, mut trail) = (vec![u32::MAX; nv as usize], vec![u32::MAX; nv as usize]);
+        for (face, &f) in faces.iter().zip(&front) {
+            for &i in face {
+                if f {
+                    lead[i as usize] = 0;
+                } else {
+                    trail[i as usize] = 0;
+                }
+            }
+        }
+        // Distinct ids for the face pass.
+        let ids = |m: &[u32], k: u32| -> Vec<u32> {
+            m.iter()
+                .enumerate()
+                .map(|(v, &x)| if x == 0 { 2 * v as u32 + k } else { x })
+                .collect()
+        };
+        let (lead_ids, trail_ids) = (ids(&lead, 0), ids(&trail, 1));
+        let want_faces: Vec<[u32; 3]> = [true, false]
+            .iter()
+            .flat_map(|&w| {
+                let map = if w { &lead_ids } else { &trail_ids };
+                faces
+                    .iter()
+                    .zip(&front)
+                    .filter(move |(_, &f)| f == w)
+                    .map(move |(face, _)| face.map(|i| map[i as usize]))
+            })
+            .collect();
+        for threads in [1, 2] {
+            let (l, t, out) = crate::on_threads(threads, || {
+                let (mut l, mut t) = (vec![u32::MAX; nv as usize], vec![u32::MAX; nv as usize]);
+                mark_sides(&faces, &front, &mut l, &mut t);
+                let out = leading_then_trailing(&faces, &front, &lead_ids, &trail_ids);
+                (l, t, out)
+            });
+            assert_eq!((&l, &t), (&lead, &trail));
+            assert_eq!(out.0, want_faces);
+            assert_eq!(out.1, front.iter().filter(|&&f| f).count());
+        }
+    }
 }
