@@ -213,6 +213,7 @@ pub(crate) fn subdivided(
         normals: Some(blend.par_iter().map(mix3).collect()),
         camera: opts.camera,
         contour_line: opts.contour_line,
+        visible_only: opts.visible_only,
     };
     Ok((Mesh::new(sv, sf)?, out, parent))
 }

@@ -70,6 +70,10 @@ pub struct VolumeOptions {
     /// normal rule (`true`), or sweep every contour edge and use the camera for the coverage
     /// alphas only (`false`).
     pub contour_line: bool,
+    /// With a camera and `contour_line`: leave out the leading faces that face away from the
+    /// camera at shutter close and the trailing faces that face away at open (a renderer that
+    /// culls back faces draws the same image from fewer faces; the volume is then open).
+    pub visible_only: bool,
 }
 
 impl Default for VolumeOptions {
@@ -80,6 +84,7 @@ impl Default for VolumeOptions {
             normals: None,
             camera: None,
             contour_line: true,
+            visible_only: false,
         }
     }
 }
@@ -309,17 +314,49 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         }
         None => (mesh, opts, front, vis),
     };
-    let (contour, vis) = select_contour(mesh, &front, vis.as_ref());
-    assemble(
+    let (contour, edge_vis) = select_contour(mesh, &front, vis.as_ref());
+    let mut volume = assemble(
         mesh,
         path,
         &front,
         &contour,
-        &vis,
+        &edge_vis,
         line_eye.is_some(),
         &alpha,
         opts,
-    )
+    )?;
+    if let (true, Some((lead, trail))) = (opts.visible_only, &vis) {
+        keep_visible(&mut volume, &front, lead, trail);
+    }
+    Ok(volume)
+}
+
+/// Drops the leading faces not facing the camera at close (`lead`) and the trailing faces not
+/// facing it at open (`trail`). `assemble` emits the leading faces first, then the trailing
+/// ones, each in mesh-face order, then the joining strips (kept).
+fn keep_visible(volume: &mut MotionVolume, front: &[bool], lead: &[bool], trail: &[bool]) {
+    let seen = front
+        .iter()
+        .zip(lead)
+        .filter(|(f, _)| **f)
+        .map(|(_, v)| *v)
+        .chain(
+            front
+                .iter()
+                .zip(trail)
+                .filter(|(f, _)| !**f)
+                .map(|(_, v)| *v),
+        );
+    let sides = front.len();
+    let keep: Vec<bool> = seen
+        .chain(std::iter::repeat(true))
+        .take(volume.faces.len())
+        .collect();
+    debug_assert!(volume.faces.len() >= sides);
+    let mut k = keep.iter();
+    volume.faces.retain(|_| *k.next().unwrap_or(&true));
+    let mut k = keep.iter();
+    volume.part.retain(|_| *k.next().unwrap_or(&true));
 }
 
 /// The extent of the mesh placed at shutter close along the summed motion `total` (0 if none).

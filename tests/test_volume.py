@@ -442,3 +442,32 @@ def test_results_do_not_depend_on_the_thread_count():
         r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
         out.append(r.stdout.strip())
     assert out[0] == out[1] and len(out[0]) == 64
+
+
+@pytest.mark.parametrize("filt", ["box", "ramp"])
+@pytest.mark.parametrize("level", [1, 3])
+def test_visible_only_draws_the_same_image_from_fewer_faces(filt, level):
+    """The leading faces turned away from the camera at close and the trailing ones turned away
+    at open are culled by the rasterizer anyway: leaving them out changes no pixel."""
+    import motionblur as mb
+
+    mesh = Mesh(*meshes.icosphere(level, 0.5))
+    eye = np.array([0.4, 0.7, 4.0])
+    cam = mb.Camera(mb.look_at(eye, (0.3, 0.1, 0.0)), 0.8, 96, 72)
+    move = np.array([0.9, 0.3, -0.4])
+    full = motion_volume(mesh, move, segments=2, filter=filt, camera_position=eye)
+    seen = motion_volume(mesh, move, segments=2, filter=filt, camera_position=eye, visible_only=True)
+    assert len(seen.faces) < 0.8 * len(full.faces)
+    np.testing.assert_array_equal(seen.vertices, full.vertices)
+    assert (seen.part == JOINING).sum() == (full.part == JOINING).sum()
+    frames = [
+        mb.rasterize(cam, mb.Draw(vol.vertices, vol.faces, vol.rgba, cull_back=True), samples=2)
+        for vol in (full, seen)
+    ]
+    np.testing.assert_array_equal(frames[0].rgba, frames[1].rgba)
+    np.testing.assert_array_equal(frames[0].depth, frames[1].depth)
+    # without a camera there is nothing to be turned away from: the whole volume
+    alone = motion_volume(mesh, move, segments=2, filter=filt, visible_only=True)
+    assert len(alone.faces) == len(motion_volume(mesh, move, segments=2, filter=filt).faces)
+    with pytest.raises(TypeError, match="visible_only"):
+        motion_volume(mesh, move, camera_position=eye, visible_only="yes")

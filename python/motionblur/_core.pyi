@@ -46,12 +46,14 @@ def motion_volume(
     camera_position: np.ndarray | None = None,
     face_colors: bool = False,
     contour_line: bool = True,
+    visible_only: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
     """Motion volume for keyframes (K+1,4,4) float64, each interval cut into segments, filter
     'ramp' | 'box' | 'triangle' | 'gaussian', colors (1|V,4) float32 straight RGBA (or (F,4)
     per face with face_colors=True), normals
     (V,3) float64 | None, camera_position (3,) float64 | None, contour_line (camera: sweep only the
-    contour line; False: the camera sets the alphas only). Returns vertices (N,3) f64,
+    contour line; False: the camera sets the alphas only), visible_only (camera and contour line:
+    leave out the leading/trailing faces facing away from it). Returns vertices (N,3) f64,
     faces (M,3) i64, rgba (N,4) f32, normals (N,3) f32, part (M,) u8, ring_alpha (n+1,) f64
     and the number of contour edges. Releases the GIL."""
 

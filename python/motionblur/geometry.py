@@ -319,6 +319,7 @@ def motion_volume(
     camera_position=None,
     face_colors=None,
     contour_line: bool = True,
+    visible_only: bool = False,
 ) -> MotionVolume:
     """Build the motion volume of ``mesh`` over the shutter (paper sections 3.3-3.4, 4.1-4.3).
 
@@ -365,6 +366,11 @@ def motion_volume(
         box/triangle/gaussian alphas use it for a perspective view.
     contour_line : bool, default True. With ``camera_position``, False sweeps every contour
         edge (shared ring vertices, a closed volume) and uses the camera for the alphas only.
+    visible_only : bool, default False. With ``camera_position`` and ``contour_line``, leave out
+        the leading faces that face away from the camera at shutter close and the trailing faces
+        that face away from it at open: drawn with back-face culling the volume gives the same
+        image from fewer faces (about half of a dense mesh's), but it is no longer closed.
+        Ignored otherwise.
 
     Returns
     -------
@@ -386,7 +392,11 @@ def motion_volume(
     cam = None if camera_position is None else _vec3(camera_position, "camera_position")
     if not isinstance(contour_line, (bool, np.bool_)):
         raise TypeError(f"contour_line: expected a bool, got {type(contour_line).__name__}")
-    out = _core.motion_volume(m._core, keys, seg, filter, col, nrm, cam, per_face, bool(contour_line))
+    if not isinstance(visible_only, (bool, np.bool_)):
+        raise TypeError(f"visible_only: expected a bool, got {type(visible_only).__name__}")
+    out = _core.motion_volume(
+        m._core, keys, seg, filter, col, nrm, cam, per_face, bool(contour_line), bool(visible_only)
+    )
     return MotionVolume(*out)
 
 

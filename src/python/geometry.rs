@@ -256,7 +256,7 @@ type VolumeTuple<'py> = (
 );
 
 #[pyfunction]
-#[pyo3(signature = (mesh, keyframes, segments, filter, colors, normals = None, camera_position = None, face_colors = false, contour_line = true))]
+#[pyo3(signature = (mesh, keyframes, segments, filter, colors, normals = None, camera_position = None, face_colors = false, contour_line = true, visible_only = false))]
 #[allow(clippy::too_many_arguments)]
 fn motion_volume<'py>(
     py: Python<'py>,
@@ -269,6 +269,7 @@ fn motion_volume<'py>(
     camera_position: Option<PyReadonlyArray1<'_, f64>>,
     face_colors: bool,
     contour_line: bool,
+    visible_only: bool,
 ) -> PyResult<VolumeTuple<'py>> {
     let filter = Filter::parse(filter).map_err(to_py_err)?;
     let kv = keyframes.as_array();
@@ -290,7 +291,7 @@ fn motion_volume<'py>(
             out
         })
         .collect();
-    let opts = volume_options(
+    let mut opts = volume_options(
         filter,
         &colors,
         face_colors,
@@ -298,6 +299,7 @@ fn motion_volume<'py>(
         camera_position.as_ref(),
         contour_line,
     )?;
+    opts.visible_only = visible_only;
     if segments == 0 {
         return Err(to_py_err(Error::value("segments", "must be >= 1")));
     }
@@ -387,6 +389,7 @@ fn volume_options(
             .map(|c| vec3(c, "camera_position"))
             .transpose()?,
         contour_line,
+        visible_only: false,
     })
 }
 

@@ -279,7 +279,7 @@ def motion_volume(
         if vol is None:
             vol = build_volume(
                 obj.mesh, keys, segments=1, filter=filter, colors=obj.rgba, camera_position=eye,
-                contour_line=contour_line,
+                contour_line=contour_line, visible_only=contour_line,
             )  # fmt: skip
             if colors == "pixel":
                 pending.append((len(draws), k, obj, vol))
