@@ -315,6 +315,7 @@ pub fn spin_volume(mesh: &Mesh, spin: &Spin, opts: &VolumeOptions) -> Result<Mot
         false,
         &AlphaMode::PerVertex(per_vertex, weights),
         opts,
+        None,
     )
 }
 

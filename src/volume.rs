@@ -218,7 +218,7 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
     if path.is_static() && face_colors {
         let front = vec![true; mesh.faces().len()];
         let alpha = AlphaMode::Rings(vec![1.0; n + 1]);
-        return assemble(mesh, path, &front, &[], &[], false, &alpha, opts);
+        return assemble(mesh, path, &front, &[], &[], false, &alpha, opts, None);
     }
     if path.is_static() {
         // The mesh itself (every vertex, in order), placed by T_0, all leading and opaque.
@@ -315,7 +315,11 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         None => (mesh, opts, front, vis),
     };
     let (contour, edge_vis) = select_contour(mesh, &front, vis.as_ref());
-    let mut volume = assemble(
+    let seen = vis
+        .as_ref()
+        .filter(|_| opts.visible_only)
+        .map(|(l, t)| (l.as_slice(), t.as_slice()));
+    assemble(
         mesh,
         path,
         &front,
@@ -324,39 +328,8 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         line_eye.is_some(),
         &alpha,
         opts,
-    )?;
-    if let (true, Some((lead, trail))) = (opts.visible_only, &vis) {
-        keep_visible(&mut volume, &front, lead, trail);
-    }
-    Ok(volume)
-}
-
-/// Drops the leading faces not facing the camera at close (`lead`) and the trailing faces not
-/// facing it at open (`trail`). `assemble` emits the leading faces first, then the trailing
-/// ones, each in mesh-face order, then the joining strips (kept).
-fn keep_visible(volume: &mut MotionVolume, front: &[bool], lead: &[bool], trail: &[bool]) {
-    let seen = front
-        .iter()
-        .zip(lead)
-        .filter(|(f, _)| **f)
-        .map(|(_, v)| *v)
-        .chain(
-            front
-                .iter()
-                .zip(trail)
-                .filter(|(f, _)| !**f)
-                .map(|(_, v)| *v),
-        );
-    let sides = front.len();
-    let keep: Vec<bool> = seen
-        .chain(std::iter::repeat(true))
-        .take(volume.faces.len())
-        .collect();
-    debug_assert!(volume.faces.len() >= sides);
-    let mut k = keep.iter();
-    volume.faces.retain(|_| *k.next().unwrap_or(&true));
-    let mut k = keep.iter();
-    volume.part.retain(|_| *k.next().unwrap_or(&true));
+        seen,
+    )
 }
 
 /// The extent of the mesh placed at shutter close along the summed motion `total` (0 if none).

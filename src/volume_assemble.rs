@@ -188,6 +188,7 @@ pub(crate) fn assemble(
     per_edge: bool,
     alpha: &AlphaMode,
     opts: &VolumeOptions,
+    visible: Option<(&[bool], &[bool])>,
 ) -> Result<MotionVolume> {
     let faces = mesh.faces();
     let verts = mesh.vertices();
@@ -365,6 +366,18 @@ pub(crate) fn assemble(
             part.push(JOINING);
         }
     }
+    // Only the faces the camera sees (`VolumeOptions::visible_only`): the vertices keep their
+    // places, and those no face uses skip their coverage alpha (0).
+    let used = visible.map(|(lead, trail)| {
+        keep_visible(&mut out_faces, &mut part, front, lead, trail);
+        let mut used = vec![false; sources.len()];
+        for f in &out_faces {
+            for &i in f {
+                used[i as usize] = true;
+            }
+        }
+        used
+    });
     // Attributes.
     let obj_normals: &[[f64; 3]] = match &opts.normals {
         Some(nr) => nr,
@@ -399,8 +412,12 @@ pub(crate) fn assemble(
     let rgba = sources
         .par_iter()
         .zip(&vertices)
-        .map(|(s, p)| {
+        .enumerate()
+        .map(|(i, (s, p))| {
             let c = color(s);
+            if used.as_ref().is_some_and(|u| !u[i]) {
+                return [c[0], c[1], c[2], 0.0];
+            }
             [c[0], c[1], c[2], (c[3] as f64 * filter_alpha(s, *p)) as f32]
         })
         .collect();
@@ -438,6 +455,40 @@ pub(crate) fn assemble(
         ring_alpha,
         contour_edges: contour.len(),
     })
+}
+
+/// Drops the leading faces not facing the camera at close (`lead`) and the trailing faces not
+/// facing it at open (`trail`). `assemble` emits the leading faces first, then the trailing
+/// ones, each in mesh-face order, then the joining strips (kept).
+fn keep_visible(
+    faces: &mut Vec<[u32; 3]>,
+    part: &mut Vec<u8>,
+    front: &[bool],
+    lead: &[bool],
+    trail: &[bool],
+) {
+    let seen = front
+        .iter()
+        .zip(lead)
+        .filter(|(f, _)| **f)
+        .map(|(_, v)| *v)
+        .chain(
+            front
+                .iter()
+                .zip(trail)
+                .filter(|(f, _)| !**f)
+                .map(|(_, v)| *v),
+        );
+    let sides = front.len();
+    let keep: Vec<bool> = seen
+        .chain(std::iter::repeat(true))
+        .take(faces.len())
+        .collect();
+    debug_assert!(faces.len() >= sides);
+    let mut k = keep.iter();
+    faces.retain(|_| *k.next().unwrap_or(&true));
+    let mut k = keep.iter();
+    part.retain(|_| *k.next().unwrap_or(&true));
 }
 
 #[cfg(test)]

@@ -111,6 +111,16 @@ fn array2<'py, T: numpy::Element + Copy, const N: usize>(
     PyArray2::from_owned_array(py, arr)
 }
 
+/// An owned `(n, N)` array handed to numpy without copying its data.
+fn owned2<'py, T: numpy::Element, const N: usize>(
+    py: Python<'py>,
+    v: Vec<[T; N]>,
+) -> Bound<'py, PyArray2<T>> {
+    let n = v.len();
+    let arr = Array2::from_shape_vec((n, N), v.into_flattened()).expect("length matches");
+    PyArray2::from_owned_array(py, arr)
+}
+
 fn index_pairs<'py>(
     py: Python<'py>,
     e: impl Iterator<Item = [u32; 2]>,
@@ -394,16 +404,12 @@ fn volume_options(
 }
 
 fn volume_tuple(py: Python<'_>, vol: crate::volume::MotionVolume) -> VolumeTuple<'_> {
-    let faces: Vec<[i64; 3]> = vol
-        .faces
-        .iter()
-        .map(|f| [f[0] as i64, f[1] as i64, f[2] as i64])
-        .collect();
+    let faces: Vec<[i64; 3]> = vol.faces.iter().map(|f| f.map(i64::from)).collect();
     (
-        array2(py, &vol.vertices),
-        array2(py, &faces),
-        array2(py, &vol.rgba),
-        array2(py, &vol.normals),
+        owned2(py, vol.vertices),
+        owned2(py, faces),
+        owned2(py, vol.rgba),
+        owned2(py, vol.normals),
         PyArray1::from_vec(py, vol.part),
         PyArray1::from_vec(py, vol.ring_alpha),
         vol.contour_edges,

@@ -289,7 +289,7 @@ def motion_volume(
         draws.append(
             (
                 drawn_as,
-                Draw(vol.vertices, vol.faces, vol.rgba, normals=vol.normals, object_id=k, cull_back=True),
+                Draw._checked(vol.vertices, vol.faces, vol.rgba, vol.normals, k, True),
             )
         )
         stats["volumes"] += 1
