@@ -35,6 +35,28 @@ pub(crate) fn check_vector(v: [f64; 3], name: &'static str) -> Result<()> {
     Ok(())
 }
 
+/// Faces ahead of the one in hand whose corners [`prefetch_corners`] asks for.
+const AHEAD: usize = 24;
+
+/// Asks the CPU to load the corners of face `f` (if any) into cache: the face passes gather
+/// vertices in face order, which a 42k-vertex mesh scatters over memory.
+#[inline]
+fn prefetch_corners(v: &[[f64; 3]], faces: &[[u32; 3]], f: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(g) = faces.get(f) {
+        for &x in g {
+            // SAFETY: `x` is a valid vertex index (checked by `Mesh::new`), so the pointer stays
+            // inside `v`; a prefetch has no other effect.
+            unsafe {
+                use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+                _mm_prefetch(v.as_ptr().add(x as usize) as *const i8, _MM_HINT_T0);
+            }
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (v, faces, f);
+}
+
 /// Front (`true`) or back per face for the motion vector `m` (object space).
 ///
 /// The vertex gathers dominate on meshes whose faces point far apart in the vertex array (an
@@ -42,7 +64,6 @@ pub(crate) fn check_vector(v: [f64; 3], name: &'static str) -> Result<()> {
 /// prefetched.
 pub fn classify_faces(mesh: &Mesh, m: [f64; 3]) -> Vec<bool> {
     const CHUNK: usize = 8192;
-    const AHEAD: usize = 24;
     let v = mesh.vertices();
     let faces = mesh.faces();
     let mut out = vec![false; faces.len()];
@@ -52,17 +73,7 @@ pub fn classify_faces(mesh: &Mesh, m: [f64; 3]) -> Vec<bool> {
             let base = ci * CHUNK;
             for (k, o) in chunk.iter_mut().enumerate() {
                 let i = base + k;
-                #[cfg(target_arch = "x86_64")]
-                if let Some(g) = faces.get(i + AHEAD) {
-                    for &x in g {
-                        // SAFETY: `x` is a valid vertex index (checked by `Mesh::new`), so the pointer
-                        // stays inside `v`; a prefetch has no other effect.
-                        unsafe {
-                            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-                            _mm_prefetch(v.as_ptr().add(x as usize) as *const i8, _MM_HINT_T0);
-                        }
-                    }
-                }
+                prefetch_corners(v, faces, i + AHEAD);
                 *o = dot(face_normal(v, &faces[i]), m) >= 0.0;
             }
         });
@@ -83,7 +94,6 @@ pub fn classify_faces_seen(
     open: &Keyframe,
 ) -> (Vec<bool>, Vec<bool>, Vec<bool>) {
     const CHUNK: usize = 8192;
-    const AHEAD: usize = 24;
     let v = mesh.vertices();
     let faces = mesh.faces();
     let n = faces.len();
@@ -102,16 +112,7 @@ pub fn classify_faces_seen(
             let base = ci * CHUNK;
             for k in 0..fr.len() {
                 let i = base + k;
-                #[cfg(target_arch = "x86_64")]
-                if let Some(g) = faces.get(i + AHEAD) {
-                    for &x in g {
-                        // SAFETY: as in `classify_faces`: a valid vertex index, a prefetch only.
-                        unsafe {
-                            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-                            _mm_prefetch(v.as_ptr().add(x as usize) as *const i8, _MM_HINT_T0);
-                        }
-                    }
-                }
+                prefetch_corners(v, faces, i + AHEAD);
                 let nf = face_normal(v, &faces[i]);
                 let a = v[faces[i][0] as usize];
                 fr[k] = dot(nf, m) >= 0.0;

@@ -413,9 +413,9 @@ mod tests {
         }
     }
 
-    /// The projection of the test above: perspective from `eye` towards the origin.
-    fn perspective(mesh: &Mesh, eye: [f64; 3]) -> Vec<[f64; 2]> {
-        let d = crate::mesh::normalize([-eye[0], -eye[1], -eye[2]]);
+    /// A unit view direction along `dir` and two unit axes across it.
+    fn basis(dir: [f64; 3]) -> ([f64; 3], [f64; 3], [f64; 3]) {
+        let d = crate::mesh::normalize(dir);
         let e1 = crate::mesh::normalize([d[1], -d[0], 0.0]);
         let e1 = if e1 == [0.0; 3] { [1.0, 0.0, 0.0] } else { e1 };
         let e2 = [
@@ -423,6 +423,12 @@ mod tests {
             d[2] * e1[0] - d[0] * e1[2],
             d[0] * e1[1] - d[1] * e1[0],
         ];
+        (d, e1, e2)
+    }
+
+    /// The projection of the test above: perspective from `eye` towards the origin.
+    fn perspective(mesh: &Mesh, eye: [f64; 3]) -> Vec<[f64; 2]> {
+        let (d, e1, e2) = basis([-eye[0], -eye[1], -eye[2]]);
         mesh.vertices()
             .iter()
             .map(|p| {
@@ -462,14 +468,7 @@ mod tests {
         }
         // Orthographic views along a direction: the projection onto a plane across it.
         for dir in [[0.0, 0.0, -1.0], [0.6, -0.8, 0.0], [0.3, 0.5, 0.81]] {
-            let d = crate::mesh::normalize(dir);
-            let e1 = crate::mesh::normalize([d[1], -d[0], 0.0]);
-            let e1 = if e1 == [0.0; 3] { [1.0, 0.0, 0.0] } else { e1 };
-            let e2 = [
-                d[1] * e1[2] - d[2] * e1[1],
-                d[2] * e1[0] - d[0] * e1[2],
-                d[0] * e1[1] - d[1] * e1[0],
-            ];
+            let (d, e1, e2) = basis(dir);
             let proj: Vec<[f64; 2]> = mesh
                 .vertices()
                 .iter()
