@@ -35,6 +35,12 @@ UNLIT = SimpleNamespace(shading="flat")
 #: speed changes and rotation follow them).
 PATH_STEPS = 4
 
+#: Splat work (sources x pixels of path) a colour render may cost before :func:`scattered` works
+#: on a coarser grid: it grows with the object's area times its image motion, so a long streak
+#: at a large size (1080p) would cost far more than its accumulation; one grid step ``s`` divides
+#: it by ``s^3`` (s^2 sources, paths s times shorter in grid pixels).
+SPLAT_BUDGET = 8e6
+
 #: Below this time-averaged alpha a pixel's scattered colour is not trusted.
 MIN_ALPHA = 1e-3
 
@@ -214,11 +220,12 @@ def scattered(scene: Scene, cam: Camera, movers, keys_of, win, pieces: int) -> n
         int(min(y1 + np.ceil(reach[1]) + 1, 2 * cam.height)),
     )
     cdf = scene.shutter_cdf(np.arange(pieces + 1) / pieces)
+    step = _grid_step(cam, corners, keys, n, pieces, float(reach.max()))
     # accumulation's painter: object-space draws, faces turned away the whole shutter dropped
     painter = _Painter(scene, movers, eye=None if scene.camera_moves else cam.pose[:3, 3])
     objects = np.array([k for k, _ in movers], np.int32)
     tan = np.tan(cam.yfov / 2.0)
-    world_to_window = to_pixels(cam, x0, y0)
+    world_to_window = np.diag([1.0 / step, 1.0 / step, 1.0, 1.0]) @ to_pixels(cam, x0, y0)
     work = []
     for p in range(pieces):
         weight = float(cdf[p + 1] - cdf[p])
@@ -233,13 +240,21 @@ def scattered(scene: Scene, cam: Camera, movers, keys_of, win, pieces: int) -> n
         # against the lights when the camera turns).
         tm = mid / n
         pose = scene.camera_pose_at(tm)
+        if step > 1:  # whole grid cells
+            rwin = (
+                rwin[0],
+                rwin[1],
+                rwin[0] + _up(rwin[2] - rwin[0], step),
+                rwin[1] + _up(rwin[3] - rwin[1], step),
+            )
         proj = window_projection(cam.projection, cam.width, cam.height, rwin)
-        lay = painter.layer(tm, np.linalg.inv(pose), proj, rwin[2] - rwin[0], rwin[3] - rwin[1])
+        rw, rh = (rwin[2] - rwin[0]) // step, (rwin[3] - rwin[1]) // step
+        lay = painter.layer(tm, np.linalg.inv(pose), proj, rw, rh)
         # pixel (i, j) at depth z: camera-space z (ray0 (i + 0.5) + ray1, ray2 (j + 0.5) + ray3, -1)
         ray = (
-            2.0 * tan * cam.aspect / cam.width,
+            2.0 * step * tan * cam.aspect / cam.width,
             (2.0 * rwin[0] / cam.width - 1.0) * tan * cam.aspect,
-            -2.0 * tan / cam.height,
+            -2.0 * step * tan / cam.height,
             (1.0 - 2.0 * rwin[1] / cam.height) * tan,
         )
         # per object and path time: camera point at the piece's middle -> its object's local
@@ -254,4 +269,51 @@ def scattered(scene: Scene, cam: Camera, movers, keys_of, win, pieces: int) -> n
         work.append((lay.rgba, lay.depth, lay.ids, ray, np.float32(weight), objects, maps))
     if not work:
         return np.zeros((y1 - y0, x1 - x0, 4), np.float32)
-    return _core._scatter_pieces(work, 2 * PATH_STEPS + 1, x1 - x0, y1 - y0)
+    if step == 1:
+        return _core._scatter_pieces(work, 2 * PATH_STEPS + 1, x1 - x0, y1 - y0)
+    coarse = _core._scatter_pieces(
+        work, 2 * PATH_STEPS + 1, _up(x1 - x0, step) // step, _up(y1 - y0, step) // step
+    )
+    return _upsampled(coarse, step, x1 - x0, y1 - y0)
+
+
+def _up(n: int, step: int) -> int:
+    return -(-n // step) * step
+
+
+def _grid_step(cam: Camera, corners, keys, n: int, pieces: int, reach: float) -> int:
+    """The grid step of :func:`scattered`'s colour renders and splat: 1 (pixels) unless the
+    movers' projected area at mid-shutter times their image path per piece exceeds
+    :data:`SPLAT_BUDGET`, then the smallest step that brings it under."""
+    mid = n // 2
+    box = _bounds(
+        cam,
+        [b @ ks[mid][:3, :3].T + ks[mid][:3, 3] for b, ks in zip(corners, keys)],
+        (0, 0, cam.width, cam.height),
+    )
+    if box is None:
+        return 1
+    work = (box[2] - box[0]) * (box[3] - box[1]) * (reach / pieces + 1.0)
+    step = 1
+    while work / step**3 > SPLAT_BUDGET and step < 8:
+        step += 1
+    return step
+
+
+def _upsampled(img: np.ndarray, step: int, w: int, h: int) -> np.ndarray:
+    """(h, w, 4) float32: ``img`` on a grid ``step`` times coarser (cell (i, j) covers pixels
+    [i step, (i + 1) step)), interpolated bilinearly at the pixel centres (clamped at the edges)."""
+
+    def axis(n_out: int, n_in: int):
+        c = (np.arange(n_out) + 0.5) / step - 0.5
+        i0 = np.clip(np.floor(c).astype(np.int64), 0, n_in - 1)
+        i1 = np.minimum(i0 + 1, n_in - 1)
+        f = np.clip(c - np.floor(c), 0.0, 1.0).astype(np.float32)
+        return i0, i1, f
+
+    j0, j1, fy = axis(h, img.shape[0])
+    i0, i1, fx = axis(w, img.shape[1])
+    rows = img[j0] * (1.0 - fy)[:, None, None] + img[j1] * fy[:, None, None]
+    return np.ascontiguousarray(
+        rows[:, i0] * (1.0 - fx)[None, :, None] + rows[:, i1] * fx[None, :, None], np.float32
+    )
