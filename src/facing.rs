@@ -7,13 +7,14 @@
 //! away throughout and the rasterizer would cull it at every sample. A face is kept when
 //! `n . (e_k - a) > -1e-9 |n| |e_k - a|` for some `k` (near edge-on faces are kept).
 //!
-//! The arithmetic is, operation for operation, that of the numpy expression it replaces
-//! (`np.cross`, `np.linalg.norm` summing `(x0² + x1²) + x2²`, and `np.einsum("ij,ij->i")`, which
-//! sums the three products as `(p0 + p2) + p1`), so the kept set is the same face for face.
+//! It replaces a numpy expression (cross product, norms, dot products); the two round
+//! differently only in the last bits, so they keep different faces only for a face within
+//! rounding of the edge-on limit, which the rasterizer would not draw anyway.
 //! Faces are handled in chunks whose kept faces are concatenated in order, so the result does not
 //! depend on the thread count.
 use rayon::prelude::*;
 
+use crate::mesh::dot;
 use crate::{Error, Result};
 
 /// Faces per parallel job.
@@ -27,11 +28,6 @@ fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
-#[inline]
-fn norm(x: [f64; 3]) -> f64 {
-    (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt()
-}
-
 /// Whether the face `(a, b, c)` faces one of the object-space `eyes` (see the module comment).
 #[inline]
 fn faces_an_eye(a: [f64; 3], b: [f64; 3], c: [f64; 3], eyes: &[[f64; 3]]) -> bool {
@@ -41,10 +37,10 @@ fn faces_an_eye(a: [f64; 3], b: [f64; 3], c: [f64; 3], eyes: &[[f64; 3]]) -> boo
         u[2] * w[0] - u[0] * w[2],
         u[0] * w[1] - u[1] * w[0],
     ];
-    let limit = -EDGE_ON * norm(n);
+    let limit = -EDGE_ON * dot(n, n).sqrt();
     eyes.iter().any(|&e| {
         let d = sub(e, a);
-        (n[0] * d[0] + n[2] * d[2]) + n[1] * d[1] > limit * norm(d)
+        dot(n, d) > limit * dot(d, d).sqrt()
     })
 }
 

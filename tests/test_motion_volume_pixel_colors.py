@@ -221,7 +221,7 @@ def test_scatter_pieces_is_the_same_for_any_thread_count_and_releases_the_gil():
 
 
 def test_vertex_colour_kernels_match_their_numpy_forms_and_check_input():
-    from motionblur.methods._volume_colors import MIN_ALPHA, pixels, sample
+    from motionblur.methods._volume_colors import MIN_ALPHA, pixels
 
     rng = np.random.default_rng(2)
     cam = mb.Camera(mb.look_at((0.0, 0.0, 5.0), (0.0, 0.0, 0.0)), 0.7, 64, 48)
@@ -234,7 +234,11 @@ def test_vertex_colour_kernels_match_their_numpy_forms_and_check_input():
     b = _core._pixel_bounds(vc.to_pixels(cam), pts)
     np.testing.assert_allclose(b, [x.min(), y.min(), x.max(), y.max()], atol=1e-9)
     got = _core._sample_colors(img, vc.to_pixels(cam, 10, 12), pts, rgba)
-    want = sample(img, x - 10, y - 12, front, rgba[:, :3], nearest=True)
+    # the numpy form: each vertex takes its pixel's colour (fallback where empty or behind)
+    h, w = img.shape[:2]
+    near = img[np.clip((y - 12).astype(np.int64), 0, h - 1), np.clip((x - 10).astype(np.int64), 0, w - 1)]
+    empty = (near[:, 3] < MIN_ALPHA) | ~front
+    want = np.where(empty[:, None], rgba[:, :3], near[:, :3] / np.maximum(near[:, 3:], MIN_ALPHA))
     np.testing.assert_allclose(got[:, :3], want, rtol=1e-6)
     np.testing.assert_array_equal(got[:, 3], rgba[:, 3])
     behind = pts.copy()

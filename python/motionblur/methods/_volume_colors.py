@@ -80,31 +80,23 @@ def to_pixels(cam: Camera, x0: float = 0.0, y0: float = 0.0) -> np.ndarray:
     return viewport @ cam.view_projection
 
 
-def sample(img: np.ndarray, x, y, front, fallback: np.ndarray, nearest: bool = False) -> np.ndarray:
+def sample(img: np.ndarray, x, y, front, fallback: np.ndarray) -> np.ndarray:
     """Straight RGB (N,3) float32 at image positions ``x``, ``y`` (N,) (pixel centres at +0.5) of
-    the premultiplied ``img`` (H,W,4), bilinear (``nearest``: the pixel's own), clamped to its
-    edge; ``fallback`` (N,3) where the sampled alpha is below :data:`MIN_ALPHA` or the point is
-    behind the camera."""
+    the premultiplied ``img`` (H,W,4), bilinear, clamped to its edge; ``fallback`` (N,3) where
+    the sampled alpha is below :data:`MIN_ALPHA` or the point is behind the camera."""
     h, w = img.shape[:2]
     flat = img.reshape(-1, 4)
-    if nearest:
-        i = np.clip(x.astype(np.int64), 0, w - 1)
-        j = np.clip(y.astype(np.int64), 0, h - 1)
-        s = flat[j * w + i]
-    else:
-        px, py = x - 0.5, y - 0.5
-        i0 = np.clip(np.floor(px), 0, max(w - 2, 0)).astype(np.int64)
-        j0 = np.clip(np.floor(py), 0, max(h - 2, 0)).astype(np.int64)
-        i1, j1 = np.minimum(i0 + 1, w - 1), np.minimum(j0 + 1, h - 1)
-        fx = np.clip(px - i0, 0.0, 1.0)[:, None]
-        fy = np.clip(py - j0, 0.0, 1.0)[:, None]
+    px, py = x - 0.5, y - 0.5
+    i0 = np.clip(np.floor(px), 0, max(w - 2, 0)).astype(np.int64)
+    j0 = np.clip(np.floor(py), 0, max(h - 2, 0)).astype(np.int64)
+    i1, j1 = np.minimum(i0 + 1, w - 1), np.minimum(j0 + 1, h - 1)
+    fx = np.clip(px - i0, 0.0, 1.0)[:, None]
+    fy = np.clip(py - j0, 0.0, 1.0)[:, None]
 
-        def at(j, i):  # gathered in float32, weighted in float64
-            return flat[j * w + i].astype(np.float64)
+    def at(j, i):  # gathered in float32, weighted in float64
+        return flat[j * w + i].astype(np.float64)
 
-        s = (at(j0, i0) * (1 - fx) + at(j0, i1) * fx) * (1 - fy) + (
-            at(j1, i0) * (1 - fx) + at(j1, i1) * fx
-        ) * fy
+    s = (at(j0, i0) * (1 - fx) + at(j0, i1) * fx) * (1 - fy) + (at(j1, i0) * (1 - fx) + at(j1, i1) * fx) * fy
     keep = (s[:, 3] < MIN_ALPHA) | ~front
     return np.where(keep[:, None], fallback, s[:, :3] / np.maximum(s[:, 3:], MIN_ALPHA)).astype(np.float32)
 

@@ -340,15 +340,7 @@ def motion_volume(
     if scatter:
         averaged = _scatter(scene, pcam, movers, pending, draws, pwin, color_renders)
         stats["averaged"] += len(pending)
-    if averaged is not None and empty:
-        # nothing behind the volumes: A times the averaged colour per resolved pixel
-        wcam = cam.resized((x1 - x0) // aa, (y1 - y0) // aa)
-        layer = raster_layer(wcam, scene, draws, projection=proj, samples=aa)
-        layer.rgba = _colored(layer.rgba, averaged, None)
-        frame = paste(static, pwin, layer, 1)
-        frame.stats.update(stats)
-        return frame
-    if averaged is not None and static.opaque:
+    if averaged is not None and not empty and static.opaque:
         # The volumes alone, per sample, over no colour but the static scene's depth (which
         # hides them): their coverage A per sample; each sample is A times the averaged colour
         # of its pixel over the static sample, then the samples are resolved.
@@ -362,15 +354,18 @@ def motion_volume(
         frame.stats.update(stats)
         return frame
     one_call = ONE_PASS and len({o.shading for o, _ in draws}) == 1
-    if one_call and (empty or (exact_static and static.opaque)):
+    if (averaged is not None and empty) or (one_call and (empty or (exact_static and static.opaque))):
         # One rasterizer call, which resolves the aa x aa samples of each pixel itself. The
         # opaque static layer (read in place at the window) pre-loads it, colour and depth per
-        # sample: only the volumes are drawn, depth-tested and composited over it exactly.
+        # sample: only the volumes are drawn, depth-tested and composited over it exactly. With
+        # averaged colours nothing is behind the volumes here: A times the colour per pixel.
         wcam = cam.resized((x1 - x0) // aa, (y1 - y0) // aa)
         under = None if empty else static.layer
         layer = raster_layer(
             wcam, scene, draws, projection=proj, background=under, background_origin=(x0, y0), samples=aa
         )  # fmt: skip
+        if averaged is not None:
+            layer.rgba = _colored(layer.rgba, averaged, None)
         frame = paste(static, pwin, layer, 1)
         frame.stats.update(stats)
         return frame
