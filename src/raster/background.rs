@@ -8,8 +8,8 @@
 //! the same pass, except when a fragment lies within one float ulp of the background's depth
 //! (the background holds depth = 1/(1/w) rounded, not 1/w itself): coplanar surfaces fight
 //! either way.
+use super::bins::TILE;
 use super::blend::Sample;
-use super::tile::TILE;
 use crate::{Error, Result};
 
 /// Per-sample arrays of the background, row-major with `stride` samples a row. The frame's

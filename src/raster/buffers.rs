@@ -3,8 +3,8 @@
 //! Resolve: the colour of a pixel is the mean of its s x s samples (a box filter). Depth, id and
 //! velocity come from the pixel's *nearest* sample (smallest depth; the first in row order on
 //! ties), so they always describe one real surface rather than a blend of two.
+use super::bins::TILE;
 use super::blend::Sample;
-use super::tile::TILE;
 
 /// Timings and counts of one frame.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -35,13 +35,14 @@ pub use camera::{
 pub use draw::{faces_from_i64, vertex_normals, Draw};
 
 use crate::{Error, Result};
+use bins::TILE;
 use glam::DVec4;
 use rayon::prelude::*;
 use setup::{Chunk, Viewport};
 use shade::{homogeneous_pixel, Prepared, Shader};
 use std::cell::RefCell;
 use std::time::Instant;
-use tile::{TileScratch, TILE};
+use tile::TileScratch;
 
 /// Faces set up per parallel job (a clipped face may become up to 7 triangles, so a chunk
 /// holds at most 28672 < 2^16 triangles).

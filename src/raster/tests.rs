@@ -37,7 +37,7 @@ fn grid(n: usize, jitter: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
             ]);
         }
     }
-    (v, crate::test_meshes::grid_faces(n))
+    (v, crate::mesh::grid_faces(n))
 }
 
 #[test]
