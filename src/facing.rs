@@ -116,7 +116,7 @@ mod tests {
                 v.push([x, y, 0.1 * (7.0 * x).sin() * (5.0 * y).cos()]);
             }
         }
-        let f = crate::test_meshes::grid_faces(n);
+        let f = crate::mesh::grid_faces(n);
         (v, f.iter().map(|t| t.map(i64::from)).collect())
     }
 

@@ -9,7 +9,7 @@
 //! [`rim_points`]'s output from those faces alone (about 2% of the sphere's faces).
 use rayon::prelude::*;
 
-use crate::mesh::FaceNeighbors;
+use crate::mesh::{FaceNeighbors, FacePlanes};
 
 /// The faces and face neighbours of a closed, consistently wound 2-manifold mesh (see
 /// [`crate::mesh::Mesh::face_neighbors`]), for [`rim_points`]; with the mesh's [`FacePlanes`],
@@ -21,63 +21,9 @@ pub struct Rim<'a> {
     pub planes: Option<&'a FacePlanes>,
 }
 
-/// Faces whose sine at their first corner is below this are always examined by
-/// [`rim_candidates`] (slivers and degenerate faces).
-pub const SLIVER: f64 = 1e-2;
 /// A face counts as facing (or facing away from) a view only when the cosine between its normal
 /// and the view ray exceeds this.
 pub const MARGIN: f64 = 1e-2;
-
-/// Per-face planes of a mesh in object space (cached by [`crate::mesh::Mesh::face_planes`]):
-/// unit normal and offset `n . (a - center)` (f32, `a` the first corner), the offset NaN for a
-/// face whose sine at `a` is below [`SLIVER`]; the vertices' mean and the largest distance from it.
-#[derive(Debug, Clone)]
-pub struct FacePlanes {
-    planes: Vec<[f32; 4]>,
-    pub center: [f64; 3],
-    pub radius: f64,
-}
-
-impl FacePlanes {
-    pub fn new(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Self {
-        let k = vertices.len() as f64;
-        let s = vertices
-            .iter()
-            .fold([0.0; 3], |a, v| [a[0] + v[0], a[1] + v[1], a[2] + v[2]]);
-        let center = [s[0] / k, s[1] / k, s[2] / k];
-        let sub = |p: [f64; 3], q: [f64; 3]| [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
-        let len = |p: [f64; 3]| crate::mesh::dot(p, p).sqrt();
-        let radius = vertices
-            .par_iter()
-            .map(|v| len(sub(*v, center)))
-            .reduce(|| 0.0, f64::max);
-        let planes = faces
-            .par_iter()
-            .with_min_len(4096)
-            .map(|f| {
-                let a = vertices[f[0] as usize];
-                let n = crate::mesh::face_normal(vertices, f);
-                let (u, w) = (
-                    sub(vertices[f[1] as usize], a),
-                    sub(vertices[f[2] as usize], a),
-                );
-                let nn = len(n);
-                let solid = nn > 0.0 && nn >= SLIVER * len(u) * len(w);
-                if !solid {
-                    return [0.0, 0.0, 0.0, f32::NAN];
-                }
-                let m = n.map(|x| x / nn);
-                let off = crate::mesh::dot(m, sub(a, center));
-                [m[0] as f32, m[1] as f32, m[2] as f32, off as f32]
-            })
-            .collect();
-        FacePlanes {
-            planes,
-            center,
-            radius,
-        }
-    }
-}
 
 /// A view of [`rim_candidates`] in the mesh's object space: a perspective eye, or the direction
 /// of an orthographic view.
@@ -117,7 +63,7 @@ pub fn rim_candidates(rim: Rim, planes: &FacePlanes, views: &[ObjectView]) -> Ve
             .collect();
         // 2 bits per view: 0 facing, 1 facing away (either sign convention), 2 not robust.
         let codes: Vec<u8> = planes
-            .planes
+            .planes()
             .par_iter()
             .with_min_len(CHUNK)
             .map(|p| {
@@ -373,7 +319,7 @@ mod tests {
     /// A closed, consistently wound UV sphere with `n` rings and `2n` segments, its vertices
     /// pushed in and out a little so that it is not convex and no projection is symmetric.
     fn sphere(n: usize) -> Mesh {
-        let (v, f) = crate::test_meshes::uv_sphere(n, 2 * n);
+        let (v, f) = crate::mesh::uv_sphere(n, 2 * n);
         let v = v
             .iter()
             .enumerate()
@@ -482,7 +428,7 @@ mod tests {
 
     #[test]
     fn a_smooth_mesh_examines_few_faces() {
-        let (v, f) = crate::test_meshes::uv_sphere(64, 128);
+        let (v, f) = crate::mesh::uv_sphere(64, 128);
         let mesh = Mesh::new(v, f).unwrap();
         let planes = FacePlanes::new(mesh.vertices(), mesh.faces());
         let rim = Rim {
@@ -511,7 +457,7 @@ mod tests {
         let f = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
         let mesh = Mesh::new(v, f).unwrap();
         let planes = FacePlanes::new(mesh.vertices(), mesh.faces());
-        assert!(planes.planes[0][3].is_nan() && !planes.planes[1][3].is_nan());
+        assert!(planes.planes()[0][3].is_nan() && !planes.planes()[1][3].is_nan());
         let rim = Rim {
             faces: mesh.faces(),
             neighbors: mesh.face_neighbors().unwrap(),

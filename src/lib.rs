@@ -12,7 +12,6 @@
 #![allow(dead_code)]
 
 pub mod accumulate;
-pub mod adjacency;
 pub mod contour;
 pub mod contour_table;
 mod error;
@@ -32,8 +31,6 @@ pub mod volume_filter;
 pub mod volume_hulls;
 
 /// `f` run on a rayon pool of `n` threads (tests of thread-count independence).
-#[cfg(test)]
-mod test_meshes;
 #[cfg(test)]
 pub(crate) fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
     rayon::ThreadPoolBuilder::new()

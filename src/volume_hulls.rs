@@ -25,7 +25,7 @@ use crate::volume_alpha::project;
 /// in front of the eye (as `rim_points` requires), with a margin.
 fn object_view(
     f: &Keyframe,
-    planes: &crate::hull::FacePlanes,
+    planes: &crate::mesh::FacePlanes,
     eye: Option<[f64; 3]>,
     d: [f64; 3],
 ) -> Option<ObjectView> {
@@ -50,7 +50,7 @@ fn object_view(
     }
     let ratio = (zc - rad) / (zc + rad);
     let bound =
-        crate::hull::MARGIN * crate::hull::SLIVER * ratio * ratio / (1.0 + angle.tan().powi(2));
+        crate::hull::MARGIN * crate::mesh::SLIVER * ratio * ratio / (1.0 + angle.tan().powi(2));
     let t = f.translation;
     (bound > 1e-7).then(|| ObjectView::Eye(obj([e[0] - t[0], e[1] - t[1], e[2] - t[2]])))
 }
@@ -138,7 +138,7 @@ mod tests {
 
     #[test]
     fn rim_candidates_leave_the_model_unchanged() {
-        let (v, f) = crate::test_meshes::uv_sphere(40, 80);
+        let (v, f) = crate::mesh::uv_sphere(40, 80);
         let mesh = crate::mesh::Mesh::new(v, f).unwrap();
         let nb = mesh.face_neighbors().unwrap();
         let rim = |planes| Rim {

@@ -2,7 +2,7 @@
 use std::collections::HashMap;
 
 use super::*;
-use crate::test_meshes::uv_sphere as sphere;
+use crate::mesh::uv_sphere as sphere;
 
 fn moved(v: &[[f64; 3]], t: [f64; 3]) -> Vec<[f64; 3]> {
     v.iter()
