@@ -16,9 +16,10 @@
 //! at shutter open, leading edge at close) is wound outward.
 use rayon::prelude::*;
 
+use crate::error::check_vector;
 use crate::mesh::{dot, face_normal, Mesh};
 use crate::motion::Keyframe;
-use crate::{Error, Result};
+use crate::Result;
 
 /// A contour edge: `edge` indexes the mesh adjacency, `(a, b)` is its orientation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -26,13 +27,6 @@ pub struct ContourEdge {
     pub edge: u32,
     pub a: u32,
     pub b: u32,
-}
-
-pub(crate) fn check_vector(v: [f64; 3], name: &'static str) -> Result<()> {
-    if v.iter().any(|x| !x.is_finite()) {
-        return Err(Error::value(name, "is NaN or inf"));
-    }
-    Ok(())
 }
 
 /// Faces ahead of the one in hand whose corners [`prefetch_corners`] asks for.

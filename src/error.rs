@@ -28,3 +28,11 @@ impl Error {
 }
 
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// Fails naming `name` when a component of `v` is NaN or infinite.
+pub(crate) fn check_vector(v: [f64; 3], name: &'static str) -> Result<()> {
+    if v.iter().any(|x| !x.is_finite()) {
+        return Err(Error::value(name, "is NaN or inf"));
+    }
+    Ok(())
+}

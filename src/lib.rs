@@ -16,19 +16,12 @@ pub mod contour;
 pub mod contour_table;
 mod error;
 pub mod facing;
-pub mod hull;
 pub mod image;
 pub mod mesh;
 pub mod motion;
 pub mod raster;
 pub mod shell;
-pub mod spin;
-pub mod subdivide;
 pub mod volume;
-pub mod volume_alpha;
-pub mod volume_assemble;
-pub mod volume_filter;
-pub mod volume_hulls;
 
 /// `f` run on a rayon pool of `n` threads (tests of thread-count independence).
 #[cfg(test)]

@@ -15,9 +15,10 @@ use crate::contour::contour_pairs as core_contour_pairs;
 use crate::contour_table::ContourTable;
 use crate::mesh::Mesh;
 use crate::motion::Path;
-use crate::spin::{spin_volume as core_spin_volume, Spin};
-use crate::volume::{motion_volume as core_motion_volume, Colors, VolumeOptions};
-use crate::volume_filter::Filter;
+use crate::volume::{
+    motion_volume as core_motion_volume, spin_volume as core_spin_volume, Colors, Filter, Spin,
+    VolumeOptions,
+};
 use crate::Error;
 
 fn rows<const N: usize, T: numpy::Element + Copy + Default>(
