@@ -13,9 +13,7 @@
 
 pub mod accumulate;
 pub mod contour;
-pub mod contour_table;
 mod error;
-pub mod facing;
 pub mod image;
 pub mod mesh;
 pub mod motion;

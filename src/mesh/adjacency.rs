@@ -1,4 +1,5 @@
-//! The edge adjacency of a mesh and the face neighbours derived from it. The adjacency is built
+//! The edge adjacency of a mesh, the face neighbours derived from it, and the faces around
+//! each vertex. The adjacency is built
 //! by a two-level counting sort of the half-edges on their lower vertex, parallel and
 //! independent of the thread count.
 use rayon::prelude::*;
@@ -73,6 +74,67 @@ impl Adjacency {
 pub struct FaceNeighbors {
     pub faces: Vec<[u32; 3]>,
     pub edges: Vec<[u32; 3]>,
+}
+
+/// The faces around each vertex (a CSR table), in increasing face order; a face that repeats a
+/// vertex is listed once per corner, as `np.add.at` would add it.
+#[derive(Debug, Clone)]
+pub struct VertexFaces {
+    offsets: Vec<u32>,
+    faces: Vec<u32>,
+}
+
+impl VertexFaces {
+    /// The table of `faces` over `n_vertices` vertices.
+    pub fn new(faces: &[[u32; 3]], n_vertices: usize) -> Self {
+        let mut offsets = vec![0u32; n_vertices + 1];
+        for f in faces {
+            for &i in f {
+                offsets[i as usize + 1] += 1;
+            }
+        }
+        for i in 0..n_vertices {
+            offsets[i + 1] += offsets[i];
+        }
+        let mut fill = offsets.clone();
+        let mut out = vec![0u32; 3 * faces.len()];
+        for (fi, f) in faces.iter().enumerate() {
+            for &i in f {
+                out[fill[i as usize] as usize] = fi as u32;
+                fill[i as usize] += 1;
+            }
+        }
+        VertexFaces {
+            offsets,
+            faces: out,
+        }
+    }
+
+    /// The faces of vertex `v`, in order.
+    #[inline]
+    pub fn faces_of(&self, v: usize) -> &[u32] {
+        &self.faces[self.offsets[v] as usize..self.offsets[v + 1] as usize]
+    }
+
+    /// Renames every listed face `f` to `rename(f)`, keeping the order of each vertex's list.
+    pub fn rename_faces(&mut self, rename: impl Fn(u32) -> u32) {
+        for f in &mut self.faces {
+            *f = rename(*f);
+        }
+    }
+
+    /// Unnormalised vertex normal of `v`: the sum of `face_n` over its faces, in order, from 0.
+    #[inline]
+    pub fn normal(&self, v: usize, face_n: &[[f32; 3]]) -> [f32; 3] {
+        let mut acc = [0.0f32; 3];
+        for &f in &self.faces[self.offsets[v] as usize..self.offsets[v + 1] as usize] {
+            let n = face_n[f as usize];
+            acc[0] += n[0];
+            acc[1] += n[1];
+            acc[2] += n[2];
+        }
+        acc
+    }
 }
 
 /// A raw pointer shared by the scatter threads; each writes its own disjoint slots.

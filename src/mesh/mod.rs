@@ -1,4 +1,4 @@
-//! Indexed triangle meshes: validation, edge adjacency, face normals and face planes.
+//! Indexed triangle meshes: validation, edge and vertex adjacency, face normals and face planes.
 //!
 //! Vertices are `[f64; 3]` in scene units, faces are `[u32; 3]` counter-clockwise seen from the
 //! front. The edge adjacency is built once (counting sort by the lower vertex, then a short sort
@@ -19,7 +19,7 @@ mod normals;
 #[cfg(test)]
 mod test_meshes;
 
-pub use adjacency::{build_adjacency, Adjacency, FaceNeighbors};
+pub use adjacency::{build_adjacency, Adjacency, FaceNeighbors, VertexFaces};
 pub use indexed::{Mesh, MeshStats, MAX_ELEMENTS};
 pub use normals::{dot, face_normal, normalize, FacePlanes, SLIVER};
 #[cfg(test)]

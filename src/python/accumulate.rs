@@ -2,7 +2,6 @@
 //! facing-face selection (`crate::facing`); GIL released.
 use super::{c_slice, c_slice_mut, to_py_err};
 use crate::accumulate;
-use crate::facing;
 use crate::Error;
 use numpy::ndarray::Array2;
 use numpy::{
@@ -218,7 +217,7 @@ fn _facing_faces<'py>(
     let f = rows3(&faces, "faces")?;
     let e = rows3(&eyes, "eyes")?;
     let kept = py
-        .detach(|| super::in_pool(|| facing::facing_faces(v, f, e)))
+        .detach(|| super::in_pool(|| accumulate::facing_faces(v, f, e)))
         .map_err(to_py_err)?;
     let arr = Array2::from_shape_vec((kept.len() / 3, 3), kept).expect("rows of 3");
     Ok(PyArray2::from_owned_array(py, arr))

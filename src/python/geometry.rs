@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::to_py_err;
 use crate::contour::contour_pairs as core_contour_pairs;
-use crate::contour_table::ContourTable;
+use crate::contour::ContourTable;
 use crate::mesh::Mesh;
 use crate::motion::Path;
 use crate::volume::{
@@ -479,7 +479,7 @@ impl PyContourTable {
 }
 
 impl PyContourTable {
-    fn set(&self, index: usize) -> PyResult<&crate::contour_table::ContourSet> {
+    fn set(&self, index: usize) -> PyResult<&crate::contour::ContourSet> {
         self.inner.sets.get(index).ok_or_else(|| {
             to_py_err(Error::value(
                 "index",

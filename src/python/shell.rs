@@ -12,7 +12,8 @@ use pyo3::prelude::*;
 use rayon::prelude::*;
 
 use super::{c_slice, to_py_err};
-use crate::shell::{motion_silhouette, BlurShell, ShellColor, ShellOptions, ShellOut};
+use crate::contour::motion_silhouette;
+use crate::shell::{BlurShell, ShellColor, ShellOptions, ShellOut};
 use crate::Error;
 
 /// Borrow a C-contiguous (N,3) float64 array as rows.

@@ -6,8 +6,7 @@
 //! does not depend on the thread count. Only live polygons emit anything.
 use rayon::prelude::*;
 
-use super::silhouette::CHUNK;
-use super::{BlurShell, ShellColor};
+use super::blur_shell::{check_rows, BlurShell, ShellColor, CHUNK};
 use crate::mesh::normalize;
 use crate::Result;
 
@@ -104,10 +103,10 @@ impl BlurShell {
         normals: Option<&[[f64; 3]]>,
     ) -> Result<BuildPlan> {
         if let Some(v) = vertices {
-            super::check_rows(v, self.n_vertices, "vertices")?;
+            check_rows(v, self.n_vertices, "vertices")?;
         }
         if let Some(n) = normals {
-            super::check_rows(n, self.n_vertices, "normals")?;
+            check_rows(n, self.n_vertices, "normals")?;
         }
         if self.updates == 0 {
             return Ok(BuildPlan::default());

@@ -8,7 +8,7 @@
 //! (for example clustered around a preferred direction of motion).
 use rayon::prelude::*;
 
-use crate::contour::{classify_faces, contour_from_sides};
+use super::edges::{classify_faces, contour_from_sides};
 use crate::error::check_vector;
 use crate::mesh::{dot, normalize, Mesh};
 use crate::{Error, Result};
