@@ -21,7 +21,7 @@ use crate::{Error, Result};
 const CHUNK: usize = 4096;
 
 /// The relative tolerance of the facing test: faces this close to edge-on are kept.
-pub const EDGE_ON: f64 = 1e-9;
+const EDGE_ON: f64 = 1e-9;
 
 #[inline]
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

@@ -15,10 +15,15 @@ const CHUNK: usize = 8192;
 /// first one is at `(x0, y0)` of a buffer `stride` samples wide.
 #[derive(Clone, Copy, Debug)]
 pub struct Rect {
+    /// Column of the rectangle's first sample.
     pub x0: usize,
+    /// Row of the rectangle's first sample.
     pub y0: usize,
+    /// Samples per row of the rectangle.
     pub width: usize,
+    /// Rows of the rectangle.
     pub height: usize,
+    /// Samples per row of the whole buffer.
     pub stride: usize,
 }
 

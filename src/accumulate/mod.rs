@@ -4,5 +4,5 @@
 mod facing;
 mod kernels;
 
-pub use facing::{facing_faces, EDGE_ON};
+pub use facing::facing_faces;
 pub use kernels::{accumulate, composite, over, resolve, Rect};

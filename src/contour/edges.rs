@@ -24,8 +24,11 @@ use crate::Result;
 /// A contour edge: `edge` indexes the mesh adjacency, `(a, b)` is its orientation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ContourEdge {
+    /// Index of the edge in the mesh adjacency.
     pub edge: u32,
+    /// First vertex, as the edge is oriented.
     pub a: u32,
+    /// Second vertex.
     pub b: u32,
 }
 
@@ -119,7 +122,7 @@ pub fn classify_faces_seen(
 
 /// Whether each face is front-facing to a camera at `eye`: `n . (eye - a) > 0`, with vertices
 /// placed by `place`.
-pub fn camera_facing(
+fn camera_facing(
     mesh: &Mesh,
     eye: [f64; 3],
     place: impl Fn([f64; 3]) -> [f64; 3] + Sync,

@@ -6,12 +6,14 @@ mod silhouette;
 mod table;
 
 pub use edges::{
-    camera_facing, classify_faces, classify_faces_seen, contour_edges, contour_from_sides,
-    contour_line, contour_pairs, ContourEdge,
+    classify_faces, classify_faces_seen, contour_edges, contour_from_sides, contour_line,
+    contour_pairs, ContourEdge,
 };
 pub(crate) use silhouette::check_values;
 pub use silhouette::{
-    face_edge, face_normals_into, facing, motion_silhouette, BACK, FRONT, MAX_COORD, MAX_NORMAL,
-    NEUTRAL, NO_EDGE,
+    face_edge, face_normals_into, facing, motion_silhouette, MAX_COORD, MAX_NORMAL, NEUTRAL,
+    NO_EDGE,
 };
-pub use table::{ContourSet, ContourTable, MAX_DIRECTIONS};
+#[cfg(test)]
+pub(crate) use silhouette::{BACK, FRONT};
+pub use table::{ContourSet, ContourTable};

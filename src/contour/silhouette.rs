@@ -129,7 +129,7 @@ pub fn to_f32(v: &[[f64; 3]]) -> Vec<[f32; 3]> {
 /// counts checked by the caller), with the given vertex normals or the unnormalised
 /// area-weighted ones, all in float32 as in [`BlurShell::update`](crate::shell::BlurShell::update). Returns the
 /// facing per vertex and the edge code per face. Fails naming `vertices`, `previous_vertices`
-/// or `normals` for NaN, inf or values beyond [`MAX_COORD`] / [`MAX_NORMAL`].
+/// or `normals` for NaN, inf or values beyond `MAX_COORD` (1e9) / `MAX_NORMAL` (1e18).
 pub fn motion_silhouette(
     vertices: &[[f64; 3]],
     previous: &[[f64; 3]],

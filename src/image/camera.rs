@@ -24,6 +24,7 @@ pub struct CameraMatrices {
 }
 
 impl CameraMatrices {
+    /// Checks the matrices (finite, a perspective projection), naming `name` in errors.
     pub fn new(view: DMat4, projection: DMat4, name: &'static str) -> Result<Self> {
         let finite = view.to_cols_array().iter().all(|v| v.is_finite())
             && projection.to_cols_array().iter().all(|v| v.is_finite());

@@ -25,6 +25,7 @@ pub enum Composite {
 }
 
 impl Composite {
+    /// Parse `over` or `under`; anything else is an error naming `mode`.
     pub fn parse(s: &str) -> Result<Self> {
         match s {
             "over" => Ok(Composite::Over),

@@ -11,8 +11,11 @@ use rayon::prelude::*;
 /// `faces[face][k] -> faces[face][(k + 1) % 3]`, in increasing order.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Adjacency {
+    /// Undirected edges `[a, b]`, `a < b`, sorted.
     pub edges: Vec<[u32; 2]>,
+    /// Per edge, the start of its half-edges (one more entry than edges).
     pub offsets: Vec<u32>,
+    /// Half-edges `3 * face + k`, grouped by edge.
     pub half_edges: Vec<u32>,
     /// Per half-edge (parallel to `half_edges`): runs from the lower to the higher index.
     pub forward: Vec<bool>,
@@ -23,6 +26,7 @@ impl Adjacency {
     pub fn len(&self) -> usize {
         self.edges.len()
     }
+    /// Whether the mesh has no edge.
     pub fn is_empty(&self) -> bool {
         self.edges.is_empty()
     }
@@ -72,7 +76,9 @@ impl Adjacency {
 /// the edge's index in the adjacency.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FaceNeighbors {
+    /// The face across each edge.
     pub faces: Vec<[u32; 3]>,
+    /// The index of each edge in the adjacency.
     pub edges: Vec<[u32; 3]>,
 }
 

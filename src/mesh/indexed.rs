@@ -13,13 +13,21 @@ pub const MAX_ELEMENTS: usize = (u32::MAX as usize) / 8;
 /// Counts describing a mesh's health.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct MeshStats {
+    /// Number of faces.
     pub faces: usize,
+    /// Number of vertices.
     pub vertices: usize,
+    /// Number of undirected edges.
     pub edges: usize,
+    /// Faces with a zero cross product.
     pub degenerate_faces: usize,
+    /// Edges with one face.
     pub boundary_edges: usize,
+    /// Edges with three or more faces.
     pub nonmanifold_edges: usize,
+    /// Edges whose two faces run them in the same direction.
     pub inconsistent_edges: usize,
+    /// Vertices no face uses.
     pub unreferenced_vertices: usize,
 }
 
@@ -108,9 +116,11 @@ impl Mesh {
         })
     }
 
+    /// Vertex positions (scene units).
     pub fn vertices(&self) -> &[[f64; 3]] {
         &self.vertices
     }
+    /// Counter-clockwise triangles over `vertices`.
     pub fn faces(&self) -> &[[u32; 3]] {
         &self.faces
     }
@@ -132,7 +142,7 @@ impl Mesh {
     }
 
     /// The per-face planes ([`FacePlanes`]), built on first use.
-    pub fn face_planes(&self) -> &FacePlanes {
+    pub(crate) fn face_planes(&self) -> &FacePlanes {
         self.planes
             .get_or_init(|| FacePlanes::new(&self.vertices, &self.faces))
     }

@@ -19,7 +19,7 @@ mod normals;
 #[cfg(test)]
 mod test_meshes;
 
-pub use adjacency::{build_adjacency, Adjacency, FaceNeighbors, VertexFaces};
+pub use adjacency::{Adjacency, FaceNeighbors, VertexFaces};
 pub use indexed::{Mesh, MeshStats, MAX_ELEMENTS};
 pub use normals::{dot, face_normal, normalize, FacePlanes, SLIVER};
 #[cfg(test)]

@@ -28,6 +28,7 @@ pub struct Background<'a> {
     pub stride: usize,
     /// The arrays' sample under the frame's sample (0, 0).
     pub x0: usize,
+    /// The arrays' row under the frame's sample row 0.
     pub y0: usize,
 }
 

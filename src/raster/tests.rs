@@ -1,4 +1,5 @@
 //! Whole-pipeline tests of the rasterizer in pure Rust.
+use super::camera::look_at;
 use super::*;
 use glam::{DMat4, DVec3};
 

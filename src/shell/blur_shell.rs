@@ -22,8 +22,11 @@ pub const MAX_HYSTERESIS: u32 = 65_000;
 /// Shell options (see the module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ShellOptions {
+    /// Ring elements per polygon, 1..=255: the strip's length in updates.
     pub subdivisions: u32,
+    /// Updates off the silhouette before a strip starts to fade.
     pub hysteresis: u32,
+    /// Alpha of a strip's base pair, in (0, 1].
     pub initial_alpha: f32,
 }
 
@@ -40,7 +43,9 @@ impl Default for ShellOptions {
 /// The shell's colour: one RGB for every strip, or the RGB of each mesh vertex.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ShellColor {
+    /// One RGB for every strip.
     Uniform([f32; 3]),
+    /// One RGB per mesh vertex.
     PerVertex(Vec<[f32; 3]>),
 }
 
@@ -257,18 +262,21 @@ impl BlurShell {
     }
 
     /// Whether updates and builds run their chunks on rayon's pool: only for meshes of at
-    /// least [`PAR_MIN_FACES`] faces. Smaller ones run the same chunks in order on the calling
+    /// least `PAR_MIN_FACES` (32768) faces. Smaller ones run the same chunks in order on the calling
     /// thread (fork/join and hand-overs cost more than the work), with the same results.
     pub fn parallel(&self) -> bool {
         self.faces.len() >= PAR_MIN_FACES
     }
 
+    /// The options the shell was made with.
     pub fn options(&self) -> ShellOptions {
         self.opts
     }
+    /// The mesh's faces.
     pub fn faces(&self) -> &[[u32; 3]] {
         &self.faces
     }
+    /// The mesh's vertex count.
     pub fn n_vertices(&self) -> usize {
         self.n_vertices
     }

@@ -6,7 +6,7 @@
 //! shell of quad strips attached to the current mesh. The rules (the paper leaves some open;
 //! each choice is stated here, in the Python docstring, and tested):
 //!
-//! - **Silhouette of motion** ([`silhouette`]): a moving vertex is front when
+//! - **Silhouette of motion** ([`motion_silhouette`](crate::motion_silhouette)): a moving vertex is front when
 //!   `n . (p - p_prev) >= 0` and back when `< 0`; a triangle with one front and two back corners
 //!   has the edge between its back corners on the silhouette. A vertex that does not move is
 //!   neutral (neither), so a static polygon never has an edge. The first update has no previous
@@ -20,9 +20,9 @@
 //!   records the last edge it had (the paper's "positions of the last blurred vertices").
 //! - **Performance.** Four parallel passes per update over fixed chunks (results independent
 //!   of the thread count): scatter the positions to a breadth-first vertex order
-//!   ([`silhouette::Locality`]), face normals, vertex normals and facing, then the per-polygon
+//!   (`locality.rs`), face normals, vertex normals and facing, then the per-polygon
 //!   step, which reads one fade byte per polygon and touches nothing else for polygons without
-//!   a strip or an edge. No allocation per update. Meshes under [`PAR_MIN_FACES`] faces run
+//!   a strip or an edge. No allocation per update. Meshes under `PAR_MIN_FACES` faces run
 //!   the same chunks in order on the calling thread.
 //! - **Birth.** A polygon whose strip is dead (or that never had one) and gains an edge at
 //!   update `n` starts a strip with two elements: its edge at update `n` and the same edge at
@@ -41,6 +41,9 @@
 //! - **Attachment.** The base pair is the polygon's last silhouette edge at the current
 //!   positions: exactly the positions given to `build`, or else the float32 snapshot of the
 //!   last update.
+//!
+//! Files: `blur_shell.rs` (options, state, construction), `update.rs` (the update passes),
+//! `build.rs` (the shell mesh), `locality.rs` (the internal vertex and face order).
 mod blur_shell;
 mod build;
 mod locality;
@@ -48,8 +51,5 @@ mod locality;
 mod tests;
 mod update;
 
-pub use blur_shell::{
-    BlurShell, FaceState, ShellColor, ShellOptions, MAX_HISTORY_BYTES, MAX_HYSTERESIS,
-    MAX_SUBDIVISIONS, ON_SILHOUETTE, PAR_MIN_FACES,
-};
+pub use blur_shell::{BlurShell, FaceState, ShellColor, ShellOptions, ON_SILHOUETTE};
 pub use build::{BuildPlan, ShellMesh, ShellOut};

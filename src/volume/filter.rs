@@ -21,9 +21,13 @@ use crate::{Error, Result};
 /// A temporal filter over the shutter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Filter {
+    /// The paper's ramp.
     Ramp,
+    /// Uniform weight over the shutter.
     Box,
+    /// Weight rising linearly to the middle of the shutter and falling back.
     Triangle,
+    /// Gaussian weight centred on the middle of the shutter (sigma 1/6).
     Gaussian,
 }
 

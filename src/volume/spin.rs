@@ -58,10 +58,13 @@ const TAU: f64 = std::f64::consts::TAU;
 /// A spin over the shutter.
 #[derive(Debug, Clone, Copy)]
 pub struct Spin {
+    /// The rotation axis (any non-zero length).
     pub axis: [f64; 3],
     /// Radians over the shutter, right hand about `axis`.
     pub angle: f64,
+    /// A point on the axis (world units).
     pub center: [f64; 3],
+    /// Translation over the shutter (world units).
     pub translation: [f64; 3],
     /// Number of rings minus one; `None`: one per `pi / 12` of sweep.
     pub segments: Option<usize>,

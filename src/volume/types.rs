@@ -33,7 +33,7 @@ pub enum Colors {
     PerFace(Vec<[f32; 4]>),
 }
 
-/// Options of [`motion_volume`].
+/// Options of [`motion_volume`](crate::motion_volume).
 #[derive(Debug, Clone)]
 pub struct VolumeOptions {
     /// The shutter filter of the alphas.
