@@ -7,7 +7,7 @@
 //! open and arrive at `v + m` at shutter close.
 use glam::{DMat3, DQuat, DVec3};
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// One rigid placement `p' = linear * p + translation` (`linear` row-major).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -14,8 +14,8 @@
 //! depend on the thread count.
 use rayon::prelude::*;
 
+use crate::error::{Error, Result};
 use crate::mesh::dot;
-use crate::{Error, Result};
 
 /// Faces per parallel job.
 const CHUNK: usize = 4096;

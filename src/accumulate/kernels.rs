@@ -6,7 +6,7 @@
 //! depend on the thread count.
 use rayon::prelude::*;
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Samples per parallel job of `over`.
 const CHUNK: usize = 8192;

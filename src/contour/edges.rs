@@ -17,9 +17,9 @@
 use rayon::prelude::*;
 
 use crate::error::check_vector;
+use crate::error::Result;
 use crate::mesh::{dot, face_normal, Mesh};
 use crate::motion::Keyframe;
-use crate::Result;
 
 /// A contour edge: `edge` indexes the mesh adjacency, `(a, b)` is its orientation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

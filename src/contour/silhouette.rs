@@ -19,8 +19,8 @@
 //!   whose float32 position does not change is neutral.
 use rayon::prelude::*;
 
+use crate::error::{Error, Result};
 use crate::mesh::{face_normal, VertexFaces};
-use crate::{Error, Result};
 
 /// Vertex facing values.
 pub const FRONT: i8 = 1;

@@ -10,8 +10,8 @@ use rayon::prelude::*;
 
 use super::edges::{classify_faces, contour_from_sides};
 use crate::error::check_vector;
+use crate::error::{Error, Result};
 use crate::mesh::{dot, normalize, Mesh};
-use crate::{Error, Result};
 
 /// Largest number of directions accepted.
 const MAX_DIRECTIONS: usize = 1 << 16;

@@ -12,7 +12,7 @@ use glam::{DMat4, DVec4};
 use rayon::prelude::*;
 
 use super::check_image;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// A perspective camera as matrices (OpenGL conventions, as `motionblur.Camera`).
 #[derive(Clone, Copy, Debug)]

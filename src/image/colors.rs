@@ -4,7 +4,7 @@
 //! colour. Each was a handful of numpy passes over 40k vertices or a window of pixels.
 use rayon::prelude::*;
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Points per parallel chunk (fixed: min/max and per-point results need no ordered sums).
 const CHUNK: usize = 8192;

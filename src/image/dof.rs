@@ -14,7 +14,7 @@ use rayon::prelude::*;
 
 use super::pyramid::opaque_unchecked;
 use super::{check_image, MAX_LEVELS};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Camera and lens of the depth of field. Depths and focal length in scene units, `yfov` in
 /// radians.

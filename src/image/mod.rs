@@ -34,7 +34,7 @@ pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};
 pub use scatter::{scatter_pieces, Piece};
 pub use splat::splat_paths;
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Largest accepted filter length (pixels); longer filters are absurd for any image we accept.
 pub const MAX_LENGTH: f32 = 65536.0;

@@ -11,7 +11,7 @@
 use rayon::prelude::*;
 
 use super::splat::{sum_buffers, trace, trace_straight, MAX_PATH_POINTS};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Largest image accepted (pixels), output or piece, as for the rasterizer.
 const MAX_PIXELS: usize = 1 << 25;

@@ -8,7 +8,7 @@
 //! (`motionblur.methods.motion_volume`).
 use rayon::prelude::*;
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Most polyline points per source.
 pub const MAX_PATH_POINTS: usize = 256;

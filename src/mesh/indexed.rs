@@ -5,7 +5,7 @@ use rayon::prelude::*;
 
 use super::adjacency::{build_adjacency, Adjacency, FaceNeighbors};
 use super::normals::{dot, face_normal, FacePlanes};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Largest number of faces or vertices accepted (indices are stored as `u32`).
 pub const MAX_ELEMENTS: usize = (u32::MAX as usize) / 8;

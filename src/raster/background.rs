@@ -10,7 +10,7 @@
 //! either way.
 use super::bins::TILE;
 use super::blend::Sample;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Per-sample arrays of the background, row-major with `stride` samples a row. The frame's
 /// `ws` x `hs` samples read the window of these arrays whose top-left sample is (`x0`, `y0`)

@@ -4,7 +4,7 @@
 //! +Y up, `yfov` is the vertical field of view in radians, pixel centres sit at +0.5. The
 //! projection equals pyrender's `PerspectiveCamera.get_projection_matrix` (an infinite far plane
 //! when `zfar` is infinite).
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use glam::{DMat4, DVec4};
 
 /// Largest image side accepted, in pixels.

@@ -1,5 +1,5 @@
 //! One mesh to draw: positions, faces, straight colours, normals, id, culling, previous positions.
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Largest coordinate magnitude accepted: beyond it f64 transforms lose every fractional bit.
 pub const MAX_COORD: f64 = 1e15;

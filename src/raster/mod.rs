@@ -33,7 +33,7 @@ use camera::check_size;
 pub use camera::Camera;
 pub use draw::{faces_from_i64, vertex_normals, Draw};
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use bins::TILE;
 use glam::DVec4;
 use rayon::prelude::*;

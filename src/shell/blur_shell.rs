@@ -3,8 +3,8 @@ use rayon::prelude::*;
 
 use super::locality::Locality;
 use crate::contour::{check_values, NEUTRAL, NO_EDGE};
+use crate::error::{Error, Result};
 use crate::mesh::MAX_ELEMENTS;
-use crate::{Error, Result};
 
 /// Work items per rayon task of the update and build passes: fixed, so the split does not
 /// depend on the thread count.

@@ -7,8 +7,8 @@
 use rayon::prelude::*;
 
 use super::blur_shell::{check_rows, BlurShell, ShellColor, CHUNK};
+use crate::error::Result;
 use crate::mesh::normalize;
-use crate::Result;
 
 /// The shell mesh: strips of quads (two triangles each), culling off when drawn.
 ///

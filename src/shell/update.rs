@@ -6,8 +6,8 @@ use super::blur_shell::{check_rows, BlurShell, Hot, CHUNK, NEVER, ON_SILHOUETTE}
 use crate::contour::{
     face_edge, face_normals_into, facing, MAX_COORD, MAX_NORMAL, NEUTRAL, NO_EDGE,
 };
+use crate::error::Result;
 use crate::mesh::face_normal;
-use crate::Result;
 
 /// A raw pointer shared by the scatter of pass A; each row writes its own slot.
 struct SharedSlots<T>(*mut T);

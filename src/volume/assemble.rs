@@ -6,9 +6,9 @@ use rayon::prelude::*;
 use super::coverage::CoverageModel;
 use super::types::{Colors, MotionVolume, VolumeOptions, JOINING, LEADING, TRAILING};
 use crate::contour::{contour_from_sides, contour_line, ContourEdge};
+use crate::error::{Error, Result};
 use crate::mesh::{normalize, Mesh, MAX_ELEMENTS};
 use crate::motion::Path;
-use crate::{Error, Result};
 
 /// Where an output vertex comes from: mesh vertex; placement at `frac` of the way from keyframe
 /// `seg` to `seg + 1` (0: the keyframe itself); keyframe for its normal.

@@ -9,9 +9,9 @@ use super::rim::Rim;
 use super::subdivide::{subdivided, subdivision_factor};
 use super::types::{check_options, Colors, MotionVolume, VolumeOptions, LEADING, MAX_SEGMENTS};
 use crate::contour::{classify_faces, classify_faces_seen};
+use crate::error::{Error, Result};
 use crate::mesh::{dot, normalize, Mesh};
 use crate::motion::Path;
-use crate::{Error, Result};
 
 /// Above this many vertices the coverage model takes its hulls over the mesh's rim (when the
 /// mesh is closed), not over every projected vertex.

@@ -16,7 +16,7 @@
 //!   the coverage model (`coverage.rs`); no floor, so a long streak is as faint as it physically is.
 //!
 //! Without motion every filter gives alpha 1.
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// A temporal filter over the shutter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -47,9 +47,9 @@ use super::filter::Filter;
 use super::subdivide::{subdivided, subdivision_for_edge};
 use super::types::{check_options, MotionVolume, VolumeOptions, MAX_SEGMENTS};
 use crate::error::check_vector;
+use crate::error::{Error, Result};
 use crate::mesh::{dot, face_normal, normalize, Mesh};
 use crate::motion::{Keyframe, Path};
-use crate::{Error, Result};
 
 const RADII: usize = 128;
 const ANGLES: usize = 720;

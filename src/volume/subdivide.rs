@@ -3,9 +3,9 @@
 use rayon::prelude::*;
 
 use super::types::{Colors, VolumeOptions};
+use crate::error::Result;
 use crate::mesh::{dot, Mesh};
 use crate::motion::Path;
-use crate::Result;
 
 /// A new vertex of a subdivided mesh: the weights of three original vertices.
 pub type Blend = ([u32; 3], [f64; 3]);

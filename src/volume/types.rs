@@ -4,8 +4,8 @@ use rayon::prelude::*;
 
 use super::filter::Filter;
 use crate::error::check_vector;
+use crate::error::{Error, Result};
 use crate::mesh::Mesh;
-use crate::{Error, Result};
 
 /// [`MotionVolume::part`] of a leading face (front faces placed at shutter close).
 pub const LEADING: u8 = 0;
