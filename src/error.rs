@@ -1,4 +1,5 @@
-//! The one error type of the core. The binding layer maps it to Python exceptions.
+//! The one error type of the core (the binding layer maps it to Python exceptions), and a
+//! shared argument check.
 use thiserror::Error;
 
 /// Errors raised by the core. Every variant names the offending argument.
@@ -6,19 +7,31 @@ use thiserror::Error;
 pub enum Error {
     /// An argument has the wrong shape, length or size. Maps to `ValueError`.
     #[error("{name}: {reason}")]
-    Shape { name: &'static str, reason: String },
+    Shape {
+        /// The argument's name, as the Python API spells it.
+        name: &'static str,
+        /// What is wrong with it.
+        reason: String,
+    },
     /// An argument has a value out of its domain (NaN, out of range, unknown name). Maps to `ValueError`.
     #[error("{name}: {reason}")]
-    Value { name: &'static str, reason: String },
+    Value {
+        /// The argument's name, as the Python API spells it.
+        name: &'static str,
+        /// What is wrong with it.
+        reason: String,
+    },
 }
 
 impl Error {
+    /// A [`Error::Shape`] naming the argument `name`.
     pub fn shape(name: &'static str, reason: impl Into<String>) -> Self {
         Error::Shape {
             name,
             reason: reason.into(),
         }
     }
+    /// A [`Error::Value`] naming the argument `name`.
     pub fn value(name: &'static str, reason: impl Into<String>) -> Self {
         Error::Value {
             name,
@@ -27,4 +40,13 @@ impl Error {
     }
 }
 
+/// A result whose error is the core's [`enum@Error`].
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// Fails naming `name` when a component of `v` is NaN or infinite.
+pub(crate) fn check_vector(v: [f64; 3], name: &'static str) -> Result<()> {
+    if v.iter().any(|x| !x.is_finite()) {
+        return Err(Error::value(name, "is NaN or inf"));
+    }
+    Ok(())
+}

@@ -2,38 +2,57 @@
 //! image-space blur, in pure Rust. The Python binding lives in `python/` behind the
 //! `python` feature and is the only place that knows about PyO3.
 //!
-//! One module per pipeline stage: `mesh` (indexed triangle meshes, adjacency), `motion`
-//! (keyframes), `contour` (contour edges, silhouette of motion), `volume` (motion volumes), `shell` (blur shells),
-//! `raster` (the software rasterizer), `image` (image-space blur).
-//!
-//! The motion volume is split into `volume` (construction), `volume_filter` (the paper's ramp),
-//! `volume_alpha` (coverage alphas), `hull` (projected hulls), `volume_assemble` (surfaces and attributes), `subdivide`
-//! and `spin` (section 4.3's spinning objects); `adjacency` builds the mesh adjacency.
-#![allow(dead_code)]
+//! One private module per pipeline stage, its API re-exported here:
+//! - `mesh`: indexed triangle meshes, their adjacency, normals and face planes;
+//! - `motion`: rigid keyframes over the shutter;
+//! - `contour`: contour edges of a rigid motion and the silhouette of motion of a deforming
+//!   mesh;
+//! - `volume`: motion volumes (Wloka and Zeleznik);
+//! - `shell`: blur shells (Jones and Keyser);
+//! - `accumulate`: the accumulation buffer's kernels;
+//! - `raster`: the software rasterizer;
+//! - `image`: image-space blur.
+#![warn(missing_docs)]
 
-pub mod accumulate;
-pub mod adjacency;
-pub mod contour;
-pub mod contour_table;
+mod accumulate;
+mod contour;
 mod error;
-pub mod facing;
-pub mod hull;
-pub mod image;
-pub mod mesh;
-pub mod motion;
-pub mod raster;
-pub mod shell;
-pub mod spin;
-pub mod subdivide;
-pub mod volume;
-pub mod volume_alpha;
-pub mod volume_assemble;
-pub mod volume_filter;
-pub mod volume_hulls;
+mod image;
+mod mesh;
+mod motion;
+mod raster;
+mod shell;
+mod volume;
+
+#[cfg(feature = "python")]
+mod python;
+
+pub use accumulate::{accumulate, composite, facing_faces, over, resolve, Rect};
+pub use contour::{
+    contour_edges, contour_pairs, motion_silhouette, ContourEdge, ContourSet, ContourTable,
+};
+pub use error::{Error, Result};
+pub use image::{
+    box_blur, camera_motion_blur, camera_velocity, colored, depth_of_field, glow, opaque_blur,
+    opaque_motion_blur, pixel_bounds, pyramid_blur, pyramid_glow, pyramid_opaque_blur,
+    sample_colors, scatter_pieces, splat_paths, velocity_blur, CameraMatrices, Composite,
+    DofParams, Piece,
+};
+pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats};
+pub use motion::{Keyframe, Path};
+pub use raster::{
+    faces_from_i64, rasterize, rasterize_over, Background, Blend, Camera, Draw, Frame, Light,
+    Options as RasterOptions, Shading, Stats as RasterStats,
+};
+pub use shell::{
+    BlurShell, BuildPlan, FaceState, ShellColor, ShellMesh, ShellOptions, ShellOut, ON_SILHOUETTE,
+};
+pub use volume::{
+    motion_volume, spin_volume, Colors, Filter, MotionVolume, Spin, VolumeOptions, JOINING,
+    LEADING, MAX_SEGMENTS, TRAILING,
+};
 
 /// `f` run on a rayon pool of `n` threads (tests of thread-count independence).
-#[cfg(test)]
-mod test_meshes;
 #[cfg(test)]
 pub(crate) fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
     rayon::ThreadPoolBuilder::new()
@@ -42,8 +61,3 @@ pub(crate) fn on_threads<T: Send>(n: usize, f: impl FnOnce() -> T + Send) -> T {
         .unwrap()
         .install(f)
 }
-
-pub use error::{Error, Result};
-
-#[cfg(feature = "python")]
-mod python;

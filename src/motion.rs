@@ -7,18 +7,21 @@
 //! open and arrive at `v + m` at shutter close.
 use glam::{DMat3, DQuat, DVec3};
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// One rigid placement `p' = linear * p + translation` (`linear` row-major).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Keyframe {
+    /// Rotation times uniform scale, row-major.
     pub linear: [[f64; 3]; 3],
+    /// Translation (scene units).
     pub translation: [f64; 3],
 }
 
 const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
 impl Keyframe {
+    /// The pure translation by `t`.
     pub fn translate(t: [f64; 3]) -> Self {
         Keyframe {
             linear: IDENTITY,
@@ -77,6 +80,7 @@ impl Keyframe {
         DMat3::from_cols_array_2d(&self.linear).transpose()
     }
 
+    /// Whether `linear` is exactly the identity.
     pub fn has_identity_linear(&self) -> bool {
         self.linear == IDENTITY
     }
@@ -203,7 +207,7 @@ impl Placer {
 
 impl Keyframe {
     /// This keyframe as a [`Placer`].
-    pub fn placer(&self) -> Placer {
+    pub(crate) fn placer(&self) -> Placer {
         Placer {
             key: *self,
             identity: self.has_identity_linear(),
@@ -214,6 +218,7 @@ impl Keyframe {
 /// Keyframes at the equally spaced shutter times `i / (len - 1)`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Path {
+    /// The keyframes, shutter open to close (at least two).
     pub frames: Vec<Keyframe>,
 }
 

@@ -7,7 +7,7 @@
 //! Outside the image the taps read transparent black.
 use super::lines::{directional, plan};
 use super::{check_direction, check_finite, check_image};
-use crate::Result;
+use crate::error::Result;
 
 /// Calls `emit(x, mean)` for every pixel of a `(n, 4)` row: the mean of the `2r + 1` pixels
 /// `x - r ..= x + r` (zero outside). Sums run in f64, so the error does not grow along the row.

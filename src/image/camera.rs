@@ -12,7 +12,7 @@ use glam::{DMat4, DVec4};
 use rayon::prelude::*;
 
 use super::check_image;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// A perspective camera as matrices (OpenGL conventions, as `motionblur.Camera`).
 #[derive(Clone, Copy, Debug)]
@@ -24,6 +24,7 @@ pub struct CameraMatrices {
 }
 
 impl CameraMatrices {
+    /// Checks the matrices (finite, a perspective projection), naming `name` in errors.
     pub fn new(view: DMat4, projection: DMat4, name: &'static str) -> Result<Self> {
         let finite = view.to_cols_array().iter().all(|v| v.is_finite())
             && projection.to_cols_array().iter().all(|v| v.is_finite());

@@ -4,7 +4,7 @@
 //! colour. Each was a handful of numpy passes over 40k vertices or a window of pixels.
 use rayon::prelude::*;
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Points per parallel chunk (fixed: min/max and per-point results need no ordered sums).
 const CHUNK: usize = 8192;
@@ -76,7 +76,7 @@ pub fn pixel_bounds(map: &[f64; 16], points: &[f64]) -> Result<Option<[f64; 4]>>
 
 /// Per point of `points` (flat `(n, 3)`), its `rgba` (flat `(n, 4)`) with the colour replaced by the straight colour of the pixel of the
 /// premultiplied `img` (`w` x `h`) it falls in under `map` (the truncated position, clamped to
-/// the image), where that pixel's alpha is at least [`MIN_ALPHA`] and the point is in front of
+/// the image), where that pixel's alpha is at least `MIN_ALPHA` (1e-3) and the point is in front of
 /// the camera. Returns `(n, 4)` floats.
 pub fn sample_colors(
     img: &[f32],
@@ -123,7 +123,7 @@ pub fn sample_colors(
 
 /// Per pixel: the volumes' coverage alpha `A` (alpha of `rgba`, drawn over nothing) times the
 /// splatted colour of `averaged` (`rgb * A / max(a, MIN_ALPHA)`) where its alpha `a` is at least
-/// [`MIN_ALPHA`] (`rgba`'s own colour elsewhere), alpha `A`, plus `(1 - A) under` when `under`
+/// `MIN_ALPHA` (`rgba`'s own colour elsewhere), alpha `A`, plus `(1 - A) under` when `under`
 /// is given. All `(n, 4)` premultiplied. Returns `(n, 4)` floats.
 pub fn colored(rgba: &[f32], averaged: &[f32], under: Option<&[f32]>) -> Result<Vec<f32>> {
     if averaged.len() != rgba.len() || rgba.len() % 4 != 0 {

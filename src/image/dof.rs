@@ -14,16 +14,21 @@ use rayon::prelude::*;
 
 use super::pyramid::opaque_unchecked;
 use super::{check_image, MAX_LEVELS};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Camera and lens of the depth of field. Depths and focal length in scene units, `yfov` in
 /// radians.
 #[derive(Clone, Copy, Debug)]
 pub struct DofParams {
+    /// Distance of the focal plane along the view axis.
     pub focal_depth: f64,
+    /// Focal length of the lens.
     pub focal_length: f64,
+    /// Aperture as an f-number (focal length over aperture diameter).
     pub f_number: f64,
+    /// Vertical field of view.
     pub yfov: f64,
+    /// Number of sub-images (see the module docs).
     pub layers: usize,
 }
 

@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use super::lines::{directional, plan};
 use super::{check_direction, check_finite, check_image, MAX_LENGTH};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Scratch buffers of one thread: the candidate sources of the sweep.
 #[derive(Default)]

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use std::borrow::Cow;
 
 use super::transpose;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// How a direction maps onto rows: transpose or not, slope of the sheared rows, tap radius.
 #[derive(Clone, Copy, Debug, PartialEq)]

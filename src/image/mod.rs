@@ -25,17 +25,16 @@ mod scatter;
 mod splat;
 
 pub use boxblur::box_blur;
-pub use camera::{camera_motion_blur, camera_velocity, velocity_blur, CameraMatrices, MAX_SAMPLES};
+pub use camera::{camera_motion_blur, camera_velocity, velocity_blur, CameraMatrices};
 pub use colors::{colored, pixel_bounds, sample_colors};
-pub use dof::{depth_of_field, layer_depths, r_infinity, DofParams, MAX_LAYERS};
+pub use dof::{depth_of_field, DofParams};
 pub use glow::glow;
-pub use lines::{plan, LinePlan};
 pub use opaque::{opaque_blur, opaque_motion_blur, Composite};
 pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};
 pub use scatter::{scatter_pieces, Piece};
-pub use splat::{splat_paths, MAX_PATH_POINTS};
+pub use splat::splat_paths;
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Largest accepted filter length (pixels); longer filters are absurd for any image we accept.
 pub const MAX_LENGTH: f32 = 65536.0;

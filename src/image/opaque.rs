@@ -12,7 +12,7 @@ use super::boxblur::box_row_range;
 use super::glow::{glow_row, GlowScratch};
 use super::lines::{build_sheared, directional_at, plan, LinePlan};
 use super::{assume_init, check_direction, check_finite, check_image, filled, put4, ALPHA_EPS};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use std::mem::MaybeUninit;
 
 /// How the blurred layer is combined with the base image.
@@ -25,6 +25,7 @@ pub enum Composite {
 }
 
 impl Composite {
+    /// Parse `over` or `under`; anything else is an error naming `mode`.
     pub fn parse(s: &str) -> Result<Self> {
         match s {
             "over" => Ok(Composite::Over),

@@ -52,8 +52,8 @@ pub(crate) fn give(v: Vec<f32>) {
 }
 
 /// `try_take`, failing with a `ValueError` naming `name` (the image the buffer is for).
-pub(crate) fn take_for(name: &'static str, n: usize) -> crate::Result<Vec<f32>> {
+pub(crate) fn take_for(name: &'static str, n: usize) -> crate::error::Result<Vec<f32>> {
     try_take(n).ok_or_else(|| {
-        crate::Error::value(name, format!("is too large: cannot allocate {n} floats"))
+        crate::error::Error::value(name, format!("is too large: cannot allocate {n} floats"))
     })
 }

@@ -10,7 +10,7 @@
 use rayon::prelude::*;
 
 use super::{check_finite, check_image, ALPHA_EPS};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Most pyramid levels accepted (a 65536-pixel side is 1 pixel after 16 levels).
 pub const MAX_LEVELS: usize = 16;

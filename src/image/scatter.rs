@@ -11,7 +11,7 @@
 use rayon::prelude::*;
 
 use super::splat::{sum_buffers, trace, trace_straight, MAX_PATH_POINTS};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Largest image accepted (pixels), output or piece, as for the rasterizer.
 const MAX_PIXELS: usize = 1 << 25;
@@ -31,7 +31,9 @@ pub struct Piece<'a> {
     pub depth: &'a [f32],
     /// `(height, width)` object id per pixel.
     pub ids: &'a [i32],
+    /// Columns of the render.
     pub width: usize,
+    /// Rows of the render.
     pub height: usize,
     /// The camera-space point of pixel `(i, j)` at depth `z` is
     /// `z (ray[0] (i + 0.5) + ray[1], ray[2] (j + 0.5) + ray[3], -1)`.

@@ -8,7 +8,7 @@
 //! (`motionblur.methods.motion_volume`).
 use rayon::prelude::*;
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Most polyline points per source.
 pub const MAX_PATH_POINTS: usize = 256;
@@ -271,7 +271,7 @@ fn column(out: &mut [[f32; 4]], o: usize, sm: usize, rows: i64, c: [f32; 4], wgt
 /// Splats `colors[i]` (premultiplied RGBA) along the polyline `paths[i * p .. (i + 1) * p]`
 /// (pixel coordinates of a `w` x `h` image, centres at +0.5): the shutter is split equally among
 /// the `p - 1` segments (one point: the source stands still), each crossed at uniform speed
-/// ([`segment`]). Returns the `(h, w, 4)` time-averaged image, row-major.
+/// (`segment`). Returns the `(h, w, 4)` time-averaged image, row-major.
 /// A segment with a non-finite end contributes nothing (a point behind the camera), as do the
 /// parts of paths outside the image.
 pub fn splat_paths(

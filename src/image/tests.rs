@@ -1,5 +1,6 @@
 //! Unit tests of the image kernels in pure Rust: invariants and thread-count independence.
 //! (The numpy twins in tests/image_twins.py check the values.)
+use super::lines::plan;
 use super::*;
 use crate::on_threads;
 

@@ -2,131 +2,26 @@
 //!
 //! Thin: copy the (already dtype-converted, C-contiguous) inputs into owned Rust data while
 //! attached, then detach for the kernels. Shapes are checked here again and named in errors.
+use std::borrow::Cow;
 use std::sync::Arc;
 
-use numpy::ndarray::Array2;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use rayon::prelude::*;
 
-use super::to_py_err;
-use crate::contour::contour_pairs as core_contour_pairs;
-use crate::contour_table::ContourTable;
-use crate::mesh::Mesh;
-use crate::motion::Path;
-use crate::spin::{spin_volume as core_spin_volume, Spin};
-use crate::volume::{motion_volume as core_motion_volume, Colors, VolumeOptions};
-use crate::volume_filter::Filter;
-use crate::Error;
+use super::convert::{
+    detached_in_pool, face_indices, flat_rows_array, in_pool, rows_any_layout, rows_array, vec3,
+    ToDict,
+};
+use crate::{
+    contour_pairs, Colors, ContourSet, ContourTable, Error, Filter, Mesh, MotionVolume, Path, Spin,
+    VolumeOptions, JOINING, LEADING, MAX_SEGMENTS, TRAILING,
+};
 
-fn rows<const N: usize, T: numpy::Element + Copy + Default>(
-    a: &PyReadonlyArray2<'_, T>,
-    name: &'static str,
-) -> PyResult<Vec<[T; N]>> {
-    let view = a.as_array();
-    if view.ncols() != N {
-        return Err(to_py_err(Error::shape(
-            name,
-            format!("expected shape (N,{N}), got {:?}", view.shape()),
-        )));
-    }
-    let mut out = vec![[T::default(); N]; view.nrows()];
-    match super::c_slice(a, name) {
-        Ok(s) => {
-            for (o, c) in out.iter_mut().zip(s.chunks_exact(N)) {
-                o.copy_from_slice(c);
-            }
-        }
-        Err(_) => {
-            for (o, r) in out.iter_mut().zip(view.rows()) {
-                for (x, y) in o.iter_mut().zip(r.iter()) {
-                    *x = *y;
-                }
-            }
-        }
-    }
-    Ok(out)
-}
-
-/// (F,3) int64 faces to owned `u32` triples, in parallel, checking every index is in [0, nv).
-fn face_rows(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>> {
-    if a.as_array().ncols() != 3 {
-        let shape = a.as_array().shape().to_vec();
-        return Err(to_py_err(Error::shape(
-            "faces",
-            format!("expected shape (N,3), got {shape:?}"),
-        )));
-    }
-    let owned;
-    let flat: &[i64] = match super::c_slice(a, "faces") {
-        Ok(s) => s,
-        Err(_) => {
-            owned = rows::<3, i64>(a, "faces")?
-                .into_iter()
-                .flatten()
-                .collect::<Vec<_>>();
-            &owned
-        }
-    };
-    let nv = nv as i64;
-    let out: Vec<[u32; 3]> = flat
-        .par_chunks_exact(3)
-        .with_min_len(8192)
-        .map(|t| {
-            if t.iter().all(|&x| (0..nv).contains(&x)) {
-                [t[0] as u32, t[1] as u32, t[2] as u32]
-            } else {
-                [u32::MAX; 3]
-            }
-        })
-        .collect();
-    if !out.par_iter().with_min_len(8192).all(|t| t[0] != u32::MAX) {
-        let i = out.iter().position(|t| t[0] == u32::MAX).unwrap_or(0);
-        return Err(to_py_err(Error::value(
-            "faces",
-            format!("face {i} has an index out of range [0, {nv})"),
-        )));
-    }
-    Ok(out)
-}
-
-fn vec3(a: &PyReadonlyArray1<'_, f64>, name: &'static str) -> PyResult<[f64; 3]> {
-    let v = a.as_array();
-    if v.len() != 3 {
-        return Err(to_py_err(Error::shape(
-            name,
-            format!("expected shape (3,), got {:?}", v.shape()),
-        )));
-    }
-    Ok([v[0], v[1], v[2]])
-}
-
-fn array2<'py, T: numpy::Element + Copy, const N: usize>(
-    py: Python<'py>,
-    v: &[[T; N]],
-) -> Bound<'py, PyArray2<T>> {
-    let flat: Vec<T> = v.iter().flatten().copied().collect();
-    let arr = Array2::from_shape_vec((v.len(), N), flat).expect("length matches");
-    PyArray2::from_owned_array(py, arr)
-}
-
-/// An owned `(n, N)` array handed to numpy without copying its data.
-fn owned2<'py, T: numpy::Element, const N: usize>(
-    py: Python<'py>,
-    v: Vec<[T; N]>,
-) -> Bound<'py, PyArray2<T>> {
-    let n = v.len();
-    let arr = Array2::from_shape_vec((n, N), v.into_flattened()).expect("length matches");
-    PyArray2::from_owned_array(py, arr)
-}
-
-fn index_pairs<'py>(
-    py: Python<'py>,
-    e: impl Iterator<Item = [u32; 2]>,
-) -> Bound<'py, PyArray2<i64>> {
-    let v: Vec<[i64; 2]> = e.map(|[a, b]| [a as i64, b as i64]).collect();
-    array2(py, &v)
+/// (F,3) int64 faces of any layout to `u32` triples, every index in [0, nv).
+fn faces(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>> {
+    let rows = rows_any_layout::<i64, 3>(a, "faces")?;
+    Ok(face_indices(rows.as_flattened(), nv)?)
 }
 
 /// The Rust mesh: owned vertices and faces and the cached edge adjacency.
@@ -143,21 +38,19 @@ impl PyMesh {
         vertices: PyReadonlyArray2<'_, f64>,
         faces: PyReadonlyArray2<'_, i64>,
     ) -> PyResult<Self> {
-        let v = rows::<3, f64>(&vertices, "vertices")?;
-        let f = face_rows(&faces, v.len())?;
-        let mesh = py.detach(move || Mesh::new(v, f));
+        let v = rows_any_layout::<f64, 3>(&vertices, "vertices")?.into_owned();
+        let f = self::faces(&faces, v.len())?;
+        let mesh = py.detach(move || Mesh::new(v, f))?;
         Ok(PyMesh {
-            inner: Arc::new(mesh.map_err(to_py_err)?),
+            inner: Arc::new(mesh),
         })
     }
 
     /// Same faces and adjacency, new vertex positions.
     fn with_vertices(&self, py: Python<'_>, vertices: PyReadonlyArray2<'_, f64>) -> PyResult<Self> {
-        let v = rows::<3, f64>(&vertices, "vertices")?;
+        let v = rows_any_layout::<f64, 3>(&vertices, "vertices")?.into_owned();
         let inner = self.inner.clone();
-        let mesh = py
-            .detach(move || inner.with_vertices(v))
-            .map_err(to_py_err)?;
+        let mesh = py.detach(move || inner.with_vertices(v))?;
         Ok(PyMesh {
             inner: Arc::new(mesh),
         })
@@ -169,18 +62,7 @@ impl PyMesh {
 
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let inner = self.inner.clone();
-        let s = py.detach(move || inner.stats());
-        let d = PyDict::new(py);
-        d.set_item("faces", s.faces)?;
-        d.set_item("vertices", s.vertices)?;
-        d.set_item("edges", s.edges)?;
-        d.set_item("degenerate_faces", s.degenerate_faces)?;
-        d.set_item("boundary_edges", s.boundary_edges)?;
-        d.set_item("nonmanifold_edges", s.nonmanifold_edges)?;
-        d.set_item("inconsistent_edges", s.inconsistent_edges)?;
-        d.set_item("unreferenced_vertices", s.unreferenced_vertices)?;
-        d.set_item("closed", s.is_closed())?;
-        Ok(d)
+        py.detach(move || inner.stats()).to_dict(py)
     }
 
     /// (F,3) float64 face normals, unit (zero for degenerate faces) or raw `(b-a) x (c-a)`.
@@ -194,21 +76,20 @@ impl PyMesh {
                 inner.face_normals_raw()
             }
         });
-        array2(py, &n)
+        rows_array(py, n)
     }
 
     /// (V,3) float64 area-weighted unit vertex normals.
     fn vertex_normals<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
         let inner = self.inner.clone();
-        let n = py.detach(move || inner.vertex_normals());
-        array2(py, &n)
+        rows_array(py, py.detach(move || inner.vertex_normals()))
     }
 
     /// (E,2) int64 undirected edges `a < b`, sorted; builds the adjacency if needed.
     fn edges<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
         let inner = self.inner.clone();
-        let e = py.detach(move || inner.adjacency().edges.clone());
-        index_pairs(py, e.into_iter())
+        let e = py.detach(move || index_pairs(&inner.adjacency().edges));
+        rows_array(py, e)
     }
 
     /// (E,) int64 number of faces on each edge of `edges()`.
@@ -233,6 +114,11 @@ impl PyMesh {
     }
 }
 
+/// `u32` vertex pairs as int64 rows.
+fn index_pairs(pairs: &[[u32; 2]]) -> Vec<[i64; 2]> {
+    pairs.iter().map(|p| p.map(i64::from)).collect()
+}
+
 #[pyfunction]
 #[pyo3(signature = (mesh, motion, camera_position = None))]
 fn contour_edges<'py>(
@@ -247,12 +133,8 @@ fn contour_edges<'py>(
         .map(|c| vec3(c, "camera_position"))
         .transpose()?;
     let inner = mesh.inner.clone();
-    let flat = py
-        .detach(move || super::in_pool(|| core_contour_pairs(&inner, m, cam)))
-        .map_err(to_py_err)?;
-    let n = flat.len() / 2;
-    let arr = Array2::from_shape_vec((n, 2), flat).expect("pairs");
-    Ok(PyArray2::from_owned_array(py, arr))
+    let flat = detached_in_pool(py, move || contour_pairs(&inner, m, cam))?;
+    Ok(flat_rows_array(py, flat, 2))
 }
 
 type VolumeTuple<'py> = (
@@ -281,25 +163,18 @@ fn motion_volume<'py>(
     contour_line: bool,
     visible_only: bool,
 ) -> PyResult<VolumeTuple<'py>> {
-    let filter = Filter::parse(filter).map_err(to_py_err)?;
+    let filter = Filter::parse(filter)?;
     let kv = keyframes.as_array();
     if kv.shape()[1] != 4 || kv.shape()[2] != 4 {
-        return Err(to_py_err(Error::shape(
+        return Err(Error::shape(
             "motion",
             format!("expected shape (K,4,4), got {:?}", kv.shape()),
-        )));
+        )
+        .into());
     }
     let mats: Vec<[[f64; 4]; 4]> = kv
         .outer_iter()
-        .map(|m| {
-            let mut out = [[0.0; 4]; 4];
-            for (r, row) in out.iter_mut().enumerate() {
-                for (c, x) in row.iter_mut().enumerate() {
-                    *x = m[[r, c]];
-                }
-            }
-            out
-        })
+        .map(|m| std::array::from_fn(|r| std::array::from_fn(|c| m[[r, c]])))
         .collect();
     let mut opts = volume_options(
         filter,
@@ -311,24 +186,19 @@ fn motion_volume<'py>(
     )?;
     opts.visible_only = visible_only;
     if segments == 0 {
-        return Err(to_py_err(Error::value("segments", "must be >= 1")));
+        return Err(Error::value("segments", "must be >= 1").into());
     }
     let inner = mesh.inner.clone();
-    let vol = py
-        .detach(move || {
-            let path = Path::from_matrices(&mats)?;
-            if path.segments().saturating_mul(segments) > crate::volume::MAX_SEGMENTS {
-                return Err(Error::value(
-                    "segments",
-                    format!(
-                        "too many segments in total (at most {})",
-                        crate::volume::MAX_SEGMENTS
-                    ),
-                ));
-            }
-            super::in_pool(|| core_motion_volume(&inner, &path.subdivide(segments), &opts))
-        })
-        .map_err(to_py_err)?;
+    let vol = py.detach(move || {
+        let path = Path::from_matrices(&mats)?;
+        if path.segments().saturating_mul(segments) > MAX_SEGMENTS {
+            return Err(Error::value(
+                "segments",
+                format!("too many segments in total (at most {MAX_SEGMENTS})"),
+            ));
+        }
+        in_pool(|| crate::motion_volume(&inner, &path.subdivide(segments), &opts))
+    })?;
     Ok(volume_tuple(py, vol))
 }
 
@@ -350,7 +220,7 @@ fn spin_volume<'py>(
     face_colors: bool,
     contour_line: bool,
 ) -> PyResult<VolumeTuple<'py>> {
-    let filter = Filter::parse(filter).map_err(to_py_err)?;
+    let filter = Filter::parse(filter)?;
     let spin = Spin {
         axis: vec3(&axis, "axis")?,
         angle,
@@ -367,9 +237,7 @@ fn spin_volume<'py>(
         contour_line,
     )?;
     let inner = mesh.inner.clone();
-    let vol = py
-        .detach(move || super::in_pool(|| core_spin_volume(&inner, &spin, &opts)))
-        .map_err(to_py_err)?;
+    let vol = detached_in_pool(py, move || crate::spin_volume(&inner, &spin, &opts))?;
     Ok(volume_tuple(py, vol))
 }
 
@@ -383,7 +251,7 @@ fn volume_options(
     camera_position: Option<&PyReadonlyArray1<'_, f64>>,
     contour_line: bool,
 ) -> PyResult<VolumeOptions> {
-    let c = rows::<4, f32>(colors, "colors")?;
+    let c = rows_any_layout::<f32, 4>(colors, "colors")?.into_owned();
     let colors = if face_colors {
         Colors::PerFace(c)
     } else if c.len() == 1 {
@@ -391,10 +259,13 @@ fn volume_options(
     } else {
         Colors::PerVertex(c)
     };
+    let normals = normals
+        .map(|n| rows_any_layout::<f64, 3>(n, "normals").map(Cow::into_owned))
+        .transpose()?;
     Ok(VolumeOptions {
         filter,
         colors,
-        normals: normals.map(|n| rows::<3, f64>(n, "normals")).transpose()?,
+        normals,
         camera: camera_position
             .map(|c| vec3(c, "camera_position"))
             .transpose()?,
@@ -403,13 +274,13 @@ fn volume_options(
     })
 }
 
-fn volume_tuple(py: Python<'_>, vol: crate::volume::MotionVolume) -> VolumeTuple<'_> {
+fn volume_tuple(py: Python<'_>, vol: MotionVolume) -> VolumeTuple<'_> {
     let faces: Vec<[i64; 3]> = vol.faces.iter().map(|f| f.map(i64::from)).collect();
     (
-        owned2(py, vol.vertices),
-        owned2(py, faces),
-        owned2(py, vol.rgba),
-        owned2(py, vol.normals),
+        rows_array(py, vol.vertices),
+        rows_array(py, faces),
+        rows_array(py, vol.rgba),
+        rows_array(py, vol.normals),
         PyArray1::from_vec(py, vol.part),
         PyArray1::from_vec(py, vol.ring_alpha),
         vol.contour_edges,
@@ -435,15 +306,13 @@ impl PyContourTable {
     ) -> PyResult<Self> {
         let dirs = directions
             .as_ref()
-            .map(|d| rows::<3, f64>(d, "directions"))
+            .map(|d| rows_any_layout::<f64, 3>(d, "directions").map(Cow::into_owned))
             .transpose()?;
         let m = mesh.inner.clone();
-        let inner = py
-            .detach(move || match dirs {
-                Some(d) => ContourTable::new(&m, d),
-                None => ContourTable::random(&m, count, seed),
-            })
-            .map_err(to_py_err)?;
+        let inner = py.detach(move || match dirs {
+            Some(d) => ContourTable::new(&m, d),
+            None => ContourTable::random(&m, count, seed),
+        })?;
         Ok(PyContourTable { inner })
     }
 
@@ -453,18 +322,18 @@ impl PyContourTable {
 
     /// (K,3) float64 unit directions.
     fn directions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        array2(py, &self.inner.directions)
+        rows_array(py, self.inner.directions.clone())
     }
 
     /// (index, angular error in radians) of the nearest stored direction.
     fn nearest(&self, motion: PyReadonlyArray1<'_, f64>) -> PyResult<(usize, f64)> {
         let m = vec3(&motion, "motion")?;
-        self.inner.nearest(m).map_err(to_py_err)
+        Ok(self.inner.nearest(m)?)
     }
 
     fn edges<'py>(&self, py: Python<'py>, index: usize) -> PyResult<Bound<'py, PyArray2<i64>>> {
         let set = self.set(index)?;
-        Ok(index_pairs(py, set.edges.iter().copied()))
+        Ok(rows_array(py, index_pairs(&set.edges)))
     }
 
     fn front<'py>(&self, py: Python<'py>, index: usize) -> PyResult<Bound<'py, PyArray1<bool>>> {
@@ -478,12 +347,12 @@ impl PyContourTable {
 }
 
 impl PyContourTable {
-    fn set(&self, index: usize) -> PyResult<&crate::contour_table::ContourSet> {
+    fn set(&self, index: usize) -> Result<&ContourSet, Error> {
         self.inner.sets.get(index).ok_or_else(|| {
-            to_py_err(Error::value(
+            Error::value(
                 "index",
                 format!("must be < {}, got {index}", self.inner.sets.len()),
-            ))
+            )
         })
     }
 }
@@ -494,8 +363,8 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(contour_edges, m)?)?;
     m.add_function(wrap_pyfunction!(motion_volume, m)?)?;
     m.add_function(wrap_pyfunction!(spin_volume, m)?)?;
-    m.add("LEADING", crate::volume::LEADING)?;
-    m.add("TRAILING", crate::volume::TRAILING)?;
-    m.add("JOINING", crate::volume::JOINING)?;
+    m.add("LEADING", LEADING)?;
+    m.add("TRAILING", TRAILING)?;
+    m.add("JOINING", JOINING)?;
     Ok(())
 }

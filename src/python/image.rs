@@ -1,15 +1,14 @@
 //! Bindings for the image stage: shape and contiguity checks naming the argument, the GIL
 //! released around every kernel, numpy out. The Python layer (`motionblur.image`) converts
 //! dtypes and checks parameters first; these checks are the second line.
-use super::{c_slice, to_py_err};
-use crate::image::{self, CameraMatrices, Composite, DofParams};
-use crate::Error;
 use glam::DMat4;
 use numpy::{
-    IntoPyArray, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
-    PyReadonlyArray4, PyUntypedArrayMethods,
+    PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArray4, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
+
+use super::convert::{c_slice, detached_in_pool, rows, shaped};
+use crate::{CameraMatrices, Composite, DofParams, Error, Piece};
 
 type PyOut<'py> = PyResult<Bound<'py, PyAny>>;
 
@@ -21,12 +20,11 @@ fn img3<'a>(
 ) -> PyResult<(&'a [f32], usize, usize)> {
     let s = a.shape();
     if s[2] != channels {
-        return Err(to_py_err(Error::shape(
-            name,
-            format!("expected shape (H,W,{channels}), got {s:?}"),
-        )));
+        return Err(
+            Error::shape(name, format!("expected shape (H,W,{channels}), got {s:?}")).into(),
+        );
     }
-    let data = c_slice(a, name).map_err(to_py_err)?;
+    let data = c_slice(a, name)?;
     Ok((data, s[1], s[0]))
 }
 
@@ -35,40 +33,37 @@ fn img2<'a>(
     name: &'static str,
 ) -> PyResult<(&'a [f32], usize, usize)> {
     let s = a.shape();
-    let data = c_slice(a, name).map_err(to_py_err)?;
+    let data = c_slice(a, name)?;
     Ok((data, s[1], s[0]))
 }
 
 fn same_size(name: &'static str, got: (usize, usize), want: (usize, usize)) -> PyResult<()> {
     if got != want {
-        return Err(to_py_err(Error::shape(
+        return Err(Error::shape(
             name,
             format!(
                 "expected {}x{} pixels like rgba, got {}x{}",
                 want.1, want.0, got.1, got.0
             ),
-        )));
+        )
+        .into());
     }
     Ok(())
 }
 
-fn out3<'py>(py: Python<'py>, v: Vec<f32>, h: usize, w: usize, c: usize) -> PyOut<'py> {
-    Ok(v.into_pyarray(py).reshape([h, w, c])?.into_any())
-}
-
-fn out2<'py>(py: Python<'py>, v: Vec<f32>, h: usize, w: usize) -> PyOut<'py> {
-    Ok(v.into_pyarray(py).reshape([h, w])?.into_any())
-}
-
-fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<DMat4> {
+/// A row-major (4,4) f64 matrix as 16 numbers.
+fn map16(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<[f64; 16]> {
     if a.shape() != [4, 4] {
-        return Err(to_py_err(Error::shape(name, "expected shape (4,4)")));
+        return Err(Error::shape(name, "expected shape (4,4)").into());
     }
-    let s = c_slice(a, name).map_err(to_py_err)?;
     let mut m = [0.0f64; 16];
-    m.copy_from_slice(s);
-    // numpy rows -> glam columns.
-    Ok(DMat4::from_cols_array(&m).transpose())
+    m.copy_from_slice(c_slice(a, name)?);
+    Ok(m)
+}
+
+/// A (4,4) f64 matrix as glam's (numpy rows -> glam columns).
+fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<DMat4> {
+    Ok(DMat4::from_cols_array(&map16(a, name)?).transpose())
 }
 
 fn cameras(
@@ -81,14 +76,12 @@ fn cameras(
         matrix(view, "camera")?,
         matrix(projection, "camera")?,
         "camera",
-    )
-    .map_err(to_py_err)?;
+    )?;
     let prev = CameraMatrices::new(
         matrix(previous_view, "previous_camera")?,
         matrix(previous_projection, "previous_camera")?,
         "previous_camera",
-    )
-    .map_err(to_py_err)?;
+    )?;
     Ok((cur, prev))
 }
 
@@ -101,10 +94,8 @@ fn _glow<'py>(
     width: f32,
 ) -> PyOut<'py> {
     let (a, w, h) = img2(&alpha, "alpha")?;
-    let out = py
-        .detach(|| super::in_pool(|| image::glow(a, w, h, direction, width)))
-        .map_err(to_py_err)?;
-    out2(py, out, h, w)
+    let out = detached_in_pool(py, || crate::glow(a, w, h, direction, width))?;
+    shaped(py, out, [h, w])
 }
 
 /// Box blur of rgba (H,W,4) f32 along direction over length pixels.
@@ -116,10 +107,8 @@ fn _box_blur<'py>(
     length: f32,
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
-    let out = py
-        .detach(|| super::in_pool(|| image::box_blur(a, w, h, direction, length)))
-        .map_err(to_py_err)?;
-    out3(py, out, h, w, 4)
+    let out = detached_in_pool(py, || crate::box_blur(a, w, h, direction, length))?;
+    shaped(py, out, [h, w, 4])
 }
 
 /// Splat colors (N,4) f32 along paths (N,P,2) f32 into a (height, width, 4) f32 image.
@@ -133,28 +122,24 @@ fn _splat_paths<'py>(
 ) -> PyOut<'py> {
     let (cs, ps) = (colors.shape(), paths.shape());
     if cs[1] != 4 {
-        return Err(to_py_err(Error::shape(
-            "colors",
-            format!("expected shape (N,4), got {cs:?}"),
-        )));
+        return Err(Error::shape("colors", format!("expected shape (N,4), got {cs:?}")).into());
     }
     if ps[2] != 2 || ps[0] != cs[0] {
-        return Err(to_py_err(Error::shape(
+        return Err(Error::shape(
             "paths",
             format!("expected shape ({},P,2) like colors, got {ps:?}", cs[0]),
-        )));
+        )
+        .into());
     }
-    let c = c_slice(&colors, "colors").map_err(to_py_err)?;
-    let p = c_slice(&paths, "paths").map_err(to_py_err)?;
+    let c = c_slice(&colors, "colors")?;
+    let p = c_slice(&paths, "paths")?;
     let c4: Vec<[f32; 4]> = c
         .chunks_exact(4)
         .map(|x| [x[0], x[1], x[2], x[3]])
         .collect();
     let p2: Vec<[f32; 2]> = p.chunks_exact(2).map(|x| [x[0], x[1]]).collect();
-    let out = py
-        .detach(|| super::in_pool(|| image::splat_paths(width, height, &c4, &p2, ps[1])))
-        .map_err(to_py_err)?;
-    out3(py, out, height, width, 4)
+    let out = detached_in_pool(py, || crate::splat_paths(width, height, &c4, &p2, ps[1]))?;
+    shaped(py, out, [height, width, 4])
 }
 
 /// One piece of `_scatter_pieces`: rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32, ray (4,)
@@ -187,55 +172,29 @@ fn _scatter_pieces<'py>(
         same_size("ids", (s[0], s[1]), (h, w))?;
         let ms = maps.shape();
         if ms[0] != objects.len() || ms[1] != points || ms[2] != 4 || ms[3] != 4 {
-            return Err(to_py_err(Error::shape(
+            return Err(Error::shape(
                 "maps",
                 format!(
                     "expected shape ({},{points},4,4) (objects, points), got {ms:?}",
                     objects.len()
                 ),
-            )));
+            )
+            .into());
         }
-        views.push(image::Piece {
+        views.push(Piece {
             rgba: c,
             depth: d,
-            ids: c_slice(ids, "ids").map_err(to_py_err)?,
+            ids: c_slice(ids, "ids")?,
             width: w,
             height: h,
             ray: *ray,
             weight: *weight,
-            objects: c_slice(objects, "objects").map_err(to_py_err)?,
-            maps: c_slice(maps, "maps").map_err(to_py_err)?,
+            objects: c_slice(objects, "objects")?,
+            maps: c_slice(maps, "maps")?,
         });
     }
-    let out = py
-        .detach(|| super::in_pool(|| image::scatter_pieces(width, height, &views, points)))
-        .map_err(to_py_err)?;
-    out3(py, out, height, width, 4)
-}
-
-/// A row-major (4,4) f64 matrix as 16 numbers.
-fn map16(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<[f64; 16]> {
-    if a.shape() != [4, 4] {
-        return Err(to_py_err(Error::shape(name, "expected shape (4,4)")));
-    }
-    let mut m = [0.0f64; 16];
-    m.copy_from_slice(c_slice(a, name).map_err(to_py_err)?);
-    Ok(m)
-}
-
-/// (N,cols) C-contiguous rows, flat.
-fn flat_rows<'a, T: numpy::Element>(
-    a: &'a PyReadonlyArray2<'_, T>,
-    name: &'static str,
-    cols: usize,
-) -> PyResult<&'a [T]> {
-    if a.shape()[1] != cols {
-        return Err(to_py_err(Error::shape(
-            name,
-            format!("expected shape (N,{cols}), got {:?}", a.shape()),
-        )));
-    }
-    c_slice(a, name).map_err(to_py_err)
+    let out = detached_in_pool(py, || crate::scatter_pieces(width, height, &views, points))?;
+    shaped(py, out, [height, width, 4])
 }
 
 /// (x_min, y_min, x_max, y_max) of points (N,3) f64 under map (4,4) f64, or None (one behind).
@@ -246,9 +205,8 @@ fn _pixel_bounds(
     points: PyReadonlyArray2<'_, f64>,
 ) -> PyResult<Option<[f64; 4]>> {
     let m = map16(&map, "map")?;
-    let p = flat_rows(&points, "points", 3)?;
-    py.detach(|| super::in_pool(|| image::pixel_bounds(&m, p)))
-        .map_err(to_py_err)
+    let p = rows::<f64, 3>(&points, "points")?.as_flattened();
+    Ok(detached_in_pool(py, || crate::pixel_bounds(&m, p))?)
 }
 
 /// rgba (N,4) f32 with the colours sampled from img (H,W,4) f32 at points (N,3) f64 under map.
@@ -262,13 +220,11 @@ fn _sample_colors<'py>(
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&img, "img", 4)?;
     let m = map16(&map, "map")?;
-    let p = flat_rows(&points, "points", 3)?;
-    let c = flat_rows(&rgba, "rgba", 4)?;
+    let p = rows::<f64, 3>(&points, "points")?.as_flattened();
+    let c = rows::<f32, 4>(&rgba, "rgba")?.as_flattened();
     let n = p.len() / 3;
-    let out = py
-        .detach(|| super::in_pool(|| image::sample_colors(a, w, h, &m, p, c)))
-        .map_err(to_py_err)?;
-    Ok(out.into_pyarray(py).reshape([n, 4])?.into_any())
+    let out = detached_in_pool(py, || crate::sample_colors(a, w, h, &m, p, c))?;
+    shaped(py, out, [n, 4])
 }
 
 /// Coverage alpha of rgba (H,W,4) f32 times the colour of averaged (H,W,4) f32, over static_rgba.
@@ -291,10 +247,8 @@ fn _colored<'py>(
         }
         None => None,
     };
-    let out = py
-        .detach(|| super::in_pool(|| image::colored(r, s, u)))
-        .map_err(to_py_err)?;
-    out3(py, out, h, w, 4)
+    let out = detached_in_pool(py, || crate::colored(r, s, u))?;
+    shaped(py, out, [h, w, 4])
 }
 
 /// Opaque blur (box, glow, eq. 7) of rgba (H,W,4) f32.
@@ -306,10 +260,8 @@ fn _opaque_blur<'py>(
     length: f32,
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
-    let out = py
-        .detach(|| super::in_pool(|| image::opaque_blur(a, w, h, direction, length)))
-        .map_err(to_py_err)?;
-    out3(py, out, h, w, 4)
+    let out = detached_in_pool(py, || crate::opaque_blur(a, w, h, direction, length))?;
+    shaped(py, out, [h, w, 4])
 }
 
 /// Opaque motion blur of rgba (H,W,4) f32 composited `mode` base (H,W,4) f32 or rgba itself.
@@ -324,7 +276,7 @@ fn _opaque_motion_blur<'py>(
     mode: &str,
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
-    let mode = Composite::parse(mode).map_err(to_py_err)?;
+    let mode = Composite::parse(mode)?;
     let b = match &base {
         Some(b) => {
             let (b, bw, bh) = img3(b, "base", 4)?;
@@ -333,12 +285,10 @@ fn _opaque_motion_blur<'py>(
         }
         None => None,
     };
-    let out = py
-        .detach(|| {
-            super::in_pool(|| image::opaque_motion_blur(a, b, w, h, direction, length, mode))
-        })
-        .map_err(to_py_err)?;
-    out3(py, out, h, w, 4)
+    let out = detached_in_pool(py, || {
+        crate::opaque_motion_blur(a, b, w, h, direction, length, mode)
+    })?;
+    shaped(py, out, [h, w, 4])
 }
 
 /// Pyramid blur of rgba (H,W,4) f32 over `levels` levels.
@@ -349,10 +299,8 @@ fn _pyramid_blur<'py>(
     levels: usize,
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
-    let out = py
-        .detach(|| super::in_pool(|| image::pyramid_blur(a, w, h, levels)))
-        .map_err(to_py_err)?;
-    out3(py, out, h, w, 4)
+    let out = detached_in_pool(py, || crate::pyramid_blur(a, w, h, levels))?;
+    shaped(py, out, [h, w, 4])
 }
 
 /// Pyramid glow (eqs. 8-9) of alpha (H,W) f32 over `levels` levels.
@@ -363,10 +311,8 @@ fn _pyramid_glow<'py>(
     levels: usize,
 ) -> PyOut<'py> {
     let (a, w, h) = img2(&alpha, "alpha")?;
-    let out = py
-        .detach(|| super::in_pool(|| image::pyramid_glow(a, w, h, levels)))
-        .map_err(to_py_err)?;
-    out2(py, out, h, w)
+    let out = detached_in_pool(py, || crate::pyramid_glow(a, w, h, levels))?;
+    shaped(py, out, [h, w])
 }
 
 /// Opaque pyramid blur of rgba (H,W,4) f32 over `levels` levels.
@@ -377,10 +323,8 @@ fn _pyramid_opaque_blur<'py>(
     levels: usize,
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
-    let out = py
-        .detach(|| super::in_pool(|| image::pyramid_opaque_blur(a, w, h, levels)))
-        .map_err(to_py_err)?;
-    out3(py, out, h, w, 4)
+    let out = detached_in_pool(py, || crate::pyramid_opaque_blur(a, w, h, levels))?;
+    shaped(py, out, [h, w, 4])
 }
 
 /// Depth of field of rgba (H,W,4) f32 with depth (H,W) f32.
@@ -406,10 +350,8 @@ fn _depth_of_field<'py>(
         yfov,
         layers,
     };
-    let out = py
-        .detach(|| super::in_pool(|| image::depth_of_field(a, d, w, h, &p)))
-        .map_err(to_py_err)?;
-    out3(py, out, h, w, 4)
+    let out = detached_in_pool(py, || crate::depth_of_field(a, d, w, h, &p))?;
+    shaped(py, out, [h, w, 4])
 }
 
 /// Per-pixel velocity (H,W,2) f32 from depth (H,W) f32 and two cameras' view/projection (4,4) f64.
@@ -424,10 +366,8 @@ fn _camera_velocity<'py>(
 ) -> PyOut<'py> {
     let (d, w, h) = img2(&depth, "depth")?;
     let (cur, prev) = cameras(&view, &projection, &previous_view, &previous_projection)?;
-    let out = py
-        .detach(|| super::in_pool(|| image::camera_velocity(d, w, h, &cur, &prev)))
-        .map_err(to_py_err)?;
-    out3(py, out, h, w, 2)
+    let out = detached_in_pool(py, || crate::camera_velocity(d, w, h, &cur, &prev))?;
+    shaped(py, out, [h, w, 2])
 }
 
 /// Centred N-sample blur of rgba (H,W,4) f32 along velocity (H,W,2) f32.
@@ -441,10 +381,8 @@ fn _velocity_blur<'py>(
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
     let (v, vw, vh) = img3(&velocity, "velocity", 2)?;
     same_size("velocity", (vh, vw), (h, w))?;
-    let out = py
-        .detach(|| super::in_pool(|| image::velocity_blur(a, v, w, h, samples)))
-        .map_err(to_py_err)?;
-    out3(py, out, h, w, 4)
+    let out = detached_in_pool(py, || crate::velocity_blur(a, v, w, h, samples))?;
+    shaped(py, out, [h, w, 4])
 }
 
 /// Chapman's camera motion blur of rgba (H,W,4) f32 with depth (H,W) f32.
@@ -465,12 +403,10 @@ fn _camera_motion_blur<'py>(
     let (d, dw, dh) = img2(&depth, "depth")?;
     same_size("depth", (dh, dw), (h, w))?;
     let (cur, prev) = cameras(&view, &projection, &previous_view, &previous_projection)?;
-    let out = py
-        .detach(|| {
-            super::in_pool(|| image::camera_motion_blur(a, d, w, h, &cur, &prev, samples, scale))
-        })
-        .map_err(to_py_err)?;
-    out3(py, out, h, w, 4)
+    let out = detached_in_pool(py, || {
+        crate::camera_motion_blur(a, d, w, h, &cur, &prev, samples, scale)
+    })?;
+    shaped(py, out, [h, w, 4])
 }
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

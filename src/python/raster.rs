@@ -1,13 +1,14 @@
 //! Bindings for the raster stage: numpy in, owned Rust data, GIL released, numpy out.
-use super::{c_slice, to_py_err};
-use crate::raster::{self, Background, Blend, Camera, Draw, Light, Options, Shading};
-use crate::Error;
 use glam::DMat4;
-use numpy::{
-    IntoPyArray, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
-};
+use numpy::{PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+
+use super::convert::{c_slice, detached_in_pool, rows, shaped, ToDict};
+use crate::{
+    faces_from_i64, rasterize_over, Background, Blend, Camera, Draw, Error, Light, RasterOptions,
+    Shading,
+};
 
 /// One draw as the Python layer passes it: (vertices f64 (V,3), faces i64 (F,3), rgba f32 (1|V,4),
 /// normals f32 (V,3) | None, object_id, cull_back, previous_vertices f64 (V,3) | None).
@@ -20,29 +21,6 @@ type DrawArgs<'py> = (
     bool,
     Option<PyReadonlyArray2<'py, f64>>,
 );
-
-/// Copies a C-contiguous (N, K) array into owned rows, checking the column count.
-fn rows<T: numpy::Element + Copy + Default, const K: usize>(
-    a: &PyReadonlyArray2<'_, T>,
-    name: &'static str,
-) -> Result<Vec<[T; K]>, Error> {
-    let shape = a.shape();
-    if shape[1] != K {
-        return Err(Error::shape(
-            name,
-            format!("expected shape (N,{K}), got {shape:?}"),
-        ));
-    }
-    let flat = c_slice(a, name)?;
-    Ok(flat
-        .chunks_exact(K)
-        .map(|c| {
-            let mut r = [T::default(); K];
-            r.copy_from_slice(c);
-            r
-        })
-        .collect())
-}
 
 /// The background as the Python layer passes it: (rgba f32 (R,S,4), depth f32 (R,S), ids i32
 /// (R,S), x0, y0), one entry per sample; the frame reads the window from sample (x0, y0).
@@ -80,7 +58,7 @@ fn background<'a>(b: &'a BackgroundArgs<'_>) -> Result<Background<'a>, Error> {
 }
 
 fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> Result<DMat4, Error> {
-    let m: Vec<[f64; 4]> = rows(a, name)?;
+    let m = rows::<f64, 4>(a, name)?;
     if m.len() != 4 {
         return Err(Error::shape(name, "expected shape (4,4)"));
     }
@@ -89,15 +67,19 @@ fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> Result<DMat4, Er
 }
 
 fn owned_draw(d: &DrawArgs<'_>) -> Result<Draw, Error> {
-    let vertices: Vec<[f64; 3]> = rows(&d.0, "vertices")?;
-    let faces_i: Vec<[i64; 3]> = rows(&d.1, "faces")?;
-    let flat: Vec<i64> = faces_i.iter().flatten().copied().collect();
-    let faces = raster::faces_from_i64(&flat, vertices.len())?;
-    let rgba: Vec<[f32; 4]> = rows(&d.2, "rgba")?;
-    let normals = d.3.as_ref().map(|n| rows(n, "normals")).transpose()?;
+    let vertices = rows::<f64, 3>(&d.0, "vertices")?.to_vec();
+    let faces = faces_from_i64(
+        rows::<i64, 3>(&d.1, "faces")?.as_flattened(),
+        vertices.len(),
+    )?;
+    let rgba = rows::<f32, 4>(&d.2, "rgba")?.to_vec();
+    let normals =
+        d.3.as_ref()
+            .map(|n| rows::<f32, 3>(n, "normals").map(<[_]>::to_vec))
+            .transpose()?;
     let previous =
         d.6.as_ref()
-            .map(|p| rows(p, "previous_vertices"))
+            .map(|p| rows::<f64, 3>(p, "previous_vertices").map(<[_]>::to_vec))
             .transpose()?;
     Ok(Draw {
         vertices,
@@ -136,58 +118,34 @@ fn _rasterize<'py>(
     Bound<'py, PyDict>,
 )> {
     let camera = Camera::from_matrices(
-        matrix(&view, "view").map_err(to_py_err)?,
-        matrix(&projection, "projection").map_err(to_py_err)?,
+        matrix(&view, "view")?,
+        matrix(&projection, "projection")?,
         width,
         height,
-    )
-    .map_err(to_py_err)?;
-    let opts = Options {
+    )?;
+    let opts = RasterOptions {
         samples,
-        blend: Blend::parse(blend).map_err(to_py_err)?,
-        shading: Shading::parse(shading).map_err(to_py_err)?,
+        blend: Blend::parse(blend)?,
+        shading: Shading::parse(shading)?,
         lights: lights
             .iter()
             .map(|(d, i)| Light::new(*d, *i))
-            .collect::<Result<_, _>>()
-            .map_err(to_py_err)?,
+            .collect::<Result<_, _>>()?,
         ambient: ambient.map(|a| a as f32),
     };
-    let owned: Vec<Draw> = draws
-        .iter()
-        .map(owned_draw)
-        .collect::<Result<_, _>>()
-        .map_err(to_py_err)?;
+    let owned: Vec<Draw> = draws.iter().map(owned_draw).collect::<Result<_, _>>()?;
     drop(draws);
-    let bg = background
-        .as_ref()
-        .map(self::background)
-        .transpose()
-        .map_err(to_py_err)?;
-    let frame = py
-        .detach(|| super::in_pool(|| raster::rasterize_over(&camera, &owned, &opts, bg.as_ref())))
-        .map_err(to_py_err)?;
+    let bg = background.as_ref().map(self::background).transpose()?;
+    let frame = detached_in_pool(py, || rasterize_over(&camera, &owned, &opts, bg.as_ref()))?;
     let (h, w) = (frame.height as usize, frame.width as usize);
-    let stats = PyDict::new(py);
-    let s = &frame.stats;
-    stats.set_item("triangles", s.triangles)?;
-    stats.set_item("fragments", s.fragments)?;
-    stats.set_item("culled", s.culled)?;
-    stats.set_item("clipped", s.clipped)?;
-    stats.set_item("ms_transform", s.ms_transform)?;
-    stats.set_item("ms_setup", s.ms_setup)?;
-    stats.set_item("ms_bin", s.ms_bin)?;
-    stats.set_item("ms_raster", s.ms_raster)?;
-    stats.set_item("ms_total", s.ms_total)?;
-    let rgba = frame.rgba.into_pyarray(py).reshape([h, w, 4])?.into_any();
-    let depth = frame.depth.into_pyarray(py).reshape([h, w])?.into_any();
-    let ids = frame.ids.into_pyarray(py).reshape([h, w])?.into_any();
-    let velocity = frame
-        .velocity
-        .into_pyarray(py)
-        .reshape([h, w, 2])?
-        .into_any();
-    Ok((rgba, depth, ids, velocity, stats))
+    let stats = frame.stats.to_dict(py)?;
+    Ok((
+        shaped(py, frame.rgba, [h, w, 4])?,
+        shaped(py, frame.depth, [h, w])?,
+        shaped(py, frame.ids, [h, w])?,
+        shaped(py, frame.velocity, [h, w, 2])?,
+        stats,
+    ))
 }
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

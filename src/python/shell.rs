@@ -9,55 +9,23 @@ use numpy::{
     PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
-use rayon::prelude::*;
 
-use super::{c_slice, to_py_err};
-use crate::shell::{motion_silhouette, BlurShell, ShellColor, ShellOptions, ShellOut};
-use crate::Error;
+use super::convert::{c_slice, detached_in_pool, face_indices, rows};
+use crate::{
+    motion_silhouette, BlurShell, Error, ShellColor, ShellOptions, ShellOut, ON_SILHOUETTE,
+};
 
-/// Borrow a C-contiguous (N,3) float64 array as rows.
-fn rows3<'a>(a: &'a PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<&'a [[f64; 3]]> {
-    let shape = a.shape();
-    if shape[1] != 3 {
-        return Err(to_py_err(Error::shape(
-            name,
-            format!("expected shape (N,3), got {shape:?}"),
-        )));
-    }
-    let flat = c_slice(a, name).map_err(to_py_err)?;
-    // SAFETY: `[f64; 3]` has the size of three f64 and the alignment of one; `flat` holds
-    // exactly `shape[0] * 3` values, so the rows cover it and nothing more.
-    Ok(unsafe { std::slice::from_raw_parts(flat.as_ptr().cast::<[f64; 3]>(), shape[0]) })
-}
-
-/// (F,3) int64 faces to `u32` triples, every index in [0, nv).
-fn face_rows(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>> {
+/// (F,3) C-contiguous int64 faces, F > 0, to `u32` triples, every index in [0, nv).
+fn faces(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>> {
     let shape = a.shape();
     if shape[1] != 3 || shape[0] == 0 {
-        return Err(to_py_err(Error::shape(
+        return Err(Error::shape(
             "faces",
             format!("expected shape (F,3), F > 0, got {shape:?}"),
-        )));
+        )
+        .into());
     }
-    let flat = c_slice(a, "faces").map_err(to_py_err)?;
-    let nv = nv as i64;
-    let out: Vec<[u32; 3]> = flat
-        .par_chunks_exact(3)
-        .map(|t| {
-            if t.iter().all(|x| (0..nv).contains(x)) {
-                [t[0] as u32, t[1] as u32, t[2] as u32]
-            } else {
-                [u32::MAX; 3]
-            }
-        })
-        .collect();
-    if let Some(i) = out.par_iter().position_first(|t| t[0] == u32::MAX) {
-        return Err(to_py_err(Error::value(
-            "faces",
-            format!("face {i} has an index out of range [0, {nv})"),
-        )));
-    }
-    Ok(out)
+    Ok(face_indices(c_slice(a, "faces")?, nv)?)
 }
 
 type I8Pair<'py> = (Bound<'py, PyArray1<i8>>, Bound<'py, PyArray1<i8>>);
@@ -72,8 +40,8 @@ type ShellArrays<'py> = (
 );
 
 /// Numpy views of one shell build, all over a single buffer: one allocation per build (the
-/// kernel writes numpy's int64 / int32 indices directly). Separate arrays per output cost a
-/// page-faulting allocation each: most of a small build under perf.
+/// kernel writes numpy's int64 / int32 indices directly) instead of a page-faulting
+/// allocation per output.
 struct OneBuffer {
     words: Vec<u64>,
     nv: usize,
@@ -191,7 +159,7 @@ impl PyBlurShell {
         mask: Option<PyReadonlyArray1<'_, bool>>,
         color: Option<PyReadonlyArray2<'_, f32>>,
     ) -> PyResult<Self> {
-        let f = face_rows(&faces, n_vertices)?;
+        let f = self::faces(&faces, n_vertices)?;
         let mask = mask.map(|m| m.as_array().to_vec());
         let color = match color {
             None => ShellColor::Uniform([1.0; 3]),
@@ -199,10 +167,11 @@ impl PyBlurShell {
                 let view = c.as_array();
                 if view.ncols() != 3 {
                     let shape = view.shape().to_vec();
-                    return Err(to_py_err(Error::shape(
+                    return Err(Error::shape(
                         "color",
                         format!("expected (3,) or (V,3), got {shape:?}"),
-                    )));
+                    )
+                    .into());
                 }
                 let rows: Vec<[f32; 3]> = view
                     .rows()
@@ -221,11 +190,7 @@ impl PyBlurShell {
             hysteresis,
             initial_alpha,
         };
-        let inner = py
-            .detach(move || {
-                super::in_pool(move || BlurShell::new(f, n_vertices, opts, mask, color))
-            })
-            .map_err(to_py_err)?;
+        let inner = detached_in_pool(py, move || BlurShell::new(f, n_vertices, opts, mask, color))?;
         Ok(PyBlurShell { inner })
     }
 
@@ -236,16 +201,16 @@ impl PyBlurShell {
         vertices: PyReadonlyArray2<'_, f64>,
         normals: Option<PyReadonlyArray2<'_, f64>>,
     ) -> PyResult<()> {
-        let v = rows3(&vertices, "vertices")?;
-        let n = normals.as_ref().map(|n| rows3(n, "normals")).transpose()?;
+        let v = rows(&vertices, "vertices")?;
+        let n = normals.as_ref().map(|n| rows(n, "normals")).transpose()?;
         let inner = &mut self.inner;
         if inner.parallel() {
-            py.detach(move || super::in_pool(move || inner.update(v, n)))
+            detached_in_pool(py, move || inner.update(v, n))?;
         } else {
             // Small mesh: sequential kernels on this thread (no hand-over to the pool).
-            py.detach(move || inner.update(v, n))
+            py.detach(move || inner.update(v, n))?;
         }
-        .map_err(to_py_err)
+        Ok(())
     }
 
     #[pyo3(signature = (vertices=None, normals=None))]
@@ -255,18 +220,15 @@ impl PyBlurShell {
         vertices: Option<PyReadonlyArray2<'py, f64>>,
         normals: Option<PyReadonlyArray2<'py, f64>>,
     ) -> PyResult<ShellArrays<'py>> {
-        let v = vertices
-            .as_ref()
-            .map(|v| rows3(v, "vertices"))
-            .transpose()?;
-        let n = normals.as_ref().map(|n| rows3(n, "normals")).transpose()?;
+        let v = vertices.as_ref().map(|v| rows(v, "vertices")).transpose()?;
+        let n = normals.as_ref().map(|n| rows(n, "normals")).transpose()?;
         let inner = &self.inner;
-        let plan = inner.build_plan(v, n).map_err(to_py_err)?;
+        let plan = inner.build_plan(v, n)?;
         let mut buf = OneBuffer::new(plan.n_vertices, plan.n_triangles);
         let out = buf.slices();
         let plan = &plan;
         if inner.parallel() {
-            py.detach(move || super::in_pool(move || inner.build_into(plan, out, v, n)));
+            detached_in_pool(py, move || inner.build_into(plan, out, v, n));
         } else {
             py.detach(move || inner.build_into(plan, out, v, n));
         }
@@ -327,7 +289,7 @@ impl PyBlurShell {
     fn _element(&self, face: usize, age: usize) -> Option<(u8, bool)> {
         self.inner
             .element(face, age)
-            .map(|c| (c & 3, c & crate::shell::ON_SILHOUETTE != 0))
+            .map(|c| (c & 3, c & ON_SILHOUETTE != 0))
     }
 }
 
@@ -342,27 +304,27 @@ fn _motion_silhouette<'py>(
     faces: PyReadonlyArray2<'py, i64>,
     normals: Option<PyReadonlyArray2<'py, f64>>,
 ) -> PyResult<I8Pair<'py>> {
-    let v = rows3(&vertices, "vertices")?;
-    let p = rows3(&previous_vertices, "previous_vertices")?;
-    let n = normals.as_ref().map(|n| rows3(n, "normals")).transpose()?;
+    let v = rows(&vertices, "vertices")?;
+    let p = rows(&previous_vertices, "previous_vertices")?;
+    let n = normals.as_ref().map(|n| rows(n, "normals")).transpose()?;
     if p.len() != v.len() {
-        return Err(to_py_err(Error::shape(
+        return Err(Error::shape(
             "previous_vertices",
             format!("expected {} rows (as vertices), got {}", v.len(), p.len()),
-        )));
+        )
+        .into());
     }
     if let Some(n) = n {
         if n.len() != v.len() {
-            return Err(to_py_err(Error::shape(
+            return Err(Error::shape(
                 "normals",
                 format!("expected {} rows (as vertices), got {}", v.len(), n.len()),
-            )));
+            )
+            .into());
         }
     }
-    let f = face_rows(&faces, v.len())?;
-    let (fac, edge) = py
-        .detach(move || super::in_pool(move || motion_silhouette(v, p, &f, n)))
-        .map_err(to_py_err)?;
+    let f = self::faces(&faces, v.len())?;
+    let (fac, edge) = detached_in_pool(py, move || motion_silhouette(v, p, &f, n))?;
     let edge = edge.into_iter().map(|e| if e > 2 { -1 } else { e as i8 });
     Ok((
         Array1::from_vec(fac).into_pyarray(py),

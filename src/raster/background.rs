@@ -8,9 +8,9 @@
 //! the same pass, except when a fragment lies within one float ulp of the background's depth
 //! (the background holds depth = 1/(1/w) rounded, not 1/w itself): coplanar surfaces fight
 //! either way.
+use super::bins::TILE;
 use super::blend::Sample;
-use super::tile::TILE;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Per-sample arrays of the background, row-major with `stride` samples a row. The frame's
 /// `ws` x `hs` samples read the window of these arrays whose top-left sample is (`x0`, `y0`)
@@ -28,6 +28,7 @@ pub struct Background<'a> {
     pub stride: usize,
     /// The arrays' sample under the frame's sample (0, 0).
     pub x0: usize,
+    /// The arrays' row under the frame's sample row 0.
     pub y0: usize,
 }
 

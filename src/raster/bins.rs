@@ -1,11 +1,13 @@
-//! Binning: which triangles touch which screen tile, in submission order.
+//! The tile grid and binning: which triangles touch which screen tile, in submission order.
 //!
 //! A triangle reference packs its chunk index (high 16 bits) and its index in the chunk (low 16
 //! bits). Chunks are numbered in submission order (draw by draw, face by face), so references
 //! ascend in submission order, and a counting sort by tile keeps that order inside every bin.
 use super::setup::Chunk;
-use super::tile::TILE;
 use rayon::prelude::*;
+
+/// Tile side in samples.
+pub const TILE: i32 = 64;
 
 /// The triangles of every tile: `refs[start[t]..start[t + 1]]` for tile `t` (row-major).
 #[derive(Debug, Default)]

@@ -11,7 +11,9 @@ use std::cmp::Ordering;
 /// How transparent fragments are composited.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Blend {
+    /// Sorted by depth per sample, composited back to front.
     Exact,
+    /// Composited in submission order, as unsorted z-buffer hardware does.
     Unsorted,
 }
 

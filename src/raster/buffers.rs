@@ -3,8 +3,8 @@
 //! Resolve: the colour of a pixel is the mean of its s x s samples (a box filter). Depth, id and
 //! velocity come from the pixel's *nearest* sample (smallest depth; the first in row order on
 //! ties), so they always describe one real surface rather than a blend of two.
+use super::bins::TILE;
 use super::blend::Sample;
-use super::tile::TILE;
 
 /// Timings and counts of one frame.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -13,19 +13,28 @@ pub struct Stats {
     pub triangles: u64,
     /// Samples covered by those triangles (both passes).
     pub fragments: u64,
+    /// Faces culled as back-facing.
     pub culled: u64,
+    /// Faces clipped against the near or far plane or the guard band.
     pub clipped: u64,
+    /// Milliseconds transforming vertices.
     pub ms_transform: f64,
+    /// Milliseconds setting up triangles.
     pub ms_setup: f64,
+    /// Milliseconds binning triangles into tiles.
     pub ms_bin: f64,
+    /// Milliseconds rasterizing and resolving the tiles.
     pub ms_raster: f64,
+    /// Milliseconds for the whole frame.
     pub ms_total: f64,
 }
 
 /// A rendered frame: row-major buffers of `height` x `width` pixels.
 #[derive(Clone, Debug, Default)]
 pub struct Frame {
+    /// Width in pixels.
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
     /// (H,W,4) premultiplied linear RGBA.
     pub rgba: Vec<f32>,
@@ -35,6 +44,7 @@ pub struct Frame {
     pub ids: Vec<i32>,
     /// (H,W,2) screen motion in pixels of the nearest surface.
     pub velocity: Vec<f32>,
+    /// Counts and timings of the frame.
     pub stats: Stats,
 }
 

@@ -4,8 +4,8 @@
 //! +Y up, `yfov` is the vertical field of view in radians, pixel centres sit at +0.5. The
 //! projection equals pyrender's `PerspectiveCamera.get_projection_matrix` (an infinite far plane
 //! when `zfar` is infinite).
-use crate::{Error, Result};
-use glam::{DMat4, DVec3, DVec4};
+use crate::error::{Error, Result};
+use glam::{DMat4, DVec4};
 
 /// Largest image side accepted, in pixels.
 pub const MAX_SIDE: u32 = 16384;
@@ -21,7 +21,9 @@ pub struct Camera {
     pub view: DMat4,
     /// Camera-to-clip transform (OpenGL clip space, w = distance along the view axis).
     pub projection: DMat4,
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
 }
 
@@ -46,7 +48,8 @@ pub fn perspective(yfov: f64, aspect: f64, znear: f64, zfar: f64) -> DMat4 {
 }
 
 /// Camera-to-world pose at `eye` looking at `target` (the camera's -Z points at the target).
-pub fn look_at(eye: DVec3, target: DVec3, up: DVec3) -> Result<DMat4> {
+#[cfg(test)]
+pub(crate) fn look_at(eye: glam::DVec3, target: glam::DVec3, up: glam::DVec3) -> Result<DMat4> {
     let back = eye - target;
     if back.length() == 0.0 || !back.is_finite() {
         return Err(Error::value("target", "must differ from eye"));
@@ -167,6 +170,7 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
 
     #[test]
     fn look_at_points_minus_z_at_the_target() {

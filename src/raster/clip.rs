@@ -19,8 +19,9 @@ pub struct ClipVertex {
 /// The most vertices a triangle clipped by six planes can have.
 pub const MAX_POLY: usize = 9;
 
-/// Bit of each plane in an outcode: near, far, left, right, bottom, top.
-pub const NEAR: u8 = 1;
+/// The near plane's bit in an outcode (bits: near, far, left, right, bottom, top).
+#[cfg(test)]
+const NEAR: u8 = 1;
 
 /// The clip volume: the near/far planes of OpenGL (-w <= z <= w) and a guard band in x and y
 /// (|x| <= gx w, |y| <= gy w).

@@ -1,5 +1,5 @@
 //! One mesh to draw: positions, faces, straight colours, normals, id, culling, previous positions.
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Largest coordinate magnitude accepted: beyond it f64 transforms lose every fractional bit.
 pub const MAX_COORD: f64 = 1e15;
@@ -10,12 +10,19 @@ pub const MAX_FACES: usize = 1 << 28;
 /// per vertex. `previous` holds the world positions at the previous time (for velocity).
 #[derive(Clone, Debug)]
 pub struct Draw {
+    /// World positions (V,3).
     pub vertices: Vec<[f64; 3]>,
+    /// Counter-clockwise triangles over `vertices`.
     pub faces: Vec<[u32; 3]>,
+    /// One colour for the mesh or one per vertex.
     pub rgba: Vec<[f32; 4]>,
+    /// Per-vertex normals for lambert shading; `None`: area-weighted vertex normals.
     pub normals: Option<Vec<[f32; 3]>>,
+    /// Written to the frame's ids where the mesh is nearest.
     pub object_id: i32,
+    /// Whether back-facing triangles are culled.
     pub cull_back: bool,
+    /// World positions at the previous time, for the velocity buffer.
     pub previous: Option<Vec<[f64; 3]>>,
 }
 

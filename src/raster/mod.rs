@@ -29,19 +29,19 @@ mod tile;
 pub use background::Background;
 pub use blend::Blend;
 pub use buffers::{Frame, Stats};
-pub use camera::{
-    check_size, look_at, perspective, Camera, MAX_INTERNAL_SIDE, MAX_PIXELS, MAX_SIDE,
-};
+use camera::check_size;
+pub use camera::Camera;
 pub use draw::{faces_from_i64, vertex_normals, Draw};
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
+use bins::TILE;
 use glam::DVec4;
 use rayon::prelude::*;
 use setup::{Chunk, Viewport};
 use shade::{homogeneous_pixel, Prepared, Shader};
 use std::cell::RefCell;
 use std::time::Instant;
-use tile::{TileScratch, TILE};
+use tile::TileScratch;
 
 /// Faces set up per parallel job (a clipped face may become up to 7 triangles, so a chunk
 /// holds at most 28672 < 2^16 triangles).
@@ -50,14 +50,18 @@ const CHUNK_FACES: usize = 4096;
 /// How fragments are shaded.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Shading {
+    /// Unlit: the colour itself.
     Flat,
+    /// Ambient plus Lambert's cosine per directional light.
     Lambert,
 }
 
 /// A directional light: `direction` is the way the light travels (normalised by `Options::new`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Light {
+    /// Unit direction the light travels.
     pub direction: [f32; 3],
+    /// RGB intensity.
     pub intensity: [f32; 3],
 }
 
@@ -66,9 +70,13 @@ pub struct Light {
 pub struct Options {
     /// Samples per pixel along each axis: 1, 2 or 4.
     pub samples: u32,
+    /// How transparent fragments are composited.
     pub blend: Blend,
+    /// How fragments are shaded.
     pub shading: Shading,
+    /// Directional lights of lambert shading.
     pub lights: Vec<Light>,
+    /// Ambient RGB of lambert shading.
     pub ambient: [f32; 3],
 }
 

@@ -1,4 +1,5 @@
 //! Whole-pipeline tests of the rasterizer in pure Rust.
+use super::camera::look_at;
 use super::*;
 use glam::{DMat4, DVec3};
 
@@ -37,7 +38,7 @@ fn grid(n: usize, jitter: f64) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
             ]);
         }
     }
-    (v, crate::test_meshes::grid_faces(n))
+    (v, crate::mesh::grid_faces(n))
 }
 
 #[test]

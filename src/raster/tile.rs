@@ -11,13 +11,12 @@
 //! (1/w and a triangle reference), and shades only the winners. Pass 2 (transparent) collects
 //! the transparent fragments in front of the opaque surface; `blend.rs` composites them.
 use super::background::Background;
+use super::bins::TILE;
 use super::blend::{Blend, Frag, FragLists, Sample};
 use super::interp::Planes;
 use super::setup::{Tri, HALF, MAY_OPAQUE, MAY_TRANSPARENT, ONE};
 use super::shade::{Shader, TriShade};
 
-/// Tile side in samples.
-pub const TILE: i32 = 64;
 const NONE: u32 = u32::MAX;
 
 /// Edge functions of a triangle, ready to walk samples.

@@ -6,10 +6,9 @@
 //! does not depend on the thread count. Only live polygons emit anything.
 use rayon::prelude::*;
 
-use super::silhouette::CHUNK;
-use super::{BlurShell, ShellColor};
+use super::blur_shell::{check_rows, BlurShell, ShellColor, CHUNK};
+use crate::error::Result;
 use crate::mesh::normalize;
-use crate::Result;
 
 /// The shell mesh: strips of quads (two triangles each), culling off when drawn.
 ///
@@ -18,7 +17,9 @@ use crate::Result;
 /// pairs `j` and `j + 1` as triangles `(2j, 2j+1, 2j+3)` and `(2j, 2j+3, 2j+2)`.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ShellMesh {
+    /// World positions.
     pub vertices: Vec<[f64; 3]>,
+    /// Triangles over `vertices`.
     pub faces: Vec<[u32; 3]>,
     /// Straight (non-premultiplied) RGBA.
     pub rgba: Vec<[f32; 4]>,
@@ -34,11 +35,17 @@ pub struct ShellMesh {
 /// Python binding can fill numpy's int64 / int32 arrays directly (`I`: triangle corners, `J`:
 /// source polygon, `K`: step).
 pub struct ShellOut<'a, I, J, K> {
+    /// World positions of the shell's vertices.
     pub vertices: &'a mut [[f64; 3]],
+    /// Triangles over `vertices`.
     pub faces: &'a mut [[I; 3]],
+    /// Straight RGBA per vertex.
     pub rgba: &'a mut [[f32; 4]],
+    /// Unit normals per vertex.
     pub normals: &'a mut [[f32; 3]],
+    /// Per vertex, the mesh polygon whose strip it belongs to.
     pub face: &'a mut [J],
+    /// Per vertex, its pair index along the strip.
     pub step: &'a mut [K],
 }
 
@@ -104,10 +111,10 @@ impl BlurShell {
         normals: Option<&[[f64; 3]]>,
     ) -> Result<BuildPlan> {
         if let Some(v) = vertices {
-            super::check_rows(v, self.n_vertices, "vertices")?;
+            check_rows(v, self.n_vertices, "vertices")?;
         }
         if let Some(n) = normals {
-            super::check_rows(n, self.n_vertices, "normals")?;
+            check_rows(n, self.n_vertices, "normals")?;
         }
         if self.updates == 0 {
             return Ok(BuildPlan::default());

@@ -1,8 +1,10 @@
 //! Core tests of the blur shell: silhouette rule, strips, fading bounds, threads.
 use std::collections::HashMap;
 
+use super::locality::Locality;
 use super::*;
-use crate::test_meshes::uv_sphere as sphere;
+use crate::contour::{face_edge, BACK, FRONT, NEUTRAL, NO_EDGE};
+use crate::mesh::uv_sphere as sphere;
 
 fn moved(v: &[[f64; 3]], t: [f64; 3]) -> Vec<[f64; 3]> {
     v.iter()
@@ -29,14 +31,11 @@ fn shell(f: &[[u32; 3]], nv: usize, s: u32, h: u32) -> BlurShell {
 #[test]
 fn facing_rule_and_face_edge() {
     let fac = [FRONT, BACK, BACK, NEUTRAL];
-    assert_eq!(silhouette::face_edge(&fac, &[0, 1, 2]), 1);
-    assert_eq!(silhouette::face_edge(&fac, &[1, 0, 2]), 2);
-    assert_eq!(silhouette::face_edge(&fac, &[1, 2, 0]), 0);
-    assert_eq!(silhouette::face_edge(&fac, &[0, 1, 3]), NO_EDGE);
-    assert_eq!(
-        silhouette::face_edge(&[BACK, BACK, BACK], &[0, 1, 2]),
-        NO_EDGE
-    );
+    assert_eq!(face_edge(&fac, &[0, 1, 2]), 1);
+    assert_eq!(face_edge(&fac, &[1, 0, 2]), 2);
+    assert_eq!(face_edge(&fac, &[1, 2, 0]), 0);
+    assert_eq!(face_edge(&fac, &[0, 1, 3]), NO_EDGE);
+    assert_eq!(face_edge(&[BACK, BACK, BACK], &[0, 1, 2]), NO_EDGE);
 }
 
 #[test]
@@ -318,7 +317,7 @@ fn bad_input_names_the_argument() {
 #[test]
 fn locality_is_a_bijection_with_faces_sorted_and_sums_in_original_order() {
     let (v, f) = sphere(9, 17);
-    let loc = silhouette::Locality::new(&f, v.len());
+    let loc = Locality::new(&f, v.len());
     let mut seen = vec![false; v.len()];
     for (i, &p) in loc.perm.iter().enumerate() {
         assert!(!seen[p as usize]);

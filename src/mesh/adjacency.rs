@@ -1,9 +1,147 @@
-//! Building the edge adjacency of a mesh (see [`crate::mesh::Adjacency`]): a two-level
-//! counting sort of the half-edges on their lower vertex, parallel and independent of the thread
-//! count.
+//! The edge adjacency of a mesh, the face neighbours derived from it, and the faces around
+//! each vertex. The adjacency is built
+//! by a two-level counting sort of the half-edges on their lower vertex, parallel and
+//! independent of the thread count.
 use rayon::prelude::*;
 
-use crate::mesh::Adjacency;
+/// The edge adjacency of a mesh.
+///
+/// `edges[e] = [a, b]` with `a < b`, sorted lexicographically. The half-edges of edge `e` are
+/// `half_edges[offsets[e]..offsets[e + 1]]`, each `3 * face + k` for the face's edge
+/// `faces[face][k] -> faces[face][(k + 1) % 3]`, in increasing order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Adjacency {
+    /// Undirected edges `[a, b]`, `a < b`, sorted.
+    pub edges: Vec<[u32; 2]>,
+    /// Per edge, the start of its half-edges (one more entry than edges).
+    pub offsets: Vec<u32>,
+    /// Half-edges `3 * face + k`, grouped by edge.
+    pub half_edges: Vec<u32>,
+    /// Per half-edge (parallel to `half_edges`): runs from the lower to the higher index.
+    pub forward: Vec<bool>,
+}
+
+impl Adjacency {
+    /// Number of undirected edges.
+    pub fn len(&self) -> usize {
+        self.edges.len()
+    }
+    /// Whether the mesh has no edge.
+    pub fn is_empty(&self) -> bool {
+        self.edges.is_empty()
+    }
+    /// The half-edges (`3 * face + k`) of edge `e`.
+    pub fn incident(&self, e: usize) -> &[u32] {
+        &self.half_edges[self.offsets[e] as usize..self.offsets[e + 1] as usize]
+    }
+    /// The direction flags of the half-edges of edge `e` (see `forward`).
+    pub fn incident_forward(&self, e: usize) -> &[bool] {
+        &self.forward[self.offsets[e] as usize..self.offsets[e + 1] as usize]
+    }
+
+    /// The face across each edge of every face and the edge's index, or `None` unless every
+    /// face edge has exactly one partner running it the other way (a closed, consistently wound,
+    /// 2-manifold mesh without zero-length edges). `n_faces`: the mesh's face count.
+    pub fn face_neighbors(&self, n_faces: usize) -> Option<FaceNeighbors> {
+        use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+        let n = 3 * n_faces;
+        let across: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(u32::MAX)).collect();
+        let edge: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(u32::MAX)).collect();
+        // Every half-edge belongs to one edge, so each slot is written at most once.
+        let paired = (0..self.len()).into_par_iter().with_min_len(4096).all(|e| {
+            let (inc, fw) = (self.incident(e), self.incident_forward(e));
+            if inc.len() != 2 || fw[0] == fw[1] {
+                return false;
+            }
+            for (h, other) in [(inc[0], inc[1]), (inc[1], inc[0])] {
+                across[h as usize].store(other / 3, Relaxed);
+                edge[h as usize].store(e as u32, Relaxed);
+            }
+            true
+        });
+        let triples = |a: &[AtomicU32]| -> Vec<[u32; 3]> {
+            a.par_chunks(3)
+                .map(|c| [c[0].load(Relaxed), c[1].load(Relaxed), c[2].load(Relaxed)])
+                .collect()
+        };
+        let faces = triples(&across);
+        (paired && faces.par_iter().all(|n| !n.contains(&u32::MAX))).then(|| FaceNeighbors {
+            faces,
+            edges: triples(&edge),
+        })
+    }
+}
+
+/// Per face `f` and edge `k` (`faces[f][k] -> faces[f][(k + 1) % 3]`): the face across it and
+/// the edge's index in the adjacency.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FaceNeighbors {
+    /// The face across each edge.
+    pub faces: Vec<[u32; 3]>,
+    /// The index of each edge in the adjacency.
+    pub edges: Vec<[u32; 3]>,
+}
+
+/// The faces around each vertex (a CSR table), in increasing face order; a face that repeats a
+/// vertex is listed once per corner, as `np.add.at` would add it.
+#[derive(Debug, Clone)]
+pub struct VertexFaces {
+    offsets: Vec<u32>,
+    faces: Vec<u32>,
+}
+
+impl VertexFaces {
+    /// The table of `faces` over `n_vertices` vertices.
+    pub fn new(faces: &[[u32; 3]], n_vertices: usize) -> Self {
+        let mut offsets = vec![0u32; n_vertices + 1];
+        for f in faces {
+            for &i in f {
+                offsets[i as usize + 1] += 1;
+            }
+        }
+        for i in 0..n_vertices {
+            offsets[i + 1] += offsets[i];
+        }
+        let mut fill = offsets.clone();
+        let mut out = vec![0u32; 3 * faces.len()];
+        for (fi, f) in faces.iter().enumerate() {
+            for &i in f {
+                out[fill[i as usize] as usize] = fi as u32;
+                fill[i as usize] += 1;
+            }
+        }
+        VertexFaces {
+            offsets,
+            faces: out,
+        }
+    }
+
+    /// The faces of vertex `v`, in order.
+    #[inline]
+    pub fn faces_of(&self, v: usize) -> &[u32] {
+        &self.faces[self.offsets[v] as usize..self.offsets[v + 1] as usize]
+    }
+
+    /// Renames every listed face `f` to `rename(f)`, keeping the order of each vertex's list.
+    pub fn rename_faces(&mut self, rename: impl Fn(u32) -> u32) {
+        for f in &mut self.faces {
+            *f = rename(*f);
+        }
+    }
+
+    /// Unnormalised vertex normal of `v`: the sum of `face_n` over its faces, in order, from 0.
+    #[inline]
+    pub fn normal(&self, v: usize, face_n: &[[f32; 3]]) -> [f32; 3] {
+        let mut acc = [0.0f32; 3];
+        for &f in &self.faces[self.offsets[v] as usize..self.offsets[v + 1] as usize] {
+            let n = face_n[f as usize];
+            acc[0] += n[0];
+            acc[1] += n[1];
+            acc[2] += n[2];
+        }
+        acc
+    }
+}
 
 /// A raw pointer shared by the scatter threads; each writes its own disjoint slots.
 struct SharedSlots<T>(*mut T);
@@ -168,5 +306,35 @@ pub fn build_adjacency(faces: &[[u32; 3]], n_vertices: usize) -> Adjacency {
         offsets,
         half_edges,
         forward,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn adjacency_is_thread_count_independent() {
+        let faces: Vec<[u32; 3]> = (0..50000u32)
+            .map(|i| [i % 4999, (i * 7 + 1) % 4999, (i * 13 + 5) % 4999])
+            .collect();
+        let a = crate::on_threads(1, || build_adjacency(&faces, 4999));
+        let b = crate::on_threads(3, || build_adjacency(&faces, 4999));
+        assert_eq!(a, b);
+        // Against a plain sort of all half-edges.
+        let mut all: Vec<(u32, u32, u32)> = Vec::new();
+        for (i, f) in faces.iter().enumerate() {
+            for k in 0..3 {
+                let (x, y) = (f[k], f[(k + 1) % 3]);
+                if x != y {
+                    all.push((x.min(y), x.max(y), 3 * i as u32 + k as u32));
+                }
+            }
+        }
+        all.sort_unstable();
+        assert_eq!(a.half_edges, all.iter().map(|t| t.2).collect::<Vec<_>>());
+        let mut keys: Vec<[u32; 2]> = all.iter().map(|t| [t.0, t.1]).collect();
+        keys.dedup();
+        assert_eq!(a.edges, keys);
     }
 }

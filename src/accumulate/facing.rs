@@ -14,14 +14,14 @@
 //! depend on the thread count.
 use rayon::prelude::*;
 
+use crate::error::{Error, Result};
 use crate::mesh::dot;
-use crate::{Error, Result};
 
 /// Faces per parallel job.
 const CHUNK: usize = 4096;
 
 /// The relative tolerance of the facing test: faces this close to edge-on are kept.
-pub const EDGE_ON: f64 = 1e-9;
+const EDGE_ON: f64 = 1e-9;
 
 #[inline]
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -116,7 +116,7 @@ mod tests {
                 v.push([x, y, 0.1 * (7.0 * x).sin() * (5.0 * y).cos()]);
             }
         }
-        let f = crate::test_meshes::grid_faces(n);
+        let f = crate::mesh::grid_faces(n);
         (v, f.iter().map(|t| t.map(i64::from)).collect())
     }
 

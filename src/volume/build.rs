@@ -1,176 +1,25 @@
-//! Motion volumes (Wloka and Zeleznik, sections 3.3-3.4 and 4.1-4.3).
-//!
-//! For keyframes `T_0 .. T_n` (shutter open to close, see [`crate::motion`]) and the summed
-//! motion vector `M` (displacement from `T_0` to `T_n`; for a translation path exactly the
-//! difference of the translations), faces are split in object space into front (`n . m >= 0`,
-//! `m = L_n^-1 M`) and back. The volume is:
-//! - the *leading* surface: the front faces placed by `T_n` (shutter close), part 0;
-//! - the *trailing* surface: the back faces placed by `T_0` (shutter open), part 1;
-//! - the *joining* surface, part 2: for every contour edge `(a, b)` and segment `j`, the quad
-//!   `a_{j-1} b_{j-1} b_j a_j` between the contour placed by `T_{j-1}` and by `T_j` (two
-//!   triangles), so the contour is oriented at every keyframe time (section 4.3).
-//!
-//! Without a camera, joining vertices at the first and last ring are the trailing and leading
-//! vertices themselves, so a closed, consistently wound mesh gives a closed, consistently wound
-//! volume. With a camera, only the contour line is swept (edges with an adjacent face that faces
-//! the camera: front faces placed at close, back faces at open) and every joining quad strip has
-//! its own vertices, so that section 4.1's rule can apply per edge: when only the trailing
-//! (leading) side is visible, all joining vertices of the edge take the trailing (leading)
-//! normal. Colours are uniform, per mesh vertex (so leading and trailing colours of an edge
-//! agree) or per face (see [`Colors`]).
-//!
-//! Normals are rotated by each ring's keyframe. Alpha comes from [`crate::volume_filter`] and
-//! multiplies the colour's own (straight) alpha. If every keyframe is the same, the result is the
-//! mesh itself placed by `T_0`, all leading and opaque (colour alpha only).
+//! The construction of a motion volume: the face split, the contour and the alphas, handed
+//! to the assembly.
 use rayon::prelude::*;
 
-use crate::contour::{check_vector, classify_faces, classify_faces_seen};
-use crate::hull::Rim;
+use super::assemble::{assemble, select_contour, AlphaMode};
+use super::coverage::{default_view, CoverageModel};
+use super::filter::Filter;
+use super::rim::Rim;
+use super::subdivide::{subdivided, subdivision_factor};
+use super::types::{check_options, Colors, MotionVolume, VolumeOptions, LEADING, MAX_SEGMENTS};
+use crate::contour::{classify_faces, classify_faces_seen};
+use crate::error::{Error, Result};
 use crate::mesh::{dot, normalize, Mesh};
 use crate::motion::Path;
-use crate::subdivide::{subdivided, subdivision_factor};
-use crate::volume_alpha::{default_view, CoverageModel};
-use crate::volume_assemble::{assemble, select_contour, AlphaMode};
-use crate::volume_filter::Filter;
-use crate::{Error, Result};
 
 /// Above this many vertices the coverage model takes its hulls over the mesh's rim (when the
 /// mesh is closed), not over every projected vertex.
 const RIM_VERTICES: usize = 4096;
 
-pub const LEADING: u8 = 0;
-pub const TRAILING: u8 = 1;
-pub const JOINING: u8 = 2;
-
-/// Largest number of segments accepted.
-pub const MAX_SEGMENTS: usize = 4096;
-
-/// Colours: one straight RGBA for all, one per mesh vertex, or one per mesh face.
-///
-/// With per-face colours every leading and trailing face has its own three vertices and every
-/// joining strip its own vertices, coloured from the strip's front face (leading end) to its back
-/// face (trailing end), or with the visible side's colour only when the camera sees one side
-/// (section 4.1); the volume is then closed geometrically but not as an indexed mesh.
-#[derive(Debug, Clone)]
-pub enum Colors {
-    Uniform([f32; 4]),
-    PerVertex(Vec<[f32; 4]>),
-    PerFace(Vec<[f32; 4]>),
-}
-
-/// Options of [`motion_volume`].
-#[derive(Debug, Clone)]
-pub struct VolumeOptions {
-    pub filter: Filter,
-    pub colors: Colors,
-    /// Per-vertex normals in object space; `None`: area-weighted vertex normals.
-    pub normals: Option<Vec<[f64; 3]>>,
-    pub camera: Option<[f64; 3]>,
-    /// With a camera: sweep only the contour line (section 3.2) and apply the section 4.1
-    /// normal rule (`true`), or sweep every contour edge and use the camera for the coverage
-    /// alphas only (`false`).
-    pub contour_line: bool,
-    /// With a camera and `contour_line`: leave out the leading faces that face away from the
-    /// camera at shutter close and the trailing faces that face away at open (a renderer that
-    /// culls back faces draws the same image from fewer faces; the volume is then open).
-    pub visible_only: bool,
-}
-
-impl Default for VolumeOptions {
-    fn default() -> Self {
-        VolumeOptions {
-            filter: Filter::Ramp,
-            colors: Colors::Uniform([1.0; 4]),
-            normals: None,
-            camera: None,
-            contour_line: true,
-            visible_only: false,
-        }
-    }
-}
-
-/// The assembled motion volume.
-#[derive(Debug, Clone, PartialEq)]
-pub struct MotionVolume {
-    pub vertices: Vec<[f64; 3]>,
-    pub faces: Vec<[u32; 3]>,
-    /// Straight (non-premultiplied) linear RGBA per vertex.
-    pub rgba: Vec<[f32; 4]>,
-    /// Unit normals per vertex (zero where the mesh normal is undefined).
-    pub normals: Vec<[f32; 3]>,
-    /// `LEADING`, `TRAILING` or `JOINING` per face.
-    pub part: Vec<u8>,
-    /// Opacity of each contour ring, open (index 0) to close (index n).
-    pub ring_alpha: Vec<f64>,
-    /// Number of contour edges swept.
-    pub contour_edges: usize,
-}
-
-pub(crate) fn check_options(mesh: &Mesh, opts: &VolumeOptions) -> Result<()> {
-    let nv = mesh.vertices().len();
-    let check_rgba = |c: &[f32; 4]| {
-        c.iter().all(|x| x.is_finite())
-            && c[..3].iter().all(|x| *x >= 0.0)
-            && (0.0..=1.0).contains(&c[3])
-    };
-    match &opts.colors {
-        Colors::Uniform(c) if !check_rgba(c) => {
-            return Err(Error::value(
-                "colors",
-                "must be finite, RGB >= 0 and alpha in [0, 1]",
-            ));
-        }
-        Colors::PerFace(c) => {
-            let nf = mesh.faces().len();
-            if c.len() != nf {
-                return Err(Error::shape(
-                    "face_colors",
-                    format!("expected {nf} colours, got {}", c.len()),
-                ));
-            }
-            if !c.par_iter().all(check_rgba) {
-                return Err(Error::value(
-                    "face_colors",
-                    "must be finite, RGB >= 0 and alpha in [0, 1]",
-                ));
-            }
-        }
-        Colors::PerVertex(c) => {
-            if c.len() != nv {
-                return Err(Error::shape(
-                    "colors",
-                    format!("expected {nv} colours, got {}", c.len()),
-                ));
-            }
-            if !c.par_iter().all(check_rgba) {
-                return Err(Error::value(
-                    "colors",
-                    "must be finite, RGB >= 0 and alpha in [0, 1]",
-                ));
-            }
-        }
-        _ => {}
-    }
-    if let Some(n) = &opts.normals {
-        if n.len() != nv {
-            return Err(Error::shape(
-                "normals",
-                format!("expected {nv} normals, got {}", n.len()),
-            ));
-        }
-        if !n.par_iter().all(|x| x.iter().all(|c| c.is_finite())) {
-            return Err(Error::value("normals", "is NaN or inf"));
-        }
-    }
-    if let Some(eye) = opts.camera {
-        check_vector(eye, "camera_position")?;
-    }
-    Ok(())
-}
-
 /// The view direction of the coverage model: from the camera to the centroid at mid-shutter
 /// (for a translation, made perpendicular to the motion unless within 37 degrees of it, see
-/// [`crate::volume_alpha`]), else [`default_view`] of the summed motion.
+/// `coverage.rs`), else [`default_view`] of the summed motion.
 fn view_direction(
     path: &Path,
     centroid: [f64; 3],
@@ -274,7 +123,7 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         f => {
             let view = view_direction(path, centroid, total, opts.camera);
             // The rim pays off once projecting and sorting every vertex costs more than the
-            // per-face orientations (measured: a 42k-vertex sphere's model 9 -> ~2 ms).
+            // per-face orientations.
             let rim = (verts.len() > RIM_VERTICES)
                 .then(|| mesh.face_neighbors())
                 .flatten()

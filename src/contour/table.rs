@@ -8,17 +8,18 @@
 //! (for example clustered around a preferred direction of motion).
 use rayon::prelude::*;
 
-use crate::contour::{check_vector, classify_faces, contour_from_sides};
+use super::edges::{classify_faces, contour_from_sides};
+use crate::error::check_vector;
+use crate::error::{Error, Result};
 use crate::mesh::{dot, normalize, Mesh};
-use crate::{Error, Result};
 
 /// Largest number of directions accepted.
-pub const MAX_DIRECTIONS: usize = 1 << 16;
+const MAX_DIRECTIONS: usize = 1 << 16;
 
 /// One stored contour set.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ContourSet {
-    /// Oriented contour edges `(a, b)` in adjacency order, as [`crate::contour::contour_edges`].
+    /// Oriented contour edges `(a, b)` in adjacency order, as [`contour_edges`](crate::contour_edges).
     pub edges: Vec<[u32; 2]>,
     /// Front (`true`) or back per face.
     pub front: Vec<bool>,
@@ -27,7 +28,9 @@ pub struct ContourSet {
 /// Contour sets for a fixed set of directions.
 #[derive(Debug, Clone)]
 pub struct ContourTable {
+    /// Unit motion directions, one per set.
     pub directions: Vec<[f64; 3]>,
+    /// The contour set of each direction.
     pub sets: Vec<ContourSet>,
 }
 

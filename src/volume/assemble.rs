@@ -1,14 +1,14 @@
 //! Assembly of motion volumes: the leading, trailing and joining surfaces of a face split and
-//! its contour, with placed vertices, colours, normals and filter alphas (see [`crate::volume`]
-//! for the construction and [`crate::spin`] for the spinning case).
+//! its contour, with placed vertices, colours, normals and filter alphas (see `build.rs`
+//! for the construction and `spin.rs` for the spinning case).
 use rayon::prelude::*;
 
+use super::coverage::CoverageModel;
+use super::types::{Colors, MotionVolume, VolumeOptions, JOINING, LEADING, TRAILING};
 use crate::contour::{contour_from_sides, contour_line, ContourEdge};
+use crate::error::{Error, Result};
 use crate::mesh::{normalize, Mesh, MAX_ELEMENTS};
 use crate::motion::Path;
-use crate::volume::{Colors, MotionVolume, VolumeOptions, JOINING, LEADING, TRAILING};
-use crate::volume_alpha::CoverageModel;
-use crate::{Error, Result};
 
 /// Where an output vertex comes from: mesh vertex; placement at `frac` of the way from keyframe
 /// `seg` to `seg + 1` (0: the keyframe itself); keyframe for its normal.
@@ -31,7 +31,7 @@ pub(crate) enum AlphaMode {
     Rings(Vec<f64>),
     /// The coverage model; every joining segment is cut at `q + 1` per-vertex times.
     Coverage(Box<CoverageModel>, usize),
-    /// One opacity per mesh vertex times a weight per keyframe ring (see `crate::spin`).
+    /// One opacity per mesh vertex times a weight per keyframe ring (see `spin.rs`).
     PerVertex(Vec<f64>, Vec<f64>),
 }
 

@@ -1,68 +1,33 @@
-//! Indexed triangle meshes: validation, face normals, statistics and the cached edge adjacency.
-//!
-//! Vertices are `[f64; 3]` in scene units, faces are `[u32; 3]` counter-clockwise seen from the
-//! front. The edge adjacency is built once (counting sort by the lower vertex, then a short sort
-//! per vertex bucket) and kept in a `OnceLock`, so a mesh can be classified against many motion
-//! vectors, or given new vertex positions with [`Mesh::with_vertices`], without rebuilding it.
-//!
-//! Edge rules (documented in the Python API too):
-//! - an undirected edge is the set of half-edges `(a, b)` / `(b, a)` of the faces that use it;
-//!   a face with a repeated index has a zero-length half-edge `(a, a)`, which is not an edge;
-//! - a *boundary* edge has one incident face, a *non-manifold* edge three or more, an
-//!   *inconsistent* edge two faces that run it in the same direction;
-//! - a *degenerate* face has a zero cross product `(b - a) x (c - a)` (repeated index,
-//!   collinear or coincident vertices). It keeps its place in the adjacency; its normal is zero.
+//! The indexed triangle mesh: validation, the cached adjacency, normals and planes, statistics.
 use std::sync::OnceLock;
 
 use rayon::prelude::*;
 
-use crate::{Error, Result};
+use super::adjacency::{build_adjacency, Adjacency, FaceNeighbors};
+use super::normals::{dot, face_normal, FacePlanes};
+use crate::error::{Error, Result};
 
 /// Largest number of faces or vertices accepted (indices are stored as `u32`).
 pub const MAX_ELEMENTS: usize = (u32::MAX as usize) / 8;
 
-/// The edge adjacency of a mesh.
-///
-/// `edges[e] = [a, b]` with `a < b`, sorted lexicographically. The half-edges of edge `e` are
-/// `half_edges[offsets[e]..offsets[e + 1]]`, each `3 * face + k` for the face's edge
-/// `faces[face][k] -> faces[face][(k + 1) % 3]`, in increasing order.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Adjacency {
-    pub edges: Vec<[u32; 2]>,
-    pub offsets: Vec<u32>,
-    pub half_edges: Vec<u32>,
-    /// Per half-edge (parallel to `half_edges`): runs from the lower to the higher index.
-    pub forward: Vec<bool>,
-}
-
-impl Adjacency {
-    /// Number of undirected edges.
-    pub fn len(&self) -> usize {
-        self.edges.len()
-    }
-    pub fn is_empty(&self) -> bool {
-        self.edges.is_empty()
-    }
-    /// The half-edges (`3 * face + k`) of edge `e`.
-    pub fn incident(&self, e: usize) -> &[u32] {
-        &self.half_edges[self.offsets[e] as usize..self.offsets[e + 1] as usize]
-    }
-    /// The direction flags of the half-edges of edge `e` (see `forward`).
-    pub fn incident_forward(&self, e: usize) -> &[bool] {
-        &self.forward[self.offsets[e] as usize..self.offsets[e + 1] as usize]
-    }
-}
-
 /// Counts describing a mesh's health.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct MeshStats {
+    /// Number of faces.
     pub faces: usize,
+    /// Number of vertices.
     pub vertices: usize,
+    /// Number of undirected edges.
     pub edges: usize,
+    /// Faces with a zero cross product.
     pub degenerate_faces: usize,
+    /// Edges with one face.
     pub boundary_edges: usize,
+    /// Edges with three or more faces.
     pub nonmanifold_edges: usize,
+    /// Edges whose two faces run them in the same direction.
     pub inconsistent_edges: usize,
+    /// Vertices no face uses.
     pub unreferenced_vertices: usize,
 }
 
@@ -71,14 +36,6 @@ impl MeshStats {
     pub fn is_closed(&self) -> bool {
         self.boundary_edges == 0 && self.nonmanifold_edges == 0 && self.inconsistent_edges == 0
     }
-}
-
-/// Per face `f` and edge `k` (`faces[f][k] -> faces[f][(k + 1) % 3]`): the face across it and
-/// the edge's index in the adjacency.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FaceNeighbors {
-    pub faces: Vec<[u32; 3]>,
-    pub edges: Vec<[u32; 3]>,
 }
 
 /// An indexed triangle mesh with a lazily built, cached edge adjacency.
@@ -92,7 +49,7 @@ pub struct Mesh {
     /// use).
     neighbors: std::sync::Arc<OnceLock<Option<FaceNeighbors>>>,
     /// [`Mesh::face_planes`], built on first use (not shared with deformed copies).
-    planes: OnceLock<crate::hull::FacePlanes>,
+    planes: OnceLock<FacePlanes>,
     /// [`Mesh::vertex_normals`], kept by [`Mesh::cached_vertex_normals`].
     normals: OnceLock<Vec<[f64; 3]>>,
     /// [`Mesh::longest_edge`], computed on first use.
@@ -159,9 +116,11 @@ impl Mesh {
         })
     }
 
+    /// Vertex positions (scene units).
     pub fn vertices(&self) -> &[[f64; 3]] {
         &self.vertices
     }
+    /// Counter-clockwise triangles over `vertices`.
     pub fn faces(&self) -> &[[u32; 3]] {
         &self.faces
     }
@@ -178,45 +137,14 @@ impl Mesh {
     /// [`Mesh::with_vertices`] copies.
     pub fn face_neighbors(&self) -> Option<&FaceNeighbors> {
         self.neighbors
-            .get_or_init(|| {
-                use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
-                let adj = self.adjacency();
-                let n = 3 * self.faces.len();
-                let across: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(u32::MAX)).collect();
-                let edge: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(u32::MAX)).collect();
-                // Every half-edge belongs to one edge, so each slot is written at most once.
-                let paired = (0..adj.len()).into_par_iter().with_min_len(4096).all(|e| {
-                    let (inc, fw) = (adj.incident(e), adj.incident_forward(e));
-                    if inc.len() != 2 || fw[0] == fw[1] {
-                        return false;
-                    }
-                    for (h, other) in [(inc[0], inc[1]), (inc[1], inc[0])] {
-                        across[h as usize].store(other / 3, Relaxed);
-                        edge[h as usize].store(e as u32, Relaxed);
-                    }
-                    true
-                });
-                let triples = |a: &[AtomicU32]| -> Vec<[u32; 3]> {
-                    a.par_chunks(3)
-                        .map(|c| [c[0].load(Relaxed), c[1].load(Relaxed), c[2].load(Relaxed)])
-                        .collect()
-                };
-                let faces = triples(&across);
-                (paired && faces.par_iter().all(|n| !n.contains(&u32::MAX))).then(|| {
-                    FaceNeighbors {
-                        faces,
-                        edges: triples(&edge),
-                    }
-                })
-            })
+            .get_or_init(|| self.adjacency().face_neighbors(self.faces.len()))
             .as_ref()
     }
 
-    /// The per-face planes of the rim pre-selection ([`crate::hull::rim_candidates`]), built
-    /// on first use.
-    pub fn face_planes(&self) -> &crate::hull::FacePlanes {
+    /// The per-face planes ([`FacePlanes`]), built on first use.
+    pub(crate) fn face_planes(&self) -> &FacePlanes {
         self.planes
-            .get_or_init(|| crate::hull::FacePlanes::new(&self.vertices, &self.faces))
+            .get_or_init(|| FacePlanes::new(&self.vertices, &self.faces))
     }
 
     /// [`Mesh::vertex_normals`], computed on first use and kept (the same values).
@@ -247,38 +175,6 @@ impl Mesh {
     /// Whether the adjacency has been built already.
     pub fn has_adjacency(&self) -> bool {
         self.adjacency.get().is_some()
-    }
-
-    /// Unnormalised face normals `(b - a) x (c - a)` (twice the area), in vertex units squared.
-    pub fn face_normals_raw(&self) -> Vec<[f64; 3]> {
-        self.faces
-            .par_iter()
-            .map(|f| face_normal(&self.vertices, f))
-            .collect()
-    }
-
-    /// Unit face normals; degenerate faces get `[0, 0, 0]`.
-    pub fn face_normals(&self) -> Vec<[f64; 3]> {
-        self.faces
-            .par_iter()
-            .map(|f| normalize(face_normal(&self.vertices, f)))
-            .collect()
-    }
-
-    /// Area-weighted vertex normals (sum of the raw normals of the faces around the vertex),
-    /// normalised; a vertex with no non-degenerate face gets `[0, 0, 0]`.
-    pub fn vertex_normals(&self) -> Vec<[f64; 3]> {
-        let mut acc = vec![[0.0f64; 3]; self.vertices.len()];
-        for f in &self.faces {
-            let n = face_normal(&self.vertices, f);
-            for &i in f {
-                let a = &mut acc[i as usize];
-                a[0] += n[0];
-                a[1] += n[1];
-                a[2] += n[2];
-            }
-        }
-        acc.into_par_iter().map(normalize).collect()
     }
 
     /// Face, vertex and edge counts, degenerate faces and the edge classes of the module docs.
@@ -347,58 +243,6 @@ fn check_vertices(vertices: &[[f64; 3]]) -> Result<()> {
     Ok(())
 }
 
-/// `(b - a) x (c - a)`, evaluated exactly as numpy's `np.cross(b - a, c - a)` in the vertices'
-/// own precision (f64 for meshes, f32 for the blur shell's snapshots).
-#[inline]
-pub fn face_normal<T>(v: &[[T; 3]], f: &[u32; 3]) -> [T; 3]
-where
-    T: Copy + std::ops::Sub<Output = T> + std::ops::Mul<Output = T>,
-{
-    let a = v[f[0] as usize];
-    let b = v[f[1] as usize];
-    let c = v[f[2] as usize];
-    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-    let w = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-    [
-        u[1] * w[2] - u[2] * w[1],
-        u[2] * w[0] - u[0] * w[2],
-        u[0] * w[1] - u[1] * w[0],
-    ]
-}
-
-/// `x0*y0 + x1*y1 + x2*y2`, left to right (no fused multiply-add), as the numpy twin computes it.
-#[inline]
-pub fn dot(x: [f64; 3], y: [f64; 3]) -> f64 {
-    x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
-}
-
-#[inline]
-pub fn normalize(n: [f64; 3]) -> [f64; 3] {
-    let l = dot(n, n).sqrt();
-    if l > 0.0 && l.is_finite() {
-        [n[0] / l, n[1] / l, n[2] / l]
-    } else {
-        [0.0; 3]
-    }
-}
-
-/// Whether half-edge `h = 3 * face + k` runs from the lower to the higher vertex index.
-#[inline]
-pub fn half_edge_forward(faces: &[[u32; 3]], h: u32) -> bool {
-    let (a, b) = half_edge(faces, h);
-    a < b
-}
-
-/// The vertices `(from, to)` of half-edge `h = 3 * face + k`.
-#[inline]
-pub fn half_edge(faces: &[[u32; 3]], h: u32) -> (u32, u32) {
-    let f = &faces[(h / 3) as usize];
-    let k = (h % 3) as usize;
-    (f[k], f[(k + 1) % 3])
-}
-
-pub use crate::adjacency::build_adjacency;
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -466,30 +310,5 @@ mod tests {
         assert!(e.to_string().starts_with("faces"));
         assert!(Mesh::new(vec![], vec![[0, 1, 2]]).is_err());
         assert!(Mesh::new(vec![[0.0; 3]], vec![]).is_err());
-    }
-
-    #[test]
-    fn adjacency_is_thread_count_independent() {
-        let faces: Vec<[u32; 3]> = (0..50000u32)
-            .map(|i| [i % 4999, (i * 7 + 1) % 4999, (i * 13 + 5) % 4999])
-            .collect();
-        let a = crate::on_threads(1, || build_adjacency(&faces, 4999));
-        let b = crate::on_threads(3, || build_adjacency(&faces, 4999));
-        assert_eq!(a, b);
-        // Against a plain sort of all half-edges.
-        let mut all: Vec<(u32, u32, u32)> = Vec::new();
-        for (i, f) in faces.iter().enumerate() {
-            for k in 0..3 {
-                let (x, y) = (f[k], f[(k + 1) % 3]);
-                if x != y {
-                    all.push((x.min(y), x.max(y), 3 * i as u32 + k as u32));
-                }
-            }
-        }
-        all.sort_unstable();
-        assert_eq!(a.half_edges, all.iter().map(|t| t.2).collect::<Vec<_>>());
-        let mut keys: Vec<[u32; 2]> = all.iter().map(|t| [t.0, t.1]).collect();
-        keys.dedup();
-        assert_eq!(a.edges, keys);
     }
 }

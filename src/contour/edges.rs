@@ -16,23 +16,20 @@
 //! at shutter open, leading edge at close) is wound outward.
 use rayon::prelude::*;
 
+use crate::error::check_vector;
+use crate::error::Result;
 use crate::mesh::{dot, face_normal, Mesh};
 use crate::motion::Keyframe;
-use crate::{Error, Result};
 
 /// A contour edge: `edge` indexes the mesh adjacency, `(a, b)` is its orientation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ContourEdge {
+    /// Index of the edge in the mesh adjacency.
     pub edge: u32,
+    /// First vertex, as the edge is oriented.
     pub a: u32,
+    /// Second vertex.
     pub b: u32,
-}
-
-pub(crate) fn check_vector(v: [f64; 3], name: &'static str) -> Result<()> {
-    if v.iter().any(|x| !x.is_finite()) {
-        return Err(Error::value(name, "is NaN or inf"));
-    }
-    Ok(())
 }
 
 /// Faces ahead of the one in hand whose corners [`prefetch_corners`] asks for.
@@ -125,7 +122,7 @@ pub fn classify_faces_seen(
 
 /// Whether each face is front-facing to a camera at `eye`: `n . (eye - a) > 0`, with vertices
 /// placed by `place`.
-pub fn camera_facing(
+fn camera_facing(
     mesh: &Mesh,
     eye: [f64; 3],
     place: impl Fn([f64; 3]) -> [f64; 3] + Sync,

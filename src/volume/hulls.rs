@@ -1,17 +1,44 @@
-//! The projected hulls of the coverage model ([`crate::volume_alpha`]): one convex hull of the
-//! mesh's image per placement, taken over the rim of a closed mesh ([`crate::hull::rim_points`]).
+//! The projected hulls of the coverage model (`coverage.rs`): the view's projection, and one
+//! convex hull of the mesh's image per placement, taken over the rim of a closed mesh
+//! ([`rim_points`]).
 //!
 //! For a dense closed mesh the faces that can lie on a placement's rim are first picked without
-//! projecting anything ([`crate::hull::rim_candidates`], from the mesh's cached face planes),
+//! projecting anything ([`rim_candidates`], from the mesh's cached face planes),
 //! when the view keeps robustly oriented faces robustly apart from degenerate (`object_view`);
 //! the hull is then exactly the one of every projected vertex's rim, from a few thousand
 //! projections instead of one per vertex and placement.
 use rayon::prelude::*;
 
-use crate::hull::{convex_hull, rim_candidates, rim_points, rim_points_of, ObjectView, Rim};
-use crate::mesh::dot;
+use super::rim::{rim_candidates, rim_points, rim_points_of, ObjectView, Rim, MARGIN};
+use crate::mesh::{dot, FacePlanes, SLIVER};
 use crate::motion::Keyframe;
-use crate::volume_alpha::project;
+
+/// Image-plane coordinates: `(p . e1, p . e2)`, or with an eye the perspective ones
+/// `((p - eye) . e1, (p - eye) . e2) / ((p - eye) . d)` (depth clamped to a tiny positive value
+/// for points at or behind the eye).
+#[inline]
+pub(super) fn project(
+    eye: Option<[f64; 3]>,
+    d: [f64; 3],
+    e1: [f64; 3],
+    e2: [f64; 3],
+    p: [f64; 3],
+) -> [f64; 2] {
+    match eye {
+        None => [dot(p, e1), dot(p, e2)],
+        Some(e) => {
+            let r = [p[0] - e[0], p[1] - e[1], p[2] - e[2]];
+            let (a, rr) = (dot(r, d), dot(r, r));
+            // `a` is the clamped depth itself when a^2 clearly exceeds (1e-9 |r|)^2 (no root).
+            let z = if a > 1e-150 && a * a > 2e-18 * rr {
+                a
+            } else {
+                a.max(1e-9 * rr.sqrt()).max(1e-300)
+            };
+            [dot(r, e1) / z, dot(r, e2) / z]
+        }
+    }
+}
 
 /// The object-space view of `rim_candidates` for the placement `f` of a mesh with planes
 /// `planes`, or `None` when the projection does not keep robustly oriented faces robustly
@@ -25,7 +52,7 @@ use crate::volume_alpha::project;
 /// in front of the eye (as `rim_points` requires), with a margin.
 fn object_view(
     f: &Keyframe,
-    planes: &crate::hull::FacePlanes,
+    planes: &FacePlanes,
     eye: Option<[f64; 3]>,
     d: [f64; 3],
 ) -> Option<ObjectView> {
@@ -49,8 +76,7 @@ fn object_view(
         return None;
     }
     let ratio = (zc - rad) / (zc + rad);
-    let bound =
-        crate::hull::MARGIN * crate::hull::SLIVER * ratio * ratio / (1.0 + angle.tan().powi(2));
+    let bound = MARGIN * SLIVER * ratio * ratio / (1.0 + angle.tan().powi(2));
     let t = f.translation;
     (bound > 1e-7).then(|| ObjectView::Eye(obj([e[0] - t[0], e[1] - t[1], e[2] - t[2]])))
 }
@@ -105,8 +131,9 @@ pub(crate) fn hulls_of(
     let slot: Vec<usize> = views
         .iter()
         .scan(0, |k, v| {
+            let slot = *k;
             *k += usize::from(v.is_some());
-            Some(*k - 1)
+            Some(slot)
         })
         .collect();
     // Placements in parallel (each hull is small work with little parallelism of its own).
@@ -129,16 +156,114 @@ pub(crate) fn hulls_of(
         .collect()
 }
 
+/// Akl-Toussaint: drop the points strictly inside the polygon of the extreme points in 32
+/// directions (they cannot be on the hull), so that a dense mesh sorts only its rim (about a
+/// tenth of a sphere's projected vertices).
+pub fn discard_interior(pts: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
+    const K: usize = 32;
+    if pts.len() < 4 * K {
+        return pts;
+    }
+    let dirs: Vec<[f64; 2]> = (0..K)
+        .map(|k| {
+            let a = std::f64::consts::TAU * k as f64 / K as f64;
+            [a.cos(), a.sin()]
+        })
+        .collect();
+    let key = |p: [f64; 2], d: [f64; 2]| p[0] * d[0] + p[1] * d[1];
+    // The point of largest p . d per direction (ties: the first), counter-clockwise.
+    let ext = pts
+        .par_chunks(8192)
+        .map(|c| {
+            let mut o = [c[0]; K];
+            for p in &c[1..] {
+                for (e, d) in o.iter_mut().zip(&dirs) {
+                    if key(*p, *d) > key(*e, *d) {
+                        *e = *p;
+                    }
+                }
+            }
+            o
+        })
+        .reduce_with(|mut a, b| {
+            for ((e, x), d) in a.iter_mut().zip(b).zip(&dirs) {
+                if key(x, *d) > key(*e, *d) {
+                    *e = x;
+                }
+            }
+            a
+        })
+        .expect("at least one chunk");
+    let mut poly: Vec<[f64; 2]> = ext.to_vec();
+    poly.dedup();
+    while poly.len() > 1 && poly[0] == poly[poly.len() - 1] {
+        poly.pop();
+    }
+    if poly.len() < 3 {
+        return pts;
+    }
+    let inside = |p: &[f64; 2]| {
+        (0..poly.len()).all(|i| {
+            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+            (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) > 0.0
+        })
+    };
+    pts.into_par_iter().filter(|p| !inside(p)).collect()
+}
+
+/// Andrew's monotone chain: the convex hull, counter-clockwise, without collinear points.
+pub fn convex_hull(pts: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
+    let mut pts = discard_interior(pts);
+    pts.par_sort_unstable_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+    pts.dedup();
+    if pts.len() < 3 {
+        return pts;
+    }
+    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
+    let mut h: Vec<[f64; 2]> = Vec::with_capacity(2 * pts.len());
+    for pass in 0..2 {
+        let start = h.len();
+        let iter: Box<dyn Iterator<Item = &[f64; 2]>> = if pass == 0 {
+            Box::new(pts.iter())
+        } else {
+            Box::new(pts.iter().rev())
+        };
+        for &p in iter {
+            while h.len() >= start + 2 && cross(h[h.len() - 2], h[h.len() - 1], p) <= 0.0 {
+                h.pop();
+            }
+            h.push(p);
+        }
+        h.pop();
+    }
+    h
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::motion::Path;
-    use crate::volume_alpha::CoverageModel;
-    use crate::volume_filter::Filter;
+    use crate::volume::coverage::CoverageModel;
+    use crate::volume::filter::Filter;
+
+    #[test]
+    fn hull_of_a_square_with_inner_points() {
+        let h = convex_hull(vec![
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [0.5, 0.5],
+            [1.0, 1.0],
+            [0.0, 1.0],
+            [0.5, 0.0],
+        ]);
+        assert_eq!(h.len(), 4);
+    }
 
     #[test]
     fn rim_candidates_leave_the_model_unchanged() {
-        let (v, f) = crate::test_meshes::uv_sphere(40, 80);
+        let (v, f) = crate::mesh::uv_sphere(40, 80);
         let mesh = crate::mesh::Mesh::new(v, f).unwrap();
         let nb = mesh.face_neighbors().unwrap();
         let rim = |planes| Rim {

@@ -6,7 +6,7 @@
 //! depend on the thread count.
 use rayon::prelude::*;
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// Samples per parallel job of `over`.
 const CHUNK: usize = 8192;
@@ -15,10 +15,15 @@ const CHUNK: usize = 8192;
 /// first one is at `(x0, y0)` of a buffer `stride` samples wide.
 #[derive(Clone, Copy, Debug)]
 pub struct Rect {
+    /// Column of the rectangle's first sample.
     pub x0: usize,
+    /// Row of the rectangle's first sample.
     pub y0: usize,
+    /// Samples per row of the rectangle.
     pub width: usize,
+    /// Rows of the rectangle.
     pub height: usize,
+    /// Samples per row of the whole buffer.
     pub stride: usize,
 }
 

@@ -41,14 +41,15 @@
 //!   rings do not map to one time and the weight is 1.
 use rayon::prelude::*;
 
-use crate::contour::check_vector;
+use super::assemble::{assemble, select_contour, AlphaMode};
+use super::build::motion_volume;
+use super::filter::Filter;
+use super::subdivide::{subdivided, subdivision_for_edge};
+use super::types::{check_options, MotionVolume, VolumeOptions, MAX_SEGMENTS};
+use crate::error::check_vector;
+use crate::error::{Error, Result};
 use crate::mesh::{dot, face_normal, normalize, Mesh};
 use crate::motion::{Keyframe, Path};
-use crate::subdivide::{subdivided, subdivision_for_edge};
-use crate::volume::{check_options, motion_volume, MotionVolume, VolumeOptions};
-use crate::volume_assemble::{assemble, select_contour, AlphaMode};
-use crate::volume_filter::Filter;
-use crate::{Error, Result};
 
 const RADII: usize = 128;
 const ANGLES: usize = 720;
@@ -57,10 +58,13 @@ const TAU: f64 = std::f64::consts::TAU;
 /// A spin over the shutter.
 #[derive(Debug, Clone, Copy)]
 pub struct Spin {
+    /// The rotation axis (any non-zero length).
     pub axis: [f64; 3],
     /// Radians over the shutter, right hand about `axis`.
     pub angle: f64,
+    /// A point on the axis (world units).
     pub center: [f64; 3],
+    /// Translation over the shutter (world units).
     pub translation: [f64; 3],
     /// Number of rings minus one; `None`: one per `pi / 12` of sweep.
     pub segments: Option<usize>,
@@ -192,10 +196,10 @@ pub fn spin_volume(mesh: &Mesh, spin: &Spin, opts: &VolumeOptions) -> Result<Mot
     }
     let sweep = spin.angle.abs().min(TAU);
     let n = match spin.segments {
-        Some(s) if !(1..=crate::volume::MAX_SEGMENTS).contains(&s) => {
+        Some(s) if !(1..=MAX_SEGMENTS).contains(&s) => {
             return Err(Error::value(
                 "segments",
-                format!("must be in 1..={}", crate::volume::MAX_SEGMENTS),
+                format!("must be in 1..={}", MAX_SEGMENTS),
             ));
         }
         Some(s) => s,

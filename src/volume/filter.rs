@@ -13,17 +13,21 @@
 //!   integral (box 1; triangle peaking at 0.5; gaussian centred at 0.5 with sigma 1/6,
 //!   truncated to [0, 1] and renormalised). Each vertex gets the weighted fraction of the
 //!   shutter during which the object covers its image, from the coverage model of
-//!   [`crate::volume_alpha`]; no floor, so a long streak is as faint as it physically is.
+//!   the coverage model (`coverage.rs`); no floor, so a long streak is as faint as it physically is.
 //!
 //! Without motion every filter gives alpha 1.
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// A temporal filter over the shutter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Filter {
+    /// The paper's ramp.
     Ramp,
+    /// Uniform weight over the shutter.
     Box,
+    /// Weight rising linearly to the middle of the shutter and falling back.
     Triangle,
+    /// Gaussian weight centred on the middle of the shutter (sigma 1/6).
     Gaussian,
 }
 

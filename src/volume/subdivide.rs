@@ -1,11 +1,11 @@
 //! Uniform conforming subdivision of meshes, for alphas that must follow a profile finer than
-//! a coarse mesh (the coverage filters of [`crate::volume_alpha`], the spin of [`crate::spin`]).
+//! a coarse mesh (the coverage filters of `coverage.rs`, the spin of `spin.rs`).
 use rayon::prelude::*;
 
+use super::types::{Colors, VolumeOptions};
+use crate::error::Result;
 use crate::mesh::{dot, Mesh};
 use crate::motion::Path;
-use crate::volume::{Colors, VolumeOptions};
-use crate::Result;
 
 /// A new vertex of a subdivided mesh: the weights of three original vertices.
 pub type Blend = ([u32; 3], [f64; 3]);

@@ -1,5 +1,5 @@
 //! Coverage alphas of the motion volume for the `box`, `triangle` and `gaussian` shutter filters
-//! (our own design; the paper only states its ramp, see [`crate::volume_filter`]).
+//! (our own design; the paper only states its ramp, see [`Filter`]).
 //!
 //! The physically correct time-averaged image of an object gives a pixel the weighted fraction of
 //! the shutter during which the object covers it, `integral of w(t) [pixel covered at t] dt`, and
@@ -32,11 +32,11 @@
 //! of the triangle and gaussian weights. The chord tables hold 1024 rows per segment (fewer for
 //! long paths, at least 64).
 
-use crate::hull::Rim;
+use super::filter::Filter;
+use super::hulls::{hulls_of, project};
+use super::rim::Rim;
 use crate::mesh::{dot, normalize};
 use crate::motion::{Keyframe, Path};
-use crate::volume_filter::Filter;
-use crate::volume_hulls::hulls_of;
 
 /// The chord of a convex polygon along a direction: for rows of constant `y` (across the
 /// direction), the interval `[lo, hi]` of `x` (along it) inside the polygon. A polygon of at
@@ -200,33 +200,6 @@ fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     ]
 }
 
-/// Image-plane coordinates: `(p . e1, p . e2)`, or with an eye the perspective ones
-/// `((p - eye) . e1, (p - eye) . e2) / ((p - eye) . d)` (depth clamped to a tiny positive value
-/// for points at or behind the eye).
-#[inline]
-pub(crate) fn project(
-    eye: Option<[f64; 3]>,
-    d: [f64; 3],
-    e1: [f64; 3],
-    e2: [f64; 3],
-    p: [f64; 3],
-) -> [f64; 2] {
-    match eye {
-        None => [dot(p, e1), dot(p, e2)],
-        Some(e) => {
-            let r = [p[0] - e[0], p[1] - e[1], p[2] - e[2]];
-            let (a, rr) = (dot(r, d), dot(r, r));
-            // `a` is the clamped depth itself when a^2 clearly exceeds (1e-9 |r|)^2 (no root).
-            let z = if a > 1e-150 && a * a > 2e-18 * rr {
-                a
-            } else {
-                a.max(1e-9 * rr.sqrt()).max(1e-300)
-            };
-            [dot(r, e1) / z, dot(r, e2) / z]
-        }
-    }
-}
-
 /// The default view: the world axis least aligned with `motion`, made perpendicular to it.
 pub fn default_view(motion: [f64; 3]) -> [f64; 3] {
     let m = normalize(motion);
@@ -246,7 +219,7 @@ impl CoverageModel {
     /// The model of `vertices` (object space) placed along `path` and seen along `view`, from
     /// the camera at `eye` (perspective) or orthographically. With `rim` (the faces of a closed
     /// mesh on these vertices) each hull is taken over the projected silhouette only
-    /// ([`crate::hull::rim_points`]), unless a vertex is not in front of the eye.
+    /// ([`rim_points`](super::rim::rim_points)), unless a vertex is not in front of the eye.
     pub fn new(
         vertices: &[[f64; 3]],
         rim: Option<Rim>,

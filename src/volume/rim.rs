@@ -1,15 +1,15 @@
-//! Convex hulls of projected point sets and meshes, for the coverage model of the motion volume
-//! ([`crate::volume_alpha`]).
+//! The projected rim of a closed mesh, for the convex hulls of the motion volume's coverage
+//! model (see `hulls.rs`).
 //!
 //! A dense mesh's projected hull is found from its rim: [`rim_points`] keeps only the vertices
 //! where the projected surface folds over (the silhouette as seen from the eye), a few hundred of
-//! the 42k vertices of an 80k-face sphere, and [`convex_hull`] then sorts those instead of all.
+//! the 42k vertices of an 80k-face sphere, and the convex hull then sorts those instead of all.
 //! [`rim_candidates`] finds the faces that can lie on the rim of several views in one pass over
 //! the mesh's cached [`FacePlanes`] (no projection), and [`rim_points_of`] gives exactly
 //! [`rim_points`]'s output from those faces alone (about 2% of the sphere's faces).
 use rayon::prelude::*;
 
-use crate::mesh::FaceNeighbors;
+use crate::mesh::{dot, FaceNeighbors, FacePlanes};
 
 /// The faces and face neighbours of a closed, consistently wound 2-manifold mesh (see
 /// [`crate::mesh::Mesh::face_neighbors`]), for [`rim_points`]; with the mesh's [`FacePlanes`],
@@ -21,63 +21,9 @@ pub struct Rim<'a> {
     pub planes: Option<&'a FacePlanes>,
 }
 
-/// Faces whose sine at their first corner is below this are always examined by
-/// [`rim_candidates`] (slivers and degenerate faces).
-pub const SLIVER: f64 = 1e-2;
 /// A face counts as facing (or facing away from) a view only when the cosine between its normal
 /// and the view ray exceeds this.
 pub const MARGIN: f64 = 1e-2;
-
-/// Per-face planes of a mesh in object space (cached by [`crate::mesh::Mesh::face_planes`]):
-/// unit normal and offset `n . (a - center)` (f32, `a` the first corner), the offset NaN for a
-/// face whose sine at `a` is below [`SLIVER`]; the vertices' mean and the largest distance from it.
-#[derive(Debug, Clone)]
-pub struct FacePlanes {
-    planes: Vec<[f32; 4]>,
-    pub center: [f64; 3],
-    pub radius: f64,
-}
-
-impl FacePlanes {
-    pub fn new(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Self {
-        let k = vertices.len() as f64;
-        let s = vertices
-            .iter()
-            .fold([0.0; 3], |a, v| [a[0] + v[0], a[1] + v[1], a[2] + v[2]]);
-        let center = [s[0] / k, s[1] / k, s[2] / k];
-        let sub = |p: [f64; 3], q: [f64; 3]| [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
-        let len = |p: [f64; 3]| crate::mesh::dot(p, p).sqrt();
-        let radius = vertices
-            .par_iter()
-            .map(|v| len(sub(*v, center)))
-            .reduce(|| 0.0, f64::max);
-        let planes = faces
-            .par_iter()
-            .with_min_len(4096)
-            .map(|f| {
-                let a = vertices[f[0] as usize];
-                let n = crate::mesh::face_normal(vertices, f);
-                let (u, w) = (
-                    sub(vertices[f[1] as usize], a),
-                    sub(vertices[f[2] as usize], a),
-                );
-                let nn = len(n);
-                let solid = nn > 0.0 && nn >= SLIVER * len(u) * len(w);
-                if !solid {
-                    return [0.0, 0.0, 0.0, f32::NAN];
-                }
-                let m = n.map(|x| x / nn);
-                let off = crate::mesh::dot(m, sub(a, center));
-                [m[0] as f32, m[1] as f32, m[2] as f32, off as f32]
-            })
-            .collect();
-        FacePlanes {
-            planes,
-            center,
-            radius,
-        }
-    }
-}
 
 /// A view of [`rim_candidates`] in the mesh's object space: a perspective eye, or the direction
 /// of an orthographic view.
@@ -93,7 +39,7 @@ pub enum ObjectView {
 ///
 /// A face outside the list and its three neighbours all robustly face the same way; when the
 /// projection keeps the faces' orientations apart from degenerate (see
-/// `crate::volume_alpha`'s conditions), their projected orientations are then equal and non-zero,
+/// `hulls.rs`'s conditions), their projected orientations are then equal and non-zero,
 /// so [`rim_points`] keeps nothing from that face, and [`rim_points_of`] over the list gives its
 /// exact output. Fixed chunks: the same for any thread count.
 pub fn rim_candidates(rim: Rim, planes: &FacePlanes, views: &[ObjectView]) -> Vec<Vec<u32>> {
@@ -106,18 +52,18 @@ pub fn rim_candidates(rim: Rim, planes: &FacePlanes, views: &[ObjectView]) -> Ve
             .map(|v| match *v {
                 ObjectView::Eye(e) => {
                     let w = [e[0] - c[0], e[1] - c[1], e[2] - c[2]];
-                    let r = crate::mesh::dot(w, w).sqrt() + planes.radius;
+                    let r = dot(w, w).sqrt() + planes.radius;
                     (w.map(|x| x as f32), 1.0, (MARGIN * r) as f32)
                 }
                 ObjectView::Direction(d) => {
-                    let r = crate::mesh::dot(d, d).sqrt();
+                    let r = dot(d, d).sqrt();
                     (d.map(|x| x as f32), 0.0, (MARGIN * r) as f32)
                 }
             })
             .collect();
         // 2 bits per view: 0 facing, 1 facing away (either sign convention), 2 not robust.
         let codes: Vec<u8> = planes
-            .planes
+            .planes()
             .par_iter()
             .with_min_len(CHUNK)
             .map(|p| {
@@ -267,113 +213,16 @@ pub fn rim_points(rim: Rim, proj: &[[f64; 2]]) -> Vec<[f64; 2]> {
         })
 }
 
-/// Akl-Toussaint: drop the points strictly inside the polygon of the extreme points in 32
-/// directions (they cannot be on the hull), so that a dense mesh sorts only its rim (about a
-/// tenth of a sphere's projected vertices).
-pub fn discard_interior(pts: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
-    const K: usize = 32;
-    if pts.len() < 4 * K {
-        return pts;
-    }
-    let dirs: Vec<[f64; 2]> = (0..K)
-        .map(|k| {
-            let a = std::f64::consts::TAU * k as f64 / K as f64;
-            [a.cos(), a.sin()]
-        })
-        .collect();
-    let key = |p: [f64; 2], d: [f64; 2]| p[0] * d[0] + p[1] * d[1];
-    // The point of largest p . d per direction (ties: the first), counter-clockwise.
-    let ext = pts
-        .par_chunks(8192)
-        .map(|c| {
-            let mut o = [c[0]; K];
-            for p in &c[1..] {
-                for (e, d) in o.iter_mut().zip(&dirs) {
-                    if key(*p, *d) > key(*e, *d) {
-                        *e = *p;
-                    }
-                }
-            }
-            o
-        })
-        .reduce_with(|mut a, b| {
-            for ((e, x), d) in a.iter_mut().zip(b).zip(&dirs) {
-                if key(x, *d) > key(*e, *d) {
-                    *e = x;
-                }
-            }
-            a
-        })
-        .expect("at least one chunk");
-    let mut poly: Vec<[f64; 2]> = ext.to_vec();
-    poly.dedup();
-    while poly.len() > 1 && poly[0] == poly[poly.len() - 1] {
-        poly.pop();
-    }
-    if poly.len() < 3 {
-        return pts;
-    }
-    let inside = |p: &[f64; 2]| {
-        (0..poly.len()).all(|i| {
-            let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
-            (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) > 0.0
-        })
-    };
-    pts.into_par_iter().filter(|p| !inside(p)).collect()
-}
-
-/// Andrew's monotone chain: the convex hull, counter-clockwise, without collinear points.
-pub fn convex_hull(pts: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
-    let mut pts = discard_interior(pts);
-    pts.par_sort_unstable_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
-    pts.dedup();
-    if pts.len() < 3 {
-        return pts;
-    }
-    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
-        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-    };
-    let mut h: Vec<[f64; 2]> = Vec::with_capacity(2 * pts.len());
-    for pass in 0..2 {
-        let start = h.len();
-        let iter: Box<dyn Iterator<Item = &[f64; 2]>> = if pass == 0 {
-            Box::new(pts.iter())
-        } else {
-            Box::new(pts.iter().rev())
-        };
-        for &p in iter {
-            while h.len() >= start + 2 && cross(h[h.len() - 2], h[h.len() - 1], p) <= 0.0 {
-                h.pop();
-            }
-            h.push(p);
-        }
-        h.pop();
-    }
-    h
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::mesh::Mesh;
-
-    #[test]
-    fn hull_of_a_square_with_inner_points() {
-        let h = convex_hull(vec![
-            [0.0, 0.0],
-            [1.0, 0.0],
-            [0.5, 0.5],
-            [1.0, 1.0],
-            [0.0, 1.0],
-            [0.5, 0.0],
-        ]);
-        assert_eq!(h.len(), 4);
-    }
+    use crate::volume::hulls::convex_hull;
 
     /// A closed, consistently wound UV sphere with `n` rings and `2n` segments, its vertices
     /// pushed in and out a little so that it is not convex and no projection is symmetric.
     fn sphere(n: usize) -> Mesh {
-        let (v, f) = crate::test_meshes::uv_sphere(n, 2 * n);
+        let (v, f) = crate::mesh::uv_sphere(n, 2 * n);
         let v = v
             .iter()
             .enumerate()
@@ -482,7 +331,7 @@ mod tests {
 
     #[test]
     fn a_smooth_mesh_examines_few_faces() {
-        let (v, f) = crate::test_meshes::uv_sphere(64, 128);
+        let (v, f) = crate::mesh::uv_sphere(64, 128);
         let mesh = Mesh::new(v, f).unwrap();
         let planes = FacePlanes::new(mesh.vertices(), mesh.faces());
         let rim = Rim {
@@ -511,7 +360,7 @@ mod tests {
         let f = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
         let mesh = Mesh::new(v, f).unwrap();
         let planes = FacePlanes::new(mesh.vertices(), mesh.faces());
-        assert!(planes.planes[0][3].is_nan() && !planes.planes[1][3].is_nan());
+        assert!(planes.planes()[0][3].is_nan() && !planes.planes()[1][3].is_nan());
         let rim = Rim {
             faces: mesh.faces(),
             neighbors: mesh.face_neighbors().unwrap(),
