@@ -17,8 +17,8 @@ import pytest
 
 import motionblur as mb
 from motionblur import meshes
+from motionblur.methods._layers import downsample, supersampled
 from motionblur.methods.accumulation import sample_times
-from motionblur.render import downsample, supersampled
 from motionblur.scene import rotate, translate
 
 
@@ -188,7 +188,7 @@ def test_results_do_not_depend_on_the_thread_count():
 
 
 def test_faces_turned_away_for_the_whole_shutter_are_dropped_once():
-    from motionblur.methods.accumulation import _facing_faces
+    from motionblur.methods._painter import facing_faces
 
     v, f = meshes.icosphere(3, 0.5)
     obj = mb.Object(
@@ -200,7 +200,7 @@ def test_faces_turned_away_for_the_whole_shutter_are_dropped_once():
         ),
     )
     eye = np.array([0.0, 0.3, 5.0])
-    kept = _facing_faces(obj, f, eye)
+    kept = facing_faces(obj, f, eye)
     assert len(f) * 0.4 < len(kept) < len(f) * 0.7
     # every dropped face is turned away at every sample time
     dropped = np.setdiff1d(np.arange(len(f)), [np.flatnonzero((f == k).all(axis=1))[0] for k in kept])
@@ -209,6 +209,6 @@ def test_faces_turned_away_for_the_whole_shutter_are_dropped_once():
         n = np.cross(w[f[dropped, 1]] - w[f[dropped, 0]], w[f[dropped, 2]] - w[f[dropped, 0]])
         assert (np.einsum("ij,ij->i", n, eye - w[f[dropped, 0]]) < 0).all()
     spinning = mb.Object((v, f), motion=mb.Motion.linear(np.eye(4), rotate(0.3, (0, 1, 0))))
-    assert len(_facing_faces(spinning, f, eye)) == len(f)  # not a pure translation: all kept
+    assert len(facing_faces(spinning, f, eye)) == len(f)  # not a pure translation: all kept
     sc = mb.Scene([obj], _cam())
     np.testing.assert_allclose(mb.render(sc, "accumulation", samples=9).rgba, twin(sc, 9), atol=2e-5)

@@ -11,7 +11,7 @@ from _threads import digests, ticks_during
 
 import motionblur as mb
 from motionblur import _core, meshes
-from motionblur.methods.accumulation import _facing_faces
+from motionblur.methods._painter import facing_faces
 from motionblur.scene import rotate, translate
 
 
@@ -51,7 +51,7 @@ def random_case(rng, nv=300, nf=700):
 def test_kept_faces_equal_the_numpy_selection_and_hold_every_facing_face(seed):
     rng = np.random.default_rng(seed)
     obj, f, eye = random_case(rng)
-    kept = _facing_faces(obj, f, eye)
+    kept = facing_faces(obj, f, eye)
     want = numpy_facing(obj, f, eye)
     assert kept.dtype == np.int64 and kept.flags.c_contiguous
     np.testing.assert_array_equal(kept, want)  # the same faces in the same order, bit for bit
@@ -70,20 +70,20 @@ def test_a_closed_mesh_loses_its_back_and_a_rotating_one_keeps_everything():
     v, f = meshes.icosphere(3, 0.5)
     eye = np.array([0.0, 0.3, 5.0])
     moving = mb.Object((v, f), motion=mb.Motion.linear(translate((-1, 0, 0)), translate((1, 0, 0))))
-    kept = _facing_faces(moving, moving.mesh.faces, eye)
+    kept = facing_faces(moving, moving.mesh.faces, eye)
     assert len(f) * 0.4 < len(kept) < len(f) * 0.7
     np.testing.assert_array_equal(kept, numpy_facing(moving, moving.mesh.faces, eye))
     spinning = mb.Object((v, f), motion=mb.Motion.linear(np.eye(4), rotate(0.3, (0, 1, 0))))
-    assert _facing_faces(spinning, spinning.mesh.faces, eye) is spinning.mesh.faces
+    assert facing_faces(spinning, spinning.mesh.faces, eye) is spinning.mesh.faces
     # seen from inside, every face of the sphere turns away: none is kept
     inside = mb.Object((v, f), motion=mb.Motion.linear(translate((0, 0, 4.9)), translate((0.01, 0, 4.9))))
-    assert _facing_faces(inside, inside.mesh.faces, eye).shape == (0, 3)
+    assert facing_faces(inside, inside.mesh.faces, eye).shape == (0, 3)
     # a quad facing the eye keeps both faces: the caller's array comes back
     quad = mb.Object(
         (np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]), np.array([[0, 1, 2], [0, 2, 3]])),
         motion=mb.Motion.linear(translate((-1, 0, 0)), translate((1, 0, 0))),
     )
-    assert _facing_faces(quad, quad.mesh.faces, eye) is quad.mesh.faces
+    assert facing_faces(quad, quad.mesh.faces, eye) is quad.mesh.faces
 
 
 def test_the_kernel_checks_its_input_and_leaves_it_unchanged():
@@ -153,10 +153,10 @@ def test_unlocked_and_edited_mesh_is_not_served_from_the_cache():
 def test_the_per_mesh_cache_lets_meshes_go():
     import gc
 
-    from motionblur.methods import accumulation as acc
+    from motionblur.methods import _painter
 
     cam = mb.Camera(mb.look_at((0.0, 0.0, 4.0), (0.0, 0.0, 0.0)), 0.7, 48, 36)
-    before = len(acc._CONSTANTS)
+    before = len(_painter._CONSTANTS)
     for k in range(5):
         v, f = meshes.icosphere(1, 0.3 + 0.1 * k)
         obj = mb.Object(
@@ -165,7 +165,7 @@ def test_the_per_mesh_cache_lets_meshes_go():
             motion=mb.Motion.linear(translate((-0.5, 0, 0)), translate((0.5, 0, 0))),
         )
         mb.render(mb.Scene([obj], cam, lights=[mb.DirectionalLight((0, 0, -1))]), "accumulation", samples=2)
-        assert len(acc._CONSTANTS) == before + 1  # this mesh's entry, the previous one's gone
+        assert len(_painter._CONSTANTS) == before + 1  # this mesh's entry, the previous one's gone
         del obj
         gc.collect()
-    assert len(acc._CONSTANTS) == before
+    assert len(_painter._CONSTANTS) == before

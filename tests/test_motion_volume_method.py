@@ -12,8 +12,8 @@ import pytest
 
 import motionblur as mb
 from motionblur import meshes
+from motionblur.methods._layers import downsample, supersampled
 from motionblur.methods.motion_volume import apparent_keyframes
-from motionblur.render import downsample, supersampled
 from motionblur.scene import rotate
 
 

@@ -237,7 +237,7 @@ def test_the_core_rechecks_the_background():
 
 def test_a_window_of_a_larger_background_is_read_in_place():
     """raw_layer over a window of a kept layer (origin x0, y0) equals the copied window."""
-    from motionblur.render import Layer, raw_layer, window_projection
+    from motionblur.methods._layers import Layer, raw_layer, window_projection
 
     statics, moving = _scene_draws()
     cam = _camera(96, 72)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from motionblur import _core
-from motionblur.render import Layer, resolve_arrays
+from motionblur.methods._layers import Layer, resolve_arrays
 
 
 def _numpy_resolve(layer: Layer, s: int):

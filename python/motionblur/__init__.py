@@ -11,6 +11,7 @@ from . import (
     _malloc,  # noqa: F401  (keeps freed frame buffers in the process; see the module)
     image,
     meshes,
+    methods,  # noqa: F401  (registers every built-in rendering method)
 )
 from . import geometry as _geometry
 from . import metrics as metrics

@@ -43,7 +43,8 @@ import numpy as np
 
 from . import metrics
 from . import reference as ref_mod
-from .render import METHODS, _load, clear_static_cache, render
+from .methods import clear_static_cache
+from .render import METHODS, render
 from .scenes_builtin import SCENES
 
 __all__ = ["run", "sweep_scene", "reference_for", "pareto_front", "equal_error", "equal_time", "main"]
@@ -93,7 +94,6 @@ def _with_aa(fn, opts: dict, aa) -> dict:
 def sweep_scene(name: str, scene, ref: np.ndarray, repeat=3, methods=None, flip=True, images=None, aa=None):
     """Rows (dicts) for every applicable method and option set on one scene (``aa`` added to the
     option sets of methods that take it)."""
-    _load()
     rows = []
     for mname, spec in METHODS.items():
         if methods is not None and mname not in methods:
@@ -465,7 +465,6 @@ def run(
     cube scene, hides the motion-blur error the report is about). The pyrender comparison runs
     ours at ``aa=1``, as pyrender under OSMesa has no multisampling.
     """
-    _load()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     names = list(SCENES) if scenes is None else list(scenes)

@@ -301,6 +301,16 @@ class Frame:
         Image.fromarray(self.to_srgb8(), mode="RGBA").save(path)
 
 
+def over_background(frame: Frame, background) -> Frame:
+    """``frame`` composited over straight RGBA ``background`` (4,) (premultiplied *over*)."""
+    bg = np.asarray(background, dtype=np.float32)
+    if bg[3] == 0.0 and not bg[:3].any():
+        return frame
+    pre = np.concatenate([bg[:3] * bg[3], bg[3:]]).astype(np.float32)
+    rgba = frame.rgba + (1.0 - frame.rgba[..., 3:4]) * pre
+    return Frame(rgba, frame.depth, frame.ids, frame.velocity, frame.stats)
+
+
 def _lights(lights) -> list[tuple[tuple[float, ...], tuple[float, ...]]]:
     if lights is None:
         return []

@@ -34,7 +34,7 @@ import os
 import numpy as np
 
 from ._validate import as_int
-from .raster import Frame
+from .raster import Frame, over_background
 from .scene import Scene
 
 __all__ = ["mitsuba", "pyrender", "mitsuba_variant"]
@@ -187,7 +187,6 @@ def mitsuba(
     import time
 
     from .methods.accumulation import sample_times
-    from .render import over_background
 
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
@@ -255,7 +254,6 @@ def pyrender(scene: Scene, t: float | None = None, samples: int = 1) -> Frame:
     import trimesh
 
     from .methods.accumulation import sample_times
-    from .render import over_background
 
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")

@@ -25,9 +25,10 @@ import numpy as np
 
 from .._validate import as_array, as_float, as_int
 from ..raster import Draw, rasterize
-from ..render import Layer, composite, raster_layer, register, resolve, supersampled
+from ..render import register
 from ..scene import Object, Scene
 from ..shell import BlurShell
+from ._layers import Layer, composite, raster_layer, resolve, supersampled
 
 __all__ = ["blur_shell", "shell_times", "apparent_vertices"]
 

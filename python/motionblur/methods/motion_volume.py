@@ -22,19 +22,19 @@ from .._validate import as_int
 from ..geometry import motion_volume as build_volume
 from ..geometry import spin_volume as build_spin
 from ..raster import Camera, Draw, Frame
-from ..render import (
+from ..render import register
+from ..scene import Object, Scene
+from ._layers import (
     Layer,
     aligned_window,
     composite,
     paste,
     raster_layer,
-    register,
     resolve,
     static_layer,
     supersampled,
     window_projection,
 )
-from ..scene import Object, Scene
 from ._volume_colors import UNLIT, averaged_colors, place, scattered, to_pixels, uniform
 
 __all__ = ["motion_volume", "apparent_keyframes", "camera_folds", "spin_of"]
