@@ -9,7 +9,7 @@ import pytest
 
 import motionblur as mb
 from motionblur import meshes
-from motionblur.metrics import rmse
+from motionblur.evaluation.metrics import rmse
 from motionblur.scene import translate
 
 

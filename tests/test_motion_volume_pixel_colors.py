@@ -13,8 +13,8 @@ from test_motion_volume_colors import _sphere_scene
 
 import motionblur as mb
 from motionblur import _core, meshes
+from motionblur.evaluation.metrics import rmse
 from motionblur.methods import _volume_colors as vc
-from motionblur.metrics import rmse
 from motionblur.scene import rotate
 
 

@@ -9,8 +9,8 @@ import pytest
 
 import motionblur as mb
 from motionblur import meshes, metrics
+from motionblur.evaluation.reference import mitsuba
 from motionblur.methods.motion_volume import spin_of
-from motionblur.reference import mitsuba
 from motionblur.scene import rotate, translate
 
 
