@@ -9,14 +9,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-from test_geometry_reference import (
-    _sorted_rows,
+from _helpers.geometry_twins import (
     builtin,
     concave_mesh,
     front_faces,
     random_convex,
     reference_contour,
     reference_contour_any,
+    sorted_rows,
 )
 
 from motionblur import Mesh, contour_edges, meshes
@@ -135,7 +135,7 @@ def test_open_nonmanifold_and_degenerate_follow_the_documented_rule():
         for _ in range(10):
             m = rng.normal(size=3)
             got = contour_edges(mesh, m)
-            np.testing.assert_array_equal(got, _sorted_rows(reference_contour_any(verts, faces, m)))
+            np.testing.assert_array_equal(got, sorted_rows(reference_contour_any(verts, faces, m)))
     # Every boundary edge of the open mesh is in the contour, whatever the motion.
     mesh = Mesh(v, open_f)
     e = mesh.edges()[mesh.edge_face_counts() == 1]

@@ -20,7 +20,7 @@ import textwrap
 import numpy as np
 import pytest
 import trimesh
-from test_geometry_reference import hull_volume, random_convex, signed_volume
+from _helpers.geometry_twins import hull_volume, random_convex, signed_volume
 
 from motionblur import JOINING, Camera, Draw, Mesh, look_at, meshes, motion_volume, rasterize
 
@@ -244,7 +244,7 @@ def test_contour_line_false_sweeps_every_edge_and_keeps_the_camera_alphas():
 def test_concave_objects_are_over_covered_but_less_than_with_the_ramp():
     """Documented limitation: on a concave blob the convex-hull model and the overlapping strips
     of a folded contour over-cover (measured +14% for a short motion); the paper's ramp more."""
-    from test_geometry_reference import concave_mesh
+    from _helpers.geometry_twins import concave_mesh
 
     tm = concave_mesh()
     v, f = np.asarray(tm.vertices) * 0.5 - [1.0, 0.0, 0.0], np.asarray(tm.faces)

@@ -223,8 +223,7 @@ def test_builtin_scenes_build_at_any_size():
     assert len(mb.SCENES["sphere80k"]().objects[0].mesh) > 80000
 
 
-def test_sequence_running_total_equals_fresh_mean_with_two_draws_per_frame():
-    rng = np.random.default_rng(0)
+def test_sequence_running_total_equals_fresh_mean_with_two_draws_per_frame(rng):
     table = {}
 
     def render_at(t):

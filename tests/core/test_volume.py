@@ -16,7 +16,7 @@ import textwrap
 import numpy as np
 import pytest
 import trimesh
-from test_geometry_reference import (
+from _helpers.geometry_twins import (
     builtin,
     concave_mesh,
     dot3,
@@ -177,10 +177,9 @@ def test_multi_segment_ramp_follows_section_4_2():
     assert set(np.round(vol.rgba[j, 3], 5)) <= set(np.round(np.float32(want), 5))
 
 
-def test_per_vertex_colours_and_normals_follow_their_vertex():
+def test_per_vertex_colours_and_normals_follow_their_vertex(rng):
     tm = concave_mesh()
     v, f = np.asarray(tm.vertices), np.asarray(tm.faces)
-    rng = np.random.default_rng(0)
     col = rng.uniform(0, 1, size=(len(v), 3)).astype(np.float32)
     m = np.array([0.2, 0.9, 0.1])
     vol = motion_volume(tm, m, colors=col)

@@ -12,7 +12,7 @@ import textwrap
 import numpy as np
 import pytest
 import trimesh
-from _shell_twin import TwinShell, twin_face_edge, twin_facing, twin_normals
+from _helpers.shell_twin import TwinShell, twin_face_edge, twin_facing, twin_normals
 
 import motionblur as mb
 from motionblur import meshes

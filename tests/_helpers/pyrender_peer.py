@@ -17,7 +17,7 @@ import numpy as np  # noqa: E402
 import pyrender  # noqa: E402
 import trimesh  # noqa: E402
 
-FAILURES = Path(__file__).resolve().parent.parent / "out" / "test-failures"
+FAILURES = Path(__file__).resolve().parents[2] / "out" / "test-failures"
 _renderers: dict[tuple[int, int], pyrender.OffscreenRenderer] = {}
 
 

@@ -2,7 +2,7 @@
 
 The twins evaluate the face classification with the same floating-point operations as the
 Rust core (``np.cross`` order, left-to-right dot product), so contour sets compare exactly.
-The tests at the bottom check the twins themselves on cases worked out by hand.
+``tests/core/test_geometry_twins.py`` checks the twins themselves on cases worked out by hand.
 """
 
 from __future__ import annotations
@@ -50,7 +50,7 @@ def _orient(f: np.ndarray, face: np.ndarray, p: np.ndarray, q: np.ndarray) -> np
     return np.where(fwd[:, None], np.stack([p, q], 1), np.stack([q, p], 1))
 
 
-def _sorted_rows(e: np.ndarray) -> np.ndarray:
+def sorted_rows(e: np.ndarray) -> np.ndarray:
     e = np.asarray(e, dtype=np.int64).reshape(-1, 2)
     key = np.sort(e, axis=1)
     return e[np.lexsort((key[:, 1], key[:, 0]))]
@@ -70,7 +70,7 @@ def reference_contour(tm: trimesh.Trimesh, motion, camera_position=None) -> np.n
         sel &= vis[adj[:, 0]] | vis[adj[:, 1]]
     adj, edges = adj[sel], edges[sel]
     ff = np.where(front[adj[:, 0]], adj[:, 0], adj[:, 1])
-    return _sorted_rows(_orient(f, ff, edges[:, 0], edges[:, 1]))
+    return sorted_rows(_orient(f, ff, edges[:, 0], edges[:, 1]))
 
 
 def reference_contour_any(v, f, motion) -> np.ndarray:
@@ -138,30 +138,3 @@ def concave_mesh() -> trimesh.Trimesh:
 def builtin(make, *args) -> trimesh.Trimesh:
     v, f = make(*args)
     return trimesh.Trimesh(v, f, process=False)
-
-
-# --- the twins checked by hand ----------------------------------------------------------------
-
-
-def test_reference_contour_of_a_box_is_the_back_square():
-    tm = builtin(meshes.box)
-    e = reference_contour(tm, [1.0, 0.0, 0.0])
-    assert len(e) == 4
-    assert (tm.vertices[e.ravel(), 0] < 0).all()
-    # A closed loop: every vertex has one outgoing and one incoming edge.
-    assert sorted(e[:, 0]) == sorted(e[:, 1])
-
-
-def test_general_rule_twin_agrees_with_trimesh_twin_on_closed_meshes():
-    tm = concave_mesh()
-    rng = np.random.default_rng(1)
-    for _ in range(5):
-        m = rng.normal(size=3)
-        np.testing.assert_array_equal(
-            _sorted_rows(reference_contour_any(tm.vertices, tm.faces, m)), reference_contour(tm, m)
-        )
-
-
-def test_volume_twin_matches_trimesh():
-    tm = random_convex(np.random.default_rng(0))
-    assert abs(signed_volume(tm.vertices, tm.faces) - tm.volume) < 1e-12 * abs(tm.volume) * 100

@@ -11,9 +11,9 @@ A diff image goes to out/test-failures/ on failure.
 
 from __future__ import annotations
 
-import _pyrender_peer as peer
 import numpy as np
 import pytest
+from _helpers import pyrender_peer as peer
 
 import motionblur as mb
 from motionblur import metrics, reference
@@ -41,6 +41,7 @@ def pan():
     return sc, reference.mitsuba(sc, times=32, spp=4), mb.render(sc, "accumulation", samples=64)
 
 
+@pytest.mark.mitsuba
 def test_methods_are_registered_with_sweeps_and_predicates(cube, pan):
     for name in ("opaque_image", "camera_velocity"):
         assert name in METHODS and len(METHODS[name].sweep) >= 3
@@ -54,6 +55,7 @@ def test_methods_are_registered_with_sweeps_and_predicates(cube, pan):
                     assert f.rgba.shape == (H, W, 4) and np.isfinite(f.rgba).all()
 
 
+@pytest.mark.mitsuba
 def test_opaque_image_beats_the_unblurred_frame_on_the_moving_cube(cube):
     sc, ref, acc = cube
     ours = mb.render(sc, "opaque_image")
@@ -72,6 +74,7 @@ def test_opaque_image_beats_the_unblurred_frame_on_the_moving_cube(cube):
     _check("opaque_image_cube_streak", e < e0, ours, ref, f"streak: {e:.4f} vs sharp {e0:.4f}")
 
 
+@pytest.mark.mitsuba
 def test_camera_velocity_beats_the_unblurred_frame_on_the_pan(pan):
     sc, ref, acc = pan
     for samples in (8, 32):

@@ -92,6 +92,7 @@ def test_the_spin_volume_is_placed_in_the_world():
     np.testing.assert_allclose(got.rgba, want.rgba, atol=1e-5)
 
 
+@pytest.mark.mitsuba
 def test_spin_beats_the_plain_volume_and_no_blur_against_mitsuba():
     sc = mb.SCENES["spinning_propeller"](width=80, height=60)
     ref = mitsuba(sc, times=32, spp=4).rgba

@@ -13,9 +13,9 @@ out/test-failures/ on failure.
 
 from __future__ import annotations
 
-import _pyrender_peer as peer
 import numpy as np
 import pytest
+from _helpers import pyrender_peer as peer
 
 import motionblur as mb
 from motionblur import metrics, reference
@@ -45,6 +45,7 @@ def _check(name, ours, ref, bound, message):
 
 
 @pytest.mark.parametrize("name", ["bending_arm", "deforming_propeller"])
+@pytest.mark.mitsuba
 def test_blur_shell_beats_the_unblurred_frame_against_mitsuba(name):
     scene = mb.SCENES[name](width=W, height=H)
     assert all(o.motion.is_deforming for o in scene.moving_objects)

@@ -1,13 +1,13 @@
-"""motionblur.image kernels against their numpy twins (tests/image_twins.py), and the properties
+"""motionblur.image kernels against their numpy twins (tests/_helpers/image_twins.py), and the properties
 of Kraus 2013 and Chapman 2011 the issue lists. Tolerance: max abs error 1e-5."""
 
 from __future__ import annotations
 
 import math
 
-import image_twins as tw
 import numpy as np
 import pytest
+from _helpers import image_twins as tw
 
 import motionblur as mb
 import motionblur.image as mi

@@ -72,6 +72,7 @@ def leaving():
     return sc, reference.mitsuba(sc, times=128, spp=8)
 
 
+@pytest.mark.mitsuba
 def test_object_leaving_the_view(leaving):
     sc, ref = leaving
     acc = mb.render(sc, "accumulation", samples=64, aa=4)
@@ -82,6 +83,7 @@ def test_object_leaving_the_view(leaving):
     assert metrics.rmse(mv, ref) < 0.5 * metrics.rmse(np.zeros_like(ref.rgba), ref)
 
 
+@pytest.mark.mitsuba
 def test_motion_far_larger_than_the_screen():
     # 40 units across a view 3.5 units wide: on screen for about a tenth of the shutter
     sc = mb.Scene([_box(mb.Motion.linear((-20.0, 0.0, 0.0), (20.0, 0.3, 0.0)))], _cam())
@@ -98,6 +100,7 @@ def test_motion_far_larger_than_the_screen():
     assert (mv.rgba[rows_mv][:, :, 3] > 0).any(axis=0).all()  # every column of the image
 
 
+@pytest.mark.mitsuba
 def test_camera_moving_with_the_object_gives_no_blur():
     path = mb.Motion.linear(translate((-1.0, 0.0, 0.0)), translate((1.0, 0.3, 0.0)))
     obj = mb.Object(meshes.icosphere(2, 0.5), (0.3, 0.7, 0.9), motion=path)
@@ -112,6 +115,7 @@ def test_camera_moving_with_the_object_gives_no_blur():
     assert abs(metrics.coverage_error(ref, want)) < 0.02
 
 
+@pytest.mark.mitsuba
 def test_rotation_about_the_view_axis():
     spin = mb.Motion([0.0, 0.5, 1.0], np.stack([rotate(a, (0.0, 0.0, 1.0)) for a in (0.0, 0.8, 1.6)]))
     sc = mb.Scene([mb.Object(meshes.box((1.2, 0.5, 0.5)), (0.9, 0.6, 0.2), motion=spin)], _cam())
@@ -138,6 +142,7 @@ def test_rotation_about_the_view_axis():
 
 @pytest.mark.parametrize("shutter", ["box", "triangle", "gaussian"])
 @pytest.mark.parametrize("shape", ["box", "sphere"])
+@pytest.mark.mitsuba
 def test_motion_volume_coverage_of_a_translating_convex_object(shape, shutter):
     mesh = meshes.box((0.6, 0.6, 0.6)) if shape == "box" else meshes.icosphere(3, 0.4)
     obj = mb.Object(mesh, (0.8, 0.4, 0.2), motion=mb.Motion.linear((-0.9, 0.1, 0.0), (0.6, -0.1, 0.0)))

@@ -50,10 +50,10 @@ def test_mesh_and_contours(sphere):
     assert np.array_equal(got.faces, vol.faces) and np.allclose(got.vertices, vol.vertices)
 
 
-def test_rasterize(sphere):
+def test_rasterize(sphere, rng):
     v, f = sphere
     cam = mb.Camera(mb.look_at((0, 0, 4), (0, 0, 0)), 0.8, 48, 40)
-    rgba = np.random.default_rng(0).uniform(0.2, 1.0, (len(v), 4)).astype(np.float32)
+    rgba = rng.uniform(0.2, 1.0, (len(v), 4)).astype(np.float32)
     rgba[:, 3] = 1
     want = mb.rasterize(cam, mb.Draw(v, f, rgba, previous_vertices=v - 0.1))
     for name, vv in layouts(v):

@@ -34,6 +34,7 @@ def test_equal_error_interpolates_log_log_and_marks_bounds():
     assert out["better"][:2] == (16.0, ">=")
 
 
+@pytest.mark.mitsuba
 def test_a_tiny_run_writes_the_table_csv_and_plot(tmp_path):
     sweeps = {
         "accumulation": [{"samples": 1}, {"samples": 4}],
@@ -75,6 +76,7 @@ def test_equal_time_interpolates_accumulations_error_at_each_methods_time():
     assert compare.equal_time([_row("blur_shell", 1.0, 0.1)]) == []
 
 
+@pytest.mark.mitsuba
 def test_a_tiny_run_shows_every_method_beside_accumulation_at_equal_time(tmp_path):
     sweeps = {
         "accumulation": [{"samples": 1}, {"samples": 4}, {"samples": 16}],

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_geometry_reference import concave_mesh, front_faces
+from _helpers.geometry_twins import concave_mesh, front_faces
 
 from motionblur import ContourTable, Mesh, contour_edges, meshes
 
@@ -36,10 +36,9 @@ def test_stored_sets_equal_contour_edges_for_their_direction(blob):
         np.testing.assert_array_equal(t.front_faces(k), front_faces(v, f, d))
 
 
-def test_lookup_is_the_nearest_direction_with_its_angle(blob):
+def test_lookup_is_the_nearest_direction_with_its_angle(blob, rng):
     t = ContourTable(blob, directions=64, seed=2)
     d = t.directions
-    rng = np.random.default_rng(0)
     for _ in range(50):
         m = rng.normal(size=3) * 10.0 ** rng.uniform(-3, 3)
         edges, err = t.lookup(m)

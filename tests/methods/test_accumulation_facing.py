@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from _threads import digests, ticks_during
+from _helpers.threads import digests, ticks_during
 
 import motionblur as mb
 from motionblur import _core, meshes

@@ -10,7 +10,7 @@ import textwrap
 
 import numpy as np
 import pytest
-from _threads import digests
+from _helpers.threads import digests
 
 import motionblur as mb
 from motionblur import meshes

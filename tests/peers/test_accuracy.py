@@ -17,9 +17,9 @@ A diff image goes to out/test-failures/ on failure.
 
 from __future__ import annotations
 
-import _pyrender_peer as peer
 import numpy as np
 import pytest
+from _helpers import pyrender_peer as peer
 from scipy import ndimage
 
 import motionblur as mb
@@ -47,6 +47,7 @@ def _static(scene: mb.Scene) -> mb.Scene:
     return scene.with_(objects=[mb.Object(o.mesh, o.color, o.shading, None, o.name) for o in scene.objects])
 
 
+@pytest.mark.mitsuba
 def test_variant_is_llvm_when_libllvm_is_installed():
     import os
 
@@ -54,6 +55,7 @@ def test_variant_is_llvm_when_libllvm_is_installed():
         assert reference.mitsuba_variant() == "llvm_ad_rgb"
 
 
+@pytest.mark.mitsuba
 def test_static_flat_scene_matches_mitsuba():
     sc = _static(mb.SCENES["cube"](width=W, height=H))
     ref = reference.mitsuba(sc, times=1, spp=64)
@@ -64,6 +66,7 @@ def test_static_flat_scene_matches_mitsuba():
     _check("static-flat", e <= 0.008 and diff <= 0.003, ours, ref, f"RMSE {e:.4f}, interior max {diff:.4f}")
 
 
+@pytest.mark.mitsuba
 def test_static_lambert_scene_matches_mitsuba():
     light = mb.DirectionalLight((-0.4, -0.5, -1.0), 1.3)
     cam = mb.Camera(mb.look_at((0.3, 0.4, 4.0), (0.0, 0.0, 0.0)), 0.7, W, H, znear=0.5, zfar=30.0)
@@ -95,6 +98,7 @@ def test_static_lambert_scene_matches_mitsuba():
     )
 
 
+@pytest.mark.mitsuba
 def test_accumulation_256_matches_the_256_time_reference():
     sc = mb.SCENES["cube"](width=W, height=H)
     ref = reference.mitsuba(sc, times=256, spp=4)
@@ -104,6 +108,7 @@ def test_accumulation_256_matches_the_256_time_reference():
     assert abs(metrics.coverage_error(ours, ref)) < 0.01
 
 
+@pytest.mark.mitsuba
 def test_accumulation_error_falls_with_n():
     cam = mb.Camera(mb.look_at((0, 0, 5), (0, 0, 0)), 0.7, W, H, znear=0.5, zfar=30.0)
     obj = mb.Object(
@@ -116,6 +121,7 @@ def test_accumulation_error_falls_with_n():
     assert errs[2] < 0.003, errs
 
 
+@pytest.mark.mitsuba
 def test_reference_is_seeded_and_checks_its_arguments():
     cam = mb.Camera(mb.look_at((0, 0, 5), (0, 0, 0)), 0.7, 24, 18, znear=0.5, zfar=30.0)
     obj = mb.Object(meshes.box(), (0.5, 0.5, 0.5), motion=mb.Motion.linear((0, 0, 0), (1, 0, 0)))
@@ -130,6 +136,7 @@ def test_reference_is_seeded_and_checks_its_arguments():
         reference.mitsuba(sc.with_(objects=[mb.Object(meshes.box(), np.ones((8, 3)))]))
 
 
+@pytest.mark.pyrender
 def test_pyrender_accumulation_peer_matches_ours():
     sc = mb.SCENES["cube"](width=W, height=H)
     theirs = reference.pyrender(sc, samples=16)
@@ -140,24 +147,7 @@ def test_pyrender_accumulation_peer_matches_ours():
     assert np.median(diff) <= 1.0 / 255 and metrics.rmse(ours, theirs) < 0.02
 
 
-def test_metrics_against_numpy():
-    rng = np.random.default_rng(0)
-    a = rng.random((16, 20, 4)).astype(np.float32)
-    b = np.clip(a + rng.normal(0, 0.05, a.shape), 0, 1).astype(np.float32)
-    assert metrics.rmse(a, b) == pytest.approx(np.sqrt(np.mean((a.astype(float) - b) ** 2)))
-    assert metrics.psnr(a, b) == pytest.approx(-20 * np.log10(metrics.rmse(a, b)))
-    assert metrics.psnr(a, a) == np.inf and metrics.flip(a, a) == 0.0
-    assert 0.0 < metrics.flip(a, b) < 1.0
-    assert metrics.coverage(a) == pytest.approx(a[..., 3].sum(dtype=np.float64), rel=1e-6)
-    half = a.copy()
-    half[..., 3] *= 0.5
-    assert metrics.coverage_error(half, a) == pytest.approx(-0.5)
-    with pytest.raises(ValueError, match="shape"):
-        metrics.rmse(a, b[:8])
-    with pytest.raises(ValueError, match="NaN"):
-        metrics.rmse(a, np.full_like(a, np.nan))
-
-
+@pytest.mark.mitsuba
 def test_translated_reference_moves_the_object():
     """A far translation during the shutter: the reference is the sum of the two halves."""
     cam = mb.Camera(mb.look_at((0, 0, 5), (0, 0, 0)), 0.7, 32, 24, znear=0.5, zfar=30.0)

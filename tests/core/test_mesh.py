@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-from test_geometry_reference import builtin, concave_mesh, raw_normals
+from _helpers.geometry_twins import builtin, concave_mesh, raw_normals
 
 from motionblur import Mesh, contour_edges, meshes
 

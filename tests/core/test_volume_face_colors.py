@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-from test_geometry_reference import front_faces, hull_volume, random_convex, signed_volume
+from _helpers.geometry_twins import front_faces, hull_volume, random_convex, signed_volume
 
 from motionblur import JOINING, LEADING, TRAILING, Mesh, meshes, motion_volume, spin_volume
 

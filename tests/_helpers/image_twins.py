@@ -1,5 +1,5 @@
 """Plain numpy twins of the motionblur.image kernels, written from the papers' equations and
-the documented filter geometry (float64 throughout). Used by tests/test_image*.py."""
+the documented filter geometry (float64 throughout). Used by tests/core/test_image*.py."""
 
 from __future__ import annotations
 

@@ -9,14 +9,16 @@ every disagreement inside the one-pixel silhouette band; FLAT colours within 1/2
 
 from __future__ import annotations
 
-import _pyrender_peer as peer
 import numpy as np
 import pyrender
 import pytest
+from _helpers import pyrender_peer as peer
 from scipy import ndimage
 
 import motionblur as mb
 from motionblur import meshes
+
+pytestmark = pytest.mark.pyrender  # every test here renders with pyrender
 
 
 def _random_mesh(seed=3, n=40):

@@ -6,9 +6,11 @@ colour renders, and the splat kernel's own input checks."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
-from _threads import digests, ticks_during
+from _helpers.threads import digests, ticks_during
 from test_motion_volume_colors import _sphere_scene
 
 import motionblur as mb
@@ -16,6 +18,8 @@ from motionblur import _core, meshes
 from motionblur.evaluation.metrics import rmse
 from motionblur.methods import _volume_colors as vc
 from motionblur.scene import rotate
+
+HERE = str(Path(__file__).parent)  # the scripts run in subprocesses import this module
 
 
 def _errors(sc, **extra):
@@ -116,7 +120,7 @@ def _splat_inputs(n=20000, seed=3):
 
 def test_splat_is_the_same_for_any_thread_count_and_releases_the_gil():
     script = (
-        "import hashlib, sys; sys.path.insert(0, 'tests')\n"
+        f"import hashlib, sys; sys.path.insert(0, {HERE!r})\n"
         "from test_motion_volume_pixel_colors import _splat_inputs\n"
         "from motionblur import _core\n"
         "c, p = _splat_inputs()\n"
@@ -209,7 +213,7 @@ def test_scatter_pieces_checks_its_input():
 
 def test_scatter_pieces_is_the_same_for_any_thread_count_and_releases_the_gil():
     script = (
-        "import hashlib, sys; sys.path.insert(0, 'tests')\n"
+        f"import hashlib, sys; sys.path.insert(0, {HERE!r})\n"
         "from test_motion_volume_pixel_colors import _piece\n"
         "from motionblur import _core\n"
         "ps = [_piece(seed=s, w=160, h=120, straight=s % 2 == 0) for s in range(3)]\n"

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from _threads import digests, ticks_during
+from _helpers.threads import digests, ticks_during
 
 import motionblur as mb
 import motionblur.image as mi
@@ -206,9 +206,9 @@ def test_results_do_not_depend_on_the_thread_count():
     assert len(set(got)) == 1, got
 
 
-def test_gil_is_released():
+def test_gil_is_released(rng):
     # A Python thread keeps running while a long blur runs in another thread.
-    big = np.random.default_rng(0).random((600, 800, 4)).astype(np.float32)
+    big = rng.random((600, 800, 4)).astype(np.float32)
     assert ticks_during(lambda: mi.box_blur(big, (1, 0.3), 81)) >= 3
 
 
@@ -239,7 +239,7 @@ np.savez(sys.argv[1], row=row, **out)
 def test_long_thin_images_at_oblique_angles_stay_small(tmp_path):
     """A 1xN or Nx1 image along an oblique direction: the sheared image is O(w h), not w^2 |slope|
     (which aborted the process); the result matches the twin on a prefix (the filter is local)."""
-    import image_twins as tw
+    from _helpers import image_twins as tw
 
     path = tmp_path / "out.npz"
     r = subprocess.run(
