@@ -33,7 +33,7 @@ from ._layers import Layer, composite, raster_layer, resolve, supersampled
 __all__ = ["blur_shell", "shell_times", "apparent_vertices"]
 
 
-#: Shells kept between renders (their mesh order and vertex-face tables cost a few ms to build
+#: Shells kept between renders (their mesh order and vertex-face tables are costly to build
 #: for large meshes): the last 8, keyed by mesh identity and options, reset before reuse (a reset
 #: shell behaves exactly like a new one). The mesh is held so its id stays unique.
 _SHELLS: OrderedDict = OrderedDict()

@@ -42,9 +42,9 @@ __all__ = ["motion_volume", "apparent_keyframes", "camera_folds", "spin_of"]
 FILTERS = ("ramp", "box", "triangle", "gaussian")
 
 #: Still camera: draw the volumes in one rasterizer call over the kept static layer (the
-#: rasterizer's ``background``), resolved by the rasterizer. False restores the previous path
-#: (static objects redrawn with the volumes at sample resolution, resolved apart); the
-#: benchmark and the tests compare the two.
+#: rasterizer's ``background``), resolved by the rasterizer. False: the static objects are
+#: redrawn with the volumes at sample resolution and resolved apart (the tests and
+#: ``benches/bench_raster.py`` compare the two).
 ONE_PASS = True
 
 
@@ -190,8 +190,7 @@ def motion_volume(
     line); ``exact_static`` (default True) redraws the static objects inside the volumes'
     window with them, one rasterizer pass with exact transparency;
     False composites the volumes over the kept static layer per sample by depth instead (exact
-    unless a volume passes through a static surface; with numpy compositing it was the slower
-    of the two on the built-in scenes); ``spin`` (paper section 4.3, objects that spin but
+    unless a volume passes through a static surface); ``spin`` (paper section 4.3, objects that spin but
     barely move) ``"auto"`` (default), True or False: with True every moving object whose
     folded motion turns about one fixed axis (see :func:`spin_of`: 32 steps, each step's axis
     within 3 degrees of the mean) is drawn as :func:`motionblur.spin_volume` (contour from the
