@@ -1,4 +1,4 @@
-"""The compiled resolve of a supersampled layer (render.resolve_arrays, paste) against numpy."""
+"""The compiled resolve of a supersampled layer (methods._layers: resolve_arrays, paste) against numpy."""
 
 from __future__ import annotations
 
