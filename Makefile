@@ -59,7 +59,7 @@ demo: build ## the main job on built-in scenes: images and a speed/error table i
 bench: build ## benchmarks against the peers, measured in the same run (out/bench)
 	@for b in benches/bench_*.py; do echo "== $$b"; $(PY) $$b || exit 1; done
 
-lint: venv ## cargo fmt, clippy and rustdoc -D warnings, ruff
+lint: build ## cargo fmt, clippy and rustdoc -D warnings, ruff, the stubs of the compiled core against it (stubtest)
 	cargo fmt --check
 	cargo clippy --release --all-targets -- -D warnings
 	cargo clippy --release --features python -- -D warnings
@@ -67,6 +67,7 @@ lint: venv ## cargo fmt, clippy and rustdoc -D warnings, ruff
 	RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --features python
 	$(VENV)/bin/ruff check python tests benches notebooks
 	$(VENV)/bin/ruff format --check python tests benches
+	$(PY) -m mypy.stubtest motionblur._core
 
 fmt: venv ## format Rust and Python in place
 	cargo fmt

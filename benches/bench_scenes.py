@@ -1,6 +1,6 @@
 """Speed against error on the five built-in scenes, against Mitsuba, measured in one run.
 
-Runs :func:`motionblur.bench.run` (every registered method over its sweep on every built-in
+Runs :func:`motionblur.evaluation.bench.run` (every registered method over its sweep on every built-in
 scene, Mitsuba references cached in out/bench/references/), then prints the two comparisons of
 the issue: motion_volume against accumulation at equal error, and accumulation with the static
 layer drawn once (N = 16) against 16-pose accumulation on pyrender. Machine: see the report
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import sys
 
-from motionblur.bench import main
+from motionblur.evaluation.bench import main
 
 if __name__ == "__main__":
     sys.exit(main(sys.argv[1:]))

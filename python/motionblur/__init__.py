@@ -11,14 +11,14 @@ from . import (
     _malloc,  # noqa: F401  (keeps freed frame buffers in the process; see the module)
     image,
     meshes,
+    methods,  # noqa: F401  (registers every built-in rendering method)
 )
 from . import geometry as _geometry
-from . import metrics as metrics
 from . import raster as _raster
-from . import reference as reference
 from . import scene as _scene
 from . import shell as _shell
 from ._core import __version__
+from .evaluation import metrics, reference
 from .geometry import *  # noqa: F403
 from .methods.accumulation import Sequence
 from .raster import *  # noqa: F403

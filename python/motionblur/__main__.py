@@ -19,12 +19,12 @@ def main(argv: list[str] | None = None) -> int:
     )
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] == ["bench"]:
-        from .bench import main as bench_main
+        from .evaluation.bench import main as bench_main
 
         return bench_main(argv[1:])
     args = parser.parse_args(argv)
     if args.command == "demo":
-        from .demo import run
+        from .evaluation.demo import run
 
         return run(args.out)
     return 2

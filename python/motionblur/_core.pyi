@@ -1,6 +1,47 @@
 """Type stubs of the compiled core. The public API wraps these; see the Python modules."""
 
+from typing import final
+
 import numpy as np
+from typing_extensions import Self
+
+# The compiled classes are PyO3 classes: built by __new__ (they have no __init__) and final.
+
+__all__ = [
+    "__version__",
+    "_Mesh",
+    "_ContourTable",
+    "contour_edges",
+    "motion_volume",
+    "spin_volume",
+    "LEADING",
+    "TRAILING",
+    "JOINING",
+    "_rasterize",
+    "_glow",
+    "_box_blur",
+    "_splat_paths",
+    "_scatter_pieces",
+    "_pixel_bounds",
+    "_sample_colors",
+    "_colored",
+    "_opaque_blur",
+    "_opaque_motion_blur",
+    "_pyramid_blur",
+    "_pyramid_glow",
+    "_pyramid_opaque_blur",
+    "_depth_of_field",
+    "_camera_velocity",
+    "_velocity_blur",
+    "_camera_motion_blur",
+    "_BlurShell",
+    "_motion_silhouette",
+    "_resolve",
+    "_composite",
+    "_accumulate",
+    "_over",
+    "_facing_faces",
+]
 
 __version__: str
 
@@ -10,10 +51,11 @@ LEADING: int
 TRAILING: int
 JOINING: int
 
+@final
 class _Mesh:
     """Rust mesh: owned float64 vertices (V,3), faces (F,3) and the cached edge adjacency."""
 
-    def __init__(self, vertices: np.ndarray, faces: np.ndarray) -> None:
+    def __new__(cls, vertices: np.ndarray, faces: np.ndarray) -> Self:
         """vertices (V,3) float64 C-contiguous, faces (F,3) int64 with indices in [0, V)."""
     def with_vertices(self, vertices: np.ndarray) -> _Mesh:
         """Same faces and cached adjacency, new (V,3) float64 vertex positions."""
@@ -76,10 +118,11 @@ def spin_volume(
     (contour_line is ignored: every contour edge is swept).
     Releases the GIL."""
 
+@final
 class _ContourTable:
     """Contour sets precomputed for K directions (section 4.4)."""
 
-    def __init__(self, mesh: _Mesh, count: int, seed: int, directions: np.ndarray | None = None) -> None:
+    def __new__(cls, mesh: _Mesh, count: int, seed: int, directions: np.ndarray | None = None) -> Self:
         """count random directions from seed (splitmix64), or the given (K,3) float64 ones."""
     def __len__(self) -> int: ...
     def directions(self) -> np.ndarray:
@@ -193,12 +236,13 @@ def _camera_motion_blur(
 
 # --- shell (blur shells, silhouette of motion)
 
+@final
 class _BlurShell:
     """Rust blur shell (see motionblur.BlurShell). faces i64 (F,3); mask bool (F,) | None; color
     f32 (1,3) | (V,3) | None (white)."""
 
-    def __init__(
-        self,
+    def __new__(
+        cls,
         faces: np.ndarray,
         n_vertices: int,
         subdivisions: int,
@@ -206,7 +250,7 @@ class _BlurShell:
         initial_alpha: float,
         mask: np.ndarray | None = None,
         color: np.ndarray | None = None,
-    ) -> None: ...
+    ) -> Self: ...
     def update(self, vertices: np.ndarray, normals: np.ndarray | None = None) -> None:
         """vertices, normals f64 (V,3) C-contiguous. Releases the GIL."""
     def build(

@@ -3,9 +3,8 @@
 glibc's malloc serves blocks of 128 KiB and more (its threshold grows up to 32 MiB as such
 blocks are freed) with fresh ``mmap`` pages and gives them back on ``free``, and it trims the top
 of the heap once 128 KiB are free there. A renderer allocates frame-sized buffers every call (the
-rasterizer's output, numpy temporaries), so every call page-faulted its buffers afresh: measured
-on the 2-core machine, an accumulation sample of the built-in airplane took 5.9 ms, 2.1 ms with
-the thresholds raised, and 16 samples of the cube 12.8 ms against 8.1 ms.
+rasterizer's output, numpy temporaries), so every call would page-fault its buffers afresh
+(the README's "Memory and speed" gives what that costs).
 
 :func:`keep_freed_memory` raises both thresholds (blocks up to 64 MiB come from the heap; up to
 256 MiB of free heap is kept), so the pages are reused. The package calls it on import unless the

@@ -1,16 +1,16 @@
 """Rendering methods, one module each; importing this package registers all of them.
 
 Adding a method is adding a module here that decorates its function with
-:func:`motionblur.render.register`. Every module of the package whose name does not start
-with an underscore is imported automatically.
+:func:`motionblur.render.register`, and importing it below. The modules whose names start with
+an underscore hold what the methods share, and a method imports them, never another method:
+``_layers`` (rasterizing into layers, compositing, supersampling, the static layer kept across
+frames), ``_painter`` (objects drawn at any shutter time, per-mesh constants) and
+``_volume_colors`` (the colours of motion volumes).
 """
 
 from __future__ import annotations
 
-import importlib
-import pkgutil
+from . import accumulation, blur_shell, image_space, motion_volume  # each registers its methods
+from ._layers import clear_static_cache
 
-__all__ = [info.name for info in pkgutil.iter_modules(__path__) if not info.name.startswith("_")]
-
-for _name in __all__:
-    importlib.import_module(f"{__name__}.{_name}")
+__all__ = ["accumulation", "blur_shell", "image_space", "motion_volume", "clear_static_cache"]

@@ -24,9 +24,9 @@ import numpy as np
 
 from .. import _core, image
 from ..raster import Camera, Draw
-from ..render import raster_layer, window_projection
 from ..scene import Object, Scene
-from .accumulation import _box_corners, _mesh_constant, _Painter
+from ._layers import raster_layer, window_projection
+from ._painter import Painter, box_corners, mesh_constant
 
 #: Stand-in for an object drawn unlit: colours already shaded (``raster_layer`` groups by it).
 UNLIT = SimpleNamespace(shading="flat")
@@ -194,12 +194,12 @@ def scattered(scene: Scene, cam: Camera, movers, keys_of, win, pieces: int) -> n
     x0, y0, x1, y1 = win
     n = pieces * 2 * PATH_STEPS  # placements: piece p spans [2 p S, 2 (p + 1) S], middle (2 p + 1) S
     keys = [keys_of(o, n) for _, o in movers]
-    corners = [_mesh_constant(o.mesh, "corners", _box_corners) for _, o in movers]
+    corners = [mesh_constant(o.mesh, "corners", box_corners) for _, o in movers]
     # the sources: what passes the output window during the shutter (its bounds grown by the
     # movers' image motion, at most one image size beyond the view)
     reach = np.zeros(2)
     for (_, o), ks in zip(movers, keys):
-        c = _mesh_constant(o.mesh, "centroid", _centroid)
+        c = mesh_constant(o.mesh, "centroid", _centroid)
         px, py, ok = pixels(cam.view_projection, ks[:, :3, :3] @ c + ks[:, :3, 3], cam.width, cam.height)
         if ok.all():
             reach = np.maximum(reach, [px.max() - px.min(), py.max() - py.min()])
@@ -213,8 +213,8 @@ def scattered(scene: Scene, cam: Camera, movers, keys_of, win, pieces: int) -> n
     )
     cdf = scene.shutter_cdf(np.arange(pieces + 1) / pieces)
     step = _grid_step(cam, corners, keys, n, pieces, float(reach.max()))
-    # accumulation's painter: object-space draws, faces turned away the whole shutter dropped
-    painter = _Painter(scene, movers, eye=None if scene.camera_moves else cam.pose[:3, 3])
+    # the painter accumulation draws with: object-space draws, faces turned away the whole shutter dropped
+    painter = Painter(scene, movers, eye=None if scene.camera_moves else cam.pose[:3, 3])
     objects = np.array([k for k, _ in movers], np.int32)
     tan = np.tan(cam.yfov / 2.0)
     world_to_window = np.diag([1.0 / step, 1.0 / step, 1.0, 1.0]) @ to_pixels(cam, x0, y0)

@@ -25,14 +25,15 @@ import numpy as np
 
 from .._validate import as_array, as_float, as_int
 from ..raster import Draw, rasterize
-from ..render import Layer, composite, raster_layer, register, resolve, supersampled
+from ..render import register
 from ..scene import Object, Scene
 from ..shell import BlurShell
+from ._layers import Layer, composite, raster_layer, resolve, supersampled
 
 __all__ = ["blur_shell", "shell_times", "apparent_vertices"]
 
 
-#: Shells kept between renders (their mesh order and vertex-face tables cost a few ms to build
+#: Shells kept between renders (their mesh order and vertex-face tables are costly to build
 #: for large meshes): the last 8, keyed by mesh identity and options, reset before reuse (a reset
 #: shell behaves exactly like a new one). The mesh is held so its id stays unique.
 _SHELLS: OrderedDict = OrderedDict()

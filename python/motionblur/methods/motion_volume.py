@@ -22,19 +22,19 @@ from .._validate import as_int
 from ..geometry import motion_volume as build_volume
 from ..geometry import spin_volume as build_spin
 from ..raster import Camera, Draw, Frame
-from ..render import (
+from ..render import register
+from ..scene import Object, Scene
+from ._layers import (
     Layer,
     aligned_window,
     composite,
     paste,
     raster_layer,
-    register,
     resolve,
     static_layer,
     supersampled,
     window_projection,
 )
-from ..scene import Object, Scene
 from ._volume_colors import UNLIT, averaged_colors, place, scattered, to_pixels, uniform
 
 __all__ = ["motion_volume", "apparent_keyframes", "camera_folds", "spin_of"]
@@ -42,9 +42,9 @@ __all__ = ["motion_volume", "apparent_keyframes", "camera_folds", "spin_of"]
 FILTERS = ("ramp", "box", "triangle", "gaussian")
 
 #: Still camera: draw the volumes in one rasterizer call over the kept static layer (the
-#: rasterizer's ``background``), resolved by the rasterizer. False restores the previous path
-#: (static objects redrawn with the volumes at sample resolution, resolved apart); the
-#: benchmark and the tests compare the two.
+#: rasterizer's ``background``), resolved by the rasterizer. False: the static objects are
+#: redrawn with the volumes at sample resolution and resolved apart (the tests and
+#: ``benches/bench_raster.py`` compare the two).
 ONE_PASS = True
 
 
@@ -190,8 +190,7 @@ def motion_volume(
     line); ``exact_static`` (default True) redraws the static objects inside the volumes'
     window with them, one rasterizer pass with exact transparency;
     False composites the volumes over the kept static layer per sample by depth instead (exact
-    unless a volume passes through a static surface; with numpy compositing it was the slower
-    of the two on the built-in scenes); ``spin`` (paper section 4.3, objects that spin but
+    unless a volume passes through a static surface); ``spin`` (paper section 4.3, objects that spin but
     barely move) ``"auto"`` (default), True or False: with True every moving object whose
     folded motion turns about one fixed axis (see :func:`spin_of`: 32 steps, each step's axis
     within 3 degrees of the mean) is drawn as :func:`motionblur.spin_volume` (contour from the

@@ -1,0 +1,79 @@
+"""Image error metrics between a rendered frame and a reference.
+
+Every function takes Frames or (H,W,4) / (H,W,3) float arrays of premultiplied linear RGBA (RGB),
+with the same shape on both sides. RMSE and PSNR use all four channels (colour and coverage);
+FLIP (NVIDIA's perceptual difference, pip ``flip-evaluator``) compares the frames composited
+over a background, in sRGB; coverage is the alpha channel summed over the image.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..raster import Frame
+
+__all__ = ["rmse", "psnr", "flip", "coverage", "coverage_error"]
+
+
+def _img(x, name: str) -> np.ndarray:
+    a = x.rgba if isinstance(x, Frame) else x
+    a = np.asarray(a, dtype=np.float64)
+    if a.ndim != 3 or a.shape[2] not in (3, 4):
+        raise ValueError(f"{name}: expected an (H,W,4) or (H,W,3) image or a Frame, got shape {a.shape}")
+    if not np.isfinite(a).all():
+        raise ValueError(f"{name}: contains NaN or inf")
+    return a
+
+
+def _pair(image, reference) -> tuple[np.ndarray, np.ndarray]:
+    a, b = _img(image, "image"), _img(reference, "reference")
+    if a.shape != b.shape:
+        raise ValueError(f"image: shape {a.shape} differs from the reference's {b.shape}")
+    return a, b
+
+
+def rmse(image, reference) -> float:
+    """Root mean square difference over every pixel and channel (linear units)."""
+    a, b = _pair(image, reference)
+    return float(np.sqrt(np.mean((a - b) ** 2)))
+
+
+def psnr(image, reference, peak: float = 1.0) -> float:
+    """Peak signal-to-noise ratio in dB, ``20 log10(peak / rmse)`` (inf for identical images)."""
+    e = rmse(image, reference)
+    return float("inf") if e == 0 else float(20.0 * np.log10(peak / e))
+
+
+def _srgb(rgba: np.ndarray, background) -> np.ndarray:
+    bg = np.asarray(background, dtype=np.float64)
+    rgb = rgba[..., :3] + (1.0 - rgba[..., 3:4]) * bg if rgba.shape[2] == 4 else rgba
+    c = np.clip(rgb, 0.0, 1.0)
+    return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1.0 / 2.4) - 0.055).astype(np.float32)
+
+
+def flip(image, reference, background=(0.0, 0.0, 0.0)) -> float:
+    """Mean LDR-FLIP error in [0, 1] of the two images composited over ``background`` (linear RGB,
+    default black) and encoded to sRGB, at the default 67 pixels per degree."""
+    import flip_evaluator
+
+    a, b = _pair(image, reference)
+    _, mean, _ = flip_evaluator.evaluate(_srgb(b, background), _srgb(a, background), "LDR")
+    return float(mean)
+
+
+def coverage(image) -> float:
+    """Alpha summed over the image (pixels covered; the time-averaged coverage of a blurred frame)."""
+    a = _img(image, "image")
+    if a.shape[2] != 4:
+        raise ValueError("image: coverage needs an alpha channel")
+    return float(a[..., 3].sum())
+
+
+def coverage_error(image, reference) -> float:
+    """Relative error of the summed alpha, ``(coverage(image) - coverage(reference)) / coverage(reference)``
+    (signed; inf when the reference covers nothing and the image does)."""
+    a, b = _pair(image, reference)
+    ca, cb = coverage(a), coverage(b)
+    if cb == 0:
+        return 0.0 if ca == 0 else float("inf")
+    return (ca - cb) / cb

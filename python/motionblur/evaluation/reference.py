@@ -1,0 +1,297 @@
+"""References: the same :class:`~motionblur.Scene` rendered by Mitsuba 3 and by pyrender.
+
+``mitsuba(scene, times=K, spp=S, seed=0)``: Mitsuba 3.9 has no shape that moves with the ray
+time, so the reference is K renders at the stratified shutter times ``(i + 0.5) / K``, each
+weighted by the shutter filter's integral over its stratum (as the accumulation method weighs
+its samples) and summed. The conversion:
+
+- meshes from numpy (``mi.Mesh`` filled through ``mi.traverse``); a moving lambert object is a
+  shape group instanced with ``to_world`` = its rigid transform at the sample time; flat objects
+  (emitters, which Mitsuba cannot instance) and deforming ones get their world vertex positions
+  written at each time;
+- the camera: ``to_world = pose @ diag(-1, 1, -1, 1)``, ``fov_axis='y'``, near/far clip; a moving
+  camera's ``to_world`` is updated per time; a box pixel filter and an rgba film;
+- ``flat`` shading: an area emitter of the object's colour on a black BSDF, seen directly
+  (``path`` integrator, ``max_depth=1``); ``lambert``: a diffuse BSDF of the object's colour under
+  directional emitters of irradiance ``pi * intensity`` (Mitsuba's diffuse BSDF is
+  ``albedo / pi``), ``direct`` integrator. A scene with both is rendered in two passes (flat
+  emitters with lambert objects black, then the lit pass with flat objects black) and summed, so
+  flat objects never light lambert ones. Mitsuba casts shadows, the rasterizer does not: the
+  built-in lit scenes have nothing that could shadow.
+
+The variant is ``llvm_ad_rgb`` when libLLVM 19 is installed (``DRJIT_LIBLLVM_PATH``, set here to
+Debian's path when it exists and the variable is unset), ``scalar_rgb`` otherwise. Long runs show
+a tqdm progress bar.
+
+``pyrender(scene, t=None, samples=1)``: pyrender (OSMesa, ``RenderFlags.FLAT``) at one time, or
+the mean of ``samples`` poses over the shutter (the 16-pose accumulation peer of the benchmark).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+
+from .._validate import as_int
+from ..methods.accumulation import sample_times
+from ..raster import Frame, over_background
+from ..scene import Scene
+
+__all__ = ["mitsuba", "pyrender", "mitsuba_variant"]
+
+_LLVM = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
+_FLIP = np.diag([-1.0, 1.0, -1.0, 1.0])
+
+
+def mitsuba_variant() -> str:
+    """The Mitsuba variant the references use: ``llvm_ad_rgb`` with libLLVM, else ``scalar_rgb``."""
+    if "DRJIT_LIBLLVM_PATH" not in os.environ and os.path.exists(_LLVM):
+        os.environ["DRJIT_LIBLLVM_PATH"] = _LLVM
+    path = os.environ.get("DRJIT_LIBLLVM_PATH")
+    return "llvm_ad_rgb" if path and os.path.exists(path) else "scalar_rgb"
+
+
+def _mi(variant=None):
+    variant = variant or mitsuba_variant()
+    import mitsuba as mi
+
+    if mi.variant() != variant:
+        mi.set_variant(variant)
+    return mi
+
+
+def _check_colours(scene: Scene):
+    for k, o in enumerate(scene.objects):
+        if o.color.ndim != 1:
+            raise ValueError(
+                f"scene: object {k}: the Mitsuba reference takes one colour per object, not per vertex"
+            )
+        if o.rgba[3] < 1.0:
+            raise ValueError(f"scene: object {k}: the Mitsuba reference takes opaque objects only (alpha 1)")
+    if scene.ambient.any() and any(o.shading == "lambert" for o in scene.objects):
+        raise ValueError(
+            "scene: the Mitsuba reference has no ambient light; use ambient=0 with lambert objects"
+        )
+
+
+class _MitsubaScene:
+    """A Mitsuba scene built once for ``pass_`` ('flat', 'lambert' or 'all') and posed per time."""
+
+    def __init__(self, mi, scene: Scene, pass_: str, spp: int):
+        self.mi, self.scene = mi, scene
+        cam = scene.camera
+        d = {"type": "scene"}
+        if pass_ == "flat":
+            d["integrator"] = {"type": "path", "max_depth": 1}
+        else:
+            d["integrator"] = {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0}
+        self.moving: list[tuple[str, object, str]] = []  # (key, object, 'vertices' | 'instance')
+        for k, o in enumerate(scene.objects):
+            rgb = [float(x) for x in o.rgba[:3]]
+            emits = o.shading == "flat" and pass_ in ("flat", "all")
+            lit = o.shading == "lambert" and pass_ in ("lambert", "all")
+            props = mi.Properties()
+            props["bsdf"] = mi.load_dict(
+                {"type": "diffuse", "reflectance": {"type": "rgb", "value": rgb if lit else [0.0] * 3}}
+            )
+            if emits:
+                props["emitter"] = mi.load_dict({"type": "area", "radiance": {"type": "rgb", "value": rgb}})
+            v, f = o.mesh.vertices, o.mesh.faces
+            mesh = mi.Mesh(f"obj{k}", len(v), len(f), props, has_vertex_normals=o.shading == "lambert")
+            p = mi.traverse(mesh)
+            instanced = o.is_moving and not o.motion.is_deforming and not emits
+            v0 = v if instanced else o.world_vertices(scene.reference_t)
+            p["vertex_positions"] = mi.Float(np.asarray(v0, np.float32).ravel())
+            p["faces"] = mi.UInt32(np.asarray(f, np.uint32).ravel())
+            if o.shading == "lambert":
+                p["vertex_normals"] = mi.Float(_normals(v0, f).ravel())
+            p.update()
+            if instanced:
+                d[f"group{k}"] = {"type": "shapegroup", f"obj{k}": mesh}
+                d[f"obj{k}"] = {"type": "instance", "shapegroup": {"type": "ref", "id": f"group{k}"}}
+                self.moving.append((f"obj{k}", o, "instance"))
+            else:
+                d[f"obj{k}"] = mesh
+                if o.is_moving:
+                    self.moving.append((f"obj{k}", o, "vertices"))
+        if pass_ in ("lambert", "all"):
+            for i, light in enumerate(scene.lights):
+                d[f"light{i}"] = {
+                    "type": "directional",
+                    "direction": [float(x) for x in light.direction],
+                    "irradiance": {"type": "rgb", "value": [float(x) * np.pi for x in light.intensity]},
+                }
+        d["sensor"] = {
+            "type": "perspective",
+            "fov": float(np.degrees(cam.yfov)),
+            "fov_axis": "y",
+            "near_clip": float(cam.znear),
+            "far_clip": float(cam.zfar) if np.isfinite(cam.zfar) else 1e7,
+            "to_world": mi.ScalarTransform4f(scene.camera_pose_at(scene.reference_t) @ _FLIP),
+            "film": {
+                "type": "hdrfilm",
+                "width": cam.width,
+                "height": cam.height,
+                "rfilter": {"type": "box"},
+                "pixel_format": "rgba",
+            },
+            "sampler": {"type": "independent", "sample_count": spp},
+        }
+        self.mi_scene = mi.load_dict(d)
+        self.params = mi.traverse(self.mi_scene)
+
+    def pose(self, t: float) -> None:
+        mi, p = self.mi, self.params
+        for key, o, how in self.moving:
+            if how == "instance":
+                p[f"{key}.to_world"] = mi.Transform4f(o.transform_at(t))
+            else:
+                v = o.world_vertices(t)
+                p[f"{key}.vertex_positions"] = mi.Float(np.asarray(v, np.float32).ravel())
+                if o.shading == "lambert":
+                    p[f"{key}.vertex_normals"] = mi.Float(_normals(v, o.mesh.faces).ravel())
+        if self.scene.camera_motion is not None:
+            p["sensor.to_world"] = mi.Transform4f(self.scene.camera_pose_at(t) @ _FLIP)
+        p.update()
+
+    def render(self, spp: int, seed: int) -> np.ndarray:
+        return np.array(self.mi.render(self.mi_scene, spp=spp, seed=seed), dtype=np.float64)
+
+
+def _normals(v, f) -> np.ndarray:
+    """(V,3) float32 area-weighted vertex normals (as the rasterizer computes them)."""
+    v = np.asarray(v, np.float64)
+    n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    out = np.zeros_like(v)
+    for i in range(3):
+        np.add.at(out, f[:, i], n)
+    length = np.linalg.norm(out, axis=1, keepdims=True)
+    return (out / np.where(length > 0, length, 1.0)).astype(np.float32)
+
+
+def mitsuba(
+    scene: Scene, times: int = 16, spp: int = 16, seed: int = 0, variant: str | None = None, progress=None
+) -> Frame:
+    """The Mitsuba 3 time-sampled reference of ``scene``.
+
+    ``times`` K >= 1 renders at the stratified shutter times ``(i + 0.5) / K`` with weights from
+    the shutter filter; ``spp`` S >= 1 samples per pixel each (independent sampler, seed
+    ``seed * K + i``; the same seed gives the same image); ``variant`` overrides the Mitsuba
+    variant; ``progress`` True/False forces the tqdm bar (default: when K * S * pixels is large).
+
+    Returns a Frame: ``rgba`` (H,W,4) float32 premultiplied linear RGBA composited over the scene
+    background; ``depth`` (inf) and ``ids`` (-1) are not computed; ``stats`` has ``times``, ``spp``,
+    ``variant`` and ``ms``. Per-vertex colours, transparent objects and ambient light raise
+    ValueError (Mitsuba has no exact twin of them).
+    """
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
+    k = as_int(times, "times", minimum=1, maximum=1 << 16)
+    spp = as_int(spp, "spp", minimum=1, maximum=1 << 20)
+    seed = as_int(seed, "seed", minimum=0)
+    _check_colours(scene)
+    t0 = time.perf_counter()
+    mi = _mi(variant)
+    shadings = {o.shading for o in scene.objects}
+    passes = (
+        ["flat", "lambert"]
+        if len(shadings) == 2 and scene.lights
+        else (["flat"] if shadings <= {"flat"} else ["lambert"])
+    )
+    if shadings == {"flat", "lambert"} and not scene.lights:
+        passes = ["flat"]
+    ts, ws = sample_times(scene, k, "stratified")
+    cam = scene.camera
+    if progress is None:
+        progress = k * spp * cam.width * cam.height * len(passes) > 2e7
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=k * len(passes), desc="mitsuba reference", disable=not progress, leave=False)
+    acc = np.zeros((cam.height, cam.width, 4))
+    for pass_ in passes:
+        ms = _MitsubaScene(mi, scene, pass_, spp)
+        for i, (t, w) in enumerate(zip(ts, ws)):
+            ms.pose(t)
+            img = ms.render(spp, seed * k + i)
+            if pass_ != passes[0]:
+                img[..., 3] = 0.0  # the coverage is counted once
+            acc += w * img
+            bar.update()
+    bar.close()
+    rgba = acc.astype(np.float32)
+    h, w_ = rgba.shape[:2]
+    frame = Frame(
+        rgba, np.full((h, w_), np.inf, np.float32), np.full((h, w_), -1, np.int32), np.zeros((h, w_, 2))
+    )
+    frame = over_background(frame, scene.background)
+    frame.stats.update(
+        times=k, spp=spp, variant=mi.variant(), passes=passes, ms=(time.perf_counter() - t0) * 1e3
+    )
+    return frame
+
+
+_renderers: dict = {}
+
+
+def pyrender(scene: Scene, t: float | None = None, samples: int = 1) -> Frame:
+    """pyrender (offscreen OSMesa, ``RenderFlags.FLAT``: unlit base colour) of ``scene``.
+
+    ``t``: one shutter time (default the reference time) when ``samples`` is 1; otherwise the
+    weighted mean of ``samples`` renders at the stratified shutter times (the classic
+    accumulation buffer on an OpenGL peer, every object drawn at every pose). Lambert objects are
+    drawn flat too (pyrender's lighting is not lambert). Returns a Frame whose rgba is pyrender's
+    RGB (over black) with alpha = coverage (depth > 0), averaged; depth is pyrender's of the last
+    render (inf for background).
+    """
+    os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
+    import pyrender as pr
+    import trimesh
+
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
+    samples = as_int(samples, "samples", minimum=1, maximum=1 << 16)
+    t0 = time.perf_counter()
+    cam = scene.camera
+    key = (cam.width, cam.height)
+    if key not in _renderers:
+        _renderers[key] = pr.OffscreenRenderer(cam.width, cam.height)
+    r = _renderers[key]
+    sc = pr.Scene(bg_color=[0.0, 0.0, 0.0, 0.0], ambient_light=[0.0, 0.0, 0.0])
+    nodes = []
+    for o in scene.objects:
+        mat = pr.MetallicRoughnessMaterial(baseColorFactor=[float(x) for x in o.rgba], alphaMode="OPAQUE")
+        deforming = o.motion is not None and o.motion.is_deforming
+        base = o.world_vertices(0.0) if deforming else o.mesh.vertices
+        tm = trimesh.Trimesh(np.asarray(base), np.asarray(o.mesh.faces), process=False)
+        node = sc.add(pr.Mesh.from_trimesh(tm, material=mat, smooth=False))
+        nodes.append((o, node, deforming, mat))
+    camera_node = sc.add(
+        pr.PerspectiveCamera(
+            yfov=cam.yfov, znear=cam.znear, zfar=cam.zfar, aspectRatio=cam.width / cam.height
+        )
+    )
+    if samples == 1:
+        ts, ws = np.array([scene.reference_t if t is None else float(t)]), np.ones(1)
+    else:
+        ts, ws = sample_times(scene, samples, "stratified")
+    acc = np.zeros((cam.height, cam.width, 4))
+    depth = None
+    for ti, wi in zip(ts, ws):
+        for o, node, deforming, mat in nodes:
+            if deforming:
+                tm = trimesh.Trimesh(o.world_vertices(ti), np.asarray(o.mesh.faces), process=False)
+                node.mesh = pr.Mesh.from_trimesh(tm, material=mat, smooth=False)
+            else:
+                sc.set_pose(node, o.transform_at(ti))
+        sc.set_pose(camera_node, scene.camera_pose_at(ti))
+        colour, depth = r.render(sc, flags=pr.RenderFlags.FLAT)
+        acc[..., :3] += wi * (colour.astype(np.float64) / 255.0)
+        acc[..., 3] += wi * (depth > 0)
+    h, w = acc.shape[:2]
+    d = np.where(depth > 0, depth, np.inf).astype(np.float32)
+    frame = Frame(acc.astype(np.float32), d, np.where(depth > 0, 0, -1).astype(np.int32), np.zeros((h, w, 2)))
+    frame = over_background(frame, scene.background)
+    frame.stats.update(samples=samples, ms=(time.perf_counter() - t0) * 1e3)
+    return frame

@@ -1,0 +1,286 @@
+"""Plain numpy twins of the motionblur.image kernels, written from the papers' equations and
+the documented filter geometry (float64 throughout). Used by tests/core/test_image*.py."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+EPS = 1e-12
+
+
+def plan(direction, reach):
+    dx, dy = float(direction[0]), float(direction[1])
+    n = math.hypot(dx, dy)
+    if n <= 0 or reach <= 0:
+        return None
+    transpose = abs(dy) > abs(dx)
+    major, minor = (dy, dx) if transpose else (dx, dy)
+    r = math.floor(reach * abs(major) / n)
+    if r == 0:
+        return None
+    return transpose, minor / major, r
+
+
+def box_rows(img, r):
+    """Zero-padded mean of 2r+1 taps along axis 1 of (h, n, C)."""
+    n = img.shape[1]
+    p = np.pad(img, ((0, 0), (r + 1, r), (0, 0)))
+    c = np.cumsum(p, axis=1)
+    return (c[:, 2 * r + 1 : 2 * r + 1 + n] - c[:, :n]) / (2 * r + 1)
+
+
+def glow_rows(a, w):
+    """Eq. 10 along axis 1 of (h, n), zero outside."""
+    if w == 0:
+        return a.copy()
+    n = a.shape[1]
+    p = np.pad(a, ((0, 0), (w, w)))
+    out = np.zeros_like(a)
+    for k in range(-w, w + 1):
+        wt = 1.0 - abs(k) / w
+        out = np.maximum(out, wt * p[:, w + k : w + k + n])
+    return np.maximum(out, a)
+
+
+def shear(img, t):
+    """Sheared rows j0.. of (h, w, C): S[j, x] = lerp of column x at y = j + x t."""
+    h, w, _ = img.shape
+    e = -(w - 1) * t
+    j0 = math.floor(min(e, 0.0))
+    j1 = math.floor(max(e, 0.0) + (h - 1)) + 1
+    js = np.arange(j0, j1 + 1, dtype=np.float64)
+    ys = js[:, None] + np.arange(w)[None, :] * t
+    y0 = np.floor(ys)
+    f = (ys - y0)[..., None]
+    y0 = y0.astype(np.int64)
+    p = np.pad(img, ((1, 2), (0, 0), (0, 0)))  # row y of img is row y + 1 of p
+    cols = np.arange(w)[None, :]
+    a = p[np.clip(y0 + 1, 0, h + 2), cols]
+    b = p[np.clip(y0 + 2, 0, h + 2), cols]
+    a = np.where(((y0 >= 0) & (y0 < h))[..., None], a, 0.0)
+    b = np.where(((y0 + 1 >= 0) & (y0 + 1 < h))[..., None], b, 0.0)
+    return (1 - f) * a + f * b, j0
+
+
+def unshear(s, j0, t, h):
+    rows, w, _ = s.shape
+    js = np.arange(h)[:, None] - np.arange(w)[None, :] * t
+    jf = np.floor(js)
+    f = (js - jf)[..., None]
+    i = jf.astype(np.int64) - j0
+    p = np.pad(s, ((1, 2), (0, 0), (0, 0)))
+    cols = np.arange(w)[None, :]
+    a = np.where(((i >= 0) & (i < rows))[..., None], p[np.clip(i + 1, 0, rows + 2), cols], 0.0)
+    b = np.where(((i + 1 >= 0) & (i + 1 < rows))[..., None], p[np.clip(i + 2, 0, rows + 2), cols], 0.0)
+    return (1 - f) * a + f * b
+
+
+def directional(img, pl, rowfn):
+    """Runs rowfn((h, n, C) -> (h, n, C')) along the plan's direction (transpose / shear)."""
+    transpose, t, _ = pl
+    x = np.swapaxes(img, 0, 1) if transpose else img
+    if t == 0.0:
+        y = rowfn(x)
+    else:
+        s, j0 = shear(x, t)
+        y = unshear(rowfn(s), j0, t, x.shape[0])
+    return np.swapaxes(y, 0, 1) if transpose else y
+
+
+def box_blur(rgba, direction, length):
+    img = rgba.astype(np.float64)
+    pl = plan(direction, length / 2)
+    if pl is None:
+        return img
+    return directional(img, pl, lambda x: box_rows(x, pl[2]))
+
+
+def glow(alpha, direction, width):
+    a = alpha.astype(np.float64)
+    pl = plan(direction, width)
+    if pl is None:
+        return a
+    g = directional(a[..., None], pl, lambda x: glow_rows(x[..., 0], pl[2])[..., None])[..., 0]
+    return np.maximum(g, a) if pl[1] != 0 else g
+
+
+def finish(blur, g, base=None, mode=None):
+    ab = blur[..., 3]
+    s = np.where(ab > EPS, g / np.where(ab > EPS, ab, 1.0), 0.0)
+    sub = blur * s[..., None]
+    sub[..., 3] = g
+    if mode is None:
+        return sub
+    if mode == "over":
+        return sub + (1 - g)[..., None] * base
+    return base + (1 - base[..., 3:4]) * sub
+
+
+def opaque_blur(rgba, direction, length, mode=None, base=None):
+    img = rgba.astype(np.float64)
+    b = img if base is None else base.astype(np.float64)
+    pl = plan(direction, length / 2)
+    if pl is None:
+        return finish(img, img[..., 3], b, mode)
+    r = pl[2]
+
+    def rows(x):
+        return np.concatenate([box_rows(x, r), glow_rows(x[..., 3], r)[..., None]], axis=-1)
+
+    five = directional(img, pl, rows)
+    g = five[..., 4]
+    if pl[1] != 0:
+        g = np.maximum(g, img[..., 3])
+    return finish(five[..., :4], g, b, mode)
+
+
+# --- pyramids
+
+
+def analyse(img):
+    h, w, c = img.shape
+    ch, cw = (h + 1) // 2, (w + 1) // 2
+    p = np.pad(img, ((1, 2 * ch + 2 - h), (1, 2 * cw + 2 - w), (0, 0)))
+    tmp = sum(p[:, a : a + 2 * cw : 2] for a in range(4)) / 4.0
+    return sum(tmp[b : b + 2 * ch : 2] for b in range(4)) / 4.0
+
+
+def expand(c, h, w):
+    def axis(x, n):
+        m = x.shape[0]
+        idx = np.arange(n)
+        i = idx // 2
+        j = np.where(idx % 2 == 0, i - 1, i + 1)
+        near = x[i]
+        ok = (j >= 0) & (j < m)
+        far = np.where(ok.reshape(-1, *([1] * (x.ndim - 1))), x[np.clip(j, 0, m - 1)], 0.0)
+        return 0.75 * near + 0.25 * far
+
+    t = np.swapaxes(axis(np.swapaxes(c, 0, 1), w), 0, 1)
+    return axis(t, h)
+
+
+def pyramid(img, levels):
+    p = [img.astype(np.float64)]
+    for _ in range(levels):
+        p.append(analyse(p[-1]))
+    return p
+
+
+def pyramid_blur(rgba, levels):
+    p = pyramid(rgba, levels)
+    cur = p[-1]
+    for lvl in range(levels - 1, -1, -1):
+        cur = expand(cur, *p[lvl].shape[:2])
+    return cur
+
+
+def pyramid_glow(alpha, levels):
+    p = pyramid(alpha[..., None], levels)
+    cur = p[-1]
+    for lvl in range(levels - 1, -1, -1):
+        e = expand(cur, *p[lvl].shape[:2])
+        a = p[lvl]
+        cur = e + a - e * a
+    return cur[..., 0]
+
+
+def pyramid_opaque_blur(rgba, levels):
+    return finish(pyramid_blur(rgba, levels), pyramid_glow(rgba[..., 3].astype(np.float64), levels))
+
+
+# --- depth of field
+
+
+def layer_depth(i, zf, r_inf):
+    if i == 0:
+        return zf
+    r = 1.7 * 2.0 ** (abs(i) - 1)
+    if i < 0:
+        return zf / (1 + r / r_inf)
+    return zf / (1 - r / r_inf) if r < r_inf else math.inf
+
+
+def matte(d, z, front, back):
+    za, zb, zc, zd = z
+    with np.errstate(invalid="ignore", divide="ignore"):
+        up = np.where(d <= za, 0.0, (d - za) / (zb - za))
+        down = 1.0 if math.isinf(zd) else (zd - d) / (zd - zc)
+        wt = np.where(d < zb, 1.0 if front else up, np.where(d <= zc, 1.0, np.where(d >= zd, 0.0, down)))
+        if back:
+            wt = np.where(d > zc, 1.0, wt)
+    return np.nan_to_num(wt)
+
+
+def depth_of_field(rgba, depth, focal_depth, focal_length, f_number, yfov, layers=5):
+    h = rgba.shape[0]
+    r_inf = h / (2 * focal_depth * math.tan(yfov / 2)) * focal_length / (2 * f_number)
+    lo = -(layers // 2)
+    ids = [
+        i for i in range(lo, lo + layers) if i == lo or math.isfinite(layer_depth(i - 1, focal_depth, r_inf))
+    ]
+    img = rgba.astype(np.float64)
+    d = depth.astype(np.float64)
+    buf = np.zeros_like(img)
+    for k in range(len(ids) - 1, -1, -1):
+        i = ids[k]
+        z = [layer_depth(i + o, focal_depth, r_inf) for o in (-2, -1, 0, 1)]
+        wt = matte(d, z, k == 0, k == len(ids) - 1)
+        sub = np.concatenate([img[..., :3] * wt[..., None], wt[..., None]], axis=-1)
+        if i != 0:
+            sub = pyramid_opaque_blur(sub, abs(i))
+        buf = sub + (1 - sub[..., 3:4]) * buf
+    return buf
+
+
+# --- camera blur
+
+
+def camera_velocity(depth, camera, previous):
+    """Unprojects through inv(projection) and inv(view), reprojects with the previous camera."""
+    h, w = depth.shape
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    nx = 2 * (x + 0.5) / w - 1
+    ny = 1 - 2 * (y + 0.5) / h
+    clip = np.stack([nx, ny, -np.ones_like(nx), np.ones_like(nx)], -1)
+    v = clip @ np.linalg.inv(camera.projection).T
+    v = v[..., :3] / v[..., 3:4]  # a point on the near plane, view space
+    d = depth.astype(np.float64)[..., None]
+    dirn = v / -v[..., 2:3]  # view-space point at depth 1
+    inf = np.isinf(d)
+    pt = np.concatenate([np.where(inf, dirn, dirn * np.where(inf, 1.0, d)), np.where(inf, 0.0, 1.0)], -1)
+    world = pt @ np.linalg.inv(camera.view).T
+    q = world @ (previous.projection @ previous.view).T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        px = (q[..., 0] / q[..., 3] + 1) * 0.5 * w
+        py = (1 - q[..., 1] / q[..., 3]) * 0.5 * h
+    vel = np.stack([x + 0.5 - px, y + 0.5 - py], -1)
+    return np.where((q[..., 3] > 0)[..., None], vel, 0.0)
+
+
+def velocity_blur(rgba, velocity, samples):
+    img = rgba.astype(np.float64)
+    h, w, _ = img.shape
+    if samples == 1:
+        return img
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    acc = np.zeros_like(img)
+    for s in range(samples):
+        t = s / (samples - 1) - 0.5
+        px = x + velocity[..., 0] * t
+        py = y + velocity[..., 1] * t
+        x0, y0 = np.floor(px), np.floor(py)
+        fx, fy = (px - x0)[..., None], (py - y0)[..., None]
+        x0, y0 = x0.astype(np.int64), y0.astype(np.int64)
+
+        def at(xx, yy):
+            return img[np.clip(yy, 0, h - 1), np.clip(xx, 0, w - 1)]
+
+        top = at(x0, y0) + fx * (at(x0 + 1, y0) - at(x0, y0))
+        bot = at(x0, y0 + 1) + fx * (at(x0 + 1, y0 + 1) - at(x0, y0 + 1))
+        acc += top + fy * (bot - top)
+    out = acc / samples
+    still = (velocity[..., 0] == 0) & (velocity[..., 1] == 0)
+    return np.where(still[..., None], img, out)
