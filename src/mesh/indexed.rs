@@ -4,7 +4,7 @@ use std::sync::OnceLock;
 use rayon::prelude::*;
 
 use super::adjacency::{build_adjacency, Adjacency, FaceNeighbors};
-use super::normals::{dot, face_normal, FacePlanes};
+use super::normals::{self, dot, face_normal, FacePlanes};
 use crate::error::{Error, Result};
 
 /// Largest number of faces or vertices accepted (indices are stored as `u32`).
@@ -57,6 +57,22 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// Unnormalised face normals `(b - a) x (c - a)` (twice the area), in vertex units squared.
+    pub fn face_normals_raw(&self) -> Vec<[f64; 3]> {
+        normals::face_normals_raw(self.vertices(), self.faces())
+    }
+
+    /// Unit face normals; degenerate faces get `[0, 0, 0]`.
+    pub fn face_normals(&self) -> Vec<[f64; 3]> {
+        normals::face_normals(self.vertices(), self.faces())
+    }
+
+    /// Area-weighted vertex normals (sum of the raw normals of the faces around the vertex),
+    /// normalised; a vertex with no non-degenerate face gets `[0, 0, 0]`.
+    pub fn vertex_normals(&self) -> Vec<[f64; 3]> {
+        normals::vertex_normals(self.vertices(), self.faces())
+    }
+
     /// A mesh from owned data. Errors name `vertices` or `faces`: empty arrays, non-finite
     /// coordinates, indices out of range, absurd sizes.
     pub fn new(vertices: Vec<[f64; 3]>, faces: Vec<[u32; 3]>) -> Result<Self> {

@@ -2,8 +2,6 @@
 //! and its face planes.
 use rayon::prelude::*;
 
-use super::Mesh;
-
 /// `(b - a) x (c - a)`, evaluated exactly as numpy's `np.cross(b - a, c - a)` in the vertices'
 /// own precision (f64 for meshes, f32 for the blur shell's snapshots).
 #[inline]
@@ -40,38 +38,33 @@ pub fn normalize(n: [f64; 3]) -> [f64; 3] {
     }
 }
 
-impl Mesh {
-    /// Unnormalised face normals `(b - a) x (c - a)` (twice the area), in vertex units squared.
-    pub fn face_normals_raw(&self) -> Vec<[f64; 3]> {
-        self.faces()
-            .par_iter()
-            .map(|f| face_normal(self.vertices(), f))
-            .collect()
-    }
+/// Unnormalised face normals `(b - a) x (c - a)` (twice the area), in vertex units squared.
+pub fn face_normals_raw(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec<[f64; 3]> {
+    faces.par_iter().map(|f| face_normal(vertices, f)).collect()
+}
 
-    /// Unit face normals; degenerate faces get `[0, 0, 0]`.
-    pub fn face_normals(&self) -> Vec<[f64; 3]> {
-        self.faces()
-            .par_iter()
-            .map(|f| normalize(face_normal(self.vertices(), f)))
-            .collect()
-    }
+/// Unit face normals; degenerate faces get `[0, 0, 0]`.
+pub fn face_normals(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec<[f64; 3]> {
+    faces
+        .par_iter()
+        .map(|f| normalize(face_normal(vertices, f)))
+        .collect()
+}
 
-    /// Area-weighted vertex normals (sum of the raw normals of the faces around the vertex),
-    /// normalised; a vertex with no non-degenerate face gets `[0, 0, 0]`.
-    pub fn vertex_normals(&self) -> Vec<[f64; 3]> {
-        let mut acc = vec![[0.0f64; 3]; self.vertices().len()];
-        for f in self.faces() {
-            let n = face_normal(self.vertices(), f);
-            for &i in f {
-                let a = &mut acc[i as usize];
-                a[0] += n[0];
-                a[1] += n[1];
-                a[2] += n[2];
-            }
+/// Area-weighted vertex normals (sum of the raw normals of the faces around the vertex),
+/// normalised; a vertex with no non-degenerate face gets `[0, 0, 0]`.
+pub fn vertex_normals(vertices: &[[f64; 3]], faces: &[[u32; 3]]) -> Vec<[f64; 3]> {
+    let mut acc = vec![[0.0f64; 3]; vertices.len()];
+    for f in faces {
+        let n = face_normal(vertices, f);
+        for &i in f {
+            let a = &mut acc[i as usize];
+            a[0] += n[0];
+            a[1] += n[1];
+            a[2] += n[2];
         }
-        acc.into_par_iter().map(normalize).collect()
     }
+    acc.into_par_iter().map(normalize).collect()
 }
 
 /// A face whose sine at its first corner is below this is a sliver (or degenerate): its plane

@@ -5,17 +5,9 @@
 //! back to front with the premultiplied `over` operator. `Blend::Unsorted` composites them in
 //! submission order, as z-buffer hardware without sorting does (the motion-volume paper's
 //! behaviour), so that the error of not sorting can be measured.
+use super::options::Blend;
 use super::shade::Shaded;
 use std::cmp::Ordering;
-
-/// How transparent fragments are composited.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Blend {
-    /// Sorted by depth per sample, composited back to front.
-    Exact,
-    /// Composited in submission order, as unsorted z-buffer hardware does.
-    Unsorted,
-}
 
 /// One transparent fragment in a tile: the tile-local sample, 1/w, and its shading.
 #[derive(Clone, Copy, Debug, Default)]

@@ -14,8 +14,8 @@
 //! The output colour is premultiplied.
 use super::draw::Draw;
 use super::interp::Planes;
+use super::options::{Options, Shading};
 use super::setup::{Chunk, Tri, FRONT, NO_CLIP};
-use super::{Options, Shading};
 
 /// Per-draw data computed once a frame: clip-space positions, previous homogeneous screen
 /// positions (for velocity) and normals (lambert only).

@@ -12,8 +12,9 @@
 //! the transparent fragments in front of the opaque surface; `blend.rs` composites them.
 use super::background::Background;
 use super::bins::TILE;
-use super::blend::{Blend, Frag, FragLists, Sample};
+use super::blend::{Frag, FragLists, Sample};
 use super::interp::Planes;
+use super::options::Blend;
 use super::setup::{Tri, HALF, MAY_OPAQUE, MAY_TRANSPARENT, ONE};
 use super::shade::{Shader, TriShade};
 
