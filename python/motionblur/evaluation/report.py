@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._optional import require
 from ..raster import Frame
 
 __all__ = ["write", "save_reference"]
@@ -61,10 +62,9 @@ def save_reference(out: Path, name: str, ref: np.ndarray) -> None:
 
 
 def _plot(name, rows, front, path):
-    import matplotlib
-
+    matplotlib = require("matplotlib")
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = require("matplotlib.pyplot", "the Pareto plots of the report")
 
     fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=110)
     for m in sorted({r["method"] for r in rows}):
