@@ -527,6 +527,73 @@ class Scene:
         args.update(changes)
         return Scene(**args)
 
+    @classmethod
+    def from_trimesh(
+        cls, scene, camera=None, *, width: int = 640, height: int = 480, shading: str = "flat", **options
+    ) -> Scene:
+        """A still scene from a ``trimesh.Scene`` (or ``trimesh.Trimesh``): every mesh node placed by
+        the scene graph's transform, with its colour (one, per vertex, per face or sampled from its
+        texture; uint8 read as linear ``/ 255``), named after its node. ``camera``: a
+        :class:`~motionblur.Camera`, or None for the trimesh scene's own camera, else one framing
+        the scene from +Z (``width`` x ``height`` pixels). ``shading`` applies to every object;
+        ``options`` go to :class:`Scene` (lights, shutter, background...). Give objects motion
+        afterwards, e.g. ``scene.with_(objects=[...])``. Needs trimesh (``motionblur[interop]``);
+        see :mod:`motionblur.interop.trimesh`."""
+        from .interop.trimesh import read_trimesh
+
+        parts, cam = read_trimesh(scene, camera, width=width, height=height)
+        objects = [Object((p.vertices, p.faces), p.color, shading=shading, name=p.name) for p in parts]
+        return cls(objects, cam, **options)
+
+    @classmethod
+    def from_gltf(
+        cls,
+        path,
+        *,
+        shutter=None,
+        animation=0,
+        camera=None,
+        width: int = 640,
+        height: int = 480,
+        shading: str = "flat",
+        resample: int = 0,
+        **options,
+    ) -> Scene:
+        """A scene in motion from a glTF 2.0 file (``.gltf`` with its buffers, embedded or
+        ``.glb``): its meshes placed by the node hierarchy, moved by the TRS keyframes of one
+        animation (and deformed by its morph-target weights and skins) over the shutter.
+
+        ``shutter``: ``(start, end)`` seconds of the animation that the shutter [0, 1] spans
+        (default: the whole animation); ``animation``: its index or name; ``camera``: a
+        :class:`~motionblur.Camera`, or None for the file's first camera (moving with its node),
+        else one framing the scene; ``resample`` N > 0 adds N + 1 evenly spaced keyframes to the
+        animation's own (for hierarchies whose composed motion is not a lerp between keys).
+        ``options`` go to :class:`Scene`. Needs pygltflib (``motionblur[interop]``); details and
+        limits in :mod:`motionblur.interop.gltf`."""
+        from .interop.gltf import read_gltf
+
+        parts, cam, cam_keys = read_gltf(
+            path,
+            shutter=shutter,
+            animation=animation,
+            camera=camera,
+            width=width,
+            height=height,
+            resample=resample,
+        )
+        objects = []
+        for p in parts:
+            motion = None
+            if p.transforms is not None:
+                motion = Motion(p.times, p.transforms)
+            elif p.positions is not None:
+                motion = Motion.deforming(p.times, p.positions)
+            objects.append(
+                Object((p.vertices, p.faces), p.color, shading=shading, motion=motion, name=p.name)
+            )
+        camera_motion = None if cam_keys is None else Motion(*cam_keys)
+        return cls(objects, cam, camera_motion=camera_motion, **options)
+
     def __repr__(self) -> str:
         return (
             f"Scene({len(self.objects)} objects ({len(self.moving_objects)} moving), {len(self.lights)} lights, "
