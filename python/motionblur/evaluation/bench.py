@@ -89,6 +89,7 @@ def run(
             METHODS[m].sweep = [dict(o) for o in s]
     rows, comparisons, flip_comparisons, pyr, paired, equal_times = [], {}, {}, [], {}, {}
     images = {} if save_images else None
+    references = {}
     try:
         for name in names:
             scene = SCENES[name](width=width, height=height)
@@ -96,6 +97,7 @@ def run(
             log(f"[{name}] reference {'cached' if ref_ms == 0 else f'{ref_ms / 1e3:.1f} s'}")
             if save_images:
                 report.save_reference(out, name, ref)
+                references[name] = ref
             scene_rows = sweep_scene(name, scene, ref, repeat, methods, flip, images, aa)
             rows += scene_rows
             comparisons[name] = equal_error(scene_rows)
@@ -133,6 +135,7 @@ def run(
         equal_times=equal_times,
         pyrender_rows=pyr,
         images=images,
+        references=references,
     )
     return {
         "rows": rows,
@@ -158,6 +161,7 @@ def main(argv=None) -> int:
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--no-flip", action="store_true")
     p.add_argument("--no-pyrender", action="store_true", help="leave out the pyrender comparison")
+    p.add_argument("--images", action="store_true", help="save every image and a labelled sheet per scene")
     p.add_argument("--quick", action="store_true", help="160x120, K = 64, one timing")
     a = p.parse_args(argv)
     w, h = (int(x) for x in a.size.lower().split("x"))
@@ -174,6 +178,7 @@ def main(argv=None) -> int:
         flip=not a.no_flip,
         aa=a.aa,
         pyrender_peer=not a.no_pyrender,
+        save_images=a.images,
     )
     md = res["paths"]["md"].read_text()
     start = md.find("## Each method against")
