@@ -59,7 +59,7 @@ demo: build ## the main job on built-in scenes: images and a speed/error table i
 bench: build ## benchmarks against the peers, measured in the same run (out/bench)
 	@for b in benches/bench_*.py; do echo "== $$b"; $(PY) $$b || exit 1; done
 
-lint: build ## cargo fmt, clippy and rustdoc -D warnings, ruff, the stubs of the compiled core against it (stubtest)
+lint: build ## cargo fmt, clippy and rustdoc -D warnings, ruff, stubtest, mypy --strict on a user script, extras resolved by pip
 	cargo fmt --check
 	cargo clippy --release --all-targets -- -D warnings
 	cargo clippy --release --features python -- -D warnings
@@ -68,6 +68,10 @@ lint: build ## cargo fmt, clippy and rustdoc -D warnings, ruff, the stubs of the
 	$(VENV)/bin/ruff check python tests benches notebooks
 	$(VENV)/bin/ruff format --check python tests benches
 	$(PY) -m mypy.stubtest motionblur._core
+	@# the public API is typed: a user's script passes mypy --strict (no Any out of a Frame, no untyped call)
+	$(PY) -m mypy --strict tests/typing/user_script.py
+	@# every extra, and all, resolves with plain pip (metadata only: nothing is built or installed)
+	$(PY) -m pip install --dry-run --ignore-installed --quiet ".[all]"
 
 fmt: venv ## format Rust and Python in place
 	cargo fmt

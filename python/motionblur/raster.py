@@ -26,11 +26,15 @@ surfaces included), ``inf`` for background; ids and velocity belong to that same
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Sequence
 from pathlib import Path
 
+from typing import Any
+
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from . import _core
 from ._optional import require
@@ -88,7 +92,9 @@ class Camera:
     .get_projection_matrix(width, height)``, ``view_projection`` = projection @ view.
     """
 
-    def __init__(self, pose, yfov, width, height, znear=0.05, zfar=float("inf")):
+    def __init__(
+        self, pose: ArrayLike, yfov: float, width: int, height: int, znear: float = 0.05, zfar: float = float("inf")
+    ) -> None:
         pose = as_array(pose, "pose", np.float64, (4, 4)).copy()
         yfov = as_float(yfov, "yfov")
         if not 0.0 < yfov < np.pi:
@@ -180,8 +186,15 @@ class Draw:
     """
 
     def __init__(
-        self, vertices, faces, rgba, normals=None, object_id=0, cull_back=True, previous_vertices=None
-    ):
+        self,
+        vertices: ArrayLike,
+        faces: ArrayLike,
+        rgba: ArrayLike,
+        normals: ArrayLike | None = None,
+        object_id: int = 0,
+        cull_back: bool = True,
+        previous_vertices: ArrayLike | None = None,
+    ) -> None:
         v = as_array(vertices, "vertices", np.float64, (None, 3))
         f = as_array(faces, "faces", np.int64, (None, 3))
         if f.min() < 0 or f.max() >= len(v):
@@ -270,7 +283,15 @@ class Frame:
     (dtypes are converted; the arrays are not copied when they already match).
     """
 
-    def __init__(self, rgba, depth, ids, velocity, stats=None):
+    rgba: NDArray[np.float32]
+    depth: NDArray[np.float32]
+    ids: NDArray[np.int32]
+    velocity: NDArray[np.float32]
+    stats: dict[str, Any]
+
+    def __init__(
+        self, rgba: ArrayLike, depth: ArrayLike, ids: ArrayLike, velocity: ArrayLike, stats: dict[str, Any] | None = None
+    ) -> None:
         rgba = _frame_array(rgba, "rgba", np.float32, (None, None, 4))
         h, w = rgba.shape[:2]
         self.rgba = rgba
@@ -288,7 +309,7 @@ class Frame:
         return int(self.rgba.shape[0])
 
     @property
-    def coverage(self) -> np.ndarray:
+    def coverage(self) -> NDArray[np.float32]:
         """(H,W) float32 alpha: the fraction of the pixel covered (premultiplied alpha)."""
         return self.rgba[..., 3]
 
@@ -305,14 +326,14 @@ class Frame:
         out = np.concatenate([s, a], axis=-1)
         return np.round(out * 255.0).astype(np.uint8)
 
-    def save_png(self, path) -> None:
+    def save_png(self, path: str | os.PathLike[str]) -> None:
         """Writes an 8-bit RGBA PNG (sRGB colour, straight alpha). Creates parent folders."""
         image = require("PIL.Image", "Frame.save_png")
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         image.fromarray(self.to_srgb8(), mode="RGBA").save(path)
 
-    def save_exr(self, path) -> Path:
+    def save_exr(self, path: str | os.PathLike[str]) -> Path:
         """Writes an OpenEXR file: linear float ``R``, ``G``, ``B``, ``A`` (premultiplied), depth
         as ``Z``, ids as ``id`` and velocity as ``velocity.X`` / ``velocity.Y``, the stats in the
         header (:mod:`motionblur.interop.exr`); every value round-trips bit-exactly through

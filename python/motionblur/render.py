@@ -21,6 +21,7 @@ import time
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 from .raster import Frame, over_background
 from .scene import Scene
@@ -81,7 +82,7 @@ def methods_for(scene: Scene) -> list[str]:
     return [n for n, m in METHODS.items() if m.applies(scene)]
 
 
-def render(scene: Scene, method: str = "accumulation", **options) -> Frame:
+def render(scene: Scene, method: str = "accumulation", **options: Any) -> Frame:
     """Render ``scene`` with the registered ``method`` (``accumulation``, ``motion_volume``, ...).
 
     Returns a :class:`Frame` of ``scene.camera`` size: ``rgba`` (H,W,4) float32 premultiplied

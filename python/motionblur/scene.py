@@ -338,7 +338,7 @@ class DirectionalLight:
     """A light at infinity: ``direction`` (3,) the way the light travels (normalised here),
     ``intensity`` float or RGB (3,) >= 0 (irradiance on a surface facing it, linear)."""
 
-    def __init__(self, direction, intensity=1.0):
+    def __init__(self, direction, intensity=1.0) -> None:
         d = as_array(direction, "direction", np.float64, (3,))
         n = np.linalg.norm(d)
         if n == 0:
@@ -418,7 +418,7 @@ class Scene:
         background=(0.0, 0.0, 0.0, 0.0),
         reference_time="close",
         ambient=0.0,
-    ):
+    ) -> None:
         if isinstance(objects, Object):
             objects = [objects]
         objects = list(objects)
