@@ -93,7 +93,13 @@ class Camera:
     """
 
     def __init__(
-        self, pose: ArrayLike, yfov: float, width: int, height: int, znear: float = 0.05, zfar: float = float("inf")
+        self,
+        pose: ArrayLike,
+        yfov: float,
+        width: int,
+        height: int,
+        znear: float = 0.05,
+        zfar: float = float("inf"),
     ) -> None:
         pose = as_array(pose, "pose", np.float64, (4, 4)).copy()
         yfov = as_float(yfov, "yfov")
@@ -145,6 +151,13 @@ class Camera:
         from .interop.pyrender import camera_parameters
 
         return cls(**camera_parameters(camera, pose, width, height))
+
+    def to_pyrender(self) -> Any:
+        """The ``pyrender.PerspectiveCamera`` with this camera's projection (``zfar=inf`` becomes
+        pyrender's ``None``); put it on a node at ``self.pose``. Needs pyrender."""
+        from .interop.pyrender import to_pyrender_camera
+
+        return to_pyrender_camera(self)
 
     def resized(self, width: int, height: int) -> Camera:
         """The same camera (pose, field of view, clip planes) with an image of ``width`` x
@@ -290,7 +303,12 @@ class Frame:
     stats: dict[str, Any]
 
     def __init__(
-        self, rgba: ArrayLike, depth: ArrayLike, ids: ArrayLike, velocity: ArrayLike, stats: dict[str, Any] | None = None
+        self,
+        rgba: ArrayLike,
+        depth: ArrayLike,
+        ids: ArrayLike,
+        velocity: ArrayLike,
+        stats: dict[str, Any] | None = None,
     ) -> None:
         rgba = _frame_array(rgba, "rgba", np.float32, (None, None, 4))
         h, w = rgba.shape[:2]

@@ -76,3 +76,12 @@ def test_other_cameras_and_a_stretched_aspect_are_refused():
         mb.Camera.from_pyrender(pyrender.PerspectiveCamera(0.8, aspectRatio=2.0), np.eye(4), W, H)
     with pytest.raises(ValueError, match="pose: expected shape"):
         mb.Camera.from_pyrender(pyrender.PerspectiveCamera(0.8), np.eye(3), W, H)
+
+
+@pytest.mark.parametrize("zfar", [np.inf, 25.0])
+def test_to_pyrender_gives_the_same_projection_back(zfar):
+    cam = mb.Camera(mb.look_at((0, 1, 4), (0, 0, 0)), 0.75, W, H, znear=0.3, zfar=zfar)
+    pc = cam.to_pyrender()
+    assert pc.zfar == (None if np.isinf(zfar) else zfar)
+    np.testing.assert_array_equal(pc.get_projection_matrix(W, H), cam.projection)
+    np.testing.assert_array_equal(mb.Camera.from_pyrender(pc, cam.pose, W, H).projection, cam.projection)

@@ -234,14 +234,7 @@ def pyrender(scene: Scene, t: float | None = None, samples: int = 1) -> Frame:
         tm = trimesh.Trimesh(np.asarray(base), np.asarray(o.mesh.faces), process=False)
         node = sc.add(pr.Mesh.from_trimesh(tm, material=mat, smooth=False))
         nodes.append((o, node, deforming, mat))
-    camera_node = sc.add(
-        pr.PerspectiveCamera(
-            yfov=cam.yfov,
-            znear=cam.znear,
-            zfar=cam.zfar if np.isfinite(cam.zfar) else None,
-            aspectRatio=cam.width / cam.height,
-        )
-    )
+    camera_node = sc.add(cam.to_pyrender())
     if samples == 1:
         ts, ws = np.array([scene.reference_t if t is None else float(t)]), np.ones(1)
     else:

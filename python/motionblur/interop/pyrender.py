@@ -16,7 +16,7 @@ import numpy as np
 
 from .._validate import as_array, as_float
 
-__all__ = ["camera_parameters"]
+__all__ = ["camera_parameters", "to_pyrender_camera"]
 
 
 def camera_parameters(camera, pose, width: int, height: int) -> dict:
@@ -49,4 +49,21 @@ def camera_parameters(camera, pose, width: int, height: int) -> dict:
         height=height,
         znear=as_float(camera.znear, "camera.znear"),
         zfar=float("inf") if zfar is None else as_float(zfar, "camera.zfar", finite=False),
+    )
+
+
+def to_pyrender_camera(camera):
+    """A ``pyrender.PerspectiveCamera`` with the projection of ``camera`` (a
+    :class:`~motionblur.Camera`): its ``yfov``, ``znear``, ``zfar`` (``inf`` becomes pyrender's
+    ``None``: passing ``inf`` to pyrender gives a NaN projection) and ``aspectRatio = width /
+    height``. The pose goes on the node: ``scene.add(cam, pose=camera.pose)``."""
+    from .._optional import require
+
+    pyrender = require("pyrender", "Camera.to_pyrender")
+    zfar = None if math.isinf(camera.zfar) else float(camera.zfar)
+    return pyrender.PerspectiveCamera(
+        yfov=float(camera.yfov),
+        znear=float(camera.znear),
+        zfar=zfar,
+        aspectRatio=camera.width / camera.height,
     )
