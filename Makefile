@@ -14,8 +14,9 @@ export MPLBACKEND := Agg
 
 RUST_SOURCES := $(shell find src -name '*.rs') Cargo.toml Cargo.lock pyproject.toml
 EXT_STAMP := $(VENV)/.built
+DOCS_STAMP := $(VENV)/.docs-installed
 
-.PHONY: help sysdeps venv build test test-rust test-python demo bench lint fmt notebooks clean
+.PHONY: help sysdeps venv build test test-rust test-python demo bench lint docs fmt notebooks clean
 
 help: ## list the targets
 	@grep -hE '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-12s %s\n", $$1, $$2}'
@@ -72,6 +73,13 @@ lint: build ## cargo fmt, clippy and rustdoc -D warnings, ruff, stubtest, mypy -
 	$(PY) -m mypy --strict tests/typing/user_script.py
 	@# every extra, and all, resolves with plain pip (metadata only: nothing is built or installed)
 	$(PY) -m pip install --dry-run --ignore-installed --quiet ".[all]"
+
+$(DOCS_STAMP): $(STAMP) requirements-docs.txt
+	$(PY) -m pip install -q -r requirements-docs.txt
+	touch $@
+
+docs: build $(DOCS_STAMP) ## the documentation site in out/site: API from the docstrings, the notebooks executed
+	$(PY) -m mkdocs build --strict --clean
 
 fmt: venv ## format Rust and Python in place
 	cargo fmt
