@@ -48,5 +48,7 @@ def run(out="out/demo", scenes=SCENES) -> int:
     md = Path(res["paths"]["md"]).read_text()
     print(md)
     sheets = ", ".join(str(p) for k, p in res["paths"].items() if k.startswith("sheet_"))
-    print(f"demo written to {out}/ in {time.perf_counter() - t0:.1f} s: sheets {sheets}, single images in {out}/images/")
+    print(
+        f"demo written to {out}/ in {time.perf_counter() - t0:.1f} s: sheets {sheets}, single images in {out}/images/"
+    )
     return 0
