@@ -123,7 +123,7 @@ def test_the_wheel_carries_licence_script_metadata_and_a_stripped_module(wheel, 
         assert any(n.startswith(dist) and n.endswith("LICENSE") for n in names), names
         assert "motionblur/py.typed" in names and "motionblur/_core.pyi" in names
         entry = z.read(f"{dist}/entry_points.txt").decode()
-        assert "motionblur = motionblur.__main__:main" in entry
+        assert "motionblur=motionblur.__main__:main" in entry.replace(" ", ""), entry
         meta = email.message_from_bytes(z.read(f"{dist}/METADATA"))
         (so,) = [n for n in names if re.match(r"motionblur/_core\..*so$", n)]
         (tmp_path / "core.so").write_bytes(z.read(so))
