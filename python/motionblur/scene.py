@@ -531,14 +531,10 @@ class Scene:
     def from_trimesh(
         cls, scene, camera=None, *, width: int = 640, height: int = 480, shading: str = "flat", **options
     ) -> Scene:
-        """A still scene from a ``trimesh.Scene`` (or ``trimesh.Trimesh``): every mesh node placed by
-        the scene graph's transform, with its colour (one, per vertex, per face or sampled from its
-        texture; uint8 read as linear ``/ 255``), named after its node. ``camera``: a
-        :class:`~motionblur.Camera`, or None for the trimesh scene's own camera, else one framing
-        the scene from +Z (``width`` x ``height`` pixels). ``shading`` applies to every object;
-        ``options`` go to :class:`Scene` (lights, shutter, background...). Give objects motion
-        afterwards, e.g. ``scene.with_(objects=[...])``. Needs trimesh (``motionblur[interop]``);
-        see :mod:`motionblur.interop.trimesh`."""
+        """A still scene from a ``trimesh.Scene`` (or ``Trimesh``): every mesh placed by the graph,
+        with its colours, named after its node; ``camera`` None: the scene's own, else one framing
+        it (``width`` x ``height``). ``options`` go to :class:`Scene`. Needs ``motionblur[interop]``;
+        details in :mod:`motionblur.interop.trimesh`."""
         from .interop.trimesh import read_trimesh
 
         parts, cam = read_trimesh(scene, camera, width=width, height=height)
@@ -559,17 +555,12 @@ class Scene:
         resample: int = 0,
         **options,
     ) -> Scene:
-        """A scene in motion from a glTF 2.0 file (``.gltf`` with its buffers, embedded or
-        ``.glb``): its meshes placed by the node hierarchy, moved by the TRS keyframes of one
-        animation (and deformed by its morph-target weights and skins) over the shutter.
-
-        ``shutter``: ``(start, end)`` seconds of the animation that the shutter [0, 1] spans
-        (default: the whole animation); ``animation``: its index or name; ``camera``: a
-        :class:`~motionblur.Camera`, or None for the file's first camera (moving with its node),
-        else one framing the scene; ``resample`` N > 0 adds N + 1 evenly spaced keyframes to the
-        animation's own (for hierarchies whose composed motion is not a lerp between keys).
-        ``options`` go to :class:`Scene`. Needs pygltflib (``motionblur[interop]``); details and
-        limits in :mod:`motionblur.interop.gltf`."""
+        """A scene in motion from a glTF 2.0 file (``.gltf``, embedded or ``.glb``): meshes placed
+        by the node hierarchy, moved by one ``animation``'s TRS keyframes, morph targets and skins;
+        the shutter [0, 1] spans ``shutter = (start, end)`` seconds of it (default: all of it).
+        ``camera`` None: the file's first camera, else one framing the scene; ``resample`` N adds
+        N + 1 evenly spaced keyframes. ``options`` go to :class:`Scene`. Needs
+        ``motionblur[interop]``; details and limits in :mod:`motionblur.interop.gltf`."""
         from .interop.gltf import read_gltf
 
         parts, cam, cam_keys = read_gltf(
