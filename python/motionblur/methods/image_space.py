@@ -1,5 +1,6 @@
 """Image-space motion blur of one rasterized frame: Kraus's opaque motion blur per moving object
-(``opaque_image``) and Chapman's camera motion blur (``camera_velocity``).
+(``opaque_image``), Chapman's camera motion blur (``camera_velocity``) and the per-pixel
+velocity-buffer post-process of game engines and Blender EEVEE (``velocity``).
 
 Both render the scene once, sharp, at the centroid ``t_c`` of the shutter filter
 (``1 - integral of W(t) dt``; 0.5 for a box shutter), so that a blur centred on each pixel covers
@@ -18,6 +19,14 @@ the whole shutter, and then blur the frame's pixels:
   only with the camera's rotation) and :func:`motionblur.image.velocity_blur` blurs along it.
   Pixels of moving objects take their rasterized velocity with the camera's motion folded in, so
   an object the camera follows stays sharp. Applies to scenes whose camera moves.
+* ``velocity`` (McGuire et al. 2012's reconstruction filter with Guertin et al. 2014's
+  improvements): the velocity buffer holds every moving object's screen motion over the whole
+  shutter per vertex, so a deforming or turning object has its own velocity at every pixel, and
+  :func:`motionblur.image.reconstruction_blur` gathers each pixel from the pixels whose motion
+  reaches it (tile max and neighbour max say how far to look, the depth buffer splits the taps
+  into foreground blurred over the pixel and background filling what it leaves). It is what
+  users pick instead of motion volumes. Limits: one sharp frame, so a surface hidden at
+  mid-shutter is never shown; motion taken as straight and uniform; a still camera.
 """
 
 from __future__ import annotations
@@ -25,13 +34,13 @@ from __future__ import annotations
 import numpy as np
 
 from .. import image
-from .._validate import as_int
+from .._validate import as_float, as_int
 from ..raster import Frame
 from ..render import register
 from ..scene import Scene
 from ._sharp import check_aa, require_box_shutter, sharp_frame, shutter_centroid
 
-__all__ = ["opaque_image", "camera_velocity", "shutter_centroid"]
+__all__ = ["opaque_image", "camera_velocity", "velocity", "shutter_centroid"]
 
 
 @register(
@@ -134,4 +143,48 @@ def camera_velocity(scene: Scene, samples: int = 16, aa: int = 1) -> Frame:
         rgba = image.velocity_blur(rgba, vel, samples)
     out = Frame(rgba, frame.depth, frame.ids, frame.velocity)
     out.stats.update(t=tc, samples=samples)
+    return out
+
+
+@register(
+    "velocity",
+    sweep=[{"samples": n} for n in (8, 16, 32)],
+    applies=lambda scene: bool(scene.moving_objects) and not scene.camera_moves,
+    needs="moving objects seen by a still camera",
+)
+def velocity(scene: Scene, samples: int = 16, aa: int = 1, tile=None, soft_depth: float = 0.02) -> Frame:
+    """The velocity-buffer post-process (McGuire 2012 / Guertin 2014, module docs).
+
+    Options: ``samples`` gather taps per pixel, even, in [2, 256]; ``aa`` 1, 2 or 4 spatial
+    samples per pixel along each axis for the sharp frame; ``tile`` tile size in pixels
+    (default: half the longest velocity, at least 8, so no motion is shortened); ``soft_depth``
+    depth difference relative to depth over which a tap turns from foreground to background.
+    A moving camera is not folded in (use ``camera_velocity``); a shutter other than a box
+    raises ValueError naming ``shutter``. ``stats``: ``t`` (time of the sharp frame),
+    ``samples``, ``tile``, ``max_velocity`` (pixels over the shutter).
+    """
+    samples = as_int(samples, "samples", minimum=2, maximum=image.MAX_TAPS)
+    if samples % 2:
+        raise ValueError(f"samples: must be even (taps come in pairs), got {samples}")
+    aa = check_aa(aa)
+    if tile is not None:
+        tile = as_int(tile, "tile", minimum=1, maximum=1 << 16)
+    soft_depth = as_float(soft_depth, "soft_depth")
+    if not soft_depth > 0:
+        raise ValueError(f"soft_depth: must be > 0, got {soft_depth}")
+    require_box_shutter(scene, "velocity")
+    if scene.camera_moves:
+        raise ValueError(
+            "scene: the velocity method blurs the objects' own motion seen by a still camera; "
+            "this camera moves (use camera_velocity, accumulation or motion_volume)"
+        )
+    tc = shutter_centroid(scene)
+    frame = sharp_frame(scene, tc, aa, velocity="shutter")
+    vel = np.ascontiguousarray(frame.velocity, dtype=np.float32)
+    vmax = float(np.sqrt((vel.astype(np.float64) ** 2).sum(axis=-1)).max())
+    if tile is None:
+        tile = max(8, int(np.ceil(0.5 * vmax)))
+    rgba = image.reconstruction_blur(frame.rgba, frame.depth, vel, samples, tile, soft_depth)
+    out = Frame(rgba, frame.depth, frame.ids, frame.velocity)
+    out.stats.update(t=tc, samples=samples, tile=tile, max_velocity=vmax)
     return out

@@ -257,8 +257,9 @@ def motion_volume(
     for k, obj in enumerate(scene.objects):
         if obj.is_moving and obj.motion.is_deforming:
             raise ValueError(
-                f"scene: object {k} ({obj.name or 'unnamed'}) deforms; motion_volume needs rigid motion "
-                "(use accumulation or blur_shell)"
+                f"scene: object {k} ({obj.name or 'unnamed'}) deforms; motion_volume sweeps one rigid "
+                "contour and needs rigid motion: use velocity (per-pixel velocity buffer, one sharp "
+                "frame), blur_shell (deforming silhouettes) or accumulation"
             )
         if not obj.is_moving and not scene.camera_moves:
             still.append((k, obj))  # no apparent motion, nothing to fold
