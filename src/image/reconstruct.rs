@@ -40,7 +40,7 @@ pub const MAX_TAPS: usize = 256;
 /// Options of [`reconstruct`].
 #[derive(Clone, Copy, Debug)]
 pub struct ReconstructParams {
-    /// Taps per pixel (2..=[`MAX_TAPS`], rounded down to even).
+    /// Taps per pixel, 2 to 256 (taps come in pairs: an odd count uses one fewer).
     pub samples: usize,
     /// Tile size in pixels (>= 1); half velocities are clamped to it.
     pub tile: usize,
