@@ -34,9 +34,9 @@ pub use contour::{
 pub use error::{Error, Result};
 pub use image::{
     box_blur, camera_motion_blur, camera_velocity, colored, depth_of_field, glow, opaque_blur,
-    opaque_motion_blur, pixel_bounds, pyramid_blur, pyramid_glow, pyramid_opaque_blur,
+    opaque_motion_blur, pixel_bounds, pyramid_blur, pyramid_glow, pyramid_opaque_blur, reconstruct,
     sample_colors, scatter_pieces, splat_paths, velocity_blur, CameraMatrices, Composite,
-    DofParams, Piece,
+    DofParams, Piece, ReconstructParams,
 };
 pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats};
 pub use motion::{Keyframe, Path};

@@ -34,6 +34,7 @@ __all__ = [
     "_camera_velocity",
     "_velocity_blur",
     "_camera_motion_blur",
+    "_reconstruct",
     "_BlurShell",
     "_motion_silhouette",
     "_resolve",
@@ -231,6 +232,11 @@ def _camera_motion_blur(
     scale: float,
 ) -> np.ndarray:
     """Chapman's camera blur: _camera_velocity times scale, then _velocity_blur. (H,W,4) f32."""
+
+def _reconstruct(
+    rgba: np.ndarray, depth: np.ndarray, velocity: np.ndarray, samples: int, tile: int, soft_depth: float
+) -> np.ndarray:
+    """McGuire/Guertin reconstruction filter: rgba (H,W,4), depth (H,W), velocity (H,W,2) f32 -> (H,W,4) f32."""
 
 # --- end image
 

@@ -39,6 +39,7 @@ __all__ = [
     "pyramid_blur",
     "pyramid_glow",
     "pyramid_opaque_blur",
+    "reconstruction_blur",
     "velocity_blur",
 ]
 
@@ -50,6 +51,8 @@ MAX_FPS_RATIO = 1000.0
 MAX_LEVELS = 16
 MAX_LAYERS = 17
 MAX_SAMPLES = 1024
+#: Most gather taps per pixel of :func:`reconstruction_blur`.
+MAX_TAPS = 256
 
 
 def _rgba(value, name="rgba", shape=None) -> np.ndarray:
@@ -240,6 +243,37 @@ def velocity_blur(rgba, velocity, samples=16) -> np.ndarray:
     v = as_array(velocity, "velocity", np.float32, (*a.shape[:2], 2), finite=False)
     n = as_int(samples, "samples", minimum=1, maximum=MAX_SAMPLES)
     return _core._velocity_blur(a, v, n)
+
+
+def reconstruction_blur(rgba, depth, velocity, samples=16, tile=None, soft_depth=0.02) -> np.ndarray:
+    """The velocity-buffer motion blur of game engines (McGuire et al. 2012's reconstruction
+    filter with Guertin et al. 2014's tile max, neighbour max and foreground/background gather;
+    ``src/image/reconstruct.rs`` has the formulas) of one sharp frame taken at mid-shutter.
+
+    ``rgba``: (H,W,4) float32 premultiplied; ``depth``: (H,W) float32 view-axis depth (> 0,
+    ``inf`` where nothing is hit); ``velocity``: (H,W,2) float32, each pixel's screen motion over
+    the whole shutter in pixels (the rasterizer's velocity buffer), the blur spanning
+    ``+- velocity / 2`` around the pixel; ``samples``: gather taps per pixel, even, in
+    [2, 256]; ``tile``: tile size in pixels (default: half the longest velocity, at least 8, so
+    no motion is shortened; a smaller tile clamps half velocities to it); ``soft_depth``: depth
+    difference, relative to depth, over which a tap goes from foreground to background (> 0).
+    Deterministic (a per-pixel hash jitters the taps), the same for any thread count.
+    Returns (H,W,4) float32 premultiplied.
+    """
+    a = _rgba(rgba)
+    d = _depth(depth, a.shape[:2])
+    v = as_array(velocity, "velocity", np.float32, (*a.shape[:2], 2), finite=False)
+    n = as_int(samples, "samples", minimum=2, maximum=MAX_TAPS)
+    if n % 2:
+        raise ValueError(f"samples: must be even (taps come in pairs), got {n}")
+    if tile is None:
+        vmax = float(np.sqrt((v.astype(np.float64) ** 2).sum(axis=-1)).max()) if np.isfinite(v).all() else 0.0
+        tile = max(8, int(np.ceil(0.5 * vmax)))
+    t = as_int(tile, "tile", minimum=1, maximum=1 << 16)
+    sd = as_float(soft_depth, "soft_depth")
+    if not sd > 0:
+        raise ValueError(f"soft_depth: must be > 0, got {sd}")
+    return _core._reconstruct(a, d, v, n, t, sd)
 
 
 def camera_motion_blur(

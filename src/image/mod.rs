@@ -21,6 +21,7 @@ mod lines;
 mod opaque;
 mod pool;
 mod pyramid;
+mod reconstruct;
 mod scatter;
 mod splat;
 
@@ -31,6 +32,7 @@ pub use dof::{depth_of_field, DofParams};
 pub use glow::glow;
 pub use opaque::{opaque_blur, opaque_motion_blur, Composite};
 pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};
+pub use reconstruct::{reconstruct, ReconstructParams};
 pub use scatter::{scatter_pieces, Piece};
 pub use splat::splat_paths;
 

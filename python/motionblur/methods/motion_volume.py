@@ -183,7 +183,8 @@ def motion_volume(
 
     Options: ``segments`` S >= 1 joining segments (the folded motion sampled at S + 1 times);
     ``filter`` ``"ramp"`` (the paper's), ``"box"``, ``"triangle"`` or ``"gaussian"`` (default:
-    the scene's shutter filter when it is a name, else ``"box"``); ``aa`` 1, 2 or 4 spatial
+    the scene's shutter filter; a scene with custom shutter weights raises ValueError naming
+    ``shutter`` unless a filter is given, the weights are never replaced silently); ``aa`` 1, 2 or 4 spatial
     samples per pixel along each axis; ``contour_line`` (default True) sweeps only the
     camera-visible contour edges (section 4.1; the same image with back faces culled, fewer
     triangles) instead of all of them (the camera at the reference time gives the perspective
@@ -219,7 +220,13 @@ def motion_volume(
     """
     segments = as_int(segments, "segments", minimum=1, maximum=4096)
     if filter is None:
-        filter = scene.shutter if isinstance(scene.shutter, str) else "box"
+        if not isinstance(scene.shutter, str):
+            raise ValueError(
+                "shutter: motion_volume's coverage model integrates the named filters only, not "
+                "custom shutter weights; pass filter='box', 'ramp', 'triangle' or 'gaussian' to "
+                "choose one, or use accumulation or blur_shell, which integrate the weights"
+            )
+        filter = scene.shutter
     if not isinstance(filter, str) or filter not in FILTERS:
         raise ValueError(f"filter: expected one of {', '.join(FILTERS)}, got {filter!r}")
     aa = as_int(aa, "aa")
@@ -250,8 +257,9 @@ def motion_volume(
     for k, obj in enumerate(scene.objects):
         if obj.is_moving and obj.motion.is_deforming:
             raise ValueError(
-                f"scene: object {k} ({obj.name or 'unnamed'}) deforms; motion_volume needs rigid motion "
-                "(use accumulation or blur_shell)"
+                f"scene: object {k} ({obj.name or 'unnamed'}) deforms; motion_volume sweeps one rigid "
+                "contour and needs rigid motion: use velocity (per-pixel velocity buffer, one sharp "
+                "frame), blur_shell (deforming silhouettes) or accumulation"
             )
         if not obj.is_moving and not scene.camera_moves:
             still.append((k, obj))  # no apparent motion, nothing to fold
