@@ -20,6 +20,7 @@ mod blend;
 mod buffers;
 mod camera;
 mod clip;
+mod coverage;
 mod draw;
 mod interp;
 mod options;
@@ -39,7 +40,7 @@ use crate::error::{Error, Result};
 use bins::TILE;
 use glam::DVec4;
 use rayon::prelude::*;
-use setup::{Chunk, Viewport};
+use setup::{Chunk, ScreenVertex, Viewport};
 use shade::{homogeneous_pixel, Prepared, Shader};
 use std::cell::RefCell;
 use std::time::Instant;
@@ -49,17 +50,29 @@ use tile::TileScratch;
 /// holds at most 28672 < 2^16 triangles).
 const CHUNK_FACES: usize = 4096;
 
-fn transform(draw: &Draw, vp: glam::DMat4, opts: &Options, w: f64, h: f64) -> Prepared {
+/// The draw's vertices in clip space (kept for shading and clipping) and projected to the
+/// viewport (for the set-up), and what shading needs per vertex.
+fn transform(
+    draw: &Draw,
+    vp: glam::DMat4,
+    viewport: &Viewport,
+    opts: &Options,
+    w: f64,
+    h: f64,
+) -> (Prepared, Vec<ScreenVertex>) {
     let project = |p: &[f64; 3]| {
         let c = vp * DVec4::new(p[0], p[1], p[2], 1.0);
         [c.x, c.y, c.z, c.w]
     };
-    let clip: Vec<[f64; 4]> = draw
+    let (clip, screen): (Vec<[f64; 4]>, Vec<ScreenVertex>) = draw
         .vertices
         .par_iter()
         .with_min_len(4096)
-        .map(project)
-        .collect();
+        .map(|p| {
+            let c = project(p);
+            (c, viewport.project(&c))
+        })
+        .unzip();
     let prev = draw.previous.as_ref().map(|prev| {
         prev.par_iter()
             .with_min_len(4096)
@@ -71,11 +84,14 @@ fn transform(draw: &Draw, vp: glam::DMat4, opts: &Options, w: f64, h: f64) -> Pr
         (Shading::Lambert, Some(n)) => Some(n.clone()),
         (Shading::Lambert, None) => Some(vertex_normals(&draw.vertices, &draw.faces)),
     };
-    Prepared {
-        clip,
-        prev,
-        normals,
-    }
+    (
+        Prepared {
+            clip,
+            prev,
+            normals,
+        },
+        screen,
+    )
 }
 
 thread_local! {
@@ -137,13 +153,13 @@ pub fn rasterize_over(
     let vp_matrix = camera.view_projection();
     let mut frame = Frame::new(w, h);
 
-    let prepared: Vec<Prepared> = draws
+    let viewport = Viewport::new(w * s, h * s);
+    let (prepared, screens): (Vec<Prepared>, Vec<Vec<ScreenVertex>>) = draws
         .iter()
-        .map(|d| transform(d, vp_matrix, opts, f64::from(w), f64::from(h)))
-        .collect();
+        .map(|d| transform(d, vp_matrix, &viewport, opts, f64::from(w), f64::from(h)))
+        .unzip();
     let t1 = Instant::now();
 
-    let viewport = Viewport::new(w * s, h * s);
     let jobs: Vec<(usize, std::ops::Range<usize>)> = draws
         .iter()
         .enumerate()
@@ -156,7 +172,8 @@ pub fn rasterize_over(
     let chunks: Vec<Chunk> = jobs
         .into_par_iter()
         .map(|(di, range)| {
-            setup::setup_chunk(di as u32, &draws[di], &prepared[di].clip, range, &viewport)
+            let clip = &prepared[di].clip;
+            setup::setup_chunk(di as u32, &draws[di], clip, &screens[di], range, &viewport)
         })
         .collect();
     let t2 = Instant::now();

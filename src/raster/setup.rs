@@ -2,16 +2,17 @@
 //!
 //! Screen coordinates are snapped to 1/256 of a sample (8 sub-pixel bits). Every later coverage
 //! decision is exact integer arithmetic on these snapped corners, so the result depends on the
-//! vertices alone: a shared edge is drawn exactly once (see `tile.rs` for the top-left rule).
+//! vertices alone: a shared edge is drawn exactly once (see `coverage.rs` for the top-left rule).
+//!
+//! Every vertex is projected and snapped once a frame (`Viewport::project`, a streaming pass);
+//! the faces then gather three compact `ScreenVertex` records (prefetched a few faces ahead: a
+//! mesh's faces may reach its vertices in any order) and only faces that cross the guard band go
+//! back to the clip-space positions. A triangle whose box holds at most `TIGHT_MAX` samples gets
+//! the box of the samples it covers, or is dropped when it covers none: small triangles then
+//! reach fewer tiles, and a box of one sample needs no edge test in the tiles (`ONE_SAMPLE`).
 use super::clip::{outcode, ClipVertex, ClipVolume, MAX_POLY};
+use super::coverage::{Edges, HALF, ONE};
 use super::draw::Draw;
-
-/// Sub-pixel bits of the fixed-point screen coordinates.
-pub const SUBPIXEL_BITS: u32 = 8;
-/// One sample in fixed point.
-pub const ONE: i64 = 1 << SUBPIXEL_BITS;
-/// Half a sample: sample centres sit at +0.5.
-pub const HALF: i64 = ONE / 2;
 
 /// The triangle faces the camera (counter-clockwise in OpenGL's y-up window coordinates).
 pub const FRONT: u8 = 1;
@@ -19,8 +20,14 @@ pub const FRONT: u8 = 1;
 pub const MAY_OPAQUE: u8 = 2;
 /// Some fragment may be transparent (alpha < 1 at some corner).
 pub const MAY_TRANSPARENT: u8 = 4;
+/// The box is the one sample the triangle covers (set by the small-triangle path).
+pub const ONE_SAMPLE: u8 = 8;
 /// Unclipped: the corners are the face's vertices `verts`.
 pub const NO_CLIP: u32 = u32::MAX;
+/// Triangles whose sample box holds at most this many samples get their covered box in setup.
+const TIGHT_MAX: i64 = 16;
+/// Faces ahead of the current one whose vertices are prefetched.
+const PREFETCH: usize = 8;
 
 /// A set-up triangle, oriented so that its fixed-point area is positive (y down).
 #[derive(Clone, Copy, Debug)]
@@ -34,7 +41,8 @@ pub struct Tri {
     pub ry: [f32; 3],
     /// 1 / w (the inverse view-axis distance) at the corners.
     pub iw: [f32; 3],
-    /// Inclusive sample range covered by the bounding box, clamped to the image.
+    /// Inclusive sample range of the bounding box, clamped to the image (for a small triangle:
+    /// the box of the samples it covers).
     pub bbox: [i32; 4],
     /// The face's vertex index of each corner (unclipped), or the face's vertices (clipped).
     pub verts: [u32; 3],
@@ -82,19 +90,59 @@ impl Viewport {
             y: fy as i32,
             rx: (x - fx / ONE as f64) as f32,
             ry: (y - fy / ONE as f64) as f32,
-            iw: 1.0 / p[3],
+            iw: (1.0 / p[3]) as f32,
+        }
+    }
+
+    /// A clip-space vertex as the face loop reads it. Its snapped corner is used only when no
+    /// face of it crosses the guard band (then it is in range); other faces are clipped from the
+    /// clip-space positions.
+    #[inline]
+    pub fn project(&self, p: &[f64; 4]) -> ScreenVertex {
+        ScreenVertex {
+            corner: self.snap(p),
+            view: outcode(p, 1.0, 1.0),
+            band: outcode(p, self.volume.gx, self.volume.gy),
         }
     }
 }
 
 /// A projected corner: fixed-point position, residual, 1/w.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 struct Corner {
     x: i32,
     y: i32,
     rx: f32,
     ry: f32,
-    iw: f64,
+    iw: f32,
+}
+
+/// A vertex projected once a frame: its snapped corner and its outcodes against the viewport
+/// and the guard band (24 bytes, gathered three times a face).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ScreenVertex {
+    corner: Corner,
+    view: u8,
+    band: u8,
+}
+
+/// Hints the cache to load the screen vertices of `face` (no effect on any result).
+#[inline(always)]
+fn prefetch(screen: &[ScreenVertex], face: [u32; 3]) {
+    #[cfg(target_arch = "x86_64")]
+    for i in face {
+        if let Some(v) = screen.get(i as usize) {
+            // SAFETY: a prefetch reads nothing architecturally and cannot fault; the pointer is
+            // to a live element anyway.
+            unsafe {
+                std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
+                    (v as *const ScreenVertex).cast(),
+                )
+            };
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (screen, face);
 }
 
 #[inline]
@@ -102,11 +150,13 @@ fn floor_div(a: i64, b: i64) -> i64 {
     a.div_euclid(b)
 }
 
-/// Sets up faces `faces` (indices into `draw.faces`) of draw `draw_index`.
+/// Sets up faces `faces` (indices into `draw.faces`) of draw `draw_index`, from the clip-space
+/// positions `clip_pos` and their projections `screen` (`Viewport::project`).
 pub fn setup_chunk(
     draw_index: u32,
     draw: &Draw,
     clip_pos: &[[f64; 4]],
+    screen: &[ScreenVertex],
     faces: std::ops::Range<usize>,
     vp: &Viewport,
 ) -> Chunk {
@@ -114,12 +164,15 @@ pub fn setup_chunk(
         tris: Vec::with_capacity(faces.len()),
         ..Default::default()
     };
-    let (gx, gy) = (vp.volume.gx, vp.volume.gy);
     let mut poly = [ClipVertex {
         pos: [0.0; 4],
         bary: [0.0; 3],
     }; MAX_POLY];
+    let end = faces.end;
     for fi in faces {
+        if fi + PREFETCH < end {
+            prefetch(screen, draw.faces[fi + PREFETCH]);
+        }
         let face = draw.faces[fi];
         let (amin, amax) = draw.alpha_range(face);
         if amax <= 0.0 {
@@ -132,23 +185,20 @@ pub fn setup_chunk(
         if amin < 1.0 {
             flags |= MAY_TRANSPARENT;
         }
-        let p = face.map(|i| clip_pos[i as usize]);
+        let v = face.map(|i| screen[i as usize]);
         // Trivial reject against the viewport itself (all corners outside one plane).
-        if outcode(&p[0], 1.0, 1.0) & outcode(&p[1], 1.0, 1.0) & outcode(&p[2], 1.0, 1.0) != 0 {
+        if v[0].view & v[1].view & v[2].view != 0 {
             continue;
         }
-        let oc = [
-            outcode(&p[0], gx, gy),
-            outcode(&p[1], gx, gy),
-            outcode(&p[2], gx, gy),
-        ];
-        if oc[0] | oc[1] | oc[2] == 0 {
-            let corners = p.map(|q| vp.snap(&q));
+        let band = v[0].band | v[1].band | v[2].band;
+        if band == 0 {
+            let corners = v.map(|q| q.corner);
             emit(&mut chunk, vp, draw, draw_index, flags, corners, face, None);
             continue;
         }
         chunk.clipped += 1;
-        let n = vp.volume.clip(p, oc[0] | oc[1] | oc[2], &mut poly);
+        let p = face.map(|i| clip_pos[i as usize]);
+        let n = vp.volume.clip(p, band, &mut poly);
         if n < 3
             || poly[..n]
                 .iter()
@@ -221,6 +271,17 @@ fn emit(
     if x0 > x1 || y0 > y1 {
         return; // covers no sample centre
     }
+    let (x, y) = (xs.map(|v| v as i32), ys.map(|v| v as i32));
+    let mut bbox = [x0 as i32, y0 as i32, x1 as i32, y1 as i32];
+    if (x1 - x0 + 1) * (y1 - y0 + 1) <= TIGHT_MAX {
+        match Edges::new(x, y).covered_box(bbox) {
+            None => return, // covers no sample
+            Some(b) => bbox = b,
+        }
+        if bbox[0] == bbox[2] && bbox[1] == bbox[3] {
+            flags |= ONE_SAMPLE;
+        }
+    }
     let clip = match bary {
         Some(b) => {
             chunk.clips.push(b);
@@ -229,12 +290,12 @@ fn emit(
         None => NO_CLIP,
     };
     chunk.tris.push(Tri {
-        x: xs.map(|v| v as i32),
-        y: ys.map(|v| v as i32),
+        x,
+        y,
         rx: corners.map(|k| k.rx),
         ry: corners.map(|k| k.ry),
-        iw: corners.map(|k| k.iw as f32),
-        bbox: [x0 as i32, y0 as i32, x1 as i32, y1 as i32],
+        iw: corners.map(|k| k.iw),
+        bbox,
         verts,
         clip,
         draw: draw_index,

@@ -1,156 +1,39 @@
-//! Coverage and the two passes of one screen tile.
+//! The two passes of one screen tile.
 //!
-//! Coverage: a sample is inside when its three fixed-point edge functions are all >= 0 after
-//! the top-left bias. With the triangle oriented clockwise on screen (positive area, y down), an
-//! edge is *top* when horizontal and running right, *left* when running up; samples exactly on
-//! such an edge belong to the triangle, samples exactly on other edges do not. Two triangles
-//! that share an edge see it with opposite directions, so exactly one of them owns a sample on
-//! it: no gaps (seams) and no double hits.
-//!
+//! Coverage (which samples a triangle covers, with the top-left rule) is `coverage.rs`.
 //! Pass 1 (opaque) keeps the nearest opaque fragment of each sample in a visibility buffer
 //! (1/w and a triangle reference), and shades only the winners. Pass 2 (transparent) collects
 //! the transparent fragments in front of the opaque surface; `blend.rs` composites them.
 use super::background::Background;
 use super::bins::TILE;
 use super::blend::{Frag, FragLists, Sample};
+use super::coverage::Edges;
 use super::interp::Planes;
 use super::options::Blend;
-use super::setup::{Tri, HALF, MAY_OPAQUE, MAY_TRANSPARENT, ONE};
+use super::setup::{Tri, MAY_OPAQUE, MAY_TRANSPARENT, ONE_SAMPLE};
 use super::shade::{Shader, TriShade};
 
 const NONE: u32 = u32::MAX;
 
-/// Edge functions of a triangle, ready to walk samples.
-#[derive(Clone, Copy)]
-pub struct Edges {
-    /// Value change per sample step in x and in y.
-    dx: [i64; 3],
-    dy: [i64; 3],
-    /// 1 for edges that are not top-left (their samples are excluded), else 0.
-    bias: [i64; 3],
-    x: [i64; 3],
-    y: [i64; 3],
-}
-
-impl Edges {
-    #[inline]
-    pub fn new(t: &Tri) -> Self {
-        let x = t.x.map(i64::from);
-        let y = t.y.map(i64::from);
-        let mut e = Edges {
-            dx: [0; 3],
-            dy: [0; 3],
-            bias: [0; 3],
-            x,
-            y,
-        };
-        for k in 0..3 {
-            let (i, j) = ((k + 1) % 3, (k + 2) % 3);
-            let (ex, ey) = (x[j] - x[i], y[j] - y[i]);
-            e.dx[k] = -ey;
-            e.dy[k] = ex;
-            let top = ey == 0 && ex > 0;
-            let left = ey < 0;
-            e.bias[k] = if top || left { 0 } else { 1 };
-        }
-        e
-    }
-
-    /// Unbiased edge values at the centre of sample (ix, iy).
-    #[inline]
-    pub fn at(&self, ix: i32, iy: i32) -> [i64; 3] {
-        let px = i64::from(ix) * ONE + HALF;
-        let py = i64::from(iy) * ONE + HALF;
-        [0, 1, 2].map(|k| {
-            let i = (k + 1) % 3;
-            self.dx[k] * (px - self.x[i]) + self.dy[k] * (py - self.y[i])
-        })
-    }
-
-    /// Calls `f(ix, iy)` for every covered sample in the box, row by row, left to right.
-    #[inline]
-    pub fn cover(&self, bx: [i32; 4], mut f: impl FnMut(i32, i32)) {
-        self.spans(bx, |iy, x0, x1| {
-            for ix in x0..=x1 {
-                f(ix, iy);
-            }
-        });
-    }
-
-    /// Calls `f(iy, x0, x1)` for every row of the box holding covered samples, top to bottom,
-    /// with the covered samples x0..=x1 of the row.
-    ///
-    /// Each edge function is affine along a row, so the covered samples of a row form one span
-    /// whose ends follow from exact integer division; boxes wider than `SPAN_MIN` samples compute
-    /// the span (long thin triangles, such as a motion volume's swept sides, have large boxes and
-    /// few covered samples), narrower ones test every sample. Both give exactly the samples whose
-    /// three biased edge values are >= 0.
-    #[inline]
-    pub fn spans(&self, bx: [i32; 4], mut f: impl FnMut(i32, i32, i32)) {
-        let mut row = self.at(bx[0], bx[1]);
-        for k in 0..3 {
-            row[k] -= self.bias[k];
-        }
-        let sx = self.dx.map(|d| d * ONE);
-        let sy = self.dy.map(|d| d * ONE);
-        let last = i64::from(bx[2] - bx[0]);
-        for iy in bx[1]..=bx[3] {
-            let (lo, hi) = if last >= SPAN_MIN {
-                span(row, sx, last)
-            } else {
-                scan(row, sx, last)
-            };
-            if lo <= hi {
-                f(iy, bx[0] + lo as i32, bx[0] + hi as i32);
-            }
-            row[0] += sy[0];
-            row[1] += sy[1];
-            row[2] += sy[2];
-        }
+/// Calls `f(ix, iy)` for every sample of the (tile-clamped, non-empty) box `bx` that the
+/// triangle covers, row by row, left to right.
+#[inline(always)]
+fn cover(t: &Tri, bx: [i32; 4], mut f: impl FnMut(i32, i32)) {
+    if t.flags & ONE_SAMPLE != 0 {
+        f(bx[0], bx[1]); // the set-up found the box's one sample covered
+    } else {
+        Edges::new(t.x, t.y).cover(bx, f);
     }
 }
 
-/// `span` by testing every step: the first and last steps where all three values are >= 0
-/// (the covered steps between them are all covered, the set being an interval).
-#[inline]
-fn scan(mut e: [i64; 3], d: [i64; 3], last: i64) -> (i64, i64) {
-    let (mut lo, mut hi) = (i64::MAX, -1);
-    for i in 0..=last {
-        if (e[0] | e[1] | e[2]) >= 0 {
-            lo = lo.min(i);
-            hi = i;
-        }
-        e[0] += d[0];
-        e[1] += d[1];
-        e[2] += d[2];
+/// `Edges::spans` of the triangle in the (tile-clamped, non-empty) box `bx`.
+#[inline(always)]
+fn spans(t: &Tri, bx: [i32; 4], mut f: impl FnMut(i32, i32, i32)) {
+    if t.flags & ONE_SAMPLE != 0 {
+        f(bx[1], bx[0], bx[0]);
+    } else {
+        Edges::new(t.x, t.y).spans(bx, f);
     }
-    (lo, hi)
-}
-
-/// Boxes at least this many samples wide (minus one) are walked by spans.
-const SPAN_MIN: i64 = 8;
-
-/// The steps i in [0, last] where `e[k] + i * d[k] >= 0` for every edge k, as an inclusive range
-/// (empty when lo > hi).
-#[inline]
-fn span(e: [i64; 3], d: [i64; 3], last: i64) -> (i64, i64) {
-    let (mut lo, mut hi) = (0i64, last);
-    for k in 0..3 {
-        let (e, d) = (e[k], d[k]);
-        if d > 0 {
-            if e < 0 {
-                // first i with e + i d >= 0: ceil(-e / d)
-                let a = -e;
-                lo = lo.max(a / d + i64::from(a % d != 0));
-            }
-        } else if d < 0 {
-            // last i with e + i d >= 0: floor(e / -d), none when e < 0
-            hi = if e < 0 { -1 } else { hi.min(e / -d) };
-        } else if e < 0 {
-            hi = -1;
-        }
-    }
-    (lo, hi)
 }
 
 /// Reusable per-thread buffers of a tile.
@@ -236,11 +119,10 @@ pub fn render_tile(
             winner.fill(NONE);
             any_opaque = true;
         }
-        let edges = Edges::new(t);
-        let planes = Planes::new(t);
         // only a triangle that may also be transparent needs its alpha per sample
         let mixed = (t.flags & MAY_TRANSPARENT != 0).then(|| sh.prepare(r));
-        edges.cover(bx, |ix, iy| {
+        let planes = Planes::new(t);
+        cover(t, bx, |ix, iy| {
             fragments += 1;
             if let Some(ts) = &mixed {
                 if ts.alpha(ts.lambdas(&planes, ix, iy)) < 1.0 {
@@ -307,11 +189,10 @@ pub fn render_tile(
         if bx[0] > bx[2] || bx[1] > bx[3] {
             continue;
         }
-        let edges = Edges::new(t);
         let planes = Planes::new(t);
         let mixed = t.flags & MAY_OPAQUE != 0;
         let ts = sh.prepare(r);
-        edges.spans(bx, |iy, x0, x1| {
+        spans(t, bx, |iy, x0, x1| {
             for ix in x0..=x1 {
                 let s = local(ix, iy);
                 let z = planes.invw(ix, iy) as f32;
@@ -336,80 +217,4 @@ pub fn render_tile(
     }
     frags.composite(&mut samples[..(TILE * TILE) as usize], blend);
     (fragments, bad_background)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Edges of the triangle with fixed-point corners (x, y), as `Edges::new` builds them.
-    fn edges(x: [i32; 3], y: [i32; 3]) -> Edges {
-        let mut e = Edges {
-            dx: [0; 3],
-            dy: [0; 3],
-            bias: [0; 3],
-            x: x.map(i64::from),
-            y: y.map(i64::from),
-        };
-        for k in 0..3 {
-            let (i, j) = ((k + 1) % 3, (k + 2) % 3);
-            let (ex, ey) = (e.x[j] - e.x[i], e.y[j] - e.y[i]);
-            e.dx[k] = -ey;
-            e.dy[k] = ex;
-            e.bias[k] = if (ey == 0 && ex > 0) || ey < 0 { 0 } else { 1 };
-        }
-        e
-    }
-
-    /// Every sample of the box tested on its own.
-    fn brute(e: &Edges, bx: [i32; 4]) -> Vec<(i32, i32)> {
-        let mut out = Vec::new();
-        for iy in bx[1]..=bx[3] {
-            for ix in bx[0]..=bx[2] {
-                let v = e.at(ix, iy);
-                if (0..3).all(|k| v[k] - e.bias[k] >= 0) {
-                    out.push((ix, iy));
-                }
-            }
-        }
-        out
-    }
-
-    #[test]
-    fn spans_visit_exactly_the_covered_samples_in_order() {
-        // xorshift: reproducible corners, slivers and axis-aligned edges included
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = |m: i32| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % m as u64) as i32
-        };
-        let mut covered = 0;
-        for n in 0..4000 {
-            let scale = [ONE as i32 * 70, ONE as i32 * 8, 3 * ONE as i32][n % 3];
-            let mut x = [0; 3].map(|_| next(scale) - scale / 8);
-            let mut y = [0; 3].map(|_| next(scale) - scale / 8);
-            if n % 7 == 0 {
-                y[1] = y[0]; // a horizontal edge
-            }
-            if n % 11 == 0 {
-                x[2] = x[1]; // a vertical edge
-            }
-            let area = i64::from(x[1] - x[0]) * i64::from(y[2] - y[0])
-                - i64::from(x[2] - x[0]) * i64::from(y[1] - y[0]);
-            if area < 0 {
-                x.swap(1, 2);
-                y.swap(1, 2);
-            }
-            let e = edges(x, y);
-            let bx = [next(5) - 2, next(5) - 2, next(70), next(70)];
-            let mut got = Vec::new();
-            e.cover(bx, |ix, iy| got.push((ix, iy)));
-            let want = brute(&e, bx);
-            covered += want.len();
-            assert_eq!(got, want, "triangle {x:?} {y:?} box {bx:?}");
-        }
-        assert!(covered > 10_000, "the test triangles must cover samples");
-    }
 }
