@@ -163,7 +163,7 @@ pub fn render_tile(
                         cached = (r, Some((Planes::new(sh.tri(r)), sh.prepare(r))));
                     }
                     let (planes, ts) = cached.1.as_ref().expect("set above");
-                    let sh = ts.shade(ts.lambdas(planes, ix, iy));
+                    let sh = ts.shade_at(planes, ix, iy);
                     Sample {
                         rgba: sh.rgba,
                         invw: zbuf[s],
@@ -199,12 +199,18 @@ pub fn render_tile(
                 if z <= zbuf[s] {
                     continue;
                 }
-                let lam = ts.lambdas(&planes, ix, iy);
-                if mixed && ts.alpha(lam) >= 1.0 {
-                    continue;
-                }
+                // A constant triangle has one alpha, so it is never mixed.
+                let shaded = match ts.constant() {
+                    Some(c) => c,
+                    None => {
+                        let lam = ts.lambdas(&planes, ix, iy);
+                        if mixed && ts.alpha(lam) >= 1.0 {
+                            continue;
+                        }
+                        ts.shade(lam)
+                    }
+                };
                 fragments += 1;
-                let shaded = ts.shade(lam);
                 if shaded.rgba[3] > 0.0 {
                     frags.push(Frag {
                         sample: s as u32,
