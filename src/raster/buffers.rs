@@ -23,8 +23,17 @@ pub struct Stats {
     pub ms_setup: f64,
     /// Milliseconds binning triangles into tiles.
     pub ms_bin: f64,
-    /// Milliseconds rasterizing and resolving the tiles.
+    /// Milliseconds rasterizing and resolving the tiles (wall clock; the four stages below are
+    /// its parts, each summed over the tiles, so with several threads they add up to more).
     pub ms_raster: f64,
+    /// Thread milliseconds of the opaque pass's coverage and depth test.
+    pub ms_coverage: f64,
+    /// Thread milliseconds shading the opaque pass's visible samples.
+    pub ms_shade: f64,
+    /// Thread milliseconds of the transparent pass: coverage, depth test, shading, compositing.
+    pub ms_transparent: f64,
+    /// Thread milliseconds resolving samples into the frame's buffers.
+    pub ms_resolve: f64,
     /// Milliseconds for the whole frame.
     pub ms_total: f64,
 }

@@ -38,20 +38,19 @@ pub use options::{Blend, Light, Options, Shading};
 
 use crate::error::{Error, Result};
 use bins::TILE;
-use glam::DVec4;
 use rayon::prelude::*;
 use setup::{Chunk, ScreenVertex, Viewport};
 use shade::{homogeneous_pixel, Prepared, Shader};
 use std::cell::RefCell;
 use std::time::Instant;
-use tile::TileScratch;
+use tile::{TileReport, TileScratch};
 
 /// Faces set up per parallel job (a clipped face may become up to 7 triangles, so a chunk
 /// holds at most 28672 < 2^16 triangles).
 const CHUNK_FACES: usize = 4096;
 
-/// The draw's vertices in clip space (kept for shading and clipping) and projected to the
-/// viewport (for the set-up), and what shading needs per vertex.
+/// The draw's vertices projected to the viewport (for the set-up), in clip space when shading
+/// needs them (velocity), and what shading needs per vertex.
 fn transform(
     draw: &Draw,
     vp: glam::DMat4,
@@ -60,19 +59,19 @@ fn transform(
     w: f64,
     h: f64,
 ) -> (Prepared, Vec<ScreenVertex>) {
-    let project = |p: &[f64; 3]| {
-        let c = vp * DVec4::new(p[0], p[1], p[2], 1.0);
-        [c.x, c.y, c.z, c.w]
+    let project = |p: &[f64; 3]| setup::clip_position(&vp, p);
+    let vertices = draw.vertices.par_iter().with_min_len(4096);
+    let (clip, screen): (Vec<[f64; 4]>, Vec<ScreenVertex>) = if draw.previous.is_some() {
+        vertices
+            .map(|p| {
+                let c = project(p);
+                (c, viewport.project(&c))
+            })
+            .unzip()
+    } else {
+        let screen = vertices.map(|p| viewport.project(&project(p))).collect();
+        (Vec::new(), screen)
     };
-    let (clip, screen): (Vec<[f64; 4]>, Vec<ScreenVertex>) = draw
-        .vertices
-        .par_iter()
-        .with_min_len(4096)
-        .map(|p| {
-            let c = project(p);
-            (c, viewport.project(&c))
-        })
-        .unzip();
     let prev = draw.previous.as_ref().map(|prev| {
         prev.par_iter()
             .with_min_len(4096)
@@ -101,6 +100,14 @@ thread_local! {
     /// per frame.
     static SCRATCH: RefCell<TileScratch> = RefCell::new(TileScratch::default());
 }
+
+thread_local! {
+    /// The bins of this thread's last frame: their buffers are reused by the next frame.
+    static KEPT_BINS: RefCell<bins::Bins> = RefCell::new(bins::Bins::default());
+}
+
+/// References the kept bins may hold room for between frames (4 bytes each).
+const KEEP_REFS: usize = 1 << 22;
 
 /// Runs `f` with this thread's tile buffers (fresh ones if they are already in use).
 fn with_scratch<R>(f: impl FnOnce(&mut TileScratch) -> R) -> R {
@@ -172,13 +179,20 @@ pub fn rasterize_over(
     let chunks: Vec<Chunk> = jobs
         .into_par_iter()
         .map(|(di, range)| {
-            let clip = &prepared[di].clip;
-            setup::setup_chunk(di as u32, &draws[di], clip, &screens[di], range, &viewport)
+            setup::setup_chunk(
+                di as u32,
+                &draws[di],
+                &vp_matrix,
+                &screens[di],
+                range,
+                &viewport,
+            )
         })
         .collect();
     let t2 = Instant::now();
 
-    let bins = bins::Bins::build(&chunks, viewport.ws, viewport.hs);
+    let mut bins = KEPT_BINS.with(RefCell::take);
+    bins.build(&chunks, viewport.ws, viewport.hs);
     let t3 = Instant::now();
 
     let shader = Shader {
@@ -192,7 +206,7 @@ pub fn rasterize_over(
     let out = frame.output();
     let tiles_x = bins.tiles_x;
     let pixels_per_tile = (TILE as u32 / s) as usize;
-    let (fragments, bad_background) = (0..bins.tiles_x * bins.tiles_y)
+    let report = (0..bins.tiles_x * bins.tiles_y)
         .into_par_iter()
         .map(|t| {
             let (tx, ty) = (t % tiles_x, t / tiles_x);
@@ -206,20 +220,26 @@ pub fn rasterize_over(
             let rect = [px[0] * s, px[1] * s, px[2] * s, px[3] * s].map(|v| v as i32);
             let refs = bins.tile(t);
             with_scratch(|scratch| {
-                let n = match (refs.is_empty(), background) {
+                let mut report = match (refs.is_empty(), background) {
                     (true, None) => {
                         scratch.samples.fill(blend::Sample::BACKGROUND);
-                        (0, false)
+                        TileReport::default()
                     }
-                    (true, Some(bg)) => (0, bg.load(rect, &mut scratch.zbuf, &mut scratch.samples)),
+                    (true, Some(bg)) => TileReport {
+                        bad_background: bg.load(rect, &mut scratch.zbuf, &mut scratch.samples),
+                        ..Default::default()
+                    },
                     _ => tile::render_tile(rect, refs, &shader, opts.blend, background, scratch),
                 };
+                let t = Instant::now();
                 // SAFETY: tiles partition the frame, so this rectangle is written by this task only.
                 unsafe { out.write_tile(&scratch.samples, px, s) };
-                n
+                report.ms[3] = (t.elapsed()).as_secs_f64() * 1e3;
+                report
             })
         })
-        .reduce(|| (0, false), |a, b| (a.0 + b.0, a.1 | b.1));
+        .reduce(TileReport::default, TileReport::add);
+    let (fragments, bad_background) = (report.fragments, report.bad_background);
     // The tiles partition the frame, so together they loaded every sample of the background's
     // window: a bad value anywhere in it was seen (rendering over it reads no value as an index
     // and cannot fail). The full check names it.
@@ -235,6 +255,9 @@ pub fn rasterize_over(
     unsafe { frame.assume_written() };
     let t4 = Instant::now();
 
+    if bins.refs.capacity() <= KEEP_REFS {
+        KEPT_BINS.with(|kept| kept.replace(bins));
+    }
     let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
     frame.stats = Stats {
         triangles: chunks.iter().map(|c| c.tris.len() as u64).sum(),
@@ -245,6 +268,10 @@ pub fn rasterize_over(
         ms_setup: ms(t1, t2),
         ms_bin: ms(t2, t3),
         ms_raster: ms(t3, t4),
+        ms_coverage: report.ms[0],
+        ms_shade: report.ms[1],
+        ms_transparent: report.ms[2],
+        ms_resolve: report.ms[3],
         ms_total: ms(t0, t4),
     };
     Ok(frame)

@@ -13,6 +13,7 @@
 use super::clip::{outcode, ClipVertex, ClipVolume, MAX_POLY};
 use super::coverage::{Edges, HALF, ONE};
 use super::draw::Draw;
+use glam::{DMat4, DVec4};
 
 /// The triangle faces the camera (counter-clockwise in OpenGL's y-up window coordinates).
 pub const FRONT: u8 = 1;
@@ -150,12 +151,20 @@ fn floor_div(a: i64, b: i64) -> i64 {
     a.div_euclid(b)
 }
 
-/// Sets up faces `faces` (indices into `draw.faces`) of draw `draw_index`, from the clip-space
-/// positions `clip_pos` and their projections `screen` (`Viewport::project`).
+/// The clip-space position of world point `p` under the view-projection matrix `m`.
+#[inline]
+pub fn clip_position(m: &DMat4, p: &[f64; 3]) -> [f64; 4] {
+    let c = *m * DVec4::new(p[0], p[1], p[2], 1.0);
+    [c.x, c.y, c.z, c.w]
+}
+
+/// Sets up faces `faces` (indices into `draw.faces`) of draw `draw_index`, from the projections
+/// `screen` of its vertices (`Viewport::project`); faces that cross the guard band are clipped
+/// from the clip-space positions under the view-projection matrix `m`.
 pub fn setup_chunk(
     draw_index: u32,
     draw: &Draw,
-    clip_pos: &[[f64; 4]],
+    m: &DMat4,
     screen: &[ScreenVertex],
     faces: std::ops::Range<usize>,
     vp: &Viewport,
@@ -197,7 +206,7 @@ pub fn setup_chunk(
             continue;
         }
         chunk.clipped += 1;
-        let p = face.map(|i| clip_pos[i as usize]);
+        let p = face.map(|i| clip_position(m, &draw.vertices[i as usize]));
         let n = vp.volume.clip(p, band, &mut poly);
         if n < 3
             || poly[..n]

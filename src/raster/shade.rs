@@ -17,8 +17,8 @@ use super::interp::Planes;
 use super::options::{Options, Shading};
 use super::setup::{Chunk, Tri, FRONT, NO_CLIP};
 
-/// Per-draw data computed once a frame: clip-space positions, previous homogeneous screen
-/// positions (for velocity) and normals (lambert only).
+/// Per-draw data computed once a frame: clip-space positions and previous homogeneous screen
+/// positions (for velocity; `clip` is empty without them) and normals (lambert only).
 #[derive(Debug, Default)]
 pub struct Prepared {
     pub clip: Vec<[f64; 4]>,

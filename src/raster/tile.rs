@@ -12,8 +12,37 @@ use super::interp::Planes;
 use super::options::Blend;
 use super::setup::{Tri, MAY_OPAQUE, MAY_TRANSPARENT, ONE_SAMPLE};
 use super::shade::{Shader, TriShade};
+use std::time::Instant;
 
 const NONE: u32 = u32::MAX;
+
+/// What rendering a tile reports.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct TileReport {
+    /// Samples covered (both passes).
+    pub fragments: u64,
+    /// Whether the background held a bad value in the tile.
+    pub bad_background: bool,
+    /// Milliseconds: opaque coverage and depth test, opaque shading, the transparent pass
+    /// (coverage, shading, compositing), resolve.
+    pub ms: [f64; 4],
+}
+
+impl TileReport {
+    /// The two reports' sums (`bad_background`: either).
+    pub fn add(self, o: TileReport) -> TileReport {
+        TileReport {
+            fragments: self.fragments + o.fragments,
+            bad_background: self.bad_background | o.bad_background,
+            ms: [0, 1, 2, 3].map(|k| self.ms[k] + o.ms[k]),
+        }
+    }
+}
+
+#[inline]
+fn ms(a: Instant, b: Instant) -> f64 {
+    (b - a).as_secs_f64() * 1e3
+}
 
 /// Calls `f(ix, iy)` for every sample of the (tile-clamped, non-empty) box `bx` that the
 /// triangle covers, row by row, left to right.
@@ -74,7 +103,7 @@ pub fn render_tile(
     blend: Blend,
     bg: Option<&Background>,
     scratch: &mut TileScratch,
-) -> (u64, bool) {
+) -> TileReport {
     let [tx0, ty0, tx1, ty1] = rect;
     let clamp = |t: &Tri| {
         [
@@ -99,6 +128,7 @@ pub fn render_tile(
             false
         }
     };
+    let t0 = Instant::now();
     let mut fragments = 0u64;
     let mut any_transparent = false;
     // Whether a triangle that may be opaque reaches the tile (`winner` is reset then only).
@@ -138,6 +168,7 @@ pub fn render_tile(
         });
     }
 
+    let t1 = Instant::now();
     // Shade the opaque winners (neighbouring samples mostly share a triangle: keep its planes).
     // Without opaque triangles every sample keeps the background.
     if !any_opaque {
@@ -174,8 +205,14 @@ pub fn render_tile(
             }
         }
     }
+    let t2 = Instant::now();
+    let mut report = TileReport {
+        fragments,
+        bad_background,
+        ms: [ms(t0, t1), ms(t1, t2), 0.0, 0.0],
+    };
     if !any_transparent {
-        return (fragments, bad_background);
+        return report;
     }
 
     // Pass 2: transparent fragments in front of the opaque surface.
@@ -222,5 +259,7 @@ pub fn render_tile(
         });
     }
     frags.composite(&mut samples[..(TILE * TILE) as usize], blend);
-    (fragments, bad_background)
+    report.fragments = fragments;
+    report.ms[2] = ms(t2, Instant::now());
+    report
 }
