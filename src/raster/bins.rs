@@ -8,19 +8,22 @@
 //! sum in (tile, chunk) order gives every chunk its own run of slots in every bin, and each chunk
 //! writes its references into its runs. The buffers are kept by the caller between frames
 //! (`Bins::build` reuses them), so binning does not allocate once they have grown.
-use super::setup::Chunk;
+use super::setup::{Chunk, Tri};
 use rayon::prelude::*;
 
 /// Tile side in samples.
 pub const TILE: i32 = 64;
 
-/// The triangles of every tile: `refs[start[t]..start[t + 1]]` for tile `t` (row-major).
+/// The triangles of every tile: `refs[start[t]..start[t + 1]]` for tile `t` (row-major), and
+/// copies of the triangles in the same order (`tris`), so that a tile reads its triangles in
+/// sequence rather than gathering them from every chunk.
 #[derive(Debug, Default)]
 pub struct Bins {
     pub tiles_x: usize,
     pub tiles_y: usize,
     pub start: Vec<usize>,
     pub refs: Vec<u32>,
+    pub tris: Vec<Tri>,
     /// Per chunk and tile (chunk-major): the triangle count, then the chunk's first slot.
     slots: Vec<usize>,
 }
@@ -46,8 +49,9 @@ fn each_tile(bbox: [i32; 4], tiles_x: usize, mut f: impl FnMut(usize)) {
     }
 }
 
-/// The reference array written by several chunks at once, each through its own slots.
-struct SharedRefs(*mut u32);
+/// The reference and triangle arrays written by several chunks at once, each through its own
+/// slots.
+struct SharedRefs(*mut u32, *mut Tri);
 
 // SAFETY: chunks write disjoint slots (see `Bins::build`), and nothing reads them meanwhile.
 unsafe impl Send for SharedRefs {}
@@ -92,7 +96,9 @@ impl Bins {
         self.start[n] = next;
         self.refs.clear();
         self.refs.resize(next, 0);
-        let out = SharedRefs(self.refs.as_mut_ptr());
+        self.tris.clear();
+        self.tris.reserve(next);
+        let out = SharedRefs(self.refs.as_mut_ptr(), self.tris.as_mut_ptr());
         let out = &out;
         if n > 0 {
             self.slots
@@ -104,20 +110,28 @@ impl Bins {
                         let r = ((ci as u32) << 16) | i as u32;
                         each_tile(t.bbox, tiles_x, |tile| {
                             // SAFETY: chunk ci owns slots slot[tile] .. slot[tile] + its count
-                            // in this bin (the prefix sum above), all below `next`; each of
-                            // its triangles in this bin takes one and advances.
-                            unsafe { *out.0.add(slot[tile]) = r };
+                            // in this bin (the prefix sum above), all below `next` (the length
+                            // of `refs`, the capacity of `tris`); each of its triangles in this
+                            // bin takes one and advances.
+                            unsafe {
+                                *out.0.add(slot[tile]) = r;
+                                out.1.add(slot[tile]).write(*t);
+                            }
                             slot[tile] += 1;
                         });
                     }
                 });
         }
+        // SAFETY: the slots of all chunks in all bins are 0..next, each written once above
+        // (the counts of the first pass are the triangles the second pass walks).
+        unsafe { self.tris.set_len(next) };
     }
 
-    /// The references of tile `t`.
+    /// The references of tile `t` and their triangles.
     #[inline]
-    pub fn tile(&self, t: usize) -> &[u32] {
-        &self.refs[self.start[t]..self.start[t + 1]]
+    pub fn tile(&self, t: usize) -> (&[u32], &[Tri]) {
+        let range = self.start[t]..self.start[t + 1];
+        (&self.refs[range.clone()], &self.tris[range])
     }
 }
 
@@ -178,7 +192,12 @@ mod tests {
                         }
                     }
                 }
-                assert_eq!(bins.tile(t), &want[..], "round {round} tile {t}");
+                let (refs, tris) = bins.tile(t);
+                assert_eq!(refs, &want[..], "round {round} tile {t}");
+                for (&r, t) in refs.iter().zip(tris) {
+                    let c = &chunks[(r >> 16) as usize].tris[(r & 0xffff) as usize];
+                    assert_eq!(t.bbox, c.bbox);
+                }
             }
         }
     }

@@ -106,8 +106,8 @@ thread_local! {
     static KEPT_BINS: RefCell<bins::Bins> = RefCell::new(bins::Bins::default());
 }
 
-/// References the kept bins may hold room for between frames (4 bytes each).
-const KEEP_REFS: usize = 1 << 22;
+/// References the kept bins may hold room for between frames (4 + 100 bytes each).
+const KEEP_REFS: usize = 1 << 19;
 
 /// Runs `f` with this thread's tile buffers (fresh ones if they are already in use).
 fn with_scratch<R>(f: impl FnOnce(&mut TileScratch) -> R) -> R {
@@ -218,7 +218,7 @@ pub fn rasterize_over(
             ];
             let s = s as usize;
             let rect = [px[0] * s, px[1] * s, px[2] * s, px[3] * s].map(|v| v as i32);
-            let refs = bins.tile(t);
+            let (refs, tris) = bins.tile(t);
             with_scratch(|scratch| {
                 let mut report = match (refs.is_empty(), background) {
                     (true, None) => {
@@ -229,7 +229,9 @@ pub fn rasterize_over(
                         bad_background: bg.load(rect, &mut scratch.zbuf, &mut scratch.samples),
                         ..Default::default()
                     },
-                    _ => tile::render_tile(rect, refs, &shader, opts.blend, background, scratch),
+                    _ => tile::render_tile(
+                        rect, refs, tris, &shader, opts.blend, background, scratch,
+                    ),
                 };
                 let t = Instant::now();
                 // SAFETY: tiles partition the frame, so this rectangle is written by this task only.
@@ -256,6 +258,7 @@ pub fn rasterize_over(
     let t4 = Instant::now();
 
     if bins.refs.capacity() <= KEEP_REFS {
+        bins.tris.clear();
         KEPT_BINS.with(|kept| kept.replace(bins));
     }
     let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;

@@ -59,17 +59,11 @@ pub fn unpack(r: u32) -> (usize, usize) {
 }
 
 impl<'a> Shader<'a> {
+    /// What shading the samples of triangle `tri` (reference `r`) needs, gathered once for the
+    /// triangle.
     #[inline]
-    pub fn tri(&self, r: u32) -> &'a Tri {
-        let (c, i) = unpack(r);
-        &self.chunks[c].tris[i]
-    }
-
-    /// What shading the samples of triangle `r` needs, gathered once for the triangle.
-    #[inline]
-    pub fn prepare(&self, r: u32) -> TriShade<'a> {
-        let (c, i) = unpack(r);
-        let tri = &self.chunks[c].tris[i];
+    pub fn prepare(&self, r: u32, tri: &Tri) -> TriShade<'a> {
+        let (c, _) = unpack(r);
         let di = tri.draw as usize;
         let d = &self.draws[di];
         let p = &self.prepared[di];

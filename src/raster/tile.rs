@@ -2,7 +2,7 @@
 //!
 //! Coverage (which samples a triangle covers, with the top-left rule) is `coverage.rs`.
 //! Pass 1 (opaque) keeps the nearest opaque fragment of each sample in a visibility buffer
-//! (1/w and a triangle reference), and shades only the winners. Pass 2 (transparent) collects
+//! (1/w and the triangle's place in the bin), and shades only the winners. Pass 2 (transparent) collects
 //! the transparent fragments in front of the opaque surface; `blend.rs` composites them.
 use super::background::Background;
 use super::bins::TILE;
@@ -92,13 +92,14 @@ impl TileScratch {
     }
 }
 
-/// Renders the samples `rect` = [x0, y0, x1, y1) of a tile from its triangle references (in
-/// submission order) into `scratch.samples` (row stride TILE), starting from `bg` when given
+/// Renders the samples `rect` = [x0, y0, x1, y1) of a tile from its triangle references and
+/// their triangles (`Bins::tile`, in submission order) into `scratch.samples` (row stride TILE), starting from `bg` when given
 /// (else from the empty background). Returns the fragment count, and whether `bg` holds a bad
 /// value in the rectangle (`Background::load`).
 pub fn render_tile(
     rect: [i32; 4],
     refs: &[u32],
+    tris: &[Tri],
     sh: &Shader,
     blend: Blend,
     bg: Option<&Background>,
@@ -135,8 +136,8 @@ pub fn render_tile(
     let mut any_opaque = false;
 
     // Pass 1: opaque fragments, nearest wins (strictly nearer: the first submitted keeps ties).
-    for &r in refs {
-        let t = sh.tri(r);
+    for (i, (&r, t)) in refs.iter().zip(tris).enumerate() {
+        let i = i as u32;
         any_transparent |= t.flags & MAY_TRANSPARENT != 0;
         if t.flags & MAY_OPAQUE == 0 {
             continue;
@@ -150,7 +151,7 @@ pub fn render_tile(
             any_opaque = true;
         }
         // only a triangle that may also be transparent needs its alpha per sample
-        let mixed = (t.flags & MAY_TRANSPARENT != 0).then(|| sh.prepare(r));
+        let mixed = (t.flags & MAY_TRANSPARENT != 0).then(|| sh.prepare(r, t));
         let planes = Planes::new(t);
         cover(t, bx, |ix, iy| {
             fragments += 1;
@@ -163,7 +164,7 @@ pub fn render_tile(
             let s = local(ix, iy);
             if z > zbuf[s] {
                 zbuf[s] = z;
-                winner[s] = r;
+                winner[s] = i;
             }
         });
     }
@@ -179,22 +180,29 @@ pub fn render_tile(
             }
         }
     } else {
-        let mut cached = (NONE, None::<(Planes, TriShade)>);
+        // (the planes only when the shading varies over the triangle)
+        let mut cached = (NONE, None::<(Option<Planes>, TriShade)>);
         for iy in ty0..ty1 {
             for ix in tx0..tx1 {
                 let s = local(ix, iy);
-                let r = winner[s];
-                if r == NONE && bg.is_some() {
+                let i = winner[s];
+                if i == NONE && bg.is_some() {
                     continue; // the background sample loaded above stays
                 }
-                samples[s] = if r == NONE {
+                samples[s] = if i == NONE {
                     Sample::BACKGROUND
                 } else {
-                    if cached.0 != r {
-                        cached = (r, Some((Planes::new(sh.tri(r)), sh.prepare(r))));
+                    if cached.0 != i {
+                        let t = &tris[i as usize];
+                        let ts = sh.prepare(refs[i as usize], t);
+                        let planes = ts.constant().is_none().then(|| Planes::new(t));
+                        cached = (i, Some((planes, ts)));
                     }
                     let (planes, ts) = cached.1.as_ref().expect("set above");
-                    let sh = ts.shade_at(planes, ix, iy);
+                    let sh = match (ts.constant(), planes) {
+                        (Some(c), _) => c,
+                        (None, p) => ts.shade_at(p.as_ref().expect("set above"), ix, iy),
+                    };
                     Sample {
                         rgba: sh.rgba,
                         invw: zbuf[s],
@@ -217,8 +225,7 @@ pub fn render_tile(
 
     // Pass 2: transparent fragments in front of the opaque surface.
     frags.clear((TILE * TILE) as usize);
-    for &r in refs {
-        let t = sh.tri(r);
+    for (&r, t) in refs.iter().zip(tris) {
         if t.flags & MAY_TRANSPARENT == 0 {
             continue;
         }
@@ -228,7 +235,7 @@ pub fn render_tile(
         }
         let planes = Planes::new(t);
         let mixed = t.flags & MAY_OPAQUE != 0;
-        let ts = sh.prepare(r);
+        let ts = sh.prepare(r, t);
         spans(t, bx, |iy, x0, x1| {
             for ix in x0..=x1 {
                 let s = local(ix, iy);
