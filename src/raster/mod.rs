@@ -39,7 +39,7 @@ pub use options::{Blend, Light, Options, Shading};
 use crate::error::{Error, Result};
 use bins::TILE;
 use rayon::prelude::*;
-use setup::{Chunk, ScreenVertex, Viewport};
+use setup::{Chunk, Screen, Viewport};
 use shade::{homogeneous_pixel, Prepared, Shader};
 use std::cell::RefCell;
 use std::time::Instant;
@@ -58,19 +58,22 @@ fn transform(
     opts: &Options,
     w: f64,
     h: f64,
-) -> (Prepared, Vec<ScreenVertex>) {
+) -> (Prepared, Screen) {
     let project = |p: &[f64; 3]| setup::clip_position(&vp, p);
     let vertices = draw.vertices.par_iter().with_min_len(4096);
-    let (clip, screen): (Vec<[f64; 4]>, Vec<ScreenVertex>) = if draw.previous.is_some() {
-        vertices
+    let mut screen = Screen::default();
+    let clip: Vec<[f64; 4]> = if draw.previous.is_some() {
+        let (clip, pos_attr): (Vec<[f64; 4]>, (Vec<_>, Vec<_>)) = vertices
             .map(|p| {
                 let c = project(p);
                 (c, viewport.project(&c))
             })
-            .unzip()
+            .unzip();
+        (screen.pos, screen.attr) = pos_attr;
+        clip
     } else {
-        let screen = vertices.map(|p| viewport.project(&project(p))).collect();
-        (Vec::new(), screen)
+        (screen.pos, screen.attr) = vertices.map(|p| viewport.project(&project(p))).unzip();
+        Vec::new()
     };
     let prev = draw.previous.as_ref().map(|prev| {
         prev.par_iter()
@@ -161,7 +164,7 @@ pub fn rasterize_over(
     let mut frame = Frame::unwritten(w, h);
 
     let viewport = Viewport::new(w * s, h * s);
-    let (prepared, screens): (Vec<Prepared>, Vec<Vec<ScreenVertex>>) = draws
+    let (prepared, screens): (Vec<Prepared>, Vec<Screen>) = draws
         .iter()
         .map(|d| transform(d, vp_matrix, &viewport, opts, f64::from(w), f64::from(h)))
         .unzip();

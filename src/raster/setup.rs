@@ -5,9 +5,10 @@
 //! vertices alone: a shared edge is drawn exactly once (see `coverage.rs` for the top-left rule).
 //!
 //! Every vertex is projected and snapped once a frame (`Viewport::project`, a streaming pass);
-//! the faces then gather three compact `ScreenVertex` records (prefetched a few faces ahead: a
-//! mesh's faces may reach its vertices in any order) and only faces that cross the guard band go
-//! back to the clip-space positions. A triangle whose box holds at most `TIGHT_MAX` samples gets
+//! the faces then gather three 8-byte fixed-point positions (prefetched a few faces ahead: a
+//! mesh's faces may reach its vertices in any order), the triangles kept after culling and
+//! bounds gather the rest of their corners, and only faces that cross the guard band go back to
+//! the clip-space positions. A triangle whose box holds at most `TIGHT_MAX` samples gets
 //! the box of the samples it covers, or is dropped when it covers none: small triangles then
 //! reach fewer tiles, and a box of one sample needs no edge test in the tiles (`ONE_SAMPLE`).
 use super::clip::{outcode, ClipVertex, ClipVolume, MAX_POLY};
@@ -95,16 +96,17 @@ impl Viewport {
         }
     }
 
-    /// A clip-space vertex as the face loop reads it. Its snapped corner is used only when no
-    /// face of it crosses the guard band (then it is in range); other faces are clipped from the
-    /// clip-space positions.
+    /// A clip-space vertex as the face loop reads it: its fixed-point position, and its
+    /// residuals and 1/w. A vertex outside the guard band gets `OUT` for x and its band outcode
+    /// for y (its faces are clipped from the clip-space positions).
     #[inline]
-    pub fn project(&self, p: &[f64; 4]) -> ScreenVertex {
-        ScreenVertex {
-            corner: self.snap(p),
-            view: outcode(p, 1.0, 1.0),
-            band: outcode(p, self.volume.gx, self.volume.gy),
+    pub fn project(&self, p: &[f64; 4]) -> ([i32; 2], [f32; 3]) {
+        let band = outcode(p, self.volume.gx, self.volume.gy);
+        if band != 0 {
+            return ([OUT, i32::from(band)], [0.0; 3]);
         }
+        let c = self.snap(p);
+        ([c.x, c.y], [c.rx, c.ry, c.iw])
     }
 }
 
@@ -118,32 +120,37 @@ struct Corner {
     iw: f32,
 }
 
-/// A vertex projected once a frame: its snapped corner and its outcodes against the viewport
-/// and the guard band (24 bytes, gathered three times a face).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct ScreenVertex {
-    corner: Corner,
-    view: u8,
-    band: u8,
+/// The x of a vertex outside the guard band (snapped positions inside it lie within +-2^25).
+const OUT: i32 = i32::MIN;
+
+/// A draw's vertices projected once a frame (`Viewport::project`): the fixed-point positions,
+/// which every face gathers (8 bytes a vertex), and the residuals and 1/w, which only the
+/// triangles that survive culling and bounds gather.
+#[derive(Debug, Default)]
+pub struct Screen {
+    /// Fixed-point (x, y), or (`OUT`, band outcode).
+    pub pos: Vec<[i32; 2]>,
+    /// Residuals (exact minus snapped, in samples) and 1/w.
+    pub attr: Vec<[f32; 3]>,
 }
 
-/// Hints the cache to load the screen vertices of `face` (no effect on any result).
+/// Hints the cache to load the positions of `face`'s vertices (no effect on any result).
 #[inline(always)]
-fn prefetch(screen: &[ScreenVertex], face: [u32; 3]) {
+fn prefetch(pos: &[[i32; 2]], face: [u32; 3]) {
     #[cfg(target_arch = "x86_64")]
     for i in face {
-        if let Some(v) = screen.get(i as usize) {
+        if let Some(v) = pos.get(i as usize) {
             // SAFETY: a prefetch reads nothing architecturally and cannot fault; the pointer is
             // to a live element anyway.
             unsafe {
                 std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
-                    (v as *const ScreenVertex).cast(),
+                    (v as *const [i32; 2]).cast(),
                 )
             };
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = (screen, face);
+    let _ = (pos, face);
 }
 
 #[inline]
@@ -159,13 +166,13 @@ pub fn clip_position(m: &DMat4, p: &[f64; 3]) -> [f64; 4] {
 }
 
 /// Sets up faces `faces` (indices into `draw.faces`) of draw `draw_index`, from the projections
-/// `screen` of its vertices (`Viewport::project`); faces that cross the guard band are clipped
-/// from the clip-space positions under the view-projection matrix `m`.
+/// `screen` of its vertices; faces that cross the guard band are clipped from the clip-space
+/// positions under the view-projection matrix `m`.
 pub fn setup_chunk(
     draw_index: u32,
     draw: &Draw,
     m: &DMat4,
-    screen: &[ScreenVertex],
+    screen: &Screen,
     faces: std::ops::Range<usize>,
     vp: &Viewport,
 ) -> Chunk {
@@ -180,7 +187,7 @@ pub fn setup_chunk(
     let end = faces.end;
     for fi in faces {
         if fi + PREFETCH < end {
-            prefetch(screen, draw.faces[fi + PREFETCH]);
+            prefetch(&screen.pos, draw.faces[fi + PREFETCH]);
         }
         let face = draw.faces[fi];
         let (amin, amax) = draw.alpha_range(face);
@@ -194,19 +201,26 @@ pub fn setup_chunk(
         if amin < 1.0 {
             flags |= MAY_TRANSPARENT;
         }
-        let v = face.map(|i| screen[i as usize]);
-        // Trivial reject against the viewport itself (all corners outside one plane).
-        if v[0].view & v[1].view & v[2].view != 0 {
+        let q = face.map(|i| screen.pos[i as usize]);
+        if q[0][0] != OUT && q[1][0] != OUT && q[2][0] != OUT {
+            // Inside the guard band. A triangle wholly outside the viewport covers no sample
+            // centre of the image, which `emit`'s bounds find.
+            let attr = || face.map(|i| screen.attr[i as usize]);
+            let (x, y) = (q.map(|v| v[0]), q.map(|v| v[1]));
+            emit(
+                &mut chunk, vp, draw, draw_index, flags, x, y, attr, face, None,
+            );
             continue;
         }
-        let band = v[0].band | v[1].band | v[2].band;
-        if band == 0 {
-            let corners = v.map(|q| q.corner);
-            emit(&mut chunk, vp, draw, draw_index, flags, corners, face, None);
-            continue;
-        }
-        chunk.clipped += 1;
         let p = face.map(|i| clip_position(m, &draw.vertices[i as usize]));
+        // Trivial reject against the viewport itself (all corners outside one plane).
+        if outcode(&p[0], 1.0, 1.0) & outcode(&p[1], 1.0, 1.0) & outcode(&p[2], 1.0, 1.0) != 0 {
+            continue;
+        }
+        let band = q
+            .iter()
+            .fold(0u8, |b, v| if v[0] == OUT { b | v[1] as u8 } else { b });
+        chunk.clipped += 1;
         let n = vp.volume.clip(p, band, &mut poly);
         if n < 3
             || poly[..n]
@@ -219,21 +233,19 @@ pub fn setup_chunk(
             let idx = [0, k, k + 1];
             let corners = idx.map(|j| vp.snap(&poly[j].pos));
             let bary = idx.map(|j| poly[j].bary.map(|b| b as f32));
+            let (x, y) = (corners.map(|k| k.x), corners.map(|k| k.y));
+            let attr = || corners.map(|k| [k.rx, k.ry, k.iw]);
+            let bary = Some(bary);
             emit(
-                &mut chunk,
-                vp,
-                draw,
-                draw_index,
-                flags,
-                corners,
-                face,
-                Some(bary),
+                &mut chunk, vp, draw, draw_index, flags, x, y, attr, face, bary,
             );
         }
     }
     chunk
 }
 
+/// Culls, orients and bounds the triangle with fixed-point corners `x`, `y` (the corners'
+/// residuals and 1/w come from `attr`, asked only for a triangle that is kept) and pushes it.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn emit(
@@ -242,11 +254,13 @@ fn emit(
     draw: &Draw,
     draw_index: u32,
     mut flags: u8,
-    mut corners: [Corner; 3],
+    mut x: [i32; 3],
+    mut y: [i32; 3],
+    attr: impl FnOnce() -> [[f32; 3]; 3],
     face: [u32; 3],
     mut bary: Option<[[f32; 3]; 3]>,
 ) {
-    let [a, b, c] = corners.map(|k| (i64::from(k.x), i64::from(k.y)));
+    let [a, b, c] = [0, 1, 2].map(|k| (i64::from(x[k]), i64::from(y[k])));
     let area = (b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1);
     if area == 0 {
         return;
@@ -259,7 +273,8 @@ fn emit(
     }
     let mut verts = face;
     if area < 0 {
-        corners.swap(1, 2);
+        x.swap(1, 2);
+        y.swap(1, 2);
         verts.swap(1, 2);
         if let Some(b) = bary.as_mut() {
             b.swap(1, 2);
@@ -268,8 +283,8 @@ fn emit(
     if front {
         flags |= FRONT;
     }
-    let xs = corners.map(|k| i64::from(k.x));
-    let ys = corners.map(|k| i64::from(k.y));
+    let xs = x.map(i64::from);
+    let ys = y.map(i64::from);
     let lo = |v: [i64; 3]| v[0].min(v[1]).min(v[2]);
     let hi = |v: [i64; 3]| v[0].max(v[1]).max(v[2]);
     // Samples whose centre (i * ONE + HALF) lies inside the bounding box.
@@ -280,7 +295,6 @@ fn emit(
     if x0 > x1 || y0 > y1 {
         return; // covers no sample centre
     }
-    let (x, y) = (xs.map(|v| v as i32), ys.map(|v| v as i32));
     let mut bbox = [x0 as i32, y0 as i32, x1 as i32, y1 as i32];
     if (x1 - x0 + 1) * (y1 - y0 + 1) <= TIGHT_MAX {
         match Edges::new(x, y).covered_box(bbox) {
@@ -298,12 +312,16 @@ fn emit(
         }
         None => NO_CLIP,
     };
+    let mut attr = attr();
+    if area < 0 {
+        attr.swap(1, 2);
+    }
     chunk.tris.push(Tri {
         x,
         y,
-        rx: corners.map(|k| k.rx),
-        ry: corners.map(|k| k.ry),
-        iw: corners.map(|k| k.iw),
+        rx: attr.map(|k| k[0]),
+        ry: attr.map(|k| k[1]),
+        iw: attr.map(|k| k[2]),
         bbox,
         verts,
         clip,
