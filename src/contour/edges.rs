@@ -54,27 +54,16 @@ fn prefetch_corners(v: &[[f64; 3]], faces: &[[u32; 3]], f: usize) {
     let _ = (v, faces, f);
 }
 
-/// Front (`true`) or back per face for the motion vector `m` (object space).
-///
-/// The vertex gathers dominate on meshes whose faces point far apart in the vertex array (an
-/// icosphere's subdivision), so on x86_64 the vertices of the face `AHEAD` places on are
-/// prefetched.
+/// Front (`true`) or back per face for the motion vector `m` (object space): `n . m >= 0` with
+/// `n` the raw face normal, read from the mesh's cache ([`Mesh::cached_face_normals_raw`],
+/// computed on the first call), so a rigid object's later calls stream over the normals
+/// instead of gathering every face's corners.
 pub fn classify_faces(mesh: &Mesh, m: [f64; 3]) -> Vec<bool> {
-    const CHUNK: usize = 8192;
-    let v = mesh.vertices();
-    let faces = mesh.faces();
-    let mut out = vec![false; faces.len()];
-    out.par_chunks_mut(CHUNK)
-        .enumerate()
-        .for_each(|(ci, chunk)| {
-            let base = ci * CHUNK;
-            for (k, o) in chunk.iter_mut().enumerate() {
-                let i = base + k;
-                prefetch_corners(v, faces, i + AHEAD);
-                *o = dot(face_normal(v, &faces[i]), m) >= 0.0;
-            }
-        });
-    out
+    mesh.cached_face_normals_raw()
+        .par_iter()
+        .with_min_len(1 << 14)
+        .map(|&n| dot(n, m) >= 0.0)
+        .collect()
 }
 
 /// [`classify_faces`] for `m` and, in the same pass over the faces (each face's corners
