@@ -134,23 +134,24 @@ pub struct Screen {
     pub attr: Vec<[f32; 3]>,
 }
 
-/// Hints the cache to load the positions of `face`'s vertices (no effect on any result).
+/// Hints the cache to load the elements of `items` that `face`'s vertices index (no effect on
+/// any result).
 #[inline(always)]
-fn prefetch(pos: &[[i32; 2]], face: [u32; 3]) {
+fn prefetch<T>(items: &[T], face: [u32; 3]) {
     #[cfg(target_arch = "x86_64")]
     for i in face {
-        if let Some(v) = pos.get(i as usize) {
+        if let Some(v) = items.get(i as usize) {
             // SAFETY: a prefetch reads nothing architecturally and cannot fault; the pointer is
             // to a live element anyway.
             unsafe {
                 std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
-                    (v as *const [i32; 2]).cast(),
+                    (v as *const T).cast(),
                 )
             };
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = (pos, face);
+    let _ = (items, face);
 }
 
 #[inline]
@@ -187,7 +188,12 @@ pub fn setup_chunk(
     let end = faces.end;
     for fi in faces {
         if fi + PREFETCH < end {
-            prefetch(&screen.pos, draw.faces[fi + PREFETCH]);
+            let ahead = draw.faces[fi + PREFETCH];
+            prefetch(&screen.pos, ahead);
+            if !draw.cull_back {
+                // Without culling most faces are kept and gather the rest of their corners too.
+                prefetch(&screen.attr, ahead);
+            }
         }
         let face = draw.faces[fi];
         let (amin, amax) = draw.alpha_range(face);
