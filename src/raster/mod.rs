@@ -1,10 +1,13 @@
 //! The CPU rasterizer: camera, clipping, triangle setup, binning, tiles, blending, buffers.
 //!
 //! Pipeline of one frame (`rasterize`):
-//! 1. transform: vertices to clip space (f64), previous positions to homogeneous pixels, normals;
-//! 2. setup (parallel over runs of faces): clip against near/far and a guard band, snap to 8-bit
-//!    fixed point, cull back faces, orient, bound (`setup.rs`, `clip.rs`);
-//! 3. binning into 64x64-sample tiles, in submission order (`bins.rs`);
+//! 1. transform: vertices projected and snapped to fixed point once each (clip-space positions
+//!    kept only when velocity needs them), previous positions to homogeneous pixels, normals;
+//! 2. setup (parallel over runs of faces): clip against near/far and a guard band, cull back
+//!    faces, orient, bound, and give small triangles the box of the samples they cover
+//!    (`setup.rs`, `clip.rs`, `coverage.rs`);
+//! 3. binning into 64x64-sample tiles, in submission order, each bin holding copies of its
+//!    triangles (`bins.rs`);
 //! 4. tiles in parallel (rayon): an opaque pass with a visibility buffer, then a transparent pass
 //!    with per-sample fragment lists composited exactly or unsorted (`tile.rs`, `blend.rs`), then
 //!    the box resolve into the frame (`buffers.rs`).
