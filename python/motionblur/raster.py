@@ -454,6 +454,19 @@ def rasterize(
     background arrays are read, never written. Wrong shapes, dtypes that do not convert, NaN
     colours and NaN or non-positive depths raise ValueError / TypeError naming ``background``.
 
+    ``Frame.stats`` (a dict): ``triangles`` (after clipping, culling and dropping triangles
+    that cover no sample), ``fragments`` (samples covered, both passes), ``culled`` (back faces),
+    ``clipped`` (faces clipped against the near/far planes or the guard band), and
+    milliseconds per stage: ``ms_transform`` (vertices projected and snapped), ``ms_setup``
+    (triangle set-up: clipping, culling, bounds, the covered box of small triangles),
+    ``ms_bin`` (triangles binned into 64x64-sample tiles), ``ms_raster`` (the tiles, wall
+    clock), ``ms_total`` (the core's whole frame) and ``ms`` (this call, from Python). The
+    tiles' stages are thread time summed over the tiles (with several threads they add up to
+    more than ``ms_raster``): ``ms_coverage`` (opaque pass: coverage and depth test),
+    ``ms_shade`` (shading the opaque samples that stay visible), ``ms_transparent`` (transparent
+    pass: coverage, depth test, shading and compositing) and ``ms_resolve`` (samples resolved
+    into the frame's buffers).
+
     The GIL is released while rendering.
     """
     t0 = time.perf_counter()

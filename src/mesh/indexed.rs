@@ -1,4 +1,5 @@
 //! The indexed triangle mesh: validation, the cached adjacency, normals and planes, statistics.
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::OnceLock;
 
 use rayon::prelude::*;
@@ -52,6 +53,10 @@ pub struct Mesh {
     planes: OnceLock<FacePlanes>,
     /// [`Mesh::vertex_normals`], kept by [`Mesh::cached_vertex_normals`].
     normals: OnceLock<Vec<[f64; 3]>>,
+    /// [`Mesh::face_normals_raw`], kept by [`Mesh::repeated_face_normals_raw`].
+    face_normals: OnceLock<Vec<[f64; 3]>>,
+    /// Whether [`Mesh::repeated_face_normals_raw`] has been asked before.
+    asked_normals: AtomicBool,
     /// [`Mesh::longest_edge`], computed on first use.
     longest: OnceLock<f64>,
 }
@@ -103,6 +108,8 @@ impl Mesh {
             neighbors: Default::default(),
             planes: Default::default(),
             normals: Default::default(),
+            face_normals: Default::default(),
+            asked_normals: Default::default(),
             longest: Default::default(),
         })
     }
@@ -128,6 +135,8 @@ impl Mesh {
             neighbors: self.neighbors.clone(),
             planes: Default::default(),
             normals: Default::default(),
+            face_normals: Default::default(),
+            asked_normals: Default::default(),
             longest: Default::default(),
         })
     }
@@ -161,6 +170,21 @@ impl Mesh {
     pub(crate) fn face_planes(&self) -> &FacePlanes {
         self.planes
             .get_or_init(|| FacePlanes::new(&self.vertices, &self.faces))
+    }
+
+    /// [`Mesh::face_normals_raw`] kept for a mesh whose faces are classified again and again (a
+    /// rigid object against a new motion every frame): `None` on the first call, when the
+    /// caller computes what it needs from the corners (a deformed mesh, used once, stores
+    /// nothing); from the second call on, the normals, computed then and kept (the same values,
+    /// 24 bytes a face; not shared with deformed copies).
+    pub fn repeated_face_normals_raw(&self) -> Option<&[[f64; 3]]> {
+        if let Some(n) = self.face_normals.get() {
+            return Some(n);
+        }
+        if !self.asked_normals.swap(true, Ordering::Relaxed) {
+            return None;
+        }
+        Some(self.face_normals.get_or_init(|| self.face_normals_raw()))
     }
 
     /// [`Mesh::vertex_normals`], computed on first use and kept (the same values).

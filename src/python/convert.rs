@@ -212,6 +212,10 @@ impl ToDict for RasterStats {
         d.set_item("ms_setup", self.ms_setup)?;
         d.set_item("ms_bin", self.ms_bin)?;
         d.set_item("ms_raster", self.ms_raster)?;
+        d.set_item("ms_coverage", self.ms_coverage)?;
+        d.set_item("ms_shade", self.ms_shade)?;
+        d.set_item("ms_transparent", self.ms_transparent)?;
+        d.set_item("ms_resolve", self.ms_resolve)?;
         d.set_item("ms_total", self.ms_total)?;
         Ok(d)
     }

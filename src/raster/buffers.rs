@@ -23,8 +23,17 @@ pub struct Stats {
     pub ms_setup: f64,
     /// Milliseconds binning triangles into tiles.
     pub ms_bin: f64,
-    /// Milliseconds rasterizing and resolving the tiles.
+    /// Milliseconds rasterizing and resolving the tiles (wall clock; the four stages below are
+    /// its parts, each summed over the tiles, so with several threads they add up to more).
     pub ms_raster: f64,
+    /// Thread milliseconds of the opaque pass's coverage and depth test.
+    pub ms_coverage: f64,
+    /// Thread milliseconds shading the opaque pass's visible samples.
+    pub ms_shade: f64,
+    /// Thread milliseconds of the transparent pass: coverage, depth test, shading, compositing.
+    pub ms_transparent: f64,
+    /// Thread milliseconds resolving samples into the frame's buffers.
+    pub ms_resolve: f64,
     /// Milliseconds for the whole frame.
     pub ms_total: f64,
 }
@@ -79,7 +88,24 @@ impl Frame {
         }
     }
 
-    /// The pointers the tiles write through. `self` must outlive every use.
+    /// A frame of the given size whose buffers are allocated but empty (length 0), to be
+    /// filled by the tiles through `output` and then `assume_written`: the tiles write every
+    /// pixel, so filling the buffers first would only write the frame's 32 bytes a pixel twice.
+    pub fn unwritten(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        Frame {
+            width,
+            height,
+            rgba: Vec::with_capacity(4 * n),
+            depth: Vec::with_capacity(n),
+            ids: Vec::with_capacity(n),
+            velocity: Vec::with_capacity(2 * n),
+            stats: Stats::default(),
+        }
+    }
+
+    /// The pointers the tiles write through (into the buffers' capacity). `self` must outlive
+    /// every use.
     pub fn output(&mut self) -> Output {
         Output {
             rgba: self.rgba.as_mut_ptr(),
@@ -88,6 +114,24 @@ impl Frame {
             velocity: self.velocity.as_mut_ptr(),
             width: self.width as usize,
             height: self.height as usize,
+        }
+    }
+
+    /// Gives the buffers of an `unwritten` frame their full length.
+    ///
+    /// # Safety
+    /// Every pixel of the frame must have been written through `output` (`Output::write_tile`
+    /// over tiles that cover the frame).
+    pub unsafe fn assume_written(&mut self) {
+        let n = self.width as usize * self.height as usize;
+        debug_assert!(self.depth.capacity() >= n && self.rgba.capacity() >= 4 * n);
+        // SAFETY: the capacities were reserved by `unwritten` and the caller guarantees every
+        // element up to these lengths was written (f32 and i32 have no invalid bit patterns).
+        unsafe {
+            self.rgba.set_len(4 * n);
+            self.depth.set_len(n);
+            self.ids.set_len(n);
+            self.velocity.set_len(2 * n);
         }
     }
 }
