@@ -2,9 +2,11 @@
 //!
 //! `Blend::Exact` sorts each sample's fragments by depth (ties broken by colour, id and
 //! velocity, so the result does not depend on the submission order at all) and composites them
-//! back to front with the premultiplied `over` operator. `Blend::Unsorted` composites them in
-//! submission order, as z-buffer hardware without sorting does (the motion-volume paper's
-//! behaviour), so that the error of not sorting can be measured.
+//! back to front with the premultiplied `over` operator. `Blend::Unsorted` does what z-buffer
+//! hardware without sorting did (the motion-volume paper's behaviour), so that the error of not
+//! sorting can be measured: fragments in submission order, each depth-tested against the depth
+//! the fragments before it wrote (and the opaque surface), composited over when nearer and
+//! writing its depth, dropped when not.
 use super::options::Blend;
 use super::shade::Shaded;
 use std::cmp::Ordering;
@@ -169,6 +171,21 @@ impl FragLists {
             let sample = &mut samples[s as usize];
             let mut c = sample.rgba;
             let mut nearest = list[0];
+            if blend == Blend::Unsorted {
+                // the first fragment passed the opaque surface's test; each later one is tested
+                // against the depth the ones before it wrote (a strictly nearer one passes)
+                for (k, f) in list.iter().enumerate() {
+                    if k == 0 || f.invw > nearest.invw {
+                        c = over(f.shaded.rgba, c);
+                        nearest = *f;
+                    }
+                }
+                sample.rgba = c;
+                sample.invw = nearest.invw;
+                sample.id = nearest.shaded.id;
+                sample.velocity = nearest.shaded.velocity;
+                continue;
+            }
             for f in list.iter() {
                 c = over(f.shaded.rgba, c);
                 if f.invw > nearest.invw {
@@ -254,21 +271,34 @@ mod tests {
     }
 
     #[test]
-    fn unsorted_blending_keeps_submission_order() {
-        let frags = vec![frag(0, 0.9, 0.5, 1), frag(0, 0.2, 0.5, 2)];
-        let mut l = FragLists::default();
-        l.clear(1);
-        for f in frags {
-            l.push(f);
-        }
-        let mut s = [Sample::BACKGROUND; 1];
-        l.composite(&mut s, Blend::Unsorted);
-        let want = over(
-            [0.25, 0.125, 0.0, 0.5],
-            over([0.25, 0.125, 0.0, 0.5], [0.0; 4]),
-        );
-        assert_eq!(s[0].rgba, want);
-        assert_eq!(s[0].id, 1);
+    fn unsorted_blending_tests_and_writes_depth_in_submission_order() {
+        let run = |frags: Vec<Frag>| {
+            let mut l = FragLists::default();
+            l.clear(1);
+            for f in frags {
+                l.push(f);
+            }
+            let mut s = [Sample::BACKGROUND; 1];
+            l.composite(&mut s, Blend::Unsorted);
+            s[0]
+        };
+        let half = [0.25, 0.125, 0.0, 0.5];
+        // far first, then near: both drawn, in that order (as sorted)
+        let s = run(vec![frag(0, 0.2, 0.5, 2), frag(0, 0.9, 0.5, 1)]);
+        assert_eq!(s.rgba, over(half, over(half, [0.0; 4])));
+        assert_eq!((s.id, s.invw), (1, 0.9));
+        // near first: it writes its depth and the far one drawn later fails the test
+        let s = run(vec![frag(0, 0.9, 0.5, 1), frag(0, 0.2, 0.5, 2)]);
+        assert_eq!(s.rgba, over(half, [0.0; 4]));
+        assert_eq!((s.id, s.invw), (1, 0.9));
+        // three layers: near, far (dropped), nearer (drawn)
+        let s = run(vec![
+            frag(0, 0.5, 0.5, 1),
+            frag(0, 0.2, 0.5, 2),
+            frag(0, 0.7, 0.5, 3),
+        ]);
+        assert_eq!(s.rgba, over(half, over(half, [0.0; 4])));
+        assert_eq!(s.id, 3);
     }
 
     /// Per sample on its own: its fragments in submission order, sorted (exact), composited.
@@ -286,9 +316,12 @@ mod tests {
                 list.sort_by(far_to_near);
             }
             let mut nearest = list[0];
-            for f in &list {
+            for (k, f) in list.iter().enumerate() {
+                if blend == Blend::Unsorted && k > 0 && f.invw <= nearest.invw {
+                    continue; // fails the depth test against what was written before
+                }
                 sample.rgba = over(f.shaded.rgba, sample.rgba);
-                if f.invw > nearest.invw {
+                if k == 0 || f.invw > nearest.invw {
                     nearest = *f;
                 }
             }
