@@ -4,7 +4,8 @@
 //!
 //! One private module per pipeline stage, its API re-exported here:
 //! - `mesh`: indexed triangle meshes, their adjacency, normals and face planes;
-//! - `motion`: rigid keyframes over the shutter;
+//! - `motion`: the one keyframe interpolation engine (rigid and deforming keyframes over the
+//!   shutter, the motion volume's paths);
 //! - `contour`: contour edges of a rigid motion and the silhouette of motion of a deforming
 //!   mesh;
 //! - `volume`: motion volumes (Wloka and Zeleznik);
@@ -39,7 +40,10 @@ pub use image::{
     DofParams, Piece,
 };
 pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats};
-pub use motion::{Keyframe, Path};
+pub use motion::{
+    axis_angle, check_times, det3, dot, mat4_mul, norm, place, row_times, transpose_times, turn,
+    uniform_times, Keyframe, Keyframes, Keys, Mat3, Mat4, Path, Similarity, IDENTITY4,
+};
 pub use raster::{
     faces_from_i64, rasterize, rasterize_over, Background, Blend, Camera, Draw, Frame, Light,
     Options as RasterOptions, Shading, Stats as RasterStats,
@@ -48,8 +52,8 @@ pub use shell::{
     BlurShell, BuildPlan, FaceState, ShellColor, ShellMesh, ShellOptions, ShellOut, ON_SILHOUETTE,
 };
 pub use volume::{
-    motion_volume, spin_volume, Colors, Filter, MotionVolume, Spin, VolumeOptions, JOINING,
-    LEADING, MAX_SEGMENTS, TRAILING,
+    check_segments, motion_volume, spin_volume, subdivided, Colors, Filter, MotionVolume, Spin,
+    VolumeOptions, JOINING, LEADING, MAX_SEGMENTS, TRAILING,
 };
 
 /// `f` run on a rayon pool of `n` threads (tests of thread-count independence).

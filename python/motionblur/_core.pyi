@@ -9,6 +9,9 @@ from typing_extensions import Self
 
 __all__ = [
     "__version__",
+    "_Keyframes",
+    "_check_times",
+    "_rotate",
     "_Mesh",
     "_ContourTable",
     "contour_edges",
@@ -45,6 +48,49 @@ __all__ = [
 
 __version__: str
 
+# --- motion (the keyframe engine)
+
+@final
+class _Keyframes:
+    """Keyframes at sorted shutter times, validated and split once: rigid (K,4,4) transforms
+    or deforming (K,V,3) vertex positions (src/motion/)."""
+
+    def __new__(
+        cls,
+        times: np.ndarray,
+        transforms: np.ndarray | None = None,
+        vertices: np.ndarray | None = None,
+        name: str = "transforms",
+    ) -> Self:
+        """times (K,) float64 strictly increasing in [0, 1] and exactly one of transforms
+        (K,4,4) float64 (rotation times positive uniform scale plus translation; errors name
+        ``name``: 'transforms', 'motion' or 'camera_motion') or vertices (K,V,3) float64."""
+    @property
+    def is_deforming(self) -> bool: ...
+    def times(self) -> np.ndarray:
+        """(K,) float64 keyframe times."""
+    def transforms(self) -> np.ndarray:
+        """(K,4,4) float64 rigid keyframes ((0,4,4) when deforming)."""
+    def scales(self) -> np.ndarray:
+        """(K,) float64 uniform scales of the rigid keyframes."""
+    def transform_at(self, t: float) -> np.ndarray:
+        """(4,4) float64 transform at shutter time t (identity when deforming)."""
+    def transforms_at(self, times: np.ndarray) -> np.ndarray:
+        """(N,4,4) float64 transforms at the shutter times (N,) float64."""
+    def vertices_at(self, t: float) -> np.ndarray:
+        """(V,3) float64 positions at shutter time t of deforming keyframes. Releases the GIL."""
+    def resampled(self, segments: int) -> _Keyframes:
+        """The rigid keyframes at the times i / segments (numpy.linspace), interpolated from
+        the parts of these (not split again)."""
+
+def _check_times(times: np.ndarray) -> None:
+    """ValueError naming ``times`` unless (N,) float64 finite, in [0, 1], strictly increasing."""
+
+def _rotate(angle: float, axis: np.ndarray, center: np.ndarray) -> np.ndarray:
+    """(4,4) float64 rotation by angle radians about axis (3,) f64 (non-zero) through center (3,) f64."""
+
+# --- end motion
+
 # --- geometry (mesh, contour, motion volume, contour table)
 
 LEADING: int
@@ -80,7 +126,7 @@ def contour_edges(mesh: _Mesh, motion: np.ndarray, camera_position: np.ndarray |
 
 def motion_volume(
     mesh: _Mesh,
-    keyframes: np.ndarray,
+    keyframes: _Keyframes,
     segments: int,
     filter: str,
     colors: np.ndarray,
@@ -90,7 +136,8 @@ def motion_volume(
     contour_line: bool = True,
     visible_only: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
-    """Motion volume for keyframes (K+1,4,4) float64, each interval cut into segments, filter
+    """Motion volume for rigid keyframes (K+1, at the times i/K), each interval cut into
+    segments (at most 4096 in total), filter
     'ramp' | 'box' | 'triangle' | 'gaussian', colors (1|V,4) float32 straight RGBA (or (F,4)
     per face with face_colors=True), normals
     (V,3) float64 | None, camera_position (3,) float64 | None, contour_line (camera: sweep only the

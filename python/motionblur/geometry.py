@@ -261,17 +261,19 @@ class MotionVolume:
         )
 
 
-def _keyframes(motion) -> np.ndarray:
+def _keyframes(motion):
+    """The rigid keyframes of ``motion`` at the times i/K, validated and split by the core's
+    keyframe engine once (keyframes the engine made already are taken as they are)."""
+    if isinstance(motion, _core._Keyframes):
+        return motion
     arr = np.asarray(motion) if not isinstance(motion, np.ndarray) else motion
     if arr.ndim == 1:
         m = _vec3(motion, "motion")
         k = np.repeat(np.eye(4)[None], 2, axis=0)
         k[1, :3, 3] = m
-        return k
-    k = as_array(motion, "motion", np.float64, (None, 4, 4))
-    if len(k) < 2:
-        raise ValueError(f"motion: expected at least 2 keyframes, got {len(k)}")
-    return k
+    else:
+        k = as_array(motion, "motion", np.float64, (None, 4, 4), finite=False)
+    return _core._Keyframes(np.linspace(0.0, 1.0, len(k)), k, None, "motion")
 
 
 def _colors(colors, n_vertices: int) -> np.ndarray:
@@ -330,10 +332,12 @@ def motion_volume(
         ``[identity, translate(m)]``: the given vertices are the placement at shutter OPEN and the
         leading surface sits at ``v + m`` at shutter close; or rigid keyframes (K+1,4,4) float
         (rotation, positive uniform scale, translation; row-major, acting on column vectors) at
-        the equally spaced shutter times ``i / K``, applied to the vertices.
+        the equally spaced shutter times ``i / K``, applied to the vertices (the methods pass
+        the core's keyframe object, ``_core._Keyframes``, at those times).
     segments : int >= 1. Each keyframe interval is cut into ``segments`` joining segments
-        (translation lerp, rotation slerp, scale lerp); the total is ``K * segments``, so the
-        keyframes are always followed and ``segments`` only subdivides them (at most 4096).
+        (translation lerp, rotation slerp, scale lerp: the keyframe engine's interpolation);
+        the total is ``K * segments``, so the keyframes are always followed and ``segments``
+        only subdivides them (at most 4096 in total).
     filter : ``"ramp"``, the paper's, exactly as stated there (leading opaque, trailing and ring
         alpha ``max(0.1, 1 - D/E)`` with D the path length to the leading ring and E the extent
         along the motion; a look, its total coverage is not the object's area); or ``"box"``,

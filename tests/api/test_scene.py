@@ -254,3 +254,18 @@ def test_sequence_running_total_equals_fresh_mean_with_two_draws_per_frame(rng):
 def test_rotate_helper_is_right_handed():
     r = rotate(math.pi / 2, (0, 0, 1))
     np.testing.assert_allclose(r[:3, :3] @ [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], atol=1e-12)
+
+
+def test_motion_samples_many_times_at_once_and_pickles():
+    import pickle
+
+    m = mb.Motion([0.0, 0.4, 1.0], np.stack([np.eye(4), rotate(1.0, (1, 1, 0)), translate((1, 2, 3))]))
+    ts = np.linspace(0.0, 1.0, 17)
+    many = m.transforms_at(ts)
+    assert many.shape == (17, 4, 4)
+    for t, got in zip(ts, many):
+        np.testing.assert_array_equal(got, m.transform_at(t))
+    for motion in (m, mb.Motion.deforming([0.0, 1.0], np.zeros((2, 5, 3)))):
+        back = pickle.loads(pickle.dumps(motion))
+        np.testing.assert_array_equal(back.transform_at(0.3), motion.transform_at(0.3))
+        assert back.is_deforming == motion.is_deforming
