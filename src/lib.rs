@@ -37,7 +37,7 @@ pub use image::{
     box_blur, camera_motion_blur, camera_velocity, colored, depth_of_field, glow, opaque_blur,
     opaque_motion_blur, pixel_bounds, pyramid_blur, pyramid_glow, pyramid_opaque_blur,
     sample_colors, scatter_pieces, splat_paths, velocity_blur, CameraMatrices, Composite,
-    DofParams, Piece,
+    DofParams, Piece, MAX_FPS_RATIO, MAX_LAYERS, MAX_LENGTH, MAX_LEVELS, MAX_SAMPLES, MIN_ALPHA,
 };
 pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats};
 pub use motion::{
@@ -46,10 +46,12 @@ pub use motion::{
 };
 pub use raster::{
     faces_from_i64, rasterize, rasterize_over, Background, Blend, Camera, Draw, Frame, Light,
-    Options as RasterOptions, Shading, Stats as RasterStats,
+    Options as RasterOptions, Shading, Stats as RasterStats, MAX_INTERNAL_SIDE, MAX_PIXELS,
+    MAX_SIDE, SAMPLES,
 };
 pub use shell::{
-    BlurShell, BuildPlan, FaceState, ShellColor, ShellMesh, ShellOptions, ShellOut, ON_SILHOUETTE,
+    BlurShell, BuildPlan, FaceState, ShellColor, ShellMesh, ShellOptions, ShellOut, MAX_HYSTERESIS,
+    MAX_SUBDIVISIONS, ON_SILHOUETTE,
 };
 pub use volume::{
     check_segments, motion_volume, spin_volume, subdivided, Colors, Filter, MotionVolume, Spin,

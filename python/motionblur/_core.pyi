@@ -12,6 +12,22 @@ __all__ = [
     "_Keyframes",
     "_check_times",
     "_rotate",
+    "MAX_SEGMENTS",
+    "FILTERS",
+    "MAX_SIDE",
+    "MAX_PIXELS",
+    "MAX_INTERNAL_SIDE",
+    "SAMPLES",
+    "SHADINGS",
+    "BLENDS",
+    "MAX_LENGTH",
+    "MAX_FPS_RATIO",
+    "MAX_LEVELS",
+    "MAX_LAYERS",
+    "MAX_SAMPLES",
+    "MIN_ALPHA",
+    "MAX_SUBDIVISIONS",
+    "MAX_HYSTERESIS",
     "_Mesh",
     "_ContourTable",
     "contour_edges",
@@ -96,6 +112,8 @@ def _rotate(angle: float, axis: np.ndarray, center: np.ndarray) -> np.ndarray:
 LEADING: int
 TRAILING: int
 JOINING: int
+MAX_SEGMENTS: int
+FILTERS: tuple[str, ...]
 
 @final
 class _Mesh:
@@ -137,7 +155,7 @@ def motion_volume(
     visible_only: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
     """Motion volume for rigid keyframes (K+1, at the times i/K), each interval cut into
-    segments (at most 4096 in total), filter
+    segments (at most MAX_SEGMENTS in total), filter
     'ramp' | 'box' | 'triangle' | 'gaussian', colors (1|V,4) float32 straight RGBA (or (F,4)
     per face with face_colors=True), normals
     (V,3) float64 | None, camera_position (3,) float64 | None, contour_line (camera: sweep only the
@@ -185,6 +203,13 @@ class _ContourTable:
 # --- end geometry
 
 # --- image (motionblur.image kernels)
+
+MAX_LENGTH: float
+MAX_FPS_RATIO: float
+MAX_LEVELS: int
+MAX_LAYERS: int
+MAX_SAMPLES: int
+MIN_ALPHA: float
 
 def _glow(alpha: np.ndarray, direction: tuple[float, float], width: float) -> np.ndarray:
     """Eq. 10 glow of alpha (H,W) f32 along direction (pixels) with half-width width (pixels).
@@ -283,6 +308,9 @@ def _camera_motion_blur(
 
 # --- shell (blur shells, silhouette of motion)
 
+MAX_SUBDIVISIONS: int
+MAX_HYSTERESIS: int
+
 @final
 class _BlurShell:
     """Rust blur shell (see motionblur.BlurShell). faces i64 (F,3); mask bool (F,) | None; color
@@ -326,6 +354,13 @@ def _motion_silhouette(
 # --- end shell
 
 # --- raster
+
+MAX_SIDE: int
+MAX_PIXELS: int
+MAX_INTERNAL_SIDE: int
+SAMPLES: tuple[int, ...]
+SHADINGS: tuple[str, ...]
+BLENDS: tuple[str, ...]
 
 def _rasterize(
     view: np.ndarray,

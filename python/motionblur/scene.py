@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from . import _core
-from ._validate import as_array, as_float
+from ._validate import as_array, as_choice, as_float
 from .geometry import Mesh, as_mesh
 from .raster import Camera
 
@@ -35,7 +35,8 @@ __all__ = [
     "rotate",
 ]
 
-SHUTTER_FILTERS = ("box", "ramp", "triangle", "gaussian")
+#: The shutter filters' names (the motion volume's filters, defined by the compiled core).
+SHUTTER_FILTERS: tuple[str, ...] = tuple(_core.FILTERS)
 
 
 def translate(offset) -> np.ndarray:
@@ -193,11 +194,7 @@ class Object:
             raise ValueError("color: RGB must be >= 0 and alpha in [0, 1]")
         self.color = c.view()  # c may be the caller's own float32 array
         self.color.flags.writeable = False
-        if not isinstance(shading, str):
-            raise TypeError(f"shading: expected a string, got {type(shading).__name__}")
-        if shading not in ("flat", "lambert"):
-            raise ValueError(f"shading: expected 'flat' or 'lambert', got {shading!r}")
-        self.shading = shading
+        self.shading = as_choice(shading, "shading", _core.SHADINGS)
         if motion is not None and not isinstance(motion, Motion):
             raise TypeError(f"motion: expected a motionblur.Motion or None, got {type(motion).__name__}")
         if motion is not None and motion.is_deforming and motion.vertices.shape[1] != nv:
@@ -285,11 +282,7 @@ def shutter_cdf(shutter, t) -> np.ndarray:
 
 def _check_shutter(shutter):
     if isinstance(shutter, str):
-        if shutter not in SHUTTER_FILTERS:
-            raise ValueError(
-                f"shutter: unknown filter {shutter!r}; expected one of {', '.join(SHUTTER_FILTERS)}"
-            )
-        return shutter
+        return as_choice(shutter, "shutter", SHUTTER_FILTERS)
     w = as_array(shutter, "shutter", np.float64, (None,))
     if (w < 0).any() or not w.sum() > 0:
         raise ValueError("shutter: weights must be >= 0 with a positive sum")

@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyTuple};
 
 use super::convert::{
     detached_in_pool, face_indices, flat_rows_array, in_pool, rows_any_layout, rows_array, vec3,
@@ -16,7 +16,7 @@ use super::convert::{
 use super::motion::PyKeyframes;
 use crate::{
     contour_pairs, subdivided, Colors, ContourSet, ContourTable, Error, Filter, Mesh, MotionVolume,
-    Path, Spin, VolumeOptions, JOINING, LEADING, TRAILING,
+    Path, Spin, VolumeOptions, JOINING, LEADING, MAX_SEGMENTS, TRAILING,
 };
 
 /// (F,3) int64 faces of any layout to `u32` triples, every index in [0, nv).
@@ -346,6 +346,8 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(contour_edges, m)?)?;
     m.add_function(wrap_pyfunction!(motion_volume, m)?)?;
     m.add_function(wrap_pyfunction!(spin_volume, m)?)?;
+    m.add("MAX_SEGMENTS", MAX_SEGMENTS)?;
+    m.add("FILTERS", PyTuple::new(m.py(), Filter::NAMES)?)?;
     m.add("LEADING", LEADING)?;
     m.add("TRAILING", TRAILING)?;
     m.add("JOINING", JOINING)?;

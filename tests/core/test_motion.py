@@ -92,7 +92,7 @@ def test_resampled_keys_are_the_samples_at_linspace_times(rng):
         np.testing.assert_array_equal(r.times(), np.linspace(0.0, 1.0, n + 1))
         np.testing.assert_array_equal(r.transforms(), keys.transforms_at(np.linspace(0.0, 1.0, n + 1)))
     with pytest.raises(ValueError, match="segments"):
-        keys.resampled(4097)
+        keys.resampled(_core.MAX_SEGMENTS + 1)
 
 
 @pytest.mark.parametrize(

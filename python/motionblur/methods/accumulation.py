@@ -19,7 +19,7 @@ from collections import deque
 import numpy as np
 
 from .. import _core
-from .._validate import as_float, as_int
+from .._validate import as_float, as_int, as_samples
 from ..raster import Frame
 from ..render import register
 from ..scene import Scene
@@ -81,9 +81,7 @@ def accumulation(
     dim = as_float(dim, "dim")
     if not 0.0 < dim <= 1.0:
         raise ValueError(f"dim: must be in (0, 1], got {dim}")
-    aa = as_int(aa, "aa")
-    if aa not in (1, 2, 4):
-        raise ValueError(f"aa: must be 1, 2 or 4, got {aa}")
+    aa = as_samples(aa, "aa")
     ref = int(np.argmin(np.abs(times - scene.reference_t)))
     stats = {"samples": len(times), "draw_calls": 0, "static_draws": 0, "window": None}
     everything = list(enumerate(scene.objects))

@@ -23,8 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import image
-from .._validate import as_int
+from .. import _core, image
+from .._validate import as_int, as_samples
 from ..raster import Draw, Frame, rasterize
 from ..render import register
 from ..scene import Scene
@@ -40,10 +40,7 @@ def shutter_centroid(scene: Scene) -> float:
 
 
 def _aa(aa) -> int:
-    aa = as_int(aa, "aa")
-    if aa not in (1, 2, 4):
-        raise ValueError(f"aa: must be 1, 2 or 4, got {aa}")
-    return aa
+    return as_samples(aa, "aa")
 
 
 def sharp_frame(scene: Scene, t: float, aa: int = 1, velocity: str | None = "shutter") -> Frame:
@@ -93,7 +90,7 @@ def sharp_frame(scene: Scene, t: float, aa: int = 1, velocity: str | None = "shu
 
 @register(
     "opaque_image",
-    sweep=[{"aa": a} for a in (1, 2, 4)],
+    sweep=[{"aa": a} for a in _core.SAMPLES],
     applies=lambda scene: bool(scene.moving_objects) and not scene.camera_moves,
 )
 def opaque_image(scene: Scene, aa: int = 1) -> Frame:

@@ -18,7 +18,7 @@ import copy
 import numpy as np
 
 from .. import _core
-from .._validate import as_int
+from .._validate import as_choice, as_int, as_samples, as_segments
 from ..geometry import motion_volume as build_volume
 from ..geometry import spin_volume as build_spin
 from ..raster import Camera, Draw, Frame
@@ -39,7 +39,7 @@ from ._volume_colors import UNLIT, averaged_colors, place, scattered, to_pixels,
 
 __all__ = ["motion_volume", "apparent_keyframes", "apparent_motion", "camera_folds", "spin_of"]
 
-FILTERS = ("ramp", "box", "triangle", "gaussian")
+FILTERS: tuple[str, ...] = tuple(_core.FILTERS)
 
 #: Still camera: draw the volumes in one rasterizer call over the kept static layer (the
 #: rasterizer's ``background``), resolved by the rasterizer. False: the static objects are
@@ -229,18 +229,14 @@ def motion_volume(
     Deforming objects raise ValueError (use accumulation or blur shells). Returns a Frame;
     ``stats`` counts the volume triangles, the spins and the volumes with averaged colours.
     """
-    segments = as_int(segments, "segments", minimum=1, maximum=4096)
+    segments = as_segments(segments)
     if filter is None:
         filter = scene.shutter if isinstance(scene.shutter, str) else "box"
-    if not isinstance(filter, str) or filter not in FILTERS:
-        raise ValueError(f"filter: expected one of {', '.join(FILTERS)}, got {filter!r}")
-    aa = as_int(aa, "aa")
-    if aa not in (1, 2, 4):
-        raise ValueError(f"aa: must be 1, 2 or 4, got {aa}")
+    as_choice(filter, "filter", FILTERS, type_error=False)
+    aa = as_samples(aa, "aa")
     if not (spin == "auto" or isinstance(spin, (bool, np.bool_))):
         raise ValueError(f"spin: expected 'auto', True or False, got {spin!r}")
-    if not isinstance(colors, str) or colors not in ("pixel", "averaged", "contour"):
-        raise ValueError(f"colors: expected 'pixel', 'averaged' or 'contour', got {colors!r}")
+    as_choice(colors, "colors", ("pixel", "averaged", "contour"), type_error=False)
     color_renders = as_int(color_renders, "color_renders", minimum=1, maximum=64)
     tr = scene.reference_t
     cam = supersampled(scene.camera_at(tr), aa)
