@@ -28,7 +28,11 @@ mod volume;
 #[cfg(feature = "python")]
 mod python;
 
-pub use accumulate::{accumulate, composite, facing_faces, over, resolve, Rect};
+pub use accumulate::{
+    accumulate, accumulate_moving, accumulate_still, composite, facing_faces, over, pixel_rect,
+    resolve, sample_rects, window_projection, Accumulated, Layer, PaintObject, Painter, Rect,
+    Samples, StaticLayer, StillCamera,
+};
 pub use contour::{
     contour_edges, contour_pairs, motion_silhouette, ContourEdge, ContourSet, ContourTable,
 };

@@ -60,6 +60,7 @@ __all__ = [
     "_accumulate",
     "_over",
     "_facing_faces",
+    "_Painter",
 ]
 
 __version__: str
@@ -440,5 +441,62 @@ def _facing_faces(vertices: np.ndarray, faces: np.ndarray, eyes: np.ndarray) -> 
     (object space) that face one of the object-space eye positions eyes (K,3) float64, K >= 1:
     ``n . (e_k - a) > -1e-9 |n| |e_k - a|`` for some k (n = (b - a) x (c - a)). All C-contiguous.
     ValueError for wrong shapes, non-finite values or indices outside [0, V). Releases the GIL."""
+
+@final
+class _Painter:
+    """Objects drawn at any shutter time with the least per-sample work (src/accumulate/
+    painter.rs): one rasterizer call per shading group, a group of one rigid object drawn in
+    object space; and a whole accumulation frame's samples in one call (frame.rs)."""
+
+    def __new__(
+        cls,
+        objects: list[
+            tuple[int, str, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, _Keyframes | None]
+        ],
+        lights: list[tuple[tuple[float, float, float], tuple[float, float, float]]],
+        ambient: tuple[float, float, float],
+    ) -> Self:
+        """objects: (object id, shading 'flat' | 'lambert', vertices (V,3) f64 object space,
+        faces (F,3) i64, straight rgba (1|V,4) f32, normals (V,3) f32 | None, keyframes placing
+        (rigid) or replacing (deforming) the vertices | None); lights: (direction, intensity)."""
+    def layer(
+        self, t: float, view: np.ndarray, projection: np.ndarray, width: int, height: int
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The objects at shutter time t through view and projection (4,4) f64: rgba
+        (height,width,4) f32 premultiplied, depth (height,width) f32, ids (height,width) i32.
+        Releases the GIL."""
+    def accumulate_still(
+        self,
+        times: np.ndarray,
+        weights: np.ndarray,
+        reference: int,
+        view: np.ndarray,
+        projection: np.ndarray,
+        view_projection: np.ndarray,
+        width: int,
+        height: int,
+        aa: int,
+        background: tuple[np.ndarray, np.ndarray, np.ndarray],
+        opaque: bool,
+    ) -> tuple[tuple[int, int, int, int], np.ndarray, np.ndarray, np.ndarray, int] | None:
+        """The still-camera accumulation frame of times, weights (N,) f64 (reference: the
+        sample whose depth and ids are kept), camera matrices (4,4) f64 of width x height
+        samples, aa, and the static layer (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32,
+        C-contiguous) and its opacity: None when the objects are off the image, else the window
+        (x0, y0, x1, y1), its rgba (h,w,4) f32 (static layer composited), depth, ids and the
+        number of rasterizer passes. Releases the GIL."""
+    def accumulate_moving(
+        self,
+        times: np.ndarray,
+        weights: np.ndarray,
+        reference: int,
+        views: np.ndarray,
+        projection: np.ndarray,
+        width: int,
+        height: int,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The moving-camera accumulation frame: one view (N,4,4) f64 per sample, projection
+        (4,4) f64; rgba (height,width,4) f32 summed, depth and ids of the reference sample.
+        Releases the GIL."""
 
 # --- end acc-frame

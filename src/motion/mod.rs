@@ -13,7 +13,8 @@ mod similarity;
 
 pub use keyframes::{check_times, uniform_times, Keyframes, Keys};
 pub use numeric::{
-    det3, dot, mat4_mul, norm, place, row_times, transpose_times, turn, Mat3, Mat4, IDENTITY4,
+    det3, dot, linear_part, mat4_mul, norm, place, row_times, translation_part, transpose_times,
+    turn, Mat3, Mat4, IDENTITY4,
 };
 pub use path::{Keyframe, Path};
 pub use similarity::{axis_angle, Similarity};

@@ -7,6 +7,7 @@ mod convert;
 mod geometry;
 mod image;
 mod motion;
+mod painter;
 mod raster;
 mod shell;
 
@@ -19,5 +20,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     image::register(m)?;
     shell::register(m)?;
     accumulate::register(m)?;
+    painter::register(m)?;
     Ok(())
 }
