@@ -386,6 +386,14 @@ class Scene:
             return np.array(self.camera.pose)
         return self.camera_motion.transform_at(t) @ self.camera.pose
 
+    def camera_poses_at(self, times) -> np.ndarray:
+        """(N,4,4) camera-to-world poses at the shutter times ``times`` (N,), each equal to
+        :meth:`camera_pose_at` of its time."""
+        times = as_array(times, "times", np.float64, (None,))
+        if self.camera_motion is None:
+            return np.repeat(np.array(self.camera.pose)[None], len(times), axis=0)
+        return self.camera_motion.transforms_at(times) @ self.camera.pose
+
     def camera_at(self, t: float) -> Camera:
         """The :class:`Camera` at shutter time ``t`` (same intrinsics, moved pose)."""
         if self.camera_motion is None:

@@ -269,3 +269,13 @@ def test_motion_samples_many_times_at_once_and_pickles():
         back = pickle.loads(pickle.dumps(motion))
         np.testing.assert_array_equal(back.transform_at(0.3), motion.transform_at(0.3))
         assert back.is_deforming == motion.is_deforming
+
+
+def test_camera_poses_at_many_times_are_the_poses_at_each():
+    m = mb.Motion.linear(np.eye(4), rotate(0.3, (0, 1, 0), (0, 0, 5)) @ translate((0.5, 0, 0)))
+    for sc in (mb.Scene([], _cam(), camera_motion=m), mb.Scene([], _cam())):
+        ts = np.linspace(0.0, 1.0, 9)
+        poses = sc.camera_poses_at(ts)
+        for t, p, v in zip(ts, poses, np.linalg.inv(poses)):
+            np.testing.assert_array_equal(p, sc.camera_pose_at(t))
+            np.testing.assert_array_equal(v, sc.camera_at(t).view)  # batched inverses: the same bits

@@ -75,7 +75,7 @@ def accumulation(
     if scene.camera_moves:
         # Everything moves on screen: whole frames at every sample, one view each.
         cam = supersampled(scene.camera, aa)
-        views = np.stack([scene.camera_at(t).view for t in times])
+        views = np.linalg.inv(scene.camera_poses_at(times))  # each sample's camera_at(t).view
         painter = Painter(scene, everything)
         rgba, depth, ids = painter.core.accumulate_moving(
             times, weights, ref, views, np.ascontiguousarray(cam.projection), cam.width, cam.height
