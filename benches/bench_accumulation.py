@@ -2,12 +2,13 @@
 the rasterizer calls it is made of, measured in the same run.
 
 Built-in scenes at 320x240, aa 1, N = 64 stratified samples, the static layer kept across
-frames (as in a real-time loop). Per scene, best of R runs after a warm-up:
+frames (as in a real-time loop). Per scene, best of R rounds after a warm-up, each round timing
+the three once in turn:
 
 - ``raster 1``: the one rasterizer call of a one-sample frame: the moving objects at t = 0.5
   through the projection of their pixel rectangle (``_core._Painter.layer``, what
   ``render(scene, "accumulation", samples=1)`` rasterizes); for the camera pan, one whole frame
-  of every object.
+  of every object (timed as 8 calls in a row, divided by 8).
 - ``per sample``: the 64 samples of a 64-sample frame drawn one call at a time from Python, each
   followed by the accumulation kernel (``_core._accumulate``): the per-sample structure, 2N calls
   into the core.
@@ -37,14 +38,19 @@ from motionblur.methods.accumulation import sample_times
 N = 64
 
 
-def best_ms(fn, repeat: int) -> float:
-    fn()  # warm-up (allocation, the static layer cached)
-    best = float("inf")
+def best_ms(fns, repeat: int) -> list[float]:
+    """Best-of-``repeat`` milliseconds of each of ``fns``, timed in interleaved rounds (one call
+    of each per round, after a warm-up) so that a change of the machine's load over the run
+    touches all of them alike."""
+    for fn in fns:
+        fn()  # warm-up (allocation, the static layer cached)
+    best = [float("inf")] * len(fns)
     for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - t0)
-    return best * 1e3
+        for i, fn in enumerate(fns):
+            t0 = time.perf_counter()
+            fn()
+            best[i] = min(best[i], time.perf_counter() - t0)
+    return [b * 1e3 for b in best]
 
 
 def rect(cam: mb.Camera, objects, t: float):
@@ -104,10 +110,16 @@ def measure(name: str, repeat: int) -> tuple:
             a = acc.setdefault((width, height), np.zeros((height, width, 4), np.float32))
             _core._accumulate(a, rgba, depth, None, float(w))
 
-    raster1 = best_ms(lambda: painter.core.layer(*one[:1], *one[2:]), repeat * 4)
-    loop = best_ms(per_sample, repeat)
-    call = best_ms(lambda: mb.render(scene, "accumulation", samples=N), repeat)
-    return name, raster1, loop, call
+    def raster1():
+        for _ in range(8):  # a few calls, so that one timing is not a single short call
+            painter.core.layer(one[0], *one[2:])
+
+    def one_call():
+        mb.render(scene, "accumulation", samples=N)
+
+    r8, loop, call = best_ms([raster1, per_sample, one_call], repeat)
+    raster1_ms = r8 / 8
+    return name, raster1_ms, loop, call
 
 
 def main() -> None:
@@ -142,7 +154,7 @@ def main() -> None:
         "# Accumulation benchmark",
         "",
         header + ".",
-        f"320x240, aa 1, {N} stratified samples, static layer cached, best of 3-15 runs after a warm-up, "
+        f"320x240, aa 1, {N} stratified samples, static layer cached, best of 3-15 interleaved rounds after a warm-up, "
         "all columns measured in the same run (`python benches/bench_accumulation.py`, run by `make bench`). "
         "raster 1: the one rasterizer call of a one-sample frame (moving objects at t = 0.5 in their "
         "rectangle; the whole frame for the camera pan); per sample: the 64 samples drawn one call at a "

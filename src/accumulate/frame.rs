@@ -379,14 +379,14 @@ pub fn accumulate_moving(
         if i == 0 {
             acc = layer.rgba.iter().map(|x| x * w).collect();
         } else {
-            accumulate(
-                &mut acc,
-                &layer.rgba,
-                &layer.depth,
-                None,
-                w,
-                Rect::whole(width * height),
-            )?;
+            let rows = Rect {
+                x0: 0,
+                y0: 0,
+                width,
+                height,
+                stride: width,
+            };
+            accumulate(&mut acc, &layer.rgba, &layer.depth, None, w, rows)?;
         }
         if i == samples.reference {
             keep = Some(layer);
