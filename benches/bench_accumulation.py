@@ -15,7 +15,7 @@ the three once in turn:
 - ``one call``: ``render(scene, "accumulation", samples=64)``, the whole frame in one call.
 
 Ratios: ``one call / (64 x raster 1)`` (the target on ``cube``: at most 1.2) and
-``one call / per sample``. Usage: python benches/bench_accumulation.py [--quick]; writes
+``one call / per sample``, of wall-clock time and of process CPU time. Usage: python benches/bench_accumulation.py [--quick]; writes
 out/bench/accumulation.md.
 """
 
@@ -38,19 +38,22 @@ from motionblur.methods.accumulation import sample_times
 N = 64
 
 
-def best_ms(fns, repeat: int) -> list[float]:
-    """Best-of-``repeat`` milliseconds of each of ``fns``, timed in interleaved rounds (one call
-    of each per round, after a warm-up) so that a change of the machine's load over the run
-    touches all of them alike."""
+def best_ms(fns, repeat: int) -> tuple[list[float], list[float]]:
+    """Best-of-``repeat`` wall-clock and process CPU milliseconds (every thread of this process:
+    what the work costs, whatever else the machine runs) of each of ``fns``, timed in
+    interleaved rounds (one call of each per round, after a warm-up) so that a change of the
+    machine's load over the run touches all of them alike."""
     for fn in fns:
         fn()  # warm-up (allocation, the static layer cached)
-    best = [float("inf")] * len(fns)
+    wall = [float("inf")] * len(fns)
+    cpu = [float("inf")] * len(fns)
     for _ in range(repeat):
         for i, fn in enumerate(fns):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.process_time()
             fn()
-            best[i] = min(best[i], time.perf_counter() - t0)
-    return [b * 1e3 for b in best]
+            wall[i] = min(wall[i], time.perf_counter() - t0)
+            cpu[i] = min(cpu[i], time.process_time() - c0)
+    return [b * 1e3 for b in wall], [b * 1e3 for b in cpu]
 
 
 def rect(cam: mb.Camera, objects, t: float):
@@ -117,9 +120,8 @@ def measure(name: str, repeat: int) -> tuple:
     def one_call():
         mb.render(scene, "accumulation", samples=N)
 
-    r8, loop, call = best_ms([raster1, per_sample, one_call], repeat)
-    raster1_ms = r8 / 8
-    return name, raster1_ms, loop, call
+    (r8, loop, call), (cpu_r8, cpu_loop, cpu_call) = best_ms([raster1, per_sample, one_call], repeat)
+    return name, r8 / 8, loop, call, cpu_call / (64 * cpu_r8 / 8), cpu_call / cpu_loop
 
 
 def main() -> None:
@@ -144,11 +146,12 @@ def main() -> None:
     for name in scenes:
         r = measure(name, 3 if name == "sphere80k" else repeat)
         rows.append(r)
-        _, raster1, loop, call = r
+        _, raster1, loop, call, cpu64, cpu_loop = r
         print(
             f"{name:<10} raster 1 {raster1:7.3f} ms  64 x raster 1 {64 * raster1:8.2f} ms  "
             f"per sample {loop:8.2f} ms  one call {call:8.2f} ms  "
-            f"one call / (64 x raster 1) {call / (64 * raster1):5.2f}  one call / per sample {call / loop:5.2f}"
+            f"one call / (64 x raster 1) {call / (64 * raster1):5.2f}  one call / per sample {call / loop:5.2f}  "
+            f"(CPU time: {cpu64:5.2f}, {cpu_loop:5.2f})"
         )
     lines = [
         "# Accumulation benchmark",
@@ -159,15 +162,17 @@ def main() -> None:
         "raster 1: the one rasterizer call of a one-sample frame (moving objects at t = 0.5 in their "
         "rectangle; the whole frame for the camera pan); per sample: the 64 samples drawn one call at a "
         "time from Python with the accumulation kernel after each; one call: "
-        "`render(scene, 'accumulation', samples=64)`.",
+        "`render(scene, 'accumulation', samples=64)`. The CPU columns are the same two ratios of "
+        "process CPU time (all threads), which another program's load on the machine changes less.",
         "",
         "| scene | raster 1 ms | 64 x raster 1 ms | per sample ms | one call ms | one call / (64 x raster 1) "
-        "| one call / per sample |",
-        "|---|---:|---:|---:|---:|---:|---:|",
+        "| one call / per sample | CPU: one call / (64 x raster 1) | CPU: one call / per sample |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     lines += [
-        f"| {n} | {r1:.3f} | {64 * r1:.2f} | {lp:.2f} | {c:.2f} | {c / (64 * r1):.2f} | {c / lp:.2f} |"
-        for n, r1, lp, c in rows
+        f"| {n} | {r1:.3f} | {64 * r1:.2f} | {lp:.2f} | {c:.2f} | {c / (64 * r1):.2f} | {c / lp:.2f} "
+        f"| {c64:.2f} | {cl:.2f} |"
+        for n, r1, lp, c, c64, cl in rows
     ]
     out = Path("out/bench")
     out.mkdir(parents=True, exist_ok=True)

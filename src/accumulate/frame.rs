@@ -14,8 +14,8 @@
 //! Moving camera ([`accumulate_moving`]): every sample is a whole frame of every object, seen
 //! by that sample's view.
 //!
-//! Samples are rasterized a batch at a time in parallel (up to 8, within 64 MB of layers) and
-//! summed one by one in sample order.
+//! Samples are rasterized a batch at a time in parallel (up to 8 small ones, one at a time for
+//! a large mesh) and summed one by one in sample order.
 //!
 //! The rectangles and projections repeat the numpy expressions of the Python loop this
 //! replaces in the same order (see [`crate::motion`]'s fixed-order arithmetic), and the sums are
@@ -202,14 +202,19 @@ fn crop<T: Copy>(data: &[T], stride: usize, channels: usize, w: [usize; 4]) -> V
 }
 
 /// Most samples drawn at once: their layers are made in parallel (each also parallel over its
-/// tiles), then summed one by one in sample order, so the sums do not depend on the batching.
+/// tiles and faces), then summed one by one in sample order, so the sums do not depend on the
+/// batching. Small samples leave the rasterizer's parallel loops short; a batch keeps the
+/// threads busy.
 const BATCH: usize = 8;
-/// Memory the layers of one batch may take (a rasterized sample takes about 32 bytes).
-const BATCH_BYTES: usize = 64 << 20;
+/// Memory the samples of one batch may take while they are rasterized: about 32 bytes a
+/// layer sample (the frame's buffers) and 128 bytes a face (clip coordinates, set-up
+/// triangles). A large mesh fills the threads and caches by itself and is drawn one sample at
+/// a time.
+const BATCH_BYTES: usize = 16 << 20;
 
-/// Samples drawn at once for layers of at most `samples` samples each.
-fn batch_size(samples: usize) -> usize {
-    (BATCH_BYTES / (32 * samples.max(1))).clamp(1, BATCH)
+/// Samples drawn at once for layers of at most `samples` samples of `faces` faces.
+fn batch_size(samples: usize, faces: usize) -> usize {
+    (BATCH_BYTES / (32 * samples + 128 * faces).max(1)).clamp(1, BATCH)
 }
 
 /// `(i, draw(i))` for `i` in `0..n`, in order; `draw` runs on `batch` samples at a time in
@@ -294,7 +299,7 @@ pub fn accumulate_still(
             .layer(samples.times[i], &camera.view, &proj, w, h)
             .map(Some)
     };
-    let batch = batch_size(ww * wh);
+    let batch = batch_size(ww * wh, painter.faces());
     for (i, layer) in in_batches(samples.times.len(), batch, draw) {
         let w = samples.weights[i] as f32;
         let (Some(layer), Some(r)) = (layer?, rects[i]) else {
@@ -372,7 +377,7 @@ pub fn accumulate_moving(
             height as u32,
         )
     };
-    let batch = batch_size(width * height);
+    let batch = batch_size(width * height, painter.faces());
     for (i, layer) in in_batches(samples.times.len(), batch, draw) {
         let w = samples.weights[i] as f32;
         let layer = layer?;
