@@ -14,15 +14,13 @@
 //! Moving camera ([`accumulate_moving`]): every sample is a whole frame of every object, seen
 //! by that sample's view.
 //!
-//! Samples are rasterized a batch at a time in parallel (up to 8 small ones, one at a time for
-//! a large mesh) and summed one by one in sample order.
+//! Samples are rasterized one after the other (each parallel over its faces and tiles) and
+//! summed in sample order.
 //!
 //! The rectangles and projections repeat the numpy expressions of the Python loop this
 //! replaces in the same order (see [`crate::motion`]'s fixed-order arithmetic), and the sums are
 //! the kernels of `kernels.rs` in sample order, so the frame is the same bit for bit, for any
 //! thread count.
-use rayon::prelude::*;
-
 use super::kernels::{accumulate, composite, over, Rect};
 use super::painter::{Layer, Painter};
 use crate::error::{Error, Result};
@@ -201,36 +199,6 @@ fn crop<T: Copy>(data: &[T], stride: usize, channels: usize, w: [usize; 4]) -> V
     out
 }
 
-/// Most samples drawn at once: their layers are made in parallel (each also parallel over its
-/// tiles and faces), then summed one by one in sample order, so the sums do not depend on the
-/// batching. Small samples leave the rasterizer's parallel loops short; a batch keeps the
-/// threads busy.
-const BATCH: usize = 8;
-/// Memory the samples of one batch may take while they are rasterized: about 32 bytes a
-/// layer sample (the frame's buffers) and 128 bytes a face (clip coordinates, set-up
-/// triangles). A large mesh fills the threads and caches by itself and is drawn one sample at
-/// a time.
-const BATCH_BYTES: usize = 16 << 20;
-
-/// Samples drawn at once for layers of at most `samples` samples of `faces` faces.
-fn batch_size(samples: usize, faces: usize) -> usize {
-    (BATCH_BYTES / (32 * samples + 128 * faces).max(1)).clamp(1, BATCH)
-}
-
-/// `(i, draw(i))` for `i` in `0..n`, in order; `draw` runs on `batch` samples at a time in
-/// parallel.
-fn in_batches<T: Send>(
-    n: usize,
-    batch: usize,
-    draw: impl Fn(usize) -> T + Sync,
-) -> impl Iterator<Item = (usize, T)> {
-    (0..n).step_by(batch).flat_map(move |start| {
-        let end = (start + batch).min(n);
-        let layers: Vec<T> = (start..end).into_par_iter().map(&draw).collect();
-        (start..end).zip(layers)
-    })
-}
-
 /// `acc += weight * add`, float32, element by element.
 fn add_weighted(acc: &mut [f32], add: &[f32], weight: f32) {
     for (a, b) in acc.iter_mut().zip(add) {
@@ -299,8 +267,7 @@ pub fn accumulate_still(
             .layer(samples.times[i], &camera.view, &proj, w, h)
             .map(Some)
     };
-    let batch = batch_size(ww * wh, painter.faces());
-    for (i, layer) in in_batches(samples.times.len(), batch, draw) {
+    for (i, layer) in (0..samples.times.len()).map(|i| (i, draw(i))) {
         let w = samples.weights[i] as f32;
         let (Some(layer), Some(r)) = (layer?, rects[i]) else {
             if !exact_sum {
@@ -377,8 +344,7 @@ pub fn accumulate_moving(
             height as u32,
         )
     };
-    let batch = batch_size(width * height, painter.faces());
-    for (i, layer) in in_batches(samples.times.len(), batch, draw) {
+    for (i, layer) in (0..samples.times.len()).map(|i| (i, draw(i))) {
         let w = samples.weights[i] as f32;
         let layer = layer?;
         if i == 0 {

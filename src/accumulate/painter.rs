@@ -211,11 +211,6 @@ impl Painter {
         &self.objects
     }
 
-    /// The faces drawn per sample, over every object.
-    pub fn faces(&self) -> usize {
-        self.objects.iter().map(|o| o.faces.len()).sum()
-    }
-
     /// The objects at shutter time `t` seen through `view` and `projection` (4x4, row-major)
     /// in a `width` x `height` layer, one sample a pixel.
     pub fn layer(
