@@ -212,3 +212,23 @@ def test_bad_requests_name_the_argument():
         _core._Painter(
             [(0, "phong", *meshes.box(), np.ones((1, 4), np.float32), None, None)], [], (0.0, 0.0, 0.0)
         )
+
+
+def test_the_painter_is_kept_across_frames_while_its_objects_stay_the_same():
+    from motionblur.methods._painter import painter_for
+
+    sc = _scene()
+    moving = [(k, o) for k, o in enumerate(sc.objects) if o.is_moving]
+    eye = sc.camera.pose[:3, 3]
+    p = painter_for(sc, moving, eye)
+    assert painter_for(sc, moving, eye) is p
+    assert painter_for(sc, moving, eye + 1.0) is not p  # another eye: other faces turned away
+    a = moving[0][1]
+    first = mb.render(sc, "accumulation", samples=6).rgba
+    a.motion = mb.Motion.linear(translate((0.5, 0, 0)), translate((-0.5, 0, 0)))
+    assert painter_for(sc, moving, eye) is not p
+    moved = mb.render(sc, "accumulation", samples=6).rgba
+    fresh = _scene()
+    fresh.objects[0].motion = a.motion
+    np.testing.assert_array_equal(moved, mb.render(fresh, "accumulation", samples=6).rgba)
+    assert not np.array_equal(first, moved)

@@ -7,6 +7,7 @@ constants kept across frames (:func:`mesh_constant`).
 from __future__ import annotations
 
 import weakref
+from collections import OrderedDict
 
 import numpy as np
 
@@ -15,7 +16,7 @@ from ..geometry import Mesh
 from ..scene import Object, Scene
 from ._layers import Layer
 
-__all__ = ["Painter", "facing_faces", "mesh_constant", "box_corners"]
+__all__ = ["Painter", "painter_for", "facing_faces", "mesh_constant", "box_corners"]
 
 
 # Per-mesh constants kept across frames: {(id(vertices), id(faces)): (weak refs to both, {name:
@@ -113,3 +114,43 @@ class Painter:
                 float(t), c(view, dtype=np.float64), c(projection, dtype=np.float64), width, height
             )
         )
+
+
+_PAINTERS: OrderedDict = OrderedDict()
+_PAINTERS_SIZE = 4
+
+
+def _parts(objects) -> list:
+    """What a painter is made of, per object: the Object, its mesh's arrays and its motion."""
+    return [p for _, o in objects for p in (o, o.mesh.vertices, o.mesh.faces, o.motion)]
+
+
+def painter_for(scene: Scene, objects: list[tuple[int, Object]], eye=None) -> Painter:
+    """A :class:`Painter` of ``objects`` kept across frames (up to 4) while the objects (the
+    same Object, mesh and motion, colour and shading), the eye, the lights and the ambient
+    light stay the same, as a real-time loop reuses what it set up. The entry holds no object
+    alive (weak references; it goes with its objects), and is never made for a mesh whose
+    arrays a caller unlocked (``flags.writeable = True``)."""
+    if any(o.mesh.vertices.flags.writeable or o.mesh.faces.flags.writeable for _, o in objects):
+        return Painter(scene, objects, eye)
+    parts = _parts(objects)
+    key = (
+        tuple(id(p) for p in parts),
+        tuple((k, o.shading, o.color.tobytes()) for k, o in objects),
+        None if eye is None else np.asarray(eye, dtype=np.float64).tobytes(),
+        tuple((li.direction.tobytes(), li.intensity.tobytes()) for li in scene.lights),
+        np.asarray(scene.ambient, dtype=np.float64).tobytes(),
+    )
+    hit = _PAINTERS.get(key)
+    if hit is not None and all(r() is p for r, p in zip(hit[1], parts)):
+        _PAINTERS.move_to_end(key)
+        return hit[0]
+    painter = Painter(scene, objects, eye)
+    refs = [
+        (lambda: None) if p is None else weakref.ref(p, lambda _r, k=key: _PAINTERS.pop(k, None))
+        for p in parts
+    ]
+    _PAINTERS[key] = (painter, refs)
+    while len(_PAINTERS) > _PAINTERS_SIZE:
+        _PAINTERS.popitem(last=False)
+    return painter

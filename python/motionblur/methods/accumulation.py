@@ -23,7 +23,7 @@ from ..raster import Frame
 from ..render import register
 from ..scene import Scene
 from ._layers import Layer, object_draw, paste, raster_layer, resolve, static_layer, supersampled
-from ._painter import Painter
+from ._painter import painter_for
 
 __all__ = ["accumulation", "sample_times", "Sequence"]
 
@@ -76,7 +76,7 @@ def accumulation(
         # Everything moves on screen: whole frames at every sample, one view each.
         cam = supersampled(scene.camera, aa)
         views = np.linalg.inv(scene.camera_poses_at(times))  # each sample's camera_at(t).view
-        painter = Painter(scene, everything)
+        painter = painter_for(scene, everything)
         rgba, depth, ids = painter.core.accumulate_moving(
             times, weights, ref, views, np.ascontiguousarray(cam.projection), cam.width, cam.height
         )
@@ -95,7 +95,7 @@ def accumulation(
     static = static_layer(scene, cam, static_objs, aa)
     stats["static_draws"] = 0 if (static.cached or not static_objs) else 1
     stats["static_cached"] = static.cached
-    painter = Painter(scene, moving, eye=cam.pose[:3, 3])
+    painter = painter_for(scene, moving, eye=cam.pose[:3, 3])
     c = np.ascontiguousarray
     layer = static.layer
     out = painter.core.accumulate_still(
