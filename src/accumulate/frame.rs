@@ -17,10 +17,10 @@
 //! Samples are rasterized one after the other (each parallel over its faces and tiles) and
 //! summed in sample order.
 //!
-//! The rectangles and projections repeat the numpy expressions of the Python loop this
-//! replaces in the same order (see [`crate::motion`]'s fixed-order arithmetic), and the sums are
-//! the kernels of `kernels.rs` in sample order, so the frame is the same bit for bit, for any
-//! thread count.
+//! The rectangles and projections are the numpy expressions of the per-sample loop in the same
+//! order (see [`crate::motion`]'s fixed-order arithmetic; the loop is the tests' serial twin),
+//! and the sums are the kernels of `kernels.rs` in sample order, so the frame is the same bit
+//! for bit, for any thread count.
 use super::kernels::{accumulate, composite, over, Rect};
 use super::painter::{Layer, Painter};
 use crate::error::{Error, Result};

@@ -7,7 +7,7 @@
 //! lights are turned into object space, so no vertex is touched per sample. Other groups get
 //! world vertices (and turned normals) per sample. Placements come from the keyframe engine;
 //! the products, determinants and turns follow [`crate::motion`]'s fixed order (numpy's), so a
-//! layer equals the one the Python painter this replaces drew, bit for bit.
+//! layer equals one drawn from placements computed in numpy, bit for bit.
 //!
 //! Also here: each object's axis-aligned bounding box, which bounds a rigid object's image
 //! at any time (see `frame.rs`).

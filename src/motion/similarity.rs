@@ -3,10 +3,10 @@
 //!
 //! A keyframe is a similarity `p' = s R p + t`: a rotation `R` times a positive uniform scale
 //! `s`, plus a translation `t`. It is validated and split once, when it is made; interpolation
-//! works on the parts and builds the matrix of the result from them. The arithmetic follows the
-//! numpy expressions of the Python layer this engine replaced, operation for operation (the
-//! products and the determinant in [`numeric`](super::numeric)'s fixed order), so interpolated
-//! transforms equal the ones it gave bit for bit.
+//! works on the parts and builds the matrix of the result from them. The arithmetic is that of
+//! the same formulas written in numpy, operation for operation (the products and the
+//! determinant in [`numeric`](super::numeric)'s fixed order), so the tests' numpy twin
+//! (`tests/_helpers/motion_twin.py`) gives the same transforms.
 // Index loops over 3- and 4-vectors read better than iterator chains here.
 #![allow(clippy::needless_range_loop)]
 use super::numeric::{
