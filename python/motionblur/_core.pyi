@@ -9,6 +9,26 @@ from typing_extensions import Self
 
 __all__ = [
     "__version__",
+    "_Keyframes",
+    "_check_times",
+    "_rotate",
+    "MAX_SEGMENTS",
+    "FILTERS",
+    "MAX_SIDE",
+    "MAX_PIXELS",
+    "MAX_INTERNAL_SIDE",
+    "SAMPLES",
+    "SHADINGS",
+    "BLENDS",
+    "MAX_LENGTH",
+    "MAX_FPS_RATIO",
+    "MAX_LEVELS",
+    "MAX_LAYERS",
+    "MAX_SAMPLES",
+    "MAX_TAPS",
+    "MIN_ALPHA",
+    "MAX_SUBDIVISIONS",
+    "MAX_HYSTERESIS",
     "_Mesh",
     "_ContourTable",
     "contour_edges",
@@ -42,15 +62,61 @@ __all__ = [
     "_accumulate",
     "_over",
     "_facing_faces",
+    "_Painter",
 ]
 
 __version__: str
+
+# --- motion (the keyframe engine)
+
+@final
+class _Keyframes:
+    """Keyframes at sorted shutter times, validated and split once: rigid (K,4,4) transforms
+    or deforming (K,V,3) vertex positions (src/motion/)."""
+
+    def __new__(
+        cls,
+        times: np.ndarray,
+        transforms: np.ndarray | None = None,
+        vertices: np.ndarray | None = None,
+        name: str = "transforms",
+    ) -> Self:
+        """times (K,) float64 strictly increasing in [0, 1] and exactly one of transforms
+        (K,4,4) float64 (rotation times positive uniform scale plus translation; errors name
+        ``name``: 'transforms', 'motion' or 'camera_motion') or vertices (K,V,3) float64."""
+    @property
+    def is_deforming(self) -> bool: ...
+    def times(self) -> np.ndarray:
+        """(K,) float64 keyframe times."""
+    def transforms(self) -> np.ndarray:
+        """(K,4,4) float64 rigid keyframes ((0,4,4) when deforming)."""
+    def scales(self) -> np.ndarray:
+        """(K,) float64 uniform scales of the rigid keyframes."""
+    def transform_at(self, t: float) -> np.ndarray:
+        """(4,4) float64 transform at shutter time t (identity when deforming)."""
+    def transforms_at(self, times: np.ndarray) -> np.ndarray:
+        """(N,4,4) float64 transforms at the shutter times (N,) float64."""
+    def vertices_at(self, t: float) -> np.ndarray:
+        """(V,3) float64 positions at shutter time t of deforming keyframes. Releases the GIL."""
+    def resampled(self, segments: int) -> _Keyframes:
+        """The rigid keyframes at the times i / segments (numpy.linspace), interpolated from
+        the parts of these (not split again)."""
+
+def _check_times(times: np.ndarray) -> None:
+    """ValueError naming ``times`` unless (N,) float64 finite, in [0, 1], strictly increasing."""
+
+def _rotate(angle: float, axis: np.ndarray, center: np.ndarray) -> np.ndarray:
+    """(4,4) float64 rotation by angle radians about axis (3,) f64 (non-zero) through center (3,) f64."""
+
+# --- end motion
 
 # --- geometry (mesh, contour, motion volume, contour table)
 
 LEADING: int
 TRAILING: int
 JOINING: int
+MAX_SEGMENTS: int
+FILTERS: tuple[str, ...]
 
 @final
 class _Mesh:
@@ -81,7 +147,7 @@ def contour_edges(mesh: _Mesh, motion: np.ndarray, camera_position: np.ndarray |
 
 def motion_volume(
     mesh: _Mesh,
-    keyframes: np.ndarray,
+    keyframes: _Keyframes,
     segments: int,
     filter: str,
     colors: np.ndarray,
@@ -91,7 +157,8 @@ def motion_volume(
     contour_line: bool = True,
     visible_only: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
-    """Motion volume for keyframes (K+1,4,4) float64, each interval cut into segments, filter
+    """Motion volume for rigid keyframes (K+1, at the times i/K), each interval cut into
+    segments (at most MAX_SEGMENTS in total), filter
     'ramp' | 'box' | 'triangle' | 'gaussian', colors (1|V,4) float32 straight RGBA (or (F,4)
     per face with face_colors=True), normals
     (V,3) float64 | None, camera_position (3,) float64 | None, contour_line (camera: sweep only the
@@ -139,6 +206,14 @@ class _ContourTable:
 # --- end geometry
 
 # --- image (motionblur.image kernels)
+
+MAX_LENGTH: float
+MAX_FPS_RATIO: float
+MAX_LEVELS: int
+MAX_LAYERS: int
+MAX_SAMPLES: int
+MAX_TAPS: int
+MIN_ALPHA: float
 
 def _glow(alpha: np.ndarray, direction: tuple[float, float], width: float) -> np.ndarray:
     """Eq. 10 glow of alpha (H,W) f32 along direction (pixels) with half-width width (pixels).
@@ -242,6 +317,9 @@ def _reconstruct(
 
 # --- shell (blur shells, silhouette of motion)
 
+MAX_SUBDIVISIONS: int
+MAX_HYSTERESIS: int
+
 @final
 class _BlurShell:
     """Rust blur shell (see motionblur.BlurShell). faces i64 (F,3); mask bool (F,) | None; color
@@ -285,6 +363,13 @@ def _motion_silhouette(
 # --- end shell
 
 # --- raster
+
+MAX_SIDE: int
+MAX_PIXELS: int
+MAX_INTERNAL_SIDE: int
+SAMPLES: tuple[int, ...]
+SHADINGS: tuple[str, ...]
+BLENDS: tuple[str, ...]
 
 def _rasterize(
     view: np.ndarray,
@@ -364,5 +449,62 @@ def _facing_faces(vertices: np.ndarray, faces: np.ndarray, eyes: np.ndarray) -> 
     (object space) that face one of the object-space eye positions eyes (K,3) float64, K >= 1:
     ``n . (e_k - a) > -1e-9 |n| |e_k - a|`` for some k (n = (b - a) x (c - a)). All C-contiguous.
     ValueError for wrong shapes, non-finite values or indices outside [0, V). Releases the GIL."""
+
+@final
+class _Painter:
+    """Objects drawn at any shutter time with the least per-sample work (src/accumulate/
+    painter.rs): one rasterizer call per shading group, a group of one rigid object drawn in
+    object space; and a whole accumulation frame's samples in one call (frame.rs)."""
+
+    def __new__(
+        cls,
+        objects: list[
+            tuple[int, str, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, _Keyframes | None]
+        ],
+        lights: list[tuple[tuple[float, float, float], tuple[float, float, float]]],
+        ambient: tuple[float, float, float],
+    ) -> Self:
+        """objects: (object id, shading 'flat' | 'lambert', vertices (V,3) f64 object space,
+        faces (F,3) i64, straight rgba (1|V,4) f32, normals (V,3) f32 | None, keyframes placing
+        (rigid) or replacing (deforming) the vertices | None); lights: (direction, intensity)."""
+    def layer(
+        self, t: float, view: np.ndarray, projection: np.ndarray, width: int, height: int
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The objects at shutter time t through view and projection (4,4) f64: rgba
+        (height,width,4) f32 premultiplied, depth (height,width) f32, ids (height,width) i32.
+        Releases the GIL."""
+    def accumulate_still(
+        self,
+        times: np.ndarray,
+        weights: np.ndarray,
+        reference: int,
+        view: np.ndarray,
+        projection: np.ndarray,
+        view_projection: np.ndarray,
+        width: int,
+        height: int,
+        aa: int,
+        background: tuple[np.ndarray, np.ndarray, np.ndarray],
+        opaque: bool,
+    ) -> tuple[tuple[int, int, int, int], np.ndarray, np.ndarray, np.ndarray, int] | None:
+        """The still-camera accumulation frame of times, weights (N,) f64 (reference: the
+        sample whose depth and ids are kept), camera matrices (4,4) f64 of width x height
+        samples, aa, and the static layer (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32,
+        C-contiguous) and its opacity: None when the objects are off the image, else the window
+        (x0, y0, x1, y1), its rgba (h,w,4) f32 (static layer composited), depth, ids and the
+        number of rasterizer passes. Releases the GIL."""
+    def accumulate_moving(
+        self,
+        times: np.ndarray,
+        weights: np.ndarray,
+        reference: int,
+        views: np.ndarray,
+        projection: np.ndarray,
+        width: int,
+        height: int,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The moving-camera accumulation frame: one view (N,4,4) f64 per sample, projection
+        (4,4) f64; rgba (height,width,4) f32 summed, depth and ids of the reference sample.
+        Releases the GIL."""
 
 # --- end acc-frame

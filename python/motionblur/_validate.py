@@ -2,7 +2,8 @@
 
 The Python layer converts dtype and contiguity (always into a fresh or read-only view, never
 writing the caller's array); the Rust boundary checks shapes and ranges again. Every error
-names the argument.
+names the argument. Limits and names come from the compiled core (``_core.MAX_SEGMENTS``,
+``_core.SAMPLES``, ``_core.FILTERS``, ...), where they are defined.
 """
 
 from __future__ import annotations
@@ -10,6 +11,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+
+from . import _core
 
 
 def as_array(
@@ -78,4 +81,28 @@ def as_int(value, name: str, *, minimum: int | None = None, maximum: int | None 
         raise ValueError(f"{name}: must be >= {minimum}, got {out}")
     if maximum is not None and out > maximum:
         raise ValueError(f"{name}: must be <= {maximum}, got {out}")
+    return out
+
+
+def as_choice(value, name: str, allowed: Sequence[str], *, type_error: bool = True) -> str:
+    """``value`` when it is one of the names ``allowed``; TypeError when it is not a string
+    (ValueError with ``type_error=False``, as the rendering methods' options raise), ValueError
+    naming the argument and the choices otherwise."""
+    if not isinstance(value, str) and type_error:
+        raise TypeError(f"{name}: expected a string, got {type(value).__name__}")
+    if not isinstance(value, str) or value not in allowed:
+        raise ValueError(f"{name}: expected one of {', '.join(allowed)}, got {value!r}")
+    return value
+
+
+def as_segments(value, name: str = "segments") -> int:
+    """A number of segments: an int in 1..``_core.MAX_SEGMENTS``."""
+    return as_int(value, name, minimum=1, maximum=_core.MAX_SEGMENTS)
+
+
+def as_samples(value, name: str) -> int:
+    """Samples per pixel along each axis: one of ``_core.SAMPLES`` (1, 2 or 4)."""
+    out = as_int(value, name)
+    if out not in _core.SAMPLES:
+        raise ValueError(f"{name}: must be one of {', '.join(map(str, _core.SAMPLES))}, got {out}")
     return out

@@ -26,7 +26,7 @@ import numpy as np
 
 from . import _core
 from ._optional import require
-from ._validate import as_array, as_float, as_int
+from ._validate import as_array, as_choice, as_float, as_int, as_segments
 
 __all__ = [
     "Mesh",
@@ -48,7 +48,8 @@ TRAILING: int = int(_core.TRAILING)
 #: joining surface (contour swept along the path).
 JOINING: int = int(_core.JOINING)
 
-FILTERS = ("ramp", "box", "triangle", "gaussian")
+#: The shutter filters of the volumes' alphas (defined by the compiled core).
+FILTERS: tuple[str, ...] = tuple(_core.FILTERS)
 
 
 def _as(value, name: str, dtype) -> np.ndarray:
@@ -268,17 +269,19 @@ class MotionVolume:
         )
 
 
-def _keyframes(motion) -> np.ndarray:
+def _keyframes(motion):
+    """The rigid keyframes of ``motion`` at the times i/K, validated and split by the core's
+    keyframe engine once (keyframes the engine made already are taken as they are)."""
+    if isinstance(motion, _core._Keyframes):
+        return motion
     arr = np.asarray(motion) if not isinstance(motion, np.ndarray) else motion
     if arr.ndim == 1:
         m = _vec3(motion, "motion")
         k = np.repeat(np.eye(4)[None], 2, axis=0)
         k[1, :3, 3] = m
-        return k
-    k = as_array(motion, "motion", np.float64, (None, 4, 4))
-    if len(k) < 2:
-        raise ValueError(f"motion: expected at least 2 keyframes, got {len(k)}")
-    return k
+    else:
+        k = as_array(motion, "motion", np.float64, (None, 4, 4), finite=False)
+    return _core._Keyframes(np.linspace(0.0, 1.0, len(k)), k, None, "motion")
 
 
 def _colors(colors, n_vertices: int) -> np.ndarray:
@@ -337,10 +340,12 @@ def motion_volume(
         ``[identity, translate(m)]``: the given vertices are the placement at shutter OPEN and the
         leading surface sits at ``v + m`` at shutter close; or rigid keyframes (K+1,4,4) float
         (rotation, positive uniform scale, translation; row-major, acting on column vectors) at
-        the equally spaced shutter times ``i / K``, applied to the vertices.
+        the equally spaced shutter times ``i / K``, applied to the vertices (the methods pass
+        the core's keyframe object, ``_core._Keyframes``, at those times).
     segments : int >= 1. Each keyframe interval is cut into ``segments`` joining segments
-        (translation lerp, rotation slerp, scale lerp); the total is ``K * segments``, so the
-        keyframes are always followed and ``segments`` only subdivides them (at most 4096).
+        (translation lerp, rotation slerp, scale lerp: the keyframe engine's interpolation);
+        the total is ``K * segments``, so the keyframes are always followed and ``segments``
+        only subdivides them (at most ``_core.MAX_SEGMENTS`` in total).
     filter : ``"ramp"``, the paper's, exactly as stated there (leading opaque, trailing and ring
         alpha ``max(0.1, 1 - D/E)`` with D the path length to the leading ring and E the extent
         along the motion; a look, its total coverage is not the object's area); or ``"box"``,
@@ -388,11 +393,8 @@ def motion_volume(
     """
     m = as_mesh(mesh)
     keys = _keyframes(motion)
-    seg = as_int(segments, "segments", minimum=1, maximum=4096)
-    if not isinstance(filter, str):
-        raise TypeError(f"filter: expected a string, got {type(filter).__name__}")
-    if filter not in FILTERS:
-        raise ValueError(f"filter: unknown filter {filter!r}; expected one of {', '.join(FILTERS)}")
+    seg = as_segments(segments)
+    as_choice(filter, "filter", FILTERS)
     nv = len(m.vertices)
     col, per_face = _vertex_or_face_colors(colors, face_colors, nv, len(m.faces))
     nrm = None if normals is None else as_array(normals, "normals", np.float64, (nv, 3))
@@ -445,7 +447,8 @@ def spin_volume(
         size; 0 gives :func:`motion_volume` of the translation, the mesh itself without one).
     center : (3,) float, a point on the axis.
     translation : optional (3,) float, a (small) translation over the shutter.
-    segments : optional int in 1..4096, the number of sweep steps (default one per pi/12).
+    segments : optional int in 1..``_core.MAX_SEGMENTS``, the number of sweep steps (default one
+        per pi/12).
     filter : ``"box"``, ``"ramp"``, ``"triangle"`` or ``"gaussian"``.
     colors, normals, camera_position, face_colors : as in :func:`motion_volume`.
 
@@ -460,11 +463,8 @@ def spin_volume(
     ang = as_float(angle, "angle")
     c = _vec3(center, "center")
     t = np.zeros(3) if translation is None else _vec3(translation, "translation")
-    seg = None if segments is None else as_int(segments, "segments", minimum=1, maximum=4096)
-    if not isinstance(filter, str):
-        raise TypeError(f"filter: expected a string, got {type(filter).__name__}")
-    if filter not in FILTERS:
-        raise ValueError(f"filter: unknown filter {filter!r}; expected one of {', '.join(FILTERS)}")
+    seg = None if segments is None else as_segments(segments)
+    as_choice(filter, "filter", FILTERS)
     nv = len(m.vertices)
     col, per_face = _vertex_or_face_colors(colors, face_colors, nv, len(m.faces))
     nrm = None if normals is None else as_array(normals, "normals", np.float64, (nv, 3))

@@ -43,16 +43,17 @@ __all__ = [
     "velocity_blur",
 ]
 
+# The limits are the compiled core's.
 #: Longest filter accepted, in pixels.
-MAX_LENGTH = 65536.0
+MAX_LENGTH: float = _core.MAX_LENGTH
 #: Largest accepted ``fps`` / ``target_fps`` ratio of ``camera_motion_blur``.
-MAX_FPS_RATIO = 1000.0
+MAX_FPS_RATIO: float = _core.MAX_FPS_RATIO
 #: Most pyramid levels, depth-of-field sub-images and blur samples accepted.
-MAX_LEVELS = 16
-MAX_LAYERS = 17
-MAX_SAMPLES = 1024
+MAX_LEVELS: int = _core.MAX_LEVELS
+MAX_LAYERS: int = _core.MAX_LAYERS
+MAX_SAMPLES: int = _core.MAX_SAMPLES
 #: Most gather taps per pixel of :func:`reconstruction_blur`.
-MAX_TAPS = 256
+MAX_TAPS: int = _core.MAX_TAPS
 
 
 def _rgba(value, name="rgba", shape=None) -> np.ndarray:
@@ -284,7 +285,7 @@ def camera_motion_blur(
     ``rgba``: (H,W,4) float32 premultiplied; ``depth``: (H,W) float32 (> 0, ``inf`` sky);
     ``camera``, ``previous_camera``: ``motionblur.Camera`` of H x W pixels; ``samples``: N in
     [1, 1024]. ``target_fps`` and ``fps`` (frames per second, both or neither): the velocity is
-    scaled by ``fps / target_fps`` (at most ``MAX_FPS_RATIO`` = 1000) so every frame looks as if
+    scaled by ``fps / target_fps`` (at most ``MAX_FPS_RATIO``) so every frame looks as if
     rendered at the target rate. Velocities are then clamped to |v| <= 1e6 pixels (points very
     close to the previous camera's plane) before the blur.
     A static camera returns the image unchanged. Returns (H,W,4) float32 premultiplied.

@@ -37,14 +37,14 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import _core
 from ._optional import require
-from ._validate import as_array, as_float, as_int
+from ._validate import as_array, as_choice, as_float, as_int, as_samples
 
 __all__ = ["Camera", "Draw", "Frame", "look_at", "rasterize"]
 
-#: Largest image side in pixels, and largest pixel count (the frame takes 32 bytes a pixel).
-MAX_SIDE = 16384
-MAX_PIXELS = 1 << 25
-_MAX_INTERNAL_SIDE = 32768
+#: Largest image side in pixels, and largest pixel count (the frame takes 32 bytes a pixel);
+#: defined by the compiled core.
+MAX_SIDE: int = _core.MAX_SIDE
+MAX_PIXELS: int = _core.MAX_PIXELS
 
 
 def look_at(eye, target, up=(0.0, 1.0, 0.0)) -> np.ndarray:
@@ -80,10 +80,11 @@ class Camera:
     """A perspective camera (pyrender's ``PerspectiveCamera`` plus an image size).
 
     Parameters: ``pose`` (4,4) camera-to-world; ``yfov`` vertical field of view in radians, in
-    (0, pi); ``width``, ``height`` in pixels (1..16384, at most 2**25 pixels); ``znear`` > 0 and
-    ``zfar`` > znear in scene units. The defaults are pyrender's: ``znear=0.05`` and
-    ``zfar=inf``, its infinite projection (pyrender's ``zfar=None``), so nothing far away is
-    clipped whatever the scene's units. :meth:`from_pyrender` converts a pyrender camera.
+    (0, pi); ``width``, ``height`` in pixels (1..``MAX_SIDE``, at most ``MAX_PIXELS`` pixels);
+    ``znear`` > 0 and ``zfar`` > znear in scene units. The defaults are pyrender's:
+    ``znear=0.05`` and ``zfar=inf``, its infinite projection (pyrender's ``zfar=None``), so
+    nothing far away is clipped whatever the scene's units. :meth:`from_pyrender` converts a
+    pyrender camera.
 
     Attributes: ``pose``, ``yfov``, ``width``, ``height``, ``znear``, ``zfar``, ``aspect``
     (width / height), ``view`` (4,4) float64 world-to-camera, ``projection`` (4,4) float64 equal
@@ -481,19 +482,11 @@ def rasterize(
     for i, d in enumerate(draws):
         if not isinstance(d, Draw):
             raise TypeError(f"draws: item {i} is a {type(d).__name__}, not a motionblur.Draw")
-    samples = as_int(samples, "samples")
-    if samples not in (1, 2, 4):
-        raise ValueError(f"samples: must be 1, 2 or 4, got {samples}")
-    if max(camera.width, camera.height) * samples > _MAX_INTERNAL_SIDE:
-        raise ValueError(f"samples: width and height times samples must be <= {_MAX_INTERNAL_SIDE}")
-    for name, value, allowed in (
-        ("blend", blend, ("exact", "unsorted")),
-        ("shading", shading, ("flat", "lambert")),
-    ):
-        if not isinstance(value, str):
-            raise TypeError(f"{name}: expected a string, got {type(value).__name__}")
-        if value not in allowed:
-            raise ValueError(f"{name}: expected one of {allowed}, got {value!r}")
+    samples = as_samples(samples, "samples")
+    if max(camera.width, camera.height) * samples > _core.MAX_INTERNAL_SIDE:
+        raise ValueError(f"samples: width and height times samples must be <= {_core.MAX_INTERNAL_SIDE}")
+    as_choice(blend, "blend", _core.BLENDS)
+    as_choice(shading, "shading", _core.SHADINGS)
     amb = np.asarray(ambient, dtype=np.float64) if not isinstance(ambient, str) else None
     if amb is None or amb.ndim > 1 or (amb.ndim == 1 and amb.shape != (3,)):
         raise TypeError("ambient: expected a float or an RGB triple")

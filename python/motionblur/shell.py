@@ -170,8 +170,10 @@ class BlurShell:
     ----------
     faces : (F,3) int, counter-clockwise front; or a mesh object with ``.vertices`` and
         ``.faces`` (then its vertex count is used).
-    subdivisions : int in 1..255: ring length, and pairs per full strip minus one.
-    hysteresis : int in 0..65000: updates a polygon keeps its full strip after losing its edge.
+    subdivisions : int in 1..``_core.MAX_SUBDIVISIONS``: ring length, and pairs per full strip
+        minus one.
+    hysteresis : int in 0..``_core.MAX_HYSTERESIS``: updates a polygon keeps its full strip
+        after losing its edge.
     initial_alpha : float in (0, 1]: alpha of the base pair.
     mask : optional (F,) bool: False polygons never get a strip (selective blurring).
     color : optional RGB, (3,) for every strip (speed lines) or (V,3) per mesh vertex (e.g.
@@ -194,8 +196,8 @@ class BlurShell:
         # A read-only view: _faces may return the caller's own array (int64, C-contiguous).
         self._faces = _faces(faces).view()
         self._faces.flags.writeable = False
-        self.subdivisions = as_int(subdivisions, "subdivisions", minimum=1, maximum=255)
-        self.hysteresis = as_int(hysteresis, "hysteresis", minimum=0, maximum=65000)
+        self.subdivisions = as_int(subdivisions, "subdivisions", minimum=1, maximum=_core.MAX_SUBDIVISIONS)
+        self.hysteresis = as_int(hysteresis, "hysteresis", minimum=0, maximum=_core.MAX_HYSTERESIS)
         self.initial_alpha = as_float(initial_alpha, "initial_alpha")
         if not 0.0 < self.initial_alpha <= 1.0:
             raise ValueError(f"initial_alpha: must be in (0, 1], got {self.initial_alpha}")

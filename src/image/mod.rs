@@ -26,13 +26,15 @@ mod scatter;
 mod splat;
 
 pub use boxblur::box_blur;
-pub use camera::{camera_motion_blur, camera_velocity, velocity_blur, CameraMatrices};
-pub use colors::{colored, pixel_bounds, sample_colors};
-pub use dof::{depth_of_field, DofParams};
+pub use camera::{
+    camera_motion_blur, camera_velocity, velocity_blur, CameraMatrices, MAX_FPS_RATIO, MAX_SAMPLES,
+};
+pub use colors::{colored, pixel_bounds, sample_colors, MIN_ALPHA};
+pub use dof::{depth_of_field, DofParams, MAX_LAYERS};
 pub use glow::glow;
 pub use opaque::{opaque_blur, opaque_motion_blur, Composite};
 pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};
-pub use reconstruct::{reconstruct, ReconstructParams};
+pub use reconstruct::{reconstruct, ReconstructParams, MAX_TAPS};
 pub use scatter::{scatter_pieces, Piece};
 pub use splat::splat_paths;
 

@@ -6,16 +6,20 @@ mod accumulate;
 mod convert;
 mod geometry;
 mod image;
+mod motion;
+mod painter;
 mod raster;
 mod shell;
 
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    motion::register(m)?;
     geometry::register(m)?;
     raster::register(m)?;
     image::register(m)?;
     shell::register(m)?;
     accumulate::register(m)?;
+    painter::register(m)?;
     Ok(())
 }

@@ -335,5 +335,7 @@ fn _motion_silhouette<'py>(
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyBlurShell>()?;
     m.add_function(wrap_pyfunction!(_motion_silhouette, m)?)?;
+    m.add("MAX_SUBDIVISIONS", crate::MAX_SUBDIVISIONS)?;
+    m.add("MAX_HYSTERESIS", crate::MAX_HYSTERESIS)?;
     Ok(())
 }

@@ -34,7 +34,7 @@ mod tile;
 pub use background::Background;
 pub use buffers::{Frame, Stats};
 use camera::check_size;
-pub use camera::Camera;
+pub use camera::{Camera, MAX_INTERNAL_SIDE, MAX_PIXELS, MAX_SIDE, SAMPLES};
 pub use draw::{faces_from_i64, vertex_normals, Draw};
 use options::check_options;
 pub use options::{Blend, Light, Options, Shading};

@@ -51,5 +51,7 @@ mod locality;
 mod tests;
 mod update;
 
-pub use blur_shell::{BlurShell, FaceState, ShellColor, ShellOptions, ON_SILHOUETTE};
+pub use blur_shell::{
+    BlurShell, FaceState, ShellColor, ShellOptions, MAX_HYSTERESIS, MAX_SUBDIVISIONS, ON_SILHOUETTE,
+};
 pub use build::{BuildPlan, ShellMesh, ShellOut};

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validate import as_int
+from .._validate import as_samples
 from ..raster import Draw, Frame, rasterize
 from ..scene import Scene
 
@@ -41,10 +41,7 @@ def require_box_shutter(scene: Scene, method: str) -> None:
 
 def check_aa(aa) -> int:
     """``aa`` as 1, 2 or 4 (spatial samples per pixel along each axis), else ValueError."""
-    aa = as_int(aa, "aa")
-    if aa not in (1, 2, 4):
-        raise ValueError(f"aa: must be 1, 2 or 4, got {aa}")
-    return aa
+    return as_samples(aa, "aa")
 
 
 def shutter_centroid(scene: Scene) -> float:
@@ -55,10 +52,7 @@ def shutter_centroid(scene: Scene) -> float:
 
 
 def _aa(aa) -> int:
-    aa = as_int(aa, "aa")
-    if aa not in (1, 2, 4):
-        raise ValueError(f"aa: must be 1, 2 or 4, got {aa}")
-    return aa
+    return as_samples(aa, "aa")
 
 
 def sharp_frame(scene: Scene, t: float, aa: int = 1, velocity: str | None = "shutter") -> Frame:

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import image
+from .. import _core, image
 from .._validate import as_float, as_int
 from ..raster import Frame
 from ..render import register
@@ -45,7 +45,7 @@ __all__ = ["opaque_image", "camera_velocity", "velocity", "shutter_centroid"]
 
 @register(
     "opaque_image",
-    sweep=[{"aa": a} for a in (1, 2, 4)],
+    sweep=[{"aa": a} for a in _core.SAMPLES],
     applies=lambda scene: bool(scene.moving_objects) and not scene.camera_moves,
     needs="moving objects seen by a still camera",
 )
