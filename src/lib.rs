@@ -44,7 +44,7 @@ pub use image::{
     DofParams, Piece, ReconstructParams, MAX_FPS_RATIO, MAX_LAYERS, MAX_LENGTH, MAX_LEVELS,
     MAX_SAMPLES, MAX_TAPS, MIN_ALPHA,
 };
-pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats};
+pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats, MAX_COORD};
 pub use motion::{
     axis_angle, check_times, det3, dot, mat4_mul, norm, place, row_times, transpose_times, turn,
     uniform_times, Keyframe, Keyframes, Keys, Mat3, Mat4, Path, Similarity, IDENTITY4,

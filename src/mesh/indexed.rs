@@ -8,6 +8,13 @@ use super::adjacency::{build_adjacency, Adjacency, FaceNeighbors};
 use super::normals::{self, dot, face_normal, FacePlanes};
 use crate::error::{Error, Result};
 
+/// The one coordinate range of every entry point: the largest accepted |component| of any
+/// position, translation or point, in scene units. Face normals multiply two coordinate
+/// differences and `n . d` a third, which stays below `f32::MAX` (3.4e38) at this bound (the
+/// blur shell's facing test runs in float32); the rasterizer's f64 transforms keep every
+/// fractional bit a pixel needs; float32 positions near it are 64 units apart anyway.
+pub const MAX_COORD: f64 = 1e9;
+
 /// Largest number of faces or vertices accepted (indices are stored as `u32`).
 pub const MAX_ELEMENTS: usize = (u32::MAX as usize) / 8;
 
@@ -268,13 +275,24 @@ fn check_vertices(vertices: &[[f64; 3]]) -> Result<()> {
             format!("too many vertices ({})", vertices.len()),
         ));
     }
-    let bad_vertex = |v: &[f64; 3]| v.iter().any(|x| !x.is_finite());
+    // `!(|x| <= MAX_COORD)` is also true for NaN.
+    let bad_vertex = |v: &[f64; 3]| v.iter().any(|x| !(x.abs() <= MAX_COORD));
     if !vertices
         .par_iter()
         .with_min_len(8192)
         .all(|v| !bad_vertex(v))
     {
         let bad = vertices.iter().position(bad_vertex).unwrap_or(0);
+        let row = vertices[bad];
+        if row.iter().all(|x| x.is_finite()) {
+            return Err(Error::value(
+                "vertices",
+                format!(
+                    "vertex {bad} ({row:?}) is beyond the coordinate range +-{MAX_COORD:e} \
+                     (MAX_COORD)"
+                ),
+            ));
+        }
         return Err(Error::value(
             "vertices",
             format!("vertex {bad} is NaN or inf"),
