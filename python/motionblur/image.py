@@ -6,9 +6,12 @@ images (alpha, depth) are float32 (H,W). Directions are (dx, dy) in pixels, +x r
 so blurs fade to transparent at the border and the opaque blur's rescale (eq. 7) keeps the colour
 there: the result does not depend on the size of the viewport (Kraus, section 3.3).
 
-Alpha is not checked against [0, 1] (nor colour against alpha): the filters are linear and apply
-as they are, but the opaque blur's rescale and the ``over``/``under`` composites assume premultiplied
-colour with alpha in [0, 1], and give colours and alphas outside that range otherwise.
+Alpha: the linear filters (``box_blur``, ``pyramid_blur``, ``velocity_blur``, ...) apply to any
+finite values. The kernels whose arithmetic assumes premultiplied colour with alpha in [0, 1]
+(``glow``, ``opaque_blur``, ``opaque_motion_blur`` and its ``base``, ``pyramid_glow``,
+``pyramid_opaque_blur``: the glow's ``1 - (1 - a)(1 - b)``, the rescale of eq. 7 and the
+``over``/``under`` composites) raise ValueError naming the argument when an alpha is outside
+[0, 1] (colour is not checked against alpha).
 
 The kernels are Rust, run on all cores (bit-identical for any thread count) and release the GIL.
 The caller's arrays are never written: every function returns a new array.

@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _core, image
-from .._validate import as_float, as_int
+from .._validate import as_bool, as_float, as_int
 from ..raster import Frame
 from ..render import register
 from ..scene import Scene
@@ -65,8 +65,7 @@ def opaque_image(scene: Scene, aa: int = 1, layers: bool = True) -> Frame:
     blurred), per object ``lengths`` (pixels), ``front_pixels`` (pixels composited in front).
     """
     aa = check_aa(aa)
-    if not isinstance(layers, (bool, np.bool_)):
-        raise TypeError(f"layers: expected a bool, got {type(layers).__name__}")
+    layers = as_bool(layers, "layers")
     require_box_shutter(scene, "opaque_image")
     tc = shutter_centroid(scene)
     frame = sharp_frame(scene, tc, aa, velocity="shutter")
