@@ -89,7 +89,8 @@ class Mesh:
 
     The edge adjacency is built in Rust on first use and kept on the object;
     :meth:`with_vertices` makes a deformed copy that shares it. Every coordinate must lie within
-    ``+-MAX_COORD`` (the coordinate range).
+    ``+-MAX_COORD`` (the coordinate range). A mesh pickles and deep-copies through its two arrays
+    (the copy builds its adjacency again when used).
     """
 
     __slots__ = ("_core", "_vertices", "_faces", "_stats")
@@ -114,6 +115,9 @@ class Mesh:
         f = _readonly(np.array(_as(faces, "faces", np.int64), copy=True))
         self._core = _core._Mesh(v, f)
         self._vertices, self._faces, self._stats = v, f, None
+
+    def __reduce__(self):
+        return Mesh, (self._vertices, self._faces)
 
     @classmethod
     def _from_core(cls, core, vertices, faces) -> Mesh:
@@ -499,17 +503,20 @@ class ContourTable:
         e.g. clustered around a preferred direction of motion.
     seed : int >= 0, the generator's seed (splitmix64; the same seed gives the same table).
 
+    A table pickles and deep-copies (rebuilt from its mesh, directions and seed: the same sets).
+
     ``lookup(motion)`` returns the contour edges of the stored direction nearest to ``motion``
     (largest cosine) and the angle between the two in radians.
     """
 
-    __slots__ = ("_core", "mesh")
+    __slots__ = ("_core", "mesh", "_args")
 
     def __init__(self, mesh, directions=64, seed: int = 0):
         self.mesh = as_mesh(mesh)
         s = as_int(seed, "seed", minimum=0, maximum=2**64 - 1)
         if isinstance(directions, (int, np.integer)) and not isinstance(directions, bool):
             k = as_int(directions, "directions", minimum=1, maximum=65536)
+            self._args = (k, s)
             self._core = _core._ContourTable(self.mesh._core, k, s, None)
         elif np.ndim(directions) == 0:
             raise TypeError(f"directions: expected an int or a (K,3) array, got {type(directions).__name__}")
@@ -519,7 +526,14 @@ class ContourTable:
                 raise ValueError(f"directions: at most 65536, got {len(d)}")
             if (np.linalg.norm(d, axis=1) == 0).any():
                 raise ValueError("directions: a direction is zero")
+            d = np.array(d, copy=True)  # kept for pickling; the caller's array may change
+            d.flags.writeable = False
+            self._args = (d, s)
             self._core = _core._ContourTable(self.mesh._core, len(d), s, d)
+
+    def __reduce__(self):
+        # Rebuilt from what made it (the directions or their count and seed): the same table.
+        return ContourTable, (self.mesh, *self._args)
 
     def __len__(self) -> int:
         return len(self._core)
