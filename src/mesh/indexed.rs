@@ -305,6 +305,23 @@ fn check_vertices(vertices: &[[f64; 3]]) -> Result<()> {
 mod tests {
     use super::*;
 
+    #[test]
+    fn coordinates_past_the_range_are_refused_naming_the_vertex() {
+        let f = vec![[0, 1, 2]];
+        let at = |y: f64| vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, y, 0.0]];
+        Mesh::new(at(MAX_COORD), f.clone()).unwrap();
+        Mesh::new(at(-MAX_COORD), f.clone()).unwrap();
+        let e = Mesh::new(at(MAX_COORD * 1.5), f.clone())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("vertices: vertex 2") && e.contains("coordinate range"),
+            "{e}"
+        );
+        let e = Mesh::new(at(f64::NAN), f).unwrap_err().to_string();
+        assert_eq!(e, "vertices: vertex 2 is NaN or inf");
+    }
+
     fn tetra() -> Mesh {
         let v = vec![
             [0.0, 0.0, 0.0],

@@ -308,6 +308,40 @@ fn rotation_matrix(q: &[f64; 4]) -> Mat3 {
 mod tests {
     use super::*;
 
+    #[test]
+    fn scales_and_translations_outside_the_range_say_which_range() {
+        let scaled = |s: f64| {
+            let mut m = IDENTITY4;
+            (0..3).for_each(|i| m[i][i] = s);
+            m
+        };
+        for s in [1e-120, 1e-10, 2e9, 1e120] {
+            let e = Similarity::from_matrix(&scaled(s), "m", 1)
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with("m: keyframe 1 scales by about"), "{e}");
+            assert!(e.contains("[1e-09, 1e+09]"), "{e}");
+        }
+        for s in [MIN_SCALE, 1e-3, 1e3, MAX_SCALE] {
+            let k = Similarity::from_matrix(&scaled(s), "m", 0).unwrap();
+            assert!((k.scale / s - 1.0).abs() < 1e-12);
+        }
+        let mut far = IDENTITY4;
+        far[1][3] = -2.0 * MAX_COORD;
+        let e = Similarity::from_matrix(&far, "m", 2)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("m: keyframe 2 translates by") && e.contains("coordinate range"),
+            "{e}"
+        );
+        // a mirror inside the range is still a mirror
+        let e = Similarity::from_matrix(&scaled(-2.0), "m", 0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("mirror or singular"), "{e}");
+    }
+
     fn rot_z(a: f64, s: f64, t: [f64; 3]) -> Mat4 {
         let (sn, c) = a.sin_cos();
         [
