@@ -77,7 +77,9 @@ def as_array(
         out = out.reshape(())
     if finite and not want_int and out.size and not np.isfinite(out).all():
         if np.isfinite(arr).all():  # finite values past float32's range
-            raise ValueError(f"{name}: values beyond the range of {np.dtype(dtype)} (+-{np.finfo(dtype).max:g})")
+            raise ValueError(
+                f"{name}: values beyond the range of {np.dtype(dtype)} (+-{np.finfo(dtype).max:g})"
+            )
         raise ValueError(f"{name}: contains NaN or inf")
     return out
 
@@ -190,7 +192,9 @@ def as_list(value, name: str, item_type: type, type_name: str) -> list:
     try:
         out = list(value)
     except TypeError as exc:  # a 0-d array, an iterator that fails
-        raise TypeError(f"{name}: expected a sequence of {type_name}, got {type(value).__name__} ({exc})") from None
+        raise TypeError(
+            f"{name}: expected a sequence of {type_name}, got {type(value).__name__} ({exc})"
+        ) from None
     for i, item in enumerate(out):
         if not isinstance(item, item_type):
             raise TypeError(f"{name}: item {i} is a {type(item).__name__}, not a {type_name}")

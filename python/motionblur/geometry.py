@@ -26,7 +26,17 @@ import numpy as np
 
 from . import _core
 from ._optional import require
-from ._validate import MAX_COORD, as_array, as_bool, as_choice, as_coords, as_float, as_int, as_segments, check_coords
+from ._validate import (
+    MAX_COORD,
+    as_array,
+    as_bool,
+    as_choice,
+    as_coords,
+    as_float,
+    as_int,
+    as_segments,
+    check_coords,
+)
 
 __all__ = [
     "Mesh",

@@ -27,6 +27,7 @@ def _size(value, name: str) -> float:
 def _count(value, name: str, minimum: int) -> int:
     return as_int(value, name, minimum=minimum, maximum=MAX_COUNT)
 
+
 __all__ = ["icosphere", "box", "torus", "cylinder", "uv_sphere"]
 __all__ += ["bending_arm", "spinning_propeller"]
 

@@ -383,7 +383,9 @@ class Frame:
         is NaN or inf (nothing is written)."""
         path = as_path(path)
         if path.suffix.lower() != ".png":
-            raise ValueError(f"path: save_png writes PNG files only; expected a name ending in .png, got {str(path)!r}")
+            raise ValueError(
+                f"path: save_png writes PNG files only; expected a name ending in .png, got {str(path)!r}"
+            )
         if not np.isfinite(self.rgba).all():
             bad = int((~np.isfinite(self.rgba)).any(axis=-1).sum())
             raise ValueError(f"rgba: {bad} pixels are NaN or inf; a PNG cannot hold them (nothing written)")

@@ -316,7 +316,9 @@ class Scene:
         objects = as_list(objects, "objects", Object, "motionblur.Object")
         if not isinstance(camera, Camera):
             raise TypeError(f"camera: expected a motionblur.Camera, got {type(camera).__name__}")
-        lights = as_list(() if lights is None else lights, "lights", DirectionalLight, "motionblur.DirectionalLight")
+        lights = as_list(
+            () if lights is None else lights, "lights", DirectionalLight, "motionblur.DirectionalLight"
+        )
         if camera_motion is not None:
             if not isinstance(camera_motion, Motion):
                 raise TypeError(

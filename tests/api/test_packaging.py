@@ -73,7 +73,10 @@ def test_extras_by_purpose_and_all_is_their_union():
     assert any(r.startswith("flip-evaluator") for r in extras["metrics"])
     assert {"pygltflib", "OpenEXR", "trimesh"} <= {re.split(r"[<>=]", r)[0] for r in extras["interop"]}
     # dev is for working on the project (make installs requirements-dev.txt, which holds it)
-    dev_reqs = {re.split(r"[<>=]", r)[0] for r in (Path(__file__).parents[2] / "requirements-dev.txt").read_text().split()}
+    dev_reqs = {
+        re.split(r"[<>=]", r)[0]
+        for r in (Path(__file__).parents[2] / "requirements-dev.txt").read_text().split()
+    }
     assert {re.split(r"[<>=]", r)[0] for r in extras["dev"]} <= dev_reqs
 
 

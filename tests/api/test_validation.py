@@ -30,9 +30,17 @@ def _scene(**kw):
 @pytest.mark.parametrize(
     "call, exc, text",
     [
-        (lambda: mb.DirectionalLight((0, 0, -1), intensity="x"), TypeError, "intensity: expected a float or an RGB"),
+        (
+            lambda: mb.DirectionalLight((0, 0, -1), intensity="x"),
+            TypeError,
+            "intensity: expected a float or an RGB",
+        ),
         (lambda: mb.DirectionalLight((0, 0, -1), intensity=1j), TypeError, "intensity: expected a real"),
-        (lambda: mb.DirectionalLight((0, 0, -1), intensity=[1, 2]), ValueError, "intensity: expected a float or"),
+        (
+            lambda: mb.DirectionalLight((0, 0, -1), intensity=[1, 2]),
+            ValueError,
+            "intensity: expected a float or",
+        ),
         (lambda: mb.DirectionalLight((0, 0, -1), intensity=-1), ValueError, "intensity: must be >= 0"),
         (lambda: _scene(ambient="x"), TypeError, "ambient: expected a float or an RGB"),
         (lambda: _scene(ambient=np.nan), ValueError, "ambient: must be finite"),
@@ -55,15 +63,47 @@ def _scene(**kw):
             TypeError,
             "ambient: expected a float or an RGB",
         ),
-        (lambda: mb.ContourTable(mb.Mesh(*mb.meshes.box()), 4).edges(2**64), ValueError, "index: must be <= 3"),
+        (
+            lambda: mb.ContourTable(mb.Mesh(*mb.meshes.box()), 4).edges(2**64),
+            ValueError,
+            "index: must be <= 3",
+        ),
         (lambda: mb.ContourTable(mb.Mesh(*mb.meshes.box()), 4).edges(4), ValueError, "index: must be <= 3"),
-        (lambda: mb.ContourTable(mb.Mesh(*mb.meshes.box()), 4).front_faces(-1), ValueError, "index: must be >= 0"),
-        (lambda: mb.ContourTable(mb.Mesh(*mb.meshes.box()), 4).edges(1.0), TypeError, "index: expected an integer"),
-        (lambda: metrics.psnr(np.zeros((2, 2, 4)), np.ones((2, 2, 4)), peak="x"), TypeError, "peak: expected"),
-        (lambda: metrics.psnr(np.zeros((2, 2, 4)), np.ones((2, 2, 4)), peak=np.nan), ValueError, "peak: must be finite"),
-        (lambda: metrics.psnr(np.zeros((2, 2, 4)), np.ones((2, 2, 4)), peak=-1), ValueError, "peak: must be > 0"),
-        (lambda: metrics.flip(np.zeros((2, 2, 4)), np.ones((2, 2, 4)), (0, 0)), ValueError, "background: expected shape"),
-        (lambda: metrics.flip(np.zeros((2, 2, 4)), np.ones((2, 2, 4)), "red"), TypeError, "background: expected a numeric"),
+        (
+            lambda: mb.ContourTable(mb.Mesh(*mb.meshes.box()), 4).front_faces(-1),
+            ValueError,
+            "index: must be >= 0",
+        ),
+        (
+            lambda: mb.ContourTable(mb.Mesh(*mb.meshes.box()), 4).edges(1.0),
+            TypeError,
+            "index: expected an integer",
+        ),
+        (
+            lambda: metrics.psnr(np.zeros((2, 2, 4)), np.ones((2, 2, 4)), peak="x"),
+            TypeError,
+            "peak: expected",
+        ),
+        (
+            lambda: metrics.psnr(np.zeros((2, 2, 4)), np.ones((2, 2, 4)), peak=np.nan),
+            ValueError,
+            "peak: must be finite",
+        ),
+        (
+            lambda: metrics.psnr(np.zeros((2, 2, 4)), np.ones((2, 2, 4)), peak=-1),
+            ValueError,
+            "peak: must be > 0",
+        ),
+        (
+            lambda: metrics.flip(np.zeros((2, 2, 4)), np.ones((2, 2, 4)), (0, 0)),
+            ValueError,
+            "background: expected shape",
+        ),
+        (
+            lambda: metrics.flip(np.zeros((2, 2, 4)), np.ones((2, 2, 4)), "red"),
+            TypeError,
+            "background: expected a numeric",
+        ),
     ],
 )
 def test_bad_scalars_and_containers_name_the_argument(call, exc, text):
@@ -96,10 +136,18 @@ def _sequence(render_at, **kw):
     [
         (lambda t: "frame", TypeError, "render_at: its result at t=0 is str"),
         (lambda t: None, TypeError, "render_at: its result at t=0 is NoneType"),
-        (lambda t: np.zeros((4, 4, 3)), ValueError, r"render_at: its result at t=0: expected shape \(N,N,4\)"),
+        (
+            lambda t: np.zeros((4, 4, 3)),
+            ValueError,
+            r"render_at: its result at t=0: expected shape \(N,N,4\)",
+        ),
         (lambda t: np.full((4, 4, 4), np.nan), ValueError, "render_at: its result at t=0: contains NaN"),
         (lambda t: np.zeros((4, 4, 4), complex), TypeError, "render_at: its result at t=0: expected a real"),
-        (lambda t: np.zeros((4 + int(t), 4, 4)), ValueError, r"render_at: its result at t=1: expected shape \(4,4,4\)"),
+        (
+            lambda t: np.zeros((4 + int(t), 4, 4)),
+            ValueError,
+            r"render_at: its result at t=1: expected shape \(4,4,4\)",
+        ),
     ],
 )
 def test_sequence_checks_what_render_at_returns(result, exc, text):
@@ -164,7 +212,9 @@ def test_metrics_reject_nan_references():
     for fn in (metrics.rmse, metrics.psnr, metrics.coverage_error):
         with pytest.raises(ValueError, match="reference: contains NaN"):
             fn(np.zeros((2, 2, 4)), ref)
-    assert metrics.psnr(np.zeros((2, 2, 4)), np.full((2, 2, 4), 0.1), peak=2.0) == pytest.approx(20 * np.log10(20))
+    assert metrics.psnr(np.zeros((2, 2, 4)), np.full((2, 2, 4), 0.1), peak=2.0) == pytest.approx(
+        20 * np.log10(20)
+    )
 
 
 @pytest.mark.parametrize("bad", [1e19, 1e10, 1.0 + 1e-6, -1e-6, -1.0])
@@ -207,7 +257,9 @@ def test_image_kernels_take_alpha_at_the_ends_of_the_range_and_linear_filters_ta
     assert np.isfinite(mbi.pyramid_glow(rgba[..., 3], 3)).all()
     hot = rgba.copy()
     hot[..., 3] *= 7.0  # a linear filter of a non-image: allowed, and linear
-    np.testing.assert_allclose(mbi.box_blur(hot, (1, 0), 3)[..., 3], 7 * mbi.box_blur(rgba, (1, 0), 3)[..., 3], rtol=1e-6)
+    np.testing.assert_allclose(
+        mbi.box_blur(hot, (1, 0), 3)[..., 3], 7 * mbi.box_blur(rgba, (1, 0), 3)[..., 3], rtol=1e-6
+    )
 
 
 # ---------------------------------------------------------------- one coordinate range
@@ -247,7 +299,9 @@ def test_every_geometry_entry_point_rejects_coordinates_past_the_range():
     }
     for name, fns in calls.items():
         for call in fns:
-            with pytest.raises(ValueError, match=f"{name}: .*(coordinate range|MAX_COORD|outside the accepted)"):
+            with pytest.raises(
+                ValueError, match=f"{name}: .*(coordinate range|MAX_COORD|outside the accepted)"
+            ):
                 call()
     # the rasterizer and the shell had their own bounds (1e15, 1e9): now the same one
     d = mb.Draw(v * 0.9e9, f, (1, 1, 1))
@@ -276,7 +330,10 @@ def test_volumes_that_leave_the_range_are_refused_and_those_inside_are_kept():
 
 @pytest.mark.parametrize("scale", [1e-120, 1e-10, 2e9, 1e120])
 def test_motion_says_which_scales_it_takes_and_why(scale):
-    with pytest.raises(ValueError, match=r"transforms: keyframe 1 scales by about .*outside the accepted uniform scales \[1e-09, 1e\+09\]"):
+    with pytest.raises(
+        ValueError,
+        match=r"transforms: keyframe 1 scales by about .*outside the accepted uniform scales \[1e-09, 1e\+09\]",
+    ):
         mb.Motion([0.0, 1.0], np.stack([np.eye(4), np.diag([scale, scale, scale, 1.0])]))
 
 
@@ -299,7 +356,11 @@ def test_look_at_takes_any_up_length_and_raises_for_a_degenerate_one():
     ref = mb.look_at([0, 0, 5], [0, 0, 0], [0, 1, 0])
     for up in ([0, 1e300, 0], [0, 1e-300, 0], [0, 3, 0]):
         np.testing.assert_allclose(mb.look_at([0, 0, 5], [0, 0, 0], up), ref, atol=1e-15)
-    for up, text in (([0, 0, 0], "up: must not be zero"), ([0, 0, 1e300], "up: must not be parallel"), ([0, np.inf, 0], "up: contains NaN")):
+    for up, text in (
+        ([0, 0, 0], "up: must not be zero"),
+        ([0, 0, 1e300], "up: must not be parallel"),
+        ([0, np.inf, 0], "up: contains NaN"),
+    ):
         with pytest.raises(ValueError, match=text):
             mb.look_at([0, 0, 5], [0, 0, 0], up)
 

@@ -142,11 +142,15 @@ def check(call: Callable[[], object], inputs, names: Iterable[str]):
     before = digest(inputs), [a.flags.writeable for a in _walk(inputs)]
     first, result = _outcome(call)
     second, _ = _outcome(call)
-    assert (digest(inputs), [a.flags.writeable for a in _walk(inputs)]) == before, "the caller's arrays changed"
+    assert (digest(inputs), [a.flags.writeable for a in _walk(inputs)]) == before, (
+        "the caller's arrays changed"
+    )
     assert first == second, f"two calls differ: {first} then {second}"
     if first[0] == "error":
         head = first[2].split(":")[0]
-        assert any(n in head for n in names), f"{first[1].__name__} names none of {sorted(names)}: {first[2]!r}"
+        assert any(n in head for n in names), (
+            f"{first[1].__name__} names none of {sorted(names)}: {first[2]!r}"
+        )
         return None
     return result
 

@@ -13,8 +13,13 @@ import os
 from hypothesis import HealthCheck, settings
 
 _quiet = [HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.filter_too_much]
-settings.register_profile("ci", max_examples=12, deadline=None, derandomize=True, suppress_health_check=_quiet)
 settings.register_profile(
-    "fuzz", max_examples=int(os.environ.get("MOTIONBLUR_FUZZ_EXAMPLES", "400")), deadline=None, suppress_health_check=_quiet
+    "ci", max_examples=12, deadline=None, derandomize=True, suppress_health_check=_quiet
+)
+settings.register_profile(
+    "fuzz",
+    max_examples=int(os.environ.get("MOTIONBLUR_FUZZ_EXAMPLES", "400")),
+    deadline=None,
+    suppress_health_check=_quiet,
 )
 settings.load_profile(os.environ.get("MOTIONBLUR_FUZZ", "ci"))

@@ -52,7 +52,10 @@ CASES = {
         "mbi.velocity_blur(np.zeros((4, 4, 4), np.float32), np.zeros((4, 4, 2), np.float32), samples=2**40)",
         "samples",
     ),
-    "accumulation samples of 2**64": ("mb.render(mb.SCENES['cube'](16, 12), 'accumulation', samples=2**64)", "samples"),
+    "accumulation samples of 2**64": (
+        "mb.render(mb.SCENES['cube'](16, 12), 'accumulation', samples=2**64)",
+        "samples",
+    ),
     "colour renders past the limit": (
         "mb.render(mb.SCENES['cube'](16, 12), 'motion_volume', color_renders=10**9)",
         "color_renders",
@@ -69,7 +72,9 @@ def test_huge_arguments_fail_clearly_or_run_in_a_child(case):
     call, name = CASES[case]
     script = CHILD.format(cap=CAP, call=textwrap.dedent(call))
     env = dict(os.environ, RAYON_NUM_THREADS="2")
-    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=TIMEOUT, env=env)
+    r = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=TIMEOUT, env=env
+    )
     assert r.returncode == 0, f"the child died (code {r.returncode}): {r.stderr[-2000:]}"
     out = r.stdout.strip().split("\t")
     if name is None:

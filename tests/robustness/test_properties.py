@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from _props import JUNK, VALUES, arrays, check, finite, good_or_bad
+from _props import JUNK, arrays, check, finite, good_or_bad
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -66,8 +66,15 @@ def test_mesh_and_contour_edges(v, f, motion):
 def test_motion_volume(keys, segments, filt, colors, camera, contour_line):
     mesh = mb.Mesh(BOX_V, BOX_F)
     vol = check(
-        lambda: mb.motion_volume(mesh, keys, segments=segments, filter=filt, colors=colors,
-                                 camera_position=camera, contour_line=contour_line),  # fmt: skip
+        lambda: mb.motion_volume(
+            mesh,
+            keys,
+            segments=segments,
+            filter=filt,
+            colors=colors,
+            camera_position=camera,
+            contour_line=contour_line,
+        ),  # fmt: skip
         (keys, colors, camera),
         ("motion", "segments", "filter", "colors", "camera_position", "contour_line"),
     )
@@ -140,8 +147,15 @@ def test_lights_and_scene_options(direction, intensity, ambient, background, ref
     obj = mb.Object((BOX_V, BOX_F), motion=mb.Motion.linear((0, 0, 0), (0.3, 0, 0)))
     lights = [] if light is None else [light]
     scene = check(
-        lambda: mb.Scene([obj], _cam(), lights=lights, ambient=ambient, background=background,
-                         reference_time=reference_time, shutter=shutter),  # fmt: skip
+        lambda: mb.Scene(
+            [obj],
+            _cam(),
+            lights=lights,
+            ambient=ambient,
+            background=background,
+            reference_time=reference_time,
+            shutter=shutter,
+        ),  # fmt: skip
         (ambient, background, shutter),
         ("ambient", "background", "reference_time", "shutter"),
     )
@@ -161,9 +175,26 @@ def test_scene_containers(objects, lights, camera_motion):
 
 
 @given(
-    method=st.sampled_from(["accumulation", "motion_volume", "blur_shell", "opaque_image", "camera_velocity"]),
-    option=st.sampled_from(["samples", "segments", "aa", "filter", "contour_line", "exact_static", "spin",
-                            "colors", "color_renders", "subdivisions", "layers", "dim", "jitter"]),  # fmt: skip
+    method=st.sampled_from(
+        ["accumulation", "motion_volume", "blur_shell", "opaque_image", "camera_velocity"]
+    ),
+    option=st.sampled_from(
+        [
+            "samples",
+            "segments",
+            "aa",
+            "filter",
+            "contour_line",
+            "exact_static",
+            "spin",
+            "colors",
+            "color_renders",
+            "subdivisions",
+            "layers",
+            "dim",
+            "jitter",
+        ]
+    ),  # fmt: skip
     value=JUNK,
 )
 def test_render_options(method, option, value):
@@ -197,8 +228,9 @@ def test_draw_and_rasterize(v, f, rgba, previous, object_id, samples, blend, sha
     if draw is None:
         return
     frame = check(
-        lambda: mb.rasterize(_cam(), draw, samples=samples, blend=blend, shading=shading,
-                             lights=[((0.0, -1.0, -1.0), 1.0)]),  # fmt: skip
+        lambda: mb.rasterize(
+            _cam(), draw, samples=samples, blend=blend, shading=shading, lights=[((0.0, -1.0, -1.0), 1.0)]
+        ),  # fmt: skip
         (),
         ("samples", "blend", "shading", "vertices"),
     )
@@ -334,9 +366,13 @@ def test_blur_shell(first, second, normals, subdivisions, alpha):
 @given(rgba=arrays(IMG), name=st.sampled_from(["f.png", "f.PNG", "f.gif", "f", "f.png.bmp", "f.jpg"]))
 def test_frame_save_png(tmp_path_factory, rgba, name):
     path = tmp_path_factory.mktemp("png") / name
-    frame = check(lambda: mb.Frame(rgba, np.zeros(rgba.shape[:2]), np.zeros(rgba.shape[:2], np.int32),
-                                   np.zeros((*rgba.shape[:2], 2))),  # fmt: skip
-                  (rgba,), ("rgba", "depth", "ids", "velocity"))
+    frame = check(
+        lambda: mb.Frame(
+            rgba, np.zeros(rgba.shape[:2]), np.zeros(rgba.shape[:2], np.int32), np.zeros((*rgba.shape[:2], 2))
+        ),  # fmt: skip
+        (rgba,),
+        ("rgba", "depth", "ids", "velocity"),
+    )
     if frame is None:
         return
     check(lambda: frame.save_png(path), (rgba,), ("path", "rgba"))
@@ -345,7 +381,9 @@ def test_frame_save_png(tmp_path_factory, rgba, name):
 
 
 @given(
-    fn=st.sampled_from(["icosphere", "box", "torus", "cylinder", "uv_sphere", "bending_arm", "spinning_propeller"]),
+    fn=st.sampled_from(
+        ["icosphere", "box", "torus", "cylinder", "uv_sphere", "bending_arm", "spinning_propeller"]
+    ),
     a=JUNK,
     b=JUNK,
 )
@@ -363,7 +401,10 @@ def test_procedural_meshes(fn, a, b):
         check(lambda: getattr(mb.meshes, fn)(first, b), (b,), names)
 
 
-@given(shutter=good_or_bad(lambda: "triangle", st.one_of(JUNK, arrays((SMALL,)))), t=st.one_of(JUNK, arrays((SMALL,))))
+@given(
+    shutter=good_or_bad(lambda: "triangle", st.one_of(JUNK, arrays((SMALL,)))),
+    t=st.one_of(JUNK, arrays((SMALL,))),
+)
 def test_shutter_cdf(shutter, t):
     w = check(lambda: mb.scene.shutter_cdf(shutter, t), (shutter, t), ("shutter", "t"))
     if w is not None:
