@@ -275,8 +275,7 @@ fn check_vertices(vertices: &[[f64; 3]]) -> Result<()> {
             format!("too many vertices ({})", vertices.len()),
         ));
     }
-    // `!(|x| <= MAX_COORD)` is also true for NaN.
-    let bad_vertex = |v: &[f64; 3]| v.iter().any(|x| !(x.abs() <= MAX_COORD));
+    let bad_vertex = |v: &[f64; 3]| v.iter().any(|x| x.is_nan() || x.abs() > MAX_COORD);
     if !vertices
         .par_iter()
         .with_min_len(8192)

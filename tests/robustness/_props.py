@@ -4,6 +4,7 @@ return a valid result; leave the caller's arrays as they were; give the same bit
 from __future__ import annotations
 
 import hashlib
+import time
 from collections.abc import Callable, Iterable
 
 import numpy as np
@@ -11,6 +12,10 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 import motionblur as mb
+
+#: Longest a call on the suite's small inputs may take, seconds (they take milliseconds; the
+#: bound catches a call whose work does not follow its arguments).
+TIME_BUDGET = 20.0
 
 #: Errors a call may raise for bad input (with the argument named in the message).
 CLEAR = (ValueError, TypeError, MemoryError)
@@ -127,16 +132,22 @@ def digest(x) -> str:
 
 
 def _outcome(call: Callable[[], object]):
+    t0 = time.perf_counter()
     try:
         result = call()
     except CLEAR as exc:
-        return ("error", type(exc), str(exc)), None
-    return ("ok", digest(result)), result
+        out = ("error", type(exc), str(exc)), None
+    else:
+        out = ("ok", digest(result)), result
+    elapsed = time.perf_counter() - t0
+    assert elapsed < TIME_BUDGET, f"a call took {elapsed:.1f} s (budget {TIME_BUDGET} s): {out[0][:2]}"
+    return out
 
 
 def check(call: Callable[[], object], inputs, names: Iterable[str]):
-    """Run ``call`` twice: the same outcome both times (bits of the result, or the error's type
-    and message), ``inputs`` (anything holding the caller's arrays) unchanged, and an error
+    """Run ``call`` twice: each within ``TIME_BUDGET``, the same outcome both times (bits of the
+    result, or the error's type and message), ``inputs`` (anything holding the caller's arrays)
+    unchanged, and an error
     one of ``CLEAR`` whose message starts by naming one of ``names``. Returns the result, or
     None after an error."""
     before = digest(inputs), [a.flags.writeable for a in _walk(inputs)]
