@@ -23,6 +23,7 @@ __all__ = [
     "BLENDS",
     "MAX_LENGTH",
     "MAX_FPS_RATIO",
+    "MAX_VELOCITY",
     "MAX_LEVELS",
     "MAX_LAYERS",
     "MAX_SAMPLES",
@@ -211,6 +212,7 @@ class _ContourTable:
 
 MAX_LENGTH: float
 MAX_FPS_RATIO: float
+MAX_VELOCITY: float
 MAX_LEVELS: int
 MAX_LAYERS: int
 MAX_SAMPLES: int

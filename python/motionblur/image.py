@@ -51,6 +51,9 @@ __all__ = [
 MAX_LENGTH: float = _core.MAX_LENGTH
 #: Largest accepted ``fps`` / ``target_fps`` ratio of ``camera_motion_blur``.
 MAX_FPS_RATIO: float = _core.MAX_FPS_RATIO
+#: Longest velocity component :func:`velocity_blur` takes, in pixels (a streak that long
+#: crosses any image); :func:`camera_motion_blur` and the ``camera_velocity`` method clamp to it.
+MAX_VELOCITY: float = _core.MAX_VELOCITY
 #: Most pyramid levels, depth-of-field sub-images and blur samples accepted.
 MAX_LEVELS: int = _core.MAX_LEVELS
 MAX_LAYERS: int = _core.MAX_LAYERS

@@ -350,6 +350,13 @@ def test_camera_field_of_view_has_a_stated_range():
     narrow = _cam(yfov=mb.raster.MIN_YFOV)
     frame = mb.render(_scene().with_(camera=narrow), "accumulation", samples=2)
     assert np.isfinite(frame.velocity).all() and np.isfinite(frame.rgba).all()
+    # a camera pan seen through the narrowest lens: streaks longer than any image, clamped
+    pan = mb.SCENES["pan"](32, 24)
+    c = pan.camera
+    pan = pan.with_(camera=mb.Camera(c.pose, mb.raster.MIN_YFOV, c.width, c.height))
+    for method in ("camera_velocity", "accumulation", "motion_volume"):
+        frame = mb.render(pan, method)
+        assert np.isfinite(frame.velocity).all() and np.isfinite(frame.rgba).all(), method
 
 
 def test_look_at_takes_any_up_length_and_raises_for_a_degenerate_one():

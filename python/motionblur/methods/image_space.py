@@ -123,7 +123,8 @@ def camera_velocity(scene: Scene, samples: int = 16, aa: int = 1) -> Frame:
 
     Options: ``samples`` N in [1, 1024] blur taps per pixel; ``aa`` 1, 2 or 4 spatial samples per
     pixel along each axis for the sharp frame. The velocity from the camera at ``t_c`` back to the
-    camera at the shutter's start is scaled by ``1 / t_c`` to span the whole shutter. Pixels of
+    camera at the shutter's start is scaled by ``1 / t_c`` to span the whole shutter and clamped
+    to ``MAX_VELOCITY`` pixels (as :func:`motionblur.image.camera_motion_blur`). Pixels of
     moving objects take the rasterizer's velocity of the object with the camera's motion folded
     in instead (Chapman's static-scene velocity would blur an object the camera follows).
     ``stats``: ``t``, ``samples``.
@@ -139,6 +140,9 @@ def camera_velocity(scene: Scene, samples: int = 16, aa: int = 1) -> Frame:
         vel = image.camera_velocity(frame.depth, cam, start)
         moving = np.isin(frame.ids, [k for k, o in enumerate(scene.objects) if o.is_moving])
         vel = np.where(moving[..., None], frame.velocity, vel) * np.float32(1.0 / tc)
+        # as camera_motion_blur: a streak past MAX_VELOCITY pixels crosses the image anyway (a
+        # very narrow field of view, a point near the previous camera plane)
+        vel = np.clip(vel, -image.MAX_VELOCITY, image.MAX_VELOCITY, out=vel)
         rgba = image.velocity_blur(rgba, vel, samples)
     out = Frame(rgba, frame.depth, frame.ids, frame.velocity)
     out.stats.update(t=tc, samples=samples)
