@@ -440,3 +440,28 @@ def test_a_blur_shell_shared_by_threads_gives_what_one_thread_gives():
     got = shared.build(pos[-1])
     for name in ("vertices", "faces", "rgba", "step"):
         np.testing.assert_array_equal(getattr(got, name), getattr(expect, name))
+
+
+def test_one_scene_rendered_from_several_threads_gives_the_same_bits():
+    """The methods share kept state across calls (static layers, painters): threads rendering
+    one scene at once neither fail nor see each other's frames."""
+    sc = mb.SCENES["cube"](48, 36)
+    methods = ("accumulation", "motion_volume", "opaque_image")
+    expect = {m: mb.render(sc, m).rgba.tobytes() for m in methods}
+    errors, differ = [], []
+
+    def run():
+        try:
+            for _ in range(3):
+                for m in methods:
+                    if mb.render(sc, m).rgba.tobytes() != expect[m]:
+                        differ.append(m)
+        except Exception as exc:  # noqa: BLE001 - the test reports whatever a thread raised
+            errors.append(exc)
+
+    threads = [threading.Thread(target=run) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors and not differ, (errors, differ)
