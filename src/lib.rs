@@ -42,9 +42,9 @@ pub use image::{
     opaque_motion_blur, pixel_bounds, pyramid_blur, pyramid_glow, pyramid_opaque_blur, reconstruct,
     sample_colors, scatter_pieces, splat_paths, velocity_blur, CameraMatrices, Composite,
     DofParams, Piece, ReconstructParams, MAX_FPS_RATIO, MAX_LAYERS, MAX_LENGTH, MAX_LEVELS,
-    MAX_SAMPLES, MAX_TAPS, MIN_ALPHA,
+    MAX_SAMPLES, MAX_TAPS, MAX_VELOCITY, MIN_ALPHA,
 };
-pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats};
+pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats, MAX_COORD};
 pub use motion::{
     axis_angle, check_times, det3, dot, mat4_mul, norm, place, row_times, transpose_times, turn,
     uniform_times, Keyframe, Keyframes, Keys, Mat3, Mat4, Path, Similarity, IDENTITY4,

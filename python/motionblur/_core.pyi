@@ -13,6 +13,7 @@ __all__ = [
     "_check_times",
     "_rotate",
     "MAX_SEGMENTS",
+    "MAX_COORD",
     "FILTERS",
     "MAX_SIDE",
     "MAX_PIXELS",
@@ -22,6 +23,7 @@ __all__ = [
     "BLENDS",
     "MAX_LENGTH",
     "MAX_FPS_RATIO",
+    "MAX_VELOCITY",
     "MAX_LEVELS",
     "MAX_LAYERS",
     "MAX_SAMPLES",
@@ -116,6 +118,7 @@ LEADING: int
 TRAILING: int
 JOINING: int
 MAX_SEGMENTS: int
+MAX_COORD: float
 FILTERS: tuple[str, ...]
 
 @final
@@ -209,6 +212,7 @@ class _ContourTable:
 
 MAX_LENGTH: float
 MAX_FPS_RATIO: float
+MAX_VELOCITY: float
 MAX_LEVELS: int
 MAX_LAYERS: int
 MAX_SAMPLES: int
@@ -343,6 +347,10 @@ class _BlurShell:
         """(vertices f64 (N,3), faces i64 (M,3), rgba f32 (N,4) straight, normals f32 (N,3),
         face i64 (N,), step i32 (N,)). Releases the GIL."""
     def reset(self) -> None: ...
+    def _history(self) -> bytes:
+        """The shell's history (update count, snapshots, rings, per-polygon state) as bytes."""
+    def _restore(self, state: bytes) -> None:
+        """Takes the history of a shell made with the same arguments (ValueError naming state otherwise)."""
     @property
     def updates(self) -> int: ...
     @property

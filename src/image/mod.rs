@@ -28,6 +28,7 @@ mod splat;
 pub use boxblur::box_blur;
 pub use camera::{
     camera_motion_blur, camera_velocity, velocity_blur, CameraMatrices, MAX_FPS_RATIO, MAX_SAMPLES,
+    MAX_VELOCITY,
 };
 pub use colors::{colored, pixel_bounds, sample_colors, MIN_ALPHA};
 pub use dof::{depth_of_field, DofParams, MAX_LAYERS};
@@ -78,6 +79,36 @@ pub(crate) fn check_finite(name: &'static str, data: &[f32]) -> Result<()> {
         .any(|c| c.iter().fold(false, |b, v| b | !v.is_finite()));
     if bad {
         return Err(Error::value(name, "contains NaN or inf"));
+    }
+    Ok(())
+}
+
+/// Whether an alpha is outside [0, 1] (NaN included; -0.0 is inside), from its bits: the
+/// bits of a float in [+0, 1] are at most those of 1.0, and -0.0 is the only negative inside.
+#[inline]
+pub(crate) fn alpha_out_of_range(bits: u32) -> bool {
+    bits > 0x3f80_0000 && bits != 0x8000_0000
+}
+
+/// Fails naming `name` when any value is NaN or infinite, or when an alpha (every value of a
+/// one-channel image, the last of each pixel of a four-channel one) is outside [0, 1]: the
+/// opaque blurs, glows and composites are defined for premultiplied colour with such alphas
+/// only (one parallel pass).
+pub(crate) fn check_premultiplied(name: &'static str, data: &[f32], channels: usize) -> Result<()> {
+    use rayon::prelude::*;
+    check_finite(name, data)?;
+    let bad = data
+        .par_chunks(channels << 14)
+        .flat_map_iter(|c| c.iter().skip(channels - 1).step_by(channels))
+        .find_first(|a| alpha_out_of_range(a.to_bits()));
+    if let Some(a) = bad {
+        return Err(Error::value(
+            name,
+            format!(
+                "alpha must be in [0, 1] (premultiplied colour), got {a}; an opaque blur, glow or \
+                 composite of other alphas is undefined"
+            ),
+        ));
     }
     Ok(())
 }

@@ -347,6 +347,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(motion_volume, m)?)?;
     m.add_function(wrap_pyfunction!(spin_volume, m)?)?;
     m.add("MAX_SEGMENTS", MAX_SEGMENTS)?;
+    m.add("MAX_COORD", crate::mesh::MAX_COORD)?;
     m.add("FILTERS", PyTuple::new(m.py(), Filter::NAMES)?)?;
     m.add("LEADING", LEADING)?;
     m.add("TRAILING", TRAILING)?;

@@ -9,6 +9,7 @@ use numpy::{
     PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
+use pyo3::types::PyBytes;
 
 use super::convert::{c_slice, detached_in_pool, face_indices, rows};
 use crate::{
@@ -237,6 +238,17 @@ impl PyBlurShell {
 
     fn reset(&mut self) {
         self.inner.reset();
+    }
+
+    /// The shell's history as bytes, for pickling (`src/shell/history.rs`).
+    fn _history<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+        PyBytes::new(py, &self.inner.history())
+    }
+
+    /// Takes the history of a shell made with the same arguments; ValueError naming `state`
+    /// otherwise (nothing changes then).
+    fn _restore(&mut self, state: &[u8]) -> PyResult<()> {
+        Ok(self.inner.restore(state)?)
     }
 
     #[getter]

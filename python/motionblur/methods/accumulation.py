@@ -18,7 +18,7 @@ from collections import deque
 
 import numpy as np
 
-from .._validate import as_float, as_int, as_samples
+from .._validate import as_array, as_bool, as_float, as_int, as_samples
 from ..raster import Frame
 from ..render import register
 from ..scene import Scene
@@ -128,6 +128,10 @@ class Sequence:
     rendered again (``keep_images=False``, the book's way) or kept from before
     (``keep_images=True``: N images of memory, one draw per frame). The total is kept in float64
     so the subtraction does not drift. ``draws`` counts the calls to ``render_at``.
+
+    Every render must be a Frame or a real, finite (H,W,4) array of the same shape as the
+    first; otherwise :meth:`next` raises TypeError / ValueError naming ``render_at`` and the
+    time. ``keep_images`` is True or False (anything else raises TypeError).
     """
 
     def __init__(
@@ -141,17 +145,24 @@ class Sequence:
         if not self.step > 0:
             raise ValueError(f"step: must be > 0, got {self.step}")
         self.t0 = as_float(t0, "t0")
-        self.keep_images = bool(keep_images)
+        self.keep_images = as_bool(keep_images, "keep_images")
         self.frame_index = -1
         self.draws = 0
         self._total = None
+        self._shape: tuple[int, ...] | None = None
         self._kept: deque = deque()
 
     def _draw(self, t: float) -> np.ndarray:
         self.draws += 1
         img = self.render_at(t)
         img = img.rgba if isinstance(img, Frame) else img
-        return np.asarray(img, dtype=np.float64)
+        name = f"render_at: its result at t={t:g}"
+        if img is None or isinstance(img, (str, bytes)):
+            raise TypeError(f"{name} is {type(img).__name__}; expected a Frame or an (H,W,4) array")
+        want = (None, None, 4) if self._shape is None else self._shape
+        out = as_array(img, name, np.float64, want)
+        self._shape = out.shape
+        return out
 
     def time(self, j: int) -> float:
         """Time of the j-th render of the whole sequence."""
