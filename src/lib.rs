@@ -12,10 +12,12 @@
 //! - `shell`: blur shells (Jones and Keyser);
 //! - `accumulate`: the accumulation buffer's kernels;
 //! - `raster`: the software rasterizer;
-//! - `image`: image-space blur.
+//! - `image`: image-space blur;
+//! - `budget`: the memory budget every kernel checks before it allocates.
 #![warn(missing_docs)]
 
 mod accumulate;
+mod budget;
 mod contour;
 mod error;
 mod image;
@@ -32,6 +34,9 @@ pub use accumulate::{
     accumulate, accumulate_moving, accumulate_still, composite, facing_faces, over, pixel_rect,
     resolve, sample_rects, window_projection, Accumulated, Layer, PaintObject, Painter, Rect,
     Samples, StaticLayer, StillCamera,
+};
+pub use budget::{
+    memory_budget, set_memory_budget, Need, DEFAULT_MEMORY_BUDGET, MIN_MEMORY_BUDGET,
 };
 pub use contour::{
     contour_edges, contour_pairs, motion_silhouette, ContourEdge, ContourSet, ContourTable,
