@@ -56,8 +56,8 @@ pub use motion::{
 };
 pub use raster::{
     faces_from_i64, rasterize, rasterize_over, Background, Blend, Camera, Draw, Frame, Light,
-    Options as RasterOptions, Shading, Stats as RasterStats, MAX_INTERNAL_SIDE, MAX_PIXELS,
-    MAX_SIDE, SAMPLES,
+    Options as RasterOptions, Shading, Stats as RasterStats, FRAGMENT_CAP, MAX_INTERNAL_SIDE,
+    MAX_PIXELS, MAX_SIDE, SAMPLES,
 };
 pub use shell::{
     BlurShell, BuildPlan, FaceState, ShellColor, ShellMesh, ShellOptions, ShellOut, MAX_HYSTERESIS,

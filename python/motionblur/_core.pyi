@@ -20,6 +20,7 @@ __all__ = [
     "FILTERS",
     "MAX_SIDE",
     "MAX_PIXELS",
+    "FRAGMENT_CAP",
     "MAX_INTERNAL_SIDE",
     "SAMPLES",
     "SHADINGS",
@@ -381,6 +382,7 @@ def _motion_silhouette(
 
 MAX_SIDE: int
 MAX_PIXELS: int
+FRAGMENT_CAP: int
 MAX_INTERNAL_SIDE: int
 SAMPLES: tuple[int, ...]
 SHADINGS: tuple[str, ...]

@@ -210,6 +210,7 @@ impl ToDict for RasterStats {
         let d = PyDict::new(py);
         d.set_item("triangles", self.triangles)?;
         d.set_item("fragments", self.fragments)?;
+        d.set_item("approximated_samples", self.approximated)?;
         d.set_item("culled", self.culled)?;
         d.set_item("clipped", self.clipped)?;
         d.set_item("ms_transform", self.ms_transform)?;
