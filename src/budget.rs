@@ -43,12 +43,17 @@ pub fn set_memory_budget(bytes: u64) -> Result<u64> {
 
 /// `bytes` for people: "5.37 GB (5368709120 bytes)".
 pub fn human(bytes: u64) -> String {
+    format!("{} ({bytes} bytes)", short(bytes))
+}
+
+/// `bytes` in GB, MB or kB: "5.37 GB".
+fn short(bytes: u64) -> String {
     let (v, unit) = match bytes {
         b if b >= 1_000_000_000 => (b as f64 / 1e9, "GB"),
         b if b >= 1_000_000 => (b as f64 / 1e6, "MB"),
         b => (b as f64 / 1e3, "kB"),
     };
-    format!("{v:.2} {unit} ({bytes} bytes)")
+    format!("{v:.2} {unit}")
 }
 
 /// The product of the named `sizes` times `each` bytes, or a `ValueError` naming them when it
@@ -119,7 +124,11 @@ impl Need {
     /// Fails with [`Error::Memory`] when the total is over the budget: the error names the
     /// arguments of the largest term and lists every term.
     pub fn check(&self) -> Result<()> {
-        let budget = memory_budget();
+        self.check_within(memory_budget())
+    }
+
+    /// [`Need::check`] against `budget` bytes.
+    pub fn check_within(&self, budget: u64) -> Result<()> {
         if self.total <= budget {
             return Ok(());
         }
@@ -131,7 +140,7 @@ impl Need {
         let parts = self
             .terms
             .iter()
-            .map(|(n, v, b)| format!("{n} = {v} ({})", human(*b)))
+            .map(|(n, v, b)| format!("{n} = {v} ({})", short(*b)))
             .collect::<Vec<_>>()
             .join(" + ");
         Err(Error::Memory {
@@ -145,11 +154,6 @@ impl Need {
             ),
         })
     }
-}
-
-/// Checks that the product of `sizes` times `each` bytes fits the budget (one-term [`Need`]).
-pub fn check(call: &'static str, sizes: &[(&'static str, u64)], each: u64) -> Result<()> {
-    Need::new(call).add(sizes, each)?.check()
 }
 
 /// The error of an allocation of `bytes` the system refused.
@@ -175,6 +179,7 @@ pub fn try_reserve<T>(v: &mut Vec<T>, additional: usize, name: &str) -> Result<(
 }
 
 /// `vec![value; n]`, or [`Error::Memory`] naming `name` when the system refuses it.
+#[cfg_attr(not(feature = "python"), allow(dead_code))]
 pub fn try_vec<T: Clone>(n: usize, value: T, name: &str) -> Result<Vec<T>> {
     let mut v = Vec::new();
     v.try_reserve_exact(n).map_err(|_| {
@@ -211,25 +216,27 @@ pub(crate) mod tests {
 
     #[test]
     fn a_need_over_the_budget_names_its_largest_term_and_raising_the_budget_lets_it_through() {
-        let _lock = BUDGET_LOCK.lock().unwrap();
-        let old = set_memory_budget(1 << 30).unwrap();
         let need = Need::new("ContourTable")
             .add(&[("faces", 1 << 20), ("directions", 1 << 12)], 1)
             .unwrap()
             .add(&[("faces", 1 << 20)], 16)
             .unwrap();
         assert_eq!(need.bytes(), (1 << 32) + (1 << 24));
-        let e = need.check().unwrap_err();
+        let e = need.check_within(1 << 30).unwrap_err();
         let Error::Memory { name, reason } = &e else {
             panic!("{e:?}")
         };
         assert_eq!(name, "faces x directions");
         assert!(reason.starts_with("ContourTable needs 4.31 GB"), "{reason}");
         assert!(reason.contains("1048576 x 4096"), "{reason}");
-        set_memory_budget(1 << 33).unwrap();
+        need.check_within(1 << 33).unwrap();
+        // the process-wide budget (the default 4 GiB) refuses it, a raised one lets it through
+        let _lock = BUDGET_LOCK.lock().unwrap();
+        assert!(need.check().is_err());
+        let old = set_memory_budget(1 << 40).unwrap();
         need.check().unwrap();
         assert!(set_memory_budget(10).is_err());
-        set_memory_budget(old).unwrap();
+        assert_eq!(set_memory_budget(old).unwrap(), 1 << 40);
     }
 
     #[test]

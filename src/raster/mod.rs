@@ -133,19 +133,14 @@ fn with_scratch<R>(f: impl FnOnce(&mut TileScratch) -> R) -> R {
 /// position and previous position (velocity), normal.
 const VERTEX_BYTES: u64 = 8 + 12 + 32 + 32 + 12;
 
-/// Bytes of a thread's tile buffers at most: the samples, depth and winners, and the
-/// transparent pass's lists, sorted copy and spills of `FRAGMENT_CAP` fragments a sample.
-const SCRATCH_BYTES: u64 = (TILE * TILE) as u64
-    * (std::mem::size_of::<blend::Sample>() as u64
-        + 8
-        + 3 * blend::FRAGMENT_CAP as u64 * std::mem::size_of::<blend::Frag>() as u64);
-
 /// What a frame allocates before binning: the frame (32 bytes a pixel), each vertex's
-/// transform, each face's set-up triangle (more when clipped) and the threads' tile buffers.
+/// transform and each face's set-up triangle (more when clipped). The threads' tile buffers
+/// are not counted: they are kept between frames and bounded whatever the frame (~180 KB a
+/// thread, and the transparent pass's lists at most `FRAGMENT_CAP` fragments a sample, ~14 MB
+/// a thread at the deepest).
 fn frame_need(camera: &Camera, draws: &[Draw]) -> Result<Need> {
     let vertices: u64 = draws.iter().map(|d| d.vertices.len() as u64).sum();
     let faces: u64 = draws.iter().map(|d| d.faces.len() as u64).sum();
-    let threads = rayon::current_num_threads() as u64;
     Need::new("rasterize")
         .add(
             &[
@@ -158,8 +153,7 @@ fn frame_need(camera: &Camera, draws: &[Draw]) -> Result<Need> {
         .add(
             &[("faces", faces)],
             std::mem::size_of::<setup::Tri>() as u64,
-        )?
-        .add(&[("threads", threads)], SCRATCH_BYTES)
+        )
 }
 
 /// Renders `draws` seen by `camera`. Errors name the offending argument.
