@@ -46,11 +46,15 @@ def set_memory_budget(bytes: int) -> int:  # noqa: A002 - the unit is the argume
     return int(_core.set_memory_budget(n))
 
 
-def _human(n: int) -> str:
+def _short(n: int) -> str:
     for unit, size in (("GB", 10**9), ("MB", 10**6)):
         if n >= size:
-            return f"{n / size:.2f} {unit} ({n} bytes)"
-    return f"{n / 1e3:.2f} kB ({n} bytes)"
+            return f"{n / size:.2f} {unit}"
+    return f"{n / 1e3:.2f} kB"
+
+
+def _human(n: int) -> str:
+    return f"{_short(n)} ({n} bytes)"
 
 
 def need(call: str, *terms: tuple[dict[str, int], int]) -> int:
@@ -76,7 +80,7 @@ def need(call: str, *terms: tuple[dict[str, int], int]) -> int:
     budget = memory_budget()
     if total > budget:
         largest = max(parts, key=lambda p: p[2])[0]
-        listed = " + ".join(f"{n} = {v} ({_human(b)})" for n, v, b in parts)
+        listed = " + ".join(f"{n} = {v} ({_short(b)})" for n, v, b in parts)
         raise MemoryError(
             f"{largest}: {call} needs {_human(total)}: {listed}; over the memory budget of "
             f"{_human(budget)} (motionblur.set_memory_budget raises it)"
