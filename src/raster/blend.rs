@@ -16,6 +16,7 @@
 //! each depth-tested against the depth the fragments before it wrote (and the opaque surface),
 //! composited over when nearer and writing its depth, dropped when not. It needs no list: each
 //! fragment is composited as it comes.
+use super::kbuffer::{merge_far_to_near, Spill, Tail};
 use super::shade::Shaded;
 use std::cmp::Ordering;
 
@@ -52,7 +53,7 @@ impl Sample {
 
 /// Total order on fragments of one sample, far to near, independent of submission order.
 #[inline]
-fn far_to_near(a: &Frag, b: &Frag) -> Ordering {
+pub(super) fn far_to_near(a: &Frag, b: &Frag) -> Ordering {
     a.invw
         .total_cmp(&b.invw)
         .then_with(|| {
@@ -78,107 +79,6 @@ pub fn over(src: [f32; 4], dst: [f32; 4]) -> [f32; 4] {
         src[2] + k * dst[2],
         src[3] + k * dst[3],
     ]
-}
-
-/// The farthest fragments of a sample past the cap, merged into one layer: its alpha is exactly
-/// what compositing them in any order gives (`1 - prod(1 - a)`), its colour their
-/// premultiplied colours' alpha-weighted mean scaled to that alpha.
-#[derive(Clone, Copy, Debug)]
-struct Tail {
-    rgb: [f64; 3],
-    alpha: f64,
-    transmit: f64,
-}
-
-impl Default for Tail {
-    fn default() -> Self {
-        Tail {
-            rgb: [0.0; 3],
-            alpha: 0.0,
-            transmit: 1.0,
-        }
-    }
-}
-
-impl Tail {
-    fn add(&mut self, f: &Frag) {
-        let c = f.shaded.rgba;
-        for k in 0..3 {
-            self.rgb[k] += f64::from(c[k]);
-        }
-        self.alpha += f64::from(c[3]);
-        self.transmit *= 1.0 - f64::from(c[3]);
-    }
-
-    /// The merged layer, premultiplied.
-    fn rgba(&self) -> [f32; 4] {
-        if self.alpha <= 0.0 {
-            return [0.0; 4];
-        }
-        let a = 1.0 - self.transmit;
-        let k = a / self.alpha;
-        [
-            (self.rgb[0] * k) as f32,
-            (self.rgb[1] * k) as f32,
-            (self.rgb[2] * k) as f32,
-            a as f32,
-        ]
-    }
-}
-
-/// The k-buffer of a sample past the cap: the nearest [`FRAGMENT_CAP`] of the fragments that
-/// came after its list was full, in a heap whose root is the farthest (so a nearer fragment
-/// replaces it in `log2(FRAGMENT_CAP)` steps), and the farther ones merged.
-#[derive(Debug, Default)]
-struct Spill {
-    /// The tile sample it belongs to.
-    sample: u32,
-    kept: Vec<Frag>,
-    tail: Tail,
-}
-
-impl Spill {
-    fn add(&mut self, f: Frag) {
-        let heap = &mut self.kept;
-        if heap.len() < FRAGMENT_CAP as usize {
-            // sift up: a parent is never nearer than its children
-            heap.push(f);
-            let mut i = heap.len() - 1;
-            while i > 0 {
-                let p = (i - 1) / 2;
-                if far_to_near(&heap[i], &heap[p]) != Ordering::Less {
-                    break;
-                }
-                heap.swap(i, p);
-                i = p;
-            }
-            return;
-        }
-        if far_to_near(&f, &heap[0]) != Ordering::Greater {
-            self.tail.add(&f); // no nearer than the farthest kept
-            return;
-        }
-        self.tail.add(&heap[0]);
-        heap[0] = f;
-        // sift down
-        let n = heap.len();
-        let mut i = 0;
-        loop {
-            let (l, r) = (2 * i + 1, 2 * i + 2);
-            let mut far = i;
-            if l < n && far_to_near(&heap[l], &heap[far]) == Ordering::Less {
-                far = l;
-            }
-            if r < n && far_to_near(&heap[r], &heap[far]) == Ordering::Less {
-                far = r;
-            }
-            if far == i {
-                break;
-            }
-            heap.swap(i, far);
-            i = far;
-        }
-    }
 }
 
 /// Reusable buffers of the transparent pass.
@@ -234,6 +134,12 @@ impl FragLists {
             self.spill_of.resize(n, NO_SPILL);
         }
         self.refused = 0;
+    }
+
+    /// Fragments the list has room for (tests: it never holds more than the cap a sample).
+    #[cfg(test)]
+    pub fn held_capacity(&self) -> usize {
+        self.frags.capacity()
     }
 
     /// Gives back the spills in use (their samples have none again).
@@ -435,23 +341,6 @@ impl FragLists {
     }
 }
 
-/// `a` and `b` (each sorted far to near) merged far to near into `out`.
-fn merge_far_to_near(a: &[Frag], b: &[Frag], out: &mut Vec<Frag>) {
-    out.clear();
-    let (mut i, mut j) = (0, 0);
-    while i < a.len() && j < b.len() {
-        if far_to_near(&b[j], &a[i]) == Ordering::Less {
-            out.push(b[j]);
-            j += 1;
-        } else {
-            out.push(a[i]);
-            i += 1;
-        }
-    }
-    out.extend_from_slice(&a[i..]);
-    out.extend_from_slice(&b[j..]);
-}
-
 /// Stable insertion sort, far to near: lists are short (a few layers per sample).
 fn insertion_sort(list: &mut [Frag]) {
     if list.len() > 32 {
@@ -468,11 +357,11 @@ fn insertion_sort(list: &mut [Frag]) {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::raster::options::Blend;
 
-    fn frag(sample: u32, invw: f32, a: f32, id: i32) -> Frag {
+    pub(in crate::raster) fn frag(sample: u32, invw: f32, a: f32, id: i32) -> Frag {
         Frag {
             sample,
             invw,
@@ -553,7 +442,7 @@ mod tests {
     }
 
     /// Per sample on its own: its fragments in submission order, sorted (exact), composited.
-    fn reference(frags: &[Frag], samples: &mut [Sample], blend: Blend) {
+    pub(in crate::raster) fn reference(frags: &[Frag], samples: &mut [Sample], blend: Blend) {
         for (s, sample) in samples.iter_mut().enumerate() {
             let mut list: Vec<Frag> = frags
                 .iter()
@@ -680,7 +569,12 @@ mod tests {
     /// exact `want`: alpha the same up to rounding (the merged layer's alpha is exact), each
     /// colour channel within what reordering the merged fragments can change, the spread of
     /// their straight colours times the merged alpha times what the nearest let through.
-    fn assert_within_merge_bound(list: &[Frag], start: &Sample, got: &Sample, want: &Sample) {
+    pub(in crate::raster) fn assert_within_merge_bound(
+        list: &[Frag],
+        start: &Sample,
+        got: &Sample,
+        want: &Sample,
+    ) {
         let mut sorted = list.to_vec();
         sorted.sort_by(far_to_near);
         let (tail, kept) = sorted.split_at(sorted.len() - FRAGMENT_CAP as usize);
@@ -698,52 +592,5 @@ mod tests {
             let err = (got.rgba[ch] - want.rgba[ch]).abs();
             assert!(err <= bound, "channel {ch}: {err} > {bound} ({start:?})");
         }
-    }
-
-    #[test]
-    fn a_deep_sample_keeps_its_nearest_fragments_exactly_and_merges_the_rest() {
-        // 200 layers on one sample, submitted in a shuffled order; its neighbour holds
-        // FRAGMENT_CAP layers exactly (no spill).
-        let cap = FRAGMENT_CAP as usize;
-        let mut frags: Vec<Frag> = (0..200)
-            .map(|i| {
-                let mut f = frag(0, 0.001 * (i + 1) as f32, 0.02 + 0.001 * (i % 7) as f32, i);
-                f.shaded.rgba[1] = f.shaded.rgba[3] * (i % 3) as f32 * 0.5;
-                f
-            })
-            .collect();
-        frags.extend((0..cap).map(|i| frag(1, 0.01 * (i + 1) as f32, 0.1, i as i32)));
-        let mut order: Vec<usize> = (0..frags.len()).collect();
-        order.sort_by_key(|&i| (i * 7919) % frags.len());
-        let mut l = FragLists::default();
-        let start = Sample {
-            rgba: [0.0, 0.0, 1.0, 1.0],
-            invw: 0.0,
-            id: -1,
-            velocity: [0.0; 2],
-        };
-        for _ in 0..2 {
-            // twice: the lists and spills are reused as a thread's scratch is
-            l.clear(2);
-            for &i in &order {
-                l.push(frags[i]);
-            }
-            let mut got = [start; 2];
-            assert_eq!(l.composite(&mut got), 1, "only sample 0 is past the cap");
-            let shuffled: Vec<Frag> = order.iter().map(|&i| frags[i]).collect();
-            let mut want = [start; 2];
-            reference(&shuffled, &mut want, Blend::Exact);
-            assert_eq!(
-                got[1].rgba.map(f32::to_bits),
-                want[1].rgba.map(f32::to_bits)
-            );
-            assert_eq!((got[0].id, got[0].invw), (want[0].id, want[0].invw));
-            assert_eq!(got[0].id, 199);
-            assert_within_merge_bound(&frags[..200], &start, &got[0], &want[0]);
-            // the merged layer is not the exact one: the test's colours make it differ
-            assert_ne!(got[0].rgba, want[0].rgba);
-        }
-        // the lists never held more than FRAGMENT_CAP fragments a sample
-        assert!(l.frags.capacity() <= 2 * cap);
     }
 }

@@ -9,7 +9,8 @@
 //! 3. binning into 64x64-sample tiles, in submission order, each bin holding copies of its
 //!    triangles (`bins.rs`);
 //! 4. tiles in parallel (rayon): an opaque pass with a visibility buffer, then a transparent pass
-//!    with per-sample fragment lists composited exactly or unsorted (`tile.rs`, `blend.rs`), then
+//!    with per-sample fragment lists composited exactly or unsorted (`tile.rs`, `blend.rs`, and
+//!    past `FRAGMENT_CAP` a sample the k-buffer of `kbuffer.rs`), then
 //!    the box resolve into the frame (`buffers.rs`).
 //!
 //! Every step is deterministic and no step depends on how work is split between threads, so the
@@ -26,6 +27,7 @@ mod clip;
 mod coverage;
 mod draw;
 mod interp;
+mod kbuffer;
 mod options;
 mod setup;
 mod shade;
