@@ -12,10 +12,12 @@
 //! - `shell`: blur shells (Jones and Keyser);
 //! - `accumulate`: the accumulation buffer's kernels;
 //! - `raster`: the software rasterizer;
-//! - `image`: image-space blur.
+//! - `image`: image-space blur;
+//! - `budget`: the memory budget every kernel checks before it allocates.
 #![warn(missing_docs)]
 
 mod accumulate;
+mod budget;
 mod contour;
 mod error;
 mod image;
@@ -32,6 +34,9 @@ pub use accumulate::{
     accumulate, accumulate_moving, accumulate_still, composite, facing_faces, over, pixel_rect,
     resolve, sample_rects, window_projection, Accumulated, Layer, PaintObject, Painter, Rect,
     Samples, StaticLayer, StillCamera,
+};
+pub use budget::{
+    memory_budget, set_memory_budget, Need, DEFAULT_MEMORY_BUDGET, MIN_MEMORY_BUDGET,
 };
 pub use contour::{
     contour_edges, contour_pairs, motion_silhouette, ContourEdge, ContourSet, ContourTable,
@@ -51,8 +56,8 @@ pub use motion::{
 };
 pub use raster::{
     faces_from_i64, rasterize, rasterize_over, Background, Blend, Camera, Draw, Frame, Light,
-    Options as RasterOptions, Shading, Stats as RasterStats, MAX_INTERNAL_SIDE, MAX_PIXELS,
-    MAX_SIDE, SAMPLES,
+    Options as RasterOptions, Shading, Stats as RasterStats, FRAGMENT_CAP, MAX_INTERNAL_SIDE,
+    MAX_PIXELS, MAX_SIDE, SAMPLES,
 };
 pub use shell::{
     BlurShell, BuildPlan, FaceState, ShellColor, ShellMesh, ShellOptions, ShellOut, MAX_HYSTERESIS,

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from . import (
     _malloc,  # noqa: F401  (keeps freed frame buffers in the process; see the module)
+    budget,
     image,
     interop,
     meshes,
@@ -21,6 +22,7 @@ from . import shell as _shell
 from ._core import __version__
 from ._namespace import tidy
 from ._optional import MissingDependencyError
+from .budget import memory_budget, set_memory_budget
 from .evaluation import metrics, reference
 from .geometry import *  # noqa: F403
 from .interop import read_image, to_mitsuba_dict
@@ -31,7 +33,18 @@ from .scene import *  # noqa: F403
 from .scenes_builtin import SCENES, builtin_scene
 from .shell import *  # noqa: F403
 
-__all__ = ["__version__", "image", "meshes", "interop", *_geometry.__all__, *_raster.__all__, *_shell.__all__]
+__all__ = [
+    "__version__",
+    "budget",
+    "memory_budget",
+    "set_memory_budget",
+    "image",
+    "meshes",
+    "interop",
+    *_geometry.__all__,
+    *_raster.__all__,
+    *_shell.__all__,
+]
 __all__ += [
     *_scene.__all__,
     "render",

@@ -9,6 +9,10 @@ from typing_extensions import Self
 
 __all__ = [
     "__version__",
+    "memory_budget",
+    "set_memory_budget",
+    "DEFAULT_MEMORY_BUDGET",
+    "MIN_MEMORY_BUDGET",
     "_Keyframes",
     "_check_times",
     "_rotate",
@@ -17,6 +21,7 @@ __all__ = [
     "FILTERS",
     "MAX_SIDE",
     "MAX_PIXELS",
+    "FRAGMENT_CAP",
     "MAX_INTERNAL_SIDE",
     "SAMPLES",
     "SHADINGS",
@@ -68,6 +73,17 @@ __all__ = [
 ]
 
 __version__: str
+
+# --- the memory budget (src/budget.rs)
+
+DEFAULT_MEMORY_BUDGET: int
+MIN_MEMORY_BUDGET: int
+
+def memory_budget() -> int:
+    """The most bytes one call may allocate."""
+
+def set_memory_budget(bytes: int) -> int:
+    """Sets the memory budget (bytes, >= MIN_MEMORY_BUDGET); returns the previous one."""
 
 # --- motion (the keyframe engine)
 
@@ -374,6 +390,7 @@ def _motion_silhouette(
 
 MAX_SIDE: int
 MAX_PIXELS: int
+FRAGMENT_CAP: int
 MAX_INTERNAL_SIDE: int
 SAMPLES: tuple[int, ...]
 SHADINGS: tuple[str, ...]

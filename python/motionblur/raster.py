@@ -56,6 +56,9 @@ __all__ = ["Camera", "Draw", "Frame", "look_at", "rasterize"]
 #: defined by the compiled core.
 MAX_SIDE: int = _core.MAX_SIDE
 MAX_PIXELS: int = _core.MAX_PIXELS
+#: Transparent fragments of one sample composited exactly with ``blend="exact"`` (see
+#: :func:`rasterize`).
+FRAGMENT_CAP: int = _core.FRAGMENT_CAP
 #: The accepted vertical fields of view, radians: ``[MIN_YFOV, pi - MIN_YFOV]``. Below it the
 #: projection's scale ``1 / tan(yfov / 2)`` sends points of the coordinate range past float32
 #: pixels (velocities become inf); at the largest image side a pixel is then 6e-11 rad.
@@ -499,8 +502,23 @@ def rasterize(
     background arrays are read, never written. Wrong shapes, dtypes that do not convert, NaN
     colours and NaN or non-positive depths raise ValueError / TypeError naming ``background``.
 
+    ``blend="exact"`` keeps at most ``FRAGMENT_CAP`` (32) transparent fragments of a sample in
+    its list: a sample with more (a stack of more than 32 transparent surfaces) gets its 32
+    nearest composited exactly over the farther ones merged into one layer, whose alpha is
+    exact and whose colour is their alpha-weighted mean (the error is at most the spread of the
+    merged colours times their alpha times what the 32 nearest let through); the frame's
+    memory then stays bounded whatever the depth complexity, and its time proportional to the
+    fragments. ``blend="unsorted"`` composites each fragment as it comes (no list).
+
+    Memory: the frame's 32 bytes a pixel, about 100 bytes a vertex and a face, and the tiles'
+    copies of the triangles (about 100 bytes for each 64x64-sample tile a triangle's box
+    reaches) are checked against the memory budget (``motionblur.set_memory_budget``) before
+    they are allocated: past it ``MemoryError`` names the arguments and the bytes.
+
     ``Frame.stats`` (a dict): ``triangles`` (after clipping, culling and dropping triangles
-    that cover no sample), ``fragments`` (samples covered, both passes), ``culled`` (back faces),
+    that cover no sample), ``fragments`` (samples covered, both passes),
+    ``approximated_samples`` (samples of the supersampled image whose transparent fragments
+    past ``FRAGMENT_CAP`` were merged, 0 when the frame is exact), ``culled`` (back faces),
     ``clipped`` (faces clipped against the near/far planes or the guard band), and
     milliseconds per stage: ``ms_transform`` (vertices projected and snapped), ``ms_setup``
     (triangle set-up: clipping, culling, bounds, the covered box of small triangles),

@@ -39,7 +39,13 @@ pub use reconstruct::{reconstruct, ReconstructParams, MAX_TAPS};
 pub use scatter::{scatter_pieces, Piece};
 pub use splat::splat_paths;
 
+use crate::budget::Need;
 use crate::error::{Error, Result};
+
+/// Copies of its input an image kernel holds at most (transposed and sheared rows, the
+/// pyramid's levels, a third more, and its expansions, the depth of field's layer and sum),
+/// counted against the memory budget by [`check_image`].
+const IMAGE_COPIES: u64 = 8;
 
 /// Largest accepted filter length (pixels); longer filters are absurd for any image we accept.
 pub const MAX_LENGTH: f32 = 65536.0;
@@ -47,7 +53,8 @@ pub const MAX_LENGTH: f32 = 65536.0;
 /// Below this blurred opacity the rescale of eq. 7 treats the pixel as empty (colour 0).
 pub const ALPHA_EPS: f32 = 1e-12;
 
-/// Checks that `data` holds `h * w * channels` values and that the image is not empty.
+/// Checks that `data` holds `h * w * channels` values, that the image is not empty, and that
+/// a kernel holding [`IMAGE_COPIES`] copies of it fits the memory budget.
 pub(crate) fn check_image(
     name: &'static str,
     data: &[f32],
@@ -68,7 +75,36 @@ pub(crate) fn check_image(
             ),
         ));
     }
-    Ok(())
+    Need::new("an image kernel (8 copies of its input at most)")
+        .add(
+            &[
+                ("width", w as u64),
+                ("height", h as u64),
+                ("channels", channels as u64),
+            ],
+            4 * IMAGE_COPIES,
+        )?
+        .check()
+}
+
+/// Checks the `buffers` images of `w` x `h` RGBA pixels (float32) that splatting sums (one per
+/// run of sources, and the result) against the memory budget.
+pub(crate) fn check_splat_buffers(
+    call: &'static str,
+    w: usize,
+    h: usize,
+    buffers: usize,
+) -> Result<()> {
+    Need::new(call)
+        .add(
+            &[
+                ("width", w as u64),
+                ("height", h as u64),
+                ("buffers", buffers as u64 + 1),
+            ],
+            16,
+        )?
+        .check()
 }
 
 /// Fails naming `name` when any value is NaN or infinite (in parallel over rows).

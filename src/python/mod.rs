@@ -3,6 +3,7 @@
 use pyo3::prelude::*;
 
 mod accumulate;
+mod budget;
 mod convert;
 mod geometry;
 mod image;
@@ -14,6 +15,7 @@ mod shell;
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    budget::register(m)?;
     motion::register(m)?;
     geometry::register(m)?;
     raster::register(m)?;
