@@ -16,21 +16,10 @@
 //! each depth-tested against the depth the fragments before it wrote (and the opaque surface),
 //! composited over when nearer and writing its depth, dropped when not. It needs no list: each
 //! fragment is composited as it comes.
+pub use super::fragment::{Frag, FRAGMENT_CAP};
+use super::fragment::far_to_near;
 use super::kbuffer::{merge_far_to_near, Spill, Tail};
-use super::shade::Shaded;
 use std::cmp::Ordering;
-
-/// Transparent fragments of one sample composited exactly (`Blend::Exact`); the farther ones
-/// of a sample with more are merged into one approximate layer.
-pub const FRAGMENT_CAP: u32 = 32;
-
-/// One transparent fragment in a tile: the tile-local sample, 1/w, and its shading.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Frag {
-    pub sample: u32,
-    pub invw: f32,
-    pub shaded: Shaded,
-}
 
 /// The per-sample result after both passes.
 #[derive(Clone, Copy, Debug)]
@@ -51,23 +40,6 @@ impl Sample {
     };
 }
 
-/// Total order on fragments of one sample, far to near, independent of submission order.
-#[inline]
-pub(super) fn far_to_near(a: &Frag, b: &Frag) -> Ordering {
-    a.invw
-        .total_cmp(&b.invw)
-        .then_with(|| {
-            let ka = a.shaded.rgba.map(f32::to_bits);
-            let kb = b.shaded.rgba.map(f32::to_bits);
-            ka.cmp(&kb)
-        })
-        .then(a.shaded.id.cmp(&b.shaded.id))
-        .then_with(|| {
-            let ka = a.shaded.velocity.map(f32::to_bits);
-            let kb = b.shaded.velocity.map(f32::to_bits);
-            ka.cmp(&kb)
-        })
-}
 
 /// Premultiplied `src over dst`.
 #[inline]
@@ -360,6 +332,7 @@ fn insertion_sort(list: &mut [Frag]) {
 pub(super) mod tests {
     use super::*;
     use crate::raster::options::Blend;
+    use crate::raster::shade::Shaded;
 
     pub(in crate::raster) fn frag(sample: u32, invw: f32, a: f32, id: i32) -> Frag {
         Frag {

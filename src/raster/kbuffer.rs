@@ -4,7 +4,7 @@
 //! alpha is exact and whose colour is their alpha-weighted mean. A sample's memory is then
 //! bounded whatever its depth complexity, and each fragment past the cap costs
 //! `log2(FRAGMENT_CAP)` steps.
-use super::blend::{far_to_near, Frag, FRAGMENT_CAP};
+use super::fragment::{far_to_near, Frag, FRAGMENT_CAP};
 use std::cmp::Ordering;
 
 /// The farthest fragments of a sample past the cap, merged into one layer: its alpha is exactly

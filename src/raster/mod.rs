@@ -20,6 +20,7 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 mod background;
 mod bins;
+mod fragment;
 mod blend;
 mod buffers;
 mod camera;

@@ -134,7 +134,7 @@ class Sequence:
     subtraction does not drift. ``draws`` counts the calls to ``render_at``.
 
     Memory: the running total (8 bytes a value) and the render being added, whatever N, with
-    ``keep_images=False``; plus the N renders (float64) with ``keep_images=True``. It is checked against the memory budget
+    ``keep_images=False``; plus the N renders (as ``render_at`` returned them) with ``keep_images=True``. It is checked against the memory budget
     (``motionblur.set_memory_budget``) once the first render gives the image size, before the
     other N - 1 are drawn: past it ``MemoryError`` names ``samples`` and the bytes.
 
@@ -169,12 +169,13 @@ class Sequence:
         if img is None or isinstance(img, (str, bytes)):
             raise TypeError(f"{name} is {type(img).__name__}; expected a Frame or an (H,W,4) array")
         want = (None, None, 4) if self._shape is None else self._shape
-        out = as_array(img, name, np.float64, want)
+        out = as_array(img, name, np.float64, want)  # the checks; float64 for the total
         self._shape = out.shape
-        return out
+        raw = np.asarray(img)
+        return raw if raw.dtype in (np.float32, np.float64) else out  # kept as rendered
 
     def _draw(self, t: float) -> np.ndarray:
-        return self._render(t)
+        return np.asarray(self._render(t), dtype=np.float64)
 
     def _check_memory(self, first: np.ndarray) -> None:
         """The running total (and the kept renders) against the memory budget."""
