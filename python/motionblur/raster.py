@@ -371,7 +371,7 @@ class Frame:
     def to_srgb8(self) -> np.ndarray:
         """(H,W,4) uint8: straight (un-premultiplied) colour, sRGB-encoded; alpha stays linear."""
         a = np.clip(self.rgba[..., 3:4], 0.0, 1.0)
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # clipped below
             c = np.where(a > 0, self.rgba[..., :3] / np.maximum(a, 1e-30), 0.0)
         c = np.clip(np.nan_to_num(c), 0.0, 1.0)
         s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
