@@ -11,10 +11,13 @@
 //! - `shell`: blur shells (Jones and Keyser);
 //! - `accumulate`: the accumulation buffer's kernels;
 //! - `raster`: the software rasterizer;
-//! - `image`: image-space blur.
+//! - `image`: image-space blur;
+//! - `analytic`: analytic motion blur, exact covered time per sample;
+//! - `shutter`: the shutter filters.
 #![warn(missing_docs)]
 
 mod accumulate;
+mod analytic;
 mod contour;
 mod error;
 mod image;
@@ -22,12 +25,17 @@ mod mesh;
 mod motion;
 mod raster;
 mod shell;
+mod shutter;
 mod volume;
 
 #[cfg(feature = "python")]
 mod python;
 
 pub use accumulate::{accumulate, composite, facing_faces, over, resolve, Rect};
+pub use analytic::{
+    render as render_analytic, Backdrop, Frame as AnalyticFrame, Input as AnalyticInput,
+    MovingDraw, Quadrature, Stats as AnalyticStats,
+};
 pub use contour::{
     contour_edges, contour_pairs, motion_silhouette, ContourEdge, ContourSet, ContourTable,
 };
@@ -47,6 +55,7 @@ pub use raster::{
 pub use shell::{
     BlurShell, BuildPlan, FaceState, ShellColor, ShellMesh, ShellOptions, ShellOut, ON_SILHOUETTE,
 };
+pub use shutter::Shutter;
 pub use volume::{
     motion_volume, spin_volume, Colors, Filter, MotionVolume, Spin, VolumeOptions, JOINING,
     LEADING, MAX_SEGMENTS, TRAILING,

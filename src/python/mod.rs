@@ -3,6 +3,7 @@
 use pyo3::prelude::*;
 
 mod accumulate;
+mod analytic;
 mod convert;
 mod geometry;
 mod image;
@@ -17,5 +18,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     image::register(m)?;
     shell::register(m)?;
     accumulate::register(m)?;
+    analytic::register(m)?;
     Ok(())
 }

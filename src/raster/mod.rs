@@ -29,7 +29,7 @@ mod tile;
 
 pub use background::Background;
 pub use buffers::{Frame, Stats};
-use camera::check_size;
+pub use camera::check_size;
 pub use camera::Camera;
 pub use draw::{faces_from_i64, vertex_normals, Draw};
 use options::check_options;

@@ -1,0 +1,543 @@
+//! Visibility over time at one sample, and the time integral of its colour.
+//!
+//! A sample holds fragments: the spans of shutter time during which one triangle covers it,
+//! with the triangle's view depth at both ends (linear in between). The shutter is cut at every
+//! fragment end, at every instant where two fragments present together (or a fragment and the
+//! static background) cross in depth, and at the filter's kinks. On each resulting piece the
+//! depth order is fixed: the layers are composited front to back (premultiplied *over*, stopping
+//! at the first opaque one) at a few Gauss-Legendre points in time, and the piece adds
+//! `(W(v) - W(u))` times the filter-weighted mean of those composites. Coverage is therefore
+//! exact (up to the linear depth model) and colour is a quadrature of the shading over time.
+//!
+//! A fragment may stand for a run of triangles of one surface that cover the sample one after
+//! the other (a chain, see `tiles.rs`); its layer is then shaded by the triangle of the chain
+//! that covers the sample at each quadrature point.
+use crate::shutter::Shutter;
+
+/// Marks a fragment of a back-facing span (its normal is flipped for shading).
+pub const BACK: u32 = 1 << 31;
+
+/// One triangle's span of time at one sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frag {
+    /// Shutter times of the span, `t0 < t1`.
+    pub t0: f32,
+    pub t1: f32,
+    /// View depth at `t0` and `t1`.
+    pub z0: f32,
+    pub z1: f32,
+    /// The tile's index of the (first) triangle, with `BACK` for back-facing spans.
+    pub prim: u32,
+    /// The first link of the fragment's chain of triangles, and how many it has.
+    pub chain: u32,
+    pub n: u32,
+}
+
+impl Frag {
+    #[inline]
+    fn depth(&self, t: f64) -> f64 {
+        let (t0, t1) = (f64::from(self.t0), f64::from(self.t1));
+        let (z0, z1) = (f64::from(self.z0), f64::from(self.z1));
+        if t1 > t0 {
+            z0 + (z1 - z0) * ((t - t0) / (t1 - t0)).clamp(0.0, 1.0)
+        } else {
+            z0
+        }
+    }
+}
+
+/// The static scene behind the moving triangles at this sample: opaque colour and its depth.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Backdrop {
+    /// Premultiplied RGBA.
+    pub rgba: [f32; 4],
+    /// View depth, `inf` where nothing is there.
+    pub depth: f32,
+    /// Object id, -1 where nothing is there.
+    pub id: i32,
+}
+
+/// Shading of the fragments' triangles at this sample.
+pub trait Layers {
+    /// True when the fragment's triangles are opaque everywhere (nothing behind shows).
+    fn opaque(&self, f: &Frag) -> bool;
+    /// Premultiplied RGBA of the surface of fragment `f` (index `i` of the sample's sorted
+    /// fragments) seen at this sample at shutter time `t`. Calls for one fragment come in
+    /// increasing `t`.
+    fn shade(&mut self, i: usize, f: &Frag, t: f64) -> [f32; 4];
+}
+
+/// How many points in time each visible piece is shaded at.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quadrature {
+    /// 1, 2 or 3 points by the piece's length: below 1/32 of the shutter 1, below 1/4 2, else 3.
+    Auto,
+    /// A fixed number of Gauss-Legendre points, 1 to 4.
+    Points(u8),
+}
+
+impl Quadrature {
+    /// Points for a piece of length `len` crossing about `elements` triangles of a chain:
+    /// `Auto` takes 1, 2 or 3 by length and at least one per triangle crossed, up to 8.
+    fn points(self, len: f64, elements: usize) -> usize {
+        match self {
+            Quadrature::Points(n) => n as usize,
+            Quadrature::Auto => {
+                let by_len = if len < 1.0 / 32.0 {
+                    1
+                } else if len < 0.25 {
+                    2
+                } else {
+                    3
+                };
+                by_len.max(elements.min(8))
+            }
+        }
+    }
+
+    /// True when fragments of one surface may be chained (`Auto`); with a fixed number of
+    /// points every triangle is shaded on its own.
+    pub fn chains(self) -> bool {
+        self == Quadrature::Auto
+    }
+}
+
+/// Gauss-Legendre nodes on [-1, 1] and weights, for 1 to 8 points.
+fn gauss(n: usize) -> (&'static [f64], &'static [f64]) {
+    const X6: [f64; 6] = [
+        -0.932_469_514_203_152,
+        -0.661_209_386_466_264_5,
+        -0.238_619_186_083_196_9,
+        0.238_619_186_083_196_9,
+        0.661_209_386_466_264_5,
+        0.932_469_514_203_152,
+    ];
+    const W6: [f64; 6] = [
+        0.171_324_492_379_170_3,
+        0.360_761_573_048_138_6,
+        0.467_913_934_572_691_1,
+        0.467_913_934_572_691_1,
+        0.360_761_573_048_138_6,
+        0.171_324_492_379_170_3,
+    ];
+    const X8: [f64; 8] = [
+        -0.960_289_856_497_536_3,
+        -0.796_666_477_413_626_7,
+        -0.525_532_409_916_329,
+        -0.183_434_642_495_649_8,
+        0.183_434_642_495_649_8,
+        0.525_532_409_916_329,
+        0.796_666_477_413_626_7,
+        0.960_289_856_497_536_3,
+    ];
+    const W8: [f64; 8] = [
+        0.101_228_536_290_376_3,
+        0.222_381_034_453_374_5,
+        0.313_706_645_877_887_3,
+        0.362_683_783_378_362,
+        0.362_683_783_378_362,
+        0.313_706_645_877_887_3,
+        0.222_381_034_453_374_5,
+        0.101_228_536_290_376_3,
+    ];
+    if n >= 7 {
+        return (&X8, &W8);
+    }
+    if n >= 5 {
+        return (&X6, &W6);
+    }
+    const X1: [f64; 1] = [0.0];
+    const W1: [f64; 1] = [2.0];
+    const X2: [f64; 2] = [-0.577_350_269_189_625_8, 0.577_350_269_189_625_8];
+    const W2: [f64; 2] = [1.0, 1.0];
+    const X3: [f64; 3] = [-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4];
+    const W3: [f64; 3] = [
+        0.555_555_555_555_555_6,
+        0.888_888_888_888_888_9,
+        0.555_555_555_555_555_6,
+    ];
+    const X4: [f64; 4] = [
+        -0.861_136_311_594_052_6,
+        -0.339_981_043_584_856_3,
+        0.339_981_043_584_856_3,
+        0.861_136_311_594_052_6,
+    ];
+    const W4: [f64; 4] = [
+        0.347_854_845_137_453_9,
+        0.652_145_154_862_546_1,
+        0.652_145_154_862_546_1,
+        0.347_854_845_137_453_9,
+    ];
+    match n {
+        1 => (&X1, &W1),
+        2 => (&X2, &W2),
+        3 => (&X3, &W3),
+        4 => (&X4, &W4),
+        _ => (&X1, &W1),
+    }
+}
+
+/// What one sample resolves to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Resolved {
+    /// Time-integrated premultiplied RGBA.
+    pub rgba: [f32; 4],
+    /// The front layer at the reference time: a fragment index and its depth then, or None
+    /// when the backdrop (or nothing) is in front.
+    pub front: Option<(usize, f64)>,
+    /// Visible pieces shaded.
+    pub pieces: u32,
+}
+
+/// Per-thread buffers of [`sweep`], kept across samples.
+#[derive(Default)]
+pub struct Scratch {
+    active: Vec<usize>,
+    cuts: Vec<f64>,
+    order: Vec<(f64, usize)>,
+    opaque: Vec<bool>,
+}
+
+/// A layer of a piece: a fragment index, or the backdrop.
+pub const BACKDROP: usize = usize::MAX;
+
+/// Sorts fragments by start time (then triangle: a unique key, so the order is the same
+/// whatever order they were found in).
+pub fn sort(frags: &mut [Frag]) {
+    // start times are >= 0, so their bits order like the floats
+    frags.sort_unstable_by_key(|f| (u64::from(f.t0.to_bits()) << 32) | u64::from(f.prim));
+}
+
+/// Walks the shutter over the fragments of one sample (sorted by [`sort`]) in pieces of fixed
+/// depth order:
+/// `piece(a, b, layers)` gets each piece `[a, b]` with its layers front to back (fragment
+/// indices, or `BACKDROP`), cut after the first opaque one. Pieces with no layer are skipped.
+/// `breaks` are extra instants to cut at.
+pub fn sweep(
+    frags: &[Frag],
+    bg: &Backdrop,
+    opaque: &[bool],
+    breaks: &[f64],
+    sc: &mut Scratch,
+    mut piece: impl FnMut(f64, f64, &[(f64, usize)], &[Frag]),
+) {
+    let has_bg = bg.depth.is_finite();
+    sc.active.clear();
+    let (mut next, mut bi) = (0, 0);
+    let mut u = 0.0f64;
+    let depth_of = |i: usize, t: f64| {
+        if i == BACKDROP {
+            f64::from(bg.depth)
+        } else {
+            frags[i].depth(t)
+        }
+    };
+    while u < 1.0 {
+        while next < frags.len() && f64::from(frags[next].t0) <= u {
+            sc.active.push(next);
+            next += 1;
+        }
+        sc.active.retain(|&i| f64::from(frags[i].t1) > u);
+        let mut v = 1.0f64;
+        if next < frags.len() {
+            v = v.min(f64::from(frags[next].t0));
+        }
+        for &i in &sc.active {
+            v = v.min(f64::from(frags[i].t1));
+        }
+        while bi < breaks.len() && breaks[bi] <= u {
+            bi += 1;
+        }
+        if bi < breaks.len() {
+            v = v.min(breaks[bi]);
+        }
+        let (a0, b0) = (u, v);
+        u = v;
+        let (u, v) = (a0, b0);
+        if v <= u {
+            continue;
+        }
+        let n = sc.active.len() + usize::from(has_bg);
+        if n == 0 {
+            continue;
+        }
+        // Cut where any two layers cross in depth.
+        sc.cuts.clear();
+        sc.cuts.push(u);
+        if n > 1 {
+            let layer = |a: usize| {
+                if a < sc.active.len() {
+                    sc.active[a]
+                } else {
+                    BACKDROP
+                }
+            };
+            for a in 0..n {
+                let ia = layer(a);
+                for b in a + 1..n {
+                    let ib = layer(b);
+                    let g0 = depth_of(ia, u) - depth_of(ib, u);
+                    let g1 = depth_of(ia, v) - depth_of(ib, v);
+                    if (g0 < 0.0 && g1 > 0.0) || (g0 > 0.0 && g1 < 0.0) {
+                        let x = u + (v - u) * (g0 / (g0 - g1));
+                        if x > u && x < v {
+                            sc.cuts.push(x);
+                        }
+                    }
+                }
+            }
+        }
+        sc.cuts.push(v);
+        if sc.cuts.len() > 3 {
+            sc.cuts[1..].sort_unstable_by(f64::total_cmp);
+        }
+        for c in 0..sc.cuts.len() - 1 {
+            let (a, b) = (sc.cuts[c], sc.cuts[c + 1]);
+            if b <= a {
+                continue;
+            }
+            let mid = 0.5 * (a + b);
+            sc.order.clear();
+            for &i in &sc.active {
+                sc.order.push((frags[i].depth(mid), i));
+            }
+            if has_bg {
+                sc.order.push((f64::from(bg.depth), BACKDROP));
+            }
+            if sc.order.len() > 1 {
+                sc.order
+                    .sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+                if let Some(p) = sc
+                    .order
+                    .iter()
+                    .position(|&(_, i)| i == BACKDROP || opaque[i])
+                {
+                    sc.order.truncate(p + 1);
+                }
+            }
+            piece(a, b, &sc.order, frags);
+        }
+    }
+}
+
+/// Resolves the fragments of one sample (sorted here) over the backdrop `bg`: the shutter
+/// integral of the composited colour, and the layer in front at `t_ref`. `breaks` are the
+/// filter's interior breaks ([`Shutter::breaks`]).
+#[allow(clippy::too_many_arguments)]
+pub fn resolve(
+    frags: &mut [Frag],
+    bg: &Backdrop,
+    layers: &mut impl Layers,
+    shutter: &Shutter,
+    breaks: &[f64],
+    quad: Quadrature,
+    t_ref: f64,
+    sc: &mut Scratch,
+) -> Resolved {
+    let mut out = Resolved {
+        rgba: [0.0; 4],
+        front: None,
+        pieces: 0,
+    };
+    let mut acc = [0.0f64; 4];
+    let mut ref_done = false;
+    sort(frags);
+    let mut opaque = std::mem::take(&mut sc.opaque);
+    opaque.clear();
+    opaque.extend(frags.iter().map(|f| layers.opaque(f)));
+    sweep(frags, bg, &opaque, breaks, sc, |a, b, order, frags| {
+        if !ref_done && t_ref >= a && t_ref <= b {
+            ref_done = true;
+            out.front = match order.first() {
+                Some(&(_, i)) if i != BACKDROP => Some((i, frags[i].depth(t_ref))),
+                _ => None,
+            };
+        }
+        let dw = shutter.cumulative(b) - shutter.cumulative(a);
+        if dw <= 0.0 {
+            return;
+        }
+        out.pieces += 1;
+        if order.len() == 1 && order[0].1 == BACKDROP {
+            for j in 0..4 {
+                acc[j] += dw * f64::from(bg.rgba[j]);
+            }
+            return;
+        }
+        let elements = order
+            .iter()
+            .filter(|&&(_, i)| i != BACKDROP)
+            .map(|&(_, i)| {
+                let f = &frags[i];
+                let share = (b - a) / (f64::from(f.t1) - f64::from(f.t0)).max(1e-30);
+                (share * f64::from(f.n)).ceil() as usize
+            })
+            .max()
+            .unwrap_or(1);
+        let (xs, ws) = gauss(quad.points(b - a, elements));
+        let (half, mid) = (0.5 * (b - a), 0.5 * (a + b));
+        let mut sum = [0.0f64; 4];
+        let mut wsum = 0.0;
+        for (x, w) in xs.iter().zip(ws) {
+            let t = mid + half * x;
+            let wt = w * shutter.density(t);
+            if wt <= 0.0 {
+                continue;
+            }
+            let mut trans = 1.0f64;
+            for &(_, i) in order {
+                let s = if i == BACKDROP {
+                    bg.rgba
+                } else {
+                    layers.shade(i, &frags[i], t)
+                };
+                for j in 0..4 {
+                    sum[j] += wt * trans * f64::from(s[j]);
+                }
+                trans *= 1.0 - f64::from(s[3]);
+                if trans <= 0.0 {
+                    break;
+                }
+            }
+            wsum += wt;
+        }
+        if wsum > 0.0 {
+            for j in 0..4 {
+                acc[j] += dw * sum[j] / wsum;
+            }
+        }
+    });
+    sc.opaque = opaque;
+    out.rgba = acc.map(|x| x as f32);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Flat colours per prim; prims listed in `opaque` are opaque.
+    struct Flat {
+        colors: Vec<[f32; 4]>,
+    }
+
+    impl Layers for Flat {
+        fn opaque(&self, f: &Frag) -> bool {
+            self.colors[(f.prim & !BACK) as usize][3] >= 1.0
+        }
+        fn shade(&mut self, _i: usize, f: &Frag, _t: f64) -> [f32; 4] {
+            let c = self.colors[(f.prim & !BACK) as usize];
+            [c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]]
+        }
+    }
+
+    fn frag(t0: f32, t1: f32, z0: f32, z1: f32, prim: u32) -> Frag {
+        Frag {
+            t0,
+            t1,
+            z0,
+            z1,
+            prim,
+            chain: 0,
+            n: 1,
+        }
+    }
+
+    const NONE: Backdrop = Backdrop {
+        rgba: [0.0; 4],
+        depth: f32::INFINITY,
+        id: -1,
+    };
+
+    #[test]
+    fn disjoint_spans_add_their_durations() {
+        let mut l = Flat {
+            colors: vec![[1.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 1.0]],
+        };
+        let mut f = vec![frag(0.5, 0.75, 2.0, 2.0, 1), frag(0.0, 0.25, 2.0, 2.0, 0)];
+        let r = resolve(
+            &mut f,
+            &NONE,
+            &mut l,
+            &Shutter::Box,
+            &[],
+            Quadrature::Auto,
+            0.1,
+            &mut Scratch::default(),
+        );
+        assert_eq!(r.rgba, [0.25, 0.25, 0.0, 0.5]);
+        assert_eq!(r.front.map(|x| f[x.0].prim), Some(0));
+    }
+
+    #[test]
+    fn nearer_span_hides_farther_one_and_crossings_split() {
+        let mut l = Flat {
+            colors: vec![[1.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 1.0]],
+        };
+        // prim 0 from depth 1 to 3, prim 1 at depth 2 throughout: they cross at t = 0.5
+        let mut f = vec![frag(0.0, 1.0, 1.0, 3.0, 0), frag(0.0, 1.0, 2.0, 2.0, 1)];
+        let r = resolve(
+            &mut f,
+            &NONE,
+            &mut l,
+            &Shutter::Box,
+            &[],
+            Quadrature::Auto,
+            1.0,
+            &mut Scratch::default(),
+        );
+        assert_eq!(r.rgba, [0.5, 0.5, 0.0, 1.0]);
+        assert_eq!(r.front.map(|x| f[x.0].prim), Some(1));
+        // a ramp shutter weighs the later half 3x: W(1) - W(0.5) = 0.75
+        let r = resolve(
+            &mut f,
+            &NONE,
+            &mut l,
+            &Shutter::Ramp,
+            &[],
+            Quadrature::Auto,
+            1.0,
+            &mut Scratch::default(),
+        );
+        assert!((r.rgba[0] - 0.25).abs() < 1e-7 && (r.rgba[1] - 0.75).abs() < 1e-7);
+    }
+
+    #[test]
+    fn transparent_layers_composite_over_the_backdrop() {
+        let mut l = Flat {
+            colors: vec![[1.0, 0.0, 0.0, 0.5]],
+        };
+        let bg = Backdrop {
+            rgba: [0.0, 0.0, 1.0, 1.0],
+            depth: 5.0,
+            id: 3,
+        };
+        let mut f = vec![frag(0.0, 0.5, 1.0, 1.0, 0)];
+        let r = resolve(
+            &mut f,
+            &bg,
+            &mut l,
+            &Shutter::Box,
+            &[],
+            Quadrature::Auto,
+            0.75,
+            &mut Scratch::default(),
+        );
+        // first half: 0.5 red over blue, second half blue
+        assert_eq!(r.rgba, [0.25, 0.0, 0.75, 1.0]);
+        assert_eq!(r.front, None);
+        // a span behind the backdrop shows nothing
+        let mut f = vec![frag(0.0, 1.0, 9.0, 9.0, 0)];
+        let r = resolve(
+            &mut f,
+            &bg,
+            &mut l,
+            &Shutter::Box,
+            &[],
+            Quadrature::Auto,
+            0.5,
+            &mut Scratch::default(),
+        );
+        assert_eq!(r.rgba, [0.0, 0.0, 1.0, 1.0]);
+    }
+}

@@ -1,0 +1,649 @@
+//! The frame: prims of every face over every segment, binning into tiles, and the tiles in
+//! parallel (fragments, visibility over time, shading, resolve of each pixel's samples).
+use std::cell::RefCell;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::input::{prepare, validate, Prepared};
+pub use super::input::{Backdrop, Input, MovingDraw};
+use super::prim::{self, Corners, Edges, Prim, OPAQUE};
+use super::resolve::{self, Backdrop as Behind, Frag, Scratch, BACK};
+use super::shade::{SampleShader, TilePrim};
+use crate::error::{Error, Result};
+
+/// Tile side in samples (a multiple of every supersampling factor).
+pub const TILE: i32 = 16;
+/// Faces set up per parallel job.
+const CHUNK: usize = 2048;
+/// Most (tile, prim) pairs a frame may bin (8 bytes each while binning).
+pub const MAX_BIN_ENTRIES: u64 = 1 << 27;
+/// Most fragments one tile may hold at once (24 bytes each).
+pub const MAX_TILE_FRAGMENTS: usize = 1 << 22;
+
+/// Counts and timings of one frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Stats {
+    /// Triangle-segments set up (after culling and the view test).
+    pub prims: u64,
+    /// (tile, prim) pairs binned.
+    pub bin_entries: u64,
+    /// Spans of covered time found at samples (fragments).
+    pub intervals: u64,
+    /// Visible pieces shaded.
+    pub pieces: u64,
+    /// Fragments merged into neighbours because a tile reached its fragment budget.
+    pub merges: u64,
+    /// Segments of the shutter.
+    pub segments: u64,
+    /// Milliseconds: preparation, prim set-up, binning, tiles, whole frame.
+    pub ms_prepare: f64,
+    pub ms_setup: f64,
+    pub ms_bin: f64,
+    pub ms_tiles: f64,
+    pub ms_total: f64,
+}
+
+/// A rendered frame, row-major `height` x `width` pixels.
+#[derive(Clone, Debug, Default)]
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    /// (H,W,4) premultiplied linear RGBA, integrated over the shutter.
+    pub rgba: Vec<f32>,
+    /// (H,W) view depth of the surface in front at the reference time, inf for none.
+    pub depth: Vec<f32>,
+    /// (H,W) object id of that surface, -1 for none.
+    pub ids: Vec<i32>,
+    /// (H,W,2) its screen motion over the shutter, pixels.
+    pub velocity: Vec<f32>,
+    pub stats: Stats,
+}
+
+/// One sample's result.
+#[derive(Clone, Copy, Debug)]
+struct SampleOut {
+    rgba: [f32; 4],
+    depth: f32,
+    id: i32,
+    velocity: [f32; 2],
+}
+
+/// One triangle of a fragment's chain: it covers the sample from `t0` until the next link's
+/// `t0` (the last one until the fragment's end).
+#[derive(Clone, Copy, Debug)]
+pub struct Link {
+    pub t0: f32,
+    /// The tile's index of the triangle.
+    pub prim: u32,
+    /// The next link, `NONE` at the end.
+    pub next: u32,
+}
+
+/// No link, no fragment.
+pub const NONE: u32 = u32::MAX;
+
+/// How far a chain's depth may stray from the straight line between its ends where a triangle
+/// joins it, relative to the depth.
+const CHAIN_DEPTH_TOLERANCE: f32 = 1e-3;
+
+#[derive(Default)]
+struct TileScratch {
+    /// Fragments in the order they are found, with their sample's index in the tile.
+    raw: Vec<(u32, Frag)>,
+    links: Vec<Link>,
+    /// Per sample: the fragment found last (index in `raw`) and the last link of its chain.
+    tail: Vec<(u32, u32)>,
+    /// Fragments grouped by sample: sample `j` owns `frags[start[j]..start[j + 1]]`.
+    frags: Vec<Frag>,
+    start: Vec<u32>,
+    prims: Vec<TilePrim>,
+    cursor: Vec<u32>,
+    sweep: Scratch,
+    out: Vec<SampleOut>,
+}
+
+thread_local! {
+    static SCRATCH: RefCell<TileScratch> = RefCell::new(TileScratch::default());
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// Renders one frame. Errors name the offending argument.
+pub fn render(input: &Input) -> Result<Frame> {
+    let t_all = Instant::now();
+    validate(input)?;
+    let s = input.samples;
+    let (ws, hs) = (input.width * s, input.height * s);
+    let mut stats = Stats {
+        segments: (input.times.len() - 1) as u64,
+        ..Stats::default()
+    };
+
+    let t = Instant::now();
+    let prepared: Vec<Prepared> = input.draws.iter().map(|d| prepare(input, d)).collect();
+    stats.ms_prepare = ms(t);
+
+    let t = Instant::now();
+    let prims = setup_prims(input, &prepared, ws, hs);
+    stats.prims = prims.len() as u64;
+    stats.ms_setup = ms(t);
+
+    let t = Instant::now();
+    let (tx, ty) = ((ws as i32 + TILE - 1) / TILE, (hs as i32 + TILE - 1) / TILE);
+    let (offsets, entries) = bin(&prims, tx, ty)?;
+    stats.bin_entries = entries.len() as u64;
+    stats.ms_bin = ms(t);
+
+    let t = Instant::now();
+    let breaks = input.shutter.breaks();
+    let ctx = Ctx {
+        input,
+        prepared: &prepared,
+        prims: &prims,
+        breaks: &breaks,
+        ws: ws as i32,
+        hs: hs as i32,
+    };
+    let tiles: Vec<(Vec<SampleOut>, [u64; 3])> = (0..(tx * ty) as usize)
+        .into_par_iter()
+        .map(|i| {
+            let bin = &entries[offsets[i] as usize..offsets[i + 1] as usize];
+            ctx.tile(i as i32 % tx, i as i32 / tx, bin)
+        })
+        .collect();
+    stats.ms_tiles = ms(t);
+
+    let mut frame = Frame {
+        width: input.width,
+        height: input.height,
+        rgba: vec![0.0; 4 * (input.width * input.height) as usize],
+        depth: vec![f32::INFINITY; (input.width * input.height) as usize],
+        ids: vec![-1; (input.width * input.height) as usize],
+        velocity: vec![0.0; 2 * (input.width * input.height) as usize],
+        stats: Stats::default(),
+    };
+    for (i, (samples, counts)) in tiles.iter().enumerate() {
+        stats.intervals += counts[0];
+        stats.pieces += counts[1];
+        stats.merges += counts[2];
+        let (x0, y0) = ((i as i32 % tx) * TILE, (i as i32 / tx) * TILE);
+        write_pixels(&mut frame, samples, x0, y0, ws as i32, hs as i32, s as i32);
+    }
+    stats.ms_total = ms(t_all);
+    frame.stats = stats;
+    Ok(frame)
+}
+
+/// Every face of every draw over every segment, in (segment, draw, face) order.
+fn setup_prims(input: &Input, prepared: &[Prepared], ws: u32, hs: u32) -> Vec<Prim> {
+    let segments = input.times.len() - 1;
+    let mut out = Vec::new();
+    for seg in 0..segments {
+        for (di, (d, p)) in input.draws.iter().zip(prepared).enumerate() {
+            let chunks: Vec<Vec<Prim>> = d
+                .faces
+                .par_chunks(CHUNK)
+                .enumerate()
+                .map(|(ci, faces)| {
+                    let mut v = Vec::new();
+                    for (j, f) in faces.iter().enumerate() {
+                        let alpha =
+                            f.map(|i| d.rgba[if d.rgba.len() == 1 { 0 } else { i as usize }][3]);
+                        if alpha.iter().all(|a| *a <= 0.0) {
+                            continue;
+                        }
+                        let c0 = f.map(|i| p.clip[seg * p.nv + i as usize]);
+                        let c1 = f.map(|i| p.clip[(seg + 1) * p.nv + i as usize]);
+                        let corners = Corners::new(c0, c1, f64::from(ws), f64::from(hs));
+                        let Some((flags, front, back, bbox, hull, nhull)) =
+                            prim::setup(&corners, &c0, &c1, d.cull_back, ws, hs)
+                        else {
+                            continue;
+                        };
+                        let opaque = p.opaque_everywhere || alpha.iter().all(|a| *a >= 1.0);
+                        v.push(Prim {
+                            draw: di as u32,
+                            face: (ci * CHUNK + j) as u32,
+                            seg: seg as u32,
+                            flags: flags | if opaque { OPAQUE } else { 0 },
+                            front,
+                            back,
+                            bbox,
+                            hull,
+                            nhull,
+                        });
+                    }
+                    v
+                })
+                .collect();
+            let mut group: Vec<Prim> = chunks.into_iter().flatten().collect();
+            order_along_motion(&mut group, p, seg, ws, hs);
+            out.extend(group);
+        }
+    }
+    out
+}
+
+/// Orders one draw's prims of one segment so that its leading side comes first: along the
+/// draw's mean screen motion, a sample is reached by the triangles in this order, so the spans
+/// of neighbouring triangles arrive one after the other and chain (a stable sort: ties keep
+/// face order).
+fn order_along_motion(group: &mut [Prim], p: &Prepared, seg: usize, ws: u32, hs: u32) {
+    let (w, h) = (f64::from(ws), f64::from(hs));
+    let step = (p.nv / 1024).max(1);
+    let (mut dx, mut dy) = (0.0, 0.0);
+    for v in (0..p.nv).step_by(step) {
+        let (a, b) = (p.clip[seg * p.nv + v], p.clip[(seg + 1) * p.nv + v]);
+        if a[3] > 0.0 && b[3] > 0.0 {
+            let pa = prim::homogeneous_pixel(&a, w, h);
+            let pb = prim::homogeneous_pixel(&b, w, h);
+            dx += pb[0] / pb[2] - pa[0] / pa[2];
+            dy += pb[1] / pb[2] - pa[1] / pa[2];
+        }
+    }
+    if !(dx * dx + dy * dy > 0.0) {
+        return;
+    }
+    let key = |q: &Prim| {
+        let cx = f64::from(q.bbox[0] + q.bbox[2]);
+        let cy = f64::from(q.bbox[1] + q.bbox[3]);
+        -(cx * dx + cy * dy)
+    };
+    group.sort_by(|a, b| key(a).total_cmp(&key(b)));
+}
+
+/// Tile bins: `offsets` (tiles + 1) into `entries` (prim indices, in prim order per tile).
+fn bin(prims: &[Prim], tx: i32, ty: i32) -> Result<(Vec<u32>, Vec<u32>)> {
+    let tiles_of = |p: &Prim| {
+        let b = p.bbox;
+        (
+            b[0] / TILE,
+            b[1] / TILE,
+            (b[2] - 1) / TILE + 1,
+            (b[3] - 1) / TILE + 1,
+        )
+    };
+    let bound: u64 = prims
+        .par_iter()
+        .map(|p| {
+            let (a, b, c, d) = tiles_of(p);
+            ((c - a) * (d - b)) as u64
+        })
+        .sum();
+    if bound > MAX_BIN_ENTRIES {
+        return Err(Error::value(
+            "draws",
+            format!(
+                "the moving triangles' swept bounds span {bound} tiles in all, past the budget of \
+                 {MAX_BIN_ENTRIES} ({} MiB); use fewer or smaller triangles, fewer segments or a \
+                 smaller image",
+                MAX_BIN_ENTRIES * 8 >> 20
+            ),
+        ));
+    }
+    let pairs: Vec<Vec<(u32, u32)>> = prims
+        .par_chunks(4096)
+        .enumerate()
+        .map(|(ci, chunk)| {
+            let mut v = Vec::new();
+            for (j, p) in chunk.iter().enumerate() {
+                let (a, b, c, d) = tiles_of(p);
+                for y in b..d.min(ty) {
+                    for x in a..c.min(tx) {
+                        let r = [x * TILE, y * TILE, (x + 1) * TILE, (y + 1) * TILE];
+                        if prim::overlaps(p, r[0], r[1], r[2], r[3]) {
+                            v.push(((y * tx + x) as u32, (ci * 4096 + j) as u32));
+                        }
+                    }
+                }
+            }
+            v
+        })
+        .collect();
+    let n = (tx * ty) as usize;
+    let mut offsets = vec![0u32; n + 1];
+    for v in &pairs {
+        for &(t, _) in v {
+            offsets[t as usize + 1] += 1;
+        }
+    }
+    for i in 0..n {
+        offsets[i + 1] += offsets[i];
+    }
+    let mut fill = offsets.clone();
+    let mut entries = vec![0u32; offsets[n] as usize];
+    for v in &pairs {
+        for &(t, p) in v {
+            entries[fill[t as usize] as usize] = p;
+            fill[t as usize] += 1;
+        }
+    }
+    Ok((offsets, entries))
+}
+
+/// What every tile reads.
+struct Ctx<'a> {
+    input: &'a Input<'a>,
+    prepared: &'a [Prepared],
+    prims: &'a [Prim],
+    breaks: &'a [f64],
+    ws: i32,
+    hs: i32,
+}
+
+impl Ctx<'_> {
+    fn corners(&self, p: &Prim) -> Corners {
+        let d = &self.input.draws[p.draw as usize];
+        let pr = &self.prepared[p.draw as usize];
+        let f = d.faces[p.face as usize];
+        let k = p.seg as usize;
+        let c0 = f.map(|i| pr.clip[k * pr.nv + i as usize]);
+        let c1 = f.map(|i| pr.clip[(k + 1) * pr.nv + i as usize]);
+        Corners::new(c0, c1, f64::from(self.ws), f64::from(self.hs))
+    }
+
+    /// One tile: its samples' results (row-major, TILE wide) and counts (intervals, pieces,
+    /// merges).
+    fn tile(&self, tx: i32, ty: i32, bin: &[u32]) -> (Vec<SampleOut>, [u64; 3]) {
+        SCRATCH.with(|cell| match cell.try_borrow_mut() {
+            Ok(mut sc) => self.tile_with(tx, ty, bin, &mut sc),
+            Err(_) => self.tile_with(tx, ty, bin, &mut TileScratch::default()),
+        })
+    }
+
+    fn tile_with(
+        &self,
+        tx: i32,
+        ty: i32,
+        bin: &[u32],
+        sc: &mut TileScratch,
+    ) -> (Vec<SampleOut>, [u64; 3]) {
+        let (x0, y0) = (tx * TILE, ty * TILE);
+        let (x1, y1) = ((x0 + TILE).min(self.ws), (y0 + TILE).min(self.hs));
+        let times = self.input.times;
+        sc.raw.clear();
+        sc.links.clear();
+        sc.prims.clear();
+        sc.tail.clear();
+        sc.tail.resize((TILE * TILE) as usize, (NONE, NONE));
+        let chains = self.input.quadrature.chains();
+        let mut counts = [0u64; 3];
+        for (li, &pi) in bin.iter().enumerate() {
+            let p = &self.prims[pi as usize];
+            let tp = TilePrim::new(self.input, self.prepared, p, &self.corners(p));
+            let e = &tp.edges;
+            let (ta, tb) = (times[p.seg as usize], times[p.seg as usize + 1]);
+            let glob = |tau: f64| ta + tau * (tb - ta);
+            for iy in p.bbox[1].max(y0)..p.bbox[3].min(y1) {
+                let (xa, xb) = prim::row_span(p, iy, p.bbox[0].max(x0), p.bbox[2].min(x1));
+                let y = f64::from(iy) + 0.5;
+                for ix in xa..xb {
+                    let x = f64::from(ix) + 0.5;
+                    let q = e.at(x, y);
+                    let (front, back) = e.covered(p, &q);
+                    for (spans, flag) in [(front, 0), (back, BACK)] {
+                        for s in spans.as_slice() {
+                            let (t0, t1) = (glob(s[0]) as f32, glob(s[1]) as f32);
+                            if !(t1 > t0) {
+                                continue;
+                            }
+                            let z0 = depth_near(e, &q, s[0], s[1]);
+                            let z1 = depth_near(e, &q, s[1], s[0]);
+                            let j = ((iy - y0) * TILE + (ix - x0)) as usize;
+                            let prim = li as u32 | flag;
+                            let f = Frag {
+                                t0,
+                                t1,
+                                z0,
+                                z1,
+                                prim,
+                                chain: 0,
+                                n: 1,
+                            };
+                            if chains && self.join(sc, j, &f, &tp) {
+                                continue;
+                            }
+                            sc.links.push(Link {
+                                t0,
+                                prim: li as u32,
+                                next: NONE,
+                            });
+                            let link = (sc.links.len() - 1) as u32;
+                            sc.tail[j] = (sc.raw.len() as u32, link);
+                            sc.raw.push((j as u32, Frag { chain: link, ..f }));
+                        }
+                    }
+                }
+            }
+            sc.prims.push(tp);
+        }
+        counts[0] = sc.raw.len() as u64;
+        // group by sample (a stable counting sort)
+        let n = (TILE * TILE) as usize;
+        sc.start.clear();
+        sc.start.resize(n + 1, 0);
+        for (j, _) in &sc.raw {
+            sc.start[*j as usize + 1] += 1;
+        }
+        for j in 0..n {
+            sc.start[j + 1] += sc.start[j];
+        }
+        sc.frags.clear();
+        sc.frags.resize(
+            sc.raw.len(),
+            Frag {
+                t0: 0.0,
+                t1: 0.0,
+                z0: 0.0,
+                z1: 0.0,
+                prim: 0,
+                chain: 0,
+                n: 0,
+            },
+        );
+        {
+            let mut fill: [u32; (TILE * TILE) as usize] = [0; (TILE * TILE) as usize];
+            fill.copy_from_slice(&sc.start[..n]);
+            for (j, f) in &sc.raw {
+                sc.frags[fill[*j as usize] as usize] = *f;
+                fill[*j as usize] += 1;
+            }
+        }
+        let mut out = std::mem::take(&mut sc.out);
+        out.clear();
+        let t_ref = self.input.reference_time;
+        for iy in y0..y0 + TILE {
+            for ix in x0..x0 + TILE {
+                if ix >= x1 || iy >= y1 {
+                    out.push(SampleOut {
+                        rgba: [0.0; 4],
+                        depth: f32::INFINITY,
+                        id: -1,
+                        velocity: [0.0; 2],
+                    });
+                    continue;
+                }
+                let j = ((iy - y0) * TILE + (ix - x0)) as usize;
+                let frags = &mut sc.frags[sc.start[j] as usize..sc.start[j + 1] as usize];
+                let bg = self.behind(ix, iy);
+                let mut shader = SampleShader {
+                    input: self.input,
+                    prepared: self.prepared,
+                    prims: &sc.prims,
+                    links: &sc.links,
+                    cursor: std::mem::take(&mut sc.cursor),
+                    x: f64::from(ix) + 0.5,
+                    y: f64::from(iy) + 0.5,
+                };
+                shader.reset(frags.len());
+                let r = resolve::resolve(
+                    frags,
+                    &bg,
+                    &mut shader,
+                    self.input.shutter,
+                    self.breaks,
+                    self.input.quadrature,
+                    t_ref,
+                    &mut sc.sweep,
+                );
+                counts[1] += u64::from(r.pieces);
+                let o = match r.front {
+                    Some((fi, z)) => {
+                        let p = shader.prim_at(&frags[fi], t_ref);
+                        SampleOut {
+                            rgba: r.rgba,
+                            depth: z as f32,
+                            id: shader.object_id(p),
+                            velocity: shader.velocity(p, t_ref),
+                        }
+                    }
+                    None => SampleOut {
+                        rgba: r.rgba,
+                        depth: bg.depth,
+                        id: bg.id,
+                        velocity: [0.0; 2],
+                    },
+                };
+                out.push(o);
+                sc.cursor = shader.cursor;
+            }
+        }
+        let result = out.clone();
+        sc.out = out;
+        (result, counts)
+    }
+
+    /// Joins `f` (a span of the tile's prim `tp`, not yet in `sc.prims`) to the fragment found
+    /// last at sample `j` when it continues it: the same draw, facing and opacity, touching in
+    /// time, and the depth at the join within `CHAIN_DEPTH_TOLERANCE` of the line between the
+    /// joined ends. Returns whether it did.
+    fn join(&self, sc: &mut TileScratch, j: usize, f: &Frag, tp: &TilePrim) -> bool {
+        let (ti, tl) = sc.tail[j];
+        if ti == NONE {
+            return false;
+        }
+        let t = sc.raw[ti as usize].1;
+        let head = &sc.prims[(t.prim & !BACK) as usize];
+        if head.draw != tp.draw
+            || (t.prim & BACK) != (f.prim & BACK)
+            || (head.flags & OPAQUE) != (tp.flags & OPAQUE)
+        {
+            return false;
+        }
+        let on_line = |za: f32, ta: f32, zb: f32, tb: f32, zm: f32, tm: f32| {
+            let z = za + (zb - za) * ((tm - ta) / (tb - ta));
+            (z - zm).abs() <= CHAIN_DEPTH_TOLERANCE * zm
+        };
+        let li = f.prim & !BACK;
+        if t.t1 == f.t0 && on_line(t.z0, t.t0, f.z1, f.t1, t.z1, t.t1) {
+            sc.links.push(Link {
+                t0: f.t0,
+                prim: li,
+                next: NONE,
+            });
+            let link = (sc.links.len() - 1) as u32;
+            sc.links[tl as usize].next = link;
+            sc.tail[j].1 = link;
+            let g = &mut sc.raw[ti as usize].1;
+            g.t1 = f.t1;
+            g.z1 = f.z1;
+            g.n += 1;
+            return true;
+        }
+        if t.t0 == f.t1 && on_line(f.z0, f.t0, t.z1, t.t1, t.z0, t.t0) {
+            sc.links.push(Link {
+                t0: f.t0,
+                prim: li,
+                next: t.chain,
+            });
+            let g = &mut sc.raw[ti as usize].1;
+            g.chain = (sc.links.len() - 1) as u32;
+            g.t0 = f.t0;
+            g.z0 = f.z0;
+            g.prim = f.prim;
+            g.n += 1;
+            return true;
+        }
+        false
+    }
+
+    fn behind(&self, ix: i32, iy: i32) -> Behind {
+        match &self.input.backdrop {
+            None => Behind {
+                rgba: [0.0; 4],
+                depth: f32::INFINITY,
+                id: -1,
+            },
+            Some(b) => {
+                let i = (iy * self.ws + ix) as usize;
+                Behind {
+                    rgba: [
+                        b.rgba[4 * i],
+                        b.rgba[4 * i + 1],
+                        b.rgba[4 * i + 2],
+                        b.rgba[4 * i + 3],
+                    ],
+                    depth: b.depth[i],
+                    id: b.ids[i],
+                }
+            }
+        }
+    }
+}
+
+/// The view depth at local time `tau` at a span's end, or a little inside the span (towards
+/// `other`) where the triangle is edge-on at the end itself.
+fn depth_near(e: &Edges, q: &prim::SampleEdges, tau: f64, other: f64) -> f32 {
+    for f in [0.0, 1e-6, 1e-3, 0.5] {
+        if let Some(z) = e.depth(q, tau + f * (other - tau)) {
+            return z as f32;
+        }
+    }
+    f32::INFINITY
+}
+
+/// Box resolve of a tile's samples into the frame's pixels: colour mean; depth, id and velocity
+/// of the nearest sample (the first in row order on ties).
+fn write_pixels(
+    frame: &mut Frame,
+    samples: &[SampleOut],
+    x0: i32,
+    y0: i32,
+    ws: i32,
+    hs: i32,
+    s: i32,
+) {
+    let w = frame.width as usize;
+    let norm = 1.0 / (s * s) as f32;
+    for py in (y0 / s)..((y0 + TILE).min(hs) / s) {
+        for px in (x0 / s)..((x0 + TILE).min(ws) / s) {
+            let mut c = [0.0f32; 4];
+            let mut best: Option<&SampleOut> = None;
+            for j in 0..s {
+                for i in 0..s {
+                    let (sx, sy) = (px * s + i - x0, py * s + j - y0);
+                    let o = &samples[(sy * TILE + sx) as usize];
+                    for k in 0..4 {
+                        c[k] += o.rgba[k];
+                    }
+                    if o.depth.is_finite() && best.is_none_or(|b| o.depth < b.depth) {
+                        best = Some(o);
+                    }
+                }
+            }
+            let i = py as usize * w + px as usize;
+            for k in 0..4 {
+                frame.rgba[4 * i + k] = if s == 1 { c[k] } else { c[k] * norm };
+            }
+            if let Some(b) = best {
+                frame.depth[i] = b.depth;
+                frame.ids[i] = b.id;
+                frame.velocity[2 * i] = b.velocity[0];
+                frame.velocity[2 * i + 1] = b.velocity[1];
+            }
+        }
+    }
+}
