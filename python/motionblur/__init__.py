@@ -18,6 +18,7 @@ from . import raster as _raster
 from . import scene as _scene
 from . import shell as _shell
 from ._core import __version__
+from .analytic import MovingDraw, coverage, rasterize_motion
 from .evaluation import metrics, reference
 from .geometry import *  # noqa: F403
 from .methods.accumulation import Sequence
@@ -29,6 +30,9 @@ from .shell import *  # noqa: F403
 
 __all__ = ["__version__", "image", "meshes", *_geometry.__all__, *_raster.__all__, *_shell.__all__]
 __all__ += [
+    "MovingDraw",
+    "rasterize_motion",
+    "coverage",
     *_scene.__all__,
     "render",
     "register",

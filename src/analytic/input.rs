@@ -24,6 +24,8 @@ pub struct MovingDraw<'a> {
     pub object_id: i32,
     /// Drop back faces.
     pub cull_back: bool,
+    /// How the draw is shaded.
+    pub shading: Shading,
 }
 
 /// The opaque static scene behind the moving draws, one entry per sample (`ws * hs`).
@@ -51,7 +53,6 @@ pub struct Input<'a> {
     pub draws: &'a [MovingDraw<'a>],
     pub backdrop: Option<Backdrop<'a>>,
     pub shutter: &'a Shutter,
-    pub shading: Shading,
     pub lights: &'a [Light],
     pub ambient: [f32; 3],
     /// Points in time per visible piece.
@@ -207,7 +208,7 @@ pub fn prepare(input: &Input, d: &MovingDraw) -> Prepared {
             [c.x, c.y, c.z, c.w]
         })
         .collect();
-    let normals = match (input.shading, input.shade, d.normals) {
+    let normals = match (d.shading, input.shade, d.normals) {
         (Shading::Lambert, true, Some(n)) => n.to_vec(),
         (Shading::Lambert, true, None) => (0..k1)
             .into_par_iter()

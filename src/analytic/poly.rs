@@ -41,6 +41,22 @@ fn horner3(c: [f64; 4], t: f64) -> f64 {
     ((c[3] * t + c[2]) * t + c[1]) * t + c[0]
 }
 
+/// The sign of `a t^2 + b t + c` on all of [0, 1] when its ends decide it without roots: a
+/// concave (or linear) function positive at both ends is positive throughout (`Some(true)`),
+/// a convex (or linear) one negative at both ends negative throughout (`Some(false)`). The
+/// test is symmetric under negation, so neighbours sharing an edge agree.
+#[inline(always)]
+fn ends_decide(a: f64, b: f64, c: f64) -> Option<bool> {
+    let (f0, f1) = (c, (a + b) + c);
+    if a <= 0.0 && f0 > 0.0 && f1 > 0.0 {
+        Some(true)
+    } else if a >= 0.0 && f0 < 0.0 && f1 < 0.0 {
+        Some(false)
+    } else {
+        None
+    }
+}
+
 /// Real roots of `a t^2 + b t + c` strictly inside (0, 1), ascending, from the canonical sign.
 #[inline]
 pub fn quadratic_roots(a: f64, b: f64, c: f64) -> ([f64; 2], usize) {
@@ -164,6 +180,11 @@ impl Spans {
     /// (the caller passes a rule that is true for exactly one of a function and its negation).
     #[inline]
     pub fn nonneg_quadratic(a: f64, b: f64, c: f64, tie: impl Fn(f64) -> bool) -> Spans {
+        match ends_decide(a, b, c) {
+            Some(true) => return Spans::FULL,
+            Some(false) => return Spans::EMPTY,
+            None => {}
+        }
         let (r, n) = quadratic_roots(a, b, c);
         let mut out = Spans::EMPTY;
         let mut lo = 0.0;
@@ -189,6 +210,11 @@ impl Spans {
         c: f64,
         tie: impl Fn(f64) -> bool,
     ) -> Result<Option<(f64, f64)>, ()> {
+        match ends_decide(a, b, c) {
+            Some(true) => return Ok(Some((0.0, 1.0))),
+            Some(false) => return Ok(None),
+            None => {}
+        }
         let (r, n) = quadratic_roots(a, b, c);
         let keep = |lo: f64, hi: f64| {
             let mid = 0.5 * (lo + hi);

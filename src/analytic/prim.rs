@@ -263,15 +263,27 @@ fn convex_hull(pts: &[[f64; 2]; 6]) -> ([[f32; 2]; 6], u8) {
     (out, n as u8)
 }
 
-/// The sample columns `[x0, x1)` of row `iy` (sample centre `iy + 0.5`) that the prim's hull
-/// reaches, within `[bx0, bx1)`.
-pub fn row_span(prim: &Prim, iy: i32, bx0: i32, bx1: i32) -> (i32, i32) {
+/// The sample columns `[x0, x1)` that the prim's hull reaches in each sample row `y0 + r`
+/// (centre `y0 + r + 0.5`) for `r` in `0..out.len()`, within `[bx0, bx1)`; `(0, 0)` where it
+/// reaches none. One pass over the hull's edges (each touches only the rows it spans).
+pub fn row_spans(prim: &Prim, y0: i32, bx0: i32, bx1: i32, out: &mut [(i32, i32)]) {
+    let rows = out.len();
     if prim.nhull == 0 {
-        return (bx0, bx1);
+        out.fill((bx0, bx1));
+        return;
     }
+    const EPS: f64 = 1e-3;
+    let mut lo = [f64::MAX; 64];
+    let mut hi = [f64::MIN; 64];
+    debug_assert!(rows <= 64);
     let n = prim.nhull as usize;
-    let y = f64::from(iy) + 0.5;
-    let (mut lo, mut hi) = (f64::MAX, f64::MIN);
+    let yc = |r: usize| f64::from(y0) + r as f64 + 0.5;
+    // rows whose centre lies in [a, b]
+    let row_range = |a: f64, b: f64| {
+        let r0 = ((a - f64::from(y0) - 0.5).ceil().max(0.0)) as usize;
+        let r1 = (((b - f64::from(y0) - 0.5).floor() + 1.0).max(0.0) as usize).min(rows);
+        r0..r1.max(r0.min(rows))
+    };
     for i in 0..n {
         let p = prim.hull[i].map(f64::from);
         let q = prim.hull[(i + 1) % n].map(f64::from);
@@ -280,32 +292,30 @@ pub fn row_span(prim: &Prim, iy: i32, bx0: i32, bx1: i32) -> (i32, i32) {
         } else {
             (q[1], p[1])
         };
-        if y < ya - 1e-3 || y > yb + 1e-3 {
+        let flat = (q[1] - p[1]).abs() < 1e-12;
+        for r in row_range(ya - EPS, yb + EPS) {
+            let (xl, xh) = if flat {
+                (p[0].min(q[0]), p[0].max(q[0]))
+            } else {
+                let u = ((yc(r) - p[1]) / (q[1] - p[1])).clamp(0.0, 1.0);
+                let x = p[0] + u * (q[0] - p[0]);
+                (x, x)
+            };
+            lo[r] = lo[r].min(xl);
+            hi[r] = hi[r].max(xh);
+        }
+    }
+    for (r, o) in out.iter_mut().enumerate() {
+        let (l, h) = (lo[r], hi[r]);
+        if l > h {
+            *o = (0, 0);
             continue;
         }
-        let x = if (q[1] - p[1]).abs() < 1e-12 {
-            lo = lo.min(p[0].min(q[0]));
-            hi = hi.max(p[0].max(q[0]));
-            continue;
-        } else {
-            let u = ((y - p[1]) / (q[1] - p[1])).clamp(0.0, 1.0);
-            p[0] + u * (q[0] - p[0])
-        };
-        lo = lo.min(x);
-        hi = hi.max(x);
+        let margin = EPS + 1e-6 * l.abs().max(h.abs());
+        let x0 = ((l - margin - 0.5).ceil() as i64).clamp(bx0 as i64, bx1 as i64) as i32;
+        let x1 = (((h + margin - 0.5).floor() + 1.0) as i64).clamp(bx0 as i64, bx1 as i64) as i32;
+        *o = (x0, x1.max(x0));
     }
-    if n == 1 {
-        let p = prim.hull[0].map(f64::from);
-        lo = p[0];
-        hi = p[0];
-    }
-    if lo > hi {
-        return (0, 0);
-    }
-    let margin = 1e-3 + 1e-6 * lo.abs().max(hi.abs());
-    let x0 = ((lo - margin - 0.5).ceil() as i64).clamp(bx0 as i64, bx1 as i64) as i32;
-    let x1 = (((hi + margin - 0.5).floor() + 1.0) as i64).clamp(bx0 as i64, bx1 as i64) as i32;
-    (x0, x1.max(x0))
 }
 
 /// True when the prim's hull may overlap the sample rectangle `[x0, x1) x [y0, y1)`.
@@ -405,11 +415,6 @@ impl Edges {
     /// front face (`f >= 0`) and as a back face (`f <= 0`), cut by the near and far planes for
     /// CLIPS prims.
     pub fn covered(&self, prim: &Prim, q: &SampleEdges) -> (Spans, Spans) {
-        if prim.back.is_empty() && prim.flags & CLIPS == 0 && prim.front.is_full() {
-            if let Some(one) = self.covered_front(q) {
-                return (one, Spans::EMPTY);
-            }
-        }
         let mut out = Spans::EMPTY;
         let mut out_back = Spans::EMPTY;
         if !prim.front.is_empty() {
@@ -455,11 +460,18 @@ impl Edges {
         (out, out_back)
     }
 
-    /// The front-face case without clipping or facing changes, when every edge's set is one
-    /// span (their intersection is then one span too); None sends the caller to the general
-    /// form. Same decisions as the general form, bit for bit.
+    /// True when the prim is a front face throughout, not clipped and not drawn from behind:
+    /// [`Edges::covered_front`] then decides almost every sample.
+    #[inline]
+    pub fn simple(prim: &Prim) -> bool {
+        prim.back.is_empty() && prim.flags & CLIPS == 0 && prim.front.is_full()
+    }
+
+    /// The front-face case of a simple prim: `Some(Some((a, b)))` the one covered span,
+    /// `Some(None)` none, `None` when an edge's set has two spans (the caller then takes the
+    /// general [`Edges::covered`]). Same decisions as the general form, bit for bit.
     #[inline(always)]
-    fn covered_front(&self, q: &SampleEdges) -> Option<Spans> {
+    pub fn covered_front(&self, q: &SampleEdges) -> Option<Option<(f64, f64)>> {
         let (mut lo, mut hi) = (0.0f64, 1.0f64);
         for i in 0..3 {
             let [a, b, c] = q[i];
@@ -469,19 +481,36 @@ impl Edges {
             };
             match Spans::nonneg_quadratic_one(a, b, c, tie) {
                 Err(()) => return None,
-                Ok(None) => return Some(Spans::EMPTY),
+                Ok(None) => return Some(None),
                 Ok(Some((l, h))) => {
                     lo = lo.max(l);
                     hi = hi.min(h);
                     if hi <= lo {
-                        return Some(Spans::EMPTY);
+                        return Some(None);
                     }
                 }
             }
         }
-        let mut s = Spans::EMPTY;
-        s.push(lo, hi);
-        Some(s)
+        Some(Some((lo, hi)))
+    }
+
+    /// The parts of the edge functions that depend on the sample row `y` only:
+    /// `row[i][k] = e[i][k][1] * y + e[i][k][2]`.
+    #[inline]
+    pub fn row(&self, y: f64) -> [[f64; 3]; 3] {
+        self.e.map(|p| p.map(|v| v[1] * y + v[2]))
+    }
+
+    /// [`Edges::at`] from a row's parts: the same values, bit for bit.
+    #[inline(always)]
+    pub fn at_row(&self, x: f64, row: &[[f64; 3]; 3]) -> SampleEdges {
+        let mut q = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for (k, j) in [(2, 0), (1, 1), (0, 2)] {
+                q[i][j] = self.e[i][k][0] * x + row[i][k];
+            }
+        }
+        q
     }
 
     /// Where the hit point lies between the near and far planes: `sign * sum f_i g_i > 0` for

@@ -20,6 +20,8 @@ pub struct TilePrim {
     pub face: u32,
     pub flags: u8,
     pub object_id: i32,
+    /// Lambert shading (else flat).
+    pub lambert: bool,
     /// The segment: shutter time of its start and its length.
     pub t0: f64,
     pub dt: f64,
@@ -51,6 +53,7 @@ impl TilePrim {
             face: prim.face,
             flags: prim.flags,
             object_id: draw.object_id,
+            lambert: draw.shading == Shading::Lambert,
             t0,
             dt: t1 - t0,
             colors,
@@ -180,7 +183,7 @@ impl Layers for SampleShader<'_> {
             }
         }
         c[3] = c[3].clamp(0.0, 1.0);
-        if input.shading == Shading::Lambert {
+        if tp.lambert {
             let mut n = [0.0f32; 3];
             for (k, l) in lam.iter().enumerate() {
                 let (n0, n1) = (tp.normals[0][k], tp.normals[1][k]);

@@ -61,6 +61,7 @@ fn render_square(pos: &[[f64; 3]], faces: &[[u32; 3]], times: &[f64], shutter: &
         normals: None,
         object_id: 7,
         cull_back: true,
+        shading: Shading::Flat,
     }];
     render(&Input {
         width: W,
@@ -71,7 +72,6 @@ fn render_square(pos: &[[f64; 3]], faces: &[[u32; 3]], times: &[f64], shutter: &
         draws: &draws,
         backdrop: None,
         shutter,
-        shading: Shading::Flat,
         lights: &[],
         ambient: [0.0; 3],
         quadrature: Quadrature::Auto,
@@ -186,6 +186,7 @@ fn bad_input_names_the_argument() {
         normals: None,
         object_id: 0,
         cull_back: true,
+        shading: Shading::Flat,
     };
     let good = Input {
         width: W,
@@ -196,7 +197,6 @@ fn bad_input_names_the_argument() {
         draws: std::slice::from_ref(&draw),
         backdrop: None,
         shutter: &Shutter::Box,
-        shading: Shading::Flat,
         lights: &[],
         ambient: [0.0; 3],
         quadrature: Quadrature::Auto,

@@ -13,7 +13,7 @@ use super::shade::{SampleShader, TilePrim};
 use crate::error::{Error, Result};
 
 /// Tile side in samples (a multiple of every supersampling factor).
-pub const TILE: i32 = 16;
+pub const TILE: i32 = 32;
 /// Faces set up per parallel job.
 const CHUNK: usize = 2048;
 /// Most (tile, prim) pairs a frame may bin (8 bytes each while binning).
@@ -34,6 +34,12 @@ pub struct Stats {
     pub pieces: u64,
     /// Fragments merged into neighbours because a tile reached its fragment budget.
     pub merges: u64,
+    /// Samples tested against a prim, and covered spans found before chaining.
+    pub tests: u64,
+    pub spans: u64,
+    /// Thread time (summed over threads, ms) finding spans and resolving samples.
+    pub ms_cover: f64,
+    pub ms_resolve: f64,
     /// Segments of the shutter.
     pub segments: u64,
     /// Milliseconds: preparation, prim set-up, binning, tiles, whole frame.
@@ -58,6 +64,29 @@ pub struct Frame {
     /// (H,W,2) its screen motion over the shutter, pixels.
     pub velocity: Vec<f32>,
     pub stats: Stats,
+}
+
+/// The current prim's segment, as its spans are recorded.
+struct SpanOf {
+    /// The prim's index in the tile.
+    li: u32,
+    /// The segment's start and length in shutter time.
+    t0: f64,
+    dt: f64,
+    /// Whether spans may chain.
+    chains: bool,
+}
+
+/// What one tile counted.
+#[derive(Clone, Copy, Debug, Default)]
+struct Counts {
+    intervals: u64,
+    pieces: u64,
+    merges: u64,
+    tests: u64,
+    spans: u64,
+    ns_cover: u64,
+    ns_resolve: u64,
 }
 
 /// One sample's result.
@@ -87,7 +116,6 @@ pub const NONE: u32 = u32::MAX;
 /// joins it, relative to the depth.
 const CHAIN_DEPTH_TOLERANCE: f32 = 1e-3;
 
-#[derive(Default)]
 struct TileScratch {
     /// Fragments in the order they are found, with their sample's index in the tile.
     raw: Vec<(u32, Frag)>,
@@ -98,9 +126,28 @@ struct TileScratch {
     frags: Vec<Frag>,
     start: Vec<u32>,
     prims: Vec<TilePrim>,
+    /// The current prim's columns per row of the tile.
+    rows: [(i32, i32); TILE as usize],
     cursor: Vec<u32>,
     sweep: Scratch,
     out: Vec<SampleOut>,
+}
+
+impl Default for TileScratch {
+    fn default() -> Self {
+        TileScratch {
+            raw: Vec::new(),
+            links: Vec::new(),
+            tail: Vec::new(),
+            frags: Vec::new(),
+            start: Vec::new(),
+            prims: Vec::new(),
+            rows: [(0, 0); TILE as usize],
+            cursor: Vec::new(),
+            sweep: Scratch::default(),
+            out: Vec::new(),
+        }
+    }
 }
 
 thread_local! {
@@ -147,7 +194,7 @@ pub fn render(input: &Input) -> Result<Frame> {
         ws: ws as i32,
         hs: hs as i32,
     };
-    let tiles: Vec<(Vec<SampleOut>, [u64; 3])> = (0..(tx * ty) as usize)
+    let tiles: Vec<(Vec<SampleOut>, Counts)> = (0..(tx * ty) as usize)
         .into_par_iter()
         .map(|i| {
             let bin = &entries[offsets[i] as usize..offsets[i + 1] as usize];
@@ -166,9 +213,13 @@ pub fn render(input: &Input) -> Result<Frame> {
         stats: Stats::default(),
     };
     for (i, (samples, counts)) in tiles.iter().enumerate() {
-        stats.intervals += counts[0];
-        stats.pieces += counts[1];
-        stats.merges += counts[2];
+        stats.intervals += counts.intervals;
+        stats.pieces += counts.pieces;
+        stats.merges += counts.merges;
+        stats.tests += counts.tests;
+        stats.spans += counts.spans;
+        stats.ms_cover += counts.ns_cover as f64 * 1e-6;
+        stats.ms_resolve += counts.ns_resolve as f64 * 1e-6;
         let (x0, y0) = ((i as i32 % tx) * TILE, (i as i32 / tx) * TILE);
         write_pixels(&mut frame, samples, x0, y0, ws as i32, hs as i32, s as i32);
     }
@@ -347,7 +398,7 @@ impl Ctx<'_> {
 
     /// One tile: its samples' results (row-major, TILE wide) and counts (intervals, pieces,
     /// merges).
-    fn tile(&self, tx: i32, ty: i32, bin: &[u32]) -> (Vec<SampleOut>, [u64; 3]) {
+    fn tile(&self, tx: i32, ty: i32, bin: &[u32]) -> (Vec<SampleOut>, Counts) {
         SCRATCH.with(|cell| match cell.try_borrow_mut() {
             Ok(mut sc) => self.tile_with(tx, ty, bin, &mut sc),
             Err(_) => self.tile_with(tx, ty, bin, &mut TileScratch::default()),
@@ -360,7 +411,8 @@ impl Ctx<'_> {
         ty: i32,
         bin: &[u32],
         sc: &mut TileScratch,
-    ) -> (Vec<SampleOut>, [u64; 3]) {
+    ) -> (Vec<SampleOut>, Counts) {
+        let clock = Instant::now();
         let (x0, y0) = (tx * TILE, ty * TILE);
         let (x1, y1) = ((x0 + TILE).min(self.ws), (y0 + TILE).min(self.hs));
         let times = self.input.times;
@@ -370,57 +422,53 @@ impl Ctx<'_> {
         sc.tail.clear();
         sc.tail.resize((TILE * TILE) as usize, (NONE, NONE));
         let chains = self.input.quadrature.chains();
-        let mut counts = [0u64; 3];
+        let mut counts = Counts::default();
         for (li, &pi) in bin.iter().enumerate() {
             let p = &self.prims[pi as usize];
             let tp = TilePrim::new(self.input, self.prepared, p, &self.corners(p));
             let e = &tp.edges;
-            let (ta, tb) = (times[p.seg as usize], times[p.seg as usize + 1]);
-            let glob = |tau: f64| ta + tau * (tb - ta);
-            for iy in p.bbox[1].max(y0)..p.bbox[3].min(y1) {
-                let (xa, xb) = prim::row_span(p, iy, p.bbox[0].max(x0), p.bbox[2].min(x1));
-                let y = f64::from(iy) + 0.5;
+            let span = SpanOf {
+                li: li as u32,
+                t0: times[p.seg as usize],
+                dt: times[p.seg as usize + 1] - times[p.seg as usize],
+                chains,
+            };
+            let simple = Edges::simple(p);
+            let (ya, yb) = (p.bbox[1].max(y0), p.bbox[3].min(y1));
+            let rows = &mut sc.rows[..(yb - ya).max(0) as usize];
+            prim::row_spans(p, ya, p.bbox[0].max(x0), p.bbox[2].min(x1), rows);
+            for iy in ya..yb {
+                let (xa, xb) = sc.rows[(iy - ya) as usize];
+                if xa >= xb {
+                    continue;
+                }
+                let row = e.row(f64::from(iy) + 0.5);
                 for ix in xa..xb {
-                    let x = f64::from(ix) + 0.5;
-                    let q = e.at(x, y);
-                    let (front, back) = e.covered(p, &q);
-                    for (spans, flag) in [(front, 0), (back, BACK)] {
-                        for s in spans.as_slice() {
-                            let (t0, t1) = (glob(s[0]) as f32, glob(s[1]) as f32);
-                            if !(t1 > t0) {
+                    let q = e.at_row(f64::from(ix) + 0.5, &row);
+                    counts.tests += 1;
+                    let j = ((iy - y0) * TILE + (ix - x0)) as usize;
+                    if simple {
+                        match e.covered_front(&q) {
+                            Some(None) => continue,
+                            Some(Some((a, b))) => {
+                                self.add_span(sc, &span, &tp, &q, j, a, b, 0, &mut counts);
                                 continue;
                             }
-                            let z0 = depth_near(e, &q, s[0], s[1]);
-                            let z1 = depth_near(e, &q, s[1], s[0]);
-                            let j = ((iy - y0) * TILE + (ix - x0)) as usize;
-                            let prim = li as u32 | flag;
-                            let f = Frag {
-                                t0,
-                                t1,
-                                z0,
-                                z1,
-                                prim,
-                                chain: 0,
-                                n: 1,
-                            };
-                            if chains && self.join(sc, j, &f, &tp) {
-                                continue;
-                            }
-                            sc.links.push(Link {
-                                t0,
-                                prim: li as u32,
-                                next: NONE,
-                            });
-                            let link = (sc.links.len() - 1) as u32;
-                            sc.tail[j] = (sc.raw.len() as u32, link);
-                            sc.raw.push((j as u32, Frag { chain: link, ..f }));
+                            None => {}
                         }
+                    }
+                    let (front, back) = e.covered(p, &q);
+                    for s in front.as_slice() {
+                        self.add_span(sc, &span, &tp, &q, j, s[0], s[1], 0, &mut counts);
+                    }
+                    for s in back.as_slice() {
+                        self.add_span(sc, &span, &tp, &q, j, s[0], s[1], BACK, &mut counts);
                     }
                 }
             }
             sc.prims.push(tp);
         }
-        counts[0] = sc.raw.len() as u64;
+        counts.intervals = sc.raw.len() as u64;
         // group by sample (a stable counting sort)
         let n = (TILE * TILE) as usize;
         sc.start.clear();
@@ -452,6 +500,8 @@ impl Ctx<'_> {
                 fill[*j as usize] += 1;
             }
         }
+        counts.ns_cover = clock.elapsed().as_nanos() as u64;
+        let clock = Instant::now();
         let mut out = std::mem::take(&mut sc.out);
         out.clear();
         let t_ref = self.input.reference_time;
@@ -469,6 +519,19 @@ impl Ctx<'_> {
                 let j = ((iy - y0) * TILE + (ix - x0)) as usize;
                 let frags = &mut sc.frags[sc.start[j] as usize..sc.start[j + 1] as usize];
                 let bg = self.behind(ix, iy);
+                if frags.is_empty() {
+                    out.push(SampleOut {
+                        rgba: if bg.depth.is_finite() {
+                            bg.rgba
+                        } else {
+                            [0.0; 4]
+                        },
+                        depth: bg.depth,
+                        id: bg.id,
+                        velocity: [0.0; 2],
+                    });
+                    continue;
+                }
                 let mut shader = SampleShader {
                     input: self.input,
                     prepared: self.prepared,
@@ -489,7 +552,7 @@ impl Ctx<'_> {
                     t_ref,
                     &mut sc.sweep,
                 );
-                counts[1] += u64::from(r.pieces);
+                counts.pieces += u64::from(r.pieces);
                 let o = match r.front {
                     Some((fi, z)) => {
                         let p = shader.prim_at(&frags[fi], t_ref);
@@ -513,7 +576,55 @@ impl Ctx<'_> {
         }
         let result = out.clone();
         sc.out = out;
+        counts.ns_resolve = clock.elapsed().as_nanos() as u64;
         (result, counts)
+    }
+
+    /// Records the span `[a, b]` (local time) of the current prim at tile sample `j`: joined to
+    /// the sample's last fragment when it continues it, else a new fragment.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn add_span(
+        &self,
+        sc: &mut TileScratch,
+        span: &SpanOf,
+        tp: &TilePrim,
+        q: &prim::SampleEdges,
+        j: usize,
+        a: f64,
+        b: f64,
+        flag: u32,
+        counts: &mut Counts,
+    ) {
+        let (t0, t1) = (
+            (span.t0 + a * span.dt) as f32,
+            (span.t0 + b * span.dt) as f32,
+        );
+        if !(t1 > t0) {
+            return;
+        }
+        counts.spans += 1;
+        let e = &tp.edges;
+        let f = Frag {
+            t0,
+            t1,
+            z0: depth_near(e, q, a, b),
+            z1: depth_near(e, q, b, a),
+            prim: span.li | flag,
+            chain: 0,
+            n: 1,
+        };
+        if span.chains && self.join(sc, j, &f, tp) {
+            return;
+        }
+        sc.links.push(Link {
+            t0,
+            prim: span.li,
+            next: NONE,
+        });
+        let link = (sc.links.len() - 1) as u32;
+        sc.tail[j] = (sc.raw.len() as u32, link);
+        sc.raw.push((j as u32, Frag { chain: link, ..f }));
     }
 
     /// Joins `f` (a span of the tile's prim `tp`, not yet in `sc.prims`) to the fragment found
@@ -526,7 +637,12 @@ impl Ctx<'_> {
             return false;
         }
         let t = sc.raw[ti as usize].1;
-        let head = &sc.prims[(t.prim & !BACK) as usize];
+        let hi = (t.prim & !BACK) as usize;
+        let head = if hi == sc.prims.len() {
+            tp
+        } else {
+            &sc.prims[hi]
+        };
         if head.draw != tp.draw
             || (t.prim & BACK) != (f.prim & BACK)
             || (head.flags & OPAQUE) != (tp.flags & OPAQUE)

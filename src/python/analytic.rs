@@ -11,7 +11,7 @@ use crate::{
 };
 
 /// One moving draw: (positions f64 (K+1,V,3), faces i64 (F,3), rgba f32 (1|V,4), normals f32
-/// (K+1,V,3) | None, object_id, cull_back).
+/// (K+1,V,3) | None, object_id, cull_back, shading name).
 type DrawArgs<'py> = (
     PyReadonlyArray3<'py, f64>,
     PyReadonlyArray2<'py, i64>,
@@ -19,6 +19,7 @@ type DrawArgs<'py> = (
     Option<PyReadonlyArray3<'py, f32>>,
     i32,
     bool,
+    String,
 );
 
 /// The backdrop: (rgba f32 (HS,WS,4), depth f32 (HS,WS), ids i32 (HS,WS)), one entry a sample.
@@ -35,6 +36,7 @@ struct Owned {
     normals: Option<Vec<[f32; 3]>>,
     object_id: i32,
     cull_back: bool,
+    shading: Shading,
 }
 
 fn as_rows<T: Copy + Default, const K: usize>(flat: &[T]) -> Vec<[T; K]> {
@@ -81,6 +83,7 @@ fn owned(d: &DrawArgs<'_>, k1: usize) -> Result<Owned, Error> {
         normals,
         object_id: d.4,
         cull_back: d.5,
+        shading: Shading::parse(&d.6)?,
     })
 }
 
@@ -88,7 +91,7 @@ fn owned(d: &DrawArgs<'_>, k1: usize) -> Result<Owned, Error> {
 /// i32, velocity (H,W,2) f32, stats dict). `shutter` is a filter name or (M,) f64 weights;
 /// `gauss` 0 means auto. The GIL is released while rendering.
 #[pyfunction]
-#[pyo3(signature = (width, height, samples, times, view_projections, draws, shutter, shading, lights, ambient, gauss, reference_time, shade, backdrop=None))]
+#[pyo3(signature = (width, height, samples, times, view_projections, draws, shutter, lights, ambient, gauss, reference_time, shade, backdrop=None))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn _analytic<'py>(
     py: Python<'py>,
@@ -99,7 +102,6 @@ fn _analytic<'py>(
     view_projections: PyReadonlyArray3<'py, f64>,
     draws: Vec<DrawArgs<'py>>,
     shutter: &Bound<'py, PyAny>,
-    shading: &str,
     lights: Vec<([f64; 3], [f64; 3])>,
     ambient: [f64; 3],
     gauss: u8,
@@ -133,7 +135,6 @@ fn _analytic<'py>(
         .iter()
         .map(|(d, i)| Light::new(*d, *i))
         .collect::<Result<_, _>>()?;
-    let shading = Shading::parse(shading)?;
     let owned: Vec<Owned> = draws
         .iter()
         .map(|d| owned(d, k1))
@@ -148,6 +149,7 @@ fn _analytic<'py>(
             normals: o.normals.as_deref(),
             object_id: o.object_id,
             cull_back: o.cull_back,
+            shading: o.shading,
         })
         .collect();
     let backdrop = match &backdrop {
@@ -167,7 +169,6 @@ fn _analytic<'py>(
         draws: &moving,
         backdrop,
         shutter: &shutter,
-        shading,
         lights: &lights,
         ambient: ambient.map(|a| a as f32),
         quadrature: if gauss == 0 {
@@ -197,6 +198,10 @@ impl ToDict for AnalyticStats {
         d.set_item("intervals", self.intervals)?;
         d.set_item("pieces", self.pieces)?;
         d.set_item("merges", self.merges)?;
+        d.set_item("tests", self.tests)?;
+        d.set_item("spans", self.spans)?;
+        d.set_item("ms_cover", self.ms_cover)?;
+        d.set_item("ms_resolve", self.ms_resolve)?;
         d.set_item("segments", self.segments)?;
         d.set_item("ms_prepare", self.ms_prepare)?;
         d.set_item("ms_setup", self.ms_setup)?;

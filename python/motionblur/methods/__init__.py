@@ -10,7 +10,7 @@ frames), ``_painter`` (objects drawn at any shutter time, per-mesh constants) an
 
 from __future__ import annotations
 
-from . import accumulation, blur_shell, image_space, motion_volume  # each registers its methods
+from . import accumulation, analytic, blur_shell, image_space, motion_volume  # each registers its methods
 from ._layers import clear_static_cache
 
-__all__ = ["accumulation", "blur_shell", "image_space", "motion_volume", "clear_static_cache"]
+__all__ = ["accumulation", "analytic", "blur_shell", "image_space", "motion_volume", "clear_static_cache"]
