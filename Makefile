@@ -14,8 +14,9 @@ export MPLBACKEND := Agg
 
 RUST_SOURCES := $(shell find src -name '*.rs') Cargo.toml Cargo.lock pyproject.toml
 EXT_STAMP := $(VENV)/.built
+DOCS_STAMP := $(VENV)/.docs-installed
 
-.PHONY: help sysdeps venv build test test-rust test-python demo bench lint fmt notebooks clean
+.PHONY: help sysdeps venv build test test-rust test-python demo bench lint docs fmt notebooks clean
 
 help: ## list the targets
 	@grep -hE '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-12s %s\n", $$1, $$2}'
@@ -59,7 +60,7 @@ demo: build ## the main job on built-in scenes: images and a speed/error table i
 bench: build ## benchmarks against the peers, measured in the same run (out/bench)
 	@for b in benches/bench_*.py; do echo "== $$b"; $(PY) $$b || exit 1; done
 
-lint: build ## cargo fmt, clippy and rustdoc -D warnings, ruff, the stubs of the compiled core against it (stubtest)
+lint: build ## cargo fmt, clippy and rustdoc -D warnings, ruff, stubtest, mypy --strict on a user script, extras resolved by pip
 	cargo fmt --check
 	cargo clippy --release --all-targets -- -D warnings
 	cargo clippy --release --features python -- -D warnings
@@ -68,6 +69,17 @@ lint: build ## cargo fmt, clippy and rustdoc -D warnings, ruff, the stubs of the
 	$(VENV)/bin/ruff check python tests benches notebooks
 	$(VENV)/bin/ruff format --check python tests benches
 	$(PY) -m mypy.stubtest motionblur._core
+	@# the public API is typed: a user's script passes mypy --strict (no Any out of a Frame, no untyped call)
+	$(PY) -m mypy --strict tests/typing/user_script.py
+	@# every extra, and all, resolves with plain pip (metadata only: nothing is built or installed)
+	$(PY) -m pip install --dry-run --ignore-installed --quiet ".[all]"
+
+$(DOCS_STAMP): $(STAMP) requirements-docs.txt
+	$(PY) -m pip install -q -r requirements-docs.txt
+	touch $@
+
+docs: build $(DOCS_STAMP) ## the documentation site in out/site: API from the docstrings, the notebooks executed
+	$(PY) -m mkdocs build --strict --clean
 
 fmt: venv ## format Rust and Python in place
 	cargo fmt

@@ -9,7 +9,9 @@ from __future__ import annotations
 
 from . import (
     _malloc,  # noqa: F401  (keeps freed frame buffers in the process; see the module)
+    analytic,
     image,
+    interop,
     meshes,
     methods,  # noqa: F401  (registers every built-in rendering method)
 )
@@ -18,17 +20,29 @@ from . import raster as _raster
 from . import scene as _scene
 from . import shell as _shell
 from ._core import __version__
+from ._namespace import tidy
+from ._optional import MissingDependencyError
 from .analytic import MovingDraw, coverage, rasterize_motion
 from .evaluation import metrics, reference
 from .geometry import *  # noqa: F403
+from .interop import read_image, to_mitsuba_dict
 from .methods.accumulation import Sequence
 from .raster import *  # noqa: F403
-from .render import METHODS, register, render
+from .render import METHODS, MethodNotApplicableWarning, register, render
 from .scene import *  # noqa: F403
 from .scenes_builtin import SCENES, builtin_scene
 from .shell import *  # noqa: F403
 
-__all__ = ["__version__", "image", "meshes", *_geometry.__all__, *_raster.__all__, *_shell.__all__]
+__all__ = [
+    "__version__",
+    "analytic",
+    "image",
+    "meshes",
+    "interop",
+    *_geometry.__all__,
+    *_raster.__all__,
+    *_shell.__all__,
+]
 __all__ += [
     "MovingDraw",
     "rasterize_motion",
@@ -42,4 +56,10 @@ __all__ += [
     "builtin_scene",
     "metrics",
     "reference",
+    "read_image",
+    "to_mitsuba_dict",
+    "MissingDependencyError",
+    "MethodNotApplicableWarning",
 ]
+
+tidy(__name__)

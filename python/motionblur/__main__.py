@@ -1,4 +1,5 @@
-"""Command line: ``python -m motionblur demo [--out DIR]`` and ``python -m motionblur bench [options]``."""
+"""Command line: ``motionblur demo [--out DIR]``, ``motionblur bench [options]`` and ``motionblur --version``
+(also ``python -m motionblur ...``; pip installs the ``motionblur`` script)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,11 @@ import sys
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m motionblur")
+    from ._core import __version__
+    from ._optional import MissingDependencyError
+
+    parser = argparse.ArgumentParser(prog="motionblur")
+    parser.add_argument("--version", action="version", version=f"motionblur {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser(
         "demo",
@@ -18,15 +23,19 @@ def main(argv: list[str] | None = None) -> int:
         "bench", help="the speed-against-error report (python -m motionblur bench --help)", add_help=False
     )
     argv = list(sys.argv[1:] if argv is None else argv)
-    if argv[:1] == ["bench"]:
-        from .evaluation.bench import main as bench_main
+    try:
+        if argv[:1] == ["bench"]:
+            from .evaluation.bench import main as bench_main
 
-        return bench_main(argv[1:])
-    args = parser.parse_args(argv)
-    if args.command == "demo":
-        from .evaluation.demo import run
+            return bench_main(argv[1:])
+        args = parser.parse_args(argv)
+        if args.command == "demo":
+            from .evaluation.demo import run
 
-        return run(args.out)
+            return run(args.out)
+    except MissingDependencyError as exc:  # a clear line, not a traceback: what to install
+        print(f"motionblur: {exc}", file=sys.stderr)
+        return 1
     return 2
 
 

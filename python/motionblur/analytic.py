@@ -81,11 +81,21 @@ class MovingDraw:
     def _args(self):
         c = np.ascontiguousarray
         n = None if self.normals is None else c(self.normals)
-        return (c(self.positions), c(self.faces), c(self.rgba), n, self.object_id, self.cull_back, self.shading)
+        return (
+            c(self.positions),
+            c(self.faces),
+            c(self.rgba),
+            n,
+            self.object_id,
+            self.cull_back,
+            self.shading,
+        )
 
     def __repr__(self) -> str:
         k, v = self.positions.shape[:2]
-        return f"MovingDraw({k} boundaries, {v} vertices, {len(self.faces)} faces, object_id={self.object_id})"
+        return (
+            f"MovingDraw({k} boundaries, {v} vertices, {len(self.faces)} faces, object_id={self.object_id})"
+        )
 
 
 def _view_projections(cameras, k1: int):

@@ -25,6 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _core
+from ._optional import require
 from ._validate import as_array, as_float, as_int
 
 __all__ = [
@@ -163,6 +164,13 @@ class Mesh:
         )
         return Mesh._from_core(self._core.with_vertices(v), v, self._faces)
 
+    def to_trimesh(self):
+        """A ``trimesh.Trimesh`` of this mesh (``process=False``: the same vertices in the same
+        order, float64, and faces). Needs trimesh (``pip install "motionblur[interop]"``)."""
+        from .interop.trimesh import to_trimesh
+
+        return to_trimesh(self._vertices, self._faces)
+
     def __len__(self) -> int:
         return len(self._faces)
 
@@ -242,8 +250,7 @@ class MotionVolume:
     def to_trimesh(self):
         """A ``trimesh.Trimesh`` (``process=False``: no vertex merging) with vertex colours as
         uint8 straight RGBA and the lighting normals."""
-        import trimesh
-
+        trimesh = require("trimesh", "to_trimesh")
         colors = np.clip(np.round(self.rgba * 255.0), 0, 255).astype(np.uint8)
         return trimesh.Trimesh(
             vertices=self.vertices,

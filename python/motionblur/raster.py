@@ -26,12 +26,17 @@ surfaces included), ``inf`` for background; ids and velocity belong to that same
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 from . import _core
+from ._optional import require
 from ._validate import as_array, as_float, as_int
 
 __all__ = ["Camera", "Draw", "Frame", "look_at", "rasterize"]
@@ -76,7 +81,9 @@ class Camera:
 
     Parameters: ``pose`` (4,4) camera-to-world; ``yfov`` vertical field of view in radians, in
     (0, pi); ``width``, ``height`` in pixels (1..16384, at most 2**25 pixels); ``znear`` > 0 and
-    ``zfar`` > znear in scene units (``zfar=inf`` gives pyrender's infinite projection).
+    ``zfar`` > znear in scene units. The defaults are pyrender's: ``znear=0.05`` and
+    ``zfar=inf``, its infinite projection (pyrender's ``zfar=None``), so nothing far away is
+    clipped whatever the scene's units. :meth:`from_pyrender` converts a pyrender camera.
 
     Attributes: ``pose``, ``yfov``, ``width``, ``height``, ``znear``, ``zfar``, ``aspect``
     (width / height), ``view`` (4,4) float64 world-to-camera, ``projection`` (4,4) float64 equal
@@ -84,7 +91,15 @@ class Camera:
     .get_projection_matrix(width, height)``, ``view_projection`` = projection @ view.
     """
 
-    def __init__(self, pose, yfov, width, height, znear=0.05, zfar=100.0):
+    def __init__(
+        self,
+        pose: ArrayLike,
+        yfov: float,
+        width: int,
+        height: int,
+        znear: float = 0.05,
+        zfar: float = float("inf"),
+    ) -> None:
         pose = as_array(pose, "pose", np.float64, (4, 4)).copy()
         yfov = as_float(yfov, "yfov")
         if not 0.0 < yfov < np.pi:
@@ -124,6 +139,24 @@ class Camera:
         self.view_projection = p @ self.view
         self.projection.flags.writeable = False
         self.view_projection.flags.writeable = False
+
+    @classmethod
+    def from_pyrender(cls, camera, pose, width: int, height: int) -> Camera:
+        """The :class:`Camera` of a ``pyrender.PerspectiveCamera`` seen from ``pose`` (4,4)
+        camera-to-world (its node's pose) rendering ``width`` x ``height`` pixels: the same
+        projection matrix as pyrender's (``zfar=None`` there is ``zfar=inf`` here). TypeError for
+        other pyrender cameras, ValueError when its ``aspectRatio`` is not ``width / height``
+        (:mod:`motionblur.interop.pyrender`)."""
+        from .interop.pyrender import camera_parameters
+
+        return cls(**camera_parameters(camera, pose, width, height))
+
+    def to_pyrender(self) -> Any:
+        """The ``pyrender.PerspectiveCamera`` with this camera's projection (``zfar=inf`` becomes
+        pyrender's ``None``); put it on a node at ``self.pose``. Needs pyrender."""
+        from .interop.pyrender import to_pyrender_camera
+
+        return to_pyrender_camera(self)
 
     def resized(self, width: int, height: int) -> Camera:
         """The same camera (pose, field of view, clip planes) with an image of ``width`` x
@@ -165,8 +198,15 @@ class Draw:
     """
 
     def __init__(
-        self, vertices, faces, rgba, normals=None, object_id=0, cull_back=True, previous_vertices=None
-    ):
+        self,
+        vertices: ArrayLike,
+        faces: ArrayLike,
+        rgba: ArrayLike,
+        normals: ArrayLike | None = None,
+        object_id: int = 0,
+        cull_back: bool = True,
+        previous_vertices: ArrayLike | None = None,
+    ) -> None:
         v = as_array(vertices, "vertices", np.float64, (None, 3))
         f = as_array(faces, "faces", np.int64, (None, 3))
         if f.min() < 0 or f.max() >= len(v):
@@ -255,7 +295,20 @@ class Frame:
     (dtypes are converted; the arrays are not copied when they already match).
     """
 
-    def __init__(self, rgba, depth, ids, velocity, stats=None):
+    rgba: NDArray[np.float32]
+    depth: NDArray[np.float32]
+    ids: NDArray[np.int32]
+    velocity: NDArray[np.float32]
+    stats: dict[str, Any]
+
+    def __init__(
+        self,
+        rgba: ArrayLike,
+        depth: ArrayLike,
+        ids: ArrayLike,
+        velocity: ArrayLike,
+        stats: dict[str, Any] | None = None,
+    ) -> None:
         rgba = _frame_array(rgba, "rgba", np.float32, (None, None, 4))
         h, w = rgba.shape[:2]
         self.rgba = rgba
@@ -273,7 +326,7 @@ class Frame:
         return int(self.rgba.shape[0])
 
     @property
-    def coverage(self) -> np.ndarray:
+    def coverage(self) -> NDArray[np.float32]:
         """(H,W) float32 alpha: the fraction of the pixel covered (premultiplied alpha)."""
         return self.rgba[..., 3]
 
@@ -290,15 +343,22 @@ class Frame:
         out = np.concatenate([s, a], axis=-1)
         return np.round(out * 255.0).astype(np.uint8)
 
-    def save_png(self, path) -> None:
+    def save_png(self, path: str | os.PathLike[str]) -> None:
         """Writes an 8-bit RGBA PNG (sRGB colour, straight alpha). Creates parent folders."""
-        from pathlib import Path
-
-        from PIL import Image
-
+        image = require("PIL.Image", "Frame.save_png")
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        Image.fromarray(self.to_srgb8(), mode="RGBA").save(path)
+        image.fromarray(self.to_srgb8(), mode="RGBA").save(path)
+
+    def save_exr(self, path: str | os.PathLike[str]) -> Path:
+        """Writes an OpenEXR file: linear float ``R``, ``G``, ``B``, ``A`` (premultiplied), depth
+        as ``Z``, ids as ``id`` and velocity as ``velocity.X`` / ``velocity.Y``, the stats in the
+        header (:mod:`motionblur.interop.exr`); every value round-trips bit-exactly through
+        :func:`motionblur.read_image`. Creates parent folders; returns the path. Needs the
+        ``OpenEXR`` package (``pip install "motionblur[interop]"``)."""
+        from .interop.exr import write_exr
+
+        return write_exr(path, self.rgba, self.depth, self.ids, self.velocity, self.stats)
 
 
 def over_background(frame: Frame, background) -> Frame:

@@ -14,34 +14,50 @@ module knows none of them. The layers the methods share are in :mod:`motionblur.
 
 from __future__ import annotations
 
+import inspect
+import re
+import textwrap
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 from .raster import Frame, over_background
 from .scene import Scene
 
-__all__ = ["render", "register", "METHODS", "MethodSpec", "methods_for"]
+__all__ = ["render", "register", "METHODS", "MethodSpec", "methods_for", "MethodNotApplicableWarning"]
+
+
+class MethodNotApplicableWarning(UserWarning):
+    """:func:`render` was asked for a method whose ``applies(scene)`` is false: the method runs,
+    but it does nothing useful for this scene (e.g. ``camera_velocity`` with a still camera gives
+    the sharp frame)."""
 
 
 @dataclass
 class MethodSpec:
     """A registered method: its function ``fn(scene, **options) -> Frame``, the option sets
-    ``sweep`` the benchmark runs, ``applies(scene) -> bool`` and a one-line description."""
+    ``sweep`` the benchmark runs, ``applies(scene) -> bool``, what the method ``needs`` of a scene
+    (words, for the warning when it does not apply) and a one-line description."""
 
     name: str
     fn: Callable[..., Frame]
     sweep: list[dict] = field(default_factory=list)
     applies: Callable[[Scene], bool] = lambda scene: True
     doc: str = ""
+    needs: str = ""
 
 
 #: Every rendering method, by name (filled by ``@register`` when :mod:`motionblur.methods` loads).
 METHODS: dict[str, MethodSpec] = {}
 
 
-def register(name: str, sweep=(), applies: Callable[[Scene], bool] | None = None):
-    """Decorator: register ``fn(scene, **options) -> Frame`` as method ``name`` (see the module docs)."""
+def register(name: str, sweep=(), applies: Callable[[Scene], bool] | None = None, needs: str = ""):
+    """Decorator: register ``fn(scene, **options) -> Frame`` as method ``name`` (see the module
+    docs). ``needs``: what ``applies`` asks of a scene, in words (``"a moving camera"``).
+    :func:`render`'s docstring lists the method's options from ``fn``'s signature and the
+    ``Options:`` paragraph of its docstring."""
     if not isinstance(name, str) or not name:
         raise TypeError("name: expected a non-empty string")
 
@@ -53,7 +69,9 @@ def register(name: str, sweep=(), applies: Callable[[Scene], bool] | None = None
             sweep=[dict(s) for s in sweep],
             applies=applies if applies is not None else (lambda scene: True),
             doc=doc[0] if doc else "",
+            needs=str(needs),
         )
+        render.__doc__ = _RENDER_DOC + _methods_doc()
         return fn
 
     return deco
@@ -64,14 +82,15 @@ def methods_for(scene: Scene) -> list[str]:
     return [n for n, m in METHODS.items() if m.applies(scene)]
 
 
-def render(scene: Scene, method: str = "accumulation", **options) -> Frame:
+def render(scene: Scene, method: str = "accumulation", **options: Any) -> Frame:
     """Render ``scene`` with the registered ``method`` (``accumulation``, ``motion_volume``, ...).
 
     Returns a :class:`Frame` of ``scene.camera`` size: ``rgba`` (H,W,4) float32 premultiplied
     linear RGBA composited over ``scene.background``, ``depth`` (H,W) float32, ``ids`` (H,W) int32
     (object index in ``scene.objects``, -1 background), ``velocity`` (H,W,2) and ``stats`` with
     ``method``, ``options`` and ``ms`` (wall time of the whole call). Unknown methods and options
-    raise ValueError / TypeError.
+    raise ValueError / TypeError; a method that does not apply to the scene (see
+    :func:`methods_for`) warns with :class:`MethodNotApplicableWarning` and runs.
     """
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
@@ -79,13 +98,76 @@ def render(scene: Scene, method: str = "accumulation", **options) -> Frame:
         raise TypeError(f"method: expected a string, got {type(method).__name__}")
     if method not in METHODS:
         raise ValueError(f"method: unknown method {method!r}; expected one of {', '.join(sorted(METHODS))}")
+    spec = METHODS[method]
+    if not spec.applies(scene):
+        warnings.warn(
+            f"method {method!r} does not apply to this scene"
+            + (f" (it needs {spec.needs})" if spec.needs else "")
+            + f"; methods that apply: {', '.join(methods_for(scene))}",
+            MethodNotApplicableWarning,
+            stacklevel=2,
+        )
+    bad = _unknown_options(spec.fn, options)
+    if bad:
+        raise TypeError(
+            f"options: method {method!r} has no option {', '.join(map(repr, bad))}; "
+            f"its options: {', '.join(_parameters(spec.fn)) or 'none'} (help(motionblur.render))"
+        )
     t0 = time.perf_counter()
-    frame = METHODS[method].fn(scene, **options)
+    frame = spec.fn(scene, **options)
     frame = over_background(frame, scene.background)
     frame.stats["method"] = method
     frame.stats["options"] = dict(options)
     frame.stats["ms"] = (time.perf_counter() - t0) * 1e3
     return frame
+
+
+_RENDER_DOC = render.__doc__ or ""
+
+
+def _parameters(fn) -> dict[str, inspect.Parameter]:
+    """The options of a method function: its parameters after ``scene``."""
+    params = list(inspect.signature(fn).parameters.values())[1:]
+    return {p.name: p for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
+
+
+def _unknown_options(fn, options: dict) -> list[str]:
+    sig = inspect.signature(fn).parameters.values()
+    if any(p.kind == p.VAR_KEYWORD for p in sig):
+        return []
+    return [k for k in options if k not in _parameters(fn)]
+
+
+def _options_paragraph(doc: str) -> str:
+    """The ``Options:`` paragraph of a method's docstring (up to the next blank line or
+    ``Returns``), whitespace collapsed."""
+    text = inspect.cleandoc(doc or "")
+    m = re.search(r"Options:(.*?)(?:\n\s*\n|$)", text, re.S)
+    return " ".join(m.group(1).split()) if m else ""
+
+
+def _methods_doc() -> str:
+    """The part of :func:`render`'s docstring listing every registered method, its options with
+    their defaults, and what its docstring says of them (units included)."""
+    lines = [
+        "",
+        "    Methods and their options (from each method's docstring; defaults in the signature):",
+        "",
+    ]
+    for name in sorted(METHODS):
+        spec = METHODS[name]
+        sig = ", ".join(
+            f"{p.name}={p.default!r}" if p.default is not p.empty else p.name
+            for p in _parameters(spec.fn).values()
+        )
+        lines.append(f"    ``{name}`` ({sig}): {spec.doc}")
+        if spec.needs:
+            lines.append(f"        Applies to scenes with {spec.needs}.")
+        para = _options_paragraph(spec.fn.__doc__ or "")
+        if para:
+            lines += textwrap.wrap(para, 92, initial_indent="        ", subsequent_indent="        ")
+        lines.append("")
+    return "\n".join(lines)
 
 
 # The methods' layer helpers are in motionblur.methods._layers. ``motionblur.render.<name>`` still

@@ -338,7 +338,7 @@ class DirectionalLight:
     """A light at infinity: ``direction`` (3,) the way the light travels (normalised here),
     ``intensity`` float or RGB (3,) >= 0 (irradiance on a surface facing it, linear)."""
 
-    def __init__(self, direction, intensity=1.0):
+    def __init__(self, direction, intensity=1.0) -> None:
         d = as_array(direction, "direction", np.float64, (3,))
         n = np.linalg.norm(d)
         if n == 0:
@@ -418,7 +418,7 @@ class Scene:
         background=(0.0, 0.0, 0.0, 0.0),
         reference_time="close",
         ambient=0.0,
-    ):
+    ) -> None:
         if isinstance(objects, Object):
             objects = [objects]
         objects = list(objects)
@@ -526,6 +526,64 @@ class Scene:
         )
         args.update(changes)
         return Scene(**args)
+
+    @classmethod
+    def from_trimesh(
+        cls, scene, camera=None, *, width: int = 640, height: int = 480, shading: str = "flat", **options
+    ) -> Scene:
+        """A still scene from a ``trimesh.Scene`` (or ``Trimesh``): every mesh placed by the graph,
+        with its colours, named after its node; ``camera`` None: the scene's own, else one framing
+        it (``width`` x ``height``). ``options`` go to :class:`Scene`. Needs ``motionblur[interop]``;
+        details in :mod:`motionblur.interop.trimesh`."""
+        from .interop.trimesh import read_trimesh
+
+        parts, cam = read_trimesh(scene, camera, width=width, height=height)
+        objects = [Object((p.vertices, p.faces), p.color, shading=shading, name=p.name) for p in parts]
+        return cls(objects, cam, **options)
+
+    @classmethod
+    def from_gltf(
+        cls,
+        path,
+        *,
+        shutter=None,
+        animation=0,
+        camera=None,
+        width: int = 640,
+        height: int = 480,
+        shading: str = "flat",
+        resample: int = 0,
+        **options,
+    ) -> Scene:
+        """A scene in motion from a glTF 2.0 file (``.gltf``, embedded or ``.glb``): meshes placed
+        by the node hierarchy, moved by one ``animation``'s TRS keyframes, morph targets and skins;
+        the shutter [0, 1] spans ``shutter = (start, end)`` seconds of it (default: all of it).
+        ``camera`` None: the file's first camera, else one framing the scene; ``resample`` N adds
+        N + 1 evenly spaced keyframes. ``options`` go to :class:`Scene`. Needs
+        ``motionblur[interop]``; details and limits in :mod:`motionblur.interop.gltf`."""
+        from .interop.gltf import read_gltf
+
+        parts, cam, cam_keys = read_gltf(
+            path,
+            shutter=shutter,
+            animation=animation,
+            camera=camera,
+            width=width,
+            height=height,
+            resample=resample,
+        )
+        objects = []
+        for p in parts:
+            motion = None
+            if p.transforms is not None:
+                motion = Motion(p.times, p.transforms)
+            elif p.positions is not None:
+                motion = Motion.deforming(p.times, p.positions)
+            objects.append(
+                Object((p.vertices, p.faces), p.color, shading=shading, motion=motion, name=p.name)
+            )
+        camera_motion = None if cam_keys is None else Motion(*cam_keys)
+        return cls(objects, cam, camera_motion=camera_motion, **options)
 
     def __repr__(self) -> str:
         return (

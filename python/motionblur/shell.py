@@ -51,6 +51,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _core
+from ._optional import require
 from ._validate import as_array, as_float, as_int
 
 __all__ = ["BlurShell", "ShellMesh", "MotionSilhouette", "motion_silhouette", "shell_over_shutter"]
@@ -140,8 +141,7 @@ class ShellMesh:
 
     def to_trimesh(self):
         """A ``trimesh.Trimesh`` (process=False) with RGBA uint8 vertex colours and the normals."""
-        import trimesh
-
+        trimesh = require("trimesh", "to_trimesh")
         colors = np.round(np.clip(self.rgba, 0.0, 1.0) * 255.0).astype(np.uint8)
         return trimesh.Trimesh(
             vertices=self.vertices,

@@ -183,7 +183,7 @@ def test_velocity_matches_a_numpy_twin():
     # Ray through each pixel centre, intersected with the quad's plane.
     ndc = np.c_[(xs + 0.5) / 64 * 2 - 1, 1 - (ys + 0.5) / 48 * 2]
     inv = np.linalg.inv(cam.view_projection)
-    far = np.c_[ndc, np.ones(len(ndc)), np.ones(len(ndc))] @ inv.T
+    far = np.c_[ndc, np.zeros(len(ndc)), np.ones(len(ndc))] @ inv.T  # a point on the ray (any zfar)
     far = far[:, :3] / far[:, 3:]
     eye = cam.pose[:3, 3]
     n = np.cross(v[1] - v[0], v[2] - v[0])
@@ -210,7 +210,7 @@ def test_lambert_matches_a_numpy_twin():
     ys, xs = np.nonzero(frame.ids == 0)
     ndc = np.c_[(xs + 0.5) / 64 * 2 - 1, 1 - (ys + 0.5) / 48 * 2]
     inv = np.linalg.inv(cam.view_projection)
-    far = np.c_[ndc, np.ones(len(ndc)), np.ones(len(ndc))] @ inv.T
+    far = np.c_[ndc, np.zeros(len(ndc)), np.ones(len(ndc))] @ inv.T  # a point on the ray (any zfar)
     far = far[:, :3] / far[:, 3:]
     eye = cam.pose[:3, 3]
     pn = np.cross(v[1] - v[0], v[2] - v[0])

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .._optional import require_all
 from ..render import METHODS
 from ..scenes_builtin import SCENES
 from . import reference as ref_mod
@@ -71,9 +72,16 @@ def run(
     cube scene, hides the motion-blur error the report is about). The pyrender comparison runs
     ours at ``aa=1``, as pyrender under OSMesa has no multisampling.
     """
+    names = list(SCENES) if scenes is None else list(scenes)
+    unknown = [n for n in names if n not in SCENES]
+    if unknown:
+        raise ValueError(f"scenes: unknown {unknown}; expected names from {', '.join(SCENES)}")
+    # every optional package the run needs, checked before anything is written
+    needed = ["mitsuba", "tqdm", "matplotlib"] + ["flip_evaluator"] * bool(flip)
+    needed += ["PIL"] * bool(save_images) + ["pyrender", "trimesh"] * bool(pyrender_peer)
+    require_all(needed, "the speed-against-error report")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    names = list(SCENES) if scenes is None else list(scenes)
     saved = {}
     if sweeps:
         for m, s in sweeps.items():
@@ -81,6 +89,7 @@ def run(
             METHODS[m].sweep = [dict(o) for o in s]
     rows, comparisons, flip_comparisons, pyr, paired, equal_times = [], {}, {}, [], {}, {}
     images = {} if save_images else None
+    references = {}
     try:
         for name in names:
             scene = SCENES[name](width=width, height=height)
@@ -88,6 +97,7 @@ def run(
             log(f"[{name}] reference {'cached' if ref_ms == 0 else f'{ref_ms / 1e3:.1f} s'}")
             if save_images:
                 report.save_reference(out, name, ref)
+                references[name] = ref
             scene_rows = sweep_scene(name, scene, ref, repeat, methods, flip, images, aa)
             rows += scene_rows
             comparisons[name] = equal_error(scene_rows)
@@ -125,6 +135,7 @@ def run(
         equal_times=equal_times,
         pyrender_rows=pyr,
         images=images,
+        references=references,
     )
     return {
         "rows": rows,
@@ -149,12 +160,26 @@ def main(argv=None) -> int:
     p.add_argument("--spp", type=int, default=4, help="Mitsuba samples per pixel per time")
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--no-flip", action="store_true")
+    p.add_argument("--no-pyrender", action="store_true", help="leave out the pyrender comparison")
+    p.add_argument("--images", action="store_true", help="save every image and a labelled sheet per scene")
     p.add_argument("--quick", action="store_true", help="160x120, K = 64, one timing")
     a = p.parse_args(argv)
     w, h = (int(x) for x in a.size.lower().split("x"))
     if a.quick:
         w, h, a.times, a.repeat = 160, 120, 64, 1
-    res = run(a.out, a.scenes, w, h, a.times, a.spp, a.repeat, flip=not a.no_flip, aa=a.aa)
+    res = run(
+        a.out,
+        a.scenes,
+        w,
+        h,
+        a.times,
+        a.spp,
+        a.repeat,
+        flip=not a.no_flip,
+        aa=a.aa,
+        pyrender_peer=not a.no_pyrender,
+        save_images=a.images,
+    )
     md = res["paths"]["md"].read_text()
     start = md.find("## Each method against")
     print(md[start if start >= 0 else md.index("## motion_volume against") :])

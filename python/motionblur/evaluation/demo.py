@@ -5,7 +5,8 @@ camera pan, and a bending arm (a deforming mesh) -- with every method that appli
 accumulation (N = 1, 4, 16, 64), motion volumes (1 and 4 segments, box and ramp filters), blur
 shells, Kraus's opaque image blur and Chapman's camera blur. Each image is measured against a
 Mitsuba reference (K = 64 shutter times, cached), and ``out`` receives every image and the
-references as PNGs (``images/``), ``results.csv``, ``results.md`` (the speed/error table) and a
+references as PNGs (``images/``), a labelled side-by-side sheet per scene (``sheet_<scene>.png``:
+the reference and each method with its options, ms and RMSE), ``results.csv``, ``results.md`` (the speed/error table) and a
 Pareto plot per scene. Well under a minute.
 """
 
@@ -46,5 +47,8 @@ def run(out="out/demo", scenes=SCENES) -> int:
     )
     md = Path(res["paths"]["md"]).read_text()
     print(md)
-    print(f"demo written to {out}/ in {time.perf_counter() - t0:.1f} s (images in {out}/images/)")
+    sheets = ", ".join(str(p) for k, p in res["paths"].items() if k.startswith("sheet_"))
+    print(
+        f"demo written to {out}/ in {time.perf_counter() - t0:.1f} s: sheets {sheets}, single images in {out}/images/"
+    )
     return 0

@@ -1,21 +1,28 @@
 """Image error metrics between a rendered frame and a reference.
 
-Every function takes Frames or (H,W,4) / (H,W,3) float arrays of premultiplied linear RGBA (RGB),
-with the same shape on both sides. RMSE and PSNR use all four channels (colour and coverage);
+Every function takes Frames, (H,W,4) / (H,W,3) float arrays of premultiplied linear RGBA (RGB)
+or paths of image files (``.exr``, ``.png``, read with :func:`motionblur.read_image`), with the
+same shape on both sides. RMSE and PSNR use all four channels (colour and coverage);
 FLIP (NVIDIA's perceptual difference, pip ``flip-evaluator``) compares the frames composited
 over a background, in sRGB; coverage is the alpha channel summed over the image.
 """
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
+from .._optional import require
+from ..interop.images import read_image
 from ..raster import Frame
 
 __all__ = ["rmse", "psnr", "flip", "coverage", "coverage_error"]
 
 
 def _img(x, name: str) -> np.ndarray:
+    if isinstance(x, (str, os.PathLike)):  # an image file written by Frame.save_exr / save_png
+        x = read_image(x)
     a = x.rgba if isinstance(x, Frame) else x
     a = np.asarray(a, dtype=np.float64)
     if a.ndim != 3 or a.shape[2] not in (3, 4):
@@ -54,8 +61,7 @@ def _srgb(rgba: np.ndarray, background) -> np.ndarray:
 def flip(image, reference, background=(0.0, 0.0, 0.0)) -> float:
     """Mean LDR-FLIP error in [0, 1] of the two images composited over ``background`` (linear RGB,
     default black) and encoded to sRGB, at the default 67 pixels per degree."""
-    import flip_evaluator
-
+    flip_evaluator = require("flip_evaluator")
     a, b = _pair(image, reference)
     _, mean, _ = flip_evaluator.evaluate(_srgb(b, background), _srgb(a, background), "LDR")
     return float(mean)

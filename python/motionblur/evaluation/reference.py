@@ -34,28 +34,21 @@ import time
 
 import numpy as np
 
+from .._optional import require, require_osmesa_pyopengl
 from .._validate import as_int
+from ..interop.mitsuba import OPENGL_TO_MITSUBA, mitsuba_variant, sensor_dict, vertex_normals
 from ..methods.accumulation import sample_times
 from ..raster import Frame, over_background
 from ..scene import Scene
 
 __all__ = ["mitsuba", "pyrender", "mitsuba_variant"]
 
-_LLVM = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
-_FLIP = np.diag([-1.0, 1.0, -1.0, 1.0])
-
-
-def mitsuba_variant() -> str:
-    """The Mitsuba variant the references use: ``llvm_ad_rgb`` with libLLVM, else ``scalar_rgb``."""
-    if "DRJIT_LIBLLVM_PATH" not in os.environ and os.path.exists(_LLVM):
-        os.environ["DRJIT_LIBLLVM_PATH"] = _LLVM
-    path = os.environ.get("DRJIT_LIBLLVM_PATH")
-    return "llvm_ad_rgb" if path and os.path.exists(path) else "scalar_rgb"
+_FLIP = OPENGL_TO_MITSUBA
 
 
 def _mi(variant=None):
     variant = variant or mitsuba_variant()
-    import mitsuba as mi
+    mi = require("mitsuba")
 
     if mi.variant() != variant:
         mi.set_variant(variant)
@@ -106,7 +99,7 @@ class _MitsubaScene:
             p["vertex_positions"] = mi.Float(np.asarray(v0, np.float32).ravel())
             p["faces"] = mi.UInt32(np.asarray(f, np.uint32).ravel())
             if o.shading == "lambert":
-                p["vertex_normals"] = mi.Float(_normals(v0, f).ravel())
+                p["vertex_normals"] = mi.Float(vertex_normals(v0, f).ravel())
             p.update()
             if instanced:
                 d[f"group{k}"] = {"type": "shapegroup", f"obj{k}": mesh}
@@ -123,22 +116,7 @@ class _MitsubaScene:
                     "direction": [float(x) for x in light.direction],
                     "irradiance": {"type": "rgb", "value": [float(x) * np.pi for x in light.intensity]},
                 }
-        d["sensor"] = {
-            "type": "perspective",
-            "fov": float(np.degrees(cam.yfov)),
-            "fov_axis": "y",
-            "near_clip": float(cam.znear),
-            "far_clip": float(cam.zfar) if np.isfinite(cam.zfar) else 1e7,
-            "to_world": mi.ScalarTransform4f(scene.camera_pose_at(scene.reference_t) @ _FLIP),
-            "film": {
-                "type": "hdrfilm",
-                "width": cam.width,
-                "height": cam.height,
-                "rfilter": {"type": "box"},
-                "pixel_format": "rgba",
-            },
-            "sampler": {"type": "independent", "sample_count": spp},
-        }
+        d["sensor"] = sensor_dict(mi, cam, scene.camera_pose_at(scene.reference_t), spp)
         self.mi_scene = mi.load_dict(d)
         self.params = mi.traverse(self.mi_scene)
 
@@ -151,24 +129,13 @@ class _MitsubaScene:
                 v = o.world_vertices(t)
                 p[f"{key}.vertex_positions"] = mi.Float(np.asarray(v, np.float32).ravel())
                 if o.shading == "lambert":
-                    p[f"{key}.vertex_normals"] = mi.Float(_normals(v, o.mesh.faces).ravel())
+                    p[f"{key}.vertex_normals"] = mi.Float(vertex_normals(v, o.mesh.faces).ravel())
         if self.scene.camera_motion is not None:
             p["sensor.to_world"] = mi.Transform4f(self.scene.camera_pose_at(t) @ _FLIP)
         p.update()
 
     def render(self, spp: int, seed: int) -> np.ndarray:
         return np.array(self.mi.render(self.mi_scene, spp=spp, seed=seed), dtype=np.float64)
-
-
-def _normals(v, f) -> np.ndarray:
-    """(V,3) float32 area-weighted vertex normals (as the rasterizer computes them)."""
-    v = np.asarray(v, np.float64)
-    n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
-    out = np.zeros_like(v)
-    for i in range(3):
-        np.add.at(out, f[:, i], n)
-    length = np.linalg.norm(out, axis=1, keepdims=True)
-    return (out / np.where(length > 0, length, 1.0)).astype(np.float32)
 
 
 def mitsuba(
@@ -206,8 +173,7 @@ def mitsuba(
     cam = scene.camera
     if progress is None:
         progress = k * spp * cam.width * cam.height * len(passes) > 2e7
-    from tqdm.auto import tqdm
-
+    tqdm = require("tqdm.auto", "the progress bar of the Mitsuba reference").tqdm
     bar = tqdm(total=k * len(passes), desc="mitsuba reference", disable=not progress, leave=False)
     acc = np.zeros((cam.height, cam.width, 4))
     for pass_ in passes:
@@ -245,12 +211,13 @@ def pyrender(scene: Scene, t: float | None = None, samples: int = 1) -> Frame:
     RGB (over black) with alpha = coverage (depth > 0), averaged; depth is pyrender's of the last
     render (inf for background).
     """
-    os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
-    import pyrender as pr
-    import trimesh
-
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
+    os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
+    require_osmesa_pyopengl()
+    pr = require("pyrender")
+    trimesh = require("trimesh", "the pyrender peer")
+
     samples = as_int(samples, "samples", minimum=1, maximum=1 << 16)
     t0 = time.perf_counter()
     cam = scene.camera
@@ -267,11 +234,7 @@ def pyrender(scene: Scene, t: float | None = None, samples: int = 1) -> Frame:
         tm = trimesh.Trimesh(np.asarray(base), np.asarray(o.mesh.faces), process=False)
         node = sc.add(pr.Mesh.from_trimesh(tm, material=mat, smooth=False))
         nodes.append((o, node, deforming, mat))
-    camera_node = sc.add(
-        pr.PerspectiveCamera(
-            yfov=cam.yfov, znear=cam.znear, zfar=cam.zfar, aspectRatio=cam.width / cam.height
-        )
-    )
+    camera_node = sc.add(cam.to_pyrender())
     if samples == 1:
         ts, ws = np.array([scene.reference_t if t is None else float(t)]), np.ones(1)
     else:

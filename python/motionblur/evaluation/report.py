@@ -1,4 +1,5 @@
-"""Writing the report: the markdown tables, the csv, the Pareto plots and the settings."""
+"""Writing the report: the markdown tables, the csv, the settings, and the pictures (Pareto plots
+and per-scene sheets, drawn by :mod:`.figures`)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..raster import Frame
+from .figures import pareto_plot, sheet
 
 __all__ = ["write", "save_reference"]
 
@@ -28,14 +30,17 @@ def write(
     equal_times,
     pyrender_rows,
     images=None,
+    references=None,
 ) -> dict:
     """Write the report into ``out``: ``pareto_<scene>.png`` per scene of ``names``,
     ``results.csv`` (the rows, ``fronts`` marking the Pareto front), ``results.md``,
     ``settings.json`` and, when given, ``images`` ({(scene, method, options): Frame}) under
-    ``images/``. Returns the paths of the table and the csv."""
+    ``images/`` with ``sheet_<scene>.png`` per scene: the reference (``references``: {scene:
+    (H,W,4) rgba}) and every method's image side by side, labelled with method, options, ms and
+    RMSE (:func:`.figures.sheet`). Returns the paths of the table and the csv."""
     for name in names:
         sel = [(r, f) for r, f in zip(rows, fronts) if r["scene"] == name]
-        _plot(name, [r for r, _ in sel], [f for _, f in sel], out / f"pareto_{name}.png")
+        pareto_plot(name, [r for r, _ in sel], [f for _, f in sel], out / f"pareto_{name}.png")
     with open(out / "results.csv", "w", newline="") as fh:
         keys = [k for k in rows[0] if not k.startswith("_")]
         wr = csv.DictWriter(fh, fieldnames=[*keys, "pareto"])
@@ -46,10 +51,29 @@ def write(
         _markdown(rows, fronts, comparisons, pyrender_rows, settings, flip_comparisons, paired, equal_times)
     )
     (out / "settings.json").write_text(json.dumps({**settings, "machine": _machine()}, indent=1))
+    paths = {"md": out / "results.md", "csv": out / "results.csv"}
     if images:
         for (scene, m, opts), frame in images.items():
             frame.save_png(out / "images" / f"{scene}_{m}_{opts.replace(' ', '_').replace('=', '')}.png")
-    return {"md": out / "results.md", "csv": out / "results.csv"}
+        for name in names:
+            tiles = (
+                [(f"reference\nMitsuba, K = {settings['times']} x {settings['spp']} spp\n", references[name])]
+                if references and name in references
+                else []
+            )
+            for r in (r for r in rows if r["scene"] == name):
+                frame = images.get((name, r["method"], r["options"]))
+                if frame is not None:
+                    tiles.append(
+                        (
+                            f"{r['method']}\n{r['options']}\n{r['ms']:.2f} ms   RMSE {r['rmse']:.5f}",
+                            frame.rgba,
+                        )
+                    )
+            if tiles:
+                paths[f"sheet_{name}"] = out / f"sheet_{name}.png"
+                sheet(tiles, paths[f"sheet_{name}"])
+    return paths
 
 
 def save_reference(out: Path, name: str, ref: np.ndarray) -> None:
@@ -58,30 +82,6 @@ def save_reference(out: Path, name: str, ref: np.ndarray) -> None:
     Frame(ref, np.zeros((h, w)), np.zeros((h, w), np.int32), np.zeros((h, w, 2))).save_png(
         out / "images" / f"{name}_reference.png"
     )
-
-
-def _plot(name, rows, front, path):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(6.4, 4.4), dpi=110)
-    for m in sorted({r["method"] for r in rows}):
-        sel = [r for r in rows if r["method"] == m]
-        ax.scatter([r["ms"] for r in sel], [r["rmse"] for r in sel], label=m, s=22)
-    fr = sorted((r for r, f in zip(rows, front) if f), key=lambda r: r["ms"])
-    ax.plot([r["ms"] for r in fr], [r["rmse"] for r in fr], "k--", lw=1, label="Pareto front")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("time per frame (ms, best of runs)")
-    ax.set_ylabel("RMSE against Mitsuba (premultiplied RGBA)")
-    ax.set_title(f"{name}: error against time")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path)
-    plt.close(fig)
 
 
 def _machine() -> str:

@@ -150,7 +150,9 @@ def analytic(scene: Scene, aa: int = 2, gauss="auto", tolerance: float = 0.05, s
         still = [(k, o) for k, o in everything if not o.is_moving]
     static = static_layer(scene, cam, still, aa) if (still or not moving) else None
     if not moving:
-        f = Frame(static.rgba.copy(), static.depth.copy(), static.ids.copy(), np.zeros((*static.ids.shape, 2)))
+        f = Frame(
+            static.rgba.copy(), static.depth.copy(), static.ids.copy(), np.zeros((*static.ids.shape, 2))
+        )
         f.stats.update({"segments": 0})
         return f
     if segments is None:

@@ -85,6 +85,7 @@ def apparent_vertices(scene: Scene, obj: Object, t: float) -> np.ndarray:
     "blur_shell",
     sweep=[{"subdivisions": s} for s in (2, 4, 8, 16, 32)],
     applies=_applies,
+    needs="a moving object or camera",
 )
 def blur_shell(
     scene: Scene,

@@ -95,6 +95,7 @@ def sharp_frame(scene: Scene, t: float, aa: int = 1, velocity: str | None = "shu
     "opaque_image",
     sweep=[{"aa": a} for a in (1, 2, 4)],
     applies=lambda scene: bool(scene.moving_objects) and not scene.camera_moves,
+    needs="moving objects seen by a still camera",
 )
 def opaque_image(scene: Scene, aa: int = 1) -> Frame:
     """Kraus's image-based opaque motion blur of every moving object (module docs).
@@ -131,6 +132,7 @@ def opaque_image(scene: Scene, aa: int = 1) -> Frame:
     "camera_velocity",
     sweep=[{"samples": n} for n in (4, 8, 16, 32)],
     applies=lambda scene: scene.camera_moves,
+    needs="a moving camera (Scene(camera_motion=...))",
 )
 def camera_velocity(scene: Scene, samples: int = 16, aa: int = 1) -> Frame:
     """Chapman's camera motion blur from the frame's depth and the camera's motion (module docs).

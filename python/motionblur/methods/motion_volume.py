@@ -166,6 +166,7 @@ def spin_of(keys: np.ndarray, vertices: np.ndarray) -> dict | None:
     + [{"segments": 1, "filter": "box", "colors": "averaged"}]
     + [{"segments": 1, "filter": "box", "color_renders": k} for k in (1, 3, 4)],
     applies=_rigid,
+    needs="rigid motion only (no deforming object)",
 )
 def motion_volume(
     scene: Scene,
