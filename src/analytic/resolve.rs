@@ -46,6 +46,20 @@ impl Frag {
     }
 }
 
+/// One triangle of a fragment's chain: it covers the sample from `t0` until the next link's
+/// `t0` (the last one until the fragment's end).
+#[derive(Clone, Copy, Debug)]
+pub struct Link {
+    pub t0: f32,
+    /// The tile's index of the triangle.
+    pub prim: u32,
+    /// The next link, `NONE` at the end.
+    pub next: u32,
+}
+
+/// No link, no fragment.
+pub const NONE: u32 = u32::MAX;
+
 /// The static scene behind the moving triangles at this sample: opaque colour and its depth.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Backdrop {

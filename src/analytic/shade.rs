@@ -8,8 +8,7 @@
 //! premultiplied.
 use super::input::{Input, Prepared};
 use super::prim::{homogeneous_pixel, Corners, Edges, Prim, OPAQUE};
-use super::resolve::{Frag, Layers, BACK};
-use super::tiles::{Link, NONE};
+use super::resolve::{Frag, Layers, Link, BACK, NONE};
 use crate::raster::Shading;
 
 /// A prim as one tile uses it: its edges and everything shading reads, gathered once.

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use super::input::{prepare, validate, Prepared};
 pub use super::input::{Backdrop, Input, MovingDraw};
 use super::prim::{self, Corners, Edges, Prim, OPAQUE};
-use super::resolve::{self, Backdrop as Behind, Frag, Scratch, BACK};
+use super::resolve::{self, Backdrop as Behind, Frag, Link, Scratch, BACK, NONE};
 use super::shade::{SampleShader, TilePrim};
 use crate::error::{Error, Result};
 
@@ -97,20 +97,6 @@ struct SampleOut {
     id: i32,
     velocity: [f32; 2],
 }
-
-/// One triangle of a fragment's chain: it covers the sample from `t0` until the next link's
-/// `t0` (the last one until the fragment's end).
-#[derive(Clone, Copy, Debug)]
-pub struct Link {
-    pub t0: f32,
-    /// The tile's index of the triangle.
-    pub prim: u32,
-    /// The next link, `NONE` at the end.
-    pub next: u32,
-}
-
-/// No link, no fragment.
-pub const NONE: u32 = u32::MAX;
 
 /// How far a chain's depth may stray from the straight line between its ends where a triangle
 /// joins it, relative to the depth.
