@@ -127,7 +127,7 @@ def _draw(obj: Object, k: int, times: np.ndarray) -> MovingDraw:
     sweep=[{"gauss": "auto"}, {"gauss": 1}, {"gauss": 2}, {"aa": 1}, {"tolerance": 0.25}],
     applies=lambda scene: True,
 )
-def analytic(scene: Scene, aa: int = 2, gauss="auto", tolerance: float = 0.05, segments=None) -> Frame:
+def analytic(scene: Scene, aa: int = 1, gauss="auto", tolerance: float = 0.05, segments=None) -> Frame:
     """Analytic motion blur: the exact covered time of every sample, visibility over time.
 
     Options: ``aa`` 1, 2 or 4 samples per pixel along each axis; ``gauss`` points in time per
