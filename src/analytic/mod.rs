@@ -22,6 +22,7 @@
 //!
 //! Depth, ids and velocity describe the surface in front at the reference time. Every step is
 //! deterministic per sample, so the output does not depend on the thread count.
+mod hull;
 mod input;
 mod poly;
 mod prim;

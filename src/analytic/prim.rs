@@ -18,7 +18,8 @@
 //! Without a plane crossing, every corner's image moves on a straight line and the triangle at
 //! any instant is the hull of its corners, so the segment's swept image lies in the convex hull
 //! of the six end positions: only samples inside it are tested.
-use super::poly::{cubic_at, quadratic_at, Spans};
+use super::hull::convex_hull;
+use super::poly::{ceil_i64, cubic_at, floor_i64, quadratic_at, Spans};
 
 /// The prim crosses the near or far plane during its segment (per-sample plane cubics, no hull).
 pub const CLIPS: u8 = 1;
@@ -213,8 +214,8 @@ pub fn setup(
             y1 = y1.max(p[1]);
         }
         // Samples sit at i + 0.5: the first whose centre can be inside, one past the last.
-        let lo = |v: f64, n: u32| ((v - 0.5).ceil().max(0.0) as i64).min(n as i64) as i32;
-        let hi = |v: f64, n: u32| (((v - 0.5).floor() + 1.0).max(0.0) as i64).min(n as i64) as i32;
+        let lo = |v: f64, n: u32| ceil_i64(v - 0.5).max(0).min(n as i64) as i32;
+        let hi = |v: f64, n: u32| floor_i64(v - 0.5).saturating_add(1).max(0).min(n as i64) as i32;
         let bbox = [lo(x0, ws), lo(y0, hs), hi(x1, ws), hi(y1, hs)];
         if bbox[0] >= bbox[2] || bbox[1] >= bbox[3] {
             return None;
@@ -230,132 +231,6 @@ pub fn setup(
         hull,
         nhull,
     ))
-}
-
-/// Convex hull (counter-clockwise in a y-up sense, i.e. clockwise on screen) of six points, in
-/// single precision, grown by a hair so that rounding never drops a covered sample.
-fn convex_hull(pts: &[[f64; 2]; 6]) -> ([[f32; 2]; 6], u8) {
-    let mut p = *pts;
-    p.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
-    let turn = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
-        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-    };
-    let mut h: Vec<[f64; 2]> = Vec::with_capacity(12);
-    for &q in p.iter() {
-        while h.len() >= 2 && turn(h[h.len() - 2], h[h.len() - 1], q) <= 0.0 {
-            h.pop();
-        }
-        h.push(q);
-    }
-    let lower = h.len() + 1;
-    for &q in p.iter().rev().skip(1) {
-        while h.len() >= lower && turn(h[h.len() - 2], h[h.len() - 1], q) <= 0.0 {
-            h.pop();
-        }
-        h.push(q);
-    }
-    h.pop();
-    let mut out = [[0.0f32; 2]; 6];
-    let n = h.len().min(6);
-    for (o, q) in out.iter_mut().zip(&h) {
-        *o = [q[0] as f32, q[1] as f32];
-    }
-    (out, n as u8)
-}
-
-/// The sample columns `[x0, x1)` that the prim's hull reaches in each sample row `y0 + r`
-/// (centre `y0 + r + 0.5`) for `r` in `0..out.len()`, within `[bx0, bx1)`; `(0, 0)` where it
-/// reaches none. One pass over the hull's edges (each touches only the rows it spans).
-pub fn row_spans(prim: &Prim, y0: i32, bx0: i32, bx1: i32, out: &mut [(i32, i32)]) {
-    let rows = out.len();
-    if prim.nhull == 0 {
-        out.fill((bx0, bx1));
-        return;
-    }
-    const EPS: f64 = 1e-3;
-    let mut lo = [f64::MAX; 64];
-    let mut hi = [f64::MIN; 64];
-    debug_assert!(rows <= 64);
-    let n = prim.nhull as usize;
-    let yc = |r: usize| f64::from(y0) + r as f64 + 0.5;
-    // rows whose centre lies in [a, b]
-    let row_range = |a: f64, b: f64| {
-        let r0 = ((a - f64::from(y0) - 0.5).ceil().max(0.0)) as usize;
-        let r1 = (((b - f64::from(y0) - 0.5).floor() + 1.0).max(0.0) as usize).min(rows);
-        r0..r1.max(r0.min(rows))
-    };
-    for i in 0..n {
-        let p = prim.hull[i].map(f64::from);
-        let q = prim.hull[(i + 1) % n].map(f64::from);
-        let (ya, yb) = if p[1] <= q[1] {
-            (p[1], q[1])
-        } else {
-            (q[1], p[1])
-        };
-        let flat = (q[1] - p[1]).abs() < 1e-12;
-        for r in row_range(ya - EPS, yb + EPS) {
-            let (xl, xh) = if flat {
-                (p[0].min(q[0]), p[0].max(q[0]))
-            } else {
-                let u = ((yc(r) - p[1]) / (q[1] - p[1])).clamp(0.0, 1.0);
-                let x = p[0] + u * (q[0] - p[0]);
-                (x, x)
-            };
-            lo[r] = lo[r].min(xl);
-            hi[r] = hi[r].max(xh);
-        }
-    }
-    for (r, o) in out.iter_mut().enumerate() {
-        let (l, h) = (lo[r], hi[r]);
-        if l > h {
-            *o = (0, 0);
-            continue;
-        }
-        let margin = EPS + 1e-6 * l.abs().max(h.abs());
-        let x0 = ((l - margin - 0.5).ceil() as i64).clamp(bx0 as i64, bx1 as i64) as i32;
-        let x1 = (((h + margin - 0.5).floor() + 1.0) as i64).clamp(bx0 as i64, bx1 as i64) as i32;
-        *o = (x0, x1.max(x0));
-    }
-}
-
-/// True when the prim's hull may overlap the sample rectangle `[x0, x1) x [y0, y1)`.
-pub fn overlaps(prim: &Prim, x0: i32, y0: i32, x1: i32, y1: i32) -> bool {
-    let b = prim.bbox;
-    if b[0] >= x1 || b[2] <= x0 || b[1] >= y1 || b[3] <= y0 {
-        return false;
-    }
-    let n = prim.nhull as usize;
-    if n < 3 {
-        return true;
-    }
-    // Separating axis along each hull edge's outward normal (sample centres: +0.5).
-    let corners = [
-        [f64::from(x0) + 0.5, f64::from(y0) + 0.5],
-        [f64::from(x1) - 0.5, f64::from(y0) + 0.5],
-        [f64::from(x0) + 0.5, f64::from(y1) - 0.5],
-        [f64::from(x1) - 0.5, f64::from(y1) - 0.5],
-    ];
-    // orientation of the hull (signed area), so "outside" is known for either winding
-    let mut area = 0.0;
-    for i in 0..n {
-        let p = prim.hull[i].map(f64::from);
-        let q = prim.hull[(i + 1) % n].map(f64::from);
-        area += p[0] * q[1] - q[0] * p[1];
-    }
-    let sgn = if area >= 0.0 { 1.0 } else { -1.0 };
-    for i in 0..n {
-        let p = prim.hull[i].map(f64::from);
-        let q = prim.hull[(i + 1) % n].map(f64::from);
-        let (ex, ey) = (q[0] - p[0], q[1] - p[1]);
-        let len = (ex * ex + ey * ey).sqrt();
-        let all_out = corners
-            .iter()
-            .all(|c| sgn * (ex * (c[1] - p[1]) - ey * (c[0] - p[0])) < -1e-3 * len);
-        if all_out {
-            return false;
-        }
-    }
-    true
 }
 
 /// A prim's sample-independent coefficients, expanded for the samples of one tile.

@@ -12,6 +12,7 @@
 //! A fragment may stand for a run of triangles of one surface that cover the sample one after
 //! the other (a chain, see `tiles.rs`); its layer is then shaded by the triangle of the chain
 //! that covers the sample at each quadrature point.
+use super::poly::ceil_i64;
 use crate::shutter::Shutter;
 
 /// Marks a fragment of a back-facing span (its normal is flipped for shading).
@@ -384,7 +385,7 @@ pub fn resolve(
             .map(|&(_, i)| {
                 let f = &frags[i];
                 let share = (b - a) / (f64::from(f.t1) - f64::from(f.t0)).max(1e-30);
-                (share * f64::from(f.n)).ceil() as usize
+                ceil_i64(share * f64::from(f.n)).max(0) as usize
             })
             .max()
             .unwrap_or(1);

@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
+use super::hull;
 use super::input::{prepare, validate, Prepared};
 pub use super::input::{Backdrop, Input, MovingDraw};
 use super::prim::{self, Corners, Edges, Prim, OPAQUE};
@@ -331,7 +332,8 @@ fn bin(prims: &[Prim], tx: i32, ty: i32) -> Result<(Vec<u32>, Vec<u32>)> {
                 for y in b..d.min(ty) {
                     for x in a..c.min(tx) {
                         let r = [x * TILE, y * TILE, (x + 1) * TILE, (y + 1) * TILE];
-                        if prim::overlaps(p, r[0], r[1], r[2], r[3]) {
+                        let hull = &p.hull[..p.nhull as usize];
+                        if hull::overlaps(p.bbox, hull, r[0], r[1], r[2], r[3]) {
                             v.push(((y * tx + x) as u32, (ci * 4096 + j) as u32));
                         }
                     }
@@ -422,8 +424,9 @@ impl Ctx<'_> {
             let simple = Edges::simple(p);
             let (ya, yb) = (p.bbox[1].max(y0), p.bbox[3].min(y1));
             let rows = &mut sc.rows[..(yb - ya).max(0) as usize];
-            prim::row_spans(p, ya, p.bbox[0].max(x0), p.bbox[2].min(x1), rows);
-            for iy in ya..yb {
+            let hull = &p.hull[..p.nhull as usize];
+            let (ra, rb) = hull::row_spans(hull, ya, p.bbox[0].max(x0), p.bbox[2].min(x1), rows);
+            for iy in ya + ra as i32..ya + rb as i32 {
                 let (xa, xb) = sc.rows[(iy - ya) as usize];
                 if xa >= xb {
                     continue;
