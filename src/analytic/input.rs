@@ -73,6 +73,9 @@ pub struct Prepared {
     pub normals: Vec<[f32; 3]>,
     /// The draw's alpha range per face is read from here: all corners opaque.
     pub opaque_everywhere: bool,
+    /// The premultiplied colour every triangle of the draw shows at every point, when shading
+    /// cannot vary: flat shading of one colour for all vertices, or no shading at all.
+    pub uniform: Option<[f32; 4]>,
 }
 
 fn finite3(p: &[f64; 3]) -> bool {
@@ -221,5 +224,19 @@ pub fn prepare(input: &Input, d: &MovingDraw) -> Prepared {
         clip,
         normals,
         opaque_everywhere: d.rgba.iter().all(|c| c[3] >= 1.0),
+        uniform: uniform_colour(input, d),
     }
+}
+
+/// See [`Prepared::uniform`]: the straight colour premultiplied as shading does.
+fn uniform_colour(input: &Input, d: &MovingDraw) -> Option<[f32; 4]> {
+    if !input.shade {
+        return Some([1.0; 4]);
+    }
+    let c = d.rgba[0];
+    if d.shading == Shading::Lambert || d.rgba.iter().any(|x| *x != c) {
+        return None;
+    }
+    let a = c[3].clamp(0.0, 1.0);
+    Some([c[0] * a, c[1] * a, c[2] * a, a])
 }

@@ -411,12 +411,10 @@ impl Edges {
     /// triangle is edge-on there.
     #[inline]
     pub fn depth(&self, q: &SampleEdges, tau: f64) -> Option<f64> {
-        let sum: f64 = q
-            .iter()
-            .map(|[a, b, c]| quadratic_at(*a, *b, *c, tau))
-            .sum();
+        let f = |k: usize| quadratic_at(q[k][0], q[k][1], q[k][2], tau);
+        let sum = (f(0) + f(1)) + f(2);
         let w = -cubic_at(self.d, tau) / sum;
-        (w.is_finite() && w > 0.0).then_some(w)
+        (w > 0.0 && w < f64::INFINITY).then_some(w)
     }
 
     /// Barycentric coordinates of the hit point at local time `tau`.

@@ -76,6 +76,9 @@ pub struct Backdrop {
 pub trait Layers {
     /// True when the fragment's triangles are opaque everywhere (nothing behind shows).
     fn opaque(&self, f: &Frag) -> bool;
+    /// The colour of fragment `f` when it is the same at every instant (its surface is of one
+    /// colour), which [`Layers::shade`] would return up to rounding; None when it varies.
+    fn uniform(&self, f: &Frag) -> Option<[f32; 4]>;
     /// Premultiplied RGBA of the surface of fragment `f` (index `i` of the sample's sorted
     /// fragments) seen at this sample at shutter time `t`. Calls for one fragment come in
     /// increasing `t`.
@@ -379,6 +382,14 @@ pub fn resolve(
             }
             return;
         }
+        // Layers of one colour each: the composite is the same at every point in time, so its
+        // filter-weighted mean over the piece is itself.
+        if let Some(c) = composite_uniform(order, frags, bg, layers) {
+            for j in 0..4 {
+                acc[j] += dw * c[j];
+            }
+            return;
+        }
         let elements = order
             .iter()
             .filter(|&&(_, i)| i != BACKDROP)
@@ -427,6 +438,33 @@ pub fn resolve(
     out
 }
 
+/// The composite of a piece's layers (front to back) when every layer is of one colour.
+#[inline]
+fn composite_uniform(
+    order: &[(f64, usize)],
+    frags: &[Frag],
+    bg: &Backdrop,
+    layers: &impl Layers,
+) -> Option<[f64; 4]> {
+    let mut sum = [0.0f64; 4];
+    let mut trans = 1.0f64;
+    for &(_, i) in order {
+        let s = if i == BACKDROP {
+            bg.rgba
+        } else {
+            layers.uniform(&frags[i])?
+        };
+        for j in 0..4 {
+            sum[j] += trans * f64::from(s[j]);
+        }
+        trans *= 1.0 - f64::from(s[3]);
+        if trans <= 0.0 {
+            break;
+        }
+    }
+    Some(sum)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -439,6 +477,9 @@ mod tests {
     impl Layers for Flat {
         fn opaque(&self, f: &Frag) -> bool {
             self.colors[(f.prim & !BACK) as usize][3] >= 1.0
+        }
+        fn uniform(&self, _f: &Frag) -> Option<[f32; 4]> {
+            None
         }
         fn shade(&mut self, _i: usize, f: &Frag, _t: f64) -> [f32; 4] {
             let c = self.colors[(f.prim & !BACK) as usize];

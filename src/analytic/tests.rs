@@ -3,6 +3,7 @@
 use glam::{DMat4, DVec3};
 
 use super::*;
+use crate::analytic::resolve;
 use crate::raster::Shading;
 use crate::shutter::Shutter;
 
@@ -240,4 +241,84 @@ fn bad_input_names_the_argument() {
         ..good.clone()
     })
     .starts_with("positions"));
+}
+
+/// Layers of flat colours, reporting them as uniform or not.
+struct FlatLayers {
+    colors: Vec<[f32; 4]>,
+    uniform: bool,
+}
+
+impl resolve::Layers for FlatLayers {
+    fn opaque(&self, f: &resolve::Frag) -> bool {
+        self.colors[f.prim as usize][3] >= 1.0
+    }
+    fn uniform(&self, f: &resolve::Frag) -> Option<[f32; 4]> {
+        let c = self.colors[f.prim as usize];
+        self.uniform
+            .then_some([c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]])
+    }
+    fn shade(&mut self, _i: usize, f: &resolve::Frag, _t: f64) -> [f32; 4] {
+        let c = self.colors[f.prim as usize];
+        [c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]]
+    }
+}
+
+#[test]
+fn uniform_layers_resolve_as_their_shading_does() {
+    let colors = vec![
+        [0.9, 0.2, 0.1, 1.0],
+        [0.1, 0.8, 0.3, 0.5],
+        [0.2, 0.3, 0.9, 0.25],
+        [0.6, 0.6, 0.1, 1.0],
+    ];
+    let frag = |t0: f32, t1: f32, z0: f32, z1: f32, prim: u32| resolve::Frag {
+        t0,
+        t1,
+        z0,
+        z1,
+        prim,
+        chain: 0,
+        n: 1 + prim,
+    };
+    let bg = resolve::Backdrop {
+        rgba: [0.05, 0.1, 0.15, 1.0],
+        depth: 3.0,
+        id: 1,
+    };
+    let frags = vec![
+        frag(0.0, 0.7, 1.0, 4.0, 0),
+        frag(0.1, 0.9, 2.5, 1.5, 1),
+        frag(0.3, 1.0, 2.0, 2.2, 2),
+        frag(0.55, 0.6, 0.5, 5.0, 3),
+    ];
+    for shutter in [Shutter::Box, Shutter::Triangle, Shutter::Gaussian] {
+        for quad in [Quadrature::Auto, Quadrature::Points(3)] {
+            let run = |uniform: bool| {
+                let mut l = FlatLayers {
+                    colors: colors.clone(),
+                    uniform,
+                };
+                let mut f = frags.clone();
+                resolve::resolve(
+                    &mut f,
+                    &bg,
+                    &mut l,
+                    &shutter,
+                    &shutter.breaks(),
+                    quad,
+                    0.5,
+                    &mut resolve::Scratch::default(),
+                )
+            };
+            let (a, b) = (run(false), run(true));
+            assert_eq!((a.front, a.pieces), (b.front, b.pieces));
+            for j in 0..4 {
+                assert!(
+                    (a.rgba[j] - b.rgba[j]).abs() < 1e-6,
+                    "{shutter:?} {a:?} {b:?}"
+                );
+            }
+        }
+    }
 }

@@ -529,6 +529,7 @@ impl Ctx<'_> {
                     cursor: std::mem::take(&mut sc.cursor),
                     x: f64::from(ix) + 0.5,
                     y: f64::from(iy) + 0.5,
+                    last: (NONE, [[0.0; 3]; 3]),
                 };
                 shader.reset(frags.len());
                 let r = resolve::resolve(
@@ -701,8 +702,19 @@ impl Ctx<'_> {
 
 /// The view depth at local time `tau` at a span's end, or a little inside the span (towards
 /// `other`) where the triangle is edge-on at the end itself.
+#[inline(always)]
 fn depth_near(e: &Edges, q: &prim::SampleEdges, tau: f64, other: f64) -> f32 {
-    for f in [0.0, 1e-6, 1e-3, 0.5] {
+    // the end itself first (`tau + 0 * (other - tau)` is `tau`)
+    match e.depth(q, tau) {
+        Some(z) => z as f32,
+        None => depth_inside(e, q, tau, other),
+    }
+}
+
+/// [`depth_near`] where the triangle is edge-on at the end itself.
+#[cold]
+fn depth_inside(e: &Edges, q: &prim::SampleEdges, tau: f64, other: f64) -> f32 {
+    for f in [1e-6, 1e-3, 0.5] {
         if let Some(z) = e.depth(q, tau + f * (other - tau)) {
             return z as f32;
         }
