@@ -90,6 +90,7 @@ fn strip_rows(hull: &[[f32; 2]], y0: i32, bx0: i32, bx1: i32, rows: usize) -> (u
 /// `0..out.len()`; rows outside it reach none and are not written). `(0, 0)` where a row in the
 /// range reaches none. An empty hull (prims that clip) reaches every column. One pass over the
 /// hull's edges (each touches only the rows it spans).
+#[inline(always)]
 pub fn row_spans(
     hull: &[[f32; 2]],
     y0: i32,
@@ -169,45 +170,66 @@ fn rows_in(
     }
 }
 
-/// True when the hull (with the bounds `bbox`) may overlap the sample rectangle
-/// `[x0, x1) x [y0, y1)`.
-pub fn overlaps(bbox: [i32; 4], hull: &[[f32; 2]], x0: i32, y0: i32, x1: i32, y1: i32) -> bool {
-    let b = bbox;
-    if b[0] >= x1 || b[2] <= x0 || b[1] >= y1 || b[3] <= y0 {
-        return false;
-    }
-    let n = hull.len();
-    if n < 3 {
-        return true;
-    }
-    // Separating axis along each hull edge's outward normal (sample centres: +0.5).
-    let corners = [
-        [f64::from(x0) + 0.5, f64::from(y0) + 0.5],
-        [f64::from(x1) - 0.5, f64::from(y0) + 0.5],
-        [f64::from(x0) + 0.5, f64::from(y1) - 0.5],
-        [f64::from(x1) - 0.5, f64::from(y1) - 0.5],
-    ];
-    // orientation of the hull (signed area), so "outside" is known for either winding
-    let mut area = 0.0;
-    for i in 0..n {
-        let p = hull[i].map(f64::from);
-        let q = hull[(i + 1) % n].map(f64::from);
-        area += p[0] * q[1] - q[0] * p[1];
-    }
-    let sgn = if area >= 0.0 { 1.0 } else { -1.0 };
-    for i in 0..n {
-        let p = hull[i].map(f64::from);
-        let q = hull[(i + 1) % n].map(f64::from);
-        let (ex, ey) = (q[0] - p[0], q[1] - p[1]);
-        let len = (ex * ex + ey * ey).sqrt();
-        let all_out = corners
-            .iter()
-            .all(|c| sgn * (ex * (c[1] - p[1]) - ey * (c[0] - p[0])) < -1e-3 * len);
-        if all_out {
-            return false;
+/// A prim's hull set up for overlap tests against many tiles: each edge's start, direction and
+/// threshold (the separating-axis test of [`Separator::overlaps`]), computed once.
+pub struct Separator {
+    bbox: [i32; 4],
+    n: usize,
+    /// Per edge: start point, direction, and `-1e-3 * length`.
+    edges: [[f64; 5]; 6],
+    /// 1 or -1: the hull's orientation, so "outside" is known for either winding.
+    sgn: f64,
+}
+
+impl Separator {
+    /// Sets up the hull `hull` with the sample bounds `bbox`.
+    pub fn new(bbox: [i32; 4], hull: &[[f32; 2]]) -> Self {
+        let n = hull.len();
+        let mut edges = [[0.0; 5]; 6];
+        let mut area = 0.0;
+        for i in 0..n {
+            let p = hull[i].map(f64::from);
+            let q = hull[(i + 1) % n].map(f64::from);
+            area += p[0] * q[1] - q[0] * p[1];
+            let (ex, ey) = (q[0] - p[0], q[1] - p[1]);
+            let len = (ex * ex + ey * ey).sqrt();
+            edges[i] = [p[0], p[1], ex, ey, -1e-3 * len];
+        }
+        let sgn = if area >= 0.0 { 1.0 } else { -1.0 };
+        Separator {
+            bbox,
+            n,
+            edges,
+            sgn,
         }
     }
-    true
+
+    /// True when the hull may overlap the sample rectangle `[x0, x1) x [y0, y1)`.
+    pub fn overlaps(&self, x0: i32, y0: i32, x1: i32, y1: i32) -> bool {
+        let b = self.bbox;
+        if b[0] >= x1 || b[2] <= x0 || b[1] >= y1 || b[3] <= y0 {
+            return false;
+        }
+        if self.n < 3 {
+            return true;
+        }
+        // Separating axis along each hull edge's outward normal (sample centres: +0.5).
+        let corners = [
+            [f64::from(x0) + 0.5, f64::from(y0) + 0.5],
+            [f64::from(x1) - 0.5, f64::from(y0) + 0.5],
+            [f64::from(x0) + 0.5, f64::from(y1) - 0.5],
+            [f64::from(x1) - 0.5, f64::from(y1) - 0.5],
+        ];
+        for &[px, py, ex, ey, thr] in &self.edges[..self.n] {
+            let all_out = corners
+                .iter()
+                .all(|c| self.sgn * (ex * (c[1] - py) - ey * (c[0] - px)) < thr);
+            if all_out {
+                return false;
+            }
+        }
+        true
+    }
 }
 
 #[cfg(test)]

@@ -223,16 +223,15 @@ impl Spans {
         out
     }
 
-    /// [`Spans::nonneg_quadratic`] when the set is one span or none: `Ok(Some((a, b)))`,
-    /// `Ok(None)`, or `Err(())` when it has two spans (the caller falls back to the general form).
+    /// [`Spans::nonneg_quadratic`] as one span or none, `Ok(Some((a, b)))` or `Ok(None)`, or
+    /// `Err((r0, r1))` when it is the two spans `[0, r0]` and `[r1, 1]` (the same set).
     #[inline(always)]
-    #[allow(clippy::result_unit_err)]
     pub fn nonneg_quadratic_one(
         a: f64,
         b: f64,
         c: f64,
         tie: impl Fn(f64) -> bool,
-    ) -> Result<Option<(f64, f64)>, ()> {
+    ) -> Result<Option<(f64, f64)>, (f64, f64)> {
         match ends_decide(a, b, c) {
             Some(true) => return Ok(Some((0.0, 1.0))),
             Some(false) => return Ok(None),
@@ -265,7 +264,7 @@ impl Spans {
                     [true, true, false] => Ok(Some((0.0, r[1]))),
                     [false, true, true] => Ok(Some((r[0], 1.0))),
                     [true, true, true] => Ok(Some((0.0, 1.0))),
-                    [true, false, true] => Err(()),
+                    [true, false, true] => Err((r[0], r[1])),
                 }
             }
         }

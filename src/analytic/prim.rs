@@ -94,6 +94,13 @@ impl Facing {
     pub fn is_full(&self) -> bool {
         self.n == 1 && self.s[0] == [0.0, 1.0]
     }
+
+    /// The span in double precision when there is exactly one (as [`Facing::spans`] has it).
+    #[inline]
+    pub fn one(&self) -> Option<(f64, f64)> {
+        let [a, b] = self.s[0].map(f64::from);
+        (self.n == 1 && a < b).then_some((a, b))
+    }
 }
 
 /// A triangle of one draw over one segment, set up once.
@@ -245,6 +252,17 @@ pub struct Edges {
     pub far: [[f64; 2]; 3],
 }
 
+/// What a simple prim covers at one sample ([`Edges::covered_front`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Cover {
+    /// No time.
+    Nothing,
+    /// One span of local time.
+    One(f64, f64),
+    /// Several spans (an edge's set had two).
+    Many(Spans),
+}
+
 /// Per-sample quadratic coefficients `(a, b, c)` of `f_i = a tau^2 + b tau + c`, `i` = 0..2.
 pub type SampleEdges = [[f64; 3]; 3];
 
@@ -335,38 +353,76 @@ impl Edges {
         (out, out_back)
     }
 
-    /// True when the prim is a front face throughout, not clipped and not drawn from behind:
-    /// [`Edges::covered_front`] then decides almost every sample.
+    /// The one span of local time when the prim is a front face, if it is not clipped and not
+    /// drawn from behind: [`Edges::covered_front`] then finds its spans at every sample.
     #[inline]
-    pub fn simple(prim: &Prim) -> bool {
-        prim.back.is_empty() && prim.flags & CLIPS == 0 && prim.front.is_full()
+    pub fn simple(prim: &Prim) -> Option<(f64, f64)> {
+        if prim.back.is_empty() && prim.flags & CLIPS == 0 {
+            prim.front.one()
+        } else {
+            None
+        }
     }
 
-    /// The front-face case of a simple prim: `Some(Some((a, b)))` the one covered span,
-    /// `Some(None)` none, `None` when an edge's set has two spans (the caller then takes the
-    /// general [`Edges::covered`]). Same decisions as the general form, bit for bit.
+    /// The front-face case of a simple prim, front-facing during `front`
+    /// ([`Edges::simple`]): the same spans as the general [`Edges::covered`], bit for bit,
+    /// with no set built while every edge's set is one span.
     #[inline(always)]
-    pub fn covered_front(&self, q: &SampleEdges) -> Option<Option<(f64, f64)>> {
-        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    pub fn covered_front(&self, front: (f64, f64), q: &SampleEdges) -> Cover {
+        let (mut lo, mut hi) = front;
         for i in 0..3 {
             let [a, b, c] = q[i];
-            let tie = |tau: f64| {
-                let (gx, gy) = self.gradient(i, tau);
-                gx > 0.0 || (gx == 0.0 && gy > 0.0)
-            };
-            match Spans::nonneg_quadratic_one(a, b, c, tie) {
-                Err(()) => return None,
-                Ok(None) => return Some(None),
+            match Spans::nonneg_quadratic_one(a, b, c, |tau| self.tie(i, tau)) {
+                Err((r0, r1)) => return self.covered_front_from(q, i, (lo, hi), (r0, r1)),
+                Ok(None) => return Cover::Nothing,
                 Ok(Some((l, h))) => {
                     lo = lo.max(l);
                     hi = hi.min(h);
                     if hi <= lo {
-                        return Some(None);
+                        return Cover::Nothing;
                     }
                 }
             }
         }
-        Some(Some((lo, hi)))
+        Cover::One(lo, hi)
+    }
+
+    /// [`Edges::covered_front`] from edge `k`, whose set is `[0, r0]` and `[r1, 1]`, on: the
+    /// general form's steps with the edges before `k` already intersected into `[lo, hi]`.
+    #[inline(never)]
+    fn covered_front_from(
+        &self,
+        q: &SampleEdges,
+        k: usize,
+        (lo, hi): (f64, f64),
+        (r0, r1): (f64, f64),
+    ) -> Cover {
+        let mut s = Spans::EMPTY;
+        s.push(lo, hi);
+        let mut e = Spans::EMPTY;
+        e.push(0.0, r0);
+        e.push(r1, 1.0);
+        s = s.intersect(&e);
+        for i in k + 1..3 {
+            if s.is_empty() {
+                break;
+            }
+            let [a, b, c] = q[i];
+            s = s.intersect(&Spans::nonneg_quadratic(a, b, c, |tau| self.tie(i, tau)));
+        }
+        if s.is_empty() {
+            Cover::Nothing
+        } else {
+            Cover::Many(s)
+        }
+    }
+
+    /// The tie rule of front faces for edge `i` at local time `tau` (a sample exactly on the
+    /// edge belongs to the side its screen gradient points to).
+    #[inline(always)]
+    fn tie(&self, i: usize, tau: f64) -> bool {
+        let (gx, gy) = self.gradient(i, tau);
+        gx > 0.0 || (gx == 0.0 && gy > 0.0)
     }
 
     /// The parts of the edge functions that depend on the sample row `y` only:
@@ -426,5 +482,83 @@ impl Edges {
             return [1.0 / 3.0; 3];
         }
         f.map(|x| x / sum)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small generator of numbers in [0, 1) (no dependency, same sequence everywhere).
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    #[test]
+    fn the_front_face_path_finds_the_general_spans_bit_for_bit() {
+        let mut rng = Lcg(7);
+        let (mut many, mut one) = (0, 0);
+        for _ in 0..400 {
+            // small, fast, turning triangles: edges often change sign twice
+            let mut c0 = [[0.0; 4]; 3];
+            let mut c1 = [[0.0; 4]; 3];
+            for k in 0..3 {
+                let w0 = 1.0 + 2.0 * rng.next();
+                let w1 = 1.0 + 2.0 * rng.next();
+                c0[k] = [rng.next() - 0.5, rng.next() - 0.5, 0.0, w0];
+                c1[k] = [rng.next() - 0.5, rng.next() - 0.5, 0.0, w1];
+            }
+            let corners = Corners::new(c0, c1, 32.0, 32.0);
+            // the whole segment, or a part of it as for faces that turn
+            let mut front = Spans::EMPTY;
+            let (f0, f1) = (rng.next(), rng.next());
+            if f0 < 0.3 {
+                front.push(0.0, 1.0);
+            } else {
+                front.push(f0.min(f1) as f32 as f64, f0.max(f1) as f32 as f64);
+            }
+            let e = Edges::new(&corners);
+            let prim = Prim {
+                draw: 0,
+                face: 0,
+                seg: 0,
+                flags: 0,
+                front: Facing::from_spans(&front),
+                back: Facing::default(),
+                bbox: [0, 0, 32, 32],
+                hull: [[0.0; 2]; 6],
+                nhull: 0,
+            };
+            for y in 0..32 {
+                for x in 0..32 {
+                    let q = e.at(f64::from(x) + 0.5, f64::from(y) + 0.5);
+                    let want = e.covered(&prim, &q).0;
+                    let f = Edges::simple(&prim).unwrap();
+                    let got = match e.covered_front(f, &q) {
+                        Cover::Nothing => Spans::EMPTY,
+                        Cover::One(a, b) => {
+                            one += 1;
+                            let mut s = Spans::EMPTY;
+                            s.push(a, b);
+                            s
+                        }
+                        Cover::Many(s) => {
+                            many += 1;
+                            s
+                        }
+                    };
+                    assert_eq!(got, want, "sample {x},{y}");
+                }
+            }
+        }
+        assert!(many > 100 && one > 1000, "{many} {one}");
     }
 }

@@ -231,6 +231,7 @@ pub fn sort(frags: &mut [Frag]) {
 /// `piece(a, b, layers)` gets each piece `[a, b]` with its layers front to back (fragment
 /// indices, or `BACKDROP`), cut after the first opaque one. Pieces with no layer are skipped.
 /// `breaks` are extra instants to cut at.
+#[inline(always)]
 pub fn sweep(
     frags: &[Frag],
     bg: &Backdrop,
@@ -342,6 +343,7 @@ pub fn sweep(
 /// integral of the composited colour, and the layer in front at `t_ref`. `breaks` are the
 /// filter's interior breaks ([`Shutter::breaks`]).
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub fn resolve(
     frags: &mut [Frag],
     bg: &Backdrop,

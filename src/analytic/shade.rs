@@ -176,6 +176,7 @@ impl Layers for SampleShader<'_> {
         self.prim(f.prim).uniform
     }
 
+    #[inline(always)]
     fn shade(&mut self, i: usize, f: &Frag, t: f64) -> [f32; 4] {
         let input = self.input;
         if !input.shade {
