@@ -12,6 +12,7 @@ use super::resolve::{Frag, Layers, Link, BACK, NONE};
 use crate::raster::Shading;
 
 /// A prim as one tile uses it: its edges and everything shading reads, gathered once.
+#[derive(Clone)]
 pub struct TilePrim {
     pub edges: Edges,
     /// The prim's draw and face, for velocity.

@@ -19,6 +19,9 @@ pub const TILE: i32 = 32;
 const CHUNK: usize = 2048;
 /// Most (tile, prim) pairs a frame may bin (8 bytes each while binning).
 pub const MAX_BIN_ENTRIES: u64 = 1 << 27;
+/// Most bytes of prims set up once for all the tiles they reach (`TilePrim`, about 520 bytes
+/// each); past it each tile sets up its own.
+const SHARED_PRIM_BYTES: usize = 256 << 20;
 /// Most fragments one tile may hold at once (24 bytes each).
 pub const MAX_TILE_FRAGMENTS: usize = 1 << 22;
 
@@ -171,12 +174,31 @@ pub fn render(input: &Input) -> Result<Frame> {
     stats.bin_entries = entries.len() as u64;
     stats.ms_bin = ms(t);
 
+    // Prims that reach several tiles are set up once for all of them, within a memory budget.
+    let t = Instant::now();
+    let shared: Vec<TilePrim> = if entries.len() > prims.len()
+        && prims.len() * std::mem::size_of::<TilePrim>() <= SHARED_PRIM_BYTES
+    {
+        prims
+            .par_iter()
+            .with_min_len(256)
+            .map(|p| {
+                let c = corners(input, &prepared, p, ws as i32, hs as i32);
+                TilePrim::new(input, &prepared, p, &c)
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    stats.ms_setup += ms(t);
+
     let t = Instant::now();
     let breaks = input.shutter.breaks();
     let ctx = Ctx {
         input,
         prepared: &prepared,
         prims: &prims,
+        shared: &shared,
         breaks: &breaks,
         ws: ws as i32,
         hs: hs as i32,
@@ -368,22 +390,25 @@ struct Ctx<'a> {
     input: &'a Input<'a>,
     prepared: &'a [Prepared],
     prims: &'a [Prim],
+    /// Every prim set up for the tiles, or empty: each tile sets up its own.
+    shared: &'a [TilePrim],
     breaks: &'a [f64],
     ws: i32,
     hs: i32,
 }
 
-impl Ctx<'_> {
-    fn corners(&self, p: &Prim) -> Corners {
-        let d = &self.input.draws[p.draw as usize];
-        let pr = &self.prepared[p.draw as usize];
-        let f = d.faces[p.face as usize];
-        let k = p.seg as usize;
-        let c0 = f.map(|i| pr.clip[k * pr.nv + i as usize]);
-        let c1 = f.map(|i| pr.clip[(k + 1) * pr.nv + i as usize]);
-        Corners::new(c0, c1, f64::from(self.ws), f64::from(self.hs))
-    }
+/// The corners of prim `p` in an image of `ws` x `hs` samples.
+fn corners(input: &Input, prepared: &[Prepared], p: &Prim, ws: i32, hs: i32) -> Corners {
+    let d = &input.draws[p.draw as usize];
+    let pr = &prepared[p.draw as usize];
+    let f = d.faces[p.face as usize];
+    let k = p.seg as usize;
+    let c0 = f.map(|i| pr.clip[k * pr.nv + i as usize]);
+    let c1 = f.map(|i| pr.clip[(k + 1) * pr.nv + i as usize]);
+    Corners::new(c0, c1, f64::from(ws), f64::from(hs))
+}
 
+impl Ctx<'_> {
     /// One tile: its samples' results (row-major, TILE wide) and counts (intervals, pieces,
     /// merges).
     fn tile(&self, tx: i32, ty: i32, bin: &[u32]) -> (Vec<SampleOut>, Counts) {
@@ -445,7 +470,15 @@ impl Ctx<'_> {
         let mut counts = Counts::default();
         for (li, &pi) in bin.iter().enumerate() {
             let p = &self.prims[pi as usize];
-            let tp = TilePrim::new(self.input, self.prepared, p, &self.corners(p));
+            let owned;
+            let tp = match self.shared.get(pi as usize) {
+                Some(tp) => tp,
+                None => {
+                    let c = corners(self.input, self.prepared, p, self.ws, self.hs);
+                    owned = TilePrim::new(self.input, self.prepared, p, &c);
+                    &owned
+                }
+            };
             let e = &tp.edges;
             let span = SpanOf {
                 li: li as u32,
@@ -472,21 +505,11 @@ impl Ctx<'_> {
                         match e.covered_front(front, &q) {
                             Cover::Nothing => {}
                             Cover::One(a, b) => {
-                                self.add_span(sc, &span, &tp, &q, j, a, b, 0, &mut counts);
+                                self.add_span(sc, &span, tp, &q, j, a, b, 0, &mut counts);
                             }
                             Cover::Many(s) => {
                                 for s in s.as_slice() {
-                                    self.add_span(
-                                        sc,
-                                        &span,
-                                        &tp,
-                                        &q,
-                                        j,
-                                        s[0],
-                                        s[1],
-                                        0,
-                                        &mut counts,
-                                    );
+                                    self.add_span(sc, &span, tp, &q, j, s[0], s[1], 0, &mut counts);
                                 }
                             }
                         }
@@ -494,14 +517,14 @@ impl Ctx<'_> {
                     }
                     let (front, back) = e.covered(p, &q);
                     for s in front.as_slice() {
-                        self.add_span(sc, &span, &tp, &q, j, s[0], s[1], 0, &mut counts);
+                        self.add_span(sc, &span, tp, &q, j, s[0], s[1], 0, &mut counts);
                     }
                     for s in back.as_slice() {
-                        self.add_span(sc, &span, &tp, &q, j, s[0], s[1], BACK, &mut counts);
+                        self.add_span(sc, &span, tp, &q, j, s[0], s[1], BACK, &mut counts);
                     }
                 }
             }
-            sc.prims.push(tp);
+            sc.prims.push(tp.clone());
         }
         counts.intervals = sc.raw.len() as u64;
         // group by sample (a stable counting sort)
