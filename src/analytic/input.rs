@@ -3,7 +3,7 @@
 use glam::{DMat4, DVec4};
 use rayon::prelude::*;
 
-use super::resolve::Quadrature;
+use super::quadrature::Quadrature;
 use crate::error::{Error, Result};
 use crate::raster::{check_size, vertex_normals, Light, Shading};
 use crate::shutter::Shutter;

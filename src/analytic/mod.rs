@@ -26,6 +26,7 @@ mod hull;
 mod input;
 mod poly;
 mod prim;
+mod quadrature;
 mod resolve;
 mod shade;
 mod tiles;
@@ -33,5 +34,5 @@ mod tiles;
 #[cfg(test)]
 mod tests;
 
-pub use resolve::Quadrature;
+pub use quadrature::Quadrature;
 pub use tiles::{render, Backdrop, Frame, Input, MovingDraw, Stats};

@@ -13,6 +13,7 @@
 //! the other (a chain, see `tiles.rs`); its layer is then shaded by the triangle of the chain
 //! that covers the sample at each quadrature point.
 use super::poly::ceil_i64;
+use super::quadrature::{gauss, Quadrature};
 use crate::shutter::Shutter;
 
 /// Marks a fragment of a back-facing span (its normal is flipped for shading).
@@ -85,116 +86,6 @@ pub trait Layers {
     fn shade(&mut self, i: usize, f: &Frag, t: f64) -> [f32; 4];
 }
 
-/// How many points in time each visible piece is shaded at.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Quadrature {
-    /// 1, 2 or 3 points by the piece's length: below 1/32 of the shutter 1, below 1/4 2, else 3.
-    Auto,
-    /// A fixed number of Gauss-Legendre points, 1 to 4.
-    Points(u8),
-}
-
-impl Quadrature {
-    /// Points for a piece of length `len` crossing about `elements` triangles of a chain:
-    /// `Auto` takes 1, 2 or 3 by length and at least one per triangle crossed, up to 8.
-    fn points(self, len: f64, elements: usize) -> usize {
-        match self {
-            Quadrature::Points(n) => n as usize,
-            Quadrature::Auto => {
-                let by_len = if len < 1.0 / 32.0 {
-                    1
-                } else if len < 0.25 {
-                    2
-                } else {
-                    3
-                };
-                by_len.max(elements.min(8))
-            }
-        }
-    }
-
-    /// True when fragments of one surface may be chained (`Auto`); with a fixed number of
-    /// points every triangle is shaded on its own.
-    pub fn chains(self) -> bool {
-        self == Quadrature::Auto
-    }
-}
-
-/// Gauss-Legendre nodes on [-1, 1] and weights, for 1 to 8 points.
-fn gauss(n: usize) -> (&'static [f64], &'static [f64]) {
-    const X6: [f64; 6] = [
-        -0.932_469_514_203_152,
-        -0.661_209_386_466_264_5,
-        -0.238_619_186_083_196_9,
-        0.238_619_186_083_196_9,
-        0.661_209_386_466_264_5,
-        0.932_469_514_203_152,
-    ];
-    const W6: [f64; 6] = [
-        0.171_324_492_379_170_3,
-        0.360_761_573_048_138_6,
-        0.467_913_934_572_691_1,
-        0.467_913_934_572_691_1,
-        0.360_761_573_048_138_6,
-        0.171_324_492_379_170_3,
-    ];
-    const X8: [f64; 8] = [
-        -0.960_289_856_497_536_3,
-        -0.796_666_477_413_626_7,
-        -0.525_532_409_916_329,
-        -0.183_434_642_495_649_8,
-        0.183_434_642_495_649_8,
-        0.525_532_409_916_329,
-        0.796_666_477_413_626_7,
-        0.960_289_856_497_536_3,
-    ];
-    const W8: [f64; 8] = [
-        0.101_228_536_290_376_3,
-        0.222_381_034_453_374_5,
-        0.313_706_645_877_887_3,
-        0.362_683_783_378_362,
-        0.362_683_783_378_362,
-        0.313_706_645_877_887_3,
-        0.222_381_034_453_374_5,
-        0.101_228_536_290_376_3,
-    ];
-    if n >= 7 {
-        return (&X8, &W8);
-    }
-    if n >= 5 {
-        return (&X6, &W6);
-    }
-    const X1: [f64; 1] = [0.0];
-    const W1: [f64; 1] = [2.0];
-    const X2: [f64; 2] = [-0.577_350_269_189_625_8, 0.577_350_269_189_625_8];
-    const W2: [f64; 2] = [1.0, 1.0];
-    const X3: [f64; 3] = [-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4];
-    const W3: [f64; 3] = [
-        0.555_555_555_555_555_6,
-        0.888_888_888_888_888_9,
-        0.555_555_555_555_555_6,
-    ];
-    const X4: [f64; 4] = [
-        -0.861_136_311_594_052_6,
-        -0.339_981_043_584_856_3,
-        0.339_981_043_584_856_3,
-        0.861_136_311_594_052_6,
-    ];
-    const W4: [f64; 4] = [
-        0.347_854_845_137_453_9,
-        0.652_145_154_862_546_1,
-        0.652_145_154_862_546_1,
-        0.347_854_845_137_453_9,
-    ];
-    match n {
-        1 => (&X1, &W1),
-        2 => (&X2, &W2),
-        3 => (&X3, &W3),
-        4 => (&X4, &W4),
-        _ => (&X1, &W1),
-    }
-}
-
 /// What one sample resolves to.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Resolved {
@@ -223,7 +114,41 @@ pub const BACKDROP: usize = usize::MAX;
 /// whatever order they were found in).
 pub fn sort(frags: &mut [Frag]) {
     // start times are >= 0, so their bits order like the floats
-    frags.sort_unstable_by_key(|f| (u64::from(f.t0.to_bits()) << 32) | u64::from(f.prim));
+    let key = |f: &Frag| (u64::from(f.t0.to_bits()) << 32) | u64::from(f.prim);
+    if frags.len() > 16 {
+        frags.sort_unstable_by_key(key);
+        return;
+    }
+    // a sample holds a few fragments: insertion sort (the keys are unique, so any sort gives
+    // this order)
+    for i in 1..frags.len() {
+        let f = frags[i];
+        let k = key(&f);
+        let mut j = i;
+        while j > 0 && key(&frags[j - 1]) > k {
+            frags[j] = frags[j - 1];
+            j -= 1;
+        }
+        frags[j] = f;
+    }
+}
+
+/// `W(b) - W(a)` ([`Shutter::cumulative`]), the box filter's inline.
+#[inline(always)]
+fn weight(shutter: &Shutter, a: f64, b: f64) -> f64 {
+    match shutter {
+        Shutter::Box => b.clamp(0.0, 1.0) - a.clamp(0.0, 1.0),
+        s => s.cumulative(b) - s.cumulative(a),
+    }
+}
+
+/// [`Shutter::density`], the box filter's inline.
+#[inline(always)]
+fn density(shutter: &Shutter, t: f64) -> f64 {
+    match shutter {
+        Shutter::Box => 1.0,
+        s => s.density(t),
+    }
 }
 
 /// Walks the shutter over the fragments of one sample (sorted by [`sort`]) in pieces of fixed
@@ -256,7 +181,15 @@ pub fn sweep(
             sc.active.push(next);
             next += 1;
         }
-        sc.active.retain(|&i| f64::from(frags[i].t1) > u);
+        let mut kept = 0;
+        for k in 0..sc.active.len() {
+            let i = sc.active[k];
+            if f64::from(frags[i].t1) > u {
+                sc.active[kept] = i;
+                kept += 1;
+            }
+        }
+        sc.active.truncate(kept);
         let mut v = 1.0f64;
         if next < frags.len() {
             v = v.min(f64::from(frags[next].t0));
@@ -373,7 +306,7 @@ pub fn resolve(
                 _ => None,
             };
         }
-        let dw = shutter.cumulative(b) - shutter.cumulative(a);
+        let dw = weight(shutter, a, b);
         if dw <= 0.0 {
             return;
         }
@@ -408,7 +341,7 @@ pub fn resolve(
         let mut wsum = 0.0;
         for (x, w) in xs.iter().zip(ws) {
             let t = mid + half * x;
-            let wt = w * shutter.density(t);
+            let wt = w * density(shutter, t);
             if wt <= 0.0 {
                 continue;
             }
