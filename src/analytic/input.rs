@@ -42,18 +42,25 @@ pub struct Backdrop<'a> {
 /// Everything one frame needs.
 #[derive(Clone, Debug)]
 pub struct Input<'a> {
-    /// Image size in pixels, and samples per pixel along each axis (1, 2 or 4).
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Samples per pixel along each axis (1, 2 or 4).
     pub samples: u32,
     /// The segment boundaries: `K + 1` strictly increasing shutter times from 0 to 1.
     pub times: &'a [f64],
     /// The camera's view-projection (OpenGL clip space) at every boundary, or one for all.
     pub view_projections: &'a [DMat4],
+    /// The moving meshes.
     pub draws: &'a [MovingDraw<'a>],
+    /// The static scene behind them, if any.
     pub backdrop: Option<Backdrop<'a>>,
+    /// The shutter filter.
     pub shutter: &'a Shutter,
+    /// Directional lights (lambert shading).
     pub lights: &'a [Light],
+    /// Ambient light (lambert shading).
     pub ambient: [f32; 3],
     /// Points in time per visible piece.
     pub quadrature: Quadrature,

@@ -13,7 +13,7 @@
 //! 1. clip positions of every vertex at every boundary (camera of that instant);
 //! 2. prims: each face over each segment, set up once (orientation cubic, swept hull, bounds);
 //!    faces back-facing throughout a segment (with culling) or outside the view are dropped;
-//! 3. binning into tiles of 16 x 16 samples by the swept hull;
+//! 3. binning into tiles of 32 x 32 samples by the swept hull (`hull.rs`);
 //! 4. tiles in parallel: each prim's covered spans at the tile's samples become fragments; per
 //!    sample, [`resolve`] orders them in depth over time (linear depth per span, split where two
 //!    cross) over the static backdrop, and shades the visible pieces at Gauss points in time;
@@ -22,6 +22,11 @@
 //!
 //! Depth, ids and velocity describe the surface in front at the reference time. Every step is
 //! deterministic per sample, so the output does not depend on the thread count.
+// Numeric kernels: index loops over corners and coefficients read like the formulas, and
+// `!(a > b)` deliberately counts NaN as failing (as in raster/).
+#![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
+
+mod frame;
 mod hull;
 mod input;
 mod poly;
@@ -34,5 +39,6 @@ mod tiles;
 #[cfg(test)]
 mod tests;
 
+pub use frame::{render, Frame, Stats};
+pub use input::{Backdrop, Input, MovingDraw};
 pub use quadrature::Quadrature;
-pub use tiles::{render, Backdrop, Frame, Input, MovingDraw, Stats};

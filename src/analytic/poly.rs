@@ -306,7 +306,8 @@ impl Spans {
         out
     }
 
-    /// The times in `self` or `other`.
+    /// The times in `self` or `other` (tests compare sets with it).
+    #[cfg(test)]
     pub fn union(&self, other: &Spans) -> Spans {
         let mut all = [[0.0; 2]; 2 * MAX_SPANS];
         let mut m = 0;

@@ -167,6 +167,10 @@ impl Corners {
     }
 }
 
+/// What [`setup`] finds of a prim: flags, front and back facing, sample bounds, hull and its
+/// number of points.
+pub type Setup = (u8, Facing, Facing, [i32; 4], [[f32; 2]; 6], u8);
+
 /// Builds the prim of one face over one segment, or None when it can cover nothing: back-facing
 /// throughout with culling, degenerate throughout, or outside the image throughout.
 pub fn setup(
@@ -176,7 +180,7 @@ pub fn setup(
     cull_back: bool,
     ws: u32,
     hs: u32,
-) -> Option<(u8, Facing, Facing, [i32; 4], [[f32; 2]; 6], u8)> {
+) -> Option<Setup> {
     // Outside one side of the view volume at both ends (linear motion keeps it there).
     let outside = |f: &dyn Fn(&[f64; 4]) -> bool| c0.iter().chain(c1).all(f);
     if outside(&|c| c[0] > c[3])
