@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _helpers.threads import digests, ticks_during
 
 import motionblur as mb
-from _helpers.threads import digests, ticks_during
 
 W, H, YFOV, DIST = 48, 36, 0.8, 5.0
 

@@ -68,7 +68,9 @@ def test_zero_motion_is_the_static_render_bit_for_bit():
 def test_a_concave_mesh_turning_over_a_static_floor():
     # the case the motion volume gets wrong: a torus turning while it moves, over a floor
     v, f = meshes.torus(0.4, 0.15, 32, 12)
-    motion = mb.Motion.linear(translate((-0.8, 0, 0)) @ rotate(0.2, (1, 0, 0)), translate((0.8, 0, 0)) @ rotate(1.4, (1, 0, 0)))
+    motion = mb.Motion.linear(
+        translate((-0.8, 0, 0)) @ rotate(0.2, (1, 0, 0)), translate((0.8, 0, 0)) @ rotate(1.4, (1, 0, 0))
+    )
     torus = mb.Object((v, f), (0.9, 0.5, 0.2), motion=motion)
     floor = mb.Object(meshes.box((6, 0.1, 4)), (0.3, 0.3, 0.35))
     floor = mb.Object((floor.mesh.vertices + (0, -0.7, 0), floor.mesh.faces), (0.3, 0.3, 0.35))
