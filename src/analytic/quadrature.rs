@@ -1,6 +1,6 @@
 //! How many points in time a visible piece of a sample is shaded at, and where: Gauss-Legendre
-//! rules of 1 to 8 points, chosen by the piece's length and the triangles of a chain it
-//! crosses ([`Quadrature::points`]).
+//! rules of 1 to 8 points, chosen by the piece's length ([`Quadrature::points`]). A piece is
+//! shaded by one triangle per layer (`resolve.rs` cuts it where a chain changes triangle).
 
 /// How many points in time each visible piece is shaded at.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -12,28 +12,21 @@ pub enum Quadrature {
 }
 
 impl Quadrature {
-    /// Points for a piece of length `len` crossing about `elements` triangles of a chain:
-    /// `Auto` takes 1, 2 or 3 by length and at least one per triangle crossed, up to 8.
-    pub fn points(self, len: f64, elements: usize) -> usize {
+    /// Points for a piece of length `len` shaded by one triangle per layer: `Auto` takes 1, 2
+    /// or 3 by length.
+    pub fn points(self, len: f64) -> usize {
         match self {
             Quadrature::Points(n) => n as usize,
             Quadrature::Auto => {
-                let by_len = if len < 1.0 / 32.0 {
+                if len < 1.0 / 32.0 {
                     1
                 } else if len < 0.25 {
                     2
                 } else {
                     3
-                };
-                by_len.max(elements.min(8))
+                }
             }
         }
-    }
-
-    /// True when fragments of one surface may be chained (`Auto`); with a fixed number of
-    /// points every triangle is shaded on its own.
-    pub fn chains(self) -> bool {
-        self == Quadrature::Auto
     }
 }
 
@@ -135,15 +128,13 @@ mod tests {
     }
 
     #[test]
-    fn auto_takes_points_by_length_and_by_triangles_crossed() {
+    fn auto_takes_points_by_length() {
         let q = Quadrature::Auto;
-        assert_eq!(q.points(0.01, 1), 1);
-        assert_eq!(q.points(0.1, 1), 2);
-        assert_eq!(q.points(0.5, 1), 3);
-        assert_eq!(q.points(0.01, 5), 5);
-        assert_eq!(q.points(0.5, 40), 8);
-        assert_eq!(Quadrature::Points(2).points(0.5, 40), 2);
-        assert!(q.chains() && !Quadrature::Points(2).chains());
+        assert_eq!(q.points(0.01), 1);
+        assert_eq!(q.points(0.1), 2);
+        assert_eq!(q.points(0.5), 3);
+        assert_eq!(Quadrature::Points(2).points(0.5), 2);
+        assert_eq!(Quadrature::Points(4).points(0.001), 4);
         // 5 and 7 points take the next even rule
         assert_eq!(gauss(5).0.len(), 6);
         assert_eq!(gauss(7).0.len(), 8);

@@ -12,7 +12,6 @@
 //! A fragment may stand for a run of triangles of one surface that cover the sample one after
 //! the other (a chain, see `tiles.rs`); its layer is then shaded by the triangle of the chain
 //! that covers the sample at each quadrature point.
-use super::poly::ceil_i64;
 use super::quadrature::{gauss, Quadrature};
 use crate::shutter::Shutter;
 
@@ -35,24 +34,13 @@ pub struct Frag {
     pub n: u32,
 }
 
-impl Frag {
-    #[inline]
-    fn depth(&self, t: f64) -> f64 {
-        let (t0, t1) = (f64::from(self.t0), f64::from(self.t1));
-        let (z0, z1) = (f64::from(self.z0), f64::from(self.z1));
-        if t1 > t0 {
-            z0 + (z1 - z0) * ((t - t0) / (t1 - t0)).clamp(0.0, 1.0)
-        } else {
-            z0
-        }
-    }
-}
-
 /// One triangle of a fragment's chain: it covers the sample from `t0` until the next link's
 /// `t0` (the last one until the fragment's end).
 #[derive(Clone, Copy, Debug)]
 pub struct Link {
     pub t0: f32,
+    /// The view depth at `t0` (the triangle's depth is linear until the next link).
+    pub z0: f32,
     /// The tile's index of the triangle.
     pub prim: u32,
     /// The next link, `NONE` at the end.
@@ -84,6 +72,9 @@ pub trait Layers {
     /// fragments) seen at this sample at shutter time `t`. Calls for one fragment come in
     /// increasing `t`.
     fn shade(&mut self, i: usize, f: &Frag, t: f64) -> [f32; 4];
+    /// Pushes the instants strictly inside `(a, b)` where fragment `f`'s chain passes from one
+    /// triangle to the next, ascending.
+    fn cuts(&mut self, i: usize, f: &Frag, a: f64, b: f64, out: &mut Vec<f64>);
 }
 
 /// What one sample resolves to.
@@ -104,11 +95,51 @@ pub struct Scratch {
     active: Vec<usize>,
     cuts: Vec<f64>,
     order: Vec<(f64, usize)>,
+    sub: Vec<f64>,
+    lines: Vec<(usize, [f64; 4])>,
+    cursor: Vec<u32>,
     opaque: Vec<bool>,
+    element_cuts: Vec<f64>,
 }
 
 /// A layer of a piece: a fragment index, or the backdrop.
 pub const BACKDROP: usize = usize::MAX;
+
+/// The straight piece of fragment `i`'s depth around time `t`: `[t_a, z_a, t_b, z_b]`, from the
+/// link of its chain covering `t` (found from `cursor[i]`, moved forward) to the next.
+fn element_line(frags: &[Frag], links: &[Link], cursor: &mut [u32], i: usize, t: f64) -> [f64; 4] {
+    let f = &frags[i];
+    let mut c = cursor[i];
+    loop {
+        let next = links[c as usize].next;
+        if next == NONE || f64::from(links[next as usize].t0) > t {
+            break;
+        }
+        c = next;
+    }
+    cursor[i] = c;
+    let l = &links[c as usize];
+    let next = l.next;
+    let (tb, zb) = if next == NONE {
+        (f.t1, f.z1)
+    } else {
+        (links[next as usize].t0, links[next as usize].z0)
+    };
+    let ta = if c == f.chain { f.t0 } else { l.t0 };
+    let za = if c == f.chain { f.z0 } else { l.z0 };
+    [f64::from(ta), f64::from(za), f64::from(tb), f64::from(zb)]
+}
+
+/// The view depth of fragment `f`'s surface at time `t` (from its chain's link then).
+pub fn depth_at(f: &Frag, links: &[Link], t: f64) -> f64 {
+    let mut cur = [f.chain];
+    let l = element_line(std::slice::from_ref(f), links, &mut cur, 0, t);
+    if l[2] > l[0] {
+        l[1] + (l[3] - l[1]) * ((t - l[0]) / (l[2] - l[0])).clamp(0.0, 1.0)
+    } else {
+        l[1]
+    }
+}
 
 /// Sorts fragments by start time (then triangle: a unique key, so the order is the same
 /// whatever order they were found in).
@@ -156,9 +187,11 @@ fn density(shutter: &Shutter, t: f64) -> f64 {
 /// `piece(a, b, layers)` gets each piece `[a, b]` with its layers front to back (fragment
 /// indices, or `BACKDROP`), cut after the first opaque one. Pieces with no layer are skipped.
 /// `breaks` are extra instants to cut at.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub fn sweep(
     frags: &[Frag],
+    links: &[Link],
     bg: &Backdrop,
     opaque: &[bool],
     breaks: &[f64],
@@ -167,15 +200,10 @@ pub fn sweep(
 ) {
     let has_bg = bg.depth.is_finite();
     sc.active.clear();
+    sc.cursor.clear();
+    sc.cursor.extend(frags.iter().map(|f| f.chain));
     let (mut next, mut bi) = (0, 0);
     let mut u = 0.0f64;
-    let depth_of = |i: usize, t: f64| {
-        if i == BACKDROP {
-            f64::from(bg.depth)
-        } else {
-            frags[i].depth(t)
-        }
-    };
     while u < 1.0 {
         while next < frags.len() && f64::from(frags[next].t0) <= u {
             sc.active.push(next);
@@ -213,50 +241,90 @@ pub fn sweep(
         if n == 0 {
             continue;
         }
-        // Cut where any two layers cross in depth.
-        sc.cuts.clear();
-        sc.cuts.push(u);
-        if n > 1 {
-            let layer = |a: usize| {
-                if a < sc.active.len() {
-                    sc.active[a]
+        if n == 1 {
+            // one layer: no depth to compare
+            sc.order.clear();
+            sc.order
+                .push((0.0, sc.active.first().copied().unwrap_or(BACKDROP)));
+            piece(u, v, &sc.order, frags);
+            continue;
+        }
+        // Chains change triangle (and depth slope) at their links: cut there first, so that
+        // every layer's depth is one straight piece on each sub-interval.
+        sc.sub.clear();
+        sc.sub.push(u);
+        for &i in &sc.active {
+            if frags[i].n > 1 {
+                let mut c = frags[i].chain;
+                while let Some(next) = Some(links[c as usize].next).filter(|&x| x != NONE) {
+                    let t = f64::from(links[next as usize].t0);
+                    if t >= v {
+                        break;
+                    }
+                    if t > u {
+                        sc.sub.push(t);
+                    }
+                    c = next;
+                }
+            }
+        }
+        sc.sub.push(v);
+        if sc.sub.len() > 3 {
+            sc.sub[1..].sort_unstable_by(f64::total_cmp);
+        }
+        for k in 0..sc.sub.len() - 1 {
+            let (p, q) = (sc.sub[k], sc.sub[k + 1]);
+            if q <= p {
+                continue;
+            }
+            let mid = 0.5 * (p + q);
+            // each layer's straight depth on [p, q]
+            sc.lines.clear();
+            for &i in &sc.active {
+                sc.lines
+                    .push((i, element_line(frags, links, &mut sc.cursor, i, mid)));
+            }
+            if has_bg {
+                let z = f64::from(bg.depth);
+                sc.lines.push((BACKDROP, [0.0, z, 1.0, z]));
+            }
+            let at = |l: &[f64; 4], t: f64| {
+                if l[2] > l[0] {
+                    l[1] + (l[3] - l[1]) * ((t - l[0]) / (l[2] - l[0])).clamp(0.0, 1.0)
                 } else {
-                    BACKDROP
+                    l[1]
                 }
             };
-            for a in 0..n {
-                let ia = layer(a);
-                for b in a + 1..n {
-                    let ib = layer(b);
-                    let g0 = depth_of(ia, u) - depth_of(ib, u);
-                    let g1 = depth_of(ia, v) - depth_of(ib, v);
+            // cut where any two layers cross in depth
+            sc.cuts.clear();
+            sc.cuts.push(p);
+            for a in 0..sc.lines.len() {
+                for b in a + 1..sc.lines.len() {
+                    let (la, lb) = (&sc.lines[a].1, &sc.lines[b].1);
+                    let g0 = at(la, p) - at(lb, p);
+                    let g1 = at(la, q) - at(lb, q);
                     if (g0 < 0.0 && g1 > 0.0) || (g0 > 0.0 && g1 < 0.0) {
-                        let x = u + (v - u) * (g0 / (g0 - g1));
-                        if x > u && x < v {
+                        let x = p + (q - p) * (g0 / (g0 - g1));
+                        if x > p && x < q {
                             sc.cuts.push(x);
                         }
                     }
                 }
             }
-        }
-        sc.cuts.push(v);
-        if sc.cuts.len() > 3 {
-            sc.cuts[1..].sort_unstable_by(f64::total_cmp);
-        }
-        for c in 0..sc.cuts.len() - 1 {
-            let (a, b) = (sc.cuts[c], sc.cuts[c + 1]);
-            if b <= a {
-                continue;
+            sc.cuts.push(q);
+            if sc.cuts.len() > 3 {
+                sc.cuts[1..].sort_unstable_by(f64::total_cmp);
             }
-            let mid = 0.5 * (a + b);
-            sc.order.clear();
-            for &i in &sc.active {
-                sc.order.push((frags[i].depth(mid), i));
-            }
-            if has_bg {
-                sc.order.push((f64::from(bg.depth), BACKDROP));
-            }
-            if sc.order.len() > 1 {
+            for c in 0..sc.cuts.len() - 1 {
+                let (a, b) = (sc.cuts[c], sc.cuts[c + 1]);
+                if b <= a {
+                    continue;
+                }
+                let m = 0.5 * (a + b);
+                sc.order.clear();
+                for (i, l) in &sc.lines {
+                    sc.order.push((at(l, m), *i));
+                }
                 sc.order
                     .sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
                 if let Some(p) = sc
@@ -266,8 +334,8 @@ pub fn sweep(
                 {
                     sc.order.truncate(p + 1);
                 }
+                piece(a, b, &sc.order, frags);
             }
-            piece(a, b, &sc.order, frags);
         }
     }
 }
@@ -279,6 +347,7 @@ pub fn sweep(
 #[inline(always)]
 pub fn resolve(
     frags: &mut [Frag],
+    links: &[Link],
     bg: &Backdrop,
     layers: &mut impl Layers,
     shutter: &Shutter,
@@ -294,81 +363,114 @@ pub fn resolve(
     };
     let mut acc = [0.0f64; 4];
     let mut ref_done = false;
+    let mut cuts = std::mem::take(&mut sc.element_cuts);
     sort(frags);
     let mut opaque = std::mem::take(&mut sc.opaque);
     opaque.clear();
     opaque.extend(frags.iter().map(|f| layers.opaque(f)));
-    sweep(frags, bg, &opaque, breaks, sc, |a, b, order, frags| {
-        if !ref_done && t_ref >= a && t_ref <= b {
-            ref_done = true;
-            out.front = match order.first() {
-                Some(&(_, i)) if i != BACKDROP => Some((i, frags[i].depth(t_ref))),
-                _ => None,
-            };
-        }
-        let dw = weight(shutter, a, b);
-        if dw <= 0.0 {
-            return;
-        }
-        out.pieces += 1;
-        if order.len() == 1 && order[0].1 == BACKDROP {
-            for j in 0..4 {
-                acc[j] += dw * f64::from(bg.rgba[j]);
-            }
-            return;
-        }
-        // Layers of one colour each: the composite is the same at every point in time, so its
-        // filter-weighted mean over the piece is itself.
-        if let Some(c) = composite_uniform(order, frags, bg, layers) {
-            for j in 0..4 {
-                acc[j] += dw * c[j];
-            }
-            return;
-        }
-        let elements = order
-            .iter()
-            .filter(|&&(_, i)| i != BACKDROP)
-            .map(|&(_, i)| {
-                let f = &frags[i];
-                let share = (b - a) / (f64::from(f.t1) - f64::from(f.t0)).max(1e-30);
-                ceil_i64(share * f64::from(f.n)).max(0) as usize
-            })
-            .max()
-            .unwrap_or(1);
-        let (xs, ws) = gauss(quad.points(b - a, elements));
-        let (half, mid) = (0.5 * (b - a), 0.5 * (a + b));
-        let mut sum = [0.0f64; 4];
-        let mut wsum = 0.0;
-        for (x, w) in xs.iter().zip(ws) {
-            let t = mid + half * x;
-            let wt = w * density(shutter, t);
-            if wt <= 0.0 {
-                continue;
-            }
-            let mut trans = 1.0f64;
-            for &(_, i) in order {
-                let s = if i == BACKDROP {
-                    bg.rgba
-                } else {
-                    layers.shade(i, &frags[i], t)
+    sweep(
+        frags,
+        links,
+        bg,
+        &opaque,
+        breaks,
+        sc,
+        |a, b, order, frags| {
+            if !ref_done && t_ref >= a && t_ref <= b {
+                ref_done = true;
+                out.front = match order.first() {
+                    Some(&(_, i)) if i != BACKDROP => Some((i, depth_at(&frags[i], links, t_ref))),
+                    _ => None,
                 };
+            }
+            let dw = weight(shutter, a, b);
+            if dw <= 0.0 {
+                return;
+            }
+            out.pieces += 1;
+            if order.len() == 1 && order[0].1 == BACKDROP {
                 for j in 0..4 {
-                    sum[j] += wt * trans * f64::from(s[j]);
+                    acc[j] += dw * f64::from(bg.rgba[j]);
                 }
-                trans *= 1.0 - f64::from(s[3]);
-                if trans <= 0.0 {
-                    break;
+                return;
+            }
+            // Layers of one colour each: the composite is the same at every point in time, so its
+            // filter-weighted mean over the piece is itself (whichever triangle of a chain covers
+            // the sample).
+            if let Some(c) = composite_uniform(order, frags, bg, layers) {
+                for j in 0..4 {
+                    acc[j] += dw * c[j];
+                }
+                return;
+            }
+            // Cut where a layer's chain passes from one triangle to the next: every sub-piece is
+            // shaded by the same triangles throughout.
+            cuts.clear();
+            cuts.push(a);
+            let mut chained = 0;
+            for &(_, i) in order {
+                if i != BACKDROP && frags[i].n > 1 {
+                    let before = cuts.len();
+                    layers.cuts(i, &frags[i], a, b, &mut cuts);
+                    chained += usize::from(cuts.len() > before);
                 }
             }
-            wsum += wt;
-        }
-        if wsum > 0.0 {
-            for j in 0..4 {
-                acc[j] += dw * sum[j] / wsum;
+            cuts.push(b);
+            // each layer's cuts come ascending; several layers' cuts interleave
+            if chained > 1 {
+                let n = cuts.len();
+                cuts[1..n - 1].sort_unstable_by(f64::total_cmp);
             }
-        }
-    });
+            for c in 0..cuts.len() - 1 {
+                let (u, v) = (cuts[c], cuts[c + 1]);
+                if v <= u {
+                    continue;
+                }
+                let dw = if cuts.len() == 2 {
+                    dw
+                } else {
+                    weight(shutter, u, v)
+                };
+                if dw <= 0.0 {
+                    continue;
+                }
+                let (xs, ws) = gauss(quad.points(v - u));
+                let (half, mid) = (0.5 * (v - u), 0.5 * (u + v));
+                let mut sum = [0.0f64; 4];
+                let mut wsum = 0.0;
+                for (x, w) in xs.iter().zip(ws) {
+                    let t = mid + half * x;
+                    let wt = w * density(shutter, t);
+                    if wt <= 0.0 {
+                        continue;
+                    }
+                    let mut trans = 1.0f64;
+                    for &(_, i) in order {
+                        let s = if i == BACKDROP {
+                            bg.rgba
+                        } else {
+                            layers.shade(i, &frags[i], t)
+                        };
+                        for j in 0..4 {
+                            sum[j] += wt * trans * f64::from(s[j]);
+                        }
+                        trans *= 1.0 - f64::from(s[3]);
+                        if trans <= 0.0 {
+                            break;
+                        }
+                    }
+                    wsum += wt;
+                }
+                if wsum > 0.0 {
+                    for j in 0..4 {
+                        acc[j] += dw * sum[j] / wsum;
+                    }
+                }
+            }
+        },
+    );
     sc.opaque = opaque;
+    sc.element_cuts = cuts;
     out.rgba = acc.map(|x| x as f32);
     out
 }
@@ -416,6 +518,7 @@ mod tests {
         fn uniform(&self, _f: &Frag) -> Option<[f32; 4]> {
             None
         }
+        fn cuts(&mut self, _i: usize, _f: &Frag, _a: f64, _b: f64, _out: &mut Vec<f64>) {}
         fn shade(&mut self, _i: usize, f: &Frag, _t: f64) -> [f32; 4] {
             let c = self.colors[(f.prim & !BACK) as usize];
             [c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]]
@@ -434,6 +537,13 @@ mod tests {
         }
     }
 
+    const LINK: [Link; 1] = [Link {
+        t0: 0.0,
+        z0: 0.0,
+        prim: 0,
+        next: super::NONE,
+    }];
+
     const NONE: Backdrop = Backdrop {
         rgba: [0.0; 4],
         depth: f32::INFINITY,
@@ -448,6 +558,7 @@ mod tests {
         let mut f = vec![frag(0.5, 0.75, 2.0, 2.0, 1), frag(0.0, 0.25, 2.0, 2.0, 0)];
         let r = resolve(
             &mut f,
+            &LINK,
             &NONE,
             &mut l,
             &Shutter::Box,
@@ -469,6 +580,7 @@ mod tests {
         let mut f = vec![frag(0.0, 1.0, 1.0, 3.0, 0), frag(0.0, 1.0, 2.0, 2.0, 1)];
         let r = resolve(
             &mut f,
+            &LINK,
             &NONE,
             &mut l,
             &Shutter::Box,
@@ -482,6 +594,7 @@ mod tests {
         // a ramp shutter weighs the later half 3x: W(1) - W(0.5) = 0.75
         let r = resolve(
             &mut f,
+            &LINK,
             &NONE,
             &mut l,
             &Shutter::Ramp,
@@ -506,6 +619,7 @@ mod tests {
         let mut f = vec![frag(0.0, 0.5, 1.0, 1.0, 0)];
         let r = resolve(
             &mut f,
+            &LINK,
             &bg,
             &mut l,
             &Shutter::Box,
@@ -521,6 +635,7 @@ mod tests {
         let mut f = vec![frag(0.0, 1.0, 9.0, 9.0, 0)];
         let r = resolve(
             &mut f,
+            &LINK,
             &bg,
             &mut l,
             &Shutter::Box,

@@ -177,6 +177,29 @@ impl Layers for SampleShader<'_> {
         self.prim(f.prim).uniform
     }
 
+    #[inline]
+    fn cuts(&mut self, i: usize, f: &Frag, a: f64, b: f64, out: &mut Vec<f64>) {
+        let mut c = if self.cursor[i] == NONE {
+            f.chain
+        } else {
+            self.cursor[i]
+        };
+        loop {
+            let next = self.links[c as usize].next;
+            if next == NONE {
+                return;
+            }
+            let t = f64::from(self.links[next as usize].t0);
+            if t >= b {
+                return;
+            }
+            if t > a {
+                out.push(t);
+            }
+            c = next;
+        }
+    }
+
     #[inline(always)]
     fn shade(&mut self, i: usize, f: &Frag, t: f64) -> [f32; 4] {
         let input = self.input;

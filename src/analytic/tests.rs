@@ -247,6 +247,7 @@ fn bad_input_names_the_argument() {
 struct FlatLayers {
     colors: Vec<[f32; 4]>,
     uniform: bool,
+    links: Vec<resolve::Link>,
 }
 
 impl resolve::Layers for FlatLayers {
@@ -257,6 +258,16 @@ impl resolve::Layers for FlatLayers {
         let c = self.colors[f.prim as usize];
         self.uniform
             .then_some([c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]])
+    }
+    fn cuts(&mut self, _i: usize, f: &resolve::Frag, a: f64, b: f64, out: &mut Vec<f64>) {
+        let mut c = self.links[f.chain as usize].next;
+        while c != resolve::NONE {
+            let t = f64::from(self.links[c as usize].t0);
+            if t > a && t < b {
+                out.push(t);
+            }
+            c = self.links[c as usize].next;
+        }
     }
     fn shade(&mut self, _i: usize, f: &resolve::Frag, _t: f64) -> [f32; 4] {
         let c = self.colors[f.prim as usize];
@@ -272,14 +283,24 @@ fn uniform_layers_resolve_as_their_shading_does() {
         [0.2, 0.3, 0.9, 0.25],
         [0.6, 0.6, 0.1, 1.0],
     ];
+    // fragment k's chain starts at link k; fragment 0 has a second link (a chain of one
+    // colour: the uniform composite holds across its links too)
+    let link = |t0: f32, z0: f32, prim: u32, next: u32| resolve::Link { t0, z0, prim, next };
+    let links = vec![
+        link(0.0, 1.0, 0, 4),
+        link(0.1, 2.5, 1, resolve::NONE),
+        link(0.3, 2.0, 2, resolve::NONE),
+        link(0.55, 0.5, 3, resolve::NONE),
+        link(0.4, 3.5, 0, resolve::NONE),
+    ];
     let frag = |t0: f32, t1: f32, z0: f32, z1: f32, prim: u32| resolve::Frag {
         t0,
         t1,
         z0,
         z1,
         prim,
-        chain: 0,
-        n: 1 + prim,
+        chain: prim,
+        n: if prim == 0 { 2 } else { 1 },
     };
     let bg = resolve::Backdrop {
         rgba: [0.05, 0.1, 0.15, 1.0],
@@ -298,10 +319,12 @@ fn uniform_layers_resolve_as_their_shading_does() {
                 let mut l = FlatLayers {
                     colors: colors.clone(),
                     uniform,
+                    links: links.clone(),
                 };
                 let mut f = frags.clone();
                 resolve::resolve(
                     &mut f,
+                    &links,
                     &bg,
                     &mut l,
                     &shutter,

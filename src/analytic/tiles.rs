@@ -20,8 +20,6 @@ struct SpanOf {
     /// The segment's start and length in shutter time.
     t0: f64,
     dt: f64,
-    /// Whether spans may chain.
-    chains: bool,
 }
 
 /// What one tile counted.
@@ -50,9 +48,9 @@ pub struct SampleOut {
     pub velocity: [f32; 2],
 }
 
-/// How far a chain's depth may stray from the straight line between its ends where a triangle
-/// joins it, relative to the depth.
-const CHAIN_DEPTH_TOLERANCE: f32 = 1e-3;
+/// Two spans join into one chain only where their depths meet at the shared instant (the same
+/// surface point seen by both triangles), within this fraction of the depth.
+const CHAIN_DEPTH_TOLERANCE: f32 = 1e-4;
 
 struct TileScratch {
     /// Fragments in the order they are found, with their sample's index in the tile.
@@ -177,7 +175,6 @@ impl Ctx<'_> {
         sc.prims.clear();
         sc.tail.clear();
         sc.tail.resize((TILE * TILE) as usize, (NONE, NONE));
-        let chains = self.input.quadrature.chains();
         let mut counts = Counts::default();
         for (li, &pi) in bin.iter().enumerate() {
             let p = &self.prims[pi as usize];
@@ -195,7 +192,6 @@ impl Ctx<'_> {
                 li: li as u32,
                 t0: times[p.seg as usize],
                 dt: times[p.seg as usize + 1] - times[p.seg as usize],
-                chains,
             };
             let simple = Edges::simple(p);
             let (ya, yb) = (p.bbox[1].max(y0), p.bbox[3].min(y1));
@@ -314,6 +310,7 @@ impl Ctx<'_> {
                 shader.reset(frags.len());
                 let r = resolve::resolve(
                     frags,
+                    &sc.links,
                     &bg,
                     &mut shader,
                     self.input.shutter,
@@ -384,11 +381,12 @@ impl Ctx<'_> {
             chain: 0,
             n: 1,
         };
-        if span.chains && self.join(sc, j, &f, tp) {
+        if self.join(sc, j, &f, tp) {
             return;
         }
         sc.links.push(Link {
             t0,
+            z0: f.z0,
             prim: span.li,
             next: NONE,
         });
@@ -399,8 +397,8 @@ impl Ctx<'_> {
 
     /// Joins `f` (a span of the tile's prim `tp`, not yet in `sc.prims`) to the fragment found
     /// last at sample `j` when it continues it: the same draw, facing and opacity, touching in
-    /// time, and the depth at the join within `CHAIN_DEPTH_TOLERANCE` of the line between the
-    /// joined ends. Returns whether it did.
+    /// time, with the depths meeting there (`CHAIN_DEPTH_TOLERANCE`). Each link keeps its own
+    /// depth, so a chain is as exact as its separate spans. Returns whether it did.
     #[inline(always)]
     fn join(&self, sc: &mut TileScratch, j: usize, f: &Frag, tp: &TilePrim) -> bool {
         let (ti, tl) = sc.tail[j];
@@ -420,14 +418,13 @@ impl Ctx<'_> {
         {
             return false;
         }
-        let on_line = |za: f32, ta: f32, zb: f32, tb: f32, zm: f32, tm: f32| {
-            let z = za + (zb - za) * ((tm - ta) / (tb - ta));
-            (z - zm).abs() <= CHAIN_DEPTH_TOLERANCE * zm
-        };
+        let meet =
+            |za: f32, zb: f32| (za - zb).abs() <= CHAIN_DEPTH_TOLERANCE * za.abs().max(zb.abs());
         let li = f.prim & !BACK;
-        if t.t1 == f.t0 && on_line(t.z0, t.t0, f.z1, f.t1, t.z1, t.t1) {
+        if t.t1 == f.t0 && meet(t.z1, f.z0) {
             sc.links.push(Link {
                 t0: f.t0,
+                z0: f.z0,
                 prim: li,
                 next: NONE,
             });
@@ -440,9 +437,10 @@ impl Ctx<'_> {
             g.n += 1;
             return true;
         }
-        if t.t0 == f.t1 && on_line(f.z0, f.t0, t.z1, t.t1, t.z0, t.t0) {
+        if t.t0 == f.t1 && meet(f.z1, t.z0) {
             sc.links.push(Link {
                 t0: f.t0,
+                z0: f.z0,
                 prim: li,
                 next: t.chain,
             });
