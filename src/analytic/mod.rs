@@ -15,8 +15,9 @@
 //!    faces back-facing throughout a segment (with culling) or outside the view are dropped;
 //! 3. binning into tiles of 32 x 32 samples by the swept hull (`hull.rs`);
 //! 4. tiles in parallel: each prim's covered spans at the tile's samples become fragments; per
-//!    sample, [`resolve`] orders them in depth over time (linear depth per span, split where two
-//!    cross) over the static backdrop, and shades the visible pieces at Gauss points in time;
+//!    sample, the sweep (`visibility.rs`) orders them in depth over time (linear depth per
+//!    triangle, split where two cross) over the static backdrop, and [`resolve`] shades the
+//!    visible pieces at Gauss points in time;
 //! 5. the box resolve of each pixel's samples (colour mean; depth, id and velocity of the
 //!    nearest sample).
 //!
@@ -35,6 +36,7 @@ mod quadrature;
 mod resolve;
 mod shade;
 mod tiles;
+mod visibility;
 
 #[cfg(test)]
 mod tests;

@@ -8,7 +8,8 @@
 //! premultiplied.
 use super::input::{Input, Prepared};
 use super::prim::{homogeneous_pixel, Corners, Edges, Prim, SampleEdges, OPAQUE};
-use super::resolve::{Frag, Layers, Link, BACK, NONE};
+use super::resolve::Layers;
+use super::visibility::{Frag, Link, BACK, NONE};
 use crate::raster::Shading;
 
 /// A prim as one tile uses it: its edges and everything shading reads, gathered once.

@@ -3,7 +3,7 @@
 use glam::{DMat4, DVec3};
 
 use super::*;
-use crate::analytic::resolve;
+use crate::analytic::{resolve, visibility};
 use crate::raster::Shading;
 use crate::shutter::Shutter;
 
@@ -247,21 +247,21 @@ fn bad_input_names_the_argument() {
 struct FlatLayers {
     colors: Vec<[f32; 4]>,
     uniform: bool,
-    links: Vec<resolve::Link>,
+    links: Vec<visibility::Link>,
 }
 
 impl resolve::Layers for FlatLayers {
-    fn opaque(&self, f: &resolve::Frag) -> bool {
+    fn opaque(&self, f: &visibility::Frag) -> bool {
         self.colors[f.prim as usize][3] >= 1.0
     }
-    fn uniform(&self, f: &resolve::Frag) -> Option<[f32; 4]> {
+    fn uniform(&self, f: &visibility::Frag) -> Option<[f32; 4]> {
         let c = self.colors[f.prim as usize];
         self.uniform
             .then_some([c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]])
     }
-    fn cuts(&mut self, _i: usize, f: &resolve::Frag, a: f64, b: f64, out: &mut Vec<f64>) {
+    fn cuts(&mut self, _i: usize, f: &visibility::Frag, a: f64, b: f64, out: &mut Vec<f64>) {
         let mut c = self.links[f.chain as usize].next;
-        while c != resolve::NONE {
+        while c != visibility::NONE {
             let t = f64::from(self.links[c as usize].t0);
             if t > a && t < b {
                 out.push(t);
@@ -269,7 +269,7 @@ impl resolve::Layers for FlatLayers {
             c = self.links[c as usize].next;
         }
     }
-    fn shade(&mut self, _i: usize, f: &resolve::Frag, _t: f64) -> [f32; 4] {
+    fn shade(&mut self, _i: usize, f: &visibility::Frag, _t: f64) -> [f32; 4] {
         let c = self.colors[f.prim as usize];
         [c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]]
     }
@@ -285,15 +285,15 @@ fn uniform_layers_resolve_as_their_shading_does() {
     ];
     // fragment k's chain starts at link k; fragment 0 has a second link (a chain of one
     // colour: the uniform composite holds across its links too)
-    let link = |t0: f32, z0: f32, prim: u32, next: u32| resolve::Link { t0, z0, prim, next };
+    let link = |t0: f32, z0: f32, prim: u32, next: u32| visibility::Link { t0, z0, prim, next };
     let links = vec![
         link(0.0, 1.0, 0, 4),
-        link(0.1, 2.5, 1, resolve::NONE),
-        link(0.3, 2.0, 2, resolve::NONE),
-        link(0.55, 0.5, 3, resolve::NONE),
-        link(0.4, 3.5, 0, resolve::NONE),
+        link(0.1, 2.5, 1, visibility::NONE),
+        link(0.3, 2.0, 2, visibility::NONE),
+        link(0.55, 0.5, 3, visibility::NONE),
+        link(0.4, 3.5, 0, visibility::NONE),
     ];
-    let frag = |t0: f32, t1: f32, z0: f32, z1: f32, prim: u32| resolve::Frag {
+    let frag = |t0: f32, t1: f32, z0: f32, z1: f32, prim: u32| visibility::Frag {
         t0,
         t1,
         z0,
@@ -302,7 +302,7 @@ fn uniform_layers_resolve_as_their_shading_does() {
         chain: prim,
         n: if prim == 0 { 2 } else { 1 },
     };
-    let bg = resolve::Backdrop {
+    let bg = visibility::Backdrop {
         rgba: [0.05, 0.1, 0.15, 1.0],
         depth: 3.0,
         id: 1,

@@ -7,8 +7,9 @@ use std::time::Instant;
 use super::hull;
 use super::input::{Input, Prepared};
 use super::prim::{self, Corners, Cover, Edges, Prim, OPAQUE};
-use super::resolve::{self, Backdrop as Behind, Frag, Link, Scratch, BACK, NONE};
+use super::resolve::{self, Scratch};
 use super::shade::{SampleShader, TilePrim};
+use super::visibility::{Backdrop as Behind, Frag, Link, BACK, NONE};
 
 /// Tile side in samples (a multiple of every supersampling factor).
 pub const TILE: i32 = 32;
