@@ -21,6 +21,15 @@ pub enum Error {
         /// What is wrong with it.
         reason: String,
     },
+    /// An argument asks for more memory than its budget allows or than could be allocated.
+    /// Maps to `MemoryError`.
+    #[error("{name}: {reason}")]
+    Memory {
+        /// The argument's name, as the Python API spells it.
+        name: &'static str,
+        /// What it would take, and the budget.
+        reason: String,
+    },
 }
 
 impl Error {
@@ -34,6 +43,13 @@ impl Error {
     /// A [`Error::Value`] naming the argument `name`.
     pub fn value(name: &'static str, reason: impl Into<String>) -> Self {
         Error::Value {
+            name,
+            reason: reason.into(),
+        }
+    }
+    /// A [`Error::Memory`] naming the argument `name`.
+    pub fn memory(name: &'static str, reason: impl Into<String>) -> Self {
+        Error::Memory {
             name,
             reason: reason.into(),
         }

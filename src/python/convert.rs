@@ -8,18 +8,22 @@ use numpy::{
     Element, IntoPyArray, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1,
     PyReadonlyArray2, PyReadwriteArray, PyUntypedArrayMethods,
 };
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyMemoryError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rayon::prelude::*;
 
 use crate::{Error, MeshStats, RasterStats};
 
-/// Every core error is a `ValueError` whose message names the argument (`"name: reason"`), so
-/// `?` maps it.
+/// Every core error is a `ValueError` whose message names the argument (`"name: reason"`), or
+/// a `MemoryError` (same message) where the argument asks for more memory than its budget or
+/// than could be allocated, so `?` maps it.
 impl From<Error> for PyErr {
     fn from(e: Error) -> PyErr {
-        PyValueError::new_err(e.to_string())
+        match e {
+            Error::Memory { .. } => PyMemoryError::new_err(e.to_string()),
+            _ => PyValueError::new_err(e.to_string()),
+        }
     }
 }
 
