@@ -34,7 +34,7 @@ mod python;
 pub use accumulate::{accumulate, composite, facing_faces, over, resolve, Rect};
 pub use analytic::{
     render as render_analytic, Backdrop, Frame as AnalyticFrame, Input as AnalyticInput,
-    MovingDraw, Quadrature, Stats as AnalyticStats,
+    MovingDraw, Quadrature, Stats as AnalyticStats, DEFAULT_TILE_BUDGET as ANALYTIC_TILE_BUDGET,
 };
 pub use contour::{
     contour_edges, contour_pairs, motion_silhouette, ContourEdge, ContourSet, ContourTable,

@@ -295,6 +295,7 @@ def _analytic(
     reference_time: float,
     shade: bool,
     backdrop: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    tile_budget: int = ...,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, float]]:
     """Analytic motion blur: draws (positions f64 (K+1,V,3) at the boundaries ``times`` f64
     (K+1,) from 0 to 1, faces i64 (F,3), straight rgba f32 (1|V,4), normals f32 (K+1,V,3) | None,
@@ -303,8 +304,9 @@ def _analytic(
     or f64 (M,) weights; ``gauss`` points per visible piece (0: auto); ``backdrop`` an opaque
     layer per sample (rgba f32 (HS,WS,4), depth f32 (HS,WS), ids i32 (HS,WS)). Returns rgba
     (H,W,4) f32 premultiplied (the shutter integral), depth (H,W) f32, ids (H,W) i32 and velocity
-    (H,W,2) f32 of the surface in front at ``reference_time``, and a stats dict. The GIL is
-    released."""
+    (H,W,2) f32 of the surface in front at ``reference_time``, and a stats dict. ``tile_budget``
+    bytes per tile pass (default 64 MiB); ``MemoryError`` where one sample alone needs more. The
+    GIL is released."""
 
 def _rasterize(
     view: np.ndarray,

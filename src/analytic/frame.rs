@@ -29,8 +29,9 @@ pub struct Stats {
     pub intervals: u64,
     /// Visible pieces shaded.
     pub pieces: u64,
-    /// Fragments merged into neighbours because a tile reached its fragment budget.
-    pub merges: u64,
+    /// Tile passes that outgrew the memory budget ([`Input::tile_budget`]) and were done again
+    /// as two halves (the result is the same; only the time grows).
+    pub splits: u64,
     /// Samples tested against a prim.
     pub tests: u64,
     /// Covered spans found at samples, before chaining.
@@ -137,7 +138,7 @@ pub fn render(input: &Input) -> Result<Frame> {
             let bin = &entries[offsets[i] as usize..offsets[i + 1] as usize];
             ctx.tile(i as i32 % tx, i as i32 / tx, bin)
         })
-        .collect();
+        .collect::<Result<_>>()?;
     stats.ms_tiles = ms(t);
 
     let mut frame = Frame {
@@ -152,7 +153,7 @@ pub fn render(input: &Input) -> Result<Frame> {
     for (i, (samples, counts)) in tiles.iter().enumerate() {
         stats.intervals += counts.intervals;
         stats.pieces += counts.pieces;
-        stats.merges += counts.merges;
+        stats.splits += counts.splits;
         stats.tests += counts.tests;
         stats.spans += counts.spans;
         stats.ms_cover += counts.ns_cover as f64 * 1e-6;

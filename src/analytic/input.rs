@@ -68,7 +68,13 @@ pub struct Input<'a> {
     pub reference_time: f64,
     /// False: coverage only (every surface white and unlit), no shading.
     pub shade: bool,
+    /// Most bytes one pass over a tile may hold in fragments, links and prims (per thread);
+    /// past it the tile is done in smaller passes, with the same result ([`DEFAULT_TILE_BUDGET`]).
+    pub tile_budget: usize,
 }
+
+/// The default of [`Input::tile_budget`]: 64 MiB.
+pub const DEFAULT_TILE_BUDGET: usize = 64 << 20;
 
 /// A draw's positions in clip space and its normals at every boundary.
 pub struct Prepared {
@@ -182,6 +188,9 @@ pub fn validate(input: &Input) -> Result<()> {
                 return Err(Error::value("normals", "must be finite"));
             }
         }
+    }
+    if input.tile_budget == 0 {
+        return Err(Error::value("tile_budget", "must be at least 1 byte"));
     }
     if let Some(b) = &input.backdrop {
         let ns = (input.width * input.samples) as usize * (input.height * input.samples) as usize;

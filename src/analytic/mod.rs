@@ -27,6 +27,7 @@
 // `!(a > b)` deliberately counts NaN as failing (as in raster/).
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
+mod chain;
 mod frame;
 mod hull;
 mod input;
@@ -42,5 +43,5 @@ mod visibility;
 mod tests;
 
 pub use frame::{render, Frame, Stats};
-pub use input::{Backdrop, Input, MovingDraw};
+pub use input::{Backdrop, Input, MovingDraw, DEFAULT_TILE_BUDGET};
 pub use quadrature::Quadrature;

@@ -8,7 +8,7 @@
 //! passes from one triangle to the next, so each sub-piece is shaded by one triangle per
 //! layer at its own Gauss points; layers of one colour skip the quadrature.
 use super::quadrature::{gauss, Quadrature};
-use super::visibility::{depth_at, sort, sweep, Backdrop, Frag, Link, Sweep, BACKDROP};
+use super::visibility::{depth_at, sort, sweep, Backdrop, Frag, Link, Overflow, Sweep, BACKDROP};
 use crate::shutter::Shutter;
 
 /// Shading of the fragments' triangles at this sample.
@@ -39,12 +39,25 @@ pub struct Resolved {
     pub pieces: u32,
 }
 
-/// Per-thread buffers of [`resolve`], kept across samples.
-#[derive(Default)]
+/// Per-thread buffers of [`resolve`], kept across samples, and their limit.
 pub struct Scratch {
     sweep: Sweep,
     opaque: Vec<bool>,
     element_cuts: Vec<f64>,
+    /// Most depth crossings one stretch of a sample's time may hold ([`sweep`]'s `max_cuts`);
+    /// unlimited by default.
+    pub max_cuts: usize,
+}
+
+impl Default for Scratch {
+    fn default() -> Self {
+        Scratch {
+            sweep: Sweep::default(),
+            opaque: Vec::new(),
+            element_cuts: Vec::new(),
+            max_cuts: usize::MAX,
+        }
+    }
 }
 
 /// `W(b) - W(a)` ([`Shutter::cumulative`]), the box filter's inline.
@@ -67,7 +80,8 @@ fn density(shutter: &Shutter, t: f64) -> f64 {
 
 /// Resolves the fragments of one sample (sorted here) over the backdrop `bg`: the shutter
 /// integral of the composited colour, and the layer in front at `t_ref`. `breaks` are the
-/// filter's interior breaks ([`Shutter::breaks`]).
+/// filter's interior breaks ([`Shutter::breaks`]). Fails where [`sweep`] does (more depth
+/// crossings than `sc.max_cuts`).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub fn resolve(
@@ -80,7 +94,7 @@ pub fn resolve(
     quad: Quadrature,
     t_ref: f64,
     sc: &mut Scratch,
-) -> Resolved {
+) -> Result<Resolved, Overflow> {
     let mut out = Resolved {
         rgba: [0.0; 4],
         front: None,
@@ -93,12 +107,13 @@ pub fn resolve(
     let mut opaque = std::mem::take(&mut sc.opaque);
     opaque.clear();
     opaque.extend(frags.iter().map(|f| layers.opaque(f)));
-    sweep(
+    let swept = sweep(
         frags,
         links,
         bg,
         &opaque,
         breaks,
+        sc.max_cuts,
         &mut sc.sweep,
         |a, b, order, frags| {
             if !ref_done && t_ref >= a && t_ref <= b {
@@ -196,8 +211,9 @@ pub fn resolve(
     );
     sc.opaque = opaque;
     sc.element_cuts = cuts;
+    swept?;
     out.rgba = acc.map(|x| x as f32);
-    out
+    Ok(out)
 }
 
 /// The composite of a piece's layers (front to back) when every layer is of one colour.
@@ -292,7 +308,8 @@ mod tests {
             Quadrature::Auto,
             0.1,
             &mut Scratch::default(),
-        );
+        )
+        .unwrap();
         assert_eq!(r.rgba, [0.25, 0.25, 0.0, 0.5]);
         assert_eq!(r.front.map(|x| f[x.0].prim), Some(0));
     }
@@ -314,7 +331,8 @@ mod tests {
             Quadrature::Auto,
             1.0,
             &mut Scratch::default(),
-        );
+        )
+        .unwrap();
         assert_eq!(r.rgba, [0.5, 0.5, 0.0, 1.0]);
         assert_eq!(r.front.map(|x| f[x.0].prim), Some(1));
         // a ramp shutter weighs the later half 3x: W(1) - W(0.5) = 0.75
@@ -328,7 +346,8 @@ mod tests {
             Quadrature::Auto,
             1.0,
             &mut Scratch::default(),
-        );
+        )
+        .unwrap();
         assert!((r.rgba[0] - 0.25).abs() < 1e-7 && (r.rgba[1] - 0.75).abs() < 1e-7);
     }
 
@@ -353,7 +372,8 @@ mod tests {
             Quadrature::Auto,
             0.75,
             &mut Scratch::default(),
-        );
+        )
+        .unwrap();
         // first half: 0.5 red over blue, second half blue
         assert_eq!(r.rgba, [0.25, 0.0, 0.75, 1.0]);
         assert_eq!(r.front, None);
@@ -369,7 +389,8 @@ mod tests {
             Quadrature::Auto,
             0.5,
             &mut Scratch::default(),
-        );
+        )
+        .unwrap();
         assert_eq!(r.rgba, [0.0, 0.0, 1.0, 1.0]);
     }
 }

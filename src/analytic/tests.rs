@@ -53,6 +53,16 @@ fn on_plane(ix: u32, iy: u32) -> (f64, f64) {
 }
 
 fn render_square(pos: &[[f64; 3]], faces: &[[u32; 3]], times: &[f64], shutter: &Shutter) -> Frame {
+    render_within(pos, faces, times, shutter, DEFAULT_TILE_BUDGET).unwrap()
+}
+
+fn render_within(
+    pos: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    times: &[f64],
+    shutter: &Shutter,
+    tile_budget: usize,
+) -> crate::Result<Frame> {
     let vp = [camera()];
     let rgba = [[1.0f32, 1.0, 1.0, 1.0]];
     let draws = [MovingDraw {
@@ -78,8 +88,8 @@ fn render_square(pos: &[[f64; 3]], faces: &[[u32; 3]], times: &[f64], shutter: &
         quadrature: Quadrature::Auto,
         reference_time: 1.0,
         shade: true,
+        tile_budget,
     })
-    .unwrap()
 }
 
 fn check_square(n: usize, shutter: Shutter) {
@@ -157,6 +167,42 @@ fn the_result_does_not_depend_on_the_thread_count() {
 }
 
 #[test]
+fn a_small_memory_budget_splits_tiles_and_changes_no_bit() {
+    // a 9x9 grid with three segments: chains of many links at every covered sample
+    let xs = [-1.5, -0.4, 0.3, 1.2];
+    let (pos, faces) = grid_square(0.6, 9, &xs);
+    let times = [0.0, 0.3, 0.7, 1.0];
+    let whole = render_square(&pos, &faces, &times, &Shutter::Triangle);
+    assert_eq!(whole.stats.splits, 0);
+    let mut splits = Vec::new();
+    for budget in [200_000, 40_000, 12_000] {
+        let f = render_within(&pos, &faces, &times, &Shutter::Triangle, budget).unwrap();
+        assert_eq!(f.rgba, whole.rgba, "budget {budget}");
+        assert_eq!(f.depth, whole.depth);
+        assert_eq!(f.ids, whole.ids);
+        assert_eq!(f.velocity, whole.velocity);
+        assert_eq!(
+            (f.stats.intervals, f.stats.spans, f.stats.pieces),
+            (whole.stats.intervals, whole.stats.spans, whole.stats.pieces)
+        );
+        splits.push(f.stats.splits);
+    }
+    // a smaller budget splits more, down to rows and single samples
+    assert!(
+        splits[0] > 0 && splits[0] < splits[1] && splits[1] < splits[2],
+        "{splits:?}"
+    );
+    // a budget no single sample fits in fails with a memory error naming the draws and the
+    // setting to raise
+    match render_within(&pos, &faces, &times, &Shutter::Triangle, 64) {
+        Err(e @ crate::Error::Memory { name: "draws", .. }) => {
+            assert!(e.to_string().contains("TILE_BUDGET_BYTES"), "{e}");
+        }
+        other => panic!("expected a memory error, got {:?}", other.map(|f| f.stats)),
+    }
+}
+
+#[test]
 fn depth_ids_and_velocity_describe_the_surface_at_the_reference_time() {
     let (pos, faces) = grid_square(0.6, 1, &[-1.5, 1.2]);
     let f = render_square(&pos, &faces, &[0.0, 1.0], &Shutter::Box);
@@ -203,6 +249,7 @@ fn bad_input_names_the_argument() {
         quadrature: Quadrature::Auto,
         reference_time: 1.0,
         shade: true,
+        tile_budget: DEFAULT_TILE_BUDGET,
     };
     assert!(render(&good).is_ok());
     let err = |i: Input| render(&i).unwrap_err().to_string();
@@ -333,6 +380,7 @@ fn uniform_layers_resolve_as_their_shading_does() {
                     0.5,
                     &mut resolve::Scratch::default(),
                 )
+                .unwrap()
             };
             let (a, b) = (run(false), run(true));
             assert_eq!((a.front, a.pieces), (b.front, b.pieces));

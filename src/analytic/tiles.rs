@@ -1,35 +1,36 @@
 //! One tile of samples: each of its prims' covered spans at its samples become fragments
 //! (chained across neighbouring triangles of one surface), then each sample's fragments are
 //! resolved over time and shaded.
+//!
+//! Memory is bounded: a pass over the tile holds at most about [`Input::tile_budget`] bytes
+//! of fragments, links and prims (the vectors' capacity may reach twice that, and is kept by
+//! the thread for the next tile); past it the pass stops and the tile is done again in halves,
+//! down to single samples, with the same result. Only a single sample past the budget on its
+//! own fails, with a memory error naming it.
 use std::cell::RefCell;
 use std::time::Instant;
 
+use super::chain::{Found, SpanOf};
 use super::hull;
 use super::input::{Input, Prepared};
-use super::prim::{self, Corners, Cover, Edges, Prim, OPAQUE};
+use super::poly::MAX_SPANS;
+use super::prim::{Corners, Cover, Edges, Prim};
 use super::resolve::{self, Scratch};
 use super::shade::{SampleShader, TilePrim};
-use super::visibility::{Backdrop as Behind, Frag, Link, BACK, NONE};
+use super::visibility::{Backdrop as Behind, Frag, Link, Overflow, BACK, NONE};
+use crate::error::{Error, Result};
 
 /// Tile side in samples (a multiple of every supersampling factor).
 pub const TILE: i32 = 32;
 
-/// The current prim's segment, as its spans are recorded.
-struct SpanOf {
-    /// The prim's index in the tile.
-    li: u32,
-    /// The segment's start and length in shutter time.
-    t0: f64,
-    dt: f64,
-}
-
 /// What one tile counted.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Counts {
-    /// Fragments after chaining, visible pieces, merges.
+    /// Fragments after chaining, visible pieces.
     pub intervals: u64,
     pub pieces: u64,
-    pub merges: u64,
+    /// Passes that outgrew the memory budget and were done again as two halves.
+    pub splits: u64,
     /// Samples tested against a prim, covered spans found.
     pub tests: u64,
     pub spans: u64,
@@ -49,19 +50,46 @@ pub struct SampleOut {
     pub velocity: [f32; 2],
 }
 
-/// Two spans join into one chain only where their depths meet at the shared instant (the same
-/// surface point seen by both triangles), within this fraction of the depth.
-const CHAIN_DEPTH_TOLERANCE: f32 = 1e-4;
+/// What a sample outside the image (in a tile at the edge) holds.
+const EMPTY: SampleOut = SampleOut {
+    rgba: [0.0; 4],
+    depth: f32::INFINITY,
+    id: -1,
+    velocity: [0.0; 2],
+};
+
+/// A rectangle of samples `[x0, x1) x [y0, y1)` (image samples) within one tile.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Rect {
+    x0: i32,
+    y0: i32,
+    x1: i32,
+    y1: i32,
+}
+
+impl Rect {
+    /// The rectangle's two halves: the upper and lower rows, or for one row the left and right
+    /// columns; None for one sample.
+    fn halves(self) -> Option<(Rect, Rect)> {
+        if self.y1 - self.y0 > 1 {
+            let m = (self.y0 + self.y1) / 2;
+            Some((Rect { y1: m, ..self }, Rect { y0: m, ..self }))
+        } else if self.x1 - self.x0 > 1 {
+            let m = (self.x0 + self.x1) / 2;
+            Some((Rect { x1: m, ..self }, Rect { x0: m, ..self }))
+        } else {
+            None
+        }
+    }
+}
 
 struct TileScratch {
-    /// Fragments in the order they are found, with their sample's index in the tile.
-    raw: Vec<(u32, Frag)>,
-    links: Vec<Link>,
-    /// Per sample: the fragment found last (index in `raw`) and the last link of its chain.
-    tail: Vec<(u32, u32)>,
+    /// Fragments and links in the order they are found.
+    found: Found,
     /// Fragments grouped by sample: sample `j` owns `frags[start[j]..start[j + 1]]`.
     frags: Vec<Frag>,
     start: Vec<u32>,
+    /// The prims with spans in this pass, in bin order (fragments and links index them).
     prims: Vec<TilePrim>,
     /// The current prim's columns per row of the tile.
     rows: [(i32, i32); TILE as usize],
@@ -73,9 +101,7 @@ struct TileScratch {
 impl Default for TileScratch {
     fn default() -> Self {
         TileScratch {
-            raw: Vec::new(),
-            links: Vec::new(),
-            tail: Vec::new(),
+            found: Found::default(),
             frags: Vec::new(),
             start: Vec::new(),
             prims: Vec::new(),
@@ -119,9 +145,9 @@ pub fn corners(input: &Input, prepared: &[Prepared], p: &Prim, ws: i32, hs: i32)
 }
 
 impl Ctx<'_> {
-    /// One tile: its samples' results (row-major, TILE wide) and counts (intervals, pieces,
-    /// merges).
-    pub fn tile(&self, tx: i32, ty: i32, bin: &[u32]) -> (Vec<SampleOut>, Counts) {
+    /// One tile: its samples' results (row-major, TILE wide) and counts. Fails only where one
+    /// sample alone needs more than the memory budget ([`Input::tile_budget`]).
+    pub fn tile(&self, tx: i32, ty: i32, bin: &[u32]) -> Result<(Vec<SampleOut>, Counts)> {
         SCRATCH.with(|cell| match cell.try_borrow_mut() {
             Ok(mut sc) => self.tile_dispatch(tx, ty, bin, &mut sc),
             Err(_) => self.tile_dispatch(tx, ty, bin, &mut TileScratch::default()),
@@ -137,7 +163,7 @@ impl Ctx<'_> {
         ty: i32,
         bin: &[u32],
         sc: &mut TileScratch,
-    ) -> (Vec<SampleOut>, Counts) {
+    ) -> Result<(Vec<SampleOut>, Counts)> {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: `tile_avx2` only requires AVX2, which the CPU was just found to have.
@@ -155,10 +181,14 @@ impl Ctx<'_> {
         ty: i32,
         bin: &[u32],
         sc: &mut TileScratch,
-    ) -> (Vec<SampleOut>, Counts) {
+    ) -> Result<(Vec<SampleOut>, Counts)> {
         self.tile_with(tx, ty, bin, sc)
     }
 
+    /// The tile in passes: the whole tile first; a pass whose fragments, links and prims would
+    /// hold more than the budget stops and is done again as two halves (rows, then columns),
+    /// down to one sample. A sample's result depends on its own fragments only, which are the
+    /// same in any pass that holds it, so the output is the same bits whatever the budget.
     #[inline(always)]
     fn tile_with(
         &self,
@@ -166,19 +196,107 @@ impl Ctx<'_> {
         ty: i32,
         bin: &[u32],
         sc: &mut TileScratch,
-    ) -> (Vec<SampleOut>, Counts) {
-        let clock = Instant::now();
+    ) -> Result<(Vec<SampleOut>, Counts)> {
         let (x0, y0) = (tx * TILE, ty * TILE);
-        let (x1, y1) = ((x0 + TILE).min(self.ws), (y0 + TILE).min(self.hs));
-        let times = self.input.times;
-        sc.raw.clear();
-        sc.links.clear();
-        sc.prims.clear();
-        sc.tail.clear();
-        sc.tail.resize((TILE * TILE) as usize, (NONE, NONE));
+        let whole = Rect {
+            x0,
+            y0,
+            x1: (x0 + TILE).min(self.ws),
+            y1: (y0 + TILE).min(self.hs),
+        };
         let mut counts = Counts::default();
-        for (li, &pi) in bin.iter().enumerate() {
+        let mut out = std::mem::take(&mut sc.out);
+        out.clear();
+        out.resize((TILE * TILE) as usize, EMPTY);
+        sc.sweep.max_cuts = self.input.tile_budget / std::mem::size_of::<f64>();
+        // a stack of rectangles to do: each split pushes two halves of at most 10 levels
+        let mut todo = [whole; 12];
+        let mut n = 1;
+        while n > 0 {
+            n -= 1;
+            let r = todo[n];
+            let clock = Instant::now();
+            let mut c = Counts::default();
+            let covered = self.cover(r, x0, y0, bin, sc, &mut c);
+            counts.ns_cover += clock.elapsed().as_nanos() as u64;
+            if covered.is_err() {
+                counts.splits += 1;
+                let Some((a, b)) = r.halves() else {
+                    return Err(self.over_budget(r.x0, r.y0, "more covered spans"));
+                };
+                todo[n] = b;
+                todo[n + 1] = a;
+                n += 2;
+                continue;
+            }
+            counts.tests += c.tests;
+            counts.spans += c.spans;
+            counts.intervals += sc.found.raw.len() as u64;
+            let clock = Instant::now();
+            let resolved = self.resolve_rect(r, x0, y0, sc, &mut out, &mut counts);
+            counts.ns_resolve += clock.elapsed().as_nanos() as u64;
+            if let Err((ix, iy)) = resolved {
+                return Err(self.over_budget(ix, iy, "more depth crossings"));
+            }
+        }
+        let result = out.clone();
+        sc.out = out;
+        Ok((result, counts))
+    }
+
+    /// The memory error of sample `(ix, iy)`, which alone holds `what` than the budget allows.
+    #[cold]
+    fn over_budget(&self, ix: i32, iy: i32, what: &str) -> Error {
+        let s = self.input.samples as i32;
+        Error::memory(
+            "draws",
+            format!(
+                "sample ({ix}, {iy}) (pixel ({}, {})) holds {what} than fit the analytic \
+                 kernel's budget of {} bytes per tile pass (motionblur.analytic.TILE_BUDGET_BYTES) \
+                 or than could be allocated; raise the budget, or use fewer moving triangles \
+                 stacked over one sample, fewer segments or less supersampling",
+                ix / s,
+                iy / s,
+                self.input.tile_budget
+            ),
+        )
+    }
+
+    /// Bytes the pass holds in fragments (found and grouped), links and prims.
+    fn held(sc: &TileScratch) -> usize {
+        use std::mem::size_of;
+        sc.found.raw.len() * (size_of::<(u32, Frag)>() + size_of::<Frag>())
+            + sc.found.links.len() * size_of::<Link>()
+            + sc.prims.len() * size_of::<TilePrim>()
+    }
+
+    /// Finds the fragments of the tile's samples in `r` (tile origin `(x0, y0)`), grouped by
+    /// sample into `sc.frags`; only prims with spans there are kept, in bin order (their
+    /// index orders fragments, so the order is the same whatever `r`). Fails where they would
+    /// hold more than the budget, or an allocation fails.
+    #[inline(always)]
+    fn cover(
+        &self,
+        r: Rect,
+        x0: i32,
+        y0: i32,
+        bin: &[u32],
+        sc: &mut TileScratch,
+        counts: &mut Counts,
+    ) -> std::result::Result<(), Overflow> {
+        let times = self.input.times;
+        let budget = self.input.tile_budget;
+        sc.found.clear((TILE * TILE) as usize);
+        sc.prims.clear();
+        // most spans one prim adds in `r`: front and back spans at every sample
+        let most = ((r.x1 - r.x0) * (r.y1 - r.y0)) as usize * 2 * MAX_SPANS;
+        for &pi in bin {
             let p = &self.prims[pi as usize];
+            let (ya, yb) = (p.bbox[1].max(r.y0), p.bbox[3].min(r.y1));
+            let (xa, xb) = (p.bbox[0].max(r.x0), p.bbox[2].min(r.x1));
+            if ya >= yb || xa >= xb {
+                continue;
+            }
             let owned;
             let tp = match self.shared.get(pi as usize) {
                 Some(tp) => tp,
@@ -188,17 +306,19 @@ impl Ctx<'_> {
                     &owned
                 }
             };
+            // room for every span the prim can add, so that the pushes below never allocate
+            sc.found.reserve(most)?;
             let e = &tp.edges;
             let span = SpanOf {
-                li: li as u32,
+                li: sc.prims.len() as u32,
                 t0: times[p.seg as usize],
                 dt: times[p.seg as usize + 1] - times[p.seg as usize],
             };
+            let spans = counts.spans;
             let simple = Edges::simple(p);
-            let (ya, yb) = (p.bbox[1].max(y0), p.bbox[3].min(y1));
-            let rows = &mut sc.rows[..(yb - ya).max(0) as usize];
+            let rows = &mut sc.rows[..(yb - ya) as usize];
             let hull = &p.hull[..p.nhull as usize];
-            let (ra, rb) = hull::row_spans(hull, ya, p.bbox[0].max(x0), p.bbox[2].min(x1), rows);
+            let (ra, rb) = hull::row_spans(hull, ya, xa, xb, rows);
             for iy in ya + ra as i32..ya + rb as i32 {
                 let (xa, xb) = sc.rows[(iy - ya) as usize];
                 if xa >= xb {
@@ -213,11 +333,31 @@ impl Ctx<'_> {
                         match e.covered_front(front, &q) {
                             Cover::Nothing => {}
                             Cover::One(a, b) => {
-                                self.add_span(sc, &span, tp, &q, j, a, b, 0, &mut counts);
+                                sc.found.add_span(
+                                    &sc.prims,
+                                    &span,
+                                    tp,
+                                    &q,
+                                    j,
+                                    a,
+                                    b,
+                                    0,
+                                    &mut counts.spans,
+                                );
                             }
                             Cover::Many(s) => {
                                 for s in s.as_slice() {
-                                    self.add_span(sc, &span, tp, &q, j, s[0], s[1], 0, &mut counts);
+                                    sc.found.add_span(
+                                        &sc.prims,
+                                        &span,
+                                        tp,
+                                        &q,
+                                        j,
+                                        s[0],
+                                        s[1],
+                                        0,
+                                        &mut counts.spans,
+                                    );
                                 }
                             }
                         }
@@ -225,29 +365,58 @@ impl Ctx<'_> {
                     }
                     let (front, back) = e.covered(p, &q);
                     for s in front.as_slice() {
-                        self.add_span(sc, &span, tp, &q, j, s[0], s[1], 0, &mut counts);
+                        sc.found.add_span(
+                            &sc.prims,
+                            &span,
+                            tp,
+                            &q,
+                            j,
+                            s[0],
+                            s[1],
+                            0,
+                            &mut counts.spans,
+                        );
                     }
                     for s in back.as_slice() {
-                        self.add_span(sc, &span, tp, &q, j, s[0], s[1], BACK, &mut counts);
+                        sc.found.add_span(
+                            &sc.prims,
+                            &span,
+                            tp,
+                            &q,
+                            j,
+                            s[0],
+                            s[1],
+                            BACK,
+                            &mut counts.spans,
+                        );
                     }
                 }
             }
-            sc.prims.push(tp.clone());
+            // a prim is kept when a fragment or link refers to it (every counted span does)
+            if counts.spans > spans {
+                sc.prims.try_reserve(1).map_err(|_| Overflow)?;
+                sc.prims.push(tp.clone());
+                if Self::held(sc) > budget {
+                    return Err(Overflow);
+                }
+            }
         }
-        counts.intervals = sc.raw.len() as u64;
         // group by sample (a stable counting sort)
         let n = (TILE * TILE) as usize;
         sc.start.clear();
         sc.start.resize(n + 1, 0);
-        for (j, _) in &sc.raw {
+        for (j, _) in &sc.found.raw {
             sc.start[*j as usize + 1] += 1;
         }
         for j in 0..n {
             sc.start[j + 1] += sc.start[j];
         }
         sc.frags.clear();
+        sc.frags
+            .try_reserve(sc.found.raw.len())
+            .map_err(|_| Overflow)?;
         sc.frags.resize(
-            sc.raw.len(),
+            sc.found.raw.len(),
             Frag {
                 t0: 0.0,
                 t1: 0.0,
@@ -258,35 +427,36 @@ impl Ctx<'_> {
                 n: 0,
             },
         );
-        {
-            let mut fill: [u32; (TILE * TILE) as usize] = [0; (TILE * TILE) as usize];
-            fill.copy_from_slice(&sc.start[..n]);
-            for (j, f) in &sc.raw {
-                sc.frags[fill[*j as usize] as usize] = *f;
-                fill[*j as usize] += 1;
-            }
+        let mut fill: [u32; (TILE * TILE) as usize] = [0; (TILE * TILE) as usize];
+        fill.copy_from_slice(&sc.start[..n]);
+        for (j, f) in &sc.found.raw {
+            sc.frags[fill[*j as usize] as usize] = *f;
+            fill[*j as usize] += 1;
         }
-        counts.ns_cover = clock.elapsed().as_nanos() as u64;
-        let clock = Instant::now();
-        let mut out = std::mem::take(&mut sc.out);
-        out.clear();
+        Ok(())
+    }
+
+    /// Resolves and shades the samples of `r` (tile origin `(x0, y0)`) from the fragments
+    /// [`Ctx::cover`] found, into `out`. Fails with the sample whose depth crossings would
+    /// outgrow the budget.
+    #[inline(always)]
+    fn resolve_rect(
+        &self,
+        r: Rect,
+        x0: i32,
+        y0: i32,
+        sc: &mut TileScratch,
+        out: &mut [SampleOut],
+        counts: &mut Counts,
+    ) -> std::result::Result<(), (i32, i32)> {
         let t_ref = self.input.reference_time;
-        for iy in y0..y0 + TILE {
-            for ix in x0..x0 + TILE {
-                if ix >= x1 || iy >= y1 {
-                    out.push(SampleOut {
-                        rgba: [0.0; 4],
-                        depth: f32::INFINITY,
-                        id: -1,
-                        velocity: [0.0; 2],
-                    });
-                    continue;
-                }
+        for iy in r.y0..r.y1 {
+            for ix in r.x0..r.x1 {
                 let j = ((iy - y0) * TILE + (ix - x0)) as usize;
                 let frags = &mut sc.frags[sc.start[j] as usize..sc.start[j + 1] as usize];
                 let bg = self.behind(ix, iy);
                 if frags.is_empty() {
-                    out.push(SampleOut {
+                    out[j] = SampleOut {
                         rgba: if bg.depth.is_finite() {
                             bg.rgba
                         } else {
@@ -295,14 +465,14 @@ impl Ctx<'_> {
                         depth: bg.depth,
                         id: bg.id,
                         velocity: [0.0; 2],
-                    });
+                    };
                     continue;
                 }
                 let mut shader = SampleShader {
                     input: self.input,
                     prepared: self.prepared,
                     prims: &sc.prims,
-                    links: &sc.links,
+                    links: &sc.found.links,
                     cursor: std::mem::take(&mut sc.cursor),
                     x: f64::from(ix) + 0.5,
                     y: f64::from(iy) + 0.5,
@@ -311,7 +481,7 @@ impl Ctx<'_> {
                 shader.reset(frags.len());
                 let r = resolve::resolve(
                     frags,
-                    &sc.links,
+                    &sc.found.links,
                     &bg,
                     &mut shader,
                     self.input.shutter,
@@ -319,9 +489,10 @@ impl Ctx<'_> {
                     self.input.quadrature,
                     t_ref,
                     &mut sc.sweep,
-                );
+                )
+                .map_err(|_| (ix, iy))?;
                 counts.pieces += u64::from(r.pieces);
-                let o = match r.front {
+                out[j] = match r.front {
                     Some((fi, z)) => {
                         let p = shader.prim_at(&frags[fi], t_ref);
                         SampleOut {
@@ -338,124 +509,11 @@ impl Ctx<'_> {
                         velocity: [0.0; 2],
                     },
                 };
-                out.push(o);
                 sc.cursor = shader.cursor;
             }
         }
-        let result = out.clone();
-        sc.out = out;
-        counts.ns_resolve = clock.elapsed().as_nanos() as u64;
-        (result, counts)
+        Ok(())
     }
-
-    /// Records the span `[a, b]` (local time) of the current prim at tile sample `j`: joined to
-    /// the sample's last fragment when it continues it, else a new fragment.
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn add_span(
-        &self,
-        sc: &mut TileScratch,
-        span: &SpanOf,
-        tp: &TilePrim,
-        q: &prim::SampleEdges,
-        j: usize,
-        a: f64,
-        b: f64,
-        flag: u32,
-        counts: &mut Counts,
-    ) {
-        let (t0, t1) = (
-            (span.t0 + a * span.dt) as f32,
-            (span.t0 + b * span.dt) as f32,
-        );
-        if !(t1 > t0) {
-            return;
-        }
-        counts.spans += 1;
-        let e = &tp.edges;
-        let f = Frag {
-            t0,
-            t1,
-            z0: depth_near(e, q, a, b),
-            z1: depth_near(e, q, b, a),
-            prim: span.li | flag,
-            chain: 0,
-            n: 1,
-        };
-        if self.join(sc, j, &f, tp) {
-            return;
-        }
-        sc.links.push(Link {
-            t0,
-            z0: f.z0,
-            prim: span.li,
-            next: NONE,
-        });
-        let link = (sc.links.len() - 1) as u32;
-        sc.tail[j] = (sc.raw.len() as u32, link);
-        sc.raw.push((j as u32, Frag { chain: link, ..f }));
-    }
-
-    /// Joins `f` (a span of the tile's prim `tp`, not yet in `sc.prims`) to the fragment found
-    /// last at sample `j` when it continues it: the same draw, facing and opacity, touching in
-    /// time, with the depths meeting there (`CHAIN_DEPTH_TOLERANCE`). Each link keeps its own
-    /// depth, so a chain is as exact as its separate spans. Returns whether it did.
-    #[inline(always)]
-    fn join(&self, sc: &mut TileScratch, j: usize, f: &Frag, tp: &TilePrim) -> bool {
-        let (ti, tl) = sc.tail[j];
-        if ti == NONE {
-            return false;
-        }
-        let t = sc.raw[ti as usize].1;
-        let hi = (t.prim & !BACK) as usize;
-        let head = if hi == sc.prims.len() {
-            tp
-        } else {
-            &sc.prims[hi]
-        };
-        if head.draw != tp.draw
-            || (t.prim & BACK) != (f.prim & BACK)
-            || (head.flags & OPAQUE) != (tp.flags & OPAQUE)
-        {
-            return false;
-        }
-        let meet =
-            |za: f32, zb: f32| (za - zb).abs() <= CHAIN_DEPTH_TOLERANCE * za.abs().max(zb.abs());
-        let li = f.prim & !BACK;
-        if t.t1 == f.t0 && meet(t.z1, f.z0) {
-            sc.links.push(Link {
-                t0: f.t0,
-                z0: f.z0,
-                prim: li,
-                next: NONE,
-            });
-            let link = (sc.links.len() - 1) as u32;
-            sc.links[tl as usize].next = link;
-            sc.tail[j].1 = link;
-            let g = &mut sc.raw[ti as usize].1;
-            g.t1 = f.t1;
-            g.z1 = f.z1;
-            g.n += 1;
-            return true;
-        }
-        if t.t0 == f.t1 && meet(f.z1, t.z0) {
-            sc.links.push(Link {
-                t0: f.t0,
-                z0: f.z0,
-                prim: li,
-                next: t.chain,
-            });
-            let g = &mut sc.raw[ti as usize].1;
-            g.chain = (sc.links.len() - 1) as u32;
-            g.t0 = f.t0;
-            g.z0 = f.z0;
-            g.prim = f.prim;
-            g.n += 1;
-            return true;
-        }
-        false
-    }
-
     fn behind(&self, ix: i32, iy: i32) -> Behind {
         match &self.input.backdrop {
             None => Behind {
@@ -478,26 +536,4 @@ impl Ctx<'_> {
             }
         }
     }
-}
-
-/// The view depth at local time `tau` at a span's end, or a little inside the span (towards
-/// `other`) where the triangle is edge-on at the end itself.
-#[inline(always)]
-fn depth_near(e: &Edges, q: &prim::SampleEdges, tau: f64, other: f64) -> f32 {
-    // the end itself first (`tau + 0 * (other - tau)` is `tau`)
-    match e.depth(q, tau) {
-        Some(z) => z as f32,
-        None => depth_inside(e, q, tau, other),
-    }
-}
-
-/// [`depth_near`] where the triangle is edge-on at the end itself.
-#[cold]
-fn depth_inside(e: &Edges, q: &prim::SampleEdges, tau: f64, other: f64) -> f32 {
-    for f in [1e-6, 1e-3, 0.5] {
-        if let Some(z) = e.depth(q, tau + f * (other - tau)) {
-            return z as f32;
-        }
-    }
-    f32::INFINITY
 }

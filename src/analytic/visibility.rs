@@ -44,6 +44,10 @@ pub struct Link {
 /// No link, no fragment.
 pub const NONE: u32 = u32::MAX;
 
+/// A sample's lists would outgrow the memory budget they were given.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Overflow;
+
 /// The static scene behind the moving triangles at this sample: opaque colour and its depth.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Backdrop {
@@ -132,7 +136,9 @@ pub fn sort(frags: &mut [Frag]) {
 /// depth order:
 /// `piece(a, b, layers)` gets each piece `[a, b]` with its layers front to back (fragment
 /// indices, or `BACKDROP`), cut after the first opaque one. Pieces with no layer are skipped.
-/// `breaks` are extra instants to cut at.
+/// `breaks` are extra instants to cut at. Fails with [`Overflow`] where the layers present
+/// together over one stretch of time cross in depth more than `max_cuts` times (the instants
+/// would take more memory than the caller's budget).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub fn sweep(
@@ -141,9 +147,10 @@ pub fn sweep(
     bg: &Backdrop,
     opaque: &[bool],
     breaks: &[f64],
+    max_cuts: usize,
     sc: &mut Sweep,
     mut piece: impl FnMut(f64, f64, &[(f64, usize)], &[Frag]),
-) {
+) -> Result<(), Overflow> {
     let has_bg = bg.depth.is_finite();
     sc.active.clear();
     sc.cursor.clear();
@@ -252,6 +259,9 @@ pub fn sweep(
                     if (g0 < 0.0 && g1 > 0.0) || (g0 > 0.0 && g1 < 0.0) {
                         let x = p + (q - p) * (g0 / (g0 - g1));
                         if x > p && x < q {
+                            if sc.cuts.len() > max_cuts {
+                                return Err(Overflow);
+                            }
                             sc.cuts.push(x);
                         }
                     }
@@ -284,6 +294,7 @@ pub fn sweep(
             }
         }
     }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -343,15 +354,21 @@ mod tests {
             id: -1,
         };
         let mut pieces = Vec::new();
-        sweep(
-            &frags,
-            &links,
-            &bg,
-            &[true, true],
-            &[],
-            &mut Sweep::default(),
-            |a, b, o, _| pieces.push((a, b, o[0].1, o.len())),
-        );
+        // one crossing per link: a budget of one crossing instant is enough, none is not
+        let run = |max_cuts: usize, pieces: &mut Vec<(f64, f64, usize, usize)>| {
+            sweep(
+                &frags,
+                &links,
+                &bg,
+                &[true, true],
+                &[],
+                max_cuts,
+                &mut Sweep::default(),
+                |a, b, o, _| pieces.push((a, b, o[0].1, o.len())),
+            )
+        };
+        assert_eq!(run(0, &mut Vec::new()), Err(Overflow));
+        assert_eq!(run(1, &mut pieces), Ok(()));
         // front-most layer per piece, cut after the first opaque one
         let front: Vec<(f64, f64, usize)> = pieces.iter().map(|p| (p.0, p.1, p.2)).collect();
         assert_eq!(
