@@ -132,25 +132,53 @@ pub fn render(input: &Input) -> Result<Frame> {
         ws: ws as i32,
         hs: hs as i32,
     };
-    let tiles: Vec<(Vec<SampleOut>, Counts)> = (0..(tx * ty) as usize)
-        .into_par_iter()
-        .map(|i| {
-            let bin = &entries[offsets[i] as usize..offsets[i + 1] as usize];
-            ctx.tile(i as i32 % tx, i as i32 / tx, bin)
-        })
-        .collect::<Result<_>>()?;
-    stats.ms_tiles = ms(t);
-
+    // The frame is written one row of tiles at a time, each row into its own band of pixel
+    // rows: only the rows in flight hold their samples' results (a frame's worth of them at
+    // 1080p with 2x2 samples would be 265 MB), the tiles of a row run in parallel too.
+    let (w, h) = (input.width as usize, input.height as usize);
     let mut frame = Frame {
         width: input.width,
         height: input.height,
-        rgba: vec![0.0; 4 * (input.width * input.height) as usize],
-        depth: vec![f32::INFINITY; (input.width * input.height) as usize],
-        ids: vec![-1; (input.width * input.height) as usize],
-        velocity: vec![0.0; 2 * (input.width * input.height) as usize],
+        rgba: vec![0.0; 4 * w * h],
+        depth: vec![f32::INFINITY; w * h],
+        ids: vec![-1; w * h],
+        velocity: vec![0.0; 2 * w * h],
         stats: Stats::default(),
     };
-    for (i, (samples, counts)) in tiles.iter().enumerate() {
+    let band = (TILE as usize / s as usize) * w;
+    let rows: Vec<Vec<Counts>> = frame
+        .rgba
+        .par_chunks_mut(4 * band)
+        .zip(frame.depth.par_chunks_mut(band))
+        .zip(frame.ids.par_chunks_mut(band))
+        .zip(frame.velocity.par_chunks_mut(2 * band))
+        .enumerate()
+        .map(|(y, (((rgba, depth), ids), velocity))| {
+            let y = y as i32;
+            let tiles: Vec<(Vec<SampleOut>, Counts)> = (0..tx)
+                .into_par_iter()
+                .map(|x| {
+                    let i = (y * tx + x) as usize;
+                    ctx.tile(x, y, &entries[offsets[i] as usize..offsets[i + 1] as usize])
+                })
+                .collect::<Result<_>>()?;
+            let mut out = Band {
+                rgba,
+                depth,
+                ids,
+                velocity,
+                width: w,
+                y0: y * TILE / s as i32,
+            };
+            for (x, (samples, _)) in tiles.iter().enumerate() {
+                let (x0, y0) = (x as i32 * TILE, y * TILE);
+                write_pixels(&mut out, samples, x0, y0, ws as i32, hs as i32, s as i32);
+            }
+            Ok(tiles.into_iter().map(|(_, c)| c).collect())
+        })
+        .collect::<Result<_>>()?;
+    stats.ms_tiles = ms(t);
+    for counts in rows.iter().flatten() {
         stats.intervals += counts.intervals;
         stats.pieces += counts.pieces;
         stats.splits += counts.splits;
@@ -158,8 +186,6 @@ pub fn render(input: &Input) -> Result<Frame> {
         stats.spans += counts.spans;
         stats.ms_cover += counts.ns_cover as f64 * 1e-6;
         stats.ms_resolve += counts.ns_resolve as f64 * 1e-6;
-        let (x0, y0) = ((i as i32 % tx) * TILE, (i as i32 / tx) * TILE);
-        write_pixels(&mut frame, samples, x0, y0, ws as i32, hs as i32, s as i32);
     }
     stats.ms_total = ms(t_all);
     frame.stats = stats;
@@ -314,10 +340,22 @@ fn bin(prims: &[Prim], tx: i32, ty: i32) -> Result<(Vec<u32>, Vec<u32>)> {
     Ok((offsets, entries))
 }
 
-/// Box resolve of a tile's samples into the frame's pixels: colour mean; depth, id and velocity
+/// The frame's pixel rows `y0..` that one row of tiles writes.
+struct Band<'a> {
+    rgba: &'a mut [f32],
+    depth: &'a mut [f32],
+    ids: &'a mut [i32],
+    velocity: &'a mut [f32],
+    /// Pixels per row.
+    width: usize,
+    /// The band's first pixel row in the frame.
+    y0: i32,
+}
+
+/// Box resolve of a tile's samples into the band's pixels: colour mean; depth, id and velocity
 /// of the nearest sample (the first in row order on ties).
 fn write_pixels(
-    frame: &mut Frame,
+    band: &mut Band,
     samples: &[SampleOut],
     x0: i32,
     y0: i32,
@@ -325,7 +363,7 @@ fn write_pixels(
     hs: i32,
     s: i32,
 ) {
-    let w = frame.width as usize;
+    let w = band.width;
     let norm = 1.0 / (s * s) as f32;
     for py in (y0 / s)..((y0 + TILE).min(hs) / s) {
         for px in (x0 / s)..((x0 + TILE).min(ws) / s) {
@@ -343,15 +381,15 @@ fn write_pixels(
                     }
                 }
             }
-            let i = py as usize * w + px as usize;
+            let i = (py - band.y0) as usize * w + px as usize;
             for k in 0..4 {
-                frame.rgba[4 * i + k] = if s == 1 { c[k] } else { c[k] * norm };
+                band.rgba[4 * i + k] = if s == 1 { c[k] } else { c[k] * norm };
             }
             if let Some(b) = best {
-                frame.depth[i] = b.depth;
-                frame.ids[i] = b.id;
-                frame.velocity[2 * i] = b.velocity[0];
-                frame.velocity[2 * i + 1] = b.velocity[1];
+                band.depth[i] = b.depth;
+                band.ids[i] = b.id;
+                band.velocity[2 * i] = b.velocity[0];
+                band.velocity[2 * i + 1] = b.velocity[1];
             }
         }
     }
