@@ -47,6 +47,13 @@ impl Error {
             reason: reason.into(),
         }
     }
+    /// A [`Error::Memory`] naming the argument `name`.
+    pub fn memory(name: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::Memory {
+            name: name.into(),
+            reason: reason.into(),
+        }
+    }
 }
 
 /// A result whose error is the core's [`enum@Error`].

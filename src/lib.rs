@@ -13,10 +13,13 @@
 //! - `accumulate`: the accumulation buffer's kernels;
 //! - `raster`: the software rasterizer;
 //! - `image`: image-space blur;
-//! - `budget`: the memory budget every kernel checks before it allocates.
+//! - `budget`: the memory budget every kernel checks before it allocates;
+//! - `analytic`: analytic motion blur, exact covered time per sample;
+//! - `shutter`: the shutter filters.
 #![warn(missing_docs)]
 
 mod accumulate;
+mod analytic;
 mod budget;
 mod contour;
 mod error;
@@ -25,6 +28,7 @@ mod mesh;
 mod motion;
 mod raster;
 mod shell;
+mod shutter;
 mod volume;
 
 #[cfg(feature = "python")]
@@ -34,6 +38,10 @@ pub use accumulate::{
     accumulate, accumulate_moving, accumulate_still, composite, facing_faces, over, pixel_rect,
     resolve, sample_rects, window_projection, Accumulated, Layer, PaintObject, Painter, Rect,
     Samples, StaticLayer, StillCamera,
+};
+pub use analytic::{
+    render as render_analytic, Backdrop, Frame as AnalyticFrame, Input as AnalyticInput,
+    MovingDraw, Quadrature, Stats as AnalyticStats, DEFAULT_TILE_BUDGET as ANALYTIC_TILE_BUDGET,
 };
 pub use budget::{
     memory_budget, set_memory_budget, Need, DEFAULT_MEMORY_BUDGET, MIN_MEMORY_BUDGET,
@@ -63,6 +71,7 @@ pub use shell::{
     BlurShell, BuildPlan, FaceState, ShellColor, ShellMesh, ShellOptions, ShellOut, MAX_HYSTERESIS,
     MAX_SUBDIVISIONS, ON_SILHOUETTE,
 };
+pub use shutter::Shutter;
 pub use volume::{
     check_segments, motion_volume, spin_volume, subdivided, Colors, Filter, MotionVolume, Spin,
     VolumeOptions, JOINING, LEADING, MAX_SEGMENTS, TRAILING,

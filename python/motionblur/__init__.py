@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from . import (
     _malloc,  # noqa: F401  (keeps freed frame buffers in the process; see the module)
+    analytic,
     budget,
     image,
     interop,
@@ -22,6 +23,7 @@ from . import shell as _shell
 from ._core import __version__
 from ._namespace import tidy
 from ._optional import MissingDependencyError
+from .analytic import MovingDraw, coverage, rasterize_motion
 from .budget import memory_budget, set_memory_budget
 from .evaluation import metrics, reference
 from .geometry import *  # noqa: F403
@@ -35,6 +37,7 @@ from .shell import *  # noqa: F403
 
 __all__ = [
     "__version__",
+    "analytic",
     "budget",
     "memory_budget",
     "set_memory_budget",
@@ -46,6 +49,9 @@ __all__ = [
     *_shell.__all__,
 ]
 __all__ += [
+    "MovingDraw",
+    "rasterize_motion",
+    "coverage",
     *_scene.__all__,
     "render",
     "register",

@@ -45,6 +45,7 @@ __all__ = [
     "TRAILING",
     "JOINING",
     "_rasterize",
+    "_analytic",
     "_glow",
     "_box_blur",
     "_splat_paths",
@@ -395,6 +396,33 @@ MAX_INTERNAL_SIDE: int
 SAMPLES: tuple[int, ...]
 SHADINGS: tuple[str, ...]
 BLENDS: tuple[str, ...]
+
+def _analytic(
+    width: int,
+    height: int,
+    samples: int,
+    times: np.ndarray,
+    view_projections: np.ndarray,
+    draws: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, int, bool, str]],
+    shutter: str | np.ndarray,
+    lights: list[tuple[tuple[float, float, float], tuple[float, float, float]]],
+    ambient: tuple[float, float, float],
+    gauss: int,
+    reference_time: float,
+    shade: bool,
+    backdrop: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    tile_budget: int = ...,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, float]]:
+    """Analytic motion blur: draws (positions f64 (K+1,V,3) at the boundaries ``times`` f64
+    (K+1,) from 0 to 1, faces i64 (F,3), straight rgba f32 (1|V,4), normals f32 (K+1,V,3) | None,
+    object_id, cull_back, shading "flat" | "lambert") seen through ``view_projections`` f64
+    (1|K+1,4,4) into height x width pixels of samples x samples each. ``shutter`` a filter name
+    or f64 (M,) weights; ``gauss`` points per visible piece (0: auto); ``backdrop`` an opaque
+    layer per sample (rgba f32 (HS,WS,4), depth f32 (HS,WS), ids i32 (HS,WS)). Returns rgba
+    (H,W,4) f32 premultiplied (the shutter integral), depth (H,W) f32, ids (H,W) i32 and velocity
+    (H,W,2) f32 of the surface in front at ``reference_time``, and a stats dict. ``tile_budget``
+    bytes per tile pass (default 64 MiB); ``MemoryError`` where one sample alone needs more. The
+    GIL is released."""
 
 def _rasterize(
     view: np.ndarray,

@@ -4,6 +4,7 @@ use pyo3::prelude::*;
 
 mod accumulate;
 mod budget;
+mod analytic;
 mod convert;
 mod geometry;
 mod image;
@@ -23,5 +24,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     shell::register(m)?;
     accumulate::register(m)?;
     painter::register(m)?;
+    analytic::register(m)?;
     Ok(())
 }

@@ -37,7 +37,7 @@ mod tile;
 pub use background::Background;
 pub use blend::FRAGMENT_CAP;
 pub use buffers::{Frame, Stats};
-use camera::check_size;
+pub use camera::check_size;
 pub use camera::{Camera, MAX_INTERNAL_SIDE, MAX_PIXELS, MAX_SIDE, SAMPLES};
 pub use draw::{faces_from_i64, vertex_normals, Draw};
 use options::check_options;

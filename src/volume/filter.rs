@@ -17,6 +17,7 @@
 //!
 //! Without motion every filter gives alpha 1.
 use crate::error::{Error, Result};
+use crate::shutter::erf;
 
 /// A temporal filter over the shutter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -111,51 +112,9 @@ impl Filter {
     }
 }
 
-/// The error function: its Taylor series for |x| < 3 (absolute error below 1e-13 there), an
-/// asymptotic expansion of erfc beyond (absolute error below 1e-7). The filters use |x| <= 2.2.
-pub fn erf(x: f64) -> f64 {
-    let ax = x.abs();
-    if ax < 3.0 {
-        // erf(x) = 2/sqrt(pi) * sum_n (-1)^n x^(2n+1) / (n! (2n+1))
-        let z = x * x;
-        let mut term = x;
-        let mut sum = x;
-        let mut n = 0.0;
-        while term.abs() > 1e-17 * sum.abs().max(1e-300) {
-            n += 1.0;
-            term *= -z / n;
-            sum += term / (2.0 * n + 1.0);
-            if n > 200.0 {
-                break;
-            }
-        }
-        sum * std::f64::consts::FRAC_2_SQRT_PI
-    } else {
-        let z = 1.0 / (ax * ax);
-        let erfc = (-ax * ax).exp() / (ax * std::f64::consts::PI.sqrt())
-            * (1.0 - 0.5 * z + 0.75 * z * z - 1.875 * z * z * z);
-        (1.0 - erfc).copysign(x)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn erf_matches_known_values() {
-        for (x, want) in [
-            (0.0, 0.0),
-            (0.1, 0.112_462_916_018_284_9),
-            (0.5, 0.520_499_877_813_046_5),
-            (1.0, 0.842_700_792_949_714_9),
-            (2.0, 0.995_322_265_018_952_7),
-            (-1.5, -0.966_105_146_475_310_7),
-            (-2.2, -0.998_137_153_702_018),
-        ] {
-            assert!((erf(x) - want).abs() < 1e-13, "erf({x}) = {}", erf(x));
-        }
-    }
 
     #[test]
     fn cumulative_weights_end_at_one() {

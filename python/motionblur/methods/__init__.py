@@ -11,7 +11,7 @@ image-space methods blur).
 
 from __future__ import annotations
 
-from . import accumulation, blur_shell, image_space, motion_volume  # each registers its methods
+from . import accumulation, analytic, blur_shell, image_space, motion_volume  # each registers its methods
 from ._layers import clear_static_cache
 
-__all__ = ["accumulation", "blur_shell", "image_space", "motion_volume", "clear_static_cache"]
+__all__ = ["accumulation", "analytic", "blur_shell", "image_space", "motion_volume", "clear_static_cache"]
