@@ -3,8 +3,8 @@
 use pyo3::prelude::*;
 
 mod accumulate;
-mod budget;
 mod analytic;
+mod budget;
 mod convert;
 mod geometry;
 mod image;

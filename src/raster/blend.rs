@@ -16,8 +16,8 @@
 //! each depth-tested against the depth the fragments before it wrote (and the opaque surface),
 //! composited over when nearer and writing its depth, dropped when not. It needs no list: each
 //! fragment is composited as it comes.
-pub use super::fragment::{Frag, FRAGMENT_CAP};
 use super::fragment::far_to_near;
+pub use super::fragment::{Frag, FRAGMENT_CAP};
 use super::kbuffer::{merge_far_to_near, Spill, Tail};
 use std::cmp::Ordering;
 
@@ -39,7 +39,6 @@ impl Sample {
         velocity: [0.0; 2],
     };
 }
-
 
 /// Premultiplied `src over dst`.
 #[inline]

@@ -20,13 +20,13 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 mod background;
 mod bins;
-mod fragment;
 mod blend;
 mod buffers;
 mod camera;
 mod clip;
 mod coverage;
 mod draw;
+mod fragment;
 mod interp;
 mod kbuffer;
 mod options;
