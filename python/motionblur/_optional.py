@@ -39,7 +39,11 @@ PACKAGES: dict[str, tuple[str, str, str]] = {
     "pyvista": ("pyvista", "meshes", "the modelled ant of the report (a file in its wheel)"),
     "fast_simplification": ("fast-simplification", "meshes", "decimating the real meshes of the report"),
     "dask": ("dask[distributed]", "bench", "the report's references and errors as Dask tasks (bench --dask)"),
-    "distributed": ("dask[distributed]", "bench", "the report's references and errors as Dask tasks (bench --dask)"),
+    "distributed": (
+        "dask[distributed]",
+        "bench",
+        "the report's references and errors as Dask tasks (bench --dask)",
+    ),
 }
 
 
