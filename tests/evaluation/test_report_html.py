@@ -28,6 +28,11 @@ def test_the_html_report_renders_in_headless_chromium(tmp_path):
                     methods=[*sweeps, "auto"], sweeps=sweeps, flip=False, pyrender_peer=False,
                     limit_samples=32, log=lambda *a: None)  # fmt: skip
     page = res["paths"]["html"]
+    md = res["paths"]["md"].read_text()
+    assert "## auto against the Pareto front" in md and "| torus_turn | " in md.split("## auto against")[1]
+    assert set(res["auto"]) == {"cube", "torus_turn"} and all(
+        x["meets"] in (True, False) for x in res["auto"].values()
+    )
     # one folder: it still works when moved elsewhere
     moved = shutil.copytree(page.parent, tmp_path / "moved")
     assert shutil.which(CHROMIUM), (

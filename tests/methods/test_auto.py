@@ -19,8 +19,8 @@ def _model(cands, margin=0.0) -> Model:
     """Candidates given as (method, options, predicted rmse, predicted ms): constant models."""
     out = []
     for method, opts, e, t in cands:
-        out.append({"method": method, "options": opts, "n": 9, "error_coef": [float(np.log(e))] + [0.0] * 8,
-                    "error_sigma": 0.5, "time_coef": [float(np.log(t))] + [0.0] * 6, "time_sigma": 0.5})  # fmt: skip
+        out.append({"method": method, "options": opts, "n": 9, "error_coef": [float(np.log(e))] + [0.0] * 9,
+                    "error_sigma": 0.5, "time_coef": [float(np.log(t))] + [0.0] * 7, "time_sigma": 0.5})  # fmt: skip
     return Model({"version": 1, "aa": 1, "margin": margin, "size": [W, H], "candidates": out})
 
 
@@ -73,9 +73,27 @@ def test_still_and_sub_pixel_objects_are_drawn_sharp_once_and_the_plan_says_why(
     assert objs["object0"]["method"] == "static" and "px" in objs["object0"]["reason"]
     assert objs["object2"]["method"] == "static" and "does not move" in objs["object2"]["reason"]
     assert objs["object1"]["method"] == "motion_volume" and "cheapest" in objs["object1"]["reason"]
-    assert set(objs["object1"]["features"]) == set(FEATURES) and objs["object1"]["features"]["motion_px"] > 5
+    assert (
+        set(objs["object1"]["features"]) == {*FEATURES, "probe_ms"}
+        and objs["object1"]["features"]["motion_px"] > 5
+    )
     assert not prepared.objects[0].is_moving and [k for _, _, ks in choices for k in ks] == [1]
     np.testing.assert_allclose(prepared.objects[0].mesh.vertices, slow.world_vertices(sc.reference_t))
+
+
+def test_a_tolerance_plan_times_nothing_and_a_budget_plan_probes_the_scene(monkeypatch):
+    """A plan for a tolerance must not depend on the machine's load (the report compares runs in
+    different processes): it uses the fit's median probe; a time budget measures one sample."""
+    sc = _scene(_cube(x=0.0))
+    m = _model(CANDS)
+    m.data["probe_ms"] = 7.5
+    timed = []
+    real = auto_mod._probe_ms
+    monkeypatch.setattr(auto_mod, "_probe_ms", lambda scene, aa: timed.append(real(scene, aa)) or timed[-1])
+    plan = auto_mod.plan(sc, tolerance=0.01, model=m)[2]
+    assert not timed and plan["objects"]["object0"]["features"]["probe_ms"] == 7.5
+    plan = auto_mod.plan(sc, budget_ms=50.0, model=m)[2]
+    assert len(timed) == 1 and plan["objects"]["object0"]["features"]["probe_ms"] == round(timed[0], 4) > 0
 
 
 def test_groups_planned_apart_compose_like_each_rendered_alone(monkeypatch):
@@ -109,11 +127,12 @@ def test_groups_planned_apart_compose_like_each_rendered_alone(monkeypatch):
 
 def test_the_fit_recovers_a_known_model_and_its_leave_one_out_spread(rng):
     feats, rows = {}, []
-    true_e = np.array([-6.0, 0.8, 0.0, 0.3, 0.0, 0.5, 0.0, 0.0, 0.0])
-    true_t = np.array([0.5, 0.4, 0.1, 0.0, 0.0, 0.0, 0.0])
+    true_e = np.array([-6.0, 0.8, 0.0, 0.3, 0.0, 0.5, 1.5, 0.0, 0.0, 0.0])
+    true_t = np.array([0.5, 1.0, 0.4, 0.1, 0.0, 0.0, 0.0, 0.0])
     for i in range(30):
         f = {"motion_px": rng.uniform(5, 300), "tri_px": rng.uniform(0.5, 50), "faces": rng.uniform(10, 1e5),
              "rotation": rng.uniform(0, 2), "spread": rng.uniform(0, 1), "concavity": rng.uniform(0, 0.5),
+             "hollowness": rng.uniform(0, 0.8), "probe_ms": rng.uniform(0.5, 20),
              "coverage_px": rng.uniform(1e3, 5e4), "deforming": 0.0, "camera_moves": 0.0}  # fmt: skip
         feats[f"s{i}"] = f
         noise = rng.normal(0, 0.05, 2)
@@ -145,3 +164,23 @@ def test_auto_renders_with_the_packaged_model_and_keeps_its_plan_with_the_scene(
     assert group_features(sc, [(0, sc.objects[0])])["motion_px"] == pytest.approx(
         chosen["features"]["motion_px"], rel=1e-3
     )
+
+
+def test_the_margin_is_the_smallest_that_meets_the_tolerance_when_each_scene_is_left_out(rng):
+    """Two candidates: a cheap one whose error wanders around 0.008 from scene to scene and an
+    accurate dear one; with no margin the planner trusts the cheap one and misses 0.01 on the
+    scenes where it wanders up, and the calibrated margin is the least that fixes that."""
+    feats, rows, applies = {}, [], {}
+    for i in range(20):
+        f = {"motion_px": rng.uniform(20, 200), "tri_px": 4.0, "faces": 1000.0, "rotation": 0.0, "spread": 0.1,
+             "concavity": 0.0, "hollowness": 0.0, "coverage_px": 1e4, "deforming": 0.0, "camera_moves": 0.0,
+             "probe_ms": 1.0}  # fmt: skip
+        feats[f"s{i}"], applies[f"s{i}"] = f, {"accumulation": True}
+        cheap = 0.008 * float(np.exp(rng.normal(0, 0.3)))
+        rows += [{"scene": f"s{i}", "method": "accumulation", "_opts": {"samples": 4}, "ms": 1.0, "rmse_limit": cheap},
+                 {"scene": f"s{i}", "method": "accumulation", "_opts": {"samples": 64}, "ms": 10.0, "rmse_limit": 0.001}]  # fmt: skip
+    margin, met = autofit.calibrate_margin(rows, feats, 2, (W, H), applies)
+    assert met[0.0] < 0.95 <= met[margin]
+    assert all(met[m] < 0.95 for m in met if m < margin)
+    loo = autofit.leave_one_out(rows, feats, 2, (W, H), 0.01, applies, margin=margin)
+    assert sum(x["meets"] for x in loo.values()) >= 0.95 * len(loo)

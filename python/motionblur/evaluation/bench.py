@@ -33,6 +33,7 @@ the references and the errors are Dask tasks; the timings stay undisturbed (:mod
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -46,22 +47,34 @@ from . import autofit, html, report
 from . import reference as ref_mod
 from .cluster import Dask, SceneRef, Serial, call_task, client_for, error_task, reference_task, timed_task
 from .compare import equal_error, equal_time, pareto_front
-from .sweep import _label, _with_aa, paired_factor, pyrender_comparison
+from .sweep import _label, _with_aa, paired_factor, paired_times, pyrender_comparison
 
 __all__ = ["run", "main", "ALL_SCENES"]
 
 #: Every scene the report knows: the built-in ones, then the real-mesh ones.
 ALL_SCENES = {**SCENES, **REAL_SCENES}
+#: The option sets run on the real-mesh scenes (every shutter there is a box: the motion volume's
+#: other filters are looks, not measurements; the analytic method takes 0.3-2 s a frame on them,
+#: so three of its option sets): 22 runs a scene instead of 44, to keep ``make bench`` in time.
+REAL_SWEEPS = {
+    "accumulation": [{"samples": n} for n in (1, 2, 4, 8, 16, 32, 64, 128, 256)],
+    "motion_volume": [{"segments": s, "filter": "box"} for s in (1, 2, 4, 8)]
+    + [{"segments": 1, "filter": "box", "color_renders": n} for n in (1, 4)],
+    "analytic": [{"gauss": "auto"}, {"gauss": 1}, {"aa": 1}],
+    "blur_shell": [{"subdivisions": 4}, {"subdivisions": 16}],
+    "opaque_image": [{"aa": 1}, {"aa": 2}],
+}
 #: The scenes of ``--quick``: two built-in, three real-mesh (concave, turning, deforming).
 QUICK_SCENES = ("cube", "pan", "bunny_turn", "torus_toward", "knot_twist")
 
 
-def _jobs(scene, methods, aa) -> list[tuple[str, dict]]:
+def _jobs(scene, methods, aa, sweeps=None) -> list[tuple[str, dict]]:
     out = []
     for mname, spec in METHODS.items():
         if mname == "auto" or (methods is not None and mname not in methods) or not spec.applies(scene):
             continue
-        out += [(mname, _with_aa(spec.fn, o, aa)) for o in spec.sweep]
+        sweep = spec.sweep if sweeps is None else sweeps.get(mname, [])
+        out += [(mname, _with_aa(spec.fn, o, aa)) for o in sweep]
     return out
 
 
@@ -153,7 +166,7 @@ def run(
         # 2. per scene: timings one at a time, then the errors as tasks
         for name in names:
             scene = built[name]
-            todo = _jobs(scene, methods, aa)
+            todo = _jobs(scene, methods, aa, REAL_SWEEPS if name in REAL_SCENES and not sweeps else None)
             timed = runner.timed(timed_task, [(refs_of[name], m, o, repeat) for m, o in todo])
             errs = runner.map(
                 error_task, [t[1] for t in timed], [refs[name]["mitsuba"]] * len(timed),
@@ -169,7 +182,9 @@ def run(
             paired[name] = runner.timed(
                 call_task, [(paired_factor, refs_of[name], scene_rows, "rmse", max(3, repeat))]
             )[0]
-            if pyrender_peer:
+            if (
+                pyrender_peer and name in SCENES
+            ):  # pyrender draws lambert flat: no comparison on the lit real scenes
                 pyr += runner.timed(
                     call_task, [(_pyrender, refs_of[name], name, refs[name]["mitsuba"], repeat)]
                 )
@@ -180,23 +195,30 @@ def run(
         features = {n: autofit.scene_features(built[n]) for n in names}
         model_info = None
         if fit_auto:
-            model = autofit.fit(rows, features, aa or 1, (width, height), where=f"{width}x{height} aa={aa}")
+            applies = {n: {m: METHODS[m].applies(built[n]) for m in METHODS} for n in names}
+            model = autofit.fit_calibrated(rows, features, aa or 1, (width, height), applies, log=log)
             model_info = str(model.save(model_path) if model_path else model.save())
             log(f"auto model refitted from {len(rows)} rows: {model_info}")
         auto_rows, landings = [], {}
         if auto and (methods is None or "auto" in methods):
             for name in names:
-                opts = _with_aa(METHODS["auto"].fn, {}, aa)
+                opts = _with_aa(METHODS["auto"].fn, {"model": str(model_path)} if model_path else {}, aa)
                 t = runner.timed(timed_task, [(refs_of[name], "auto", opts, max(repeat, 5))])[0]
                 e = runner.map(error_task, [t[1]], [refs[name]["mitsuba"]], [refs[name]["limit"]], [flip])[0]
                 r = _row(name, "auto", opts, t[0], e, t[2])
                 frames[(name, "auto", r["options"])] = t[1]
                 auto_rows.append(r)
-                landings[name] = autofit.landing(
-                    [x for x in rows if x["scene"] == name], r, DEFAULT_TOLERANCE
-                )
-                log(f"  {name:<18} auto {r['ms']:9.2f} ms  own limit {r['rmse_limit']:.5f}  "
-                    f"front {landings[name]['front_ms']:.2f} ms  ratio {landings[name]['ratio']:.2f}")  # fmt: skip
+                srows = [x for x in rows if x["scene"] == name]
+                lg = autofit.landing(srows, r, DEFAULT_TOLERANCE)
+                front = autofit.front_row(srows, r["rmse_limit"])
+                if front is not None:  # re-timed in pairs: both under the same load
+                    jobs = [("auto", opts), (front["method"], front["_opts"])]
+                    pa, pf = runner.timed(call_task, [(paired_times, refs_of[name], jobs)])[0]
+                    lg.update(paired_auto_ms=pa, paired_front_ms=pf, paired_ratio=pa / pf)
+                    lg["front"] = f"{front['method']} {front['options']}"
+                landings[name] = lg
+                log(f"  {name:<18} auto {r['ms']:9.2f} ms  own limit {r['rmse_limit']:.5f}  front {lg['front_ms']:.2f} ms  "
+                    f"ratio {lg['ratio']:.2f}, re-timed in pairs {lg.get('paired_ratio', float('nan')):.2f}")  # fmt: skip
         rows += auto_rows
     finally:
         for m, s in saved.items():
@@ -204,14 +226,9 @@ def run(
     loo = {}
     if auto_rows and len(names) > autofit.MIN_ROWS:
         applies = {n: {m: METHODS[m].applies(built[n]) for m in METHODS} for n in names}
-        loo = autofit.leave_one_out(
-            [r for r in rows if r["method"] != "auto"],
-            features,
-            aa or 1,
-            (width, height),
-            DEFAULT_TOLERANCE,
-            applies,
-        )
+        swept = [r for r in rows if r["method"] != "auto"]
+        probed = autofit.add_probes(features, swept, aa or 1)
+        loo = autofit.leave_one_out(swept, probed, aa or 1, (width, height), DEFAULT_TOLERANCE, applies)
     fronts, fronts_limit = [], []
     for name in names:
         sel = [r for r in rows if r["scene"] == name]
@@ -225,6 +242,12 @@ def run(
         paired=paired, equal_times=equal_times, pyrender_rows=pyr, fronts_limit=fronts_limit,
         frames=frames, references=refs, landings=landings, loo=loo, save_images=save_images,
     )  # fmt: skip
+    # the measurements with their option sets, to refit auto's model without rendering (--fit-auto-from)
+    (out / "rows.json").write_text(json.dumps({
+        "size": [width, height], "aa": aa, "features": features,
+        "applies": {n: {m: METHODS[m].applies(built[n]) for m in METHODS} for n in names},
+        "rows": [{k: v for k, v in r.items() if k != "_plan"} for r in rows],
+    }, default=str))  # fmt: skip
     if write_html:
         paths["html"] = html.write(out, names, rows, paths, refs, frames, settings)
     return {
@@ -262,6 +285,8 @@ def main(argv=None) -> int:
     p.add_argument("--no-pyrender", action="store_true", help="leave out the pyrender comparison")
     p.add_argument("--images", action="store_true", help="save every image under images/")
     p.add_argument("--fit-auto", action="store_true", help="refit auto's cost and error model from this run")
+    p.add_argument("--fit-auto-from", default=None, metavar="ROWS_JSON",
+                   help="refit auto's model from a run's rows.json, rendering nothing")  # fmt: skip
     p.add_argument(
         "--dask", default=None, metavar="local|ADDRESS", help="references and errors as Dask tasks"
     )
@@ -271,6 +296,9 @@ def main(argv=None) -> int:
         help=f"160x120, K = 64, N = 256, one timing, no pyrender, scenes {' '.join(QUICK_SCENES)}",
     )
     a = p.parse_args(argv)
+    if a.fit_auto_from:
+        print(f"auto model refitted from {a.fit_auto_from}: {autofit.refit_from(a.fit_auto_from)}")
+        return 0
     w, h = (int(x) for x in a.size.lower().split("x"))
     if a.quick:
         w, h, a.times, a.repeat, a.limit_samples, a.no_pyrender = 160, 120, 64, 1, 256, True

@@ -24,9 +24,9 @@ from ._layers import clear_static_cache
 __all__ = [
     "accumulation",
     "analytic",
+    "auto",
     "blur_shell",
     "image_space",
     "motion_volume",
-    "auto",
     "clear_static_cache",
 ]

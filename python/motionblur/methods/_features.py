@@ -20,6 +20,10 @@ camera (moving or not) returns a dict of floats:
 - ``concavity``: the concave share of the meshes' bending, 0 for convex meshes: the sum over
   edges of length times the concave dihedral angle over the sum of length times the absolute
   dihedral angle (a torus 0.3-0.5, the bunny scan about 0.4; cached per mesh);
+- ``hollowness``: how far the objects' silhouette at the reference time falls short of its convex
+  hull: 1 - (pixels covered, from a one-sample raster of the group) / (area of the convex hull
+  of its projected vertices), at half the image size; 0 for a convex outline, large for a ring's hole or an ant's legs.
+  The motion volume's coverage model takes the hull, so this is what it over-covers;
 - ``coverage_px``: the screen area the group sweeps, pixels (the union of its test points'
   bounding boxes over the shutter, clipped to the image);
 - ``deforming``, ``camera_moves``: 1.0 or 0.0.
@@ -38,7 +42,8 @@ __all__ = ["group_features", "FEATURES", "concavity", "screen_points"]
 
 #: The names :func:`group_features` returns, in a fixed order.
 FEATURES = (
-    "motion_px", "tri_px", "faces", "rotation", "spread", "concavity", "coverage_px", "deforming", "camera_moves",
+    "motion_px", "tri_px", "faces", "rotation", "spread", "concavity", "hollowness", "coverage_px", "deforming",
+    "camera_moves",
 )  # fmt: skip
 _STEPS = 8
 _POINTS = 64
@@ -156,6 +161,53 @@ def _tri_px(scene: Scene, objects) -> float:
     return float(np.concatenate(areas).mean()) if areas else 0.0
 
 
+def _hull_area(xy: np.ndarray) -> float:
+    """Area of the convex hull of the points ``xy`` (N,2) (Andrew's monotone chain)."""
+    pts = np.unique(np.round(xy, 6), axis=0)
+    if len(pts) < 3:
+        return 0.0
+
+    def half(points):
+        chain: list = []
+        for p in points:
+            while len(chain) >= 2:
+                (ax, ay), (bx, by) = chain[-2], chain[-1]
+                if (bx - ax) * (p[1] - ay) - (by - ay) * (p[0] - ax) > 0:
+                    break
+                chain.pop()
+            chain.append((p[0], p[1]))
+        return chain
+
+    lower, upper = half(pts), half(pts[::-1])
+    hull = np.array(lower[:-1] + upper[:-1])
+    x, y = hull[:, 0], hull[:, 1]
+    return float(0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+
+
+def _hollowness(scene: Scene, objects) -> float:
+    from ..raster import Draw, rasterize
+
+    t = scene.reference_t
+    full = scene.camera_at(t) if scene.camera_moves else scene.camera
+    cam = full.resized(max(8, full.width // 2), max(6, full.height // 2))  # half size: a quarter of the cost
+    draws, pts = [], []
+    vp = cam.view_projection
+    for _, o in objects:
+        v = o.world_vertices(t)
+        draws.append(Draw(v, o.mesh.faces, (1.0, 1.0, 1.0, 1.0)))
+        sub = v[np.linspace(0, len(v) - 1, min(len(v), 4 * _FACES)).astype(np.int64)]
+        w = sub @ vp[3, :3] + vp[3, 3]
+        sub = sub[w > cam.znear * 0.5]
+        w = w[w > cam.znear * 0.5]
+        xy = (sub @ vp[:2, :3].T + vp[:2, 3]) / w[:, None]
+        pts.append(np.column_stack([(xy[:, 0] + 1) * 0.5 * cam.width, (1 - xy[:, 1]) * 0.5 * cam.height]))
+    hull = _hull_area(np.concatenate(pts)) if pts else 0.0
+    if hull < 1.0:
+        return 0.0
+    area = float((rasterize(cam, draws).rgba[..., 3] > 0.5).sum())
+    return float(np.clip(1.0 - area / hull, 0.0, 1.0))
+
+
 def group_features(scene: Scene, objects) -> dict[str, float]:
     """The features of the group ``objects`` (pairs ``(index, Object)``) in ``scene`` (see the
     module docs): a dict with every name of :data:`FEATURES`."""
@@ -180,6 +232,7 @@ def group_features(scene: Scene, objects) -> dict[str, float]:
         "rotation": max((_rotation(o, times, cams) for _, o in objects), default=0.0),
         "spread": spread,
         "concavity": max((concavity(o.mesh) for _, o in objects), default=0.0),
+        "hollowness": _hollowness(scene, objects),
         "coverage_px": float(np.prod(np.maximum(hi - lo, 0.0))),
         "deforming": float(any(o.motion is not None and o.motion.is_deforming for _, o in objects)),
         "camera_moves": float(scene.camera_moves),

@@ -4,9 +4,12 @@ or the most accurate one that fits a time budget.
 A scene pays only for what it needs. Per frame, ``auto``:
 
 1. measures what each object does on screen (:mod:`._features`: screen motion in pixels,
-   triangle size on screen, rotation, spread of motion, concavity, swept area);
-2. draws every object whose screen motion is under :data:`STILL_PX` pixels sharp, once, at the
-   reference time (it joins the static layer);
+   triangle size on screen, rotation, spread of motion, concavity, hollowness, swept area) and
+   with ``budget_ms``, times one accumulation sample of it (the time model's probe of scene and
+   machine; with a tolerance nothing is timed and the fit's median probe stands in, so the plan
+   is the same on every run);
+2. under a still camera, draws every object whose screen motion is under :data:`STILL_PX`
+   pixels sharp, once, at the reference time (it joins the static layer);
 3. groups the moving objects whose swept screen boxes overlap (a method composites overlapping
    blurs correctly only among the objects it draws itself), and plans each group: among the
    candidates of the cost and error model (every option set the report sweeps of analytic,
@@ -27,6 +30,8 @@ plan again.
 """
 
 from __future__ import annotations
+
+import time
 
 from .._validate import as_float, as_int
 from ..raster import Frame
@@ -70,6 +75,16 @@ def _groups(scene: Scene, moving) -> list[list[tuple[int, Object]]]:
     return list(out.values())
 
 
+def _probe_ms(scene: Scene, aa: int) -> float:
+    """Milliseconds of one accumulation sample of ``scene`` at ``aa`` (the second of two renders:
+    the first builds the static layer): the time model's measure of the scene and the machine."""
+    fn = METHODS["accumulation"].fn
+    fn(scene, samples=1, aa=aa)
+    t0 = time.perf_counter()
+    fn(scene, samples=1, aa=aa)
+    return (time.perf_counter() - t0) * 1e3
+
+
 def _still(obj: Object, t: float) -> Object:
     return Object((obj.world_vertices(t), obj.mesh.faces), obj.color, obj.shading, None, obj.name)
 
@@ -96,7 +111,9 @@ def plan(scene: Scene, tolerance=None, budget_ms=None, aa: int = 1, model: Model
             info[names[k]] = {"method": "static", "reason": "does not move: in the static layer, drawn once"}
             continue
         f = group_features(scene, [(k, o)])
-        if f["motion_px"] < STILL_PX:
+        # Frozen in world space only under a still camera: under a moving one, an object still on
+        # screen moves with the camera, and freezing it would smear it the other way.
+        if f["motion_px"] < STILL_PX and not scene.camera_moves:
             objects[k] = _still(o, scene.reference_t)
             info[names[k]] = {
                 "method": "static",
@@ -111,7 +128,10 @@ def plan(scene: Scene, tolerance=None, budget_ms=None, aa: int = 1, model: Model
     for group in _groups(prepared, moving) if moving else []:
         sub = prepared.with_(objects=[o for k, o in enumerate(objects) if (k, o) in group or not o.is_moving])
         applies = {m: METHODS[m].applies(sub) for m in model.methods() if m in METHODS}
-        feats = group_features(prepared, group)
+        # Only a time budget is worth a timed probe: a tolerance's plan must not depend on the
+        # machine's load (the same scene gets the same plan on every run, in every process).
+        probe = _probe_ms(sub, aa) if goal == "budget" else model.reference_probe_ms
+        feats = {**group_features(prepared, group), "probe_ms": probe}
         pick = model.choose(feats, tol if goal == "tolerance" else None, budget, aa, applies, margin)
         choices.append((pick["method"], pick["options"], [k for k, _ in group]))
         for k, _ in group:
@@ -154,23 +174,24 @@ def _with_aa(method: str, opts: dict, aa: int) -> dict:
 
 
 @register("auto", sweep=[{}, {"tolerance": 0.003}, {"tolerance": 0.03}], applies=lambda scene: True)
-def auto(scene: Scene, tolerance=None, budget_ms=None, aa: int = 1) -> Frame:
+def auto(scene: Scene, tolerance=None, budget_ms=None, aa: int = 1, model=None) -> Frame:
     """Planned per object: the cheapest method predicted to meet a tolerance, or the most accurate within a budget.
 
     Options: ``tolerance`` RMSE against the own-limit reference (accumulation with 1024 samples;
     premultiplied linear RGBA), default :data:`DEFAULT_TOLERANCE` (0.01); ``budget_ms`` instead,
     milliseconds per frame on the machine the model was fitted on; ``aa`` 1, 2 or 4 samples per
-    pixel along each axis, given to the chosen method. ``stats["plan"]``: per object the method,
+    pixel along each axis, given to the chosen method; ``model`` the path of a model file (default
+    the package's ``auto_model.json``; ``bench --fit-auto`` writes one). ``stats["plan"]``: per object the method,
     options, predicted ms and RMSE, and why (see :mod:`motionblur.methods.auto`).
     """
     aa = as_int(aa, "aa")
     key = id(scene)
     hit = _PLANS.get(key)
-    args = (tolerance, budget_ms, aa)
+    args = (tolerance, budget_ms, aa, model)
     if hit is not None and hit[0] is scene and hit[1] == args:
         prepared, choices, info = hit[2]["scene"], hit[2]["choices"], hit[2]["plan"]
     else:
-        prepared, choices, info = plan(scene, tolerance, budget_ms, aa)
+        prepared, choices, info = plan(scene, tolerance, budget_ms, aa, load_model(model) if model else None)
         if len(_PLANS) >= _PLAN_CACHE:
             _PLANS.pop(next(iter(_PLANS)))
         _PLANS[key] = (scene, args, {"scene": prepared, "choices": choices, "plan": info})
