@@ -16,7 +16,7 @@ RUST_SOURCES := $(shell find src -name '*.rs') Cargo.toml Cargo.lock pyproject.t
 EXT_STAMP := $(VENV)/.built
 DOCS_STAMP := $(VENV)/.docs-installed
 
-.PHONY: help sysdeps venv build test test-rust test-python demo bench lint docs fmt notebooks clean
+.PHONY: help sysdeps venv build test test-rust test-python fuzz demo bench lint docs fmt notebooks clean
 
 help: ## list the targets
 	@grep -hE '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-12s %s\n", $$1, $$2}'
@@ -53,6 +53,10 @@ test-python: build ## pytest, including the notebooks
 	$(PY) -m pytest -q -n 2 --nbmake tests notebooks
 
 test: build test-rust test-python ## everything CI runs
+
+FUZZ_EXAMPLES ?= 400
+fuzz: build ## the property-based robustness suite with many examples (FUZZ_EXAMPLES per property, random seed)
+	MOTIONBLUR_FUZZ=fuzz MOTIONBLUR_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PY) -m pytest -q -n 2 -m robustness tests/robustness
 
 demo: build ## the main job on built-in scenes: images and a speed/error table in out/demo
 	$(PY) -m motionblur demo --out out/demo

@@ -36,7 +36,7 @@ import scipy.ndimage as ndi  # noqa: E402
 import motionblur as mb  # noqa: E402
 import motionblur.image as mi  # noqa: E402
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests" / "_helpers"))
 import image_twins as tw  # noqa: E402
 
 H, W, L = 768, 1024, 101

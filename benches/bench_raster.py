@@ -1,6 +1,6 @@
 """Rasterizer benchmark: motionblur.rasterize against pyrender (offscreen, OSMesa), same run.
 
-Icospheres of 5k, 82k and 328k faces (meshes.icosphere(4/6/7)) at 1024x768, FLAT shading:
+Icospheres of 5k, 82k, 328k and 1.3M faces (meshes.icosphere(4/6/7/8)) at 1024x768, FLAT shading:
 
 - opaque: one opaque sphere. Peer: pyrender ``render()`` with ``RenderFlags.FLAT``.
 - transparent: the same sphere at alpha 0.5, back faces drawn. Ours: ``blend="exact"`` (every
@@ -8,8 +8,12 @@ Icospheres of 5k, 82k and 328k faces (meshes.icosphere(4/6/7)) at 1024x768, FLAT
   submission order with no per-fragment sorting (unsorted hardware blending).
 
 Both sides are timed end to end from Python (pyrender includes its readback into numpy; ours
-includes building the frame's numpy arrays). Prints best-of-N milliseconds and ratios
-(motionblur / pyrender, so below 1 means we are faster) and writes out/bench/raster.md.
+includes building the frame's numpy arrays), in paired runs: each round renders once with each,
+so the load of a shared machine falls on both alike, and each side keeps its best round. Prints
+best-of-N milliseconds and ratios (motionblur / pyrender, so below 1 means we are faster) and
+the stage profile of our best frame (``Frame.stats``: milliseconds of transform, set-up,
+binning and the tiles, and the tiles' thread time in coverage, shading, the transparent pass and
+resolve), and writes out/bench/raster.md.
 
 Second table, the motion_volume frame on a still camera (built-in cube, curved, sphere80k,
 airplane at 320x240, ``segments=1, filter="box", aa=2``), as a ratio against one accumulation
@@ -48,6 +52,36 @@ def best_ms(fn, repeat: int) -> float:
         fn()
         best = min(best, time.perf_counter() - t0)
     return best * 1e3
+
+
+def paired(ours, peer, repeat: int):
+    """Best milliseconds of ``ours`` and ``peer`` called alternately ``repeat`` times after a
+    warm-up each, and the stats of our best frame."""
+    ours(), peer()
+    best_o = best_p = float("inf")
+    stats = None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        frame = ours()
+        t1 = time.perf_counter()
+        peer()
+        t2 = time.perf_counter()
+        if t1 - t0 < best_o:
+            best_o, stats = t1 - t0, frame.stats
+        best_p = min(best_p, t2 - t1)
+    return best_o * 1e3, best_p * 1e3, stats
+
+
+STAGES = (
+    "ms_transform",
+    "ms_setup",
+    "ms_bin",
+    "ms_raster",
+    "ms_coverage",
+    "ms_shade",
+    "ms_transparent",
+    "ms_resolve",
+)
 
 
 def pyrender_scene(v, f, rgba, camera, blend: bool):
@@ -116,11 +150,11 @@ def motion_volume_rows(quick: bool) -> list[str]:
 
 def main() -> None:
     quick = "--quick" in sys.argv
-    subs = (4, 6) if quick else (4, 6, 7)
+    subs = (4, 6) if quick else (4, 6, 7, 8)
     cores = os.cpu_count()
     header = (
-        f"machine: {platform.machine()}, {cores} cores, no GPU (pyrender on Mesa's OSMesa software "
-        f"rasterizer), python {platform.python_version()}, pyrender {pyrender.__version__}"
+        f"machine: {platform.machine()}, {cores} cores (shared with other jobs), no GPU (pyrender on "
+        f"Mesa's OSMesa software rasterizer), python {platform.python_version()}, pyrender {pyrender.__version__}"
     )
     print(header)
     camera = mb.Camera(mb.look_at((0.3, 0.4, 3.2), (0, 0, 0)), np.pi / 3, W, H)
@@ -128,31 +162,51 @@ def main() -> None:
     rows = []
     for sub in subs:
         v, f = meshes.icosphere(sub)
-        repeat = 7 if len(f) < 100_000 else 5
+        repeat = 5 if quick else (15 if len(f) < 100_000 else 9 if len(f) < 1_000_000 else 7)
         for job, alpha in (("opaque", 1.0), ("transparent a=0.5", 0.5)):
             rgba = (0.8, 0.5, 0.2, alpha)
             draw = mb.Draw(v, f, rgba, cull_back=alpha == 1.0)
             sc = pyrender_scene(v, f, rgba, camera, blend=alpha < 1.0)
-            ours = best_ms(lambda d=draw: mb.rasterize(camera, d, blend="exact"), repeat)
-            peer = best_ms(lambda s=sc: renderer.render(s, flags=pyrender.RenderFlags.FLAT), repeat)
-            rows.append((len(f), job, ours, peer, ours / peer))
-            print(
-                f"{len(f):>8} faces  {job:<18} ours {ours:8.2f} ms  pyrender {peer:8.2f} ms  ratio {ours / peer:5.2f}"
+            ours, peer, stats = paired(
+                lambda d=draw: mb.rasterize(camera, d, blend="exact"),
+                lambda s=sc: renderer.render(s, flags=pyrender.RenderFlags.FLAT),
+                repeat,
             )
+            rows.append((len(f), job, ours, peer, ours / peer, stats))
+            print(
+                f"{len(f):>8} faces  {job:<18} ours {ours:8.2f} ms  pyrender {peer:8.2f} ms  ratio {ours / peer:5.2f}  "
+                + " ".join(f"{k[3:]} {stats[k]:.2f}" for k in STAGES)
+            )
+        del v, f
     renderer.delete()
     lines = [
         "# Rasterizer benchmark",
         "",
         header + ".",
-        f"{W}x{H}, FLAT shading, best of 5-7 runs after a warm-up; ratio = motionblur / pyrender "
-        "(below 1: we are faster), measured in the same run (`python benches/bench_raster.py`, "
-        "run by `make bench`). Transparent: ours composites every fragment in exact depth order, "
-        "pyrender blends unsorted.",
+        f"{W}x{H}, FLAT shading, paired runs (each round renders once with each renderer), best of 7-15 "
+        "rounds after a warm-up; ratio = motionblur / pyrender (below 1: we are faster), measured in the "
+        "same run (`python benches/bench_raster.py`, run by `make bench`). Transparent: ours composites "
+        "every fragment in exact depth order, pyrender blends unsorted.",
         "",
         "| faces | job | motionblur ms | pyrender ms | ratio |",
         "|---:|---|---:|---:|---:|",
     ]
-    lines += [f"| {n:,} | {job} | {o:.2f} | {p:.2f} | {r:.2f} |" for n, job, o, p, r in rows]
+    lines += [f"| {n:,} | {job} | {o:.2f} | {p:.2f} | {r:.2f} |" for n, job, o, p, r, _ in rows]
+    lines += [
+        "",
+        "## Where our time goes",
+        "",
+        "`Frame.stats` of our best frame, ms. transform, setup, bin and raster are wall clock and add up "
+        "to the core's frame; coverage, shade, transparent and resolve are the tiles' thread time summed "
+        "over the tiles (both threads), the parts of raster.",
+        "",
+        "| faces | job | triangles | " + " | ".join(k[3:] for k in STAGES) + " |",
+        "|---:|---|---:|" + "---:|" * len(STAGES),
+    ]
+    lines += [
+        f"| {n:,} | {job} | {st['triangles']:,} | " + " | ".join(f"{st[k]:.2f}" for k in STAGES) + " |"
+        for n, job, _, _, _, st in rows
+    ]
     lines += motion_volume_rows(quick)
     out = Path("out/bench")
     out.mkdir(parents=True, exist_ok=True)

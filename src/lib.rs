@@ -4,7 +4,8 @@
 //!
 //! One private module per pipeline stage, its API re-exported here:
 //! - `mesh`: indexed triangle meshes, their adjacency, normals and face planes;
-//! - `motion`: rigid keyframes over the shutter;
+//! - `motion`: the one keyframe interpolation engine (rigid and deforming keyframes over the
+//!   shutter, the motion volume's paths);
 //! - `contour`: contour edges of a rigid motion and the silhouette of motion of a deforming
 //!   mesh;
 //! - `volume`: motion volumes (Wloka and Zeleznik);
@@ -12,12 +13,14 @@
 //! - `accumulate`: the accumulation buffer's kernels;
 //! - `raster`: the software rasterizer;
 //! - `image`: image-space blur;
+//! - `budget`: the memory budget every kernel checks before it allocates;
 //! - `analytic`: analytic motion blur, exact covered time per sample;
 //! - `shutter`: the shutter filters.
 #![warn(missing_docs)]
 
 mod accumulate;
 mod analytic;
+mod budget;
 mod contour;
 mod error;
 mod image;
@@ -31,10 +34,17 @@ mod volume;
 #[cfg(feature = "python")]
 mod python;
 
-pub use accumulate::{accumulate, composite, facing_faces, over, resolve, Rect};
+pub use accumulate::{
+    accumulate, accumulate_moving, accumulate_still, composite, facing_faces, over, pixel_rect,
+    resolve, sample_rects, window_projection, Accumulated, Layer, PaintObject, Painter, Rect,
+    Samples, StaticLayer, StillCamera,
+};
 pub use analytic::{
     render as render_analytic, Backdrop, Frame as AnalyticFrame, Input as AnalyticInput,
-    MovingDraw, Quadrature, Stats as AnalyticStats,
+    MovingDraw, Quadrature, Stats as AnalyticStats, DEFAULT_TILE_BUDGET as ANALYTIC_TILE_BUDGET,
+};
+pub use budget::{
+    memory_budget, set_memory_budget, Need, DEFAULT_MEMORY_BUDGET, MIN_MEMORY_BUDGET,
 };
 pub use contour::{
     contour_edges, contour_pairs, motion_silhouette, ContourEdge, ContourSet, ContourTable,
@@ -42,23 +52,29 @@ pub use contour::{
 pub use error::{Error, Result};
 pub use image::{
     box_blur, camera_motion_blur, camera_velocity, colored, depth_of_field, glow, opaque_blur,
-    opaque_motion_blur, pixel_bounds, pyramid_blur, pyramid_glow, pyramid_opaque_blur,
+    opaque_motion_blur, pixel_bounds, pyramid_blur, pyramid_glow, pyramid_opaque_blur, reconstruct,
     sample_colors, scatter_pieces, splat_paths, velocity_blur, CameraMatrices, Composite,
-    DofParams, Piece,
+    DofParams, Piece, ReconstructParams, MAX_FPS_RATIO, MAX_LAYERS, MAX_LENGTH, MAX_LEVELS,
+    MAX_SAMPLES, MAX_TAPS, MAX_VELOCITY, MIN_ALPHA,
 };
-pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats};
-pub use motion::{Keyframe, Path};
+pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats, MAX_COORD};
+pub use motion::{
+    axis_angle, check_times, det3, dot, mat4_mul, norm, place, row_times, transpose_times, turn,
+    uniform_times, Keyframe, Keyframes, Keys, Mat3, Mat4, Path, Similarity, IDENTITY4,
+};
 pub use raster::{
     faces_from_i64, rasterize, rasterize_over, Background, Blend, Camera, Draw, Frame, Light,
-    Options as RasterOptions, Shading, Stats as RasterStats,
+    Options as RasterOptions, Shading, Stats as RasterStats, FRAGMENT_CAP, MAX_INTERNAL_SIDE,
+    MAX_PIXELS, MAX_SIDE, SAMPLES,
 };
 pub use shell::{
-    BlurShell, BuildPlan, FaceState, ShellColor, ShellMesh, ShellOptions, ShellOut, ON_SILHOUETTE,
+    BlurShell, BuildPlan, FaceState, ShellColor, ShellMesh, ShellOptions, ShellOut, MAX_HYSTERESIS,
+    MAX_SUBDIVISIONS, ON_SILHOUETTE,
 };
 pub use shutter::Shutter;
 pub use volume::{
-    motion_volume, spin_volume, Colors, Filter, MotionVolume, Spin, VolumeOptions, JOINING,
-    LEADING, MAX_SEGMENTS, TRAILING,
+    check_segments, motion_volume, spin_volume, subdivided, Colors, Filter, MotionVolume, Spin,
+    VolumeOptions, JOINING, LEADING, MAX_SEGMENTS, TRAILING,
 };
 
 /// `f` run on a rayon pool of `n` threads (tests of thread-count independence).

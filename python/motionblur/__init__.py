@@ -10,6 +10,7 @@ from __future__ import annotations
 from . import (
     _malloc,  # noqa: F401  (keeps freed frame buffers in the process; see the module)
     analytic,
+    budget,
     image,
     interop,
     meshes,
@@ -23,6 +24,7 @@ from ._core import __version__
 from ._namespace import tidy
 from ._optional import MissingDependencyError
 from .analytic import MovingDraw, coverage, rasterize_motion
+from .budget import memory_budget, set_memory_budget
 from .evaluation import metrics, reference
 from .geometry import *  # noqa: F403
 from .interop import read_image, to_mitsuba_dict
@@ -36,6 +38,9 @@ from .shell import *  # noqa: F403
 __all__ = [
     "__version__",
     "analytic",
+    "budget",
+    "memory_budget",
+    "set_memory_budget",
     "image",
     "meshes",
     "interop",

@@ -9,6 +9,33 @@ from typing_extensions import Self
 
 __all__ = [
     "__version__",
+    "memory_budget",
+    "set_memory_budget",
+    "DEFAULT_MEMORY_BUDGET",
+    "MIN_MEMORY_BUDGET",
+    "_Keyframes",
+    "_check_times",
+    "_rotate",
+    "MAX_SEGMENTS",
+    "MAX_COORD",
+    "FILTERS",
+    "MAX_SIDE",
+    "MAX_PIXELS",
+    "FRAGMENT_CAP",
+    "MAX_INTERNAL_SIDE",
+    "SAMPLES",
+    "SHADINGS",
+    "BLENDS",
+    "MAX_LENGTH",
+    "MAX_FPS_RATIO",
+    "MAX_VELOCITY",
+    "MAX_LEVELS",
+    "MAX_LAYERS",
+    "MAX_SAMPLES",
+    "MAX_TAPS",
+    "MIN_ALPHA",
+    "MAX_SUBDIVISIONS",
+    "MAX_HYSTERESIS",
     "_Mesh",
     "_ContourTable",
     "contour_edges",
@@ -35,6 +62,7 @@ __all__ = [
     "_camera_velocity",
     "_velocity_blur",
     "_camera_motion_blur",
+    "_reconstruct",
     "_BlurShell",
     "_motion_silhouette",
     "_resolve",
@@ -42,15 +70,73 @@ __all__ = [
     "_accumulate",
     "_over",
     "_facing_faces",
+    "_Painter",
 ]
 
 __version__: str
+
+# --- the memory budget (src/budget.rs)
+
+DEFAULT_MEMORY_BUDGET: int
+MIN_MEMORY_BUDGET: int
+
+def memory_budget() -> int:
+    """The most bytes one call may allocate."""
+
+def set_memory_budget(bytes: int) -> int:
+    """Sets the memory budget (bytes, >= MIN_MEMORY_BUDGET); returns the previous one."""
+
+# --- motion (the keyframe engine)
+
+@final
+class _Keyframes:
+    """Keyframes at sorted shutter times, validated and split once: rigid (K,4,4) transforms
+    or deforming (K,V,3) vertex positions (src/motion/)."""
+
+    def __new__(
+        cls,
+        times: np.ndarray,
+        transforms: np.ndarray | None = None,
+        vertices: np.ndarray | None = None,
+        name: str = "transforms",
+    ) -> Self:
+        """times (K,) float64 strictly increasing in [0, 1] and exactly one of transforms
+        (K,4,4) float64 (rotation times positive uniform scale plus translation; errors name
+        ``name``: 'transforms', 'motion' or 'camera_motion') or vertices (K,V,3) float64."""
+    @property
+    def is_deforming(self) -> bool: ...
+    def times(self) -> np.ndarray:
+        """(K,) float64 keyframe times."""
+    def transforms(self) -> np.ndarray:
+        """(K,4,4) float64 rigid keyframes ((0,4,4) when deforming)."""
+    def scales(self) -> np.ndarray:
+        """(K,) float64 uniform scales of the rigid keyframes."""
+    def transform_at(self, t: float) -> np.ndarray:
+        """(4,4) float64 transform at shutter time t (identity when deforming)."""
+    def transforms_at(self, times: np.ndarray) -> np.ndarray:
+        """(N,4,4) float64 transforms at the shutter times (N,) float64."""
+    def vertices_at(self, t: float) -> np.ndarray:
+        """(V,3) float64 positions at shutter time t of deforming keyframes. Releases the GIL."""
+    def resampled(self, segments: int) -> _Keyframes:
+        """The rigid keyframes at the times i / segments (numpy.linspace), interpolated from
+        the parts of these (not split again)."""
+
+def _check_times(times: np.ndarray) -> None:
+    """ValueError naming ``times`` unless (N,) float64 finite, in [0, 1], strictly increasing."""
+
+def _rotate(angle: float, axis: np.ndarray, center: np.ndarray) -> np.ndarray:
+    """(4,4) float64 rotation by angle radians about axis (3,) f64 (non-zero) through center (3,) f64."""
+
+# --- end motion
 
 # --- geometry (mesh, contour, motion volume, contour table)
 
 LEADING: int
 TRAILING: int
 JOINING: int
+MAX_SEGMENTS: int
+MAX_COORD: float
+FILTERS: tuple[str, ...]
 
 @final
 class _Mesh:
@@ -81,7 +167,7 @@ def contour_edges(mesh: _Mesh, motion: np.ndarray, camera_position: np.ndarray |
 
 def motion_volume(
     mesh: _Mesh,
-    keyframes: np.ndarray,
+    keyframes: _Keyframes,
     segments: int,
     filter: str,
     colors: np.ndarray,
@@ -91,7 +177,8 @@ def motion_volume(
     contour_line: bool = True,
     visible_only: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
-    """Motion volume for keyframes (K+1,4,4) float64, each interval cut into segments, filter
+    """Motion volume for rigid keyframes (K+1, at the times i/K), each interval cut into
+    segments (at most MAX_SEGMENTS in total), filter
     'ramp' | 'box' | 'triangle' | 'gaussian', colors (1|V,4) float32 straight RGBA (or (F,4)
     per face with face_colors=True), normals
     (V,3) float64 | None, camera_position (3,) float64 | None, contour_line (camera: sweep only the
@@ -139,6 +226,15 @@ class _ContourTable:
 # --- end geometry
 
 # --- image (motionblur.image kernels)
+
+MAX_LENGTH: float
+MAX_FPS_RATIO: float
+MAX_VELOCITY: float
+MAX_LEVELS: int
+MAX_LAYERS: int
+MAX_SAMPLES: int
+MAX_TAPS: int
+MIN_ALPHA: float
 
 def _glow(alpha: np.ndarray, direction: tuple[float, float], width: float) -> np.ndarray:
     """Eq. 10 glow of alpha (H,W) f32 along direction (pixels) with half-width width (pixels).
@@ -233,9 +329,17 @@ def _camera_motion_blur(
 ) -> np.ndarray:
     """Chapman's camera blur: _camera_velocity times scale, then _velocity_blur. (H,W,4) f32."""
 
+def _reconstruct(
+    rgba: np.ndarray, depth: np.ndarray, velocity: np.ndarray, samples: int, tile: int, soft_depth: float
+) -> np.ndarray:
+    """McGuire/Guertin reconstruction filter: rgba (H,W,4), depth (H,W), velocity (H,W,2) f32 -> (H,W,4) f32."""
+
 # --- end image
 
 # --- shell (blur shells, silhouette of motion)
+
+MAX_SUBDIVISIONS: int
+MAX_HYSTERESIS: int
 
 @final
 class _BlurShell:
@@ -260,6 +364,10 @@ class _BlurShell:
         """(vertices f64 (N,3), faces i64 (M,3), rgba f32 (N,4) straight, normals f32 (N,3),
         face i64 (N,), step i32 (N,)). Releases the GIL."""
     def reset(self) -> None: ...
+    def _history(self) -> bytes:
+        """The shell's history (update count, snapshots, rings, per-polygon state) as bytes."""
+    def _restore(self, state: bytes) -> None:
+        """Takes the history of a shell made with the same arguments (ValueError naming state otherwise)."""
     @property
     def updates(self) -> int: ...
     @property
@@ -281,6 +389,14 @@ def _motion_silhouette(
 
 # --- raster
 
+MAX_SIDE: int
+MAX_PIXELS: int
+FRAGMENT_CAP: int
+MAX_INTERNAL_SIDE: int
+SAMPLES: tuple[int, ...]
+SHADINGS: tuple[str, ...]
+BLENDS: tuple[str, ...]
+
 def _analytic(
     width: int,
     height: int,
@@ -295,6 +411,7 @@ def _analytic(
     reference_time: float,
     shade: bool,
     backdrop: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    tile_budget: int = ...,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, float]]:
     """Analytic motion blur: draws (positions f64 (K+1,V,3) at the boundaries ``times`` f64
     (K+1,) from 0 to 1, faces i64 (F,3), straight rgba f32 (1|V,4), normals f32 (K+1,V,3) | None,
@@ -303,8 +420,9 @@ def _analytic(
     or f64 (M,) weights; ``gauss`` points per visible piece (0: auto); ``backdrop`` an opaque
     layer per sample (rgba f32 (HS,WS,4), depth f32 (HS,WS), ids i32 (HS,WS)). Returns rgba
     (H,W,4) f32 premultiplied (the shutter integral), depth (H,W) f32, ids (H,W) i32 and velocity
-    (H,W,2) f32 of the surface in front at ``reference_time``, and a stats dict. The GIL is
-    released."""
+    (H,W,2) f32 of the surface in front at ``reference_time``, and a stats dict. ``tile_budget``
+    bytes per tile pass (default 64 MiB); ``MemoryError`` where one sample alone needs more. The
+    GIL is released."""
 
 def _rasterize(
     view: np.ndarray,
@@ -384,5 +502,62 @@ def _facing_faces(vertices: np.ndarray, faces: np.ndarray, eyes: np.ndarray) -> 
     (object space) that face one of the object-space eye positions eyes (K,3) float64, K >= 1:
     ``n . (e_k - a) > -1e-9 |n| |e_k - a|`` for some k (n = (b - a) x (c - a)). All C-contiguous.
     ValueError for wrong shapes, non-finite values or indices outside [0, V). Releases the GIL."""
+
+@final
+class _Painter:
+    """Objects drawn at any shutter time with the least per-sample work (src/accumulate/
+    painter.rs): one rasterizer call per shading group, a group of one rigid object drawn in
+    object space; and a whole accumulation frame's samples in one call (frame.rs)."""
+
+    def __new__(
+        cls,
+        objects: list[
+            tuple[int, str, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, _Keyframes | None]
+        ],
+        lights: list[tuple[tuple[float, float, float], tuple[float, float, float]]],
+        ambient: tuple[float, float, float],
+    ) -> Self:
+        """objects: (object id, shading 'flat' | 'lambert', vertices (V,3) f64 object space,
+        faces (F,3) i64, straight rgba (1|V,4) f32, normals (V,3) f32 | None, keyframes placing
+        (rigid) or replacing (deforming) the vertices | None); lights: (direction, intensity)."""
+    def layer(
+        self, t: float, view: np.ndarray, projection: np.ndarray, width: int, height: int
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The objects at shutter time t through view and projection (4,4) f64: rgba
+        (height,width,4) f32 premultiplied, depth (height,width) f32, ids (height,width) i32.
+        Releases the GIL."""
+    def accumulate_still(
+        self,
+        times: np.ndarray,
+        weights: np.ndarray,
+        reference: int,
+        view: np.ndarray,
+        projection: np.ndarray,
+        view_projection: np.ndarray,
+        width: int,
+        height: int,
+        aa: int,
+        background: tuple[np.ndarray, np.ndarray, np.ndarray],
+        opaque: bool,
+    ) -> tuple[tuple[int, int, int, int], np.ndarray, np.ndarray, np.ndarray, int] | None:
+        """The still-camera accumulation frame of times, weights (N,) f64 (reference: the
+        sample whose depth and ids are kept), camera matrices (4,4) f64 of width x height
+        samples, aa, and the static layer (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32,
+        C-contiguous) and its opacity: None when the objects are off the image, else the window
+        (x0, y0, x1, y1), its rgba (h,w,4) f32 (static layer composited), depth, ids and the
+        number of rasterizer passes. Releases the GIL."""
+    def accumulate_moving(
+        self,
+        times: np.ndarray,
+        weights: np.ndarray,
+        reference: int,
+        views: np.ndarray,
+        projection: np.ndarray,
+        width: int,
+        height: int,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The moving-camera accumulation frame: one view (N,4,4) f64 per sample, projection
+        (4,4) f64; rgba (height,width,4) f32 summed, depth and ids of the reference sample.
+        Releases the GIL."""
 
 # --- end acc-frame

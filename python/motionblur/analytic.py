@@ -19,7 +19,16 @@ from . import _core
 from ._validate import as_array, as_float, as_int
 from .raster import Camera, Frame
 
-__all__ = ["MovingDraw", "rasterize_motion", "coverage"]
+__all__ = ["MovingDraw", "rasterize_motion", "coverage", "TILE_BUDGET_BYTES"]
+
+#: Most bytes one pass over a tile of 32 x 32 samples may hold in fragments (the spans of time
+#: the triangles cover its samples), their chains and the triangles they come from, per thread.
+#: Past it the tile is done again in halves (rows, then columns, down to single samples): the
+#: result is the same bits, only slower (``stats["splits"]`` counts the halvings). A single
+#: sample that alone needs more (thousands of moving triangles stacked over it) raises
+#: ``MemoryError`` naming it; raise this setting to let it through. Each thread's buffers may
+#: reach twice this and are kept for the next tile.
+TILE_BUDGET_BYTES = 64 << 20
 
 
 class MovingDraw:
@@ -137,10 +146,9 @@ def rasterize_motion(
     increasing from 0 to 1 (normalised shutter time). ``samples``: 1, 2 or 4 per pixel along
     each axis. ``shutter``: ``"box"``, ``"ramp"``, ``"triangle"``, ``"gaussian"`` or (M,) weights
     of M equal strata. ``lights`` (pairs (direction (3,), intensity float or (3,))) and
-    ``ambient`` light the lambert draws. ``gauss``: points in time per
-    visible piece, 1 to 4, or ``"auto"`` (1 to 8 by the piece's length and the triangles it
-    crosses, with the triangles of one surface crossing a sample one after the other shaded
-    as one run). ``reference_time`` in [0, 1]: the instant depth, ids and velocity describe.
+    ``ambient`` light the lambert draws. ``gauss``: points in time per visible piece, 1 to
+    4, or ``"auto"`` (1 to 3 by the piece's length); a piece is cut where the triangle covering
+    the sample changes, so each triangle is shaded at its own points. ``reference_time`` in [0, 1]: the instant depth, ids and velocity describe.
     ``background``: an opaque layer the draws are depth-tested and composited against, one
     entry per sample: ``(rgba (HS,WS,4) float32 premultiplied, depth (HS,WS) float32 view
     depth (inf where empty), ids (HS,WS) int32)``. ``shade=False`` gives coverage only (every
@@ -151,8 +159,10 @@ def rasterize_motion(
     (pixels, the surface's screen motion from the first to the last boundary) of the surface in
     front at ``reference_time`` (of each pixel's nearest sample); ``stats`` with ``prims``,
     ``bin_entries``, ``intervals`` (covered spans found), ``pieces`` (visible pieces shaded),
-    ``merges``, ``segments`` and ``ms_*`` per stage. Bit-identical for any thread count; the GIL
-    is released.
+    ``splits`` (tile passes redone in halves to stay within :data:`TILE_BUDGET_BYTES`),
+    ``segments`` and ``ms_*`` per stage. Bit-identical for any thread count and any budget; the
+    GIL is released. ``MemoryError`` (naming the sample) where one sample alone needs more than
+    the budget.
     """
     t = as_array(times, "times", np.float64, (None,))
     vps, w, h = _view_projections(cameras, len(t))
@@ -196,7 +206,7 @@ def rasterize_motion(
     rgba, depth, ids, velocity, stats = _core._analytic(
         w, h, samples, np.ascontiguousarray(t), vps, [d._args() for d in draws], _shutter_arg(shutter),
         light_args, tuple(map(float, amb)), g, as_float(reference_time, "reference_time"),
-        bool(shade), bd,
+        bool(shade), bd, as_int(TILE_BUDGET_BYTES, "TILE_BUDGET_BYTES", minimum=1),
     )  # fmt: skip
     return Frame(rgba, depth, ids, velocity, stats)
 

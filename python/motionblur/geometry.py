@@ -26,7 +26,17 @@ import numpy as np
 
 from . import _core
 from ._optional import require
-from ._validate import as_array, as_float, as_int
+from ._validate import (
+    MAX_COORD,
+    as_array,
+    as_bool,
+    as_choice,
+    as_coords,
+    as_float,
+    as_int,
+    as_segments,
+    check_coords,
+)
 
 __all__ = [
     "Mesh",
@@ -39,6 +49,7 @@ __all__ = [
     "LEADING",
     "TRAILING",
     "JOINING",
+    "MAX_COORD",
 ]
 
 #: ``MotionVolume.part`` values: leading surface (front faces at shutter close).
@@ -48,7 +59,8 @@ TRAILING: int = int(_core.TRAILING)
 #: joining surface (contour swept along the path).
 JOINING: int = int(_core.JOINING)
 
-FILTERS = ("ramp", "box", "triangle", "gaussian")
+#: The shutter filters of the volumes' alphas (defined by the compiled core).
+FILTERS: tuple[str, ...] = tuple(_core.FILTERS)
 
 
 def _as(value, name: str, dtype) -> np.ndarray:
@@ -86,7 +98,9 @@ class Mesh:
         ``unreferenced_vertices`` and ``closed`` (no boundary, non-manifold or inconsistent edge).
 
     The edge adjacency is built in Rust on first use and kept on the object;
-    :meth:`with_vertices` makes a deformed copy that shares it.
+    :meth:`with_vertices` makes a deformed copy that shares it. Every coordinate must lie within
+    ``+-MAX_COORD`` (the coordinate range). A mesh pickles and deep-copies through its two arrays
+    (the copy builds its adjacency again when used).
     """
 
     __slots__ = ("_core", "_vertices", "_faces", "_stats")
@@ -111,6 +125,9 @@ class Mesh:
         f = _readonly(np.array(_as(faces, "faces", np.int64), copy=True))
         self._core = _core._Mesh(v, f)
         self._vertices, self._faces, self._stats = v, f, None
+
+    def __reduce__(self):
+        return Mesh, (self._vertices, self._faces)
 
     @classmethod
     def _from_core(cls, core, vertices, faces) -> Mesh:
@@ -138,7 +155,7 @@ class Mesh:
     def face_normals(self, unit: bool = True) -> np.ndarray:
         """(F,3) float64 face normals: unit vectors (zeros for degenerate faces), or with
         ``unit=False`` the raw cross products ``(b - a) x (c - a)`` (length twice the area)."""
-        return self._core.face_normals(bool(unit))
+        return self._core.face_normals(as_bool(unit, "unit"))
 
     def vertex_normals(self) -> np.ndarray:
         """(V,3) float64 area-weighted unit vertex normals (zeros where undefined)."""
@@ -190,7 +207,17 @@ def as_mesh(mesh, name: str = "mesh") -> Mesh:
 
 
 def _vec3(value, name: str) -> np.ndarray:
-    return as_array(value, name, np.float64, (3,))
+    """A (3,) float64 point or vector, finite and within the coordinate range."""
+    return as_coords(value, name, (3,))
+
+
+def _check_output(vertices: np.ndarray, name: str) -> None:
+    """The volume's vertices stay in the coordinate range (a large scale or a spin about a far
+    centre can carry a mesh that is in range out of it)."""
+    try:
+        check_coords(vertices, "volume")
+    except ValueError as exc:
+        raise ValueError(f"{name}: the volume leaves the coordinate range ({exc})") from None
 
 
 def contour_edges(mesh, motion, camera_position=None) -> np.ndarray:
@@ -268,17 +295,19 @@ class MotionVolume:
         )
 
 
-def _keyframes(motion) -> np.ndarray:
+def _keyframes(motion):
+    """The rigid keyframes of ``motion`` at the times i/K, validated and split by the core's
+    keyframe engine once (keyframes the engine made already are taken as they are)."""
+    if isinstance(motion, _core._Keyframes):
+        return motion
     arr = np.asarray(motion) if not isinstance(motion, np.ndarray) else motion
     if arr.ndim == 1:
         m = _vec3(motion, "motion")
         k = np.repeat(np.eye(4)[None], 2, axis=0)
         k[1, :3, 3] = m
-        return k
-    k = as_array(motion, "motion", np.float64, (None, 4, 4))
-    if len(k) < 2:
-        raise ValueError(f"motion: expected at least 2 keyframes, got {len(k)}")
-    return k
+    else:
+        k = as_array(motion, "motion", np.float64, (None, 4, 4), finite=False)
+    return _core._Keyframes(np.linspace(0.0, 1.0, len(k)), k, None, "motion")
 
 
 def _colors(colors, n_vertices: int) -> np.ndarray:
@@ -337,10 +366,12 @@ def motion_volume(
         ``[identity, translate(m)]``: the given vertices are the placement at shutter OPEN and the
         leading surface sits at ``v + m`` at shutter close; or rigid keyframes (K+1,4,4) float
         (rotation, positive uniform scale, translation; row-major, acting on column vectors) at
-        the equally spaced shutter times ``i / K``, applied to the vertices.
+        the equally spaced shutter times ``i / K``, applied to the vertices (the methods pass
+        the core's keyframe object, ``_core._Keyframes``, at those times).
     segments : int >= 1. Each keyframe interval is cut into ``segments`` joining segments
-        (translation lerp, rotation slerp, scale lerp); the total is ``K * segments``, so the
-        keyframes are always followed and ``segments`` only subdivides them (at most 4096).
+        (translation lerp, rotation slerp, scale lerp: the keyframe engine's interpolation);
+        the total is ``K * segments``, so the keyframes are always followed and ``segments``
+        only subdivides them (at most ``_core.MAX_SEGMENTS`` in total).
     filter : ``"ramp"``, the paper's, exactly as stated there (leading opaque, trailing and ring
         alpha ``max(0.1, 1 - D/E)`` with D the path length to the leading ring and E the extent
         along the motion; a look, its total coverage is not the object's area); or ``"box"``,
@@ -388,22 +419,16 @@ def motion_volume(
     """
     m = as_mesh(mesh)
     keys = _keyframes(motion)
-    seg = as_int(segments, "segments", minimum=1, maximum=4096)
-    if not isinstance(filter, str):
-        raise TypeError(f"filter: expected a string, got {type(filter).__name__}")
-    if filter not in FILTERS:
-        raise ValueError(f"filter: unknown filter {filter!r}; expected one of {', '.join(FILTERS)}")
+    seg = as_segments(segments)
+    as_choice(filter, "filter", FILTERS)
     nv = len(m.vertices)
     col, per_face = _vertex_or_face_colors(colors, face_colors, nv, len(m.faces))
     nrm = None if normals is None else as_array(normals, "normals", np.float64, (nv, 3))
     cam = None if camera_position is None else _vec3(camera_position, "camera_position")
-    if not isinstance(contour_line, (bool, np.bool_)):
-        raise TypeError(f"contour_line: expected a bool, got {type(contour_line).__name__}")
-    if not isinstance(visible_only, (bool, np.bool_)):
-        raise TypeError(f"visible_only: expected a bool, got {type(visible_only).__name__}")
-    out = _core.motion_volume(
-        m._core, keys, seg, filter, col, nrm, cam, per_face, bool(contour_line), bool(visible_only)
-    )
+    contour_line = as_bool(contour_line, "contour_line")
+    visible_only = as_bool(visible_only, "visible_only")
+    out = _core.motion_volume(m._core, keys, seg, filter, col, nrm, cam, per_face, contour_line, visible_only)
+    _check_output(out[0], "motion")
     return MotionVolume(*out)
 
 
@@ -445,7 +470,8 @@ def spin_volume(
         size; 0 gives :func:`motion_volume` of the translation, the mesh itself without one).
     center : (3,) float, a point on the axis.
     translation : optional (3,) float, a (small) translation over the shutter.
-    segments : optional int in 1..4096, the number of sweep steps (default one per pi/12).
+    segments : optional int in 1..``_core.MAX_SEGMENTS``, the number of sweep steps (default one
+        per pi/12).
     filter : ``"box"``, ``"ramp"``, ``"triangle"`` or ``"gaussian"``.
     colors, normals, camera_position, face_colors : as in :func:`motion_volume`.
 
@@ -460,16 +486,19 @@ def spin_volume(
     ang = as_float(angle, "angle")
     c = _vec3(center, "center")
     t = np.zeros(3) if translation is None else _vec3(translation, "translation")
-    seg = None if segments is None else as_int(segments, "segments", minimum=1, maximum=4096)
-    if not isinstance(filter, str):
-        raise TypeError(f"filter: expected a string, got {type(filter).__name__}")
-    if filter not in FILTERS:
-        raise ValueError(f"filter: unknown filter {filter!r}; expected one of {', '.join(FILTERS)}")
+    seg = None if segments is None else as_segments(segments)
+    as_choice(filter, "filter", FILTERS)
     nv = len(m.vertices)
     col, per_face = _vertex_or_face_colors(colors, face_colors, nv, len(m.faces))
     nrm = None if normals is None else as_array(normals, "normals", np.float64, (nv, 3))
     cam = None if camera_position is None else _vec3(camera_position, "camera_position")
-    out = _core.spin_volume(m._core, ax, ang, c, t, seg, filter, col, nrm, cam, per_face)
+    try:
+        out = _core.spin_volume(m._core, ax, ang, c, t, seg, filter, col, nrm, cam, per_face)
+    except ValueError as exc:  # the core's keyframes of the spin are called "motion": not an argument here
+        if not str(exc).startswith("motion:"):
+            raise
+        raise ValueError(f"center: the spin about it leaves the coordinate range ({exc})") from None
+    _check_output(out[0], "center")
     return MotionVolume(*out)
 
 
@@ -484,27 +513,37 @@ class ContourTable:
         e.g. clustered around a preferred direction of motion.
     seed : int >= 0, the generator's seed (splitmix64; the same seed gives the same table).
 
+    A table pickles and deep-copies (rebuilt from its mesh, directions and seed: the same sets).
+
     ``lookup(motion)`` returns the contour edges of the stored direction nearest to ``motion``
     (largest cosine) and the angle between the two in radians.
     """
 
-    __slots__ = ("_core", "mesh")
+    __slots__ = ("_core", "mesh", "_args")
 
     def __init__(self, mesh, directions=64, seed: int = 0):
         self.mesh = as_mesh(mesh)
         s = as_int(seed, "seed", minimum=0, maximum=2**64 - 1)
         if isinstance(directions, (int, np.integer)) and not isinstance(directions, bool):
             k = as_int(directions, "directions", minimum=1, maximum=65536)
+            self._args = (k, s)
             self._core = _core._ContourTable(self.mesh._core, k, s, None)
         elif np.ndim(directions) == 0:
             raise TypeError(f"directions: expected an int or a (K,3) array, got {type(directions).__name__}")
         else:
-            d = as_array(directions, "directions", np.float64, (None, 3))
+            d = as_coords(directions, "directions", (None, 3))
             if len(d) > 65536:
                 raise ValueError(f"directions: at most 65536, got {len(d)}")
             if (np.linalg.norm(d, axis=1) == 0).any():
                 raise ValueError("directions: a direction is zero")
+            d = np.array(d, copy=True)  # kept for pickling; the caller's array may change
+            d.flags.writeable = False
+            self._args = (d, s)
             self._core = _core._ContourTable(self.mesh._core, len(d), s, d)
+
+    def __reduce__(self):
+        # Rebuilt from what made it (the directions or their count and seed): the same table.
+        return ContourTable, (self.mesh, *self._args)
 
     def __len__(self) -> int:
         return len(self._core)
@@ -526,11 +565,11 @@ class ContourTable:
 
     def edges(self, index: int) -> np.ndarray:
         """(E,2) int64 contour edges stored for direction ``index``."""
-        return self._core.edges(as_int(index, "index", minimum=0))
+        return self._core.edges(as_int(index, "index", minimum=0, maximum=len(self) - 1))
 
     def front_faces(self, index: int) -> np.ndarray:
         """(F,) bool: the faces facing direction ``index`` (``n . d >= 0``)."""
-        return self._core.front(as_int(index, "index", minimum=0))
+        return self._core.front(as_int(index, "index", minimum=0, maximum=len(self) - 1))
 
     @property
     def storage_bytes(self) -> int:

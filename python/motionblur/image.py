@@ -6,9 +6,12 @@ images (alpha, depth) are float32 (H,W). Directions are (dx, dy) in pixels, +x r
 so blurs fade to transparent at the border and the opaque blur's rescale (eq. 7) keeps the colour
 there: the result does not depend on the size of the viewport (Kraus, section 3.3).
 
-Alpha is not checked against [0, 1] (nor colour against alpha): the filters are linear and apply
-as they are, but the opaque blur's rescale and the ``over``/``under`` composites assume premultiplied
-colour with alpha in [0, 1], and give colours and alphas outside that range otherwise.
+Alpha: the linear filters (``box_blur``, ``pyramid_blur``, ``velocity_blur``, ...) apply to any
+finite values. The kernels whose arithmetic assumes premultiplied colour with alpha in [0, 1]
+(``glow``, ``opaque_blur``, ``opaque_motion_blur`` and its ``base``, ``pyramid_glow``,
+``pyramid_opaque_blur``: the glow's ``1 - (1 - a)(1 - b)``, the rescale of eq. 7 and the
+``over``/``under`` composites) raise ValueError naming the argument when an alpha is outside
+[0, 1] (colour is not checked against alpha).
 
 The kernels are Rust, run on all cores (bit-identical for any thread count) and release the GIL.
 The caller's arrays are never written: every function returns a new array.
@@ -39,17 +42,24 @@ __all__ = [
     "pyramid_blur",
     "pyramid_glow",
     "pyramid_opaque_blur",
+    "reconstruction_blur",
     "velocity_blur",
 ]
 
+# The limits are the compiled core's.
 #: Longest filter accepted, in pixels.
-MAX_LENGTH = 65536.0
+MAX_LENGTH: float = _core.MAX_LENGTH
 #: Largest accepted ``fps`` / ``target_fps`` ratio of ``camera_motion_blur``.
-MAX_FPS_RATIO = 1000.0
+MAX_FPS_RATIO: float = _core.MAX_FPS_RATIO
+#: Longest velocity component :func:`velocity_blur` takes, in pixels (a streak that long
+#: crosses any image); :func:`camera_motion_blur` and the ``camera_velocity`` method clamp to it.
+MAX_VELOCITY: float = _core.MAX_VELOCITY
 #: Most pyramid levels, depth-of-field sub-images and blur samples accepted.
-MAX_LEVELS = 16
-MAX_LAYERS = 17
-MAX_SAMPLES = 1024
+MAX_LEVELS: int = _core.MAX_LEVELS
+MAX_LAYERS: int = _core.MAX_LAYERS
+MAX_SAMPLES: int = _core.MAX_SAMPLES
+#: Most gather taps per pixel of :func:`reconstruction_blur`.
+MAX_TAPS: int = _core.MAX_TAPS
 
 
 def _rgba(value, name="rgba", shape=None) -> np.ndarray:
@@ -242,6 +252,37 @@ def velocity_blur(rgba, velocity, samples=16) -> np.ndarray:
     return _core._velocity_blur(a, v, n)
 
 
+def reconstruction_blur(rgba, depth, velocity, samples=16, tile=None, soft_depth=0.02) -> np.ndarray:
+    """The velocity-buffer motion blur of game engines (McGuire et al. 2012's reconstruction
+    filter with Guertin et al. 2014's tile max, neighbour max and foreground/background gather;
+    ``src/image/reconstruct.rs`` has the formulas) of one sharp frame taken at mid-shutter.
+
+    ``rgba``: (H,W,4) float32 premultiplied; ``depth``: (H,W) float32 view-axis depth (> 0,
+    ``inf`` where nothing is hit); ``velocity``: (H,W,2) float32, each pixel's screen motion over
+    the whole shutter in pixels (the rasterizer's velocity buffer), the blur spanning
+    ``+- velocity / 2`` around the pixel; ``samples``: gather taps per pixel, even, in
+    [2, 256]; ``tile``: tile size in pixels (default: half the longest velocity, at least 8, so
+    no motion is shortened; a smaller tile clamps half velocities to it); ``soft_depth``: depth
+    difference, relative to depth, over which a tap goes from foreground to background (> 0).
+    Deterministic (a per-pixel hash jitters the taps), the same for any thread count.
+    Returns (H,W,4) float32 premultiplied.
+    """
+    a = _rgba(rgba)
+    d = _depth(depth, a.shape[:2])
+    v = as_array(velocity, "velocity", np.float32, (*a.shape[:2], 2), finite=False)
+    n = as_int(samples, "samples", minimum=2, maximum=MAX_TAPS)
+    if n % 2:
+        raise ValueError(f"samples: must be even (taps come in pairs), got {n}")
+    if tile is None:
+        vmax = float(np.sqrt((v.astype(np.float64) ** 2).sum(axis=-1)).max()) if np.isfinite(v).all() else 0.0
+        tile = max(8, int(np.ceil(0.5 * vmax)))
+    t = as_int(tile, "tile", minimum=1, maximum=1 << 16)
+    sd = as_float(soft_depth, "soft_depth")
+    if not sd > 0:
+        raise ValueError(f"soft_depth: must be > 0, got {sd}")
+    return _core._reconstruct(a, d, v, n, t, sd)
+
+
 def camera_motion_blur(
     rgba, depth, camera, previous_camera, samples=16, target_fps=None, fps=None
 ) -> np.ndarray:
@@ -250,7 +291,7 @@ def camera_motion_blur(
     ``rgba``: (H,W,4) float32 premultiplied; ``depth``: (H,W) float32 (> 0, ``inf`` sky);
     ``camera``, ``previous_camera``: ``motionblur.Camera`` of H x W pixels; ``samples``: N in
     [1, 1024]. ``target_fps`` and ``fps`` (frames per second, both or neither): the velocity is
-    scaled by ``fps / target_fps`` (at most ``MAX_FPS_RATIO`` = 1000) so every frame looks as if
+    scaled by ``fps / target_fps`` (at most ``MAX_FPS_RATIO``) so every frame looks as if
     rendered at the target rate. Velocities are then clamped to |v| <= 1e6 pixels (points very
     close to the previous camera's plane) before the blur.
     A static camera returns the image unchanged. Returns (H,W,4) float32 premultiplied.

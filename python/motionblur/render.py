@@ -23,6 +23,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from .raster import Frame, over_background
 from .scene import Scene
 
@@ -82,7 +84,14 @@ def methods_for(scene: Scene) -> list[str]:
     return [n for n, m in METHODS.items() if m.applies(scene)]
 
 
-def render(scene: Scene, method: str = "accumulation", **options: Any) -> Frame:
+def render(
+    scene: Scene,
+    method: str = "accumulation",
+    *,
+    aperture: float | None = None,
+    focus_distance: float | None = None,
+    **options: Any,
+) -> Frame:
     """Render ``scene`` with the registered ``method`` (``accumulation``, ``motion_volume``, ...).
 
     Returns a :class:`Frame` of ``scene.camera`` size: ``rgba`` (H,W,4) float32 premultiplied
@@ -91,6 +100,13 @@ def render(scene: Scene, method: str = "accumulation", **options: Any) -> Frame:
     ``method``, ``options`` and ``ms`` (wall time of the whole call). Unknown methods and options
     raise ValueError / TypeError; a method that does not apply to the scene (see
     :func:`methods_for`) warns with :class:`MethodNotApplicableWarning` and runs.
+
+    Depth of field (any method): ``aperture`` (the thin lens's radius, scene units, > 0) and
+    ``focus_distance`` (the focal plane's distance along the view axis, scene units, > 0), both
+    or neither, blur the method's frame with Kraus's sub-image depth of field
+    (:func:`motionblur.image.depth_of_field`, section 3.1) from its depth buffer: the lens of
+    Mitsuba's ``thinlens`` sensor (``reference.mitsuba(..., aperture=, focus_distance=)``), as
+    a post-process of the pinhole frame. ``stats`` then has ``dof`` (the lens).
     """
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
@@ -113,8 +129,11 @@ def render(scene: Scene, method: str = "accumulation", **options: Any) -> Frame:
             f"options: method {method!r} has no option {', '.join(map(repr, bad))}; "
             f"its options: {', '.join(_parameters(spec.fn)) or 'none'} (help(motionblur.render))"
         )
+    lens = _lens(aperture, focus_distance)
     t0 = time.perf_counter()
     frame = spec.fn(scene, **options)
+    if lens is not None:
+        frame = _with_depth_of_field(frame, scene, *lens)
     frame = over_background(frame, scene.background)
     frame.stats["method"] = method
     frame.stats["options"] = dict(options)
@@ -123,6 +142,40 @@ def render(scene: Scene, method: str = "accumulation", **options: Any) -> Frame:
 
 
 _RENDER_DOC = render.__doc__ or ""
+
+#: Sub-images of the depth of field that ``render(aperture=...)`` applies (Kraus's eq. 1 radii
+#: 0, 1.7, 3.4, 6.8, 13.6 pixels in front of and behind the focal plane).
+DOF_LAYERS = 9
+
+
+def _lens(aperture, focus_distance) -> tuple[float, float] | None:
+    """(aperture, focus_distance) checked, or None when both are None."""
+    if aperture is None and focus_distance is None:
+        return None
+    if aperture is None or focus_distance is None:
+        missing = "aperture" if aperture is None else "focus_distance"
+        raise ValueError(f"{missing}: depth of field needs both aperture and focus_distance")
+    from ._validate import as_float
+
+    a, f = as_float(aperture, "aperture"), as_float(focus_distance, "focus_distance")
+    for name, v in (("aperture", a), ("focus_distance", f)):
+        if not (np.isfinite(v) and v > 0):
+            raise ValueError(f"{name}: must be finite and > 0 (scene units), got {v}")
+    return a, f
+
+
+def _with_depth_of_field(frame: Frame, scene: Scene, aperture: float, focus: float) -> Frame:
+    """The frame blurred by the thin lens of radius ``aperture`` focused at ``focus``: Kraus's
+    eq. 5 takes the radius as ``focal_length / (2 f_number)``."""
+    from .image import depth_of_field
+
+    depth = np.where(np.isfinite(frame.depth) & (frame.depth > 0), frame.depth, np.inf).astype(np.float32)
+    cam = scene.camera
+    rgba = depth_of_field(frame.rgba, depth, focus, 2.0 * aperture, 1.0, cam.yfov, layers=DOF_LAYERS)
+    out = Frame(rgba, frame.depth, frame.ids, frame.velocity)
+    out.stats.update(frame.stats)
+    out.stats["dof"] = {"aperture": aperture, "focus_distance": focus, "layers": DOF_LAYERS}
+    return out
 
 
 def _parameters(fn) -> dict[str, inspect.Parameter]:

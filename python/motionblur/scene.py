@@ -10,7 +10,7 @@ A :class:`Scene` holds objects, a camera (whose pose may move with ``camera_moti
 and a shutter filter: ``"box"`` (uniform), ``"ramp"`` (weight 2t, rising to the close, the
 motion-volume paper's), ``"triangle"`` (peak at 0.5), ``"gaussian"`` (centred at 0.5, sigma
 1/6, truncated to [0, 1]) or a (M,) array of non-negative weights for M equal strata of the
-shutter. These are the same filters as the motion volume's (``src/volume_filter.rs``).
+shutter. These are the same filters as the motion volume's (``src/volume/filter.rs``).
 """
 
 from __future__ import annotations
@@ -19,9 +19,10 @@ import math
 
 import numpy as np
 
-from ._validate import as_array, as_float
+from . import _core
+from ._validate import as_array, as_choice, as_coords, as_float, as_list, as_rgb
 from .geometry import Mesh, as_mesh
-from .raster import Camera
+from .raster import Camera, unit_vector
 
 __all__ = [
     "Motion",
@@ -34,111 +35,35 @@ __all__ = [
     "rotate",
 ]
 
-SHUTTER_FILTERS = ("box", "ramp", "triangle", "gaussian")
-
-_RIGID_TOL = 1e-6
+#: The shutter filters' names (the motion volume's filters, defined by the compiled core).
+SHUTTER_FILTERS: tuple[str, ...] = tuple(_core.FILTERS)
 
 
 def translate(offset) -> np.ndarray:
     """(4,4) float64 translation by ``offset`` (3,)."""
     m = np.eye(4)
-    m[:3, 3] = as_array(offset, "offset", np.float64, (3,))
+    m[:3, 3] = as_coords(offset, "offset", (3,))
     return m
 
 
 def rotate(angle: float, axis=(0.0, 0.0, 1.0), center=(0.0, 0.0, 0.0)) -> np.ndarray:
     """(4,4) float64 rotation by ``angle`` radians (right hand) about ``axis`` (3,) through ``center`` (3,)."""
     a = as_array(axis, "axis", np.float64, (3,))
-    n = np.linalg.norm(a)
-    if n == 0:
+    if not np.abs(a).max() > 0:
         raise ValueError("axis: must not be zero")
-    q = _axis_angle_quat(a / n, as_float(angle, "angle"))
-    m = np.eye(4)
-    m[:3, :3] = _quat_to_mat(q)
-    c = as_array(center, "center", np.float64, (3,))
-    m[:3, 3] = c - m[:3, :3] @ c
-    return m
-
-
-# ---------------------------------------------------------------- quaternions (w, x, y, z)
-
-
-def _axis_angle_quat(axis: np.ndarray, angle: float) -> np.ndarray:
-    return np.concatenate([[math.cos(angle / 2)], math.sin(angle / 2) * axis])
-
-
-def _quat_to_mat(q: np.ndarray) -> np.ndarray:
-    w, x, y, z = q / np.linalg.norm(q)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
-def _mat_to_quat(r: np.ndarray) -> np.ndarray:
-    """Unit quaternion of a rotation matrix (Shepperd's method, numerically stable)."""
-    tr = np.trace(r)
-    if tr > 0:
-        s = math.sqrt(tr + 1.0) * 2
-        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
-    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
-        s = math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2]) * 2
-        q = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
-    elif r[1, 1] > r[2, 2]:
-        s = math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2]) * 2
-        q = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
-    else:
-        s = math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1]) * 2
-        q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
-    q = np.asarray(q)
-    return q / np.linalg.norm(q)
-
-
-def _slerp(q0: np.ndarray, q1: np.ndarray, u: float) -> np.ndarray:
-    d = float(q0 @ q1)
-    if d < 0.0:  # the shorter arc
-        q1, d = -q1, -d
-    if d > 0.9995:
-        q = q0 + u * (q1 - q0)
-        return q / np.linalg.norm(q)
-    theta = math.acos(min(1.0, d))
-    s = math.sin(theta)
-    return (math.sin((1 - u) * theta) * q0 + math.sin(u * theta) * q1) / s
+    if not 1e-150 < np.abs(a).max() < 1e150:  # only the direction counts: keep its length finite
+        a = a / np.abs(a).max()
+    c = as_coords(center, "center", (3,))
+    return _core._rotate(as_float(angle, "angle"), a, c)
 
 
 # ---------------------------------------------------------------- motion
 
 
-def _check_times(times, name: str = "times") -> np.ndarray:
-    t = as_array(times, name, np.float64, (None,))
-    if (t < 0).any() or (t > 1).any():
-        raise ValueError(f"{name}: must lie in the shutter interval [0, 1], got [{t.min():g}, {t.max():g}]")
-    if len(t) > 1 and not (np.diff(t) > 0).all():
-        raise ValueError(f"{name}: must be strictly increasing")
-    return t
-
-
-def _decompose(m: np.ndarray, index: int) -> tuple[np.ndarray, np.ndarray, float]:
-    """(translation (3,), quaternion (4,), scale) of a similarity transform, or ValueError."""
-    if not np.allclose(m[3], [0, 0, 0, 1], atol=1e-12):
-        raise ValueError(f"transforms: keyframe {index}: last row must be [0, 0, 0, 1]")
-    lin = m[:3, :3]
-    det = np.linalg.det(lin)
-    if not det > 0:
-        raise ValueError(
-            f"transforms: keyframe {index} is not rigid (determinant {det:g} <= 0: mirror or singular)"
-        )
-    s = det ** (1.0 / 3.0)
-    r = lin / s
-    if np.abs(r.T @ r - np.eye(3)).max() > _RIGID_TOL:
-        raise ValueError(
-            f"transforms: keyframe {index} is not rigid (rotation times a positive uniform scale); "
-            "shear and non-uniform scale are not supported"
-        )
-    return m[:3, 3].copy(), _mat_to_quat(r), s
+def _rebuild_motion(times, transforms, vertices) -> Motion:
+    if vertices is not None:
+        return Motion.deforming(times, vertices)
+    return Motion(times, transforms)
 
 
 class Motion:
@@ -150,21 +75,22 @@ class Motion:
     translation is lerped, the rotation slerped (shorter arc) and the scale lerped; before the first
     and after the last keyframe the transform holds. Use :meth:`deforming` for vertex keyframes.
 
-    Raises ValueError for wrong shapes, NaN, unsorted or out-of-range times, K < 1 and
-    non-rigid matrices (shear, non-uniform scale, mirrors). The inputs are copied.
+    The keyframes are validated and split into translation, rotation and scale once, by the
+    compiled core's keyframe engine (``src/motion/``), which also samples them.
+
+    Raises ValueError for wrong shapes, NaN, unsorted or out-of-range times, K < 1,
+    non-rigid matrices (shear, non-uniform scale, mirrors), scales outside [1/MAX_COORD,
+    MAX_COORD] (1e-9 to 1e9: scaled coordinates stay in the coordinate range and the scale is
+    split off through the determinant) and translations beyond ``+-MAX_COORD``. The inputs
+    are copied.
     """
 
     def __init__(self, times, transforms):
-        t = _check_times(times)
-        m = as_array(transforms, "transforms", np.float64, (None, 4, 4))
-        if len(m) != len(t):
-            raise ValueError(f"transforms: expected {len(t)} keyframes (one per time), got {len(m)}")
-        parts = [_decompose(m[i], i) for i in range(len(m))]
+        t = as_array(times, "times", np.float64, (None,), finite=False)
+        m = as_array(transforms, "transforms", np.float64, (None, 4, 4), finite=False)
+        self._keys = _core._Keyframes(t, m, None)  # validates times, count and every matrix
         self.times = t.view()  # read-only below; t may be the caller's own array
         self.transforms = m.copy()
-        self._trans = np.array([p[0] for p in parts])
-        self._quat = np.array([p[1] for p in parts])
-        self._scale = np.array([p[2] for p in parts])
         self.vertices = None
         for a in (self.times, self.transforms):
             a.flags.writeable = False
@@ -174,9 +100,8 @@ class Motion:
         """Two keyframes at t = 0 and t = 1. ``start`` and ``end``: (4,4) transforms or (3,) translations."""
 
         def mat(x, name):
-            a = np.asarray(x, dtype=np.float64) if not isinstance(x, str) else None
-            if a is not None and a.shape == (3,):
-                return translate(a)
+            if np.shape(x) == (3,):
+                return translate(as_coords(x, name, (3,)))
             return as_array(x, name, np.float64, (4, 4))
 
         return cls([0.0, 1.0], np.stack([mat(start, "start"), mat(end, "end")]))
@@ -186,15 +111,15 @@ class Motion:
         """Vertex keyframes: ``times`` (K,) strictly increasing in [0, 1], ``vertices`` (K,V,3)
         float world positions (the object's mesh gives the faces, with V vertices). Positions are
         interpolated linearly between keyframes and held outside them."""
-        t = _check_times(times)
-        v = as_array(vertices, "vertices", np.float64, (None, None, 3))
-        if len(v) != len(t):
-            raise ValueError(f"vertices: expected {len(t)} keyframes (one per time), got {len(v)}")
+        t = as_array(times, "times", np.float64, (None,), finite=False)
+        v = as_array(vertices, "vertices", np.float64, (None, None, 3), finite=False)
         self = cls.__new__(cls)
-        self.times = t
+        self._keys = _core._Keyframes(t, None, v)  # validates times, count and values
+        self.times = t.view()
         self.vertices = v.copy()
-        self.vertices.flags.writeable = False
         self.transforms = None
+        for a in (self.times, self.vertices):
+            a.flags.writeable = False
         return self
 
     @property
@@ -208,38 +133,23 @@ class Motion:
         k = self.vertices if self.is_deforming else self.transforms
         return bool((k == k[0]).all())
 
-    def _segment(self, t: float) -> tuple[int, int, float]:
-        t = as_float(t, "t")
-        ts = self.times
-        if t <= ts[0] or len(ts) == 1:
-            return 0, 0, 0.0
-        if t >= ts[-1]:
-            return len(ts) - 1, len(ts) - 1, 0.0
-        j = int(np.searchsorted(ts, t, side="right"))
-        i = j - 1
-        return i, j, (t - ts[i]) / (ts[j] - ts[i])
-
     def transform_at(self, t: float) -> np.ndarray:
         """(4,4) float64 rigid transform at shutter time ``t`` (identity for deforming motion)."""
-        if self.is_deforming:
-            return np.eye(4)
-        i, j, u = self._segment(t)
-        if u == 0.0:
-            return self.transforms[i].copy()
-        out = np.eye(4)
-        s = (1 - u) * self._scale[i] + u * self._scale[j]
-        out[:3, :3] = s * _quat_to_mat(_slerp(self._quat[i], self._quat[j], u))
-        out[:3, 3] = (1 - u) * self._trans[i] + u * self._trans[j]
-        return out
+        return self._keys.transform_at(as_float(t, "t"))
+
+    def transforms_at(self, times) -> np.ndarray:
+        """(N,4,4) float64 rigid transforms at the shutter times ``times`` (N,) (identities for
+        deforming motion); each equals :meth:`transform_at` of its time."""
+        return self._keys.transforms_at(as_array(times, "times", np.float64, (None,), allow_empty=True))
 
     def vertices_at(self, t: float) -> np.ndarray:
         """(V,3) float64 positions at ``t`` of a deforming motion (linear between keyframes)."""
         if not self.is_deforming:
             raise ValueError("motion: vertices_at needs a deforming motion (Motion.deforming)")
-        i, j, u = self._segment(t)
-        if u == 0.0:
-            return self.vertices[i].copy()
-        return (1 - u) * self.vertices[i] + u * self.vertices[j]
+        return self._keys.vertices_at(as_float(t, "t"))
+
+    def __reduce__(self):
+        return _rebuild_motion, (self.times, self.transforms, self.vertices)
 
     def __repr__(self) -> str:
         kind = "deforming" if self.is_deforming else "rigid"
@@ -288,11 +198,7 @@ class Object:
             raise ValueError("color: RGB must be >= 0 and alpha in [0, 1]")
         self.color = c.view()  # c may be the caller's own float32 array
         self.color.flags.writeable = False
-        if not isinstance(shading, str):
-            raise TypeError(f"shading: expected a string, got {type(shading).__name__}")
-        if shading not in ("flat", "lambert"):
-            raise ValueError(f"shading: expected 'flat' or 'lambert', got {shading!r}")
-        self.shading = shading
+        self.shading = as_choice(shading, "shading", _core.SHADINGS)
         if motion is not None and not isinstance(motion, Motion):
             raise TypeError(f"motion: expected a motionblur.Motion or None, got {type(motion).__name__}")
         if motion is not None and motion.is_deforming and motion.vertices.shape[1] != nv:
@@ -339,16 +245,8 @@ class DirectionalLight:
     ``intensity`` float or RGB (3,) >= 0 (irradiance on a surface facing it, linear)."""
 
     def __init__(self, direction, intensity=1.0) -> None:
-        d = as_array(direction, "direction", np.float64, (3,))
-        n = np.linalg.norm(d)
-        if n == 0:
-            raise ValueError("direction: must not be zero")
-        k = np.asarray(intensity, dtype=np.float64)
-        k = as_array(np.broadcast_to(k, (3,)) if k.ndim == 0 else k, "intensity", np.float64, (3,))
-        if (k < 0).any():
-            raise ValueError("intensity: must be >= 0")
-        self.direction = d / n
-        self.intensity = k
+        self.direction = unit_vector(direction, "direction")
+        self.intensity = as_rgb(intensity, "intensity")
 
     def __repr__(self) -> str:
         return f"DirectionalLight(direction={self.direction.round(3).tolist()}, intensity={self.intensity.tolist()})"
@@ -359,7 +257,7 @@ class DirectionalLight:
 
 def shutter_cdf(shutter, t) -> np.ndarray:
     """Cumulative shutter weight W(t) (W(0) = 0, W(1) = 1) of a filter name or (M,) weights, at ``t``."""
-    t = np.clip(np.asarray(t, dtype=np.float64), 0.0, 1.0)
+    t = np.clip(as_array(t, "t", np.float64, (None,) * np.ndim(t), allow_empty=True), 0.0, 1.0)
     if isinstance(shutter, str):
         if shutter == "box":
             return t.copy()
@@ -373,18 +271,14 @@ def shutter_cdf(shutter, t) -> np.ndarray:
             lo, hi = phi(-3.0), phi(3.0)
             return (phi((t - 0.5) * 6.0) - lo) / (hi - lo)
         raise ValueError(f"shutter: unknown filter {shutter!r}; expected one of {', '.join(SHUTTER_FILTERS)}")
-    w = np.asarray(shutter, dtype=np.float64)
+    w = _check_shutter(shutter)
     cum = np.concatenate([[0.0], np.cumsum(w) / w.sum()])
     return np.interp(t, np.linspace(0.0, 1.0, len(w) + 1), cum)
 
 
 def _check_shutter(shutter):
     if isinstance(shutter, str):
-        if shutter not in SHUTTER_FILTERS:
-            raise ValueError(
-                f"shutter: unknown filter {shutter!r}; expected one of {', '.join(SHUTTER_FILTERS)}"
-            )
-        return shutter
+        return as_choice(shutter, "shutter", SHUTTER_FILTERS)
     w = as_array(shutter, "shutter", np.float64, (None,))
     if (w < 0).any() or not w.sum() > 0:
         raise ValueError("shutter: weights must be >= 0 with a positive sum")
@@ -419,20 +313,12 @@ class Scene:
         reference_time="close",
         ambient=0.0,
     ) -> None:
-        if isinstance(objects, Object):
-            objects = [objects]
-        objects = list(objects)
-        for i, o in enumerate(objects):
-            if not isinstance(o, Object):
-                raise TypeError(f"objects: item {i} is a {type(o).__name__}, not a motionblur.Object")
+        objects = as_list(objects, "objects", Object, "motionblur.Object")
         if not isinstance(camera, Camera):
             raise TypeError(f"camera: expected a motionblur.Camera, got {type(camera).__name__}")
-        lights = list(lights or ())
-        for i, light in enumerate(lights):
-            if not isinstance(light, DirectionalLight):
-                raise TypeError(
-                    f"lights: item {i} is a {type(light).__name__}, not a motionblur.DirectionalLight"
-                )
+        lights = as_list(
+            () if lights is None else lights, "lights", DirectionalLight, "motionblur.DirectionalLight"
+        )
         if camera_motion is not None:
             if not isinstance(camera_motion, Motion):
                 raise TypeError(
@@ -440,7 +326,7 @@ class Scene:
                 )
             if camera_motion.is_deforming:
                 raise ValueError("camera_motion: must be rigid, not deforming")
-            if np.abs(camera_motion._scale - 1.0).max() > 1e-9:
+            if np.abs(camera_motion._keys.scales() - 1.0).max() > 1e-9:
                 raise ValueError("camera_motion: must not scale (rotation and translation only)")
         self.objects = objects
         self.camera = camera
@@ -464,11 +350,7 @@ class Scene:
                 raise ValueError(f"reference_time: must be in [0, 1], got {rt}")
             self.reference_t = rt
         self.reference_time = reference_time
-        amb = np.asarray(ambient, dtype=np.float64)
-        amb = as_array(np.broadcast_to(amb, (3,)) if amb.ndim == 0 else amb, "ambient", np.float64, (3,))
-        if (amb < 0).any():
-            raise ValueError("ambient: must be >= 0")
-        self.ambient = amb
+        self.ambient = as_rgb(ambient, "ambient")
 
     @property
     def camera_moves(self) -> bool:
@@ -488,6 +370,14 @@ class Scene:
             return np.array(self.camera.pose)
         return self.camera_motion.transform_at(t) @ self.camera.pose
 
+    def camera_poses_at(self, times) -> np.ndarray:
+        """(N,4,4) camera-to-world poses at the shutter times ``times`` (N,), each equal to
+        :meth:`camera_pose_at` of its time."""
+        times = as_array(times, "times", np.float64, (None,))
+        if self.camera_motion is None:
+            return np.repeat(np.array(self.camera.pose)[None], len(times), axis=0)
+        return self.camera_motion.transforms_at(times) @ self.camera.pose
+
     def camera_at(self, t: float) -> Camera:
         """The :class:`Camera` at shutter time ``t`` (same intrinsics, moved pose)."""
         if self.camera_motion is None:
@@ -504,7 +394,8 @@ class Scene:
         [0, 1]): each time stands for the part of the shutter nearest to it (the cells between the
         midpoints of neighbouring times), weighted by the shutter filter's integral over it. For
         stratified times ``(i + 0.5) / N`` the cells are the strata."""
-        t = _check_times(times, "times")
+        t = as_array(times, "times", np.float64, (None,), finite=False)
+        _core._check_times(t)
         edges = np.concatenate([[0.0], 0.5 * (t[1:] + t[:-1]), [1.0]])
         w = np.diff(self.shutter_cdf(edges))
         total = w.sum()

@@ -8,6 +8,9 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 
+/// Fewest samples per parallel job of `accumulate` (a small rectangle is summed on one thread).
+const MIN_SAMPLES: usize = 16384;
+
 /// Samples per parallel job of `over`.
 const CHUNK: usize = 8192;
 
@@ -84,17 +87,25 @@ pub fn accumulate(
         .enumerate()
         .skip(rect.y0)
         .take(rect.height)
+        .with_min_len(MIN_SAMPLES.div_ceil(rect.width))
         .for_each(|(y, row)| {
             let ry = y - rect.y0;
             let src = &rgba[4 * ry * rect.width..4 * (ry + 1) * rect.width];
-            let dep = &depth[ry * rect.width..(ry + 1) * rect.width];
             let dst = &mut row[4 * rect.x0..4 * (rect.x0 + rect.width)];
-            for (i, (a4, r4)) in dst.chunks_exact_mut(4).zip(src.chunks_exact(4)).enumerate() {
-                let front = match limit {
-                    Some(l) => dep[i] < l[y * stride + rect.x0 + i],
-                    None => true,
-                };
-                if front {
+            let Some(l) = limit else {
+                for (a, r) in dst.iter_mut().zip(src) {
+                    *a += weight * *r;
+                }
+                return;
+            };
+            let dep = &depth[ry * rect.width..(ry + 1) * rect.width];
+            let lim = &l[y * stride + rect.x0..y * stride + rect.x0 + rect.width];
+            for ((a4, r4), (d, m)) in dst
+                .chunks_exact_mut(4)
+                .zip(src.chunks_exact(4))
+                .zip(dep.iter().zip(lim))
+            {
+                if d < m {
                     for j in 0..4 {
                         a4[j] += weight * r4[j];
                     }

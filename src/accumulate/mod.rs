@@ -1,8 +1,16 @@
-//! The accumulation buffer's kernels: the weighted, depth-tested sum of a moving layer, the
-//! composite and resolve of layers, and the conservative back-face selection of a translating
-//! mesh.
+//! The accumulation buffer: its kernels (the weighted, depth-tested sum of a moving layer, the
+//! composite and resolve of layers), the conservative back-face selection of a translating
+//! mesh, the painter that draws objects at any shutter time, and the whole frame's samples in
+//! one call.
 mod facing;
+mod frame;
 mod kernels;
+mod painter;
 
 pub use facing::facing_faces;
+pub use frame::{
+    accumulate_moving, accumulate_still, pixel_rect, sample_rects, window_projection, Accumulated,
+    Samples, StaticLayer, StillCamera,
+};
 pub use kernels::{accumulate, composite, over, resolve, Rect};
+pub use painter::{Layer, PaintObject, Painter};

@@ -3,7 +3,7 @@
 use glam::{DMat4, DVec4};
 use rayon::prelude::*;
 
-use super::resolve::Quadrature;
+use super::quadrature::Quadrature;
 use crate::error::{Error, Result};
 use crate::raster::{check_size, vertex_normals, Light, Shading};
 use crate::shutter::Shutter;
@@ -42,18 +42,25 @@ pub struct Backdrop<'a> {
 /// Everything one frame needs.
 #[derive(Clone, Debug)]
 pub struct Input<'a> {
-    /// Image size in pixels, and samples per pixel along each axis (1, 2 or 4).
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Samples per pixel along each axis (1, 2 or 4).
     pub samples: u32,
     /// The segment boundaries: `K + 1` strictly increasing shutter times from 0 to 1.
     pub times: &'a [f64],
     /// The camera's view-projection (OpenGL clip space) at every boundary, or one for all.
     pub view_projections: &'a [DMat4],
+    /// The moving meshes.
     pub draws: &'a [MovingDraw<'a>],
+    /// The static scene behind them, if any.
     pub backdrop: Option<Backdrop<'a>>,
+    /// The shutter filter.
     pub shutter: &'a Shutter,
+    /// Directional lights (lambert shading).
     pub lights: &'a [Light],
+    /// Ambient light (lambert shading).
     pub ambient: [f32; 3],
     /// Points in time per visible piece.
     pub quadrature: Quadrature,
@@ -61,7 +68,13 @@ pub struct Input<'a> {
     pub reference_time: f64,
     /// False: coverage only (every surface white and unlit), no shading.
     pub shade: bool,
+    /// Most bytes one pass over a tile may hold in fragments, links and prims (per thread);
+    /// past it the tile is done in smaller passes, with the same result ([`DEFAULT_TILE_BUDGET`]).
+    pub tile_budget: usize,
 }
+
+/// The default of [`Input::tile_budget`]: 64 MiB.
+pub const DEFAULT_TILE_BUDGET: usize = 64 << 20;
 
 /// A draw's positions in clip space and its normals at every boundary.
 pub struct Prepared {
@@ -73,6 +86,9 @@ pub struct Prepared {
     pub normals: Vec<[f32; 3]>,
     /// The draw's alpha range per face is read from here: all corners opaque.
     pub opaque_everywhere: bool,
+    /// The premultiplied colour every triangle of the draw shows at every point, when shading
+    /// cannot vary: flat shading of one colour for all vertices, or no shading at all.
+    pub uniform: Option<[f32; 4]>,
 }
 
 fn finite3(p: &[f64; 3]) -> bool {
@@ -173,6 +189,9 @@ pub fn validate(input: &Input) -> Result<()> {
             }
         }
     }
+    if input.tile_budget == 0 {
+        return Err(Error::value("tile_budget", "must be at least 1 byte"));
+    }
     if let Some(b) = &input.backdrop {
         let ns = (input.width * input.samples) as usize * (input.height * input.samples) as usize;
         if b.depth.len() != ns || b.ids.len() != ns || b.rgba.len() != 4 * ns {
@@ -221,5 +240,19 @@ pub fn prepare(input: &Input, d: &MovingDraw) -> Prepared {
         clip,
         normals,
         opaque_everywhere: d.rgba.iter().all(|c| c[3] >= 1.0),
+        uniform: uniform_colour(input, d),
     }
+}
+
+/// See [`Prepared::uniform`]: the straight colour premultiplied as shading does.
+fn uniform_colour(input: &Input, d: &MovingDraw) -> Option<[f32; 4]> {
+    if !input.shade {
+        return Some([1.0; 4]);
+    }
+    let c = d.rgba[0];
+    if d.shading == Shading::Lambert || d.rgba.iter().any(|x| *x != c) {
+        return None;
+    }
+    let a = c[3].clamp(0.0, 1.0);
+    Some([c[0] * a, c[1] * a, c[2] * a, a])
 }

@@ -57,6 +57,29 @@ fn ends_decide(a: f64, b: f64, c: f64) -> Option<bool> {
     }
 }
 
+/// `x.floor() as i64` (saturating, NaN to 0) without a libm call: the build targets plain
+/// x86-64, which has no rounding instruction, and sample bounds take this per hull row.
+#[inline(always)]
+pub fn floor_i64(x: f64) -> i64 {
+    let i = x as i64;
+    if (i as f64) > x {
+        i.saturating_sub(1)
+    } else {
+        i
+    }
+}
+
+/// `x.ceil() as i64` (saturating, NaN to 0) without a libm call, as [`floor_i64`].
+#[inline(always)]
+pub fn ceil_i64(x: f64) -> i64 {
+    let i = x as i64;
+    if (i as f64) < x {
+        i.saturating_add(1)
+    } else {
+        i
+    }
+}
+
 /// Real roots of `a t^2 + b t + c` strictly inside (0, 1), ascending, from the canonical sign.
 #[inline]
 pub fn quadratic_roots(a: f64, b: f64, c: f64) -> ([f64; 2], usize) {
@@ -200,16 +223,15 @@ impl Spans {
         out
     }
 
-    /// [`Spans::nonneg_quadratic`] when the set is one span or none: `Ok(Some((a, b)))`,
-    /// `Ok(None)`, or `Err(())` when it has two spans (the caller falls back to the general form).
+    /// [`Spans::nonneg_quadratic`] as one span or none, `Ok(Some((a, b)))` or `Ok(None)`, or
+    /// `Err((r0, r1))` when it is the two spans `[0, r0]` and `[r1, 1]` (the same set).
     #[inline(always)]
-    #[allow(clippy::result_unit_err)]
     pub fn nonneg_quadratic_one(
         a: f64,
         b: f64,
         c: f64,
         tie: impl Fn(f64) -> bool,
-    ) -> Result<Option<(f64, f64)>, ()> {
+    ) -> Result<Option<(f64, f64)>, (f64, f64)> {
         match ends_decide(a, b, c) {
             Some(true) => return Ok(Some((0.0, 1.0))),
             Some(false) => return Ok(None),
@@ -242,7 +264,7 @@ impl Spans {
                     [true, true, false] => Ok(Some((0.0, r[1]))),
                     [false, true, true] => Ok(Some((r[0], 1.0))),
                     [true, true, true] => Ok(Some((0.0, 1.0))),
-                    [true, false, true] => Err(()),
+                    [true, false, true] => Err((r[0], r[1])),
                 }
             }
         }
@@ -284,7 +306,8 @@ impl Spans {
         out
     }
 
-    /// The times in `self` or `other`.
+    /// The times in `self` or `other` (tests compare sets with it).
+    #[cfg(test)]
     pub fn union(&self, other: &Spans) -> Spans {
         let mut all = [[0.0; 2]; 2 * MAX_SPANS];
         let mut m = 0;
@@ -317,6 +340,55 @@ pub fn quadratic_at(a: f64, b: f64, c: f64, t: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn integer_floor_and_ceil_match_the_float_ones() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            2.5,
+            -2.5,
+            1e-300,
+            -1e-300,
+            4503599627370495.5,
+            -4503599627370495.5,
+            9.2e18,
+            -9.2e18,
+            9.3e18,
+            -9.3e18,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            f64::MAX,
+            f64::MIN,
+        ];
+        let mut x = 1.0e-3f64;
+        while x < 1e20 {
+            xs.extend([
+                x,
+                -x,
+                x.next_up(),
+                -x.next_up(),
+                x.next_down(),
+                -x.next_down(),
+            ]);
+            x *= 1.37;
+        }
+        for k in -300..300 {
+            let v = f64::from(k) * 0.25;
+            xs.extend([v, v.next_up(), v.next_down()]);
+        }
+        for x in xs {
+            assert_eq!(floor_i64(x), x.floor() as i64, "floor {x}");
+            assert_eq!(ceil_i64(x), x.ceil() as i64, "ceil {x}");
+        }
+    }
 
     #[test]
     fn quadratic_roots_match_the_closed_form_and_are_sign_symmetric() {

@@ -18,7 +18,8 @@
 //! Without a plane crossing, every corner's image moves on a straight line and the triangle at
 //! any instant is the hull of its corners, so the segment's swept image lies in the convex hull
 //! of the six end positions: only samples inside it are tested.
-use super::poly::{cubic_at, quadratic_at, Spans};
+use super::hull::convex_hull;
+use super::poly::{ceil_i64, cubic_at, floor_i64, quadratic_at, Spans};
 
 /// The prim crosses the near or far plane during its segment (per-sample plane cubics, no hull).
 pub const CLIPS: u8 = 1;
@@ -93,6 +94,13 @@ impl Facing {
     pub fn is_full(&self) -> bool {
         self.n == 1 && self.s[0] == [0.0, 1.0]
     }
+
+    /// The span in double precision when there is exactly one (as [`Facing::spans`] has it).
+    #[inline]
+    pub fn one(&self) -> Option<(f64, f64)> {
+        let [a, b] = self.s[0].map(f64::from);
+        (self.n == 1 && a < b).then_some((a, b))
+    }
 }
 
 /// A triangle of one draw over one segment, set up once.
@@ -159,6 +167,10 @@ impl Corners {
     }
 }
 
+/// What [`setup`] finds of a prim: flags, front and back facing, sample bounds, hull and its
+/// number of points.
+pub type Setup = (u8, Facing, Facing, [i32; 4], [[f32; 2]; 6], u8);
+
 /// Builds the prim of one face over one segment, or None when it can cover nothing: back-facing
 /// throughout with culling, degenerate throughout, or outside the image throughout.
 pub fn setup(
@@ -168,7 +180,7 @@ pub fn setup(
     cull_back: bool,
     ws: u32,
     hs: u32,
-) -> Option<(u8, Facing, Facing, [i32; 4], [[f32; 2]; 6], u8)> {
+) -> Option<Setup> {
     // Outside one side of the view volume at both ends (linear motion keeps it there).
     let outside = |f: &dyn Fn(&[f64; 4]) -> bool| c0.iter().chain(c1).all(f);
     if outside(&|c| c[0] > c[3])
@@ -213,8 +225,8 @@ pub fn setup(
             y1 = y1.max(p[1]);
         }
         // Samples sit at i + 0.5: the first whose centre can be inside, one past the last.
-        let lo = |v: f64, n: u32| ((v - 0.5).ceil().max(0.0) as i64).min(n as i64) as i32;
-        let hi = |v: f64, n: u32| (((v - 0.5).floor() + 1.0).max(0.0) as i64).min(n as i64) as i32;
+        let lo = |v: f64, n: u32| ceil_i64(v - 0.5).max(0).min(n as i64) as i32;
+        let hi = |v: f64, n: u32| floor_i64(v - 0.5).saturating_add(1).max(0).min(n as i64) as i32;
         let bbox = [lo(x0, ws), lo(y0, hs), hi(x1, ws), hi(y1, hs)];
         if bbox[0] >= bbox[2] || bbox[1] >= bbox[3] {
             return None;
@@ -232,132 +244,6 @@ pub fn setup(
     ))
 }
 
-/// Convex hull (counter-clockwise in a y-up sense, i.e. clockwise on screen) of six points, in
-/// single precision, grown by a hair so that rounding never drops a covered sample.
-fn convex_hull(pts: &[[f64; 2]; 6]) -> ([[f32; 2]; 6], u8) {
-    let mut p = *pts;
-    p.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
-    let turn = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
-        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-    };
-    let mut h: Vec<[f64; 2]> = Vec::with_capacity(12);
-    for &q in p.iter() {
-        while h.len() >= 2 && turn(h[h.len() - 2], h[h.len() - 1], q) <= 0.0 {
-            h.pop();
-        }
-        h.push(q);
-    }
-    let lower = h.len() + 1;
-    for &q in p.iter().rev().skip(1) {
-        while h.len() >= lower && turn(h[h.len() - 2], h[h.len() - 1], q) <= 0.0 {
-            h.pop();
-        }
-        h.push(q);
-    }
-    h.pop();
-    let mut out = [[0.0f32; 2]; 6];
-    let n = h.len().min(6);
-    for (o, q) in out.iter_mut().zip(&h) {
-        *o = [q[0] as f32, q[1] as f32];
-    }
-    (out, n as u8)
-}
-
-/// The sample columns `[x0, x1)` that the prim's hull reaches in each sample row `y0 + r`
-/// (centre `y0 + r + 0.5`) for `r` in `0..out.len()`, within `[bx0, bx1)`; `(0, 0)` where it
-/// reaches none. One pass over the hull's edges (each touches only the rows it spans).
-pub fn row_spans(prim: &Prim, y0: i32, bx0: i32, bx1: i32, out: &mut [(i32, i32)]) {
-    let rows = out.len();
-    if prim.nhull == 0 {
-        out.fill((bx0, bx1));
-        return;
-    }
-    const EPS: f64 = 1e-3;
-    let mut lo = [f64::MAX; 64];
-    let mut hi = [f64::MIN; 64];
-    debug_assert!(rows <= 64);
-    let n = prim.nhull as usize;
-    let yc = |r: usize| f64::from(y0) + r as f64 + 0.5;
-    // rows whose centre lies in [a, b]
-    let row_range = |a: f64, b: f64| {
-        let r0 = ((a - f64::from(y0) - 0.5).ceil().max(0.0)) as usize;
-        let r1 = (((b - f64::from(y0) - 0.5).floor() + 1.0).max(0.0) as usize).min(rows);
-        r0..r1.max(r0.min(rows))
-    };
-    for i in 0..n {
-        let p = prim.hull[i].map(f64::from);
-        let q = prim.hull[(i + 1) % n].map(f64::from);
-        let (ya, yb) = if p[1] <= q[1] {
-            (p[1], q[1])
-        } else {
-            (q[1], p[1])
-        };
-        let flat = (q[1] - p[1]).abs() < 1e-12;
-        for r in row_range(ya - EPS, yb + EPS) {
-            let (xl, xh) = if flat {
-                (p[0].min(q[0]), p[0].max(q[0]))
-            } else {
-                let u = ((yc(r) - p[1]) / (q[1] - p[1])).clamp(0.0, 1.0);
-                let x = p[0] + u * (q[0] - p[0]);
-                (x, x)
-            };
-            lo[r] = lo[r].min(xl);
-            hi[r] = hi[r].max(xh);
-        }
-    }
-    for (r, o) in out.iter_mut().enumerate() {
-        let (l, h) = (lo[r], hi[r]);
-        if l > h {
-            *o = (0, 0);
-            continue;
-        }
-        let margin = EPS + 1e-6 * l.abs().max(h.abs());
-        let x0 = ((l - margin - 0.5).ceil() as i64).clamp(bx0 as i64, bx1 as i64) as i32;
-        let x1 = (((h + margin - 0.5).floor() + 1.0) as i64).clamp(bx0 as i64, bx1 as i64) as i32;
-        *o = (x0, x1.max(x0));
-    }
-}
-
-/// True when the prim's hull may overlap the sample rectangle `[x0, x1) x [y0, y1)`.
-pub fn overlaps(prim: &Prim, x0: i32, y0: i32, x1: i32, y1: i32) -> bool {
-    let b = prim.bbox;
-    if b[0] >= x1 || b[2] <= x0 || b[1] >= y1 || b[3] <= y0 {
-        return false;
-    }
-    let n = prim.nhull as usize;
-    if n < 3 {
-        return true;
-    }
-    // Separating axis along each hull edge's outward normal (sample centres: +0.5).
-    let corners = [
-        [f64::from(x0) + 0.5, f64::from(y0) + 0.5],
-        [f64::from(x1) - 0.5, f64::from(y0) + 0.5],
-        [f64::from(x0) + 0.5, f64::from(y1) - 0.5],
-        [f64::from(x1) - 0.5, f64::from(y1) - 0.5],
-    ];
-    // orientation of the hull (signed area), so "outside" is known for either winding
-    let mut area = 0.0;
-    for i in 0..n {
-        let p = prim.hull[i].map(f64::from);
-        let q = prim.hull[(i + 1) % n].map(f64::from);
-        area += p[0] * q[1] - q[0] * p[1];
-    }
-    let sgn = if area >= 0.0 { 1.0 } else { -1.0 };
-    for i in 0..n {
-        let p = prim.hull[i].map(f64::from);
-        let q = prim.hull[(i + 1) % n].map(f64::from);
-        let (ex, ey) = (q[0] - p[0], q[1] - p[1]);
-        let len = (ex * ex + ey * ey).sqrt();
-        let all_out = corners
-            .iter()
-            .all(|c| sgn * (ex * (c[1] - p[1]) - ey * (c[0] - p[0])) < -1e-3 * len);
-        if all_out {
-            return false;
-        }
-    }
-    true
-}
-
 /// A prim's sample-independent coefficients, expanded for the samples of one tile.
 #[derive(Clone, Copy, Debug)]
 pub struct Edges {
@@ -368,6 +254,17 @@ pub struct Edges {
     /// Per corner: `z + w` and `w - z` at tau = 0 and their change (for CLIPS prims).
     pub near: [[f64; 2]; 3],
     pub far: [[f64; 2]; 3],
+}
+
+/// What a simple prim covers at one sample ([`Edges::covered_front`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Cover {
+    /// No time.
+    Nothing,
+    /// One span of local time.
+    One(f64, f64),
+    /// Several spans (an edge's set had two).
+    Many(Spans),
 }
 
 /// Per-sample quadratic coefficients `(a, b, c)` of `f_i = a tau^2 + b tau + c`, `i` = 0..2.
@@ -460,38 +357,76 @@ impl Edges {
         (out, out_back)
     }
 
-    /// True when the prim is a front face throughout, not clipped and not drawn from behind:
-    /// [`Edges::covered_front`] then decides almost every sample.
+    /// The one span of local time when the prim is a front face, if it is not clipped and not
+    /// drawn from behind: [`Edges::covered_front`] then finds its spans at every sample.
     #[inline]
-    pub fn simple(prim: &Prim) -> bool {
-        prim.back.is_empty() && prim.flags & CLIPS == 0 && prim.front.is_full()
+    pub fn simple(prim: &Prim) -> Option<(f64, f64)> {
+        if prim.back.is_empty() && prim.flags & CLIPS == 0 {
+            prim.front.one()
+        } else {
+            None
+        }
     }
 
-    /// The front-face case of a simple prim: `Some(Some((a, b)))` the one covered span,
-    /// `Some(None)` none, `None` when an edge's set has two spans (the caller then takes the
-    /// general [`Edges::covered`]). Same decisions as the general form, bit for bit.
+    /// The front-face case of a simple prim, front-facing during `front`
+    /// ([`Edges::simple`]): the same spans as the general [`Edges::covered`], bit for bit,
+    /// with no set built while every edge's set is one span.
     #[inline(always)]
-    pub fn covered_front(&self, q: &SampleEdges) -> Option<Option<(f64, f64)>> {
-        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    pub fn covered_front(&self, front: (f64, f64), q: &SampleEdges) -> Cover {
+        let (mut lo, mut hi) = front;
         for i in 0..3 {
             let [a, b, c] = q[i];
-            let tie = |tau: f64| {
-                let (gx, gy) = self.gradient(i, tau);
-                gx > 0.0 || (gx == 0.0 && gy > 0.0)
-            };
-            match Spans::nonneg_quadratic_one(a, b, c, tie) {
-                Err(()) => return None,
-                Ok(None) => return Some(None),
+            match Spans::nonneg_quadratic_one(a, b, c, |tau| self.tie(i, tau)) {
+                Err((r0, r1)) => return self.covered_front_from(q, i, (lo, hi), (r0, r1)),
+                Ok(None) => return Cover::Nothing,
                 Ok(Some((l, h))) => {
                     lo = lo.max(l);
                     hi = hi.min(h);
                     if hi <= lo {
-                        return Some(None);
+                        return Cover::Nothing;
                     }
                 }
             }
         }
-        Some(Some((lo, hi)))
+        Cover::One(lo, hi)
+    }
+
+    /// [`Edges::covered_front`] from edge `k`, whose set is `[0, r0]` and `[r1, 1]`, on: the
+    /// general form's steps with the edges before `k` already intersected into `[lo, hi]`.
+    #[inline(never)]
+    fn covered_front_from(
+        &self,
+        q: &SampleEdges,
+        k: usize,
+        (lo, hi): (f64, f64),
+        (r0, r1): (f64, f64),
+    ) -> Cover {
+        let mut s = Spans::EMPTY;
+        s.push(lo, hi);
+        let mut e = Spans::EMPTY;
+        e.push(0.0, r0);
+        e.push(r1, 1.0);
+        s = s.intersect(&e);
+        for i in k + 1..3 {
+            if s.is_empty() {
+                break;
+            }
+            let [a, b, c] = q[i];
+            s = s.intersect(&Spans::nonneg_quadratic(a, b, c, |tau| self.tie(i, tau)));
+        }
+        if s.is_empty() {
+            Cover::Nothing
+        } else {
+            Cover::Many(s)
+        }
+    }
+
+    /// The tie rule of front faces for edge `i` at local time `tau` (a sample exactly on the
+    /// edge belongs to the side its screen gradient points to).
+    #[inline(always)]
+    fn tie(&self, i: usize, tau: f64) -> bool {
+        let (gx, gy) = self.gradient(i, tau);
+        gx > 0.0 || (gx == 0.0 && gy > 0.0)
     }
 
     /// The parts of the edge functions that depend on the sample row `y` only:
@@ -536,12 +471,10 @@ impl Edges {
     /// triangle is edge-on there.
     #[inline]
     pub fn depth(&self, q: &SampleEdges, tau: f64) -> Option<f64> {
-        let sum: f64 = q
-            .iter()
-            .map(|[a, b, c]| quadratic_at(*a, *b, *c, tau))
-            .sum();
+        let f = |k: usize| quadratic_at(q[k][0], q[k][1], q[k][2], tau);
+        let sum = (f(0) + f(1)) + f(2);
         let w = -cubic_at(self.d, tau) / sum;
-        (w.is_finite() && w > 0.0).then_some(w)
+        (w > 0.0 && w < f64::INFINITY).then_some(w)
     }
 
     /// Barycentric coordinates of the hit point at local time `tau`.
@@ -553,5 +486,83 @@ impl Edges {
             return [1.0 / 3.0; 3];
         }
         f.map(|x| x / sum)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small generator of numbers in [0, 1) (no dependency, same sequence everywhere).
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    #[test]
+    fn the_front_face_path_finds_the_general_spans_bit_for_bit() {
+        let mut rng = Lcg(7);
+        let (mut many, mut one) = (0, 0);
+        for _ in 0..400 {
+            // small, fast, turning triangles: edges often change sign twice
+            let mut c0 = [[0.0; 4]; 3];
+            let mut c1 = [[0.0; 4]; 3];
+            for k in 0..3 {
+                let w0 = 1.0 + 2.0 * rng.next();
+                let w1 = 1.0 + 2.0 * rng.next();
+                c0[k] = [rng.next() - 0.5, rng.next() - 0.5, 0.0, w0];
+                c1[k] = [rng.next() - 0.5, rng.next() - 0.5, 0.0, w1];
+            }
+            let corners = Corners::new(c0, c1, 32.0, 32.0);
+            // the whole segment, or a part of it as for faces that turn
+            let mut front = Spans::EMPTY;
+            let (f0, f1) = (rng.next(), rng.next());
+            if f0 < 0.3 {
+                front.push(0.0, 1.0);
+            } else {
+                front.push(f0.min(f1) as f32 as f64, f0.max(f1) as f32 as f64);
+            }
+            let e = Edges::new(&corners);
+            let prim = Prim {
+                draw: 0,
+                face: 0,
+                seg: 0,
+                flags: 0,
+                front: Facing::from_spans(&front),
+                back: Facing::default(),
+                bbox: [0, 0, 32, 32],
+                hull: [[0.0; 2]; 6],
+                nhull: 0,
+            };
+            for y in 0..32 {
+                for x in 0..32 {
+                    let q = e.at(f64::from(x) + 0.5, f64::from(y) + 0.5);
+                    let want = e.covered(&prim, &q).0;
+                    let f = Edges::simple(&prim).unwrap();
+                    let got = match e.covered_front(f, &q) {
+                        Cover::Nothing => Spans::EMPTY,
+                        Cover::One(a, b) => {
+                            one += 1;
+                            let mut s = Spans::EMPTY;
+                            s.push(a, b);
+                            s
+                        }
+                        Cover::Many(s) => {
+                            many += 1;
+                            s
+                        }
+                    };
+                    assert_eq!(got, want, "sample {x},{y}");
+                }
+            }
+        }
+        assert!(many > 100 && one > 1000, "{many} {one}");
     }
 }

@@ -7,11 +7,13 @@
 //! with `n` normalised and flipped on back faces; alpha is never shaded; the output is
 //! premultiplied.
 use super::input::{Input, Prepared};
-use super::prim::{homogeneous_pixel, Corners, Edges, Prim, OPAQUE};
-use super::resolve::{Frag, Layers, Link, BACK, NONE};
+use super::prim::{homogeneous_pixel, Corners, Edges, Prim, SampleEdges, OPAQUE};
+use super::resolve::Layers;
+use super::visibility::{Frag, Link, BACK, NONE};
 use crate::raster::Shading;
 
 /// A prim as one tile uses it: its edges and everything shading reads, gathered once.
+#[derive(Clone)]
 pub struct TilePrim {
     pub edges: Edges,
     /// The prim's draw and face, for velocity.
@@ -26,8 +28,10 @@ pub struct TilePrim {
     pub dt: f64,
     /// Straight RGBA of the corners.
     pub colors: [[f32; 4]; 3],
-    /// Corner normals at the segment's start and end (lambert).
+    /// Corner normals at the segment's start and their change over it (lambert).
     pub normals: [[[f32; 3]; 3]; 2],
+    /// The draw's colour where it cannot vary ([`Prepared::uniform`]).
+    pub uniform: Option<[f32; 4]>,
 }
 
 impl TilePrim {
@@ -41,8 +45,12 @@ impl TilePrim {
         let mut normals = [[[0.0f32; 3]; 3]; 2];
         if !d.normals.is_empty() {
             for (c, v) in face.iter().enumerate() {
-                normals[0][c] = d.normals[k * d.nv + *v as usize];
-                normals[1][c] = d.normals[(k + 1) * d.nv + *v as usize];
+                let (n0, n1) = (
+                    d.normals[k * d.nv + *v as usize],
+                    d.normals[(k + 1) * d.nv + *v as usize],
+                );
+                normals[0][c] = n0;
+                normals[1][c] = [n1[0] - n0[0], n1[1] - n0[1], n1[2] - n0[2]];
             }
         }
         let (t0, t1) = (input.times[k], input.times[k + 1]);
@@ -57,6 +65,7 @@ impl TilePrim {
             dt: t1 - t0,
             colors,
             normals,
+            uniform: d.uniform,
         }
     }
 }
@@ -73,6 +82,8 @@ pub struct SampleShader<'a> {
     /// Sample centre.
     pub x: f64,
     pub y: f64,
+    /// The tile index of the prim shaded last and its edge values at this sample.
+    pub last: (u32, SampleEdges),
 }
 
 impl SampleShader<'_> {
@@ -85,6 +96,7 @@ impl SampleShader<'_> {
     pub fn reset(&mut self, n: usize) {
         self.cursor.clear();
         self.cursor.resize(n, NONE);
+        self.last.0 = NONE;
     }
 
     /// The triangle of `f`'s chain covering the sample at time `t` (with `f`'s `BACK` flag).
@@ -103,9 +115,8 @@ impl SampleShader<'_> {
     /// local time.
     #[inline]
     fn barycentric(&self, tp: &TilePrim, t: f64) -> ([f64; 3], f64) {
-        let tau = ((t - tp.t0) / tp.dt).clamp(0.0, 1.0);
         let q = tp.edges.at(self.x, self.y);
-        (tp.edges.barycentric(&q, tau), tau)
+        barycentric_at(tp, &q, t)
     }
 
     /// Object id of the prim's draw.
@@ -147,12 +158,27 @@ impl SampleShader<'_> {
     }
 }
 
+/// Barycentric coordinates of the surface point with edge values `q` at time `t`, and the
+/// local time.
+#[inline]
+fn barycentric_at(tp: &TilePrim, q: &SampleEdges, t: f64) -> ([f64; 3], f64) {
+    let tau = ((t - tp.t0) / tp.dt).clamp(0.0, 1.0);
+    (tp.edges.barycentric(q, tau), tau)
+}
+
 impl Layers for SampleShader<'_> {
     #[inline]
     fn opaque(&self, f: &Frag) -> bool {
         self.prim(f.prim).flags & OPAQUE != 0
     }
 
+    #[inline]
+    fn uniform(&self, f: &Frag) -> Option<[f32; 4]> {
+        // a chain's triangles are all of one draw
+        self.prim(f.prim).uniform
+    }
+
+    #[inline]
     fn cuts(&mut self, i: usize, f: &Frag, a: f64, b: f64, out: &mut Vec<f64>) {
         let mut c = if self.cursor[i] == NONE {
             f.chain
@@ -175,6 +201,7 @@ impl Layers for SampleShader<'_> {
         }
     }
 
+    #[inline(always)]
     fn shade(&mut self, i: usize, f: &Frag, t: f64) -> [f32; 4] {
         let input = self.input;
         if !input.shade {
@@ -195,8 +222,13 @@ impl Layers for SampleShader<'_> {
         }
         self.cursor[i] = c;
         let p = self.links[c as usize].prim | (f.prim & BACK);
-        let tp = self.prim(p);
-        let (lam, tau) = self.barycentric(tp, t);
+        let prims = self.prims;
+        let tp = &prims[(p & !BACK) as usize];
+        // the prim's edge values at this sample, kept while calls stay on one prim
+        if self.last.0 != p & !BACK {
+            self.last = (p & !BACK, tp.edges.at(self.x, self.y));
+        }
+        let (lam, tau) = barycentric_at(tp, &self.last.1, t);
         let mut c = [0.0f32; 4];
         for k in 0..3 {
             for j in 0..4 {
@@ -207,9 +239,9 @@ impl Layers for SampleShader<'_> {
         if tp.lambert {
             let mut n = [0.0f32; 3];
             for (k, l) in lam.iter().enumerate() {
-                let (n0, n1) = (tp.normals[0][k], tp.normals[1][k]);
+                let (n0, dn) = (tp.normals[0][k], tp.normals[1][k]);
                 for j in 0..3 {
-                    n[j] += *l as f32 * (n0[j] + tau as f32 * (n1[j] - n0[j]));
+                    n[j] += *l as f32 * (n0[j] + tau as f32 * dn[j]);
                 }
             }
             let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();

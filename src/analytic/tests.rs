@@ -3,6 +3,7 @@
 use glam::{DMat4, DVec3};
 
 use super::*;
+use crate::analytic::{resolve, visibility};
 use crate::raster::Shading;
 use crate::shutter::Shutter;
 
@@ -52,6 +53,16 @@ fn on_plane(ix: u32, iy: u32) -> (f64, f64) {
 }
 
 fn render_square(pos: &[[f64; 3]], faces: &[[u32; 3]], times: &[f64], shutter: &Shutter) -> Frame {
+    render_within(pos, faces, times, shutter, DEFAULT_TILE_BUDGET).unwrap()
+}
+
+fn render_within(
+    pos: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    times: &[f64],
+    shutter: &Shutter,
+    tile_budget: usize,
+) -> crate::Result<Frame> {
     let vp = [camera()];
     let rgba = [[1.0f32, 1.0, 1.0, 1.0]];
     let draws = [MovingDraw {
@@ -77,8 +88,8 @@ fn render_square(pos: &[[f64; 3]], faces: &[[u32; 3]], times: &[f64], shutter: &
         quadrature: Quadrature::Auto,
         reference_time: 1.0,
         shade: true,
+        tile_budget,
     })
-    .unwrap()
 }
 
 fn check_square(n: usize, shutter: Shutter) {
@@ -156,6 +167,42 @@ fn the_result_does_not_depend_on_the_thread_count() {
 }
 
 #[test]
+fn a_small_memory_budget_splits_tiles_and_changes_no_bit() {
+    // a 9x9 grid with three segments: chains of many links at every covered sample
+    let xs = [-1.5, -0.4, 0.3, 1.2];
+    let (pos, faces) = grid_square(0.6, 9, &xs);
+    let times = [0.0, 0.3, 0.7, 1.0];
+    let whole = render_square(&pos, &faces, &times, &Shutter::Triangle);
+    assert_eq!(whole.stats.splits, 0);
+    let mut splits = Vec::new();
+    for budget in [200_000, 40_000, 12_000] {
+        let f = render_within(&pos, &faces, &times, &Shutter::Triangle, budget).unwrap();
+        assert_eq!(f.rgba, whole.rgba, "budget {budget}");
+        assert_eq!(f.depth, whole.depth);
+        assert_eq!(f.ids, whole.ids);
+        assert_eq!(f.velocity, whole.velocity);
+        assert_eq!(
+            (f.stats.intervals, f.stats.spans, f.stats.pieces),
+            (whole.stats.intervals, whole.stats.spans, whole.stats.pieces)
+        );
+        splits.push(f.stats.splits);
+    }
+    // a smaller budget splits more, down to rows and single samples
+    assert!(
+        splits[0] > 0 && splits[0] < splits[1] && splits[1] < splits[2],
+        "{splits:?}"
+    );
+    // a budget no single sample fits in fails with a memory error naming the draws and the
+    // setting to raise
+    match render_within(&pos, &faces, &times, &Shutter::Triangle, 64) {
+        Err(e @ crate::Error::Memory { name: "draws", .. }) => {
+            assert!(e.to_string().contains("TILE_BUDGET_BYTES"), "{e}");
+        }
+        other => panic!("expected a memory error, got {:?}", other.map(|f| f.stats)),
+    }
+}
+
+#[test]
 fn depth_ids_and_velocity_describe_the_surface_at_the_reference_time() {
     let (pos, faces) = grid_square(0.6, 1, &[-1.5, 1.2]);
     let f = render_square(&pos, &faces, &[0.0, 1.0], &Shutter::Box);
@@ -202,6 +249,7 @@ fn bad_input_names_the_argument() {
         quadrature: Quadrature::Auto,
         reference_time: 1.0,
         shade: true,
+        tile_budget: DEFAULT_TILE_BUDGET,
     };
     assert!(render(&good).is_ok());
     let err = |i: Input| render(&i).unwrap_err().to_string();
@@ -240,4 +288,108 @@ fn bad_input_names_the_argument() {
         ..good.clone()
     })
     .starts_with("positions"));
+}
+
+/// Layers of flat colours, reporting them as uniform or not.
+struct FlatLayers {
+    colors: Vec<[f32; 4]>,
+    uniform: bool,
+    links: Vec<visibility::Link>,
+}
+
+impl resolve::Layers for FlatLayers {
+    fn opaque(&self, f: &visibility::Frag) -> bool {
+        self.colors[f.prim as usize][3] >= 1.0
+    }
+    fn uniform(&self, f: &visibility::Frag) -> Option<[f32; 4]> {
+        let c = self.colors[f.prim as usize];
+        self.uniform
+            .then_some([c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]])
+    }
+    fn cuts(&mut self, _i: usize, f: &visibility::Frag, a: f64, b: f64, out: &mut Vec<f64>) {
+        let mut c = self.links[f.chain as usize].next;
+        while c != visibility::NONE {
+            let t = f64::from(self.links[c as usize].t0);
+            if t > a && t < b {
+                out.push(t);
+            }
+            c = self.links[c as usize].next;
+        }
+    }
+    fn shade(&mut self, _i: usize, f: &visibility::Frag, _t: f64) -> [f32; 4] {
+        let c = self.colors[f.prim as usize];
+        [c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]]
+    }
+}
+
+#[test]
+fn uniform_layers_resolve_as_their_shading_does() {
+    let colors = vec![
+        [0.9, 0.2, 0.1, 1.0],
+        [0.1, 0.8, 0.3, 0.5],
+        [0.2, 0.3, 0.9, 0.25],
+        [0.6, 0.6, 0.1, 1.0],
+    ];
+    // fragment k's chain starts at link k; fragment 0 has a second link (a chain of one
+    // colour: the uniform composite holds across its links too)
+    let link = |t0: f32, z0: f32, prim: u32, next: u32| visibility::Link { t0, z0, prim, next };
+    let links = vec![
+        link(0.0, 1.0, 0, 4),
+        link(0.1, 2.5, 1, visibility::NONE),
+        link(0.3, 2.0, 2, visibility::NONE),
+        link(0.55, 0.5, 3, visibility::NONE),
+        link(0.4, 3.5, 0, visibility::NONE),
+    ];
+    let frag = |t0: f32, t1: f32, z0: f32, z1: f32, prim: u32| visibility::Frag {
+        t0,
+        t1,
+        z0,
+        z1,
+        prim,
+        chain: prim,
+        n: if prim == 0 { 2 } else { 1 },
+    };
+    let bg = visibility::Backdrop {
+        rgba: [0.05, 0.1, 0.15, 1.0],
+        depth: 3.0,
+        id: 1,
+    };
+    let frags = vec![
+        frag(0.0, 0.7, 1.0, 4.0, 0),
+        frag(0.1, 0.9, 2.5, 1.5, 1),
+        frag(0.3, 1.0, 2.0, 2.2, 2),
+        frag(0.55, 0.6, 0.5, 5.0, 3),
+    ];
+    for shutter in [Shutter::Box, Shutter::Triangle, Shutter::Gaussian] {
+        for quad in [Quadrature::Auto, Quadrature::Points(3)] {
+            let run = |uniform: bool| {
+                let mut l = FlatLayers {
+                    colors: colors.clone(),
+                    uniform,
+                    links: links.clone(),
+                };
+                let mut f = frags.clone();
+                resolve::resolve(
+                    &mut f,
+                    &links,
+                    &bg,
+                    &mut l,
+                    &shutter,
+                    &shutter.breaks(),
+                    quad,
+                    0.5,
+                    &mut resolve::Scratch::default(),
+                )
+                .unwrap()
+            };
+            let (a, b) = (run(false), run(true));
+            assert_eq!((a.front, a.pieces), (b.front, b.pieces));
+            for j in 0..4 {
+                assert!(
+                    (a.rgba[j] - b.rgba[j]).abs() < 1e-6,
+                    "{shutter:?} {a:?} {b:?}"
+                );
+            }
+        }
+    }
 }

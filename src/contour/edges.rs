@@ -54,12 +54,22 @@ fn prefetch_corners(v: &[[f64; 3]], faces: &[[u32; 3]], f: usize) {
     let _ = (v, faces, f);
 }
 
-/// Front (`true`) or back per face for the motion vector `m` (object space).
+/// Front (`true`) or back per face for the motion vector `m` (object space): `n . m >= 0` with
+/// `n` the raw face normal.
 ///
-/// The vertex gathers dominate on meshes whose faces point far apart in the vertex array (an
-/// icosphere's subdivision), so on x86_64 the vertices of the face `AHEAD` places on are
-/// prefetched.
+/// A mesh classified again (a rigid object, every frame) streams over its kept normals
+/// ([`Mesh::repeated_face_normals_raw`]); the first call on a mesh (a deformed copy is used
+/// once) computes each face's normal from its corners, prefetching the corners of the face
+/// `AHEAD` places on (an icosphere's faces reach their vertices far apart in the array). Both
+/// compute the same normal, so the classification is the same.
 pub fn classify_faces(mesh: &Mesh, m: [f64; 3]) -> Vec<bool> {
+    if let Some(normals) = mesh.repeated_face_normals_raw() {
+        return normals
+            .par_iter()
+            .with_min_len(1 << 14)
+            .map(|&n| dot(n, m) >= 0.0)
+            .collect();
+    }
     const CHUNK: usize = 8192;
     let v = mesh.vertices();
     let faces = mesh.faces();
@@ -339,6 +349,30 @@ mod tests {
             [1, 7, 3],
         ];
         Mesh::new(v, f).unwrap()
+    }
+
+    #[test]
+    fn cached_normals_classify_as_the_corners_do_and_deformed_copies_recompute() {
+        let m = cube();
+        let direct = |mesh: &Mesh, d: [f64; 3]| -> Vec<bool> {
+            mesh.faces()
+                .iter()
+                .map(|f| dot(face_normal(mesh.vertices(), f), d) >= 0.0)
+                .collect()
+        };
+        for d in [[1.0, 0.0, 0.0], [0.3, -0.7, 0.2], [0.0, 0.0, -1.0]] {
+            // the first call computes from the corners, the later ones read the kept normals
+            assert_eq!(classify_faces(&m, d), direct(&m, d));
+        }
+        // A deformed copy (mirrored in x) gets its own normals, not the original's.
+        let mirrored: Vec<[f64; 3]> = m.vertices().iter().map(|v| [-v[0], v[1], v[2]]).collect();
+        let copy = m.with_vertices(mirrored).unwrap();
+        let d = [1.0, 0.2, 0.1];
+        for _ in 0..3 {
+            assert_eq!(classify_faces(&copy, d), direct(&copy, d));
+        }
+        assert_ne!(classify_faces(&copy, d), classify_faces(&m, d));
+        assert!(m.repeated_face_normals_raw().is_some());
     }
 
     #[test]

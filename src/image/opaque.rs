@@ -11,7 +11,10 @@ use rayon::prelude::*;
 use super::boxblur::box_row_range;
 use super::glow::{glow_row, GlowScratch};
 use super::lines::{build_sheared, directional_at, plan, LinePlan};
-use super::{assume_init, check_direction, check_finite, check_image, filled, put4, ALPHA_EPS};
+use super::{
+    alpha_out_of_range, assume_init, check_direction, check_image, check_premultiplied, filled,
+    put4, ALPHA_EPS,
+};
 use crate::error::{Error, Result};
 use std::mem::MaybeUninit;
 
@@ -79,7 +82,7 @@ struct RowScratch {
 
 /// One pass over a `(n, 4)` source row, its base row and the output row: writes the base (or
 /// zeros when `copy` is false) to the output, and returns whether the source and the base are
-/// finite and the first and last pixel of the source with non-zero alpha.
+/// finite with alphas in [0, 1] and the first and last pixel of the source with non-zero alpha.
 fn scan_copy_row(
     src: &[f32],
     base: &[f32],
@@ -110,7 +113,10 @@ fn scan_copy_row(
         let mut nz = [0u32; 16];
         let mut lane = |i: usize, sv: f32, bv: f32, o: &mut MaybeUninit<f32>| {
             let (sb, bb) = (sv.to_bits(), bv.to_bits());
+            let is_alpha = (i & 3 == 3) as u32;
             bad[i] |= ((sb & EXP) == EXP) as u32 | (((bb & EXP) == EXP) as u32 & cp);
+            bad[i] |=
+                is_alpha & (alpha_out_of_range(sb) as u32 | (alpha_out_of_range(bb) as u32 & cp));
             nz[i] |= sb & AMASK[i];
             o.write(if copy { bv } else { 0.0 });
         };
@@ -349,8 +355,8 @@ fn opaque_impl(
     let base_img = base.unwrap_or(rgba);
     let p = plan(direction, length * 0.5);
     if p.is_none() {
-        check_finite("rgba", rgba)?;
-        check_finite("base", base_img)?;
+        check_premultiplied("rgba", rgba, 4)?;
+        check_premultiplied("base", base_img, 4)?;
     }
     let mut ok = Ok(true);
     let out = filled(w * h * 4, |out| match p {
@@ -367,8 +373,8 @@ fn opaque_impl(
             }),
     });
     if !ok? {
-        check_finite("rgba", rgba)?;
-        check_finite("base", base_img)?;
+        check_premultiplied("rgba", rgba, 4)?;
+        check_premultiplied("base", base_img, 4)?;
     }
     Ok(out)
 }

@@ -143,3 +143,31 @@ fn sheared_buffer_is_bounded_by_the_image() {
         }
     }
 }
+
+#[test]
+fn kernels_that_assume_premultiplied_alpha_refuse_other_alphas() {
+    let (w, h) = (37, 5);
+    for bad in [1.0 + f32::EPSILON, -1e-6, 1e19, f32::NAN] {
+        let mut rgba = vec![0.0f32; w * h * 4];
+        rgba[(2 * w + 30) * 4 + 3] = bad;
+        let alpha: Vec<f32> = rgba.chunks(4).map(|p| p[3]).collect();
+        let clean = vec![0.0f32; w * h * 4];
+        for dir in [[1.0, 0.0], [1.0, 0.4], [0.0, 1.0]] {
+            assert!(opaque_blur(&rgba, w, h, dir, 3.0).is_err(), "{bad} {dir:?}");
+            let e = opaque_motion_blur(&clean, Some(&rgba), w, h, dir, 3.0, Composite::Over);
+            assert!(
+                e.unwrap_err().to_string().starts_with("base:"),
+                "{bad} {dir:?}"
+            );
+            assert!(glow(&alpha, w, h, dir, 3.0).is_err());
+        }
+        assert!(pyramid_glow(&alpha, w, h, 2).is_err());
+        assert!(pyramid_opaque_blur(&rgba, w, h, 2).is_err());
+        assert!(pyramid_blur(&rgba, w, h, 2).is_ok() != bad.is_nan());
+    }
+    let mut ends = vec![0.0f32; w * h * 4];
+    ends[3] = 1.0;
+    ends[7] = -0.0;
+    assert!(opaque_blur(&ends, w, h, [1.0, 0.3], 3.0).is_ok());
+    assert!(check_premultiplied("rgba", &ends, 4).is_ok());
+}

@@ -1,4 +1,5 @@
 //! The indexed triangle mesh: validation, the cached adjacency, normals and planes, statistics.
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::OnceLock;
 
 use rayon::prelude::*;
@@ -6,6 +7,13 @@ use rayon::prelude::*;
 use super::adjacency::{build_adjacency, Adjacency, FaceNeighbors};
 use super::normals::{self, dot, face_normal, FacePlanes};
 use crate::error::{Error, Result};
+
+/// The one coordinate range of every entry point: the largest accepted |component| of any
+/// position, translation or point, in scene units. Face normals multiply two coordinate
+/// differences and `n . d` a third, which stays below `f32::MAX` (3.4e38) at this bound (the
+/// blur shell's facing test runs in float32); the rasterizer's f64 transforms keep every
+/// fractional bit a pixel needs; float32 positions near it are 64 units apart anyway.
+pub const MAX_COORD: f64 = 1e9;
 
 /// Largest number of faces or vertices accepted (indices are stored as `u32`).
 pub const MAX_ELEMENTS: usize = (u32::MAX as usize) / 8;
@@ -52,6 +60,10 @@ pub struct Mesh {
     planes: OnceLock<FacePlanes>,
     /// [`Mesh::vertex_normals`], kept by [`Mesh::cached_vertex_normals`].
     normals: OnceLock<Vec<[f64; 3]>>,
+    /// [`Mesh::face_normals_raw`], kept by [`Mesh::repeated_face_normals_raw`].
+    face_normals: OnceLock<Vec<[f64; 3]>>,
+    /// Whether [`Mesh::repeated_face_normals_raw`] has been asked before.
+    asked_normals: AtomicBool,
     /// [`Mesh::longest_edge`], computed on first use.
     longest: OnceLock<f64>,
 }
@@ -103,6 +115,8 @@ impl Mesh {
             neighbors: Default::default(),
             planes: Default::default(),
             normals: Default::default(),
+            face_normals: Default::default(),
+            asked_normals: Default::default(),
             longest: Default::default(),
         })
     }
@@ -128,6 +142,8 @@ impl Mesh {
             neighbors: self.neighbors.clone(),
             planes: Default::default(),
             normals: Default::default(),
+            face_normals: Default::default(),
+            asked_normals: Default::default(),
             longest: Default::default(),
         })
     }
@@ -161,6 +177,21 @@ impl Mesh {
     pub(crate) fn face_planes(&self) -> &FacePlanes {
         self.planes
             .get_or_init(|| FacePlanes::new(&self.vertices, &self.faces))
+    }
+
+    /// [`Mesh::face_normals_raw`] kept for a mesh whose faces are classified again and again (a
+    /// rigid object against a new motion every frame): `None` on the first call, when the
+    /// caller computes what it needs from the corners (a deformed mesh, used once, stores
+    /// nothing); from the second call on, the normals, computed then and kept (the same values,
+    /// 24 bytes a face; not shared with deformed copies).
+    pub fn repeated_face_normals_raw(&self) -> Option<&[[f64; 3]]> {
+        if let Some(n) = self.face_normals.get() {
+            return Some(n);
+        }
+        if !self.asked_normals.swap(true, Ordering::Relaxed) {
+            return None;
+        }
+        Some(self.face_normals.get_or_init(|| self.face_normals_raw()))
     }
 
     /// [`Mesh::vertex_normals`], computed on first use and kept (the same values).
@@ -244,13 +275,23 @@ fn check_vertices(vertices: &[[f64; 3]]) -> Result<()> {
             format!("too many vertices ({})", vertices.len()),
         ));
     }
-    let bad_vertex = |v: &[f64; 3]| v.iter().any(|x| !x.is_finite());
+    let bad_vertex = |v: &[f64; 3]| v.iter().any(|x| x.is_nan() || x.abs() > MAX_COORD);
     if !vertices
         .par_iter()
         .with_min_len(8192)
         .all(|v| !bad_vertex(v))
     {
         let bad = vertices.iter().position(bad_vertex).unwrap_or(0);
+        let row = vertices[bad];
+        if row.iter().all(|x| x.is_finite()) {
+            return Err(Error::value(
+                "vertices",
+                format!(
+                    "vertex {bad} ({row:?}) is beyond the coordinate range +-{MAX_COORD:e} \
+                     (MAX_COORD)"
+                ),
+            ));
+        }
         return Err(Error::value(
             "vertices",
             format!("vertex {bad} is NaN or inf"),
@@ -262,6 +303,23 @@ fn check_vertices(vertices: &[[f64; 3]]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn coordinates_past_the_range_are_refused_naming_the_vertex() {
+        let f = vec![[0, 1, 2]];
+        let at = |y: f64| vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, y, 0.0]];
+        Mesh::new(at(MAX_COORD), f.clone()).unwrap();
+        Mesh::new(at(-MAX_COORD), f.clone()).unwrap();
+        let e = Mesh::new(at(MAX_COORD * 1.5), f.clone())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("vertices: vertex 2") && e.contains("coordinate range"),
+            "{e}"
+        );
+        let e = Mesh::new(at(f64::NAN), f).unwrap_err().to_string();
+        assert_eq!(e, "vertices: vertex 2 is NaN or inf");
+    }
 
     fn tetra() -> Mesh {
         let v = vec![

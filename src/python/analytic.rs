@@ -7,7 +7,7 @@ use pyo3::types::PyDict;
 use super::convert::{c_slice, detached_in_pool, face_indices, shaped, ToDict};
 use crate::{
     render_analytic, AnalyticInput, AnalyticStats, Backdrop, Error, Light, MovingDraw, Quadrature,
-    Shading, Shutter,
+    Shading, Shutter, ANALYTIC_TILE_BUDGET,
 };
 
 /// One moving draw: (positions f64 (K+1,V,3), faces i64 (F,3), rgba f32 (1|V,4), normals f32
@@ -89,9 +89,10 @@ fn owned(d: &DrawArgs<'_>, k1: usize) -> Result<Owned, Error> {
 
 /// Renders moving draws analytically; returns (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W)
 /// i32, velocity (H,W,2) f32, stats dict). `shutter` is a filter name or (M,) f64 weights;
-/// `gauss` 0 means auto. The GIL is released while rendering.
+/// `gauss` 0 means auto; `tile_budget` is [`AnalyticInput::tile_budget`] in bytes. The GIL is
+/// released while rendering.
 #[pyfunction]
-#[pyo3(signature = (width, height, samples, times, view_projections, draws, shutter, lights, ambient, gauss, reference_time, shade, backdrop=None))]
+#[pyo3(signature = (width, height, samples, times, view_projections, draws, shutter, lights, ambient, gauss, reference_time, shade, backdrop=None, tile_budget=ANALYTIC_TILE_BUDGET))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn _analytic<'py>(
     py: Python<'py>,
@@ -108,6 +109,7 @@ fn _analytic<'py>(
     reference_time: f64,
     shade: bool,
     backdrop: Option<BackdropArgs<'py>>,
+    tile_budget: usize,
 ) -> PyResult<(
     Bound<'py, PyAny>,
     Bound<'py, PyAny>,
@@ -178,6 +180,7 @@ fn _analytic<'py>(
         },
         reference_time,
         shade,
+        tile_budget,
     };
     let frame = detached_in_pool(py, || render_analytic(&input))?;
     let (h, w) = (frame.height as usize, frame.width as usize);
@@ -197,7 +200,7 @@ impl ToDict for AnalyticStats {
         d.set_item("bin_entries", self.bin_entries)?;
         d.set_item("intervals", self.intervals)?;
         d.set_item("pieces", self.pieces)?;
-        d.set_item("merges", self.merges)?;
+        d.set_item("splits", self.splits)?;
         d.set_item("tests", self.tests)?;
         d.set_item("spans", self.spans)?;
         d.set_item("ms_cover", self.ms_cover)?;

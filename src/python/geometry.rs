@@ -5,18 +5,40 @@
 use std::borrow::Cow;
 use std::sync::Arc;
 
-use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyTuple};
 
 use super::convert::{
     detached_in_pool, face_indices, flat_rows_array, in_pool, rows_any_layout, rows_array, vec3,
     ToDict,
 };
+use super::motion::PyKeyframes;
 use crate::{
-    contour_pairs, Colors, ContourSet, ContourTable, Error, Filter, Mesh, MotionVolume, Path, Spin,
-    VolumeOptions, JOINING, LEADING, MAX_SEGMENTS, TRAILING,
+    contour_pairs, subdivided, Colors, ContourSet, ContourTable, Error, Filter, Mesh, MotionVolume,
+    Need, Path, Spin, VolumeOptions, JOINING, LEADING, MAX_SEGMENTS, TRAILING,
 };
+
+/// Bytes a volume takes per mesh edge on the contour and segment: two joining faces and their
+/// share of the ring vertices (position, colour, normal), while assembled and as returned.
+const EDGE_SEGMENT_BYTES: u64 = 96;
+
+/// Sweep steps of a spin without `segments` at most (one per `pi / 12` of a full turn).
+const DEFAULT_SPIN_SEGMENTS: u64 = 24;
+
+/// A volume's worst case, checked against the memory budget before it is built (the contour is
+/// known only inside): every mesh edge on the contour, swept into two joining faces per
+/// segment, and the leading and trailing faces with their vertices.
+fn check_volume(call: &'static str, mesh: &Mesh, segments: u64) -> Result<(), Error> {
+    let edges = mesh.adjacency().edges.len() as u64;
+    Need::new(call)
+        .add(
+            &[("mesh edges", edges), ("segments", segments)],
+            EDGE_SEGMENT_BYTES,
+        )?
+        .add(&[("faces", mesh.faces().len() as u64)], 2 * 64)?
+        .check()
+}
 
 /// (F,3) int64 faces of any layout to `u32` triples, every index in [0, nv).
 fn faces(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>> {
@@ -147,13 +169,15 @@ type VolumeTuple<'py> = (
     usize,
 );
 
+/// The motion volume of `mesh` along `keyframes` (rigid, at the equally spaced shutter times
+/// `i / K`), each interval cut into `segments` joining segments.
 #[pyfunction]
 #[pyo3(signature = (mesh, keyframes, segments, filter, colors, normals = None, camera_position = None, face_colors = false, contour_line = true, visible_only = false))]
 #[allow(clippy::too_many_arguments)]
 fn motion_volume<'py>(
     py: Python<'py>,
     mesh: &PyMesh,
-    keyframes: PyReadonlyArray3<'_, f64>,
+    keyframes: &PyKeyframes,
     segments: usize,
     filter: &str,
     colors: PyReadonlyArray2<'_, f32>,
@@ -164,18 +188,6 @@ fn motion_volume<'py>(
     visible_only: bool,
 ) -> PyResult<VolumeTuple<'py>> {
     let filter = Filter::parse(filter)?;
-    let kv = keyframes.as_array();
-    if kv.shape()[1] != 4 || kv.shape()[2] != 4 {
-        return Err(Error::shape(
-            "motion",
-            format!("expected shape (K,4,4), got {:?}", kv.shape()),
-        )
-        .into());
-    }
-    let mats: Vec<[[f64; 4]; 4]> = kv
-        .outer_iter()
-        .map(|m| std::array::from_fn(|r| std::array::from_fn(|c| m[[r, c]])))
-        .collect();
     let mut opts = volume_options(
         filter,
         &colors,
@@ -185,19 +197,12 @@ fn motion_volume<'py>(
         contour_line,
     )?;
     opts.visible_only = visible_only;
-    if segments == 0 {
-        return Err(Error::value("segments", "must be >= 1").into());
-    }
+    let keys = keyframes.rigid().to_vec();
     let inner = mesh.inner.clone();
     let vol = py.detach(move || {
-        let path = Path::from_matrices(&mats)?;
-        if path.segments().saturating_mul(segments) > MAX_SEGMENTS {
-            return Err(Error::value(
-                "segments",
-                format!("too many segments in total (at most {MAX_SEGMENTS})"),
-            ));
-        }
-        in_pool(|| crate::motion_volume(&inner, &path.subdivide(segments), &opts))
+        let path = subdivided(&Path::from_keys(keys)?, segments)?;
+        check_volume("motion_volume", &inner, path.segments() as u64)?;
+        in_pool(|| crate::motion_volume(&inner, &path, &opts))
     })?;
     Ok(volume_tuple(py, vol))
 }
@@ -237,7 +242,14 @@ fn spin_volume<'py>(
         contour_line,
     )?;
     let inner = mesh.inner.clone();
-    let vol = detached_in_pool(py, move || crate::spin_volume(&inner, &spin, &opts))?;
+    let vol = detached_in_pool(py, move || {
+        if let Some(s) = segments.filter(|&s| s <= MAX_SEGMENTS) {
+            check_volume("spin_volume", &inner, s as u64)?;
+        } else if segments.is_none() {
+            check_volume("spin_volume", &inner, DEFAULT_SPIN_SEGMENTS)?;
+        }
+        crate::spin_volume(&inner, &spin, &opts)
+    })?;
     Ok(volume_tuple(py, vol))
 }
 
@@ -363,6 +375,9 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(contour_edges, m)?)?;
     m.add_function(wrap_pyfunction!(motion_volume, m)?)?;
     m.add_function(wrap_pyfunction!(spin_volume, m)?)?;
+    m.add("MAX_SEGMENTS", MAX_SEGMENTS)?;
+    m.add("MAX_COORD", crate::mesh::MAX_COORD)?;
+    m.add("FILTERS", PyTuple::new(m.py(), Filter::NAMES)?)?;
     m.add("LEADING", LEADING)?;
     m.add("TRAILING", TRAILING)?;
     m.add("JOINING", JOINING)?;

@@ -8,7 +8,7 @@ use numpy::{
 use pyo3::prelude::*;
 
 use super::convert::{c_slice, detached_in_pool, rows, shaped};
-use crate::{CameraMatrices, Composite, DofParams, Error, Piece};
+use crate::{CameraMatrices, Composite, DofParams, Error, Piece, ReconstructParams};
 
 type PyOut<'py> = PyResult<Bound<'py, PyAny>>;
 
@@ -409,7 +409,34 @@ fn _camera_motion_blur<'py>(
     shaped(py, out, [h, w, 4])
 }
 
+/// McGuire/Guertin reconstruction filter of rgba (H,W,4) f32 with depth (H,W) f32 and
+/// velocity (H,W,2) f32.
+#[pyfunction]
+fn _reconstruct<'py>(
+    py: Python<'py>,
+    rgba: PyReadonlyArray3<'py, f32>,
+    depth: PyReadonlyArray2<'py, f32>,
+    velocity: PyReadonlyArray3<'py, f32>,
+    samples: usize,
+    tile: usize,
+    soft_depth: f32,
+) -> PyOut<'py> {
+    let (a, w, h) = img3(&rgba, "rgba", 4)?;
+    let (d, dw, dh) = img2(&depth, "depth")?;
+    same_size("depth", (dh, dw), (h, w))?;
+    let (v, vw, vh) = img3(&velocity, "velocity", 2)?;
+    same_size("velocity", (vh, vw), (h, w))?;
+    let params = ReconstructParams {
+        samples,
+        tile,
+        soft_depth,
+    };
+    let out = detached_in_pool(py, || crate::reconstruct(a, d, v, w, h, params))?;
+    shaped(py, out, [h, w, 4])
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(_reconstruct, m)?)?;
     m.add_function(wrap_pyfunction!(_glow, m)?)?;
     m.add_function(wrap_pyfunction!(_box_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_splat_paths, m)?)?;
@@ -426,5 +453,13 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_camera_velocity, m)?)?;
     m.add_function(wrap_pyfunction!(_velocity_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_camera_motion_blur, m)?)?;
+    m.add("MAX_LENGTH", f64::from(crate::MAX_LENGTH))?;
+    m.add("MAX_FPS_RATIO", crate::MAX_FPS_RATIO)?;
+    m.add("MAX_VELOCITY", crate::MAX_VELOCITY)?;
+    m.add("MAX_LEVELS", crate::MAX_LEVELS)?;
+    m.add("MAX_LAYERS", crate::MAX_LAYERS)?;
+    m.add("MAX_SAMPLES", crate::MAX_SAMPLES)?;
+    m.add("MAX_TAPS", crate::MAX_TAPS)?;
+    m.add("MIN_ALPHA", f64::from(crate::MIN_ALPHA))?;
     Ok(())
 }

@@ -3,21 +3,27 @@
 use pyo3::prelude::*;
 
 mod accumulate;
+mod budget;
 mod analytic;
 mod convert;
 mod geometry;
 mod image;
+mod motion;
+mod painter;
 mod raster;
 mod shell;
 
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    budget::register(m)?;
+    motion::register(m)?;
     geometry::register(m)?;
     raster::register(m)?;
     image::register(m)?;
     shell::register(m)?;
     accumulate::register(m)?;
+    painter::register(m)?;
     analytic::register(m)?;
     Ok(())
 }

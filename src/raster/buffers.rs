@@ -5,6 +5,8 @@
 //! ties), so they always describe one real surface rather than a blend of two.
 use super::bins::TILE;
 use super::blend::Sample;
+use crate::budget::try_reserve;
+use crate::error::Result;
 
 /// Timings and counts of one frame.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -13,6 +15,10 @@ pub struct Stats {
     pub triangles: u64,
     /// Samples covered by those triangles (both passes).
     pub fragments: u64,
+    /// Samples (of the supersampled image) holding more than `FRAGMENT_CAP` (32) transparent
+    /// fragments with `Blend::Exact`: their nearest 32 were composited exactly over the rest
+    /// merged into one layer (alpha exact, colour an alpha-weighted mean).
+    pub approximated: u64,
     /// Faces culled as back-facing.
     pub culled: u64,
     /// Faces clipped against the near or far plane or the guard band.
@@ -23,8 +29,17 @@ pub struct Stats {
     pub ms_setup: f64,
     /// Milliseconds binning triangles into tiles.
     pub ms_bin: f64,
-    /// Milliseconds rasterizing and resolving the tiles.
+    /// Milliseconds rasterizing and resolving the tiles (wall clock; the four stages below are
+    /// its parts, each summed over the tiles, so with several threads they add up to more).
     pub ms_raster: f64,
+    /// Thread milliseconds of the opaque pass's coverage and depth test.
+    pub ms_coverage: f64,
+    /// Thread milliseconds shading the opaque pass's visible samples.
+    pub ms_shade: f64,
+    /// Thread milliseconds of the transparent pass: coverage, depth test, shading, compositing.
+    pub ms_transparent: f64,
+    /// Thread milliseconds resolving samples into the frame's buffers.
+    pub ms_resolve: f64,
     /// Milliseconds for the whole frame.
     pub ms_total: f64,
 }
@@ -79,7 +94,26 @@ impl Frame {
         }
     }
 
-    /// The pointers the tiles write through. `self` must outlive every use.
+    /// A frame of the given size whose buffers are allocated but empty (length 0), to be
+    /// filled by the tiles through `output` and then `assume_written`: the tiles write every
+    /// pixel, so filling the buffers first would only write the frame's 32 bytes a pixel twice.
+    /// An allocation the system refuses is an error naming `width`.
+    pub fn unwritten(width: u32, height: u32) -> Result<Self> {
+        let n = width as usize * height as usize;
+        let mut frame = Frame {
+            width,
+            height,
+            ..Default::default()
+        };
+        try_reserve(&mut frame.rgba, 4 * n, "width")?;
+        try_reserve(&mut frame.depth, n, "width")?;
+        try_reserve(&mut frame.ids, n, "width")?;
+        try_reserve(&mut frame.velocity, 2 * n, "width")?;
+        Ok(frame)
+    }
+
+    /// The pointers the tiles write through (into the buffers' capacity). `self` must outlive
+    /// every use.
     pub fn output(&mut self) -> Output {
         Output {
             rgba: self.rgba.as_mut_ptr(),
@@ -88,6 +122,24 @@ impl Frame {
             velocity: self.velocity.as_mut_ptr(),
             width: self.width as usize,
             height: self.height as usize,
+        }
+    }
+
+    /// Gives the buffers of an `unwritten` frame their full length.
+    ///
+    /// # Safety
+    /// Every pixel of the frame must have been written through `output` (`Output::write_tile`
+    /// over tiles that cover the frame).
+    pub unsafe fn assume_written(&mut self) {
+        let n = self.width as usize * self.height as usize;
+        debug_assert!(self.depth.capacity() >= n && self.rgba.capacity() >= 4 * n);
+        // SAFETY: the capacities were reserved by `unwritten` and the caller guarantees every
+        // element up to these lengths was written (f32 and i32 have no invalid bit patterns).
+        unsafe {
+            self.rgba.set_len(4 * n);
+            self.depth.set_len(n);
+            self.ids.set_len(n);
+            self.velocity.set_len(2 * n);
         }
     }
 }

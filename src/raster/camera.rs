@@ -13,6 +13,8 @@ pub const MAX_SIDE: u32 = 16384;
 pub const MAX_PIXELS: u64 = 1 << 25;
 /// Largest side of the supersampled (internal) image: keeps fixed-point coordinates in range.
 pub const MAX_INTERNAL_SIDE: u32 = 32768;
+/// Samples per pixel along each axis the rasterizer takes.
+pub const SAMPLES: [u32; 3] = [1, 2, 4];
 
 /// A perspective camera: matrices in f64, image size in pixels.
 #[derive(Clone, Debug, PartialEq)]
@@ -88,7 +90,7 @@ pub fn check_size(width: u32, height: u32, samples: u32) -> Result<()> {
             format!("width * height must be <= {MAX_PIXELS}, got {width} x {height}"),
         ));
     }
-    if !matches!(samples, 1 | 2 | 4) {
+    if !SAMPLES.contains(&samples) {
         return Err(Error::value(
             "samples",
             format!("must be 1, 2 or 4, got {samples}"),

@@ -8,7 +8,8 @@
 //! Screen-space barycentric weights b_k are affine in the sample position; 1/w is affine too
 //! (sum of b_k / w_k), and the perspective-correct barycentric coordinates of the surface point
 //! are (b_k / w_k) / (1/w).
-use super::setup::{Tri, ONE};
+use super::coverage::ONE;
+use super::setup::Tri;
 
 /// Affine planes of the three screen-space weights, relative to corner 0, plus 1/w.
 #[derive(Clone, Copy, Debug)]

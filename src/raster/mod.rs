@@ -1,12 +1,16 @@
 //! The CPU rasterizer: camera, clipping, triangle setup, binning, tiles, blending, buffers.
 //!
 //! Pipeline of one frame (`rasterize`):
-//! 1. transform: vertices to clip space (f64), previous positions to homogeneous pixels, normals;
-//! 2. setup (parallel over runs of faces): clip against near/far and a guard band, snap to 8-bit
-//!    fixed point, cull back faces, orient, bound (`setup.rs`, `clip.rs`);
-//! 3. binning into 64x64-sample tiles, in submission order (`bins.rs`);
+//! 1. transform: vertices projected and snapped to fixed point once each (clip-space positions
+//!    kept only when velocity needs them), previous positions to homogeneous pixels, normals;
+//! 2. setup (parallel over runs of faces): clip against near/far and a guard band, cull back
+//!    faces, orient, bound, and give small triangles the box of the samples they cover
+//!    (`setup.rs`, `clip.rs`, `coverage.rs`);
+//! 3. binning into 64x64-sample tiles, in submission order, each bin holding copies of its
+//!    triangles (`bins.rs`);
 //! 4. tiles in parallel (rayon): an opaque pass with a visibility buffer, then a transparent pass
-//!    with per-sample fragment lists composited exactly or unsorted (`tile.rs`, `blend.rs`), then
+//!    with per-sample fragment lists composited exactly or unsorted (`tile.rs`, `blend.rs`, and
+//!    past `FRAGMENT_CAP` a sample the k-buffer of `kbuffer.rs`), then
 //!    the box resolve into the frame (`buffers.rs`).
 //!
 //! Every step is deterministic and no step depends on how work is split between threads, so the
@@ -16,50 +20,69 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 mod background;
 mod bins;
+mod fragment;
 mod blend;
 mod buffers;
 mod camera;
 mod clip;
+mod coverage;
 mod draw;
 mod interp;
+mod kbuffer;
 mod options;
 mod setup;
 mod shade;
 mod tile;
 
 pub use background::Background;
+pub use blend::FRAGMENT_CAP;
 pub use buffers::{Frame, Stats};
 pub use camera::check_size;
-pub use camera::Camera;
+pub use camera::{Camera, MAX_INTERNAL_SIDE, MAX_PIXELS, MAX_SIDE, SAMPLES};
 pub use draw::{faces_from_i64, vertex_normals, Draw};
 use options::check_options;
 pub use options::{Blend, Light, Options, Shading};
 
+use crate::budget::{self, Need};
 use crate::error::{Error, Result};
 use bins::TILE;
-use glam::DVec4;
 use rayon::prelude::*;
-use setup::{Chunk, Viewport};
+use setup::{Chunk, Screen, Viewport};
 use shade::{homogeneous_pixel, Prepared, Shader};
 use std::cell::RefCell;
 use std::time::Instant;
-use tile::TileScratch;
+use tile::{TileReport, TileScratch};
 
 /// Faces set up per parallel job (a clipped face may become up to 7 triangles, so a chunk
 /// holds at most 28672 < 2^16 triangles).
 const CHUNK_FACES: usize = 4096;
 
-fn transform(draw: &Draw, vp: glam::DMat4, opts: &Options, w: f64, h: f64) -> Prepared {
-    let project = |p: &[f64; 3]| {
-        let c = vp * DVec4::new(p[0], p[1], p[2], 1.0);
-        [c.x, c.y, c.z, c.w]
+/// The draw's vertices projected to the viewport (for the set-up), in clip space when shading
+/// needs them (velocity), and what shading needs per vertex.
+fn transform(
+    draw: &Draw,
+    vp: glam::DMat4,
+    viewport: &Viewport,
+    opts: &Options,
+    w: f64,
+    h: f64,
+) -> (Prepared, Screen) {
+    let project = |p: &[f64; 3]| setup::clip_position(&vp, p);
+    let vertices = draw.vertices.par_iter().with_min_len(4096);
+    let mut screen = Screen::default();
+    let clip: Vec<[f64; 4]> = if draw.previous.is_some() {
+        let (clip, pos_attr): (Vec<[f64; 4]>, (Vec<_>, Vec<_>)) = vertices
+            .map(|p| {
+                let c = project(p);
+                (c, viewport.project(&c))
+            })
+            .unzip();
+        (screen.pos, screen.attr) = pos_attr;
+        clip
+    } else {
+        (screen.pos, screen.attr) = vertices.map(|p| viewport.project(&project(p))).unzip();
+        Vec::new()
     };
-    let clip: Vec<[f64; 4]> = draw
-        .vertices
-        .par_iter()
-        .with_min_len(4096)
-        .map(project)
-        .collect();
     let prev = draw.previous.as_ref().map(|prev| {
         prev.par_iter()
             .with_min_len(4096)
@@ -71,20 +94,31 @@ fn transform(draw: &Draw, vp: glam::DMat4, opts: &Options, w: f64, h: f64) -> Pr
         (Shading::Lambert, Some(n)) => Some(n.clone()),
         (Shading::Lambert, None) => Some(vertex_normals(&draw.vertices, &draw.faces)),
     };
-    Prepared {
-        clip,
-        prev,
-        normals,
-    }
+    (
+        Prepared {
+            clip,
+            prev,
+            normals,
+        },
+        screen,
+    )
 }
 
 thread_local! {
     /// Each thread's tile buffers, kept across tiles and frames: a tile resets what it reads, so
     /// reuse changes no result, and the ~300 KB of buffers (and the fragment lists grown to the
-    /// frame's depth complexity, up to 2^18 fragments) are not allocated and page-faulted again
-    /// per frame.
+    /// frame's depth complexity, at most `FRAGMENT_CAP` fragments a sample) are not allocated
+    /// and page-faulted again per frame.
     static SCRATCH: RefCell<TileScratch> = RefCell::new(TileScratch::default());
 }
+
+thread_local! {
+    /// The bins of this thread's last frame: their buffers are reused by the next frame.
+    static KEPT_BINS: RefCell<bins::Bins> = RefCell::new(bins::Bins::default());
+}
+
+/// References the kept bins may hold room for between frames (4 + 100 bytes each).
+const KEEP_REFS: usize = 1 << 19;
 
 /// Runs `f` with this thread's tile buffers (fresh ones if they are already in use).
 fn with_scratch<R>(f: impl FnOnce(&mut TileScratch) -> R) -> R {
@@ -96,6 +130,33 @@ fn with_scratch<R>(f: impl FnOnce(&mut TileScratch) -> R) -> R {
         }
         Err(_) => f(&mut TileScratch::default()),
     })
+}
+
+/// Bytes a vertex takes while a frame is drawn: its fixed-point position and residuals, clip
+/// position and previous position (velocity), normal.
+const VERTEX_BYTES: u64 = 8 + 12 + 32 + 32 + 12;
+
+/// What a frame allocates before binning: the frame (32 bytes a pixel), each vertex's
+/// transform and each face's set-up triangle (more when clipped). The threads' tile buffers
+/// are not counted: they are kept between frames and bounded whatever the frame (~180 KB a
+/// thread, and the transparent pass's lists at most `FRAGMENT_CAP` fragments a sample, ~14 MB
+/// a thread at the deepest).
+fn frame_need(camera: &Camera, draws: &[Draw]) -> Result<Need> {
+    let vertices: u64 = draws.iter().map(|d| d.vertices.len() as u64).sum();
+    let faces: u64 = draws.iter().map(|d| d.faces.len() as u64).sum();
+    Need::new("rasterize")
+        .add(
+            &[
+                ("width", u64::from(camera.width)),
+                ("height", u64::from(camera.height)),
+            ],
+            32,
+        )?
+        .add(&[("vertices", vertices)], VERTEX_BYTES)?
+        .add(
+            &[("faces", faces)],
+            std::mem::size_of::<setup::Tri>() as u64,
+        )
 }
 
 /// Renders `draws` seen by `camera`. Errors name the offending argument.
@@ -132,18 +193,20 @@ pub fn rasterize_over(
             "too many faces or draws in one frame",
         ));
     }
+    let need = frame_need(camera, draws)?;
+    need.check()?;
     let (w, h) = (camera.width, camera.height);
     let s = opts.samples;
     let vp_matrix = camera.view_projection();
-    let mut frame = Frame::new(w, h);
-
-    let prepared: Vec<Prepared> = draws
-        .iter()
-        .map(|d| transform(d, vp_matrix, opts, f64::from(w), f64::from(h)))
-        .collect();
-    let t1 = Instant::now();
+    let mut frame = Frame::unwritten(w, h)?;
 
     let viewport = Viewport::new(w * s, h * s);
+    let (prepared, screens): (Vec<Prepared>, Vec<Screen>) = draws
+        .iter()
+        .map(|d| transform(d, vp_matrix, &viewport, opts, f64::from(w), f64::from(h)))
+        .unzip();
+    let t1 = Instant::now();
+
     let jobs: Vec<(usize, std::ops::Range<usize>)> = draws
         .iter()
         .enumerate()
@@ -156,12 +219,20 @@ pub fn rasterize_over(
     let chunks: Vec<Chunk> = jobs
         .into_par_iter()
         .map(|(di, range)| {
-            setup::setup_chunk(di as u32, &draws[di], &prepared[di].clip, range, &viewport)
+            setup::setup_chunk(
+                di as u32,
+                &draws[di],
+                &vp_matrix,
+                &screens[di],
+                range,
+                &viewport,
+            )
         })
         .collect();
     let t2 = Instant::now();
 
-    let bins = bins::Bins::build(&chunks, viewport.ws, viewport.hs);
+    let mut bins = KEPT_BINS.with(RefCell::take);
+    bins.build(&chunks, viewport.ws, viewport.hs, need)?;
     let t3 = Instant::now();
 
     let shader = Shader {
@@ -175,7 +246,7 @@ pub fn rasterize_over(
     let out = frame.output();
     let tiles_x = bins.tiles_x;
     let pixels_per_tile = (TILE as u32 / s) as usize;
-    let (fragments, bad_background) = (0..bins.tiles_x * bins.tiles_y)
+    let report = (0..bins.tiles_x * bins.tiles_y)
         .into_par_iter()
         .map(|t| {
             let (tx, ty) = (t % tiles_x, t / tiles_x);
@@ -187,22 +258,33 @@ pub fn rasterize_over(
             ];
             let s = s as usize;
             let rect = [px[0] * s, px[1] * s, px[2] * s, px[3] * s].map(|v| v as i32);
-            let refs = bins.tile(t);
+            let (refs, tris) = bins.tile(t);
             with_scratch(|scratch| {
-                let n = match (refs.is_empty(), background) {
+                let mut report = match (refs.is_empty(), background) {
                     (true, None) => {
                         scratch.samples.fill(blend::Sample::BACKGROUND);
-                        (0, false)
+                        TileReport::default()
                     }
-                    (true, Some(bg)) => (0, bg.load(rect, &mut scratch.zbuf, &mut scratch.samples)),
-                    _ => tile::render_tile(rect, refs, &shader, opts.blend, background, scratch),
+                    (true, Some(bg)) => TileReport {
+                        bad_background: bg.load(rect, &mut scratch.zbuf, &mut scratch.samples),
+                        ..Default::default()
+                    },
+                    _ => tile::render_tile(
+                        rect, refs, tris, &shader, opts.blend, background, scratch,
+                    ),
                 };
+                let t = Instant::now();
                 // SAFETY: tiles partition the frame, so this rectangle is written by this task only.
                 unsafe { out.write_tile(&scratch.samples, px, s) };
-                n
+                report.ms[3] = (t.elapsed()).as_secs_f64() * 1e3;
+                report
             })
         })
-        .reduce(|| (0, false), |a, b| (a.0 + b.0, a.1 | b.1));
+        .reduce(TileReport::default, TileReport::add);
+    if report.refused > 0 {
+        return Err(budget::refused("draws", report.refused));
+    }
+    let (fragments, bad_background) = (report.fragments, report.bad_background);
     // The tiles partition the frame, so together they loaded every sample of the background's
     // window: a bad value anywhere in it was seen (rendering over it reads no value as an index
     // and cannot fail). The full check names it.
@@ -213,18 +295,30 @@ pub fn rasterize_over(
             "depth must be > 0 and rgba finite",
         ));
     }
+    // SAFETY: the tiles partition the frame (tiles_x * tiles_y tiles of pixels_per_tile
+    // pixels, clamped to the image, cover every pixel) and each wrote its rectangle above.
+    unsafe { frame.assume_written() };
     let t4 = Instant::now();
 
+    if bins.refs.capacity() <= KEEP_REFS {
+        bins.tris.clear();
+        KEPT_BINS.with(|kept| kept.replace(bins));
+    }
     let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
     frame.stats = Stats {
         triangles: chunks.iter().map(|c| c.tris.len() as u64).sum(),
         fragments,
+        approximated: report.approximated,
         culled: chunks.iter().map(|c| c.culled).sum(),
         clipped: chunks.iter().map(|c| c.clipped).sum(),
         ms_transform: ms(t0, t1),
         ms_setup: ms(t1, t2),
         ms_bin: ms(t2, t3),
         ms_raster: ms(t3, t4),
+        ms_coverage: report.ms[0],
+        ms_shade: report.ms[1],
+        ms_transparent: report.ms[2],
+        ms_resolve: report.ms[3],
         ms_total: ms(t0, t4),
     };
     Ok(frame)

@@ -56,6 +56,9 @@ impl Default for Options {
 }
 
 impl Blend {
+    /// The blend modes' names, as [`Blend::parse`] takes them.
+    pub const NAMES: [&'static str; 2] = ["exact", "unsorted"];
+
     /// "exact" or "unsorted".
     pub fn parse(name: &str) -> Result<Self> {
         match name {
@@ -70,6 +73,9 @@ impl Blend {
 }
 
 impl Shading {
+    /// The shading modes' names, as [`Shading::parse`] takes them.
+    pub const NAMES: [&'static str; 2] = ["flat", "lambert"];
+
     /// "flat" or "lambert".
     pub fn parse(name: &str) -> Result<Self> {
         match name {

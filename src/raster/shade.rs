@@ -17,8 +17,8 @@ use super::interp::Planes;
 use super::options::{Options, Shading};
 use super::setup::{Chunk, Tri, FRONT, NO_CLIP};
 
-/// Per-draw data computed once a frame: clip-space positions, previous homogeneous screen
-/// positions (for velocity) and normals (lambert only).
+/// Per-draw data computed once a frame: clip-space positions and previous homogeneous screen
+/// positions (for velocity; `clip` is empty without them) and normals (lambert only).
 #[derive(Debug, Default)]
 pub struct Prepared {
     pub clip: Vec<[f64; 4]>,
@@ -59,17 +59,11 @@ pub fn unpack(r: u32) -> (usize, usize) {
 }
 
 impl<'a> Shader<'a> {
+    /// What shading the samples of triangle `tri` (reference `r`) needs, gathered once for the
+    /// triangle.
     #[inline]
-    pub fn tri(&self, r: u32) -> &'a Tri {
-        let (c, i) = unpack(r);
-        &self.chunks[c].tris[i]
-    }
-
-    /// What shading the samples of triangle `r` needs, gathered once for the triangle.
-    #[inline]
-    pub fn prepare(&self, r: u32) -> TriShade<'a> {
-        let (c, i) = unpack(r);
-        let tri = &self.chunks[c].tris[i];
+    pub fn prepare(&self, r: u32, tri: &Tri) -> TriShade<'a> {
+        let (c, _) = unpack(r);
         let di = tri.draw as usize;
         let d = &self.draws[di];
         let p = &self.prepared[di];
@@ -83,7 +77,8 @@ impl<'a> Shader<'a> {
             (Shading::Lambert, Some(n)) => Some(v.map(|k| n[k as usize])),
             _ => None,
         };
-        TriShade {
+        let mut ts = TriShade {
+            constant: None,
             clip: (tri.clip != NO_CLIP).then(|| self.chunks[c].clips[tri.clip as usize]),
             color: d.rgba[0],
             colors,
@@ -95,13 +90,21 @@ impl<'a> Shader<'a> {
             opts: self.opts,
             width: self.width,
             height: self.height,
+        };
+        if ts.colors.is_none() && ts.normals.is_none() && p.prev.is_none() {
+            // Nothing varies over the triangle: its one shading, computed as `shade` would.
+            ts.constant = Some(ts.shade([0.0; 3]));
         }
+        ts
     }
 }
 
 /// The shading inputs of one triangle: its corners' colours and normals, its clip table, its
 /// draw's id. Per sample only the interpolation remains.
 pub struct TriShade<'a> {
+    /// The shading of every sample when nothing varies over the triangle (one colour, flat or
+    /// without normals, no velocity): `shade` returns it without interpolating.
+    constant: Option<Shaded>,
     clip: Option<[[f32; 3]; 3]>,
     /// The draw's colour when it has one for all vertices (`colors` None).
     color: [f32; 4],
@@ -144,9 +147,29 @@ impl TriShade<'_> {
         }
     }
 
+    /// The shading of sample (ix, iy), whose interpolation planes are `planes` (`shade` of its
+    /// `lambdas`, which a constant triangle does not need).
+    #[inline(always)]
+    pub fn shade_at(&self, planes: &Planes, ix: i32, iy: i32) -> Shaded {
+        match self.constant {
+            Some(c) => c,
+            None => self.shade(self.lambdas(planes, ix, iy)),
+        }
+    }
+
+    /// The shading of every sample when the triangle's is constant (then its alpha is one
+    /// value too).
+    #[inline(always)]
+    pub fn constant(&self) -> Option<Shaded> {
+        self.constant
+    }
+
     /// Shades the sample with barycentric coordinates `lam`.
     #[inline(always)]
     pub fn shade(&self, lam: [f32; 3]) -> Shaded {
+        if let Some(c) = self.constant {
+            return c;
+        }
         let mut c = match &self.colors {
             None => self.color,
             Some(cs) => {

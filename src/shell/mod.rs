@@ -46,10 +46,13 @@
 //! `build.rs` (the shell mesh), `locality.rs` (the internal vertex and face order).
 mod blur_shell;
 mod build;
+mod history;
 mod locality;
 #[cfg(test)]
 mod tests;
 mod update;
 
-pub use blur_shell::{BlurShell, FaceState, ShellColor, ShellOptions, ON_SILHOUETTE};
+pub use blur_shell::{
+    BlurShell, FaceState, ShellColor, ShellOptions, MAX_HYSTERESIS, MAX_SUBDIVISIONS, ON_SILHOUETTE,
+};
 pub use build::{BuildPlan, ShellMesh, ShellOut};

@@ -398,9 +398,7 @@ pub(crate) fn assemble(
         if u == 0.0 {
             placers[j].point(verts[s.v as usize])
         } else {
-            frames[j]
-                .interpolate(&frames[j + 1], u)
-                .point(verts[s.v as usize])
+            path.between(j, u).point(verts[s.v as usize])
         }
     };
     let vertices: Vec<[f64; 3]> = sources.par_iter().map(place).collect();

@@ -7,9 +7,9 @@ use super::coverage::{default_view, CoverageModel};
 use super::filter::Filter;
 use super::rim::Rim;
 use super::subdivide::{subdivided, subdivision_factor};
-use super::types::{check_options, Colors, MotionVolume, VolumeOptions, LEADING, MAX_SEGMENTS};
+use super::types::{check_options, check_segments, Colors, MotionVolume, VolumeOptions, LEADING};
 use crate::contour::{classify_faces, classify_faces_seen};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::mesh::{dot, normalize, Mesh};
 use crate::motion::Path;
 
@@ -56,12 +56,7 @@ fn mean(vertices: &[[f64; 3]]) -> [f64; 3] {
 pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<MotionVolume> {
     check_options(mesh, opts)?;
     let n = path.segments();
-    if n == 0 || n > MAX_SEGMENTS {
-        return Err(Error::value(
-            "segments",
-            format!("total segments must be in 1..={MAX_SEGMENTS}, got {n}"),
-        ));
-    }
+    check_segments(n)?;
     let verts = mesh.vertices();
     let face_colors = matches!(opts.colors, Colors::PerFace(_));
     if path.is_static() && face_colors {

@@ -269,12 +269,8 @@ impl CoverageModel {
             8usize.div_ceil(n)
         };
         let sub = (parts > 1).then(|| path.subdivide(parts));
-        let mids = |p: &Path| -> Vec<Keyframe> {
-            p.frames
-                .windows(2)
-                .map(|w| w[0].interpolate(&w[1], 0.5))
-                .collect()
-        };
+        let mids =
+            |p: &Path| -> Vec<Keyframe> { (0..p.segments()).map(|j| p.between(j, 0.5)).collect() };
         let mut placements: Vec<Keyframe> = Vec::new();
         let wanted = if pure {
             vec![path.frames[0]]
@@ -332,7 +328,7 @@ impl CoverageModel {
                             let off = [0.5 * (pa[0] + pb[0]) - o[0], 0.5 * (pa[1] + pb[1]) - o[1]];
                             h.iter().map(|p| [p[0] + off[0], p[1] + off[1]]).collect()
                         }
-                        None => hull_at(&a.interpolate(b, 0.5)),
+                        None => hull_at(&path.between(j, 0.5)),
                     };
                     let local: Vec<[f64; 2]> = hull
                         .iter()
@@ -445,7 +441,6 @@ impl CoverageModel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::Keyframe;
 
     fn square() -> Vec<[f64; 3]> {
         vec![
@@ -460,12 +455,7 @@ mod tests {
     fn box_coverage_of_a_translating_square_is_exact() {
         // A unit square moving 4 along x, seen along -z: a point at x covers the window where the
         // square's [tx, tx + 1] contains it, so coverage = |[x - 1, x] / 4 ∩ [0, 1]|.
-        let path = Path {
-            frames: vec![
-                Keyframe::translate([0.0; 3]),
-                Keyframe::translate([4.0, 0.0, 0.0]),
-            ],
-        };
+        let path = Path::translation([4.0, 0.0, 0.0]).unwrap();
         let m = CoverageModel::new(&square(), None, &path, Filter::Box, [0.0, 0.0, -1.0], None);
         for (x, want) in [
             (-0.5, 0.0),

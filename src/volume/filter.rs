@@ -36,6 +36,9 @@ pub enum Filter {
 pub const ALPHA_FLOOR: f64 = 0.1;
 
 impl Filter {
+    /// The filters' names, as [`Filter::parse`] takes them.
+    pub const NAMES: [&'static str; 4] = ["ramp", "box", "triangle", "gaussian"];
+
     /// Parse `ramp`, `box`, `triangle` or `gaussian`; anything else is an error naming `filter`.
     pub fn parse(name: &str) -> Result<Self> {
         match name {

@@ -294,7 +294,7 @@ mod tests {
                 (None, [0.0, -0.1, -1.0], true),
             ] {
                 let d = crate::mesh::normalize(view);
-                let mid = path.frames[0].interpolate(&path.frames[1], 0.5);
+                let mid = path.between(0, 0.5);
                 let picked = object_view(&mid, mesh.face_planes(), eye, d);
                 assert_eq!(picked.is_some(), fast, "{eye:?} {view:?}");
                 let model = |planes| {

@@ -40,4 +40,7 @@ mod types;
 pub use build::motion_volume;
 pub use filter::Filter;
 pub use spin::{spin_volume, Spin};
-pub use types::{Colors, MotionVolume, VolumeOptions, JOINING, LEADING, MAX_SEGMENTS, TRAILING};
+pub use types::{
+    check_segments, subdivided, Colors, MotionVolume, VolumeOptions, JOINING, LEADING,
+    MAX_SEGMENTS, TRAILING,
+};

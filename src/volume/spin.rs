@@ -45,7 +45,7 @@ use super::assemble::{assemble, select_contour, AlphaMode};
 use super::build::motion_volume;
 use super::filter::Filter;
 use super::subdivide::{subdivided, subdivision_for_edge};
-use super::types::{check_options, MotionVolume, VolumeOptions, MAX_SEGMENTS};
+use super::types::{check_options, check_segments, MotionVolume, VolumeOptions};
 use crate::error::check_vector;
 use crate::error::{Error, Result};
 use crate::mesh::{dot, face_normal, normalize, Mesh};
@@ -196,13 +196,10 @@ pub fn spin_volume(mesh: &Mesh, spin: &Spin, opts: &VolumeOptions) -> Result<Mot
     }
     let sweep = spin.angle.abs().min(TAU);
     let n = match spin.segments {
-        Some(s) if !(1..=MAX_SEGMENTS).contains(&s) => {
-            return Err(Error::value(
-                "segments",
-                format!("must be in 1..={}", MAX_SEGMENTS),
-            ));
+        Some(s) => {
+            check_segments(s)?;
+            s
         }
-        Some(s) => s,
         None => ((sweep / (std::f64::consts::PI / 12.0)).ceil() as usize).max(1),
     };
     let sign = if spin.angle < 0.0 { -1.0 } else { 1.0 };
@@ -219,7 +216,7 @@ pub fn spin_volume(mesh: &Mesh, spin: &Spin, opts: &VolumeOptions) -> Result<Mot
             )
         })
         .collect();
-    let path = Path { frames };
+    let path = Path::from_frames(&frames)?;
     if sweep == 0.0 {
         // No spin: the paper's motion volume of the translation (the mesh itself if none).
         return motion_volume(mesh, &path, opts);

@@ -6,6 +6,7 @@ use super::filter::Filter;
 use crate::error::check_vector;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
+use crate::motion::Path;
 
 /// [`MotionVolume::part`] of a leading face (front faces placed at shutter close).
 pub const LEADING: u8 = 0;
@@ -14,8 +15,27 @@ pub const TRAILING: u8 = 1;
 /// [`MotionVolume::part`] of a joining face (the swept contour).
 pub const JOINING: u8 = 2;
 
-/// Largest number of segments accepted.
+/// Largest number of segments accepted (joining segments of a volume, sweep steps of a spin).
 pub const MAX_SEGMENTS: usize = 4096;
+
+/// Checks a number of segments: in `1..=MAX_SEGMENTS` (for a volume: in total, keyframe
+/// intervals times the segments each is cut into). Errors name `segments`.
+pub fn check_segments(n: usize) -> Result<()> {
+    if n == 0 || n > MAX_SEGMENTS {
+        return Err(Error::value(
+            "segments",
+            format!("must be in 1..={MAX_SEGMENTS} (in total), got {n}"),
+        ));
+    }
+    Ok(())
+}
+
+/// `path` with every interval cut into `segments` joining segments, checked first
+/// ([`check_segments`] of the total) so that nothing is allocated for an absurd count.
+pub fn subdivided(path: &Path, segments: usize) -> Result<Path> {
+    check_segments(path.segments().saturating_mul(segments))?;
+    Ok(path.subdivide(segments))
+}
 
 /// Colours: one straight RGBA for all, one per mesh vertex, or one per mesh face.
 ///

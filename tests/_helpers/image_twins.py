@@ -284,3 +284,94 @@ def velocity_blur(rgba, velocity, samples):
     out = acc / samples
     still = (velocity[..., 0] == 0) & (velocity[..., 1] == 0)
     return np.where(still[..., None], img, out)
+
+
+def _jitter(x: int, y: int) -> float:
+    m = 0xFFFFFFFF
+    h = ((x * 0x8DA6B343) & m) ^ ((y * 0xD8163841) & m)
+    h ^= h >> 13
+    h = (h * 0x5BD1E995) & m
+    h ^= h >> 15
+    return (h >> 8) / float(1 << 24)
+
+
+def reconstruct_twin(rgba, depth, velocity, samples=16, tile=8, soft_depth=0.02):
+    """Plain-Python twin of ``src/image/reconstruct.rs`` (McGuire 2012 / Guertin 2014 gather,
+    the formulas of its module docs), float64; for small images."""
+    h, w = depth.shape
+    half = 0.5 * velocity.astype(np.float64)
+    ln = np.hypot(half[..., 0], half[..., 1])
+    scale = np.where(ln > tile, tile / np.maximum(ln, 1e-300), 1.0)
+    half = half * scale[..., None]
+    ln = np.hypot(half[..., 0], half[..., 1])
+    tx, ty = -(-w // tile), -(-h // tile)
+    tiles = np.zeros((ty, tx, 2))
+    for by in range(ty):
+        for bx in range(tx):
+            best = np.zeros(2)
+            for y in range(by * tile, min((by + 1) * tile, h)):
+                for x in range(bx * tile, min((bx + 1) * tile, w)):
+                    if ln[y, x] ** 2 > best @ best:
+                        best = half[y, x]
+            tiles[by, bx] = best
+    nmax = np.zeros_like(tiles)
+    for by in range(ty):
+        for bx in range(tx):
+            best = np.zeros(2)
+            for dy in (-1, 0, 1):
+                for dx in (-1, 0, 1):
+                    y, x = by + dy, bx + dx
+                    if 0 <= y < ty and 0 <= x < tx and tiles[y, x] @ tiles[y, x] > best @ best:
+                        best = tiles[y, x]
+            nmax[by, bx] = best
+    out = np.zeros((h, w, 4))
+    col = rgba.astype(np.float64)
+    for y in range(h):
+        for x in range(w):
+            n, c = nmax[y // tile, x // tile], half[y, x]
+            rn, rc = np.hypot(*n), np.hypot(*c)
+            if max(rn, rc) < 0.5:
+                out[y, x] = col[y, x]
+                continue
+            zx = float(depth[y, x])
+            fg, bg = np.zeros(4), np.zeros(4)
+            acc = [0.0, 0.0, 0.0]  # wf, wb, taps
+
+            def tap(yy, xx, d, zx=zx, rc=rc, fg=fg, bg=bg, acc=acc):
+                zy = float(depth[yy, xx])
+                near = min(zx, zy)
+                f = 0.5 if zx == zy else float(np.clip(0.5 - (zy - zx) / (soft_depth * near), 0, 1))
+                a = f * np.clip(ln[yy, xx] - d + 1, 0, 1)
+                b = (1 - f) * np.clip(rc - d + 1, 0, 1)
+                fg[:] += a * col[yy, xx]
+                bg[:] += b * col[yy, xx]
+                acc[0] += a
+                acc[1] += b
+                acc[2] += 1
+
+            tap(y, x, 0.0)
+            pairs = samples // 2
+            both = rc >= 0.5 and rn >= 0.5
+            j = _jitter(x, y)
+            for p in range(pairs):
+                if both and p % 2 == 1:
+                    dvec, r, q, m = c, rc, p // 2, pairs // 2
+                elif both:
+                    dvec, r, q, m = n, rn, p // 2, pairs - pairs // 2
+                elif rn >= 0.5:
+                    dvec, r, q, m = n, rn, p, pairs
+                else:
+                    dvec, r, q, m = c, rc, p, pairs
+                t = (q + j) / max(m, 1)
+                for s in (-1.0, 1.0):
+                    px, py = x + 0.5 + s * t * dvec[0], y + 0.5 + s * t * dvec[1]
+                    if px < 0 or py < 0 or px >= w or py >= h:
+                        continue
+                    sx, sy = int(px), int(py)
+                    d = min(np.hypot(sx - x, sy - y), t * r)
+                    tap(sy, sx, d)
+            wf, wb, taps = acc
+            fill = float(np.clip(1 - (wf + wb) / taps, 0, 1))
+            back = bg / wb if wb > 0 else col[y, x]
+            out[y, x] = (fg + bg) / taps + back * fill
+    return out.astype(np.float32)

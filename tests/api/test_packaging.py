@@ -61,7 +61,7 @@ def test_extras_by_purpose_and_all_is_their_union():
     extras = _pyproject()["project"]["optional-dependencies"]
     assert {"reference", "metrics", "pyrender", "interop", "meshes", "bench", "all"} <= set(extras)
     assert "peers" not in extras
-    others = sorted(set(extras) - {"all"})
+    others = sorted(set(extras) - {"all", "dev"})
     assert extras["all"] == [
         f"motionblur[{','.join(o for o in ['reference', 'metrics', 'pyrender', 'interop', 'meshes', 'bench'])}]"
     ]
@@ -74,6 +74,12 @@ def test_extras_by_purpose_and_all_is_their_union():
     assert any(r.startswith("mitsuba") for r in extras["reference"])
     assert any(r.startswith("flip-evaluator") for r in extras["metrics"])
     assert {"pygltflib", "OpenEXR", "trimesh"} <= {re.split(r"[<>=]", r)[0] for r in extras["interop"]}
+    # dev is for working on the project (make installs requirements-dev.txt, which holds it)
+    dev_reqs = {
+        re.split(r"[<>=]", r)[0]
+        for r in (Path(__file__).parents[2] / "requirements-dev.txt").read_text().split()
+    }
+    assert {re.split(r"[<>=]", r)[0] for r in extras["dev"]} <= dev_reqs
 
 
 def test_console_script_prints_the_version():

@@ -254,3 +254,28 @@ def test_sequence_running_total_equals_fresh_mean_with_two_draws_per_frame(rng):
 def test_rotate_helper_is_right_handed():
     r = rotate(math.pi / 2, (0, 0, 1))
     np.testing.assert_allclose(r[:3, :3] @ [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], atol=1e-12)
+
+
+def test_motion_samples_many_times_at_once_and_pickles():
+    import pickle
+
+    m = mb.Motion([0.0, 0.4, 1.0], np.stack([np.eye(4), rotate(1.0, (1, 1, 0)), translate((1, 2, 3))]))
+    ts = np.linspace(0.0, 1.0, 17)
+    many = m.transforms_at(ts)
+    assert many.shape == (17, 4, 4)
+    for t, got in zip(ts, many):
+        np.testing.assert_array_equal(got, m.transform_at(t))
+    for motion in (m, mb.Motion.deforming([0.0, 1.0], np.zeros((2, 5, 3)))):
+        back = pickle.loads(pickle.dumps(motion))
+        np.testing.assert_array_equal(back.transform_at(0.3), motion.transform_at(0.3))
+        assert back.is_deforming == motion.is_deforming
+
+
+def test_camera_poses_at_many_times_are_the_poses_at_each():
+    m = mb.Motion.linear(np.eye(4), rotate(0.3, (0, 1, 0), (0, 0, 5)) @ translate((0.5, 0, 0)))
+    for sc in (mb.Scene([], _cam(), camera_motion=m), mb.Scene([], _cam())):
+        ts = np.linspace(0.0, 1.0, 9)
+        poses = sc.camera_poses_at(ts)
+        for t, p, v in zip(ts, poses, np.linalg.inv(poses)):
+            np.testing.assert_array_equal(p, sc.camera_pose_at(t))
+            np.testing.assert_array_equal(v, sc.camera_at(t).view)  # batched inverses: the same bits

@@ -211,3 +211,45 @@ def test_the_gil_is_released():
     draw = mb.MovingDraw(np.stack([v, v + (2, 0, 0)]), f, (1, 1, 1))
     cam = mb.Camera(mb.look_at((0, 0, DIST), (0, 0, 0)), YFOV, 320, 240)
     assert ticks_during(lambda: mb.rasterize_motion(cam, [draw], [0.0, 1.0], samples=2)) > 3
+
+
+def stacked(n: int):
+    """One draw of n translucent quads, each wider than the view, stacked 0.02 apart in depth and
+    translating by its own amount: every sample is covered by most of them at once."""
+    v, f = grid_square(1.8, 1)
+    pos, faces, rgba = [], [], []
+    for i in range(n):
+        z = (0, 0, -0.02 * i)
+        pos.append(np.stack([v + (-0.6 + 0.01 * i, 0, 0) + z, v + (0.7 - 0.015 * i, 0.1, 0) + z]))
+        faces.append(f + 4 * i)
+        rgba.append(np.tile([(i % 3) / 2, (i % 5) / 4, (i % 7) / 6, 0.08], (4, 1)))
+    return mb.MovingDraw(np.concatenate(pos, axis=1), np.concatenate(faces), np.concatenate(rgba))
+
+
+def test_a_small_memory_budget_changes_no_bit_and_a_too_small_one_raises(monkeypatch):
+    draw, args = stacked(40), dict(times=[0.0, 1.0], samples=1, shutter="triangle")
+    whole = mb.rasterize_motion(_cam(), [draw], **args)
+    assert whole.stats["splits"] == 0 and whole.stats["intervals"] > 20 * W * H
+    splits = []
+    for budget in (1 << 20, 1 << 17):
+        monkeypatch.setattr(mb.analytic, "TILE_BUDGET_BYTES", budget)
+        part = mb.rasterize_motion(_cam(), [draw], **args)
+        for a, b in zip((part.rgba, part.depth, part.ids, part.velocity),
+                        (whole.rgba, whole.depth, whole.ids, whole.velocity)):  # fmt: skip
+            assert np.array_equal(a, b)
+        for key in ("intervals", "pieces"):
+            assert part.stats[key] == whole.stats[key], key
+        splits.append(part.stats["splits"])
+    assert 0 < splits[0] < splits[1], splits
+    # one sample under 40 layers needs more than 4 KiB: a MemoryError naming it, and the session
+    # goes on
+    monkeypatch.setattr(mb.analytic, "TILE_BUDGET_BYTES", 4096)
+    with pytest.raises(MemoryError, match=r"draws: sample \(\d+, \d+\) \(pixel .*TILE_BUDGET_BYTES"):
+        mb.rasterize_motion(_cam(), [draw], **args)
+    for bad, exc in ((0, ValueError), (1.5, TypeError)):
+        monkeypatch.setattr(mb.analytic, "TILE_BUDGET_BYTES", bad)
+        with pytest.raises(exc, match="TILE_BUDGET_BYTES"):
+            mb.rasterize_motion(_cam(), [draw], **args)
+    monkeypatch.undo()
+    again = mb.rasterize_motion(_cam(), [draw], **args)
+    assert np.array_equal(again.rgba, whole.rgba)

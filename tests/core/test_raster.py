@@ -504,3 +504,22 @@ def test_a_resized_camera_checks_its_size(size):
     cam = mb.Camera(np.eye(4), 0.8, 16, 12)
     with pytest.raises(ValueError, match="width|height|pixels"):
         cam.resized(*size)
+
+
+def test_unsorted_blending_tests_and_writes_depth_like_the_hardware():
+    """The 1996 hardware composited in submission order but depth-tested each transparent
+    fragment against the depth the earlier ones wrote: a far quad drawn after a near one is
+    dropped where they overlap; drawn before it, both show, as in depth order."""
+    cam = mb.Camera(mb.look_at((0.0, 0.0, 4.0), (0, 0, 0)), 0.7, 32, 32)
+    v, f = quad(1.0)
+    near = mb.Draw(v + [0, 0, 0.5], f, (0.9, 0.1, 0.1, 0.5), object_id=1)
+    far = mb.Draw(v + [0, 0, -0.5], f, (0.1, 0.1, 0.9, 0.5), object_id=2)
+    exact = mb.rasterize(cam, [far, near], blend="exact")
+    back_to_front = mb.rasterize(cam, [far, near], blend="unsorted")
+    np.testing.assert_array_equal(back_to_front.rgba, exact.rgba)
+    front_first = mb.rasterize(cam, [near, far], blend="unsorted")
+    alone = mb.rasterize(cam, [near], blend="unsorted")
+    centre = (16, 16)
+    np.testing.assert_array_equal(front_first.rgba[centre], alone.rgba[centre])
+    assert front_first.ids[centre] == 1
+    assert np.abs(front_first.rgba[centre] - exact.rgba[centre]).max() > 0.1

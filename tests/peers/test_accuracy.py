@@ -132,8 +132,9 @@ def test_reference_is_seeded_and_checks_its_arguments():
     for bad in ({"times": 0}, {"spp": 0}, {"times": 1.5}):
         with pytest.raises((ValueError, TypeError), match=next(iter(bad))):
             reference.mitsuba(sc, **bad)
-    with pytest.raises(ValueError, match="per vertex"):
-        reference.mitsuba(sc.with_(objects=[mb.Object(meshes.box(), np.ones((8, 3)))]))
+    # per-vertex colours are taken now (tests/peers/test_reference_scenes.py); lens options pair up
+    with pytest.raises(ValueError, match="focus_distance"):
+        reference.mitsuba(sc, aperture=0.1)
 
 
 @pytest.mark.pyrender

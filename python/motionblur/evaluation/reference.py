@@ -57,50 +57,103 @@ def _mi(variant=None):
 
 def _check_colours(scene: Scene):
     for k, o in enumerate(scene.objects):
-        if o.color.ndim != 1:
+        if o.shading == "lambert" and float(np.min(o.rgba[..., 3])) < 1.0:
             raise ValueError(
-                f"scene: object {k}: the Mitsuba reference takes one colour per object, not per vertex"
+                f"scene: object {k}: the Mitsuba reference takes transparent objects with flat "
+                "shading only (its direct integrator stops at the first surface); use alpha 1 or "
+                "shading='flat'"
             )
-        if o.rgba[3] < 1.0:
-            raise ValueError(f"scene: object {k}: the Mitsuba reference takes opaque objects only (alpha 1)")
     if scene.ambient.any() and any(o.shading == "lambert" for o in scene.objects):
         raise ValueError(
             "scene: the Mitsuba reference has no ambient light; use ambient=0 with lambert objects"
         )
 
 
+def _transparent(o) -> bool:
+    return float(np.min(o.rgba[..., 3])) < 1.0
+
+
+def _colour(o, scale: float = 1.0) -> dict:
+    """The object's colour as a Mitsuba texture: one RGB, or the per-vertex ``vertex_color``
+    mesh attribute (interpolated over each triangle as the rasterizer does)."""
+    if o.rgba.ndim == 2:
+        return {"type": "mesh_attribute", "name": "vertex_color", "scale": scale}
+    return {"type": "rgb", "value": [float(x) * scale for x in o.rgba[:3]]}
+
+
+def _front_faces(v: np.ndarray, f: np.ndarray, eye: np.ndarray) -> np.ndarray:
+    """(F,3) uint32 faces with those facing away from ``eye`` made degenerate (the rasterizer
+    culls back faces, and a transparent object's must not hide what is behind it)."""
+    a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
+    facing = (np.cross(b - a, c - a) * (eye - a)).sum(axis=1) > 0
+    out = np.where(facing[:, None], f, f[:, :1]).astype(np.uint32)
+    return np.ascontiguousarray(out)
+
+
 class _MitsubaScene:
     """A Mitsuba scene built once for ``pass_`` ('flat', 'lambert' or 'all') and posed per time."""
 
-    def __init__(self, mi, scene: Scene, pass_: str, spp: int):
+    def __init__(self, mi, scene: Scene, pass_: str, spp: int, lens=None):
         self.mi, self.scene = mi, scene
         cam = scene.camera
         d = {"type": "scene"}
-        if pass_ == "flat":
-            d["integrator"] = {"type": "path", "max_depth": 1}
+        coverage = pass_ == "coverage"
+        layers = sum(_transparent(o) for o in scene.objects)
+        if pass_ in ("flat", "coverage"):
+            # a transparent surface is a null interaction: each one seen through costs a bounce
+            d["integrator"] = {"type": "path", "max_depth": 1 + 2 * layers}
+        elif layers:
+            d["integrator"] = {"type": "path", "max_depth": 2 + 2 * layers}
         else:
             d["integrator"] = {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0}
         self.moving: list[tuple[str, object, str]] = []  # (key, object, 'vertices' | 'instance')
+        self.clear: list[tuple[str, object]] = []  # transparent objects: back faces dropped per time
+        self.backdrop = layers > 0 and pass_ in ("flat", "coverage")
         for k, o in enumerate(scene.objects):
-            rgb = [float(x) for x in o.rgba[:3]]
             emits = o.shading == "flat" and pass_ in ("flat", "all")
             lit = o.shading == "lambert" and pass_ in ("lambert", "all")
+            if coverage:
+                emits = lit = False
+            clear = _transparent(o)
+            # alpha as opacity: a mask of that opacity over the BSDF; a transparent emitter
+            # radiates alpha times its colour (premultiplied, as the rasterizer composites it);
+            # the coverage pass makes every object emit its alpha
+            alpha = {"type": "rgb", "value": [float(np.min(o.rgba[..., 3]))] * 3}
+            if o.rgba.ndim == 2:
+                alpha = {"type": "mesh_attribute", "name": "vertex_alpha"}
+            bsdf = {
+                "type": "diffuse",
+                "reflectance": _colour(o) if lit else {"type": "rgb", "value": [0.0] * 3},
+            }
+            if clear:
+                bsdf = {"type": "mask", "opacity": alpha, "bsdf": bsdf}
             props = mi.Properties()
-            props["bsdf"] = mi.load_dict(
-                {"type": "diffuse", "reflectance": {"type": "rgb", "value": rgb if lit else [0.0] * 3}}
-            )
-            if emits:
-                props["emitter"] = mi.load_dict({"type": "area", "radiance": {"type": "rgb", "value": rgb}})
+            props["bsdf"] = mi.load_dict(bsdf)
+            if coverage:
+                props["emitter"] = mi.load_dict({"type": "area", "radiance": alpha})
+            elif emits:
+                radiance = _colour(o, float(np.min(o.rgba[..., 3])) if o.rgba.ndim == 1 else 1.0)
+                if o.rgba.ndim == 2 and clear:
+                    radiance = {"type": "mesh_attribute", "name": "vertex_premultiplied"}
+                props["emitter"] = mi.load_dict({"type": "area", "radiance": radiance})
             v, f = o.mesh.vertices, o.mesh.faces
             mesh = mi.Mesh(f"obj{k}", len(v), len(f), props, has_vertex_normals=o.shading == "lambert")
             p = mi.traverse(mesh)
-            instanced = o.is_moving and not o.motion.is_deforming and not emits
+            instanced = o.is_moving and not o.motion.is_deforming and not emits and not clear and not coverage
             v0 = v if instanced else o.world_vertices(scene.reference_t)
             p["vertex_positions"] = mi.Float(np.asarray(v0, np.float32).ravel())
             p["faces"] = mi.UInt32(np.asarray(f, np.uint32).ravel())
             if o.shading == "lambert":
                 p["vertex_normals"] = mi.Float(vertex_normals(v0, f).ravel())
             p.update()
+            if o.rgba.ndim == 2:
+                rgba = np.asarray(o.rgba, np.float32)
+                mesh.add_attribute("vertex_color", 3, np.ascontiguousarray(rgba[:, :3]).ravel())
+                mesh.add_attribute("vertex_alpha", 1, np.ascontiguousarray(rgba[:, 3]).ravel())
+                premultiplied = np.ascontiguousarray(rgba[:, :3] * rgba[:, 3:4])
+                mesh.add_attribute("vertex_premultiplied", 3, premultiplied.ravel())
+            if clear:
+                self.clear.append((f"obj{k}", o))
             if instanced:
                 d[f"group{k}"] = {"type": "shapegroup", f"obj{k}": mesh}
                 d[f"obj{k}"] = {"type": "instance", "shapegroup": {"type": "ref", "id": f"group{k}"}}
@@ -116,7 +169,16 @@ class _MitsubaScene:
                     "direction": [float(x) for x in light.direction],
                     "irradiance": {"type": "rgb", "value": [float(x) * np.pi for x in light.intensity]},
                 }
-        d["sensor"] = sensor_dict(mi, cam, scene.camera_pose_at(scene.reference_t), spp)
+        if self.backdrop:
+            # Mitsuba's film zeroes the colour of a ray that leaves through transparent surfaces
+            # only (its alpha is 0): a black opaque backdrop behind everything keeps every ray,
+            # and the coverage pass gives the alpha
+            d["backdrop"] = {
+                "type": "rectangle",
+                "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.0] * 3}},
+            }
+            self._backdrop_scale = _backdrop_distance(scene)
+        d["sensor"] = sensor_dict(mi, cam, scene.camera_pose_at(scene.reference_t), spp, lens)
         self.mi_scene = mi.load_dict(d)
         self.params = mi.traverse(self.mi_scene)
 
@@ -132,6 +194,18 @@ class _MitsubaScene:
                     p[f"{key}.vertex_normals"] = mi.Float(vertex_normals(v, o.mesh.faces).ravel())
         if self.scene.camera_motion is not None:
             p["sensor.to_world"] = mi.Transform4f(self.scene.camera_pose_at(t) @ _FLIP)
+        pose = self.scene.camera_pose_at(t)
+        for key, o in self.clear:
+            v = o.world_vertices(t)
+            p[f"{key}.vertex_positions"] = mi.Float(np.asarray(v, np.float32).ravel())
+            p[f"{key}.faces"] = mi.UInt32(_front_faces(v, np.asarray(o.mesh.faces), pose[:3, 3]).ravel())
+        if self.backdrop:
+            dist = self._backdrop_scale
+            cam = self.scene.camera
+            half = dist * np.tan(cam.yfov / 2) * 2.0 * max(1.0, cam.width / cam.height)
+            place = pose @ np.diag([half, half, 1.0, 1.0])
+            place[:3, 3] = pose[:3, 3] - dist * pose[:3, 2]
+            p["backdrop.to_world"] = mi.Transform4f(place @ _FLIP)
         p.update()
 
     def render(self, spp: int, seed: int) -> np.ndarray:
@@ -139,7 +213,14 @@ class _MitsubaScene:
 
 
 def mitsuba(
-    scene: Scene, times: int = 16, spp: int = 16, seed: int = 0, variant: str | None = None, progress=None
+    scene: Scene,
+    times: int = 16,
+    spp: int = 16,
+    seed: int = 0,
+    variant: str | None = None,
+    progress=None,
+    aperture: float | None = None,
+    focus_distance: float | None = None,
 ) -> Frame:
     """The Mitsuba 3 time-sampled reference of ``scene``.
 
@@ -148,10 +229,21 @@ def mitsuba(
     ``seed * K + i``; the same seed gives the same image); ``variant`` overrides the Mitsuba
     variant; ``progress`` True/False forces the tqdm bar (default: when K * S * pixels is large).
 
+    ``aperture`` and ``focus_distance`` (scene units, both or neither): Mitsuba's ``thinlens``
+    sensor of that lens radius focused on the plane at that distance along the view axis (the
+    depth-of-field reference of ``render(..., aperture=, focus_distance=)``).
+
+    Per-vertex colours are a ``vertex_color`` mesh attribute (interpolated over each triangle
+    as the rasterizer does). Transparent objects (alpha < 1, flat shading) are a ``mask`` of
+    their alpha over the BSDF and radiate alpha times their colour, seen through with the
+    ``path`` integrator, their back faces dropped at each time as the rasterizer culls them; a
+    black backdrop behind everything keeps Mitsuba's film from zeroing the colour of rays that
+    leave through them, and a coverage pass (every object radiating its alpha) gives the alpha.
+
     Returns a Frame: ``rgba`` (H,W,4) float32 premultiplied linear RGBA composited over the scene
     background; ``depth`` (inf) and ``ids`` (-1) are not computed; ``stats`` has ``times``, ``spp``,
-    ``variant`` and ``ms``. Per-vertex colours, transparent objects and ambient light raise
-    ValueError (Mitsuba has no exact twin of them).
+    ``variant`` and ``ms``. Transparent lambert objects and ambient light raise ValueError
+    (Mitsuba's direct integrator has no twin of them).
     """
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
@@ -159,6 +251,7 @@ def mitsuba(
     spp = as_int(spp, "spp", minimum=1, maximum=1 << 20)
     seed = as_int(seed, "seed", minimum=0)
     _check_colours(scene)
+    lens = _lens(aperture, focus_distance)
     t0 = time.perf_counter()
     mi = _mi(variant)
     shadings = {o.shading for o in scene.objects}
@@ -169,6 +262,8 @@ def mitsuba(
     )
     if shadings == {"flat", "lambert"} and not scene.lights:
         passes = ["flat"]
+    if any(_transparent(o) for o in scene.objects):
+        passes.append("coverage")
     ts, ws = sample_times(scene, k, "stratified")
     cam = scene.camera
     if progress is None:
@@ -176,16 +271,23 @@ def mitsuba(
     tqdm = require("tqdm.auto", "the progress bar of the Mitsuba reference").tqdm
     bar = tqdm(total=k * len(passes), desc="mitsuba reference", disable=not progress, leave=False)
     acc = np.zeros((cam.height, cam.width, 4))
+    coverage = np.zeros((cam.height, cam.width))
     for pass_ in passes:
-        ms = _MitsubaScene(mi, scene, pass_, spp)
+        ms = _MitsubaScene(mi, scene, pass_, spp, lens)
         for i, (t, w) in enumerate(zip(ts, ws)):
             ms.pose(t)
             img = ms.render(spp, seed * k + i)
+            if pass_ == "coverage":
+                coverage += w * img[..., 0]
+                bar.update()
+                continue
             if pass_ != passes[0]:
                 img[..., 3] = 0.0  # the coverage is counted once
             acc += w * img
             bar.update()
     bar.close()
+    if "coverage" in passes:
+        acc[..., 3] = coverage
     rgba = acc.astype(np.float32)
     h, w_ = rgba.shape[:2]
     frame = Frame(
@@ -196,6 +298,29 @@ def mitsuba(
         times=k, spp=spp, variant=mi.variant(), passes=passes, ms=(time.perf_counter() - t0) * 1e3
     )
     return frame
+
+
+def _lens(aperture, focus_distance):
+    if aperture is None and focus_distance is None:
+        return None
+    if aperture is None or focus_distance is None:
+        missing = "aperture" if aperture is None else "focus_distance"
+        raise ValueError(f"{missing}: the thin lens needs both aperture and focus_distance")
+    a, f = float(aperture), float(focus_distance)
+    for name, v in (("aperture", a), ("focus_distance", f)):
+        if not (np.isfinite(v) and v > 0):
+            raise ValueError(f"{name}: must be finite and > 0 (scene units), got {v}")
+    return a, f
+
+
+def _backdrop_distance(scene: Scene) -> float:
+    """A distance from the camera beyond every object at every time (the backdrop's)."""
+    far = 1.0
+    for t in (0.0, 0.5, 1.0):
+        eye = scene.camera_pose_at(t)[:3, 3]
+        for o in scene.objects:
+            far = max(far, float(np.linalg.norm(o.world_vertices(t) - eye, axis=1).max()))
+    return 4.0 * far
 
 
 _renderers: dict = {}

@@ -66,11 +66,14 @@ def vertex_normals(v, f) -> np.ndarray:
     return (out / np.where(length > 0, length, 1.0)).astype(np.float32)
 
 
-def sensor_dict(mi, camera, pose, spp: int) -> dict:
+def sensor_dict(mi, camera, pose, spp: int, lens=None) -> dict:
     """The ``perspective`` sensor dict of ``camera`` (a :class:`~motionblur.Camera`) at ``pose``
-    (4,4) camera-to-world, with an rgba ``hdrfilm`` (box filter) and ``spp`` samples per pixel."""
+    (4,4) camera-to-world, with an rgba ``hdrfilm`` (box filter) and ``spp`` samples per pixel;
+    with ``lens`` = (aperture radius, focus distance) in scene units, a ``thinlens`` sensor."""
+    extra = {} if lens is None else {"aperture_radius": float(lens[0]), "focus_distance": float(lens[1])}
     return {
-        "type": "perspective",
+        "type": "perspective" if lens is None else "thinlens",
+        **extra,
         "fov": float(np.degrees(camera.yfov)),
         "fov_axis": "y",
         "near_clip": float(camera.znear),

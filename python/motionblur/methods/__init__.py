@@ -4,9 +4,10 @@ Adding a method is adding a module here that decorates its function with
 :func:`motionblur.render.register`, and importing it below. The modules whose names start with
 an underscore hold what the methods share, and a method imports them, never another method:
 ``_layers`` (rasterizing into layers, compositing, supersampling, the static layer kept across
-frames), ``_painter`` (objects drawn at any shutter time, per-mesh constants) and
-``_volume_colors`` (the colours of motion volumes), ``_features`` (what an object does on screen)
-and ``_auto_model`` (the planner's fitted cost and error model, ``auto_model.json``).
+frames), ``_painter`` (objects drawn at any shutter time, per-mesh constants),
+``_volume_colors`` (the colours of motion volumes), ``_sharp`` (the sharp frame the image-space
+methods blur), ``_features`` (what an object does on screen) and ``_auto_model`` (the planner's
+fitted cost and error model, ``auto_model.json``).
 """
 
 from __future__ import annotations

@@ -1,22 +1,22 @@
 """The painter the time-sampling methods share: a fixed set of objects rasterized at any shutter
-time with the least per-sample work (:class:`Painter`), the pixel windows they cover per time
-(:func:`sample_windows`), their placements computed once per object and time
-(:class:`Placements`), and per-mesh constants kept across frames (:func:`mesh_constant`).
+time with the least per-sample work (:class:`Painter`, the compiled core's), the faces a
+translating object turns away during the whole shutter (:func:`facing_faces`), and per-mesh
+constants kept across frames (:func:`mesh_constant`).
 """
 
 from __future__ import annotations
 
 import weakref
+from collections import OrderedDict
 
 import numpy as np
 
 from .. import _core
 from ..geometry import Mesh
-from ..raster import Camera
 from ..scene import Object, Scene
-from ._layers import Layer, composite
+from ._layers import Layer
 
-__all__ = ["Painter", "Placements", "sample_windows", "facing_faces", "mesh_constant", "box_corners"]
+__all__ = ["Painter", "painter_for", "facing_faces", "mesh_constant", "box_corners"]
 
 
 # Per-mesh constants kept across frames: {(id(vertices), id(faces)): (weak refs to both, {name:
@@ -57,65 +57,6 @@ def _normals32(mesh: Mesh) -> np.ndarray:
     return mesh.vertex_normals().astype(np.float32)
 
 
-def _bounds(camera: Camera, pts: np.ndarray):
-    """(x0, y0, x1, y1) pixel bounds of the points, clamped to the image (None when off the
-    image), or the whole image when a point is behind the camera."""
-    w, h = camera.width, camera.height
-    vp = camera.view_projection
-    clip = pts @ vp[:3, :3].T + vp[:3, 3]
-    wc = pts @ vp[3, :3] + vp[3, 3]
-    if (wc <= 1e-9).any():
-        return 0, 0, w, h
-    x = (clip[:, 0] / wc + 1.0) * 0.5 * w
-    y = (1.0 - clip[:, 1] / wc) * 0.5 * h
-    x0, y0 = max(0, int(np.floor(x.min())) - 1), max(0, int(np.floor(y.min())) - 1)
-    x1, y1 = min(w, int(np.ceil(x.max())) + 1), min(h, int(np.ceil(y.max())) + 1)
-    if x0 >= x1 or y0 >= y1:
-        return None
-    return x0, y0, x1, y1
-
-
-class Placements:
-    """``placement(obj, t)``: ``obj.transform_at(t)``, computed once per object and time (the
-    sample windows and the painter both place every moving rigid object at every sample time;
-    deforming vertices are not kept: N of them would be N meshes of memory). The matrices are
-    shared: read them, do not write them."""
-
-    def __init__(self):
-        self._memo: dict[tuple[int, float], np.ndarray] = {}
-
-    def __call__(self, obj: Object, t: float) -> np.ndarray:
-        key = (id(obj), float(t))
-        m = self._memo.get(key)
-        if m is None:
-            m = self._memo[key] = obj.transform_at(t)
-        return m
-
-
-def sample_windows(camera: Camera, times, objects, placement=None) -> list:
-    """Per time of ``times``, the pixel rectangle (x0, y0, x1, y1) of ``camera`` holding
-    ``objects`` at that time (None when they are off the image). Rigid objects are bounded by
-    their transformed bounding box (the projection of a box holds the projection of its content
-    when the box is in front of the camera); the whole image when a point is behind the camera.
-    ``placement`` (a :class:`Placements`) may carry the transforms over to the painter."""
-    place = placement if placement is not None else Placements()
-    corners = {}
-    for obj in objects:
-        if not (obj.motion is not None and obj.motion.is_deforming):
-            corners[id(obj)] = mesh_constant(obj.mesh, "corners", box_corners)
-    out = []
-    for t in times:
-        pts = []
-        for obj in objects:
-            if id(obj) in corners:
-                m = place(obj, t)
-                pts.append(corners[id(obj)] @ m[:3, :3].T + m[:3, 3])
-            else:
-                pts.append(obj.world_vertices(t))
-        out.append(_bounds(camera, np.concatenate(pts)))
-    return out
-
-
 def facing_faces(obj: Object, faces: np.ndarray, eye: np.ndarray) -> np.ndarray:
     """The faces of a rigidly translating ``obj`` that face ``eye`` at some time of the shutter
     (all faces for other motions), conservatively: near edge-on faces are kept. A face is kept
@@ -137,69 +78,79 @@ def facing_faces(obj: Object, faces: np.ndarray, eye: np.ndarray) -> np.ndarray:
 
 
 class Painter:
-    """Rasterizes a fixed set of objects at any shutter time with the least per-sample work.
+    """Rasterizes a fixed set of objects at any shutter time with the least per-sample work:
+    the compiled painter (``_core._Painter``, ``src/accumulate/painter.rs``), made once.
 
-    Faces, colours and object-space normals are converted once. A shading group holding a
-    single rigid object is drawn in object space with the model transform folded into the view
-    matrix (and the lights turned into object space), so no vertex is touched per sample; other
-    groups get world vertices (and rotated normals) per sample. With a still camera ``eye``, a
-    rigidly translating object (every keyframe with the same rotation and scale) loses the faces
-    that face away from the eye during the whole shutter, once, before the sample loop: along a
-    straight segment ``n . (eye - p(t))`` is linear in t, so a face back-facing at every keyframe
-    is back-facing throughout and the rasterizer would cull it at every sample anyway."""
+    Faces, colours, object-space normals and the objects' keyframes go to the core once. A
+    shading group holding a single rigid object is drawn in object space with the model
+    transform folded into the view matrix (and the lights turned into object space), so no
+    vertex is touched per sample; other groups get world vertices (and rotated normals) per
+    sample. With a still camera ``eye``, a rigidly translating object (every keyframe with the
+    same rotation and scale) loses the faces that face away from the eye during the whole
+    shutter, once (:func:`facing_faces`): along a straight segment ``n . (eye - p(t))`` is
+    linear in t, so a face back-facing at every keyframe is back-facing throughout and the
+    rasterizer would cull it at every sample anyway. :meth:`layer` draws one time;
+    ``core.accumulate_still`` and ``core.accumulate_moving`` a whole accumulation frame."""
 
-    def __init__(self, scene: Scene, objects: list[tuple[int, Object]], eye=None, placement=None):
-        self.scene = scene
-        self.place = placement if placement is not None else Placements()
-        self.groups: dict[str, list] = {}
+    def __init__(self, scene: Scene, objects: list[tuple[int, Object]], eye=None):
+        items = []
         for k, o in objects:
             faces = np.ascontiguousarray(o.mesh.faces, dtype=np.int64)
             if eye is not None:
                 faces = facing_faces(o, faces, np.asarray(eye, dtype=np.float64))
             rgba = np.ascontiguousarray(np.atleast_2d(o.rgba), dtype=np.float32)
             normals = mesh_constant(o.mesh, "normals32", _normals32) if o.shading == "lambert" else None
-            self.groups.setdefault(o.shading, []).append((k, o, faces, rgba, normals))
-        self.lights = [(np.asarray(li.direction), tuple(map(float, li.intensity))) for li in scene.lights]
-        self.ambient = tuple(map(float, scene.ambient))
-
-    def _light_args(self, rotation=None):
-        if rotation is None:
-            return [(tuple(map(float, d)), k) for d, k in self.lights]
-        return [(tuple(map(float, rotation.T @ d)), k) for d, k in self.lights]
+            keys = None if o.motion is None else o.motion._keys
+            items.append((k, o.shading, o.mesh.vertices, faces, rgba, normals, keys))
+        lights = [(tuple(map(float, li.direction)), tuple(map(float, li.intensity))) for li in scene.lights]
+        self.core = _core._Painter(items, lights, tuple(map(float, scene.ambient)))
 
     def layer(self, t: float, view: np.ndarray, projection: np.ndarray, width: int, height: int) -> Layer:
-        out = None
-        for shading, items in self.groups.items():
-            if len(items) == 1 and not (items[0][1].motion is not None and items[0][1].motion.is_deforming):
-                k, o, faces, rgba, normals = items[0]
-                m = self.place(o, t)
-                r = m[:3, :3] / np.cbrt(np.linalg.det(m[:3, :3]))
-                args = [(o.mesh.vertices, faces, rgba, normals, k, True, None)]
-                vm, lights = view @ m, self._light_args(r)
-            else:
-                args = []
-                for k, o, faces, rgba, normals in items:
-                    v = np.ascontiguousarray(o.world_vertices(t))
-                    n = None
-                    if normals is not None and not (o.motion is not None and o.motion.is_deforming):
-                        r = self.place(o, t)[:3, :3]
-                        n = np.ascontiguousarray(
-                            normals @ (r / np.cbrt(np.linalg.det(r))).T, dtype=np.float32
-                        )
-                    args.append((v, faces, rgba, n, k, True, None))
-                vm, lights = view, self._light_args()
-            rgba_, depth, ids, _vel, _st = _core._rasterize(
-                np.ascontiguousarray(vm),
-                projection,
-                width,
-                height,
-                args,
-                1,
-                "exact",
-                shading,
-                lights,
-                self.ambient,
+        """The objects at shutter time ``t`` seen through ``view`` and ``projection`` (4,4) in a
+        ``width`` x ``height`` Layer (one sample a pixel)."""
+        c = np.ascontiguousarray
+        return Layer(
+            *self.core.layer(
+                float(t), c(view, dtype=np.float64), c(projection, dtype=np.float64), width, height
             )
-            layer = Layer(rgba_, depth, ids)
-            out = layer if out is None else composite(out, layer)
-        return out if out is not None else Layer.empty(height, width)
+        )
+
+
+_PAINTERS: OrderedDict = OrderedDict()
+_PAINTERS_SIZE = 4
+
+
+def _parts(objects) -> list:
+    """What a painter is made of, per object: the Object, its mesh's arrays and its motion."""
+    return [p for _, o in objects for p in (o, o.mesh.vertices, o.mesh.faces, o.motion)]
+
+
+def painter_for(scene: Scene, objects: list[tuple[int, Object]], eye=None) -> Painter:
+    """A :class:`Painter` of ``objects`` kept across frames (up to 4) while the objects (the
+    same Object, mesh and motion, colour and shading), the eye, the lights and the ambient
+    light stay the same, as a real-time loop reuses what it set up. The entry holds no object
+    alive (weak references; it goes with its objects), and is never made for a mesh whose
+    arrays a caller unlocked (``flags.writeable = True``)."""
+    if any(o.mesh.vertices.flags.writeable or o.mesh.faces.flags.writeable for _, o in objects):
+        return Painter(scene, objects, eye)
+    parts = _parts(objects)
+    key = (
+        tuple(id(p) for p in parts),
+        tuple((k, o.shading, o.color.tobytes()) for k, o in objects),
+        None if eye is None else np.asarray(eye, dtype=np.float64).tobytes(),
+        tuple((li.direction.tobytes(), li.intensity.tobytes()) for li in scene.lights),
+        np.asarray(scene.ambient, dtype=np.float64).tobytes(),
+    )
+    hit = _PAINTERS.get(key)
+    if hit is not None and all(r() is p for r, p in zip(hit[1], parts)):
+        _PAINTERS.move_to_end(key)
+        return hit[0]
+    painter = Painter(scene, objects, eye)
+    refs = [
+        (lambda: None) if p is None else weakref.ref(p, lambda _r, k=key: _PAINTERS.pop(k, None))
+        for p in parts
+    ]
+    _PAINTERS[key] = (painter, refs)
+    while len(_PAINTERS) > _PAINTERS_SIZE:
+        _PAINTERS.popitem(last=False)
+    return painter

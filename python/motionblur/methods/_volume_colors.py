@@ -42,7 +42,7 @@ PATH_STEPS = 4
 SPLAT_BUDGET = 8e6
 
 #: Below this time-averaged alpha a pixel's scattered colour is not trusted.
-MIN_ALPHA = 1e-3
+MIN_ALPHA: float = _core.MIN_ALPHA
 
 
 def uniform(obj: Object) -> bool:

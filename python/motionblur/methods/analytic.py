@@ -164,12 +164,13 @@ def analytic(scene: Scene, aa: int = 1, gauss="auto", tolerance: float = 0.05, s
     """Analytic motion blur: the exact covered time of every sample, visibility over time.
 
     Options: ``aa`` 1, 2 or 4 samples per pixel along each axis; ``gauss`` points in time per
-    visible piece (1 to 4, or ``"auto"``: 1 to 8 by the piece's length and the triangles it
-    crosses, triangles of one surface crossing a sample one after the other shaded as one run);
-    ``tolerance`` pixels, the chord rule of :func:`segment_times`; ``segments`` an int to cut
-    the shutter into that many equal segments instead (plus every keyframe time). Depth, ids and
-    velocity describe the surface in front at the scene's reference time. ``stats``: the
-    kernel's (``prims``, ``intervals``, ``pieces``, ``ms_*``) plus ``segments``.
+    visible piece and triangle (1 to 4, or ``"auto"``: 1 to 3 by the piece's length; a piece is
+    cut where the triangle of a surface covering the sample changes); ``tolerance`` pixels, the
+    chord rule of :func:`segment_times`; ``segments`` an int to cut the shutter into that many
+    equal segments instead (plus every keyframe time). Depth, ids and velocity describe the
+    surface in front at the scene's reference time. ``stats``: the kernel's (``prims``,
+    ``intervals``, ``pieces``, ``splits``, ``ms_*``) plus ``segments``. Memory per thread is
+    bounded by :data:`motionblur.analytic.TILE_BUDGET_BYTES`.
     """
     aa = as_int(aa, "aa")
     if aa not in (1, 2, 4):

@@ -23,7 +23,8 @@ from collections import OrderedDict
 
 import numpy as np
 
-from .._validate import as_array, as_float, as_int
+from .. import _core
+from .._validate import as_array, as_choice, as_float, as_int, as_samples
 from ..raster import Draw, rasterize
 from ..render import register
 from ..scene import Object, Scene
@@ -98,7 +99,7 @@ def blur_shell(
 ):
     """Blur-shell rendering: every moving object trails a shell of fading strips (section 3).
 
-    Options: ``subdivisions`` S in 1..255 (strips of S quads, the motion sampled at S + 1
+    Options: ``subdivisions`` S in 1..``_core.MAX_SUBDIVISIONS`` (strips of S quads, the motion sampled at S + 1
     times); ``hysteresis`` updates a polygon keeps its strip after losing its silhouette edge;
     ``initial_alpha`` in (0, 1] the alpha at the mesh; ``color`` RGB (3,) for every shell
     (speed lines), default each object's own colour; ``blend``: ``"nearest"`` (default) draws
@@ -110,8 +111,8 @@ def blur_shell(
     ``aa`` 1, 2 or 4 spatial samples per pixel along each axis. Returns a Frame; ``stats`` has ``shells``, ``shell_triangles`` and
     ``ms_shell`` (shell updates and builds).
     """
-    s = as_int(subdivisions, "subdivisions", minimum=1, maximum=255)
-    h = as_int(hysteresis, "hysteresis", minimum=0, maximum=65000)
+    s = as_int(subdivisions, "subdivisions", minimum=1, maximum=_core.MAX_SUBDIVISIONS)
+    h = as_int(hysteresis, "hysteresis", minimum=0, maximum=_core.MAX_HYSTERESIS)
     a = as_float(initial_alpha, "initial_alpha")
     if not 0.0 < a <= 1.0:
         raise ValueError(f"initial_alpha: must be in (0, 1], got {a}")
@@ -119,11 +120,8 @@ def blur_shell(
         color = as_array(color, "color", np.float32, (3,))
         if (color < 0).any():
             raise ValueError("color: must be >= 0")
-    if not isinstance(blend, str) or blend not in ("nearest", "exact"):
-        raise ValueError(f"blend: expected 'nearest' or 'exact', got {blend!r}")
-    aa = as_int(aa, "aa")
-    if aa not in (1, 2, 4):
-        raise ValueError(f"aa: must be 1, 2 or 4, got {aa}")
+    as_choice(blend, "blend", ("nearest", "exact"), type_error=False)
+    aa = as_samples(aa, "aa")
     tr = scene.reference_t
     cam = supersampled(scene.camera_at(tr), aa)
     times = shell_times(scene, s)

@@ -18,7 +18,7 @@ import copy
 import numpy as np
 
 from .. import _core
-from .._validate import as_int
+from .._validate import as_bool, as_choice, as_int, as_samples, as_segments
 from ..geometry import motion_volume as build_volume
 from ..geometry import spin_volume as build_spin
 from ..raster import Camera, Draw, Frame
@@ -37,9 +37,9 @@ from ._layers import (
 )
 from ._volume_colors import UNLIT, averaged_colors, place, scattered, to_pixels, uniform
 
-__all__ = ["motion_volume", "apparent_keyframes", "camera_folds", "spin_of"]
+__all__ = ["motion_volume", "apparent_keyframes", "apparent_motion", "camera_folds", "spin_of"]
 
-FILTERS = ("ramp", "box", "triangle", "gaussian")
+FILTERS: tuple[str, ...] = tuple(_core.FILTERS)
 
 #: Still camera: draw the volumes in one rasterizer call over the kept static layer (the
 #: rasterizer's ``background``), resolved by the rasterizer. False: the static objects are
@@ -63,20 +63,33 @@ def camera_folds(scene: Scene, segments: int) -> np.ndarray | None:
     )
 
 
+def apparent_motion(scene: Scene, obj: Object, segments: int, folds=None):
+    """The keyframe engine's rigid keyframes (``_core._Keyframes``) of ``obj`` at the times
+    ``i / S`` as the camera at the reference time sees them: ``P(t_r) @ inv(P(t)) @ O(t)``
+    (paper section 3.1). With a still camera these are the object's own keyframes resampled
+    (interpolated from their parts, not split again); a moving camera makes new matrices,
+    split once. ``folds``: optional :func:`camera_folds` of the same ``segments``."""
+    if not scene.camera_moves and obj.is_moving:
+        return obj.motion._keys.resampled(segments)
+    times = np.linspace(0.0, 1.0, segments + 1)
+    own = np.broadcast_to(obj.transform_at(0.0), (len(times), 4, 4))
+    if scene.camera_moves:
+        if obj.is_moving:
+            own = obj.motion.transforms_at(times)
+        if folds is None:
+            folds = camera_folds(scene, segments)
+        own = folds @ own
+    return _core._Keyframes(times, np.ascontiguousarray(own), None, "motion")
+
+
 def apparent_keyframes(scene: Scene, obj: Object, segments: int, folds=None) -> np.ndarray:
     """(S+1,4,4) float64 placements of ``obj`` at the times ``i / S`` as the camera at the
-    reference time sees them: ``P(t_r) @ inv(P(t)) @ O(t)`` (paper section 3.1). ``folds``:
-    optional :func:`camera_folds` of the same ``segments``."""
-    times = np.linspace(0.0, 1.0, segments + 1)
-    if not obj.is_moving:
-        own = np.broadcast_to(obj.transform_at(0.0), (len(times), 4, 4))
-    else:
-        own = np.stack([obj.transform_at(t) for t in times])
+    reference time sees them: the matrices of :func:`apparent_motion`."""
     if not scene.camera_moves:
-        return np.array(own)
-    if folds is None:
-        folds = camera_folds(scene, segments)
-    return folds @ own
+        if obj.is_moving:
+            return obj.motion.transforms_at(np.linspace(0.0, 1.0, segments + 1))
+        return np.array(np.broadcast_to(obj.transform_at(0.0), (segments + 1, 4, 4)))
+    return apparent_motion(scene, obj, segments, folds).transforms()
 
 
 #: Steps the folded motion is sampled at to find a spin (each step must turn less than SPIN_MAX_STEP).
@@ -183,7 +196,8 @@ def motion_volume(
 
     Options: ``segments`` S >= 1 joining segments (the folded motion sampled at S + 1 times);
     ``filter`` ``"ramp"`` (the paper's), ``"box"``, ``"triangle"`` or ``"gaussian"`` (default:
-    the scene's shutter filter when it is a name, else ``"box"``); ``aa`` 1, 2 or 4 spatial
+    the scene's shutter filter; a scene with custom shutter weights raises ValueError naming
+    ``shutter`` unless a filter is given, the weights are never replaced silently); ``aa`` 1, 2 or 4 spatial
     samples per pixel along each axis; ``contour_line`` (default True) sweeps only the
     camera-visible contour edges (section 4.1; the same image with back faces culled, fewer
     triangles) instead of all of them (the camera at the reference time gives the perspective
@@ -217,18 +231,22 @@ def motion_volume(
     Deforming objects raise ValueError (use accumulation or blur shells). Returns a Frame;
     ``stats`` counts the volume triangles, the spins and the volumes with averaged colours.
     """
-    segments = as_int(segments, "segments", minimum=1, maximum=4096)
+    segments = as_segments(segments)
     if filter is None:
-        filter = scene.shutter if isinstance(scene.shutter, str) else "box"
-    if not isinstance(filter, str) or filter not in FILTERS:
-        raise ValueError(f"filter: expected one of {', '.join(FILTERS)}, got {filter!r}")
-    aa = as_int(aa, "aa")
-    if aa not in (1, 2, 4):
-        raise ValueError(f"aa: must be 1, 2 or 4, got {aa}")
-    if not (spin == "auto" or isinstance(spin, (bool, np.bool_))):
+        if not isinstance(scene.shutter, str):
+            raise ValueError(
+                "shutter: motion_volume's coverage model integrates the named filters only, not "
+                "custom shutter weights; pass filter='box', 'ramp', 'triangle' or 'gaussian' to "
+                "choose one, or use accumulation or blur_shell, which integrate the weights"
+            )
+        filter = scene.shutter
+    as_choice(filter, "filter", FILTERS, type_error=False)
+    aa = as_samples(aa, "aa")
+    contour_line = as_bool(contour_line, "contour_line")
+    exact_static = as_bool(exact_static, "exact_static")
+    if not ((isinstance(spin, str) and spin == "auto") or isinstance(spin, (bool, np.bool_))):
         raise ValueError(f"spin: expected 'auto', True or False, got {spin!r}")
-    if not isinstance(colors, str) or colors not in ("pixel", "averaged", "contour"):
-        raise ValueError(f"colors: expected 'pixel', 'averaged' or 'contour', got {colors!r}")
+    as_choice(colors, "colors", ("pixel", "averaged", "contour"), type_error=False)
     color_renders = as_int(color_renders, "color_renders", minimum=1, maximum=64)
     tr = scene.reference_t
     cam = supersampled(scene.camera_at(tr), aa)
@@ -250,13 +268,15 @@ def motion_volume(
     for k, obj in enumerate(scene.objects):
         if obj.is_moving and obj.motion.is_deforming:
             raise ValueError(
-                f"scene: object {k} ({obj.name or 'unnamed'}) deforms; motion_volume needs rigid motion "
-                "(use accumulation or blur_shell)"
+                f"scene: object {k} ({obj.name or 'unnamed'}) deforms; motion_volume sweeps one rigid "
+                "contour and needs rigid motion: use velocity (per-pixel velocity buffer, one sharp "
+                "frame), blur_shell (deforming silhouettes) or accumulation"
             )
         if not obj.is_moving and not scene.camera_moves:
             still.append((k, obj))  # no apparent motion, nothing to fold
             continue
-        keys = apparent_keyframes(scene, obj, segments, folds)
+        apparent = apparent_motion(scene, obj, segments, folds)
+        keys = apparent.transforms()
         turns = spin is not False and _rotates(scene, obj) and (spin is True or _may_spin(keys, obj))
         if _still(keys) and not turns:
             if not scene.camera_moves:
@@ -278,7 +298,7 @@ def motion_volume(
         drawn_as = obj
         if vol is None:
             vol = build_volume(
-                obj.mesh, keys, segments=1, filter=filter, colors=obj.rgba, camera_position=eye,
+                obj.mesh, apparent, segments=1, filter=filter, colors=obj.rgba, camera_position=eye,
                 contour_line=contour_line, visible_only=contour_line,
             )  # fmt: skip
             if colors == "pixel":

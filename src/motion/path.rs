@@ -1,12 +1,17 @@
-//! Rigid keyframes over the shutter: validation, point and normal transforms, subdivision.
+//! Paths of the motion volume: rigid keyframes at the equally spaced shutter times `i / n`,
+//! and the placement type the volume's construction applies to points.
 //!
-//! A [`Path`] holds `n + 1` keyframes at the equally spaced shutter times `i / n`. Each keyframe
-//! maps the mesh's given vertices to their placement at that time, `p' = L p + t`, where `L` is
-//! a rotation times a positive uniform scale (a similarity; mirrors and shear are rejected).
-//! A translation `m` is the path `[identity, translate(m)]`: the given vertices sit at shutter
-//! open and arrive at `v + m` at shutter close.
-use glam::{DMat3, DQuat, DVec3};
+//! A [`Path`] holds `n + 1` keyframes. Each maps the mesh's given vertices to their placement
+//! at that time, `p' = L p + t`, where `L` is a rotation times a positive uniform scale (a
+//! similarity; mirrors and shear are rejected). A translation `m` is the path
+//! `[identity, translate(m)]`: the given vertices sit at shutter open and arrive at `v + m` at
+//! shutter close. The keyframes are split into their parts once ([`Similarity`]); subdividing
+//! a path and placing at a fraction of a segment interpolate those parts, as every other
+//! sampling of rigid keyframes does ([`Keyframes`](super::keyframes::Keyframes)).
+use glam::{DMat3, DVec3};
 
+use super::numeric::Mat4;
+use super::similarity::Similarity;
 use crate::error::{Error, Result};
 
 /// One rigid placement `p' = linear * p + translation` (`linear` row-major).
@@ -29,50 +34,19 @@ impl Keyframe {
         }
     }
 
-    /// From a row-major 4x4 matrix: finite, last row `[0, 0, 0, 1]`, and a similarity with a
-    /// positive determinant. `index` names the keyframe in errors about `motion`.
-    pub fn from_matrix(m: &[[f64; 4]; 4], index: usize) -> Result<Self> {
-        if m.iter().flatten().any(|x| !x.is_finite()) {
-            return Err(Error::value(
-                "motion",
-                format!("keyframe {index} is NaN or inf"),
-            ));
+    /// From a row-major 4x4 matrix, validated as a rigid keyframe
+    /// ([`Similarity::from_matrix`]); `index` names the keyframe in errors about `motion`.
+    pub fn from_matrix(m: &Mat4, index: usize) -> Result<Self> {
+        Ok(Keyframe::of(&Similarity::from_matrix(m, "motion", index)?))
+    }
+
+    /// The placement of a split keyframe.
+    pub fn of(k: &Similarity) -> Self {
+        let m = &k.matrix;
+        Keyframe {
+            linear: std::array::from_fn(|r| [m[r][0], m[r][1], m[r][2]]),
+            translation: k.translation,
         }
-        if m[3] != [0.0, 0.0, 0.0, 1.0] {
-            return Err(Error::value(
-                "motion",
-                format!("keyframe {index}: last row must be [0, 0, 0, 1]"),
-            ));
-        }
-        let linear = [
-            [m[0][0], m[0][1], m[0][2]],
-            [m[1][0], m[1][1], m[1][2]],
-            [m[2][0], m[2][1], m[2][2]],
-        ];
-        let k = Keyframe {
-            linear,
-            translation: [m[0][3], m[1][3], m[2][3]],
-        };
-        let det = k.mat3().determinant();
-        if det.is_nan() || det <= 0.0 {
-            return Err(Error::value(
-                "motion",
-                format!(
-                    "keyframe {index}: the 3x3 part must have a positive determinant (no mirror)"
-                ),
-            ));
-        }
-        // Similarity: L^T L = s^2 I.
-        let ltl = k.mat3().transpose() * k.mat3();
-        let s2 = (ltl.x_axis.x + ltl.y_axis.y + ltl.z_axis.z) / 3.0;
-        let off = (ltl - DMat3::from_diagonal(DVec3::splat(s2))).to_cols_array();
-        if off.iter().any(|x| x.abs() > 1e-6 * s2) {
-            return Err(Error::value(
-                "motion",
-                format!("keyframe {index}: must be rigid (rotation, uniform scale, translation)"),
-            ));
-        }
-        Ok(k)
     }
 
     /// The 3x3 part as a glam matrix (column-major storage).
@@ -130,39 +104,6 @@ impl Keyframe {
     pub fn normal(&self, n: [f64; 3]) -> [f64; 3] {
         self.vector(n)
     }
-
-    fn decompose(&self) -> (f64, DQuat) {
-        let m = self.mat3();
-        let s = m.determinant().cbrt();
-        (s, DQuat::from_mat3(&(m * (1.0 / s))).normalize())
-    }
-
-    /// Interpolation between two keyframes at `u` in [0, 1]: translation and scale linear,
-    /// rotation by spherical linear interpolation. `u = 0` and `u = 1` return the ends exactly.
-    pub fn interpolate(&self, other: &Keyframe, u: f64) -> Keyframe {
-        if u <= 0.0 {
-            return *self;
-        }
-        if u >= 1.0 {
-            return *other;
-        }
-        let t0 = DVec3::from_array(self.translation);
-        let t1 = DVec3::from_array(other.translation);
-        let translation = t0.lerp(t1, u).to_array();
-        if self.linear == other.linear {
-            return Keyframe {
-                linear: self.linear,
-                translation,
-            };
-        }
-        let (s0, q0) = self.decompose();
-        let (s1, q1) = other.decompose();
-        let m = DMat3::from_quat(q0.slerp(q1, u)) * (s0 + (s1 - s0) * u);
-        Keyframe {
-            linear: m.transpose().to_cols_array_2d(),
-            translation,
-        }
-    }
 }
 
 /// A keyframe with its identity test made once: [`Placer::point`] gives exactly
@@ -218,32 +159,68 @@ impl Keyframe {
 /// Keyframes at the equally spaced shutter times `i / (len - 1)`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Path {
-    /// The keyframes, shutter open to close (at least two).
+    /// The keyframes' placements, shutter open to close (at least two).
     pub frames: Vec<Keyframe>,
+    /// The same keyframes split into their parts.
+    keys: Vec<Similarity>,
 }
 
 impl Path {
+    /// The path of keyframes already split (at least two).
+    pub fn from_keys(keys: Vec<Similarity>) -> Result<Self> {
+        if keys.len() < 2 {
+            return Err(Error::shape("motion", "needs at least 2 keyframes"));
+        }
+        Ok(Path {
+            frames: keys.iter().map(Keyframe::of).collect(),
+            keys,
+        })
+    }
+
     /// The translation `m` over the shutter: `[identity, translate(m)]`.
     pub fn translation(m: [f64; 3]) -> Result<Self> {
         if m.iter().any(|x| !x.is_finite()) {
             return Err(Error::value("motion", "is NaN or inf"));
         }
-        Ok(Path {
-            frames: vec![Keyframe::translate([0.0; 3]), Keyframe::translate(m)],
-        })
+        Path::from_keys(vec![
+            Similarity::translate([0.0; 3]),
+            Similarity::translate(m),
+        ])
     }
 
-    /// From `n + 1 >= 2` row-major 4x4 matrices.
-    pub fn from_matrices(mats: &[[[f64; 4]; 4]]) -> Result<Self> {
+    /// From `n + 1 >= 2` row-major 4x4 matrices, each validated and split; errors name `motion`.
+    pub fn from_matrices(mats: &[Mat4]) -> Result<Self> {
         if mats.len() < 2 {
             return Err(Error::shape("motion", "needs at least 2 keyframes"));
         }
-        let frames = mats
+        let keys = mats
             .iter()
             .enumerate()
-            .map(|(i, m)| Keyframe::from_matrix(m, i))
+            .map(|(i, m)| Similarity::from_matrix(m, "motion", i))
             .collect::<Result<Vec<_>>>()?;
-        Ok(Path { frames })
+        Path::from_keys(keys)
+    }
+
+    /// From placements made in Rust (`n + 1 >= 2`), each validated and split.
+    pub fn from_frames(frames: &[Keyframe]) -> Result<Self> {
+        let mats: Vec<Mat4> = frames
+            .iter()
+            .map(|f| {
+                let (l, t) = (&f.linear, &f.translation);
+                [
+                    [l[0][0], l[0][1], l[0][2], t[0]],
+                    [l[1][0], l[1][1], l[1][2], t[1]],
+                    [l[2][0], l[2][1], l[2][2], t[2]],
+                    [0.0, 0.0, 0.0, 1.0],
+                ]
+            })
+            .collect();
+        Path::from_matrices(&mats)
+    }
+
+    /// The keyframes split into their parts.
+    pub fn keys(&self) -> &[Similarity] {
+        &self.keys
     }
 
     /// Number of segments (keyframe intervals).
@@ -251,28 +228,41 @@ impl Path {
         self.frames.len() - 1
     }
 
+    /// The placement the fraction `u` of the way through segment `j` (keyframes `j` and
+    /// `j + 1`): its ends exactly at `u <= 0` and `u >= 1`, else the interpolated parts
+    /// ([`Similarity::interpolate`]).
+    pub fn between(&self, j: usize, u: f64) -> Keyframe {
+        if u <= 0.0 {
+            return self.frames[j];
+        }
+        if u >= 1.0 {
+            return self.frames[j + 1];
+        }
+        Keyframe::of(&self.keys[j].interpolate(&self.keys[j + 1], u))
+    }
+
+    /// The placement at shutter time `t` in [0, 1]: [`Path::between`] in its segment.
+    pub fn at(&self, t: f64) -> Keyframe {
+        let n = self.segments();
+        let x = t.clamp(0.0, 1.0) * n as f64;
+        let j = (x.floor() as usize).min(n - 1);
+        self.between(j, x - j as f64)
+    }
+
     /// Every interval cut into `parts` equal sub-intervals (interpolated keyframes).
     pub fn subdivide(&self, parts: usize) -> Path {
         if parts <= 1 {
             return self.clone();
         }
-        let mut frames = Vec::with_capacity(self.segments() * parts + 1);
-        for w in self.frames.windows(2) {
-            frames.push(w[0]);
+        let mut keys = Vec::with_capacity(self.segments() * parts + 1);
+        for w in self.keys.windows(2) {
+            keys.push(w[0]);
             for j in 1..parts {
-                frames.push(w[0].interpolate(&w[1], j as f64 / parts as f64));
+                keys.push(w[0].interpolate(&w[1], j as f64 / parts as f64));
             }
         }
-        frames.push(*self.frames.last().expect("at least two keyframes"));
-        Path { frames }
-    }
-
-    /// The placement at shutter time `t` in [0, 1]: keyframe interpolation inside its interval.
-    pub fn at(&self, t: f64) -> Keyframe {
-        let n = self.segments();
-        let x = t.clamp(0.0, 1.0) * n as f64;
-        let j = (x.floor() as usize).min(n - 1);
-        self.frames[j].interpolate(&self.frames[j + 1], x - j as f64)
+        keys.push(*self.keys.last().expect("at least two keyframes"));
+        Path::from_keys(keys).expect("at least two keyframes")
     }
 
     /// Whether every keyframe equals the first (no motion at all).
@@ -374,5 +364,18 @@ mod tests {
             }
         }
         assert!((half.translation[0] - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn between_places_as_subdivision_and_hits_the_ends() {
+        let p = Path::from_matrices(&[rot_z(0.2, [0.0; 3]), rot_z(1.4, [2.0, 1.0, 0.0])]).unwrap();
+        let q = p.subdivide(3);
+        assert_eq!(p.between(0, 1.0 / 3.0), q.frames[1]);
+        assert_eq!(p.between(0, 0.0), p.frames[0]);
+        assert_eq!(p.between(0, 1.0), p.frames[1]);
+        // the translation path stays exact: identity 3x3 parts, lerped translations
+        let t = Path::translation([3.0, 0.0, -1.5]).unwrap().subdivide(2);
+        assert!(t.frames[1].has_identity_linear());
+        assert_eq!(t.frames[1].translation, [1.5, 0.0, -0.75]);
     }
 }

@@ -1,0 +1,234 @@
+"""The accumulation frame in one call (``_core._Painter.accumulate_still`` / ``accumulate_moving``,
+``src/accumulate/frame.rs``) against its serial twin: the per-sample loop written in Python
+with the painter's layer and the accumulation kernels, one call per sample. Exact: the twin
+computes the sample rectangles in numpy in the order the core does, so the frames agree bit for
+bit. Also: the same frame for any thread count, the GIL released, bad input named."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from _helpers.threads import digests, ticks_during
+
+import motionblur as mb
+from motionblur import _core, meshes
+from motionblur.methods._layers import Layer, composite, static_layer, supersampled, window_projection
+from motionblur.methods._painter import Painter, box_corners
+from motionblur.methods.accumulation import sample_times
+from motionblur.scene import rotate, translate
+
+
+def _cam(w=64, h=48):
+    return mb.Camera(mb.look_at((0.2, 0.4, 5.0), (0.0, 0.0, 0.0)), 0.7, w, h, znear=0.5, zfar=30.0)
+
+
+def _scene(alpha: float = 1.0, lambert_pair: bool = True) -> mb.Scene:
+    v, f = meshes.icosphere(2, 0.4)
+    bv, bf = meshes.box((0.5, 0.5, 0.5))
+    a = mb.Object(
+        (v, f), (0.8, 0.3, 0.2), "lambert",
+        mb.Motion.linear(translate((-1.2, 0, 0)) @ rotate(0.3, (0, 1, 0)), translate((1.0, 0.3, 0)) @ rotate(-0.5, (1, 1, 0))),
+    )  # fmt: skip
+    b = mb.Object(
+        (bv, bf), (0.2, 0.6, 0.9), "lambert" if lambert_pair else "flat",
+        mb.Motion([0.0, 0.5, 1.0], np.stack([translate((0, -1, 0)), rotate(1.0, (0, 0, 1)), translate((0.5, 0.8, -0.5))])),
+    )  # fmt: skip
+    pv = np.stack([v * 0.5 + (0.3 * t, 0.6, 0.5) for t in np.linspace(0.0, 1.0, 4)])
+    d = mb.Object((pv[0], f), (0.3, 0.9, 0.4), "flat", mb.Motion.deforming(np.linspace(0.0, 1.0, 4), pv))
+    wall = mb.Object((bv * (12, 8, 0.2) + (0, 0, -1.5), bf), (0.5, 0.5, 0.45, alpha), "flat")
+    light = mb.DirectionalLight((-0.3, -1.0, -0.6), 1.0)
+    return mb.Scene([a, b, d, wall], _cam(), [light], ambient=0.1)
+
+
+def _rect(cam, pts):
+    """The sample rectangle of points (numpy, in the core's order)."""
+    vp = cam.view_projection
+    clip = pts @ vp[:3, :3].T + vp[:3, 3]
+    wc = pts @ vp[3, :3] + vp[3, 3]
+    if (wc <= 1e-9).any():
+        return 0, 0, cam.width, cam.height
+    x = (clip[:, 0] / wc + 1.0) * 0.5 * cam.width
+    y = (1.0 - clip[:, 1] / wc) * 0.5 * cam.height
+    x0, y0 = max(0, int(np.floor(x.min())) - 1), max(0, int(np.floor(y.min())) - 1)
+    x1, y1 = min(cam.width, int(np.ceil(x.max())) + 1), min(cam.height, int(np.ceil(y.max())) + 1)
+    return None if x0 >= x1 or y0 >= y1 else (x0, y0, x1, y1)
+
+
+def serial_twin(scene: mb.Scene, n: int, aa: int):
+    """The still-camera frame one sample at a time from Python: (window, rgba, depth, ids, calls)."""
+    times, weights = sample_times(scene, n)
+    ref = int(np.argmin(np.abs(times - scene.reference_t)))
+    cam = supersampled(scene.camera, aa)
+    moving = [(k, o) for k, o in enumerate(scene.objects) if o.is_moving]
+    static = static_layer(scene, cam, [(k, o) for k, o in enumerate(scene.objects) if not o.is_moving], aa)
+    painter = Painter(scene, moving, eye=cam.pose[:3, 3])
+    rects = []
+    for t in times:
+        pts = []
+        for _, o in moving:
+            if o.motion.is_deforming:
+                pts.append(o.world_vertices(t))
+            else:
+                m = o.transform_at(t)
+                pts.append(box_corners(o.mesh) @ m[:3, :3].T + m[:3, 3])
+        rects.append(_rect(cam, np.concatenate(pts)))
+    found = np.array([r for r in rects if r is not None])
+    x0, y0 = (found[:, :2].min(axis=0) // aa) * aa
+    x1 = min(cam.width, -(-found[:, 2].max() // aa) * aa)
+    y1 = min(cam.height, -(-found[:, 3].max() // aa) * aa)
+    c = np.ascontiguousarray
+    base = Layer(*(c(a[y0:y1, x0:x1]) for a in (static.layer.rgba, static.layer.depth, static.layer.ids)))
+    has_static = bool(np.isfinite(base.depth).any())
+    exact = not has_static or static.opaque
+    acc = np.zeros((y1 - y0, x1 - x0, 4), np.float32)
+    depth, ids = base.depth.copy(), base.ids.copy()
+    calls = 0
+    for i, (t, r) in enumerate(zip(times, rects)):
+        w = np.float32(weights[i])
+        if r is None:
+            if not exact:
+                acc += w * base.rgba
+            continue
+        proj = c(window_projection(cam.projection, cam.width, cam.height, r))
+        layer = painter.layer(t, c(cam.view), proj, r[2] - r[0], r[3] - r[1])
+        calls += 1
+        sx0, sy0, sx1, sy1 = r[0] - x0, r[1] - y0, r[2] - x0, r[3] - y0
+        sub = Layer(base.rgba[sy0:sy1, sx0:sx1], base.depth[sy0:sy1, sx0:sx1], base.ids[sy0:sy1, sx0:sx1])
+        if i == ref:
+            kept = composite(layer, sub)
+            depth[sy0:sy1, sx0:sx1], ids[sy0:sy1, sx0:sx1] = kept.depth, kept.ids
+        if exact:
+            _core._accumulate(
+                acc, layer.rgba, layer.depth, base.depth if has_static else None, float(w), sx0, sy0
+            )
+        else:
+            full = base.rgba.copy()
+            full[sy0:sy1, sx0:sx1] = composite(layer, sub).rgba
+            acc += w * full
+    if has_static and static.opaque:
+        _core._over(acc, base.rgba)
+    return (int(x0), int(y0), int(x1), int(y1)), acc, depth, ids, calls
+
+
+def one_call(scene: mb.Scene, n: int, aa: int):
+    times, weights = sample_times(scene, n)
+    ref = int(np.argmin(np.abs(times - scene.reference_t)))
+    cam = supersampled(scene.camera, aa)
+    moving = [(k, o) for k, o in enumerate(scene.objects) if o.is_moving]
+    static = static_layer(scene, cam, [(k, o) for k, o in enumerate(scene.objects) if not o.is_moving], aa)
+    painter = Painter(scene, moving, eye=cam.pose[:3, 3])
+    c = np.ascontiguousarray
+    layer = static.layer
+    return painter.core.accumulate_still(
+        times, weights, ref, c(cam.view), c(cam.projection), c(cam.view_projection), cam.width, cam.height,
+        aa, (c(layer.rgba), c(layer.depth), c(layer.ids)), static.opaque,
+    )  # fmt: skip
+
+
+@pytest.mark.parametrize("aa", [1, 2])
+@pytest.mark.parametrize("alpha", [1.0, 0.5])
+def test_one_call_equals_the_serial_loop(aa, alpha):
+    sc = _scene(alpha)
+    win, rgba, depth, ids, calls = one_call(sc, 13, aa)
+    twin = serial_twin(sc, 13, aa)
+    assert win == twin[0] and calls == twin[4] == 13
+    np.testing.assert_array_equal(rgba, twin[1])
+    np.testing.assert_array_equal(depth, twin[2])
+    np.testing.assert_array_equal(ids, twin[3])
+    assert rgba[..., 3].max() > 0.5  # the objects are in the frame
+
+
+def test_moving_camera_equals_the_serial_loop():
+    sc = _scene(lambert_pair=False).with_(
+        camera_motion=mb.Motion.linear(np.eye(4), rotate(0.2, (0, 1, 0), (0.2, 0.4, 5.0)))
+    )
+    times, weights = sample_times(sc, 9)
+    everything = list(enumerate(sc.objects))
+    views = np.stack([sc.camera_at(t).view for t in times])
+    painter = Painter(sc, everything)
+    cam = sc.camera
+    rgba, depth, ids = painter.core.accumulate_moving(
+        times, weights, 4, views, cam.projection, cam.width, cam.height
+    )
+    acc = None
+    for i, t in enumerate(times):
+        layer = painter.layer(t, views[i], cam.projection, cam.width, cam.height)
+        if acc is None:
+            acc = layer.rgba * np.float32(weights[i])
+        else:
+            _core._accumulate(acc, layer.rgba, layer.depth, None, float(weights[i]))
+        if i == 4:
+            keep = layer
+    np.testing.assert_array_equal(rgba, acc)
+    np.testing.assert_array_equal(depth, keep.depth)
+    np.testing.assert_array_equal(ids, keep.ids)
+
+
+def test_offscreen_objects_give_no_window():
+    v, f = meshes.icosphere(1)
+    far = mb.Object((v + (80.0, 0, 0), f), motion=mb.Motion.linear((0, 0, 0), (1, 0, 0)))
+    sc = mb.Scene([far], _cam())
+    assert one_call(sc, 4, 1) is None
+    fr = mb.render(sc, "accumulation", samples=4)
+    assert fr.stats["window"] is None and fr.stats["draw_calls"] == 0 and fr.rgba.max() == 0
+
+
+def test_the_frame_is_the_same_for_any_thread_count():
+    script = (
+        "import hashlib, numpy as np\n"
+        "from methods.test_accumulation_frame import _scene\n"
+        "import motionblur as mb\n"
+        "f = mb.render(_scene(0.5), 'accumulation', samples=16, aa=2)\n"
+        "g = mb.render(_scene(1.0), 'accumulation', samples=16)\n"
+        "print(hashlib.sha256(f.rgba.tobytes() + f.depth.tobytes() + g.rgba.tobytes() + g.ids.tobytes()).hexdigest())\n"
+    )
+    assert len(set(digests(script))) == 1
+
+
+def test_the_frame_releases_the_gil():
+    v, f = meshes.icosphere(5, 0.5)
+    ball = mb.Object((v, f), (0.8, 0.3, 0.2), motion=mb.Motion.linear((-1, 0, 0), (1, 0, 0)))
+    sc = mb.Scene([ball], mb.Camera(mb.look_at((0, 0, 4.0), (0, 0, 0)), 0.7, 320, 240))
+    assert ticks_during(lambda: mb.render(sc, "accumulation", samples=32)) > 0
+
+
+def test_bad_requests_name_the_argument():
+    sc = _scene()
+    cam = sc.camera
+    times, weights = sample_times(sc, 4)
+    painter = Painter(sc, [(0, sc.objects[0])])
+    bg = (np.zeros((cam.height, cam.width, 4), np.float32), np.full((cam.height, cam.width), np.inf, np.float32),
+          np.full((cam.height, cam.width), -1, np.int32))  # fmt: skip
+    args = (cam.view, cam.projection, cam.view_projection, cam.width, cam.height, 1)
+    with pytest.raises(ValueError, match="weights"):
+        painter.core.accumulate_still(times, weights[:3], 0, *args, bg, True)
+    with pytest.raises(ValueError, match="reference"):
+        painter.core.accumulate_still(times, weights, 4, *args, bg, True)
+    with pytest.raises(ValueError, match="background"):
+        painter.core.accumulate_still(times, weights, 0, *args, (bg[0][1:], bg[1], bg[2]), True)
+    with pytest.raises(ValueError, match="views"):
+        painter.core.accumulate_moving(times, weights, 0, np.zeros((3, 4, 4)), cam.projection, 8, 8)
+    with pytest.raises(ValueError, match="shading"):
+        _core._Painter(
+            [(0, "phong", *meshes.box(), np.ones((1, 4), np.float32), None, None)], [], (0.0, 0.0, 0.0)
+        )
+
+
+def test_the_painter_is_kept_across_frames_while_its_objects_stay_the_same():
+    from motionblur.methods._painter import painter_for
+
+    sc = _scene()
+    moving = [(k, o) for k, o in enumerate(sc.objects) if o.is_moving]
+    eye = sc.camera.pose[:3, 3]
+    p = painter_for(sc, moving, eye)
+    assert painter_for(sc, moving, eye) is p
+    assert painter_for(sc, moving, eye + 1.0) is not p  # another eye: other faces turned away
+    a = moving[0][1]
+    first = mb.render(sc, "accumulation", samples=6).rgba
+    a.motion = mb.Motion.linear(translate((0.5, 0, 0)), translate((-0.5, 0, 0)))
+    assert painter_for(sc, moving, eye) is not p
+    moved = mb.render(sc, "accumulation", samples=6).rgba
+    fresh = _scene()
+    fresh.objects[0].motion = a.motion
+    np.testing.assert_array_equal(moved, mb.render(fresh, "accumulation", samples=6).rgba)
+    assert not np.array_equal(first, moved)
