@@ -5,7 +5,7 @@ SHELL := /bin/bash
 VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
-APT_PACKAGES := libosmesa6 libllvm19 libgl1 libglu1-mesa
+APT_PACKAGES := libosmesa6 libllvm19 libgl1 libglu1-mesa chromium-headless-shell
 
 # Headless peers: pyrender through OSMesa, Mitsuba's llvm variant through Debian's LLVM 19.
 export PYOPENGL_PLATFORM := osmesa
@@ -21,7 +21,7 @@ DOCS_STAMP := $(VENV)/.docs-installed
 help: ## list the targets
 	@grep -hE '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-12s %s\n", $$1, $$2}'
 
-sysdeps: ## install the Debian packages the peers need (OSMesa, LLVM 19), when missing
+sysdeps: ## install the Debian packages the peers need (OSMesa, LLVM 19, headless Chromium), when missing
 	@missing=""; for p in $(APT_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
 	if [ -n "$$missing" ]; then \
 	  echo "installing Debian packages:$$missing"; \
