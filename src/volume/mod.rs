@@ -26,12 +26,14 @@
 //! Files: `types.rs` (options and result), `build.rs` (the construction), `assemble.rs`
 //! (surfaces and attributes), `filter.rs` (shutter filters), `coverage.rs` (coverage alphas),
 //! `hulls.rs` and `rim.rs` (the coverage model's projected hulls), `subdivide.rs` (finer meshes
-//! for the alphas) and `spin.rs` (section 4.3's spinning objects).
+//! for the alphas), `spin.rs` (section 4.3's spinning objects) and `polar.rs` (their occupancy
+//! seen along the axis).
 mod assemble;
 mod build;
 mod coverage;
 mod filter;
 mod hulls;
+mod polar;
 mod rim;
 mod spin;
 mod subdivide;
