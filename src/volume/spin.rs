@@ -254,7 +254,7 @@ fn turning_faces(mesh: &Mesh, w: [f64; 3], c: [f64; 3]) -> Vec<bool> {
 fn filter_density(f: Filter, t: f64) -> f64 {
     let h = 1e-6;
     let (a, b) = ((t - h).max(0.0), (t + h).min(1.0));
-    (f.cumulative(b) - f.cumulative(a)) / (b - a)
+    (f.cumulative_exact(b) - f.cumulative_exact(a)) / (b - a)
 }
 
 #[cfg(test)]
