@@ -23,6 +23,9 @@ struct Source {
     front: u32,
     back: u32,
     towards_front: f32,
+    /// A ring point's index among all contour vertices' ring points (its coverage is computed
+    /// once, see `assemble`), or `u32::MAX`.
+    ring_point: u32,
 }
 
 /// How the vertices of a volume get their filter opacity.
@@ -212,6 +215,26 @@ pub(crate) fn assemble(
         .map(|&v| ring_points(alpha, path, verts[v as usize]))
         .collect();
     let rings = points.first().map_or(n + 1, |p| p.len());
+    // Placement of mesh vertex `v` at `frac` of segment `seg` (a keyframe's own placer at 0).
+    let placers: Vec<_> = frames.iter().map(|f| f.placer()).collect();
+    let place_at = |v: u32, (j, u): (u32, f64)| {
+        let j = j as usize;
+        if u == 0.0 {
+            placers[j].point(verts[v as usize])
+        } else {
+            path.between(j, u).point(verts[v as usize])
+        }
+    };
+    // The coverage of every ring point, once: a contour vertex on two swept edges has its
+    // strip vertices at the same points twice, and the rings' mean alphas read them again.
+    let ring_coverage: Vec<f64> = match alpha {
+        AlphaMode::Coverage(model, _) => ring_vertices
+            .par_iter()
+            .zip(&points)
+            .flat_map_iter(|(&v, pts)| pts.iter().map(move |&pt| model.coverage(place_at(v, pt))))
+            .collect(),
+        _ => Vec::new(),
+    };
     let joining = contour.len().saturating_mul(2 * (rings - 1));
     if joining > MAX_ELEMENTS || faces.len() + joining > MAX_ELEMENTS {
         return Err(Error::value(
@@ -247,6 +270,7 @@ pub(crate) fn assemble(
         front: NONE,
         back: NONE,
         towards_front: 1.0,
+        ring_point: NONE,
     };
     let mut out_faces = Vec::with_capacity(faces.len() + joining);
     let mut part = Vec::with_capacity(out_faces.capacity());
@@ -281,6 +305,14 @@ pub(crate) fn assemble(
         }
     }
     let nearest = |(seg, frac): (u32, f64)| if frac < 0.5 { seg } else { seg + 1 };
+    // Ring point `r` of the `k`-th contour vertex in `ring_coverage` (none without it).
+    let slot = |k: usize, r: usize| {
+        if ring_coverage.is_empty() {
+            NONE
+        } else {
+            (k * rings + r) as u32
+        }
+    };
     let ring_base = sources.len();
     let ring_count = ring_vertices.len();
     if strips {
@@ -320,6 +352,7 @@ pub(crate) fn assemble(
                         front,
                         back,
                         towards_front,
+                        ring_point: slot(ring[v as usize] as usize, r),
                         ..source(v, pt, normal_ring)
                     });
                 }
@@ -327,8 +360,11 @@ pub(crate) fn assemble(
         }
     } else {
         for r in 1..rings.saturating_sub(1) {
-            for (pts, &v) in points.iter().zip(&ring_vertices) {
-                sources.push(source(v, pts[r], nearest(pts[r])));
+            for (k, (pts, &v)) in points.iter().zip(&ring_vertices).enumerate() {
+                sources.push(Source {
+                    ring_point: slot(k, r),
+                    ..source(v, pts[r], nearest(pts[r]))
+                });
             }
         }
     }
@@ -392,18 +428,11 @@ pub(crate) fn assemble(
         }
         Colors::PerFace(_) => [1.0; 4],
     };
-    let placers: Vec<_> = frames.iter().map(|f| f.placer()).collect();
-    let place = |s: &Source| {
-        let (j, u) = (s.seg as usize, s.frac);
-        if u == 0.0 {
-            placers[j].point(verts[s.v as usize])
-        } else {
-            path.between(j, u).point(verts[s.v as usize])
-        }
-    };
+    let place = |s: &Source| place_at(s.v, (s.seg, s.frac));
     let vertices: Vec<[f64; 3]> = sources.par_iter().map(place).collect();
     let filter_alpha = |s: &Source, p: [f64; 3]| match alpha {
         AlphaMode::Rings(r) => r[s.seg as usize],
+        AlphaMode::Coverage(_, _) if s.ring_point != NONE => ring_coverage[s.ring_point as usize],
         AlphaMode::Coverage(model, _) => model.coverage(p),
         AlphaMode::PerVertex(a, w) => (a[s.v as usize] * w[s.seg as usize]).clamp(0.0, 1.0),
     };
@@ -429,6 +458,14 @@ pub(crate) fn assemble(
     let ring_alpha = match alpha {
         AlphaMode::Rings(r) => r.clone(),
         _ if ring_vertices.is_empty() => vec![1.0; n + 1],
+        // Ring `i` is ring point `i (q + 2)` of every contour vertex (see `ring_points`).
+        AlphaMode::Coverage(_, _) => (0..=n)
+            .map(|i| {
+                let r = i * ((rings - 1) / n);
+                let sum: f64 = (0..ring_count).map(|k| ring_coverage[k * rings + r]).sum();
+                sum / ring_count as f64
+            })
+            .collect(),
         _ => (0..=n)
             .map(|i| {
                 // Collected first, then summed in order: the same for any thread count.
