@@ -468,6 +468,11 @@ impl CoverageModel {
         )
     }
 
+    /// The image of the world point `p` on the model's picture plane (the units of its hulls).
+    pub fn image(&self, p: [f64; 3]) -> [f64; 2] {
+        project(self.eye, self.d, self.e1, self.e2, p)
+    }
+
     /// The filter-weighted fraction of the shutter during which the object covers the image of
     /// the world point `p`, in [0, 1].
     pub fn coverage(&self, p: [f64; 3]) -> f64 {

@@ -229,6 +229,7 @@ pub fn spin_volume(mesh: &Mesh, spin: &Spin, opts: &VolumeOptions) -> Result<Mot
         &AlphaMode::PerVertex(per_vertex, weights),
         opts,
         None,
+        false,
     )
 }
 

@@ -73,9 +73,9 @@ def test_spans_keep_the_coverage_of_every_segment(turning_scene, filt):
         got = mb.render(scene, "motion_volume", aa=2, segments=s).rgba[..., 3]
         total = got.sum() / ref.sum() - 1
         pixel = np.abs(got - ref).sum() / ref.sum()
-        # measured: total -0.3% (box) / +1.6% (gaussian), per pixel 13.3% / 10.2% at every count
-        assert abs(total) < 0.03, f"{s} segments: total {total:+.3f}"
-        assert pixel < 0.15, f"{s} segments: per pixel {pixel:.3f}"
+        # measured: total +1.8% (box) / +3.8% (gaussian), per pixel 11.2% / 7.7% at every count
+        assert abs(total) < 0.05, f"{s} segments: total {total:+.3f}"
+        assert pixel < 0.13, f"{s} segments: per pixel {pixel:.3f}"
         alphas[s] = got
     # the spans (65, 512 segments) stay within a per cent of following every segment (64)
     for s in (65, 512):
