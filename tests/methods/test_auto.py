@@ -184,3 +184,14 @@ def test_the_margin_is_the_smallest_that_meets_the_tolerance_when_each_scene_is_
     assert all(met[m] < 0.95 for m in met if m < margin)
     loo = autofit.leave_one_out(rows, feats, 2, (W, H), 0.01, applies, margin=margin)
     assert sum(x["meets"] for x in loo.values()) >= 0.95 * len(loo)
+
+
+def test_the_plan_renders_the_scene_shutter_never_another_filter():
+    """The model holds motion-volume candidates with other filters (the report's looks): a plan
+    for a box-shutter scene never picks one, nor any filter for a scene with custom weights."""
+    for shutter in ("box", "triangle", [1.0, 3.0, 1.0]):
+        sc = mb.SCENES["cube"](64, 48).with_(shutter=shutter)
+        for goal in ({"tolerance": 0.05}, {"tolerance": 0.001}, {"budget_ms": 1.0}, {"budget_ms": 1e4}):
+            for method, opts, _ in auto_mod.plan(sc, **goal)[1]:
+                want = shutter if isinstance(shutter, str) else None
+                assert opts.get("filter", want) == want, (shutter, goal, method, opts)

@@ -118,10 +118,19 @@ class Model:
             for c in self.candidates
         ]
 
-    def choose(self, f: dict, tolerance, budget_ms, aa: int, applies: dict, margin: float) -> dict:
+    def choose(
+        self, f: dict, tolerance, budget_ms, aa: int, applies: dict, margin: float, shutter=None
+    ) -> dict:
         """The chosen candidate for features ``f``: ``{method, options, predicted_ms,
-        predicted_rmse, reason}`` (see :mod:`motionblur.methods.auto`)."""
-        preds = [p for p in self.predict(f, aa) if applies.get(p[0]["method"], False)]
+        predicted_rmse, reason}`` (see :mod:`motionblur.methods.auto`). With ``shutter`` (the
+        scene's filter name, or weights), a candidate whose options name another ``filter`` is
+        left out: it would render a different shutter than the scene's."""
+        preds = [
+            p
+            for p in self.predict(f, aa)
+            if applies.get(p[0]["method"], False)
+            and (shutter is None or p[0]["options"].get("filter", shutter) == shutter)
+        ]
         e = error_terms(f)
         if not preds:
             raise ValueError("auto: no candidate of the model applies to this scene")

@@ -132,7 +132,8 @@ def plan(scene: Scene, tolerance=None, budget_ms=None, aa: int = 1, model: Model
         # machine's load (the same scene gets the same plan on every run, in every process).
         probe = _probe_ms(sub, aa) if goal == "budget" else model.reference_probe_ms
         feats = {**group_features(prepared, group), "probe_ms": probe}
-        pick = model.choose(feats, tol if goal == "tolerance" else None, budget, aa, applies, margin)
+        shutter = scene.shutter if isinstance(scene.shutter, str) else "weights"
+        pick = model.choose(feats, tol if goal == "tolerance" else None, budget, aa, applies, margin, shutter)
         choices.append((pick["method"], pick["options"], [k for k, _ in group]))
         for k, _ in group:
             info[names[k]] = {
