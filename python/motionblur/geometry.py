@@ -234,11 +234,15 @@ class MotionVolume:
         shutter open to close (for box/triangle/gaussian: the mean over the ring's vertices).
     contour_count : number of contour edges swept.
     segments : number of joining segments n.
+    contour_error : with a ``contour_table``, the angle (radians) between the summed motion and
+        the stored direction whose face split and contour were swept; 0.0 otherwise.
     """
 
-    __slots__ = ("vertices", "faces", "rgba", "normals", "part", "ring_alpha", "contour_count", "segments")
+    __slots__ = (
+        "vertices", "faces", "rgba", "normals", "part", "ring_alpha", "contour_count", "segments", "contour_error"
+    )  # fmt: skip
 
-    def __init__(self, vertices, faces, rgba, normals, part, ring_alpha, contour_count):
+    def __init__(self, vertices, faces, rgba, normals, part, ring_alpha, contour_count, contour_error=0.0):
         self.vertices = vertices
         self.faces = faces
         self.rgba = rgba
@@ -247,6 +251,7 @@ class MotionVolume:
         self.ring_alpha = ring_alpha
         self.contour_count = int(contour_count)
         self.segments = len(ring_alpha) - 1
+        self.contour_error = float(contour_error)
 
     def to_trimesh(self):
         """A ``trimesh.Trimesh`` (``process=False``: no vertex merging) with vertex colours as
@@ -330,8 +335,9 @@ def motion_volume(
     face_colors=None,
     contour_line: bool = True,
     visible_only: bool = False,
+    contour_table: ContourTable | None = None,
 ) -> MotionVolume:
-    """Build the motion volume of ``mesh`` over the shutter (paper sections 3.3-3.4, 4.1-4.3).
+    """Build the motion volume of ``mesh`` over the shutter (paper sections 3.3-3.4, 4.1-4.4).
 
     Parameters
     ----------
@@ -383,6 +389,12 @@ def motion_volume(
         that face away from it at open: drawn with back-face culling the volume gives the same
         image from fewer faces (about half of a dense mesh's), but it is no longer closed.
         Ignored otherwise.
+    contour_table : optional :class:`ContourTable` of this mesh (paper section 4.4): the face
+        split and contour edges of its stored direction nearest to the summed motion (object
+        space) are swept instead of the ones computed for the motion itself (a coarse mesh
+        subdivided for the alphas maps the split to its new faces and finds their contour);
+        ``MotionVolume.contour_error`` is the angle between the two. The alphas still follow the
+        true motion. Exactly the volume without a table when the motion's direction is stored.
 
     Returns
     -------
@@ -403,8 +415,15 @@ def motion_volume(
         raise TypeError(f"contour_line: expected a bool, got {type(contour_line).__name__}")
     if not isinstance(visible_only, (bool, np.bool_)):
         raise TypeError(f"visible_only: expected a bool, got {type(visible_only).__name__}")
+    table = None
+    if contour_table is not None:
+        if not isinstance(contour_table, ContourTable):
+            raise TypeError(f"contour_table: expected a ContourTable, got {type(contour_table).__name__}")
+        if contour_table.mesh is not m and not np.array_equal(contour_table.mesh.faces, m.faces):
+            raise ValueError("contour_table: was computed for another mesh (its faces differ from mesh's)")
+        table = contour_table._core
     out = _core.motion_volume(
-        m._core, keys, seg, filter, col, nrm, cam, per_face, bool(contour_line), bool(visible_only)
+        m._core, keys, seg, filter, col, nrm, cam, per_face, bool(contour_line), bool(visible_only), table
     )
     return MotionVolume(*out)
 
@@ -485,7 +504,9 @@ class ContourTable:
     seed : int >= 0, the generator's seed (splitmix64; the same seed gives the same table).
 
     ``lookup(motion)`` returns the contour edges of the stored direction nearest to ``motion``
-    (largest cosine) and the angle between the two in radians.
+    (largest cosine) and the angle between the two in radians. ``motion_volume(...,
+    contour_table=table)`` and ``render(scene, "motion_volume", contour_table=...)`` sweep the
+    stored split and contour instead of computing them each frame.
     """
 
     __slots__ = ("_core", "mesh")
@@ -534,5 +555,6 @@ class ContourTable:
 
     @property
     def storage_bytes(self) -> int:
-        """Bytes held by the stored sets (8 per edge, 1 per face flag and direction)."""
+        """Bytes held by the stored sets (12 per edge: its adjacency index and two vertices; 1 per
+        face flag and direction)."""
         return int(self._core.storage_bytes())
