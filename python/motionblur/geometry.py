@@ -274,12 +274,27 @@ class MotionVolume:
         )
 
 
+_DEFORMING = (
+    "motion: vertex keyframes (a deforming mesh); a motion volume sweeps one rigid contour along "
+    "rigid keyframes (K+1,4,4). For a deforming mesh use BlurShell / shell_over_shutter (its "
+    "silhouette of motion follows every vertex), or render(scene, 'blur_shell' | 'velocity' | "
+    "'opaque_image' | 'accumulation')"
+)
+
+
 def _keyframes(motion):
     """The rigid keyframes of ``motion`` at the times i/K, validated and split by the core's
     keyframe engine once (keyframes the engine made already are taken as they are)."""
     if isinstance(motion, _core._Keyframes):
         return motion
+    deforming = getattr(motion, "is_deforming", None)
+    if deforming is not None:  # a motionblur.Motion
+        if deforming:
+            raise ValueError(_DEFORMING)
+        return motion._keys.resampled(max(1, len(motion.times) - 1))
     arr = np.asarray(motion) if not isinstance(motion, np.ndarray) else motion
+    if arr.ndim == 3 and arr.shape[-1] == 3:
+        raise ValueError(_DEFORMING)
     if arr.ndim == 1:
         m = _vec3(motion, "motion")
         k = np.repeat(np.eye(4)[None], 2, axis=0)
@@ -344,7 +359,8 @@ def motion_volume(
     mesh : Mesh or trimesh-like; vertices in object space (scene units).
     motion : either a (3,) translation ``m`` over the shutter, meaning the keyframes
         ``[identity, translate(m)]``: the given vertices are the placement at shutter OPEN and the
-        leading surface sits at ``v + m`` at shutter close; or rigid keyframes (K+1,4,4) float
+        leading surface sits at ``v + m`` at shutter close; or a rigid :class:`motionblur.Motion`
+        (resampled at the times ``i / K`` for its K keyframe intervals); or rigid keyframes (K+1,4,4) float
         (rotation, positive uniform scale, translation; row-major, acting on column vectors) at
         the equally spaced shutter times ``i / K``, applied to the vertices (the methods pass
         the core's keyframe object, ``_core._Keyframes``, at those times).

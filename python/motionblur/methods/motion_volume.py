@@ -278,8 +278,9 @@ def motion_volume(
         if obj.is_moving and obj.motion.is_deforming:
             raise ValueError(
                 f"scene: object {k} ({obj.name or 'unnamed'}) deforms; motion_volume sweeps one rigid "
-                "contour and needs rigid motion: use velocity (per-pixel velocity buffer, one sharp "
-                "frame), blur_shell (deforming silhouettes) or accumulation"
+                "contour and needs rigid motion: use opaque_image (velocity masks over the static "
+                "scene), velocity (per-pixel velocity buffer), blur_shell (deforming silhouettes) or "
+                "accumulation"
             )
         if not obj.is_moving and not scene.camera_moves:
             still.append((k, obj))  # no apparent motion, nothing to fold
