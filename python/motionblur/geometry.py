@@ -383,8 +383,12 @@ def motion_volume(
         +30% to +230%). For these filters each joining segment is cut at the two times the
         object's ends pass each contour vertex (plus 3 more cuts for triangle, 5 for gaussian),
         and coarse meshes are subdivided (each edge into up to 16 parts, at most 2**20 faces)
-        so that alphas can follow the coverage profile. No 0.1 floor: long streaks are faint.
-        See ``src/volume_alpha.rs``.
+        so that alphas can follow the coverage profile; then faces are cut (up to three passes)
+        where the linearly interpolated alpha misses the coverage by more than 0.02, chiefly
+        along the outline of an object whose image grows, shrinks or turns across its motion.
+        Past 64 segments the model follows the path on 64 spans, so the time is linear in the
+        segments. No 0.1 floor: long streaks are faint. See ``src/volume/coverage.rs`` and
+        ``src/volume/refine.rs``.
     colors : None (white, opaque), one RGB/RGBA colour, or (V,3)/(V,4) per vertex; linear,
         straight alpha, RGB >= 0, alpha in [0, 1].
     face_colors : optional (F,3)/(F,4) colour per face (linear, straight alpha), instead of
@@ -460,7 +464,7 @@ def spin_volume(
     """The motion volume of an object that spins but barely moves (end of paper section 4.3).
 
     The paper's rule: the contour comes from the rotation axis instead of the motion vector,
-    and the transparency follows the rotational speed. Our construction (``src/spin.rs``):
+    and the transparency follows the rotational speed. Our construction (``src/volume/spin.rs``):
     faces with ``n . axis >= 0`` are front; the leading surface is the front faces at shutter
     close, the trailing surface the back faces at open, and the contour is swept around the
     axis through the last ``min(|angle|, 2 pi)`` radians (rings at most ``pi/12`` apart). A
