@@ -168,9 +168,9 @@ impl ContourTable {
         Ok((&self.sets[k], angle))
     }
 
-    /// [`faces_seen`] for the table's mesh: the same tests and arithmetic, from the mesh's kept
-    /// face normals and the table's first corners read in order instead of every face's corners
-    /// gathered (or [`faces_seen`] itself when the mesh keeps no normals).
+    /// `faces_seen` (`edges.rs`) for the table's mesh: the same tests and arithmetic, from the
+    /// mesh's kept face normals and the table's first corners read in order instead of every
+    /// face's corners gathered (or `faces_seen` itself when the mesh keeps no normals).
     pub fn faces_seen(
         &self,
         mesh: &Mesh,
