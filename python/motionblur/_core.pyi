@@ -176,16 +176,19 @@ def motion_volume(
     face_colors: bool = False,
     contour_line: bool = True,
     visible_only: bool = False,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+    contour_table: _ContourTable | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, float]:
     """Motion volume for rigid keyframes (K+1, at the times i/K), each interval cut into
     segments (at most MAX_SEGMENTS in total), filter
     'ramp' | 'box' | 'triangle' | 'gaussian', colors (1|V,4) float32 straight RGBA (or (F,4)
     per face with face_colors=True), normals
     (V,3) float64 | None, camera_position (3,) float64 | None, contour_line (camera: sweep only the
     contour line; False: the camera sets the alphas only), visible_only (camera and contour line:
-    leave out the leading/trailing faces facing away from it). Returns vertices (N,3) f64,
-    faces (M,3) i64, rgba (N,4) f32, normals (N,3) f32, part (M,) u8, ring_alpha (n+1,) f64
-    and the number of contour edges. Releases the GIL."""
+    leave out the leading/trailing faces facing away from it), contour_table (built for this
+    mesh: the split and contour of its nearest stored direction). Returns vertices (N,3) f64,
+    faces (M,3) i64, rgba (N,4) f32, normals (N,3) f32, part (M,) u8, ring_alpha (n+1,) f64,
+    the number of contour edges and the contour table's angular error (radians, 0 without).
+    Releases the GIL."""
 
 def spin_volume(
     mesh: _Mesh,
@@ -200,7 +203,7 @@ def spin_volume(
     camera_position: np.ndarray | None = None,
     face_colors: bool = False,
     contour_line: bool = True,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, float]:
     """Spin volume (section 4.3): axis (3,) f64, angle radians, center (3,) f64, translation
     (3,) f64, segments (sweep steps) | None; the rest and the result as motion_volume
     (contour_line is ignored: every contour edge is swept).

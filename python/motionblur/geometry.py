@@ -260,11 +260,15 @@ class MotionVolume:
         shutter open to close (for box/triangle/gaussian: the mean over the ring's vertices).
     contour_count : number of contour edges swept.
     segments : number of joining segments n.
+    contour_error : with a ``contour_table``, the angle (radians) between the summed motion and
+        the stored direction whose face split and contour were swept; 0.0 otherwise.
     """
 
-    __slots__ = ("vertices", "faces", "rgba", "normals", "part", "ring_alpha", "contour_count", "segments")
+    __slots__ = (
+        "vertices", "faces", "rgba", "normals", "part", "ring_alpha", "contour_count", "segments", "contour_error"
+    )  # fmt: skip
 
-    def __init__(self, vertices, faces, rgba, normals, part, ring_alpha, contour_count):
+    def __init__(self, vertices, faces, rgba, normals, part, ring_alpha, contour_count, contour_error=0.0):
         self.vertices = vertices
         self.faces = faces
         self.rgba = rgba
@@ -273,6 +277,7 @@ class MotionVolume:
         self.ring_alpha = ring_alpha
         self.contour_count = int(contour_count)
         self.segments = len(ring_alpha) - 1
+        self.contour_error = float(contour_error)
 
     def to_trimesh(self):
         """A ``trimesh.Trimesh`` (``process=False``: no vertex merging) with vertex colours as
@@ -295,12 +300,27 @@ class MotionVolume:
         )
 
 
+_DEFORMING = (
+    "motion: vertex keyframes (a deforming mesh); a motion volume sweeps one rigid contour along "
+    "rigid keyframes (K+1,4,4). For a deforming mesh use BlurShell / shell_over_shutter (its "
+    "silhouette of motion follows every vertex), or render(scene, 'blur_shell' | 'velocity' | "
+    "'opaque_image' | 'accumulation')"
+)
+
+
 def _keyframes(motion):
     """The rigid keyframes of ``motion`` at the times i/K, validated and split by the core's
     keyframe engine once (keyframes the engine made already are taken as they are)."""
     if isinstance(motion, _core._Keyframes):
         return motion
+    deforming = getattr(motion, "is_deforming", None)
+    if deforming is not None:  # a motionblur.Motion
+        if deforming:
+            raise ValueError(_DEFORMING)
+        return motion._keys.resampled(max(1, len(motion.times) - 1))
     arr = np.asarray(motion) if not isinstance(motion, np.ndarray) else motion
+    if arr.ndim == 3 and arr.shape[-1] == 3:
+        raise ValueError(_DEFORMING)
     if arr.ndim == 1:
         m = _vec3(motion, "motion")
         k = np.repeat(np.eye(4)[None], 2, axis=0)
@@ -356,15 +376,17 @@ def motion_volume(
     face_colors=None,
     contour_line: bool = True,
     visible_only: bool = False,
+    contour_table: ContourTable | None = None,
 ) -> MotionVolume:
-    """Build the motion volume of ``mesh`` over the shutter (paper sections 3.3-3.4, 4.1-4.3).
+    """Build the motion volume of ``mesh`` over the shutter (paper sections 3.3-3.4, 4.1-4.4).
 
     Parameters
     ----------
     mesh : Mesh or trimesh-like; vertices in object space (scene units).
     motion : either a (3,) translation ``m`` over the shutter, meaning the keyframes
         ``[identity, translate(m)]``: the given vertices are the placement at shutter OPEN and the
-        leading surface sits at ``v + m`` at shutter close; or rigid keyframes (K+1,4,4) float
+        leading surface sits at ``v + m`` at shutter close; or a rigid :class:`motionblur.Motion`
+        (resampled at the times ``i / K`` for its K keyframe intervals); or rigid keyframes (K+1,4,4) float
         (rotation, positive uniform scale, translation; row-major, acting on column vectors) at
         the equally spaced shutter times ``i / K``, applied to the vertices (the methods pass
         the core's keyframe object, ``_core._Keyframes``, at those times).
@@ -387,8 +409,12 @@ def motion_volume(
         +30% to +230%). For these filters each joining segment is cut at the two times the
         object's ends pass each contour vertex (plus 3 more cuts for triangle, 5 for gaussian),
         and coarse meshes are subdivided (each edge into up to 16 parts, at most 2**20 faces)
-        so that alphas can follow the coverage profile. No 0.1 floor: long streaks are faint.
-        See ``src/volume_alpha.rs``.
+        so that alphas can follow the coverage profile; then faces are cut (up to three passes)
+        where the linearly interpolated alpha misses the coverage by more than 0.02, chiefly
+        along the outline of an object whose image grows, shrinks or turns across its motion.
+        Past 64 segments the model follows the path on 64 spans, so the time is linear in the
+        segments. No 0.1 floor: long streaks are faint. See ``src/volume/coverage.rs`` and
+        ``src/volume/refine.rs``.
     colors : None (white, opaque), one RGB/RGBA colour, or (V,3)/(V,4) per vertex; linear,
         straight alpha, RGB >= 0, alpha in [0, 1].
     face_colors : optional (F,3)/(F,4) colour per face (linear, straight alpha), instead of
@@ -409,6 +435,12 @@ def motion_volume(
         that face away from it at open: drawn with back-face culling the volume gives the same
         image from fewer faces (about half of a dense mesh's), but it is no longer closed.
         Ignored otherwise.
+    contour_table : optional :class:`ContourTable` of this mesh (paper section 4.4): the face
+        split and contour edges of its stored direction nearest to the summed motion (object
+        space) are swept instead of the ones computed for the motion itself (a coarse mesh
+        subdivided for the alphas maps the split to its new faces and finds their contour);
+        ``MotionVolume.contour_error`` is the angle between the two. The alphas still follow the
+        true motion. Exactly the volume without a table when the motion's direction is stored.
 
     Returns
     -------
@@ -427,7 +459,14 @@ def motion_volume(
     cam = None if camera_position is None else _vec3(camera_position, "camera_position")
     contour_line = as_bool(contour_line, "contour_line")
     visible_only = as_bool(visible_only, "visible_only")
-    out = _core.motion_volume(m._core, keys, seg, filter, col, nrm, cam, per_face, contour_line, visible_only)
+    table = None
+    if contour_table is not None:
+        if not isinstance(contour_table, ContourTable):
+            raise TypeError(f"contour_table: expected a ContourTable, got {type(contour_table).__name__}")
+        if contour_table.mesh is not m and not np.array_equal(contour_table.mesh.faces, m.faces):
+            raise ValueError("contour_table: was computed for another mesh (its faces differ from mesh's)")
+        table = contour_table._core
+    out = _core.motion_volume(m._core, keys, seg, filter, col, nrm, cam, per_face, contour_line, visible_only, table)
     _check_output(out[0], "motion")
     return MotionVolume(*out)
 
@@ -448,7 +487,7 @@ def spin_volume(
     """The motion volume of an object that spins but barely moves (end of paper section 4.3).
 
     The paper's rule: the contour comes from the rotation axis instead of the motion vector,
-    and the transparency follows the rotational speed. Our construction (``src/spin.rs``):
+    and the transparency follows the rotational speed. Our construction (``src/volume/spin.rs``):
     faces with ``n . axis >= 0`` are front; the leading surface is the front faces at shutter
     close, the trailing surface the back faces at open, and the contour is swept around the
     axis through the last ``min(|angle|, 2 pi)`` radians (rings at most ``pi/12`` apart). A
@@ -516,7 +555,9 @@ class ContourTable:
     A table pickles and deep-copies (rebuilt from its mesh, directions and seed: the same sets).
 
     ``lookup(motion)`` returns the contour edges of the stored direction nearest to ``motion``
-    (largest cosine) and the angle between the two in radians.
+    (largest cosine) and the angle between the two in radians. ``motion_volume(...,
+    contour_table=table)`` and ``render(scene, "motion_volume", contour_table=...)`` sweep the
+    stored split and contour instead of computing them each frame.
     """
 
     __slots__ = ("_core", "mesh", "_args")
@@ -573,5 +614,6 @@ class ContourTable:
 
     @property
     def storage_bytes(self) -> int:
-        """Bytes held by the stored sets (8 per edge, 1 per face flag and direction)."""
+        """Bytes held by the stored sets (12 per edge: its adjacency index and two vertices; 1 per
+        face flag and direction)."""
         return int(self._core.storage_bytes())

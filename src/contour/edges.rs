@@ -130,6 +130,41 @@ pub fn classify_faces_seen(
     (front, lead, trail)
 }
 
+/// [`classify_faces_seen`]'s camera tests alone, with its arithmetic, for a face split that is
+/// already known (a [`ContourTable`](super::ContourTable)'s): whether each face faces the camera
+/// at `eye` when placed by `close` and by `open`.
+pub fn faces_seen(
+    mesh: &Mesh,
+    eye: [f64; 3],
+    close: &Keyframe,
+    open: &Keyframe,
+) -> (Vec<bool>, Vec<bool>) {
+    const CHUNK: usize = 8192;
+    let v = mesh.vertices();
+    let faces = mesh.faces();
+    let back = |k: &Keyframe| {
+        let t = k.translation;
+        k.inverse_vector([eye[0] - t[0], eye[1] - t[1], eye[2] - t[2]])
+    };
+    let (ec, eo) = (back(close), back(open));
+    let (mut lead, mut trail) = (vec![false; faces.len()], vec![false; faces.len()]);
+    lead.par_chunks_mut(CHUNK)
+        .zip(trail.par_chunks_mut(CHUNK))
+        .enumerate()
+        .for_each(|(ci, (le, tr))| {
+            let base = ci * CHUNK;
+            for k in 0..le.len() {
+                let i = base + k;
+                prefetch_corners(v, faces, i + AHEAD);
+                let nf = face_normal(v, &faces[i]);
+                let a = v[faces[i][0] as usize];
+                le[k] = dot(nf, [ec[0] - a[0], ec[1] - a[1], ec[2] - a[2]]) > 0.0;
+                tr[k] = dot(nf, [eo[0] - a[0], eo[1] - a[1], eo[2] - a[2]]) > 0.0;
+            }
+        });
+    (lead, trail)
+}
+
 /// Whether each face is front-facing to a camera at `eye`: `n . (eye - a) > 0`, with vertices
 /// placed by `place`.
 fn camera_facing(

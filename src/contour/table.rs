@@ -10,11 +10,12 @@ use rayon::prelude::*;
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use super::edges::{classify_faces, contour_from_sides};
+use super::edges::{classify_faces, contour_from_sides, faces_seen, ContourEdge};
 use crate::budget::{memory_budget, Need};
 use crate::error::check_vector;
 use crate::error::{Error, Result};
 use crate::mesh::{dot, normalize, Mesh};
+use crate::motion::Keyframe;
 
 /// Largest number of directions accepted.
 const MAX_DIRECTIONS: usize = 1 << 16;
@@ -22,10 +23,18 @@ const MAX_DIRECTIONS: usize = 1 << 16;
 /// One stored contour set.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ContourSet {
-    /// Oriented contour edges `(a, b)` in adjacency order, as [`contour_edges`](crate::contour_edges).
-    pub edges: Vec<[u32; 2]>,
+    /// Oriented contour edges in adjacency order, as [`contour_edges`](crate::contour_edges)
+    /// gives them (with their adjacency index, which a motion volume's assembly reads).
+    pub contour: Vec<ContourEdge>,
     /// Front (`true`) or back per face.
     pub front: Vec<bool>,
+}
+
+impl ContourSet {
+    /// The oriented contour edges `(a, b)`.
+    pub fn edges(&self) -> Vec<[u32; 2]> {
+        self.contour.iter().map(|c| [c.a, c.b]).collect()
+    }
 }
 
 /// Contour sets for a fixed set of directions.
@@ -35,6 +44,10 @@ pub struct ContourTable {
     pub directions: Vec<[f64; 3]>,
     /// The contour set of each direction.
     pub sets: Vec<ContourSet>,
+    /// The vertex and face counts of the mesh the sets were computed for.
+    pub mesh_size: (usize, usize),
+    /// The first corner of each face, for [`ContourTable::faces_seen`].
+    pub corners: Vec<[f64; 3]>,
 }
 
 struct SplitMix64(u64);
@@ -83,7 +96,7 @@ fn table_need(faces: usize, directions: usize) -> Result<Need> {
 impl ContourTable {
     /// Precompute the contour sets of `mesh` for the given directions (normalised here).
     ///
-    /// Memory: a byte per face and direction and 8 bytes per contour edge of each direction,
+    /// Memory: a byte per face and direction and 12 bytes per contour edge of each direction,
     /// checked against the memory budget: the flags before anything is computed, the edges as
     /// the sets are made (the call stops at the first set past the budget).
     pub fn new(mesh: &Mesh, directions: Vec<[f64; 3]>) -> Result<Self> {
@@ -116,18 +129,15 @@ impl ContourTable {
             .par_iter()
             .map(|&d| {
                 let front = classify_faces(mesh, d);
-                let edges: Vec<[u32; 2]> = contour_from_sides(mesh, &front)
-                    .into_iter()
-                    .map(|c| [c.a, c.b])
-                    .collect();
-                let bytes = 8 * edges.len() as u64;
+                let contour = contour_from_sides(mesh, &front);
+                let bytes = (contour.len() * std::mem::size_of::<ContourEdge>()) as u64;
                 let total = held.fetch_add(bytes, Ordering::Relaxed) + bytes;
                 if total > budget {
                     return Err(Error::Memory {
                         name: "faces x directions".into(),
                         reason: format!(
                             "ContourTable of {} faces and {} directions: the contour edges take \
-                             over the memory budget of {} with the face flags (8 bytes an edge, \
+                             over the memory budget of {} with the face flags (12 bytes an edge, \
                              a byte a face and direction); motionblur.set_memory_budget raises it",
                             mesh.faces().len(),
                             unit.len(),
@@ -135,12 +145,18 @@ impl ContourTable {
                         ),
                     });
                 }
-                Ok(ContourSet { edges, front })
+                Ok(ContourSet { contour, front })
             })
             .collect::<Result<Vec<_>>>()?;
         Ok(ContourTable {
             directions: unit,
             sets,
+            mesh_size: (mesh.vertices().len(), mesh.faces().len()),
+            corners: mesh
+                .faces()
+                .par_iter()
+                .map(|f| mesh.vertices()[f[0] as usize])
+                .collect(),
         })
     }
 
@@ -176,11 +192,61 @@ impl ContourTable {
         Ok((best, cos.clamp(-1.0, 1.0).acos()))
     }
 
-    /// Bytes held by the stored sets (edges as two u32, one byte per face flag).
+    /// The stored set of the direction nearest to `motion` (object space) and the angle to it,
+    /// for `mesh`, which must have the vertex and face counts of the table's mesh (an error
+    /// naming `contour_table` otherwise).
+    pub fn lookup(&self, mesh: &Mesh, motion: [f64; 3]) -> Result<(&ContourSet, f64)> {
+        let size = (mesh.vertices().len(), mesh.faces().len());
+        if size != self.mesh_size {
+            return Err(Error::value(
+                "contour_table",
+                format!(
+                    "was computed for a mesh of {} vertices and {} faces, not this one of {} and {}",
+                    self.mesh_size.0, self.mesh_size.1, size.0, size.1
+                ),
+            ));
+        }
+        let (k, angle) = self.nearest(motion)?;
+        Ok((&self.sets[k], angle))
+    }
+
+    /// `faces_seen` (`edges.rs`) for the table's mesh: the same tests and arithmetic, from the
+    /// mesh's kept face normals and the table's first corners read in order instead of every
+    /// face's corners gathered (or `faces_seen` itself when the mesh keeps no normals).
+    pub fn faces_seen(
+        &self,
+        mesh: &Mesh,
+        eye: [f64; 3],
+        close: &Keyframe,
+        open: &Keyframe,
+    ) -> (Vec<bool>, Vec<bool>) {
+        let Some(normals) = mesh.repeated_face_normals_raw() else {
+            return faces_seen(mesh, eye, close, open);
+        };
+        let back = |k: &Keyframe| {
+            let t = k.translation;
+            k.inverse_vector([eye[0] - t[0], eye[1] - t[1], eye[2] - t[2]])
+        };
+        let (ec, eo) = (back(close), back(open));
+        normals
+            .par_iter()
+            .zip(&self.corners)
+            .with_min_len(1 << 14)
+            .map(|(&nf, a)| {
+                (
+                    dot(nf, [ec[0] - a[0], ec[1] - a[1], ec[2] - a[2]]) > 0.0,
+                    dot(nf, [eo[0] - a[0], eo[1] - a[1], eo[2] - a[2]]) > 0.0,
+                )
+            })
+            .unzip()
+    }
+
+    /// Bytes held by the stored sets (edges as an adjacency index and two vertices, three u32;
+    /// one byte per face flag).
     pub fn storage_bytes(&self) -> usize {
         self.sets
             .iter()
-            .map(|s| s.edges.len() * 8 + s.front.len())
+            .map(|s| s.contour.len() * std::mem::size_of::<ContourEdge>() + s.front.len())
             .sum()
     }
 }

@@ -167,12 +167,14 @@ type VolumeTuple<'py> = (
     Bound<'py, PyArray1<u8>>,
     Bound<'py, PyArray1<f64>>,
     usize,
+    f64,
 );
 
 /// The motion volume of `mesh` along `keyframes` (rigid, at the equally spaced shutter times
-/// `i / K`), each interval cut into `segments` joining segments.
+/// `i / K`), each interval cut into `segments` joining segments; with `contour_table` (built for
+/// this mesh) the face split and contour come from its nearest stored direction.
 #[pyfunction]
-#[pyo3(signature = (mesh, keyframes, segments, filter, colors, normals = None, camera_position = None, face_colors = false, contour_line = true, visible_only = false))]
+#[pyo3(signature = (mesh, keyframes, segments, filter, colors, normals = None, camera_position = None, face_colors = false, contour_line = true, visible_only = false, contour_table = None))]
 #[allow(clippy::too_many_arguments)]
 fn motion_volume<'py>(
     py: Python<'py>,
@@ -186,6 +188,7 @@ fn motion_volume<'py>(
     face_colors: bool,
     contour_line: bool,
     visible_only: bool,
+    contour_table: Option<&PyContourTable>,
 ) -> PyResult<VolumeTuple<'py>> {
     let filter = Filter::parse(filter)?;
     let mut opts = volume_options(
@@ -197,6 +200,7 @@ fn motion_volume<'py>(
         contour_line,
     )?;
     opts.visible_only = visible_only;
+    opts.contours = contour_table.map(|t| t.inner.clone());
     let keys = keyframes.rigid().to_vec();
     let inner = mesh.inner.clone();
     let vol = py.detach(move || {
@@ -283,6 +287,7 @@ fn volume_options(
             .transpose()?,
         contour_line,
         visible_only: false,
+        contours: None,
     })
 }
 
@@ -296,13 +301,14 @@ fn volume_tuple(py: Python<'_>, vol: MotionVolume) -> VolumeTuple<'_> {
         PyArray1::from_vec(py, vol.part),
         PyArray1::from_vec(py, vol.ring_alpha),
         vol.contour_edges,
+        vol.contour_error,
     )
 }
 
 /// Precomputed contour sets (section 4.4).
 #[pyclass(frozen, name = "_ContourTable", module = "motionblur._core")]
 pub struct PyContourTable {
-    inner: ContourTable,
+    inner: Arc<ContourTable>,
 }
 
 #[pymethods]
@@ -325,7 +331,9 @@ impl PyContourTable {
             Some(d) => ContourTable::new(&m, d),
             None => ContourTable::random(&m, count, seed),
         })?;
-        Ok(PyContourTable { inner })
+        Ok(PyContourTable {
+            inner: Arc::new(inner),
+        })
     }
 
     fn __len__(&self) -> usize {
@@ -345,7 +353,7 @@ impl PyContourTable {
 
     fn edges<'py>(&self, py: Python<'py>, index: usize) -> PyResult<Bound<'py, PyArray2<i64>>> {
         let set = self.set(index)?;
-        Ok(rows_array(py, index_pairs(&set.edges)))
+        Ok(rows_array(py, index_pairs(&set.edges())))
     }
 
     fn front<'py>(&self, py: Python<'py>, index: usize) -> PyResult<Bound<'py, PyArray1<bool>>> {

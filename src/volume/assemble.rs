@@ -7,7 +7,7 @@ use super::coverage::CoverageModel;
 use super::refine::{refine, Surface};
 use super::sides::{leading_then_trailing, mark_sides};
 use super::types::{Colors, MotionVolume, VolumeOptions, JOINING, LEADING, TRAILING};
-use crate::contour::{contour_from_sides, contour_line, ContourEdge};
+use crate::contour::{contour_line, ContourEdge};
 use crate::error::{Error, Result};
 use crate::mesh::{normalize, Mesh, MAX_ELEMENTS};
 use crate::motion::Path;
@@ -40,15 +40,15 @@ pub(crate) enum AlphaMode {
     PerVertex(Vec<f64>, Vec<f64>),
 }
 
-/// The contour edges of a face split; with the camera sides of the faces (facing the camera at
-/// close, at open), the contour line and, per edge, whether its leading (front faces at close)
-/// and trailing (back faces at open) sides face the camera.
+/// The `contour` edges of a face split (from `front`); with the camera sides of the faces
+/// (facing the camera at close, at open), the contour line and, per edge, whether its leading
+/// (front faces at close) and trailing (back faces at open) sides face the camera.
 pub(crate) fn select_contour(
     mesh: &Mesh,
+    contour: Vec<ContourEdge>,
     front: &[bool],
     sides: Option<&(Vec<bool>, Vec<bool>)>,
 ) -> (Vec<ContourEdge>, Vec<(bool, bool)>) {
-    let contour = contour_from_sides(mesh, front);
     let Some((vis_lead, vis_trail)) = sides else {
         return (contour, Vec::new());
     };
@@ -457,6 +457,7 @@ pub(crate) fn assemble(
         part,
         ring_alpha,
         contour_edges: contour.len(),
+        contour_error: 0.0,
     })
 }
 

@@ -8,7 +8,7 @@ use super::filter::Filter;
 use super::rim::Rim;
 use super::subdivide::{subdivided, subdivision_factor};
 use super::types::{check_options, check_segments, Colors, MotionVolume, VolumeOptions, LEADING};
-use crate::contour::{classify_faces, classify_faces_seen};
+use crate::contour::{classify_faces, classify_faces_seen, contour_from_sides};
 use crate::error::Result;
 use crate::mesh::{dot, normalize, Mesh};
 use crate::motion::Path;
@@ -102,6 +102,7 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
             part: vec![LEADING; mesh.faces().len()],
             ring_alpha: vec![1.0; n + 1],
             contour_edges: 0,
+            contour_error: 0.0,
         });
     }
     // Motion vector, extent, ring opacities.
@@ -150,12 +151,23 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
     // A subdivided face takes the sides of its parent face: the split of a face parallel to
     // the motion (n . m = 0) must not depend on the rounding of the new vertices.
     let line_eye = opts.camera.filter(|_| opts.contour_line);
-    let (front, vis) = match line_eye {
-        Some(eye) => {
+    // Section 4.4: the split and contour of the stored direction nearest the motion (none for a
+    // motion that ends where it started: no direction).
+    let stored = match &opts.contours {
+        Some(table) if m_obj != [0.0; 3] => Some(table.lookup(mesh, m_obj)?),
+        _ => None,
+    };
+    let (front, vis) = match (line_eye, stored, opts.contours.as_deref()) {
+        (Some(eye), Some((set, _)), Some(table)) => (
+            set.front.clone(),
+            Some(table.faces_seen(mesh, eye, last, first)),
+        ),
+        (Some(eye), _, _) => {
             let (f, lead, trail) = classify_faces_seen(mesh, m_obj, eye, last, first);
             (f, Some((lead, trail)))
         }
-        None => (classify_faces(mesh, m_obj), None),
+        (None, Some((set, _)), _) => (set.front.clone(), None),
+        (None, None, _) => (classify_faces(mesh, m_obj), None),
     };
     let (mesh, opts, front, vis) = match &sub {
         Some((m, o, parent)) => {
@@ -169,9 +181,14 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         }
         None => (mesh, opts, front, vis),
     };
-    let (contour, edge_vis) = select_contour(mesh, &front, vis.as_ref());
+    // The stored contour, unless the mesh was subdivided (its split maps to the new faces).
+    let contour = match (stored, &sub) {
+        (Some((set, _)), None) => set.contour.clone(),
+        _ => contour_from_sides(mesh, &front),
+    };
+    let (contour, edge_vis) = select_contour(mesh, contour, &front, vis.as_ref());
     let facing = vis.as_ref().map(|(l, t)| (l.as_slice(), t.as_slice()));
-    assemble(
+    let mut vol = assemble(
         mesh,
         path,
         &front,
@@ -182,7 +199,9 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         opts,
         facing,
         opts.visible_only,
-    )
+    )?;
+    vol.contour_error = stored.map_or(0.0, |(_, angle)| angle);
+    Ok(vol)
 }
 
 /// The extent of the mesh placed at shutter close along the summed motion `total` (0 if none).

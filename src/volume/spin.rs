@@ -47,6 +47,7 @@ use super::filter::Filter;
 use super::polar::{polar_occupancy, ANGLES, RADII};
 use super::subdivide::{subdivided, subdivision_for_edge};
 use super::types::{check_options, check_segments, MotionVolume, VolumeOptions};
+use crate::contour::contour_from_sides;
 use crate::error::check_vector;
 use crate::error::{Error, Result};
 use crate::mesh::{dot, face_normal, normalize, Mesh};
@@ -218,7 +219,7 @@ pub fn spin_volume(mesh: &Mesh, spin: &Spin, opts: &VolumeOptions) -> Result<Mot
         .collect();
     // Every contour edge is swept: the contour-line test of section 3.2 judges a swept sector by
     // the faces at its ends, which for a turning object drops sectors that are in view.
-    let (contour, vis) = select_contour(mesh, &front, None);
+    let (contour, vis) = select_contour(mesh, contour_from_sides(mesh, &front), &front, None);
     assemble(
         mesh,
         &path,

@@ -214,6 +214,7 @@ pub(crate) fn subdivided(
         camera: opts.camera,
         contour_line: opts.contour_line,
         visible_only: opts.visible_only,
+        contours: opts.contours.clone(),
     };
     Ok((Mesh::new(sv, sf)?, out, parent))
 }

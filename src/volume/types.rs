@@ -2,7 +2,10 @@
 //! subdivision.
 use rayon::prelude::*;
 
+use std::sync::Arc;
+
 use super::filter::Filter;
+use crate::contour::ContourTable;
 use crate::error::check_vector;
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
@@ -73,6 +76,10 @@ pub struct VolumeOptions {
     /// camera at shutter close and the trailing faces that face away at open (a renderer that
     /// culls back faces draws the same image from fewer faces; the volume is then open).
     pub visible_only: bool,
+    /// Precomputed contour sets of the mesh (section 4.4): the face split and contour edges of
+    /// the stored direction nearest the summed motion replace the ones computed for it
+    /// ([`MotionVolume::contour_error`] is the angle between the two).
+    pub contours: Option<Arc<ContourTable>>,
 }
 
 impl Default for VolumeOptions {
@@ -84,6 +91,7 @@ impl Default for VolumeOptions {
             camera: None,
             contour_line: true,
             visible_only: false,
+            contours: None,
         }
     }
 }
@@ -105,6 +113,9 @@ pub struct MotionVolume {
     pub ring_alpha: Vec<f64>,
     /// Number of contour edges swept.
     pub contour_edges: usize,
+    /// With [`VolumeOptions::contours`], the angle (radians) between the summed motion and the
+    /// stored direction whose contour was swept; 0 otherwise.
+    pub contour_error: f64,
 }
 
 /// Checks the colours, normals and camera of `opts` against `mesh`, naming the argument.

@@ -86,7 +86,13 @@ def test_deforming_objects_are_refused():
     blob = mb.Object((v, f), motion=mb.Motion.deforming([0, 1], np.stack([v, v * 1.5])))
     sc = mb.Scene([blob], mb.Camera(mb.look_at((0, 0, 5), (0, 0, 0)), 0.7, 32, 24))
     assert not mb.METHODS["motion_volume"].applies(sc)
-    with pytest.raises(ValueError, match="deforms"):
+    with pytest.raises(ValueError, match="deforms") as err:
         mb.render(sc, "motion_volume")
+    for method in ("opaque_image", "velocity", "blur_shell", "accumulation"):  # what to use instead
+        assert method in str(err.value) and mb.METHODS[method].applies(sc)
+    # the geometry call names them too, for vertex keyframes given as a Motion or as positions
+    for motion in (blob.motion, np.stack([v, v * 1.5])):
+        with pytest.raises(ValueError, match="deforming mesh.*BlurShell.*blur_shell"):
+            mb.motion_volume(mb.Mesh(v, f), motion)
     with pytest.raises(ValueError, match="filter"):
         mb.render(mb.Scene([], sc.camera), "motion_volume", filter="hann")

@@ -1,19 +1,25 @@
 """Blur shells (Jones and Keyser): each moving object trails a shell of fading quad strips.
 
-The frame is rendered once with the camera at the scene's reference time ``t_r`` (shutter close
-by default). Each moving object (rigid or deforming) feeds a :class:`motionblur.BlurShell` with
-its positions at ``subdivisions + 1`` times over ``[0, t_r]``: updated at all but the last, built
-at the last, so its strips join the mesh at ``t_r`` to where its silhouette of motion was at
-shutter open. The times are the quantiles of the shutter filter (uniform for a box shutter):
-pair ``j`` of a strip, at alpha ``initial_alpha * (1 - j / S)``, sits where the mesh was at the
-time ``t`` with ``W(t) = 1 - j / S`` (``W`` the cumulative shutter weight over ``[0, t_r]``),
-which is the fraction of the shutter a long object covers a point its trailing silhouette
-crossed at ``t``. Camera motion is folded into the objects' motion as in motion volumes: the
-object at ``t`` is placed where the camera at ``t_r`` sees what the camera at ``t`` saw.
+The paper's frame (``centred=False``) is rendered once with the camera at the scene's reference
+time ``t_r`` (shutter close by default). Each moving object (rigid or deforming) feeds a
+:class:`motionblur.BlurShell` with its positions at ``subdivisions + 1`` times over ``[0, t_r]``:
+updated at all but the last, built at the last, so its strips join the mesh at ``t_r`` to where
+its silhouette of motion was at shutter open. The times are the quantiles of the shutter filter
+(uniform for a box shutter): pair ``j`` of a strip, at alpha ``initial_alpha * (1 - j / S)``,
+sits where the mesh was at the time ``t`` with ``W(t) = 1 - j / S`` (``W`` the cumulative
+shutter weight over ``[0, t_r]``), which is the fraction of the shutter a long object covers a
+point its trailing silhouette crossed at ``t``. Camera motion is folded into the objects'
+motion as in motion volumes: the object at ``t`` is placed where the camera at ``t_r`` sees what
+the camera at ``t`` saw.
 
-The sharp meshes at ``t_r`` are drawn opaque, the shells over them with culling off (as the
-paper) and exact per-sample depth-sorted transparency, in the object's shading (the shell keeps
-the mesh's normals from when each pair was recorded).
+The default frame (``centred=True``) is the same construction about the shutter's median time
+``t_m``: the meshes sharp at ``t_m``, one shell trailing into the past (fed from shutter open
+to ``t_m``) and one into the future (fed from shutter close back to ``t_m``), each ramp from
+``initial_alpha / 2`` (the shutter's weight on its side) to 0.
+
+The sharp meshes are drawn opaque, the shells over them with culling off (as the paper) and
+exact per-sample depth-sorted transparency, in the object's shading (the shell keeps the mesh's
+normals from when each pair was recorded).
 """
 
 from __future__ import annotations
@@ -24,7 +30,7 @@ from collections import OrderedDict
 import numpy as np
 
 from .. import _core
-from .._validate import as_array, as_choice, as_float, as_int, as_samples
+from .._validate import as_array, as_bool, as_choice, as_float, as_int, as_samples
 from ..raster import Draw, rasterize
 from ..render import register
 from ..scene import Object, Scene
@@ -40,8 +46,8 @@ __all__ = ["blur_shell", "shell_times", "apparent_vertices"]
 _SHELLS: OrderedDict = OrderedDict()
 
 
-def _shell_for(mesh, nv: int, s: int, h: int, a: float, rgb: np.ndarray) -> BlurShell:
-    key = (id(mesh), nv, s, h, a, rgb.shape, rgb.tobytes())
+def _shell_for(mesh, nv: int, s: int, h: int, a: float, rgb: np.ndarray, side: str = "past") -> BlurShell:
+    key = (id(mesh), nv, s, h, a, rgb.shape, rgb.tobytes(), side)
     hit = _SHELLS.get(key)
     if hit is not None and hit[0] is mesh:
         _SHELLS.move_to_end(key)
@@ -72,19 +78,39 @@ def shell_times(scene: Scene, subdivisions: int) -> np.ndarray:
     return np.maximum.accumulate(t)
 
 
-def apparent_vertices(scene: Scene, obj: Object, t: float) -> np.ndarray:
-    """(V,3) float64 world positions of ``obj`` at ``t`` as the camera at the reference time
-    sees them: ``P(t_r) @ inv(P(t))`` applied to its world vertices."""
+def apparent_vertices(scene: Scene, obj: Object, t: float, seen_at: float | None = None) -> np.ndarray:
+    """(V,3) float64 world positions of ``obj`` at ``t`` as the camera at ``seen_at`` (default
+    the reference time ``t_r``) sees them: ``P(seen_at) @ inv(P(t))`` applied to its world
+    vertices."""
     v = obj.world_vertices(t)
     if not scene.camera_moves:
         return v
-    m = scene.camera_pose_at(scene.reference_t) @ np.linalg.inv(scene.camera_pose_at(t))
+    ref = scene.reference_t if seen_at is None else seen_at
+    m = scene.camera_pose_at(ref) @ np.linalg.inv(scene.camera_pose_at(t))
     return v @ m[:3, :3].T + m[:3, 3]
+
+
+def centred_times(scene: Scene, subdivisions: int) -> tuple[float, np.ndarray, np.ndarray]:
+    """The shutter's median ``t_m`` (``W(t_m) = 1/2``) and the (S+1,) times of the two half
+    shells, each ending at ``t_m``: the past one from shutter open, the future one from shutter
+    close (decreasing), at the quantiles ``1/2 (1 - i/S)`` and ``1/2 (1 + i/S)`` of the
+    shutter's weight, so that pair ``j`` of either shell sits where the mesh was at the time
+    the shutter's weight between it and ``t_m`` is ``j / (2 S)``."""
+    grid = np.linspace(0.0, 1.0, 4097)
+    w = np.asarray(scene.shutter_cdf(grid), dtype=np.float64)
+    w = (w - w[0]) / (w[-1] - w[0])
+    q = np.arange(subdivisions + 1) / (2 * subdivisions)
+    past = np.interp(q, w, grid)
+    future = np.interp(1.0 - q, w, grid)
+    past[0], future[0] = 0.0, 1.0
+    tm = float(np.interp(0.5, w, grid))
+    past[-1] = future[-1] = tm
+    return tm, past, future
 
 
 @register(
     "blur_shell",
-    sweep=[{"subdivisions": s} for s in (2, 4, 8, 16, 32)],
+    sweep=[{"subdivisions": s} for s in (2, 4, 8, 16, 32)] + [{"subdivisions": 10, "centred": False}],
     applies=_applies,
     needs="a moving object or camera",
 )
@@ -96,6 +122,7 @@ def blur_shell(
     color=None,
     blend: str = "nearest",
     aa: int = 1,
+    centred: bool = True,
 ):
     """Blur-shell rendering: every moving object trails a shell of fading strips (section 3).
 
@@ -108,8 +135,19 @@ def blur_shell(
     (the paper's section 3.4 proposal, which stops the front and back sheets of a shell and
     overlapping strips from compounding their alpha), or ``"exact"``: every shell triangle
     blended with exact per-sample depth-sorted transparency (the paper's basic method);
-    ``aa`` 1, 2 or 4 spatial samples per pixel along each axis. Returns a Frame; ``stats`` has ``shells``, ``shell_triangles`` and
-    ``ms_shell`` (shell updates and builds).
+    ``aa`` 1, 2 or 4 spatial samples per pixel along each axis; ``centred`` (default True):
+    the sharp meshes are drawn at the shutter's median time ``t_m`` (0.5 for a box shutter)
+    with two shells of ``ceil(S / 2)`` subdivisions each, one fed the positions from shutter
+    open to ``t_m`` (the paper's trail into the past) and one fed them from shutter close back to
+    ``t_m`` (the same construction run backwards: a trail into the future), each starting at
+    ``initial_alpha / 2``, the shutter's weight on its side. A trail's ramp is the coverage of a
+    point a long object left at that time; drawn from shutter close with one trail from alpha 1
+    (False: the paper's frame, the object opaque at its last place) it over-covers every motion
+    longer than the object, and on the deforming scenes it measured worse than the sharp frame
+    at mid-shutter (RMSE against 256-sample accumulation, bending arm 0.089 against 0.064,
+    deforming propeller 0.124 against 0.077; centred: 0.057 and 0.058). Returns a Frame;
+    ``stats`` has ``shells``, ``shell_triangles``, ``ms_shell`` (shell updates and builds) and
+    ``t`` (the time of the sharp meshes).
     """
     s = as_int(subdivisions, "subdivisions", minimum=1, maximum=_core.MAX_SUBDIVISIONS)
     h = as_int(hysteresis, "hysteresis", minimum=0, maximum=_core.MAX_HYSTERESIS)
@@ -122,30 +160,39 @@ def blur_shell(
             raise ValueError("color: must be >= 0")
     as_choice(blend, "blend", ("nearest", "exact"), type_error=False)
     aa = as_samples(aa, "aa")
-    tr = scene.reference_t
+    centred = as_bool(centred, "centred")
+    if centred:
+        s_side = -(-s // 2)
+        tr, past, future = centred_times(scene, s_side)
+        sides = [("past", past, 0.5 * a), ("future", future, 0.5 * a)]
+    else:
+        tr, s_side = scene.reference_t, s
+        sides = [("past", shell_times(scene, s), a)]
     cam = supersampled(scene.camera_at(tr), aa)
-    times = shell_times(scene, s)
     draws: list[tuple[Object, Draw]] = []
     shells: list[tuple[Object, Draw]] = []
-    stats = {"shells": 0, "shell_triangles": 0, "ms_shell": 0.0, "subdivisions": s}
+    stats = {"shells": 0, "shell_triangles": 0, "ms_shell": 0.0, "subdivisions": s, "t": tr}
     for k, obj in enumerate(scene.objects):
         moving = obj.is_moving or scene.camera_moves
-        current = apparent_vertices(scene, obj, tr)
+        current = apparent_vertices(scene, obj, tr, tr)
         draws.append((obj, Draw(current, obj.mesh.faces, obj.rgba, object_id=k)))
-        if not moving or tr == 0.0:
+        if not moving:
             continue
-        t0 = time.perf_counter()
         rgb = np.ascontiguousarray(color if color is not None else obj.rgba[..., :3], np.float32)
-        shell = _shell_for(obj.mesh, len(current), s, h, a, rgb)
-        for t in times[:-1]:
-            shell.update(apparent_vertices(scene, obj, float(t)))
-        mesh = shell.build(current)
-        stats["ms_shell"] += (time.perf_counter() - t0) * 1e3
-        if mesh.is_empty:
-            continue
-        (shells if blend == "nearest" else draws).append((obj, mesh.draw(object_id=k)))
-        stats["shells"] += 1
-        stats["shell_triangles"] += len(mesh.faces)
+        for side, times, alpha in sides:
+            if times[0] == times[-1]:
+                continue  # no time on this side of the frame
+            t0 = time.perf_counter()
+            shell = _shell_for(obj.mesh, len(current), s_side, h, alpha, rgb, side)
+            for t in times[:-1]:
+                shell.update(apparent_vertices(scene, obj, float(t), tr))
+            mesh = shell.build(current)
+            stats["ms_shell"] += (time.perf_counter() - t0) * 1e3
+            if mesh.is_empty:
+                continue
+            (shells if blend == "nearest" else draws).append((obj, mesh.draw(object_id=k)))
+            stats["shells"] += 1
+            stats["shell_triangles"] += len(mesh.faces)
     layer = raster_layer(cam, scene, draws) if draws else Layer.empty(cam.height, cam.width)
     if shells:
         layer = over_by_depth(nearest_layer(cam, scene, shells), layer)

@@ -14,11 +14,13 @@ transparency.
 from __future__ import annotations
 
 import copy
+from collections import OrderedDict
 
 import numpy as np
 
 from .. import _core
 from .._validate import as_bool, as_choice, as_int, as_samples, as_segments
+from ..geometry import ContourTable
 from ..geometry import motion_volume as build_volume
 from ..geometry import spin_volume as build_spin
 from ..raster import Camera, Draw, Frame
@@ -191,6 +193,7 @@ def motion_volume(
     spin="auto",
     colors: str = "pixel",
     color_renders: int = 2,
+    contour_table=False,
 ):
     """Motion-volume rendering: each moving object becomes its motion volume, drawn transparent.
 
@@ -228,8 +231,15 @@ def motion_volume(
     (where the splatted alpha is below 1e-3 the volume's vertex colours, sampled from the same
     image, stand in). Scenes whose moving objects all have one flat colour skip it (nothing to
     average); with a spin volume in the frame ``"pixel"`` falls back to ``"averaged"``.
+    ``contour_table`` (paper section 4.4) False (default); True or an int K: each moving
+    object's mesh gets a :class:`motionblur.ContourTable` of K (True: 128) stochastic directions,
+    built at its first frame and kept (the last 8 meshes), and its volume sweeps the face split
+    and contour stored for the direction nearest its motion instead of computing them; or
+    ContourTables (one, or a list), used for the objects whose mesh they were built for.
     Deforming objects raise ValueError (use accumulation or blur shells). Returns a Frame;
-    ``stats`` counts the volume triangles, the spins and the volumes with averaged colours.
+    ``stats`` counts the volume triangles, the spins and the volumes with averaged colours, and
+    with tables has ``contour_error``, the largest angle (radians) between an object's motion and
+    the stored direction it swept.
     """
     segments = as_segments(segments)
     if filter is None:
@@ -248,6 +258,7 @@ def motion_volume(
         raise ValueError(f"spin: expected 'auto', True or False, got {spin!r}")
     as_choice(colors, "colors", ("pixel", "averaged", "contour"), type_error=False)
     color_renders = as_int(color_renders, "color_renders", minimum=1, maximum=64)
+    table_for = _contour_tables(contour_table)
     tr = scene.reference_t
     cam = supersampled(scene.camera_at(tr), aa)
     eye = cam.pose[:3, 3]  # the perspective of the coverage alphas, with or without contour_line
@@ -269,8 +280,9 @@ def motion_volume(
         if obj.is_moving and obj.motion.is_deforming:
             raise ValueError(
                 f"scene: object {k} ({obj.name or 'unnamed'}) deforms; motion_volume sweeps one rigid "
-                "contour and needs rigid motion: use velocity (per-pixel velocity buffer, one sharp "
-                "frame), blur_shell (deforming silhouettes) or accumulation"
+                "contour and needs rigid motion: use opaque_image (velocity masks over the static "
+                "scene), velocity (per-pixel velocity buffer), blur_shell (deforming silhouettes) or "
+                "accumulation"
             )
         if not obj.is_moving and not scene.camera_moves:
             still.append((k, obj))  # no apparent motion, nothing to fold
@@ -297,10 +309,13 @@ def motion_volume(
                 stats["spins"] += 1
         drawn_as = obj
         if vol is None:
+            table = table_for(obj.mesh)
             vol = build_volume(
                 obj.mesh, apparent, segments=1, filter=filter, colors=obj.rgba, camera_position=eye,
-                contour_line=contour_line, visible_only=contour_line,
+                contour_line=contour_line, visible_only=contour_line, contour_table=table,
             )  # fmt: skip
+            if table is not None:
+                stats["contour_error"] = max(stats.get("contour_error", 0.0), vol.contour_error)
             if colors == "pixel":
                 pending.append((len(draws), k, obj, vol))
             elif colors == "averaged" and not uniform(obj):
@@ -401,6 +416,37 @@ def motion_volume(
     frame = paste(static, win, layer, aa)
     frame.stats.update(stats)
     return frame
+
+
+#: Directions of the tables ``contour_table=True`` builds, and the meshes whose tables are kept.
+CONTOUR_DIRECTIONS = 128
+_TABLES: OrderedDict = OrderedDict()
+
+
+def _contour_tables(option):
+    """``contour_table`` -> a function from an object's mesh to its ContourTable or None."""
+    if option is False or option is None:
+        return lambda mesh: None
+    if isinstance(option, ContourTable):
+        option = [option]
+    if isinstance(option, (list, tuple)):
+        if not all(isinstance(t, ContourTable) for t in option):
+            raise TypeError("contour_table: expected True, False, an int or ContourTables")
+        return lambda mesh: next((t for t in option if t.mesh is mesh), None)
+    k = CONTOUR_DIRECTIONS if option is True else as_int(option, "contour_table", minimum=1, maximum=65536)
+
+    def table_for(mesh):
+        key = (id(mesh), k)
+        hit = _TABLES.get(key)
+        if hit is not None and hit.mesh is mesh:
+            _TABLES.move_to_end(key)
+            return hit
+        _TABLES[key] = table = ContourTable(mesh, directions=k)
+        while len(_TABLES) > 8:
+            _TABLES.popitem(last=False)
+        return table
+
+    return table_for
 
 
 def _window(cam: Camera, vertex_sets):
