@@ -62,7 +62,8 @@ demo: build ## the main job on built-in scenes: images and a speed/error table i
 	$(PY) -m motionblur demo --out out/demo
 
 bench: build ## benchmarks against the peers, measured in the same run (out/bench)
-	@for b in benches/bench_*.py; do echo "== $$b"; $(PY) $$b || exit 1; done
+	@all=$$(date +%s); for b in benches/bench_*.py; do echo "== $$b"; t=$$(date +%s); $(PY) $$b || exit 1; \
+	  echo "== $$b took $$(( $$(date +%s) - t )) s"; done; echo "== make bench took $$(( $$(date +%s) - all )) s"
 
 lint: build ## cargo fmt, clippy and rustdoc -D warnings, ruff, stubtest, mypy --strict on a user script, extras resolved by pip
 	cargo fmt --check

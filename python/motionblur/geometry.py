@@ -466,7 +466,9 @@ def motion_volume(
         if contour_table.mesh is not m and not np.array_equal(contour_table.mesh.faces, m.faces):
             raise ValueError("contour_table: was computed for another mesh (its faces differ from mesh's)")
         table = contour_table._core
-    out = _core.motion_volume(m._core, keys, seg, filter, col, nrm, cam, per_face, contour_line, visible_only, table)
+    out = _core.motion_volume(
+        m._core, keys, seg, filter, col, nrm, cam, per_face, contour_line, visible_only, table
+    )
     _check_output(out[0], "motion")
     return MotionVolume(*out)
 

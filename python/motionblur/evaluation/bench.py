@@ -34,6 +34,8 @@ the references and the errors are Dask tasks; the timings stay undisturbed (:mod
 from __future__ import annotations
 
 import json
+import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -80,6 +82,27 @@ def _jobs(scene, methods, aa, sweeps=None) -> list[tuple[str, dict]]:
 
 def _pyrender(scene, name, ref, repeat):
     return pyrender_comparison(name, scene, ref, repeat)
+
+
+class _Phases:
+    """Wall seconds spent in each phase of a run (``with phases("name"): ...`` adds to it)."""
+
+    def __init__(self):
+        self.seconds: dict[str, float] = {}
+        self.start = time.perf_counter()
+
+    @contextmanager
+    def __call__(self, name: str):
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.seconds[name] = self.seconds.get(name, 0.0) + time.perf_counter() - t0
+
+    def summary(self) -> str:
+        total = time.perf_counter() - self.start
+        parts = ", ".join(f"{k} {v:.0f} s" for k, v in sorted(self.seconds.items(), key=lambda kv: -kv[1]))
+        return f"{total:.0f} s in all: {parts}"
 
 
 def _row(name, method, opts, ms, err, plan=None) -> dict:
@@ -135,6 +158,7 @@ def run(
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     runner = Serial() if client is None else Dask(client)
+    phases = _Phases()
     saved = {}
     if sweeps:
         for m, s in sweeps.items():
@@ -159,7 +183,8 @@ def run(
         # 1. every reference of the run, as parallel tasks on a cluster
         kinds = [("mitsuba", mits_settings), ("limit", limit_settings)]
         jobs = [(refs_of[n], k, s, cache) for n in names for k, s in kinds]
-        images = runner.map(reference_task, *zip(*jobs))
+        with phases("references"):
+            images = runner.map(reference_task, *zip(*jobs))
         for i, n in enumerate(names):
             refs[n] = {"mitsuba": images[2 * i], "limit": images[2 * i + 1]}
         log(f"references: {len(jobs)} ({runner.name})")
@@ -167,11 +192,13 @@ def run(
         for name in names:
             scene = built[name]
             todo = _jobs(scene, methods, aa, REAL_SWEEPS if name in REAL_SCENES and not sweeps else None)
-            timed = runner.timed(timed_task, [(refs_of[name], m, o, repeat) for m, o in todo])
-            errs = runner.map(
-                error_task, [t[1] for t in timed], [refs[name]["mitsuba"]] * len(timed),
-                [refs[name]["limit"]] * len(timed), [flip] * len(timed),
-            )  # fmt: skip
+            with phases("timed renders"):
+                timed = runner.timed(timed_task, [(refs_of[name], m, o, repeat) for m, o in todo])
+            with phases("errors"):
+                errs = runner.map(
+                    error_task, [t[1] for t in timed], [refs[name]["mitsuba"]] * len(timed),
+                    [refs[name]["limit"]] * len(timed), [flip] * len(timed),
+                )  # fmt: skip
             scene_rows = [_row(name, m, o, t[0], e) for (m, o), t, e in zip(todo, timed, errs)]
             for r, t in zip(scene_rows, timed):
                 frames[(name, r["method"], r["options"])] = t[1]
@@ -179,15 +206,17 @@ def run(
             comparisons[name] = equal_error(scene_rows)
             equal_times[name] = equal_time(scene_rows)
             flip_comparisons[name] = equal_error(scene_rows, metric="flip") if flip else []
-            paired[name] = runner.timed(
-                call_task, [(paired_factor, refs_of[name], scene_rows, "rmse", max(3, repeat))]
-            )[0]
+            with phases("paired re-timing"):
+                paired[name] = runner.timed(
+                    call_task, [(paired_factor, refs_of[name], scene_rows, "rmse", max(3, repeat))]
+                )[0]
             if (
                 pyrender_peer and name in SCENES
             ):  # pyrender draws lambert flat: no comparison on the lit real scenes
-                pyr += runner.timed(
-                    call_task, [(_pyrender, refs_of[name], name, refs[name]["mitsuba"], repeat)]
-                )
+                with phases("pyrender"):
+                    pyr += runner.timed(
+                        call_task, [(_pyrender, refs_of[name], name, refs[name]["mitsuba"], repeat)]
+                    )
             for r in scene_rows:
                 log(f"  {name:<18} {r['method']:<14} {r['options']:<28} {r['ms']:9.2f} ms  "
                     f"RMSE {r['rmse']:.5f}  own limit {r['rmse_limit']:.5f}")  # fmt: skip
@@ -199,36 +228,40 @@ def run(
             model = autofit.fit_calibrated(rows, features, aa or 1, (width, height), applies, log=log)
             model_info = str(model.save(model_path) if model_path else model.save())
             log(f"auto model refitted from {len(rows)} rows: {model_info}")
-        auto_rows, landings = [], {}
-        if auto and (methods is None or "auto" in methods):
-            for name in names:
-                opts = _with_aa(METHODS["auto"].fn, {"model": str(model_path)} if model_path else {}, aa)
-                t = runner.timed(timed_task, [(refs_of[name], "auto", opts, max(repeat, 5))])[0]
-                e = runner.map(error_task, [t[1]], [refs[name]["mitsuba"]], [refs[name]["limit"]], [flip])[0]
-                r = _row(name, "auto", opts, t[0], e, t[2])
-                frames[(name, "auto", r["options"])] = t[1]
-                auto_rows.append(r)
-                srows = [x for x in rows if x["scene"] == name]
-                lg = autofit.landing(srows, r, DEFAULT_TOLERANCE)
-                front = autofit.front_row(srows, r["rmse_limit"])
-                if front is not None:  # re-timed in pairs: both under the same load
-                    jobs = [("auto", opts), (front["method"], front["_opts"])]
-                    pa, pf = runner.timed(call_task, [(paired_times, refs_of[name], jobs)])[0]
-                    lg.update(paired_auto_ms=pa, paired_front_ms=pf, paired_ratio=pa / pf)
-                    lg["front"] = f"{front['method']} {front['options']}"
-                landings[name] = lg
-                log(f"  {name:<18} auto {r['ms']:9.2f} ms  own limit {r['rmse_limit']:.5f}  front {lg['front_ms']:.2f} ms  "
-                    f"ratio {lg['ratio']:.2f}, re-timed in pairs {lg.get('paired_ratio', float('nan')):.2f}")  # fmt: skip
+        with phases("auto"):
+            auto_rows, landings = [], {}
+            if auto and (methods is None or "auto" in methods):
+                for name in names:
+                    opts = _with_aa(METHODS["auto"].fn, {"model": str(model_path)} if model_path else {}, aa)
+                    t = runner.timed(timed_task, [(refs_of[name], "auto", opts, max(repeat, 5))])[0]
+                    e = runner.map(
+                        error_task, [t[1]], [refs[name]["mitsuba"]], [refs[name]["limit"]], [flip]
+                    )[0]
+                    r = _row(name, "auto", opts, t[0], e, t[2])
+                    frames[(name, "auto", r["options"])] = t[1]
+                    auto_rows.append(r)
+                    srows = [x for x in rows if x["scene"] == name]
+                    lg = autofit.landing(srows, r, DEFAULT_TOLERANCE)
+                    front = autofit.front_row(srows, r["rmse_limit"])
+                    if front is not None:  # re-timed in pairs: both under the same load
+                        jobs = [("auto", opts), (front["method"], front["_opts"])]
+                        pa, pf = runner.timed(call_task, [(paired_times, refs_of[name], jobs)])[0]
+                        lg.update(paired_auto_ms=pa, paired_front_ms=pf, paired_ratio=pa / pf)
+                        lg["front"] = f"{front['method']} {front['options']}"
+                    landings[name] = lg
+                    log(f"  {name:<18} auto {r['ms']:9.2f} ms  own limit {r['rmse_limit']:.5f}  front {lg['front_ms']:.2f} ms  "
+                        f"ratio {lg['ratio']:.2f}, re-timed in pairs {lg.get('paired_ratio', float('nan')):.2f}")  # fmt: skip
         rows += auto_rows
     finally:
         for m, s in saved.items():
             METHODS[m].sweep = s
     loo = {}
-    if auto_rows and len(names) > autofit.MIN_ROWS:
-        applies = {n: {m: METHODS[m].applies(built[n]) for m in METHODS} for n in names}
-        swept = [r for r in rows if r["method"] != "auto"]
-        probed = autofit.add_probes(features, swept, aa or 1)
-        loo = autofit.leave_one_out(swept, probed, aa or 1, (width, height), DEFAULT_TOLERANCE, applies)
+    with phases("leave one out"):
+        if auto_rows and len(names) > autofit.MIN_ROWS:
+            applies = {n: {m: METHODS[m].applies(built[n]) for m in METHODS} for n in names}
+            swept = [r for r in rows if r["method"] != "auto"]
+            probed = autofit.add_probes(features, swept, aa or 1)
+            loo = autofit.leave_one_out(swept, probed, aa or 1, (width, height), DEFAULT_TOLERANCE, applies)
     fronts, fronts_limit = [], []
     for name in names:
         sel = [r for r in rows if r["scene"] == name]
@@ -236,7 +269,7 @@ def run(
         fronts_limit += pareto_front([{**r, "rmse": r["rmse_limit"]} for r in sel])
     settings = dict(width=width, height=height, times=times, spp=spp, repeat=repeat, aa=aa,
                     variant=ref_mod.mitsuba_variant(), limit_samples=limit_samples, runner=runner.name,
-                    tolerance=DEFAULT_TOLERANCE)  # fmt: skip
+                    tolerance=DEFAULT_TOLERANCE, phases=phases.summary())  # fmt: skip
     paths = report.write(
         out, names, rows, fronts, settings, comparisons=comparisons, flip_comparisons=flip_comparisons,
         paired=paired, equal_times=equal_times, pyrender_rows=pyr, fronts_limit=fronts_limit,
@@ -250,6 +283,7 @@ def run(
     }, default=str))  # fmt: skip
     if write_html:
         paths["html"] = html.write(out, names, rows, paths, refs, frames, settings)
+    log(f"bench: {phases.summary()}")
     return {
         "rows": rows,
         "comparisons": comparisons,

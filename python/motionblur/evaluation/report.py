@@ -229,6 +229,8 @@ def _markdown(
         "method's own error). Pareto marks the front against Mitsuba. Error: RMSE over premultiplied RGBA; "
         "coverage error is signed (alpha summed over the image, relative)."
     )
+    if settings.get("phases"):
+        lines += ["", f"Run time before this report was written: {settings['phases']}."]
     lines.append("")
     for scene in dict.fromkeys(r["scene"] for r in rows):
         sel = [(r, f) for r, f in zip(rows, fronts) if r["scene"] == scene]
