@@ -44,11 +44,12 @@ def public_names(module: ModuleType) -> list[str]:
 
 
 def tidy(package: str) -> None:
-    """Import every submodule of ``package`` (none of them imports an optional dependency at
-    import time) and give each, and the package, a ``__dir__`` listing :func:`public_names`."""
+    """Import every submodule of ``package`` but ``__main__`` (none of them imports an optional
+    dependency at import time) and give each, and the package, a ``__dir__`` listing :func:`public_names`."""
     root = sys.modules[package]
     for info in pkgutil.walk_packages(root.__path__, package + "."):
-        importlib.import_module(info.name)
+        if info.name.rsplit(".", 1)[-1] != "__main__":  # runpy warns when `python -m` finds it loaded
+            importlib.import_module(info.name)
     for name, module in list(sys.modules.items()):
         if module is not None and (name == package or name.startswith(package + ".")):
             names = set(public_names(module))

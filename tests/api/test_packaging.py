@@ -91,6 +91,8 @@ def test_console_script_prints_the_version():
         [sys.executable, "-m", "motionblur", "--version"], capture_output=True, text=True, check=True
     )
     assert out.stdout.strip() == f"motionblur {mb.__version__}"
+    # importing the package does not load motionblur.__main__ (runpy would warn that it is loaded)
+    assert "RuntimeWarning" not in out.stderr, out.stderr
 
 
 def _sections(path: Path) -> set[str]:
