@@ -5,7 +5,7 @@ Meshes: a 10k-face torus and icospheres of 82k, 328k and 1.3M faces, deformed ev
 (a travelling wave plus a translation, so the silhouette changes and every normal is recomputed).
 
 - update: ``BlurShell.update(vertices)`` (float32 conversion, face and vertex normals, facing,
-  per-polygon silhouette edge, ring and state). Peer: the numpy twin's update (tests/_shell_twin.py,
+  per-polygon silhouette edge, ring and state). Peer: the numpy twin's update (tests/_helpers/shell_twin.py,
   vectorised numpy, the same float32 arithmetic; both must give the same state, checked first).
 - build: ``BlurShell.build()`` after the 10th update (only live strips are emitted).
 - frame share: a 640x480 frame of our rasterizer drawing the mesh (opaque) and the shell (culling
@@ -29,8 +29,8 @@ import numpy as np
 import motionblur as mb
 from motionblur import meshes
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-from _shell_twin import TwinShell  # noqa: E402
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "_helpers"))
+from shell_twin import TwinShell  # noqa: E402
 
 
 def best_ms(fn, repeat: int) -> float:
