@@ -130,3 +130,14 @@ def test_the_paired_factor_re_times_the_option_set_a_user_would_pick():
     b = row("motion_volume", 1.0, 0.0002, {"segments": 2, "filter": "box"})
     p = sweep.paired_factor(scene, acc + [a, b], rounds=1)
     assert p["options"] == b["options"] and p["bound"] == ">=" and p["n_lo"] == 16 and p["n_hi"] is None
+
+
+def test_the_sweep_leaves_out_option_sets_that_render_another_shutter():
+    """The motion volume's ramp/triangle/gaussian looks on a box-shutter scene are not measured
+    against references that integrate the box (and auto never chooses them there)."""
+    cube = mb.SCENES["cube"](width=32, height=24)
+    box = [o for m, o in bench._jobs(cube, ["motion_volume"], 2) if m == "motion_volume"]
+    assert box and all(o.get("filter", "box") == "box" for o in box)
+    tri = [o for m, o in bench._jobs(cube.with_(shutter="triangle"), ["motion_volume"], 2)]
+    assert tri and all(o.get("filter", "triangle") == "triangle" for o in tri)
+    assert {o["filter"] for o in tri if "filter" in o} == {"triangle"}

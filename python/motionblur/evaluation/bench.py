@@ -71,12 +71,17 @@ QUICK_SCENES = ("cube", "pan", "bunny_turn", "torus_toward", "knot_twist")
 
 
 def _jobs(scene, methods, aa, sweeps=None) -> list[tuple[str, dict]]:
+    """The (method, options) runs of ``scene``. An option set naming another shutter ``filter``
+    than the scene's renders a different shutter than the references integrate (the motion
+    volume's ramp, triangle and gaussian looks on a box shutter): not a measurement, left out, as
+    ``auto`` never chooses it."""
     out = []
+    shutter = scene.shutter if isinstance(scene.shutter, str) else "weights"
     for mname, spec in METHODS.items():
         if mname == "auto" or (methods is not None and mname not in methods) or not spec.applies(scene):
             continue
         sweep = spec.sweep if sweeps is None else sweeps.get(mname, [])
-        out += [(mname, _with_aa(spec.fn, o, aa)) for o in sweep]
+        out += [(mname, _with_aa(spec.fn, o, aa)) for o in sweep if o.get("filter", shutter) == shutter]
     return out
 
 
