@@ -19,6 +19,7 @@ mod dof;
 mod glow;
 mod lines;
 mod opaque;
+mod opaque_row;
 mod pool;
 mod pyramid;
 mod reconstruct;
@@ -32,7 +33,8 @@ pub use camera::{
 pub use colors::{colored, pixel_bounds, sample_colors, MIN_ALPHA};
 pub use dof::{depth_of_field, DofParams, MAX_LAYERS};
 pub use glow::glow;
-pub use opaque::{opaque_blur, opaque_motion_blur, Composite};
+pub use opaque::{opaque_blur, opaque_motion_blur};
+pub use opaque_row::Composite;
 pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};
 pub use reconstruct::{reconstruct, ReconstructParams, MAX_TAPS};
 pub use scatter::{scatter_pieces, Piece};
@@ -45,6 +47,24 @@ pub const MAX_LENGTH: f32 = 65536.0;
 
 /// Below this blurred opacity the rescale of eq. 7 treats the pixel as empty (colour 0).
 pub const ALPHA_EPS: f32 = 1e-12;
+
+/// Whether this CPU runs the kernels' vector forms (AVX2; the answer is cached by the standard
+/// library). The vector forms give the same bits as the plain ones.
+#[inline]
+pub(crate) fn simd() -> bool {
+    #[cfg(test)]
+    if tests::PLAIN.load(std::sync::atomic::Ordering::Relaxed) {
+        return false;
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
 
 /// Checks that `data` holds `h * w * channels` values and that the image is not empty.
 pub(crate) fn check_image(
@@ -112,6 +132,15 @@ pub(crate) fn filled(n: usize, fill: impl FnOnce(&mut [std::mem::MaybeUninit<f32
     // SAFETY: `fill` initialised every element (its contract); MaybeUninit<f32> has the layout
     // of f32, and the allocation is handed over unchanged.
     unsafe { Vec::from_raw_parts(v.as_mut_ptr() as *mut f32, v.len(), v.capacity()) }
+}
+
+/// Copies `src` into the uninitialised `dst` (of the same length), as one memcpy.
+#[inline]
+pub(crate) fn write_copy(dst: &mut [std::mem::MaybeUninit<f32>], src: &[f32]) {
+    assert_eq!(dst.len(), src.len());
+    // SAFETY: both slices hold `src.len()` f32-sized values (MaybeUninit<f32> has f32's
+    // layout) and cannot overlap (one is borrowed mutably).
+    unsafe { std::ptr::copy_nonoverlapping(src.as_ptr(), dst.as_mut_ptr() as *mut f32, src.len()) };
 }
 
 /// Writes four floats at pixel `x` of an uninitialised `(n, 4)` row.

@@ -11,70 +11,20 @@ use rayon::prelude::*;
 use super::boxblur::box_row_range;
 use super::glow::{glow_row, GlowScratch};
 use super::lines::{build_sheared, directional_at, plan, LinePlan};
-use super::{assume_init, check_direction, check_finite, check_image, filled, put4, ALPHA_EPS};
-use crate::error::{Error, Result};
+use super::opaque_row::{
+    all_finite, alpha_constant, alpha_span, box_finish, finish, Composite, Glow, RowJob,
+};
+use super::{
+    assume_init, check_direction, check_finite, check_image, filled, put4, simd, write_copy,
+};
+use crate::error::Result;
 use std::mem::MaybeUninit;
-
-/// How the blurred layer is combined with the base image.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Composite {
-    /// `sub + (1 - A_sub) base`: a moving foreground over the sharp image (figure 6).
-    Over,
-    /// `base + (1 - A_base) sub`: a moving background under the sharp foreground (figure 7).
-    Under,
-}
-
-impl Composite {
-    /// Parse `over` or `under`; anything else is an error naming `mode`.
-    pub fn parse(s: &str) -> Result<Self> {
-        match s {
-            "over" => Ok(Composite::Over),
-            "under" => Ok(Composite::Under),
-            _ => Err(Error::value(
-                "mode",
-                format!("expected 'over' or 'under', got {s:?}"),
-            )),
-        }
-    }
-}
-
-/// Eq. 7 and the composite for one pixel.
-#[inline(always)]
-fn finish(blur: [f32; 4], glow: f32, base: &[f32], comp: Option<Composite>) -> [f32; 4] {
-    let s = if blur[3] > ALPHA_EPS {
-        glow / blur[3]
-    } else {
-        0.0
-    };
-    let sub = [blur[0] * s, blur[1] * s, blur[2] * s, glow];
-    match comp {
-        None => sub,
-        Some(Composite::Over) => {
-            let k = 1.0 - glow;
-            [
-                sub[0] + k * base[0],
-                sub[1] + k * base[1],
-                sub[2] + k * base[2],
-                sub[3] + k * base[3],
-            ]
-        }
-        Some(Composite::Under) => {
-            let k = 1.0 - base[3];
-            [
-                base[0] + k * sub[0],
-                base[1] + k * sub[1],
-                base[2] + k * sub[2],
-                base[3] + k * sub[3],
-            ]
-        }
-    }
-}
 
 #[derive(Default)]
 struct RowScratch {
     glow: GlowScratch,
     a: Vec<f32>,
-    g: Vec<f32>,
+    g: [Vec<f32>; 2],
 }
 
 /// One pass over a `(n, 4)` source row, its base row and the output row: writes the base (or
@@ -145,26 +95,11 @@ fn scan_copy_row(
     }
 }
 
-/// First and last pixel with non-zero alpha in a `(n, 4)` row (blocks of 16 pixels are tested
-/// with an OR of the alpha bits, then the first and last non-empty blocks are searched).
-fn alpha_span(row: &[f32]) -> Option<(usize, usize)> {
-    const B: usize = 16;
-    let nz = |c: &[f32]| {
-        c.chunks_exact(4)
-            .fold(0u32, |m, p| m | (p[3].to_bits() & 0x7fff_ffff))
-            != 0
-    };
-    let blocks = row.len().div_ceil(4 * B);
-    let block = |b: usize| &row[b * 4 * B..((b + 1) * 4 * B).min(row.len())];
-    let first = (0..blocks).find(|&b| nz(block(b)))?;
-    let last = (first..blocks).rev().find(|&b| nz(block(b)))?;
-    let lo = block(first).chunks_exact(4).position(|p| p[3] != 0.0)? + first * B;
-    let hi = block(last).chunks_exact(4).rposition(|p| p[3] != 0.0)? + last * B;
-    Some((lo, hi))
-}
-
-/// Along rows: one fused pass per row (glow, running sums, rescale, composite), restricted to
-/// the pixels within reach of non-zero alpha; the rest of the row is the empty result.
+/// Along rows, two rows at a time: each row is checked (finite source and base, the span of
+/// non-zero alpha, constant alpha) while it is read into the cache, the pixels out of reach of
+/// its alpha get the empty result (the base, or 0), and the rest one fused pass (running sums,
+/// glow, eq. 7, composite; `opaque_row`), which runs the two rows side by side when their
+/// spans agree. Returns false when a value is not finite (the rows are then zeros).
 fn rows_path(
     rgba: &[f32],
     base: &[f32],
@@ -173,27 +108,63 @@ fn rows_path(
     comp: Option<Composite>,
     out: &mut [MaybeUninit<f32>],
 ) -> bool {
-    out.par_chunks_mut(w * 4)
-        .zip(rgba.par_chunks(w * 4))
-        .zip(base.par_chunks(w * 4))
+    let simd = simd();
+    let same = std::ptr::eq(rgba, base);
+    out.par_chunks_mut(2 * w * 4)
+        .zip(rgba.par_chunks(2 * w * 4))
+        .zip(base.par_chunks(2 * w * 4))
         .map_init(RowScratch::default, |s, ((o, src), b)| {
-            // One streaming pass over the three rows, as a plain copy would make: finiteness of
-            // the source and the base, the span of non-zero alpha, and the empty result (the
-            // base, or 0) written everywhere; the span is then overwritten from cache.
-            let (ok, span) = scan_copy_row(src, b, o, comp.is_some());
-            let Some((lo, hi)) = span else {
-                return ok;
-            };
-            let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(w));
-            s.a.clear();
-            s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
-            s.g.resize(xb - xa, 0.0);
-            glow_row(&s.a, r, &mut s.g, &mut s.glow);
-            let g = &s.g;
-            box_row_range(src, w, r, xa, xb, |x, m| {
-                put4(o, x, finish(m, g[x - xa], &b[x * 4..x * 4 + 4], comp));
-            });
-            ok
+            let mut spans = [None; 2];
+            let mut glows = [false; 2];
+            let mut ok = true;
+            for (k, (sr, br)) in src.chunks(w * 4).zip(b.chunks(w * 4)).enumerate() {
+                ok &= all_finite(sr, simd) && (comp.is_none() || same || all_finite(br, simd));
+                spans[k] = alpha_span(sr, simd)
+                    .map(|(lo, hi)| (lo.saturating_sub(r), (hi + r + 1).min(w)));
+                if let Some((xa, xb)) = spans[k] {
+                    glows[k] = alpha_constant(&sr[xa * 4..xb * 4], simd);
+                    if !glows[k] {
+                        s.a.clear();
+                        s.a.extend(sr[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
+                        s.g[k].resize(xb - xa, 0.0);
+                        glow_row(&s.a, r, &mut s.g[k], &mut s.glow);
+                    }
+                }
+            }
+            if !ok {
+                o.fill(MaybeUninit::new(0.0));
+                return false;
+            }
+            let mut jobs = Vec::with_capacity(2);
+            let rows = o
+                .chunks_mut(w * 4)
+                .zip(src.chunks(w * 4))
+                .zip(b.chunks(w * 4));
+            for (k, ((or, sr), br)) in rows.enumerate() {
+                let (xa, xb) = spans[k].unwrap_or((w, w));
+                let empty = |o: &mut [MaybeUninit<f32>], from: usize| match comp {
+                    Some(_) => write_copy(o, &br[from..from + o.len()]),
+                    None => o.fill(MaybeUninit::new(0.0)),
+                };
+                let (head, rest) = or.split_at_mut(xa * 4);
+                empty(head, 0);
+                empty(&mut rest[(xb - xa) * 4..], xb * 4);
+                if xa < xb {
+                    let glow = match glows[k] {
+                        true => Glow::Const(sr[xa * 4 + 3]),
+                        false => Glow::Row(&s.g[k]),
+                    };
+                    jobs.push(RowJob {
+                        src: sr,
+                        base: br,
+                        out: or,
+                        span: (xa, xb),
+                        glow,
+                    });
+                }
+            }
+            box_finish(&mut jobs, w, r, comp, simd);
+            true
         })
         .reduce(|| true, |a, b| a & b)
 }
@@ -256,7 +227,7 @@ fn crop_path(
     let offset = if p.transpose { cy0 } else { cx0 } as f64;
     let live = [x0 - cx0, x1 - cx0, y0 - cy0, y1 - cy0];
     let filter = |src: &[f32], n: usize, o: &mut [f32], s: &mut RowScratch| -> bool {
-        let Some((lo, hi)) = alpha_span(src) else {
+        let Some((lo, hi)) = alpha_span(src, simd()) else {
             return false;
         };
         let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(n));
@@ -264,9 +235,9 @@ fn crop_path(
         o[xb * 5..].fill(0.0);
         s.a.clear();
         s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
-        s.g.resize(xb - xa, 0.0);
-        glow_row(&s.a, r, &mut s.g, &mut s.glow);
-        let g = &s.g;
+        s.g[0].resize(xb - xa, 0.0);
+        glow_row(&s.a, r, &mut s.g[0], &mut s.glow);
+        let g = &s.g[0];
         box_row_range(src, n, r, xa, xb, |x, m| {
             o[x * 5..x * 5 + 4].copy_from_slice(&m);
             o[x * 5 + 4] = g[x - xa];

@@ -3,6 +3,11 @@
 use super::lines::plan;
 use super::*;
 use crate::on_threads;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Makes `simd()` false (the plain forms) while set. Both forms give the same bits, so other
+/// tests running meanwhile are not affected.
+pub(crate) static PLAIN: AtomicBool = AtomicBool::new(false);
 
 fn image(w: usize, h: usize, seed: u32) -> Vec<f32> {
     // A small deterministic generator: an alpha blob with random-ish colours.
@@ -142,4 +147,47 @@ fn sheared_buffer_is_bounded_by_the_image() {
             }
         }
     }
+}
+
+#[test]
+fn vector_and_plain_forms_give_the_same_bits() {
+    // Images with opaque stretches (the fast paths), soft edges, ragged spans and a base.
+    let (w, h) = (131, 67);
+    let blob = image(w, h, 7);
+    let opaque: Vec<f32> = blob
+        .chunks(4)
+        .flat_map(|p| [p[0], p[1], p[2], 1.0])
+        .collect();
+    let base = image(w, h, 8);
+    let run = || {
+        let mut all = Vec::new();
+        for img in [&blob, &opaque] {
+            for d in [
+                [1.0, 0.0],
+                [-1.0, 0.0],
+                [0.0, 1.0],
+                [1.0, 0.577],
+                [1.0, -0.3],
+                [0.4, -1.0],
+            ] {
+                for len in [3.0, 21.0, 90.0] {
+                    all.extend(opaque_blur(img, w, h, d, len).unwrap());
+                    for c in [Composite::Over, Composite::Under] {
+                        all.extend(opaque_motion_blur(img, Some(&base), w, h, d, len, c).unwrap());
+                    }
+                    all.extend(box_blur(img, w, h, d, len).unwrap());
+                }
+            }
+        }
+        all
+    };
+    let vector = run();
+    PLAIN.store(true, Ordering::Relaxed);
+    let plain = run();
+    PLAIN.store(false, Ordering::Relaxed);
+    assert_eq!(vector.len(), plain.len());
+    assert!(vector
+        .iter()
+        .zip(&plain)
+        .all(|(a, b)| a.to_bits() == b.to_bits()));
 }
