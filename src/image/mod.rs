@@ -24,6 +24,7 @@ mod pool;
 mod pyramid;
 mod reconstruct;
 mod scatter;
+mod sheared_row;
 mod splat;
 
 pub use boxblur::box_blur;
@@ -149,12 +150,6 @@ pub(crate) fn put4(o: &mut [std::mem::MaybeUninit<f32>], x: usize, v: [f32; 4]) 
     for (d, s) in o[x * 4..x * 4 + 4].iter_mut().zip(v) {
         d.write(s);
     }
-}
-
-/// Views a completely written buffer as floats.
-pub(crate) fn assume_init(o: &mut [std::mem::MaybeUninit<f32>]) -> &mut [f32] {
-    // SAFETY: callers pass buffers whose every element has been written.
-    unsafe { &mut *(o as *mut [std::mem::MaybeUninit<f32>] as *mut [f32]) }
 }
 
 /// Transposes a `(h, w, C)` image into `(w, h, C)`, in cache blocks, in parallel over output rows.

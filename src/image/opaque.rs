@@ -8,15 +8,13 @@
 //! whole filter is one fused pass (running sums, glow, rescale, composite) per row.
 use rayon::prelude::*;
 
-use super::boxblur::box_row_range;
 use super::glow::{glow_row, GlowScratch};
 use super::lines::{build_sheared, directional_at, plan, LinePlan};
 use super::opaque_row::{
     all_finite, alpha_constant, alpha_span, box_finish, finish, Composite, Glow, RowJob,
 };
-use super::{
-    assume_init, check_direction, check_finite, check_image, filled, put4, simd, write_copy,
-};
+use super::sheared_row::{filter_row, finish_row, FilterScratch};
+use super::{check_direction, check_finite, check_image, filled, put4, simd, write_copy};
 use crate::error::Result;
 use std::mem::MaybeUninit;
 
@@ -25,74 +23,6 @@ struct RowScratch {
     glow: GlowScratch,
     a: Vec<f32>,
     g: [Vec<f32>; 2],
-}
-
-/// One pass over a `(n, 4)` source row, its base row and the output row: writes the base (or
-/// zeros when `copy` is false) to the output, and returns whether the source and the base are
-/// finite and the first and last pixel of the source with non-zero alpha.
-fn scan_copy_row(
-    src: &[f32],
-    base: &[f32],
-    out: &mut [MaybeUninit<f32>],
-    copy: bool,
-) -> (bool, Option<(usize, usize)>) {
-    const B: usize = 16;
-    const EXP: u32 = 0x7f80_0000;
-    // Lane-wise accumulators over 16 floats (4 pixels) so that the loop vectorises.
-    const AMASK: [u32; 16] = {
-        let mut m = [0u32; 16];
-        let mut i = 3;
-        while i < 16 {
-            m[i] = 0x7fff_ffff;
-            i += 4;
-        }
-        m
-    };
-    let cp = copy as u32;
-    let mut bad = [0u32; 16];
-    let (mut first, mut last) = (usize::MAX, 0);
-    for (k, ((sb, bb), ob)) in src
-        .chunks(4 * B)
-        .zip(base.chunks(4 * B))
-        .zip(out.chunks_mut(4 * B))
-        .enumerate()
-    {
-        let mut nz = [0u32; 16];
-        let mut lane = |i: usize, sv: f32, bv: f32, o: &mut MaybeUninit<f32>| {
-            let (sb, bb) = (sv.to_bits(), bv.to_bits());
-            bad[i] |= ((sb & EXP) == EXP) as u32 | (((bb & EXP) == EXP) as u32 & cp);
-            nz[i] |= sb & AMASK[i];
-            o.write(if copy { bv } else { 0.0 });
-        };
-        let mut sc = sb.chunks_exact(16);
-        let mut bc = bb.chunks_exact(16);
-        let mut oc = ob.chunks_exact_mut(16);
-        for ((s4, b4), o4) in (&mut sc).zip(&mut bc).zip(&mut oc) {
-            for i in 0..16 {
-                lane(i, s4[i], b4[i], &mut o4[i]);
-            }
-        }
-        let (st, bt, ot) = (sc.remainder(), bc.remainder(), oc.into_remainder());
-        for i in 0..st.len() {
-            lane(i, st[i], bt[i], &mut ot[i]);
-        }
-        if nz.iter().fold(0, |a, &v| a | v) != 0 {
-            first = first.min(k);
-            last = k;
-        }
-    }
-    let bad = [bad.iter().fold(0, |a, &v| a | v); 4];
-    let ok = (bad[0] | bad[1] | bad[2] | bad[3]) == 0;
-    if first == usize::MAX {
-        return (ok, None);
-    }
-    let block = |b: usize| &src[b * 4 * B..((b + 1) * 4 * B).min(src.len())];
-    let lo = block(first).chunks_exact(4).position(|p| p[3] != 0.0);
-    let hi = block(last).chunks_exact(4).rposition(|p| p[3] != 0.0);
-    match (lo, hi) {
-        (Some(lo), Some(hi)) => (ok, Some((lo + first * B, hi + last * B))),
-        _ => (ok, None),
-    }
 }
 
 /// Along rows, two rows at a time: each row is checked (finite source and base, the span of
@@ -170,7 +100,9 @@ fn rows_path(
 }
 
 /// Any other direction: the filter runs on the crop that can receive non-zero alpha (the
-/// alpha's bounding box grown by two filter reaches), transposed and/or sheared.
+/// alpha's bounding box grown by two filter reaches), transposed and/or sheared; then each
+/// output row is written once: the empty result (the base, or 0) outside the crop, eq. 7 and
+/// the composite inside. Returns false when a value is not finite (the output is then zeros).
 fn crop_path(
     rgba: &[f32],
     base: &[f32],
@@ -180,7 +112,9 @@ fn crop_path(
     comp: Option<Composite>,
     out: &mut [MaybeUninit<f32>],
 ) -> Result<bool> {
-    // One streaming pass: finiteness, the empty result everywhere, and the alpha's box.
+    let simd = simd();
+    let same = std::ptr::eq(rgba, base);
+    // One streaming pass: finiteness and the alpha's box.
     type Scan = (bool, Option<(usize, usize, usize, usize)>);
     let join = |a: Scan, b: Scan| -> Scan {
         let bbox = match (a.1, b.1) {
@@ -189,23 +123,34 @@ fn crop_path(
         };
         (a.0 & b.0, bbox)
     };
-    let (ok, bbox) = out
-        .par_chunks_mut(w * 4)
-        .zip(rgba.par_chunks(w * 4))
+    let (ok, bbox) = rgba
+        .par_chunks(w * 4)
         .zip(base.par_chunks(w * 4))
         .enumerate()
-        .map(|(y, ((o, src), b))| {
-            let (ok, span) = scan_copy_row(src, b, o, comp.is_some());
-            (ok, span.map(|(lo, hi)| (lo, hi, y, y)))
+        .map(|(y, (src, b))| {
+            let ok = all_finite(src, simd) && (comp.is_none() || same || all_finite(b, simd));
+            (ok, alpha_span(src, simd).map(|(lo, hi)| (lo, hi, y, y)))
         })
         .reduce(|| (true, None), join);
-    let out = assume_init(out);
-    let Some((x0, x1, y0, y1)) = bbox else {
-        return Ok(ok);
-    };
     if !ok {
+        out.par_chunks_mut(w * 4)
+            .for_each(|o| o.fill(MaybeUninit::new(0.0)));
         return Ok(false);
     }
+    // The empty result of output row `y`, columns `xa .. xb`.
+    let empty = |y: usize, xa: usize, xb: usize, o: &mut [MaybeUninit<f32>]| match comp {
+        Some(_) => write_copy(
+            &mut o[xa * 4..xb * 4],
+            &base[(y * w + xa) * 4..(y * w + xb) * 4],
+        ),
+        None => o[xa * 4..xb * 4].fill(MaybeUninit::new(0.0)),
+    };
+    let Some((x0, x1, y0, y1)) = bbox else {
+        out.par_chunks_mut(w * 4)
+            .enumerate()
+            .for_each(|(y, o)| empty(y, 0, w, o));
+        return Ok(true);
+    };
     let r = p.radius;
     let major = 2 * r + 2;
     let minor = (2.0 * r as f64 * p.slope.abs()).ceil() as usize + 2;
@@ -217,56 +162,38 @@ fn crop_path(
     let (cx0, cx1) = (x0.saturating_sub(mx), (x1 + 1 + mx).min(w));
     let (cy0, cy1) = (y0.saturating_sub(my), (y1 + 1 + my).min(h));
     let (cw, ch) = (cx1 - cx0, cy1 - cy0);
-    let mut crop = super::pool::take_for("rgba", cw * ch * 4)?;
-    crop.par_chunks_mut(cw * 4)
-        .enumerate()
-        .for_each(|(k, row)| {
+    // The crop, copied unless it is the whole image.
+    let mut copy = None;
+    if cw < w || ch < h {
+        let mut c = super::pool::take_for("rgba", cw * ch * 4)?;
+        c.par_chunks_mut(cw * 4).enumerate().for_each(|(k, row)| {
             let y = cy0 + k;
             row.copy_from_slice(&rgba[(y * w + cx0) * 4..(y * w + cx1) * 4]);
         });
+        copy = Some(c);
+    }
+    let crop = copy.as_deref().unwrap_or(rgba);
     let offset = if p.transpose { cy0 } else { cx0 } as f64;
     let live = [x0 - cx0, x1 - cx0, y0 - cy0, y1 - cy0];
-    let filter = |src: &[f32], n: usize, o: &mut [f32], s: &mut RowScratch| -> bool {
-        let Some((lo, hi)) = alpha_span(src, simd()) else {
-            return false;
-        };
-        let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(n));
-        o[..xa * 5].fill(0.0);
-        o[xb * 5..].fill(0.0);
-        s.a.clear();
-        s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
-        s.g[0].resize(xb - xa, 0.0);
-        glow_row(&s.a, r, &mut s.g[0], &mut s.glow);
-        let g = &s.g[0];
-        box_row_range(src, n, r, xa, xb, |x, m| {
-            o[x * 5..x * 5 + 4].copy_from_slice(&m);
-            o[x * 5 + 4] = g[x - xa];
-        });
-        true
+    let filter = |src: &[f32], n: usize, o: &mut [f32], s: &mut FilterScratch| -> bool {
+        filter_row(src, n, r, o, s, simd)
     };
-    // Eq. 7 and the composite of crop row `y` (its five values: blur RGBA and glow) into the
-    // full output row `o`.
-    let oblique = p.slope != 0.0;
-    let finish_row = |y: usize, f5: &[f32], o: &mut [f32]| {
-        let gy = cy0 + y;
-        for x in 0..cw {
-            let i = gy * w + cx0 + x;
-            let f = &f5[x * 5..x * 5 + 5];
-            let g = if oblique {
-                f[4].max(rgba[i * 4 + 3])
-            } else {
-                f[4]
-            };
-            let v = finish([f[0], f[1], f[2], f[3]], g, &base[i * 4..i * 4 + 4], comp);
-            o[(cx0 + x) * 4..(cx0 + x) * 4 + 4].copy_from_slice(&v);
-        }
+    // Output row `y`: the empty result outside the crop, `inside(k, o)` for crop row `k`.
+    let mut rows = |inside: &(dyn Fn(usize, &mut [MaybeUninit<f32>]) + Sync)| {
+        out.par_chunks_mut(w * 4).enumerate().for_each(|(y, o)| {
+            if y < cy0 || y >= cy1 {
+                return empty(y, 0, w, o);
+            }
+            empty(y, 0, cx0, o);
+            empty(y, cx1, w, o);
+            inside(y - cy0, &mut o[cx0 * 4..cx1 * 4]);
+        })
     };
-    let out_rows = &mut out[cy0 * w * 4..cy1 * w * 4];
-    if oblique && !p.transpose {
-        // Shear, filter, and shear back row by row straight into the output.
-        let sh = build_sheared::<4, 5, RowScratch>(
+    if p.slope != 0.0 && !p.transpose {
+        // Shear and filter, then shear back straight into the output, piece by piece.
+        let sh = build_sheared::<4, 5, FilterScratch>(
             "rgba",
-            &crop,
+            crop,
             cw,
             ch,
             p.slope,
@@ -274,18 +201,17 @@ fn crop_path(
             Some(live),
             &filter,
         )?;
-        out_rows.par_chunks_mut(w * 4).enumerate().for_each_init(
-            || vec![0.0f32; cw * 5],
-            |row, (y, o)| {
-                sh.unshear_row(cw, y, row);
-                finish_row(y, row, o);
-            },
-        );
+        let runs = sh.runs(cw);
+        rows(&|k, o| {
+            let at = ((cy0 + k) * w + cx0) * 4;
+            let (alpha, b) = (&rgba[at..at + cw * 4], &base[at..at + cw * 4]);
+            finish_row(&sh, &runs, k, alpha, b, o, comp, simd);
+        });
         super::pool::give(sh.data);
     } else {
-        let five = directional_at::<4, 5, RowScratch>(
+        let five = directional_at::<4, 5, FilterScratch>(
             "rgba",
-            &crop,
+            crop,
             cw,
             ch,
             p,
@@ -293,13 +219,27 @@ fn crop_path(
             Some(live),
             filter,
         )?;
-        out_rows
-            .par_chunks_mut(w * 4)
-            .enumerate()
-            .for_each(|(y, o)| finish_row(y, &five[y * cw * 5..(y + 1) * cw * 5], o));
+        // Eq. 7 and the composite of crop row `k` (five values a pixel: blur RGBA and glow).
+        let oblique = p.slope != 0.0;
+        rows(&|k, o| {
+            let f5 = &five[k * cw * 5..(k + 1) * cw * 5];
+            let at = ((cy0 + k) * w + cx0) * 4;
+            for x in 0..cw {
+                let f = &f5[x * 5..x * 5 + 5];
+                let i = at + x * 4;
+                let g = if oblique { f[4].max(rgba[i + 3]) } else { f[4] };
+                put4(
+                    o,
+                    x,
+                    finish([f[0], f[1], f[2], f[3]], g, &base[i..i + 4], comp),
+                );
+            }
+        });
         super::pool::give(five);
     }
-    super::pool::give(crop);
+    if let Some(c) = copy {
+        super::pool::give(c);
+    }
     Ok(true)
 }
 
