@@ -19,8 +19,10 @@ pub struct Frag {
     pub shaded: Shaded,
 }
 
-/// The per-sample result after both passes.
+/// The per-sample result after both passes (in this field order: the resolve reads it as
+/// eight floats).
 #[derive(Clone, Copy, Debug)]
+#[repr(C)]
 pub struct Sample {
     pub rgba: [f32; 4],
     /// 1/w of the nearest surface with alpha > 0 (0 for background).
