@@ -41,7 +41,7 @@ impl Sample {
 }
 
 /// Total order on fragments of one sample, far to near, independent of submission order.
-#[inline]
+#[inline(always)]
 fn far_to_near(a: &Frag, b: &Frag) -> Ordering {
     a.invw
         .total_cmp(&b.invw)
@@ -73,17 +73,19 @@ pub fn over(src: [f32; 4], dst: [f32; 4]) -> [f32; 4] {
 /// Reusable buffers of the transparent pass.
 ///
 /// Fragments are pushed in submission order with a per-sample count. Most samples of a typical
-/// frame hold at most one transparent fragment (a convex surface drawn with back faces culled):
-/// those are composited straight from the list, and only the fragments of samples holding
-/// several are grouped per sample (in submission order) and sorted.
+/// frame hold one transparent fragment (a convex surface drawn with back faces culled) or two
+/// (its front and back): those are composited straight from the list, and only the fragments of
+/// samples holding more are grouped per sample (in submission order) and sorted.
 #[derive(Default)]
 pub struct FragLists {
     frags: Vec<Frag>,
-    /// Fragments per tile sample; while grouping, `SEEN` marks a sample given its slots.
+    /// Fragments per tile sample; `SEEN` marks a sample whose first fragment was met (a pair's
+    /// first, or a group given its slots).
     count: Vec<u32>,
     /// The fragments of samples with several, grouped per sample.
     sorted: Vec<Frag>,
-    /// Next free slot in `sorted` of a sample being grouped (valid once `SEEN`).
+    /// A pair's first fragment in `frags`, or the next free slot in `sorted` of a sample being
+    /// grouped (valid once `SEEN`).
     next: Vec<u32>,
     /// (sample, first slot, fragment count) of each group in `sorted`.
     groups: Vec<(u32, u32, u32)>,
@@ -125,18 +127,34 @@ impl FragLists {
             return;
         }
         debug_assert_eq!(samples.len(), self.count.len());
-        // A sample's only fragment: its list needs no grouping and no sort.
+        // A sample's only fragment needs no list; a sample's two fragments (the front and back
+        // of a closed surface) are composited when the second comes, the first found through
+        // `next`. Only samples holding three or more are grouped.
+        self.next.resize(samples.len(), 0);
         let mut several = 0usize;
-        for f in &self.frags {
+        for (i, f) in self.frags.iter().enumerate() {
             let s = f.sample as usize;
-            if self.count[s] == 1 {
-                let sample = &mut samples[s];
-                sample.rgba = over(f.shaded.rgba, sample.rgba);
-                sample.invw = f.invw;
-                sample.id = f.shaded.id;
-                sample.velocity = f.shaded.velocity;
-            } else {
-                several += 1;
+            match self.count[s] {
+                1 => {
+                    let sample = &mut samples[s];
+                    sample.rgba = over(f.shaded.rgba, sample.rgba);
+                    sample.invw = f.invw;
+                    sample.id = f.shaded.id;
+                    sample.velocity = f.shaded.velocity;
+                }
+                2 => {
+                    self.count[s] = 2 | SEEN;
+                    self.next[s] = i as u32;
+                }
+                c if c == 2 | SEEN => {
+                    composite_pair(
+                        &self.frags[self.next[s] as usize],
+                        f,
+                        &mut samples[s],
+                        blend,
+                    );
+                }
+                _ => several += 1,
             }
         }
         if several == 0 {
@@ -146,13 +164,12 @@ impl FragLists {
         // first fragment comes (groups in order of first appearance; samples are independent).
         self.sorted.clear();
         self.sorted.resize(several, Frag::default());
-        self.next.resize(samples.len(), 0);
         self.groups.clear();
         let mut cursor = 0u32;
         for f in &self.frags {
             let s = f.sample as usize;
             let c = self.count[s];
-            if c == 1 {
+            if c & !SEEN <= 2 {
                 continue;
             }
             if c & SEEN == 0 {
@@ -167,40 +184,65 @@ impl FragLists {
         }
         for &(s, lo, len) in &self.groups {
             let list = &mut self.sorted[lo as usize..(lo + len) as usize];
-            if blend == Blend::Exact {
-                insertion_sort(list);
-            }
-            let sample = &mut samples[s as usize];
-            let mut c = sample.rgba;
-            let mut nearest = list[0];
-            if blend == Blend::Unsorted {
-                // the first fragment passed the opaque surface's test; each later one is tested
-                // against the depth the ones before it wrote (a strictly nearer one passes)
-                for (k, f) in list.iter().enumerate() {
-                    if k == 0 || f.invw > nearest.invw {
-                        c = over(f.shaded.rgba, c);
-                        nearest = *f;
-                    }
-                }
-                sample.rgba = c;
-                sample.invw = nearest.invw;
-                sample.id = nearest.shaded.id;
-                sample.velocity = nearest.shaded.velocity;
-                continue;
-            }
-            for f in list.iter() {
-                c = over(f.shaded.rgba, c);
-                if f.invw > nearest.invw {
-                    nearest = *f;
-                }
-            }
-            sample.rgba = c;
-            // Every fragment here passed the depth test, so it is nearer than the opaque surface.
-            sample.invw = nearest.invw;
-            sample.id = nearest.shaded.id;
-            sample.velocity = nearest.shaded.velocity;
+            composite_list(list, &mut samples[s as usize], blend);
         }
     }
+}
+
+/// `composite_list` of two fragments `a` and `b` (in submission order), without copying them:
+/// the same order (`far_to_near`, which first compares 1/w) and the same operations.
+#[inline(always)]
+fn composite_pair(a: &Frag, b: &Frag, sample: &mut Sample, blend: Blend) {
+    let (first, second) = match blend {
+        Blend::Exact if far_to_near(a, b) == Ordering::Greater => (b, a),
+        _ => (a, b),
+    };
+    let mut c = over(first.shaded.rgba, sample.rgba);
+    let mut nearest = first;
+    if blend == Blend::Exact || second.invw > first.invw {
+        c = over(second.shaded.rgba, c);
+    }
+    if second.invw > first.invw {
+        nearest = second;
+    }
+    sample.rgba = c;
+    sample.invw = nearest.invw;
+    sample.id = nearest.shaded.id;
+    sample.velocity = nearest.shaded.velocity;
+}
+
+/// Composites one sample's fragments (in submission order, two or more) over it: sorted far
+/// to near for `Exact`; for `Unsorted` each later fragment drawn only when nearer than the
+/// ones before it wrote.
+#[inline]
+fn composite_list(list: &mut [Frag], sample: &mut Sample, blend: Blend) {
+    if blend == Blend::Exact {
+        insertion_sort(list);
+    }
+    let mut c = sample.rgba;
+    let mut nearest = list[0];
+    if blend == Blend::Unsorted {
+        // the first fragment passed the opaque surface's test; each later one is tested
+        // against the depth the ones before it wrote (a strictly nearer one passes)
+        for (k, f) in list.iter().enumerate() {
+            if k == 0 || f.invw > nearest.invw {
+                c = over(f.shaded.rgba, c);
+                nearest = *f;
+            }
+        }
+    } else {
+        for f in list.iter() {
+            c = over(f.shaded.rgba, c);
+            if f.invw > nearest.invw {
+                nearest = *f;
+            }
+        }
+    }
+    sample.rgba = c;
+    // Every fragment here passed the depth test, so it is nearer than the opaque surface.
+    sample.invw = nearest.invw;
+    sample.id = nearest.shaded.id;
+    sample.velocity = nearest.shaded.velocity;
 }
 
 /// Stable insertion sort, far to near: lists are short (a few layers per sample).

@@ -236,6 +236,29 @@ pub fn render_tile(
         let planes = Planes::new(t);
         let mixed = t.flags & MAY_OPAQUE != 0;
         let ts = sh.prepare(r, t);
+        if let Some(shaded) = ts.constant() {
+            // A constant triangle has one alpha, so it is never mixed: one loop without the
+            // shading's tests (the same fragments, in the same order).
+            let keep = shaded.rgba[3] > 0.0;
+            spans(t, bx, |iy, x0, x1| {
+                for ix in x0..=x1 {
+                    let s = local(ix, iy);
+                    let z = planes.invw(ix, iy) as f32;
+                    if z <= zbuf[s] {
+                        continue;
+                    }
+                    fragments += 1;
+                    if keep {
+                        frags.push(Frag {
+                            sample: s as u32,
+                            invw: z,
+                            shaded,
+                        });
+                    }
+                }
+            });
+            continue;
+        }
         spans(t, bx, |iy, x0, x1| {
             for ix in x0..=x1 {
                 let s = local(ix, iy);
@@ -243,17 +266,11 @@ pub fn render_tile(
                 if z <= zbuf[s] {
                     continue;
                 }
-                // A constant triangle has one alpha, so it is never mixed.
-                let shaded = match ts.constant() {
-                    Some(c) => c,
-                    None => {
-                        let lam = ts.lambdas(&planes, ix, iy);
-                        if mixed && ts.alpha(lam) >= 1.0 {
-                            continue;
-                        }
-                        ts.shade(lam)
-                    }
-                };
+                let lam = ts.lambdas(&planes, ix, iy);
+                if mixed && ts.alpha(lam) >= 1.0 {
+                    continue;
+                }
+                let shaded = ts.shade(lam);
                 fragments += 1;
                 if shaded.rgba[3] > 0.0 {
                     frags.push(Frag {
