@@ -5,7 +5,7 @@ SHELL := /bin/bash
 VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
-APT_PACKAGES := libosmesa6 libllvm19 libgl1 libglu1-mesa
+APT_PACKAGES := libosmesa6 libllvm19 libgl1 libglu1-mesa chromium-headless-shell
 
 # Headless peers: pyrender through OSMesa, Mitsuba's llvm variant through Debian's LLVM 19.
 export PYOPENGL_PLATFORM := osmesa
@@ -16,12 +16,12 @@ RUST_SOURCES := $(shell find src -name '*.rs') Cargo.toml Cargo.lock pyproject.t
 EXT_STAMP := $(VENV)/.built
 DOCS_STAMP := $(VENV)/.docs-installed
 
-.PHONY: help sysdeps venv build test test-rust test-python demo bench lint docs fmt notebooks clean
+.PHONY: help sysdeps venv build test test-rust test-python fuzz demo bench lint docs fmt notebooks clean
 
 help: ## list the targets
 	@grep -hE '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-12s %s\n", $$1, $$2}'
 
-sysdeps: ## install the Debian packages the peers need (OSMesa, LLVM 19), when missing
+sysdeps: ## install the Debian packages the peers need (OSMesa, LLVM 19, headless Chromium), when missing
 	@missing=""; for p in $(APT_PACKAGES); do dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
 	if [ -n "$$missing" ]; then \
 	  echo "installing Debian packages:$$missing"; \
@@ -53,6 +53,10 @@ test-python: build ## pytest, including the notebooks
 	$(PY) -m pytest -q -n 2 --nbmake tests notebooks
 
 test: build test-rust test-python ## everything CI runs
+
+FUZZ_EXAMPLES ?= 400
+fuzz: build ## the property-based robustness suite with many examples (FUZZ_EXAMPLES per property, random seed)
+	MOTIONBLUR_FUZZ=fuzz MOTIONBLUR_FUZZ_EXAMPLES=$(FUZZ_EXAMPLES) $(PY) -m pytest -q -n 2 -m robustness tests/robustness
 
 demo: build ## the main job on built-in scenes: images and a speed/error table in out/demo
 	$(PY) -m motionblur demo --out out/demo

@@ -21,6 +21,15 @@ pub enum Error {
         /// What is wrong with it.
         reason: String,
     },
+    /// A call would allocate more than the memory budget, or the system refused an
+    /// allocation (see `budget.rs`). Maps to `MemoryError`.
+    #[error("{name}: {reason}")]
+    Memory {
+        /// The arguments whose sizes the memory is proportional to (`"faces x directions"`).
+        name: String,
+        /// The bytes needed and the budget, or what was refused.
+        reason: String,
+    },
 }
 
 impl Error {
@@ -35,6 +44,13 @@ impl Error {
     pub fn value(name: &'static str, reason: impl Into<String>) -> Self {
         Error::Value {
             name,
+            reason: reason.into(),
+        }
+    }
+    /// A [`Error::Memory`] naming the argument `name`.
+    pub fn memory(name: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::Memory {
+            name: name.into(),
             reason: reason.into(),
         }
     }

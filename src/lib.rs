@@ -12,10 +12,15 @@
 //! - `shell`: blur shells (Jones and Keyser);
 //! - `accumulate`: the accumulation buffer's kernels;
 //! - `raster`: the software rasterizer;
-//! - `image`: image-space blur.
+//! - `image`: image-space blur;
+//! - `budget`: the memory budget every kernel checks before it allocates;
+//! - `analytic`: analytic motion blur, exact covered time per sample;
+//! - `shutter`: the shutter filters.
 #![warn(missing_docs)]
 
 mod accumulate;
+mod analytic;
+mod budget;
 mod contour;
 mod error;
 mod image;
@@ -23,6 +28,7 @@ mod mesh;
 mod motion;
 mod raster;
 mod shell;
+mod shutter;
 mod volume;
 
 #[cfg(feature = "python")]
@@ -33,6 +39,13 @@ pub use accumulate::{
     resolve, sample_rects, window_projection, Accumulated, Layer, PaintObject, Painter, Rect,
     Samples, StaticLayer, StillCamera,
 };
+pub use analytic::{
+    render as render_analytic, Backdrop, Frame as AnalyticFrame, Input as AnalyticInput,
+    MovingDraw, Quadrature, Stats as AnalyticStats, DEFAULT_TILE_BUDGET as ANALYTIC_TILE_BUDGET,
+};
+pub use budget::{
+    memory_budget, set_memory_budget, Need, DEFAULT_MEMORY_BUDGET, MIN_MEMORY_BUDGET,
+};
 pub use contour::{
     contour_edges, contour_pairs, motion_silhouette, ContourEdge, ContourSet, ContourTable,
 };
@@ -42,22 +55,23 @@ pub use image::{
     opaque_motion_blur, pixel_bounds, pyramid_blur, pyramid_glow, pyramid_opaque_blur, reconstruct,
     sample_colors, scatter_pieces, splat_paths, velocity_blur, CameraMatrices, Composite,
     DofParams, Piece, ReconstructParams, MAX_FPS_RATIO, MAX_LAYERS, MAX_LENGTH, MAX_LEVELS,
-    MAX_SAMPLES, MAX_TAPS, MIN_ALPHA,
+    MAX_SAMPLES, MAX_TAPS, MAX_VELOCITY, MIN_ALPHA,
 };
-pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats};
+pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats, MAX_COORD};
 pub use motion::{
     axis_angle, check_times, det3, dot, mat4_mul, norm, place, row_times, transpose_times, turn,
     uniform_times, Keyframe, Keyframes, Keys, Mat3, Mat4, Path, Similarity, IDENTITY4,
 };
 pub use raster::{
     faces_from_i64, rasterize, rasterize_over, Background, Blend, Camera, Draw, Frame, Light,
-    Options as RasterOptions, Shading, Stats as RasterStats, MAX_INTERNAL_SIDE, MAX_PIXELS,
-    MAX_SIDE, SAMPLES,
+    Options as RasterOptions, Shading, Stats as RasterStats, FRAGMENT_CAP, MAX_INTERNAL_SIDE,
+    MAX_PIXELS, MAX_SIDE, SAMPLES,
 };
 pub use shell::{
     BlurShell, BuildPlan, FaceState, ShellColor, ShellMesh, ShellOptions, ShellOut, MAX_HYSTERESIS,
     MAX_SUBDIVISIONS, ON_SILHOUETTE,
 };
+pub use shutter::Shutter;
 pub use volume::{
     check_segments, motion_volume, spin_volume, subdivided, Colors, Filter, MotionVolume, Spin,
     VolumeOptions, JOINING, LEADING, MAX_SEGMENTS, TRAILING,

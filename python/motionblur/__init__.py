@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from . import (
     _malloc,  # noqa: F401  (keeps freed frame buffers in the process; see the module)
+    analytic,
+    budget,
     image,
     interop,
     meshes,
@@ -21,6 +23,8 @@ from . import shell as _shell
 from ._core import __version__
 from ._namespace import tidy
 from ._optional import MissingDependencyError
+from .analytic import MovingDraw, coverage, rasterize_motion
+from .budget import memory_budget, set_memory_budget
 from .evaluation import metrics, reference
 from .geometry import *  # noqa: F403
 from .interop import read_image, to_mitsuba_dict
@@ -31,8 +35,23 @@ from .scene import *  # noqa: F403
 from .scenes_builtin import SCENES, builtin_scene
 from .shell import *  # noqa: F403
 
-__all__ = ["__version__", "image", "meshes", "interop", *_geometry.__all__, *_raster.__all__, *_shell.__all__]
+__all__ = [
+    "__version__",
+    "analytic",
+    "budget",
+    "memory_budget",
+    "set_memory_budget",
+    "image",
+    "meshes",
+    "interop",
+    *_geometry.__all__,
+    *_raster.__all__,
+    *_shell.__all__,
+]
 __all__ += [
+    "MovingDraw",
+    "rasterize_motion",
+    "coverage",
     *_scene.__all__,
     "render",
     "register",

@@ -9,19 +9,26 @@ from typing_extensions import Self
 
 __all__ = [
     "__version__",
+    "memory_budget",
+    "set_memory_budget",
+    "DEFAULT_MEMORY_BUDGET",
+    "MIN_MEMORY_BUDGET",
     "_Keyframes",
     "_check_times",
     "_rotate",
     "MAX_SEGMENTS",
+    "MAX_COORD",
     "FILTERS",
     "MAX_SIDE",
     "MAX_PIXELS",
+    "FRAGMENT_CAP",
     "MAX_INTERNAL_SIDE",
     "SAMPLES",
     "SHADINGS",
     "BLENDS",
     "MAX_LENGTH",
     "MAX_FPS_RATIO",
+    "MAX_VELOCITY",
     "MAX_LEVELS",
     "MAX_LAYERS",
     "MAX_SAMPLES",
@@ -38,6 +45,7 @@ __all__ = [
     "TRAILING",
     "JOINING",
     "_rasterize",
+    "_analytic",
     "_glow",
     "_box_blur",
     "_splat_paths",
@@ -66,6 +74,17 @@ __all__ = [
 ]
 
 __version__: str
+
+# --- the memory budget (src/budget.rs)
+
+DEFAULT_MEMORY_BUDGET: int
+MIN_MEMORY_BUDGET: int
+
+def memory_budget() -> int:
+    """The most bytes one call may allocate."""
+
+def set_memory_budget(bytes: int) -> int:
+    """Sets the memory budget (bytes, >= MIN_MEMORY_BUDGET); returns the previous one."""
 
 # --- motion (the keyframe engine)
 
@@ -116,6 +135,7 @@ LEADING: int
 TRAILING: int
 JOINING: int
 MAX_SEGMENTS: int
+MAX_COORD: float
 FILTERS: tuple[str, ...]
 
 @final
@@ -209,6 +229,7 @@ class _ContourTable:
 
 MAX_LENGTH: float
 MAX_FPS_RATIO: float
+MAX_VELOCITY: float
 MAX_LEVELS: int
 MAX_LAYERS: int
 MAX_SAMPLES: int
@@ -343,6 +364,10 @@ class _BlurShell:
         """(vertices f64 (N,3), faces i64 (M,3), rgba f32 (N,4) straight, normals f32 (N,3),
         face i64 (N,), step i32 (N,)). Releases the GIL."""
     def reset(self) -> None: ...
+    def _history(self) -> bytes:
+        """The shell's history (update count, snapshots, rings, per-polygon state) as bytes."""
+    def _restore(self, state: bytes) -> None:
+        """Takes the history of a shell made with the same arguments (ValueError naming state otherwise)."""
     @property
     def updates(self) -> int: ...
     @property
@@ -366,10 +391,38 @@ def _motion_silhouette(
 
 MAX_SIDE: int
 MAX_PIXELS: int
+FRAGMENT_CAP: int
 MAX_INTERNAL_SIDE: int
 SAMPLES: tuple[int, ...]
 SHADINGS: tuple[str, ...]
 BLENDS: tuple[str, ...]
+
+def _analytic(
+    width: int,
+    height: int,
+    samples: int,
+    times: np.ndarray,
+    view_projections: np.ndarray,
+    draws: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, int, bool, str]],
+    shutter: str | np.ndarray,
+    lights: list[tuple[tuple[float, float, float], tuple[float, float, float]]],
+    ambient: tuple[float, float, float],
+    gauss: int,
+    reference_time: float,
+    shade: bool,
+    backdrop: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+    tile_budget: int = ...,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, float]]:
+    """Analytic motion blur: draws (positions f64 (K+1,V,3) at the boundaries ``times`` f64
+    (K+1,) from 0 to 1, faces i64 (F,3), straight rgba f32 (1|V,4), normals f32 (K+1,V,3) | None,
+    object_id, cull_back, shading "flat" | "lambert") seen through ``view_projections`` f64
+    (1|K+1,4,4) into height x width pixels of samples x samples each. ``shutter`` a filter name
+    or f64 (M,) weights; ``gauss`` points per visible piece (0: auto); ``backdrop`` an opaque
+    layer per sample (rgba f32 (HS,WS,4), depth f32 (HS,WS), ids i32 (HS,WS)). Returns rgba
+    (H,W,4) f32 premultiplied (the shutter integral), depth (H,W) f32, ids (H,W) i32 and velocity
+    (H,W,2) f32 of the surface in front at ``reference_time``, and a stats dict. ``tile_budget``
+    bytes per tile pass (default 64 MiB); ``MemoryError`` where one sample alone needs more. The
+    GIL is released."""
 
 def _rasterize(
     view: np.ndarray,

@@ -3,16 +3,35 @@
 The Python layer converts dtype and contiguity (always into a fresh or read-only view, never
 writing the caller's array); the Rust boundary checks shapes and ranges again. Every error
 names the argument. Limits and names come from the compiled core (``_core.MAX_SEGMENTS``,
-``_core.SAMPLES``, ``_core.FILTERS``, ...), where they are defined.
+``_core.SAMPLES``, ``_core.FILTERS``, ``_core.MAX_COORD``, ...), where they are defined.
+
+The rules, one for every entry point:
+
+- **Arrays**: numeric and real (no complex, object, string or bool-as-number surprises),
+  the documented shape, not empty, finite unless stated; converted into a fresh array or a
+  read-only view, never written.
+- **Scalars**: a real number (not a bool, a string, a complex), finite unless stated, in the
+  documented range; an integer option is an ``int`` or numpy integer, never a float.
+- **Booleans**: ``True``/``False`` or a numpy bool; anything else (``"no"``, ``0``, ``None``)
+  raises TypeError.
+- **Coordinates**: every position, translation, point and vector in scene units lies within
+  ``+-MAX_COORD`` (1e9) in every component, so face normals, dot products and projections stay
+  finite and exact enough in float32 and float64; beyond it a ValueError names the argument.
+- **Colours and light**: a float or an RGB triple, finite and >= 0; alpha in [0, 1].
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
 from . import _core
+
+#: Largest accepted |component| of any coordinate, in scene units (the compiled core's bound).
+MAX_COORD: float = float(_core.MAX_COORD)
 
 
 def as_array(
@@ -52,8 +71,15 @@ def as_array(
         lo, hi = arr.min(), arr.max()
         if lo < info.min or hi > info.max:
             raise ValueError(f"{name}: values out of range for {np.dtype(dtype)}")
-    out = np.ascontiguousarray(arr, dtype=dtype)
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = np.ascontiguousarray(arr, dtype=dtype)
+    if arr.ndim == 0:  # ascontiguousarray makes a 0-d array 1-d
+        out = out.reshape(())
     if finite and not want_int and out.size and not np.isfinite(out).all():
+        if np.isfinite(arr).all():  # finite values past float32's range
+            raise ValueError(
+                f"{name}: values beyond the range of {np.dtype(dtype)} (+-{np.finfo(dtype).max:g})"
+            )
         raise ValueError(f"{name}: contains NaN or inf")
     return out
 
@@ -106,3 +132,77 @@ def as_samples(value, name: str) -> int:
     if out not in _core.SAMPLES:
         raise ValueError(f"{name}: must be one of {', '.join(map(str, _core.SAMPLES))}, got {out}")
     return out
+
+
+def as_bool(value, name: str) -> bool:
+    """``value`` as a bool when it is ``True``/``False`` or a numpy bool; TypeError naming the
+    argument otherwise (so ``"no"``, ``0`` or ``None`` are never read as a truth value)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name}: expected True or False, got {value!r}")
+    return bool(value)
+
+
+def as_coords(value, name: str, shape: Sequence[int | None], *, allow_empty: bool = False) -> np.ndarray:
+    """``as_array`` float64 of ``shape``, finite and within ``+-MAX_COORD`` in every component."""
+    out = as_array(value, name, np.float64, shape, allow_empty=allow_empty)
+    check_coords(out, name)
+    return out
+
+
+def check_coords(arr: np.ndarray, name: str) -> None:
+    """ValueError naming ``name`` when a component of the float array ``arr`` is NaN, inf or
+    beyond ``+-MAX_COORD``."""
+    if arr.size == 0:
+        return
+    m = float(np.abs(arr).max())
+    if not m <= MAX_COORD:
+        if not np.isfinite(arr).all():
+            raise ValueError(f"{name}: contains NaN or inf")
+        raise ValueError(
+            f"{name}: coordinates must lie within +-{MAX_COORD:g} (the coordinate range, "
+            f"motionblur.MAX_COORD), got a component of magnitude {m:g}"
+        )
+
+
+def as_rgb(value, name: str) -> np.ndarray:
+    """A float or an RGB triple as a (3,) float64 array, finite and >= 0 (light intensities,
+    ambient light). TypeError for strings, complex numbers and other non-numbers."""
+    if isinstance(value, (str, bytes)) or value is None:
+        raise TypeError(f"{name}: expected a float or an RGB triple, got {type(value).__name__}")
+    if np.ndim(value) == 0:
+        if np.iscomplexobj(value):
+            raise TypeError(f"{name}: expected a real number, got {type(value).__name__}")
+        arr = np.full(3, as_float(value, name))
+    else:
+        arr = as_array(value, name, np.float64, (None,))
+        if arr.shape != (3,):
+            raise ValueError(f"{name}: expected a float or an RGB triple, got shape {arr.shape}")
+    if (arr < 0).any():
+        raise ValueError(f"{name}: must be >= 0, got {arr.tolist()}")
+    return arr
+
+
+def as_list(value, name: str, item_type: type, type_name: str) -> list:
+    """``value`` (one ``item_type`` or an iterable of them, not a string) as a list; TypeError
+    naming the argument and the item otherwise."""
+    if isinstance(value, item_type):
+        return [value]
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
+        raise TypeError(f"{name}: expected a sequence of {type_name}, got {type(value).__name__}")
+    try:
+        out = list(value)
+    except TypeError as exc:  # a 0-d array, an iterator that fails
+        raise TypeError(
+            f"{name}: expected a sequence of {type_name}, got {type(value).__name__} ({exc})"
+        ) from None
+    for i, item in enumerate(out):
+        if not isinstance(item, item_type):
+            raise TypeError(f"{name}: item {i} is a {type(item).__name__}, not a {type_name}")
+    return out
+
+
+def as_path(value, name: str = "path") -> Path:
+    """A ``Path`` from a str or an ``os.PathLike``; TypeError naming the argument otherwise."""
+    if not isinstance(value, (str, os.PathLike)):
+        raise TypeError(f"{name}: expected a str or os.PathLike file name, got {type(value).__name__}")
+    return Path(value)

@@ -26,7 +26,17 @@ import numpy as np
 
 from . import _core
 from ._optional import require
-from ._validate import as_array, as_choice, as_float, as_int, as_segments
+from ._validate import (
+    MAX_COORD,
+    as_array,
+    as_bool,
+    as_choice,
+    as_coords,
+    as_float,
+    as_int,
+    as_segments,
+    check_coords,
+)
 
 __all__ = [
     "Mesh",
@@ -39,6 +49,7 @@ __all__ = [
     "LEADING",
     "TRAILING",
     "JOINING",
+    "MAX_COORD",
 ]
 
 #: ``MotionVolume.part`` values: leading surface (front faces at shutter close).
@@ -87,7 +98,9 @@ class Mesh:
         ``unreferenced_vertices`` and ``closed`` (no boundary, non-manifold or inconsistent edge).
 
     The edge adjacency is built in Rust on first use and kept on the object;
-    :meth:`with_vertices` makes a deformed copy that shares it.
+    :meth:`with_vertices` makes a deformed copy that shares it. Every coordinate must lie within
+    ``+-MAX_COORD`` (the coordinate range). A mesh pickles and deep-copies through its two arrays
+    (the copy builds its adjacency again when used).
     """
 
     __slots__ = ("_core", "_vertices", "_faces", "_stats")
@@ -112,6 +125,9 @@ class Mesh:
         f = _readonly(np.array(_as(faces, "faces", np.int64), copy=True))
         self._core = _core._Mesh(v, f)
         self._vertices, self._faces, self._stats = v, f, None
+
+    def __reduce__(self):
+        return Mesh, (self._vertices, self._faces)
 
     @classmethod
     def _from_core(cls, core, vertices, faces) -> Mesh:
@@ -139,7 +155,7 @@ class Mesh:
     def face_normals(self, unit: bool = True) -> np.ndarray:
         """(F,3) float64 face normals: unit vectors (zeros for degenerate faces), or with
         ``unit=False`` the raw cross products ``(b - a) x (c - a)`` (length twice the area)."""
-        return self._core.face_normals(bool(unit))
+        return self._core.face_normals(as_bool(unit, "unit"))
 
     def vertex_normals(self) -> np.ndarray:
         """(V,3) float64 area-weighted unit vertex normals (zeros where undefined)."""
@@ -191,7 +207,17 @@ def as_mesh(mesh, name: str = "mesh") -> Mesh:
 
 
 def _vec3(value, name: str) -> np.ndarray:
-    return as_array(value, name, np.float64, (3,))
+    """A (3,) float64 point or vector, finite and within the coordinate range."""
+    return as_coords(value, name, (3,))
+
+
+def _check_output(vertices: np.ndarray, name: str) -> None:
+    """The volume's vertices stay in the coordinate range (a large scale or a spin about a far
+    centre can carry a mesh that is in range out of it)."""
+    try:
+        check_coords(vertices, "volume")
+    except ValueError as exc:
+        raise ValueError(f"{name}: the volume leaves the coordinate range ({exc})") from None
 
 
 def contour_edges(mesh, motion, camera_position=None) -> np.ndarray:
@@ -399,13 +425,10 @@ def motion_volume(
     col, per_face = _vertex_or_face_colors(colors, face_colors, nv, len(m.faces))
     nrm = None if normals is None else as_array(normals, "normals", np.float64, (nv, 3))
     cam = None if camera_position is None else _vec3(camera_position, "camera_position")
-    if not isinstance(contour_line, (bool, np.bool_)):
-        raise TypeError(f"contour_line: expected a bool, got {type(contour_line).__name__}")
-    if not isinstance(visible_only, (bool, np.bool_)):
-        raise TypeError(f"visible_only: expected a bool, got {type(visible_only).__name__}")
-    out = _core.motion_volume(
-        m._core, keys, seg, filter, col, nrm, cam, per_face, bool(contour_line), bool(visible_only)
-    )
+    contour_line = as_bool(contour_line, "contour_line")
+    visible_only = as_bool(visible_only, "visible_only")
+    out = _core.motion_volume(m._core, keys, seg, filter, col, nrm, cam, per_face, contour_line, visible_only)
+    _check_output(out[0], "motion")
     return MotionVolume(*out)
 
 
@@ -469,7 +492,13 @@ def spin_volume(
     col, per_face = _vertex_or_face_colors(colors, face_colors, nv, len(m.faces))
     nrm = None if normals is None else as_array(normals, "normals", np.float64, (nv, 3))
     cam = None if camera_position is None else _vec3(camera_position, "camera_position")
-    out = _core.spin_volume(m._core, ax, ang, c, t, seg, filter, col, nrm, cam, per_face)
+    try:
+        out = _core.spin_volume(m._core, ax, ang, c, t, seg, filter, col, nrm, cam, per_face)
+    except ValueError as exc:  # the core's keyframes of the spin are called "motion": not an argument here
+        if not str(exc).startswith("motion:"):
+            raise
+        raise ValueError(f"center: the spin about it leaves the coordinate range ({exc})") from None
+    _check_output(out[0], "center")
     return MotionVolume(*out)
 
 
@@ -484,27 +513,37 @@ class ContourTable:
         e.g. clustered around a preferred direction of motion.
     seed : int >= 0, the generator's seed (splitmix64; the same seed gives the same table).
 
+    A table pickles and deep-copies (rebuilt from its mesh, directions and seed: the same sets).
+
     ``lookup(motion)`` returns the contour edges of the stored direction nearest to ``motion``
     (largest cosine) and the angle between the two in radians.
     """
 
-    __slots__ = ("_core", "mesh")
+    __slots__ = ("_core", "mesh", "_args")
 
     def __init__(self, mesh, directions=64, seed: int = 0):
         self.mesh = as_mesh(mesh)
         s = as_int(seed, "seed", minimum=0, maximum=2**64 - 1)
         if isinstance(directions, (int, np.integer)) and not isinstance(directions, bool):
             k = as_int(directions, "directions", minimum=1, maximum=65536)
+            self._args = (k, s)
             self._core = _core._ContourTable(self.mesh._core, k, s, None)
         elif np.ndim(directions) == 0:
             raise TypeError(f"directions: expected an int or a (K,3) array, got {type(directions).__name__}")
         else:
-            d = as_array(directions, "directions", np.float64, (None, 3))
+            d = as_coords(directions, "directions", (None, 3))
             if len(d) > 65536:
                 raise ValueError(f"directions: at most 65536, got {len(d)}")
             if (np.linalg.norm(d, axis=1) == 0).any():
                 raise ValueError("directions: a direction is zero")
+            d = np.array(d, copy=True)  # kept for pickling; the caller's array may change
+            d.flags.writeable = False
+            self._args = (d, s)
             self._core = _core._ContourTable(self.mesh._core, len(d), s, d)
+
+    def __reduce__(self):
+        # Rebuilt from what made it (the directions or their count and seed): the same table.
+        return ContourTable, (self.mesh, *self._args)
 
     def __len__(self) -> int:
         return len(self._core)
@@ -526,11 +565,11 @@ class ContourTable:
 
     def edges(self, index: int) -> np.ndarray:
         """(E,2) int64 contour edges stored for direction ``index``."""
-        return self._core.edges(as_int(index, "index", minimum=0))
+        return self._core.edges(as_int(index, "index", minimum=0, maximum=len(self) - 1))
 
     def front_faces(self, index: int) -> np.ndarray:
         """(F,) bool: the faces facing direction ``index`` (``n . d >= 0``)."""
-        return self._core.front(as_int(index, "index", minimum=0))
+        return self._core.front(as_int(index, "index", minimum=0, maximum=len(self) - 1))
 
     @property
     def storage_bytes(self) -> int:

@@ -6,9 +6,12 @@ images (alpha, depth) are float32 (H,W). Directions are (dx, dy) in pixels, +x r
 so blurs fade to transparent at the border and the opaque blur's rescale (eq. 7) keeps the colour
 there: the result does not depend on the size of the viewport (Kraus, section 3.3).
 
-Alpha is not checked against [0, 1] (nor colour against alpha): the filters are linear and apply
-as they are, but the opaque blur's rescale and the ``over``/``under`` composites assume premultiplied
-colour with alpha in [0, 1], and give colours and alphas outside that range otherwise.
+Alpha: the linear filters (``box_blur``, ``pyramid_blur``, ``velocity_blur``, ...) apply to any
+finite values. The kernels whose arithmetic assumes premultiplied colour with alpha in [0, 1]
+(``glow``, ``opaque_blur``, ``opaque_motion_blur`` and its ``base``, ``pyramid_glow``,
+``pyramid_opaque_blur``: the glow's ``1 - (1 - a)(1 - b)``, the rescale of eq. 7 and the
+``over``/``under`` composites) raise ValueError naming the argument when an alpha is outside
+[0, 1] (colour is not checked against alpha).
 
 The kernels are Rust, run on all cores (bit-identical for any thread count) and release the GIL.
 The caller's arrays are never written: every function returns a new array.
@@ -48,6 +51,9 @@ __all__ = [
 MAX_LENGTH: float = _core.MAX_LENGTH
 #: Largest accepted ``fps`` / ``target_fps`` ratio of ``camera_motion_blur``.
 MAX_FPS_RATIO: float = _core.MAX_FPS_RATIO
+#: Longest velocity component :func:`velocity_blur` takes, in pixels (a streak that long
+#: crosses any image); :func:`camera_motion_blur` and the ``camera_velocity`` method clamp to it.
+MAX_VELOCITY: float = _core.MAX_VELOCITY
 #: Most pyramid levels, depth-of-field sub-images and blur samples accepted.
 MAX_LEVELS: int = _core.MAX_LEVELS
 MAX_LAYERS: int = _core.MAX_LAYERS

@@ -1,12 +1,32 @@
 """Built-in procedural meshes for demos, tests and benchmarks.
 
 Every function returns ``(vertices, faces)``: vertices (V,3) float64 in scene units, faces (F,3)
-int64, counter-clockwise seen from outside (outward normals).
+int64, counter-clockwise seen from outside (outward normals). Sizes are finite numbers > 0 (the
+result within the coordinate range, ``MAX_COORD``) and counts integers in the stated ranges
+(at most ``MAX_COUNT`` sections, rings or times); otherwise ValueError / TypeError naming the
+argument.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from ._validate import MAX_COORD, as_array, as_float, as_int
+
+#: Largest count of sections, rings, times or blades of a procedural mesh.
+MAX_COUNT = 1 << 14
+
+
+def _size(value, name: str) -> float:
+    v = as_float(value, name)
+    if not 0.0 < v <= MAX_COORD / 4:
+        raise ValueError(f"{name}: must be in (0, MAX_COORD / 4], got {v:g}")
+    return v
+
+
+def _count(value, name: str, minimum: int) -> int:
+    return as_int(value, name, minimum=minimum, maximum=MAX_COUNT)
+
 
 __all__ = ["icosphere", "box", "torus", "cylinder", "uv_sphere"]
 __all__ += ["bending_arm", "spinning_propeller"]
@@ -14,8 +34,8 @@ __all__ += ["bending_arm", "spinning_propeller"]
 
 def icosphere(subdivisions: int = 2, radius: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Geodesic sphere: 20 * 4**subdivisions faces (5: 20k, 6: 82k, 7: 328k, 8: 1.3M)."""
-    if subdivisions < 0 or subdivisions > 9:
-        raise ValueError(f"subdivisions: must be in 0..9, got {subdivisions}")
+    subdivisions = as_int(subdivisions, "subdivisions", minimum=0, maximum=9)
+    radius = _size(radius, "radius")
     t = (1.0 + 5.0**0.5) / 2.0
     v = np.array(
         [[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0],
@@ -54,7 +74,12 @@ def icosphere(subdivisions: int = 2, radius: float = 1.0) -> tuple[np.ndarray, n
 
 def box(extents=(1.0, 1.0, 1.0)) -> tuple[np.ndarray, np.ndarray]:
     """Axis-aligned box centred at the origin: 8 vertices, 12 faces."""
-    e = np.asarray(extents, dtype=np.float64) / 2.0
+    if np.ndim(extents) == 0:
+        extents = (extents,) * 3
+    e = as_array(extents, "extents", np.float64, (3,))
+    for x in e:
+        _size(float(x), "extents")
+    e = e / 2.0
     v = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=np.float64) * e
     f = np.array(
         [[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5],  # -x, +x
@@ -66,6 +91,8 @@ def box(extents=(1.0, 1.0, 1.0)) -> tuple[np.ndarray, np.ndarray]:
 
 def torus(major: float = 1.0, minor: float = 0.3, n_major: int = 32, n_minor: int = 16):
     """Torus around +Z: n_major * n_minor * 2 faces."""
+    major, minor = _size(major, "major"), _size(minor, "minor")
+    n_major, n_minor = _count(n_major, "n_major", 3), _count(n_minor, "n_minor", 3)
     u = np.linspace(0, 2 * np.pi, n_major, endpoint=False)
     w = np.linspace(0, 2 * np.pi, n_minor, endpoint=False)
     uu, ww = np.meshgrid(u, w, indexing="ij")
@@ -82,6 +109,8 @@ def torus(major: float = 1.0, minor: float = 0.3, n_major: int = 32, n_minor: in
 
 def cylinder(radius: float = 0.5, height: float = 2.0, sections: int = 32, rings: int = 1):
     """Closed cylinder along +Z from z=0 to z=height, with `rings` bands (for bending)."""
+    radius, height = _size(radius, "radius"), _size(height, "height")
+    sections, rings = _count(sections, "sections", 3), _count(rings, "rings", 1)
     ang = np.linspace(0, 2 * np.pi, sections, endpoint=False)
     zs = np.linspace(0.0, height, rings + 1)
     ring = np.stack([radius * np.cos(ang), radius * np.sin(ang)], -1)
@@ -105,6 +134,7 @@ def cylinder(radius: float = 0.5, height: float = 2.0, sections: int = 32, rings
 
 def uv_sphere(n_lat: int = 16, n_lon: int = 32, radius: float = 1.0):
     """Latitude-longitude sphere with poles on +-Z (has thin triangles near the poles)."""
+    n_lat, n_lon, radius = _count(n_lat, "n_lat", 2), _count(n_lon, "n_lon", 3), _size(radius, "radius")
     lat = np.linspace(0, np.pi, n_lat + 1)[1:-1]
     lon = np.linspace(0, 2 * np.pi, n_lon, endpoint=False)
     la, lo = np.meshgrid(lat, lon, indexing="ij")
@@ -132,12 +162,12 @@ def uv_sphere(n_lat: int = 16, n_lon: int = 32, radius: float = 1.0):
 
 def _shutter_times(times) -> np.ndarray:
     if isinstance(times, (int, np.integer)) and not isinstance(times, bool):
-        if times < 2:
-            raise ValueError(f"times: need at least 2, got {times}")
-        return np.linspace(0.0, 1.0, int(times))
-    t = np.asarray(times, dtype=np.float64)
-    if t.ndim != 1 or len(t) < 1 or not np.isfinite(t).all():
-        raise ValueError("times: expected an int count or a (K,) finite array")
+        return np.linspace(0.0, 1.0, _count(times, "times", 2))
+    if np.ndim(times) == 0:
+        raise TypeError(f"times: expected an int count or a (K,) finite array, got {type(times).__name__}")
+    t = as_array(times, "times", np.float64, (None,))
+    if len(t) > MAX_COUNT or np.abs(t).max() > MAX_COORD:
+        raise ValueError(f"times: at most {MAX_COUNT} times within +-MAX_COORD")
     return t
 
 
@@ -169,6 +199,7 @@ def bending_arm(
     (closed, counter-clockwise outward; ``sections * rings * 2 + 2 * sections`` faces).
     """
     t = _shutter_times(times)
+    angle = as_float(angle, "angle")
     v, f = cylinder(radius=radius, height=length, sections=sections, rings=rings)
     elbow = np.array([0.0, 0.0, length / 2.0])
     x = np.clip((v[:, 2] - (elbow[2] - radius)) / (2.0 * radius), 0.0, 1.0)
@@ -192,8 +223,9 @@ def spinning_propeller(
     int64 (12 faces per box). ``times``: an int K or (K,) times in shutter units.
     """
     t = _shutter_times(times)
-    if blades < 1:
-        raise ValueError(f"blades: must be >= 1, got {blades}")
+    blades = _count(blades, "blades", 1)
+    radius, chord = _size(radius, "radius"), _size(chord, "chord")
+    turns, pitch = as_float(turns, "turns"), as_float(pitch, "pitch")
     verts, faces = [], []
     hv, hf = box((0.2 * radius, 0.2 * radius, 0.12 * radius))
     verts.append(hv)

@@ -37,7 +37,18 @@ from numpy.typing import ArrayLike, NDArray
 
 from . import _core
 from ._optional import require
-from ._validate import as_array, as_choice, as_float, as_int, as_samples
+from ._validate import (
+    as_array,
+    as_bool,
+    as_choice,
+    as_coords,
+    as_float,
+    as_int,
+    as_path,
+    as_rgb,
+    as_samples,
+    check_coords,
+)
 
 __all__ = ["Camera", "Draw", "Frame", "look_at", "rasterize"]
 
@@ -45,13 +56,36 @@ __all__ = ["Camera", "Draw", "Frame", "look_at", "rasterize"]
 #: defined by the compiled core.
 MAX_SIDE: int = _core.MAX_SIDE
 MAX_PIXELS: int = _core.MAX_PIXELS
+#: Transparent fragments of one sample composited exactly with ``blend="exact"`` (see
+#: :func:`rasterize`).
+FRAGMENT_CAP: int = _core.FRAGMENT_CAP
+#: The accepted vertical fields of view, radians: ``[MIN_YFOV, pi - MIN_YFOV]``. Below it the
+#: projection's scale ``1 / tan(yfov / 2)`` sends points of the coordinate range past float32
+#: pixels (velocities become inf); at the largest image side a pixel is then 6e-11 rad.
+MIN_YFOV: float = 1e-6
+
+
+def unit_vector(value, name: str) -> np.ndarray:
+    """(3,) float64 ``value`` divided by its length: any finite non-zero vector, however large
+    or small its components (it is scaled by its largest component first when they are)."""
+    d = as_array(value, name, np.float64, (3,))
+    m = float(np.abs(d).max())
+    if m == 0.0:
+        raise ValueError(f"{name}: must not be zero")
+    if not 1e-150 < m < 1e150:
+        d = d / m
+    return d / np.linalg.norm(d)
 
 
 def look_at(eye, target, up=(0.0, 1.0, 0.0)) -> np.ndarray:
-    """Camera-to-world pose (4,4) float64 at ``eye`` (3,) whose -Z looks at ``target`` (3,), +Y near ``up``."""
-    eye = as_array(eye, "eye", np.float64, (3,))
-    target = as_array(target, "target", np.float64, (3,))
-    up = as_array(up, "up", np.float64, (3,))
+    """Camera-to-world pose (4,4) float64 at ``eye`` (3,) whose -Z looks at ``target`` (3,), +Y near ``up``.
+
+    ``eye`` and ``target`` lie in the coordinate range (``MAX_COORD``); ``up`` is any finite
+    non-zero vector (only its direction counts) not parallel to ``target - eye``: otherwise
+    ValueError naming the argument."""
+    eye = as_coords(eye, "eye", (3,))
+    target = as_coords(target, "target", (3,))
+    up = unit_vector(up, "up")
     back = eye - target
     n = np.linalg.norm(back)
     if n == 0.0:
@@ -59,7 +93,7 @@ def look_at(eye, target, up=(0.0, 1.0, 0.0)) -> np.ndarray:
     z = back / n
     x = np.cross(up, z)
     nx = np.linalg.norm(x)
-    if nx < 1e-12 * max(np.linalg.norm(up), 1e-300):
+    if not nx >= 1e-12:
         raise ValueError("up: must not be parallel to the view direction")
     x /= nx
     y = np.cross(z, x)
@@ -79,8 +113,9 @@ def _check_size(width, height) -> tuple[int, int]:
 class Camera:
     """A perspective camera (pyrender's ``PerspectiveCamera`` plus an image size).
 
-    Parameters: ``pose`` (4,4) camera-to-world; ``yfov`` vertical field of view in radians, in
-    (0, pi); ``width``, ``height`` in pixels (1..``MAX_SIDE``, at most ``MAX_PIXELS`` pixels);
+    Parameters: ``pose`` (4,4) camera-to-world, its position in the coordinate range
+    (``MAX_COORD``); ``yfov`` vertical field of view in radians, in [``MIN_YFOV``, pi -
+    ``MIN_YFOV``] (1e-6); ``width``, ``height`` in pixels (1..``MAX_SIDE``, at most ``MAX_PIXELS`` pixels);
     ``znear`` > 0 and ``zfar`` > znear in scene units. The defaults are pyrender's:
     ``znear=0.05`` and ``zfar=inf``, its infinite projection (pyrender's ``zfar=None``), so
     nothing far away is clipped whatever the scene's units. :meth:`from_pyrender` converts a
@@ -102,9 +137,10 @@ class Camera:
         zfar: float = float("inf"),
     ) -> None:
         pose = as_array(pose, "pose", np.float64, (4, 4)).copy()
+        check_coords(pose[:3, 3], "pose")
         yfov = as_float(yfov, "yfov")
-        if not 0.0 < yfov < np.pi:
-            raise ValueError(f"yfov: must be in (0, pi) radians, got {yfov}")
+        if not MIN_YFOV <= yfov <= np.pi - MIN_YFOV:
+            raise ValueError(f"yfov: must be in [{MIN_YFOV:g}, pi - {MIN_YFOV:g}] radians, got {yfov:g}")
         width, height = _check_size(width, height)
         znear = as_float(znear, "znear")
         if znear <= 0.0:
@@ -208,7 +244,7 @@ class Draw:
         cull_back: bool = True,
         previous_vertices: ArrayLike | None = None,
     ) -> None:
-        v = as_array(vertices, "vertices", np.float64, (None, 3))
+        v = as_coords(vertices, "vertices", (None, 3))
         f = as_array(faces, "faces", np.int64, (None, 3))
         if f.min() < 0 or f.max() >= len(v):
             raise ValueError(f"faces: indices must be in [0, {len(v)}), got [{f.min()}, {f.max()}]")
@@ -232,12 +268,10 @@ class Draw:
         p = (
             None
             if previous_vertices is None
-            else as_array(previous_vertices, "previous_vertices", np.float64, (len(v), 3))
+            else as_coords(previous_vertices, "previous_vertices", (len(v), 3))
         )
         self.object_id = as_int(object_id, "object_id", minimum=-(2**31), maximum=2**31 - 1)
-        if not isinstance(cull_back, (bool, np.bool_)):
-            raise TypeError(f"cull_back: expected a bool, got {type(cull_back).__name__}")
-        self.cull_back = bool(cull_back)
+        self.cull_back = as_bool(cull_back, "cull_back")
         self.vertices, self.faces, self.rgba = _readonly(v), _readonly(f), _readonly(c)
         self.normals, self.previous_vertices = _readonly(n), _readonly(p)
 
@@ -351,7 +385,7 @@ class Frame:
     def to_srgb8(self) -> np.ndarray:
         """(H,W,4) uint8: straight (un-premultiplied) colour, sRGB-encoded; alpha stays linear."""
         a = np.clip(self.rgba[..., 3:4], 0.0, 1.0)
-        with np.errstate(divide="ignore", invalid="ignore"):
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # clipped below
             c = np.where(a > 0, self.rgba[..., :3] / np.maximum(a, 1e-30), 0.0)
         c = np.clip(np.nan_to_num(c), 0.0, 1.0)
         s = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
@@ -359,11 +393,22 @@ class Frame:
         return np.round(out * 255.0).astype(np.uint8)
 
     def save_png(self, path: str | os.PathLike[str]) -> None:
-        """Writes an 8-bit RGBA PNG (sRGB colour, straight alpha). Creates parent folders."""
+        """Writes an 8-bit RGBA PNG (sRGB colour, straight alpha: :meth:`to_srgb8`, which clips
+        colour and alpha to [0, 1]). Creates parent folders. PNG only: ``path`` must end in
+        ``.png`` (any case), else ValueError (other formats would drop alpha or palettize
+        silently; :meth:`save_exr` keeps every value). ValueError naming ``rgba`` when a pixel
+        is NaN or inf (nothing is written)."""
+        path = as_path(path)
+        if path.suffix.lower() != ".png":
+            raise ValueError(
+                f"path: save_png writes PNG files only; expected a name ending in .png, got {str(path)!r}"
+            )
+        if not np.isfinite(self.rgba).all():
+            bad = int((~np.isfinite(self.rgba)).any(axis=-1).sum())
+            raise ValueError(f"rgba: {bad} pixels are NaN or inf; a PNG cannot hold them (nothing written)")
         image = require("PIL.Image", "Frame.save_png")
-        path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        image.fromarray(self.to_srgb8(), mode="RGBA").save(path)
+        image.fromarray(self.to_srgb8(), mode="RGBA").save(path, format="PNG")
 
     def save_exr(self, path: str | os.PathLike[str]) -> Path:
         """Writes an OpenEXR file: linear float ``R``, ``G``, ``B``, ``A`` (premultiplied), depth
@@ -373,7 +418,7 @@ class Frame:
         ``OpenEXR`` package (``pip install "motionblur[interop]"``)."""
         from .interop.exr import write_exr
 
-        return write_exr(path, self.rgba, self.depth, self.ids, self.velocity, self.stats)
+        return write_exr(as_path(path), self.rgba, self.depth, self.ids, self.velocity, self.stats)
 
 
 def over_background(frame: Frame, background) -> Frame:
@@ -389,6 +434,8 @@ def over_background(frame: Frame, background) -> Frame:
 def _lights(lights) -> list[tuple[tuple[float, ...], tuple[float, ...]]]:
     if lights is None:
         return []
+    if isinstance(lights, (str, bytes)) or not hasattr(lights, "__iter__"):
+        raise TypeError(f"lights: expected a sequence of lights, got {type(lights).__name__}")
     out = []
     for i, light in enumerate(lights):
         if hasattr(light, "direction") and hasattr(light, "intensity"):
@@ -400,13 +447,13 @@ def _lights(lights) -> list[tuple[tuple[float, ...], tuple[float, ...]]]:
                 raise TypeError(
                     f"lights: item {i} must have .direction and .intensity or be (direction, intensity)"
                 ) from exc
-        d = as_array(d, "lights", np.float64, (3,))
-        if not np.linalg.norm(d) > 0:
+        d = as_array(d, f"lights: item {i} direction", np.float64, (3,))
+        m = float(np.abs(d).max())
+        if not m > 0:
             raise ValueError(f"lights: item {i} has a zero direction")
-        k = np.asarray(k, dtype=np.float64)
-        k = as_array(np.broadcast_to(k, (3,)) if k.ndim == 0 else k, "lights", np.float64, (3,))
-        if (k < 0).any():
-            raise ValueError(f"lights: item {i} has a negative intensity")
+        if not 1e-150 < m < 1e150:  # only the direction counts: keep its length finite
+            d = d / m
+        k = as_rgb(k, f"lights: item {i} intensity")
         out.append((tuple(map(float, d)), tuple(map(float, k))))
     return out
 
@@ -469,8 +516,23 @@ def rasterize(
     background arrays are read, never written. Wrong shapes, dtypes that do not convert, NaN
     colours and NaN or non-positive depths raise ValueError / TypeError naming ``background``.
 
+    ``blend="exact"`` keeps at most ``FRAGMENT_CAP`` (32) transparent fragments of a sample in
+    its list: a sample with more (a stack of more than 32 transparent surfaces) gets its 32
+    nearest composited exactly over the farther ones merged into one layer, whose alpha is
+    exact and whose colour is their alpha-weighted mean (the error is at most the spread of the
+    merged colours times their alpha times what the 32 nearest let through); the frame's
+    memory then stays bounded whatever the depth complexity, and its time proportional to the
+    fragments. ``blend="unsorted"`` composites each fragment as it comes (no list).
+
+    Memory: the frame's 32 bytes a pixel, about 100 bytes a vertex and a face, and the tiles'
+    copies of the triangles (about 100 bytes for each 64x64-sample tile a triangle's box
+    reaches) are checked against the memory budget (``motionblur.set_memory_budget``) before
+    they are allocated: past it ``MemoryError`` names the arguments and the bytes.
+
     ``Frame.stats`` (a dict): ``triangles`` (after clipping, culling and dropping triangles
-    that cover no sample), ``fragments`` (samples covered, both passes), ``culled`` (back faces),
+    that cover no sample), ``fragments`` (samples covered, both passes),
+    ``approximated_samples`` (samples of the supersampled image whose transparent fragments
+    past ``FRAGMENT_CAP`` were merged, 0 when the frame is exact), ``culled`` (back faces),
     ``clipped`` (faces clipped against the near/far planes or the guard band), and
     milliseconds per stage: ``ms_transform`` (vertices projected and snapped), ``ms_setup``
     (triangle set-up: clipping, culling, bounds, the covered box of small triangles),
@@ -501,12 +563,7 @@ def rasterize(
         raise ValueError(f"samples: width and height times samples must be <= {_core.MAX_INTERNAL_SIDE}")
     as_choice(blend, "blend", _core.BLENDS)
     as_choice(shading, "shading", _core.SHADINGS)
-    amb = np.asarray(ambient, dtype=np.float64) if not isinstance(ambient, str) else None
-    if amb is None or amb.ndim > 1 or (amb.ndim == 1 and amb.shape != (3,)):
-        raise TypeError("ambient: expected a float or an RGB triple")
-    amb = np.broadcast_to(amb, (3,))
-    if not np.isfinite(amb).all() or (amb < 0).any():
-        raise ValueError("ambient: must be finite and >= 0")
+    amb = as_rgb(ambient, "ambient")
     if background is not None:
         background = (*_background(background, camera.height * samples, camera.width * samples), 0, 0)
     rgba, depth, ids, velocity, stats = _core._rasterize(

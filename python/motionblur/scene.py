@@ -20,9 +20,9 @@ import math
 import numpy as np
 
 from . import _core
-from ._validate import as_array, as_choice, as_float
+from ._validate import as_array, as_choice, as_coords, as_float, as_list, as_rgb
 from .geometry import Mesh, as_mesh
-from .raster import Camera
+from .raster import Camera, unit_vector
 
 __all__ = [
     "Motion",
@@ -42,16 +42,18 @@ SHUTTER_FILTERS: tuple[str, ...] = tuple(_core.FILTERS)
 def translate(offset) -> np.ndarray:
     """(4,4) float64 translation by ``offset`` (3,)."""
     m = np.eye(4)
-    m[:3, 3] = as_array(offset, "offset", np.float64, (3,))
+    m[:3, 3] = as_coords(offset, "offset", (3,))
     return m
 
 
 def rotate(angle: float, axis=(0.0, 0.0, 1.0), center=(0.0, 0.0, 0.0)) -> np.ndarray:
     """(4,4) float64 rotation by ``angle`` radians (right hand) about ``axis`` (3,) through ``center`` (3,)."""
     a = as_array(axis, "axis", np.float64, (3,))
-    if np.linalg.norm(a) == 0:
+    if not np.abs(a).max() > 0:
         raise ValueError("axis: must not be zero")
-    c = as_array(center, "center", np.float64, (3,))
+    if not 1e-150 < np.abs(a).max() < 1e150:  # only the direction counts: keep its length finite
+        a = a / np.abs(a).max()
+    c = as_coords(center, "center", (3,))
     return _core._rotate(as_float(angle, "angle"), a, c)
 
 
@@ -76,8 +78,11 @@ class Motion:
     The keyframes are validated and split into translation, rotation and scale once, by the
     compiled core's keyframe engine (``src/motion/``), which also samples them.
 
-    Raises ValueError for wrong shapes, NaN, unsorted or out-of-range times, K < 1 and
-    non-rigid matrices (shear, non-uniform scale, mirrors). The inputs are copied.
+    Raises ValueError for wrong shapes, NaN, unsorted or out-of-range times, K < 1,
+    non-rigid matrices (shear, non-uniform scale, mirrors), scales outside [1/MAX_COORD,
+    MAX_COORD] (1e-9 to 1e9: scaled coordinates stay in the coordinate range and the scale is
+    split off through the determinant) and translations beyond ``+-MAX_COORD``. The inputs
+    are copied.
     """
 
     def __init__(self, times, transforms):
@@ -95,9 +100,8 @@ class Motion:
         """Two keyframes at t = 0 and t = 1. ``start`` and ``end``: (4,4) transforms or (3,) translations."""
 
         def mat(x, name):
-            a = np.asarray(x, dtype=np.float64) if not isinstance(x, str) else None
-            if a is not None and a.shape == (3,):
-                return translate(a)
+            if np.shape(x) == (3,):
+                return translate(as_coords(x, name, (3,)))
             return as_array(x, name, np.float64, (4, 4))
 
         return cls([0.0, 1.0], np.stack([mat(start, "start"), mat(end, "end")]))
@@ -241,16 +245,8 @@ class DirectionalLight:
     ``intensity`` float or RGB (3,) >= 0 (irradiance on a surface facing it, linear)."""
 
     def __init__(self, direction, intensity=1.0) -> None:
-        d = as_array(direction, "direction", np.float64, (3,))
-        n = np.linalg.norm(d)
-        if n == 0:
-            raise ValueError("direction: must not be zero")
-        k = np.asarray(intensity, dtype=np.float64)
-        k = as_array(np.broadcast_to(k, (3,)) if k.ndim == 0 else k, "intensity", np.float64, (3,))
-        if (k < 0).any():
-            raise ValueError("intensity: must be >= 0")
-        self.direction = d / n
-        self.intensity = k
+        self.direction = unit_vector(direction, "direction")
+        self.intensity = as_rgb(intensity, "intensity")
 
     def __repr__(self) -> str:
         return f"DirectionalLight(direction={self.direction.round(3).tolist()}, intensity={self.intensity.tolist()})"
@@ -261,7 +257,7 @@ class DirectionalLight:
 
 def shutter_cdf(shutter, t) -> np.ndarray:
     """Cumulative shutter weight W(t) (W(0) = 0, W(1) = 1) of a filter name or (M,) weights, at ``t``."""
-    t = np.clip(np.asarray(t, dtype=np.float64), 0.0, 1.0)
+    t = np.clip(as_array(t, "t", np.float64, (None,) * np.ndim(t), allow_empty=True), 0.0, 1.0)
     if isinstance(shutter, str):
         if shutter == "box":
             return t.copy()
@@ -275,7 +271,7 @@ def shutter_cdf(shutter, t) -> np.ndarray:
             lo, hi = phi(-3.0), phi(3.0)
             return (phi((t - 0.5) * 6.0) - lo) / (hi - lo)
         raise ValueError(f"shutter: unknown filter {shutter!r}; expected one of {', '.join(SHUTTER_FILTERS)}")
-    w = np.asarray(shutter, dtype=np.float64)
+    w = _check_shutter(shutter)
     cum = np.concatenate([[0.0], np.cumsum(w) / w.sum()])
     return np.interp(t, np.linspace(0.0, 1.0, len(w) + 1), cum)
 
@@ -317,20 +313,12 @@ class Scene:
         reference_time="close",
         ambient=0.0,
     ) -> None:
-        if isinstance(objects, Object):
-            objects = [objects]
-        objects = list(objects)
-        for i, o in enumerate(objects):
-            if not isinstance(o, Object):
-                raise TypeError(f"objects: item {i} is a {type(o).__name__}, not a motionblur.Object")
+        objects = as_list(objects, "objects", Object, "motionblur.Object")
         if not isinstance(camera, Camera):
             raise TypeError(f"camera: expected a motionblur.Camera, got {type(camera).__name__}")
-        lights = list(lights or ())
-        for i, light in enumerate(lights):
-            if not isinstance(light, DirectionalLight):
-                raise TypeError(
-                    f"lights: item {i} is a {type(light).__name__}, not a motionblur.DirectionalLight"
-                )
+        lights = as_list(
+            () if lights is None else lights, "lights", DirectionalLight, "motionblur.DirectionalLight"
+        )
         if camera_motion is not None:
             if not isinstance(camera_motion, Motion):
                 raise TypeError(
@@ -362,11 +350,7 @@ class Scene:
                 raise ValueError(f"reference_time: must be in [0, 1], got {rt}")
             self.reference_t = rt
         self.reference_time = reference_time
-        amb = np.asarray(ambient, dtype=np.float64)
-        amb = as_array(np.broadcast_to(amb, (3,)) if amb.ndim == 0 else amb, "ambient", np.float64, (3,))
-        if (amb < 0).any():
-            raise ValueError("ambient: must be >= 0")
-        self.ambient = amb
+        self.ambient = as_rgb(ambient, "ambient")
 
     @property
     def camera_moves(self) -> bool:

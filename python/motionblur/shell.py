@@ -48,18 +48,20 @@ Rules (the paper leaves some open; each choice is stated here and tested):
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 from . import _core
 from ._optional import require
-from ._validate import as_array, as_float, as_int
+from ._validate import MAX_COORD, as_array, as_float, as_int
 
 __all__ = ["BlurShell", "ShellMesh", "MotionSilhouette", "motion_silhouette", "shell_over_shutter"]
 
-#: Largest accepted |coordinate| of positions (scene units). The facing test runs in float32:
-#: face normals multiply two coordinate differences and ``n . d`` a third, which would overflow
-#: float32 (3.4e38) beyond this (float32 positions near it are 64 units apart anyway).
-MAX_COORD = 1e9
+#: Largest accepted |coordinate| of positions (scene units): the one coordinate range of the
+#: package (``motionblur.MAX_COORD``). The facing test runs in float32: face normals multiply two
+#: coordinate differences and ``n . d`` a third, which would overflow float32 (3.4e38) beyond it.
+MAX_COORD = MAX_COORD
 #: Largest accepted |component| of given normals (``n . d`` stays finite in float32).
 MAX_NORMAL = 1e18
 
@@ -184,6 +186,10 @@ class BlurShell:
     ``build(vertices=None, normals=None)`` returns the :class:`ShellMesh`; ``reset()`` forgets
     every update. The vertex count is fixed: an update with another count raises ValueError.
     The heavy work runs in Rust with the GIL released; results do not depend on thread count.
+
+    A shell may be shared between threads: its calls take an internal lock, so calls from
+    several threads run one after the other (in the order they get the lock). It pickles and
+    deep-copies with its whole history (the copy updates and builds exactly as the original).
     """
 
     def __init__(
@@ -221,6 +227,7 @@ class BlurShell:
             color = c
         self._color = color
         self._core = None
+        self._lock = threading.Lock()
         if n_vertices is not None:
             self._make(as_int(n_vertices, "n_vertices", minimum=1, maximum=np.iinfo(np.int64).max))
 
@@ -266,10 +273,15 @@ class BlurShell:
         ``normals`` (wrong shape, NaN/inf, a vertex count other than the shell's, a component
         beyond ``MAX_COORD`` / ``MAX_NORMAL``)."""
         v = _rows(vertices, "vertices")
-        if self._core is None:
-            self._make(len(v))
         n = None if normals is None else _rows(normals, "normals")
-        self._core.update(v, n)
+        with self._lock:
+            if self._core is None:
+                if len(v) <= self._faces.max():
+                    raise ValueError(
+                        f"vertices: the faces use vertex {self._faces.max()}, got {len(v)} vertices"
+                    )
+                self._make(len(v))
+            self._core.update(v, n)
 
     def build(self, vertices=None, normals=None) -> ShellMesh:
         """The shell after the last update, as a :class:`ShellMesh` (empty before any update).
@@ -277,16 +289,18 @@ class BlurShell:
         ``vertices`` / ``normals`` (V,3): the current mesh when it moved since the last update
         (a frame between updates); default: those of the last update. The base pairs take
         these positions, so strips stay attached to the mesh drawn in the same frame."""
-        if self._core is None:
-            return ShellMesh.empty()
         v = None if vertices is None else _rows(vertices, "vertices")
         n = None if normals is None else _rows(normals, "normals")
-        return ShellMesh(*self._core.build(v, n))
+        with self._lock:
+            if self._core is None:
+                return ShellMesh.empty()
+            return ShellMesh(*self._core.build(v, n))
 
     def reset(self) -> None:
         """Forget every update (no strips; the next update finds no silhouette)."""
-        if self._core is not None:
-            self._core.reset()
+        with self._lock:
+            if self._core is not None:
+                self._core.reset()
 
     def state(self) -> dict[str, np.ndarray]:
         """Per-vertex and per-polygon state after the last update: ``facing`` (V,) int8,
@@ -294,19 +308,49 @@ class BlurShell:
         updates since the polygon last had an edge (saturates at 65535), ``fade`` (F,) int32
         fade level ``d`` (>= subdivisions: no strip), ``run`` (F,) int32 ring elements in the
         strip."""
-        if self._core is None:
-            raise ValueError("shell: has no state before the first update")
-        keys = ("facing", "last_edge", "since", "fade", "run")
-        return dict(zip(keys, self._core._state()))
+        with self._lock:
+            if self._core is None:
+                raise ValueError("shell: has no state before the first update")
+            keys = ("facing", "last_edge", "since", "fade", "run")
+            return dict(zip(keys, self._core._state()))
 
     def element(self, face: int, age: int) -> tuple[int, bool] | None:
         """Ring element of polygon ``face`` recorded ``age`` updates ago: (edge k, on the
         silhouette then), or None beyond its strip."""
-        if self._core is None:
-            return None
         face = as_int(face, "face", minimum=0, maximum=len(self._faces) - 1)
         age = as_int(age, "age", minimum=0, maximum=np.iinfo(np.int64).max)
-        return self._core._element(face, age)
+        with self._lock:
+            if self._core is None:
+                return None
+            return self._core._element(face, age)
+
+    def __getstate__(self) -> dict:
+        with self._lock:
+            history = None if self._core is None else self._core._history()
+            n_vertices = None if self._core is None else self._core.n_vertices
+        return {
+            "faces": self._faces,
+            "subdivisions": self.subdivisions,
+            "hysteresis": self.hysteresis,
+            "initial_alpha": self.initial_alpha,
+            "mask": self._mask,
+            "color": self._color,
+            "n_vertices": n_vertices,
+            "history": history,
+        }
+
+    def __setstate__(self, state: dict) -> None:
+        self.__init__(
+            state["faces"],
+            state["subdivisions"],
+            state["hysteresis"],
+            state["initial_alpha"],
+            state["mask"],
+            state["color"],
+            state["n_vertices"],
+        )
+        if state["history"] is not None:
+            self._core._restore(state["history"])
 
     def __repr__(self) -> str:
         return (

@@ -23,6 +23,7 @@
 //! for bit, for any thread count.
 use super::kernels::{accumulate, composite, over, Rect};
 use super::painter::{Layer, Painter};
+use crate::budget::Need;
 use crate::error::{Error, Result};
 use crate::motion::{linear_part, mat4_mul, place, row_times, Mat4, IDENTITY4};
 
@@ -250,6 +251,14 @@ pub fn accumulate_still(
         ih.min(win[3].div_ceil(aa) * aa),
     ];
     let (ww, wh) = (win[2] - win[0], win[3] - win[1]);
+    // The window's sum, the static layer's crop and the reference sample's depth and ids, and
+    // a sample's layer (the rasterizer checks its own frame), before any is allocated.
+    Need::new("accumulation")
+        .add(
+            &[("window width", ww as u64), ("window height", wh as u64)],
+            96,
+        )?
+        .check()?;
     let base_rgba = crop(background.rgba, iw, 4, win);
     let base_depth = crop(background.depth, iw, 1, win);
     let base_ids = crop(background.ids, iw, 1, win);
@@ -333,6 +342,11 @@ pub fn accumulate_moving(
     if views.len() != samples.times.len() {
         return Err(Error::shape("views", "one view per time expected"));
     }
+    // The sum, the reference sample's layer and the sample being added (24 bytes a sample
+    // each), before any is allocated.
+    Need::new("accumulation")
+        .add(&[("width", width as u64), ("height", height as u64)], 72)?
+        .check()?;
     let mut acc: Vec<f32> = Vec::new();
     let mut keep: Option<Layer> = None;
     let draw = |i: usize| -> Result<Layer> {

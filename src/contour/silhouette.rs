@@ -32,11 +32,11 @@ pub const NO_EDGE: u8 = 3;
 /// Work items per rayon task: fixed, so the split does not depend on the thread count.
 const CHUNK: usize = 8192;
 
-/// Largest accepted |coordinate| of positions (scene units). Everything runs in float32: a face
-/// normal is a product of two coordinate differences (up to `8 MAX_COORD^2` per component),
-/// a vertex sums at most 2^32 of them and `n . d` multiplies by another difference, which stays
-/// below `f32::MAX` (3.4e38) at this bound; float32 positions near it are 64 units apart anyway.
-pub const MAX_COORD: f64 = 1e9;
+/// Largest accepted |coordinate| of positions (scene units): the one coordinate range. Everything
+/// runs in float32: a face normal is a product of two coordinate differences (up to
+/// `8 MAX_COORD^2` per component), a vertex sums at most 2^32 of them and `n . d` multiplies by
+/// another difference, which stays below `f32::MAX` (3.4e38) at this bound.
+pub use crate::mesh::MAX_COORD;
 /// Largest accepted |component| of given normals (`3 MAX_NORMAL 2 MAX_COORD` fits in float32).
 pub const MAX_NORMAL: f64 = 1e18;
 

@@ -8,7 +8,10 @@
 //! (for example clustered around a preferred direction of motion).
 use rayon::prelude::*;
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use super::edges::{classify_faces, contour_from_sides};
+use crate::budget::{memory_budget, Need};
 use crate::error::check_vector;
 use crate::error::{Error, Result};
 use crate::mesh::{dot, normalize, Mesh};
@@ -63,8 +66,26 @@ pub fn random_directions(count: usize, seed: u64) -> Vec<[f64; 3]> {
         .collect()
 }
 
+/// What a table of `directions` sets of `faces` faces holds before its contour edges: a front
+/// flag per face and direction, and each set's own fields.
+fn table_need(faces: usize, directions: usize) -> Result<Need> {
+    Need::new("ContourTable")
+        .add(
+            &[("faces", faces as u64), ("directions", directions as u64)],
+            1,
+        )?
+        .add(
+            &[("directions", directions as u64)],
+            (std::mem::size_of::<ContourSet>() + 24) as u64,
+        )
+}
+
 impl ContourTable {
     /// Precompute the contour sets of `mesh` for the given directions (normalised here).
+    ///
+    /// Memory: a byte per face and direction and 8 bytes per contour edge of each direction,
+    /// checked against the memory budget: the flags before anything is computed, the edges as
+    /// the sets are made (the call stops at the first set past the budget).
     pub fn new(mesh: &Mesh, directions: Vec<[f64; 3]>) -> Result<Self> {
         if directions.is_empty() || directions.len() > MAX_DIRECTIONS {
             return Err(Error::value(
@@ -75,6 +96,8 @@ impl ContourTable {
                 ),
             ));
         }
+        let need = table_need(mesh.faces().len(), directions.len())?;
+        need.check()?;
         let mut unit = Vec::with_capacity(directions.len());
         for d in directions {
             check_vector(d, "directions")?;
@@ -85,17 +108,36 @@ impl ContourTable {
             unit.push(u);
         }
         mesh.adjacency();
+        // The edges' bytes are known set by set: their running total with the flags is checked
+        // as each set is made.
+        let budget = memory_budget();
+        let held = AtomicU64::new(need.bytes());
         let sets = unit
             .par_iter()
             .map(|&d| {
                 let front = classify_faces(mesh, d);
-                let edges = contour_from_sides(mesh, &front)
+                let edges: Vec<[u32; 2]> = contour_from_sides(mesh, &front)
                     .into_iter()
                     .map(|c| [c.a, c.b])
                     .collect();
-                ContourSet { edges, front }
+                let bytes = 8 * edges.len() as u64;
+                let total = held.fetch_add(bytes, Ordering::Relaxed) + bytes;
+                if total > budget {
+                    return Err(Error::Memory {
+                        name: "faces x directions".into(),
+                        reason: format!(
+                            "ContourTable of {} faces and {} directions: the contour edges take \
+                             over the memory budget of {} with the face flags (8 bytes an edge, \
+                             a byte a face and direction); motionblur.set_memory_budget raises it",
+                            mesh.faces().len(),
+                            unit.len(),
+                            crate::budget::human(budget)
+                        ),
+                    });
+                }
+                Ok(ContourSet { edges, front })
             })
-            .collect();
+            .collect::<Result<Vec<_>>>()?;
         Ok(ContourTable {
             directions: unit,
             sets,
@@ -146,6 +188,24 @@ impl ContourTable {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_table_past_the_memory_budget_fails_before_it_is_computed() {
+        let (v, f) = crate::mesh::uv_sphere(200, 205);
+        let mesh = Mesh::new(v, f).unwrap();
+        assert!(mesh.faces().len() * MAX_DIRECTIONS > 4 << 30);
+        let _lock = crate::budget::tests::BUDGET_LOCK.lock().unwrap();
+        let t = std::time::Instant::now();
+        let e = ContourTable::random(&mesh, MAX_DIRECTIONS, 1).unwrap_err();
+        assert!(t.elapsed().as_secs_f64() < 1.0, "checked before computing");
+        let Error::Memory { name, reason } = &e else {
+            panic!("{e:?}")
+        };
+        assert_eq!(name, "faces x directions");
+        assert!(reason.contains(&format!("{} x {MAX_DIRECTIONS}", mesh.faces().len())));
+        // within the budget the same mesh gets its table
+        assert_eq!(ContourTable::random(&mesh, 8, 1).unwrap().sets.len(), 8);
+    }
 
     #[test]
     fn directions_are_unit_and_seeded() {

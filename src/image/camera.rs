@@ -114,6 +114,9 @@ fn floorf(v: f32) -> f32 {
 
 /// Largest `fps / target_fps` factor of `camera_motion_blur`.
 pub const MAX_FPS_RATIO: f64 = 1000.0;
+/// Longest velocity `velocity_blur` takes, in pixels per component: a streak that long already
+/// crosses any image (sides are at most 16384 pixels); `camera_motion_blur` clamps to it.
+pub const MAX_VELOCITY: f32 = 1e6;
 
 /// Largest number of blur samples accepted.
 pub const MAX_SAMPLES: usize = 1024;
@@ -139,10 +142,13 @@ pub fn velocity_blur(
     if rgba.par_iter().any(|v| !v.is_finite()) {
         return Err(Error::value("rgba", "contains NaN or inf"));
     }
-    if velocity.par_iter().any(|v| !v.is_finite() || v.abs() > 1e6) {
+    if velocity
+        .par_iter()
+        .any(|v| !v.is_finite() || v.abs() > MAX_VELOCITY)
+    {
         return Err(Error::value(
             "velocity",
-            "must be finite and below 1e6 pixels",
+            format!("must be finite and within +-{MAX_VELOCITY:e} pixels (MAX_VELOCITY)"),
         ));
     }
     Ok(blur_unchecked(rgba, velocity, w, h, samples))
@@ -214,6 +220,7 @@ pub fn camera_motion_blur(
             .for_each(|x| *x = (*x as f64 * scale) as f32);
     }
     // Velocities from points very close to the previous camera plane can be huge: clamp them.
-    v.par_iter_mut().for_each(|x| *x = x.clamp(-1e6, 1e6));
+    v.par_iter_mut()
+        .for_each(|x| *x = x.clamp(-MAX_VELOCITY, MAX_VELOCITY));
     velocity_blur(rgba, &v, w, h, samples)
 }

@@ -9,7 +9,7 @@
 use rayon::prelude::*;
 
 use super::lines::{directional, plan};
-use super::{check_direction, check_finite, check_image, MAX_LENGTH};
+use super::{check_direction, check_image, check_premultiplied, MAX_LENGTH};
 use crate::error::{Error, Result};
 
 /// Scratch buffers of one thread: the candidate sources of the sweep, a row's ends.
@@ -165,7 +165,7 @@ pub fn glow(
     if width > MAX_LENGTH / 2.0 {
         return Err(Error::value("width", "is absurdly large"));
     }
-    check_finite("alpha", alpha)?;
+    check_premultiplied("alpha", alpha, 1)?;
     let Some(p) = plan(direction, width) else {
         return Ok(alpha.to_vec());
     };

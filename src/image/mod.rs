@@ -30,6 +30,7 @@ mod splat;
 pub use boxblur::box_blur;
 pub use camera::{
     camera_motion_blur, camera_velocity, velocity_blur, CameraMatrices, MAX_FPS_RATIO, MAX_SAMPLES,
+    MAX_VELOCITY,
 };
 pub use colors::{colored, pixel_bounds, sample_colors, MIN_ALPHA};
 pub use dof::{depth_of_field, DofParams, MAX_LAYERS};
@@ -41,7 +42,13 @@ pub use reconstruct::{reconstruct, ReconstructParams, MAX_TAPS};
 pub use scatter::{scatter_pieces, Piece};
 pub use splat::splat_paths;
 
+use crate::budget::Need;
 use crate::error::{Error, Result};
+
+/// Copies of its input an image kernel holds at most (transposed and sheared rows, the
+/// pyramid's levels, a third more, and its expansions, the depth of field's layer and sum),
+/// counted against the memory budget by [`check_image`].
+const IMAGE_COPIES: u64 = 8;
 
 /// Largest accepted filter length (pixels); longer filters are absurd for any image we accept.
 pub const MAX_LENGTH: f32 = 65536.0;
@@ -67,7 +74,8 @@ pub(crate) fn simd() -> bool {
     }
 }
 
-/// Checks that `data` holds `h * w * channels` values and that the image is not empty.
+/// Checks that `data` holds `h * w * channels` values, that the image is not empty, and that
+/// a kernel holding [`IMAGE_COPIES`] copies of it fits the memory budget.
 pub(crate) fn check_image(
     name: &'static str,
     data: &[f32],
@@ -88,7 +96,36 @@ pub(crate) fn check_image(
             ),
         ));
     }
-    Ok(())
+    Need::new("an image kernel (8 copies of its input at most)")
+        .add(
+            &[
+                ("width", w as u64),
+                ("height", h as u64),
+                ("channels", channels as u64),
+            ],
+            4 * IMAGE_COPIES,
+        )?
+        .check()
+}
+
+/// Checks the `buffers` images of `w` x `h` RGBA pixels (float32) that splatting sums (one per
+/// run of sources, and the result) against the memory budget.
+pub(crate) fn check_splat_buffers(
+    call: &'static str,
+    w: usize,
+    h: usize,
+    buffers: usize,
+) -> Result<()> {
+    Need::new(call)
+        .add(
+            &[
+                ("width", w as u64),
+                ("height", h as u64),
+                ("buffers", buffers as u64 + 1),
+            ],
+            16,
+        )?
+        .check()
 }
 
 /// Fails naming `name` when any value is NaN or infinite (in parallel over rows).
@@ -99,6 +136,36 @@ pub(crate) fn check_finite(name: &'static str, data: &[f32]) -> Result<()> {
         .any(|c| c.iter().fold(false, |b, v| b | !v.is_finite()));
     if bad {
         return Err(Error::value(name, "contains NaN or inf"));
+    }
+    Ok(())
+}
+
+/// Whether an alpha is outside [0, 1] (NaN included; -0.0 is inside), from its bits: the
+/// bits of a float in [+0, 1] are at most those of 1.0, and -0.0 is the only negative inside.
+#[inline]
+pub(crate) fn alpha_out_of_range(bits: u32) -> bool {
+    bits > 0x3f80_0000 && bits != 0x8000_0000
+}
+
+/// Fails naming `name` when any value is NaN or infinite, or when an alpha (every value of a
+/// one-channel image, the last of each pixel of a four-channel one) is outside [0, 1]: the
+/// opaque blurs, glows and composites are defined for premultiplied colour with such alphas
+/// only (one parallel pass).
+pub(crate) fn check_premultiplied(name: &'static str, data: &[f32], channels: usize) -> Result<()> {
+    use rayon::prelude::*;
+    check_finite(name, data)?;
+    let bad = data
+        .par_chunks(channels << 14)
+        .flat_map_iter(|c| c.iter().skip(channels - 1).step_by(channels))
+        .find_first(|a| alpha_out_of_range(a.to_bits()));
+    if let Some(a) = bad {
+        return Err(Error::value(
+            name,
+            format!(
+                "alpha must be in [0, 1] (premultiplied colour), got {a}; an opaque blur, glow or \
+                 composite of other alphas is undefined"
+            ),
+        ));
     }
     Ok(())
 }

@@ -11,10 +11,12 @@ use rayon::prelude::*;
 use super::glow::{glow_row, GlowScratch};
 use super::lines::{build_sheared, directional_at, plan, LinePlan};
 use super::opaque_row::{
-    all_finite, alpha_constant, alpha_span, box_finish, finish, Composite, Glow, RowJob,
+    alpha_constant, alpha_span, box_finish, finish, premultiplied, Composite, Glow, RowJob,
 };
 use super::sheared_row::{filter_row, finish_row, FilterScratch};
-use super::{check_direction, check_finite, check_image, filled, put4, simd, write_copy};
+use super::{
+    check_direction, check_image, check_premultiplied, filled, put4, simd, write_copy,
+};
 use crate::error::Result;
 use std::mem::MaybeUninit;
 
@@ -25,11 +27,12 @@ struct RowScratch {
     g: [Vec<f32>; 2],
 }
 
-/// Along rows, two rows at a time: each row is checked (finite source and base, the span of
+/// Along rows, two rows at a time: each row is checked (finite source and base with alphas in [0, 1], the span of
 /// non-zero alpha, constant alpha) while it is read into the cache, the pixels out of reach of
 /// its alpha get the empty result (the base, or 0), and the rest one fused pass (running sums,
 /// glow, eq. 7, composite; `opaque_row`), which runs the two rows side by side when their
-/// spans agree. Returns false when a value is not finite (the rows are then zeros).
+/// spans agree. Returns false when a value is not finite or an alpha is outside [0, 1] (the
+/// rows are then zeros).
 fn rows_path(
     rgba: &[f32],
     base: &[f32],
@@ -48,7 +51,7 @@ fn rows_path(
             let mut glows = [false; 2];
             let mut ok = true;
             for (k, (sr, br)) in src.chunks(w * 4).zip(b.chunks(w * 4)).enumerate() {
-                ok &= all_finite(sr, simd) && (comp.is_none() || same || all_finite(br, simd));
+                ok &= premultiplied(sr, simd) && (comp.is_none() || same || premultiplied(br, simd));
                 spans[k] = alpha_span(sr, simd)
                     .map(|(lo, hi)| (lo.saturating_sub(r), (hi + r + 1).min(w)));
                 if let Some((xa, xb)) = spans[k] {
@@ -102,7 +105,8 @@ fn rows_path(
 /// Any other direction: the filter runs on the crop that can receive non-zero alpha (the
 /// alpha's bounding box grown by two filter reaches), transposed and/or sheared; then each
 /// output row is written once: the empty result (the base, or 0) outside the crop, eq. 7 and
-/// the composite inside. Returns false when a value is not finite (the output is then zeros).
+/// the composite inside. Returns false when a value is not finite or an alpha is outside [0, 1]
+/// (the output is then zeros).
 fn crop_path(
     rgba: &[f32],
     base: &[f32],
@@ -114,7 +118,7 @@ fn crop_path(
 ) -> Result<bool> {
     let simd = simd();
     let same = std::ptr::eq(rgba, base);
-    // One streaming pass: finiteness and the alpha's box.
+    // One streaming pass: finiteness, the alphas' range and the alpha's box.
     type Scan = (bool, Option<(usize, usize, usize, usize)>);
     let join = |a: Scan, b: Scan| -> Scan {
         let bbox = match (a.1, b.1) {
@@ -128,7 +132,7 @@ fn crop_path(
         .zip(base.par_chunks(w * 4))
         .enumerate()
         .map(|(y, (src, b))| {
-            let ok = all_finite(src, simd) && (comp.is_none() || same || all_finite(b, simd));
+            let ok = premultiplied(src, simd) && (comp.is_none() || same || premultiplied(b, simd));
             (ok, alpha_span(src, simd).map(|(lo, hi)| (lo, hi, y, y)))
         })
         .reduce(|| (true, None), join);
@@ -260,8 +264,8 @@ fn opaque_impl(
     let base_img = base.unwrap_or(rgba);
     let p = plan(direction, length * 0.5);
     if p.is_none() {
-        check_finite("rgba", rgba)?;
-        check_finite("base", base_img)?;
+        check_premultiplied("rgba", rgba, 4)?;
+        check_premultiplied("base", base_img, 4)?;
     }
     let mut ok = Ok(true);
     let out = filled(w * h * 4, |out| match p {
@@ -278,8 +282,8 @@ fn opaque_impl(
             }),
     });
     if !ok? {
-        check_finite("rgba", rgba)?;
-        check_finite("base", base_img)?;
+        check_premultiplied("rgba", rgba, 4)?;
+        check_premultiplied("base", base_img, 4)?;
     }
     Ok(out)
 }

@@ -1,6 +1,7 @@
-//! One image row of the opaque blur: the checks that decide what a row needs (finite values, the
-//! span of non-zero alpha, a constant alpha) and the fused pass that runs the box filter's
-//! running sums, Kraus's eq. 7 and the composite in one sweep, writing each output pixel once.
+//! One image row of the opaque blur: the checks that decide what a row needs (finite values and
+//! alphas in [0, 1], the span of non-zero alpha, a constant alpha) and the fused pass that runs
+//! the box filter's running sums, Kraus's eq. 7 and the composite in one sweep, writing each
+//! output pixel once.
 //!
 //! Every kernel has a plain form and, on x86-64 CPUs with AVX2 (detected at run time), a vector
 //! form that performs the same IEEE operations in the same order on the same values (four f64
@@ -67,23 +68,35 @@ pub(crate) fn finish(blur: [f32; 4], glow: f32, base: &[f32], comp: Option<Compo
     }
 }
 
-/// Whether every value is finite (no NaN, no infinity).
-pub(crate) fn all_finite(v: &[f32], simd: bool) -> bool {
+/// Whether a `(n, 4)` row is premultiplied colour as the opaque blur needs it: every value
+/// finite (no NaN, no infinity) and every alpha in [0, 1] (`super::alpha_out_of_range`).
+pub(crate) fn premultiplied(v: &[f32], simd: bool) -> bool {
     #[cfg(target_arch = "x86_64")]
     if simd {
         // SAFETY: `simd` is true only where AVX2 was detected.
-        return unsafe { avx::all_finite(v) };
+        return unsafe { avx::premultiplied(v) };
     }
     let _ = simd;
-    // Lane-wise accumulators over 16 values so that the loop vectorises.
+    // Lane-wise accumulators over 16 values (4 pixels) so that the loop vectorises.
     let mut bad = [0u32; 16];
     let mut chunks = v.chunks_exact(16);
     for c in &mut chunks {
         for i in 0..16 {
-            bad[i] |= ((c[i].to_bits() & 0x7f80_0000) == 0x7f80_0000) as u32;
+            let b = c[i].to_bits();
+            bad[i] |= ((b & 0x7f80_0000) == 0x7f80_0000) as u32;
+            bad[i] |= (i & 3 == 3) as u32 & super::alpha_out_of_range(b) as u32;
         }
     }
-    bad.iter().all(|&b| b == 0) && chunks.remainder().iter().all(|v| v.is_finite())
+    bad.iter().all(|&b| b == 0) && tail_premultiplied(chunks.remainder())
+}
+
+/// [`premultiplied`] of the last pixels of a row (fewer than four), one by one.
+fn tail_premultiplied(v: &[f32]) -> bool {
+    v.chunks(4).all(|p| {
+        p.iter().all(|v| v.is_finite())
+            && p.len() == 4
+            && !super::alpha_out_of_range(p[3].to_bits())
+    })
 }
 
 /// First and last pixel with non-zero alpha in a `(n, 4)` row.
@@ -192,19 +205,32 @@ mod avx {
     use super::{Composite, Glow, RowJob, ALPHA_EPS};
     use std::arch::x86_64::*;
 
+    /// `super::premultiplied`: the exponent test of every value, and on the alpha lanes the
+    /// range test of `super::super::alpha_out_of_range` (above 1.0 as a signed integer, or
+    /// negative other than -0.0).
     #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn all_finite(v: &[f32]) -> bool {
+    pub(super) unsafe fn premultiplied(v: &[f32]) -> bool {
         let exp = _mm256_set1_epi32(0x7f80_0000);
+        let one = _mm256_set1_epi32(0x3f80_0000);
+        let neg0 = _mm256_set1_epi32(i32::MIN);
+        let zero = _mm256_setzero_si256();
+        let alpha = _mm256_setr_epi32(0, 0, 0, -1, 0, 0, 0, -1);
         let mut bad = _mm256_setzero_si256();
         let mut chunks = v.chunks_exact(16);
         for c in &mut chunks {
             let p = c.as_ptr() as *const __m256i;
-            let a = _mm256_and_si256(_mm256_loadu_si256(p), exp);
-            let b = _mm256_and_si256(_mm256_loadu_si256(p.add(1)), exp);
-            bad = _mm256_or_si256(bad, _mm256_cmpeq_epi32(a, exp));
-            bad = _mm256_or_si256(bad, _mm256_cmpeq_epi32(b, exp));
+            for x in [_mm256_loadu_si256(p), _mm256_loadu_si256(p.add(1))] {
+                bad = _mm256_or_si256(bad, _mm256_cmpeq_epi32(_mm256_and_si256(x, exp), exp));
+                let above = _mm256_cmpgt_epi32(x, one);
+                let neg = _mm256_andnot_si256(
+                    _mm256_cmpeq_epi32(x, neg0),
+                    _mm256_cmpgt_epi32(zero, x),
+                );
+                let out = _mm256_and_si256(_mm256_or_si256(above, neg), alpha);
+                bad = _mm256_or_si256(bad, out);
+            }
         }
-        _mm256_testz_si256(bad, bad) != 0 && chunks.remainder().iter().all(|v| v.is_finite())
+        _mm256_testz_si256(bad, bad) != 0 && super::tail_premultiplied(chunks.remainder())
     }
 
     /// Whether pixels `2i` and `2i + 1` of the row (8 floats at `p`) have a non-zero alpha.

@@ -9,7 +9,7 @@
 //! lowers alpha. The opaque pyramid blur rescales the blur to the glow (eq. 7).
 use rayon::prelude::*;
 
-use super::{check_finite, check_image, ALPHA_EPS};
+use super::{check_finite, check_image, check_premultiplied, ALPHA_EPS};
 use crate::error::{Error, Result};
 
 /// Most pyramid levels accepted (a 65536-pixel side is 1 pixel after 16 levels).
@@ -164,7 +164,7 @@ pub fn pyramid_blur(rgba: &[f32], w: usize, h: usize, levels: usize) -> Result<V
 pub fn pyramid_glow(alpha: &[f32], w: usize, h: usize, levels: usize) -> Result<Vec<f32>> {
     check_image("alpha", alpha, w, h, 1)?;
     check_levels(levels)?;
-    check_finite("alpha", alpha)?;
+    check_premultiplied("alpha", alpha, 1)?;
     Ok(synth_glow(&build(alpha, w, h, 1, levels), 1, 0))
 }
 
@@ -173,7 +173,7 @@ pub fn pyramid_glow(alpha: &[f32], w: usize, h: usize, levels: usize) -> Result<
 pub fn pyramid_opaque_blur(rgba: &[f32], w: usize, h: usize, levels: usize) -> Result<Vec<f32>> {
     check_image("rgba", rgba, w, h, 4)?;
     check_levels(levels)?;
-    check_finite("rgba", rgba)?;
+    check_premultiplied("rgba", rgba, 4)?;
     Ok(opaque_unchecked(rgba, w, h, levels))
 }
 

@@ -186,6 +186,7 @@ pub fn scatter_pieces(
     let n = src.len();
     let runs = n.div_ceil(RUN_SOURCES).clamp(1, RUNS);
     let run = n.div_ceil(runs).max(1);
+    super::check_splat_buffers("scatter_pieces", width, height, n.div_ceil(run))?;
     let buffers: Vec<Vec<[f32; 4]>> = src
         .par_chunks(run)
         .map(|chunk| {

@@ -309,6 +309,7 @@ pub fn splat_paths(
     }
     let n = colors.len();
     let run = n.div_ceil(RUNS).max(1);
+    super::check_splat_buffers("splat_paths", w, h, n.div_ceil(run))?;
     let buffers: Vec<Vec<[f32; 4]>> = (0..n.div_ceil(run))
         .into_par_iter()
         .map(|r| {

@@ -191,3 +191,68 @@ fn vector_and_plain_forms_give_the_same_bits() {
         .zip(&plain)
         .all(|(a, b)| a.to_bits() == b.to_bits()));
 }
+
+#[test]
+fn kernels_that_assume_premultiplied_alpha_refuse_other_alphas() {
+    let (w, h) = (37, 5);
+    for bad in [1.0 + f32::EPSILON, -1e-6, 1e19, f32::NAN] {
+        let mut rgba = vec![0.0f32; w * h * 4];
+        rgba[(2 * w + 30) * 4 + 3] = bad;
+        let alpha: Vec<f32> = rgba.chunks(4).map(|p| p[3]).collect();
+        let clean = vec![0.0f32; w * h * 4];
+        for dir in [[1.0, 0.0], [1.0, 0.4], [0.0, 1.0]] {
+            assert!(opaque_blur(&rgba, w, h, dir, 3.0).is_err(), "{bad} {dir:?}");
+            let e = opaque_motion_blur(&clean, Some(&rgba), w, h, dir, 3.0, Composite::Over);
+            assert!(
+                e.unwrap_err().to_string().starts_with("base:"),
+                "{bad} {dir:?}"
+            );
+            assert!(glow(&alpha, w, h, dir, 3.0).is_err());
+        }
+        assert!(pyramid_glow(&alpha, w, h, 2).is_err());
+        assert!(pyramid_opaque_blur(&rgba, w, h, 2).is_err());
+        assert!(pyramid_blur(&rgba, w, h, 2).is_ok() != bad.is_nan());
+    }
+    let mut ends = vec![0.0f32; w * h * 4];
+    ends[3] = 1.0;
+    ends[7] = -0.0;
+    assert!(opaque_blur(&ends, w, h, [1.0, 0.3], 3.0).is_ok());
+    assert!(check_premultiplied("rgba", &ends, 4).is_ok());
+}
+
+#[test]
+fn row_check_of_premultiplied_colour_is_the_same_in_both_forms() {
+    use super::opaque_row::premultiplied;
+    let specials = [
+        0.0,
+        -0.0,
+        1.0,
+        0.5,
+        1.0 + f32::EPSILON,
+        -1e-6,
+        1e19,
+        -1e19,
+        f32::NAN,
+        -f32::NAN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::MIN_POSITIVE,
+        -f32::MIN_POSITIVE,
+    ];
+    let clean = image(13, 1, 3);
+    for n in [1, 3, 4, 5, 8, 13] {
+        let row = &clean[..n * 4];
+        let simd = simd();
+        assert!(premultiplied(row, false) && premultiplied(row, simd));
+        for at in 0..n * 4 {
+            for v in specials {
+                let mut r = row.to_vec();
+                r[at] = v;
+                let want = r.iter().all(|v| v.is_finite())
+                    && r.chunks(4).all(|p| !alpha_out_of_range(p[3].to_bits()));
+                assert_eq!(premultiplied(&r, false), want, "{n} {at} {v}");
+                assert_eq!(premultiplied(&r, simd), want, "{n} {at} {v}");
+            }
+        }
+    }
+}

@@ -8,6 +8,13 @@ use super::adjacency::{build_adjacency, Adjacency, FaceNeighbors};
 use super::normals::{self, dot, face_normal, FacePlanes};
 use crate::error::{Error, Result};
 
+/// The one coordinate range of every entry point: the largest accepted |component| of any
+/// position, translation or point, in scene units. Face normals multiply two coordinate
+/// differences and `n . d` a third, which stays below `f32::MAX` (3.4e38) at this bound (the
+/// blur shell's facing test runs in float32); the rasterizer's f64 transforms keep every
+/// fractional bit a pixel needs; float32 positions near it are 64 units apart anyway.
+pub const MAX_COORD: f64 = 1e9;
+
 /// Largest number of faces or vertices accepted (indices are stored as `u32`).
 pub const MAX_ELEMENTS: usize = (u32::MAX as usize) / 8;
 
@@ -268,13 +275,23 @@ fn check_vertices(vertices: &[[f64; 3]]) -> Result<()> {
             format!("too many vertices ({})", vertices.len()),
         ));
     }
-    let bad_vertex = |v: &[f64; 3]| v.iter().any(|x| !x.is_finite());
+    let bad_vertex = |v: &[f64; 3]| v.iter().any(|x| x.is_nan() || x.abs() > MAX_COORD);
     if !vertices
         .par_iter()
         .with_min_len(8192)
         .all(|v| !bad_vertex(v))
     {
         let bad = vertices.iter().position(bad_vertex).unwrap_or(0);
+        let row = vertices[bad];
+        if row.iter().all(|x| x.is_finite()) {
+            return Err(Error::value(
+                "vertices",
+                format!(
+                    "vertex {bad} ({row:?}) is beyond the coordinate range +-{MAX_COORD:e} \
+                     (MAX_COORD)"
+                ),
+            ));
+        }
         return Err(Error::value(
             "vertices",
             format!("vertex {bad} is NaN or inf"),
@@ -286,6 +303,23 @@ fn check_vertices(vertices: &[[f64; 3]]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn coordinates_past_the_range_are_refused_naming_the_vertex() {
+        let f = vec![[0, 1, 2]];
+        let at = |y: f64| vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, y, 0.0]];
+        Mesh::new(at(MAX_COORD), f.clone()).unwrap();
+        Mesh::new(at(-MAX_COORD), f.clone()).unwrap();
+        let e = Mesh::new(at(MAX_COORD * 1.5), f.clone())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("vertices: vertex 2") && e.contains("coordinate range"),
+            "{e}"
+        );
+        let e = Mesh::new(at(f64::NAN), f).unwrap_err().to_string();
+        assert_eq!(e, "vertices: vertex 2 is NaN or inf");
+    }
 
     fn tetra() -> Mesh {
         let v = vec![

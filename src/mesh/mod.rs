@@ -20,7 +20,7 @@ mod normals;
 mod test_meshes;
 
 pub use adjacency::{Adjacency, FaceNeighbors, VertexFaces};
-pub use indexed::{Mesh, MeshStats, MAX_ELEMENTS};
+pub use indexed::{Mesh, MeshStats, MAX_COORD, MAX_ELEMENTS};
 pub use normals::{dot, face_normal, normalize, FacePlanes, SLIVER};
 #[cfg(test)]
 pub(crate) use test_meshes::{grid_faces, uv_sphere};

@@ -123,6 +123,19 @@ impl Keyframes {
         if vertices.iter().flatten().any(|x| !x.is_finite()) {
             return Err(Error::value("vertices", "contains NaN or inf"));
         }
+        if vertices
+            .iter()
+            .flatten()
+            .any(|x| x.abs() > crate::mesh::MAX_COORD)
+        {
+            return Err(Error::value(
+                "vertices",
+                format!(
+                    "positions beyond the coordinate range +-{:e} (MAX_COORD)",
+                    crate::mesh::MAX_COORD
+                ),
+            ));
+        }
         let count = vertices.len() / times.len();
         Ok(Keyframes {
             times,

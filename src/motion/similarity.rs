@@ -13,10 +13,18 @@ use super::numeric::{
     det3, dot, gram, linear_part, norm, row_times, translation_part, Mat3, Mat4, IDENTITY4,
 };
 use crate::error::{Error, Result};
+use crate::mesh::MAX_COORD;
 
 /// Largest deviation of `R^T R` from the identity accepted for a rotation (the 3x3 part
 /// divided by the cube root of its determinant).
 pub const RIGID_TOLERANCE: f64 = 1e-6;
+
+/// Smallest and largest accepted uniform scale of a keyframe: `1 / MAX_COORD` to `MAX_COORD`.
+/// A unit object scaled by them stays within the coordinate range (and is not shrunk below its
+/// rounding), and the determinant `s^3` that splits the scale off stays a normal float64.
+pub const MIN_SCALE: f64 = 1.0 / MAX_COORD;
+/// See [`MIN_SCALE`].
+pub const MAX_SCALE: f64 = MAX_COORD;
 
 /// Above this cosine between two unit quaternions (half-angles below 1.4e-6 rad, equal
 /// rotations among them) the interpolation is the normalised linear one: it equals the slerp
@@ -84,6 +92,38 @@ impl Similarity {
             ));
         }
         let lin = linear_part(m);
+        // The range first, from the columns' lengths (a rigid keyframe's are all the scale): a
+        // scale past it would make the determinant overflow or underflow and the messages below
+        // speak of shear or mirrors.
+        let lengths = (0..3).map(|c| (0..3).map(|r| lin[r][c] * lin[r][c]).sum::<f64>().sqrt());
+        let (lo, hi) = lengths.fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
+        let slack = 1.0 + RIGID_TOLERANCE;
+        if lo > 0.0 && (hi > MAX_SCALE * slack || lo < MIN_SCALE / slack) {
+            let s = if hi > MAX_SCALE * slack { hi } else { lo };
+            return Err(Error::value(
+                name,
+                format!(
+                    "keyframe {index} scales by about {}, outside the accepted uniform scales \
+                     [{}, {}] (1/MAX_COORD to MAX_COORD: scaled coordinates must stay in the \
+                     coordinate range +-{}, and the scale is split off through the determinant)",
+                    general(s),
+                    general(MIN_SCALE),
+                    general(MAX_SCALE),
+                    general(MAX_COORD)
+                ),
+            ));
+        }
+        let t = translation_part(m);
+        if t.iter().any(|x| x.abs() > MAX_COORD) {
+            return Err(Error::value(
+                name,
+                format!(
+                    "keyframe {index} translates by {t:?}, beyond the coordinate range +-{} \
+                     (MAX_COORD)",
+                    general(MAX_COORD)
+                ),
+            ));
+        }
         let det = det3(&lin);
         if det <= 0.0 {
             return Err(Error::value(
@@ -267,6 +307,40 @@ fn rotation_matrix(q: &[f64; 4]) -> Mat3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn scales_and_translations_outside_the_range_say_which_range() {
+        let scaled = |s: f64| {
+            let mut m = IDENTITY4;
+            (0..3).for_each(|i| m[i][i] = s);
+            m
+        };
+        for s in [1e-120, 1e-10, 2e9, 1e120] {
+            let e = Similarity::from_matrix(&scaled(s), "m", 1)
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with("m: keyframe 1 scales by about"), "{e}");
+            assert!(e.contains("[1e-09, 1e+09]"), "{e}");
+        }
+        for s in [MIN_SCALE, 1e-3, 1e3, MAX_SCALE] {
+            let k = Similarity::from_matrix(&scaled(s), "m", 0).unwrap();
+            assert!((k.scale / s - 1.0).abs() < 1e-12);
+        }
+        let mut far = IDENTITY4;
+        far[1][3] = -2.0 * MAX_COORD;
+        let e = Similarity::from_matrix(&far, "m", 2)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("m: keyframe 2 translates by") && e.contains("coordinate range"),
+            "{e}"
+        );
+        // a mirror inside the range is still a mirror
+        let e = Similarity::from_matrix(&scaled(-2.0), "m", 0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("mirror or singular"), "{e}");
+    }
 
     fn rot_z(a: f64, s: f64, t: [f64; 3]) -> Mat4 {
         let (sn, c) = a.sin_cos();

@@ -8,18 +8,22 @@ use numpy::{
     Element, IntoPyArray, PyArray2, PyArrayMethods, PyReadonlyArray, PyReadonlyArray1,
     PyReadonlyArray2, PyReadwriteArray, PyUntypedArrayMethods,
 };
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyMemoryError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rayon::prelude::*;
 
 use crate::{Error, MeshStats, RasterStats};
 
-/// Every core error is a `ValueError` whose message names the argument (`"name: reason"`), so
-/// `?` maps it.
+/// Every core error names the argument (`"name: reason"`): a `MemoryError` when the call is
+/// over the memory budget or an allocation was refused, a `ValueError` otherwise, so `?` maps
+/// it.
 impl From<Error> for PyErr {
     fn from(e: Error) -> PyErr {
-        PyValueError::new_err(e.to_string())
+        match e {
+            Error::Memory { .. } => PyMemoryError::new_err(e.to_string()),
+            _ => PyValueError::new_err(e.to_string()),
+        }
     }
 }
 
@@ -206,6 +210,7 @@ impl ToDict for RasterStats {
         let d = PyDict::new(py);
         d.set_item("triangles", self.triangles)?;
         d.set_item("fragments", self.fragments)?;
+        d.set_item("approximated_samples", self.approximated)?;
         d.set_item("culled", self.culled)?;
         d.set_item("clipped", self.clipped)?;
         d.set_item("ms_transform", self.ms_transform)?;

@@ -16,8 +16,29 @@ use super::convert::{
 use super::motion::PyKeyframes;
 use crate::{
     contour_pairs, subdivided, Colors, ContourSet, ContourTable, Error, Filter, Mesh, MotionVolume,
-    Path, Spin, VolumeOptions, JOINING, LEADING, MAX_SEGMENTS, TRAILING,
+    Need, Path, Spin, VolumeOptions, JOINING, LEADING, MAX_SEGMENTS, TRAILING,
 };
+
+/// Bytes a volume takes per mesh edge on the contour and segment: two joining faces and their
+/// share of the ring vertices (position, colour, normal), while assembled and as returned.
+const EDGE_SEGMENT_BYTES: u64 = 96;
+
+/// Sweep steps of a spin without `segments` at most (one per `pi / 12` of a full turn).
+const DEFAULT_SPIN_SEGMENTS: u64 = 24;
+
+/// A volume's worst case, checked against the memory budget before it is built (the contour is
+/// known only inside): every mesh edge on the contour, swept into two joining faces per
+/// segment, and the leading and trailing faces with their vertices.
+fn check_volume(call: &'static str, mesh: &Mesh, segments: u64) -> Result<(), Error> {
+    let edges = mesh.adjacency().edges.len() as u64;
+    Need::new(call)
+        .add(
+            &[("mesh edges", edges), ("segments", segments)],
+            EDGE_SEGMENT_BYTES,
+        )?
+        .add(&[("faces", mesh.faces().len() as u64)], 2 * 64)?
+        .check()
+}
 
 /// (F,3) int64 faces of any layout to `u32` triples, every index in [0, nv).
 fn faces(a: &PyReadonlyArray2<'_, i64>, nv: usize) -> PyResult<Vec<[u32; 3]>> {
@@ -180,6 +201,7 @@ fn motion_volume<'py>(
     let inner = mesh.inner.clone();
     let vol = py.detach(move || {
         let path = subdivided(&Path::from_keys(keys)?, segments)?;
+        check_volume("motion_volume", &inner, path.segments() as u64)?;
         in_pool(|| crate::motion_volume(&inner, &path, &opts))
     })?;
     Ok(volume_tuple(py, vol))
@@ -220,7 +242,14 @@ fn spin_volume<'py>(
         contour_line,
     )?;
     let inner = mesh.inner.clone();
-    let vol = detached_in_pool(py, move || crate::spin_volume(&inner, &spin, &opts))?;
+    let vol = detached_in_pool(py, move || {
+        if let Some(s) = segments.filter(|&s| s <= MAX_SEGMENTS) {
+            check_volume("spin_volume", &inner, s as u64)?;
+        } else if segments.is_none() {
+            check_volume("spin_volume", &inner, DEFAULT_SPIN_SEGMENTS)?;
+        }
+        crate::spin_volume(&inner, &spin, &opts)
+    })?;
     Ok(volume_tuple(py, vol))
 }
 
@@ -347,6 +376,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(motion_volume, m)?)?;
     m.add_function(wrap_pyfunction!(spin_volume, m)?)?;
     m.add("MAX_SEGMENTS", MAX_SEGMENTS)?;
+    m.add("MAX_COORD", crate::mesh::MAX_COORD)?;
     m.add("FILTERS", PyTuple::new(m.py(), Filter::NAMES)?)?;
     m.add("LEADING", LEADING)?;
     m.add("TRAILING", TRAILING)?;

@@ -455,6 +455,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_camera_motion_blur, m)?)?;
     m.add("MAX_LENGTH", f64::from(crate::MAX_LENGTH))?;
     m.add("MAX_FPS_RATIO", crate::MAX_FPS_RATIO)?;
+    m.add("MAX_VELOCITY", crate::MAX_VELOCITY)?;
     m.add("MAX_LEVELS", crate::MAX_LEVELS)?;
     m.add("MAX_LAYERS", crate::MAX_LAYERS)?;
     m.add("MAX_SAMPLES", crate::MAX_SAMPLES)?;

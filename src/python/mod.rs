@@ -3,6 +3,8 @@
 use pyo3::prelude::*;
 
 mod accumulate;
+mod analytic;
+mod budget;
 mod convert;
 mod geometry;
 mod image;
@@ -14,6 +16,7 @@ mod shell;
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    budget::register(m)?;
     motion::register(m)?;
     geometry::register(m)?;
     raster::register(m)?;
@@ -21,5 +24,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     shell::register(m)?;
     accumulate::register(m)?;
     painter::register(m)?;
+    analytic::register(m)?;
     Ok(())
 }

@@ -7,7 +7,7 @@ use pyo3::types::{PyDict, PyTuple};
 use super::convert::{c_slice, detached_in_pool, rows, shaped, ToDict};
 use crate::{
     faces_from_i64, rasterize_over, Background, Blend, Camera, Draw, Error, Light, RasterOptions,
-    Shading, MAX_INTERNAL_SIDE, MAX_PIXELS, MAX_SIDE, SAMPLES,
+    Shading, FRAGMENT_CAP, MAX_INTERNAL_SIDE, MAX_PIXELS, MAX_SIDE, SAMPLES,
 };
 
 /// One draw as the Python layer passes it: (vertices f64 (V,3), faces i64 (F,3), rgba f32 (1|V,4),
@@ -156,6 +156,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_rasterize, m)?)?;
     m.add("MAX_SIDE", MAX_SIDE)?;
     m.add("MAX_PIXELS", MAX_PIXELS)?;
+    m.add("FRAGMENT_CAP", FRAGMENT_CAP)?;
     m.add("MAX_INTERNAL_SIDE", MAX_INTERNAL_SIDE)?;
     m.add("SAMPLES", PyTuple::new(m.py(), SAMPLES)?)?;
     m.add("SHADINGS", PyTuple::new(m.py(), Shading::NAMES)?)?;

@@ -9,8 +9,10 @@ use numpy::{
     PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
+use pyo3::types::PyBytes;
 
 use super::convert::{c_slice, detached_in_pool, face_indices, rows};
+use crate::budget::try_vec;
 use crate::{
     motion_silhouette, BlurShell, Error, ShellColor, ShellOptions, ShellOut, ON_SILHOUETTE,
 };
@@ -61,12 +63,14 @@ fn layout(nv: usize, nt: usize) -> [usize; 7] {
 }
 
 impl OneBuffer {
-    fn new(nv: usize, nt: usize) -> Self {
-        OneBuffer {
-            words: vec![0u64; layout(nv, nt)[6]],
+    /// The buffer, or a `MemoryError` when the system refuses it (the plan checked its size
+    /// against the budget).
+    fn new(nv: usize, nt: usize) -> Result<Self, Error> {
+        Ok(OneBuffer {
+            words: try_vec(layout(nv, nt)[6], 0u64, "vertices")?,
             nv,
             nt,
-        }
+        })
     }
 
     #[allow(clippy::type_complexity)]
@@ -224,7 +228,7 @@ impl PyBlurShell {
         let n = normals.as_ref().map(|n| rows(n, "normals")).transpose()?;
         let inner = &self.inner;
         let plan = inner.build_plan(v, n)?;
-        let mut buf = OneBuffer::new(plan.n_vertices, plan.n_triangles);
+        let mut buf = OneBuffer::new(plan.n_vertices, plan.n_triangles)?;
         let out = buf.slices();
         let plan = &plan;
         if inner.parallel() {
@@ -237,6 +241,17 @@ impl PyBlurShell {
 
     fn reset(&mut self) {
         self.inner.reset();
+    }
+
+    /// The shell's history as bytes, for pickling (`src/shell/history.rs`).
+    fn _history<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+        PyBytes::new(py, &self.inner.history())
+    }
+
+    /// Takes the history of a shell made with the same arguments; ValueError naming `state`
+    /// otherwise (nothing changes then).
+    fn _restore(&mut self, state: &[u8]) -> PyResult<()> {
+        Ok(self.inner.restore(state)?)
     }
 
     #[getter]

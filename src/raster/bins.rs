@@ -9,6 +9,8 @@
 //! writes its references into its runs. The buffers are kept by the caller between frames
 //! (`Bins::build` reuses them), so binning does not allocate once they have grown.
 use super::setup::{Chunk, Tri};
+use crate::budget::{try_reserve, Need};
+use crate::error::Result;
 use rayon::prelude::*;
 
 /// Tile side in samples.
@@ -59,15 +61,23 @@ unsafe impl Sync for SharedRefs {}
 
 impl Bins {
     /// Bins the set-up triangles for an internal image of `ws` x `hs` samples, reusing the
-    /// buffers of the previous build.
-    pub fn build(&mut self, chunks: &[Chunk], ws: u32, hs: u32) {
+    /// buffers of the previous build. `need` is the rest of the frame's memory (the frame, the
+    /// set-up): the counts per chunk and tile, and then the tiles' copies of the triangles once
+    /// counted, are added to it and checked against the budget before they are allocated.
+    pub fn build(&mut self, chunks: &[Chunk], ws: u32, hs: u32, need: Need) -> Result<()> {
         let tiles_x = (ws as usize).div_ceil(TILE as usize);
         let tiles_y = (hs as usize).div_ceil(TILE as usize);
         let n = tiles_x * tiles_y;
         self.tiles_x = tiles_x;
         self.tiles_y = tiles_y;
+        let need = need.add(
+            &[("face chunks", chunks.len() as u64), ("tiles", n as u64)],
+            8,
+        )?;
+        need.check()?;
         // Counts per chunk and tile, in parallel.
         self.slots.clear();
+        try_reserve(&mut self.slots, chunks.len() * n, "draws")?;
         self.slots.resize(chunks.len() * n, 0);
         if n > 0 {
             self.slots
@@ -94,10 +104,16 @@ impl Bins {
             }
         }
         self.start[n] = next;
+        // Each triangle is copied into every tile its box reaches: a product of the draws'
+        // triangles and the image's tiles, known only now.
+        let each = (std::mem::size_of::<u32>() + std::mem::size_of::<Tri>()) as u64;
+        need.add(&[("triangles x tiles they reach", next as u64)], each)?
+            .check()?;
         self.refs.clear();
+        try_reserve(&mut self.refs, next, "draws")?;
         self.refs.resize(next, 0);
         self.tris.clear();
-        self.tris.reserve(next);
+        try_reserve(&mut self.tris, next, "draws")?;
         let out = SharedRefs(self.refs.as_mut_ptr(), self.tris.as_mut_ptr());
         let out = &out;
         if n > 0 {
@@ -125,6 +141,7 @@ impl Bins {
         // SAFETY: the slots of all chunks in all bins are 0..next, each written once above
         // (the counts of the first pass are the triangles the second pass walks).
         unsafe { self.tris.set_len(next) };
+        Ok(())
     }
 
     /// The references of tile `t` and their triangles.
@@ -179,7 +196,7 @@ mod tests {
                     ..Default::default()
                 })
                 .collect();
-            bins.build(&chunks, ws, hs);
+            bins.build(&chunks, ws, hs, Need::new("test")).unwrap();
             for t in 0..bins.tiles_x * bins.tiles_y {
                 let (tx, ty) = ((t % bins.tiles_x) as i32, (t / bins.tiles_x) as i32);
                 let mut want = Vec::new();

@@ -5,6 +5,8 @@
 //! ties), so they always describe one real surface rather than a blend of two.
 use super::bins::TILE;
 use super::blend::Sample;
+use crate::budget::try_reserve;
+use crate::error::Result;
 
 /// Timings and counts of one frame.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -13,6 +15,10 @@ pub struct Stats {
     pub triangles: u64,
     /// Samples covered by those triangles (both passes).
     pub fragments: u64,
+    /// Samples (of the supersampled image) holding more than `FRAGMENT_CAP` (32) transparent
+    /// fragments with `Blend::Exact`: their nearest 32 were composited exactly over the rest
+    /// merged into one layer (alpha exact, colour an alpha-weighted mean).
+    pub approximated: u64,
     /// Faces culled as back-facing.
     pub culled: u64,
     /// Faces clipped against the near or far plane or the guard band.
@@ -92,18 +98,22 @@ impl Frame {
     /// A frame of the given size whose buffers are allocated but empty (length 0), to be
     /// filled by the tiles through `output` and then `assume_written`: the tiles write every
     /// pixel, so filling the buffers first would only write the frame's 24 or 32 bytes a pixel
-    /// twice. Without `velocity` the velocity buffer stays empty.
-    pub fn unwritten(width: u32, height: u32, velocity: bool) -> Self {
+    /// twice. Without `velocity` the velocity buffer stays empty. An allocation the system
+    /// refuses is an error naming `width`.
+    pub fn unwritten(width: u32, height: u32, velocity: bool) -> Result<Self> {
         let n = width as usize * height as usize;
-        Frame {
+        let mut frame = Frame {
             width,
             height,
-            rgba: Vec::with_capacity(4 * n),
-            depth: Vec::with_capacity(n),
-            ids: Vec::with_capacity(n),
-            velocity: Vec::with_capacity(if velocity { 2 * n } else { 0 }),
-            stats: Stats::default(),
+            ..Default::default()
+        };
+        try_reserve(&mut frame.rgba, 4 * n, "width")?;
+        try_reserve(&mut frame.depth, n, "width")?;
+        try_reserve(&mut frame.ids, n, "width")?;
+        if velocity {
+            try_reserve(&mut frame.velocity, 2 * n, "width")?;
         }
+        Ok(frame)
     }
 
     /// The pointers the tiles write through (into the buffers' capacity; velocity only when
@@ -354,7 +364,7 @@ mod tests {
             .collect();
         for (w, h, velocity) in [(64, 64, true), (61, 37, false), (13, 5, true)] {
             let run = |simd| {
-                let mut f = Frame::unwritten(w as u32, h as u32, velocity);
+                let mut f = Frame::unwritten(w as u32, h as u32, velocity).unwrap();
                 let out = f.output();
                 // SAFETY: one tile covering the frame, written once.
                 unsafe {

@@ -1,8 +1,8 @@
 //! One mesh to draw: positions, faces, straight colours, normals, id, culling, previous positions.
 use crate::error::{Error, Result};
 
-/// Largest coordinate magnitude accepted: beyond it f64 transforms lose every fractional bit.
-pub const MAX_COORD: f64 = 1e15;
+/// Largest coordinate magnitude accepted: the one coordinate range of every entry point.
+pub use crate::mesh::MAX_COORD;
 /// Largest face count of one frame (triangle references are packed in 32 bits).
 pub const MAX_FACES: usize = 1 << 28;
 
@@ -58,7 +58,7 @@ fn check_points(name: &'static str, p: &[[f64; 3]]) -> Result<()> {
             if c.abs() > MAX_COORD {
                 return Err(Error::value(
                     name,
-                    format!("coordinates beyond {MAX_COORD:e}"),
+                    format!("coordinates beyond the coordinate range +-{MAX_COORD:e} (MAX_COORD)"),
                 ));
             }
         }

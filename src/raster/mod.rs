@@ -9,7 +9,8 @@
 //! 3. binning into 64x64-sample tiles, in submission order, each bin holding copies of its
 //!    triangles (`bins.rs`);
 //! 4. tiles in parallel (rayon): an opaque pass with a visibility buffer, then a transparent pass
-//!    with per-sample fragment lists composited exactly or unsorted (`tile.rs`, `blend.rs`), then
+//!    with per-sample fragment lists composited exactly or unsorted (`tile.rs`, `blend.rs`, and
+//!    past `FRAGMENT_CAP` a sample the k-buffer of `kbuffer.rs`), then
 //!    the box resolve into the frame (`buffers.rs`).
 //!
 //! Every step is deterministic and no step depends on how work is split between threads, so the
@@ -25,20 +26,24 @@ mod camera;
 mod clip;
 mod coverage;
 mod draw;
+mod fragment;
 mod interp;
+mod kbuffer;
 mod options;
 mod setup;
 mod shade;
 mod tile;
 
 pub use background::Background;
+pub use blend::FRAGMENT_CAP;
 pub use buffers::{Frame, Stats};
-use camera::check_size;
+pub use camera::check_size;
 pub use camera::{Camera, MAX_INTERNAL_SIDE, MAX_PIXELS, MAX_SIDE, SAMPLES};
 pub use draw::{faces_from_i64, vertex_normals, Draw};
 use options::check_options;
 pub use options::{Blend, Light, Options, Shading};
 
+use crate::budget::{self, Need};
 use crate::error::{Error, Result};
 use bins::TILE;
 use rayon::prelude::*;
@@ -102,8 +107,8 @@ fn transform(
 thread_local! {
     /// Each thread's tile buffers, kept across tiles and frames: a tile resets what it reads, so
     /// reuse changes no result, and the ~300 KB of buffers (and the fragment lists grown to the
-    /// frame's depth complexity, up to 2^18 fragments) are not allocated and page-faulted again
-    /// per frame.
+    /// frame's depth complexity, at most `FRAGMENT_CAP` fragments a sample) are not allocated
+    /// and page-faulted again per frame.
     static SCRATCH: RefCell<TileScratch> = RefCell::new(TileScratch::default());
 }
 
@@ -125,6 +130,33 @@ fn with_scratch<R>(f: impl FnOnce(&mut TileScratch) -> R) -> R {
         }
         Err(_) => f(&mut TileScratch::default()),
     })
+}
+
+/// Bytes a vertex takes while a frame is drawn: its fixed-point position and residuals, clip
+/// position and previous position (velocity), normal.
+const VERTEX_BYTES: u64 = 8 + 12 + 32 + 32 + 12;
+
+/// What a frame allocates before binning: the frame (32 bytes a pixel), each vertex's
+/// transform and each face's set-up triangle (more when clipped). The threads' tile buffers
+/// are not counted: they are kept between frames and bounded whatever the frame (~180 KB a
+/// thread, and the transparent pass's lists at most `FRAGMENT_CAP` fragments a sample, ~14 MB
+/// a thread at the deepest).
+fn frame_need(camera: &Camera, draws: &[Draw]) -> Result<Need> {
+    let vertices: u64 = draws.iter().map(|d| d.vertices.len() as u64).sum();
+    let faces: u64 = draws.iter().map(|d| d.faces.len() as u64).sum();
+    Need::new("rasterize")
+        .add(
+            &[
+                ("width", u64::from(camera.width)),
+                ("height", u64::from(camera.height)),
+            ],
+            32,
+        )?
+        .add(&[("vertices", vertices)], VERTEX_BYTES)?
+        .add(
+            &[("faces", faces)],
+            std::mem::size_of::<setup::Tri>() as u64,
+        )
 }
 
 /// Renders `draws` seen by `camera`. Errors name the offending argument.
@@ -161,10 +193,12 @@ pub fn rasterize_over(
             "too many faces or draws in one frame",
         ));
     }
+    let need = frame_need(camera, draws)?;
+    need.check()?;
     let (w, h) = (camera.width, camera.height);
     let s = opts.samples;
     let vp_matrix = camera.view_projection();
-    let mut frame = Frame::unwritten(w, h, draws.iter().any(|d| d.previous.is_some()));
+    let mut frame = Frame::unwritten(w, h, draws.iter().any(|d| d.previous.is_some()))?;
 
     let viewport = Viewport::new(w * s, h * s);
     let (prepared, screens): (Vec<Prepared>, Vec<Screen>) = draws
@@ -198,7 +232,7 @@ pub fn rasterize_over(
     let t2 = Instant::now();
 
     let mut bins = KEPT_BINS.with(RefCell::take);
-    bins.build(&chunks, viewport.ws, viewport.hs);
+    bins.build(&chunks, viewport.ws, viewport.hs, need)?;
     let t3 = Instant::now();
 
     let shader = Shader {
@@ -247,6 +281,9 @@ pub fn rasterize_over(
             })
         })
         .reduce(TileReport::default, TileReport::add);
+    if report.refused > 0 {
+        return Err(budget::refused("draws", report.refused));
+    }
     let (fragments, bad_background) = (report.fragments, report.bad_background);
     // The tiles partition the frame, so together they loaded every sample of the background's
     // window: a bad value anywhere in it was seen (rendering over it reads no value as an index
@@ -271,6 +308,7 @@ pub fn rasterize_over(
     frame.stats = Stats {
         triangles: chunks.iter().map(|c| c.tris.len() as u64).sum(),
         fragments,
+        approximated: report.approximated,
         culled: chunks.iter().map(|c| c.culled).sum(),
         clipped: chunks.iter().map(|c| c.clipped).sum(),
         ms_transform: ms(t0, t1),

@@ -3,7 +3,8 @@
 //! Coverage (which samples a triangle covers, with the top-left rule) is `coverage.rs`.
 //! Pass 1 (opaque) keeps the nearest opaque fragment of each sample in a visibility buffer
 //! (1/w and the triangle's place in the bin), and shades only the winners. Pass 2 (transparent) collects
-//! the transparent fragments in front of the opaque surface; `blend.rs` composites them.
+//! the transparent fragments in front of the opaque surface; `blend.rs` composites them (in
+//! bounded lists, or each as it comes for `Blend::Unsorted`).
 use super::background::Background;
 use super::bins::TILE;
 use super::blend::{Frag, FragLists, Sample};
@@ -23,6 +24,10 @@ pub struct TileReport {
     pub fragments: u64,
     /// Whether the background held a bad value in the tile.
     pub bad_background: bool,
+    /// Samples whose transparent fragments past `FRAGMENT_CAP` were merged approximately.
+    pub approximated: u64,
+    /// Bytes of an allocation the system refused (0: none; the frame then fails).
+    pub refused: u64,
     /// Milliseconds: opaque coverage and depth test, opaque shading, the transparent pass
     /// (coverage, shading, compositing), resolve.
     pub ms: [f64; 4],
@@ -34,6 +39,8 @@ impl TileReport {
         TileReport {
             fragments: self.fragments + o.fragments,
             bad_background: self.bad_background | o.bad_background,
+            approximated: self.approximated + o.approximated,
+            refused: self.refused.max(o.refused),
             ms: [0, 1, 2, 3].map(|k| self.ms[k] + o.ms[k]),
         }
     }
@@ -218,6 +225,7 @@ pub fn render_tile(
         fragments,
         bad_background,
         ms: [ms(t0, t1), ms(t1, t2), 0.0, 0.0],
+        ..Default::default()
     };
     if !any_transparent {
         return report;
@@ -249,11 +257,15 @@ pub fn render_tile(
                     }
                     fragments += 1;
                     if keep {
-                        frags.push(Frag {
+                        let f = Frag {
                             sample: s as u32,
                             invw: z,
                             shaded,
-                        });
+                        };
+                        match blend {
+                            Blend::Exact => frags.push(f),
+                            Blend::Unsorted => frags.blend_unsorted(samples, f),
+                        }
                     }
                 }
             });
@@ -273,16 +285,23 @@ pub fn render_tile(
                 let shaded = ts.shade(lam);
                 fragments += 1;
                 if shaded.rgba[3] > 0.0 {
-                    frags.push(Frag {
+                    let f = Frag {
                         sample: s as u32,
                         invw: z,
                         shaded,
-                    });
+                    };
+                    match blend {
+                        Blend::Exact => frags.push(f),
+                        Blend::Unsorted => frags.blend_unsorted(samples, f),
+                    }
                 }
             }
         });
     }
-    frags.composite(&mut samples[..(TILE * TILE) as usize], blend);
+    if blend == Blend::Exact {
+        report.approximated = frags.composite(&mut samples[..(TILE * TILE) as usize]);
+    }
+    report.refused = frags.refused;
     report.fragments = fragments;
     report.ms[2] = ms(t2, Instant::now());
     report

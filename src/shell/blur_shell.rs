@@ -2,6 +2,7 @@
 use rayon::prelude::*;
 
 use super::locality::Locality;
+use crate::budget::Need;
 use crate::contour::{check_values, NEUTRAL, NO_EDGE};
 use crate::error::{Error, Result};
 use crate::mesh::MAX_ELEMENTS;
@@ -14,8 +15,6 @@ pub(super) const CHUNK: usize = 8192;
 pub const ON_SILHOUETTE: u8 = 4;
 /// Largest `subdivisions` (the fade level is a `u8`).
 pub const MAX_SUBDIVISIONS: u32 = 255;
-/// Largest memory a shell may take for its history (snapshots, rings, tables), in bytes.
-pub const MAX_HISTORY_BYTES: u64 = 8_000_000_000;
 /// Largest `hysteresis` (the count of updates off the silhouette is a saturating `u16`).
 pub const MAX_HYSTERESIS: u32 = 65_000;
 
@@ -213,21 +212,15 @@ impl BlurShell {
         }
         let s = opts.subdivisions as usize;
         let nf = faces.len();
-        // Positions and normals (12 bytes each per vertex and buffer), ring, per-face state.
-        let bytes =
-            (s as u128 + 1) * n_vertices as u128 * 24 + s as u128 * nf as u128 + 64 * nf as u128;
-        if bytes > MAX_HISTORY_BYTES as u128 {
-            return Err(Error::value(
-                "subdivisions",
-                format!(
-                    "{} subdivisions over {n_vertices} vertices and {nf} faces need {:.1} GB of \
-                     history (limit {} GB); use fewer subdivisions or a smaller mesh",
-                    opts.subdivisions,
-                    bytes as f64 / 1e9,
-                    MAX_HISTORY_BYTES / 1_000_000_000
-                ),
-            ));
-        }
+        // Positions and normals (12 bytes each per vertex and buffer), the rings, per-face and
+        // per-vertex state, checked against the memory budget before any is allocated.
+        let (nv64, nf64, s64) = (n_vertices as u64, nf as u64, u64::from(opts.subdivisions));
+        Need::new("BlurShell")
+            .add(&[("n_vertices", nv64), ("subdivisions + 1", s64 + 1)], 24)?
+            .add(&[("faces", nf64), ("subdivisions", s64)], 1)?
+            .add(&[("faces", nf64)], 64)?
+            .add(&[("n_vertices", nv64)], 16)?
+            .check()?;
         let loc = Locality::new(&faces, n_vertices);
         Ok(BlurShell {
             loc,

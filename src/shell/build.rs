@@ -7,6 +7,7 @@
 use rayon::prelude::*;
 
 use super::blur_shell::{check_rows, BlurShell, ShellColor, CHUNK};
+use crate::budget::Need;
 use crate::error::Result;
 use crate::mesh::normalize;
 
@@ -132,7 +133,13 @@ impl BlurShell {
             (0..nf.div_ceil(CHUNK)).map(count).collect()
         };
         let n_pairs: usize = counts.iter().map(|c| c.0).sum();
-        let n_triangles = counts.iter().map(|&(p, s)| 2 * (p - s)).sum();
+        let n_triangles: usize = counts.iter().map(|&(p, s)| 2 * (p - s)).sum();
+        // The shell mesh: 64 bytes a vertex (position, colour, normal, face, step), 24 a
+        // triangle, checked against the memory budget before the caller allocates it.
+        Need::new("BlurShell.build")
+            .add(&[("strip vertices", 2 * n_pairs as u64)], 64)?
+            .add(&[("strip triangles", n_triangles as u64)], 24)?
+            .check()?;
         Ok(BuildPlan {
             counts,
             n_vertices: 2 * n_pairs,

@@ -46,6 +46,7 @@
 //! `build.rs` (the shell mesh), `locality.rs` (the internal vertex and face order).
 mod blur_shell;
 mod build;
+mod history;
 mod locality;
 #[cfg(test)]
 mod tests;

@@ -4,6 +4,8 @@
 use rayon::prelude::*;
 
 use super::coverage::CoverageModel;
+use super::refine::{refine, Surface};
+use super::sides::{leading_then_trailing, mark_sides};
 use super::types::{Colors, MotionVolume, VolumeOptions, JOINING, LEADING, TRAILING};
 use crate::contour::{contour_from_sides, contour_line, ContourEdge};
 use crate::error::{Error, Result};
@@ -23,6 +25,9 @@ struct Source {
     front: u32,
     back: u32,
     towards_front: f32,
+    /// A ring point's index among all contour vertices' ring points (its coverage is computed
+    /// once, see `assemble`), or `u32::MAX`.
+    ring_point: u32,
 }
 
 /// How the vertices of a volume get their filter opacity.
@@ -92,91 +97,6 @@ fn ring_points(alpha: &AlphaMode, path: &Path, p: [f64; 3]) -> Vec<(u32, f64)> {
     }
 }
 
-/// Faces per chunk of the parallel passes over the faces below (fixed: the same for any
-/// thread count).
-const FACE_CHUNK: usize = 8192;
-
-/// Set `lead[v]` (`trail[v]`) to 0 for every corner of a front (back) face.
-fn mark_sides(faces: &[[u32; 3]], front: &[bool], lead: &mut [u32], trail: &mut [u32]) {
-    use std::sync::atomic::{AtomicBool, Ordering::Relaxed};
-    if faces.len() <= FACE_CHUNK {
-        for (face, &f) in faces.iter().zip(front) {
-            let map = if f { &mut *lead } else { &mut *trail };
-            for &i in face {
-                map[i as usize] = 0;
-            }
-        }
-        return;
-    }
-    // Plain (relaxed) stores of `true` only: the result does not depend on their order.
-    let (l, t): (Vec<AtomicBool>, Vec<AtomicBool>) = (0..lead.len())
-        .map(|_| (AtomicBool::new(false), AtomicBool::new(false)))
-        .unzip();
-    faces
-        .par_chunks(FACE_CHUNK)
-        .zip(front.par_chunks(FACE_CHUNK))
-        .for_each(|(fs, fr)| {
-            for (face, &f) in fs.iter().zip(fr) {
-                let map = if f { &l } else { &t };
-                for &i in face {
-                    map[i as usize].store(true, Relaxed);
-                }
-            }
-        });
-    for (m, flags) in [(lead, &l), (trail, &t)] {
-        for (x, b) in m.iter_mut().zip(flags) {
-            if b.load(Relaxed) {
-                *x = 0;
-            }
-        }
-    }
-}
-
-/// The front faces through `lead`, in order, then the back faces through `trail`, in order
-/// and the number of front faces: chunks counted, then written at their prefix offsets.
-fn leading_then_trailing(
-    faces: &[[u32; 3]],
-    front: &[bool],
-    lead: &[u32],
-    trail: &[u32],
-) -> (Vec<[u32; 3]>, usize) {
-    let mut out = vec![[0u32; 3]; faces.len()];
-    let counts: Vec<usize> = front
-        .par_chunks(FACE_CHUNK)
-        .map(|c| c.iter().filter(|&&f| f).count())
-        .collect();
-    let leading = counts.iter().sum();
-    let (mut lo, mut hi) = out.split_at_mut(leading);
-    let mut parts = Vec::with_capacity(counts.len());
-    for (ci, &c) in counts.iter().enumerate() {
-        let size = FACE_CHUNK.min(faces.len() - ci * FACE_CHUNK);
-        let (a, rest_lo) = std::mem::take(&mut lo).split_at_mut(c);
-        let (b, rest_hi) = std::mem::take(&mut hi).split_at_mut(size - c);
-        parts.push((a, b));
-        (lo, hi) = (rest_lo, rest_hi);
-    }
-    parts
-        .into_par_iter()
-        .zip(
-            faces
-                .par_chunks(FACE_CHUNK)
-                .zip(front.par_chunks(FACE_CHUNK)),
-        )
-        .for_each(|((a, b), (fs, fr))| {
-            let (mut i, mut j) = (0, 0);
-            for (face, &f) in fs.iter().zip(fr) {
-                if f {
-                    a[i] = face.map(|v| lead[v as usize]);
-                    i += 1;
-                } else {
-                    b[j] = face.map(|v| trail[v as usize]);
-                    j += 1;
-                }
-            }
-        });
-    (out, leading)
-}
-
 /// Assemble leading, trailing and joining surfaces (the module docs) with vertex attributes.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn assemble(
@@ -188,7 +108,8 @@ pub(crate) fn assemble(
     per_edge: bool,
     alpha: &AlphaMode,
     opts: &VolumeOptions,
-    visible: Option<(&[bool], &[bool])>,
+    facing: Option<(&[bool], &[bool])>,
+    visible_only: bool,
 ) -> Result<MotionVolume> {
     let faces = mesh.faces();
     let verts = mesh.vertices();
@@ -212,6 +133,26 @@ pub(crate) fn assemble(
         .map(|&v| ring_points(alpha, path, verts[v as usize]))
         .collect();
     let rings = points.first().map_or(n + 1, |p| p.len());
+    // Placement of mesh vertex `v` at `frac` of segment `seg` (a keyframe's own placer at 0).
+    let placers: Vec<_> = frames.iter().map(|f| f.placer()).collect();
+    let place_at = |v: u32, (j, u): (u32, f64)| {
+        let j = j as usize;
+        if u == 0.0 {
+            placers[j].point(verts[v as usize])
+        } else {
+            path.between(j, u).point(verts[v as usize])
+        }
+    };
+    // The coverage of every ring point, once: a contour vertex on two swept edges has its
+    // strip vertices at the same points twice, and the rings' mean alphas read them again.
+    let ring_coverage: Vec<f64> = match alpha {
+        AlphaMode::Coverage(model, _) => ring_vertices
+            .par_iter()
+            .zip(&points)
+            .flat_map_iter(|(&v, pts)| pts.iter().map(move |&pt| model.coverage(place_at(v, pt))))
+            .collect(),
+        _ => Vec::new(),
+    };
     let joining = contour.len().saturating_mul(2 * (rings - 1));
     if joining > MAX_ELEMENTS || faces.len() + joining > MAX_ELEMENTS {
         return Err(Error::value(
@@ -247,6 +188,7 @@ pub(crate) fn assemble(
         front: NONE,
         back: NONE,
         towards_front: 1.0,
+        ring_point: NONE,
     };
     let mut out_faces = Vec::with_capacity(faces.len() + joining);
     let mut part = Vec::with_capacity(out_faces.capacity());
@@ -281,6 +223,14 @@ pub(crate) fn assemble(
         }
     }
     let nearest = |(seg, frac): (u32, f64)| if frac < 0.5 { seg } else { seg + 1 };
+    // Ring point `r` of the `k`-th contour vertex in `ring_coverage` (none without it).
+    let slot = |k: usize, r: usize| {
+        if ring_coverage.is_empty() {
+            NONE
+        } else {
+            (k * rings + r) as u32
+        }
+    };
     let ring_base = sources.len();
     let ring_count = ring_vertices.len();
     if strips {
@@ -320,6 +270,7 @@ pub(crate) fn assemble(
                         front,
                         back,
                         towards_front,
+                        ring_point: slot(ring[v as usize] as usize, r),
                         ..source(v, pt, normal_ring)
                     });
                 }
@@ -327,8 +278,11 @@ pub(crate) fn assemble(
         }
     } else {
         for r in 1..rings.saturating_sub(1) {
-            for (pts, &v) in points.iter().zip(&ring_vertices) {
-                sources.push(source(v, pts[r], nearest(pts[r])));
+            for (k, (pts, &v)) in points.iter().zip(&ring_vertices).enumerate() {
+                sources.push(Source {
+                    ring_point: slot(k, r),
+                    ..source(v, pts[r], nearest(pts[r]))
+                });
             }
         }
     }
@@ -366,10 +320,15 @@ pub(crate) fn assemble(
             part.push(JOINING);
         }
     }
-    // Only the faces the camera sees (`VolumeOptions::visible_only`): the vertices keep their
-    // places, and those no face uses skip their coverage alpha (0).
-    let used = visible.map(|(lead, trail)| {
-        keep_visible(&mut out_faces, &mut part, front, lead, trail);
+    // The faces the camera sees (leading faces facing it at close, trailing ones at open, every
+    // joining face); with `VolumeOptions::visible_only` only those are kept: the vertices keep
+    // their places, and those no face uses skip their coverage alpha (0).
+    let seen = facing.map(|(lead, trail)| seen_faces(out_faces.len(), front, lead, trail));
+    let used = seen.as_ref().filter(|_| visible_only).map(|seen| {
+        let mut k = seen.iter();
+        out_faces.retain(|_| *k.next().unwrap_or(&true));
+        let mut k = seen.iter();
+        part.retain(|_| *k.next().unwrap_or(&true));
         let mut used = vec![false; sources.len()];
         for f in &out_faces {
             for &i in f {
@@ -378,6 +337,8 @@ pub(crate) fn assemble(
         }
         used
     });
+    // The faces whose edges refinement tests: the seen ones (all, without a camera).
+    let testable = if visible_only { None } else { seen };
     // Attributes.
     let obj_normals: &[[f64; 3]] = match &opts.normals {
         Some(nr) => nr,
@@ -392,43 +353,87 @@ pub(crate) fn assemble(
         }
         Colors::PerFace(_) => [1.0; 4],
     };
-    let placers: Vec<_> = frames.iter().map(|f| f.placer()).collect();
-    let place = |s: &Source| {
-        let (j, u) = (s.seg as usize, s.frac);
-        if u == 0.0 {
-            placers[j].point(verts[s.v as usize])
-        } else {
-            path.between(j, u).point(verts[s.v as usize])
-        }
-    };
+    let place = |s: &Source| place_at(s.v, (s.seg, s.frac));
     let vertices: Vec<[f64; 3]> = sources.par_iter().map(place).collect();
     let filter_alpha = |s: &Source, p: [f64; 3]| match alpha {
         AlphaMode::Rings(r) => r[s.seg as usize],
+        AlphaMode::Coverage(_, _) if s.ring_point != NONE => ring_coverage[s.ring_point as usize],
         AlphaMode::Coverage(model, _) => model.coverage(p),
         AlphaMode::PerVertex(a, w) => (a[s.v as usize] * w[s.seg as usize]).clamp(0.0, 1.0),
     };
-    let rgba = sources
-        .par_iter()
-        .zip(&vertices)
-        .enumerate()
-        .map(|(i, (s, p))| {
-            let c = color(s);
-            if used.as_ref().is_some_and(|u| !u[i]) {
-                return [c[0], c[1], c[2], 0.0];
-            }
-            [c[0], c[1], c[2], (c[3] as f64 * filter_alpha(s, *p)) as f32]
-        })
-        .collect();
-    let normals = sources
+    let normals: Vec<[f32; 3]> = sources
         .par_iter()
         .map(|s| {
             let w = normalize(placers[s.normal_ring as usize].normal(obj_normals[s.v as usize]));
             [w[0] as f32, w[1] as f32, w[2] as f32]
         })
         .collect();
+    let (vertices, out_faces, part, rgba, normals) = match alpha {
+        AlphaMode::Coverage(model, _) => {
+            // Coverage alphas, then the faces cut where they bend (`refine.rs`).
+            let cover = sources
+                .par_iter()
+                .zip(&vertices)
+                .enumerate()
+                .map(|(i, (s, p))| {
+                    if used.as_ref().is_some_and(|u| !u[i]) {
+                        0.0
+                    } else {
+                        filter_alpha(s, *p)
+                    }
+                })
+                .collect();
+            let mut surface = Surface {
+                vertices,
+                faces: out_faces,
+                part,
+                cover,
+                colors: sources.par_iter().map(color).collect(),
+                normals,
+                testable: testable.unwrap_or_default(),
+            };
+            refine(model, &mut surface);
+            let rgba = surface
+                .colors
+                .par_iter()
+                .zip(&surface.cover)
+                .map(|(c, a)| [c[0], c[1], c[2], (c[3] as f64 * a) as f32])
+                .collect();
+            (
+                surface.vertices,
+                surface.faces,
+                surface.part,
+                rgba,
+                surface.normals,
+            )
+        }
+        _ => {
+            let rgba = sources
+                .par_iter()
+                .zip(&vertices)
+                .enumerate()
+                .map(|(i, (s, p))| {
+                    let c = color(s);
+                    if used.as_ref().is_some_and(|u| !u[i]) {
+                        return [c[0], c[1], c[2], 0.0];
+                    }
+                    [c[0], c[1], c[2], (c[3] as f64 * filter_alpha(s, *p)) as f32]
+                })
+                .collect();
+            (vertices, out_faces, part, rgba, normals)
+        }
+    };
     let ring_alpha = match alpha {
         AlphaMode::Rings(r) => r.clone(),
         _ if ring_vertices.is_empty() => vec![1.0; n + 1],
+        // Ring `i` is ring point `i (q + 2)` of every contour vertex (see `ring_points`).
+        AlphaMode::Coverage(_, _) => (0..=n)
+            .map(|i| {
+                let r = i * ((rings - 1) / n);
+                let sum: f64 = (0..ring_count).map(|k| ring_coverage[k * rings + r]).sum();
+                sum / ring_count as f64
+            })
+            .collect(),
         _ => (0..=n)
             .map(|i| {
                 // Collected first, then summed in order: the same for any thread count.
@@ -455,16 +460,11 @@ pub(crate) fn assemble(
     })
 }
 
-/// Drops the leading faces not facing the camera at close (`lead`) and the trailing faces not
-/// facing it at open (`trail`). `assemble` emits the leading faces first, then the trailing
-/// ones, each in mesh-face order, then the joining strips (kept).
-fn keep_visible(
-    faces: &mut Vec<[u32; 3]>,
-    part: &mut Vec<u8>,
-    front: &[bool],
-    lead: &[bool],
-    trail: &[bool],
-) {
+/// Per face of the `count` a volume has, whether the camera sees it: the leading faces facing it
+/// at close (`lead`), the trailing faces facing it at open (`trail`) and every joining face.
+/// `assemble` emits the leading faces first, then the trailing ones, each in mesh-face order,
+/// then the joining strips.
+fn seen_faces(count: usize, front: &[bool], lead: &[bool], trail: &[bool]) -> Vec<bool> {
     let seen = front
         .iter()
         .zip(lead)
@@ -477,69 +477,6 @@ fn keep_visible(
                 .filter(|(f, _)| !**f)
                 .map(|(_, v)| *v),
         );
-    let sides = front.len();
-    let keep: Vec<bool> = seen
-        .chain(std::iter::repeat(true))
-        .take(faces.len())
-        .collect();
-    debug_assert!(faces.len() >= sides);
-    let mut k = keep.iter();
-    faces.retain(|_| *k.next().unwrap_or(&true));
-    let mut k = keep.iter();
-    part.retain(|_| *k.next().unwrap_or(&true));
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn chunked_side_passes_equal_the_serial_loops() {
-        // Three chunks of faces with pseudo-random corners and sides.
-        let nv = 5000u32;
-        let faces: Vec<[u32; 3]> = (0..(2 * FACE_CHUNK + 77) as u32)
-            .map(|i| [i % nv, (i * 7 + 3) % nv, (i * 13 + 11) % nv])
-            .collect();
-        let front: Vec<bool> = (0..faces.len()).map(|i| (i * 2654435761) % 7 < 3).collect();
-        let (mut lead, mut trail) = (vec![u32::MAX; nv as usize], vec![u32::MAX; nv as usize]);
-        for (face, &f) in faces.iter().zip(&front) {
-            for &i in face {
-                if f {
-                    lead[i as usize] = 0;
-                } else {
-                    trail[i as usize] = 0;
-                }
-            }
-        }
-        // Distinct ids for the face pass.
-        let ids = |m: &[u32], k: u32| -> Vec<u32> {
-            m.iter()
-                .enumerate()
-                .map(|(v, &x)| if x == 0 { 2 * v as u32 + k } else { x })
-                .collect()
-        };
-        let (lead_ids, trail_ids) = (ids(&lead, 0), ids(&trail, 1));
-        let want_faces: Vec<[u32; 3]> = [true, false]
-            .iter()
-            .flat_map(|&w| {
-                let map = if w { &lead_ids } else { &trail_ids };
-                faces
-                    .iter()
-                    .zip(&front)
-                    .filter(move |(_, &f)| f == w)
-                    .map(move |(face, _)| face.map(|i| map[i as usize]))
-            })
-            .collect();
-        for threads in [1, 2] {
-            let (l, t, out) = crate::on_threads(threads, || {
-                let (mut l, mut t) = (vec![u32::MAX; nv as usize], vec![u32::MAX; nv as usize]);
-                mark_sides(&faces, &front, &mut l, &mut t);
-                let out = leading_then_trailing(&faces, &front, &lead_ids, &trail_ids);
-                (l, t, out)
-            });
-            assert_eq!((&l, &t), (&lead, &trail));
-            assert_eq!(out.0, want_faces);
-            assert_eq!(out.1, front.iter().filter(|&&f| f).count());
-        }
-    }
+    debug_assert!(count >= front.len());
+    seen.chain(std::iter::repeat(true)).take(count).collect()
 }

@@ -62,7 +62,18 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
     if path.is_static() && face_colors {
         let front = vec![true; mesh.faces().len()];
         let alpha = AlphaMode::Rings(vec![1.0; n + 1]);
-        return assemble(mesh, path, &front, &[], &[], false, &alpha, opts, None);
+        return assemble(
+            mesh,
+            path,
+            &front,
+            &[],
+            &[],
+            false,
+            &alpha,
+            opts,
+            None,
+            false,
+        );
     }
     if path.is_static() {
         // The mesh itself (every vertex, in order), placed by T_0, all leading and opaque.
@@ -159,10 +170,7 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         None => (mesh, opts, front, vis),
     };
     let (contour, edge_vis) = select_contour(mesh, &front, vis.as_ref());
-    let seen = vis
-        .as_ref()
-        .filter(|_| opts.visible_only)
-        .map(|(l, t)| (l.as_slice(), t.as_slice()));
+    let facing = vis.as_ref().map(|(l, t)| (l.as_slice(), t.as_slice()));
     assemble(
         mesh,
         path,
@@ -172,7 +180,8 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         line_eye.is_some(),
         &alpha,
         opts,
-        seen,
+        facing,
+        opts.visible_only,
     )
 }
 

@@ -31,6 +31,12 @@
 //! and at `q - 1` equally spaced times (`q` from [`Filter::knots_per_segment`]) for the curvature
 //! of the triangle and gaussian weights. The chord tables hold 1024 rows per segment (fewer for
 //! long paths, at least 64).
+//!
+//! A path of more than [`MAX_MODEL_SEGMENTS`] segments is followed on that many spans of
+//! consecutive segments (each span's hull at its middle, moved along the chord between its
+//! ends): a vertex's coverage then costs the same for any number of segments, and a volume's
+//! alphas cost time linear in its segments. Its strips are still cut per path segment, each
+//! with its span's hull moved to the segment's middle.
 
 use super::filter::Filter;
 use super::hulls::{hulls_of, project};
@@ -164,6 +170,31 @@ impl ChordTable {
 /// (each one projects every vertex and takes its hull).
 const DENSE_VERTICES: usize = 20_000;
 
+/// Most spans the model follows a path on: a longer path's segments are taken in this many
+/// consecutive groups (see [`spans`]), so that a vertex's coverage costs the same for any number
+/// of segments.
+pub const MAX_MODEL_SEGMENTS: usize = 64;
+
+/// The spans `(a, b)` of keyframes the model follows a path of `n` segments on: every segment,
+/// or past [`MAX_MODEL_SEGMENTS`] that many groups of consecutive ones.
+fn spans(n: usize) -> Vec<(usize, usize)> {
+    if n > MAX_MODEL_SEGMENTS {
+        let m = MAX_MODEL_SEGMENTS;
+        (0..m).map(|g| (g * n / m, (g + 1) * n / m)).collect()
+    } else {
+        (0..n).map(|j| (j, j + 1)).collect()
+    }
+}
+
+/// The placement of `p` at the middle of the span `(a, b)` (in time).
+fn middle(p: &Path, (a, b): (usize, usize)) -> Keyframe {
+    if b == a + 1 {
+        p.between(a, 0.5)
+    } else {
+        p.between((a + b) / 2, if (a + b) % 2 == 1 { 0.5 } else { 0.0 })
+    }
+}
+
 /// One path segment of the model.
 #[derive(Debug, Clone)]
 struct Segment {
@@ -261,7 +292,7 @@ impl CoverageModel {
         // that differ with depth, so the coverage integral follows it on at least 8
         // sub-segments; a translated dense mesh (hull of many points per sub-segment) gets 3.
         // The cuts of the joining strips use the path's own segments.
-        let parts = if pure {
+        let parts = if pure || n > MAX_MODEL_SEGMENTS {
             1
         } else if path.is_translation() && vertices.len() > DENSE_VERTICES {
             3usize.div_ceil(n)
@@ -269,8 +300,12 @@ impl CoverageModel {
             8usize.div_ceil(n)
         };
         let sub = (parts > 1).then(|| path.subdivide(parts));
-        let mids =
-            |p: &Path| -> Vec<Keyframe> { (0..p.segments()).map(|j| p.between(j, 0.5)).collect() };
+        let mids = |p: &Path| -> Vec<Keyframe> {
+            spans(p.segments())
+                .into_iter()
+                .map(|s| middle(p, s))
+                .collect()
+        };
         let mut placements: Vec<Keyframe> = Vec::new();
         let wanted = if pure {
             vec![path.frames[0]]
@@ -303,57 +338,110 @@ impl CoverageModel {
             })
             .unwrap_or(1.0);
         let still = 1e-12 * size.max(1e-300);
-        let build = |path: &Path| -> Vec<Segment> {
-            let n = path.segments();
-            let rows = (65_536 / n.max(1)).clamp(64, 1024);
-            (0..n)
-                .map(|j| {
-                    let (a, b) = (&path.frames[j], &path.frames[j + 1]);
-                    let (pa, pb) = if pure {
-                        (proj(a.translation), proj(b.translation))
-                    } else {
-                        (proj(a.point(centroid)), proj(b.point(centroid)))
+        // The projected path of span (a, b) of `p`: its ends' images (the translation's, or the
+        // centroid's placed).
+        let ends = |p: &Path, (a, b): (usize, usize)| -> ([f64; 2], [f64; 2]) {
+            let (fa, fb) = (&p.frames[a], &p.frames[b]);
+            if pure {
+                (proj(fa.translation), proj(fb.translation))
+            } else {
+                (proj(fa.point(centroid)), proj(fb.point(centroid)))
+            }
+        };
+        // The segment of span (a, b) of `p` (`n` segments) with the image `hull` at its middle.
+        let make = |p: &Path, (a, b): (usize, usize), hull: Vec<[f64; 2]>, rows: usize| {
+            let n = p.segments();
+            let (pa, pb) = ends(p, (a, b));
+            let disp = [pb[0] - pa[0], pb[1] - pa[1]];
+            let len = (disp[0] * disp[0] + disp[1] * disp[1]).sqrt();
+            let dir = if len > still {
+                [disp[0] / len, disp[1] / len]
+            } else {
+                [1.0, 0.0]
+            };
+            let perp = [-dir[1], dir[0]];
+            let local: Vec<[f64; 2]> = hull
+                .iter()
+                .map(|p| {
+                    [
+                        p[0] * dir[0] + p[1] * dir[1],
+                        p[0] * perp[0] + p[1] * perp[1],
+                    ]
+                })
+                .collect();
+            Segment {
+                t0: a as f64 / n as f64,
+                t1: b as f64 / n as f64,
+                dir,
+                perp,
+                len,
+                table: ChordTable::new(&local, rows),
+            }
+        };
+        // The orthographic translation's hull: the first one moved to the span's middle.
+        let moved = |p: &Path, span: (usize, usize), h: &[[f64; 2]]| -> Vec<[f64; 2]> {
+            let (pa, pb) = ends(p, span);
+            let o = proj(path.frames[0].translation);
+            let off = [0.5 * (pa[0] + pb[0]) - o[0], 0.5 * (pa[1] + pb[1]) - o[1]];
+            h.iter().map(|q| [q[0] + off[0], q[1] + off[1]]).collect()
+        };
+        let build = |p: &Path| -> Vec<Segment> {
+            let spans = spans(p.segments());
+            let rows = (65_536 / spans.len().max(1)).clamp(64, 1024);
+            spans
+                .into_iter()
+                .map(|span| {
+                    let hull = match &base {
+                        Some(h) => moved(p, span, h),
+                        None => hull_at(&middle(p, span)),
                     };
-                    let disp = [pb[0] - pa[0], pb[1] - pa[1]];
-                    let len = (disp[0] * disp[0] + disp[1] * disp[1]).sqrt();
-                    let dir = if len > still {
-                        [disp[0] / len, disp[1] / len]
-                    } else {
-                        [1.0, 0.0]
-                    };
-                    let perp = [-dir[1], dir[0]];
-                    let hull: Vec<[f64; 2]> = match &base {
-                        Some(h) => {
-                            let o = proj(path.frames[0].translation);
-                            let off = [0.5 * (pa[0] + pb[0]) - o[0], 0.5 * (pa[1] + pb[1]) - o[1]];
-                            h.iter().map(|p| [p[0] + off[0], p[1] + off[1]]).collect()
-                        }
-                        None => hull_at(&path.between(j, 0.5)),
-                    };
-                    let local: Vec<[f64; 2]> = hull
-                        .iter()
-                        .map(|p| {
-                            [
-                                p[0] * dir[0] + p[1] * dir[1],
-                                p[0] * perp[0] + p[1] * perp[1],
-                            ]
-                        })
-                        .collect();
-                    Segment {
-                        t0: j as f64 / n as f64,
-                        t1: (j + 1) as f64 / n as f64,
-                        dir,
-                        perp,
-                        len,
-                        table: ChordTable::new(&local, rows),
-                    }
+                    make(p, span, hull, rows)
                 })
                 .collect()
         };
-        let geometric = build(path);
         let segments = match &sub {
             Some(s) => build(s),
-            None => geometric.clone(),
+            None => build(path),
+        };
+        let geometric = if n <= MAX_MODEL_SEGMENTS {
+            match &sub {
+                Some(_) => build(path),
+                None => segments.clone(),
+            }
+        } else {
+            // Every path segment, with the hull of its span moved by the centroid's image from
+            // the span's middle to the segment's (as the model moves a hull along its span).
+            let rows = (65_536 / n).clamp(64, 1024);
+            let groups = spans(n);
+            let centres: Vec<[f64; 2]> = groups
+                .iter()
+                .map(|&g| proj(middle(path, g).point(centroid)))
+                .collect();
+            let group_hulls: Vec<Vec<[f64; 2]>> = match &base {
+                Some(_) => Vec::new(),
+                None => groups.iter().map(|&g| hull_at(&middle(path, g))).collect(),
+            };
+            let mut g = 0;
+            (0..n)
+                .map(|j| {
+                    while groups[g].1 <= j {
+                        g += 1;
+                    }
+                    let hull = match &base {
+                        Some(h) => moved(path, (j, j + 1), h),
+                        None => {
+                            let (pa, pb) = ends(path, (j, j + 1));
+                            let c = centres[g];
+                            let off = [0.5 * (pa[0] + pb[0]) - c[0], 0.5 * (pa[1] + pb[1]) - c[1]];
+                            group_hulls[g]
+                                .iter()
+                                .map(|q| [q[0] + off[0], q[1] + off[1]])
+                                .collect()
+                        }
+                    };
+                    make(path, (j, j + 1), hull, rows)
+                })
+                .collect()
         };
         CoverageModel {
             filter,
@@ -378,6 +466,11 @@ impl CoverageModel {
             q[0] * s.dir[0] + q[1] * s.dir[1],
             q[0] * s.perp[0] + q[1] * s.perp[1],
         )
+    }
+
+    /// The image of the world point `p` on the model's picture plane (the units of its hulls).
+    pub fn image(&self, p: [f64; 3]) -> [f64; 2] {
+        project(self.eye, self.d, self.e1, self.e2, p)
     }
 
     /// The filter-weighted fraction of the shutter during which the object covers the image of

@@ -44,6 +44,7 @@ use rayon::prelude::*;
 use super::assemble::{assemble, select_contour, AlphaMode};
 use super::build::motion_volume;
 use super::filter::Filter;
+use super::polar::{polar_occupancy, ANGLES, RADII};
 use super::subdivide::{subdivided, subdivision_for_edge};
 use super::types::{check_options, check_segments, MotionVolume, VolumeOptions};
 use crate::error::check_vector;
@@ -51,8 +52,6 @@ use crate::error::{Error, Result};
 use crate::mesh::{dot, face_normal, normalize, Mesh};
 use crate::motion::{Keyframe, Path};
 
-const RADII: usize = 128;
-const ANGLES: usize = 720;
 const TAU: f64 = std::f64::consts::TAU;
 
 /// A spin over the shutter.
@@ -91,93 +90,6 @@ fn rotation(w: [f64; 3], beta: f64, c: [f64; 3], t: [f64; 3]) -> Keyframe {
             c[2] - rc[2] + t[2],
         ],
     }
-}
-
-/// Per radial bin: (angle covered, number of covered arcs) of the faces flagged in `front`
-/// (those facing the axis, which tile the object's projection along it) seen along `w`.
-fn polar_occupancy(
-    mesh: &Mesh,
-    front: &[bool],
-    c: [f64; 3],
-    w: [f64; 3],
-) -> (f64, Vec<(f64, usize)>) {
-    let helper = if w[0].abs() < 0.9 {
-        [1.0, 0.0, 0.0]
-    } else {
-        [0.0, 1.0, 0.0]
-    };
-    let e1 = normalize(cross(helper, w));
-    let e2 = cross(w, e1);
-    let v = mesh.vertices();
-    let flat: Vec<[f64; 2]> = v
-        .par_iter()
-        .map(|p| {
-            let d = [p[0] - c[0], p[1] - c[1], p[2] - c[2]];
-            [dot(d, e1), dot(d, e2)]
-        })
-        .collect();
-    let rmax = flat
-        .iter()
-        .map(|p| (p[0] * p[0] + p[1] * p[1]).sqrt())
-        .fold(0.0, f64::max);
-    if rmax <= 0.0 {
-        return (0.0, vec![(TAU, 1); RADII]);
-    }
-    let dr = rmax / RADII as f64;
-    let tris: Vec<[[f64; 2]; 3]> = mesh
-        .faces()
-        .iter()
-        .zip(front)
-        .filter(|(_, &f)| f)
-        .map(|(f, _)| {
-            [
-                flat[f[0] as usize],
-                flat[f[1] as usize],
-                flat[f[2] as usize],
-            ]
-        })
-        .collect();
-    let bins: Vec<(f64, usize)> = (0..RADII)
-        .into_par_iter()
-        .map(|k| {
-            let r = (k as f64 + 0.5) * dr;
-            let mut hit = vec![false; ANGLES];
-            for t in &tris {
-                let rs = t.map(|p| (p[0] * p[0] + p[1] * p[1]).sqrt());
-                if rs.iter().all(|&x| x < r) {
-                    continue;
-                }
-                let area2 = (t[1][0] - t[0][0]) * (t[2][1] - t[0][1])
-                    - (t[1][1] - t[0][1]) * (t[2][0] - t[0][0]);
-                if area2 == 0.0 {
-                    continue;
-                }
-                let inside = |p: [f64; 2]| {
-                    let s = |a: [f64; 2], b: [f64; 2]| {
-                        (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
-                    };
-                    let (x, y, z) = (s(t[0], t[1]), s(t[1], t[2]), s(t[2], t[0]));
-                    if area2 > 0.0 {
-                        x >= 0.0 && y >= 0.0 && z >= 0.0
-                    } else {
-                        x <= 0.0 && y <= 0.0 && z <= 0.0
-                    }
-                };
-                for (a, h) in hit.iter_mut().enumerate() {
-                    if !*h {
-                        let ang = (a as f64 + 0.5) * TAU / ANGLES as f64;
-                        *h = inside([r * ang.cos(), r * ang.sin()]);
-                    }
-                }
-            }
-            let count = hit.iter().filter(|h| **h).count();
-            let arcs = (0..ANGLES)
-                .filter(|&a| hit[a] && !hit[(a + ANGLES - 1) % ANGLES])
-                .count();
-            (count as f64 * TAU / ANGLES as f64, arcs)
-        })
-        .collect();
-    (rmax, bins)
 }
 
 /// The spin volume of `mesh` (see the module docs). Colours, normals and the camera rules are
@@ -317,6 +229,7 @@ pub fn spin_volume(mesh: &Mesh, spin: &Spin, opts: &VolumeOptions) -> Result<Mot
         &AlphaMode::PerVertex(per_vertex, weights),
         opts,
         None,
+        false,
     )
 }
 
@@ -342,7 +255,7 @@ fn turning_faces(mesh: &Mesh, w: [f64; 3], c: [f64; 3]) -> Vec<bool> {
 fn filter_density(f: Filter, t: f64) -> f64 {
     let h = 1e-6;
     let (a, b) = ((t - h).max(0.0), (t + h).min(1.0));
-    (f.cumulative(b) - f.cumulative(a)) / (b - a)
+    (f.cumulative_exact(b) - f.cumulative_exact(a)) / (b - a)
 }
 
 #[cfg(test)]

@@ -27,7 +27,7 @@ def test_python_constants_are_the_cores():
         (1, 2, 4),
     )
     assert _core.MAX_SEGMENTS == 4096
-    for name in ("MAX_LENGTH", "MAX_FPS_RATIO", "MAX_LEVELS", "MAX_LAYERS", "MAX_SAMPLES"):
+    for name in ("MAX_LENGTH", "MAX_FPS_RATIO", "MAX_LEVELS", "MAX_LAYERS", "MAX_SAMPLES", "MAX_VELOCITY"):
         assert getattr(image, name) == getattr(_core, name), name
     assert _volume_colors.MIN_ALPHA == _core.MIN_ALPHA and np.float32(_core.MIN_ALPHA) == np.float32(1e-3)
 

@@ -59,19 +59,27 @@ def test_licence_changelog_and_classifiers():
 
 def test_extras_by_purpose_and_all_is_their_union():
     extras = _pyproject()["project"]["optional-dependencies"]
-    assert {"reference", "metrics", "pyrender", "interop", "bench", "all"} <= set(extras)
+    assert {"reference", "metrics", "pyrender", "interop", "meshes", "bench", "all"} <= set(extras)
     assert "peers" not in extras
-    others = sorted(set(extras) - {"all"})
+    others = sorted(set(extras) - {"all", "dev"})
     assert extras["all"] == [
-        f"motionblur[{','.join(o for o in ['reference', 'metrics', 'pyrender', 'interop', 'bench'])}]"
+        f"motionblur[{','.join(o for o in ['reference', 'metrics', 'pyrender', 'interop', 'meshes', 'bench'])}]"
     ]
-    assert set(others) == {"reference", "metrics", "pyrender", "interop", "bench"}
+    assert set(others) == {"reference", "metrics", "pyrender", "interop", "meshes", "bench"}
+    # the real meshes of the report come with the bench, not with the library
+    assert "motionblur[reference,metrics,meshes]" in extras["bench"]
     # pyrender 0.1.45 pins PyOpenGL==3.1.0: an extra asking for a newer PyOpenGL cannot resolve
     for name, reqs in extras.items():
         assert not any(r.lower().startswith("pyopengl") for r in reqs), name
     assert any(r.startswith("mitsuba") for r in extras["reference"])
     assert any(r.startswith("flip-evaluator") for r in extras["metrics"])
     assert {"pygltflib", "OpenEXR", "trimesh"} <= {re.split(r"[<>=]", r)[0] for r in extras["interop"]}
+    # dev is for working on the project (make installs requirements-dev.txt, which holds it)
+    dev_reqs = {
+        re.split(r"[<>=]", r)[0]
+        for r in (Path(__file__).parents[2] / "requirements-dev.txt").read_text().split()
+    }
+    assert {re.split(r"[<>=]", r)[0] for r in extras["dev"]} <= dev_reqs
 
 
 def test_console_script_prints_the_version():

@@ -92,6 +92,26 @@ def test_faster_spin_is_more_transparent():
     assert (vol.rgba[hub, 3] > 0.99).all()
 
 
+def test_a_dense_mesh_spins_in_time_proportional_to_its_faces():
+    """The occupancy grid tests each face only on its own ring of radii and wedge of angles
+    (every one of the 128 x 720 cells before: about 210 us a face whatever the angle, 82k faces
+    17 s). 20k faces now take tens of ms; the bound is 50x that, far below the old 4-12 s."""
+    v, f = meshes.icosphere(5)
+    mesh = Mesh(v * [1.0, 0.3, 0.1], f)
+    for angle in (0.3, 3.0):
+        spin_volume(mesh, [0, 0, 1], angle)  # warm-up
+        t = min(_timed(lambda a=angle: spin_volume(mesh, [0, 0, 1], a)) for _ in range(2))
+        assert t < 1.5, f"{len(f)} faces, angle {angle}: {t:.2f} s"
+
+
+def _timed(fn):
+    import time
+
+    t = time.perf_counter()
+    fn()
+    return time.perf_counter() - t
+
+
 def test_zero_spin_is_the_mesh_itself_opaque():
     v, f = propeller()
     vol = spin_volume(Mesh(v, f), [0, 0, 1], 0.0, colors=[0.2, 0.4, 0.6])

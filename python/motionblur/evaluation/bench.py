@@ -1,50 +1,92 @@
-"""The speed-against-error report: every registered method on every built-in scene.
+"""The speed-against-error report: every registered method on every built-in and real-mesh scene.
 
-For each scene of :data:`motionblur.SCENES` and each method of :data:`motionblur.METHODS` whose
-``applies(scene)`` is true, every option set of the method's ``sweep`` is rendered; the best of
-``repeat`` wall-clock timings of :func:`motionblur.render` and the error against the Mitsuba
-time-sampled reference (RMSE over premultiplied RGBA, PSNR, FLIP, signed coverage error) are
-recorded. References are cached under ``<out>/references/`` (keyed by scene, size, K, spp, seed
-and the Mitsuba variant). Outputs in ``<out>``: ``results.csv``, ``results.md`` (a table per
-scene, the Pareto front marked, and the two comparisons below) and ``pareto_<scene>.png``
-(error against time, log-log, the front drawn).
+Scenes: :data:`motionblur.SCENES` (procedural, mostly convex) and
+:data:`motionblur.scenes_real.REAL_SCENES` (the bunny scan, the modelled ant, a torus and a
+torus knot; translating, turning, coming toward the camera, one deforming). For each scene and
+each method of :data:`motionblur.METHODS` whose ``applies(scene)`` is true, every option set of
+the method's ``sweep`` is rendered and timed (best of ``repeat`` after a warm-up), and measured
+against **two references**:
 
-Comparisons, measured in the same run:
+- Mitsuba 3, time-sampled (K shutter times x spp): the physical ground truth. It casts shadows
+  the rasterizer does not draw, so on the real-mesh scenes (a mover over a lit floor) every
+  method carries that difference too;
+- the method's own N -> infinity limit: accumulation with ``limit_samples`` (1024) samples on our
+  rasterizer, at the same ``aa``: what a method would give with unlimited time, so the RMSE
+  against it is the blur method's own error, without the renderers' differences.
 
-- motion_volume against accumulation at equal error: for each motion-volume option set, the time
-  accumulation needs for the same RMSE, interpolated log-log between the two N that bracket it
-  (if even N = 1 is better, its time is an upper bound and the factor is marked ``<=``; if even
-  the largest N is worse, ``>=``). The factor is accumulation's time over motion_volume's.
-- every method against accumulation at equal time (:func:`.compare.equal_time`): for each run of a
-  method, accumulation's RMSE in the same time, interpolated log-log on accumulation's error
-  against time, beside the method's own.
-- accumulation with the static layer drawn once (N = 16) against 16-pose accumulation on pyrender
-  (every object at every pose, :func:`.reference.pyrender`), on the same scene and size;
-  ours at ``aa=1`` like pyrender under OSMesa, its static layer drawn once per frame (the cache
-  cleared before every run).
+References are cached under ``<out>/references/`` keyed by a hash of the scene and the
+reference's settings (:mod:`.cache`). ``auto`` (the planner) gets one row per scene at its
+default tolerance, and where it lands against the Pareto front (time at the error it reaches) is
+reported; ``fit_auto=True`` first refits its model from this run's rows. Outputs in ``<out>``:
+``results.csv``, ``results.md`` (tables per scene, both references, the comparisons below),
+``pareto_<scene>.png`` (error against time for both references, the front annotated),
+``sheet_<scene>.png`` (labelled: the references and each method's most accurate option set
+within a matched time, ``auto``'s) and ``html/index.html`` (a static page, :mod:`.html`).
 
-In the sweeps the static layer is kept across frames (as a real-time loop keeps it while the
-static objects and the camera do not change), for every method alike; timings are the best of
-``repeat`` runs after one warm-up run.
+Comparisons, measured in the same run: motion_volume against accumulation at equal error (and
+re-timed in pairs), every method against accumulation at equal time, and accumulation with the
+static layer drawn once against 16-pose pyrender accumulation (see :mod:`.sweep`).
 
-:func:`run` is the whole report and :func:`main` its command line (``python -m motionblur
-bench``); :mod:`.sweep` renders and times, :mod:`.compare` computes the comparisons from the
-rows, :mod:`.report` writes the files.
+With a ``dask.distributed`` client (``client=``, or ``--dask local|ADDRESS`` on the command line)
+the references and the errors are Dask tasks; the timings stay undisturbed (:mod:`.cluster`).
 """
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
+import numpy as np
+
 from .._optional import require_all
+from ..methods.auto import DEFAULT_TOLERANCE
 from ..render import METHODS
 from ..scenes_builtin import SCENES
+from ..scenes_real import REAL_SCENES
+from . import autofit, html, report
 from . import reference as ref_mod
-from . import report
+from .cluster import Dask, SceneRef, Serial, call_task, client_for, error_task, reference_task, timed_task
 from .compare import equal_error, equal_time, pareto_front
-from .sweep import paired_factor, pyrender_comparison, reference_for, sweep_scene
+from .sweep import _label, _with_aa, paired_factor, paired_times, pyrender_comparison
 
-__all__ = ["run", "main"]
+__all__ = ["run", "main", "ALL_SCENES"]
+
+#: Every scene the report knows: the built-in ones, then the real-mesh ones.
+ALL_SCENES = {**SCENES, **REAL_SCENES}
+#: The option sets run on the real-mesh scenes (every shutter there is a box: the motion volume's
+#: other filters are looks, not measurements; the analytic method takes 0.3-2 s a frame on them,
+#: so three of its option sets): 22 runs a scene instead of 44, to keep ``make bench`` in time.
+REAL_SWEEPS = {
+    "accumulation": [{"samples": n} for n in (1, 2, 4, 8, 16, 32, 64, 128, 256)],
+    "motion_volume": [{"segments": s, "filter": "box"} for s in (1, 2, 4, 8)]
+    + [{"segments": 1, "filter": "box", "color_renders": n} for n in (1, 4)],
+    "analytic": [{"gauss": "auto"}, {"gauss": 1}, {"aa": 1}],
+    "blur_shell": [{"subdivisions": 4}, {"subdivisions": 16}],
+    "opaque_image": [{"aa": 1}, {"aa": 2}],
+}
+#: The scenes of ``--quick``: two built-in, three real-mesh (concave, turning, deforming).
+QUICK_SCENES = ("cube", "pan", "bunny_turn", "torus_toward", "knot_twist")
+
+
+def _jobs(scene, methods, aa, sweeps=None) -> list[tuple[str, dict]]:
+    out = []
+    for mname, spec in METHODS.items():
+        if mname == "auto" or (methods is not None and mname not in methods) or not spec.applies(scene):
+            continue
+        sweep = spec.sweep if sweeps is None else sweeps.get(mname, [])
+        out += [(mname, _with_aa(spec.fn, o, aa)) for o in sweep]
+    return out
+
+
+def _pyrender(scene, name, ref, repeat):
+    return pyrender_comparison(name, scene, ref, repeat)
+
+
+def _row(name, method, opts, ms, err, plan=None) -> dict:
+    row = {"scene": name, "method": method, "options": _label(opts), "_opts": opts, "ms": ms, **err}
+    if plan:
+        row["_plan"] = plan
+    return row
 
 
 def run(
@@ -62,81 +104,152 @@ def run(
     save_images: bool = False,
     aa: int | None = 2,
     log=print,
+    client=None,
+    limit_samples: int = 1024,
+    auto: bool = True,
+    fit_auto: bool = False,
+    model_path=None,
+    write_html: bool = True,
+    seed: int = 0,
 ) -> dict:
-    """Run the report and write it to ``out``; returns ``{"rows", "comparisons", "pyrender", "paths"}``.
+    """Run the report and write it to ``out``; returns ``{"rows", "comparisons", "auto", "paths", ...}``.
 
-    ``scenes``: names from SCENES (default all); ``sweeps``: optional ``{method: [options, ...]}``
-    replacing the registered sweeps (the demo's small version); ``methods``: restrict to these;
-    ``aa``: spatial samples per pixel per axis given to every method that takes ``aa`` (2 by
-    default: with one sample per pixel the aliasing of long static edges, about 0.017 RMSE on the
-    cube scene, hides the motion-blur error the report is about). The pyrender comparison runs
-    ours at ``aa=1``, as pyrender under OSMesa has no multisampling.
+    ``scenes``: names from :data:`ALL_SCENES` (default all); ``sweeps``: optional ``{method:
+    [options, ...]}`` replacing the registered sweeps; ``methods``: restrict to these; ``aa``:
+    spatial samples per pixel per axis given to every method that takes ``aa`` (and to the
+    own-limit reference); ``client``: a ``dask.distributed.Client`` (see :mod:`.cluster`);
+    ``limit_samples``: N of the own-limit reference; ``auto``: add an ``auto`` row per scene;
+    ``fit_auto``: refit auto's model from this run first and save it to ``model_path`` (default
+    the package's ``auto_model.json``); ``save_images``: every image under ``images/``;
+    ``write_html``: the static page under ``html/``.
     """
-    names = list(SCENES) if scenes is None else list(scenes)
-    unknown = [n for n in names if n not in SCENES]
+    names = list(ALL_SCENES) if scenes is None else list(scenes)
+    unknown = [n for n in names if n not in ALL_SCENES]
     if unknown:
-        raise ValueError(f"scenes: unknown {unknown}; expected names from {', '.join(SCENES)}")
-    # every optional package the run needs, checked before anything is written
-    needed = ["mitsuba", "tqdm", "matplotlib"] + ["flip_evaluator"] * bool(flip)
-    needed += ["PIL"] * bool(save_images) + ["pyrender", "trimesh"] * bool(pyrender_peer)
+        raise ValueError(f"scenes: unknown {unknown}; expected names from {', '.join(ALL_SCENES)}")
+    needed = ["mitsuba", "tqdm", "matplotlib", "PIL"] + ["flip_evaluator"] * bool(flip)
+    needed += ["pyrender", "trimesh"] * bool(pyrender_peer)
+    if any(n in REAL_SCENES for n in names):
+        needed += ["pymeshfix", "pyvista", "fast_simplification"]
     require_all(needed, "the speed-against-error report")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    runner = Serial() if client is None else Dask(client)
     saved = {}
     if sweeps:
         for m, s in sweeps.items():
             saved[m] = METHODS[m].sweep
             METHODS[m].sweep = [dict(o) for o in s]
-    rows, comparisons, flip_comparisons, pyr, paired, equal_times = [], {}, {}, [], {}, {}
-    images = {} if save_images else None
-    references = {}
+    refs_of = {name: SceneRef(name, width, height) for name in names}  # what tasks get: scenes do not pickle
+    built = {name: refs_of[name].build() for name in names}
+    cache = str(out / "references")
+    mits_settings = {"times": times, "spp": spp, "seed": seed}
+    limit_settings = {"samples": limit_samples, "aa": aa or 1}
+    rows, frames, refs, comparisons, flip_comparisons, equal_times, paired, pyr = (
+        [],
+        {},
+        {},
+        {},
+        {},
+        {},
+        {},
+        [],
+    )
     try:
+        # 1. every reference of the run, as parallel tasks on a cluster
+        kinds = [("mitsuba", mits_settings), ("limit", limit_settings)]
+        jobs = [(refs_of[n], k, s, cache) for n in names for k, s in kinds]
+        images = runner.map(reference_task, *zip(*jobs))
+        for i, n in enumerate(names):
+            refs[n] = {"mitsuba": images[2 * i], "limit": images[2 * i + 1]}
+        log(f"references: {len(jobs)} ({runner.name})")
+        # 2. per scene: timings one at a time, then the errors as tasks
         for name in names:
-            scene = SCENES[name](width=width, height=height)
-            ref, ref_ms = reference_for(name, scene, times, spp, out / "references")
-            log(f"[{name}] reference {'cached' if ref_ms == 0 else f'{ref_ms / 1e3:.1f} s'}")
-            if save_images:
-                report.save_reference(out, name, ref)
-                references[name] = ref
-            scene_rows = sweep_scene(name, scene, ref, repeat, methods, flip, images, aa)
+            scene = built[name]
+            todo = _jobs(scene, methods, aa, REAL_SWEEPS if name in REAL_SCENES and not sweeps else None)
+            timed = runner.timed(timed_task, [(refs_of[name], m, o, repeat) for m, o in todo])
+            errs = runner.map(
+                error_task, [t[1] for t in timed], [refs[name]["mitsuba"]] * len(timed),
+                [refs[name]["limit"]] * len(timed), [flip] * len(timed),
+            )  # fmt: skip
+            scene_rows = [_row(name, m, o, t[0], e) for (m, o), t, e in zip(todo, timed, errs)]
+            for r, t in zip(scene_rows, timed):
+                frames[(name, r["method"], r["options"])] = t[1]
             rows += scene_rows
             comparisons[name] = equal_error(scene_rows)
             equal_times[name] = equal_time(scene_rows)
             flip_comparisons[name] = equal_error(scene_rows, metric="flip") if flip else []
-            paired[name] = paired_factor(scene, scene_rows, "rmse", max(3, repeat))
-            if pyrender_peer:
-                pyr.append(pyrender_comparison(name, scene, ref, repeat))
+            paired[name] = runner.timed(
+                call_task, [(paired_factor, refs_of[name], scene_rows, "rmse", max(3, repeat))]
+            )[0]
+            if (
+                pyrender_peer and name in SCENES
+            ):  # pyrender draws lambert flat: no comparison on the lit real scenes
+                pyr += runner.timed(
+                    call_task, [(_pyrender, refs_of[name], name, refs[name]["mitsuba"], repeat)]
+                )
             for r in scene_rows:
-                log(f"  {r['method']:<14} {r['options']:<28} {r['ms']:9.2f} ms  RMSE {r['rmse']:.5f}")
+                log(f"  {name:<18} {r['method']:<14} {r['options']:<28} {r['ms']:9.2f} ms  "
+                    f"RMSE {r['rmse']:.5f}  own limit {r['rmse_limit']:.5f}")  # fmt: skip
+        # 3. auto: refit its model from these rows when asked, then one row per scene
+        features = {n: autofit.scene_features(built[n]) for n in names}
+        model_info = None
+        if fit_auto:
+            applies = {n: {m: METHODS[m].applies(built[n]) for m in METHODS} for n in names}
+            model = autofit.fit_calibrated(rows, features, aa or 1, (width, height), applies, log=log)
+            model_info = str(model.save(model_path) if model_path else model.save())
+            log(f"auto model refitted from {len(rows)} rows: {model_info}")
+        auto_rows, landings = [], {}
+        if auto and (methods is None or "auto" in methods):
+            for name in names:
+                opts = _with_aa(METHODS["auto"].fn, {"model": str(model_path)} if model_path else {}, aa)
+                t = runner.timed(timed_task, [(refs_of[name], "auto", opts, max(repeat, 5))])[0]
+                e = runner.map(error_task, [t[1]], [refs[name]["mitsuba"]], [refs[name]["limit"]], [flip])[0]
+                r = _row(name, "auto", opts, t[0], e, t[2])
+                frames[(name, "auto", r["options"])] = t[1]
+                auto_rows.append(r)
+                srows = [x for x in rows if x["scene"] == name]
+                lg = autofit.landing(srows, r, DEFAULT_TOLERANCE)
+                front = autofit.front_row(srows, r["rmse_limit"])
+                if front is not None:  # re-timed in pairs: both under the same load
+                    jobs = [("auto", opts), (front["method"], front["_opts"])]
+                    pa, pf = runner.timed(call_task, [(paired_times, refs_of[name], jobs)])[0]
+                    lg.update(paired_auto_ms=pa, paired_front_ms=pf, paired_ratio=pa / pf)
+                    lg["front"] = f"{front['method']} {front['options']}"
+                landings[name] = lg
+                log(f"  {name:<18} auto {r['ms']:9.2f} ms  own limit {r['rmse_limit']:.5f}  front {lg['front_ms']:.2f} ms  "
+                    f"ratio {lg['ratio']:.2f}, re-timed in pairs {lg.get('paired_ratio', float('nan')):.2f}")  # fmt: skip
+        rows += auto_rows
     finally:
         for m, s in saved.items():
             METHODS[m].sweep = s
-    fronts = []
+    loo = {}
+    if auto_rows and len(names) > autofit.MIN_ROWS:
+        applies = {n: {m: METHODS[m].applies(built[n]) for m in METHODS} for n in names}
+        swept = [r for r in rows if r["method"] != "auto"]
+        probed = autofit.add_probes(features, swept, aa or 1)
+        loo = autofit.leave_one_out(swept, probed, aa or 1, (width, height), DEFAULT_TOLERANCE, applies)
+    fronts, fronts_limit = [], []
     for name in names:
-        fronts += pareto_front([r for r in rows if r["scene"] == name])
-    settings = dict(
-        width=width,
-        height=height,
-        times=times,
-        spp=spp,
-        repeat=repeat,
-        aa=aa,
-        variant=ref_mod.mitsuba_variant(),
-    )
+        sel = [r for r in rows if r["scene"] == name]
+        fronts += pareto_front(sel)
+        fronts_limit += pareto_front([{**r, "rmse": r["rmse_limit"]} for r in sel])
+    settings = dict(width=width, height=height, times=times, spp=spp, repeat=repeat, aa=aa,
+                    variant=ref_mod.mitsuba_variant(), limit_samples=limit_samples, runner=runner.name,
+                    tolerance=DEFAULT_TOLERANCE)  # fmt: skip
     paths = report.write(
-        out,
-        names,
-        rows,
-        fronts,
-        settings,
-        comparisons=comparisons,
-        flip_comparisons=flip_comparisons,
-        paired=paired,
-        equal_times=equal_times,
-        pyrender_rows=pyr,
-        images=images,
-        references=references,
-    )
+        out, names, rows, fronts, settings, comparisons=comparisons, flip_comparisons=flip_comparisons,
+        paired=paired, equal_times=equal_times, pyrender_rows=pyr, fronts_limit=fronts_limit,
+        frames=frames, references=refs, landings=landings, loo=loo, save_images=save_images,
+    )  # fmt: skip
+    # the measurements with their option sets, to refit auto's model without rendering (--fit-auto-from)
+    (out / "rows.json").write_text(json.dumps({
+        "size": [width, height], "aa": aa, "features": features,
+        "applies": {n: {m: METHODS[m].applies(built[n]) for m in METHODS} for n in names},
+        "rows": [{k: v for k, v in r.items() if k != "_plan"} for r in rows],
+    }, default=str))  # fmt: skip
+    if write_html:
+        paths["html"] = html.write(out, names, rows, paths, refs, frames, settings)
     return {
         "rows": rows,
         "comparisons": comparisons,
@@ -144,7 +257,12 @@ def run(
         "paired": paired,
         "equal_time": equal_times,
         "pyrender": pyr,
+        "auto": landings,
+        "leave_one_out": loo,
+        "features": features,
+        "model": model_info,
         "paths": paths,
+        "references": {n: {k: np.asarray(v) for k, v in r.items()} for n, r in refs.items()},
     }
 
 
@@ -153,35 +271,52 @@ def main(argv=None) -> int:
 
     p = argparse.ArgumentParser(prog="python -m motionblur bench", description=__doc__.splitlines()[0])
     p.add_argument("--out", default="out/bench")
-    p.add_argument("--scenes", nargs="*", default=None, help=f"subset of {', '.join(SCENES)}")
+    p.add_argument("--scenes", nargs="*", default=None, help=f"subset of {', '.join(ALL_SCENES)}")
+    p.add_argument(
+        "--set", choices=["all", "builtin", "real"], default="all", help="which scenes (default all)"
+    )
     p.add_argument("--size", default="320x240", help="WxH")
     p.add_argument("--aa", type=int, default=2, help="spatial samples per pixel per axis for every method")
     p.add_argument("--times", type=int, default=256, help="Mitsuba shutter times K")
     p.add_argument("--spp", type=int, default=4, help="Mitsuba samples per pixel per time")
+    p.add_argument("--limit-samples", type=int, default=1024, help="N of the own-limit reference")
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--no-flip", action="store_true")
     p.add_argument("--no-pyrender", action="store_true", help="leave out the pyrender comparison")
-    p.add_argument("--images", action="store_true", help="save every image and a labelled sheet per scene")
-    p.add_argument("--quick", action="store_true", help="160x120, K = 64, one timing")
+    p.add_argument("--images", action="store_true", help="save every image under images/")
+    p.add_argument("--fit-auto", action="store_true", help="refit auto's cost and error model from this run")
+    p.add_argument("--fit-auto-from", default=None, metavar="ROWS_JSON",
+                   help="refit auto's model from a run's rows.json, rendering nothing")  # fmt: skip
+    p.add_argument(
+        "--dask", default=None, metavar="local|ADDRESS", help="references and errors as Dask tasks"
+    )
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help=f"160x120, K = 64, N = 256, one timing, no pyrender, scenes {' '.join(QUICK_SCENES)}",
+    )
     a = p.parse_args(argv)
+    if a.fit_auto_from:
+        print(f"auto model refitted from {a.fit_auto_from}: {autofit.refit_from(a.fit_auto_from)}")
+        return 0
     w, h = (int(x) for x in a.size.lower().split("x"))
     if a.quick:
-        w, h, a.times, a.repeat = 160, 120, 64, 1
-    res = run(
-        a.out,
-        a.scenes,
-        w,
-        h,
-        a.times,
-        a.spp,
-        a.repeat,
-        flip=not a.no_flip,
-        aa=a.aa,
-        pyrender_peer=not a.no_pyrender,
-        save_images=a.images,
-    )
+        w, h, a.times, a.repeat, a.limit_samples, a.no_pyrender = 160, 120, 64, 1, 256, True
+    scenes = a.scenes if a.scenes is not None or not a.quick else list(QUICK_SCENES)
+    if scenes is None and a.set != "all":
+        scenes = list(SCENES if a.set == "builtin" else REAL_SCENES)
+    client = client_for(a.dask) if a.dask else None
+    try:
+        res = run(a.out, scenes, w, h, a.times, a.spp, a.repeat, flip=not a.no_flip, aa=a.aa,
+                  pyrender_peer=not a.no_pyrender, save_images=a.images, client=client,
+                  limit_samples=a.limit_samples, fit_auto=a.fit_auto)  # fmt: skip
+    finally:
+        if client is not None:
+            Dask(client, owns=True).close()
     md = res["paths"]["md"].read_text()
-    start = md.find("## Each method against")
-    print(md[start if start >= 0 else md.index("## motion_volume against") :])
-    print(f"written: {res['paths']['md']}, {res['paths']['csv']}, {a.out}/pareto_*.png")
+    start = md.find("## auto against the Pareto front")
+    print(md[start if start >= 0 else 0 :])
+    print(
+        f"written: {res['paths']['md']}, {res['paths']['csv']}, {a.out}/pareto_*.png, {res['paths'].get('html')}"
+    )
     return 0

@@ -37,39 +37,56 @@ def method_colors(names=None) -> dict[str, str]:
     return {m: _PALETTE[i % len(_PALETTE)] for i, m in enumerate(every)}
 
 
-def pareto_plot(name: str, rows, front, path) -> dict:
-    """Plot one scene's ``rows`` (dicts with method, options, ms, rmse) with ``front`` (bools,
-    the Pareto front) to ``path``. Returns ``{"colors": {method: colour}, "labels": [front
-    point labels]}`` (what the plot shows, for tests)."""
+def _panel(ax, rows, front, metric: str, colors: dict, ylabel: str) -> list[str]:
+    for m in sorted({r["method"] for r in rows}):
+        sel = [r for r in rows if r["method"] == m]
+        marker = "*" if m == "auto" else "o"
+        ax.scatter([r["ms"] for r in sel], [r[metric] for r in sel], label=m, s=70 if m == "auto" else 24,
+                   color=colors[m], marker=marker, zorder=3)  # fmt: skip
+    fr = sorted((r for r, f in zip(rows, front) if f), key=lambda r: r["ms"])
+    ax.plot([r["ms"] for r in fr], [r[metric] for r in fr], "k--", lw=1, label="Pareto front", zorder=2)
+    labels = []
+    for i, r in enumerate(fr):
+        text = f"{r['method']} {r['options']}" if r["options"] != "-" else r["method"]
+        labels.append(text)
+        ax.annotate(text, (r["ms"], r[metric]), textcoords="offset points", xytext=(5, -11 if i % 2 else 4),
+                    fontsize=6.5, color=colors[r["method"]])  # fmt: skip
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("time per frame (ms, best of runs)")
+    ax.set_ylabel(ylabel)
+    ax.grid(True, which="both", alpha=0.3)
+    return labels
+
+
+def pareto_plot(name: str, rows, front, path, front_limit=None) -> dict:
+    """Plot one scene's ``rows`` (dicts with method, options, ms, rmse and optionally
+    rmse_limit) with ``front`` (bools, the Pareto front against Mitsuba) to ``path``; with
+    ``rmse_limit`` in the rows, a second panel of the error against the own-limit reference and
+    its front (``front_limit``). Every point of a front is annotated with its method and options
+    (readable without hovering). Returns ``{"colors": {method: colour}, "labels": [front point
+    labels of the first panel], "labels_limit": [...]}`` (what the plot shows, for tests)."""
     matplotlib = require("matplotlib")
     matplotlib.use("Agg")
     plt = require("matplotlib.pyplot", "the Pareto plots of the report")
     colors = method_colors(r["method"] for r in rows)
-    fig, ax = plt.subplots(figsize=(7.2, 4.8), dpi=110)
-    shown = {}
-    for m in sorted({r["method"] for r in rows}):
-        sel = [r for r in rows if r["method"] == m]
-        ax.scatter([r["ms"] for r in sel], [r["rmse"] for r in sel], label=m, s=24, color=colors[m], zorder=3)
-        shown[m] = colors[m]
-    fr = sorted((r for r, f in zip(rows, front) if f), key=lambda r: r["ms"])
-    ax.plot([r["ms"] for r in fr], [r["rmse"] for r in fr], "k--", lw=1, label="Pareto front", zorder=2)
-    labels = []
-    for r in fr:
-        text = f"{r['method']} {r['options']}" if r["options"] != "-" else r["method"]
-        labels.append(text)
-        ax.annotate(text, (r["ms"], r["rmse"]), textcoords="offset points", xytext=(4, 4), fontsize=6,
-                    color=colors[r["method"]])  # fmt: skip
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("time per frame (ms, best of runs)")
-    ax.set_ylabel("RMSE against Mitsuba (premultiplied RGBA)")
-    ax.set_title(f"{name}: error against time")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
+    two = bool(rows) and all("rmse_limit" in r for r in rows)
+    fig, axes = plt.subplots(1, 2 if two else 1, figsize=(14.0 if two else 7.2, 5.2), dpi=110, squeeze=False)
+    labels = _panel(axes[0][0], rows, front, "rmse", colors, "RMSE against Mitsuba (premultiplied RGBA)")
+    axes[0][0].set_title(f"{name}: error against Mitsuba")
+    labels_limit = []
+    if two:
+        fl = front_limit if front_limit is not None else [False] * len(rows)
+        labels_limit = _panel(
+            axes[0][1], rows, fl, "rmse_limit", colors, "RMSE against the own limit (accumulation, large N)"
+        )
+        axes[0][1].set_title(f"{name}: error against the method's own limit")
+    axes[0][0].legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(path)
     plt.close(fig)
-    return {"colors": shown, "labels": labels}
+    return {"colors": {m: colors[m] for m in sorted({r["method"] for r in rows})}, "labels": labels,
+            "labels_limit": labels_limit}  # fmt: skip
 
 
 def _tile_rgb(rgba: np.ndarray, background: float = 0.0) -> np.ndarray:

@@ -2,7 +2,9 @@
 
 Every function takes Frames, (H,W,4) / (H,W,3) float arrays of premultiplied linear RGBA (RGB)
 or paths of image files (``.exr``, ``.png``, read with :func:`motionblur.read_image`), with the
-same shape on both sides. RMSE and PSNR use all four channels (colour and coverage);
+same shape on both sides: real numbers (no complex or object arrays), finite, not empty,
+else ValueError / TypeError naming ``image`` or ``reference``. RMSE and PSNR use all four
+channels (colour and coverage);
 FLIP (NVIDIA's perceptual difference, pip ``flip-evaluator``) compares the frames composited
 over a background, in sRGB; coverage is the alpha channel summed over the image.
 """
@@ -14,6 +16,7 @@ import os
 import numpy as np
 
 from .._optional import require
+from .._validate import as_array, as_float
 from ..interop.images import read_image
 from ..raster import Frame
 
@@ -24,11 +27,17 @@ def _img(x, name: str) -> np.ndarray:
     if isinstance(x, (str, os.PathLike)):  # an image file written by Frame.save_exr / save_png
         x = read_image(x)
     a = x.rgba if isinstance(x, Frame) else x
-    a = np.asarray(a, dtype=np.float64)
-    if a.ndim != 3 or a.shape[2] not in (3, 4):
+    try:
+        nd = np.ndim(a)
+    except ValueError as exc:  # a ragged nested list
+        raise TypeError(f"{name}: cannot be read as an array ({exc})") from None
+    if nd != 3:
+        raise ValueError(f"{name}: expected an (H,W,4) or (H,W,3) image or a Frame, got shape {np.shape(a)}")
+    a = as_array(a, name, np.float64, (None, None, None), allow_empty=True)
+    if a.shape[2] not in (3, 4):
         raise ValueError(f"{name}: expected an (H,W,4) or (H,W,3) image or a Frame, got shape {a.shape}")
-    if not np.isfinite(a).all():
-        raise ValueError(f"{name}: contains NaN or inf")
+    if a.size == 0:
+        raise ValueError(f"{name}: is empty (shape {a.shape}); a metric of no pixels is undefined")
     return a
 
 
@@ -46,13 +55,16 @@ def rmse(image, reference) -> float:
 
 
 def psnr(image, reference, peak: float = 1.0) -> float:
-    """Peak signal-to-noise ratio in dB, ``20 log10(peak / rmse)`` (inf for identical images)."""
+    """Peak signal-to-noise ratio in dB, ``20 log10(peak / rmse)`` (inf for identical images);
+    ``peak`` a finite number > 0 (the largest value a pixel can take, 1 for these images)."""
+    peak = as_float(peak, "peak")
+    if not peak > 0:
+        raise ValueError(f"peak: must be > 0, got {peak}")
     e = rmse(image, reference)
     return float("inf") if e == 0 else float(20.0 * np.log10(peak / e))
 
 
-def _srgb(rgba: np.ndarray, background) -> np.ndarray:
-    bg = np.asarray(background, dtype=np.float64)
+def _srgb(rgba: np.ndarray, bg: np.ndarray) -> np.ndarray:
     rgb = rgba[..., :3] + (1.0 - rgba[..., 3:4]) * bg if rgba.shape[2] == 4 else rgba
     c = np.clip(rgb, 0.0, 1.0)
     return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1.0 / 2.4) - 0.055).astype(np.float32)
@@ -60,10 +72,13 @@ def _srgb(rgba: np.ndarray, background) -> np.ndarray:
 
 def flip(image, reference, background=(0.0, 0.0, 0.0)) -> float:
     """Mean LDR-FLIP error in [0, 1] of the two images composited over ``background`` (linear RGB,
-    default black) and encoded to sRGB, at the default 67 pixels per degree."""
+    default black; (3,) finite and >= 0) and encoded to sRGB, at the default 67 pixels per degree."""
+    bg = as_array(background, "background", np.float64, (3,))
+    if (bg < 0).any():
+        raise ValueError(f"background: must be >= 0, got {bg.tolist()}")
     flip_evaluator = require("flip_evaluator")
     a, b = _pair(image, reference)
-    _, mean, _ = flip_evaluator.evaluate(_srgb(b, background), _srgb(a, background), "LDR")
+    _, mean, _ = flip_evaluator.evaluate(_srgb(b, bg), _srgb(a, bg), "LDR")
     return float(mean)
 
 

@@ -13,8 +13,9 @@ import numpy as np
 
 from ..raster import Frame
 from .figures import pareto_plot, sheet
+from .sweep import _label
 
-__all__ = ["write", "save_reference"]
+__all__ = ["write", "save_reference", "matched"]
 
 
 def write(
@@ -29,59 +30,166 @@ def write(
     paired,
     equal_times,
     pyrender_rows,
-    images=None,
+    fronts_limit=None,
+    frames=None,
     references=None,
+    landings=None,
+    loo=None,
+    save_images=False,
+    images=None,
 ) -> dict:
-    """Write the report into ``out``: ``pareto_<scene>.png`` per scene of ``names``,
-    ``results.csv`` (the rows, ``fronts`` marking the Pareto front), ``results.md``,
-    ``settings.json`` and, when given, ``images`` ({(scene, method, options): Frame}) under
-    ``images/`` with ``sheet_<scene>.png`` per scene: the reference (``references``: {scene:
-    (H,W,4) rgba}) and every method's image side by side, labelled with method, options, ms and
-    RMSE (:func:`.figures.sheet`). Returns the paths of the table and the csv."""
+    """Write the report into ``out``: ``pareto_<scene>.png`` per scene of ``names`` (error
+    against both references, :func:`.figures.pareto_plot`), ``results.csv`` (the rows, ``fronts``
+    and ``fronts_limit`` marking the Pareto fronts against Mitsuba and against the own limit),
+    ``results.md``, ``settings.json`` and, given ``frames`` ({(scene, method, options): rgba}) and
+    ``references`` ({scene: {"mitsuba": rgba, "limit": rgba}}), ``sheet_<scene>.png``: both
+    references and, per method, its most accurate option set (own-limit RMSE) within the matched
+    time (:func:`matched`), labelled with method, options, ms and both RMSEs; with
+    ``save_images`` every frame under ``images/``. ``images`` ({key: Frame}) is the old form of
+    ``frames``. Returns the paths written."""
+    if images:
+        frames = {**(frames or {}), **{k: f.rgba for k, f in images.items()}}
+    fronts_limit = fronts_limit or [False] * len(rows)
+    paths = {"md": out / "results.md", "csv": out / "results.csv"}
     for name in names:
-        sel = [(r, f) for r, f in zip(rows, fronts) if r["scene"] == name]
-        pareto_plot(name, [r for r, _ in sel], [f for _, f in sel], out / f"pareto_{name}.png")
+        sel = [(r, f, g) for r, f, g in zip(rows, fronts, fronts_limit) if r["scene"] == name]
+        paths[f"pareto_{name}"] = out / f"pareto_{name}.png"
+        pareto_plot(name, [r for r, _, _ in sel], [f for _, f, _ in sel], paths[f"pareto_{name}"],
+                    front_limit=[g for _, _, g in sel])  # fmt: skip
     with open(out / "results.csv", "w", newline="") as fh:
-        keys = [k for k in rows[0] if not k.startswith("_")]
-        wr = csv.DictWriter(fh, fieldnames=[*keys, "pareto"])
+        keys = list(dict.fromkeys(k for r in rows for k in r if not k.startswith("_")))
+        wr = csv.DictWriter(fh, fieldnames=[*keys, "pareto", "pareto_limit"], restval="")
         wr.writeheader()
-        for r, f in zip(rows, fronts):
-            wr.writerow({**{k: r[k] for k in keys}, "pareto": int(f)})
-    (out / "results.md").write_text(
+        for r, f, g in zip(rows, fronts, fronts_limit):
+            wr.writerow({**{k: r[k] for k in keys if k in r}, "pareto": int(f), "pareto_limit": int(g)})
+    paths["md"].write_text(
         _markdown(rows, fronts, comparisons, pyrender_rows, settings, flip_comparisons, paired, equal_times)
+        + _auto_markdown(landings or {}, loo or {}, rows, settings)
     )
     (out / "settings.json").write_text(json.dumps({**settings, "machine": _machine()}, indent=1))
-    paths = {"md": out / "results.md", "csv": out / "results.csv"}
-    if images:
-        for (scene, m, opts), frame in images.items():
-            frame.save_png(out / "images" / f"{scene}_{m}_{opts.replace(' ', '_').replace('=', '')}.png")
-        for name in names:
-            tiles = (
-                [(f"reference\nMitsuba, K = {settings['times']} x {settings['spp']} spp\n", references[name])]
-                if references and name in references
-                else []
+    if frames and save_images:
+        for (scene, m, opts), rgba in frames.items():
+            _frame(rgba).save_png(
+                out / "images" / f"{scene}_{m}_{opts.replace(' ', '_').replace('=', '')}.png"
             )
-            for r in (r for r in rows if r["scene"] == name):
-                frame = images.get((name, r["method"], r["options"]))
-                if frame is not None:
-                    tiles.append(
-                        (
-                            f"{r['method']}\n{r['options']}\n{r['ms']:.2f} ms   RMSE {r['rmse']:.5f}",
-                            frame.rgba,
-                        )
+    if frames:
+        for name in names:
+            tiles = []
+            ref = (references or {}).get(name, {})
+            if "mitsuba" in ref:
+                tiles.append(
+                    (f"reference: Mitsuba\nK = {settings['times']} x {settings['spp']} spp\n", ref["mitsuba"])
+                )
+            if "limit" in ref:
+                tiles.append(
+                    (
+                        f"reference: own limit\naccumulation N = {settings.get('limit_samples', '?')}\n",
+                        ref["limit"],
                     )
+                )
+            for r in matched([r for r in rows if r["scene"] == name])[1]:
+                rgba = frames.get((name, r["method"], r["options"]))
+                if rgba is not None:
+                    tiles.append((f"{r['method']}\n{r['options']}\n{r['ms']:.1f} ms  {_errors(r)}", rgba))
             if tiles:
                 paths[f"sheet_{name}"] = out / f"sheet_{name}.png"
                 sheet(tiles, paths[f"sheet_{name}"])
     return paths
 
 
+def _errors(r) -> str:
+    if "rmse_limit" in r and r["rmse_limit"] == r["rmse_limit"]:
+        return f"RMSE {r['rmse']:.4f} / {r['rmse_limit']:.4f}"
+    return f"RMSE {r['rmse']:.5f}"
+
+
+def _frame(rgba) -> Frame:
+    h, w = rgba.shape[:2]
+    return Frame(rgba, np.zeros((h, w)), np.zeros((h, w), np.int32), np.zeros((h, w, 2)))
+
+
+def matched(rows) -> tuple[float, list]:
+    """``(T, picks)`` for one scene's rows: the matched time T is the ``auto`` row's time when
+    there is one, else the median of the rows' times; each method's pick is its most accurate row
+    (RMSE against the own limit, or against Mitsuba when the rows have no other) taking at most T,
+    or its fastest row when none does; ``auto``'s row first."""
+    if not rows:
+        return 0.0, []
+    metric = "rmse_limit" if all("rmse_limit" in r for r in rows) else "rmse"
+    autos = [r for r in rows if r["method"] == "auto"]
+    t = autos[0]["ms"] if autos else float(np.median([r["ms"] for r in rows]))
+    picks = autos[:1]
+    for m in dict.fromkeys(r["method"] for r in rows if r["method"] != "auto"):
+        rs = [r for r in rows if r["method"] == m]
+        within = [r for r in rs if r["ms"] <= t * 1.0001]
+        picks.append(min(within, key=lambda r: r[metric]) if within else min(rs, key=lambda r: r["ms"]))
+    return t, picks
+
+
 def save_reference(out: Path, name: str, ref: np.ndarray) -> None:
     """The reference image of scene ``name`` as ``images/<name>_reference.png``."""
-    h, w = ref.shape[:2]
-    Frame(ref, np.zeros((h, w)), np.zeros((h, w), np.int32), np.zeros((h, w, 2))).save_png(
-        out / "images" / f"{name}_reference.png"
-    )
+    _frame(ref).save_png(out / "images" / f"{name}_reference.png")
+
+
+def _ratio(landing: dict) -> float:
+    """The headline ratio of a landing: re-timed in pairs when it was, else from the sweep."""
+    return landing.get("paired_ratio", landing["ratio"])
+
+
+def _auto_markdown(landings: dict, loo: dict, rows, settings) -> str:
+    if not landings:
+        return ""
+    tol = settings.get("tolerance")
+    lines = ["", "## auto against the Pareto front", ""]
+    lines += [
+        f"`auto` at its default tolerance (RMSE {tol} against the own limit). The front at auto's error = the "
+        "fastest swept run at least as accurate (own-limit RMSE) as auto's frame; ratio = auto's ms / its ms "
+        "(target <= 1.25), from the sweep's timings and re-timed in pairs (auto and that run round-robin, "
+        "5 rounds of 3 frames each, best of all, both under the same load: the headline). The plan is auto's "
+        "choice for the scene's moving objects.",
+        "",
+        "| scene | plan | auto ms | own-limit RMSE | RMSE vs Mitsuba | front run at that error | its ms | ratio | "
+        "in pairs: auto / front ms | ratio | meets tolerance |",
+        "|---|---|---:|---:|---:|---|---:|---:|---|---:|:-:|",
+    ]
+    for r in (r for r in rows if r["method"] == "auto"):
+        lg = landings.get(r["scene"])
+        if lg is None:
+            continue
+        chosen = sorted({f"{p.get('method')} {_label(p.get('options', {}))}".strip()
+                         for p in r.get("_plan", {}).get("objects", {}).values() if p.get("method") != "static"})  # fmt: skip
+        pa, pf = lg.get("paired_auto_ms", float("nan")), lg.get("paired_front_ms", float("nan"))
+        lines.append(
+            f"| {r['scene']} | {'; '.join(chosen) or 'static'} | {r['ms']:.2f} | {r['rmse_limit']:.5f} | {r['rmse']:.5f} | "
+            f"{lg.get('front', '')} | {lg['front_ms']:.2f} | {lg['ratio']:.2f} | {pa:.2f} / {pf:.2f} | {_ratio(lg):.2f} | "
+            f"{'yes' if lg['meets'] else 'no'} |"
+        )
+    n = len(landings)
+    within = sum(1 for x in landings.values() if _ratio(x) <= 1.25)
+    meets = sum(1 for x in landings.values() if x["meets"])
+    lines += [
+        "",
+        f"Within 1.25x of the front (re-timed in pairs): {within} of {n} scenes; tolerance met: {meets} of {n}.",
+        "",
+    ]
+    if loo:
+        w2 = sum(1 for x in loo.values() if x["ratio"] <= 1.25)
+        m2 = sum(1 for x in loo.values() if x["meets"])
+        lines += [
+            "Leave one scene out (the model refitted without the scene, the planner's choice read from the "
+            "scene's measured rows, nothing re-rendered): "
+            f"within 1.25x of the front on {w2} of {len(loo)} scenes, tolerance met on {m2} of {len(loo)}.",
+            "",
+            "| scene | choice | ms | own-limit RMSE | front ms | ratio | meets |",
+            "|---|---|---:|---:|---:|---:|:-:|",
+        ]
+        for s, x in loo.items():
+            lines.append(
+                f"| {s} | {x['method']} {_label(x['options'])} | {x['ms']:.2f} | {x['error']:.5f} | "
+                f"{x['front_ms']:.2f} | {x['ratio']:.2f} | {'yes' if x['meets'] else 'no'} |"
+            )
+        lines.append("")
+    return "\n".join(lines) + "\n"
 
 
 def _machine() -> str:
@@ -116,7 +224,9 @@ def _markdown(
     lines.append(
         f"Machine: {_machine()} (shared with other jobs: timings are best of {settings['repeat']}). "
         f"Images {settings['width']}x{settings['height']}, methods at aa = {settings['aa']} (spatial samples per pixel per axis); reference: Mitsuba {settings['variant']}, "
-        f"K = {settings['times']} shutter times x {settings['spp']} spp. Error: RMSE over premultiplied RGBA; "
+        f"K = {settings['times']} shutter times x {settings['spp']} spp; second reference: each method's own limit, "
+        f"accumulation with N = {settings.get('limit_samples', '-')} samples on our rasterizer (no shadows: the blur "
+        "method's own error). Pareto marks the front against Mitsuba. Error: RMSE over premultiplied RGBA; "
         "coverage error is signed (alpha summed over the image, relative)."
     )
     lines.append("")
@@ -125,13 +235,13 @@ def _markdown(
         lines += [
             f"## {scene}",
             "",
-            "| method | options | ms | RMSE | PSNR dB | FLIP | coverage err | Pareto |",
-            "|---|---|---:|---:|---:|---:|---:|:-:|",
+            "| method | options | ms | RMSE (Mitsuba) | RMSE (own limit) | PSNR dB | FLIP | coverage err | Pareto |",
+            "|---|---|---:|---:|---:|---:|---:|---:|:-:|",
         ]
         for r, f in sorted(sel, key=lambda x: x[0]["ms"]):
             lines.append(
-                f"| {r['method']} | {r['options']} | {r['ms']:.2f} | {r['rmse']:.5f} | {r['psnr']:.2f} | "
-                f"{r['flip']:.4f} | {r['coverage_error']:+.3f} | {'*' if f else ''} |"
+                f"| {r['method']} | {r['options']} | {r['ms']:.2f} | {r['rmse']:.5f} | {r.get('rmse_limit', float('nan')):.5f} | "
+                f"{r['psnr']:.2f} | {r['flip']:.4f} | {r['coverage_error']:+.3f} | {'*' if f else ''} |"
             )
         lines.append("")
     if equal_times:

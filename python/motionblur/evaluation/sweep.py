@@ -20,7 +20,7 @@ from . import metrics
 from . import reference as ref_mod
 from .compare import equal_error
 
-__all__ = ["sweep_scene", "reference_for", "paired_factor", "pyrender_comparison"]
+__all__ = ["sweep_scene", "reference_for", "paired_factor", "paired_times", "pyrender_comparison"]
 
 
 def _best_ms(fn, repeat: int):
@@ -147,6 +147,22 @@ def paired_factor(scene, rows, metric="rmse", rounds=7, burst=3):
         "bound": bound,
         "factor": t_acc / t_mv,
     }
+
+
+def paired_times(scene, jobs, rounds: int = 5, burst: int = 3) -> list[float]:
+    """Best ms of each ``(method, options)`` of ``jobs`` on ``scene``, timed round-robin
+    (``rounds`` rounds of ``burst`` consecutive frames of each, after one warm-up frame each), so
+    that every job sees the same machine load, each in its steady state."""
+    for method, opts in jobs:
+        render(scene, method, **opts)
+    best = [float("inf")] * len(jobs)
+    for _ in range(rounds):
+        for j, (method, opts) in enumerate(jobs):
+            for _ in range(burst):
+                t0 = time.perf_counter()
+                render(scene, method, **opts)
+                best[j] = min(best[j], (time.perf_counter() - t0) * 1e3)
+    return best
 
 
 def pyrender_comparison(name, scene, ref, repeat):

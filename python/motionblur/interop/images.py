@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .._optional import require
+from .._validate import as_array, as_path
 from ..raster import Frame
 from .exr import read_exr
 
@@ -25,7 +26,7 @@ __all__ = ["read_image", "srgb_to_linear"]
 
 def srgb_to_linear(c: np.ndarray) -> np.ndarray:
     """The sRGB transfer function inverted: ``c`` in [0, 1] (any shape) to linear float32."""
-    c = np.asarray(c, dtype=np.float64)
+    c = as_array(c, "c", np.float64, (None,) * np.ndim(c), allow_empty=True, finite=False)
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4).astype(np.float32)
 
 
@@ -48,7 +49,7 @@ def read_image(path) -> Frame:
 
     Raises FileNotFoundError for a missing file, ValueError naming ``path`` for another suffix.
     """
-    path = Path(path)
+    path = as_path(path)
     suffix = path.suffix.lower()
     if suffix not in (".exr", ".png"):
         raise ValueError(f"path: expected an .exr or .png file, got {str(path)!r}")

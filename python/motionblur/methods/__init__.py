@@ -5,13 +5,29 @@ Adding a method is adding a module here that decorates its function with
 an underscore hold what the methods share, and a method imports them, never another method:
 ``_layers`` (rasterizing into layers, compositing, supersampling, the static layer kept across
 frames), ``_painter`` (objects drawn at any shutter time, per-mesh constants),
-``_volume_colors`` (the colours of motion volumes) and ``_sharp`` (the sharp frame the
-image-space methods blur).
+``_volume_colors`` (the colours of motion volumes), ``_sharp`` (the sharp frame the image-space
+methods blur), ``_features`` (what an object does on screen) and ``_auto_model`` (the planner's
+fitted cost and error model, ``auto_model.json``).
 """
 
 from __future__ import annotations
 
-from . import accumulation, blur_shell, image_space, motion_volume  # each registers its methods
+from . import (  # each registers its methods
+    accumulation,
+    analytic,
+    auto,  # the planner: it calls the others through the registry, at render time
+    blur_shell,
+    image_space,
+    motion_volume,
+)
 from ._layers import clear_static_cache
 
-__all__ = ["accumulation", "blur_shell", "image_space", "motion_volume", "clear_static_cache"]
+__all__ = [
+    "accumulation",
+    "analytic",
+    "auto",
+    "blur_shell",
+    "image_space",
+    "motion_volume",
+    "clear_static_cache",
+]

@@ -18,20 +18,24 @@ from collections import deque
 
 import numpy as np
 
-from .._validate import as_float, as_int, as_samples
+from .._validate import as_array, as_bool, as_float, as_int, as_samples
+from ..budget import need
 from ..raster import Frame
 from ..render import register
 from ..scene import Scene
 from ._layers import Layer, object_draw, paste, raster_layer, resolve, static_layer, supersampled
 from ._painter import painter_for
 
-__all__ = ["accumulation", "sample_times", "Sequence"]
+__all__ = ["accumulation", "sample_times", "Sequence", "MAX_TIME_SAMPLES"]
+
+#: Most time samples a frame (``accumulation``'s ``samples``) or a :class:`Sequence` averages.
+MAX_TIME_SAMPLES = 1 << 16
 
 
 def sample_times(scene: Scene, n: int, sampling: str = "stratified", seed: int = 0):
     """(times (N,), weights (N,)) of N shutter samples: stratified or jittered times, weights the
     shutter filter's integral over each stratum (summing to 1)."""
-    n = as_int(n, "samples", minimum=1, maximum=1 << 16)
+    n = as_int(n, "samples", minimum=1, maximum=MAX_TIME_SAMPLES)
     if sampling == "stratified":
         u = np.full(n, 0.5)
     elif sampling == "jittered":
@@ -122,12 +126,21 @@ class Sequence:
     """The accumulation buffer's running total across consecutive frames.
 
     ``render_at(t) -> (H,W,4) array or Frame`` renders the scene sharp at (animation) time ``t``;
-    ``samples`` N renders are averaged per frame, ``step`` apart in time. Frame k (from 0) is the
-    mean of the renders at ``t0 + (k + j) * step``, j = 0..N-1. The first :meth:`next` draws N
-    times; every later one draws twice: it adds the newest render and subtracts the oldest one,
-    rendered again (``keep_images=False``, the book's way) or kept from before
-    (``keep_images=True``: N images of memory, one draw per frame). The total is kept in float64
-    so the subtraction does not drift. ``draws`` counts the calls to ``render_at``.
+    ``samples`` N renders (1..``MAX_TIME_SAMPLES``) are averaged per frame, ``step`` apart in
+    time. Frame k (from 0) is the mean of the renders at ``t0 + (k + j) * step``, j = 0..N-1.
+    The first :meth:`next` draws N times; every later one draws twice: it adds the newest render
+    and subtracts the oldest one, rendered again (``keep_images=False``, the book's way) or kept
+    from before (``keep_images=True``: one draw per frame). The total is kept in float64 so the
+    subtraction does not drift. ``draws`` counts the calls to ``render_at``.
+
+    Memory: the running total (8 bytes a value) and the render being added, whatever N, with
+    ``keep_images=False``; plus the N renders (as ``render_at`` returned them) with ``keep_images=True``. It is checked against the memory budget
+    (``motionblur.set_memory_budget``) once the first render gives the image size, before the
+    other N - 1 are drawn: past it ``MemoryError`` names ``samples`` and the bytes.
+
+    Every render must be a Frame or a real, finite (H,W,4) array of the same shape as the
+    first; otherwise :meth:`next` raises TypeError / ValueError naming ``render_at`` and the
+    time. ``keep_images`` is True or False (anything else raises TypeError).
     """
 
     def __init__(
@@ -136,22 +149,40 @@ class Sequence:
         if not callable(render_at):
             raise TypeError("render_at: expected a callable t -> image")
         self.render_at = render_at
-        self.samples = as_int(samples, "samples", minimum=1)
+        self.samples = as_int(samples, "samples", minimum=1, maximum=MAX_TIME_SAMPLES)
         self.step = as_float(step, "step")
         if not self.step > 0:
             raise ValueError(f"step: must be > 0, got {self.step}")
         self.t0 = as_float(t0, "t0")
-        self.keep_images = bool(keep_images)
+        self.keep_images = as_bool(keep_images, "keep_images")
         self.frame_index = -1
         self.draws = 0
         self._total = None
+        self._shape: tuple[int, ...] | None = None
         self._kept: deque = deque()
 
-    def _draw(self, t: float) -> np.ndarray:
+    def _render(self, t: float) -> np.ndarray:
         self.draws += 1
         img = self.render_at(t)
         img = img.rgba if isinstance(img, Frame) else img
-        return np.asarray(img, dtype=np.float64)
+        name = f"render_at: its result at t={t:g}"
+        if img is None or isinstance(img, (str, bytes)):
+            raise TypeError(f"{name} is {type(img).__name__}; expected a Frame or an (H,W,4) array")
+        want = (None, None, 4) if self._shape is None else self._shape
+        out = as_array(img, name, np.float64, want)  # the checks; float64 for the total
+        self._shape = out.shape
+        raw = np.asarray(img)
+        return raw if raw.dtype in (np.float32, np.float64) else out  # kept as rendered
+
+    def _draw(self, t: float) -> np.ndarray:
+        return np.asarray(self._render(t), dtype=np.float64)
+
+    def _check_memory(self, first: np.ndarray) -> None:
+        """The running total (and the kept renders) against the memory budget."""
+        terms = [({"image values": first.size}, 2 * 8)]
+        if self.keep_images:
+            terms.append(({"samples": self.samples, "image values": first.size}, first.itemsize))
+        need("Sequence", *terms)
 
     def time(self, j: int) -> float:
         """Time of the j-th render of the whole sequence."""
@@ -163,14 +194,22 @@ class Sequence:
         self.frame_index += 1
         k = self.frame_index
         if self._total is None:
-            imgs = [self._draw(self.time(j)) for j in range(n)]
-            self._total = np.sum(imgs, axis=0)
-            if self.keep_images:
-                self._kept.extend(imgs)
+            # A running sum, one render at a time: only the total (and, when kept, the
+            # renders) stays.
+            for j in range(n):
+                img = self._render(self.time(j))
+                if j == 0:
+                    self._check_memory(img)
+                    total = np.array(img, dtype=np.float64)
+                else:
+                    total += img
+                if self.keep_images:
+                    self._kept.append(np.array(img, copy=True))
+            self._total = total
         else:
-            newest = self._draw(self.time(k + n - 1))
+            newest = self._render(self.time(k + n - 1))
             oldest = self._kept.popleft() if self.keep_images else self._draw(self.time(k - 1))
-            self._total += newest - oldest
+            self._total += np.asarray(newest, dtype=np.float64) - np.asarray(oldest, dtype=np.float64)
             if self.keep_images:
-                self._kept.append(newest)
+                self._kept.append(np.array(newest, copy=True))
         return (self._total / n).astype(np.float32)

@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _core, image
-from .._validate import as_float, as_int
+from .._validate import as_bool, as_float, as_int
 from ..raster import Frame
 from ..render import register
 from ..scene import Scene
@@ -65,8 +65,7 @@ def opaque_image(scene: Scene, aa: int = 1, layers: bool = True) -> Frame:
     blurred), per object ``lengths`` (pixels), ``front_pixels`` (pixels composited in front).
     """
     aa = check_aa(aa)
-    if not isinstance(layers, (bool, np.bool_)):
-        raise TypeError(f"layers: expected a bool, got {type(layers).__name__}")
+    layers = as_bool(layers, "layers")
     require_box_shutter(scene, "opaque_image")
     tc = shutter_centroid(scene)
     frame = sharp_frame(scene, tc, aa, velocity="shutter")
@@ -124,7 +123,8 @@ def camera_velocity(scene: Scene, samples: int = 16, aa: int = 1) -> Frame:
 
     Options: ``samples`` N in [1, 1024] blur taps per pixel; ``aa`` 1, 2 or 4 spatial samples per
     pixel along each axis for the sharp frame. The velocity from the camera at ``t_c`` back to the
-    camera at the shutter's start is scaled by ``1 / t_c`` to span the whole shutter. Pixels of
+    camera at the shutter's start is scaled by ``1 / t_c`` to span the whole shutter and clamped
+    to ``MAX_VELOCITY`` pixels (as :func:`motionblur.image.camera_motion_blur`). Pixels of
     moving objects take the rasterizer's velocity of the object with the camera's motion folded
     in instead (Chapman's static-scene velocity would blur an object the camera follows).
     ``stats``: ``t``, ``samples``.
@@ -140,6 +140,9 @@ def camera_velocity(scene: Scene, samples: int = 16, aa: int = 1) -> Frame:
         vel = image.camera_velocity(frame.depth, cam, start)
         moving = np.isin(frame.ids, [k for k, o in enumerate(scene.objects) if o.is_moving])
         vel = np.where(moving[..., None], frame.velocity, vel) * np.float32(1.0 / tc)
+        # as camera_motion_blur: a streak past MAX_VELOCITY pixels crosses the image anyway (a
+        # very narrow field of view, a point near the previous camera plane)
+        vel = np.clip(vel, -image.MAX_VELOCITY, image.MAX_VELOCITY, out=vel)
         rgba = image.velocity_blur(rgba, vel, samples)
     out = Frame(rgba, frame.depth, frame.ids, frame.velocity)
     out.stats.update(t=tc, samples=samples)

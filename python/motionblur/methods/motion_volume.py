@@ -18,7 +18,7 @@ import copy
 import numpy as np
 
 from .. import _core
-from .._validate import as_choice, as_int, as_samples, as_segments
+from .._validate import as_bool, as_choice, as_int, as_samples, as_segments
 from ..geometry import motion_volume as build_volume
 from ..geometry import spin_volume as build_spin
 from ..raster import Camera, Draw, Frame
@@ -242,7 +242,9 @@ def motion_volume(
         filter = scene.shutter
     as_choice(filter, "filter", FILTERS, type_error=False)
     aa = as_samples(aa, "aa")
-    if not (spin == "auto" or isinstance(spin, (bool, np.bool_))):
+    contour_line = as_bool(contour_line, "contour_line")
+    exact_static = as_bool(exact_static, "exact_static")
+    if not ((isinstance(spin, str) and spin == "auto") or isinstance(spin, (bool, np.bool_))):
         raise ValueError(f"spin: expected 'auto', True or False, got {spin!r}")
     as_choice(colors, "colors", ("pixel", "averaged", "contour"), type_error=False)
     color_renders = as_int(color_renders, "color_renders", minimum=1, maximum=64)

@@ -1,0 +1,157 @@
+"""The analytic method against accumulation with 256 and 1024 time samples, per built-in scene:
+wall clock and error, in the same run.
+
+Every method renders each scene at the same size and supersampling, timed in the same run (best
+of ``--repeat`` calls each, after one warm-up call), so the ratios are what counts on a shared
+machine; the load average is printed before and after. Error is the RMSE of the premultiplied
+RGBA against accumulation with ``--reference`` samples (4096: its own noise is about half that
+of accumulation-1024). Also prints the analytic kernel's counts (sample tests, spans, pieces,
+tile splits) and its cover/resolve thread time.
+
+``--memory`` instead measures the peak resident memory of one frame of ``--memory-scene`` at
+``--memory-size`` (each method in a fresh process: ``ru_maxrss`` of the child, minus the same
+process's peak before the frame, so numpy, the scene and the extension are not counted).
+
+Usage: python benches/bench_analytic.py [--size 320x240] [--aa 2] [--repeat 3] [--scenes a,b]
+       [--reference 4096] [--no-error]
+       python benches/bench_analytic.py --memory [--memory-scene sphere80k] [--memory-size 1920x1080]
+Writes out/bench/analytic.md (or analytic_memory.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+
+import motionblur as mb
+from motionblur.scenes_builtin import SCENES
+
+ACCUMULATION = (256, 1024)
+
+
+def best(fn, repeat: int) -> tuple[float, object]:
+    out = fn()  # warm-up: static layers, segment rules, allocator
+    t_best = float("inf")
+    for _ in range(repeat):
+        t = time.perf_counter()
+        out = fn()
+        t_best = min(t_best, time.perf_counter() - t)
+    return t_best, out
+
+
+def rmse(a, b) -> float:
+    return float(np.sqrt(np.mean((a.rgba - b.rgba) ** 2)))
+
+
+def load() -> str:
+    return " ".join(Path("/proc/loadavg").read_text().split()[:3]) if Path("/proc/loadavg").exists() else "?"
+
+
+def speed_and_error(a: argparse.Namespace) -> list[str]:
+    w, h = (int(v) for v in a.size.split("x"))
+    lines = [
+        f"{a.size}, aa={a.aa}, best of {a.repeat} (wall clock), {os.cpu_count()} cores; "
+        f"load average at start {load()}",
+        "",
+        "| scene | analytic ms | acc-256 ms | acc-1024 ms | acc-256 / analytic | acc-1024 / analytic "
+        "| RMSE analytic | RMSE acc-256 | RMSE acc-1024 | tests | spans | pieces | splits |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    print("\n".join(lines), flush=True)
+    for name in a.scenes.split(","):
+        scene = SCENES[name](width=w, height=h)
+        ta, fa = best(partial(mb.render, scene, "analytic", aa=a.aa), a.repeat)
+        times, frames = {}, {}
+        for n in ACCUMULATION:
+            times[n], frames[n] = best(
+                partial(mb.render, scene, "accumulation", samples=n, aa=a.aa), a.repeat
+            )
+        err = {"analytic": float("nan"), **{n: float("nan") for n in ACCUMULATION}}
+        if not a.no_error:
+            ref = mb.render(scene, "accumulation", samples=a.reference, aa=a.aa)
+            err = {"analytic": rmse(fa, ref), **{n: rmse(frames[n], ref) for n in ACCUMULATION}}
+        s = fa.stats
+        row = (
+            f"| {name} | {1e3 * ta:.1f} | {1e3 * times[256]:.1f} | {1e3 * times[1024]:.1f} "
+            f"| {times[256] / ta:.2f} | {times[1024] / ta:.2f} | {err['analytic']:.2e} | {err[256]:.2e} "
+            f"| {err[1024]:.2e} | {s.get('tests', 0)} | {s.get('spans', 0)} | {s.get('pieces', 0)} "
+            f"| {s.get('splits', 0)} |"
+        )
+        print(row, flush=True)
+        lines.append(row)
+    tail = f"\nload average at the end {load()}; RMSE against accumulation-{a.reference}"
+    print(tail)
+    return [*lines, tail]
+
+
+_CHILD = """
+import json, resource, sys
+import motionblur as mb
+name, w, h, method, kw = sys.argv[1], int(sys.argv[2]), int(sys.argv[3]), sys.argv[4], json.loads(sys.argv[5])
+scene = mb.SCENES[name](w, h)
+before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+frame = mb.render(scene, method, **kw)
+after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+print(json.dumps({"before_kib": before, "peak_kib": after, "ms": frame.stats.get("ms_total", 0.0)}))
+"""
+
+
+def memory(a: argparse.Namespace) -> list[str]:
+    w, h = (int(v) for v in a.memory_size.split("x"))
+    runs = [
+        ("analytic", {}),
+        ("analytic", {"aa": 2}),
+        ("accumulation", {"samples": 1}),
+        ("accumulation", {"samples": 256}),
+    ]
+    lines = [
+        f"{a.memory_scene} at {a.memory_size}: peak resident memory of one frame, each in a fresh "
+        f"process; load average {load()}",
+        "",
+        "| method | options | process peak MiB | of which the frame MiB |",
+        "|---|---|---:|---:|",
+    ]
+    print("\n".join(lines), flush=True)
+    for method, kw in runs:
+        out = subprocess.run(
+            [sys.executable, "-c", _CHILD, a.memory_scene, str(w), str(h), method, json.dumps(kw)],
+            capture_output=True, text=True, check=True,
+        ).stdout  # fmt: skip
+        r = json.loads(out.strip().splitlines()[-1])
+        row = (
+            f"| {method} | {kw} | {r['peak_kib'] / 1024:.0f} | "
+            f"{(r['peak_kib'] - r['before_kib']) / 1024:.0f} |"
+        )
+        print(row, flush=True)
+        lines.append(row)
+    return lines
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--size", default="320x240")
+    ap.add_argument("--aa", type=int, default=2)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--scenes", default=",".join(SCENES))
+    ap.add_argument("--reference", type=int, default=4096)
+    ap.add_argument("--no-error", action="store_true")
+    ap.add_argument("--memory", action="store_true")
+    ap.add_argument("--memory-scene", default="sphere80k")
+    ap.add_argument("--memory-size", default="1920x1080")
+    a = ap.parse_args()
+    lines = memory(a) if a.memory else speed_and_error(a)
+    out = Path("out/bench")
+    out.mkdir(parents=True, exist_ok=True)
+    (out / ("analytic_memory.md" if a.memory else "analytic.md")).write_text("\n".join(lines) + "\n")
+
+
+if __name__ == "__main__":
+    main()

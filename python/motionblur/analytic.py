@@ -1,0 +1,218 @@
+"""Analytic motion blur for numpy users: meshes given at the boundaries of shutter segments,
+rasterized with the exact time each sample is covered.
+
+Within each segment ``[times[k], times[k+1]]`` every vertex moves linearly in clip space, so a
+triangle's edge functions at a sample are quadratics in time and the covered times are found
+from their roots (Korein and Badler's continuous algorithm in Gribel et al.'s rasterizer form).
+Visibility is resolved over time per sample (linear depth per covered span, split where two
+surfaces cross) and colour is integrated with the shutter filter at Gauss points in time.
+:func:`rasterize_motion` is the kernel behind ``render(scene, "analytic")``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from . import _core
+from ._validate import as_array, as_float, as_int
+from .raster import Camera, Frame
+
+__all__ = ["MovingDraw", "rasterize_motion", "coverage", "TILE_BUDGET_BYTES"]
+
+#: Most bytes one pass over a tile of 32 x 32 samples may hold in fragments (the spans of time
+#: the triangles cover its samples), their chains and the triangles they come from, per thread.
+#: Past it the tile is done again in halves (rows, then columns, down to single samples): the
+#: result is the same bits, only slower (``stats["splits"]`` counts the halvings). A single
+#: sample that alone needs more (thousands of moving triangles stacked over it) raises
+#: ``MemoryError`` naming it; raise this setting to let it through. Each thread's buffers may
+#: reach twice this and are kept for the next tile.
+TILE_BUDGET_BYTES = 64 << 20
+
+
+class MovingDraw:
+    """One mesh moving over the shutter.
+
+    ``positions`` (K+1,V,3) float world positions at the K+1 segment boundaries; ``faces``
+    (F,3) int, counter-clockwise is front; ``rgba`` straight linear colour: (3,)/(4,) for every
+    vertex or (V,3)/(V,4) per vertex, alpha in [0, 1]; ``normals`` (K+1,V,3) world normals at
+    the boundaries for lambert shading (None: area-weighted normals of the positions);
+    ``object_id`` int32 written to ``Frame.ids``; ``cull_back`` drops back faces; ``shading``
+    ``"flat"`` (unlit colour) or ``"lambert"`` (the frame's lights and ambient). The arrays are
+    stored as read-only float64 / int64 / float32 copies or views; the caller's arrays are never
+    written.
+    """
+
+    def __init__(
+        self,
+        positions,
+        faces,
+        rgba=(1.0, 1.0, 1.0),
+        normals=None,
+        object_id=0,
+        cull_back=True,
+        shading: str = "flat",
+    ):
+        p = as_array(positions, "positions", np.float64, (None, None, 3))
+        f = as_array(faces, "faces", np.int64, (None, 3), allow_empty=True)
+        nv = p.shape[1]
+        if f.size and (f.min() < 0 or f.max() >= nv):
+            raise ValueError(f"faces: indices must be in [0, {nv}), got [{f.min()}, {f.max()}]")
+        c = np.asarray(rgba) if not isinstance(rgba, str) else None
+        if c is None:
+            raise TypeError("rgba: expected a colour or per-vertex colours")
+        if c.ndim <= 1:
+            c = as_array(c, "rgba", np.float32, (None,))[None, :]
+        else:
+            c = as_array(c, "rgba", np.float32, (nv, None))
+        if c.shape[1] not in (3, 4):
+            raise ValueError(f"rgba: expected (3,), (4,), (V,3) or (V,4), got shape {np.shape(rgba)}")
+        if c.shape[1] == 3:
+            c = np.concatenate([c, np.ones((len(c), 1), np.float32)], axis=1)
+        if (c[:, :3] < 0).any() or ((c[:, 3] < 0) | (c[:, 3] > 1)).any():
+            raise ValueError("rgba: colours must be >= 0 and alpha in [0, 1]")
+        n = None if normals is None else as_array(normals, "normals", np.float32, p.shape)
+        self.positions, self.faces, self.rgba, self.normals = p, f, c, n
+        for a in (self.positions, self.faces, self.rgba, self.normals):
+            if a is not None:
+                a.flags.writeable = False
+        self.object_id = as_int(object_id, "object_id", minimum=-(2**31), maximum=2**31 - 1)
+        if not isinstance(cull_back, (bool, np.bool_)):
+            raise TypeError(f"cull_back: expected a bool, got {type(cull_back).__name__}")
+        self.cull_back = bool(cull_back)
+        if not isinstance(shading, str):
+            raise TypeError(f"shading: expected a string, got {type(shading).__name__}")
+        if shading not in ("flat", "lambert"):
+            raise ValueError(f"shading: expected 'flat' or 'lambert', got {shading!r}")
+        self.shading = shading
+
+    def _args(self):
+        c = np.ascontiguousarray
+        n = None if self.normals is None else c(self.normals)
+        return (
+            c(self.positions),
+            c(self.faces),
+            c(self.rgba),
+            n,
+            self.object_id,
+            self.cull_back,
+            self.shading,
+        )
+
+    def __repr__(self) -> str:
+        k, v = self.positions.shape[:2]
+        return (
+            f"MovingDraw({k} boundaries, {v} vertices, {len(self.faces)} faces, object_id={self.object_id})"
+        )
+
+
+def _view_projections(cameras, k1: int):
+    cams = [cameras] if isinstance(cameras, Camera) else list(cameras)
+    if not cams or not all(isinstance(c, Camera) for c in cams):
+        raise TypeError("cameras: expected a motionblur.Camera or a sequence of them (one per boundary)")
+    if len(cams) not in (1, k1):
+        raise ValueError(f"cameras: expected 1 or {k1} cameras (one per boundary), got {len(cams)}")
+    w, h = cams[0].width, cams[0].height
+    if any((c.width, c.height) != (w, h) for c in cams):
+        raise ValueError("cameras: every camera must have the same image size")
+    return np.ascontiguousarray(np.stack([c.view_projection for c in cams])), w, h
+
+
+def _shutter_arg(shutter):
+    if isinstance(shutter, str):
+        return shutter
+    w = as_array(shutter, "shutter", np.float64, (None,))
+    return np.ascontiguousarray(w)
+
+
+def rasterize_motion(
+    cameras,
+    draws: Sequence[MovingDraw],
+    times,
+    samples: int = 1,
+    shutter="box",
+    lights=(),
+    ambient=0.0,
+    gauss="auto",
+    reference_time: float = 1.0,
+    background=None,
+    shade: bool = True,
+) -> Frame:
+    """Rasterizes moving meshes with the exact covered time per sample.
+
+    ``cameras``: one :class:`Camera`, or one per boundary (a moving camera; same image size).
+    ``draws``: :class:`MovingDraw` s. ``times`` (K+1,) float: the segment boundaries, strictly
+    increasing from 0 to 1 (normalised shutter time). ``samples``: 1, 2 or 4 per pixel along
+    each axis. ``shutter``: ``"box"``, ``"ramp"``, ``"triangle"``, ``"gaussian"`` or (M,) weights
+    of M equal strata. ``lights`` (pairs (direction (3,), intensity float or (3,))) and
+    ``ambient`` light the lambert draws. ``gauss``: points in time per visible piece, 1 to
+    4, or ``"auto"`` (1 to 3 by the piece's length); a piece is cut where the triangle covering
+    the sample changes, so each triangle is shaded at its own points. ``reference_time`` in [0, 1]: the instant depth, ids and velocity describe.
+    ``background``: an opaque layer the draws are depth-tested and composited against, one
+    entry per sample: ``(rgba (HS,WS,4) float32 premultiplied, depth (HS,WS) float32 view
+    depth (inf where empty), ids (HS,WS) int32)``. ``shade=False`` gives coverage only (every
+    surface opaque white).
+
+    Returns a :class:`Frame`: ``rgba`` (H,W,4) float32 premultiplied, the shutter-weighted
+    time integral; ``depth`` (H,W) float32, ``ids`` (H,W) int32 and ``velocity`` (H,W,2) float32
+    (pixels, the surface's screen motion from the first to the last boundary) of the surface in
+    front at ``reference_time`` (of each pixel's nearest sample); ``stats`` with ``prims``,
+    ``bin_entries``, ``intervals`` (covered spans found), ``pieces`` (visible pieces shaded),
+    ``splits`` (tile passes redone in halves to stay within :data:`TILE_BUDGET_BYTES`),
+    ``segments`` and ``ms_*`` per stage. Bit-identical for any thread count and any budget; the
+    GIL is released. ``MemoryError`` (naming the sample) where one sample alone needs more than
+    the budget.
+    """
+    t = as_array(times, "times", np.float64, (None,))
+    vps, w, h = _view_projections(cameras, len(t))
+    draws = list(draws)
+    for i, d in enumerate(draws):
+        if not isinstance(d, MovingDraw):
+            raise TypeError(f"draws: item {i} is a {type(d).__name__}, not a motionblur.MovingDraw")
+        if d.positions.shape[0] != len(t):
+            raise ValueError(
+                f"draws: item {i} has {d.positions.shape[0]} boundaries of positions, times has {len(t)}"
+            )
+    samples = as_int(samples, "samples")
+    if isinstance(gauss, str):
+        if gauss != "auto":
+            raise ValueError(f"gauss: expected 'auto' or 1 to 4, got {gauss!r}")
+        g = 0
+    else:
+        g = as_int(gauss, "gauss", minimum=1, maximum=4)
+    light_args = []
+    for i, li in enumerate(lights):
+        try:
+            d, k = li
+        except (TypeError, ValueError):
+            raise TypeError(f"lights: item {i} must be a pair (direction, intensity)") from None
+        dv = as_array(d, "lights", np.float64, (3,))
+        kv = np.asarray(k, dtype=np.float64)
+        kv = as_array(np.broadcast_to(kv, (3,)) if kv.ndim == 0 else kv, "lights", np.float64, (3,))
+        light_args.append((tuple(map(float, dv)), tuple(map(float, kv))))
+    amb = np.asarray(ambient, dtype=np.float64)
+    amb = as_array(np.broadcast_to(amb, (3,)) if amb.ndim == 0 else amb, "ambient", np.float64, (3,))
+    bd = None
+    if background is not None:
+        try:
+            rgba, depth, ids = background
+        except (TypeError, ValueError):
+            raise TypeError("background: expected a triple (rgba, depth, ids)") from None
+        c = np.ascontiguousarray
+        bd = (c(rgba, dtype=np.float32), c(depth, dtype=np.float32), c(ids, dtype=np.int32))
+    if not isinstance(shade, (bool, np.bool_)):
+        raise TypeError(f"shade: expected a bool, got {type(shade).__name__}")
+    rgba, depth, ids, velocity, stats = _core._analytic(
+        w, h, samples, np.ascontiguousarray(t), vps, [d._args() for d in draws], _shutter_arg(shutter),
+        light_args, tuple(map(float, amb)), g, as_float(reference_time, "reference_time"),
+        bool(shade), bd, as_int(TILE_BUDGET_BYTES, "TILE_BUDGET_BYTES", minimum=1),
+    )  # fmt: skip
+    return Frame(rgba, depth, ids, velocity, stats)
+
+
+def coverage(cameras, draws: Sequence[MovingDraw], times, samples: int = 1, shutter="box") -> np.ndarray:
+    """(H,W) float32: the shutter-weighted fraction of the time each pixel is covered by any of
+    the ``draws`` (see :func:`rasterize_motion` for the arguments), without shading."""
+    f = rasterize_motion(cameras, draws, times, samples=samples, shutter=shutter, shade=False)
+    return f.rgba[..., 3].copy()

@@ -1,0 +1,396 @@
+//! The frame: prims of every face over every segment, binning into tiles, the tiles in
+//! parallel (`tiles.rs`), and the box resolve of each pixel's samples.
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::hull;
+use super::input::{prepare, validate, Input, Prepared};
+use super::prim::{self, Corners, Prim, OPAQUE};
+use super::shade::TilePrim;
+use super::tiles::{corners, Counts, Ctx, SampleOut, TILE};
+use crate::error::{Error, Result};
+
+/// Faces set up per parallel job.
+const CHUNK: usize = 2048;
+/// Most (tile, prim) pairs a frame may bin (8 bytes each while binning).
+pub const MAX_BIN_ENTRIES: u64 = 1 << 27;
+/// Most bytes of prims set up once for all the tiles they reach (`TilePrim`, about 520 bytes
+/// each); past it each tile sets up its own.
+const SHARED_PRIM_BYTES: usize = 256 << 20;
+/// Counts and timings of one frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Stats {
+    /// Triangle-segments set up (after culling and the view test).
+    pub prims: u64,
+    /// (tile, prim) pairs binned.
+    pub bin_entries: u64,
+    /// Spans of covered time found at samples (fragments).
+    pub intervals: u64,
+    /// Visible pieces shaded.
+    pub pieces: u64,
+    /// Tile passes that outgrew the memory budget ([`Input::tile_budget`]) and were done again
+    /// as two halves (the result is the same; only the time grows).
+    pub splits: u64,
+    /// Samples tested against a prim.
+    pub tests: u64,
+    /// Covered spans found at samples, before chaining.
+    pub spans: u64,
+    /// Thread time (summed over threads, ms) finding spans.
+    pub ms_cover: f64,
+    /// Thread time (summed over threads, ms) resolving and shading samples.
+    pub ms_resolve: f64,
+    /// Segments of the shutter.
+    pub segments: u64,
+    /// Milliseconds preparing the draws (clip positions, normals).
+    pub ms_prepare: f64,
+    /// Milliseconds setting up prims (and sharing them between tiles).
+    pub ms_setup: f64,
+    /// Milliseconds binning prims into tiles.
+    pub ms_bin: f64,
+    /// Milliseconds in the tiles.
+    pub ms_tiles: f64,
+    /// Milliseconds for the whole frame.
+    pub ms_total: f64,
+}
+
+/// A rendered frame, row-major `height` x `width` pixels.
+#[derive(Clone, Debug, Default)]
+pub struct Frame {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// (H,W,4) premultiplied linear RGBA, integrated over the shutter.
+    pub rgba: Vec<f32>,
+    /// (H,W) view depth of the surface in front at the reference time, inf for none.
+    pub depth: Vec<f32>,
+    /// (H,W) object id of that surface, -1 for none.
+    pub ids: Vec<i32>,
+    /// (H,W,2) its screen motion over the shutter, pixels.
+    pub velocity: Vec<f32>,
+    /// Counts and timings.
+    pub stats: Stats,
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// Renders one frame. Errors name the offending argument.
+pub fn render(input: &Input) -> Result<Frame> {
+    let t_all = Instant::now();
+    validate(input)?;
+    let s = input.samples;
+    let (ws, hs) = (input.width * s, input.height * s);
+    let mut stats = Stats {
+        segments: (input.times.len() - 1) as u64,
+        ..Stats::default()
+    };
+
+    let t = Instant::now();
+    let prepared: Vec<Prepared> = input.draws.iter().map(|d| prepare(input, d)).collect();
+    stats.ms_prepare = ms(t);
+
+    let t = Instant::now();
+    let prims = setup_prims(input, &prepared, ws, hs);
+    stats.prims = prims.len() as u64;
+    stats.ms_setup = ms(t);
+
+    let t = Instant::now();
+    let (tx, ty) = ((ws as i32 + TILE - 1) / TILE, (hs as i32 + TILE - 1) / TILE);
+    let (offsets, entries) = bin(&prims, tx, ty)?;
+    stats.bin_entries = entries.len() as u64;
+    stats.ms_bin = ms(t);
+
+    // Prims that reach several tiles are set up once for all of them, within a memory budget.
+    let t = Instant::now();
+    let shared: Vec<TilePrim> = if entries.len() > prims.len()
+        && prims.len() * std::mem::size_of::<TilePrim>() <= SHARED_PRIM_BYTES
+    {
+        prims
+            .par_iter()
+            .with_min_len(256)
+            .map(|p| {
+                let c = corners(input, &prepared, p, ws as i32, hs as i32);
+                TilePrim::new(input, &prepared, p, &c)
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    stats.ms_setup += ms(t);
+
+    let t = Instant::now();
+    let breaks = input.shutter.breaks();
+    let ctx = Ctx {
+        input,
+        prepared: &prepared,
+        prims: &prims,
+        shared: &shared,
+        breaks: &breaks,
+        ws: ws as i32,
+        hs: hs as i32,
+    };
+    // The frame is written one row of tiles at a time, each row into its own band of pixel
+    // rows: only the rows in flight hold their samples' results (a frame's worth of them at
+    // 1080p with 2x2 samples would be 265 MB), the tiles of a row run in parallel too.
+    let (w, h) = (input.width as usize, input.height as usize);
+    let mut frame = Frame {
+        width: input.width,
+        height: input.height,
+        rgba: vec![0.0; 4 * w * h],
+        depth: vec![f32::INFINITY; w * h],
+        ids: vec![-1; w * h],
+        velocity: vec![0.0; 2 * w * h],
+        stats: Stats::default(),
+    };
+    let band = (TILE as usize / s as usize) * w;
+    let rows: Vec<Vec<Counts>> = frame
+        .rgba
+        .par_chunks_mut(4 * band)
+        .zip(frame.depth.par_chunks_mut(band))
+        .zip(frame.ids.par_chunks_mut(band))
+        .zip(frame.velocity.par_chunks_mut(2 * band))
+        .enumerate()
+        .map(|(y, (((rgba, depth), ids), velocity))| {
+            let y = y as i32;
+            let tiles: Vec<(Vec<SampleOut>, Counts)> = (0..tx)
+                .into_par_iter()
+                .map(|x| {
+                    let i = (y * tx + x) as usize;
+                    ctx.tile(x, y, &entries[offsets[i] as usize..offsets[i + 1] as usize])
+                })
+                .collect::<Result<_>>()?;
+            let mut out = Band {
+                rgba,
+                depth,
+                ids,
+                velocity,
+                width: w,
+                y0: y * TILE / s as i32,
+            };
+            for (x, (samples, _)) in tiles.iter().enumerate() {
+                let (x0, y0) = (x as i32 * TILE, y * TILE);
+                write_pixels(&mut out, samples, x0, y0, ws as i32, hs as i32, s as i32);
+            }
+            Ok(tiles.into_iter().map(|(_, c)| c).collect())
+        })
+        .collect::<Result<_>>()?;
+    stats.ms_tiles = ms(t);
+    for counts in rows.iter().flatten() {
+        stats.intervals += counts.intervals;
+        stats.pieces += counts.pieces;
+        stats.splits += counts.splits;
+        stats.tests += counts.tests;
+        stats.spans += counts.spans;
+        stats.ms_cover += counts.ns_cover as f64 * 1e-6;
+        stats.ms_resolve += counts.ns_resolve as f64 * 1e-6;
+    }
+    stats.ms_total = ms(t_all);
+    frame.stats = stats;
+    Ok(frame)
+}
+
+/// Every face of every draw over every segment, in (segment, draw, face) order.
+fn setup_prims(input: &Input, prepared: &[Prepared], ws: u32, hs: u32) -> Vec<Prim> {
+    let segments = input.times.len() - 1;
+    let mut out = Vec::new();
+    for seg in 0..segments {
+        for (di, (d, p)) in input.draws.iter().zip(prepared).enumerate() {
+            let chunks: Vec<Vec<Prim>> = d
+                .faces
+                .par_chunks(CHUNK)
+                .enumerate()
+                .map(|(ci, faces)| {
+                    let mut v = Vec::new();
+                    for (j, f) in faces.iter().enumerate() {
+                        let alpha =
+                            f.map(|i| d.rgba[if d.rgba.len() == 1 { 0 } else { i as usize }][3]);
+                        if alpha.iter().all(|a| *a <= 0.0) {
+                            continue;
+                        }
+                        let c0 = f.map(|i| p.clip[seg * p.nv + i as usize]);
+                        let c1 = f.map(|i| p.clip[(seg + 1) * p.nv + i as usize]);
+                        let corners = Corners::new(c0, c1, f64::from(ws), f64::from(hs));
+                        let Some((flags, front, back, bbox, hull, nhull)) =
+                            prim::setup(&corners, &c0, &c1, d.cull_back, ws, hs)
+                        else {
+                            continue;
+                        };
+                        let opaque = p.opaque_everywhere || alpha.iter().all(|a| *a >= 1.0);
+                        v.push(Prim {
+                            draw: di as u32,
+                            face: (ci * CHUNK + j) as u32,
+                            seg: seg as u32,
+                            flags: flags | if opaque { OPAQUE } else { 0 },
+                            front,
+                            back,
+                            bbox,
+                            hull,
+                            nhull,
+                        });
+                    }
+                    v
+                })
+                .collect();
+            let mut group: Vec<Prim> = chunks.into_iter().flatten().collect();
+            order_along_motion(&mut group, p, seg, ws, hs);
+            out.extend(group);
+        }
+    }
+    out
+}
+
+/// Orders one draw's prims of one segment so that its leading side comes first: along the
+/// draw's mean screen motion, a sample is reached by the triangles in this order, so the spans
+/// of neighbouring triangles arrive one after the other and chain (a stable sort: ties keep
+/// face order).
+fn order_along_motion(group: &mut [Prim], p: &Prepared, seg: usize, ws: u32, hs: u32) {
+    let (w, h) = (f64::from(ws), f64::from(hs));
+    let step = (p.nv / 1024).max(1);
+    let (mut dx, mut dy) = (0.0, 0.0);
+    for v in (0..p.nv).step_by(step) {
+        let (a, b) = (p.clip[seg * p.nv + v], p.clip[(seg + 1) * p.nv + v]);
+        if a[3] > 0.0 && b[3] > 0.0 {
+            let pa = prim::homogeneous_pixel(&a, w, h);
+            let pb = prim::homogeneous_pixel(&b, w, h);
+            dx += pb[0] / pb[2] - pa[0] / pa[2];
+            dy += pb[1] / pb[2] - pa[1] / pa[2];
+        }
+    }
+    if !(dx * dx + dy * dy > 0.0) {
+        return;
+    }
+    let key = |q: &Prim| {
+        let cx = f64::from(q.bbox[0] + q.bbox[2]);
+        let cy = f64::from(q.bbox[1] + q.bbox[3]);
+        -(cx * dx + cy * dy)
+    };
+    group.sort_by(|a, b| key(a).total_cmp(&key(b)));
+}
+
+/// Tile bins: `offsets` (tiles + 1) into `entries` (prim indices, in prim order per tile).
+fn bin(prims: &[Prim], tx: i32, ty: i32) -> Result<(Vec<u32>, Vec<u32>)> {
+    let tiles_of = |p: &Prim| {
+        let b = p.bbox;
+        (
+            b[0] / TILE,
+            b[1] / TILE,
+            (b[2] - 1) / TILE + 1,
+            (b[3] - 1) / TILE + 1,
+        )
+    };
+    let bound: u64 = prims
+        .par_iter()
+        .map(|p| {
+            let (a, b, c, d) = tiles_of(p);
+            ((c - a) * (d - b)) as u64
+        })
+        .sum();
+    if bound > MAX_BIN_ENTRIES {
+        return Err(Error::value(
+            "draws",
+            format!(
+                "the moving triangles' swept bounds span {bound} tiles in all, past the budget of \
+                 {MAX_BIN_ENTRIES} ({} MiB); use fewer or smaller triangles, fewer segments or a \
+                 smaller image",
+                (MAX_BIN_ENTRIES * 8) >> 20
+            ),
+        ));
+    }
+    let pairs: Vec<Vec<(u32, u32)>> = prims
+        .par_chunks(4096)
+        .enumerate()
+        .map(|(ci, chunk)| {
+            let mut v = Vec::new();
+            for (j, p) in chunk.iter().enumerate() {
+                let (a, b, c, d) = tiles_of(p);
+                let sep = hull::Separator::new(p.bbox, &p.hull[..p.nhull as usize]);
+                for y in b..d.min(ty) {
+                    for x in a..c.min(tx) {
+                        let r = [x * TILE, y * TILE, (x + 1) * TILE, (y + 1) * TILE];
+                        if sep.overlaps(r[0], r[1], r[2], r[3]) {
+                            v.push(((y * tx + x) as u32, (ci * 4096 + j) as u32));
+                        }
+                    }
+                }
+            }
+            v
+        })
+        .collect();
+    let n = (tx * ty) as usize;
+    let mut offsets = vec![0u32; n + 1];
+    for v in &pairs {
+        for &(t, _) in v {
+            offsets[t as usize + 1] += 1;
+        }
+    }
+    for i in 0..n {
+        offsets[i + 1] += offsets[i];
+    }
+    let mut fill = offsets.clone();
+    let mut entries = vec![0u32; offsets[n] as usize];
+    for v in &pairs {
+        for &(t, p) in v {
+            entries[fill[t as usize] as usize] = p;
+            fill[t as usize] += 1;
+        }
+    }
+    Ok((offsets, entries))
+}
+
+/// The frame's pixel rows `y0..` that one row of tiles writes.
+struct Band<'a> {
+    rgba: &'a mut [f32],
+    depth: &'a mut [f32],
+    ids: &'a mut [i32],
+    velocity: &'a mut [f32],
+    /// Pixels per row.
+    width: usize,
+    /// The band's first pixel row in the frame.
+    y0: i32,
+}
+
+/// Box resolve of a tile's samples into the band's pixels: colour mean; depth, id and velocity
+/// of the nearest sample (the first in row order on ties).
+fn write_pixels(
+    band: &mut Band,
+    samples: &[SampleOut],
+    x0: i32,
+    y0: i32,
+    ws: i32,
+    hs: i32,
+    s: i32,
+) {
+    let w = band.width;
+    let norm = 1.0 / (s * s) as f32;
+    for py in (y0 / s)..((y0 + TILE).min(hs) / s) {
+        for px in (x0 / s)..((x0 + TILE).min(ws) / s) {
+            let mut c = [0.0f32; 4];
+            let mut best: Option<&SampleOut> = None;
+            for j in 0..s {
+                for i in 0..s {
+                    let (sx, sy) = (px * s + i - x0, py * s + j - y0);
+                    let o = &samples[(sy * TILE + sx) as usize];
+                    for k in 0..4 {
+                        c[k] += o.rgba[k];
+                    }
+                    if o.depth.is_finite() && best.is_none_or(|b| o.depth < b.depth) {
+                        best = Some(o);
+                    }
+                }
+            }
+            let i = (py - band.y0) as usize * w + px as usize;
+            for k in 0..4 {
+                band.rgba[4 * i + k] = if s == 1 { c[k] } else { c[k] * norm };
+            }
+            if let Some(b) = best {
+                band.depth[i] = b.depth;
+                band.ids[i] = b.id;
+                band.velocity[2 * i] = b.velocity[0];
+                band.velocity[2 * i + 1] = b.velocity[1];
+            }
+        }
+    }
+}

@@ -1,0 +1,258 @@
+//! What a frame of the analytic method is given, its checks, and the per-draw preparation
+//! (clip positions and normals at every segment boundary).
+use glam::{DMat4, DVec4};
+use rayon::prelude::*;
+
+use super::quadrature::Quadrature;
+use crate::error::{Error, Result};
+use crate::raster::{check_size, vertex_normals, Light, Shading};
+use crate::shutter::Shutter;
+
+/// One mesh moving over the shutter.
+#[derive(Clone, Copy, Debug)]
+pub struct MovingDraw<'a> {
+    /// World positions at every segment boundary, boundary-major: `(K+1) * V` points.
+    pub positions: &'a [[f64; 3]],
+    /// Triangles, counter-clockwise is front.
+    pub faces: &'a [[u32; 3]],
+    /// Straight linear RGBA: one for every vertex, or one per vertex (`V`).
+    pub rgba: &'a [[f32; 4]],
+    /// World normals at every boundary (`(K+1) * V`), or None: area-weighted vertex normals of
+    /// the positions (used by lambert shading only).
+    pub normals: Option<&'a [[f32; 3]]>,
+    /// Written to the frame's ids.
+    pub object_id: i32,
+    /// Drop back faces.
+    pub cull_back: bool,
+    /// How the draw is shaded.
+    pub shading: Shading,
+}
+
+/// The opaque static scene behind the moving draws, one entry per sample (`ws * hs`).
+#[derive(Clone, Copy, Debug)]
+pub struct Backdrop<'a> {
+    /// Premultiplied linear RGBA, 4 per sample.
+    pub rgba: &'a [f32],
+    /// View depth, `inf` where nothing is there.
+    pub depth: &'a [f32],
+    /// Object ids, -1 where nothing is there.
+    pub ids: &'a [i32],
+}
+
+/// Everything one frame needs.
+#[derive(Clone, Debug)]
+pub struct Input<'a> {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Samples per pixel along each axis (1, 2 or 4).
+    pub samples: u32,
+    /// The segment boundaries: `K + 1` strictly increasing shutter times from 0 to 1.
+    pub times: &'a [f64],
+    /// The camera's view-projection (OpenGL clip space) at every boundary, or one for all.
+    pub view_projections: &'a [DMat4],
+    /// The moving meshes.
+    pub draws: &'a [MovingDraw<'a>],
+    /// The static scene behind them, if any.
+    pub backdrop: Option<Backdrop<'a>>,
+    /// The shutter filter.
+    pub shutter: &'a Shutter,
+    /// Directional lights (lambert shading).
+    pub lights: &'a [Light],
+    /// Ambient light (lambert shading).
+    pub ambient: [f32; 3],
+    /// Points in time per visible piece.
+    pub quadrature: Quadrature,
+    /// The instant depth, ids and velocity describe, in [0, 1].
+    pub reference_time: f64,
+    /// False: coverage only (every surface white and unlit), no shading.
+    pub shade: bool,
+    /// Most bytes one pass over a tile may hold in fragments, links and prims (per thread);
+    /// past it the tile is done in smaller passes, with the same result ([`DEFAULT_TILE_BUDGET`]).
+    pub tile_budget: usize,
+}
+
+/// The default of [`Input::tile_budget`]: 64 MiB.
+pub const DEFAULT_TILE_BUDGET: usize = 64 << 20;
+
+/// A draw's positions in clip space and its normals at every boundary.
+pub struct Prepared {
+    /// Vertices per boundary.
+    pub nv: usize,
+    /// `(K+1) * V` clip positions.
+    pub clip: Vec<[f64; 4]>,
+    /// `(K+1) * V` world normals (lambert), else empty.
+    pub normals: Vec<[f32; 3]>,
+    /// The draw's alpha range per face is read from here: all corners opaque.
+    pub opaque_everywhere: bool,
+    /// The premultiplied colour every triangle of the draw shows at every point, when shading
+    /// cannot vary: flat shading of one colour for all vertices, or no shading at all.
+    pub uniform: Option<[f32; 4]>,
+}
+
+fn finite3(p: &[f64; 3]) -> bool {
+    p.iter().all(|x| x.is_finite())
+}
+
+/// Checks the input; errors name the argument.
+pub fn validate(input: &Input) -> Result<()> {
+    check_size(input.width, input.height, input.samples)?;
+    let t = input.times;
+    if t.len() < 2 {
+        return Err(Error::shape(
+            "times",
+            "needs at least 2 boundaries (0 and 1)",
+        ));
+    }
+    if t[0] != 0.0 || t[t.len() - 1] != 1.0 {
+        return Err(Error::value("times", "must start at 0 and end at 1"));
+    }
+    if t.windows(2).any(|w| !(w[1] > w[0])) {
+        return Err(Error::value("times", "must be strictly increasing"));
+    }
+    let k1 = t.len();
+    let nvp = input.view_projections.len();
+    if nvp != 1 && nvp != k1 {
+        return Err(Error::shape(
+            "view_projections",
+            format!("expected 1 or {k1} matrices (one per boundary), got {nvp}"),
+        ));
+    }
+    if input
+        .view_projections
+        .iter()
+        .any(|m| !m.to_cols_array().iter().all(|x| x.is_finite()))
+    {
+        return Err(Error::value("view_projections", "must be finite"));
+    }
+    if !(0.0..=1.0).contains(&input.reference_time) {
+        return Err(Error::value("reference_time", "must be in [0, 1]"));
+    }
+    if let Quadrature::Points(n) = input.quadrature {
+        if !(1..=4).contains(&n) {
+            return Err(Error::value("gauss", "must be 1 to 4 points (or auto)"));
+        }
+    }
+    if input.ambient.iter().any(|x| !x.is_finite() || *x < 0.0) {
+        return Err(Error::value("ambient", "must be finite and >= 0"));
+    }
+    for d in input.draws {
+        let n = d.positions.len();
+        if n == 0 || n % k1 != 0 {
+            return Err(Error::shape(
+                "positions",
+                format!("expected (K+1)*V = {k1}*V points, got {n}"),
+            ));
+        }
+        let nv = n / k1;
+        if !d.positions.iter().all(finite3) {
+            return Err(Error::value("positions", "must be finite"));
+        }
+        if d.positions.iter().flatten().any(|x| x.abs() > 1e15) {
+            return Err(Error::value(
+                "positions",
+                "must lie within 1e15 of the origin",
+            ));
+        }
+        if d.faces.iter().flatten().any(|&i| i as usize >= nv) {
+            return Err(Error::value(
+                "faces",
+                format!("indices must be below the {nv} vertices"),
+            ));
+        }
+        if d.rgba.len() != 1 && d.rgba.len() != nv {
+            return Err(Error::shape(
+                "rgba",
+                format!("expected 1 or {nv} colours, got {}", d.rgba.len()),
+            ));
+        }
+        if d.rgba
+            .iter()
+            .any(|c| !c.iter().all(|x| x.is_finite()) || c[..3].iter().any(|x| *x < 0.0))
+            || d.rgba.iter().any(|c| !(0.0..=1.0).contains(&c[3]))
+        {
+            return Err(Error::value(
+                "rgba",
+                "colours must be finite and >= 0, alpha in [0, 1]",
+            ));
+        }
+        if let Some(nm) = d.normals {
+            if nm.len() != n {
+                return Err(Error::shape(
+                    "normals",
+                    format!("expected {n} normals (one per position), got {}", nm.len()),
+                ));
+            }
+            if !nm.iter().flatten().all(|x| x.is_finite()) {
+                return Err(Error::value("normals", "must be finite"));
+            }
+        }
+    }
+    if input.tile_budget == 0 {
+        return Err(Error::value("tile_budget", "must be at least 1 byte"));
+    }
+    if let Some(b) = &input.backdrop {
+        let ns = (input.width * input.samples) as usize * (input.height * input.samples) as usize;
+        if b.depth.len() != ns || b.ids.len() != ns || b.rgba.len() != 4 * ns {
+            return Err(Error::shape(
+                "backdrop",
+                format!("expected one entry per sample ({ns})"),
+            ));
+        }
+        if b.depth.iter().any(|z| z.is_nan() || *z <= 0.0) || !b.rgba.iter().all(|x| x.is_finite())
+        {
+            return Err(Error::value(
+                "backdrop",
+                "depth must be > 0 (inf where empty) and colours finite",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Clip positions (camera of each boundary) and, for lambert shading, normals of one draw.
+pub fn prepare(input: &Input, d: &MovingDraw) -> Prepared {
+    let k1 = input.times.len();
+    let nv = d.positions.len() / k1;
+    let vps = input.view_projections;
+    let clip: Vec<[f64; 4]> = d
+        .positions
+        .par_iter()
+        .with_min_len(4096)
+        .enumerate()
+        .map(|(i, p)| {
+            let m = vps[if vps.len() == 1 { 0 } else { i / nv }];
+            let c = m * DVec4::new(p[0], p[1], p[2], 1.0);
+            [c.x, c.y, c.z, c.w]
+        })
+        .collect();
+    let normals = match (d.shading, input.shade, d.normals) {
+        (Shading::Lambert, true, Some(n)) => n.to_vec(),
+        (Shading::Lambert, true, None) => (0..k1)
+            .into_par_iter()
+            .flat_map_iter(|k| vertex_normals(&d.positions[k * nv..(k + 1) * nv], d.faces))
+            .collect(),
+        _ => Vec::new(),
+    };
+    Prepared {
+        nv,
+        clip,
+        normals,
+        opaque_everywhere: d.rgba.iter().all(|c| c[3] >= 1.0),
+        uniform: uniform_colour(input, d),
+    }
+}
+
+/// See [`Prepared::uniform`]: the straight colour premultiplied as shading does.
+fn uniform_colour(input: &Input, d: &MovingDraw) -> Option<[f32; 4]> {
+    if !input.shade {
+        return Some([1.0; 4]);
+    }
+    let c = d.rgba[0];
+    if d.shading == Shading::Lambert || d.rgba.iter().any(|x| *x != c) {
+        return None;
+    }
+    let a = c[3].clamp(0.0, 1.0);
+    Some([c[0] * a, c[1] * a, c[2] * a, a])
+}

@@ -1,0 +1,269 @@
+//! Shading of a moving triangle at one sample and one instant: the hit point's barycentric
+//! coordinates at that instant interpolate colour, alpha and the normal (itself interpolated
+//! between the segment's boundaries, so a turning object's lighting turns with it).
+//!
+//! Definitions are the rasterizer's (`raster/shade.rs`): `flat` is the interpolated straight
+//! colour, `lambert` multiplies it by `ambient + sum_l intensity_l * max(0, n . -direction_l)`
+//! with `n` normalised and flipped on back faces; alpha is never shaded; the output is
+//! premultiplied.
+use super::input::{Input, Prepared};
+use super::prim::{homogeneous_pixel, Corners, Edges, Prim, SampleEdges, OPAQUE};
+use super::resolve::Layers;
+use super::visibility::{Frag, Link, BACK, NONE};
+use crate::raster::Shading;
+
+/// A prim as one tile uses it: its edges and everything shading reads, gathered once.
+#[derive(Clone)]
+pub struct TilePrim {
+    pub edges: Edges,
+    /// The prim's draw and face, for velocity.
+    pub draw: u32,
+    pub face: u32,
+    pub flags: u8,
+    pub object_id: i32,
+    /// Lambert shading (else flat).
+    pub lambert: bool,
+    /// The segment: shutter time of its start and its length.
+    pub t0: f64,
+    pub dt: f64,
+    /// Straight RGBA of the corners.
+    pub colors: [[f32; 4]; 3],
+    /// Corner normals at the segment's start and their change over it (lambert).
+    pub normals: [[[f32; 3]; 3]; 2],
+    /// The draw's colour where it cannot vary ([`Prepared::uniform`]).
+    pub uniform: Option<[f32; 4]>,
+}
+
+impl TilePrim {
+    /// Gathers what shading `prim` needs.
+    pub fn new(input: &Input, prepared: &[Prepared], prim: &Prim, corners: &Corners) -> Self {
+        let draw = &input.draws[prim.draw as usize];
+        let face = draw.faces[prim.face as usize];
+        let d = &prepared[prim.draw as usize];
+        let k = prim.seg as usize;
+        let colors = face.map(|v| draw.rgba[if draw.rgba.len() == 1 { 0 } else { v as usize }]);
+        let mut normals = [[[0.0f32; 3]; 3]; 2];
+        if !d.normals.is_empty() {
+            for (c, v) in face.iter().enumerate() {
+                let (n0, n1) = (
+                    d.normals[k * d.nv + *v as usize],
+                    d.normals[(k + 1) * d.nv + *v as usize],
+                );
+                normals[0][c] = n0;
+                normals[1][c] = [n1[0] - n0[0], n1[1] - n0[1], n1[2] - n0[2]];
+            }
+        }
+        let (t0, t1) = (input.times[k], input.times[k + 1]);
+        TilePrim {
+            edges: Edges::new(corners),
+            draw: prim.draw,
+            face: prim.face,
+            flags: prim.flags,
+            object_id: draw.object_id,
+            lambert: draw.shading == Shading::Lambert,
+            t0,
+            dt: t1 - t0,
+            colors,
+            normals,
+            uniform: d.uniform,
+        }
+    }
+}
+
+/// The tile's triangles as seen from one sample.
+pub struct SampleShader<'a> {
+    pub input: &'a Input<'a>,
+    pub prepared: &'a [Prepared],
+    /// The tile's prims, by tile index.
+    pub prims: &'a [TilePrim],
+    /// The tile's chain links, and per fragment of the sample the link shading reached.
+    pub links: &'a [Link],
+    pub cursor: Vec<u32>,
+    /// Sample centre.
+    pub x: f64,
+    pub y: f64,
+    /// The tile index of the prim shaded last and its edge values at this sample.
+    pub last: (u32, SampleEdges),
+}
+
+impl SampleShader<'_> {
+    #[inline]
+    fn prim(&self, p: u32) -> &TilePrim {
+        &self.prims[(p & !BACK) as usize]
+    }
+
+    /// Starts a sample with `n` fragments.
+    pub fn reset(&mut self, n: usize) {
+        self.cursor.clear();
+        self.cursor.resize(n, NONE);
+        self.last.0 = NONE;
+    }
+
+    /// The triangle of `f`'s chain covering the sample at time `t` (with `f`'s `BACK` flag).
+    pub fn prim_at(&self, f: &Frag, t: f64) -> u32 {
+        let mut c = f.chain;
+        loop {
+            let next = self.links[c as usize].next;
+            if next == NONE || f64::from(self.links[next as usize].t0) > t {
+                return self.links[c as usize].prim | (f.prim & BACK);
+            }
+            c = next;
+        }
+    }
+
+    /// Barycentric coordinates of the surface point at this sample at time `t`, and the
+    /// local time.
+    #[inline]
+    fn barycentric(&self, tp: &TilePrim, t: f64) -> ([f64; 3], f64) {
+        let q = tp.edges.at(self.x, self.y);
+        barycentric_at(tp, &q, t)
+    }
+
+    /// Object id of the prim's draw.
+    pub fn object_id(&self, p: u32) -> i32 {
+        self.prim(p).object_id
+    }
+
+    /// Screen motion over the shutter (pixels, +x right, +y down) of the surface point seen at
+    /// this sample at time `t`: the same barycentric point at the first and last boundary.
+    pub fn velocity(&self, p: u32, t: f64) -> [f32; 2] {
+        let tp = self.prim(p);
+        let (lam, _) = self.barycentric(tp, t);
+        let d = &self.prepared[tp.draw as usize];
+        let face = self.input.draws[tp.draw as usize].faces[tp.face as usize];
+        let s = f64::from(self.input.samples);
+        let (ws, hs) = (
+            f64::from(self.input.width) * s,
+            f64::from(self.input.height) * s,
+        );
+        let at = |k: usize| {
+            let mut h = [0.0f64; 3];
+            for c in 0..3 {
+                let hp = homogeneous_pixel(&d.clip[k * d.nv + face[c] as usize], ws, hs);
+                for j in 0..3 {
+                    h[j] += lam[c] * hp[j];
+                }
+            }
+            h
+        };
+        let (h0, h1) = (at(0), at(self.input.times.len() - 1));
+        if h0[2] > 0.0 && h1[2] > 0.0 {
+            [
+                ((h1[0] / h1[2] - h0[0] / h0[2]) / s) as f32,
+                ((h1[1] / h1[2] - h0[1] / h0[2]) / s) as f32,
+            ]
+        } else {
+            [0.0; 2]
+        }
+    }
+}
+
+/// Barycentric coordinates of the surface point with edge values `q` at time `t`, and the
+/// local time.
+#[inline]
+fn barycentric_at(tp: &TilePrim, q: &SampleEdges, t: f64) -> ([f64; 3], f64) {
+    let tau = ((t - tp.t0) / tp.dt).clamp(0.0, 1.0);
+    (tp.edges.barycentric(q, tau), tau)
+}
+
+impl Layers for SampleShader<'_> {
+    #[inline]
+    fn opaque(&self, f: &Frag) -> bool {
+        self.prim(f.prim).flags & OPAQUE != 0
+    }
+
+    #[inline]
+    fn uniform(&self, f: &Frag) -> Option<[f32; 4]> {
+        // a chain's triangles are all of one draw
+        self.prim(f.prim).uniform
+    }
+
+    #[inline]
+    fn cuts(&mut self, i: usize, f: &Frag, a: f64, b: f64, out: &mut Vec<f64>) {
+        let mut c = if self.cursor[i] == NONE {
+            f.chain
+        } else {
+            self.cursor[i]
+        };
+        loop {
+            let next = self.links[c as usize].next;
+            if next == NONE {
+                return;
+            }
+            let t = f64::from(self.links[next as usize].t0);
+            if t >= b {
+                return;
+            }
+            if t > a {
+                out.push(t);
+            }
+            c = next;
+        }
+    }
+
+    #[inline(always)]
+    fn shade(&mut self, i: usize, f: &Frag, t: f64) -> [f32; 4] {
+        let input = self.input;
+        if !input.shade {
+            return [1.0; 4];
+        }
+        // the chain's triangle at t: calls for one fragment come in increasing t
+        let mut c = if self.cursor[i] == NONE {
+            f.chain
+        } else {
+            self.cursor[i]
+        };
+        loop {
+            let next = self.links[c as usize].next;
+            if next == NONE || f64::from(self.links[next as usize].t0) > t {
+                break;
+            }
+            c = next;
+        }
+        self.cursor[i] = c;
+        let p = self.links[c as usize].prim | (f.prim & BACK);
+        let prims = self.prims;
+        let tp = &prims[(p & !BACK) as usize];
+        // the prim's edge values at this sample, kept while calls stay on one prim
+        if self.last.0 != p & !BACK {
+            self.last = (p & !BACK, tp.edges.at(self.x, self.y));
+        }
+        let (lam, tau) = barycentric_at(tp, &self.last.1, t);
+        let mut c = [0.0f32; 4];
+        for k in 0..3 {
+            for j in 0..4 {
+                c[j] += lam[k] as f32 * tp.colors[k][j];
+            }
+        }
+        c[3] = c[3].clamp(0.0, 1.0);
+        if tp.lambert {
+            let mut n = [0.0f32; 3];
+            for (k, l) in lam.iter().enumerate() {
+                let (n0, dn) = (tp.normals[0][k], tp.normals[1][k]);
+                for j in 0..3 {
+                    n[j] += *l as f32 * (n0[j] + tau as f32 * dn[j]);
+                }
+            }
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            let s = if len > 0.0 { 1.0 / len } else { 0.0 };
+            let s = if p & BACK != 0 { -s } else { s };
+            let n = n.map(|x| x * s);
+            let mut l = input.ambient;
+            for light in input.lights {
+                let cos = -(n[0] * light.direction[0]
+                    + n[1] * light.direction[1]
+                    + n[2] * light.direction[2]);
+                if cos > 0.0 {
+                    for j in 0..3 {
+                        l[j] += light.intensity[j] * cos;
+                    }
+                }
+            }
+            for j in 0..3 {
+                c[j] *= l[j];
+            }
+        }
+        let a = c[3];
+        [c[0] * a, c[1] * a, c[2] * a, a]
+    }
+}
