@@ -15,7 +15,8 @@
 //! - `image`: image-space blur;
 //! - `budget`: the memory budget every kernel checks before it allocates;
 //! - `analytic`: analytic motion blur, exact covered time per sample;
-//! - `shutter`: the shutter filters.
+//! - `shutter`: the shutter filters;
+//! - `simd`: the switch over the kernels' vector forms.
 #![warn(missing_docs)]
 
 mod accumulate;
@@ -29,6 +30,7 @@ mod motion;
 mod raster;
 mod shell;
 mod shutter;
+mod simd;
 mod volume;
 
 #[cfg(feature = "python")]
@@ -57,6 +59,7 @@ pub use image::{
     DofParams, Piece, ReconstructParams, MAX_FPS_RATIO, MAX_LAYERS, MAX_LENGTH, MAX_LEVELS,
     MAX_SAMPLES, MAX_TAPS, MAX_VELOCITY, MIN_ALPHA,
 };
+pub use simd::{set_simd, simd_enabled};
 pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats, MAX_COORD};
 pub use motion::{
     axis_angle, check_times, det3, dot, mat4_mul, norm, place, row_times, transpose_times, turn,

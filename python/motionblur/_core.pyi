@@ -11,6 +11,8 @@ __all__ = [
     "__version__",
     "memory_budget",
     "set_memory_budget",
+    "_set_simd",
+    "_simd_enabled",
     "DEFAULT_MEMORY_BUDGET",
     "MIN_MEMORY_BUDGET",
     "_Keyframes",
@@ -85,6 +87,15 @@ def memory_budget() -> int:
 
 def set_memory_budget(bytes: int) -> int:
     """Sets the memory budget (bytes, >= MIN_MEMORY_BUDGET); returns the previous one."""
+
+# --- the kernels' vector forms (src/simd.rs)
+
+def _set_simd(enabled: bool) -> bool:
+    """Allows or forbids the kernels' vector forms (`crate::simd`); returns whether they were
+    allowed. Results are the same bits either way: tests compare the two forms with it."""
+
+def _simd_enabled() -> bool:
+    """Whether the kernels run their vector forms (AVX2 detected and not switched off)."""
 
 # --- motion (the keyframe engine)
 

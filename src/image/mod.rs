@@ -56,22 +56,10 @@ pub const MAX_LENGTH: f32 = 65536.0;
 /// Below this blurred opacity the rescale of eq. 7 treats the pixel as empty (colour 0).
 pub const ALPHA_EPS: f32 = 1e-12;
 
-/// Whether this CPU runs the kernels' vector forms (AVX2; the answer is cached by the standard
-/// library). The vector forms give the same bits as the plain ones.
+/// Whether the kernels run their vector forms (`crate::simd`): the same bits as the plain ones.
 #[inline]
 pub(crate) fn simd() -> bool {
-    #[cfg(test)]
-    if tests::PLAIN.load(std::sync::atomic::Ordering::Relaxed) {
-        return false;
-    }
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx2")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+    crate::simd::simd_enabled()
 }
 
 /// Checks that `data` holds `h * w * channels` values, that the image is not empty, and that

@@ -3,11 +3,7 @@
 use super::lines::plan;
 use super::*;
 use crate::on_threads;
-use std::sync::atomic::{AtomicBool, Ordering};
-
-/// Makes `simd()` false (the plain forms) while set. Both forms give the same bits, so other
-/// tests running meanwhile are not affected.
-pub(crate) static PLAIN: AtomicBool = AtomicBool::new(false);
+use crate::simd::{set_simd, SWITCH};
 
 fn image(w: usize, h: usize, seed: u32) -> Vec<f32> {
     // A small deterministic generator: an alpha blob with random-ish colours.
@@ -181,10 +177,12 @@ fn vector_and_plain_forms_give_the_same_bits() {
         }
         all
     };
+    let _guard = SWITCH.lock().unwrap_or_else(|e| e.into_inner());
+    let before = set_simd(true);
     let vector = run();
-    PLAIN.store(true, Ordering::Relaxed);
+    set_simd(false);
     let plain = run();
-    PLAIN.store(false, Ordering::Relaxed);
+    set_simd(before);
     assert_eq!(vector.len(), plain.len());
     assert!(vector
         .iter()

@@ -152,16 +152,9 @@ impl Frame {
     }
 }
 
-/// Whether the CPU runs the resolve's vector form (AVX2; cached by the standard library).
+/// Whether the resolve runs its vector form (`crate::simd`: AVX2 detected and not switched off).
 fn simd() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx2")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+    crate::simd::simd_enabled()
 }
 
 impl Output {
