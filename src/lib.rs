@@ -59,7 +59,6 @@ pub use image::{
     DofParams, Piece, ReconstructParams, MAX_FPS_RATIO, MAX_LAYERS, MAX_LENGTH, MAX_LEVELS,
     MAX_SAMPLES, MAX_TAPS, MAX_VELOCITY, MIN_ALPHA,
 };
-pub use simd::{set_simd, simd_enabled};
 pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats, MAX_COORD};
 pub use motion::{
     axis_angle, check_times, det3, dot, mat4_mul, norm, place, row_times, transpose_times, turn,
@@ -75,6 +74,7 @@ pub use shell::{
     MAX_SUBDIVISIONS, ON_SILHOUETTE,
 };
 pub use shutter::Shutter;
+pub use simd::{set_simd, simd_enabled};
 pub use volume::{
     check_segments, motion_volume, spin_volume, subdivided, Colors, Filter, MotionVolume, Spin,
     VolumeOptions, JOINING, LEADING, MAX_SEGMENTS, TRAILING,

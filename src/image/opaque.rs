@@ -14,9 +14,7 @@ use super::opaque_row::{
     alpha_constant, alpha_span, box_finish, finish, premultiplied, Composite, Glow, RowJob,
 };
 use super::sheared_row::{filter_row, finish_row, FilterScratch};
-use super::{
-    check_direction, check_image, check_premultiplied, filled, put4, simd, write_copy,
-};
+use super::{check_direction, check_image, check_premultiplied, filled, put4, simd, write_copy};
 use crate::error::Result;
 use std::mem::MaybeUninit;
 
@@ -51,7 +49,8 @@ fn rows_path(
             let mut glows = [false; 2];
             let mut ok = true;
             for (k, (sr, br)) in src.chunks(w * 4).zip(b.chunks(w * 4)).enumerate() {
-                ok &= premultiplied(sr, simd) && (comp.is_none() || same || premultiplied(br, simd));
+                ok &=
+                    premultiplied(sr, simd) && (comp.is_none() || same || premultiplied(br, simd));
                 spans[k] = alpha_span(sr, simd)
                     .map(|(lo, hi)| (lo.saturating_sub(r), (hi + r + 1).min(w)));
                 if let Some((xa, xb)) = spans[k] {

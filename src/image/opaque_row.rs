@@ -222,10 +222,8 @@ mod avx {
             for x in [_mm256_loadu_si256(p), _mm256_loadu_si256(p.add(1))] {
                 bad = _mm256_or_si256(bad, _mm256_cmpeq_epi32(_mm256_and_si256(x, exp), exp));
                 let above = _mm256_cmpgt_epi32(x, one);
-                let neg = _mm256_andnot_si256(
-                    _mm256_cmpeq_epi32(x, neg0),
-                    _mm256_cmpgt_epi32(zero, x),
-                );
+                let neg =
+                    _mm256_andnot_si256(_mm256_cmpeq_epi32(x, neg0), _mm256_cmpgt_epi32(zero, x));
                 let out = _mm256_and_si256(_mm256_or_si256(above, neg), alpha);
                 bad = _mm256_or_si256(bad, out);
             }

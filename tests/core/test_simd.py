@@ -74,7 +74,10 @@ def test_rasterizer_is_the_same_in_both_forms():
         mb.Draw(v, f, (0.8, 0.4, 0.2, 0.5), cull_back=False, previous_vertices=v * 1.05, object_id=3),
         mb.Draw(*meshes.torus(), (0.2, 0.4, 0.8, 1.0), object_id=4),
     ]
-    still = [mb.Draw(v, f, (0.8, 0.4, 0.2, 0.5), cull_back=False), mb.Draw(*meshes.torus(), (0.2, 0.4, 0.8, 1.0))]
+    still = [
+        mb.Draw(v, f, (0.8, 0.4, 0.2, 0.5), cull_back=False),
+        mb.Draw(*meshes.torus(), (0.2, 0.4, 0.8, 1.0)),
+    ]
     cam = mb.Camera(mb.look_at((0.5, 0.6, 3.0), (0, 0, 0)), 0.9, 123, 77)
 
     def render():
