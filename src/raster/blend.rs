@@ -327,21 +327,16 @@ impl FragLists {
 }
 
 /// The exact composite of a sample's two fragments `a` and `b` (in submission order) without
-/// copying them: what sorting the pair far to near (`far_to_near`) and compositing it does,
-/// operation for operation (the nearest is the second unless its 1/w is not greater).
+/// copying them: sorting the pair far to near (`far_to_near`) and compositing it, op for op.
 #[inline(always)]
 fn composite_pair(a: &Frag, b: &Frag, sample: &mut Sample) {
     let (first, second) = match far_to_near(a, b) {
         Ordering::Greater => (b, a),
         _ => (a, b),
     };
-    let c = over(second.shaded.rgba, over(first.shaded.rgba, sample.rgba));
-    let nearest = if second.invw > first.invw {
-        second
-    } else {
-        first
-    };
-    sample.rgba = c;
+    sample.rgba = over(second.shaded.rgba, over(first.shaded.rgba, sample.rgba));
+    // The list's rule: the nearest is the first unless a later one has a greater 1/w.
+    let nearest = [first, second][(second.invw > first.invw) as usize];
     sample.invw = nearest.invw;
     sample.id = nearest.shaded.id;
     sample.velocity = nearest.shaded.velocity;
