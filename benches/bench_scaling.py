@@ -5,17 +5,23 @@ warm-up; the calls of one point are interleaved round by round, so the load of a
 falls on all methods alike), and drawn as one line of the axis's plot:
 
 - size (``SIZES``, 320x240 to 3840x2160): the rasterizer on the 82k-face icosphere, opaque and
-  transparent (alpha 0.5, exact order), and the image kernels on an RGBA float32 frame whose
-  every pixel is opaque (opaque motion blur over 101 px, horizontal and at 30 degrees, and the
-  horizontal box blur), with a copy of the frame as the memory-bandwidth floor;
+  transparent (alpha 0.5, exact order); the image kernels on an RGBA float32 frame whose every
+  pixel is opaque (opaque motion blur over 101 px, horizontal and at 30 degrees, and the
+  horizontal box blur), with a copy of the frame as the memory-bandwidth floor; and the scene
+  methods on the 82k-face icosphere moving across the view (``render(scene, method)``:
+  accumulation with 8 samples, ``opaque_image`` (a sharp frame blurred by the image kernels),
+  and the analytic method when it is registered);
 - triangles (``TRIANGLES``, 1.3k to 1.3M faces, icospheres of 3 to 8 subdivisions) at
-  1024x768: the rasterizer, opaque and transparent.
+  1024x768: the rasterizer, opaque and transparent, and the same scene methods on that sphere.
 
 Adding a method: decorate a function with ``@method(axis, name)``. For ``"size"`` it takes
 ``(width, height)`` and returns a callable that renders once at that size; for ``"triangles"``
 it takes ``(vertices, faces)`` of the icosphere (rendered at 1024x768) and returns that callable.
-Set-up done by the function (meshes, images) is not timed. Nothing else changes: the tables and
-plots pick the method up.
+Set-up done by the function (meshes, images, scenes) is not timed. Nothing else changes: the
+tables and plots pick the method up. ``@method(axis, name, needs="analytic")`` joins only when
+``render`` knows the method ``analytic`` (it lands from another branch as
+``render(scene, "analytic")``; until then the run says it left it out): a method of
+``render`` is one decorated call of ``_scene_method``.
 
 Writes out/bench/scaling.md, scaling_size.png and scaling_triangles.png.
 Usage: python benches/bench_scaling.py [--quick]
@@ -38,6 +44,8 @@ import numpy as np  # noqa: E402
 import motionblur as mb  # noqa: E402
 import motionblur.image as mi  # noqa: E402
 from motionblur import meshes  # noqa: E402
+from motionblur.render import METHODS as RENDER_METHODS  # noqa: E402
+from motionblur.scene import translate  # noqa: E402
 
 SIZES = [(320, 240), (640, 480), (1280, 720), (1920, 1080), (3840, 2160)]
 TRIANGLES = [3, 4, 5, 6, 7, 8]  # icosphere subdivisions: 1,280 to 1,310,720 faces
@@ -48,11 +56,19 @@ BLUR_LENGTH = 101
 METHODS: dict[str, dict] = {"size": {}, "triangles": {}}
 
 
-def method(axis: str, name: str):
-    """Registers a factory for ``axis`` ("size" or "triangles") under ``name``."""
+#: (axis, name, render method) of the factories left out because ``render`` lacks the method.
+LEFT_OUT: list[tuple[str, str, str]] = []
+
+
+def method(axis: str, name: str, needs: str | None = None):
+    """Registers a factory for ``axis`` ("size" or "triangles") under ``name``; with ``needs``,
+    only when ``render`` knows that method (else it is listed in ``LEFT_OUT``)."""
 
     def register(factory):
-        METHODS[axis][name] = factory
+        if needs is not None and needs not in RENDER_METHODS:
+            LEFT_OUT.append((axis, name, needs))
+        else:
+            METHODS[axis][name] = factory
         return factory
 
     return register
@@ -126,6 +142,32 @@ def _copy(width, height):
     return lambda: np.copy(img)
 
 
+def _moving_sphere(width: int, height: int, v, f) -> mb.Scene:
+    """The icosphere (v, f) moving one radius to the right over the shutter, seen by the
+    benchmark's camera at width x height."""
+    sphere = mb.Object(
+        mb.Mesh(v, f),
+        color=(0.8, 0.5, 0.2),
+        motion=mb.Motion.linear(translate((-0.5, 0, 0)), translate((0.5, 0, 0))),
+    )
+    return mb.Scene([sphere], _camera(width, height), shutter="box")
+
+
+def _scene_method(render_method: str, label: str, **options):
+    """Registers ``render(scene, render_method, **options)`` on both axes: the 82k-face sphere
+    at every size, every sphere at 1024x768 (joins only when ``render`` knows the method)."""
+
+    @method("size", f"{label}, 82k faces", needs=render_method)
+    def by_size(width, height):
+        scene = _moving_sphere(width, height, *_sphere(6))
+        return lambda: mb.render(scene, render_method, **options)
+
+    @method("triangles", label, needs=render_method)
+    def by_triangles(v, f):
+        scene = _moving_sphere(*RASTER_SIZE, v, f)
+        return lambda: mb.render(scene, render_method, **options)
+
+
 @method("triangles", "rasterize opaque")
 def _raster_opaque_tris(v, f):
     return _raster(_camera(*RASTER_SIZE), v, f, 1.0)
@@ -134,6 +176,13 @@ def _raster_opaque_tris(v, f):
 @method("triangles", "rasterize transparent")
 def _raster_transparent_tris(v, f):
     return _raster(_camera(*RASTER_SIZE), v, f, 0.5)
+
+
+_scene_method("accumulation", "accumulation, 8 samples", samples=8)
+# Kraus's image-space method: one sharp frame, then the opaque motion blur of the mover.
+_scene_method("opaque_image", "opaque_image (image kernels)")
+# The analytic method (another branch): joins both plots once render() knows it.
+_scene_method("analytic", "analytic")
 
 
 def paired_best_ms(fns: list, repeat: int) -> list[float]:
@@ -198,6 +247,8 @@ def main() -> None:
         f"python {platform.python_version()}, numpy {np.__version__}"
     )
     print(header)
+    for axis, name, needs in LEFT_OUT:
+        print(f"left out: {axis} {name!r} (render() has no method {needs!r} yet)")
     size_labels = [f"{w}x{h}" for w, h in sizes]
     by_size = run_axis("size", sizes, size_labels, quick)
     tri_counts = [20 * 4**s for s in subs]
@@ -224,13 +275,24 @@ def main() -> None:
         "",
         "## Time against image size",
         "",
-        f"Rasterizer: the 82k-face icosphere; image kernels: every pixel opaque, {BLUR_LENGTH}-pixel blur.",
+        f"Rasterizer: the 82k-face icosphere; image kernels: every pixel opaque, {BLUR_LENGTH}-pixel blur; "
+        "scene methods: the 82k-face icosphere moving one radius across the view.",
         "",
         *table(by_size, size_labels),
         "",
         f"## Time against triangle count ({RASTER_SIZE[0]}x{RASTER_SIZE[1]})",
         "",
         *table(by_tris, tri_labels),
+        *(
+            [
+                "",
+                "Left out (render() lacks the method): "
+                + ", ".join(sorted({n for _, _, n in LEFT_OUT}))
+                + ".",
+            ]
+            if LEFT_OUT
+            else []
+        ),
     ]
     (out / "scaling.md").write_text("\n".join(lines) + "\n")
     print(f"wrote {out / 'scaling.md'}, scaling_size.png, scaling_triangles.png")

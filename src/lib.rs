@@ -15,7 +15,8 @@
 //! - `image`: image-space blur;
 //! - `budget`: the memory budget every kernel checks before it allocates;
 //! - `analytic`: analytic motion blur, exact covered time per sample;
-//! - `shutter`: the shutter filters.
+//! - `shutter`: the shutter filters;
+//! - `simd`: the switch over the kernels' vector forms.
 #![warn(missing_docs)]
 
 mod accumulate;
@@ -29,6 +30,7 @@ mod motion;
 mod raster;
 mod shell;
 mod shutter;
+mod simd;
 mod volume;
 
 #[cfg(feature = "python")]
@@ -72,6 +74,7 @@ pub use shell::{
     MAX_SUBDIVISIONS, ON_SILHOUETTE,
 };
 pub use shutter::Shutter;
+pub use simd::{set_simd, simd_enabled};
 pub use volume::{
     check_segments, motion_volume, spin_volume, subdivided, Colors, Filter, MotionVolume, Spin,
     VolumeOptions, JOINING, LEADING, MAX_SEGMENTS, TRAILING,

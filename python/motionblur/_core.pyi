@@ -11,6 +11,8 @@ __all__ = [
     "__version__",
     "memory_budget",
     "set_memory_budget",
+    "_set_simd",
+    "_simd_enabled",
     "DEFAULT_MEMORY_BUDGET",
     "MIN_MEMORY_BUDGET",
     "_Keyframes",
@@ -85,6 +87,15 @@ def memory_budget() -> int:
 
 def set_memory_budget(bytes: int) -> int:
     """Sets the memory budget (bytes, >= MIN_MEMORY_BUDGET); returns the previous one."""
+
+# --- the kernels' vector forms (src/simd.rs)
+
+def _set_simd(enabled: bool) -> bool:
+    """Allows or forbids the kernels' vector forms (`crate::simd`); returns whether they were
+    allowed. Results are the same bits either way: tests compare the two forms with it."""
+
+def _simd_enabled() -> bool:
+    """Whether the kernels run their vector forms (AVX2 detected and not switched off)."""
 
 # --- motion (the keyframe engine)
 
@@ -439,7 +450,7 @@ def _rasterize(
     lights: list[tuple[tuple[float, float, float], tuple[float, float, float]]],
     ambient: tuple[float, float, float],
     background: tuple[np.ndarray, np.ndarray, np.ndarray, int, int] | None = None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, float]]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, dict[str, float]]:
     """Render draws (vertices f64 (V,3), faces i64 (F,3), straight rgba f32 (1|V,4), normals f32
     (V,3) | None, object_id, cull_back, previous_vertices f64 (V,3) | None) seen through view and
     projection (4,4) f64 into an image of height x width. ``background``: optional opaque layer
@@ -448,7 +459,8 @@ def _rasterize(
     x0, y0): the frame's height * samples x width * samples samples are its window from sample
     (x0, y0) (checked to fit); C-contiguous, read only. Returns rgba
     (H,W,4) f32 premultiplied, depth (H,W) f32 view-axis distance (inf background), ids (H,W) i32
-    (-1 background), velocity (H,W,2) f32 pixels, and a stats dict. Releases the GIL."""
+    (-1 background), velocity (H,W,2) f32 pixels (None when no draw has previous vertices: the
+    motion is zero everywhere and is not written), and a stats dict. Releases the GIL."""
 
 # --- scenes (accumulation kernels)
 

@@ -327,13 +327,14 @@ class Frame:
     stage). ``coverage`` is the alpha channel (H,W).
 
     Any code may build a Frame from numpy arrays: ``Frame(rgba, depth, ids, velocity, stats=None)``
-    (dtypes are converted; the arrays are not copied when they already match).
+    (dtypes are converted; the arrays are not copied when they already match). ``velocity=None``
+    means no motion: the zeros are made when ``velocity`` is first read (``rasterize`` does so
+    when no draw has previous vertices, and writes no velocity buffer).
     """
 
     rgba: NDArray[np.float32]
     depth: NDArray[np.float32]
     ids: NDArray[np.int32]
-    velocity: NDArray[np.float32]
     stats: dict[str, Any]
 
     def __init__(
@@ -341,7 +342,7 @@ class Frame:
         rgba: ArrayLike,
         depth: ArrayLike,
         ids: ArrayLike,
-        velocity: ArrayLike,
+        velocity: ArrayLike | None,
         stats: dict[str, Any] | None = None,
     ) -> None:
         rgba = _frame_array(rgba, "rgba", np.float32, (None, None, 4))
@@ -349,8 +350,21 @@ class Frame:
         self.rgba = rgba
         self.depth = _frame_array(depth, "depth", np.float32, (h, w))
         self.ids = _frame_array(ids, "ids", np.int32, (h, w))
-        self.velocity = _frame_array(velocity, "velocity", np.float32, (h, w, 2))
+        self._velocity: NDArray[np.float32] | None = None
+        if velocity is not None:
+            self._velocity = _frame_array(velocity, "velocity", np.float32, (h, w, 2))
         self.stats = dict(stats) if stats is not None else {}
+
+    @property
+    def velocity(self) -> NDArray[np.float32]:
+        """(H,W,2) float32 screen motion in pixels (zeros made on first read when none was given)."""
+        if self._velocity is None:
+            self._velocity = np.zeros((self.height, self.width, 2), np.float32)
+        return self._velocity
+
+    @velocity.setter
+    def velocity(self, value: ArrayLike) -> None:
+        self._velocity = _frame_array(value, "velocity", np.float32, (self.height, self.width, 2))
 
     @property
     def width(self) -> int:

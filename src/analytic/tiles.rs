@@ -154,9 +154,10 @@ impl Ctx<'_> {
         })
     }
 
-    /// [`Ctx::tile_with`] compiled for AVX2 where the CPU has it (the build targets plain
-    /// x86-64): the same operations in the same order, no fused multiply-add (Rust never
-    /// contracts), so the same bits, in fewer instructions (rounding, blends, wider moves).
+    /// [`Ctx::tile_with`] compiled for AVX2 where the CPU has it and the vector forms are not
+    /// switched off (`crate::simd`; the build targets plain x86-64): the same operations in
+    /// the same order, no fused multiply-add (Rust never contracts), so the same bits, in fewer
+    /// instructions (rounding, blends, wider moves).
     fn tile_dispatch(
         &self,
         tx: i32,
@@ -165,7 +166,7 @@ impl Ctx<'_> {
         sc: &mut TileScratch,
     ) -> Result<(Vec<SampleOut>, Counts)> {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if crate::simd::simd_enabled() {
             // SAFETY: `tile_avx2` only requires AVX2, which the CPU was just found to have.
             return unsafe { self.tile_avx2(tx, ty, bin, sc) };
         }

@@ -12,10 +12,57 @@ use super::lines::{directional, plan};
 use super::{check_direction, check_image, check_premultiplied, MAX_LENGTH};
 use crate::error::{Error, Result};
 
-/// Scratch buffers of one thread: the candidate sources of the sweep.
+/// Scratch buffers of one thread: the candidate sources of the sweep, a row's ends.
 #[derive(Default)]
 pub(crate) struct GlowScratch {
     cand: Vec<u32>,
+    ends: Vec<f32>,
+}
+
+/// The smallest and the largest value of `a` (finite), lane by lane so that it vectorises.
+fn min_max(a: &[f32]) -> (f32, f32) {
+    let mut lo = [f32::INFINITY; 8];
+    let mut hi = [f32::NEG_INFINITY; 8];
+    let mut chunks = a.chunks_exact(8);
+    for c in &mut chunks {
+        for i in 0..8 {
+            lo[i] = if c[i] < lo[i] { c[i] } else { lo[i] };
+            hi[i] = if c[i] > hi[i] { c[i] } else { hi[i] };
+        }
+    }
+    let fold = |(l, h): (f32, f32), &v: &f32| (l.min(v), h.max(v));
+    let (l, h) = chunks
+        .remainder()
+        .iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), fold);
+    (
+        lo.iter().fold(l, |m, &v| m.min(v)),
+        hi.iter().fold(h, |m, &v| m.max(v)),
+    )
+}
+
+/// A run `[p, q]` of at least `len` targets whose glow is their own alpha because no other
+/// source can beat it: `a[i] > 0` and `a[i] >= (1 - 1/w) hi` with `hi = max(a)`, the largest
+/// weighted value any other source can reach (their weights are at most `1 - 1/w`, and the
+/// float operations are monotone, so the bound holds in float too). The first such run.
+fn dominant_run(a: &[f32], w: usize, hi: f32, len: usize) -> Option<(usize, usize)> {
+    let thr = (1.0 - 1.0 / w as f32) * hi;
+    let good = |v: f32| v > 0.0 && v >= thr;
+    let mut i = 0;
+    while i < a.len() {
+        let p = i + a[i..].iter().position(|&v| good(v))?;
+        // The end of the run, eight values at a time.
+        let mut q = p;
+        while q + 8 <= a.len() && a[q..q + 8].iter().fold(true, |ok, &v| ok & good(v)) {
+            q += 8;
+        }
+        q += a[q..].iter().position(|&v| !good(v)).unwrap_or(a.len() - q);
+        if q - p >= len {
+            return Some((p, q - 1));
+        }
+        i = q;
+    }
+    None
 }
 
 /// Eq. 10 on one row: `out[i] = max_{|k| <= w} (1 - |k| / w) a[i + k]`; `w = 0` copies.
@@ -25,6 +72,11 @@ pub(crate) struct GlowScratch {
 /// each sweep keeps only the sources within reach whose alpha strictly grows with distance (a
 /// monotone deque: `cand[lo..]`, nearest last) and takes the best of those. For masks and smooth
 /// alpha the deque holds one or two sources, so the cost is O(1) per pixel whatever `w` is.
+///
+/// A target whose alpha no other source can beat (`dominant_run`: an opaque stretch, even one
+/// whose alpha varies by an ulp) is its own glow; around the longest run of such targets only
+/// the row's ends run the sweeps, each on the sources within reach of its targets, which gives
+/// the same maxima as the whole row.
 pub(crate) fn glow_row(a: &[f32], w: usize, out: &mut [f32], s: &mut GlowScratch) {
     let n = a.len();
     if w == 0 {
@@ -32,17 +84,33 @@ pub(crate) fn glow_row(a: &[f32], w: usize, out: &mut [f32], s: &mut GlowScratch
         return;
     }
     // A constant row (an opaque or empty stretch) is its own glow.
-    let (lo, hi) = a
-        .iter()
-        .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), &v| {
-            (l.min(v), h.max(v))
-        });
+    let (lo, hi) = min_max(a);
     if lo == hi && lo >= 0.0 {
         out.copy_from_slice(a);
         return;
     }
+    let Some((p, q)) = dominant_run(a, w, hi, 2 * w) else {
+        return sweeps(a, w, out, &mut s.cand);
+    };
+    // Targets 0 .. p need the sources 0 .. p + w; targets q + 1 .. n the sources
+    // q + 1 - w .. n; the run itself is its own glow.
+    let mut ends = std::mem::take(&mut s.ends);
+    let e = (p + w).min(n);
+    ends.resize(e, 0.0);
+    sweeps(&a[..e], w, &mut ends, &mut s.cand);
+    out[..p].copy_from_slice(&ends[..p]);
+    let b = (q + 1).saturating_sub(w);
+    ends.resize(n - b, 0.0);
+    sweeps(&a[b..], w, &mut ends, &mut s.cand);
+    out[q + 1..].copy_from_slice(&ends[q + 1 - b..]);
+    out[p..=q].copy_from_slice(&a[p..=q]);
+    s.ends = ends;
+}
+
+/// The two sweeps of `glow_row` over the whole of `a`.
+fn sweeps(a: &[f32], w: usize, out: &mut [f32], q: &mut Vec<u32>) {
+    let n = a.len();
     let wf = w as f32;
-    let q = &mut s.cand;
     // Sources at or right of the target (sweep right to left).
     q.clear();
     let mut lo = 0;

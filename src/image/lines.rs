@@ -104,7 +104,104 @@ pub(crate) fn shear_row<const C: usize>(
     (xa, n): (usize, usize),
     out: &mut [f32],
 ) {
-    for x in xa..xa + n {
+    // The columns whose two samples are both in the image (y0 in [0, h - 2]) form one interval
+    // (the floors are monotone): there the loop needs no test.
+    let fl = &phase.floor[xa..xa + n];
+    let (lo, hi) = (-j, h as i64 - 2 - j);
+    let (ia, ib) = if fl.len() < 2 || fl[0] <= fl[fl.len() - 1] {
+        (
+            fl.partition_point(|&f| f < lo),
+            fl.partition_point(|&f| f <= hi),
+        )
+    } else {
+        (
+            fl.partition_point(|&f| f > hi),
+            fl.partition_point(|&f| f >= lo),
+        )
+    };
+    let ib = ib.max(ia);
+    assert!(img.len() >= w * h * C && out.len() >= n * C && xa + n <= w);
+    let (fl, fr) = (
+        &phase.floor[xa + ia..xa + ib],
+        &phase.frac[xa + ia..xa + ib],
+    );
+    #[cfg(target_arch = "x86_64")]
+    if C == 4 && super::simd() {
+        // SAFETY: AVX2 was detected; every pixel read is in the image (as below).
+        unsafe { shear4_avx(img, w, j, fl, fr, xa + ia, &mut out[ia * 4..ib * 4]) };
+        return shear_edges::<C>(img, w, h, phase, j, (xa, n), (ia, ib), out);
+    }
+    let o = &mut out[ia * C..ib * C];
+    for (k, (o, (&fl, &f))) in o.chunks_exact_mut(C).zip(fl.iter().zip(fr)).enumerate() {
+        let x = xa + ia + k;
+        let y0 = (j + fl) as usize;
+        debug_assert!(y0 + 1 < h);
+        // SAFETY: y0 + 1 < h (the interval's definition) and x < w, so both pixels are in
+        // `img` (asserted to hold h * w * C values).
+        let (a, b) = unsafe {
+            (
+                img.get_unchecked((y0 * w + x) * C..(y0 * w + x) * C + C),
+                img.get_unchecked(((y0 + 1) * w + x) * C..((y0 + 1) * w + x) * C + C),
+            )
+        };
+        for c in 0..C {
+            o[c] = (1.0 - f) * a[c] + f * b[c];
+        }
+    }
+    shear_edges::<C>(img, w, h, phase, j, (xa, n), (ia, ib), out)
+}
+
+/// How many sheared rows ahead `shear4_avx` prefetches.
+#[cfg(target_arch = "x86_64")]
+const AHEAD: usize = 4;
+
+/// `shear_row`'s interior for four channels: the same operations lane for lane.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn shear4_avx(
+    img: &[f32],
+    w: usize,
+    j: i64,
+    fl: &[i64],
+    fr: &[f32],
+    x0: usize,
+    out: &mut [f32],
+) {
+    use std::arch::x86_64::*;
+    let (p, o) = (img.as_ptr(), out.as_mut_ptr());
+    for (k, (&fl, &f)) in fl.iter().zip(fr).enumerate() {
+        let x = x0 + k;
+        let y0 = (j + fl) as usize;
+        if x % 4 == 0 {
+            // The pixels that sheared row j + AHEAD reads here (a diagonal walk through the
+            // image defeats the hardware prefetchers); a prefetch past the image is harmless.
+            let at = p.wrapping_add(((y0 + AHEAD) * w + x) * 4);
+            _mm_prefetch::<_MM_HINT_T0>(at as *const i8);
+            _mm_prefetch::<_MM_HINT_T0>(at.wrapping_add(w * 4) as *const i8);
+        }
+        let a = _mm_loadu_ps(p.add((y0 * w + x) * 4));
+        let b = _mm_loadu_ps(p.add(((y0 + 1) * w + x) * 4));
+        let v = _mm_add_ps(
+            _mm_mul_ps(_mm_set1_ps(1.0 - f), a),
+            _mm_mul_ps(_mm_set1_ps(f), b),
+        );
+        _mm_storeu_ps(o.add(k * 4), v);
+    }
+}
+
+/// `shear_row` at the columns outside its interior `ia .. ib` (relative to `xa`).
+#[allow(clippy::too_many_arguments)]
+fn shear_edges<const C: usize>(
+    img: &[f32],
+    w: usize,
+    h: usize,
+    phase: &Phase,
+    j: i64,
+    (xa, n): (usize, usize),
+    (ia, ib): (usize, usize),
+    out: &mut [f32],
+) {
+    for x in (xa..xa + ia).chain(xa + ib..xa + n) {
         let y0 = j + phase.floor[x];
         let f = phase.frac[x];
         let o = &mut out[(x - xa) * C..(x - xa) * C + C];
@@ -224,6 +321,73 @@ impl<const CO: usize> Sheared<CO> {
             return None;
         }
         Some(&self.data[(self.offs[k as usize] + x - s) * CO..][..CO])
+    }
+
+    /// The runs of output columns `(start, end)` that interpolate the same two sheared rows in
+    /// every output row (the integer part of `-x t - c0` is constant over a run).
+    pub(crate) fn runs(&self, w: usize) -> Vec<(usize, usize)> {
+        let fl = &self.back.floor;
+        let mut runs = Vec::with_capacity(w / 2 + 1);
+        let mut a = 0;
+        for x in 1..=w {
+            if x == w || fl[x] != fl[a] {
+                runs.push((a, x));
+                a = x;
+            }
+        }
+        runs
+    }
+
+    /// The sheared rows that output row `y` interpolates at column `x` (`k`, the one of weight
+    /// `1 - frac[x]`, and `k + 1`), each as `(start, end, offset)`: the row holds columns
+    /// `start .. end` at `data[offset * CO ..]` (empty for a zero row).
+    #[inline(always)]
+    pub(crate) fn rows_at(&self, y: usize, x: usize) -> [(usize, usize, usize); 2] {
+        let k = y as i64 + self.back.floor[x] - self.j0;
+        let row = |k: i64| -> (usize, usize, usize) {
+            if k < 0 || k >= self.spans.len() as i64 {
+                return (0, 0, 0);
+            }
+            let (s, n) = self.spans[k as usize];
+            (s, s + n, self.offs[k as usize])
+        };
+        [row(k), row(k + 1)]
+    }
+
+    /// The weights of the second sheared row at every column (`rows_at`).
+    pub(crate) fn fracs(&self) -> &[f32] {
+        &self.back.frac
+    }
+
+    /// Output row `y` over the columns of `run` as pieces `emit(x0, x1, a, b, frac)`: `a` and
+    /// `b` are the values of the two sheared rows that `unshear_row` interpolates at columns
+    /// `x0 .. x1` (`CO` per column; `None` where that row is zero there) and `frac` their
+    /// weights of `b`.
+    #[inline]
+    pub(crate) fn pieces(
+        &self,
+        y: usize,
+        (xs, xe): (usize, usize),
+        mut emit: impl FnMut(usize, usize, Option<&[f32]>, Option<&[f32]>, &[f32]),
+    ) {
+        let [ra, rb] = self.rows_at(y, xs);
+        let slice = |r: (usize, usize, usize), x0: usize, x1: usize| -> Option<&[f32]> {
+            (r.0 <= x0 && x1 <= r.1)
+                .then(|| &self.data[(r.2 + x0 - r.0) * CO..(r.2 + x1 - r.0) * CO])
+        };
+        let frac = &self.back.frac;
+        if ra.0 <= xs && xe <= ra.1 && rb.0 <= xs && xe <= rb.1 {
+            return emit(xs, xe, slice(ra, xs, xe), slice(rb, xs, xe), &frac[xs..xe]);
+        }
+        // Near the ends of the sheared rows: split the run where either row starts or ends.
+        let mut cuts = [xs, xe, ra.0, ra.1, rb.0, rb.1].map(|c| c.clamp(xs, xe));
+        cuts.sort_unstable();
+        for c in cuts.windows(2) {
+            let (x0, x1) = (c[0], c[1]);
+            if x0 < x1 {
+                emit(x0, x1, slice(ra, x0, x1), slice(rb, x0, x1), &frac[x0..x1]);
+            }
+        }
     }
 
     /// Output row `y` of the image the sheared rows came from: `out[x]` interpolates sheared

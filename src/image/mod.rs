@@ -19,10 +19,12 @@ mod dof;
 mod glow;
 mod lines;
 mod opaque;
+mod opaque_row;
 mod pool;
 mod pyramid;
 mod reconstruct;
 mod scatter;
+mod sheared_row;
 mod splat;
 
 pub use boxblur::box_blur;
@@ -33,7 +35,8 @@ pub use camera::{
 pub use colors::{colored, pixel_bounds, sample_colors, MIN_ALPHA};
 pub use dof::{depth_of_field, DofParams, MAX_LAYERS};
 pub use glow::glow;
-pub use opaque::{opaque_blur, opaque_motion_blur, Composite};
+pub use opaque::{opaque_blur, opaque_motion_blur};
+pub use opaque_row::Composite;
 pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};
 pub use reconstruct::{reconstruct, ReconstructParams, MAX_TAPS};
 pub use scatter::{scatter_pieces, Piece};
@@ -52,6 +55,12 @@ pub const MAX_LENGTH: f32 = 65536.0;
 
 /// Below this blurred opacity the rescale of eq. 7 treats the pixel as empty (colour 0).
 pub const ALPHA_EPS: f32 = 1e-12;
+
+/// Whether the kernels run their vector forms (`crate::simd`): the same bits as the plain ones.
+#[inline]
+pub(crate) fn simd() -> bool {
+    crate::simd::simd_enabled()
+}
 
 /// Checks that `data` holds `h * w * channels` values, that the image is not empty, and that
 /// a kernel holding [`IMAGE_COPIES`] copies of it fits the memory budget.
@@ -181,18 +190,21 @@ pub(crate) fn filled(n: usize, fill: impl FnOnce(&mut [std::mem::MaybeUninit<f32
     unsafe { Vec::from_raw_parts(v.as_mut_ptr() as *mut f32, v.len(), v.capacity()) }
 }
 
+/// Copies `src` into the uninitialised `dst` (of the same length), as one memcpy.
+#[inline]
+pub(crate) fn write_copy(dst: &mut [std::mem::MaybeUninit<f32>], src: &[f32]) {
+    assert_eq!(dst.len(), src.len());
+    // SAFETY: both slices hold `src.len()` f32-sized values (MaybeUninit<f32> has f32's
+    // layout) and cannot overlap (one is borrowed mutably).
+    unsafe { std::ptr::copy_nonoverlapping(src.as_ptr(), dst.as_mut_ptr() as *mut f32, src.len()) };
+}
+
 /// Writes four floats at pixel `x` of an uninitialised `(n, 4)` row.
 #[inline(always)]
 pub(crate) fn put4(o: &mut [std::mem::MaybeUninit<f32>], x: usize, v: [f32; 4]) {
     for (d, s) in o[x * 4..x * 4 + 4].iter_mut().zip(v) {
         d.write(s);
     }
-}
-
-/// Views a completely written buffer as floats.
-pub(crate) fn assume_init(o: &mut [std::mem::MaybeUninit<f32>]) -> &mut [f32] {
-    // SAFETY: callers pass buffers whose every element has been written.
-    unsafe { &mut *(o as *mut [std::mem::MaybeUninit<f32>] as *mut [f32]) }
 }
 
 /// Transposes a `(h, w, C)` image into `(w, h, C)`, in cache blocks, in parallel over output rows.

@@ -8,169 +8,29 @@
 //! whole filter is one fused pass (running sums, glow, rescale, composite) per row.
 use rayon::prelude::*;
 
-use super::boxblur::box_row_range;
 use super::glow::{glow_row, GlowScratch};
 use super::lines::{build_sheared, directional_at, plan, LinePlan};
-use super::{
-    alpha_out_of_range, assume_init, check_direction, check_image, check_premultiplied, filled,
-    put4, ALPHA_EPS,
+use super::opaque_row::{
+    alpha_constant, alpha_span, box_finish, finish, premultiplied, Composite, Glow, RowJob,
 };
-use crate::error::{Error, Result};
+use super::sheared_row::{filter_row, finish_row, FilterScratch};
+use super::{check_direction, check_image, check_premultiplied, filled, put4, simd, write_copy};
+use crate::error::Result;
 use std::mem::MaybeUninit;
-
-/// How the blurred layer is combined with the base image.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Composite {
-    /// `sub + (1 - A_sub) base`: a moving foreground over the sharp image (figure 6).
-    Over,
-    /// `base + (1 - A_base) sub`: a moving background under the sharp foreground (figure 7).
-    Under,
-}
-
-impl Composite {
-    /// Parse `over` or `under`; anything else is an error naming `mode`.
-    pub fn parse(s: &str) -> Result<Self> {
-        match s {
-            "over" => Ok(Composite::Over),
-            "under" => Ok(Composite::Under),
-            _ => Err(Error::value(
-                "mode",
-                format!("expected 'over' or 'under', got {s:?}"),
-            )),
-        }
-    }
-}
-
-/// Eq. 7 and the composite for one pixel.
-#[inline(always)]
-fn finish(blur: [f32; 4], glow: f32, base: &[f32], comp: Option<Composite>) -> [f32; 4] {
-    let s = if blur[3] > ALPHA_EPS {
-        glow / blur[3]
-    } else {
-        0.0
-    };
-    let sub = [blur[0] * s, blur[1] * s, blur[2] * s, glow];
-    match comp {
-        None => sub,
-        Some(Composite::Over) => {
-            let k = 1.0 - glow;
-            [
-                sub[0] + k * base[0],
-                sub[1] + k * base[1],
-                sub[2] + k * base[2],
-                sub[3] + k * base[3],
-            ]
-        }
-        Some(Composite::Under) => {
-            let k = 1.0 - base[3];
-            [
-                base[0] + k * sub[0],
-                base[1] + k * sub[1],
-                base[2] + k * sub[2],
-                base[3] + k * sub[3],
-            ]
-        }
-    }
-}
 
 #[derive(Default)]
 struct RowScratch {
     glow: GlowScratch,
     a: Vec<f32>,
-    g: Vec<f32>,
+    g: [Vec<f32>; 2],
 }
 
-/// One pass over a `(n, 4)` source row, its base row and the output row: writes the base (or
-/// zeros when `copy` is false) to the output, and returns whether the source and the base are
-/// finite with alphas in [0, 1] and the first and last pixel of the source with non-zero alpha.
-fn scan_copy_row(
-    src: &[f32],
-    base: &[f32],
-    out: &mut [MaybeUninit<f32>],
-    copy: bool,
-) -> (bool, Option<(usize, usize)>) {
-    const B: usize = 16;
-    const EXP: u32 = 0x7f80_0000;
-    // Lane-wise accumulators over 16 floats (4 pixels) so that the loop vectorises.
-    const AMASK: [u32; 16] = {
-        let mut m = [0u32; 16];
-        let mut i = 3;
-        while i < 16 {
-            m[i] = 0x7fff_ffff;
-            i += 4;
-        }
-        m
-    };
-    let cp = copy as u32;
-    let mut bad = [0u32; 16];
-    let (mut first, mut last) = (usize::MAX, 0);
-    for (k, ((sb, bb), ob)) in src
-        .chunks(4 * B)
-        .zip(base.chunks(4 * B))
-        .zip(out.chunks_mut(4 * B))
-        .enumerate()
-    {
-        let mut nz = [0u32; 16];
-        let mut lane = |i: usize, sv: f32, bv: f32, o: &mut MaybeUninit<f32>| {
-            let (sb, bb) = (sv.to_bits(), bv.to_bits());
-            let is_alpha = (i & 3 == 3) as u32;
-            bad[i] |= ((sb & EXP) == EXP) as u32 | (((bb & EXP) == EXP) as u32 & cp);
-            bad[i] |=
-                is_alpha & (alpha_out_of_range(sb) as u32 | (alpha_out_of_range(bb) as u32 & cp));
-            nz[i] |= sb & AMASK[i];
-            o.write(if copy { bv } else { 0.0 });
-        };
-        let mut sc = sb.chunks_exact(16);
-        let mut bc = bb.chunks_exact(16);
-        let mut oc = ob.chunks_exact_mut(16);
-        for ((s4, b4), o4) in (&mut sc).zip(&mut bc).zip(&mut oc) {
-            for i in 0..16 {
-                lane(i, s4[i], b4[i], &mut o4[i]);
-            }
-        }
-        let (st, bt, ot) = (sc.remainder(), bc.remainder(), oc.into_remainder());
-        for i in 0..st.len() {
-            lane(i, st[i], bt[i], &mut ot[i]);
-        }
-        if nz.iter().fold(0, |a, &v| a | v) != 0 {
-            first = first.min(k);
-            last = k;
-        }
-    }
-    let bad = [bad.iter().fold(0, |a, &v| a | v); 4];
-    let ok = (bad[0] | bad[1] | bad[2] | bad[3]) == 0;
-    if first == usize::MAX {
-        return (ok, None);
-    }
-    let block = |b: usize| &src[b * 4 * B..((b + 1) * 4 * B).min(src.len())];
-    let lo = block(first).chunks_exact(4).position(|p| p[3] != 0.0);
-    let hi = block(last).chunks_exact(4).rposition(|p| p[3] != 0.0);
-    match (lo, hi) {
-        (Some(lo), Some(hi)) => (ok, Some((lo + first * B, hi + last * B))),
-        _ => (ok, None),
-    }
-}
-
-/// First and last pixel with non-zero alpha in a `(n, 4)` row (blocks of 16 pixels are tested
-/// with an OR of the alpha bits, then the first and last non-empty blocks are searched).
-fn alpha_span(row: &[f32]) -> Option<(usize, usize)> {
-    const B: usize = 16;
-    let nz = |c: &[f32]| {
-        c.chunks_exact(4)
-            .fold(0u32, |m, p| m | (p[3].to_bits() & 0x7fff_ffff))
-            != 0
-    };
-    let blocks = row.len().div_ceil(4 * B);
-    let block = |b: usize| &row[b * 4 * B..((b + 1) * 4 * B).min(row.len())];
-    let first = (0..blocks).find(|&b| nz(block(b)))?;
-    let last = (first..blocks).rev().find(|&b| nz(block(b)))?;
-    let lo = block(first).chunks_exact(4).position(|p| p[3] != 0.0)? + first * B;
-    let hi = block(last).chunks_exact(4).rposition(|p| p[3] != 0.0)? + last * B;
-    Some((lo, hi))
-}
-
-/// Along rows: one fused pass per row (glow, running sums, rescale, composite), restricted to
-/// the pixels within reach of non-zero alpha; the rest of the row is the empty result.
+/// Along rows, two rows at a time: each row is checked (finite source and base with alphas in [0, 1], the span of
+/// non-zero alpha, constant alpha) while it is read into the cache, the pixels out of reach of
+/// its alpha get the empty result (the base, or 0), and the rest one fused pass (running sums,
+/// glow, eq. 7, composite; `opaque_row`), which runs the two rows side by side when their
+/// spans agree. Returns false when a value is not finite or an alpha is outside [0, 1] (the
+/// rows are then zeros).
 fn rows_path(
     rgba: &[f32],
     base: &[f32],
@@ -179,33 +39,73 @@ fn rows_path(
     comp: Option<Composite>,
     out: &mut [MaybeUninit<f32>],
 ) -> bool {
-    out.par_chunks_mut(w * 4)
-        .zip(rgba.par_chunks(w * 4))
-        .zip(base.par_chunks(w * 4))
+    let simd = simd();
+    let same = std::ptr::eq(rgba, base);
+    out.par_chunks_mut(2 * w * 4)
+        .zip(rgba.par_chunks(2 * w * 4))
+        .zip(base.par_chunks(2 * w * 4))
         .map_init(RowScratch::default, |s, ((o, src), b)| {
-            // One streaming pass over the three rows, as a plain copy would make: finiteness of
-            // the source and the base, the span of non-zero alpha, and the empty result (the
-            // base, or 0) written everywhere; the span is then overwritten from cache.
-            let (ok, span) = scan_copy_row(src, b, o, comp.is_some());
-            let Some((lo, hi)) = span else {
-                return ok;
-            };
-            let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(w));
-            s.a.clear();
-            s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
-            s.g.resize(xb - xa, 0.0);
-            glow_row(&s.a, r, &mut s.g, &mut s.glow);
-            let g = &s.g;
-            box_row_range(src, w, r, xa, xb, |x, m| {
-                put4(o, x, finish(m, g[x - xa], &b[x * 4..x * 4 + 4], comp));
-            });
-            ok
+            let mut spans = [None; 2];
+            let mut glows = [false; 2];
+            let mut ok = true;
+            for (k, (sr, br)) in src.chunks(w * 4).zip(b.chunks(w * 4)).enumerate() {
+                ok &=
+                    premultiplied(sr, simd) && (comp.is_none() || same || premultiplied(br, simd));
+                spans[k] = alpha_span(sr, simd)
+                    .map(|(lo, hi)| (lo.saturating_sub(r), (hi + r + 1).min(w)));
+                if let Some((xa, xb)) = spans[k] {
+                    glows[k] = alpha_constant(&sr[xa * 4..xb * 4], simd);
+                    if !glows[k] {
+                        s.a.clear();
+                        s.a.extend(sr[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
+                        s.g[k].resize(xb - xa, 0.0);
+                        glow_row(&s.a, r, &mut s.g[k], &mut s.glow);
+                    }
+                }
+            }
+            if !ok {
+                o.fill(MaybeUninit::new(0.0));
+                return false;
+            }
+            let mut jobs = Vec::with_capacity(2);
+            let rows = o
+                .chunks_mut(w * 4)
+                .zip(src.chunks(w * 4))
+                .zip(b.chunks(w * 4));
+            for (k, ((or, sr), br)) in rows.enumerate() {
+                let (xa, xb) = spans[k].unwrap_or((w, w));
+                let empty = |o: &mut [MaybeUninit<f32>], from: usize| match comp {
+                    Some(_) => write_copy(o, &br[from..from + o.len()]),
+                    None => o.fill(MaybeUninit::new(0.0)),
+                };
+                let (head, rest) = or.split_at_mut(xa * 4);
+                empty(head, 0);
+                empty(&mut rest[(xb - xa) * 4..], xb * 4);
+                if xa < xb {
+                    let glow = match glows[k] {
+                        true => Glow::Const(sr[xa * 4 + 3]),
+                        false => Glow::Row(&s.g[k]),
+                    };
+                    jobs.push(RowJob {
+                        src: sr,
+                        base: br,
+                        out: or,
+                        span: (xa, xb),
+                        glow,
+                    });
+                }
+            }
+            box_finish(&mut jobs, w, r, comp, simd);
+            true
         })
         .reduce(|| true, |a, b| a & b)
 }
 
 /// Any other direction: the filter runs on the crop that can receive non-zero alpha (the
-/// alpha's bounding box grown by two filter reaches), transposed and/or sheared.
+/// alpha's bounding box grown by two filter reaches), transposed and/or sheared; then each
+/// output row is written once: the empty result (the base, or 0) outside the crop, eq. 7 and
+/// the composite inside. Returns false when a value is not finite or an alpha is outside [0, 1]
+/// (the output is then zeros).
 fn crop_path(
     rgba: &[f32],
     base: &[f32],
@@ -215,7 +115,9 @@ fn crop_path(
     comp: Option<Composite>,
     out: &mut [MaybeUninit<f32>],
 ) -> Result<bool> {
-    // One streaming pass: finiteness, the empty result everywhere, and the alpha's box.
+    let simd = simd();
+    let same = std::ptr::eq(rgba, base);
+    // One streaming pass: finiteness, the alphas' range and the alpha's box.
     type Scan = (bool, Option<(usize, usize, usize, usize)>);
     let join = |a: Scan, b: Scan| -> Scan {
         let bbox = match (a.1, b.1) {
@@ -224,23 +126,34 @@ fn crop_path(
         };
         (a.0 & b.0, bbox)
     };
-    let (ok, bbox) = out
-        .par_chunks_mut(w * 4)
-        .zip(rgba.par_chunks(w * 4))
+    let (ok, bbox) = rgba
+        .par_chunks(w * 4)
         .zip(base.par_chunks(w * 4))
         .enumerate()
-        .map(|(y, ((o, src), b))| {
-            let (ok, span) = scan_copy_row(src, b, o, comp.is_some());
-            (ok, span.map(|(lo, hi)| (lo, hi, y, y)))
+        .map(|(y, (src, b))| {
+            let ok = premultiplied(src, simd) && (comp.is_none() || same || premultiplied(b, simd));
+            (ok, alpha_span(src, simd).map(|(lo, hi)| (lo, hi, y, y)))
         })
         .reduce(|| (true, None), join);
-    let out = assume_init(out);
-    let Some((x0, x1, y0, y1)) = bbox else {
-        return Ok(ok);
-    };
     if !ok {
+        out.par_chunks_mut(w * 4)
+            .for_each(|o| o.fill(MaybeUninit::new(0.0)));
         return Ok(false);
     }
+    // The empty result of output row `y`, columns `xa .. xb`.
+    let empty = |y: usize, xa: usize, xb: usize, o: &mut [MaybeUninit<f32>]| match comp {
+        Some(_) => write_copy(
+            &mut o[xa * 4..xb * 4],
+            &base[(y * w + xa) * 4..(y * w + xb) * 4],
+        ),
+        None => o[xa * 4..xb * 4].fill(MaybeUninit::new(0.0)),
+    };
+    let Some((x0, x1, y0, y1)) = bbox else {
+        out.par_chunks_mut(w * 4)
+            .enumerate()
+            .for_each(|(y, o)| empty(y, 0, w, o));
+        return Ok(true);
+    };
     let r = p.radius;
     let major = 2 * r + 2;
     let minor = (2.0 * r as f64 * p.slope.abs()).ceil() as usize + 2;
@@ -252,56 +165,38 @@ fn crop_path(
     let (cx0, cx1) = (x0.saturating_sub(mx), (x1 + 1 + mx).min(w));
     let (cy0, cy1) = (y0.saturating_sub(my), (y1 + 1 + my).min(h));
     let (cw, ch) = (cx1 - cx0, cy1 - cy0);
-    let mut crop = super::pool::take_for("rgba", cw * ch * 4)?;
-    crop.par_chunks_mut(cw * 4)
-        .enumerate()
-        .for_each(|(k, row)| {
+    // The crop, copied unless it is the whole image.
+    let mut copy = None;
+    if cw < w || ch < h {
+        let mut c = super::pool::take_for("rgba", cw * ch * 4)?;
+        c.par_chunks_mut(cw * 4).enumerate().for_each(|(k, row)| {
             let y = cy0 + k;
             row.copy_from_slice(&rgba[(y * w + cx0) * 4..(y * w + cx1) * 4]);
         });
+        copy = Some(c);
+    }
+    let crop = copy.as_deref().unwrap_or(rgba);
     let offset = if p.transpose { cy0 } else { cx0 } as f64;
     let live = [x0 - cx0, x1 - cx0, y0 - cy0, y1 - cy0];
-    let filter = |src: &[f32], n: usize, o: &mut [f32], s: &mut RowScratch| -> bool {
-        let Some((lo, hi)) = alpha_span(src) else {
-            return false;
-        };
-        let (xa, xb) = (lo.saturating_sub(r), (hi + r + 1).min(n));
-        o[..xa * 5].fill(0.0);
-        o[xb * 5..].fill(0.0);
-        s.a.clear();
-        s.a.extend(src[xa * 4..xb * 4].chunks_exact(4).map(|px| px[3]));
-        s.g.resize(xb - xa, 0.0);
-        glow_row(&s.a, r, &mut s.g, &mut s.glow);
-        let g = &s.g;
-        box_row_range(src, n, r, xa, xb, |x, m| {
-            o[x * 5..x * 5 + 4].copy_from_slice(&m);
-            o[x * 5 + 4] = g[x - xa];
-        });
-        true
+    let filter = |src: &[f32], n: usize, o: &mut [f32], s: &mut FilterScratch| -> bool {
+        filter_row(src, n, r, o, s, simd)
     };
-    // Eq. 7 and the composite of crop row `y` (its five values: blur RGBA and glow) into the
-    // full output row `o`.
-    let oblique = p.slope != 0.0;
-    let finish_row = |y: usize, f5: &[f32], o: &mut [f32]| {
-        let gy = cy0 + y;
-        for x in 0..cw {
-            let i = gy * w + cx0 + x;
-            let f = &f5[x * 5..x * 5 + 5];
-            let g = if oblique {
-                f[4].max(rgba[i * 4 + 3])
-            } else {
-                f[4]
-            };
-            let v = finish([f[0], f[1], f[2], f[3]], g, &base[i * 4..i * 4 + 4], comp);
-            o[(cx0 + x) * 4..(cx0 + x) * 4 + 4].copy_from_slice(&v);
-        }
+    // Output row `y`: the empty result outside the crop, `inside(k, o)` for crop row `k`.
+    let mut rows = |inside: &(dyn Fn(usize, &mut [MaybeUninit<f32>]) + Sync)| {
+        out.par_chunks_mut(w * 4).enumerate().for_each(|(y, o)| {
+            if y < cy0 || y >= cy1 {
+                return empty(y, 0, w, o);
+            }
+            empty(y, 0, cx0, o);
+            empty(y, cx1, w, o);
+            inside(y - cy0, &mut o[cx0 * 4..cx1 * 4]);
+        })
     };
-    let out_rows = &mut out[cy0 * w * 4..cy1 * w * 4];
-    if oblique && !p.transpose {
-        // Shear, filter, and shear back row by row straight into the output.
-        let sh = build_sheared::<4, 5, RowScratch>(
+    if p.slope != 0.0 && !p.transpose {
+        // Shear and filter, then shear back straight into the output, piece by piece.
+        let sh = build_sheared::<4, 5, FilterScratch>(
             "rgba",
-            &crop,
+            crop,
             cw,
             ch,
             p.slope,
@@ -309,18 +204,17 @@ fn crop_path(
             Some(live),
             &filter,
         )?;
-        out_rows.par_chunks_mut(w * 4).enumerate().for_each_init(
-            || vec![0.0f32; cw * 5],
-            |row, (y, o)| {
-                sh.unshear_row(cw, y, row);
-                finish_row(y, row, o);
-            },
-        );
+        let runs = sh.runs(cw);
+        rows(&|k, o| {
+            let at = ((cy0 + k) * w + cx0) * 4;
+            let (alpha, b) = (&rgba[at..at + cw * 4], &base[at..at + cw * 4]);
+            finish_row(&sh, &runs, k, alpha, b, o, comp, simd);
+        });
         super::pool::give(sh.data);
     } else {
-        let five = directional_at::<4, 5, RowScratch>(
+        let five = directional_at::<4, 5, FilterScratch>(
             "rgba",
-            &crop,
+            crop,
             cw,
             ch,
             p,
@@ -328,13 +222,27 @@ fn crop_path(
             Some(live),
             filter,
         )?;
-        out_rows
-            .par_chunks_mut(w * 4)
-            .enumerate()
-            .for_each(|(y, o)| finish_row(y, &five[y * cw * 5..(y + 1) * cw * 5], o));
+        // Eq. 7 and the composite of crop row `k` (five values a pixel: blur RGBA and glow).
+        let oblique = p.slope != 0.0;
+        rows(&|k, o| {
+            let f5 = &five[k * cw * 5..(k + 1) * cw * 5];
+            let at = ((cy0 + k) * w + cx0) * 4;
+            for x in 0..cw {
+                let f = &f5[x * 5..x * 5 + 5];
+                let i = at + x * 4;
+                let g = if oblique { f[4].max(rgba[i + 3]) } else { f[4] };
+                put4(
+                    o,
+                    x,
+                    finish([f[0], f[1], f[2], f[3]], g, &base[i..i + 4], comp),
+                );
+            }
+        });
         super::pool::give(five);
     }
-    super::pool::give(crop);
+    if let Some(c) = copy {
+        super::pool::give(c);
+    }
     Ok(true)
 }
 

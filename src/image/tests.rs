@@ -3,6 +3,7 @@
 use super::lines::plan;
 use super::*;
 use crate::on_threads;
+use crate::simd::{set_simd, SWITCH};
 
 fn image(w: usize, h: usize, seed: u32) -> Vec<f32> {
     // A small deterministic generator: an alpha blob with random-ish colours.
@@ -145,6 +146,51 @@ fn sheared_buffer_is_bounded_by_the_image() {
 }
 
 #[test]
+fn vector_and_plain_forms_give_the_same_bits() {
+    // Images with opaque stretches (the fast paths), soft edges, ragged spans and a base.
+    let (w, h) = (131, 67);
+    let blob = image(w, h, 7);
+    let opaque: Vec<f32> = blob
+        .chunks(4)
+        .flat_map(|p| [p[0], p[1], p[2], 1.0])
+        .collect();
+    let base = image(w, h, 8);
+    let run = || {
+        let mut all = Vec::new();
+        for img in [&blob, &opaque] {
+            for d in [
+                [1.0, 0.0],
+                [-1.0, 0.0],
+                [0.0, 1.0],
+                [1.0, 0.577],
+                [1.0, -0.3],
+                [0.4, -1.0],
+            ] {
+                for len in [3.0, 21.0, 90.0] {
+                    all.extend(opaque_blur(img, w, h, d, len).unwrap());
+                    for c in [Composite::Over, Composite::Under] {
+                        all.extend(opaque_motion_blur(img, Some(&base), w, h, d, len, c).unwrap());
+                    }
+                    all.extend(box_blur(img, w, h, d, len).unwrap());
+                }
+            }
+        }
+        all
+    };
+    let _guard = SWITCH.lock().unwrap_or_else(|e| e.into_inner());
+    let before = set_simd(true);
+    let vector = run();
+    set_simd(false);
+    let plain = run();
+    set_simd(before);
+    assert_eq!(vector.len(), plain.len());
+    assert!(vector
+        .iter()
+        .zip(&plain)
+        .all(|(a, b)| a.to_bits() == b.to_bits()));
+}
+
+#[test]
 fn kernels_that_assume_premultiplied_alpha_refuse_other_alphas() {
     let (w, h) = (37, 5);
     for bad in [1.0 + f32::EPSILON, -1e-6, 1e19, f32::NAN] {
@@ -170,4 +216,41 @@ fn kernels_that_assume_premultiplied_alpha_refuse_other_alphas() {
     ends[7] = -0.0;
     assert!(opaque_blur(&ends, w, h, [1.0, 0.3], 3.0).is_ok());
     assert!(check_premultiplied("rgba", &ends, 4).is_ok());
+}
+
+#[test]
+fn row_check_of_premultiplied_colour_is_the_same_in_both_forms() {
+    use super::opaque_row::premultiplied;
+    let specials = [
+        0.0,
+        -0.0,
+        1.0,
+        0.5,
+        1.0 + f32::EPSILON,
+        -1e-6,
+        1e19,
+        -1e19,
+        f32::NAN,
+        -f32::NAN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::MIN_POSITIVE,
+        -f32::MIN_POSITIVE,
+    ];
+    let clean = image(13, 1, 3);
+    for n in [1, 3, 4, 5, 8, 13] {
+        let row = &clean[..n * 4];
+        let simd = simd();
+        assert!(premultiplied(row, false) && premultiplied(row, simd));
+        for at in 0..n * 4 {
+            for v in specials {
+                let mut r = row.to_vec();
+                r[at] = v;
+                let want = r.iter().all(|v| v.is_finite())
+                    && r.chunks(4).all(|p| !alpha_out_of_range(p[3].to_bits()));
+                assert_eq!(premultiplied(&r, false), want, "{n} {at} {v}");
+                assert_eq!(premultiplied(&r, simd), want, "{n} {at} {v}");
+            }
+        }
+    }
 }

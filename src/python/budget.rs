@@ -1,4 +1,5 @@
-//! Bindings of the memory budget: read and set the one process-wide number every kernel checks.
+//! Bindings of the process-wide settings: the memory budget every kernel checks, and (for
+//! tests) the switch over the kernels' vector forms.
 use pyo3::prelude::*;
 
 use crate::{DEFAULT_MEMORY_BUDGET, MIN_MEMORY_BUDGET};
@@ -15,9 +16,24 @@ fn set_memory_budget(bytes: u64) -> PyResult<u64> {
     Ok(crate::set_memory_budget(bytes)?)
 }
 
+/// Allows or forbids the kernels' vector forms (`crate::simd`); returns whether they were
+/// allowed. Results are the same bits either way: tests compare the two forms with it.
+#[pyfunction]
+fn _set_simd(enabled: bool) -> bool {
+    crate::set_simd(enabled)
+}
+
+/// Whether the kernels run their vector forms (AVX2 detected and not switched off).
+#[pyfunction]
+fn _simd_enabled() -> bool {
+    crate::simd_enabled()
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(memory_budget, m)?)?;
     m.add_function(wrap_pyfunction!(set_memory_budget, m)?)?;
+    m.add_function(wrap_pyfunction!(_set_simd, m)?)?;
+    m.add_function(wrap_pyfunction!(_simd_enabled, m)?)?;
     m.add("DEFAULT_MEMORY_BUDGET", DEFAULT_MEMORY_BUDGET)?;
     m.add("MIN_MEMORY_BUDGET", MIN_MEMORY_BUDGET)?;
     Ok(())

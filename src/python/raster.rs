@@ -93,7 +93,8 @@ fn owned_draw(d: &DrawArgs<'_>) -> Result<Draw, Error> {
 }
 
 /// Renders draws, over `background` when given; returns (rgba (H,W,4) f32, depth (H,W) f32,
-/// ids (H,W) i32, velocity (H,W,2) f32, stats dict). The GIL is released while rendering.
+/// ids (H,W) i32, velocity (H,W,2) f32 or None when no draw has previous positions (zero
+/// motion), stats dict). The GIL is released while rendering.
 #[pyfunction]
 #[pyo3(signature = (view, projection, width, height, draws, samples, blend, shading, lights, ambient, background=None))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
@@ -143,7 +144,10 @@ fn _rasterize<'py>(
         shaped(py, frame.rgba, [h, w, 4])?,
         shaped(py, frame.depth, [h, w])?,
         shaped(py, frame.ids, [h, w])?,
-        shaped(py, frame.velocity, [h, w, 2])?,
+        match frame.velocity.is_empty() {
+            true => py.None().into_bound(py),
+            false => shaped(py, frame.velocity, [h, w, 2])?,
+        },
         stats,
     ))
 }

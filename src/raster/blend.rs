@@ -21,8 +21,10 @@ pub use super::fragment::{Frag, FRAGMENT_CAP};
 use super::kbuffer::{merge_far_to_near, Spill, Tail};
 use std::cmp::Ordering;
 
-/// The per-sample result after both passes.
+/// The per-sample result after both passes (in this field order: the resolve reads it as
+/// eight floats).
 #[derive(Clone, Copy, Debug)]
+#[repr(C)]
 pub struct Sample {
     pub rgba: [f32; 4],
     /// 1/w of the nearest surface with alpha > 0 (0 for background).
@@ -55,21 +57,23 @@ pub fn over(src: [f32; 4], dst: [f32; 4]) -> [f32; 4] {
 /// Reusable buffers of the transparent pass.
 ///
 /// Fragments are pushed in submission order with a per-sample count. Most samples of a typical
-/// frame hold at most one transparent fragment (a convex surface drawn with back faces culled):
-/// those are composited straight from the list, and only the fragments of samples holding
-/// several are grouped per sample (in submission order) and sorted. A sample's fragments past
-/// [`FRAGMENT_CAP`] go to its [`Spill`], so the lists hold at most [`FRAGMENT_CAP`] fragments
-/// a sample. Allocations are fallible: a refused one marks the lists `refused` (the bytes) and
-/// drops the fragment, and the caller fails the frame.
+/// frame hold one transparent fragment (a convex surface drawn with back faces culled) or two
+/// (its front and back): those are composited straight from the list, and only the fragments of
+/// samples holding more are grouped per sample (in submission order) and sorted. A sample's
+/// fragments past [`FRAGMENT_CAP`] go to its [`Spill`], so the lists hold at most
+/// [`FRAGMENT_CAP`] fragments a sample. Allocations are fallible: a refused one marks the lists
+/// `refused` (the bytes) and drops the fragment, and the caller fails the frame.
 #[derive(Default)]
 pub struct FragLists {
     frags: Vec<Frag>,
-    /// Fragments per tile sample in `frags`; while grouping, `SEEN` marks a sample given its
-    /// slots. With `Blend::Unsorted`, whether a fragment of the sample was composited.
+    /// Fragments per tile sample in `frags`; `SEEN` marks a sample whose first fragment was met
+    /// while compositing (a pair's first, or a group given its slots). With `Blend::Unsorted`,
+    /// whether a fragment of the sample was composited.
     count: Vec<u32>,
     /// The fragments of samples with several, grouped per sample.
     sorted: Vec<Frag>,
-    /// Next free slot in `sorted` of a sample being grouped (valid once `SEEN`).
+    /// A pair's first fragment in `frags`, or the next free slot in `sorted` of a sample being
+    /// grouped (valid once `SEEN`).
     next: Vec<u32>,
     /// (sample, first slot, fragment count) of each group in `sorted`.
     groups: Vec<(u32, u32, u32)>,
@@ -225,18 +229,29 @@ impl FragLists {
             return 0;
         }
         debug_assert_eq!(samples.len(), self.count.len());
-        // A sample's only fragment: its list needs no grouping and no sort.
+        // A sample's only fragment needs no list; a sample's two fragments (the front and back
+        // of a closed surface) are composited when the second comes, the first found through
+        // `next`. Only samples holding three or more are grouped.
+        self.next.resize(samples.len(), 0);
         let mut several = 0usize;
-        for f in &self.frags {
+        for (i, f) in self.frags.iter().enumerate() {
             let s = f.sample as usize;
-            if self.count[s] == 1 {
-                let sample = &mut samples[s];
-                sample.rgba = over(f.shaded.rgba, sample.rgba);
-                sample.invw = f.invw;
-                sample.id = f.shaded.id;
-                sample.velocity = f.shaded.velocity;
-            } else {
-                several += 1;
+            match self.count[s] {
+                1 => {
+                    let sample = &mut samples[s];
+                    sample.rgba = over(f.shaded.rgba, sample.rgba);
+                    sample.invw = f.invw;
+                    sample.id = f.shaded.id;
+                    sample.velocity = f.shaded.velocity;
+                }
+                2 => {
+                    self.count[s] = 2 | SEEN;
+                    self.next[s] = i as u32;
+                }
+                c if c == 2 | SEEN => {
+                    composite_pair(&self.frags[self.next[s] as usize], f, &mut samples[s]);
+                }
+                _ => several += 1,
             }
         }
         if several == 0 {
@@ -251,13 +266,12 @@ impl FragLists {
             return 0;
         }
         self.sorted.resize(several, Frag::default());
-        self.next.resize(samples.len(), 0);
         self.groups.clear();
         let mut cursor = 0u32;
         for f in &self.frags {
             let s = f.sample as usize;
             let c = self.count[s];
-            if c == 1 {
+            if c & !SEEN <= 2 {
                 continue;
             }
             if c & SEEN == 0 {
@@ -310,6 +324,22 @@ impl FragLists {
         }
         approximated
     }
+}
+
+/// The exact composite of a sample's two fragments `a` and `b` (in submission order) without
+/// copying them: sorting the pair far to near (`far_to_near`) and compositing it, op for op.
+#[inline(always)]
+fn composite_pair(a: &Frag, b: &Frag, sample: &mut Sample) {
+    let (first, second) = match far_to_near(a, b) {
+        Ordering::Greater => (b, a),
+        _ => (a, b),
+    };
+    sample.rgba = over(second.shaded.rgba, over(first.shaded.rgba, sample.rgba));
+    // The list's rule: the nearest is the first unless a later one has a greater 1/w.
+    let nearest = [first, second][(second.invw > first.invw) as usize];
+    sample.invw = nearest.invw;
+    sample.id = nearest.shaded.id;
+    sample.velocity = nearest.shaded.velocity;
 }
 
 /// Stable insertion sort, far to near: lists are short (a few layers per sample).

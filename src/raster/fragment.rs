@@ -17,7 +17,7 @@ pub struct Frag {
 }
 
 /// Total order on fragments of one sample, far to near, independent of submission order.
-#[inline]
+#[inline(always)]
 pub(super) fn far_to_near(a: &Frag, b: &Frag) -> Ordering {
     a.invw
         .total_cmp(&b.invw)

@@ -198,7 +198,7 @@ pub fn rasterize_over(
     let (w, h) = (camera.width, camera.height);
     let s = opts.samples;
     let vp_matrix = camera.view_projection();
-    let mut frame = Frame::unwritten(w, h)?;
+    let mut frame = Frame::unwritten(w, h, draws.iter().any(|d| d.previous.is_some()))?;
 
     let viewport = Viewport::new(w * s, h * s);
     let (prepared, screens): (Vec<Prepared>, Vec<Screen>) = draws

@@ -244,6 +244,33 @@ pub fn render_tile(
         let planes = Planes::new(t);
         let mixed = t.flags & MAY_OPAQUE != 0;
         let ts = sh.prepare(r, t);
+        if let Some(shaded) = ts.constant() {
+            // A constant triangle has one alpha, so it is never mixed: one loop without the
+            // shading's tests (the same fragments, in the same order).
+            let keep = shaded.rgba[3] > 0.0;
+            spans(t, bx, |iy, x0, x1| {
+                for ix in x0..=x1 {
+                    let s = local(ix, iy);
+                    let z = planes.invw(ix, iy) as f32;
+                    if z <= zbuf[s] {
+                        continue;
+                    }
+                    fragments += 1;
+                    if keep {
+                        let f = Frag {
+                            sample: s as u32,
+                            invw: z,
+                            shaded,
+                        };
+                        match blend {
+                            Blend::Exact => frags.push(f),
+                            Blend::Unsorted => frags.blend_unsorted(samples, f),
+                        }
+                    }
+                }
+            });
+            continue;
+        }
         spans(t, bx, |iy, x0, x1| {
             for ix in x0..=x1 {
                 let s = local(ix, iy);
@@ -251,17 +278,11 @@ pub fn render_tile(
                 if z <= zbuf[s] {
                     continue;
                 }
-                // A constant triangle has one alpha, so it is never mixed.
-                let shaded = match ts.constant() {
-                    Some(c) => c,
-                    None => {
-                        let lam = ts.lambdas(&planes, ix, iy);
-                        if mixed && ts.alpha(lam) >= 1.0 {
-                            continue;
-                        }
-                        ts.shade(lam)
-                    }
-                };
+                let lam = ts.lambdas(&planes, ix, iy);
+                if mixed && ts.alpha(lam) >= 1.0 {
+                    continue;
+                }
+                let shaded = ts.shade(lam);
                 fragments += 1;
                 if shaded.rgba[3] > 0.0 {
                     let f = Frag {
