@@ -10,8 +10,8 @@ import runpy
 from pathlib import Path
 
 import numpy as np
-import pyrender
 import pytest
+from _helpers import pyrender_peer  # noqa: F401  (OSMesa chosen before pyrender is imported)
 
 import motionblur as mb
 from motionblur import meshes
@@ -23,6 +23,8 @@ BENCH = Path(__file__).resolve().parents[2] / "benches" / "bench_raster.py"
 
 @pytest.mark.parametrize("alpha", [1.0, 0.5])
 def test_the_bench_peer_draws_our_pixels(alpha):
+    import pyrender
+
     bench = runpy.run_path(str(BENCH), run_name="bench_loaded")
     w, h = bench["W"], bench["H"]
     camera = mb.Camera(mb.look_at((0.3, 0.4, 3.2), (0, 0, 0)), np.pi / 3, w, h)
