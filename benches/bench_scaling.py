@@ -44,6 +44,7 @@ import numpy as np  # noqa: E402
 import motionblur as mb  # noqa: E402
 import motionblur.image as mi  # noqa: E402
 from motionblur import meshes  # noqa: E402
+from motionblur.evaluation.cluster import TIMING_BUDGET_S  # noqa: E402  (the report's rule)
 from motionblur.render import METHODS as RENDER_METHODS  # noqa: E402
 from motionblur.scene import translate  # noqa: E402
 
@@ -183,11 +184,6 @@ _scene_method("accumulation", "accumulation, 8 samples", samples=8)
 _scene_method("opaque_image", "opaque_image (image kernels)")
 # The analytic method (another branch): joins both plots once render() knows it.
 _scene_method("analytic", "analytic")
-
-
-#: Seconds of timed calls after which a callable sits out the remaining rounds of a point (the
-#: analytic frame at 3840x2160 takes 16 s: one timed call after the warm-up is enough there).
-TIMING_BUDGET_S = 1.5
 
 
 def paired_best_ms(fns: list, repeat: int) -> list[float]:

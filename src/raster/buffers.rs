@@ -175,6 +175,31 @@ impl Output {
         }
     }
 
+    /// Writes pixel `o` (row-major index): `rgba`, and the depth (1/`invw`, infinite where it is
+    /// not positive), id and velocity of the nearest sample `best`.
+    ///
+    /// # Safety
+    /// Pixel `o` must be inside the frame and owned by the calling tile.
+    #[inline(always)]
+    unsafe fn put(&self, o: usize, rgba: [f32; 4], best: &Sample) {
+        // SAFETY: the caller's contract.
+        unsafe {
+            for (k, c) in rgba.into_iter().enumerate() {
+                *self.rgba.add(4 * o + k) = c;
+            }
+            *self.depth.add(o) = if best.invw > 0.0 {
+                1.0 / best.invw
+            } else {
+                f32::INFINITY
+            };
+            *self.ids.add(o) = best.id;
+            if let Some(v) = self.velocity {
+                *v.add(2 * o) = best.velocity[0];
+                *v.add(2 * o + 1) = best.velocity[1];
+            }
+        }
+    }
+
     /// `write_tile` for one sample a pixel: `resolve::<1>`'s values, eight pixels at a time in
     /// AVX2 where the CPU has it (the same operations: `0 + rgba`, one IEEE division for the
     /// depth, the background where 1/w is not positive).
@@ -202,23 +227,9 @@ impl Output {
                 } else {
                     Sample::BACKGROUND
                 };
-                let o = y * self.width + x;
+                let rgba = smp.rgba.map(|c| 0.0 + c);
                 // SAFETY: (x, y) is inside the frame and owned by this tile (caller's contract).
-                unsafe {
-                    for k in 0..4 {
-                        *self.rgba.add(4 * o + k) = 0.0 + smp.rgba[k];
-                    }
-                    *self.depth.add(o) = if best.invw > 0.0 {
-                        1.0 / best.invw
-                    } else {
-                        f32::INFINITY
-                    };
-                    *self.ids.add(o) = best.id;
-                    if let Some(v) = self.velocity {
-                        *v.add(2 * o) = best.velocity[0];
-                        *v.add(2 * o + 1) = best.velocity[1];
-                    }
-                }
+                unsafe { self.put(y * self.width + x, rgba, &best) };
             }
         }
     }
@@ -313,23 +324,9 @@ impl Output {
                     }
                 }
                 let best = best.map_or(Sample::BACKGROUND, |i| samples[i]);
-                let o = y * self.width + x;
+                let rgba = if S == 1 { c } else { c.map(|v| v * norm) };
                 // SAFETY: (x, y) is inside the frame and owned by this tile (caller's contract).
-                unsafe {
-                    for k in 0..4 {
-                        *self.rgba.add(4 * o + k) = if S == 1 { c[k] } else { c[k] * norm };
-                    }
-                    *self.depth.add(o) = if best.invw > 0.0 {
-                        1.0 / best.invw
-                    } else {
-                        f32::INFINITY
-                    };
-                    *self.ids.add(o) = best.id;
-                    if let Some(v) = self.velocity {
-                        *v.add(2 * o) = best.velocity[0];
-                        *v.add(2 * o + 1) = best.velocity[1];
-                    }
-                }
+                unsafe { self.put(y * self.width + x, rgba, &best) };
             }
         }
     }

@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from .._optional import require_all
-from ..methods.auto import DEFAULT_TOLERANCE
+from ..methods.auto import DEFAULT_TOLERANCE, renders_shutter
 from ..render import METHODS
 from ..scenes_builtin import SCENES
 from ..scenes_real import REAL_SCENES
@@ -76,12 +76,11 @@ def _jobs(scene, methods, aa, sweeps=None) -> list[tuple[str, dict]]:
     volume's ramp, triangle and gaussian looks on a box shutter): not a measurement, left out, as
     ``auto`` never chooses it."""
     out = []
-    shutter = scene.shutter if isinstance(scene.shutter, str) else "weights"
     for mname, spec in METHODS.items():
         if mname == "auto" or (methods is not None and mname not in methods) or not spec.applies(scene):
             continue
         sweep = spec.sweep if sweeps is None else sweeps.get(mname, [])
-        out += [(mname, _with_aa(spec.fn, o, aa)) for o in sweep if o.get("filter", shutter) == shutter]
+        out += [(mname, _with_aa(spec.fn, o, aa)) for o in sweep if renders_shutter(o, scene)]
     return out
 
 

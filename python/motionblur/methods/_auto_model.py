@@ -118,18 +118,14 @@ class Model:
             for c in self.candidates
         ]
 
-    def choose(
-        self, f: dict, tolerance, budget_ms, aa: int, applies: dict, margin: float, shutter=None
-    ) -> dict:
+    def choose(self, f: dict, tolerance, budget_ms, aa: int, applies: dict, margin: float, keep=None) -> dict:
         """The chosen candidate for features ``f``: ``{method, options, predicted_ms,
-        predicted_rmse, reason}`` (see :mod:`motionblur.methods.auto`). With ``shutter`` (the
-        scene's filter name, or weights), a candidate whose options name another ``filter`` is
-        left out: it would render a different shutter than the scene's."""
+        predicted_rmse, reason}`` (see :mod:`motionblur.methods.auto`). With ``keep`` (a predicate
+        on a candidate's options, e.g. that it renders the scene's shutter), the others are left out."""
         preds = [
             p
             for p in self.predict(f, aa)
-            if applies.get(p[0]["method"], False)
-            and (shutter is None or p[0]["options"].get("filter", shutter) == shutter)
+            if applies.get(p[0]["method"], False) and (keep is None or keep(p[0]["options"]))
         ]
         e = error_terms(f)
         if not preds:

@@ -40,7 +40,7 @@ from ..scene import Object, Scene
 from ._auto_model import Model, load_model
 from ._features import group_features, screen_box
 
-__all__ = ["auto", "plan", "STILL_PX", "DEFAULT_TOLERANCE"]
+__all__ = ["auto", "plan", "renders_shutter", "STILL_PX", "DEFAULT_TOLERANCE"]
 
 #: Objects moving less than this many pixels over the shutter are drawn sharp once.
 STILL_PX = 0.5
@@ -48,6 +48,14 @@ STILL_PX = 0.5
 DEFAULT_TOLERANCE = 0.01
 _PLANS: dict[int, tuple[Scene, tuple, dict]] = {}
 _PLAN_CACHE = 16
+
+
+def renders_shutter(options: dict, scene: Scene) -> bool:
+    """Whether a method run with ``options`` renders ``scene``'s shutter: False when the options
+    name another ``filter`` than the scene's (the motion volume's ramp, triangle or gaussian looks
+    on a box shutter). ``auto`` never chooses such a run, and the report does not measure it."""
+    shutter = scene.shutter if isinstance(scene.shutter, str) else "weights"
+    return options.get("filter", shutter) == shutter
 
 
 def _overlap(a, b) -> bool:
@@ -132,8 +140,10 @@ def plan(scene: Scene, tolerance=None, budget_ms=None, aa: int = 1, model: Model
         # machine's load (the same scene gets the same plan on every run, in every process).
         probe = _probe_ms(sub, aa) if goal == "budget" else model.reference_probe_ms
         feats = {**group_features(prepared, group), "probe_ms": probe}
-        shutter = scene.shutter if isinstance(scene.shutter, str) else "weights"
-        pick = model.choose(feats, tol if goal == "tolerance" else None, budget, aa, applies, margin, shutter)
+        pick = model.choose(
+            feats, tol if goal == "tolerance" else None, budget, aa, applies, margin,
+            lambda options: renders_shutter(options, scene),  # keep
+        )  # fmt: skip
         choices.append((pick["method"], pick["options"], [k for k, _ in group]))
         for k, _ in group:
             info[names[k]] = {
