@@ -1,5 +1,5 @@
-"""The analytic method against accumulation with 256 and 1024 time samples, per built-in scene:
-wall clock and error, in the same run.
+"""The analytic method against accumulation with 64, 256 and 1024 time samples, per built-in scene
+(or real-mesh scene with ``--real``): wall clock and error, in the same run.
 
 Every method renders each scene at the same size and supersampling, timed in the same run (best
 of ``--repeat`` calls each, after one warm-up call), so the ratios are what counts on a shared
@@ -8,12 +8,19 @@ RGBA against accumulation with ``--reference`` samples (4096: its own noise is a
 of accumulation-1024). Also prints the analytic kernel's counts (sample tests, spans, pieces,
 tile splits) and its cover/resolve thread time.
 
+The factor at equal error: when the analytic error is at or below accumulation-1024's, the
+factor is reported as a bound, ``>= t(acc-1024) / t(analytic)``. Otherwise the sample count N
+at which accumulation's error equals the analytic one is interpolated between the measured
+counts on a log-log line (extrapolated below 64 along the 64-256 slope), accumulation's time at
+N is interpolated linearly in N between the measured times (a frame costs a fixed part plus a
+part per sample), and the factor is that time over the analytic one.
+
 ``--memory`` instead measures the peak resident memory of one frame of ``--memory-scene`` at
 ``--memory-size`` (each method in a fresh process: ``ru_maxrss`` of the child, minus the same
 process's peak before the frame, so numpy, the scene and the extension are not counted).
 
 Usage: python benches/bench_analytic.py [--size 320x240] [--aa 2] [--repeat 3] [--scenes a,b]
-       [--reference 4096] [--no-error]
+       [--real] [--reference 4096] [--no-error]
        python benches/bench_analytic.py --memory [--memory-scene sphere80k] [--memory-size 1920x1080]
 Writes out/bench/analytic.md (or analytic_memory.md).
 """
@@ -34,8 +41,9 @@ import numpy as np
 import motionblur as mb
 from motionblur.evaluation.cluster import TIMING_BUDGET_S  # the report's rule: stop repeating after 1.5 s
 from motionblur.scenes_builtin import SCENES
+from motionblur.scenes_real import REAL_SCENES
 
-ACCUMULATION = (256, 1024)
+ACCUMULATION = (64, 256, 1024)
 
 
 def best(fn, repeat: int) -> tuple[float, object]:
@@ -55,6 +63,27 @@ def rmse(a, b) -> float:
     return float(np.sqrt(np.mean((a.rgba - b.rgba) ** 2)))
 
 
+def equal_error_factor(ta: float, ea: float, times: dict, err: dict) -> str:
+    """Accumulation's time at the analytic error over the analytic time (see the module doc)."""
+    ns = sorted(times)
+    if not np.isfinite(ea) or any(not np.isfinite(err[n]) for n in ns):
+        return "?"
+    if ea <= err[ns[-1]]:
+        return f">= {times[ns[-1]] / ta:.2f}"
+    # the bracketing pair of measured counts (or the two lowest, to extrapolate below them)
+    lo, hi = ns[0], ns[1]
+    for a, b in zip(ns, ns[1:]):
+        if err[b] <= ea <= err[a]:
+            lo, hi = a, b
+    slope = (np.log(err[hi]) - np.log(err[lo])) / (np.log(hi) - np.log(lo))
+    if not slope < 0:
+        return "?"
+    n = lo * np.exp((np.log(ea) - np.log(err[lo])) / slope)
+    per = (times[hi] - times[lo]) / (hi - lo)
+    t_n = max(times[lo] + per * (n - lo), 0.0)
+    return f"{t_n / ta:.2f} (N={n:.0f})"
+
+
 def load() -> str:
     return " ".join(Path("/proc/loadavg").read_text().split()[:3]) if Path("/proc/loadavg").exists() else "?"
 
@@ -66,13 +95,14 @@ def speed_and_error(a: argparse.Namespace) -> list[str]:
         f"{TIMING_BUDGET_S} s), {os.cpu_count()} cores; "
         f"load average at start {load()}",
         "",
-        "| scene | analytic ms | acc-256 ms | acc-1024 ms | acc-256 / analytic | acc-1024 / analytic "
-        "| RMSE analytic | RMSE acc-256 | RMSE acc-1024 | tests | spans | pieces | splits |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "| scene | analytic ms | acc-64 ms | acc-256 ms | acc-1024 ms | acc-1024 / analytic "
+        "| at equal error | RMSE analytic | RMSE acc-64 | RMSE acc-256 | RMSE acc-1024 | tests | spans "
+        "| pieces | splits | cover ms | resolve ms |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     print("\n".join(lines), flush=True)
     for name in a.scenes.split(","):
-        scene = SCENES[name](width=w, height=h)
+        scene = (SCENES | REAL_SCENES)[name](width=w, height=h)
         ta, fa = best(partial(mb.render, scene, "analytic", aa=a.aa), a.repeat)
         times, frames = {}, {}
         for n in ACCUMULATION:
@@ -84,11 +114,13 @@ def speed_and_error(a: argparse.Namespace) -> list[str]:
             ref = mb.render(scene, "accumulation", samples=a.reference, aa=a.aa)
             err = {"analytic": rmse(fa, ref), **{n: rmse(frames[n], ref) for n in ACCUMULATION}}
         s = fa.stats
+        factor = equal_error_factor(ta, err["analytic"], times, err)
         row = (
-            f"| {name} | {1e3 * ta:.1f} | {1e3 * times[256]:.1f} | {1e3 * times[1024]:.1f} "
-            f"| {times[256] / ta:.2f} | {times[1024] / ta:.2f} | {err['analytic']:.2e} | {err[256]:.2e} "
-            f"| {err[1024]:.2e} | {s.get('tests', 0)} | {s.get('spans', 0)} | {s.get('pieces', 0)} "
-            f"| {s.get('splits', 0)} |"
+            f"| {name} | {1e3 * ta:.1f} | {1e3 * times[64]:.1f} | {1e3 * times[256]:.1f} "
+            f"| {1e3 * times[1024]:.1f} | {times[1024] / ta:.2f} | {factor} | {err['analytic']:.2e} "
+            f"| {err[64]:.2e} | {err[256]:.2e} | {err[1024]:.2e} | {s.get('tests', 0)} "
+            f"| {s.get('spans', 0)} | {s.get('pieces', 0)} | {s.get('splits', 0)} "
+            f"| {s.get('ms_cover', 0.0):.0f} | {s.get('ms_resolve', 0.0):.0f} |"
         )
         print(row, flush=True)
         lines.append(row)
@@ -146,12 +178,15 @@ def main() -> None:
     ap.add_argument("--aa", type=int, default=2)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--scenes", default=",".join(SCENES))
+    ap.add_argument("--real", action="store_true", help="every real-mesh scene instead")
     ap.add_argument("--reference", type=int, default=4096)
     ap.add_argument("--no-error", action="store_true")
     ap.add_argument("--memory", action="store_true")
     ap.add_argument("--memory-scene", default="sphere80k")
     ap.add_argument("--memory-size", default="1920x1080")
     a = ap.parse_args()
+    if a.real:
+        a.scenes = ",".join(REAL_SCENES)
     lines = memory(a) if a.memory else speed_and_error(a)
     out = Path("out/bench")
     out.mkdir(parents=True, exist_ok=True)
