@@ -359,6 +359,21 @@ impl<const CO: usize> Sheared<CO> {
         &self.back.frac
     }
 
+    /// The sheared row (relative to `j0`) that output row `y` reads with weight `1 - frac[x]`
+    /// at column `x` is `y + row_offset(x)` (`rows_at`).
+    #[inline]
+    pub(crate) fn row_offset(&self, x: usize) -> i64 {
+        self.back.floor[x] - self.j0
+    }
+
+    /// Every sheared row as `(start, end, offset)`, as `rows_at` gives them.
+    pub(crate) fn row_list(&self) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
+        self.spans
+            .iter()
+            .zip(&self.offs)
+            .map(|(&(s, n), &o)| (s, s + n, o))
+    }
+
     /// Output row `y` over the columns of `run` as pieces `emit(x0, x1, a, b, frac)`: `a` and
     /// `b` are the values of the two sheared rows that `unshear_row` interpolates at columns
     /// `x0 .. x1` (`CO` per column; `None` where that row is zero there) and `frac` their
