@@ -11,7 +11,8 @@ use rayon::prelude::*;
 use super::glow::{glow_row, GlowScratch};
 use super::lines::{build_sheared, directional_at, plan, LinePlan};
 use super::opaque_row::{
-    alpha_constant, alpha_span, box_finish, finish, premultiplied, Composite, Glow, RowJob,
+    alpha_constant, alpha_range, alpha_span, box_finish, finish, premultiplied, Composite, Glow,
+    RowJob,
 };
 use super::sheared_finish::{finish_row, Unshear};
 use super::sheared_row::{filter_row, FilterScratch};
@@ -50,8 +51,14 @@ fn rows_path(
             let mut glows = [false; 2];
             let mut ok = true;
             for (k, (sr, br)) in src.chunks(w * 4).zip(b.chunks(w * 4)).enumerate() {
-                ok &=
-                    premultiplied(sr, simd) && (comp.is_none() || same || premultiplied(br, simd));
+                let range = alpha_range(sr, simd);
+                ok &= range.is_some() && (comp.is_none() || same || premultiplied(br, simd));
+                if range.is_some_and(|(lo, hi)| lo == hi && lo > 0.0) {
+                    // One alpha > 0 all along the row: it spans the row and is its own glow.
+                    spans[k] = Some((0, w));
+                    glows[k] = true;
+                    continue;
+                }
                 spans[k] = alpha_span(sr, simd)
                     .map(|(lo, hi)| (lo.saturating_sub(r), (hi + r + 1).min(w)));
                 if let Some((xa, xb)) = spans[k] {
