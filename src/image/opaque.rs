@@ -216,7 +216,7 @@ fn crop_path(
             Some(live),
             &filter,
         )?;
-        let u = Unshear::new(&sh, cw);
+        let u = Unshear::new(&sh, cw, ch);
         rows(&|k, o, s| {
             let at = ((cy0 + k) * w + cx0) * 4;
             let (alpha, b) = (&rgba[at..at + cw * 4], &base[at..at + cw * 4]);

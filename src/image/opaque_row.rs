@@ -103,10 +103,13 @@ pub(crate) fn alpha_range(v: &[f32], simd: bool) -> Option<(f32, f32)> {
     }
     let alphas = (3..16).step_by(4).map(|i| (lo[i], hi[i]));
     let tails = tail.chunks_exact(4).map(|p| (p[3], p[3]));
-    Some(alphas.chain(tails).fold(
-        (f32::INFINITY, f32::NEG_INFINITY),
-        |(l, h), (a, b)| (l.min(a), h.max(b)),
-    ))
+    Some(
+        alphas
+            .chain(tails)
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), (a, b)| {
+                (l.min(a), h.max(b))
+            }),
+    )
 }
 
 /// [`premultiplied`] of the last pixels of a row (fewer than four), one by one.
@@ -299,7 +302,7 @@ mod avx {
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn alpha_constant(row: &[f32]) -> bool {
         let a0 = row[3];
-        if !(a0 >= 0.0) {
+        if a0.is_nan() || a0 < 0.0 {
             return false;
         }
         let first = _mm256_set1_ps(a0);

@@ -24,65 +24,98 @@ pub(crate) struct Piece<'a> {
 
 /// What the output rows of a crop need of its filtered sheared rows, computed once: the runs of
 /// columns that read the same two sheared rows (`Sheared::runs`), and for the direct path of
-/// the AVX2 form each column's sheared row and weights and each sheared row's columns.
+/// the AVX2 form each column's sheared row and weights and where each sheared row is.
 pub(crate) struct Unshear {
     runs: Vec<(usize, usize)>,
-    /// Per run: its columns and `Sheared::row_offset` (the same at each of its columns).
-    run_rows: Vec<(usize, usize, i64)>,
-    /// Per column: `Sheared::row_offset`, and the weights `1 - frac` and `frac`.
+    /// Per column: `Sheared::row_offset`.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
-    cols: Vec<(i64, [f32; 2])>,
-    /// Per sheared row: its columns `start .. end`; column `x` of it is `data[(index + x) * 5 ..]`.
-    rows: Vec<(usize, usize, isize)>,
+    offset: Vec<isize>,
+    /// Per column: the weights `1 - frac` and `frac`.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    weights: Vec<[f32; 2]>,
+    /// How many sheared rows before row `k` fail to hold all the columns that output rows
+    /// `0 .. ch - 1` may read of them (`ch` rows in all), at `bad[k]`.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    bad: Vec<u32>,
+    /// Output rows.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    rows: usize,
+    /// Per sheared row: column `x` of it is at `data[index + 5 x ..]` (for `x` in its span),
+    /// then `AHEAD` zeros so that a prefetch may name a row past the last.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    index: Vec<isize>,
     /// The smallest and largest row offset.
-    offsets: (i64, i64),
+    offsets: (isize, isize),
 }
 
+/// How many output rows ahead the direct path prefetches.
+const AHEAD: usize = 4;
+
 impl Unshear {
-    pub(crate) fn new(sh: &Sheared<5>, cw: usize) -> Self {
+    /// For the `ch` output rows of a crop `cw` columns wide.
+    pub(crate) fn new(sh: &Sheared<5>, cw: usize, ch: usize) -> Self {
         let runs = sh.runs(cw);
         let run_rows: Vec<_> = runs
             .iter()
-            .map(|&(xs, xe)| (xs, xe, sh.row_offset(xs)))
+            .map(|&(xs, xe)| (xs, xe, sh.row_offset(xs) as isize))
             .collect();
-        let cols: Vec<_> = (0..cw)
-            .zip(sh.fracs())
-            .map(|(x, &f)| (sh.row_offset(x), [1.0 - f, f]))
-            .collect();
-        let rows = sh
+        let offset = (0..cw).map(|x| sh.row_offset(x) as isize).collect();
+        let weights = sh.fracs()[..cw].iter().map(|&f| [1.0 - f, f]).collect();
+        let index = sh
             .row_list()
-            .map(|(s, e, o)| (s, e, o as isize - s as isize))
+            .map(|(s, _, o)| (o as isize - s as isize) * 5)
+            .chain([0; AHEAD])
             .collect();
-        let offsets = run_rows.iter().fold((i64::MAX, i64::MIN), |(lo, hi), r| {
-            (lo.min(r.2), hi.max(r.2))
-        });
+        let offsets = run_rows
+            .iter()
+            .fold((isize::MAX, isize::MIN), |(lo, hi), r| {
+                (lo.min(r.2), hi.max(r.2))
+            });
+        // Output row y < ch - 1 reads sheared rows y + k and y + k + 1 over a run of row offset
+        // k, so sheared row j is read over the runs whose offset is in [j - (ch - 1), j]: a
+        // window of runs (the offsets are monotone in x), whose columns it must hold.
+        let up = run_rows.first().map(|r| r.2) <= run_rows.last().map(|r| r.2);
+        let mut bad = vec![0u32];
+        for (j, (s, e, _)) in sh.row_list().enumerate() {
+            let (lo, hi) = (j as isize + 1 - ch as isize, j as isize);
+            let (r0, r1) = match up {
+                true => (
+                    run_rows.partition_point(|r| r.2 < lo),
+                    run_rows.partition_point(|r| r.2 <= hi),
+                ),
+                false => (
+                    run_rows.partition_point(|r| r.2 > hi),
+                    run_rows.partition_point(|r| r.2 >= lo),
+                ),
+            };
+            let holds = r0 >= r1 || (s <= run_rows[r0].0 && run_rows[r1 - 1].1 <= e);
+            bad.push(bad[j] + !holds as u32);
+        }
         Unshear {
             runs,
-            run_rows,
-            cols,
-            rows,
+            offset,
+            weights,
+            bad,
+            rows: ch,
+            index,
             offsets,
         }
     }
-
     /// The crop's width.
     fn width(&self) -> usize {
         self.runs.last().map_or(0, |r| r.1)
     }
 
     /// Whether both sheared rows that output row `y` reads hold every column of every run (so
-    /// that no pixel of the row is a piece of a zero row).
+    /// that no pixel of the row is a piece of a zero row). Not the crop's last row.
     #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     fn direct(&self, y: usize) -> bool {
-        let y = y as i64;
-        if y + self.offsets.0 < 0 || y + self.offsets.1 + 1 >= self.rows.len() as i64 {
-            return false;
-        }
-        self.run_rows.iter().all(|&(xs, xe, k)| {
-            let k = (y + k) as usize;
-            let (a, b) = (self.rows[k], self.rows[k + 1]);
-            a.0 <= xs && xe <= a.1 && b.0 <= xs && xe <= b.1
-        })
+        let (y, (k0, k1)) = (y as isize, self.offsets);
+        let n = self.bad.len() as isize - 1;
+        y + 1 < self.rows as isize
+            && y + k0 >= 0
+            && y + k1 + 1 < n
+            && self.bad[(y + k1 + 2) as usize] == self.bad[(y + k0) as usize]
     }
 }
 
@@ -187,7 +220,7 @@ pub(crate) fn finish_piece(p: Piece, comp: Option<Composite>, simd: bool) {
 #[cfg(target_arch = "x86_64")]
 mod avx {
     //! The AVX2 forms. Callers check that AVX2 is present and that the slices are long enough.
-    use super::{lerp, Composite, Piece, Sheared, Unshear};
+    use super::{lerp, Composite, Piece, Sheared, Unshear, AHEAD};
     use crate::image::ALPHA_EPS;
     use std::arch::x86_64::*;
     use std::mem::MaybeUninit;
@@ -272,22 +305,26 @@ mod avx {
     ) {
         let cw = u.width();
         debug_assert!(buf.len() >= cw * 5 && u.direct(y));
-        let (data, rows) = (sh.data.as_ptr(), u.rows.as_ptr());
+        debug_assert!(u.offset.len() == cw && u.weights.len() == cw);
+        let data = sh.data.as_ptr();
         let (mb, gb) = buf.split_at_mut(cw * 4);
         let (mb, gb) = (mb.as_mut_ptr(), gb.as_mut_ptr());
-        let pa = alpha.as_ptr();
-        // The last sheared row a prefetch may name.
-        let last = u.rows.len() - 1;
-        for (x, &(k, [omf, f])) in u.cols.iter().enumerate() {
-            let k = (y as i64 + k) as usize;
-            let (ia, ib) = ((*rows.add(k)).2, (*rows.add(k + 1)).2);
+        let (pa, offset, weights) = (alpha.as_ptr(), u.offset.as_ptr(), u.weights.as_ptr());
+        // Sheared row `y + k` is at `data[*rows.offset(k) ..]`, the one that output row
+        // `y + AHEAD` reads at `data[*ahead.offset(k) ..]` (the index has AHEAD rows of
+        // padding).
+        let rows = u.index.as_ptr().add(y);
+        let ahead = rows.add(AHEAD);
+        for x in 0..cw {
+            let k = *offset.add(x);
+            let [omf, f] = *weights.add(x);
             // The pixel that output row y + AHEAD reads here, on its way into the cache (the
             // diagonal walk through the sheared rows defeats the hardware prefetchers); a
-            // prefetch of an address outside the data is harmless.
-            let ahead = (*rows.add((k + AHEAD).min(last))).2 + x as isize;
-            _mm_prefetch::<_MM_HINT_T0>(data.wrapping_offset(ahead * 5) as *const i8);
-            let a = data.offset((ia + x as isize) * 5);
-            let b = data.offset((ib + x as isize) * 5);
+            // prefetch outside the data is harmless.
+            let next = data.wrapping_offset(*ahead.offset(k) + 5 * x as isize);
+            _mm_prefetch::<_MM_HINT_T0>(next as *const i8);
+            let a = data.offset(*rows.offset(k) + 5 * x as isize);
+            let b = data.offset(*rows.offset(k + 1) + 5 * x as isize);
             let m = _mm_add_ps(
                 _mm_mul_ps(_mm_set1_ps(omf), _mm_loadu_ps(a)),
                 _mm_mul_ps(_mm_set1_ps(f), _mm_loadu_ps(b)),
@@ -366,9 +403,6 @@ mod avx {
             _mm_storeu_ps(out.add(x * 4), o);
         }
     }
-
-    /// How many output rows ahead `row` prefetches.
-    const AHEAD: usize = 4;
 
     const NONE: u8 = 0;
     const OVER: u8 = 1;
