@@ -24,6 +24,7 @@ mod pool;
 mod pyramid;
 mod reconstruct;
 mod scatter;
+mod sheared_finish;
 mod sheared_row;
 mod splat;
 

@@ -11,9 +11,11 @@ use rayon::prelude::*;
 use super::glow::{glow_row, GlowScratch};
 use super::lines::{build_sheared, directional_at, plan, LinePlan};
 use super::opaque_row::{
-    alpha_constant, alpha_span, box_finish, finish, premultiplied, Composite, Glow, RowJob,
+    alpha_constant, alpha_range, alpha_span, box_finish, finish, premultiplied, Composite, Glow,
+    RowJob,
 };
-use super::sheared_row::{filter_row, finish_row, FilterScratch};
+use super::sheared_finish::{finish_row, Unshear};
+use super::sheared_row::{filter_row, FilterScratch};
 use super::{check_direction, check_image, check_premultiplied, filled, put4, simd, write_copy};
 use crate::error::Result;
 use std::mem::MaybeUninit;
@@ -49,8 +51,14 @@ fn rows_path(
             let mut glows = [false; 2];
             let mut ok = true;
             for (k, (sr, br)) in src.chunks(w * 4).zip(b.chunks(w * 4)).enumerate() {
-                ok &=
-                    premultiplied(sr, simd) && (comp.is_none() || same || premultiplied(br, simd));
+                let range = alpha_range(sr, simd);
+                ok &= range.is_some() && (comp.is_none() || same || premultiplied(br, simd));
+                if range.is_some_and(|(lo, hi)| lo == hi && lo > 0.0) {
+                    // One alpha > 0 all along the row: it spans the row and is its own glow.
+                    spans[k] = Some((0, w));
+                    glows[k] = true;
+                    continue;
+                }
                 spans[k] = alpha_span(sr, simd)
                     .map(|(lo, hi)| (lo.saturating_sub(r), (hi + r + 1).min(w)));
                 if let Some((xa, xb)) = spans[k] {
@@ -181,19 +189,23 @@ fn crop_path(
     let filter = |src: &[f32], n: usize, o: &mut [f32], s: &mut FilterScratch| -> bool {
         filter_row(src, n, r, o, s, simd)
     };
-    // Output row `y`: the empty result outside the crop, `inside(k, o)` for crop row `k`.
-    let mut rows = |inside: &(dyn Fn(usize, &mut [MaybeUninit<f32>]) + Sync)| {
-        out.par_chunks_mut(w * 4).enumerate().for_each(|(y, o)| {
-            if y < cy0 || y >= cy1 {
-                return empty(y, 0, w, o);
-            }
-            empty(y, 0, cx0, o);
-            empty(y, cx1, w, o);
-            inside(y - cy0, &mut o[cx0 * 4..cx1 * 4]);
-        })
+    // Output row `y`: the empty result outside the crop, `inside(k, o, scratch)` for crop row
+    // `k` (`scratch`: a buffer of the thread).
+    type Inside<'a> = dyn Fn(usize, &mut [MaybeUninit<f32>], &mut Vec<f32>) + Sync + 'a;
+    let mut rows = |inside: &Inside| {
+        out.par_chunks_mut(w * 4)
+            .enumerate()
+            .for_each_init(Vec::new, |s, (y, o)| {
+                if y < cy0 || y >= cy1 {
+                    return empty(y, 0, w, o);
+                }
+                empty(y, 0, cx0, o);
+                empty(y, cx1, w, o);
+                inside(y - cy0, &mut o[cx0 * 4..cx1 * 4], s);
+            })
     };
     if p.slope != 0.0 && !p.transpose {
-        // Shear and filter, then shear back straight into the output, piece by piece.
+        // Shear and filter, then shear back straight into the output, row by row.
         let sh = build_sheared::<4, 5, FilterScratch>(
             "rgba",
             crop,
@@ -204,11 +216,11 @@ fn crop_path(
             Some(live),
             &filter,
         )?;
-        let runs = sh.runs(cw);
-        rows(&|k, o| {
+        let u = Unshear::new(&sh, cw, ch);
+        rows(&|k, o, s| {
             let at = ((cy0 + k) * w + cx0) * 4;
             let (alpha, b) = (&rgba[at..at + cw * 4], &base[at..at + cw * 4]);
-            finish_row(&sh, &runs, k, alpha, b, o, comp, simd);
+            finish_row(&sh, &u, k, alpha, b, o, comp, simd, s);
         });
         super::pool::give(sh.data);
     } else {
@@ -224,7 +236,7 @@ fn crop_path(
         )?;
         // Eq. 7 and the composite of crop row `k` (five values a pixel: blur RGBA and glow).
         let oblique = p.slope != 0.0;
-        rows(&|k, o| {
+        rows(&|k, o, _| {
             let f5 = &five[k * cw * 5..(k + 1) * cw * 5];
             let at = ((cy0 + k) * w + cx0) * 4;
             for x in 0..cw {

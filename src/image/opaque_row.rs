@@ -71,23 +71,45 @@ pub(crate) fn finish(blur: [f32; 4], glow: f32, base: &[f32], comp: Option<Compo
 /// Whether a `(n, 4)` row is premultiplied colour as the opaque blur needs it: every value
 /// finite (no NaN, no infinity) and every alpha in [0, 1] (`super::alpha_out_of_range`).
 pub(crate) fn premultiplied(v: &[f32], simd: bool) -> bool {
+    alpha_range(v, simd).is_some()
+}
+
+/// `Some((lo, hi))`, the smallest and the largest alpha of a `(n, 4)` row (`n >= 1`), when the
+/// row is [`premultiplied`]; `None` when it is not. One pass: the check and the range together.
+pub(crate) fn alpha_range(v: &[f32], simd: bool) -> Option<(f32, f32)> {
     #[cfg(target_arch = "x86_64")]
     if simd {
         // SAFETY: `simd` is true only where AVX2 was detected.
-        return unsafe { avx::premultiplied(v) };
+        return unsafe { avx::alpha_range(v) };
     }
     let _ = simd;
     // Lane-wise accumulators over 16 values (4 pixels) so that the loop vectorises.
     let mut bad = [0u32; 16];
+    let mut lo = [f32::INFINITY; 16];
+    let mut hi = [f32::NEG_INFINITY; 16];
     let mut chunks = v.chunks_exact(16);
     for c in &mut chunks {
         for i in 0..16 {
             let b = c[i].to_bits();
             bad[i] |= ((b & 0x7f80_0000) == 0x7f80_0000) as u32;
             bad[i] |= (i & 3 == 3) as u32 & super::alpha_out_of_range(b) as u32;
+            lo[i] = if c[i] < lo[i] { c[i] } else { lo[i] };
+            hi[i] = if c[i] > hi[i] { c[i] } else { hi[i] };
         }
     }
-    bad.iter().all(|&b| b == 0) && tail_premultiplied(chunks.remainder())
+    let tail = chunks.remainder();
+    if bad.iter().any(|&b| b != 0) || !tail_premultiplied(tail) {
+        return None;
+    }
+    let alphas = (3..16).step_by(4).map(|i| (lo[i], hi[i]));
+    let tails = tail.chunks_exact(4).map(|p| (p[3], p[3]));
+    Some(
+        alphas
+            .chain(tails)
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), (a, b)| {
+                (l.min(a), h.max(b))
+            }),
+    )
 }
 
 /// [`premultiplied`] of the last pixels of a row (fewer than four), one by one.
@@ -124,7 +146,9 @@ pub(crate) fn alpha_span(row: &[f32], simd: bool) -> Option<(usize, usize)> {
     Some((lo, hi))
 }
 
-/// Whether the alpha of the finite `(n, 4)` row is one value `>= 0` (so its glow is itself).
+/// Whether the alpha of the finite `(n, 4)` row is one value `>= 0` (so its glow is itself):
+/// every alpha equal to the first one (and so the smallest to the largest), which is `>= 0`.
+/// Stops at the first block of pixels with a different alpha.
 pub(crate) fn alpha_constant(row: &[f32], simd: bool) -> bool {
     #[cfg(target_arch = "x86_64")]
     if simd && row.len() >= 8 {
@@ -132,12 +156,10 @@ pub(crate) fn alpha_constant(row: &[f32], simd: bool) -> bool {
         return unsafe { avx::alpha_constant(row) };
     }
     let _ = simd;
-    let (lo, hi) = row
-        .chunks_exact(4)
-        .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), p| {
-            (l.min(p[3]), h.max(p[3]))
-        });
-    lo == hi && lo >= 0.0
+    let Some(&a0) = row.get(3) else {
+        return false;
+    };
+    a0 >= 0.0 && row.chunks_exact(4).all(|p| p[3] == a0)
 }
 
 /// The glow of a row's pixels: one value for the whole span (a row whose alpha is constant is
@@ -205,21 +227,27 @@ mod avx {
     use super::{Composite, Glow, RowJob, ALPHA_EPS};
     use std::arch::x86_64::*;
 
-    /// `super::premultiplied`: the exponent test of every value, and on the alpha lanes the
+    /// `super::alpha_range`: the exponent test of every value, and on the alpha lanes the
     /// range test of `super::super::alpha_out_of_range` (above 1.0 as a signed integer, or
-    /// negative other than -0.0).
+    /// negative other than -0.0), with the smallest and the largest value of every lane.
     #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn premultiplied(v: &[f32]) -> bool {
+    pub(super) unsafe fn alpha_range(v: &[f32]) -> Option<(f32, f32)> {
         let exp = _mm256_set1_epi32(0x7f80_0000);
         let one = _mm256_set1_epi32(0x3f80_0000);
         let neg0 = _mm256_set1_epi32(i32::MIN);
         let zero = _mm256_setzero_si256();
         let alpha = _mm256_setr_epi32(0, 0, 0, -1, 0, 0, 0, -1);
         let mut bad = _mm256_setzero_si256();
+        let mut lo = [_mm256_set1_ps(f32::INFINITY); 2];
+        let mut hi = [_mm256_set1_ps(f32::NEG_INFINITY); 2];
         let mut chunks = v.chunks_exact(16);
         for c in &mut chunks {
-            let p = c.as_ptr() as *const __m256i;
-            for x in [_mm256_loadu_si256(p), _mm256_loadu_si256(p.add(1))] {
+            let p = c.as_ptr();
+            for k in 0..2 {
+                let f = _mm256_loadu_ps(p.add(8 * k));
+                lo[k] = _mm256_min_ps(lo[k], f);
+                hi[k] = _mm256_max_ps(hi[k], f);
+                let x = _mm256_castps_si256(f);
                 bad = _mm256_or_si256(bad, _mm256_cmpeq_epi32(_mm256_and_si256(x, exp), exp));
                 let above = _mm256_cmpgt_epi32(x, one);
                 let neg =
@@ -228,7 +256,19 @@ mod avx {
                 bad = _mm256_or_si256(bad, out);
             }
         }
-        _mm256_testz_si256(bad, bad) != 0 && super::tail_premultiplied(chunks.remainder())
+        let tail = chunks.remainder();
+        if _mm256_testz_si256(bad, bad) == 0 || !super::tail_premultiplied(tail) {
+            return None;
+        }
+        let mut l = [0.0f32; 8];
+        let mut h = [0.0f32; 8];
+        _mm256_storeu_ps(l.as_mut_ptr(), _mm256_min_ps(lo[0], lo[1]));
+        _mm256_storeu_ps(h.as_mut_ptr(), _mm256_max_ps(hi[0], hi[1]));
+        let (mut lo, mut hi) = (l[3].min(l[7]), h[3].max(h[7]));
+        for p in tail.chunks_exact(4) {
+            (lo, hi) = (lo.min(p[3]), hi.max(p[3]));
+        }
+        Some((lo, hi))
     }
 
     /// Whether pixels `2i` and `2i + 1` of the row (8 floats at `p`) have a non-zero alpha.
@@ -258,27 +298,26 @@ mod avx {
         Some((lo, hi))
     }
 
+    /// `super::alpha_constant`: the alphas compared with the first one, 16 pixels at a time.
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn alpha_constant(row: &[f32]) -> bool {
-        let n = row.len() / 4;
-        let p = row.as_ptr();
-        let first = _mm256_set1_ps(row[3]);
-        let (mut lo, mut hi) = (first, first);
-        for i in 0..n / 2 {
-            let v = _mm256_loadu_ps(p.add(i * 8));
-            lo = _mm256_min_ps(lo, v);
-            hi = _mm256_max_ps(hi, v);
+        let a0 = row[3];
+        if a0.is_nan() || a0 < 0.0 {
+            return false;
         }
-        let mut l = [0.0f32; 8];
-        let mut h = [0.0f32; 8];
-        _mm256_storeu_ps(l.as_mut_ptr(), lo);
-        _mm256_storeu_ps(h.as_mut_ptr(), hi);
-        let (mut lo, mut hi) = (l[3].min(l[7]), h[3].max(h[7]));
-        if n % 2 == 1 {
-            lo = lo.min(row[n * 4 - 1]);
-            hi = hi.max(row[n * 4 - 1]);
+        let first = _mm256_set1_ps(a0);
+        let mut chunks = row.chunks_exact(64);
+        for c in &mut chunks {
+            let p = c.as_ptr();
+            let eq = [0, 1, 2, 3, 4, 5, 6, 7]
+                .map(|i| _mm256_cmp_ps::<_CMP_EQ_OQ>(_mm256_loadu_ps(p.add(8 * i)), first));
+            let e01 = _mm256_and_ps(_mm256_and_ps(eq[0], eq[1]), _mm256_and_ps(eq[2], eq[3]));
+            let e23 = _mm256_and_ps(_mm256_and_ps(eq[4], eq[5]), _mm256_and_ps(eq[6], eq[7]));
+            if _mm256_movemask_ps(_mm256_and_ps(e01, e23)) & 0x88 != 0x88 {
+                return false;
+            }
         }
-        lo == hi && lo >= 0.0
+        chunks.remainder().chunks_exact(4).all(|p| p[3] == a0)
     }
 
     const NONE: u8 = 0;

@@ -1,13 +1,151 @@
-//! The row kernels of the opaque blur along any direction other than a row: the filter of one
-//! sheared (or transposed) row into five values a pixel (the box mean's RGBA and the glow), and
-//! eq. 7 with the composite of the output pixels that interpolate two such rows (`lines`).
+//! One sheared row (`lines`): its samples of the image (`shear_row`, for every filter along an
+//! oblique line) and the opaque blur's filter of it into five values a pixel, the box mean's
+//! RGBA and the glow (`filter_row`; the output pixels that interpolate two such rows are
+//! finished in `sheared_finish`).
 //!
-//! As in `opaque_row`, each has a plain form and an AVX2 form that performs the same IEEE
-//! operations in the same order, so both give the same bits.
+//! As in `opaque_row`, the kernels have a plain form and an AVX2 form that performs the same
+//! IEEE operations in the same order, so both give the same bits.
 use super::glow::{glow_row, GlowScratch};
-use super::lines::Sheared;
-use super::opaque_row::{alpha_constant, alpha_span, finish, Composite};
-use std::mem::MaybeUninit;
+use super::lines::Phase;
+use super::opaque_row::{alpha_constant, alpha_span};
+
+/// Sheared row `j` of a `(h, w, C)` image: `out[x] = lerp(img[floor(y)][x], img[floor(y)+1][x], frac(y))`
+/// with `y = j + x t + c0` (`phase` from `Phase::new(w, t, c0, 1.0)`), zero outside the image.
+/// `c0` in [0, 1) is the phase of a crop whose first column is not column 0 of the full image.
+/// Only columns `xa .. xa + n` are computed, into `out[(x - xa) * C ..]`.
+pub(crate) fn shear_row<const C: usize>(
+    img: &[f32],
+    w: usize,
+    h: usize,
+    phase: &Phase,
+    j: i64,
+    (xa, n): (usize, usize),
+    out: &mut [f32],
+) {
+    // The columns whose two samples are both in the image (y0 in [0, h - 2]) form one interval
+    // (the floors are monotone): there the loop needs no test.
+    let fl = &phase.floor[xa..xa + n];
+    let (lo, hi) = (-j, h as i64 - 2 - j);
+    let (ia, ib) = if fl.len() < 2 || fl[0] <= fl[fl.len() - 1] {
+        (
+            fl.partition_point(|&f| f < lo),
+            fl.partition_point(|&f| f <= hi),
+        )
+    } else {
+        (
+            fl.partition_point(|&f| f > hi),
+            fl.partition_point(|&f| f >= lo),
+        )
+    };
+    let ib = ib.max(ia);
+    assert!(img.len() >= w * h * C && out.len() >= n * C && xa + n <= w);
+    let (fl, fr) = (
+        &phase.floor[xa + ia..xa + ib],
+        &phase.frac[xa + ia..xa + ib],
+    );
+    #[cfg(target_arch = "x86_64")]
+    if C == 4 && super::simd() {
+        // SAFETY: AVX2 was detected; every pixel read is in the image (as below).
+        unsafe { shear4_avx(img, w, j, fl, fr, xa + ia, &mut out[ia * 4..ib * 4]) };
+        return shear_edges::<C>(img, w, h, phase, j, (xa, n), (ia, ib), out);
+    }
+    let o = &mut out[ia * C..ib * C];
+    for (k, (o, (&fl, &f))) in o.chunks_exact_mut(C).zip(fl.iter().zip(fr)).enumerate() {
+        let x = xa + ia + k;
+        let y0 = (j + fl) as usize;
+        debug_assert!(y0 + 1 < h);
+        // SAFETY: y0 + 1 < h (the interval's definition) and x < w, so both pixels are in
+        // `img` (asserted to hold h * w * C values).
+        let (a, b) = unsafe {
+            (
+                img.get_unchecked((y0 * w + x) * C..(y0 * w + x) * C + C),
+                img.get_unchecked(((y0 + 1) * w + x) * C..((y0 + 1) * w + x) * C + C),
+            )
+        };
+        for c in 0..C {
+            o[c] = (1.0 - f) * a[c] + f * b[c];
+        }
+    }
+    shear_edges::<C>(img, w, h, phase, j, (xa, n), (ia, ib), out)
+}
+
+/// How many sheared rows ahead `shear4_avx` prefetches.
+#[cfg(target_arch = "x86_64")]
+const AHEAD: usize = 4;
+
+/// `shear_row`'s interior for four channels: the same operations lane for lane.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn shear4_avx(
+    img: &[f32],
+    w: usize,
+    j: i64,
+    fl: &[i64],
+    fr: &[f32],
+    x0: usize,
+    out: &mut [f32],
+) {
+    use std::arch::x86_64::*;
+    let (p, o) = (img.as_ptr(), out.as_mut_ptr());
+    for (k, (&fl, &f)) in fl.iter().zip(fr).enumerate() {
+        let x = x0 + k;
+        let y0 = (j + fl) as usize;
+        if x % 4 == 0 {
+            // The pixels that sheared row j + AHEAD reads here (a diagonal walk through the
+            // image defeats the hardware prefetchers); a prefetch past the image is harmless.
+            let at = p.wrapping_add(((y0 + AHEAD) * w + x) * 4);
+            _mm_prefetch::<_MM_HINT_T0>(at as *const i8);
+            _mm_prefetch::<_MM_HINT_T0>(at.wrapping_add(w * 4) as *const i8);
+        }
+        let a = _mm_loadu_ps(p.add((y0 * w + x) * 4));
+        let b = _mm_loadu_ps(p.add(((y0 + 1) * w + x) * 4));
+        let v = _mm_add_ps(
+            _mm_mul_ps(_mm_set1_ps(1.0 - f), a),
+            _mm_mul_ps(_mm_set1_ps(f), b),
+        );
+        _mm_storeu_ps(o.add(k * 4), v);
+    }
+}
+
+/// `shear_row` at the columns outside its interior `ia .. ib` (relative to `xa`).
+#[allow(clippy::too_many_arguments)]
+fn shear_edges<const C: usize>(
+    img: &[f32],
+    w: usize,
+    h: usize,
+    phase: &Phase,
+    j: i64,
+    (xa, n): (usize, usize),
+    (ia, ib): (usize, usize),
+    out: &mut [f32],
+) {
+    for x in (xa..xa + ia).chain(xa + ib..xa + n) {
+        let y0 = j + phase.floor[x];
+        let f = phase.frac[x];
+        let o = &mut out[(x - xa) * C..(x - xa) * C + C];
+        if y0 >= 0 && y0 + 1 < h as i64 {
+            let a = &img[(y0 as usize * w + x) * C..][..C];
+            let b = &img[((y0 + 1) as usize * w + x) * C..][..C];
+            for c in 0..C {
+                o[c] = (1.0 - f) * a[c] + f * b[c];
+            }
+            continue;
+        }
+        o.fill(0.0);
+        if y0 >= 0 && y0 < h as i64 {
+            let p = &img[(y0 as usize * w + x) * C..][..C];
+            for c in 0..C {
+                o[c] += (1.0 - f) * p[c];
+            }
+        }
+        if y0 + 1 >= 0 && y0 + 1 < h as i64 {
+            let p = &img[((y0 + 1) as usize * w + x) * C..][..C];
+            for c in 0..C {
+                o[c] += f * p[c];
+            }
+        }
+    }
+}
 
 /// Scratch buffers of one thread for `filter_row`.
 #[derive(Default)]
@@ -62,113 +200,10 @@ pub(crate) fn filter_row(
     true
 }
 
-/// One piece of an output row (`lines::Sheared::pieces`): output pixels `x0 .. x1` interpolate
-/// the five values of two filtered rows, `a` (weight `1 - frac`) and `b` (weight `frac`), each
-/// `None` where that row is zero; their glow is raised to the source alpha (`alpha[x * 4]`),
-/// then eq. 7 and the composite with `base` (`base[x * 4 ..]`) go to `out[x * 4 ..]`.
-pub(crate) struct Piece<'a> {
-    pub(crate) a: Option<&'a [f32]>,
-    pub(crate) b: Option<&'a [f32]>,
-    pub(crate) frac: &'a [f32],
-    pub(crate) alpha: &'a [f32],
-    pub(crate) base: &'a [f32],
-    pub(crate) out: &'a mut [MaybeUninit<f32>],
-}
-
-/// Crop row `y` of the output from the filtered sheared rows `sh`, run by run (`Sheared::runs`):
-/// `alpha`, `base` and `out` are the row's `(cw, 4)` source (for its alpha), base and output
-/// pixels. Where both sheared rows cover a run (all but the ends of the
-/// sheared rows) the run goes straight to `finish_piece`'s arithmetic; elsewhere piece by piece.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn finish_row(
-    sh: &Sheared<5>,
-    runs: &[(usize, usize)],
-    y: usize,
-    alpha: &[f32],
-    base: &[f32],
-    out: &mut [MaybeUninit<f32>],
-    comp: Option<Composite>,
-    simd: bool,
-) {
-    let cw = runs.last().map_or(0, |r| r.1);
-    assert!(alpha.len() >= cw * 4 && base.len() >= cw * 4 && out.len() >= cw * 4);
-    #[cfg(target_arch = "x86_64")]
-    if simd {
-        // SAFETY: AVX2 was detected; the row lengths were checked above.
-        unsafe { avx::finish_row(sh, runs, y, alpha, base, out, comp) };
-        return;
-    }
-    for &run in runs {
-        finish_pieces(sh, run, y, alpha, base, out, comp, simd);
-    }
-}
-
-/// `finish_row` over one run, piece by piece.
-#[allow(clippy::too_many_arguments)]
-#[inline]
-fn finish_pieces(
-    sh: &Sheared<5>,
-    run: (usize, usize),
-    y: usize,
-    alpha: &[f32],
-    base: &[f32],
-    out: &mut [MaybeUninit<f32>],
-    comp: Option<Composite>,
-    simd: bool,
-) {
-    sh.pieces(y, run, |x0, x1, a, b, frac| {
-        let piece = Piece {
-            a,
-            b,
-            frac,
-            alpha: &alpha[x0 * 4 + 3..x1 * 4],
-            base: &base[x0 * 4..x1 * 4],
-            out: &mut out[x0 * 4..x1 * 4],
-        };
-        finish_piece(piece, comp, simd);
-    });
-}
-
-/// The interpolation of one of the five values, as `lines::Sheared::unshear_row` computes it.
-#[inline(always)]
-fn lerp(a: Option<&[f32]>, b: Option<&[f32]>, f: f32, i: usize) -> f32 {
-    match (a, b) {
-        (Some(a), Some(b)) => (1.0 - f) * a[i] + f * b[i],
-        (Some(a), None) => (1.0 - f) * a[i],
-        (None, Some(b)) => f * b[i],
-        (None, None) => 0.0,
-    }
-}
-
-/// Writes the output pixels of `p` (see `Piece`).
-pub(crate) fn finish_piece(p: Piece, comp: Option<Composite>, simd: bool) {
-    let n = p.frac.len();
-    assert!(p.a.is_none_or(|a| a.len() == n * 5) && p.b.is_none_or(|b| b.len() == n * 5));
-    assert!(p.alpha.len() + 3 >= n * 4 && p.base.len() >= n * 4 && p.out.len() >= n * 4);
-    #[cfg(target_arch = "x86_64")]
-    if simd {
-        // SAFETY: AVX2 was detected; the lengths were checked above.
-        unsafe { avx::finish_piece(p, comp) };
-        return;
-    }
-    let _ = simd;
-    for x in 0..n {
-        let f = p.frac[x];
-        let v =
-            [0, 1, 2, 3].map(|c| lerp(p.a.map(|a| &a[x * 5..]), p.b.map(|b| &b[x * 5..]), f, c));
-        let g = lerp(p.a.map(|a| &a[x * 5..]), p.b.map(|b| &b[x * 5..]), f, 4).max(p.alpha[x * 4]);
-        let o = finish(v, g, &p.base[x * 4..x * 4 + 4], comp);
-        super::put4(p.out, x, o);
-    }
-}
-
 #[cfg(target_arch = "x86_64")]
 mod avx {
-    //! The AVX2 forms. Callers check that AVX2 is present and that the slices are long enough.
-    use super::{lerp, Composite, Piece, Sheared};
-    use crate::image::ALPHA_EPS;
+    //! The AVX2 form. Callers check that AVX2 is present and that the slices are long enough.
     use std::arch::x86_64::*;
-    use std::mem::MaybeUninit;
 
     /// Pixel `i` of a `(n, 4)` row as four f64 lanes.
     #[inline(always)]
@@ -219,164 +254,6 @@ mod avx {
         for x in sub_start.max(add_end)..xb {
             emit(x, s);
             s = _mm256_sub_pd(s, px(p, x - r));
-        }
-    }
-
-    /// `super::finish_row`: each run whose two sheared rows are both present goes through
-    /// `run`, the others piece by piece.
-    #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn finish_row(
-        sh: &Sheared<5>,
-        runs: &[(usize, usize)],
-        y: usize,
-        alpha: &[f32],
-        base: &[f32],
-        out: &mut [MaybeUninit<f32>],
-        comp: Option<Composite>,
-    ) {
-        match comp {
-            None => row::<NONE>(sh, runs, y, alpha, base, out),
-            Some(Composite::Over) => row::<OVER>(sh, runs, y, alpha, base, out),
-            Some(Composite::Under) => row::<UNDER>(sh, runs, y, alpha, base, out),
-        }
-    }
-
-    #[inline(always)]
-    unsafe fn row<const C: u8>(
-        sh: &Sheared<5>,
-        runs: &[(usize, usize)],
-        y: usize,
-        alpha: &[f32],
-        base: &[f32],
-        out: &mut [MaybeUninit<f32>],
-    ) {
-        let (data, fracs) = (sh.data.as_ptr(), sh.fracs());
-        let (pa, pb, po) = (alpha.as_ptr(), base.as_ptr(), out.as_mut_ptr() as *mut f32);
-        let comp = match C {
-            OVER => Some(Composite::Over),
-            UNDER => Some(Composite::Under),
-            _ => None,
-        };
-        for &(xs, xe) in runs {
-            let [ra, rb] = sh.rows_at(y, xs);
-            // The rows that output row y + AHEAD reads here, on their way into the cache (the
-            // diagonal walk through the sheared rows defeats the hardware prefetchers).
-            let [_, rf] = sh.rows_at(y + AHEAD, xs);
-            if rf.0 <= xs && xe <= rf.1 {
-                let at = data.add((rf.2 + xs - rf.0) * 5);
-                _mm_prefetch::<_MM_HINT_T0>(at as *const i8);
-                _mm_prefetch::<_MM_HINT_T0>(at.add((xe - xs) * 5 - 1) as *const i8);
-            }
-            if ra.0 <= xs && xe <= ra.1 && rb.0 <= xs && xe <= rb.1 {
-                let (oa, ob) = ((ra.2 + xs - ra.0) * 5, (rb.2 + xs - rb.0) * 5);
-                debug_assert!(oa.max(ob) + (xe - xs) * 5 <= sh.data.len());
-                run::<C>(
-                    data.add(oa),
-                    data.add(ob),
-                    fracs.get_unchecked(xs..xe),
-                    pa.add(xs * 4),
-                    pb.add(xs * 4),
-                    po.add(xs * 4),
-                );
-            } else {
-                super::finish_pieces(sh, (xs, xe), y, alpha, base, out, comp, true);
-            }
-        }
-    }
-
-    /// How many output rows ahead `row` prefetches.
-    const AHEAD: usize = 4;
-
-    const NONE: u8 = 0;
-    const OVER: u8 = 1;
-    const UNDER: u8 = 2;
-
-    #[inline(always)]
-    unsafe fn run<const C: u8>(
-        a: *const f32,
-        b: *const f32,
-        frac: &[f32],
-        alpha: *const f32,
-        base: *const f32,
-        out: *mut f32,
-    ) {
-        for (x, &f) in frac.iter().enumerate() {
-            let (fv, gv) = (_mm_set1_ps(f), _mm_set1_ps(1.0 - f));
-            let (pa, pb) = (a.add(x * 5), b.add(x * 5));
-            let m = _mm_add_ps(
-                _mm_mul_ps(gv, _mm_loadu_ps(pa)),
-                _mm_mul_ps(fv, _mm_loadu_ps(pb)),
-            );
-            let g5 = (1.0 - f) * *pa.add(4) + f * *pb.add(4);
-            let g = _mm_set1_ps(g5.max(*alpha.add(x * 4 + 3)));
-            let o = finish::<C>(m, g, base.add(x * 4));
-            _mm_storeu_ps(out.add(x * 4), o);
-        }
-    }
-
-    /// `opaque_row::finish`, lane for lane.
-    #[inline(always)]
-    unsafe fn finish<const C: u8>(m: __m128, g: __m128, base: *const f32) -> __m128 {
-        let one = _mm_set1_ps(1.0);
-        let a = _mm_shuffle_ps::<0xff>(m, m);
-        let keep = _mm_cmpgt_ps(a, _mm_set1_ps(ALPHA_EPS));
-        let s = _mm_and_ps(_mm_div_ps(g, a), keep);
-        let sub = _mm_blend_ps::<0b1000>(_mm_mul_ps(m, s), g);
-        match C {
-            OVER => _mm_add_ps(sub, _mm_mul_ps(_mm_sub_ps(one, g), _mm_loadu_ps(base))),
-            UNDER => {
-                let b = _mm_loadu_ps(base);
-                let k = _mm_sub_ps(one, _mm_shuffle_ps::<0xff>(b, b));
-                _mm_add_ps(b, _mm_mul_ps(k, sub))
-            }
-            _ => sub,
-        }
-    }
-
-    #[target_feature(enable = "avx2")]
-    pub(super) unsafe fn finish_piece(p: Piece, comp: Option<Composite>) {
-        let n = p.frac.len();
-        let (pa, pb) = (p.a.map(|a| a.as_ptr()), p.b.map(|b| b.as_ptr()));
-        let out = p.out.as_mut_ptr() as *mut f32;
-        let (alpha, base) = (p.alpha.as_ptr(), p.base.as_ptr());
-        let one = _mm_set1_ps(1.0);
-        for x in 0..n {
-            let f = *p.frac.get_unchecked(x);
-            let (fv, gv) = (_mm_set1_ps(f), _mm_set1_ps(1.0 - f));
-            let m = match (pa, pb) {
-                (Some(a), Some(b)) => _mm_add_ps(
-                    _mm_mul_ps(gv, _mm_loadu_ps(a.add(x * 5))),
-                    _mm_mul_ps(fv, _mm_loadu_ps(b.add(x * 5))),
-                ),
-                (Some(a), None) => _mm_mul_ps(gv, _mm_loadu_ps(a.add(x * 5))),
-                (None, Some(b)) => _mm_mul_ps(fv, _mm_loadu_ps(b.add(x * 5))),
-                (None, None) => _mm_setzero_ps(),
-            };
-            let g5 = lerp(
-                pa.map(|a| std::slice::from_raw_parts(a.add(x * 5), 5)),
-                pb.map(|b| std::slice::from_raw_parts(b.add(x * 5), 5)),
-                f,
-                4,
-            );
-            let g = _mm_set1_ps(g5.max(*alpha.add(x * 4)));
-            // `opaque_row::finish`, lane for lane.
-            let a = _mm_shuffle_ps::<0xff>(m, m);
-            let keep = _mm_cmpgt_ps(a, _mm_set1_ps(ALPHA_EPS));
-            let s = _mm_and_ps(_mm_div_ps(g, a), keep);
-            let sub = _mm_blend_ps::<0b1000>(_mm_mul_ps(m, s), g);
-            let o = match comp {
-                Some(Composite::Over) => _mm_add_ps(
-                    sub,
-                    _mm_mul_ps(_mm_sub_ps(one, g), _mm_loadu_ps(base.add(x * 4))),
-                ),
-                Some(Composite::Under) => {
-                    let b = _mm_loadu_ps(base.add(x * 4));
-                    let k = _mm_sub_ps(one, _mm_shuffle_ps::<0xff>(b, b));
-                    _mm_add_ps(b, _mm_mul_ps(k, sub))
-                }
-                None => sub,
-            };
-            _mm_storeu_ps(out.add(x * 4), o);
         }
     }
 }
