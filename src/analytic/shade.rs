@@ -99,6 +99,40 @@ impl SampleShader<'_> {
         self.last.0 = NONE;
     }
 
+    /// Starts loading what shading `frags` reads: the links of their chains and the shading
+    /// data of the links' triangles, for fragments whose colour varies (the others are never
+    /// shaded). The chains are walked side by side, so the loads of different chains overlap
+    /// instead of waiting on each other; the triangles are only prefetched. Nothing is
+    /// computed.
+    pub fn warm(&mut self, frags: &[Frag]) {
+        if !self.input.shade {
+            return;
+        }
+        let walk = &mut self.cursor;
+        walk.clear();
+        for f in frags {
+            let tp = &self.prims[(f.prim & !BACK) as usize];
+            if tp.uniform.is_none() {
+                prefetch(tp);
+                if f.n > 1 {
+                    walk.push(f.chain);
+                }
+            }
+        }
+        while !walk.is_empty() {
+            let mut kept = 0;
+            for k in 0..walk.len() {
+                let l = &self.links[walk[k] as usize];
+                if l.next != NONE {
+                    prefetch(&self.prims[self.links[l.next as usize].prim as usize]);
+                    walk[kept] = l.next;
+                    kept += 1;
+                }
+            }
+            walk.truncate(kept);
+        }
+    }
+
     /// The triangle of `f`'s chain covering the sample at time `t` (with `f`'s `BACK` flag).
     pub fn prim_at(&self, f: &Frag, t: f64) -> u32 {
         let mut c = f.chain;
@@ -154,6 +188,23 @@ impl SampleShader<'_> {
             ]
         } else {
             [0.0; 2]
+        }
+    }
+}
+
+/// Asks the CPU to bring `tp`'s edges and shading data into cache (a hint, no effect on
+/// results).
+#[inline(always)]
+fn prefetch(tp: &TilePrim) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        let base = (tp as *const TilePrim).cast::<i8>();
+        let mut k = 0;
+        while k < std::mem::size_of::<TilePrim>() {
+            // SAFETY: a prefetch never faults; the address is inside `tp`.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(base.wrapping_add(k)) };
+            k += 64;
         }
     }
 }
