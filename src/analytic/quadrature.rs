@@ -1,30 +1,52 @@
 //! How many points in time a visible piece of a sample is shaded at, and where: Gauss-Legendre
-//! rules of 1 to 8 points, chosen by the piece's length ([`Quadrature::points`]). A piece is
-//! shaded by one triangle per layer (`resolve.rs` cuts it where a chain changes triangle).
+//! rules of 1 to 8 points, chosen by the piece's length and by how much its triangles' shading
+//! varies across them ([`Quadrature::points`]). A piece is shaded by one triangle per layer
+//! (`resolve.rs` cuts it where a chain changes triangle).
+
+/// [`Quadrature::Auto`] shades triangles whose corner normals are further apart than this at 2
+/// points at least.
+pub const BEND_2: f32 = 0.3;
+/// ... and further apart than this at 3.
+pub const BEND_3: f32 = 1.0;
 
 /// How many points in time each visible piece is shaded at.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Quadrature {
-    /// 1, 2 or 3 points by the piece's length: below 1/32 of the shutter 1, below 1/4 2, else 3.
+    /// 1, 2 or 3 points, the most of two rules. By the piece's length: below 1/32 of the
+    /// shutter 1, below 1/4 2, else 3. By the bend of its triangles (the largest distance
+    /// between two unit corner normals of a smooth-shaded triangle, about the angle between
+    /// them; 0 for flat shading): above 0.3 (`BEND_2`) 2, above 1.0 (`BEND_3`) 3. A sample
+    /// crossed by a triangle sweeps the whole triangle within a short piece, so how much the
+    /// shading varies over the piece depends on the triangle's normals as much as on the
+    /// piece's length: lambert of a normal interpolated linearly and normalised is linear up to
+    /// terms in the square of the bend, which a single midpoint misses.
     Auto,
     /// A fixed number of Gauss-Legendre points, 1 to 4.
     Points(u8),
 }
 
 impl Quadrature {
-    /// Points for a piece of length `len` shaded by one triangle per layer: `Auto` takes 1, 2
-    /// or 3 by length.
-    pub fn points(self, len: f64) -> usize {
+    /// Points for a piece of length `len` shaded by one triangle per layer whose shading
+    /// varies by `bend` across it: `Auto` takes 1, 2 or 3 by length, and by `bend`.
+    pub fn points(self, len: f64, bend: f32) -> usize {
         match self {
             Quadrature::Points(n) => n as usize,
             Quadrature::Auto => {
-                if len < 1.0 / 32.0 {
+                let by_len = if len < 1.0 / 32.0 {
                     1
                 } else if len < 0.25 {
                     2
                 } else {
                     3
-                }
+                };
+                let by_bend = if bend > BEND_3 {
+                    3
+                } else if bend > BEND_2 {
+                    2
+                } else {
+                    1
+                };
+                by_len.max(by_bend)
             }
         }
     }
@@ -128,13 +150,19 @@ mod tests {
     }
 
     #[test]
-    fn auto_takes_points_by_length() {
+    fn auto_takes_points_by_length_and_bend() {
         let q = Quadrature::Auto;
-        assert_eq!(q.points(0.01), 1);
-        assert_eq!(q.points(0.1), 2);
-        assert_eq!(q.points(0.5), 3);
-        assert_eq!(Quadrature::Points(2).points(0.5), 2);
-        assert_eq!(Quadrature::Points(4).points(0.001), 4);
+        assert_eq!(q.points(0.01, 0.0), 1);
+        assert_eq!(q.points(0.1, 0.0), 2);
+        assert_eq!(q.points(0.5, 0.0), 3);
+        assert_eq!(Quadrature::Points(2).points(0.5, 0.0), 2);
+        // a bent triangle takes more points however short the piece; a long piece keeps its 3
+        assert_eq!(q.points(0.01, 0.02), 1);
+        assert_eq!(q.points(0.01, 0.5), 2);
+        assert_eq!(q.points(0.01, 1.5), 3);
+        assert_eq!(q.points(0.5, 0.5), 3);
+        assert_eq!(Quadrature::Points(1).points(0.01, 1.5), 1);
+        assert_eq!(Quadrature::Points(4).points(0.001, 0.0), 4);
         // 5 and 7 points take the next even rule
         assert_eq!(gauss(5).0.len(), 6);
         assert_eq!(gauss(7).0.len(), 8);

@@ -8,7 +8,9 @@
 //! passes from one triangle to the next, so each sub-piece is shaded by one triangle per
 //! layer at its own Gauss points; layers of one colour skip the quadrature.
 use super::quadrature::{gauss, Quadrature};
-use super::visibility::{depth_at, sort, sweep, Backdrop, Frag, Link, Overflow, Sweep, BACKDROP};
+use super::visibility::{
+    depth_at, sort, sweep, Backdrop, Frag, Link, Overflow, Sweep, BACKDROP, NONE,
+};
 use crate::shutter::Shutter;
 
 /// Shading of the fragments' triangles at this sample.
@@ -18,10 +20,16 @@ pub trait Layers {
     /// The colour of fragment `f` when it is the same at every instant (its surface is of one
     /// colour), which [`Layers::shade`] would return up to rounding; None when it varies.
     fn uniform(&self, f: &Frag) -> Option<[f32; 4]>;
-    /// Premultiplied RGBA of the surface of fragment `f` (index `i` of the sample's sorted
-    /// fragments) seen at this sample at shutter time `t`. Calls for one fragment come in
+    /// The triangle of fragment `f` (index `i` of the sample's sorted fragments) covering the
+    /// sample at shutter time `t`, with `f`'s `BACK` flag, and the time from which the next
+    /// triangle of its chain covers it (infinity for the last). Calls for one fragment come in
     /// increasing `t`.
-    fn shade(&mut self, i: usize, f: &Frag, t: f64) -> [f32; 4];
+    fn triangle(&mut self, i: usize, f: &Frag, t: f64) -> (u32, f64);
+    /// How much the shading of triangle `p` varies across it ([`Quadrature::points`]).
+    fn bend(&self, p: u32) -> f32;
+    /// Premultiplied RGBA of triangle `p` (as [`Layers::triangle`] gives it) seen at this
+    /// sample at shutter time `t`.
+    fn shade(&mut self, p: u32, t: f64) -> [f32; 4];
     /// Pushes the instants strictly inside `(a, b)` where fragment `f`'s chain passes from one
     /// triangle to the next, ascending.
     fn cuts(&mut self, i: usize, f: &Frag, a: f64, b: f64, out: &mut Vec<f64>);
@@ -44,6 +52,7 @@ pub struct Scratch {
     sweep: Sweep,
     opaque: Vec<bool>,
     element_cuts: Vec<f64>,
+    tris: Vec<(u32, f64)>,
     /// Most depth crossings one stretch of a sample's time may hold ([`sweep`]'s `max_cuts`);
     /// unlimited by default.
     pub max_cuts: usize,
@@ -55,6 +64,7 @@ impl Default for Scratch {
             sweep: Sweep::default(),
             opaque: Vec::new(),
             element_cuts: Vec::new(),
+            tris: Vec::new(),
             max_cuts: usize::MAX,
         }
     }
@@ -103,6 +113,7 @@ pub fn resolve(
     let mut acc = [0.0f64; 4];
     let mut ref_done = false;
     let mut cuts = std::mem::take(&mut sc.element_cuts);
+    let mut tris = std::mem::take(&mut sc.tris);
     sort(frags);
     let mut opaque = std::mem::take(&mut sc.opaque);
     opaque.clear();
@@ -174,8 +185,26 @@ pub fn resolve(
                 if dw <= 0.0 {
                     continue;
                 }
-                let (xs, ws) = gauss(quad.points(v - u));
                 let (half, mid) = (0.5 * (v - u), 0.5 * (u + v));
+                // each layer's triangle, found at the first point in time and kept while the
+                // points stay before its chain's next link
+                let (xs, ws) = gauss(quad.points(v - u, 0.0));
+                let mut bend = 0.0f32;
+                tris.clear();
+                for &(_, i) in order {
+                    if i == BACKDROP {
+                        tris.push((NONE, f64::INFINITY));
+                    } else {
+                        let tri = layers.triangle(i, &frags[i], mid + half * xs[0]);
+                        bend = bend.max(layers.bend(tri.0));
+                        tris.push(tri);
+                    }
+                }
+                let (xs, ws) = if bend > 0.0 {
+                    gauss(quad.points(v - u, bend))
+                } else {
+                    (xs, ws)
+                };
                 let mut sum = [0.0f64; 4];
                 let mut wsum = 0.0;
                 for (x, w) in xs.iter().zip(ws) {
@@ -185,11 +214,14 @@ pub fn resolve(
                         continue;
                     }
                     let mut trans = 1.0f64;
-                    for &(_, i) in order {
+                    for (k, &(_, i)) in order.iter().enumerate() {
                         let s = if i == BACKDROP {
                             bg.rgba
                         } else {
-                            layers.shade(i, &frags[i], t)
+                            if t >= tris[k].1 {
+                                tris[k] = layers.triangle(i, &frags[i], t);
+                            }
+                            layers.shade(tris[k].0, t)
                         };
                         for j in 0..4 {
                             sum[j] += wt * trans * f64::from(s[j]);
@@ -202,8 +234,16 @@ pub fn resolve(
                     wsum += wt;
                 }
                 if wsum > 0.0 {
-                    for j in 0..4 {
-                        acc[j] += dw * sum[j] / wsum;
+                    if power_of_two(wsum) {
+                        // dividing by a power of two is multiplying by its exact reciprocal
+                        let inv = 1.0 / wsum;
+                        for j in 0..4 {
+                            acc[j] += dw * sum[j] * inv;
+                        }
+                    } else {
+                        for j in 0..4 {
+                            acc[j] += dw * sum[j] / wsum;
+                        }
                     }
                 }
             }
@@ -211,9 +251,18 @@ pub fn resolve(
     );
     sc.opaque = opaque;
     sc.element_cuts = cuts;
+    sc.tris = tris;
     swept?;
     out.rgba = acc.map(|x| x as f32);
     Ok(out)
+}
+
+/// True when `x` is a normal power of two (its reciprocal is exact, so multiplying by it gives
+/// the same bits as dividing by `x`). The weights of Gauss rules of 1 and 2 points sum to 2.
+#[inline(always)]
+fn power_of_two(x: f64) -> bool {
+    const MANTISSA: u64 = (1 << 52) - 1;
+    x.is_normal() && x.to_bits() & MANTISSA == 0 && x < 2f64.powi(1000)
 }
 
 /// The composite of a piece's layers (front to back) when every layer is of one colour.
@@ -261,8 +310,14 @@ mod tests {
             None
         }
         fn cuts(&mut self, _i: usize, _f: &Frag, _a: f64, _b: f64, _out: &mut Vec<f64>) {}
-        fn shade(&mut self, _i: usize, f: &Frag, _t: f64) -> [f32; 4] {
-            let c = self.colors[(f.prim & !BACK) as usize];
+        fn triangle(&mut self, _i: usize, f: &Frag, _t: f64) -> (u32, f64) {
+            (f.prim, f64::INFINITY)
+        }
+        fn bend(&self, _p: u32) -> f32 {
+            0.0
+        }
+        fn shade(&mut self, p: u32, _t: f64) -> [f32; 4] {
+            let c = self.colors[(p & !BACK) as usize];
             [c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]]
         }
     }
@@ -283,14 +338,25 @@ mod tests {
         t0: 0.0,
         z0: 0.0,
         prim: 0,
-        next: super::super::visibility::NONE,
+        next: NONE,
     }];
 
-    const NONE: Backdrop = Backdrop {
+    const EMPTY: Backdrop = Backdrop {
         rgba: [0.0; 4],
         depth: f32::INFINITY,
         id: -1,
     };
+
+    #[test]
+    fn powers_of_two_are_told_apart() {
+        assert!(power_of_two(2.0) && power_of_two(1.0) && power_of_two(0.25));
+        assert!(!power_of_two(3.0) && !power_of_two(0.0) && !power_of_two(f64::INFINITY));
+        assert!(!power_of_two(f64::MIN_POSITIVE / 2.0) && !power_of_two(f64::NAN));
+        // the 1- and 2-point rules' weights sum to 2; a divide by it is the multiply
+        for x in [0.3f64, 1e-30, 0.123_456_789] {
+            assert_eq!(0.7 * x / 2.0, 0.7 * x * 0.5);
+        }
+    }
 
     #[test]
     fn disjoint_spans_add_their_durations() {
@@ -301,7 +367,7 @@ mod tests {
         let r = resolve(
             &mut f,
             &LINK,
-            &NONE,
+            &EMPTY,
             &mut l,
             &Shutter::Box,
             &[],
@@ -324,7 +390,7 @@ mod tests {
         let r = resolve(
             &mut f,
             &LINK,
-            &NONE,
+            &EMPTY,
             &mut l,
             &Shutter::Box,
             &[],
@@ -339,7 +405,7 @@ mod tests {
         let r = resolve(
             &mut f,
             &LINK,
-            &NONE,
+            &EMPTY,
             &mut l,
             &Shutter::Ramp,
             &[],

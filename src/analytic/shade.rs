@@ -32,6 +32,8 @@ pub struct TilePrim {
     pub normals: [[[f32; 3]; 3]; 2],
     /// The draw's colour where it cannot vary ([`Prepared::uniform`]).
     pub uniform: Option<[f32; 4]>,
+    /// How much the shading varies across the triangle ([`Quadrature::points`]).
+    pub bend: f32,
 }
 
 impl TilePrim {
@@ -54,20 +56,46 @@ impl TilePrim {
             }
         }
         let (t0, t1) = (input.times[k], input.times[k + 1]);
+        let lambert = draw.shading == Shading::Lambert;
         TilePrim {
             edges: Edges::new(corners),
             draw: prim.draw,
             face: prim.face,
             flags: prim.flags,
             object_id: draw.object_id,
-            lambert: draw.shading == Shading::Lambert,
+            lambert,
             t0,
             dt: t1 - t0,
             colors,
             normals,
             uniform: d.uniform,
+            bend: if lambert { spread(&normals) } else { 0.0 },
         }
     }
+}
+
+/// The largest distance between two of a triangle's unit corner normals, at the segment's
+/// start or end: about the largest angle (radians) between them.
+fn spread(normals: &[[[f32; 3]; 3]; 2]) -> f32 {
+    let unit = |n: [f32; 3]| {
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        if len > 0.0 {
+            n.map(|x| x / len)
+        } else {
+            n
+        }
+    };
+    let mut most = 0.0f32;
+    let (n0, dn) = (normals[0], normals[1]);
+    let n1 = [0, 1, 2].map(|c| [0, 1, 2].map(|j| n0[c][j] + dn[c][j]));
+    for n in [n0, n1] {
+        let u = n.map(unit);
+        for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+            let d = [0, 1, 2].map(|j| u[a][j] - u[b][j]);
+            most = most.max((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt());
+        }
+    }
+    most
 }
 
 /// The tile's triangles as seen from one sample.
@@ -97,6 +125,40 @@ impl SampleShader<'_> {
         self.cursor.clear();
         self.cursor.resize(n, NONE);
         self.last.0 = NONE;
+    }
+
+    /// Starts loading what shading `frags` reads: the links of their chains and the shading
+    /// data of the links' triangles, for fragments whose colour varies (the others are never
+    /// shaded). The chains are walked side by side, so the loads of different chains overlap
+    /// instead of waiting on each other; the triangles are only prefetched. Nothing is
+    /// computed.
+    pub fn warm(&mut self, frags: &[Frag]) {
+        if !self.input.shade {
+            return;
+        }
+        let walk = &mut self.cursor;
+        walk.clear();
+        for f in frags {
+            let tp = &self.prims[(f.prim & !BACK) as usize];
+            if tp.uniform.is_none() {
+                prefetch(tp);
+                if f.n > 1 {
+                    walk.push(f.chain);
+                }
+            }
+        }
+        while !walk.is_empty() {
+            let mut kept = 0;
+            for k in 0..walk.len() {
+                let l = &self.links[walk[k] as usize];
+                if l.next != NONE {
+                    prefetch(&self.prims[self.links[l.next as usize].prim as usize]);
+                    walk[kept] = l.next;
+                    kept += 1;
+                }
+            }
+            walk.truncate(kept);
+        }
     }
 
     /// The triangle of `f`'s chain covering the sample at time `t` (with `f`'s `BACK` flag).
@@ -158,6 +220,23 @@ impl SampleShader<'_> {
     }
 }
 
+/// Asks the CPU to bring `tp`'s edges and shading data into cache (a hint, no effect on
+/// results).
+#[inline(always)]
+fn prefetch(tp: &TilePrim) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        let base = (tp as *const TilePrim).cast::<i8>();
+        let mut k = 0;
+        while k < std::mem::size_of::<TilePrim>() {
+            // SAFETY: a prefetch never faults; the address is inside `tp`.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(base.wrapping_add(k)) };
+            k += 64;
+        }
+    }
+}
+
 /// Barycentric coordinates of the surface point with edge values `q` at time `t`, and the
 /// local time.
 #[inline]
@@ -201,13 +280,8 @@ impl Layers for SampleShader<'_> {
         }
     }
 
-    #[inline(always)]
-    fn shade(&mut self, i: usize, f: &Frag, t: f64) -> [f32; 4] {
-        let input = self.input;
-        if !input.shade {
-            return [1.0; 4];
-        }
-        // the chain's triangle at t: calls for one fragment come in increasing t
+    #[inline]
+    fn triangle(&mut self, i: usize, f: &Frag, t: f64) -> (u32, f64) {
         let mut c = if self.cursor[i] == NONE {
             f.chain
         } else {
@@ -215,13 +289,30 @@ impl Layers for SampleShader<'_> {
         };
         loop {
             let next = self.links[c as usize].next;
-            if next == NONE || f64::from(self.links[next as usize].t0) > t {
-                break;
+            if next == NONE {
+                self.cursor[i] = c;
+                return (self.links[c as usize].prim | (f.prim & BACK), f64::INFINITY);
+            }
+            let end = f64::from(self.links[next as usize].t0);
+            if end > t {
+                self.cursor[i] = c;
+                return (self.links[c as usize].prim | (f.prim & BACK), end);
             }
             c = next;
         }
-        self.cursor[i] = c;
-        let p = self.links[c as usize].prim | (f.prim & BACK);
+    }
+
+    #[inline]
+    fn bend(&self, p: u32) -> f32 {
+        self.prim(p).bend
+    }
+
+    #[inline(always)]
+    fn shade(&mut self, p: u32, t: f64) -> [f32; 4] {
+        let input = self.input;
+        if !input.shade {
+            return [1.0; 4];
+        }
         let prims = self.prims;
         let tp = &prims[(p & !BACK) as usize];
         // the prim's edge values at this sample, kept while calls stay on one prim
@@ -265,5 +356,26 @@ impl Layers for SampleShader<'_> {
         }
         let a = c[3];
         [c[0] * a, c[1] * a, c[2] * a, a]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spread_is_the_largest_chord_between_unit_corner_normals() {
+        // equal normals (of any length) do not bend; a right angle is a chord of sqrt(2)
+        let flat = [[[0.0, 0.0, 2.0]; 3], [[0.0; 3]; 3]];
+        assert_eq!(spread(&flat), 0.0);
+        let bent = [
+            [[0.0, 0.0, 1.0], [0.0, 0.0, 3.0], [0.0, 1.0, 0.0]],
+            [[0.0; 3]; 3],
+        ];
+        assert!((spread(&bent) - 2f32.sqrt()).abs() < 1e-6);
+        // a segment that bends its corners apart counts at its end
+        let mut turning = flat;
+        turning[1][2] = [0.0, 1.0, -2.0];
+        assert!((spread(&turning) - 2f32.sqrt()).abs() < 1e-6);
     }
 }

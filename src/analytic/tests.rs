@@ -318,8 +318,14 @@ impl resolve::Layers for FlatLayers {
             c = self.links[c as usize].next;
         }
     }
-    fn shade(&mut self, _i: usize, f: &visibility::Frag, _t: f64) -> [f32; 4] {
-        let c = self.colors[f.prim as usize];
+    fn triangle(&mut self, _i: usize, f: &visibility::Frag, _t: f64) -> (u32, f64) {
+        (f.prim, f64::INFINITY)
+    }
+    fn bend(&self, _p: u32) -> f32 {
+        0.0
+    }
+    fn shade(&mut self, p: u32, _t: f64) -> [f32; 4] {
+        let c = self.colors[p as usize];
         [c[0] * c[3], c[1] * c[3], c[2] * c[3], c[3]]
     }
 }

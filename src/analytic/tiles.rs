@@ -479,6 +479,7 @@ impl Ctx<'_> {
                     y: f64::from(iy) + 0.5,
                     last: (NONE, [[0.0; 3]; 3]),
                 };
+                shader.warm(frags);
                 shader.reset(frags.len());
                 let r = resolve::resolve(
                     frags,
