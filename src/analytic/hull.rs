@@ -16,24 +16,28 @@ pub fn convex_hull(pts: &[[f64; 2]; 6]) -> (Hull, u8) {
     let turn = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
         (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
     };
-    let mut h: Vec<[f64; 2]> = Vec::with_capacity(12);
+    // Andrew's monotone chain on a stack array (at most 6 + 5 points before the last pop)
+    let mut h = [[0.0f64; 2]; 12];
+    let mut m = 0;
     for &q in p.iter() {
-        while h.len() >= 2 && turn(h[h.len() - 2], h[h.len() - 1], q) <= 0.0 {
-            h.pop();
+        while m >= 2 && turn(h[m - 2], h[m - 1], q) <= 0.0 {
+            m -= 1;
         }
-        h.push(q);
+        h[m] = q;
+        m += 1;
     }
-    let lower = h.len() + 1;
+    let lower = m + 1;
     for &q in p.iter().rev().skip(1) {
-        while h.len() >= lower && turn(h[h.len() - 2], h[h.len() - 1], q) <= 0.0 {
-            h.pop();
+        while m >= lower && turn(h[m - 2], h[m - 1], q) <= 0.0 {
+            m -= 1;
         }
-        h.push(q);
+        h[m] = q;
+        m += 1;
     }
-    h.pop();
+    m -= 1;
     let mut out = [[0.0f32; 2]; 6];
-    let n = h.len().min(6);
-    for (o, q) in out.iter_mut().zip(&h) {
+    let n = m.min(6);
+    for (o, q) in out.iter_mut().zip(&h[..m]) {
         *o = [q[0] as f32, q[1] as f32];
     }
     (out, n as u8)
