@@ -1,15 +1,16 @@
-"""The analytic method against accumulation with 64, 256 and 1024 time samples, per built-in scene
-(or real-mesh scene with ``--real``): wall clock and error, in the same run.
+"""The analytic method against accumulation with 64 to 4096 time samples (``--counts``), per
+built-in scene (or real-mesh scene with ``--real``): wall clock and error, in the same run.
 
 Every method renders each scene at the same size and supersampling, timed in the same run (best
 of ``--repeat`` calls each, after one warm-up call), so the ratios are what counts on a shared
 machine; the load average is printed before and after. Error is the RMSE of the premultiplied
-RGBA against accumulation with ``--reference`` samples (4096: its own noise is about half that
-of accumulation-1024). Also prints the analytic kernel's counts (sample tests, spans, pieces,
+RGBA against accumulation with ``--reference`` samples (16384, whose own error is about a quarter
+of accumulation-4096's, so that an error below accumulation-4096's can be told apart from the
+reference's noise; cached in out/bench/refs per build of the extension). Also prints the analytic kernel's counts (sample tests, spans, pieces,
 tile splits) and its cover/resolve thread time.
 
-The factor at equal error: when the analytic error is at or below accumulation-1024's, the
-factor is reported as a bound, ``>= t(acc-1024) / t(analytic)``. Otherwise the sample count N
+The factor at equal error: when the analytic error is at or below that of the largest count
+timed, the factor is reported as a bound, ``>= t(acc-4096) / t(analytic)``. Otherwise the sample count N
 at which accumulation's error equals the analytic one is interpolated between the measured
 counts on a log-log line (extrapolated below 64 along the 64-256 slope), accumulation's time at
 N is interpolated linearly in N between the measured times (a frame costs a fixed part plus a
@@ -20,7 +21,7 @@ part per sample), and the factor is that time over the analytic one.
 process's peak before the frame, so numpy, the scene and the extension are not counted).
 
 Usage: python benches/bench_analytic.py [--size 320x240] [--aa 2] [--repeat 3] [--scenes a,b]
-       [--real] [--reference 4096] [--no-error]
+       [--real] [--reference 16384] [--counts 64,256,1024,4096] [--no-error]
        python benches/bench_analytic.py --memory [--memory-scene sphere80k] [--memory-size 1920x1080]
 Writes out/bench/analytic.md (or analytic_memory.md).
 """
@@ -35,6 +36,7 @@ import sys
 import time
 from functools import partial
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -43,7 +45,20 @@ from motionblur.evaluation.cluster import TIMING_BUDGET_S  # the report's rule: 
 from motionblur.scenes_builtin import SCENES
 from motionblur.scenes_real import REAL_SCENES
 
-ACCUMULATION = (64, 256, 1024)
+
+def reference(scene, name: str, a: argparse.Namespace):
+    """Accumulation with ``--reference`` samples, kept in out/bench/refs between runs of the same
+    build of the extension (a deep reference takes minutes on the dense scenes)."""
+    core = Path(mb._core.__file__).stat()
+    build = f"{core.st_size:x}{int(core.st_mtime):x}"
+    path = Path("out/bench/refs") / f"{name}_{a.size}_aa{a.aa}_{a.reference}_{build}.npz"
+    if path.exists():
+        with np.load(path) as z:
+            return SimpleNamespace(rgba=z["rgba"])
+    frame = mb.render(scene, "accumulation", samples=a.reference, aa=a.aa)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    np.savez_compressed(path, rgba=frame.rgba)
+    return frame
 
 
 def best(fn, repeat: int) -> tuple[float, object]:
@@ -90,35 +105,42 @@ def load() -> str:
 
 def speed_and_error(a: argparse.Namespace) -> list[str]:
     w, h = (int(v) for v in a.size.split("x"))
+    counts = sorted(int(n) for n in a.counts.split(","))
+    if len(counts) < 2 or not a.reference > counts[-1]:
+        raise SystemExit("--counts: at least two sample counts, all below --reference")
     lines = [
         f"{a.size}, aa={a.aa}, best of {a.repeat} (wall clock; fewer once the calls add up to "
         f"{TIMING_BUDGET_S} s), {os.cpu_count()} cores; "
         f"load average at start {load()}",
         "",
-        "| scene | analytic ms | acc-64 ms | acc-256 ms | acc-1024 ms | acc-1024 / analytic "
-        "| at equal error | RMSE analytic | RMSE acc-64 | RMSE acc-256 | RMSE acc-1024 | tests | spans "
-        "| pieces | splits | cover ms | resolve ms |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "| scene | analytic ms | "
+        + "".join(f"acc-{n} ms | " for n in counts)
+        + f"acc-{counts[-1]} / analytic | at equal error | RMSE analytic | "
+        + "".join(f"RMSE acc-{n} | " for n in counts)
+        + "tests | spans | pieces | splits | cover ms | resolve ms |",
+        "|---|" + "---:|" * (2 * len(counts) + 10),
     ]
     print("\n".join(lines), flush=True)
     for name in a.scenes.split(","):
         scene = (SCENES | REAL_SCENES)[name](width=w, height=h)
         ta, fa = best(partial(mb.render, scene, "analytic", aa=a.aa), a.repeat)
         times, frames = {}, {}
-        for n in ACCUMULATION:
+        for n in counts:
             times[n], frames[n] = best(
                 partial(mb.render, scene, "accumulation", samples=n, aa=a.aa), a.repeat
             )
-        err = {"analytic": float("nan"), **{n: float("nan") for n in ACCUMULATION}}
+        err = {"analytic": float("nan"), **{n: float("nan") for n in counts}}
         if not a.no_error:
-            ref = mb.render(scene, "accumulation", samples=a.reference, aa=a.aa)
-            err = {"analytic": rmse(fa, ref), **{n: rmse(frames[n], ref) for n in ACCUMULATION}}
+            ref = reference(scene, name, a)
+            err = {"analytic": rmse(fa, ref), **{n: rmse(frames[n], ref) for n in counts}}
         s = fa.stats
         factor = equal_error_factor(ta, err["analytic"], times, err)
         row = (
-            f"| {name} | {1e3 * ta:.1f} | {1e3 * times[64]:.1f} | {1e3 * times[256]:.1f} "
-            f"| {1e3 * times[1024]:.1f} | {times[1024] / ta:.2f} | {factor} | {err['analytic']:.2e} "
-            f"| {err[64]:.2e} | {err[256]:.2e} | {err[1024]:.2e} | {s.get('tests', 0)} "
+            f"| {name} | {1e3 * ta:.1f} | "
+            + "".join(f"{1e3 * times[n]:.1f} | " for n in counts)
+            + f"{times[counts[-1]] / ta:.2f} | {factor} | {err['analytic']:.2e} | "
+            + "".join(f"{err[n]:.2e} | " for n in counts)
+            + f"{s.get('tests', 0)} "
             f"| {s.get('spans', 0)} | {s.get('pieces', 0)} | {s.get('splits', 0)} "
             f"| {s.get('ms_cover', 0.0):.0f} | {s.get('ms_resolve', 0.0):.0f} |"
         )
@@ -179,7 +201,8 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--scenes", default=",".join(SCENES))
     ap.add_argument("--real", action="store_true", help="every real-mesh scene instead")
-    ap.add_argument("--reference", type=int, default=4096)
+    ap.add_argument("--reference", type=int, default=16384)
+    ap.add_argument("--counts", default="64,256,1024,4096", help="accumulation sample counts to time")
     ap.add_argument("--no-error", action="store_true")
     ap.add_argument("--memory", action="store_true")
     ap.add_argument("--memory-scene", default="sphere80k")
