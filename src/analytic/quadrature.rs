@@ -5,17 +5,20 @@
 
 /// [`Quadrature::Auto`] shades triangles whose corner normals are further apart than this at 2
 /// points at least.
-pub const BEND_2: f32 = 0.3;
-/// ... and further apart than this at 3.
-pub const BEND_3: f32 = 1.0;
+pub const BEND_2: f32 = 0.1;
+/// ... further apart than this at 3.
+pub const BEND_3: f32 = 0.5;
+/// ... and further apart than this at 4.
+pub const BEND_4: f32 = 1.0;
 
 /// How many points in time each visible piece is shaded at.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Quadrature {
-    /// 1, 2 or 3 points, the most of two rules. By the piece's length: below 1/32 of the
+    /// 1 to 4 points, the most of two rules. By the piece's length: below 1/32 of the
     /// shutter 1, below 1/4 2, else 3. By the bend of its triangles (the largest distance
     /// between two unit corner normals of a smooth-shaded triangle, about the angle between
-    /// them; 0 for flat shading): above 0.3 (`BEND_2`) 2, above 1.0 (`BEND_3`) 3. A sample
+    /// them; 0 for flat shading): above 0.1 (`BEND_2`) 2, above 0.5 (`BEND_3`) 3, above 1.0
+    /// (`BEND_4`) 4. A sample
     /// crossed by a triangle sweeps the whole triangle within a short piece, so how much the
     /// shading varies over the piece depends on the triangle's normals as much as on the
     /// piece's length: lambert of a normal interpolated linearly and normalised is linear up to
@@ -27,7 +30,7 @@ pub enum Quadrature {
 
 impl Quadrature {
     /// Points for a piece of length `len` shaded by one triangle per layer whose shading
-    /// varies by `bend` across it: `Auto` takes 1, 2 or 3 by length, and by `bend`.
+    /// varies by `bend` across it: `Auto` takes 1, 2 or 3 by length, or up to 4 by `bend`.
     pub fn points(self, len: f64, bend: f32) -> usize {
         match self {
             Quadrature::Points(n) => n as usize,
@@ -39,7 +42,9 @@ impl Quadrature {
                 } else {
                     3
                 };
-                let by_bend = if bend > BEND_3 {
+                let by_bend = if bend > BEND_4 {
+                    4
+                } else if bend > BEND_3 {
                     3
                 } else if bend > BEND_2 {
                     2
@@ -158,9 +163,11 @@ mod tests {
         assert_eq!(Quadrature::Points(2).points(0.5, 0.0), 2);
         // a bent triangle takes more points however short the piece; a long piece keeps its 3
         assert_eq!(q.points(0.01, 0.02), 1);
-        assert_eq!(q.points(0.01, 0.5), 2);
-        assert_eq!(q.points(0.01, 1.5), 3);
-        assert_eq!(q.points(0.5, 0.5), 3);
+        assert_eq!(q.points(0.01, 0.3), 2);
+        assert_eq!(q.points(0.01, 0.7), 3);
+        assert_eq!(q.points(0.01, 1.5), 4);
+        assert_eq!(q.points(0.5, 0.3), 3);
+        assert_eq!(q.points(0.5, 1.5), 4);
         assert_eq!(Quadrature::Points(1).points(0.01, 1.5), 1);
         assert_eq!(Quadrature::Points(4).points(0.001, 0.0), 4);
         // 5 and 7 points take the next even rule

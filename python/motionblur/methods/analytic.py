@@ -171,9 +171,9 @@ def analytic(scene: Scene, aa: int = 1, gauss="auto", tolerance: float = 0.04, s
     """Analytic motion blur: the exact covered time of every sample, visibility over time.
 
     Options: ``aa`` 1, 2 or 4 samples per pixel along each axis; ``gauss`` points in time per
-    visible piece and triangle (1 to 4, or ``"auto"``: 1 to 3, the most of two rules: by the
+    visible piece and triangle (1 to 4, or ``"auto"``: 1 to 4, the most of two rules: by the
     piece's length, 1 below 1/32 of the shutter, 2 below 1/4, else 3; and by how far apart a
-    lambert triangle's unit vertex normals are, 2 beyond 0.3 and 3 beyond 1.0, since a sample
+    lambert triangle's unit vertex normals are, 2 beyond 0.1, 3 beyond 0.5 and 4 beyond 1.0, since a sample
     sweeps the whole triangle within a short piece; a piece is cut where the triangle of a
     surface covering the sample changes); ``tolerance`` pixels, the
     chord rule of :func:`segment_times`; ``segments`` an int to cut the shutter into that many
