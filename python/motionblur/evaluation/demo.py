@@ -23,7 +23,7 @@ SWEEPS = {
     "blur_shell": [{"subdivisions": s} for s in (4, 16)],
     "opaque_image": [{"aa": 2}],
     "camera_velocity": [{"samples": n} for n in (8, 32)],
-    "analytic": [{"tolerance": 0.04}],
+    "analytic": [{"tolerance": 0.01}],
 }
 
 SCENES = ("cube", "pan", "bending_arm")

@@ -38,7 +38,7 @@ def _test_points(obj: Object) -> tuple[np.ndarray | None, np.ndarray | None]:
     return corners, None
 
 
-def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.04) -> np.ndarray:
+def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.01) -> np.ndarray:
     """(K+1,) float64 segment boundaries from 0 to 1 for ``objects`` seen by ``camera``'s image.
 
     The rule: the shutter is first cut at every keyframe time of the objects' motions and of
@@ -167,7 +167,7 @@ def _draw(scene: Scene, obj: Object, k: int, times: np.ndarray) -> MovingDraw:
     sweep=[{"gauss": "auto"}, {"gauss": 1}, {"gauss": 2}, {"aa": 1}, {"tolerance": 0.25}],
     applies=lambda scene: True,
 )
-def analytic(scene: Scene, aa: int = 1, gauss="auto", tolerance: float = 0.04, segments=None) -> Frame:
+def analytic(scene: Scene, aa: int = 1, gauss="auto", tolerance: float = 0.01, segments=None) -> Frame:
     """Analytic motion blur: the exact covered time of every sample, visibility over time.
 
     Options: ``aa`` 1, 2 or 4 samples per pixel along each axis; ``gauss`` points in time per
