@@ -130,3 +130,48 @@ def test_a_small_memory_budget_gives_the_same_frame(name, monkeypatch):
     assert whole.stats["splits"] == 0 and part.stats["splits"] > 0
     for key in ("rgba", "depth", "ids", "velocity"):
         assert np.array_equal(getattr(part, key), getattr(whole, key)), key
+
+
+def _twisting_torus(shading: str) -> mb.Scene:
+    v, f = meshes.torus(0.5, 0.2, 16, 8)  # 128 vertices: every vertex is a test point
+    ts = np.linspace(0.0, 1.0, 3)
+    frames = []
+    for t in ts:
+        ang = 1.2 * t * v[:, 1] / 0.2  # a twist about the vertical, growing with height
+        c, s = np.cos(ang), np.sin(ang)
+        frames.append(np.stack([v[:, 0] * c + v[:, 2] * s, v[:, 1], -v[:, 0] * s + v[:, 2] * c], -1))
+    obj = mb.Object(
+        (frames[0], f), (0.8, 0.6, 0.3), shading, motion=mb.Motion.deforming(ts, np.stack(frames))
+    )
+    return mb.Scene([obj], _cam(), lights=[mb.DirectionalLight((0, -1, -1), 1.0)])
+
+
+def _vertex_normals(v, f):
+    n = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    out = np.zeros_like(v)
+    for i in range(3):
+        np.add.at(out, f[:, i], n)
+    return out / np.linalg.norm(out, axis=1, keepdims=True)
+
+
+def test_a_deforming_lambert_mesh_is_cut_until_its_normals_bend_linearly():
+    from motionblur.methods.analytic import NORMAL_TOLERANCE, segment_times
+
+    lit, flat = _twisting_torus("lambert"), _twisting_torus("flat")
+    obj = lit.objects[0]
+    times = segment_times(lit, [obj], lit.camera)
+    # positions are linear between the keyframes, so only the normal rule cuts further
+    assert segment_times(flat, [flat.objects[0]], flat.camera).tolist() == [0.0, 0.5, 1.0]
+    assert len(times) > 3 and {0.0, 0.5, 1.0} <= set(times.tolist())
+    f = np.asarray(obj.mesh.faces)
+    worst = 0.0
+    for a, b in zip(times[:-1], times[1:]):
+        na, nb, nm = (_vertex_normals(obj.world_vertices(t), f) for t in (a, b, 0.5 * (a + b)))
+        mean = (na + nb) / np.linalg.norm(na + nb, axis=1, keepdims=True)
+        worst = max(worst, float(np.linalg.norm(nm - mean, axis=1).max()))
+    assert worst <= NORMAL_TOLERANCE
+    # and the cuts pay: the frame is closer to accumulation's limit than with the keyframes alone
+    ref = mb.render(lit, "accumulation", samples=1024, aa=2)
+    keyframes = mb.render(lit, "analytic", aa=2, segments=2)
+    got = mb.render(lit, "analytic", aa=2)
+    assert _rmse(got, ref) < 0.5 * _rmse(keyframes, ref)

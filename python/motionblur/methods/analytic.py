@@ -25,6 +25,11 @@ __all__ = ["analytic", "segment_times", "MAX_SEGMENTS"]
 MAX_SEGMENTS = 256
 #: Test points per deforming object in the segment rule.
 _DEFORMING_POINTS = 256
+#: Largest distance between a test vertex's unit normal at a piece's middle and the direction of
+#: the mean of its normals at the piece's ends (about radians), for deforming lambert objects in
+#: the segment rule: their normals are computed at every boundary and interpolated between, and
+#: lambert shading moves by about this much wherever they bend.
+NORMAL_TOLERANCE = 2e-4
 
 
 def _test_points(obj: Object) -> tuple[np.ndarray | None, np.ndarray | None]:
@@ -38,6 +43,31 @@ def _test_points(obj: Object) -> tuple[np.ndarray | None, np.ndarray | None]:
     return corners, None
 
 
+def _normal_faces(obj: Object, idx: np.ndarray | None):
+    """(faces touching the test vertices in local numbering, their vertices, the test vertices'
+    rows among them) of a deforming lambert object, else None."""
+    if idx is None or obj.shading != "lambert":
+        return None
+    f = np.asarray(obj.mesh.faces)
+    sub = f[np.isin(f, idx).any(axis=1)]
+    verts = np.unique(sub)
+    return np.searchsorted(verts, sub), verts, np.searchsorted(verts, idx)
+
+
+def _unit_normals(v: np.ndarray, probe) -> np.ndarray:
+    """(P,3) area-weighted unit vertex normals of the test vertices (as the kernel computes them
+    at each boundary), zeros where undefined."""
+    local, verts, rows = probe
+    p = v[verts]
+    n = np.cross(p[local[:, 1]] - p[local[:, 0]], p[local[:, 2]] - p[local[:, 0]])
+    out = np.zeros_like(p)
+    for i in range(3):
+        np.add.at(out, local[:, i], n)
+    out = out[rows]
+    length = np.linalg.norm(out, axis=1, keepdims=True)
+    return out / np.where(length > 0, length, 1.0)
+
+
 def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.01) -> np.ndarray:
     """(K+1,) float64 segment boundaries from 0 to 1 for ``objects`` seen by ``camera``'s image.
 
@@ -46,11 +76,15 @@ def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.01
     than ``tolerance`` pixels from where motion linear in clip space between the piece's ends
     puts it (points behind the camera count as off). Test points are the corners of each rigid
     object's bounding box (the farthest points from any rotation axis) and up to 256 vertices
-    of each deforming one. At most :data:`MAX_SEGMENTS` segments."""
+    of each deforming one. A deforming lambert object's piece is also halved while a test
+    vertex's unit normal at the middle lies more than :data:`NORMAL_TOLERANCE` from the
+    direction of the mean of its normals at the ends. At most :data:`MAX_SEGMENTS` segments."""
     tol = as_float(tolerance, "tolerance")
     if not tol > 0:
         raise ValueError(f"tolerance: must be > 0 pixels, got {tol}")
     pts = [(o, *_test_points(o)) for o in objects]
+    probes = [(o, _normal_faces(o, idx)) for o, _, idx in pts]
+    probes = [(o, pr) for o, pr in probes if pr is not None]
     if not pts:
         return np.array([0.0, 1.0])
     w, h = camera.width, camera.height
@@ -80,6 +114,23 @@ def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.01
             cache[t] = clip(t)
         return cache[t]
 
+    normal_cache: dict[float, list] = {}
+
+    def normals(t: float) -> list:
+        if t not in normal_cache:
+            normal_cache[t] = [_unit_normals(o.world_vertices(t), pr) for o, pr in probes]
+        return normal_cache[t]
+
+    def normals_straight(a: float, b: float) -> bool:
+        for na, nb, nm in zip(normals(a), normals(b), normals(0.5 * (a + b))):
+            mean = na + nb
+            length = np.linalg.norm(mean, axis=1, keepdims=True)
+            ok = (length[:, 0] > 1e-12) & (np.linalg.norm(nm, axis=1) > 0)
+            mean = mean / np.where(length > 1e-12, length, 1.0)
+            if not (np.linalg.norm(nm[ok] - mean[ok], axis=1) <= NORMAL_TOLERANCE).all():
+                return False
+        return True
+
     def straight(a: float, b: float) -> bool:
         (ca, wa), (cb, wb), (cm, wm) = at(a), at(b), at(0.5 * (a + b))
         xl, yl, okl = pixels(0.5 * (ca + cb), 0.5 * (wa + wb))
@@ -87,7 +138,9 @@ def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.01
         if not (okl == okm).all():
             return False
         ok = okl & okm
-        return bool((np.hypot(xl[ok] - xm[ok], yl[ok] - ym[ok]) <= tol).all())
+        if not (np.hypot(xl[ok] - xm[ok], yl[ok] - ym[ok]) <= tol).all():
+            return False
+        return normals_straight(a, b)
 
     cuts = {0.0, 1.0}
     motions = [o.motion for o in objects if o.motion is not None]
