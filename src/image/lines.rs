@@ -11,7 +11,6 @@
 use rayon::prelude::*;
 use std::borrow::Cow;
 
-use super::sheared_row::shear_row;
 use super::transpose;
 use crate::error::{Error, Result};
 
@@ -72,8 +71,8 @@ pub(crate) fn shear_range(w: usize, h: usize, t: f64, c0: f64) -> (i64, usize) {
 /// `-x t - c0` (`sign = -1`, the way back). Row `j` of the shear samples image row
 /// `j + floor[x]` and the next one with weight `frac[x]`: the fraction does not depend on `j`.
 pub(crate) struct Phase {
-    pub(crate) floor: Vec<i64>,
-    pub(crate) frac: Vec<f32>,
+    floor: Vec<i64>,
+    frac: Vec<f32>,
 }
 
 impl Phase {
@@ -89,6 +88,144 @@ impl Phase {
             p.frac.push((u - fl) as f32);
         }
         p
+    }
+}
+
+/// Sheared row `j` of a `(h, w, C)` image: `out[x] = lerp(img[floor(y)][x], img[floor(y)+1][x], frac(y))`
+/// with `y = j + x t + c0` (`phase` from `Phase::new(w, t, c0, 1.0)`), zero outside the image.
+/// `c0` in [0, 1) is the phase of a crop whose first column is not column 0 of the full image.
+/// Only columns `xa .. xa + n` are computed, into `out[(x - xa) * C ..]`.
+pub(crate) fn shear_row<const C: usize>(
+    img: &[f32],
+    w: usize,
+    h: usize,
+    phase: &Phase,
+    j: i64,
+    (xa, n): (usize, usize),
+    out: &mut [f32],
+) {
+    // The columns whose two samples are both in the image (y0 in [0, h - 2]) form one interval
+    // (the floors are monotone): there the loop needs no test.
+    let fl = &phase.floor[xa..xa + n];
+    let (lo, hi) = (-j, h as i64 - 2 - j);
+    let (ia, ib) = if fl.len() < 2 || fl[0] <= fl[fl.len() - 1] {
+        (
+            fl.partition_point(|&f| f < lo),
+            fl.partition_point(|&f| f <= hi),
+        )
+    } else {
+        (
+            fl.partition_point(|&f| f > hi),
+            fl.partition_point(|&f| f >= lo),
+        )
+    };
+    let ib = ib.max(ia);
+    assert!(img.len() >= w * h * C && out.len() >= n * C && xa + n <= w);
+    let (fl, fr) = (
+        &phase.floor[xa + ia..xa + ib],
+        &phase.frac[xa + ia..xa + ib],
+    );
+    #[cfg(target_arch = "x86_64")]
+    if C == 4 && super::simd() {
+        // SAFETY: AVX2 was detected; every pixel read is in the image (as below).
+        unsafe { shear4_avx(img, w, j, fl, fr, xa + ia, &mut out[ia * 4..ib * 4]) };
+        return shear_edges::<C>(img, w, h, phase, j, (xa, n), (ia, ib), out);
+    }
+    let o = &mut out[ia * C..ib * C];
+    for (k, (o, (&fl, &f))) in o.chunks_exact_mut(C).zip(fl.iter().zip(fr)).enumerate() {
+        let x = xa + ia + k;
+        let y0 = (j + fl) as usize;
+        debug_assert!(y0 + 1 < h);
+        // SAFETY: y0 + 1 < h (the interval's definition) and x < w, so both pixels are in
+        // `img` (asserted to hold h * w * C values).
+        let (a, b) = unsafe {
+            (
+                img.get_unchecked((y0 * w + x) * C..(y0 * w + x) * C + C),
+                img.get_unchecked(((y0 + 1) * w + x) * C..((y0 + 1) * w + x) * C + C),
+            )
+        };
+        for c in 0..C {
+            o[c] = (1.0 - f) * a[c] + f * b[c];
+        }
+    }
+    shear_edges::<C>(img, w, h, phase, j, (xa, n), (ia, ib), out)
+}
+
+/// How many sheared rows ahead `shear4_avx` prefetches.
+#[cfg(target_arch = "x86_64")]
+const AHEAD: usize = 4;
+
+/// `shear_row`'s interior for four channels: the same operations lane for lane.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn shear4_avx(
+    img: &[f32],
+    w: usize,
+    j: i64,
+    fl: &[i64],
+    fr: &[f32],
+    x0: usize,
+    out: &mut [f32],
+) {
+    use std::arch::x86_64::*;
+    let (p, o) = (img.as_ptr(), out.as_mut_ptr());
+    for (k, (&fl, &f)) in fl.iter().zip(fr).enumerate() {
+        let x = x0 + k;
+        let y0 = (j + fl) as usize;
+        if x % 4 == 0 {
+            // The pixels that sheared row j + AHEAD reads here (a diagonal walk through the
+            // image defeats the hardware prefetchers); a prefetch past the image is harmless.
+            let at = p.wrapping_add(((y0 + AHEAD) * w + x) * 4);
+            _mm_prefetch::<_MM_HINT_T0>(at as *const i8);
+            _mm_prefetch::<_MM_HINT_T0>(at.wrapping_add(w * 4) as *const i8);
+        }
+        let a = _mm_loadu_ps(p.add((y0 * w + x) * 4));
+        let b = _mm_loadu_ps(p.add(((y0 + 1) * w + x) * 4));
+        let v = _mm_add_ps(
+            _mm_mul_ps(_mm_set1_ps(1.0 - f), a),
+            _mm_mul_ps(_mm_set1_ps(f), b),
+        );
+        _mm_storeu_ps(o.add(k * 4), v);
+    }
+}
+
+/// `shear_row` at the columns outside its interior `ia .. ib` (relative to `xa`).
+#[allow(clippy::too_many_arguments)]
+fn shear_edges<const C: usize>(
+    img: &[f32],
+    w: usize,
+    h: usize,
+    phase: &Phase,
+    j: i64,
+    (xa, n): (usize, usize),
+    (ia, ib): (usize, usize),
+    out: &mut [f32],
+) {
+    for x in (xa..xa + ia).chain(xa + ib..xa + n) {
+        let y0 = j + phase.floor[x];
+        let f = phase.frac[x];
+        let o = &mut out[(x - xa) * C..(x - xa) * C + C];
+        if y0 >= 0 && y0 + 1 < h as i64 {
+            let a = &img[(y0 as usize * w + x) * C..][..C];
+            let b = &img[((y0 + 1) as usize * w + x) * C..][..C];
+            for c in 0..C {
+                o[c] = (1.0 - f) * a[c] + f * b[c];
+            }
+            continue;
+        }
+        o.fill(0.0);
+        if y0 >= 0 && y0 < h as i64 {
+            let p = &img[(y0 as usize * w + x) * C..][..C];
+            for c in 0..C {
+                o[c] += (1.0 - f) * p[c];
+            }
+        }
+        if y0 + 1 >= 0 && y0 + 1 < h as i64 {
+            let p = &img[((y0 + 1) as usize * w + x) * C..][..C];
+            for c in 0..C {
+                o[c] += f * p[c];
+            }
+        }
     }
 }
 
