@@ -19,7 +19,7 @@ from ..render import register
 from ..scene import Object, Scene
 from ._layers import static_layer, supersampled
 
-__all__ = ["analytic", "segment_times", "MAX_SEGMENTS"]
+__all__ = ["analytic", "segment_times", "MAX_SEGMENTS", "NORMAL_TOLERANCE"]
 
 #: Most segments the automatic rule makes.
 MAX_SEGMENTS = 256
