@@ -219,6 +219,9 @@ pub(crate) fn box_finish(
 }
 
 #[cfg(target_arch = "x86_64")]
+pub(crate) use avx::{finish4, NONE, OVER, UNDER};
+
+#[cfg(target_arch = "x86_64")]
 mod avx {
     //! The AVX2 forms. Callers check that AVX2 is present and that the slices are long enough.
     //! The fused pass keeps a row's running sum in one 256-bit register (four f64 channels);
@@ -320,9 +323,30 @@ mod avx {
         chunks.remainder().chunks_exact(4).all(|p| p[3] == a0)
     }
 
-    const NONE: u8 = 0;
-    const OVER: u8 = 1;
-    const UNDER: u8 = 2;
+    /// The composite as a const parameter of the AVX2 kernels: none, over, under.
+    pub(crate) const NONE: u8 = 0;
+    pub(crate) const OVER: u8 = 1;
+    pub(crate) const UNDER: u8 = 2;
+
+    /// Eq. 7 and the composite of one pixel: `m` its blurred RGBA, `g` its glow in every lane,
+    /// `base` its base pixel (`super::finish`, lane for lane).
+    #[inline(always)]
+    pub(crate) unsafe fn finish4<const C: u8>(m: __m128, g: __m128, base: *const f32) -> __m128 {
+        let one = _mm_set1_ps(1.0);
+        let a = _mm_shuffle_ps::<0xff>(m, m);
+        let keep = _mm_cmpgt_ps(a, _mm_set1_ps(ALPHA_EPS));
+        let s = _mm_and_ps(_mm_div_ps(g, a), keep);
+        let sub = _mm_blend_ps::<0b1000>(_mm_mul_ps(m, s), g);
+        match C {
+            OVER => _mm_add_ps(sub, _mm_mul_ps(_mm_sub_ps(one, g), _mm_loadu_ps(base))),
+            UNDER => {
+                let b = _mm_loadu_ps(base);
+                let k = _mm_sub_ps(one, _mm_shuffle_ps::<0xff>(b, b));
+                _mm_add_ps(b, _mm_mul_ps(k, sub))
+            }
+            _ => sub,
+        }
+    }
 
     /// One row of the fused pass: its pointers, span, glow and running sum.
     struct Row {
@@ -404,21 +428,7 @@ mod avx {
                 true => _mm_set1_ps(self.cg),
                 false => _mm_broadcast_ss(&*self.glow.add(x - self.xa)),
             };
-            let a = _mm_shuffle_ps::<0xff>(m, m);
-            let keep = _mm_cmpgt_ps(a, _mm_set1_ps(ALPHA_EPS));
-            let s = _mm_and_ps(_mm_div_ps(g, a), keep);
-            let sub = _mm_blend_ps::<0b1000>(_mm_mul_ps(m, s), g);
-            let base = self.base.add(x * 4);
-            let one = _mm_set1_ps(1.0);
-            let o = match C {
-                OVER => _mm_add_ps(sub, _mm_mul_ps(_mm_sub_ps(one, g), _mm_loadu_ps(base))),
-                UNDER => {
-                    let b = _mm_loadu_ps(base);
-                    let k = _mm_sub_ps(one, _mm_shuffle_ps::<0xff>(b, b));
-                    _mm_add_ps(b, _mm_mul_ps(k, sub))
-                }
-                _ => sub,
-            };
+            let o = finish4::<C>(m, g, self.base.add(x * 4));
             _mm_storeu_ps(self.out.add(x * 4), o);
             self.advance(x, n, r);
         }

@@ -221,6 +221,7 @@ pub(crate) fn finish_piece(p: Piece, comp: Option<Composite>, simd: bool) {
 mod avx {
     //! The AVX2 forms. Callers check that AVX2 is present and that the slices are long enough.
     use super::{lerp, Composite, Piece, Sheared, Unshear, AHEAD};
+    use crate::image::opaque_row::{finish4, NONE, OVER, UNDER};
     use crate::image::ALPHA_EPS;
     use std::arch::x86_64::*;
     use std::mem::MaybeUninit;
@@ -395,7 +396,7 @@ mod avx {
             x += 8;
         }
         for x in x..n {
-            let o = finish::<C>(
+            let o = finish4::<C>(
                 _mm_loadu_ps(m.add(x * 4)),
                 _mm_set1_ps(*g.add(x)),
                 base.add(x * 4),
@@ -403,10 +404,6 @@ mod avx {
             _mm_storeu_ps(out.add(x * 4), o);
         }
     }
-
-    const NONE: u8 = 0;
-    const OVER: u8 = 1;
-    const UNDER: u8 = 2;
 
     #[inline(always)]
     unsafe fn run<const C: u8>(
@@ -426,27 +423,8 @@ mod avx {
             );
             let g5 = (1.0 - f) * *pa.add(4) + f * *pb.add(4);
             let g = _mm_set1_ps(g5.max(*alpha.add(x * 4 + 3)));
-            let o = finish::<C>(m, g, base.add(x * 4));
+            let o = finish4::<C>(m, g, base.add(x * 4));
             _mm_storeu_ps(out.add(x * 4), o);
-        }
-    }
-
-    /// `opaque_row::finish`, lane for lane.
-    #[inline(always)]
-    unsafe fn finish<const C: u8>(m: __m128, g: __m128, base: *const f32) -> __m128 {
-        let one = _mm_set1_ps(1.0);
-        let a = _mm_shuffle_ps::<0xff>(m, m);
-        let keep = _mm_cmpgt_ps(a, _mm_set1_ps(ALPHA_EPS));
-        let s = _mm_and_ps(_mm_div_ps(g, a), keep);
-        let sub = _mm_blend_ps::<0b1000>(_mm_mul_ps(m, s), g);
-        match C {
-            OVER => _mm_add_ps(sub, _mm_mul_ps(_mm_sub_ps(one, g), _mm_loadu_ps(base))),
-            UNDER => {
-                let b = _mm_loadu_ps(base);
-                let k = _mm_sub_ps(one, _mm_shuffle_ps::<0xff>(b, b));
-                _mm_add_ps(b, _mm_mul_ps(k, sub))
-            }
-            _ => sub,
         }
     }
 

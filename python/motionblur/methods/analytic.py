@@ -14,6 +14,7 @@ import numpy as np
 
 from .._validate import as_float, as_int
 from ..analytic import MovingDraw, rasterize_motion
+from ..geometry import Mesh
 from ..raster import Camera, Frame
 from ..render import register
 from ..scene import Object, Scene
@@ -43,29 +44,17 @@ def _test_points(obj: Object) -> tuple[np.ndarray | None, np.ndarray | None]:
     return corners, None
 
 
-def _normal_faces(obj: Object, idx: np.ndarray | None):
-    """(faces touching the test vertices in local numbering, their vertices, the test vertices'
-    rows among them) of a deforming lambert object, else None."""
+def _normal_probe(obj: Object, idx: np.ndarray | None):
+    """(the mesh of the faces touching the test vertices ``idx``, its vertices' indices in the
+    object's mesh, the test vertices' rows in it) of a deforming lambert object, else None: the
+    test vertices' normals are those of this small mesh."""
     if idx is None or obj.shading != "lambert":
         return None
     f = np.asarray(obj.mesh.faces)
     sub = f[np.isin(f, idx).any(axis=1)]
     verts = np.unique(sub)
-    return np.searchsorted(verts, sub), verts, np.searchsorted(verts, idx)
-
-
-def _unit_normals(v: np.ndarray, probe) -> np.ndarray:
-    """(P,3) area-weighted unit vertex normals of the test vertices (as the kernel computes them
-    at each boundary), zeros where undefined."""
-    local, verts, rows = probe
-    p = v[verts]
-    n = np.cross(p[local[:, 1]] - p[local[:, 0]], p[local[:, 2]] - p[local[:, 0]])
-    out = np.zeros_like(p)
-    for i in range(3):
-        np.add.at(out, local[:, i], n)
-    out = out[rows]
-    length = np.linalg.norm(out, axis=1, keepdims=True)
-    return out / np.where(length > 0, length, 1.0)
+    local = Mesh(obj.mesh.vertices[verts], np.searchsorted(verts, sub))
+    return local, verts, np.searchsorted(verts, idx)
 
 
 def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.01) -> np.ndarray:
@@ -83,7 +72,7 @@ def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.01
     if not tol > 0:
         raise ValueError(f"tolerance: must be > 0 pixels, got {tol}")
     pts = [(o, *_test_points(o)) for o in objects]
-    probes = [(o, _normal_faces(o, idx)) for o, _, idx in pts]
+    probes = [(o, _normal_probe(o, idx)) for o, _, idx in pts]
     probes = [(o, pr) for o, pr in probes if pr is not None]
     if not pts:
         return np.array([0.0, 1.0])
@@ -118,7 +107,10 @@ def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.01
 
     def normals(t: float) -> list:
         if t not in normal_cache:
-            normal_cache[t] = [_unit_normals(o.world_vertices(t), pr) for o, pr in probes]
+            normal_cache[t] = [
+                local.with_vertices(o.world_vertices(t)[verts]).vertex_normals()[rows]
+                for o, (local, verts, rows) in probes
+            ]
         return normal_cache[t]
 
     def normals_straight(a: float, b: float) -> bool:
