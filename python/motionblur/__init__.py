@@ -28,6 +28,7 @@ from .budget import memory_budget, set_memory_budget
 from .evaluation import metrics, reference
 from .geometry import *  # noqa: F403
 from .interop import read_image, to_mitsuba_dict
+from .methods._estimate import exact
 from .methods.accumulation import Sequence
 from .raster import *  # noqa: F403
 from .render import METHODS, MethodNotApplicableWarning, register, render
@@ -54,6 +55,7 @@ __all__ += [
     "coverage",
     *_scene.__all__,
     "render",
+    "exact",
     "register",
     "METHODS",
     "Sequence",

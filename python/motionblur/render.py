@@ -90,6 +90,7 @@ def render(
     *,
     aperture: float | None = None,
     focus_distance: float | None = None,
+    error_estimate: bool = True,
     **options: Any,
 ) -> Frame:
     """Render ``scene`` with the registered ``method`` (``accumulation``, ``motion_volume``, ...).
@@ -110,6 +111,8 @@ def render(
     """
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
+    if not isinstance(error_estimate, bool):
+        raise TypeError(f"error_estimate: expected True or False, got {type(error_estimate).__name__}")
     if not isinstance(method, str):
         raise TypeError(f"method: expected a string, got {type(method).__name__}")
     if method not in METHODS:
@@ -138,7 +141,16 @@ def render(
     frame.stats["method"] = method
     frame.stats["options"] = dict(options)
     frame.stats["ms"] = (time.perf_counter() - t0) * 1e3
+    if error_estimate and "error_estimate" not in frame.stats and ESTIMATOR:
+        frame.stats.update(ESTIMATOR[0](scene, method, options))
+    if lens is not None and "error_estimate" in frame.stats:
+        frame.stats["error_estimate_how"] += " (of the motion blur before the lens)"
     return frame
+
+
+#: The pilot estimator ``fn(scene, method, options) -> dict`` that :func:`render` calls when a
+#: method did not measure its own error (set by :mod:`motionblur.methods._estimate`).
+ESTIMATOR: list[Callable[[Scene, str, dict], dict]] = []
 
 
 _RENDER_DOC = render.__doc__ or ""

@@ -20,6 +20,7 @@ from . import (  # each registers its methods
     image_space,
     motion_volume,
 )
+from ._estimate import exact
 from ._layers import clear_static_cache
 
 __all__ = [
@@ -30,4 +31,5 @@ __all__ = [
     "image_space",
     "motion_volume",
     "clear_static_cache",
+    "exact",
 ]

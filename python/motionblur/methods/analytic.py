@@ -24,6 +24,9 @@ __all__ = ["analytic", "segment_times", "MAX_SEGMENTS", "NORMAL_TOLERANCE"]
 
 #: Most segments the automatic rule makes.
 MAX_SEGMENTS = 256
+#: Shortest piece the rule halves: a test point that crosses the camera's plane is never
+#: "straight" around the crossing, and halving towards it would end in equal boundaries.
+MIN_PIECE = 1.0 / 1024.0
 #: Test points per deforming object in the segment rule.
 _DEFORMING_POINTS = 256
 #: Largest distance between a test vertex's unit normal at a piece's middle and the direction of
@@ -67,7 +70,8 @@ def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.01
     object's bounding box (the farthest points from any rotation axis) and up to 256 vertices
     of each deforming one. A deforming lambert object's piece is also halved while a test
     vertex's unit normal at the middle lies more than :data:`NORMAL_TOLERANCE` from the
-    direction of the mean of its normals at the ends. At most :data:`MAX_SEGMENTS` segments."""
+    direction of the mean of its normals at the ends. At most :data:`MAX_SEGMENTS` segments, none
+    halved below :data:`MIN_PIECE` of the shutter."""
     tol = as_float(tolerance, "tolerance")
     if not tol > 0:
         raise ValueError(f"tolerance: must be > 0 pixels, got {tol}")
@@ -145,7 +149,7 @@ def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.01
     stack = list(zip(todo[:-1], todo[1:]))[::-1]
     while stack:
         a, b = stack.pop()
-        if len(out) - 1 + len(stack) + 1 < MAX_SEGMENTS and not straight(a, b):
+        if b - a > MIN_PIECE and len(out) - 1 + len(stack) + 1 < MAX_SEGMENTS and not straight(a, b):
             m = 0.5 * (a + b)
             stack.append((m, b))
             stack.append((a, m))
@@ -249,8 +253,11 @@ def analytic(scene: Scene, aa: int = 1, gauss="auto", tolerance: float = 0.01, s
     else:
         n = as_int(segments, "segments", minimum=1, maximum=MAX_SEGMENTS)
         cuts = set(np.linspace(0.0, 1.0, n + 1).tolist())
-        for _, o in moving:
-            cuts.update(float(t) for t in o.motion.times if o.motion is not None)
+        motions = [o.motion for _, o in moving if o.motion is not None]
+        if scene.camera_motion is not None:
+            motions.append(scene.camera_motion)
+        for m in motions:
+            cuts.update(float(t) for t in m.times if 0.0 < t < 1.0)
         times = np.array(sorted(cuts))
     draws = [_draw(scene, o, k, times) for k, o in moving]
     cams = [scene.camera_at(t) for t in times] if scene.camera_moves else scene.camera
