@@ -23,8 +23,7 @@ from ..budget import need
 from ..raster import Frame
 from ..render import register
 from ..scene import Scene
-from ._layers import Layer, object_draw, paste, raster_layer, resolve, static_layer, supersampled
-from ._painter import painter_for
+from ._accumulate import HalfSums, accumulate
 
 __all__ = ["accumulation", "sample_times", "Sequence", "MAX_TIME_SAMPLES"]
 
@@ -64,8 +63,9 @@ def accumulation(
     ``stats``: ``samples``, ``draw_calls`` (rasterizer passes over moving geometry),
     ``static_draws`` (0 or 1) and ``window`` (the pixel rectangle redrawn per sample).
 
-    The frame's N samples are drawn and summed by the compiled core in one call
-    (``_core._Painter.accumulate_still`` / ``accumulate_moving``, ``src/accumulate/frame.rs``).
+    The even and the odd samples are drawn and summed by the compiled core in one call each
+    (``_core._Painter.accumulate_still`` / ``accumulate_moving``, ``src/accumulate/frame.rs``);
+    their difference is the frame's ``stats["error_estimate"]`` (:mod:`._accumulate`).
     """
     times, weights = sample_times(scene, samples, sampling, seed)
     dim = as_float(dim, "dim")
@@ -74,98 +74,17 @@ def accumulation(
     aa = as_samples(aa, "aa")
     ref = int(np.argmin(np.abs(times - scene.reference_t)))
     halves = [np.arange(len(times))[j::2] for j in (0, 1)]
-    mass = [float(weights[h].sum()) for h in halves]
-    if len(times) < 2 or min(mass) <= 0.0 or dim < 1.0:
+    if len(times) < 2 or min(float(weights[h].sum()) for h in halves) <= 0.0 or dim < 1.0:
         # No two halves to compare (or the dimmed look, whose bias they do not see): render()
         # estimates the error with its pilot.
-        return _accumulate(scene, times, weights, ref, dim, aa)
-    parts = [_accumulate(scene, times[h], weights[h] / m, _nearest(h, ref), dim, aa) for h, m in zip(halves, mass)]
-    frame = parts[ref % 2]
-    frame.rgba = (mass[0] * parts[0].rgba.astype(np.float64) + mass[1] * parts[1].rgba).astype(np.float32)
-    frame.stats["samples"] = len(times)
-    frame.stats["draw_calls"] = sum(p.stats["draw_calls"] for p in parts)
-    frame.stats["static_draws"] = max(p.stats["static_draws"] for p in parts)
-    wins = [p.stats["window"] for p in parts if p.stats["window"] is not None]
-    frame.stats["window"] = (
-        tuple(f(w[i] for w in wins) for i, f in enumerate((min, min, max, max))) if wins else None
-    )
-    diff = composited_difference(parts[0].rgba, parts[1].rgba, scene.background)
-    scale = HALVES_FACTOR[sampling] * 2.0 * np.sqrt(mass[0] * mass[1])
-    frame.stats["error_estimate"] = float(scale * np.sqrt(np.mean(np.square(diff, dtype=np.float64))))
-    frame.stats["error_estimate_how"] = "halves: the even and the odd time samples compared"
-    return frame
+        return accumulate(scene, times, weights, ref, dim, aa)
+    sums = HalfSums(scene, aa, sampling)
+    for j, h in enumerate(halves):
+        sums.add(times[h], weights[h], j)
+    return sums.frame()
 
 
-#: The error of an N-sample frame over the RMS difference of its two interleaved halves (each
-#: normalised) times 2 sqrt(wA wB) (1 for equal halves), by sampling; chosen on the tuning
-#: scenes of :mod:`motionblur.evaluation.random_scenes` (``benches/bench_error_estimates.py``).
-HALVES_FACTOR = {"stratified": 0.5, "jittered": 0.5}
 
-
-def _nearest(indices: np.ndarray, ref: int) -> int:
-    """The position in ``indices`` of the index nearest ``ref``."""
-    return int(np.argmin(np.abs(indices - ref)))
-
-
-def composited_difference(a: np.ndarray, b: np.ndarray, background) -> np.ndarray:
-    """(H,W,4) float64 difference of premultiplied frames ``a`` and ``b`` once each is composited
-    over straight RGBA ``background`` (4,) (compositing is linear in the frame)."""
-    bg = np.asarray(background, np.float64)
-    pre = np.concatenate([bg[:3] * bg[3], bg[3:]])
-    d = a.astype(np.float64) - b
-    return d - d[..., 3:4] * pre
-
-
-def _accumulate(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> Frame:
-    """The accumulation buffer of ``times`` with ``weights`` (summing to 1), depth and ids of
-    sample ``ref``; the method's body (see :func:`accumulation`)."""
-    stats = {"samples": len(times), "draw_calls": 0, "static_draws": 0, "window": None}
-    everything = list(enumerate(scene.objects))
-
-    if scene.camera_moves:
-        # Everything moves on screen: whole frames at every sample, one view each.
-        cam = supersampled(scene.camera, aa)
-        views = np.linalg.inv(scene.camera_poses_at(times))  # each sample's camera_at(t).view
-        painter = painter_for(scene, everything)
-        rgba, depth, ids = painter.core.accumulate_moving(
-            times, weights, ref, views, np.ascontiguousarray(cam.projection), cam.width, cam.height
-        )
-        stats["draw_calls"] = len(times)
-        if dim < 1.0:
-            cam = supersampled(scene.camera_at(scene.reference_t), aa)
-            static = [(o, object_draw(o, scene.reference_t, k)) for k, o in everything if not o.is_moving]
-            rgba = (1.0 - dim) * raster_layer(cam, scene, static).rgba + dim * rgba
-        frame = resolve(Layer(rgba.astype(np.float32), depth, ids), aa)
-        frame.stats.update(stats)
-        return frame
-
-    cam = supersampled(scene.camera, aa)
-    static_objs = [(k, o) for k, o in everything if not o.is_moving]
-    moving = [(k, o) for k, o in everything if o.is_moving]
-    static = static_layer(scene, cam, static_objs, aa)
-    stats["static_draws"] = 0 if (static.cached or not static_objs) else 1
-    stats["static_cached"] = static.cached
-    painter = painter_for(scene, moving, eye=cam.pose[:3, 3])
-    c = np.ascontiguousarray
-    layer = static.layer
-    out = painter.core.accumulate_still(
-        times, weights, ref, c(cam.view), c(cam.projection), c(cam.view_projection), cam.width, cam.height,
-        aa, (c(layer.rgba), c(layer.depth), c(layer.ids)), static.opaque,
-    )  # fmt: skip
-    if out is None:
-        frame = Frame(
-            static.rgba.copy(), static.depth.copy(), static.ids.copy(), np.zeros((*static.ids.shape, 2))
-        )
-        frame.stats.update(stats)
-        return frame
-    win, acc, depth, ids, stats["draw_calls"] = out
-    stats["window"] = win
-    x0, y0, x1, y1 = win
-    if dim < 1.0:
-        acc = (1.0 - dim) * layer.rgba[y0:y1, x0:x1] + dim * acc
-    frame = paste(static, win, Layer(acc, depth, ids), aa)
-    frame.stats.update(stats)
-    return frame
 
 
 class Sequence:

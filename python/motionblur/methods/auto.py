@@ -1,214 +1,264 @@
-"""The planner (method ``auto``): each object drawn by the cheapest method that meets a tolerance,
-or the most accurate one that fits a time budget.
+"""The planner (method ``auto``): a frame whose measured error meets a tolerance, or the most
+accurate frame that fits a time budget.
 
-A scene pays only for what it needs. Per frame, ``auto``:
+``auto`` certifies what it returns by measurement, not by prediction. Its candidates are the two
+methods that measure their own distance from the exact time integral (:func:`motionblur.exact`)
+while they render: accumulation, whose two interleaved halves of time samples give its error
+(``stats["error_estimate"]``, the halves' RMS difference; its error falls as 1/N), and the
+analytic method, exact to about :data:`ANALYTIC_ERROR` at its defaults and to 1e-5 at
+:data:`motionblur.methods._estimate.EXACT_OPTIONS`.
 
-1. measures what each object does on screen (:mod:`._features`: screen motion in pixels,
-   triangle size on screen, rotation, spread of motion, concavity, hollowness, swept area) and
-   with ``budget_ms``, times one accumulation sample of it (the time model's probe of scene and
-   machine; with a tolerance nothing is timed and the fit's median probe stands in, so the plan
-   is the same on every run);
-2. under a still camera, draws every object whose screen motion is under :data:`STILL_PX`
-   pixels sharp, once, at the reference time (it joins the static layer);
-3. groups the moving objects whose swept screen boxes overlap (a method composites overlapping
-   blurs correctly only among the objects it draws itself), and plans each group: among the
-   candidates of the cost and error model (every option set the report sweeps of analytic,
-   motion volume, accumulation and the image-space blurs, where the method applies), the one
-   with the least predicted time whose predicted RMSE against the own-limit reference
-   (accumulation with 1024 samples), plus ``margin`` standard deviations of the model's
-   residuals, is under ``tolerance``; or, given ``budget_ms``, the most accurate one whose
-   predicted time fits the budget; the most accurate (fastest) candidate when none does;
-4. renders: one call when every group chose the same thing; otherwise each group by its own
-   method over the static scene, the results added as differences from the static frame
-   (exact where the groups' boxes do not overlap, which is how the groups were made).
+With ``tolerance`` (RMSE against the exact integral, premultiplied linear RGBA):
 
-The model (:mod:`._auto_model`, ``auto_model.json`` beside this file) is fitted from the report's
-measurements and refitted by ``python -m motionblur bench --fit-auto``. ``Frame.stats["plan"]``
-says for each object what was chosen and why. The plan is kept with the scene object (up to 16
-scenes), as a real-time loop keeps its static layer: rendering the same ``Scene`` again does not
-plan again.
+1. a scene where nothing moves on screen is one sharp frame (its error is 0);
+2. accumulation with :data:`FIRST_SAMPLES` samples measures the scene's error at that N;
+3. since the error falls about as 1/N (:data:`RATE`), the N that brings the estimate under
+   ``tolerance`` x :data:`SAFETY` is predicted and rendered, keeping the samples drawn when N
+   is an odd multiple of the last count, and again while the estimate says it missed (each
+   step predicted from the last two measurements, at most :data:`MAX_STEPS` steps);
+4. when that N would cost more than the analytic frame (predicted from its segment count and
+   accumulation's time per sample, only asked once N reaches :data:`ANALYTIC_FROM`), or exceed
+   :data:`MAX_SAMPLES`, or the tolerance is under what accumulation can certify cheaply, the
+   analytic method renders instead (at the exact options below :data:`ANALYTIC_ERROR` x 2).
+
+With ``budget_ms``: accumulation with the most samples that fit the budget at the per-sample
+time measured on the first render (the analytic frame instead when its predicted time fits
+and it is the more accurate), measured against the clock.
+
+``Frame.stats["plan"]`` lists every render tried (method, options, ms, error estimate) and why
+the last was kept; ``stats["error_estimate"]`` is the kept frame's own.
 """
 
 from __future__ import annotations
 
+import math
 import time
+
+import numpy as np
 
 from .._validate import as_float, as_int
 from ..raster import Frame
 from ..render import METHODS, register
-from ..scene import Object, Scene
-from ._auto_model import Model, load_model
-from ._features import group_features, screen_box
+from ..scene import Scene
+from ._accumulate import HalfSums
+from ._estimate import EXACT_OPTIONS
+from .accumulation import sample_times
+from .analytic import segment_times
 
-__all__ = ["auto", "plan", "renders_shutter", "STILL_PX", "DEFAULT_TOLERANCE"]
+__all__ = [
+    "auto",
+    "renders_shutter",
+    "DEFAULT_TOLERANCE",
+    "SAFETY",
+    "FIRST_SAMPLES",
+    "MAX_SAMPLES",
+    "RATE",
+    "MAX_STEPS",
+    "ANALYTIC_ERROR",
+    "ANALYTIC_FROM",
+    "ANALYTIC_COST",
+]
 
-#: Objects moving less than this many pixels over the shutter are drawn sharp once.
-STILL_PX = 0.5
-#: The default tolerance: RMSE against the own-limit reference (premultiplied linear RGBA).
+#: The default tolerance: RMSE against the exact time integral (premultiplied linear RGBA).
 DEFAULT_TOLERANCE = 0.01
-_PLANS: dict[int, tuple[Scene, tuple, dict]] = {}
-_PLAN_CACHE = 16
+#: The share of the tolerance auto aims its estimate at (the estimate's own spread).
+SAFETY = 0.85
+#: Time samples of the first accumulation render (two halves of 2).
+FIRST_SAMPLES = 4
+#: The rate auto first assumes the error falls at, as N^-RATE (1 for an edge's coverage at one
+#: point; slower where a pixel sees many edges), until two renders show their own.
+RATE = 0.9
+#: Most time samples auto gives accumulation.
+MAX_SAMPLES = 4096
+#: Most accumulation renders after the first.
+MAX_STEPS = 3
+#: Sample count from which the analytic frame is timed as the alternative.
+ANALYTIC_FROM = 512
+#: The analytic frame's time over (its segments + 8) accumulation samples' (the largest ratio
+#: on most tuning scenes; chosen there).
+ANALYTIC_COST = 4.0
+#: The analytic method's error against the exact integral at its defaults (largest measured on
+#: the tuning scenes, with margin): below twice this tolerance it runs at the exact options.
+ANALYTIC_ERROR = 1e-4
 
 
 def renders_shutter(options: dict, scene: Scene) -> bool:
     """Whether a method run with ``options`` renders ``scene``'s shutter: False when the options
     name another ``filter`` than the scene's (the motion volume's ramp, triangle or gaussian looks
-    on a box shutter). ``auto`` never chooses such a run, and the report does not measure it."""
+    on a box shutter). The report does not measure such a run against the scene's integral."""
     shutter = scene.shutter if isinstance(scene.shutter, str) else "weights"
     return options.get("filter", shutter) == shutter
 
 
-def _overlap(a, b) -> bool:
-    return a[0] <= b[2] and b[0] <= a[2] and a[1] <= b[3] and b[1] <= a[3]
+def _moves(scene: Scene) -> bool:
+    return scene.camera_moves or any(o.is_moving for o in scene.objects)
 
 
-def _groups(scene: Scene, moving) -> list[list[tuple[int, Object]]]:
-    """The moving objects (pairs) joined where their swept screen boxes overlap."""
-    boxes = [screen_box(scene, [p]) for p in moving]
-    parent = list(range(len(moving)))
+class _Trials:
+    """The renders auto tried, in order, each timed and with its error estimate."""
 
-    def find(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
+    def __init__(self, scene: Scene, aa: int) -> None:
+        self.scene, self.aa, self.tried, self.frames = scene, aa, [], []
+        self.sums: HalfSums | None = None
 
-    for i in range(len(moving)):
-        for j in range(i + 1, len(moving)):
-            if _overlap(boxes[i], boxes[j]):
-                parent[find(i)] = find(j)
-    out: dict[int, list] = {}
-    for i, p in enumerate(moving):
-        out.setdefault(find(i), []).append(p)
-    return list(out.values())
+    def _record(self, method: str, options: dict, frame: Frame, ms: float, est: float) -> Frame:
+        frame.stats["error_estimate"] = est
+        self.tried.append({"method": method, "options": dict(options), "ms": round(ms, 3), "error_estimate": est})
+        self.frames.append(frame)
+        return frame
 
+    def run(self, method: str, **options) -> Frame:
+        t0 = time.perf_counter()
+        frame = METHODS[method].fn(self.scene, aa=self.aa, **options)
+        ms = (time.perf_counter() - t0) * 1e3
+        est = frame.stats.get("error_estimate", 0.0)
+        if method == "analytic":
+            est = 0.0 if options == EXACT_OPTIONS else ANALYTIC_ERROR
+        elif not options.get("samples", 2) > 1:
+            est = 0.0  # the one sharp frame of a scene where nothing moves
+        return self._record(method, options, frame, ms, est)
 
-def _probe_ms(scene: Scene, aa: int) -> float:
-    """Milliseconds of one accumulation sample of ``scene`` at ``aa`` (the second of two renders:
-    the first builds the static layer): the time model's measure of the scene and the machine."""
-    fn = METHODS["accumulation"].fn
-    fn(scene, samples=1, aa=aa)
-    t0 = time.perf_counter()
-    fn(scene, samples=1, aa=aa)
-    return (time.perf_counter() - t0) * 1e3
+    def accumulate(self, n: int) -> Frame:
+        """Accumulation with ``n`` stratified samples; under a box shutter the samples already
+        drawn are kept when ``n`` is an odd multiple of the last count (their times are on the
+        new grid) and only the others are drawn."""
+        t0 = time.perf_counter()
+        box = isinstance(self.scene.shutter, str) and self.scene.shutter == "box"
+        last = self.sums.samples if self.sums is not None else 0
+        if not (box and last and n % last == 0 and (n // last) % 2 == 1):
+            self.sums, last = HalfSums(self.scene, self.aa), 0
+        times, weights = sample_times(self.scene, n)
+        j = np.arange(n)
+        if last:
+            step = n // last
+            self.sums.reweight(lambda t: (np.full(len(t), 1.0 / n), int(round(t[0] * n - 0.5)) % 2))
+            j = j[(j % step) != step // 2]  # the new times only
+        for half in (0, 1):
+            sel = j[j % 2 == half]
+            if len(sel):
+                self.sums.add(times[sel], weights[sel], half)
+        frame = self.sums.frame()
+        ms = (time.perf_counter() - t0) * 1e3
+        return self._record("accumulation", {"samples": n}, frame, ms, frame.stats["error_estimate"])
 
+    @property
+    def last(self) -> dict:
+        """The last render of the frame itself (not a timing pilot)."""
+        return [t for t in self.tried if "pilot" not in t["options"]][-1]
 
-def _still(obj: Object, t: float) -> Object:
-    return Object((obj.world_vertices(t), obj.mesh.faces), obj.color, obj.shading, None, obj.name)
+    def per_sample_ms(self) -> float:
+        """Milliseconds per time sample of the accumulation renders so far."""
+        acc = [t for t in self.tried if t["method"] == "accumulation" and "pilot" not in t["options"]]
+        return sum(t["ms"] for t in acc) / max(1, self.sums.samples if self.sums else acc[-1]["options"]["samples"])
 
-
-def plan(scene: Scene, tolerance=None, budget_ms=None, aa: int = 1, model: Model | None = None, margin=None):
-    """``(scene to render, [(method, options, object indices)], plan dict)`` for ``scene`` (see
-    the module docs); the plan dict is what ``Frame.stats["plan"]`` holds: per object name (or
-    ``object<k>``) the method, options, predicted ms and RMSE and the reason."""
-    model = model or load_model()
-    margin = model.margin if margin is None else float(margin)
-    goal = "budget" if budget_ms is not None else "tolerance"
-    tol = DEFAULT_TOLERANCE if tolerance is None else as_float(tolerance, "tolerance")
-    budget = None if budget_ms is None else as_float(budget_ms, "budget_ms")
-    if tolerance is not None and budget_ms is not None:
-        raise ValueError("tolerance, budget_ms: give one of them, not both")
-    if not tol > 0 or (budget is not None and not budget > 0):
-        raise ValueError("tolerance and budget_ms must be > 0")
-    objects = list(scene.objects)
-    info: dict[str, dict] = {}
-    names = [o.name or f"object{k}" for k, o in enumerate(objects)]
-    moving = []
-    for k, o in enumerate(objects):
-        if not (o.is_moving or scene.camera_moves):
-            info[names[k]] = {"method": "static", "reason": "does not move: in the static layer, drawn once"}
-            continue
-        f = group_features(scene, [(k, o)])
-        # Frozen in world space only under a still camera: under a moving one, an object still on
-        # screen moves with the camera, and freezing it would smear it the other way.
-        if f["motion_px"] < STILL_PX and not scene.camera_moves:
-            objects[k] = _still(o, scene.reference_t)
-            info[names[k]] = {
-                "method": "static",
-                "reason": f"moves {f['motion_px']:.2f} px < {STILL_PX} px on screen: drawn sharp once",
-            }
-        else:
-            moving.append((k, o))
-    prepared = (
-        scene.with_(objects=objects) if any(a is not b for a, b in zip(objects, scene.objects)) else scene
-    )
-    choices = []
-    for group in _groups(prepared, moving) if moving else []:
-        sub = prepared.with_(objects=[o for k, o in enumerate(objects) if (k, o) in group or not o.is_moving])
-        applies = {m: METHODS[m].applies(sub) for m in model.methods() if m in METHODS}
-        # Only a time budget is worth a timed probe: a tolerance's plan must not depend on the
-        # machine's load (the same scene gets the same plan on every run, in every process).
-        probe = _probe_ms(sub, aa) if goal == "budget" else model.reference_probe_ms
-        feats = {**group_features(prepared, group), "probe_ms": probe}
-        pick = model.choose(
-            feats, tol if goal == "tolerance" else None, budget, aa, applies, margin,
-            lambda options: renders_shutter(options, scene),  # keep
-        )  # fmt: skip
-        choices.append((pick["method"], pick["options"], [k for k, _ in group]))
-        for k, _ in group:
-            info[names[k]] = {
-                **pick,
-                "group": [names[j] for j, _ in group],
-                "features": {n: round(v, 4) for n, v in feats.items()},
-            }
-    return prepared, choices, {"goal": goal, "tolerance": tol if goal == "tolerance" else None,
-                               "budget_ms": budget, "objects": info}  # fmt: skip
+    def analytic_ms(self) -> float:
+        """The analytic frame's predicted time: :data:`ANALYTIC_COST` x (its segments + 8) x the
+        accumulation's time per sample (the segments by the analytic method's rule)."""
+        scene = self.scene
+        moving = scene.objects if scene.camera_moves else [o for o in scene.objects if o.is_moving]
+        t0 = time.perf_counter()
+        segments = len(segment_times(scene, moving, scene.camera)) - 1
+        ms = (time.perf_counter() - t0) * 1e3
+        self.tried.append({"method": "analytic", "options": {"pilot": f"{segments} segments"}, "ms": round(ms, 3)})
+        return ANALYTIC_COST * (segments + 8) * self.per_sample_ms()
 
 
-def _render_groups(scene: Scene, choices, aa: int) -> Frame:
-    if len({(m, tuple(sorted(o.items()))) for m, o, _ in choices}) <= 1:
-        m, opts, _ = choices[0]
-        return METHODS[m].fn(scene, **_with_aa(m, opts, aa))
-    grouped = {k for _, _, ks in choices for k in ks}
-    static = scene.with_(objects=[o for k, o in enumerate(scene.objects) if k not in grouped])
-    base = METHODS["accumulation"].fn(static, samples=1, aa=aa)
-    keep = [k for k in range(len(scene.objects)) if k not in grouped]
-    rgba, ids = base.rgba.astype("float64"), base.ids.copy()
-    for m, opts, ks in choices:
-        index = sorted(keep + ks)
-        f = METHODS[m].fn(scene.with_(objects=[scene.objects[k] for k in index]), **_with_aa(m, opts, aa))
-        rgba += f.rgba - base.rgba
-        for local, k in enumerate(index):
-            if k in ks:
-                ids[f.ids == local] = k
-    base.rgba = rgba.astype("float32")
-    base.ids = ids
-    return base
+def _next_count(n: int, want: float) -> int:
+    """The sample count after ``n`` for an estimated need of ``want``: the smallest odd multiple
+    of ``n`` at least ``want`` (the samples drawn are kept) unless that overshoots by half, else
+    ``want`` rounded up to even."""
+    odd = n * (2 * math.ceil((want / n - 1) / 2) + 1)
+    return int(min(MAX_SAMPLES, odd if odd < 1.5 * want else 2 * math.ceil(want / 2)))
 
 
-def _with_aa(method: str, opts: dict, aa: int) -> dict:
-    import inspect
+def _for_tolerance(trials: _Trials, tol: float) -> str:
+    """Render until the estimate meets ``tol`` (see the module docs); returns why it stopped."""
+    if tol < 2 * ANALYTIC_ERROR:
+        trials.run("analytic", **EXACT_OPTIONS)
+        return f"tolerance {tol:g} < 2 x {ANALYTIC_ERROR:g}: the exact integral"
+    aim = tol * SAFETY
+    trials.accumulate(FIRST_SAMPLES)
+    analytic_ms = None
+    rate = RATE
+    for _ in range(MAX_STEPS + 1):
+        est, n = trials.last["error_estimate"], trials.last["options"]["samples"]
+        if est <= aim:
+            return f"accumulation-{n} estimates {est:.3g} <= {SAFETY} x tolerance"
+        measured = [(t["options"]["samples"], t["error_estimate"]) for t in trials.tried if t["method"] == "accumulation"]
+        if len(measured) >= 2 and measured[-2][1] > est > 0:  # the rate these two renders show
+            (n0, e0), (n1, e1) = measured[-2:]
+            rate = min(1.2, max(0.5, math.log(e0 / e1) / math.log(n1 / n0)))
+        want = max(n * (est / aim) ** (1.0 / rate), n + 2)
+        if want >= ANALYTIC_FROM:
+            if analytic_ms is None:
+                analytic_ms = trials.analytic_ms()
+            if want > MAX_SAMPLES or analytic_ms < want * trials.per_sample_ms():
+                trials.run("analytic")
+                return (
+                    f"accumulation would need {want:.0f} samples (about {want * trials.per_sample_ms():.0f} ms); "
+                    f"the analytic frame, predicted {analytic_ms:.0f} ms, is exact to {ANALYTIC_ERROR:g}"
+                )
+        trials.accumulate(_next_count(n, want))
+    trials.run("analytic")
+    return f"accumulation still estimated over the tolerance after {MAX_STEPS} steps: the analytic frame"
 
-    if "aa" in opts or "aa" not in inspect.signature(METHODS[method].fn).parameters:
-        return dict(opts)
-    return {**opts, "aa": aa}
+
+def _for_budget(trials: _Trials, budget: float) -> str:
+    """The most accurate frame the budget allows (see the module docs); returns why."""
+    start = time.perf_counter()
+    trials.accumulate(4)
+    left = budget - (time.perf_counter() - start) * 1e3
+    n = int(left * 0.9 / max(trials.per_sample_ms(), 1e-6))
+    if n >= ANALYTIC_FROM:
+        an = trials.analytic_ms()
+        left = budget - (time.perf_counter() - start) * 1e3
+        if an < 0.8 * left:
+            trials.run("analytic")
+            return f"the analytic frame (predicted {an:.0f} ms) fits the {budget:g} ms budget"
+        n = int(left * 0.9 / max(trials.per_sample_ms(), 1e-6))
+    if n <= 4:
+        return f"the first render (4 samples) used the budget's time: {trials.last['ms']:.1f} ms of {budget:g}"
+    trials.accumulate(min(MAX_SAMPLES, n - n % 2))
+    return f"accumulation with the most samples that fit {budget:g} ms at {trials.per_sample_ms():.3f} ms a sample"
 
 
 @register("auto", sweep=[{}, {"tolerance": 0.003}, {"tolerance": 0.03}], applies=lambda scene: True)
-def auto(scene: Scene, tolerance=None, budget_ms=None, aa: int = 1, model=None) -> Frame:
-    """Planned per object: the cheapest method predicted to meet a tolerance, or the most accurate within a budget.
+def auto(scene: Scene, tolerance=None, budget_ms=None, aa: int = 1) -> Frame:
+    """A frame whose measured error meets a tolerance, or the most accurate one within a time budget.
 
-    Options: ``tolerance`` RMSE against the own-limit reference (accumulation with 1024 samples;
+    Options: ``tolerance`` RMSE against the exact time integral (:func:`motionblur.exact`;
     premultiplied linear RGBA), default :data:`DEFAULT_TOLERANCE` (0.01); ``budget_ms`` instead,
-    milliseconds per frame on the machine the model was fitted on; ``aa`` 1, 2 or 4 samples per
-    pixel along each axis, given to the chosen method; ``model`` the path of a model file (default
-    the package's ``auto_model.json``; ``bench --fit-auto`` writes one). ``stats["plan"]``: per object the method,
-    options, predicted ms and RMSE, and why (see :mod:`motionblur.methods.auto`).
+    milliseconds per frame measured on this machine as it renders; ``aa`` 1, 2 or 4 samples per
+    pixel along each axis. ``stats["plan"]``: ``goal``, ``tolerance`` or ``budget_ms``,
+    ``tried`` (every render: method, options, ms, error estimate), ``kept`` (the method and
+    options of the frame returned) and ``why`` (see :mod:`motionblur.methods.auto`).
     """
     aa = as_int(aa, "aa")
-    key = id(scene)
-    hit = _PLANS.get(key)
-    args = (tolerance, budget_ms, aa, model)
-    if hit is not None and hit[0] is scene and hit[1] == args:
-        prepared, choices, info = hit[2]["scene"], hit[2]["choices"], hit[2]["plan"]
+    if tolerance is not None and budget_ms is not None:
+        raise ValueError("tolerance, budget_ms: give one of them, not both")
+    tol = DEFAULT_TOLERANCE if tolerance is None else as_float(tolerance, "tolerance")
+    budget = None if budget_ms is None else as_float(budget_ms, "budget_ms")
+    if not (tol > 0 and math.isfinite(tol)):
+        raise ValueError(f"tolerance: must be finite and > 0, got {tol}")
+    if budget is not None and not (budget > 0 and math.isfinite(budget)):
+        raise ValueError(f"budget_ms: must be finite and > 0, got {budget}")
+    trials = _Trials(scene, aa)
+    if not _moves(scene):
+        trials.run("accumulation", samples=1)
+        why = "nothing moves on screen: one sharp frame"
+    elif budget is not None:
+        why = _for_budget(trials, budget)
     else:
-        prepared, choices, info = plan(scene, tolerance, budget_ms, aa, load_model(model) if model else None)
-        if len(_PLANS) >= _PLAN_CACHE:
-            _PLANS.pop(next(iter(_PLANS)))
-        _PLANS[key] = (scene, args, {"scene": prepared, "choices": choices, "plan": info})
-    if not choices:
-        frame = METHODS["accumulation"].fn(prepared, samples=1, aa=aa)
-    else:
-        frame = _render_groups(prepared, choices, aa)
-    frame.stats["plan"] = info
+        why = _for_tolerance(trials, tol)
+    frame = trials.frames[-1]
+    frame.stats["error_estimate_how"] = f"auto: {trials.last['method']}'s own estimate"
+    frame.stats["plan"] = {
+        "goal": "budget" if budget is not None else "tolerance",
+        "tolerance": None if budget is not None else tol,
+        "budget_ms": budget,
+        "tried": trials.tried,
+        "kept": {"method": trials.last["method"], "options": trials.last["options"]},
+        "why": why,
+    }
     return frame
+

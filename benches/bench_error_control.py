@@ -1,0 +1,180 @@
+"""Error you can trust, measured: every method's error estimate against its measured error, and
+``auto`` at several tolerances, on seeded random scenes against the exact time integral.
+
+    python benches/bench_error_control.py [--set measuring|tuning] [--scenes 40] [--sizes 96x72,192x144]
+
+For each scene of :func:`motionblur.evaluation.random_scenes.random_scene` (the measuring set by
+default: seeds and meshes never tuned on) and each size:
+
+- the reference: :func:`motionblur.exact` (cached under ``out/bench/error_control``);
+- calibration: every method that applies, at its default options (and accumulation at 4 and 64
+  samples), rendered with ``render()``: estimate / measured RMSE;
+- auto at tolerances 0.01, 0.004 and 0.001: measured RMSE / tolerance, its time, and the cheapest
+  render that meets the tolerance on that scene among accumulation at 1 to 4096 samples (powers
+  of two and their 1.5x), the analytic method and every other method's default (each timed
+  best-of-3 in the same run), and auto's time over that one's.
+
+Writes ``results.md`` and ``rows.json`` to ``out/bench/error_control/<set>``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+import motionblur as mb
+from motionblur.evaluation.random_scenes import MEASURING_SEEDS, TUNING_SEEDS, random_scene
+
+TOLERANCES = (0.01, 0.004, 0.001)
+OUT = Path("out/bench/error_control")
+ACC_GRID = sorted({int(v) for k in range(13) for v in (2**k, 1.5 * 2**k) if v <= 4096})
+
+
+def rmse(a, b) -> float:
+    return float(np.sqrt(np.mean(np.square(np.asarray(a, np.float64) - b))))
+
+
+def best_ms(fn, repeat: int = 3) -> tuple[float, object]:
+    best, out = float("inf"), None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, (time.perf_counter() - t0) * 1e3)
+    return best, out
+
+
+def reference(scene, seed: int, size: str) -> np.ndarray:
+    key = hashlib.sha1(f"{mb.__version__}{seed}{size}".encode()).hexdigest()[:12]
+    path = OUT / "refs" / f"{seed}_{size}_{key}.npy"
+    if path.exists():
+        return np.load(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    ref = mb.exact(scene).rgba.astype(np.float64)
+    np.save(path, ref)
+    return ref
+
+
+def calibration_rows(scene, ref, seed, size) -> list[dict]:
+    rows = []
+    runs = [("accumulation", {"samples": 4}), ("accumulation", {}), ("accumulation", {"samples": 64})]
+    runs += [(m, {}) for m in mb.METHODS if m not in ("accumulation", "auto") and mb.METHODS[m].applies(scene)]
+    for method, opts in runs:
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                f = mb.render(scene, method, **opts)
+        except ValueError as exc:  # a method that refuses the motion says so
+            rows.append({"seed": seed, "size": size, "method": method, "options": opts, "refused": str(exc)[:120]})
+            continue
+        measured = rmse(f.rgba, ref)
+        rows.append(
+            {
+                "seed": seed, "size": size, "method": method, "options": opts, "measured": measured,
+                "estimate": f.stats["error_estimate"], "how": f.stats["error_estimate_how"].split(":")[0],
+            }
+        )  # fmt: skip
+    return rows
+
+
+def cheapest(scene, ref, tol: float) -> tuple[str, float]:
+    """The cheapest render meeting ``tol`` (label, best-of-3 ms)."""
+    found = []
+    for n in ACC_GRID:
+        ms, f = best_ms(lambda n=n: mb.render(scene, "accumulation", samples=n, error_estimate=False))
+        if rmse(f.rgba, ref) <= tol:
+            found.append((f"accumulation-{n}", ms))
+            break
+    for m in mb.METHODS:
+        if m in ("accumulation", "auto") or not mb.METHODS[m].applies(scene):
+            continue
+        try:
+            ms, f = best_ms(lambda m=m: mb.render(scene, m, error_estimate=False))
+        except ValueError:
+            continue
+        if rmse(f.rgba, ref) <= tol:
+            found.append((m, ms))
+    return min(found, key=lambda x: x[1]) if found else ("none", float("nan"))
+
+
+def auto_rows(scene, ref, seed, size) -> list[dict]:
+    rows = []
+    for tol in TOLERANCES:
+        ms, f = best_ms(lambda tol=tol: mb.render(scene, "auto", tolerance=tol))
+        label, cms = cheapest(scene, ref, tol)
+        kept = f.stats["plan"]["kept"]
+        rows.append(
+            {
+                "seed": seed, "size": size, "tolerance": tol, "measured": rmse(f.rgba, ref), "ms": ms,
+                "kept": f"{kept['method']} {kept['options']}", "cheapest": label, "cheapest_ms": cms,
+            }
+        )  # fmt: skip
+    return rows
+
+
+def summarise(cal: list[dict], aut: list[dict]) -> str:
+    lines = ["## Error estimates: estimate / measured RMSE against mb.exact", ""]
+    lines += ["| method | frames | in [0.5, 2] | below 0.5 | median | min | max |", "|---|---|---|---|---|---|---|"]
+    by: dict[str, list[float]] = {}
+    for r in cal:
+        if "measured" not in r:
+            continue
+        if r["measured"] < 1e-5:  # nothing to estimate: both ~0
+            continue
+        key = r["method"] + (f" {r['options']}" if r["options"] else "")
+        by.setdefault(key, []).append(r["estimate"] / r["measured"])
+    for key, v in sorted(by.items()):
+        a = np.array(v)
+        lines.append(
+            f"| {key} | {len(a)} | {np.mean((a >= 0.5) & (a <= 2)):.0%} | {int((a < 0.5).sum())} | "
+            f"{np.median(a):.2f} | {a.min():.2f} | {a.max():.2f} |"
+        )
+    refused = [r for r in cal if "refused" in r]
+    lines += ["", f"Refused (raised a clear ValueError): {len(refused)} renders.", ""]
+    lines += ["## auto: measured RMSE / tolerance, and time / the cheapest render meeting the tolerance", ""]
+    lines += ["| size | tolerance | scenes | met | worst | median | time / cheapest (median, worst) |", "|---|---|---|---|---|---|---|"]
+    for size in sorted({r["size"] for r in aut}):
+        for tol in TOLERANCES:
+            sel = [r for r in aut if r["size"] == size and r["tolerance"] == tol]
+            ratio = np.array([r["measured"] / tol for r in sel])
+            cost = np.array([r["ms"] / r["cheapest_ms"] for r in sel if np.isfinite(r["cheapest_ms"])])
+            lines.append(
+                f"| {size} | {tol} | {len(sel)} | {np.mean(ratio <= 1):.0%} | {ratio.max():.2f} | "
+                f"{np.median(ratio):.2f} | {np.median(cost):.2f}, {cost.max():.2f} |"
+            )
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--set", choices=("measuring", "tuning"), default="measuring")
+    p.add_argument("--scenes", type=int, default=24)
+    p.add_argument("--sizes", default="96x72,192x144")
+    p.add_argument("--first", type=int, default=0, help="skip this many seeds of the set")
+    args = p.parse_args()
+    seeds = (MEASURING_SEEDS if args.set == "measuring" else TUNING_SEEDS)[args.first : args.first + args.scenes]
+    out = OUT / args.set
+    out.mkdir(parents=True, exist_ok=True)
+    cal, aut = [], []
+    for size in args.sizes.split(","):
+        w, h = map(int, size.split("x"))
+        for seed in seeds:
+            scene = random_scene(seed, w, h)
+            t0 = time.perf_counter()
+            ref = reference(scene, seed, size)
+            cal += calibration_rows(scene, ref, seed, size)
+            aut += auto_rows(scene, ref, seed, size)
+            print(f"{size} seed {seed}: {time.perf_counter() - t0:.1f} s", flush=True)
+    (out / "rows.json").write_text(json.dumps({"calibration": cal, "auto": aut}, indent=1, default=str))
+    text = summarise(cal, aut)
+    (out / "results.md").write_text(f"# {args.set} set, seeds {seeds.start}..{seeds.stop - 1}\n\n" + text)
+    print(text)
+
+
+if __name__ == "__main__":
+    main()

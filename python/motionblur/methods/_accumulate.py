@@ -1,0 +1,152 @@
+"""The accumulation buffer's kernel call and its two halves, shared by ``accumulation`` and ``auto``.
+
+:func:`accumulate` renders the weighted mean of a set of shutter times (the compiled core draws
+and sums them in one call). :class:`HalfSums` keeps an accumulation as two interleaved halves of
+its time samples (even and odd strata), each a weighted mean with its weight: the frame is their
+sum, and their RMS difference measures the frame's own error against the exact time integral
+(see :data:`HALVES_FACTOR`). ``auto`` adds samples to the halves it already has instead of
+rendering again.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..raster import Frame
+from ..scene import Scene
+from ._layers import Layer, object_draw, paste, raster_layer, resolve, static_layer, supersampled
+from ._painter import painter_for
+
+__all__ = ["accumulate", "HalfSums", "composited_difference", "HALVES_FACTOR"]
+
+
+#: The error of an N-sample frame over the RMS difference of its two interleaved halves (each
+#: normalised) times 2 sqrt(wA wB) / (wA + wB) (1 for equal halves), by sampling; chosen on the
+#: tuning scenes of :mod:`motionblur.evaluation.random_scenes` (``benches/bench_error_control.py
+#: --set tuning``). Stratified halves are two regular grids offset by one stratum: their errors
+#: are anti-correlated, so the difference overstates the frame's error by about 4.
+HALVES_FACTOR = {"stratified": 0.25, "jittered": 0.38}
+
+
+def _nearest(values: np.ndarray, target: float) -> int:
+    """The position in ``values`` of the value nearest ``target``."""
+    return int(np.argmin(np.abs(values - target)))
+
+
+def composited_difference(a: np.ndarray, b: np.ndarray, background) -> np.ndarray:
+    """(H,W,4) float64 difference of premultiplied frames ``a`` and ``b`` once each is composited
+    over straight RGBA ``background`` (4,) (compositing is linear in the frame)."""
+    bg = np.asarray(background, np.float64)
+    pre = np.concatenate([bg[:3] * bg[3], bg[3:]])
+    d = a.astype(np.float64) - b
+    return d - d[..., 3:4] * pre
+
+
+def accumulate(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> Frame:
+    """The accumulation buffer of ``times`` with ``weights`` (summing to 1), depth and ids of
+    sample ``ref``; the method's body (see :func:`accumulation`)."""
+    stats = {"samples": len(times), "draw_calls": 0, "static_draws": 0, "window": None}
+    everything = list(enumerate(scene.objects))
+
+    if scene.camera_moves:
+        # Everything moves on screen: whole frames at every sample, one view each.
+        cam = supersampled(scene.camera, aa)
+        views = np.linalg.inv(scene.camera_poses_at(times))  # each sample's camera_at(t).view
+        painter = painter_for(scene, everything)
+        rgba, depth, ids = painter.core.accumulate_moving(
+            times, weights, ref, views, np.ascontiguousarray(cam.projection), cam.width, cam.height
+        )
+        stats["draw_calls"] = len(times)
+        if dim < 1.0:
+            cam = supersampled(scene.camera_at(scene.reference_t), aa)
+            static = [(o, object_draw(o, scene.reference_t, k)) for k, o in everything if not o.is_moving]
+            rgba = (1.0 - dim) * raster_layer(cam, scene, static).rgba + dim * rgba
+        frame = resolve(Layer(rgba.astype(np.float32), depth, ids), aa)
+        frame.stats.update(stats)
+        return frame
+
+    cam = supersampled(scene.camera, aa)
+    static_objs = [(k, o) for k, o in everything if not o.is_moving]
+    moving = [(k, o) for k, o in everything if o.is_moving]
+    static = static_layer(scene, cam, static_objs, aa)
+    stats["static_draws"] = 0 if (static.cached or not static_objs) else 1
+    stats["static_cached"] = static.cached
+    painter = painter_for(scene, moving, eye=cam.pose[:3, 3])
+    c = np.ascontiguousarray
+    layer = static.layer
+    out = painter.core.accumulate_still(
+        times, weights, ref, c(cam.view), c(cam.projection), c(cam.view_projection), cam.width, cam.height,
+        aa, (c(layer.rgba), c(layer.depth), c(layer.ids)), static.opaque,
+    )  # fmt: skip
+    if out is None:
+        frame = Frame(
+            static.rgba.copy(), static.depth.copy(), static.ids.copy(), np.zeros((*static.ids.shape, 2))
+        )
+        frame.stats.update(stats)
+        return frame
+    win, acc, depth, ids, stats["draw_calls"] = out
+    stats["window"] = win
+    x0, y0, x1, y1 = win
+    if dim < 1.0:
+        acc = (1.0 - dim) * layer.rgba[y0:y1, x0:x1] + dim * acc
+    frame = paste(static, win, Layer(acc, depth, ids), aa)
+    frame.stats.update(stats)
+    return frame
+
+
+class HalfSums:
+    """An accumulation kept as its even and odd halves of time samples (see the module docs).
+
+    ``add(times, weights, half)`` renders ``times`` (weights: the shutter's mass of each one's
+    stratum, on the frame's final grid) into half 0 or 1; :meth:`reweight` gives every sample
+    rendered so far a new weight (a box shutter's samples all weigh 1/N, so a finer grid that
+    keeps the old times only changes their weights); :meth:`frame` is the sum with
+    ``stats["error_estimate"]`` from the halves."""
+
+    def __init__(self, scene: Scene, aa: int, sampling: str = "stratified") -> None:
+        self.scene, self.aa, self.sampling = scene, aa, sampling
+        self.parts: list[tuple[int, np.ndarray, np.ndarray, Frame]] = []  # (half, times, weights, frame)
+
+    def add(self, times, weights, half: int) -> None:
+        times, weights = np.ascontiguousarray(times, np.float64), np.ascontiguousarray(weights, np.float64)
+        mass = float(weights.sum())
+        ref = _nearest(times, self.scene.reference_t)
+        self.parts.append((half, times, weights, accumulate(self.scene, times, weights / mass, ref, 1.0, self.aa)))
+
+    def reweight(self, weight_of) -> None:
+        """Every part's weights replaced by ``weight_of(times) -> weights`` and moved to the half
+        ``weight_of`` gives as ``half_of(times)`` (a tuple ``(weights, half)``)."""
+        out = []
+        for _, t, _, f in self.parts:
+            w, half = weight_of(t)
+            out.append((half, t, np.asarray(w, np.float64), f))
+        self.parts = out
+
+    @property
+    def samples(self) -> int:
+        return sum(len(t) for _, t, _, _ in self.parts)
+
+    def _half(self, j: int) -> tuple[float, np.ndarray]:
+        sel = [(float(w.sum()), f.rgba) for h, _, w, f in self.parts if h == j]
+        mass = sum(m for m, _ in sel)
+        return mass, sum(m * r.astype(np.float64) for m, r in sel) / mass
+
+    def frame(self) -> Frame:
+        (ma, a), (mb, b) = self._half(0), self._half(1)
+        ref_t = self.scene.reference_t
+        nearest = min(self.parts, key=lambda p: float(np.min(np.abs(p[1] - ref_t))))[3]
+        frame = Frame(((ma * a + mb * b) / (ma + mb)).astype(np.float32), nearest.depth, nearest.ids, None)
+        calls = [p[3].stats for p in self.parts]
+        wins = [c["window"] for c in calls if c["window"] is not None]
+        frame.stats.update(
+            samples=self.samples,
+            draw_calls=sum(c["draw_calls"] for c in calls),
+            static_draws=max(c["static_draws"] for c in calls),
+            window=tuple(f(w[i] for w in wins) for i, f in enumerate((min, min, max, max))) if wins else None,
+        )
+        diff = composited_difference(a, b, self.scene.background)
+        m = (ma * mb) ** 0.5 / (ma + mb)
+        scale = HALVES_FACTOR[self.sampling] * 2.0 * m
+        frame.stats["error_estimate"] = float(scale * np.sqrt(np.mean(np.square(diff))))
+        frame.stats["error_estimate_how"] = "halves: the even and the odd time samples compared"
+        return frame
