@@ -63,14 +63,18 @@ def reference(scene, seed: int, size: str) -> np.ndarray:
 def calibration_rows(scene, ref, seed, size) -> list[dict]:
     rows = []
     runs = [("accumulation", {"samples": 4}), ("accumulation", {}), ("accumulation", {"samples": 64})]
-    runs += [(m, {}) for m in mb.METHODS if m not in ("accumulation", "auto") and mb.METHODS[m].applies(scene)]
+    runs += [
+        (m, {}) for m in mb.METHODS if m not in ("accumulation", "auto") and mb.METHODS[m].applies(scene)
+    ]
     for method, opts in runs:
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 f = mb.render(scene, method, **opts)
         except ValueError as exc:  # a method that refuses the motion says so
-            rows.append({"seed": seed, "size": size, "method": method, "options": opts, "refused": str(exc)[:120]})
+            rows.append(
+                {"seed": seed, "size": size, "method": method, "options": opts, "refused": str(exc)[:120]}
+            )
             continue
         measured = rmse(f.rgba, ref)
         rows.append(
@@ -119,7 +123,10 @@ def auto_rows(scene, ref, seed, size) -> list[dict]:
 
 def summarise(cal: list[dict], aut: list[dict]) -> str:
     lines = ["## Error estimates: estimate / measured RMSE against mb.exact", ""]
-    lines += ["| method | frames | in [0.5, 2] | below 0.5 | median | min | max |", "|---|---|---|---|---|---|---|"]
+    lines += [
+        "| method | frames | in [0.5, 2] | below 0.5 | median | min | max |",
+        "|---|---|---|---|---|---|---|",
+    ]
     by: dict[str, list[float]] = {}
     for r in cal:
         if "measured" not in r:
@@ -137,7 +144,10 @@ def summarise(cal: list[dict], aut: list[dict]) -> str:
     refused = [r for r in cal if "refused" in r]
     lines += ["", f"Refused (raised a clear ValueError): {len(refused)} renders.", ""]
     lines += ["## auto: measured RMSE / tolerance, and time / the cheapest render meeting the tolerance", ""]
-    lines += ["| size | tolerance | scenes | met | worst | median | time / cheapest (median, worst) |", "|---|---|---|---|---|---|---|"]
+    lines += [
+        "| size | tolerance | scenes | met | worst | median | time / cheapest (median, worst) |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for size in sorted({r["size"] for r in aut}):
         for tol in TOLERANCES:
             sel = [r for r in aut if r["size"] == size and r["tolerance"] == tol]
@@ -153,12 +163,15 @@ def summarise(cal: list[dict], aut: list[dict]) -> str:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--set", choices=("measuring", "tuning"), default="measuring")
-    p.add_argument("--scenes", type=int, default=24)
+    p.add_argument("--scenes", type=int, default=12)
     p.add_argument("--sizes", default="96x72,192x144")
     p.add_argument("--first", type=int, default=0, help="skip this many seeds of the set")
+    p.add_argument("--tag", default="", help="a suffix for the output folder")
     args = p.parse_args()
-    seeds = (MEASURING_SEEDS if args.set == "measuring" else TUNING_SEEDS)[args.first : args.first + args.scenes]
-    out = OUT / args.set
+    seeds = (MEASURING_SEEDS if args.set == "measuring" else TUNING_SEEDS)[
+        args.first : args.first + args.scenes
+    ]
+    out = OUT / (args.set + args.tag)
     out.mkdir(parents=True, exist_ok=True)
     cal, aut = [], []
     for size in args.sizes.split(","):

@@ -80,7 +80,9 @@ def test_refined_samples_are_the_same_frame_as_rendering_them_at_once():
 
 def test_nothing_moving_is_one_sharp_frame_with_no_error():
     scene = mb.SCENES["cube"](W, H)
-    still = scene.with_(objects=[mb.Object((o.world_vertices(0.0), o.mesh.faces), o.color) for o in scene.objects])
+    still = scene.with_(
+        objects=[mb.Object((o.world_vertices(0.0), o.mesh.faces), o.color) for o in scene.objects]
+    )
     f = mb.render(still, "auto", tolerance=1e-3)
     assert f.stats["plan"]["tried"] == [{**f.stats["plan"]["tried"][0], "options": {"samples": 1}}]
     assert f.stats["error_estimate"] == 0.0
@@ -102,7 +104,10 @@ def test_a_budget_is_measured_against_the_clock_and_more_time_buys_accuracy():
     large = mb.render(scene, "auto", budget_ms=200.0)
     assert small.stats["plan"]["goal"] == "budget"
     assert _rmse(large.rgba, ref) < _rmse(small.rgba, ref)
-    assert large.stats["plan"]["kept"]["options"].get("samples", 10**9) > small.stats["plan"]["kept"]["options"]["samples"]
+    assert (
+        large.stats["plan"]["kept"]["options"].get("samples", 10**9)
+        > small.stats["plan"]["kept"]["options"]["samples"]
+    )
 
 
 @pytest.mark.parametrize(

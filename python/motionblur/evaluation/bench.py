@@ -10,14 +10,15 @@ against **two references**:
 - Mitsuba 3, time-sampled (K shutter times x spp): the physical ground truth. It casts shadows
   the rasterizer does not draw, so on the real-mesh scenes (a mover over a lit floor) every
   method carries that difference too;
-- the method's own N -> infinity limit: accumulation with ``limit_samples`` (1024) samples on our
+- the method's own limit: the exact time integral (:func:`motionblur.exact`, the analytic method
+  at a tight setting), or accumulation with ``limit_samples`` samples when given, on our
   rasterizer, at the same ``aa``: what a method would give with unlimited time, so the RMSE
   against it is the blur method's own error, without the renderers' differences.
 
 References are cached under ``<out>/references/`` keyed by a hash of the scene and the
 reference's settings (:mod:`.cache`). ``auto`` (the planner) gets one row per scene at its
 default tolerance, and where it lands against the Pareto front (time at the error it reaches) is
-reported; ``fit_auto=True`` first refits its model from this run's rows. Outputs in ``<out>``:
+reported. Outputs in ``<out>``:
 ``results.csv``, ``results.md`` (tables per scene, both references, the comparisons below),
 ``pareto_<scene>.png`` (error against time for both references, the front annotated),
 ``sheet_<scene>.png`` (labelled: the references and each method's most accurate option set
@@ -45,10 +46,10 @@ from ..methods.auto import DEFAULT_TOLERANCE, renders_shutter
 from ..render import METHODS
 from ..scenes_builtin import SCENES
 from ..scenes_real import REAL_SCENES
-from . import autofit, html, report
+from . import html, report
 from . import reference as ref_mod
 from .cluster import Dask, SceneRef, Serial, call_task, client_for, error_task, reference_task, timed_task
-from .compare import equal_error, equal_time, pareto_front
+from .compare import equal_error, equal_time, front_row, landing, pareto_front
 from .sweep import _label, _with_aa, paired_factor, paired_times, pyrender_comparison
 
 __all__ = ["run", "main", "ALL_SCENES"]
@@ -132,10 +133,8 @@ def run(
     aa: int | None = 2,
     log=print,
     client=None,
-    limit_samples: int = 1024,
+    limit_samples: int | None = None,
     auto: bool = True,
-    fit_auto: bool = False,
-    model_path=None,
     write_html: bool = True,
     seed: int = 0,
 ) -> dict:
@@ -145,9 +144,9 @@ def run(
     [options, ...]}`` replacing the registered sweeps; ``methods``: restrict to these; ``aa``:
     spatial samples per pixel per axis given to every method that takes ``aa`` (and to the
     own-limit reference); ``client``: a ``dask.distributed.Client`` (see :mod:`.cluster`);
-    ``limit_samples``: N of the own-limit reference; ``auto``: add an ``auto`` row per scene;
-    ``fit_auto``: refit auto's model from this run first and save it to ``model_path`` (default
-    the package's ``auto_model.json``); ``save_images``: every image under ``images/``;
+    ``limit_samples``: None (the own limit is :func:`motionblur.exact`, the exact time integral)
+    or N for accumulation with N samples instead; ``auto``: add an ``auto`` row per scene;
+    ``save_images``: every image under ``images/``;
     ``write_html``: the static page under ``html/``.
     """
     names = list(ALL_SCENES) if scenes is None else list(scenes)
@@ -224,19 +223,12 @@ def run(
             for r in scene_rows:
                 log(f"  {name:<18} {r['method']:<14} {r['options']:<28} {r['ms']:9.2f} ms  "
                     f"RMSE {r['rmse']:.5f}  own limit {r['rmse_limit']:.5f}")  # fmt: skip
-        # 3. auto: refit its model from these rows when asked, then one row per scene
-        features = {n: autofit.scene_features(built[n]) for n in names}
-        model_info = None
-        if fit_auto:
-            applies = {n: {m: METHODS[m].applies(built[n]) for m in METHODS} for n in names}
-            model = autofit.fit_calibrated(rows, features, aa or 1, (width, height), applies, log=log)
-            model_info = str(model.save(model_path) if model_path else model.save())
-            log(f"auto model refitted from {len(rows)} rows: {model_info}")
+        # 3. auto: one row per scene
         with phases("auto"):
             auto_rows, landings = [], {}
             if auto and (methods is None or "auto" in methods):
                 for name in names:
-                    opts = _with_aa(METHODS["auto"].fn, {"model": str(model_path)} if model_path else {}, aa)
+                    opts = _with_aa(METHODS["auto"].fn, {}, aa)
                     t = runner.timed(timed_task, [(refs_of[name], "auto", opts, max(repeat, 5))])[0]
                     e = runner.map(
                         error_task, [t[1]], [refs[name]["mitsuba"]], [refs[name]["limit"]], [flip]
@@ -245,8 +237,8 @@ def run(
                     frames[(name, "auto", r["options"])] = t[1]
                     auto_rows.append(r)
                     srows = [x for x in rows if x["scene"] == name]
-                    lg = autofit.landing(srows, r, DEFAULT_TOLERANCE)
-                    front = autofit.front_row(srows, r["rmse_limit"])
+                    lg = landing(srows, r, DEFAULT_TOLERANCE)
+                    front = front_row(srows, r["rmse_limit"])
                     if front is not None:  # re-timed in pairs: both under the same load
                         jobs = [("auto", opts), (front["method"], front["_opts"])]
                         pa, pf = runner.timed(call_task, [(paired_times, refs_of[name], jobs)])[0]
@@ -259,13 +251,6 @@ def run(
     finally:
         for m, s in saved.items():
             METHODS[m].sweep = s
-    loo = {}
-    with phases("leave one out"):
-        if auto_rows and len(names) > autofit.MIN_ROWS:
-            applies = {n: {m: METHODS[m].applies(built[n]) for m in METHODS} for n in names}
-            swept = [r for r in rows if r["method"] != "auto"]
-            probed = autofit.add_probes(features, swept, aa or 1)
-            loo = autofit.leave_one_out(swept, probed, aa or 1, (width, height), DEFAULT_TOLERANCE, applies)
     fronts, fronts_limit = [], []
     for name in names:
         sel = [r for r in rows if r["scene"] == name]
@@ -277,11 +262,11 @@ def run(
     paths = report.write(
         out, names, rows, fronts, settings, comparisons=comparisons, flip_comparisons=flip_comparisons,
         paired=paired, equal_times=equal_times, pyrender_rows=pyr, fronts_limit=fronts_limit,
-        frames=frames, references=refs, landings=landings, loo=loo, save_images=save_images,
+        frames=frames, references=refs, landings=landings, save_images=save_images,
     )  # fmt: skip
-    # the measurements with their option sets, to refit auto's model without rendering (--fit-auto-from)
+    # the measurements with their option sets
     (out / "rows.json").write_text(json.dumps({
-        "size": [width, height], "aa": aa, "features": features,
+        "size": [width, height], "aa": aa,
         "applies": {n: {m: METHODS[m].applies(built[n]) for m in METHODS} for n in names},
         "rows": [{k: v for k, v in r.items() if k != "_plan"} for r in rows],
     }, default=str))  # fmt: skip
@@ -296,9 +281,6 @@ def run(
         "equal_time": equal_times,
         "pyrender": pyr,
         "auto": landings,
-        "leave_one_out": loo,
-        "features": features,
-        "model": model_info,
         "paths": paths,
         "references": {n: {k: np.asarray(v) for k, v in r.items()} for n, r in refs.items()},
     }
@@ -317,14 +299,12 @@ def main(argv=None) -> int:
     p.add_argument("--aa", type=int, default=2, help="spatial samples per pixel per axis for every method")
     p.add_argument("--times", type=int, default=256, help="Mitsuba shutter times K")
     p.add_argument("--spp", type=int, default=4, help="Mitsuba samples per pixel per time")
-    p.add_argument("--limit-samples", type=int, default=1024, help="N of the own-limit reference")
+    p.add_argument("--limit-samples", type=int, default=None,
+                   help="N of an accumulation own-limit reference (default: the exact integral, motionblur.exact)")  # fmt: skip
     p.add_argument("--repeat", type=int, default=3)
     p.add_argument("--no-flip", action="store_true")
     p.add_argument("--no-pyrender", action="store_true", help="leave out the pyrender comparison")
     p.add_argument("--images", action="store_true", help="save every image under images/")
-    p.add_argument("--fit-auto", action="store_true", help="refit auto's cost and error model from this run")
-    p.add_argument("--fit-auto-from", default=None, metavar="ROWS_JSON",
-                   help="refit auto's model from a run's rows.json, rendering nothing")  # fmt: skip
     p.add_argument(
         "--dask", default=None, metavar="local|ADDRESS", help="references and errors as Dask tasks"
     )
@@ -334,12 +314,9 @@ def main(argv=None) -> int:
         help=f"160x120, K = 64, N = 256, one timing, no pyrender, scenes {' '.join(QUICK_SCENES)}",
     )
     a = p.parse_args(argv)
-    if a.fit_auto_from:
-        print(f"auto model refitted from {a.fit_auto_from}: {autofit.refit_from(a.fit_auto_from)}")
-        return 0
     w, h = (int(x) for x in a.size.lower().split("x"))
     if a.quick:
-        w, h, a.times, a.repeat, a.limit_samples, a.no_pyrender = 160, 120, 64, 1, 256, True
+        w, h, a.times, a.repeat, a.no_pyrender = 160, 120, 64, 1, True
     scenes = a.scenes if a.scenes is not None or not a.quick else list(QUICK_SCENES)
     if scenes is None and a.set != "all":
         scenes = list(SCENES if a.set == "builtin" else REAL_SCENES)
@@ -347,7 +324,7 @@ def main(argv=None) -> int:
     try:
         res = run(a.out, scenes, w, h, a.times, a.spp, a.repeat, flip=not a.no_flip, aa=a.aa,
                   pyrender_peer=not a.no_pyrender, save_images=a.images, client=client,
-                  limit_samples=a.limit_samples, fit_auto=a.fit_auto)  # fmt: skip
+                  limit_samples=a.limit_samples)  # fmt: skip
     finally:
         if client is not None:
             Dask(client, owns=True).close()

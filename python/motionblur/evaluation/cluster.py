@@ -29,6 +29,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from .._optional import require
+from ..methods._estimate import exact
 from ..render import render
 from ..scene import Scene
 from . import metrics
@@ -88,8 +89,9 @@ def reference_task(scene: Scene, kind: str, settings: dict, folder: str) -> np.n
     """(H,W,4) float32 reference of ``scene``, from the cache ``folder`` or rendered into it.
 
     ``kind`` ``"mitsuba"``: settings ``times`` (K), ``spp``, ``seed``: :func:`.reference.mitsuba`;
-    ``"limit"``: settings ``samples`` (N) and ``aa``: stratified accumulation on our rasterizer,
-    the N -> infinity limit every method approaches (no shadows, our shading). ``scene``: a
+    ``"limit"``: settings ``samples`` and ``aa``: the exact time integral on our rasterizer
+    (:func:`motionblur.exact`) when ``samples`` is None, else stratified accumulation with that
+    many samples: the limit every method approaches (no shadows, our shading). ``scene``: a
     Scene or a :class:`SceneRef`."""
     scene = _scene(scene)
     if kind == "mitsuba":
@@ -104,6 +106,8 @@ def reference_task(scene: Scene, kind: str, settings: dict, folder: str) -> np.n
         key = reference_key(scene, kind, **settings)
 
         def make():
+            if settings.get("samples") is None:
+                return exact(scene, aa=settings["aa"]).rgba
             return render(scene, "accumulation", samples=settings["samples"], aa=settings["aa"]).rgba
 
     else:

@@ -7,13 +7,15 @@ A row is a dict with at least ``method``, ``ms`` and an error column (``rmse``, 
   error, interpolated log-log between the two sample counts that bracket it (if even N = 1 is
   better, its time is an upper bound, marked ``<=``; if even the largest N is worse, ``>=``).
 - :func:`equal_time`: for each row of another method, accumulation's error in the same time.
+- :func:`front_row`, :func:`front_time`, :func:`landing`: where an ``auto`` row lands against
+  the fastest swept run at least as accurate.
 """
 
 from __future__ import annotations
 
 import math
 
-__all__ = ["pareto_front", "equal_error", "equal_time"]
+__all__ = ["pareto_front", "equal_error", "equal_time", "front_row", "front_time", "landing"]
 
 
 def pareto_front(rows) -> list[bool]:
@@ -109,3 +111,33 @@ def equal_time(rows, methods=None, baseline="accumulation", metric="rmse"):
                     break
         out.append((r, eb, bound, eb / e))
     return out
+
+
+#: Rows of these methods are left out of the fronts (the planner is measured against them).
+_SKIP = ("auto",)
+
+
+def front_row(rows, error: float, metric: str = "rmse_limit"):
+    """The fastest row (``auto`` left out) whose ``metric`` is at most ``error``, or None."""
+    ok = [r for r in rows if r["method"] not in _SKIP and r[metric] <= error * (1 + 1e-9)]
+    return min(ok, key=lambda r: r["ms"]) if ok else None
+
+
+def front_time(rows, error: float, metric: str = "rmse_limit") -> float:
+    """The Pareto front's time at ``error``: the least ms of the rows (``auto`` left out) whose
+    ``metric`` is at most ``error``; inf when none is."""
+    ok = [r["ms"] for r in rows if r["method"] not in _SKIP and r[metric] <= error * (1 + 1e-9)]
+    return min(ok) if ok else float("inf")
+
+
+def landing(rows, auto_row: dict, tolerance: float, metric: str = "rmse_limit") -> dict:
+    """``{ms, error, front_ms, ratio, meets}`` of one ``auto`` row on its scene's ``rows``:
+    its time over the front's time at the error it reached, and whether it met ``tolerance``."""
+    f = front_time(rows, auto_row[metric], metric)
+    return {
+        "ms": auto_row["ms"],
+        "error": auto_row[metric],
+        "front_ms": f,
+        "ratio": auto_row["ms"] / f if math.isfinite(f) else float("nan"),
+        "meets": auto_row[metric] <= tolerance,
+    }

@@ -28,6 +28,11 @@ __all__ = ["write", "GAIN"]
 GAIN = 10.0
 
 
+def _limit_label(settings) -> str:
+    n = settings.get("limit_samples")
+    return "the exact time integral (motionblur.exact)" if n is None else f"accumulation, N = {n}"
+
+
 def _png(rgba: np.ndarray, path: Path) -> None:
     h, w = rgba.shape[:2]
     Frame(
@@ -142,9 +147,7 @@ def write(out, names, rows, paths: dict, references: dict, frames: dict, setting
                 f"Mitsuba, K = {settings['times']} x {settings['spp']} spp",
             )
         ]
-        entries.append(
-            ("limit", "reference: own limit", refs["limit"], f"accumulation, N = {settings['limit_samples']}")
-        )
+        entries.append(("limit", "reference: own limit", refs["limit"], _limit_label(settings)))
         for r in picks:
             rgba = frames.get((name, r["method"], r["options"]))
             if rgba is not None:
@@ -164,7 +167,7 @@ def write(out, names, rows, paths: dict, references: dict, frames: dict, setting
     info = (
         f"{settings['width']}x{settings['height']}, methods at aa = {settings['aa']}; references: Mitsuba "
         f"{settings['variant']} (K = {settings['times']} x {settings['spp']} spp) and each method's own limit "
-        f"(accumulation, N = {settings['limit_samples']}); run: {settings.get('runner', 'serial')}."
+        f"({_limit_label(settings)}); run: {settings.get('runner', 'serial')}."
     )
     blob = json.dumps({"settings": info, "gain": GAIN, "scenes": scenes}).replace("</", "<\\/")
     page = folder / "index.html"

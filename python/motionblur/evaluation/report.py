@@ -18,6 +18,11 @@ from .sweep import _label
 __all__ = ["write", "save_reference", "matched"]
 
 
+def _limit_label(settings) -> str:
+    n = settings.get("limit_samples")
+    return "the exact time integral (motionblur.exact)" if n is None else f"accumulation, N = {n}"
+
+
 def write(
     out: Path,
     names,
@@ -83,7 +88,7 @@ def write(
             if "limit" in ref:
                 tiles.append(
                     (
-                        f"reference: own limit\naccumulation N = {settings.get('limit_samples', '?')}\n",
+                        f"reference: own limit\n{_limit_label(settings)}\n",
                         ref["limit"],
                     )
                 )
@@ -225,7 +230,7 @@ def _markdown(
         f"Machine: {_machine()} (shared with other jobs: timings are best of {settings['repeat']}). "
         f"Images {settings['width']}x{settings['height']}, methods at aa = {settings['aa']} (spatial samples per pixel per axis); reference: Mitsuba {settings['variant']}, "
         f"K = {settings['times']} shutter times x {settings['spp']} spp; second reference: each method's own limit, "
-        f"accumulation with N = {settings.get('limit_samples', '-')} samples on our rasterizer (no shadows: the blur "
+        f"{_limit_label(settings)} on our rasterizer (no shadows: the blur "
         "method's own error). Pareto marks the front against Mitsuba. Error: RMSE over premultiplied RGBA; "
         "coverage error is signed (alpha summed over the image, relative)."
     )

@@ -6,8 +6,8 @@ an underscore hold what the methods share, and a method imports them, never anot
 ``_layers`` (rasterizing into layers, compositing, supersampling, the static layer kept across
 frames), ``_painter`` (objects drawn at any shutter time, per-mesh constants),
 ``_volume_colors`` (the colours of motion volumes), ``_sharp`` (the sharp frame the image-space
-methods blur), ``_features`` (what an object does on screen) and ``_auto_model`` (the planner's
-fitted cost and error model, ``auto_model.json``).
+methods blur), ``_accumulate`` (the accumulation kernel call and its two halves of samples) and
+``_estimate`` (the exact reference :func:`exact` and every frame's error estimate).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from . import (  # each registers its methods
     image_space,
     motion_volume,
 )
-from ._estimate import exact
+from ._estimate import exact  # noqa: F401  (motionblur.exact)
 from ._layers import clear_static_cache
 
 __all__ = [
@@ -31,5 +31,4 @@ __all__ = [
     "image_space",
     "motion_volume",
     "clear_static_cache",
-    "exact",
 ]

@@ -12,12 +12,23 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._validate import as_int
 from ..raster import Frame
 from ..scene import Scene
 from ._layers import Layer, object_draw, paste, raster_layer, resolve, static_layer, supersampled
 from ._painter import painter_for
 
-__all__ = ["accumulate", "HalfSums", "composited_difference", "HALVES_FACTOR"]
+__all__ = [
+    "accumulate",
+    "sample_times",
+    "HalfSums",
+    "composited_difference",
+    "HALVES_FACTOR",
+    "MAX_TIME_SAMPLES",
+]
+
+#: Most time samples a frame (``accumulation``'s ``samples``) or a :class:`Sequence` averages.
+MAX_TIME_SAMPLES = 1 << 16
 
 
 #: The error of an N-sample frame over the RMS difference of its two interleaved halves (each
@@ -31,6 +42,21 @@ HALVES_FACTOR = {"stratified": 0.25, "jittered": 0.38}
 def _nearest(values: np.ndarray, target: float) -> int:
     """The position in ``values`` of the value nearest ``target``."""
     return int(np.argmin(np.abs(values - target)))
+
+
+def sample_times(scene: Scene, n: int, sampling: str = "stratified", seed: int = 0):
+    """(times (N,), weights (N,)) of N shutter samples: stratified or jittered times, weights the
+    shutter filter's integral over each stratum (summing to 1)."""
+    n = as_int(n, "samples", minimum=1, maximum=MAX_TIME_SAMPLES)
+    if sampling == "stratified":
+        u = np.full(n, 0.5)
+    elif sampling == "jittered":
+        u = np.random.default_rng(as_int(seed, "seed", minimum=0)).random(n)
+    else:
+        raise ValueError(f"sampling: expected 'stratified' or 'jittered', got {sampling!r}")
+    times = (np.arange(n) + u) / n
+    w = np.diff(scene.shutter_cdf(np.arange(n + 1) / n))
+    return times, w / w.sum()
 
 
 def composited_difference(a: np.ndarray, b: np.ndarray, background) -> np.ndarray:
@@ -111,7 +137,9 @@ class HalfSums:
         times, weights = np.ascontiguousarray(times, np.float64), np.ascontiguousarray(weights, np.float64)
         mass = float(weights.sum())
         ref = _nearest(times, self.scene.reference_t)
-        self.parts.append((half, times, weights, accumulate(self.scene, times, weights / mass, ref, 1.0, self.aa)))
+        self.parts.append(
+            (half, times, weights, accumulate(self.scene, times, weights / mass, ref, 1.0, self.aa))
+        )
 
     def reweight(self, weight_of) -> None:
         """Every part's weights replaced by ``weight_of(times) -> weights`` and moved to the half
@@ -142,6 +170,7 @@ class HalfSums:
             samples=self.samples,
             draw_calls=sum(c["draw_calls"] for c in calls),
             static_draws=max(c["static_draws"] for c in calls),
+            static_cached=calls[0].get("static_cached", False),
             window=tuple(f(w[i] for w in wins) for i, f in enumerate((min, min, max, max))) if wins else None,
         )
         diff = composited_difference(a, b, self.scene.background)

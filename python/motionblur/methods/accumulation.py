@@ -23,27 +23,9 @@ from ..budget import need
 from ..raster import Frame
 from ..render import register
 from ..scene import Scene
-from ._accumulate import HalfSums, accumulate
+from ._accumulate import MAX_TIME_SAMPLES, HalfSums, accumulate, sample_times
 
 __all__ = ["accumulation", "sample_times", "Sequence", "MAX_TIME_SAMPLES"]
-
-#: Most time samples a frame (``accumulation``'s ``samples``) or a :class:`Sequence` averages.
-MAX_TIME_SAMPLES = 1 << 16
-
-
-def sample_times(scene: Scene, n: int, sampling: str = "stratified", seed: int = 0):
-    """(times (N,), weights (N,)) of N shutter samples: stratified or jittered times, weights the
-    shutter filter's integral over each stratum (summing to 1)."""
-    n = as_int(n, "samples", minimum=1, maximum=MAX_TIME_SAMPLES)
-    if sampling == "stratified":
-        u = np.full(n, 0.5)
-    elif sampling == "jittered":
-        u = np.random.default_rng(as_int(seed, "seed", minimum=0)).random(n)
-    else:
-        raise ValueError(f"sampling: expected 'stratified' or 'jittered', got {sampling!r}")
-    times = (np.arange(n) + u) / n
-    w = np.diff(scene.shutter_cdf(np.arange(n + 1) / n))
-    return times, w / w.sum()
 
 
 @register(
@@ -82,9 +64,6 @@ def accumulation(
     for j, h in enumerate(halves):
         sums.add(times[h], weights[h], j)
     return sums.frame()
-
-
-
 
 
 class Sequence:

@@ -40,10 +40,9 @@ from .._validate import as_float, as_int
 from ..raster import Frame
 from ..render import METHODS, register
 from ..scene import Scene
-from ._accumulate import HalfSums
+from ._accumulate import HalfSums, sample_times
 from ._estimate import EXACT_OPTIONS
-from .accumulation import sample_times
-from .analytic import segment_times
+from ._segments import segment_times
 
 __all__ = [
     "auto",
@@ -69,7 +68,7 @@ FIRST_SAMPLES = 4
 #: point; slower where a pixel sees many edges), until two renders show their own.
 RATE = 0.9
 #: Most time samples auto gives accumulation.
-MAX_SAMPLES = 4096
+MAX_SAMPLES = 1 << 12
 #: Most accumulation renders after the first.
 MAX_STEPS = 3
 #: Sample count from which the analytic frame is timed as the alternative.
@@ -103,7 +102,9 @@ class _Trials:
 
     def _record(self, method: str, options: dict, frame: Frame, ms: float, est: float) -> Frame:
         frame.stats["error_estimate"] = est
-        self.tried.append({"method": method, "options": dict(options), "ms": round(ms, 3), "error_estimate": est})
+        self.tried.append(
+            {"method": method, "options": dict(options), "ms": round(ms, 3), "error_estimate": est}
+        )
         self.frames.append(frame)
         return frame
 
@@ -149,7 +150,9 @@ class _Trials:
     def per_sample_ms(self) -> float:
         """Milliseconds per time sample of the accumulation renders so far."""
         acc = [t for t in self.tried if t["method"] == "accumulation" and "pilot" not in t["options"]]
-        return sum(t["ms"] for t in acc) / max(1, self.sums.samples if self.sums else acc[-1]["options"]["samples"])
+        return sum(t["ms"] for t in acc) / max(
+            1, self.sums.samples if self.sums else acc[-1]["options"]["samples"]
+        )
 
     def analytic_ms(self) -> float:
         """The analytic frame's predicted time: :data:`ANALYTIC_COST` x (its segments + 8) x the
@@ -159,16 +162,19 @@ class _Trials:
         t0 = time.perf_counter()
         segments = len(segment_times(scene, moving, scene.camera)) - 1
         ms = (time.perf_counter() - t0) * 1e3
-        self.tried.append({"method": "analytic", "options": {"pilot": f"{segments} segments"}, "ms": round(ms, 3)})
+        self.tried.append(
+            {"method": "analytic", "options": {"pilot": f"{segments} segments"}, "ms": round(ms, 3)}
+        )
         return ANALYTIC_COST * (segments + 8) * self.per_sample_ms()
 
 
 def _next_count(n: int, want: float) -> int:
     """The sample count after ``n`` for an estimated need of ``want``: the smallest odd multiple
-    of ``n`` at least ``want`` (the samples drawn are kept) unless that overshoots by half, else
-    ``want`` rounded up to even."""
+    of ``n`` at least ``want`` (whose grid keeps the ``n`` samples drawn, so it draws the others
+    only) when that draws no more new samples than ``want`` rounded up to even does afresh."""
     odd = n * (2 * math.ceil((want / n - 1) / 2) + 1)
-    return int(min(MAX_SAMPLES, odd if odd < 1.5 * want else 2 * math.ceil(want / 2)))
+    fresh = 2 * math.ceil(want / 2)
+    return int(min(MAX_SAMPLES, odd if odd - n <= fresh else fresh))
 
 
 def _for_tolerance(trials: _Trials, tol: float) -> str:
@@ -184,7 +190,11 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
         est, n = trials.last["error_estimate"], trials.last["options"]["samples"]
         if est <= aim:
             return f"accumulation-{n} estimates {est:.3g} <= {SAFETY} x tolerance"
-        measured = [(t["options"]["samples"], t["error_estimate"]) for t in trials.tried if t["method"] == "accumulation"]
+        measured = [
+            (t["options"]["samples"], t["error_estimate"])
+            for t in trials.tried
+            if t["method"] == "accumulation"
+        ]
         if len(measured) >= 2 and measured[-2][1] > est > 0:  # the rate these two renders show
             (n0, e0), (n1, e1) = measured[-2:]
             rate = min(1.2, max(0.5, math.log(e0 / e1) / math.log(n1 / n0)))
@@ -217,7 +227,9 @@ def _for_budget(trials: _Trials, budget: float) -> str:
             return f"the analytic frame (predicted {an:.0f} ms) fits the {budget:g} ms budget"
         n = int(left * 0.9 / max(trials.per_sample_ms(), 1e-6))
     if n <= 4:
-        return f"the first render (4 samples) used the budget's time: {trials.last['ms']:.1f} ms of {budget:g}"
+        return (
+            f"the first render (4 samples) used the budget's time: {trials.last['ms']:.1f} ms of {budget:g}"
+        )
     trials.accumulate(min(MAX_SAMPLES, n - n % 2))
     return f"accumulation with the most samples that fit {budget:g} ms at {trials.per_sample_ms():.3f} ms a sample"
 
@@ -261,4 +273,3 @@ def auto(scene: Scene, tolerance=None, budget_ms=None, aa: int = 1) -> Frame:
         "why": why,
     }
     return frame
-
