@@ -31,7 +31,7 @@ from .interop import read_image, to_mitsuba_dict
 from .methods._estimate import exact
 from .methods.accumulation import Sequence
 from .raster import *  # noqa: F403
-from .render import METHODS, MethodNotApplicableWarning, register, render
+from .render import METHODS, MethodNotApplicableWarning, PoorBlurWarning, register, render
 from .scene import *  # noqa: F403
 from .scenes_builtin import SCENES, builtin_scene
 from .shell import *  # noqa: F403
@@ -67,6 +67,7 @@ __all__ += [
     "to_mitsuba_dict",
     "MissingDependencyError",
     "MethodNotApplicableWarning",
+    "PoorBlurWarning",
 ]
 
 tidy(__name__)

@@ -28,7 +28,22 @@ import numpy as np
 from .raster import Frame, over_background
 from .scene import Scene
 
-__all__ = ["render", "register", "METHODS", "MethodSpec", "methods_for", "MethodNotApplicableWarning"]
+__all__ = [
+    "render",
+    "register",
+    "METHODS",
+    "MethodSpec",
+    "methods_for",
+    "MethodNotApplicableWarning",
+    "PoorBlurWarning",
+]
+
+
+class PoorBlurWarning(UserWarning):
+    """The frame's error estimate is larger than the unblurred frame's (the sharp frame at
+    mid-shutter, measured by the same pilot): on this scene the method blurs worse than not
+    blurring at all. ``accumulation`` and ``analytic`` (or ``auto``) give the exact integral's
+    approximation that converges."""
 
 
 class MethodNotApplicableWarning(UserWarning):
@@ -143,6 +158,14 @@ def render(
     frame.stats["ms"] = (time.perf_counter() - t0) * 1e3
     if error_estimate and "error_estimate" not in frame.stats and ESTIMATOR:
         frame.stats.update(ESTIMATOR[0](scene, method, options))
+        if frame.stats.get("error_estimate", 0.0) > frame.stats.get("unblurred_estimate", float("inf")) > 0.0:
+            warnings.warn(
+                f"method {method!r}: estimated RMSE {frame.stats['error_estimate']:.3g} against the exact "
+                f"integral is above the unblurred frame's {frame.stats['unblurred_estimate']:.3g} on this "
+                "scene (its blur is worse than none); 'accumulation', 'analytic' or 'auto' converge to it",
+                PoorBlurWarning,
+                stacklevel=2,
+            )
     if lens is not None and "error_estimate" in frame.stats:
         frame.stats["error_estimate_how"] += " (of the motion blur before the lens)"
     return frame
