@@ -14,7 +14,8 @@ With ``tolerance`` (RMSE against the exact integral, premultiplied linear RGBA):
 2. accumulation with :data:`FIRST_SAMPLES` samples measures the scene's error at that N;
 3. since the error falls about as 1/N (:data:`RATE`), the N that brings the estimate under
    ``tolerance`` x :data:`SAFETY` is predicted and rendered, keeping the samples drawn when N
-   is an odd multiple of the last count, and again while the estimate says it missed (each
+   is an odd multiple of the last count (with fewer than :data:`SURE_SAMPLES` samples the aim is
+   lower: their halves spread more), and again while the estimate says it missed (each
    step predicted from the last two measurements, at most :data:`MAX_STEPS` steps);
 4. when that N would cost more than the analytic frame (predicted from its segment count and
    accumulation's time per sample, only asked once N reaches :data:`ANALYTIC_FROM`), or exceed
@@ -52,6 +53,7 @@ __all__ = [
     "FIRST_SAMPLES",
     "MAX_SAMPLES",
     "RATE",
+    "SURE_SAMPLES",
     "MAX_STEPS",
     "ANALYTIC_ERROR",
     "ANALYTIC_FROM",
@@ -62,11 +64,14 @@ __all__ = [
 DEFAULT_TOLERANCE = 0.01
 #: The share of the tolerance auto aims its estimate at (the estimate's own spread).
 SAFETY = 0.85
+#: Below this many samples the halves hold few samples each and their estimate spreads more:
+#: the aim shrinks as sqrt(N / SURE_SAMPLES) (chosen on the tuning scenes).
+SURE_SAMPLES = 8
 #: Time samples of the first accumulation render (two halves of 2).
 FIRST_SAMPLES = 4
 #: The rate auto first assumes the error falls at, as N^-RATE (1 for an edge's coverage at one
 #: point; slower where a pixel sees many edges), until two renders show their own.
-RATE = 0.9
+RATE = 1.0
 #: Most time samples auto gives accumulation.
 MAX_SAMPLES = 1 << 12
 #: Most accumulation renders after the first.
@@ -188,7 +193,7 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
     rate = RATE
     for _ in range(MAX_STEPS + 1):
         est, n = trials.last["error_estimate"], trials.last["options"]["samples"]
-        if est <= aim:
+        if est <= aim * min(1.0, math.sqrt(n / SURE_SAMPLES)):
             return f"accumulation-{n} estimates {est:.3g} <= {SAFETY} x tolerance"
         measured = [
             (t["options"]["samples"], t["error_estimate"])
