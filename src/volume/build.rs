@@ -139,7 +139,8 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
                     neighbors,
                     planes: Some(mesh.face_planes()),
                 });
-            let model = CoverageModel::new(verts, rim, path, f, view, opts.camera);
+            let model =
+                CoverageModel::new(verts, rim, path, f, view, opts.camera).windowed(opts.window);
             let s = subdivision_factor(mesh, path, lengths.iter().sum(), extent);
             let sub = (s > 1).then(|| subdivided(mesh, opts, s)).transpose()?;
             (
