@@ -187,7 +187,10 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         (Some((set, _)), None) => set.contour.clone(),
         _ => contour_from_sides(mesh, &front),
     };
-    let (contour, edge_vis) = select_contour(mesh, contour, &front, vis.as_ref());
+    let strips = line_eye
+        .filter(|_| !path.is_translation())
+        .map(|eye| (path, eye));
+    let (contour, edge_vis) = select_contour(mesh, contour, &front, vis.as_ref(), strips);
     let facing = vis.as_ref().map(|(l, t)| (l.as_slice(), t.as_slice()));
     let mut vol = assemble(
         mesh,
