@@ -19,7 +19,10 @@ A piece must hold, for every object with apparent motion (the camera's folded in
 on a fine grid of the shutter (:data:`GRID` steps and every keyframe time):
 
 - the rotation of the object's placement turns at most :data:`MAX_TURN` radians (the sum of the
-  grid steps' angles);
+  grid steps' angles), and its arc (the angle times the farthest vertex's distance from the
+  centroid) is at most :data:`DOMINANCE` times the centroid's displacement over the piece (the
+  paper's "rotates slowly compared to its translation") or below :data:`ARC_PX` pixels (an
+  object that turns in place is drawn about as a sample per piece);
 - the vertex centroid stays within :data:`MAX_BEND` object radii of the chord of the piece
   followed at constant speed (the volume follows the chord with ``segments=1``, and its alphas
   take the time spent along it as uniform: a path that bends, or slows down at a keyframe, is
@@ -42,9 +45,12 @@ from ..scene import Motion, Object, Scene
 #: Largest rotation (radians) of an object's apparent placement within a piece.
 MAX_TURN = 0.35
 #: A turn counts only when its arc (farthest vertex from the centroid) exceeds DOMINANCE times the
-#: centroid's displacement over the piece and ARC_PX pixels.
+#: centroid's displacement over the piece and ARC_PX pixels: the first of these that needs at
+#: most MAX_PIECES pieces (a piece of a turn in place draws the object about where it is at the
+#: piece's end, so the arc is the spacing of samples; 2 px: a face-on propeller 0.16 of the sharp
+#: frame's error, 4 px: 0.34, where 2 px would need too many pieces).
 DOMINANCE = 2.0
-ARC_PX = 2.0
+ARC_PX = (2.0, 4.0)
 #: Largest distance of the vertex centroid from the piece's chord followed at constant speed, in
 #: object radii.
 MAX_BEND = 0.03
@@ -116,15 +122,15 @@ class _Track:
     def measures(self, i: int, js: np.ndarray, view):
         """(turn, bend in radii, sweep in radians) of the pieces from grid index ``i`` to each
         of ``js`` (> i); a turn that the piece's translation dominates, or whose arc is below
-        ARC_PX pixels, counts as 0. ``view``: (eye, forward, focal length in pixels)."""
-        eye, forward, focal = view
+        ``arc_px`` pixels, counts as 0. ``view``: (eye, forward, focal length in pixels, arc_px)."""
+        eye, forward, focal, arc_px = view
         turn = self.turn[js] - self.turn[i]
         c = self.centre
         a = c[i]
         ends = c[js] - a  # (J,3)
         arc = turn * self.radius
         depth = np.maximum(np.minimum((c[js] - eye) @ forward, (a - eye) @ forward), 1e-9)
-        slow = (arc <= DOMINANCE * np.linalg.norm(ends, axis=1)) | (arc * focal / depth <= ARC_PX)
+        slow = (arc <= DOMINANCE * np.linalg.norm(ends, axis=1)) | (arc * focal / depth <= arc_px)
         turn = np.where(slow & (turn <= MAX_TURN), 0.0, turn)
         # the centroid at the inner grid times k against the chord followed at constant speed
         k = np.arange(i + 1, js.max() + 1)
@@ -152,8 +158,15 @@ def _worst(tracks, i: int, j: int, view) -> str:
     out = []
     for k, tr in tracks:
         turn, bend, sweep = (float(x[0]) for x in tr.measures(i, np.array([j]), view))
-        if turn > 0.0:
-            out.append(f"object {k} turns {turn:.2f} rad (at most {MAX_TURN} per piece, less in place)")
+        if turn > MAX_TURN:
+            out.append(f"object {k} turns {turn:.2f} rad (at most {MAX_TURN} per piece)")
+        elif turn > 0.0:
+            eye, forward, focal, arc_px = view
+            depth = max(float((tr.centre[j] - eye) @ forward), 1e-9)
+            out.append(
+                f"object {k} turns {turn:.2f} rad more than it moves, its farthest point "
+                f"{turn * tr.radius * focal / depth:.1f} pixels (at most {arc_px:g} per piece)"
+            )
         if bend > MAX_BEND:
             out.append(f"object {k}'s path bends {bend:.2f} object radii off its chord (at most {MAX_BEND})")
         if sweep > MAX_SWEEP:
@@ -161,11 +174,11 @@ def _worst(tracks, i: int, j: int, view) -> str:
     return "; ".join(out)
 
 
-def _view(scene: Scene):
-    """(eye, forward, focal length in pixels) of the camera at the reference time."""
+def _view(scene: Scene, arc_px: float):
+    """(eye, forward, focal length in pixels, arc_px) of the camera at the reference time."""
     cam = scene.camera_at(scene.reference_t)
     pose = cam.pose
-    return pose[:3, 3], -pose[:3, 2], cam.height / (2.0 * np.tan(0.5 * cam.yfov))
+    return pose[:3, 3], -pose[:3, 2], cam.height / (2.0 * np.tan(0.5 * cam.yfov)), arc_px
 
 
 def _tracks(scene: Scene, spun, times):
@@ -181,21 +194,36 @@ def _tracks(scene: Scene, spun, times):
 
 def plan(scene: Scene, spun=frozenset()) -> np.ndarray:
     """Boundaries (P+1,) of the fewest greedy pieces of the shutter that each hold the criteria
-    of the module docs for every object; ValueError naming ``pieces`` past MAX_PIECES."""
+    of the module docs for every object, with the arc of a turn in place limited to the first of
+    ARC_PX that needs at most MAX_PIECES pieces; ValueError naming ``pieces`` past MAX_PIECES."""
     times = _grid(scene, scene.objects)
     tracks = _tracks(scene, spun, times)
     if not tracks:
         return np.array([0.0, 1.0])
-    view = _view(scene)
+    for k, arc_px in enumerate(ARC_PX):
+        try:
+            return _greedy(times, tracks, _view(scene, arc_px))
+        except ValueError:
+            if k == len(ARC_PX) - 1:
+                raise
+    raise AssertionError("unreachable")
+
+
+def _greedy(times, tracks, view) -> np.ndarray:
     plain = [t for _, t in tracks]
     n = len(times) - 1
     bounds = [0]
     i = 0
     while i < n:
-        js = np.arange(i + 1, n + 1)
-        ok = _fits(plain, i, js, view)
-        # the longest piece whose every shorter prefix fits too (a single grid step always)
-        bad = np.flatnonzero(~ok)
+        # the longest piece whose every shorter prefix fits too, among candidate ends doubling
+        # in reach until one fails (the test of K ends costs K^2)
+        reach = 16
+        while True:
+            js = np.arange(i + 1, min(n, i + reach) + 1)
+            bad = np.flatnonzero(~_fits(plain, i, js, view))
+            if len(bad) or js[-1] == n:
+                break
+            reach *= 2
         if len(bad) and bad[0] == 0:
             raise ValueError(
                 f"pieces: within {times[i + 1] - times[i]:.3g} of the shutter from t = {times[i]:.3g} "
@@ -223,7 +251,7 @@ def check_equal(scene: Scene, pieces: int, spun=frozenset()) -> np.ndarray:
     tracks = _tracks(scene, spun, times)
     if not tracks:
         return bounds
-    view = _view(scene)
+    view = _view(scene, ARC_PX[-1])
     idx = np.searchsorted(times, bounds)
     idx = np.clip(idx, 0, len(times) - 1)
     for a, b in zip(idx[:-1], idx[1:]):
