@@ -188,7 +188,7 @@ def motion_volume(
     contour_line: bool = True,
     visible_only: bool = False,
     contour_table: _ContourTable | None = None,
-    window: tuple[float, float] = (0.0, 1.0),
+    window: tuple[float, float] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, float]:
     """Motion volume for rigid keyframes (K+1, at the times i/K), each interval cut into
     segments (at most MAX_SEGMENTS in total), filter
