@@ -188,6 +188,7 @@ def motion_volume(
     contour_line: bool = True,
     visible_only: bool = False,
     contour_table: _ContourTable | None = None,
+    window: tuple[float, float] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, float]:
     """Motion volume for rigid keyframes (K+1, at the times i/K), each interval cut into
     segments (at most MAX_SEGMENTS in total), filter
@@ -196,7 +197,9 @@ def motion_volume(
     (V,3) float64 | None, camera_position (3,) float64 | None, contour_line (camera: sweep only the
     contour line; False: the camera sets the alphas only), visible_only (camera and contour line:
     leave out the leading/trailing faces facing away from it), contour_table (built for this
-    mesh: the split and contour of its nearest stored direction). Returns vertices (N,3) f64,
+    mesh: the split and contour of its nearest stored direction), window (a, b): the part of the
+    shutter the keyframes stand for (the coverage alphas weigh it by the filter, normalised).
+    Returns vertices (N,3) f64,
     faces (M,3) i64, rgba (N,4) f32, normals (N,3) f32, part (M,) u8, ring_alpha (n+1,) f64,
     the number of contour edges and the contour table's angular error (radians, 0 without).
     Releases the GIL."""

@@ -377,6 +377,7 @@ def motion_volume(
     contour_line: bool = True,
     visible_only: bool = False,
     contour_table: ContourTable | None = None,
+    window=(0.0, 1.0),
 ) -> MotionVolume:
     """Build the motion volume of ``mesh`` over the shutter (paper sections 3.3-3.4, 4.1-4.4).
 
@@ -441,6 +442,11 @@ def motion_volume(
         subdivided for the alphas maps the split to its new faces and finds their contour);
         ``MotionVolume.contour_error`` is the angle between the two. The alphas still follow the
         true motion. Exactly the volume without a table when the motion's direction is stored.
+    window : (a, b) with 0 <= a < b <= 1, default (0, 1): the part of the shutter the keyframes
+        stand for (their times ``i / K`` are the shutter times ``a + (b - a) i / K``); the
+        box/triangle/gaussian alphas weigh the time by the filter over ``[a, b]``, normalised to
+        unit weight (one piece of a shutter drawn as several volumes, as ``render(...,
+        "motion_volume")`` does for motions one volume cannot follow). The ramp ignores it.
 
     Returns
     -------
@@ -466,9 +472,11 @@ def motion_volume(
         if contour_table.mesh is not m and not np.array_equal(contour_table.mesh.faces, m.faces):
             raise ValueError("contour_table: was computed for another mesh (its faces differ from mesh's)")
         table = contour_table._core
+    win = as_array(window, "window", np.float64, (2,))
     out = _core.motion_volume(
-        m._core, keys, seg, filter, col, nrm, cam, per_face, contour_line, visible_only, table
-    )
+        m._core, keys, seg, filter, col, nrm, cam, per_face, contour_line, visible_only, table,
+        (float(win[0]), float(win[1])),
+    )  # fmt: skip
     _check_output(out[0], "motion")
     return MotionVolume(*out)
 

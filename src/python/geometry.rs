@@ -172,9 +172,10 @@ type VolumeTuple<'py> = (
 
 /// The motion volume of `mesh` along `keyframes` (rigid, at the equally spaced shutter times
 /// `i / K`), each interval cut into `segments` joining segments; with `contour_table` (built for
-/// this mesh) the face split and contour come from its nearest stored direction.
+/// this mesh) the face split and contour come from its nearest stored direction; `window`: the
+/// part of the shutter the keyframes stand for (see `VolumeOptions::window`; None: all of it).
 #[pyfunction]
-#[pyo3(signature = (mesh, keyframes, segments, filter, colors, normals = None, camera_position = None, face_colors = false, contour_line = true, visible_only = false, contour_table = None))]
+#[pyo3(signature = (mesh, keyframes, segments, filter, colors, normals = None, camera_position = None, face_colors = false, contour_line = true, visible_only = false, contour_table = None, window = None))]
 #[allow(clippy::too_many_arguments)]
 fn motion_volume<'py>(
     py: Python<'py>,
@@ -189,6 +190,7 @@ fn motion_volume<'py>(
     contour_line: bool,
     visible_only: bool,
     contour_table: Option<&PyContourTable>,
+    window: Option<(f64, f64)>,
 ) -> PyResult<VolumeTuple<'py>> {
     let filter = Filter::parse(filter)?;
     let mut opts = volume_options(
@@ -201,6 +203,7 @@ fn motion_volume<'py>(
     )?;
     opts.visible_only = visible_only;
     opts.contours = contour_table.map(|t| t.inner.clone());
+    opts.window = window.unwrap_or((0.0, 1.0));
     let keys = keyframes.rigid().to_vec();
     let inner = mesh.inner.clone();
     let vol = py.detach(move || {
@@ -288,6 +291,7 @@ fn volume_options(
         contour_line,
         visible_only: false,
         contours: None,
+        window: (0.0, 1.0),
     })
 }
 

@@ -221,6 +221,10 @@ pub struct CoverageModel {
     geometric: Vec<Segment>,
     /// Below this projected length a segment counts as not moving (scene units).
     still: f64,
+    /// The part of the shutter the path stands for, its filter weight (see
+    /// [`CoverageModel::windowed`]).
+    window: (f64, f64),
+    window_weight: f64,
 }
 
 fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -452,7 +456,30 @@ impl CoverageModel {
             segments,
             geometric,
             still,
+            window: (0.0, 1.0),
+            window_weight: 1.0,
         }
+    }
+
+    /// The model with the path standing for the part `(a, b)` of the shutter (its times `t` are
+    /// the shutter times `a + (b - a) t`): the coverage weighs the time by the filter over
+    /// `[a, b]`, normalised to unit weight (`(0, 1)`: the whole shutter, the default). The
+    /// window must have a positive weight (see `check_options`).
+    pub fn windowed(mut self, (a, b): (f64, f64)) -> Self {
+        self.window = (a, b);
+        self.window_weight = self.filter.weight(a, b);
+        self
+    }
+
+    /// The filter weight of the path times `[t0, t1]` within the window, normalised.
+    #[inline]
+    fn weight(&self, t0: f64, t1: f64) -> f64 {
+        let (a, b) = self.window;
+        if (a, b) == (0.0, 1.0) {
+            return self.filter.cumulative(t1) - self.filter.cumulative(t0);
+        }
+        let span = b - a;
+        self.filter.weight(a + t0 * span, a + t1 * span) / self.window_weight
     }
 
     fn local(&self, s: &Segment, p: [f64; 3]) -> (f64, f64) {
@@ -497,8 +524,7 @@ impl CoverageModel {
             };
             if u1 > u0 {
                 let dt = s.t1 - s.t0;
-                sum +=
-                    self.filter.cumulative(s.t0 + u1 * dt) - self.filter.cumulative(s.t0 + u0 * dt);
+                sum += self.weight(s.t0 + u0 * dt, s.t0 + u1 * dt);
             }
         }
         sum.clamp(0.0, 1.0)
@@ -563,5 +589,23 @@ mod tests {
         assert_eq!(m.coverage([2.0, 1.5, 0.0]), 0.0);
         let k = m.knots(0, [0.0, 0.5, 0.0], [4.0, 0.5, 0.0], 1);
         assert!((k[0] - 0.25).abs() < 1e-12 && (k[1] - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_window_weighs_its_part_of_the_shutter() {
+        // The rising half of the triangle filter, normalised, is the weight 2u on the path's
+        // time u: the ramp's cumulative u^2. A box window is the box itself.
+        let path = Path::translation([4.0, 0.0, 0.0]).unwrap();
+        let model =
+            |f: Filter| CoverageModel::new(&square(), None, &path, f, [0.0, 0.0, -1.0], None);
+        let half = model(Filter::Triangle).windowed((0.0, 0.5));
+        let ramp = model(Filter::Ramp);
+        let boxed = model(Filter::Box).windowed((0.3, 0.7));
+        for x in [-0.5, 0.3, 0.5, 1.7, 2.0, 3.2, 4.5] {
+            let p = [x, 0.5, 0.0];
+            assert!((half.coverage(p) - ramp.coverage(p)).abs() < 1e-12, "x {x}");
+            assert!((boxed.coverage(p) - model(Filter::Box).coverage(p)).abs() < 1e-12);
+        }
+        assert!(half.coverage([3.5, 0.5, 0.0]) > 0.2);
     }
 }

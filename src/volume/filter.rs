@@ -72,6 +72,11 @@ impl Filter {
         }
     }
 
+    /// The filter's weight of the shutter interval `[a, b]`: `W(b) - W(a)`.
+    pub fn weight(self, a: f64, b: f64) -> f64 {
+        self.cumulative(b) - self.cumulative(a)
+    }
+
     /// [`Filter::cumulative`] with the gaussian from its definition (the error function's
     /// series), for difference quotients over tiny steps, which would magnify the table's
     /// 1e-14 error (a spin's ring weights).

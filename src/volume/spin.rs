@@ -219,7 +219,7 @@ pub fn spin_volume(mesh: &Mesh, spin: &Spin, opts: &VolumeOptions) -> Result<Mot
         .collect();
     // Every contour edge is swept: the contour-line test of section 3.2 judges a swept sector by
     // the faces at its ends, which for a turning object drops sectors that are in view.
-    let (contour, vis) = select_contour(mesh, contour_from_sides(mesh, &front), &front, None);
+    let (contour, vis) = select_contour(mesh, contour_from_sides(mesh, &front), &front, None, None);
     assemble(
         mesh,
         &path,

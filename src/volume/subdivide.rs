@@ -215,6 +215,7 @@ pub(crate) fn subdivided(
         contour_line: opts.contour_line,
         visible_only: opts.visible_only,
         contours: opts.contours.clone(),
+        window: opts.window,
     };
     Ok((Mesh::new(sv, sf)?, out, parent))
 }

@@ -80,6 +80,11 @@ pub struct VolumeOptions {
     /// the stored direction nearest the summed motion replace the ones computed for it
     /// ([`MotionVolume::contour_error`] is the angle between the two).
     pub contours: Option<Arc<ContourTable>>,
+    /// The part `(a, b)` of the shutter the path stands for (`0 <= a < b <= 1`): its keyframe
+    /// times `i / n` are the shutter times `a + (b - a) i / n`, and the coverage alphas weigh the
+    /// time by the filter over `[a, b]`, normalised to unit weight (a piece of a shutter cut into
+    /// several volumes; `(0, 1)`: the whole shutter). The ramp ignores it.
+    pub window: (f64, f64),
 }
 
 impl Default for VolumeOptions {
@@ -92,6 +97,7 @@ impl Default for VolumeOptions {
             contour_line: true,
             visible_only: false,
             contours: None,
+            window: (0.0, 1.0),
         }
     }
 }
@@ -177,6 +183,13 @@ pub(crate) fn check_options(mesh: &Mesh, opts: &VolumeOptions) -> Result<()> {
     }
     if let Some(eye) = opts.camera {
         check_vector(eye, "camera_position")?;
+    }
+    let (a, b) = opts.window;
+    if !(0.0 <= a && a < b && b <= 1.0) || opts.filter.weight(a, b) <= 0.0 {
+        return Err(Error::value(
+            "window",
+            format!("must be 0 <= a < b <= 1 with a positive filter weight, got ({a}, {b})"),
+        ));
     }
     Ok(())
 }

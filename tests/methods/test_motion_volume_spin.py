@@ -1,6 +1,7 @@
 """motion_volume with spin (paper section 4.3) in render(): the spin found in the folded motion,
-the auto criterion, the spin volume placed in the world, and the error against Mitsuba on the
-rigid spinning_propeller scene."""
+the spin volume only on request (``spin=True``; by default a spinning object is cut into pieces
+of the shutter like any turning one), the spin volume placed in the world, and the error
+against Mitsuba on the rigid spinning_propeller scene."""
 
 from __future__ import annotations
 
@@ -53,14 +54,19 @@ def test_spin_of_recovers_axis_angle_centre_and_translation():
     assert spin_of(wobble, v) is None
 
 
-def test_auto_spins_only_objects_that_turn_in_place():
+def test_spin_volumes_only_on_request():
     for name in ("cube", "airplane", "curved", "pan"):  # translation, orbit, pan: never a spin
         f = mb.render(mb.SCENES[name](width=40, height=30), "motion_volume")
         assert f.stats["spins"] == 0, name
     sc = mb.SCENES["spinning_propeller"](width=40, height=30)
-    assert mb.render(sc, "motion_volume").stats["spins"] == 1
-    assert mb.render(sc, "motion_volume", spin=False).stats["spins"] == 0
-    # the same spin carried 1.5 units sideways: the translation dominates, auto keeps the plain volume
+    # by default (and with False) the spin is cut into pieces of the shutter, each a plain volume
+    for spin in ("auto", False):
+        f = mb.render(sc, "motion_volume", spin=spin)
+        assert f.stats["spins"] == 0 and f.stats["pieces"] > 1 and f.stats["volumes"] == f.stats["pieces"]
+    # with True it is one spin volume (its rotation needs no pieces)
+    f = mb.render(sc, "motion_volume", spin=True)
+    assert f.stats["spins"] == 1 and f.stats["pieces"] == 1
+    # the same spin carried 1.5 units sideways: still a spin about one axis
     v, f = _propeller()
     moving = mb.Object((v, f), motion=_spinning(0.15, shift=(1.5, 0.0, 0.0)))
     sc2 = sc.with_(objects=[moving])
@@ -81,7 +87,7 @@ def test_the_spin_volume_is_placed_in_the_world():
     obj = mb.Object((v, f), color=(0.9, 0.4, 0.2), motion=motion)
     cam = mb.Camera(mb.look_at((0.0, -1.0, 3.6), (0.0, 0.0, 0.0)), 0.75, 64, 48, znear=0.5, zfar=30.0)
     sc = mb.Scene([obj], cam)
-    got = mb.render(sc, "motion_volume", filter="box")
+    got = mb.render(sc, "motion_volume", filter="box", spin=True)
     assert got.stats["spins"] == 1
     wv = v @ place[:3, :3].T + place[:3, 3]
     vol = mb.spin_volume(
@@ -93,17 +99,17 @@ def test_the_spin_volume_is_placed_in_the_world():
 
 
 @pytest.mark.mitsuba
-def test_spin_beats_the_plain_volume_and_no_blur_against_mitsuba():
+def test_spin_and_pieces_beat_no_blur_against_mitsuba():
     sc = mb.SCENES["spinning_propeller"](width=80, height=60)
     ref = mitsuba(sc, times=32, spp=4).rgba
-    spin = metrics.rmse(mb.render(sc, "motion_volume", segments=4), ref)
-    plain = metrics.rmse(mb.render(sc, "motion_volume", segments=4, spin=False), ref)
+    spin = metrics.rmse(mb.render(sc, "motion_volume", segments=4, spin=True), ref)
+    pieces = metrics.rmse(mb.render(sc, "motion_volume", segments=4), ref)
     prop = sc.objects[0]
     still = sc.with_(objects=[mb.Object((prop.world_vertices(sc.reference_t), prop.mesh.faces), prop.color)])
     sharp = metrics.rmse(mb.render(still, "accumulation", samples=1), ref)
-    # measured: spin 0.059, plain volume 0.14 (the contour of a zero centroid motion: the
-    # propeller opaque at shutter close), no blur 0.12
-    assert spin < 0.6 * plain and spin < 0.6 * sharp, (spin, plain, sharp)
+    # measured: spin volume 0.059, pieces (10 of the shutter) 0.019, no blur 0.17; one plain
+    # volume was 0.14 (the contour of a zero centroid motion: the propeller opaque at close)
+    assert spin < 0.6 * sharp and pieces < 0.6 * spin, (spin, pieces, sharp)
 
 
 def test_contour_line_false_keeps_the_perspective_coverage():

@@ -9,6 +9,11 @@ leaves it sharp. For ``segments`` S the folded motion is sampled at the S + 1 ti
 and the volume joins the contour rings of those placements. Objects without apparent motion are
 drawn sharp and opaque; the volumes are drawn over them with exact (depth-sorted per sample)
 transparency.
+
+A motion one volume cannot follow (an object that turns, a path that bends or changes speed,
+a long path seen in perspective) is cut into pieces of the shutter, each drawn as its own frame
+of volumes, and the frames are summed weighted by the filter's weight of each piece (see
+:mod:`motionblur.methods._volume_pieces`); beyond 64 pieces the method raises ValueError.
 """
 
 from __future__ import annotations
@@ -25,7 +30,7 @@ from ..geometry import motion_volume as build_volume
 from ..geometry import spin_volume as build_spin
 from ..raster import Camera, Draw, Frame
 from ..render import register
-from ..scene import Object, Scene
+from ..scene import Object, Scene, shutter_cdf
 from ._layers import (
     Layer,
     aligned_window,
@@ -38,6 +43,7 @@ from ._layers import (
     window_projection,
 )
 from ._volume_colors import UNLIT, averaged_colors, place, scattered, to_pixels, uniform
+from ._volume_pieces import MAX_PIECES, check_equal, piece_scene, plan
 
 __all__ = ["motion_volume", "apparent_keyframes", "apparent_motion", "camera_folds", "spin_of"]
 
@@ -97,9 +103,6 @@ def apparent_keyframes(scene: Scene, obj: Object, segments: int, folds=None) -> 
 #: Steps the folded motion is sampled at to find a spin (each step must turn less than SPIN_MAX_STEP).
 SPIN_STEPS = 32
 SPIN_MAX_STEP = 2.5
-#: auto spin: the arc the farthest vertex travels about the axis over the shutter, at least this
-#: many times the path of the object's vertex centroid (``|angle| r >= SPIN_DOMINANCE * path``).
-SPIN_DOMINANCE = 4.0
 #: largest angle (radians) between a step's rotation axis and the mean axis for a "fixed" axis.
 SPIN_AXIS_TOLERANCE = np.radians(3.0)
 
@@ -173,17 +176,7 @@ def spin_of(keys: np.ndarray, vertices: np.ndarray) -> dict | None:
     }
 
 
-@register(
-    "motion_volume",
-    # every filter and segment count; and the paper's surface colours, with its ramp and with box
-    sweep=[{"segments": s, "filter": f} for f in FILTERS for s in (1, 2, 4, 8)]
-    + [{"segments": 1, "filter": f, "colors": "contour"} for f in ("ramp", "box")]
-    + [{"segments": 1, "filter": "box", "colors": "averaged"}]
-    + [{"segments": 1, "filter": "box", "color_renders": k} for k in (1, 3, 4)],
-    applies=_rigid,
-    needs="rigid motion only (no deforming object)",
-)
-def motion_volume(
+def _single(
     scene: Scene,
     segments: int = 1,
     filter: str | None = None,
@@ -194,53 +187,12 @@ def motion_volume(
     colors: str = "pixel",
     color_renders: int = 2,
     contour_table=False,
+    window=(0.0, 1.0),
 ):
-    """Motion-volume rendering: each moving object becomes its motion volume, drawn transparent.
-
-    Options: ``segments`` S >= 1 joining segments (the folded motion sampled at S + 1 times);
-    ``filter`` ``"ramp"`` (the paper's), ``"box"``, ``"triangle"`` or ``"gaussian"`` (default:
-    the scene's shutter filter; a scene with custom shutter weights raises ValueError naming
-    ``shutter`` unless a filter is given, the weights are never replaced silently); ``aa`` 1, 2 or 4 spatial
-    samples per pixel along each axis; ``contour_line`` (default True) sweeps only the
-    camera-visible contour edges (section 4.1; the same image with back faces culled, fewer
-    triangles) instead of all of them (the camera at the reference time gives the perspective
-    of the coverage alphas either way; a spin volume gets the camera only with the contour
-    line); ``exact_static`` (default True) redraws the static objects inside the volumes'
-    window with them, one rasterizer pass with exact transparency;
-    False composites the volumes over the kept static layer per sample by depth instead (exact
-    unless a volume passes through a static surface); ``spin`` (paper section 4.3, objects that spin but
-    barely move) ``"auto"`` (default), True or False: with True every moving object whose
-    folded motion turns about one fixed axis (see :func:`spin_of`: 32 steps, each step's axis
-    within 3 degrees of the mean) is drawn as :func:`motionblur.spin_volume` (contour from the
-    axis, alpha from the rotational speed; ``segments`` then does not apply, one ring per
-    pi/12); with ``"auto"`` only those that spin in place: the arc the vertex farthest from the
-    axis travels is at least 4 times the path of the object's vertex centroid
-    (``|angle| r >= 4 path``: a propeller or wheel, not an object orbiting a far axis nor a
-    camera pan); False never; ``colors`` ``"pixel"`` (default), ``"averaged"`` or
-    ``"contour"``: the paper's volume (``"contour"``) carries the object's own surface colours
-    (joining surfaces take theirs from the contour edges, section 4.1, which the paper itself
-    names a weakness: a shaded sphere's streak shows its rim's shading, not the average of its
-    surface). The other two give a translation volume (not a spin volume) the time-averaged
-    colour the camera sees, drawn unlit (see :mod:`motionblur.methods._volume_colors`):
-    ``"averaged"`` per volume vertex, from one sharp render at mid-shutter box-blurred along the
-    centroid's image path (one extra pass); ``"pixel"`` per pixel, from ``color_renders`` K >= 1
-    sharp renders of the moving objects at the middles of K equal pieces of the shutter, each
-    pixel splatted along its own 3D point's image path (K extra passes): the volume gives each
-    pixel its coverage alpha A (its geometry, the coverage model and the depth test against the
-    static scene) and the splatted image its colour C, the pixel is A C over the static scene
-    (where the splatted alpha is below 1e-3 the volume's vertex colours, sampled from the same
-    image, stand in). Scenes whose moving objects all have one flat colour skip it (nothing to
-    average); with a spin volume in the frame ``"pixel"`` falls back to ``"averaged"``.
-    ``contour_table`` (paper section 4.4) False (default); True or an int K: each moving
-    object's mesh gets a :class:`motionblur.ContourTable` of K (True: 128) stochastic directions,
-    built at its first frame and kept (the last 8 meshes), and its volume sweeps the face split
-    and contour stored for the direction nearest its motion instead of computing them; or
-    ContourTables (one, or a list), used for the objects whose mesh they were built for.
-    Deforming objects raise ValueError (use accumulation or blur shells). Returns a Frame;
-    ``stats`` counts the volume triangles, the spins and the volumes with averaged colours, and
-    with tables has ``contour_error``, the largest angle (radians) between an object's motion and
-    the stored direction it swept.
-    """
+    """One motion volume per moving object over the whole shutter of ``scene`` (the paper's
+    method; the options as :func:`motion_volume`'s). ``window``: the part of the original shutter
+    ``scene``'s stands for (a piece, see :func:`motion_volume`): the coverage alphas weigh its
+    time by the filter over that part (a spin volume takes a box weight within it)."""
     segments = as_segments(segments)
     if filter is None:
         if not isinstance(scene.shutter, str):
@@ -289,7 +241,7 @@ def motion_volume(
             continue
         apparent = apparent_motion(scene, obj, segments, folds)
         keys = apparent.transforms()
-        turns = spin is not False and _rotates(scene, obj) and (spin is True or _may_spin(keys, obj))
+        turns = spin is True and _rotates(scene, obj)
         if _still(keys) and not turns:
             if not scene.camera_moves:
                 still.append((k, obj))
@@ -304,15 +256,16 @@ def motion_volume(
             if spin_folds is None and scene.camera_moves:
                 spin_folds = camera_folds(scene, SPIN_STEPS)
             sp = spin_of(apparent_keyframes(scene, obj, SPIN_STEPS, spin_folds), obj.mesh.vertices)
-            if sp is not None and (spin is True or sp["dominance"] >= SPIN_DOMINANCE):
-                vol = _spin_volume(obj, keys[0], sp, filter, eye if contour_line else None)
+            if sp is not None:
+                spin_filter = filter if tuple(window) == (0.0, 1.0) else "box"
+                vol = _spin_volume(obj, keys[0], sp, spin_filter, eye if contour_line else None)
                 stats["spins"] += 1
         drawn_as = obj
         if vol is None:
             table = table_for(obj.mesh)
             vol = build_volume(
                 obj.mesh, apparent, segments=1, filter=filter, colors=obj.rgba, camera_position=eye,
-                contour_line=contour_line, visible_only=contour_line, contour_table=table,
+                contour_line=contour_line, visible_only=contour_line, contour_table=table, window=window,
             )  # fmt: skip
             if table is not None:
                 stats["contour_error"] = max(stats.get("contour_error", 0.0), vol.contour_error)
@@ -418,6 +371,160 @@ def motion_volume(
     return frame
 
 
+@register(
+    "motion_volume",
+    # every filter and segment count; and the paper's surface colours, with its ramp and with box
+    sweep=[{"segments": s, "filter": f} for f in FILTERS for s in (1, 2, 4, 8)]
+    + [{"segments": 1, "filter": f, "colors": "contour"} for f in ("ramp", "box")]
+    + [{"segments": 1, "filter": "box", "colors": "averaged"}]
+    + [{"segments": 1, "filter": "box", "color_renders": k} for k in (1, 3, 4)],
+    applies=_rigid,
+    needs="rigid motion only (no deforming object)",
+)
+def motion_volume(
+    scene: Scene,
+    segments: int = 1,
+    filter: str | None = None,
+    aa: int = 1,
+    contour_line: bool = True,
+    exact_static: bool = True,
+    spin="auto",
+    colors: str = "pixel",
+    color_renders: int = 2,
+    contour_table=False,
+    pieces="auto",
+):
+    """Motion-volume rendering: each moving object becomes its motion volume, drawn transparent.
+
+    Options: ``pieces`` ``"auto"`` (default) or an int P >= 1: the shutter is cut into pieces,
+    each short enough for one volume (see :mod:`motionblur.methods._volume_pieces`: per piece an
+    object turns at most 0.35 rad, less when it turns in place, its centroid stays within 0.03
+    object radii of the chord followed at constant speed and crosses at most 0.6 rad of the
+    view), every piece is rendered as its own frame of volumes
+    and the frames are summed, weighted by the shutter filter's weight of each piece (the
+    time-averaged image is linear in time; the coverage alphas of a piece's volumes weigh its
+    time by the filter, a spin volume's by a box). ``"auto"`` takes the fewest pieces that hold (one for a straight, slow enough
+    translation: the paper's method) and raises ValueError naming ``pieces`` past 64; an int
+    takes P equal pieces and raises ValueError naming ``pieces`` when one of them breaks the
+    limits (never a silently wrong frame: use ``"auto"``, or the ``analytic`` or
+    ``accumulation`` methods). With more than one piece the ``ramp`` filter (the paper's
+    look, one volume over the shutter) raises ValueError.
+    ``segments`` S >= 1 joining segments per piece (its folded motion sampled at S + 1 times);
+    ``filter`` ``"ramp"`` (the paper's), ``"box"``, ``"triangle"`` or ``"gaussian"`` (default:
+    the scene's shutter filter; a scene with custom shutter weights raises ValueError naming
+    ``shutter`` unless a filter is given, the weights are never replaced silently); ``aa`` 1, 2 or 4 spatial
+    samples per pixel along each axis; ``contour_line`` (default True) sweeps only the
+    camera-visible contour edges (section 4.1; the same image with back faces culled, fewer
+    triangles) instead of all of them (the camera at the reference time gives the perspective
+    of the coverage alphas either way; a spin volume gets the camera only with the contour
+    line); ``exact_static`` (default True) redraws the static objects inside the volumes'
+    window with them, one rasterizer pass with exact transparency;
+    False composites the volumes over the kept static layer per sample by depth instead (exact
+    unless a volume passes through a static surface); ``spin`` (paper section 4.3, objects that spin but
+    barely move) ``"auto"`` (default), True or False: with True every moving object whose
+    folded motion turns about one fixed axis (see :func:`spin_of`: 32 steps, each step's axis
+    within 3 degrees of the mean) is drawn as :func:`motionblur.spin_volume` (contour from the
+    axis, alpha from the rotational speed; ``segments`` then does not apply, one ring per
+    pi/12; its rotation does not count against the pieces' limits). It is the paper's
+    approximation: measured against the exact integral it gave +27% coverage for a box spun
+    about the view axis and +40% seen side-on (worse than no blur), so ``"auto"`` and False never
+    draw one: a spinning object is cut into pieces like any turning one. ``colors`` ``"pixel"``
+    (default), ``"averaged"`` or
+    ``"contour"``: the paper's volume (``"contour"``) carries the object's own surface colours
+    (joining surfaces take theirs from the contour edges, section 4.1, which the paper itself
+    names a weakness: a shaded sphere's streak shows its rim's shading, not the average of its
+    surface). The other two give a translation volume (not a spin volume) the time-averaged
+    colour the camera sees, drawn unlit (see :mod:`motionblur.methods._volume_colors`):
+    ``"averaged"`` per volume vertex, from one sharp render at mid-shutter box-blurred along the
+    centroid's image path (one extra pass); ``"pixel"`` per pixel, from ``color_renders`` K >= 1
+    sharp renders of the moving objects at the middles of K equal pieces of the shutter, each
+    pixel splatted along its own 3D point's image path (K extra passes): the volume gives each
+    pixel its coverage alpha A (its geometry, the coverage model and the depth test against the
+    static scene) and the splatted image its colour C, the pixel is A C over the static scene
+    (where the splatted alpha is below 1e-3 the volume's vertex colours, sampled from the same
+    image, stand in). Scenes whose moving objects all have one flat colour skip it (nothing to
+    average); with a spin volume in the frame ``"pixel"`` falls back to ``"averaged"``.
+    ``contour_table`` (paper section 4.4) False (default); True or an int K: each moving
+    object's mesh gets a :class:`motionblur.ContourTable` of K (True: 128) stochastic directions,
+    built at its first frame and kept (the last 8 meshes), and its volume sweeps the face split
+    and contour stored for the direction nearest its motion instead of computing them; or
+    ContourTables (one, or a list), used for the objects whose mesh they were built for.
+    Deforming objects raise ValueError (use accumulation or blur shells). Returns a Frame;
+    ``stats`` counts the pieces, the volume triangles, the spins and the volumes with averaged
+    colours (summed over the pieces), and with tables has ``contour_error``, the largest angle
+    (radians) between an object's motion and the stored direction it swept.
+    """
+    if not (isinstance(pieces, str) and pieces == "auto"):
+        if isinstance(pieces, str):
+            raise ValueError(f"pieces: expected 'auto' or an int >= 1, got {pieces!r}")
+        pieces = as_int(pieces, "pieces", minimum=1, maximum=MAX_PIECES)
+    if filter is None and isinstance(scene.shutter, str):
+        filter = scene.shutter
+    options = dict(
+        segments=segments, filter=filter, aa=aa, contour_line=contour_line, exact_static=exact_static,
+        spin=spin, colors=colors, color_renders=color_renders, contour_table=contour_table,
+    )  # fmt: skip
+    moves = scene.camera_moves or any(o.is_moving for o in scene.objects)
+    if filter is None or not _rigid(scene) or not moves:
+        bounds = np.array([0.0, 1.0])  # _single raises (custom weights, deforming objects) or no motion
+    else:
+        as_choice(filter, "filter", FILTERS, type_error=False)
+        spun = _spun(scene) if spin is True else frozenset()
+        bounds = plan(scene, spun) if pieces == "auto" else check_equal(scene, pieces, spun)
+    if len(bounds) == 2:
+        frame = _single(scene, **options)
+        frame.stats["pieces"] = 1
+        return frame
+    if filter == "ramp":
+        raise ValueError(
+            f"filter: 'ramp' (the paper's look) is one volume over the shutter, and this motion needs "
+            f"{len(bounds) - 1} pieces of it (it turns, bends or crosses the view too much for one "
+            "volume); pass filter='box', 'triangle' or 'gaussian', or use render(scene, 'analytic') "
+            "or render(scene, 'accumulation')"
+        )
+    weights = np.diff(shutter_cdf(filter, bounds))
+    frames = []
+    for a, b, w in zip(bounds[:-1], bounds[1:], weights):
+        if w > 0.0:
+            piece = piece_scene(scene, float(a), float(b))
+            frames.append((w, _single(piece, **options, window=(float(a), float(b)))))
+    return _summed(frames, len(bounds) - 1, filter)
+
+
+def _spun(scene: Scene) -> frozenset:
+    """Indices of the objects ``spin=True`` draws as spin volumes (see :func:`spin_of`)."""
+    folds = camera_folds(scene, SPIN_STEPS) if scene.camera_moves else None
+    out = set()
+    for k, obj in enumerate(scene.objects):
+        if (obj.is_moving or scene.camera_moves) and _rotates(scene, obj):
+            keys = apparent_keyframes(scene, obj, SPIN_STEPS, folds)
+            if spin_of(keys, obj.mesh.vertices) is not None:
+                out.add(k)
+    return frozenset(out)
+
+
+def _summed(frames, pieces: int, filter: str) -> Frame:
+    """The pieces' frames ``(weight, Frame)`` summed: RGBA weighted, depth and ids of the nearest."""
+    rgba = np.zeros_like(frames[0][1].rgba, dtype=np.float64)
+    for w, f in frames:
+        rgba += w * f.rgba
+    depth = np.stack([f.depth for _, f in frames])
+    near = np.argmin(depth, axis=0)[None]
+    ids = np.take_along_axis(np.stack([f.ids for _, f in frames]), near, axis=0)[0]
+    out = Frame(rgba.astype(np.float32), np.take_along_axis(depth, near, axis=0)[0], ids, None)
+    stats = {"pieces": pieces, "filter": filter}
+    for _, f in frames:
+        for k, v in f.stats.items():
+            if k in ("volumes", "volume_triangles", "spins", "averaged"):
+                stats[k] = stats.get(k, 0) + v
+            elif k == "contour_error":
+                stats[k] = max(stats.get(k, 0.0), v)
+            elif k not in stats and k != "window":
+                stats[k] = v
+    out.stats.update(stats)
+    return out
+
+
 #: Directions of the tables ``contour_table=True`` builds, and the meshes whose tables are kept.
 CONTOUR_DIRECTIONS = 128
 _TABLES: OrderedDict = OrderedDict()
@@ -490,25 +597,6 @@ def _spin_volume(obj: Object, open_pose: np.ndarray, sp: dict, filter: str, eye)
     rot = m / np.cbrt(np.linalg.det(m))
     vol.normals = (vol.normals @ rot.T).astype(np.float32)
     return vol
-
-
-def _may_spin(keys: np.ndarray, obj: Object) -> bool:
-    """A cheap necessary test for the auto spin on the coarse placements ``keys``: a spin in
-    place has its axis within R/3 of the centroid (R its farthest vertex), so its farthest arc
-    is at most 4R/3 times the angle; with a margin, run the 32-step test only when
-    ``angle * 2R >= SPIN_DOMINANCE * centroid chord path``."""
-    m3 = keys[:, :3, :3]
-    scale = np.cbrt(abs(np.linalg.det(m3[0])))
-    rots = m3 / scale
-    angle = sum(np.linalg.norm(_rotvec(b @ a.T)) for a, b in zip(rots[:-1], rots[1:]))
-    if not keys.shape[0] > 1 or angle <= 0.0:
-        return False
-    v = obj.mesh.vertices
-    c = v.mean(axis=0)
-    radius = float(np.sqrt(((v - c) ** 2).sum(axis=1).max())) * scale
-    path = m3 @ c + keys[:, :3, 3]
-    chord = float(np.linalg.norm(np.diff(path, axis=0), axis=1).sum())
-    return angle * 2.0 * radius >= SPIN_DOMINANCE * chord
 
 
 def _rotates(scene: Scene, obj: Object) -> bool:
