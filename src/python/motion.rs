@@ -5,7 +5,7 @@ use std::sync::Arc;
 use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
-use super::convert::{c_slice, rows_array, shaped, vec3};
+use super::convert::{c_slice, detached_in_pool, rows_array, shaped, vec3};
 use crate::{axis_angle, check_times, Error, Keyframes, Mat4, Similarity};
 
 /// The argument names a caller may give the matrices (errors name it).
@@ -76,7 +76,7 @@ impl PyKeyframes {
         let keys = match (transforms, vertices) {
             (Some(m), None) => {
                 let mats = matrices(&m, name)?;
-                py.detach(move || Keyframes::rigid(t, &mats, name))?
+                detached_in_pool(py, move || Keyframes::rigid(t, &mats, name))?
             }
             (None, Some(v)) => {
                 let shape = v.shape().to_vec();
@@ -101,7 +101,7 @@ impl PyKeyframes {
                 let flat = c_slice(&v, "vertices")?;
                 let rows: Vec<[f64; 3]> =
                     flat.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
-                py.detach(move || Keyframes::deforming(t, rows))?
+                detached_in_pool(py, move || Keyframes::deforming(t, rows))?
             }
             _ => {
                 return Err(Error::value(
@@ -168,9 +168,11 @@ impl PyKeyframes {
     ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
         let t = finite(t, "t")?;
         let inner = self.inner.clone();
-        let v = py
-            .detach(move || inner.vertices_at(t))
-            .ok_or_else(|| Error::value("motion", "vertices_at needs a deforming motion"))?;
+        let v = detached_in_pool(py, move || {
+            inner
+                .vertices_at(t)
+                .ok_or_else(|| Error::value("motion", "vertices_at needs a deforming motion"))
+        })?;
         Ok(rows_array(py, v))
     }
 

@@ -232,7 +232,10 @@ impl PyBlurShell {
         let out = buf.slices();
         let plan = &plan;
         if inner.parallel() {
-            detached_in_pool(py, move || inner.build_into(plan, out, v, n));
+            detached_in_pool(py, move || {
+                inner.build_into(plan, out, v, n);
+                Ok(())
+            })?;
         } else {
             py.detach(move || inner.build_into(plan, out, v, n));
         }
