@@ -63,7 +63,7 @@ fn check_count(name: &'static str, n: usize) -> Result<usize> {
     } else {
         Err(Error::value(
             name,
-            format!("the number of threads must be in 1..={MAX_THREADS}, got {n}"),
+            format!("the number of threads must be from 1 to {MAX_THREADS}, got {n}"),
         ))
     }
 }
@@ -86,7 +86,7 @@ fn parse_env(text: &str) -> Result<Option<usize>> {
     let bad = || {
         Error::value(
             NUM_THREADS_ENV,
-            format!("expected a whole number of threads in 1..={MAX_THREADS}, got {text:?}"),
+            format!("expected a whole number of threads from 1 to {MAX_THREADS}, got {text:?}"),
         )
     };
     let n: usize = text.parse().map_err(|_| bad())?;
@@ -261,7 +261,7 @@ mod tests {
         for n in [0, MAX_THREADS + 1, usize::MAX] {
             let e = set_num_threads(n).unwrap_err().to_string();
             assert!(
-                e.starts_with("n: the number of threads must be in 1..=1024"),
+                e.starts_with("n: the number of threads must be from 1 to 1024"),
                 "{e}"
             );
         }
