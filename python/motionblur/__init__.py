@@ -15,6 +15,7 @@ from . import (
     interop,
     meshes,
     methods,  # noqa: F401  (registers every built-in rendering method)
+    threads,
 )
 from . import geometry as _geometry
 from . import raster as _raster
@@ -34,6 +35,7 @@ from .render import METHODS, MethodNotApplicableWarning, register, render
 from .scene import *  # noqa: F403
 from .scenes_builtin import SCENES, builtin_scene
 from .shell import *  # noqa: F403
+from .threads import get_num_threads, set_num_threads
 
 __all__ = [
     "__version__",
@@ -41,6 +43,9 @@ __all__ = [
     "budget",
     "memory_budget",
     "set_memory_budget",
+    "threads",
+    "get_num_threads",
+    "set_num_threads",
     "image",
     "meshes",
     "interop",
