@@ -31,6 +31,7 @@ plan again.
 
 from __future__ import annotations
 
+import threading
 import time
 
 from .._validate import as_float, as_int
@@ -48,6 +49,7 @@ STILL_PX = 0.5
 DEFAULT_TOLERANCE = 0.01
 _PLANS: dict[int, tuple[Scene, tuple, dict]] = {}
 _PLAN_CACHE = 16
+_PLANS_LOCK = threading.Lock()
 
 
 def renders_shutter(options: dict, scene: Scene) -> bool:
@@ -203,9 +205,10 @@ def auto(scene: Scene, tolerance=None, budget_ms=None, aa: int = 1, model=None) 
         prepared, choices, info = hit[2]["scene"], hit[2]["choices"], hit[2]["plan"]
     else:
         prepared, choices, info = plan(scene, tolerance, budget_ms, aa, load_model(model) if model else None)
-        if len(_PLANS) >= _PLAN_CACHE:
-            _PLANS.pop(next(iter(_PLANS)))
-        _PLANS[key] = (scene, args, {"scene": prepared, "choices": choices, "plan": info})
+        with _PLANS_LOCK:  # renders in several threads share the plans
+            if len(_PLANS) >= _PLAN_CACHE:
+                _PLANS.pop(next(iter(_PLANS)))
+            _PLANS[key] = (scene, args, {"scene": prepared, "choices": choices, "plan": info})
     if not choices:
         frame = METHODS["accumulation"].fn(prepared, samples=1, aa=aa)
     else:
