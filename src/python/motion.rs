@@ -1,11 +1,12 @@
 //! Bindings for the keyframe engine: `_Keyframes`, validated once when made and sampled at
-//! any time (many times in one call), and `_check_times`.
+//! any time (many times in one call), and `_check_times`. The engine (`src/motion/`) is
+//! sequential, no rayon call in it: its calls release the GIL but need no thread pool.
 use std::sync::Arc;
 
 use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
-use super::convert::{c_slice, detached_in_pool, rows_array, shaped, vec3};
+use super::convert::{c_slice, rows_array, shaped, vec3};
 use crate::{axis_angle, check_times, Error, Keyframes, Mat4, Similarity};
 
 /// The argument names a caller may give the matrices (errors name it).
@@ -76,7 +77,7 @@ impl PyKeyframes {
         let keys = match (transforms, vertices) {
             (Some(m), None) => {
                 let mats = matrices(&m, name)?;
-                detached_in_pool(py, move || Keyframes::rigid(t, &mats, name))?
+                py.detach(move || Keyframes::rigid(t, &mats, name))?
             }
             (None, Some(v)) => {
                 let shape = v.shape().to_vec();
@@ -101,7 +102,7 @@ impl PyKeyframes {
                 let flat = c_slice(&v, "vertices")?;
                 let rows: Vec<[f64; 3]> =
                     flat.chunks_exact(3).map(|p| [p[0], p[1], p[2]]).collect();
-                detached_in_pool(py, move || Keyframes::deforming(t, rows))?
+                py.detach(move || Keyframes::deforming(t, rows))?
             }
             _ => {
                 return Err(Error::value(
@@ -168,11 +169,9 @@ impl PyKeyframes {
     ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
         let t = finite(t, "t")?;
         let inner = self.inner.clone();
-        let v = detached_in_pool(py, move || {
-            inner
-                .vertices_at(t)
-                .ok_or_else(|| Error::value("motion", "vertices_at needs a deforming motion"))
-        })?;
+        let v = py
+            .detach(move || inner.vertices_at(t))
+            .ok_or_else(|| Error::value("motion", "vertices_at needs a deforming motion"))?;
         Ok(rows_array(py, v))
     }
 
