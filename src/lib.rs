@@ -16,7 +16,8 @@
 //! - `budget`: the memory budget every kernel checks before it allocates;
 //! - `analytic`: analytic motion blur, exact covered time per sample;
 //! - `shutter`: the shutter filters;
-//! - `simd`: the switch over the kernels' vector forms.
+//! - `simd`: the switch over the kernels' vector forms;
+//! - `threads`: the per-process thread pool every parallel kernel runs in (safe after `fork`).
 #![warn(missing_docs)]
 
 mod accumulate;
@@ -31,6 +32,7 @@ mod raster;
 mod shell;
 mod shutter;
 mod simd;
+mod threads;
 mod volume;
 
 #[cfg(feature = "python")]
@@ -75,6 +77,7 @@ pub use shell::{
 };
 pub use shutter::Shutter;
 pub use simd::{set_simd, simd_enabled};
+pub use threads::{install, num_threads, set_num_threads, MAX_THREADS, NUM_THREADS_ENV};
 pub use volume::{
     check_segments, motion_volume, spin_volume, subdivided, Colors, Filter, MotionVolume, Spin,
     VolumeOptions, JOINING, LEADING, MAX_SEGMENTS, TRAILING,

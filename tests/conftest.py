@@ -3,8 +3,10 @@
 The tests are grouped by stage: ``core/`` (the compiled kernels: mesh, contour, volume, raster,
 image, shell), ``methods/`` (the rendering methods and the layers they share), ``peers/`` (the
 whole chain against pyrender and Mitsuba 3), ``evaluation/`` (the speed-against-error report)
-``api/`` (the package, scenes, stubs, array layouts, README, import cycles, packaging) and
-``interop/`` (trimesh, glTF, pyrender cameras, Mitsuba dictionaries, EXR files). Helpers the
+``api/`` (the package, scenes, stubs, array layouts, README, import cycles, packaging),
+``interop/`` (trimesh, glTF, pyrender cameras, Mitsuba dictionaries, EXR files) and
+``process/`` (fork, spawn and forkserver pools, bare forks, loader workers, Dask clusters and
+threads, each against the serial bits, every wait with a timeout). Helpers the
 tests share (numpy twins, the pyrender peer, thread-count checks) are in ``_helpers/``.
 
 The markers ``mitsuba`` and ``pyrender`` (see pyproject.toml) name the tests that run a peer, so

@@ -15,6 +15,7 @@ from . import (
     interop,
     meshes,
     methods,  # noqa: F401  (registers every built-in rendering method)
+    threads,
 )
 from . import geometry as _geometry
 from . import raster as _raster
@@ -35,6 +36,7 @@ from .render import METHODS, MethodNotApplicableWarning, PoorBlurWarning, regist
 from .scene import *  # noqa: F403
 from .scenes_builtin import SCENES, builtin_scene
 from .shell import *  # noqa: F403
+from .threads import get_num_threads, set_num_threads
 
 __all__ = [
     "__version__",
@@ -42,6 +44,9 @@ __all__ = [
     "budget",
     "memory_budget",
     "set_memory_budget",
+    "threads",
+    "get_num_threads",
+    "set_num_threads",
     "image",
     "meshes",
     "interop",

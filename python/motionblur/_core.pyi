@@ -11,6 +11,9 @@ __all__ = [
     "__version__",
     "memory_budget",
     "set_memory_budget",
+    "get_num_threads",
+    "set_num_threads",
+    "MAX_THREADS",
     "_set_simd",
     "_simd_enabled",
     "DEFAULT_MEMORY_BUDGET",
@@ -87,6 +90,18 @@ def memory_budget() -> int:
 
 def set_memory_budget(bytes: int) -> int:
     """Sets the memory budget (bytes, >= MIN_MEMORY_BUDGET); returns the previous one."""
+
+# --- the thread pool of the parallel kernels (src/threads.rs)
+
+MAX_THREADS: int
+
+def get_num_threads() -> int:
+    """The number of threads the parallel kernels of this process run on (the first call reads
+    MOTIONBLUR_NUM_THREADS unless set_num_threads was called)."""
+
+def set_num_threads(n: int) -> int:
+    """Sets the number of threads the parallel kernels run on (1..=MAX_THREADS); returns the
+    previous count."""
 
 # --- the kernels' vector forms (src/simd.rs)
 

@@ -50,12 +50,16 @@ fn limit_of(name: &str) -> f64 {
 }
 
 /// Fails naming `name` at the first row with a NaN, an inf or a value beyond `limit_of(name)`.
-pub(crate) fn check_values(a: &[[f64; 3]], name: &'static str) -> Result<()> {
+/// `par`: scan on rayon's current pool, else in order on this thread (the same row either way).
+pub(crate) fn check_values(a: &[[f64; 3]], name: &'static str, par: bool) -> Result<()> {
     let lim = limit_of(name);
-    if let Some(bad) = a
-        .par_iter()
-        .position_first(|v| v.iter().any(|x| x.is_nan() || x.abs() > lim))
-    {
+    let is_bad = |v: &[f64; 3]| v.iter().any(|x| x.is_nan() || x.abs() > lim);
+    let first = if par {
+        a.par_iter().position_first(is_bad)
+    } else {
+        a.iter().position(is_bad)
+    };
+    if let Some(bad) = first {
         let row = a[bad];
         if row.iter().all(|x| x.is_finite()) {
             return Err(Error::value(
@@ -136,10 +140,10 @@ pub fn motion_silhouette(
     faces: &[[u32; 3]],
     normals: Option<&[[f64; 3]]>,
 ) -> Result<(Vec<i8>, Vec<u8>)> {
-    check_values(vertices, "vertices")?;
-    check_values(previous, "previous_vertices")?;
+    check_values(vertices, "vertices", true)?;
+    check_values(previous, "previous_vertices", true)?;
     if let Some(n) = normals {
-        check_values(n, "normals")?;
+        check_values(n, "normals", true)?;
     }
     let (v, p) = (to_f32(vertices), to_f32(previous));
     let mut fac = vec![NEUTRAL; vertices.len()];

@@ -27,15 +27,22 @@ impl From<Error> for PyErr {
     }
 }
 
-/// Runs `f` on a worker thread of rayon's global pool: the parallel loops inside it then start
-/// from a worker instead of handing every loop over from a foreign thread (a futex wake-up and
-/// wait each). Results do not depend on where `f` runs.
-pub(crate) fn in_pool<R: Send>(f: impl FnOnce() -> R + Send) -> R {
-    rayon::scope(|_| f())
+/// Runs `f` in this process's thread pool ([`crate::install`], never rayon's global pool, whose
+/// threads a forked child does not have): the parallel loops inside it then start from a
+/// worker instead of handing every loop over from a foreign thread (a futex wake-up and wait
+/// each). Results do not depend on where `f` runs. Every binding that reaches a parallel
+/// kernel goes through here. Fails without running `f` when `MOTIONBLUR_NUM_THREADS` is
+/// invalid (and `set_num_threads` was not called).
+pub(crate) fn in_pool<T: Send>(f: impl FnOnce() -> Result<T, Error> + Send) -> Result<T, Error> {
+    crate::num_threads()?;
+    crate::install(f)
 }
 
 /// [`in_pool`] with the GIL released.
-pub(crate) fn detached_in_pool<R: Send>(py: Python<'_>, f: impl FnOnce() -> R + Send) -> R {
+pub(crate) fn detached_in_pool<T: Send>(
+    py: Python<'_>,
+    f: impl FnOnce() -> Result<T, Error> + Send,
+) -> Result<T, Error> {
     py.detach(|| in_pool(f))
 }
 
@@ -131,25 +138,27 @@ pub(crate) fn vec3(a: &PyReadonlyArray1<'_, f64>, name: &'static str) -> Result<
 /// `faces` (flat int64 triples) as `u32` triples, every index in `[0, nv)`; else an error
 /// naming `faces` and the first bad face.
 pub(crate) fn face_indices(faces: &[i64], nv: usize) -> Result<Vec<[u32; 3]>, Error> {
-    let nv = nv as i64;
-    let out: Vec<[u32; 3]> = faces
-        .par_chunks_exact(3)
-        .with_min_len(8192)
-        .map(|t| {
-            if t.iter().all(|x| (0..nv).contains(x)) {
-                [t[0] as u32, t[1] as u32, t[2] as u32]
-            } else {
-                [u32::MAX; 3]
-            }
-        })
-        .collect();
-    if let Some(i) = out.par_iter().position_first(|t| t[0] == u32::MAX) {
-        return Err(Error::value(
-            "faces",
-            format!("face {i} has an index out of range [0, {nv})"),
-        ));
-    }
-    Ok(out)
+    in_pool(|| {
+        let nv = nv as i64;
+        let out: Vec<[u32; 3]> = faces
+            .par_chunks_exact(3)
+            .with_min_len(8192)
+            .map(|t| {
+                if t.iter().all(|x| (0..nv).contains(x)) {
+                    [t[0] as u32, t[1] as u32, t[2] as u32]
+                } else {
+                    [u32::MAX; 3]
+                }
+            })
+            .collect();
+        if let Some(i) = out.par_iter().position_first(|t| t[0] == u32::MAX) {
+            return Err(Error::value(
+                "faces",
+                format!("face {i} has an index out of range [0, {nv})"),
+            ));
+        }
+        Ok(out)
+    })
 }
 
 // ---- numpy out ----

@@ -10,8 +10,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
 use super::convert::{
-    detached_in_pool, face_indices, flat_rows_array, in_pool, rows_any_layout, rows_array, vec3,
-    ToDict,
+    detached_in_pool, face_indices, flat_rows_array, rows_any_layout, rows_array, vec3, ToDict,
 };
 use super::motion::PyKeyframes;
 use crate::{
@@ -62,7 +61,7 @@ impl PyMesh {
     ) -> PyResult<Self> {
         let v = rows_any_layout::<f64, 3>(&vertices, "vertices")?.into_owned();
         let f = self::faces(&faces, v.len())?;
-        let mesh = py.detach(move || Mesh::new(v, f))?;
+        let mesh = detached_in_pool(py, move || Mesh::new(v, f))?;
         Ok(PyMesh {
             inner: Arc::new(mesh),
         })
@@ -72,7 +71,7 @@ impl PyMesh {
     fn with_vertices(&self, py: Python<'_>, vertices: PyReadonlyArray2<'_, f64>) -> PyResult<Self> {
         let v = rows_any_layout::<f64, 3>(&vertices, "vertices")?.into_owned();
         let inner = self.inner.clone();
-        let mesh = py.detach(move || inner.with_vertices(v))?;
+        let mesh = detached_in_pool(py, move || inner.with_vertices(v))?;
         Ok(PyMesh {
             inner: Arc::new(mesh),
         })
@@ -84,55 +83,63 @@ impl PyMesh {
 
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let inner = self.inner.clone();
-        py.detach(move || inner.stats()).to_dict(py)
+        detached_in_pool(py, move || Ok(inner.stats()))?.to_dict(py)
     }
 
     /// (F,3) float64 face normals, unit (zero for degenerate faces) or raw `(b-a) x (c-a)`.
     #[pyo3(signature = (unit = true))]
-    fn face_normals<'py>(&self, py: Python<'py>, unit: bool) -> Bound<'py, PyArray2<f64>> {
+    fn face_normals<'py>(
+        &self,
+        py: Python<'py>,
+        unit: bool,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let inner = self.inner.clone();
-        let n = py.detach(move || {
-            if unit {
+        let n = detached_in_pool(py, move || {
+            Ok(if unit {
                 inner.face_normals()
             } else {
                 inner.face_normals_raw()
-            }
-        });
-        rows_array(py, n)
+            })
+        })?;
+        Ok(rows_array(py, n))
     }
 
     /// (V,3) float64 area-weighted unit vertex normals.
-    fn vertex_normals<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+    fn vertex_normals<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let inner = self.inner.clone();
-        rows_array(py, py.detach(move || inner.vertex_normals()))
+        let n = detached_in_pool(py, move || Ok(inner.vertex_normals()))?;
+        Ok(rows_array(py, n))
     }
 
     /// (E,2) int64 undirected edges `a < b`, sorted; builds the adjacency if needed.
-    fn edges<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
+    fn edges<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
         let inner = self.inner.clone();
-        let e = py.detach(move || index_pairs(&inner.adjacency().edges));
-        rows_array(py, e)
+        let e = detached_in_pool(py, move || Ok(index_pairs(&inner.adjacency().edges)))?;
+        Ok(rows_array(py, e))
     }
 
     /// (E,) int64 number of faces on each edge of `edges()`.
-    fn edge_face_counts<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+    fn edge_face_counts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<i64>>> {
         let inner = self.inner.clone();
-        let c: Vec<i64> = py.detach(move || {
+        let c: Vec<i64> = detached_in_pool(py, move || {
             let adj = inner.adjacency();
-            adj.offsets
+            Ok(adj
+                .offsets
                 .windows(2)
                 .map(|w| (w[1] - w[0]) as i64)
-                .collect()
-        });
-        PyArray1::from_vec(py, c)
+                .collect())
+        })?;
+        Ok(PyArray1::from_vec(py, c))
     }
 
     /// Build the adjacency now (it is otherwise built on first use).
-    fn build_adjacency(&self, py: Python<'_>) {
+    fn build_adjacency(&self, py: Python<'_>) -> PyResult<()> {
         let inner = self.inner.clone();
-        py.detach(move || {
+        detached_in_pool(py, move || {
             inner.adjacency();
-        });
+            Ok(())
+        })?;
+        Ok(())
     }
 }
 
@@ -206,10 +213,10 @@ fn motion_volume<'py>(
     opts.window = window.unwrap_or((0.0, 1.0));
     let keys = keyframes.rigid().to_vec();
     let inner = mesh.inner.clone();
-    let vol = py.detach(move || {
+    let vol = detached_in_pool(py, move || {
         let path = subdivided(&Path::from_keys(keys)?, segments)?;
         check_volume("motion_volume", &inner, path.segments() as u64)?;
-        in_pool(|| crate::motion_volume(&inner, &path, &opts))
+        crate::motion_volume(&inner, &path, &opts)
     })?;
     Ok(volume_tuple(py, vol))
 }
@@ -331,7 +338,7 @@ impl PyContourTable {
             .map(|d| rows_any_layout::<f64, 3>(d, "directions").map(Cow::into_owned))
             .transpose()?;
         let m = mesh.inner.clone();
-        let inner = py.detach(move || match dirs {
+        let inner = detached_in_pool(py, move || match dirs {
             Some(d) => ContourTable::new(&m, d),
             None => ContourTable::random(&m, count, seed),
         })?;

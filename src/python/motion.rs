@@ -1,5 +1,6 @@
 //! Bindings for the keyframe engine: `_Keyframes`, validated once when made and sampled at
-//! any time (many times in one call), and `_check_times`.
+//! any time (many times in one call), and `_check_times`. The engine (`src/motion/`) is
+//! sequential, no rayon call in it: its calls release the GIL but need no thread pool.
 use std::sync::Arc;
 
 use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray3, PyUntypedArrayMethods};

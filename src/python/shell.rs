@@ -11,7 +11,7 @@ use numpy::{
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 
-use super::convert::{c_slice, detached_in_pool, face_indices, rows};
+use super::convert::{c_slice, detached_in_pool, face_indices, in_pool, rows};
 use crate::budget::try_vec;
 use crate::{
     motion_silhouette, BlurShell, Error, ShellColor, ShellOptions, ShellOut, ON_SILHOUETTE,
@@ -211,7 +211,8 @@ impl PyBlurShell {
         if inner.parallel() {
             detached_in_pool(py, move || inner.update(v, n))?;
         } else {
-            // Small mesh: sequential kernels on this thread (no hand-over to the pool).
+            // Small mesh: sequential kernels on this thread (no hand-over to the pool, and no
+            // rayon call: nothing that could reach rayon's global pool).
             py.detach(move || inner.update(v, n))?;
         }
         Ok(())
@@ -227,12 +228,20 @@ impl PyBlurShell {
         let v = vertices.as_ref().map(|v| rows(v, "vertices")).transpose()?;
         let n = normals.as_ref().map(|n| rows(n, "normals")).transpose()?;
         let inner = &self.inner;
-        let plan = inner.build_plan(v, n)?;
+        // A small shell runs in order on this thread, no rayon call in it (see `parallel`).
+        let plan = if inner.parallel() {
+            in_pool(|| inner.build_plan(v, n))?
+        } else {
+            inner.build_plan(v, n)?
+        };
         let mut buf = OneBuffer::new(plan.n_vertices, plan.n_triangles)?;
         let out = buf.slices();
         let plan = &plan;
         if inner.parallel() {
-            detached_in_pool(py, move || inner.build_into(plan, out, v, n));
+            detached_in_pool(py, move || {
+                inner.build_into(plan, out, v, n);
+                Ok(())
+            })?;
         } else {
             py.detach(move || inner.build_into(plan, out, v, n));
         }

@@ -118,7 +118,7 @@ pub const PAR_MIN_FACES: usize = 4 * CHUNK;
 
 /// Fails naming `name` unless `a` has `n` rows of finite values within the silhouette's
 /// float32 bounds.
-pub(super) fn check_rows(a: &[[f64; 3]], n: usize, name: &'static str) -> Result<()> {
+pub(super) fn check_rows(a: &[[f64; 3]], n: usize, name: &'static str, par: bool) -> Result<()> {
     if a.len() != n {
         return Err(Error::shape(
             name,
@@ -129,7 +129,7 @@ pub(super) fn check_rows(a: &[[f64; 3]], n: usize, name: &'static str) -> Result
             ),
         ));
     }
-    check_values(a, name)
+    check_values(a, name, par)
 }
 
 impl BlurShell {

@@ -112,10 +112,10 @@ impl BlurShell {
         normals: Option<&[[f64; 3]]>,
     ) -> Result<BuildPlan> {
         if let Some(v) = vertices {
-            check_rows(v, self.n_vertices, "vertices")?;
+            check_rows(v, self.n_vertices, "vertices", self.parallel())?;
         }
         if let Some(n) = normals {
-            check_rows(n, self.n_vertices, "normals")?;
+            check_rows(n, self.n_vertices, "normals", self.parallel())?;
         }
         if self.updates == 0 {
             return Ok(BuildPlan::default());

@@ -20,11 +20,11 @@ impl BlurShell {
     /// `MAX_NORMAL`); the state is then unchanged.
     pub fn update(&mut self, vertices: &[[f64; 3]], normals: Option<&[[f64; 3]]>) -> Result<()> {
         if vertices.len() != self.n_vertices {
-            return check_rows(vertices, self.n_vertices, "vertices");
+            return check_rows(vertices, self.n_vertices, "vertices", self.parallel());
         }
         if let Some(nr) = normals {
             if nr.len() != self.n_vertices {
-                return check_rows(nr, self.n_vertices, "normals");
+                return check_rows(nr, self.n_vertices, "normals", self.parallel());
             }
         }
         let s = self.opts.subdivisions as usize;
@@ -43,7 +43,7 @@ impl BlurShell {
             MAX_COORD,
             par,
         ) {
-            return check_rows(vertices, self.n_vertices, "vertices");
+            return check_rows(vertices, self.n_vertices, "vertices", self.parallel());
         }
         if let Some(nr) = normals {
             if scatter_f32(
@@ -53,7 +53,7 @@ impl BlurShell {
                 MAX_NORMAL,
                 par,
             ) {
-                return check_rows(nr, self.n_vertices, "normals");
+                return check_rows(nr, self.n_vertices, "normals", self.parallel());
             }
         }
         let cur = &self.pos_bufs[spare];

@@ -11,12 +11,12 @@ from pathlib import Path
 
 
 def digests(script: str, threads=(1, 2, 3), timeout: float = 300) -> list[str]:
-    """The stdout of ``python -c script`` (a hex digest) under each RAYON_NUM_THREADS value."""
+    """The stdout of ``python -c script`` (a hex digest) under each MOTIONBLUR_NUM_THREADS value."""
     out = []
     tests = str(Path(__file__).resolve().parents[1])  # the script imports the helpers as the tests do
     path = os.pathsep.join([tests, *filter(None, [os.environ.get("PYTHONPATH")])])
     for n in threads:
-        env = dict(os.environ, RAYON_NUM_THREADS=str(n), PYTHONPATH=path)
+        env = dict(os.environ, MOTIONBLUR_NUM_THREADS=str(n), PYTHONPATH=path)
         r = subprocess.run(
             [sys.executable, "-c", script], env=env, capture_output=True, text=True, timeout=timeout
         )

@@ -10,6 +10,7 @@ at a time into layers through one rasterizer call per shading mode (:func:`raste
 
 from __future__ import annotations
 
+import threading
 from collections import OrderedDict
 from dataclasses import dataclass
 
@@ -261,6 +262,7 @@ def resolve(layer: Layer, samples: int) -> Frame:
 # ---------------------------------------------------------------- the static layer, kept across frames
 
 _STATIC_CACHE: OrderedDict = OrderedDict()
+_STATIC_LOCK = threading.Lock()  # renders in several threads share the cache
 _STATIC_CACHE_SIZE = 4
 
 
@@ -299,18 +301,21 @@ def static_layer(scene: Scene, camera: Camera, objects, aa: int) -> Static:
     and placement, the camera, the lights and ``aa`` stay the same, as a real-time loop reuses
     the static part of its frame."""
     key = _fingerprint(scene, camera, objects, aa)
-    hit = _STATIC_CACHE.get(key)
+    with _STATIC_LOCK:
+        hit = _STATIC_CACHE.get(key)
+        if hit is not None:
+            _STATIC_CACHE.move_to_end(key)
     if hit is not None:
-        _STATIC_CACHE.move_to_end(key)
         hit[0].cached = True
         return hit[0]
     layer = raster_layer(camera, scene, [(o, object_draw(o, 0.0, k)) for k, o in objects])
     st = Static(layer, aa)
     st.opaque = all(float(np.min(o.rgba[..., 3])) >= 1.0 for _, o in objects)
     # keep the objects alive with the entry, so the ids in the key stay theirs
-    _STATIC_CACHE[key] = (st, [o for _, o in objects])
-    while len(_STATIC_CACHE) > _STATIC_CACHE_SIZE:
-        _STATIC_CACHE.popitem(last=False)
+    with _STATIC_LOCK:
+        _STATIC_CACHE[key] = (st, [o for _, o in objects])
+        while len(_STATIC_CACHE) > _STATIC_CACHE_SIZE:
+            _STATIC_CACHE.popitem(last=False)
     return st
 
 

@@ -6,6 +6,7 @@ constants kept across frames (:func:`mesh_constant`).
 
 from __future__ import annotations
 
+import threading
 import weakref
 from collections import OrderedDict
 
@@ -117,6 +118,7 @@ class Painter:
 
 
 _PAINTERS: OrderedDict = OrderedDict()
+_PAINTERS_LOCK = threading.Lock()  # renders in several threads share the cache
 _PAINTERS_SIZE = 4
 
 
@@ -141,16 +143,18 @@ def painter_for(scene: Scene, objects: list[tuple[int, Object]], eye=None) -> Pa
         tuple((li.direction.tobytes(), li.intensity.tobytes()) for li in scene.lights),
         np.asarray(scene.ambient, dtype=np.float64).tobytes(),
     )
-    hit = _PAINTERS.get(key)
-    if hit is not None and all(r() is p for r, p in zip(hit[1], parts)):
-        _PAINTERS.move_to_end(key)
-        return hit[0]
+    with _PAINTERS_LOCK:
+        hit = _PAINTERS.get(key)
+        if hit is not None and all(r() is p for r, p in zip(hit[1], parts)):
+            _PAINTERS.move_to_end(key)
+            return hit[0]
     painter = Painter(scene, objects, eye)
     refs = [
         (lambda: None) if p is None else weakref.ref(p, lambda _r, k=key: _PAINTERS.pop(k, None))
         for p in parts
     ]
-    _PAINTERS[key] = (painter, refs)
-    while len(_PAINTERS) > _PAINTERS_SIZE:
-        _PAINTERS.popitem(last=False)
+    with _PAINTERS_LOCK:
+        _PAINTERS[key] = (painter, refs)
+        while len(_PAINTERS) > _PAINTERS_SIZE:
+            _PAINTERS.popitem(last=False)
     return painter

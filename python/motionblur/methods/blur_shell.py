@@ -24,8 +24,11 @@ normals from when each pair was recorded).
 
 from __future__ import annotations
 
+import threading
 import time
 from collections import OrderedDict
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 import numpy as np
 
@@ -42,22 +45,32 @@ __all__ = ["blur_shell", "shell_times", "apparent_vertices"]
 
 #: Shells kept between renders (their mesh order and vertex-face tables are costly to build
 #: for large meshes): the last 8, keyed by mesh identity and options, reset before reuse (a reset
-#: shell behaves exactly like a new one). The mesh is held so its id stays unique.
+#: shell behaves exactly like a new one). The mesh is held so its id stays unique. A shell has
+#: state (its updates), so a render takes it out for its own use and puts it back after: renders
+#: of one scene in several threads at once never share one.
 _SHELLS: OrderedDict = OrderedDict()
+_SHELLS_LOCK = threading.Lock()
 
 
-def _shell_for(mesh, nv: int, s: int, h: int, a: float, rgb: np.ndarray, side: str = "past") -> BlurShell:
+@contextmanager
+def _shell_for(
+    mesh, nv: int, s: int, h: int, a: float, rgb: np.ndarray, side: str = "past"
+) -> Iterator[BlurShell]:
     key = (id(mesh), nv, s, h, a, rgb.shape, rgb.tobytes(), side)
-    hit = _SHELLS.get(key)
+    with _SHELLS_LOCK:
+        hit = _SHELLS.pop(key, None)
     if hit is not None and hit[0] is mesh:
-        _SHELLS.move_to_end(key)
-        hit[1].reset()
-        return hit[1]
-    shell = BlurShell(mesh.faces, s, h, a, color=rgb, n_vertices=nv)
-    _SHELLS[key] = (mesh, shell)
-    while len(_SHELLS) > 8:
-        _SHELLS.popitem(last=False)
-    return shell
+        shell = hit[1]
+        shell.reset()
+    else:  # none kept, or another thread's render has it now
+        shell = BlurShell(mesh.faces, s, h, a, color=rgb, n_vertices=nv)
+    try:
+        yield shell
+    finally:
+        with _SHELLS_LOCK:
+            _SHELLS[key] = (mesh, shell)
+            while len(_SHELLS) > 8:
+                _SHELLS.popitem(last=False)
 
 
 def _applies(scene: Scene) -> bool:
@@ -183,10 +196,10 @@ def blur_shell(
             if times[0] == times[-1]:
                 continue  # no time on this side of the frame
             t0 = time.perf_counter()
-            shell = _shell_for(obj.mesh, len(current), s_side, h, alpha, rgb, side)
-            for t in times[:-1]:
-                shell.update(apparent_vertices(scene, obj, float(t), tr))
-            mesh = shell.build(current)
+            with _shell_for(obj.mesh, len(current), s_side, h, alpha, rgb, side) as shell:
+                for t in times[:-1]:
+                    shell.update(apparent_vertices(scene, obj, float(t), tr))
+                mesh = shell.build(current)
             stats["ms_shell"] += (time.perf_counter() - t0) * 1e3
             if mesh.is_empty:
                 continue

@@ -19,6 +19,7 @@ of volumes, and the frames are summed weighted by the filter's weight of each pi
 from __future__ import annotations
 
 import copy
+import threading
 from collections import OrderedDict
 
 import numpy as np
@@ -528,6 +529,7 @@ def _summed(frames, pieces: int, filter: str) -> Frame:
 #: Directions of the tables ``contour_table=True`` builds, and the meshes whose tables are kept.
 CONTOUR_DIRECTIONS = 128
 _TABLES: OrderedDict = OrderedDict()
+_TABLES_LOCK = threading.Lock()  # renders in several threads share the tables
 
 
 def _contour_tables(option):
@@ -544,13 +546,16 @@ def _contour_tables(option):
 
     def table_for(mesh):
         key = (id(mesh), k)
-        hit = _TABLES.get(key)
-        if hit is not None and hit.mesh is mesh:
-            _TABLES.move_to_end(key)
-            return hit
-        _TABLES[key] = table = ContourTable(mesh, directions=k)
-        while len(_TABLES) > 8:
-            _TABLES.popitem(last=False)
+        with _TABLES_LOCK:
+            hit = _TABLES.get(key)
+            if hit is not None and hit.mesh is mesh:
+                _TABLES.move_to_end(key)
+                return hit
+        table = ContourTable(mesh, directions=k)
+        with _TABLES_LOCK:
+            _TABLES[key] = table
+            while len(_TABLES) > 8:
+                _TABLES.popitem(last=False)
         return table
 
     return table_for
