@@ -146,8 +146,9 @@ def pyramid_blur(rgba, levels) -> np.ndarray:
     """Pyramid blur (section 3.2): ``levels`` analysis steps with a 4x4 box (each halves the size,
     rounding up, so any size works), then as many biquadratic B-spline expansions.
 
-    ``rgba``: (H,W,4) float32; ``levels``: int in [0, 16] (0 returns a copy; the blur radius is
-    about ``1.7 * 2**(levels - 1)`` pixels). Returns (H,W,4) float32.
+    ``rgba``: (H,W,4) float32; ``levels``: int in [0, 16] (0 returns a copy; the kernel's per-axis
+    variance is ``4**levels / 2 - 1/4`` pixels² about its centre, that of a disc of radius
+    ``sqrt(2 * 4**levels - 1)`` pixels, and its best Gaussian sigma about ``1.7 * 2**(levels - 1)``). Returns (H,W,4) float32.
     """
     return _core._pyramid_blur(_rgba(rgba), _levels(levels))
 
@@ -176,7 +177,9 @@ def depth_of_field(rgba, depth, focal_depth, focal_length, f_number, yfov, layer
     distance, > 0, ``inf`` for background (NaN raises); ``focal_depth`` and ``focal_length`` in
     scene units (> 0); ``f_number`` > 0; ``yfov`` in radians in (0, pi); ``layers``: number of
     sub-images in [1, 17], indices ``-(layers // 2) .. layers - 1 - layers // 2`` (negative in front
-    of the focal plane). Sub-image ``i`` has the blur radius ``1.7 * 2**(|i| - 1)`` pixels, the
+    of the focal plane). Sub-image ``i`` has the blur radius ``sqrt(2 * 4**|i| - 1)`` pixels (the
+    disc of the ``|i|``-level pyramid blur's second moment; Kraus's eq. 1, ``1.7 * 2**(|i| - 1)``,
+    is 1.6x smaller and blurred every circle of confusion 1.6x too wide), the
     thin-lens depth of eqs. 2-4 (infinite where eq. 4 turns negative; sub-images starting beyond
     infinity are dropped), the matting ramps of figure 2 and ``|i|`` pyramid levels; sub-images are
     blended over each other from far to near (eq. 6). Returns (H,W,4) float32 premultiplied.

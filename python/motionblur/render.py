@@ -143,8 +143,8 @@ def render(
 
 _RENDER_DOC = render.__doc__ or ""
 
-#: Sub-images of the depth of field that ``render(aperture=...)`` applies (Kraus's eq. 1 radii
-#: 0, 1.7, 3.4, 6.8, 13.6 pixels in front of and behind the focal plane).
+#: Sub-images of the depth of field that ``render(aperture=...)`` applies (radii 0, 2.6, 5.6,
+#: 11.3, 22.6 pixels in front of and behind the focal plane).
 DOF_LAYERS = 9
 
 

@@ -194,10 +194,15 @@ def pyramid_opaque_blur(rgba, levels):
 # --- depth of field
 
 
+def disc_radius(levels):
+    """The disc with the second moment of the ``levels``-level pyramid blur."""
+    return math.sqrt(2 * 4.0**levels - 1) if levels else 0.0
+
+
 def layer_depth(i, zf, r_inf):
     if i == 0:
         return zf
-    r = 1.7 * 2.0 ** (abs(i) - 1)
+    r = disc_radius(abs(i))
     if i < 0:
         return zf / (1 + r / r_inf)
     return zf / (1 - r / r_inf) if r < r_inf else math.inf

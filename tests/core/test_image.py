@@ -116,7 +116,7 @@ def test_depth_of_field_infinite_far_layers_are_handled():
     h = img.shape[0]
     args = dict(focal_depth=2.0, focal_length=0.05, f_number=50.0, yfov=0.8, layers=7)
     r_inf = h / (2 * 2.0 * math.tan(0.4)) * 0.05 / (2 * 50.0)
-    assert r_inf < 1.7  # so z_1 = z_f / (1 - 1.7 / r_inf) would be negative
+    assert r_inf < tw.disc_radius(1)  # so z_1 = z_f / (1 - r_1 / r_inf) would be negative
     got = mi.depth_of_field(img, depth, **args)
     check(got, tw.depth_of_field(img, depth, **args))
     assert np.isfinite(got).all()
