@@ -37,6 +37,7 @@ __all__ = [
     "camera_velocity",
     "depth_of_field",
     "glow",
+    "lens_blur",
     "opaque_blur",
     "opaque_motion_blur",
     "pyramid_blur",
@@ -57,6 +58,8 @@ MAX_VELOCITY: float = _core.MAX_VELOCITY
 #: Most pyramid levels, depth-of-field sub-images and blur samples accepted.
 MAX_LEVELS: int = _core.MAX_LEVELS
 MAX_LAYERS: int = _core.MAX_LAYERS
+#: Most pyramid levels of :func:`lens_blur` (a circle of confusion of radius 362 pixels).
+MAX_LENS_LEVELS: int = _core.MAX_LENS_LEVELS
 MAX_SAMPLES: int = _core.MAX_SAMPLES
 #: Most gather taps per pixel of :func:`reconstruction_blur`.
 MAX_TAPS: int = _core.MAX_TAPS
@@ -201,6 +204,37 @@ def depth_of_field(rgba, depth, focal_depth, focal_length, f_number, yfov, layer
         raise ValueError(f"yfov: must be in (0, pi) radians, got {fov}")
     n = as_int(layers, "layers", minimum=1, maximum=MAX_LAYERS)
     return _core._depth_of_field(a, d, fd, fl, fn, fov, n)
+
+
+def lens_blur(rgba, depth, aperture, focus_distance, yfov) -> np.ndarray:
+    """Depth of field of a thin lens from a pinhole image and its depth (what
+    ``render(..., aperture=, focus_distance=)`` applies; Mitsuba's ``thinlens`` sensor).
+
+    ``rgba``: (H,W,4) float32 premultiplied pinhole image, alpha in [0, 1]; ``depth``: (H,W)
+    float32 view-axis distance, > 0, ``inf`` for background (NaN raises); ``aperture``: the lens's
+    *radius* (Mitsuba's ``aperture_radius``) and ``focus_distance``: the focal plane's distance
+    along the view axis, both scene units > 0; ``yfov``: vertical field of view in radians, in
+    (0, pi). A point at depth ``z`` spreads over the circle of confusion of radius
+    ``H * aperture * |1 - focus_distance / z| / (2 * focus_distance * tan(yfov / 2))`` pixels.
+
+    Sub-images by circle of confusion, each blurred with a mixture of two pyramid blurs of the
+    disc's variance (levels ``L`` match discs of radius ``sqrt(2 * 4**L - 1)``), extended under
+    nearer sub-images by push-pull interpolation (Kraus and Strengert 2007) and blended far to
+    near with ``over``; the image border does not fade, and a last push-pull fill closes what is
+    left uncovered where the pinhole image is opaque (``src/image/lens.rs``). Returns (H,W,4)
+    float32 premultiplied.
+    """
+    a = _rgba(rgba)
+    d = _depth(depth, a.shape[:2])
+    ap = as_float(aperture, "aperture")
+    fd = as_float(focus_distance, "focus_distance")
+    for name, v in (("aperture", ap), ("focus_distance", fd)):
+        if not (np.isfinite(v) and v > 0):
+            raise ValueError(f"{name}: must be finite and > 0 (scene units), got {v}")
+    fov = as_float(yfov, "yfov")
+    if not 0.0 < fov < np.pi:
+        raise ValueError(f"yfov: must be in (0, pi) radians, got {fov}")
+    return _core._lens_blur(a, d, ap, fd, fov)
 
 
 def _camera(camera, name, shape) -> tuple[np.ndarray, np.ndarray]:

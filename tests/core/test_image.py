@@ -129,6 +129,19 @@ def test_depth_of_field_in_focus_plane_is_sharp():
     check(got, img.astype(np.float64))
 
 
+@pytest.mark.parametrize("aperture", [0.005, 0.05, 0.3])
+def test_lens_blur_matches_twin(aperture):
+    img, depth = dof_scene()
+    got = mi.lens_blur(img, depth, aperture, 2.0, 0.8)
+    check(got, tw.lens_blur(img, depth, aperture, 2.0, 0.8), f"aperture {aperture}")
+
+
+def test_lens_blur_in_focus_plane_is_unchanged():
+    img, _ = dof_scene()
+    depth = np.full(img.shape[:2], 2.0, np.float32)
+    np.testing.assert_array_equal(mi.lens_blur(img, depth, 0.2, 2.0, 0.8), img)
+
+
 def cameras(w=64, h=48, move=(0.0, 0.0, 0.0), turn=0.0):
     pose = mb.look_at((0, 0, 5), (0, 0, 0))
     cam = mb.Camera(pose, 0.8, w, h)
