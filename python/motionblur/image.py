@@ -217,8 +217,9 @@ def lens_blur(rgba, depth, aperture, focus_distance, yfov) -> np.ndarray:
     (0, pi). A point at depth ``z`` spreads over the circle of confusion of radius
     ``H * aperture * |1 - focus_distance / z| / (2 * focus_distance * tan(yfov / 2))`` pixels.
 
-    Sub-images by circle of confusion, each blurred with a mixture of two pyramid blurs of the
-    disc's variance (levels ``L`` match discs of radius ``sqrt(2 * 4**L - 1)``), extended under
+    Sub-images by circle of confusion, each blurred with the mixture of two kernels that has the
+    disc's variance (the 3x3 binomial matches a disc of radius ``sqrt(2)`` pixels, the
+    ``L``-level pyramid blur one of radius ``sqrt(2 * 4**L - 1)``), extended under
     nearer sub-images by push-pull interpolation (Kraus and Strengert 2007) and blended far to
     near with ``over``; the image border does not fade, and a last push-pull fill closes what is
     left uncovered where the pinhole image is opaque (``src/image/lens.rs``). Returns (H,W,4)

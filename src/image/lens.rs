@@ -7,23 +7,25 @@
 //! confusion has the signed radius `s = r_inf (1 - F / z)` pixels (negative in front of the
 //! focus) with `r_inf = h A / (2 F tan(yfov / 2))` (Kraus's eq. 5 with `f / (2N) = A`).
 //!
-//! The `L`-level pyramid blur (`pyramid`) has the second moment of a disc of radius
-//! `r_L = sqrt(2 * 4^L - 1)` pixels (`dof::pyramid_disc_radius`). A pixel with `r_k <= |s| <
-//! r_{k+1}` belongs to sub-image `(side, k)` and is blurred by the mixture `(1 - t) K_k + t
-//! K_{k+1}` with `t = (s^2 - r_k^2) / (r_{k+1}^2 - r_k^2)`, the mixture with the disc's variance
-//! `s^2 / 4`; the last `k` takes every larger `|s|` with `K_k` alone. Levels go up to the first
-//! `r_L` at or beyond the largest `|s|` (at most [`MAX_LENS_LEVELS`]).
+//! Kernels `K_j`: `K_0` the identity, `K_1` the 3x3 binomial (`[1, 2, 1] / 4` on each axis),
+//! `K_j` for `j >= 2` the `(j - 1)`-level pyramid blur (`pyramid`). Each has the second moment
+//! of a disc of radius `r_j` = 0, `sqrt(2)`, then `sqrt(2 * 4^L - 1)` for `L` levels
+//! (`dof::pyramid_disc_radius`: 2.65, 5.57, 11.3 ... pixels). A pixel with `r_j <= |s| <
+//! r_{j+1}` belongs to sub-image `(side, j)` and is blurred by the mixture `(1 - t) K_j + t
+//! K_{j+1}` with `t = (s^2 - r_j^2) / (r_{j+1}^2 - r_j^2)`, the mixture with the disc's variance
+//! `s^2 / 4`; the last `j` takes every larger `|s|` with `K_j` alone. Kernels go up to the first
+//! `r_j` at or beyond the largest `|s|` (at most [`MAX_LENS_LEVELS`] pyramid levels).
 //!
 //! Sub-images are processed from the farthest (largest positive `s`) to the nearest and blended
-//! with "over" (Kraus's eq. 6), but with the ordinary (not opaque) pyramid blur, so a blurred
-//! silhouette turns partially transparent as the thin lens's does. What it uncovers is filled as
-//! Kraus and Strengert (2007) fill disoccluded pixels: before the blur, each sub-image is extended
-//! under the pixels of nearer sub-images by its push-pull interpolation over `k + 2` levels (two
-//! levels beyond its blur). Each blur is divided by the blur of an all-ones image, so the image
-//! border does not fade to transparent, a sub-image whose alpha exceeds 1 (mixtures of different
-//! `t`) is scaled back to 1, and a last push-pull fill under the result, up to the pinhole's
-//! alpha (the fill's colour with that alpha), closes what the mixtures leave uncovered. An image
-//! all at the focus comes back unchanged, a uniform opaque one stays uniform at any depths.
+//! with "over" (Kraus's eq. 6), but with the ordinary (not opaque) blur, so a blurred silhouette
+//! turns partially transparent as the thin lens's does. What it uncovers is filled as Kraus and
+//! Strengert (2007) fill disoccluded pixels: before the blur, sub-image `j` is extended under the
+//! pixels of nearer sub-images by its push-pull interpolation over `j + 2` levels. Each blur is
+//! divided by the blur of an all-ones image, so the image border does not fade to transparent,
+//! a sub-image whose alpha exceeds 1 (mixtures of different `t`) is scaled back to 1, and a last
+//! push-pull fill under the result, up to the pinhole's alpha (the fill's colour with that
+//! alpha), closes what the mixtures leave uncovered. An image all at the focus comes back
+//! unchanged, a uniform opaque one stays uniform at any depths.
 use rayon::prelude::*;
 
 use super::dof::pyramid_disc_radius;
@@ -71,12 +73,62 @@ pub fn lens_r_infinity(p: &LensParams, h: usize) -> f64 {
     h as f64 * p.aperture / (2.0 * p.focus_distance * (p.yfov / 2.0).tan())
 }
 
-/// Pyramid blur over `levels` levels divided by the blur of an all-ones image (`ones`).
-fn normalized_blur(img: &[f32], w: usize, h: usize, levels: usize, ones: &[f32]) -> Vec<f32> {
-    if levels == 0 {
+/// Radius in pixels of the disc with the second moment of kernel `K_j` (module docs).
+pub fn lens_kernel_radius(j: usize) -> f64 {
+    match j {
+        0 => 0.0,
+        1 => std::f64::consts::SQRT_2,
+        _ => pyramid_disc_radius(j - 1),
+    }
+}
+
+/// The 3x3 binomial blur of a `(h, w, c)` image (zero outside).
+fn binomial(img: &[f32], w: usize, h: usize, c: usize) -> Vec<f32> {
+    let mut rows = vec![0.0f32; img.len()];
+    rows.par_chunks_mut(w * c)
+        .zip(img.par_chunks(w * c))
+        .for_each(|(o, r)| {
+            for x in 0..w {
+                for k in 0..c {
+                    let left = if x > 0 { r[(x - 1) * c + k] } else { 0.0 };
+                    let right = if x + 1 < w { r[(x + 1) * c + k] } else { 0.0 };
+                    o[x * c + k] = 0.25 * left + 0.5 * r[x * c + k] + 0.25 * right;
+                }
+            }
+        });
+    let mut out = vec![0.0f32; img.len()];
+    out.par_chunks_mut(w * c).enumerate().for_each(|(y, o)| {
+        let mid = &rows[y * w * c..(y + 1) * w * c];
+        for (i, v) in o.iter_mut().enumerate() {
+            *v = 0.5 * mid[i];
+        }
+        for ny in [y.wrapping_sub(1), y + 1] {
+            if ny < h {
+                let r = &rows[ny * w * c..(ny + 1) * w * c];
+                for (v, n) in o.iter_mut().zip(r) {
+                    *v += 0.25 * n;
+                }
+            }
+        }
+    });
+    out
+}
+
+/// Kernel `K_j` on a `(h, w, c)` image (zero outside).
+fn kernel(img: &[f32], w: usize, h: usize, c: usize, j: usize) -> Vec<f32> {
+    match j {
+        0 => img.to_vec(),
+        1 => binomial(img, w, h, c),
+        _ => blur_unchecked(img, w, h, c, j - 1),
+    }
+}
+
+/// `K_j` of a `(h, w, 4)` image divided by `K_j` of an all-ones image (`ones`).
+fn normalized_blur(img: &[f32], w: usize, h: usize, j: usize, ones: &[f32]) -> Vec<f32> {
+    if j == 0 {
         return img.to_vec();
     }
-    let mut out = blur_unchecked(img, w, h, 4, levels);
+    let mut out = kernel(img, w, h, 4, j);
     out.par_chunks_mut(4)
         .zip(ones.par_iter())
         .for_each(|(o, &n)| {
@@ -121,10 +173,10 @@ pub fn lens_blur(
         .map(|&d| coc(d).abs())
         .reduce(|| 0.0, f64::max);
     let mut top = 0;
-    while top < MAX_LENS_LEVELS && pyramid_disc_radius(top) < s_max {
+    while top < MAX_LENS_LEVELS + 1 && lens_kernel_radius(top) < s_max {
         top += 1;
     }
-    let radii: Vec<f64> = (0..=top).map(pyramid_disc_radius).collect();
+    let radii: Vec<f64> = (0..=top).map(lens_kernel_radius).collect();
     // Sub-image of each pixel, in blending order: back k = top..0 at 0..=top, front k = 0..top
     // at top+1..=2top+1; and its weight t of K_{k+1}.
     let (pos, t): (Vec<u16>, Vec<f32>) = depth
@@ -148,12 +200,12 @@ pub fn lens_blur(
         used[q as usize] = true;
     }
     let ones_img = vec![1.0f32; w * h];
-    let ones: Vec<Vec<f32>> = (0..=top + 1)
-        .map(|l| {
-            if l == 0 {
+    let ones: Vec<Vec<f32>> = (0..=top)
+        .map(|j| {
+            if j == 0 {
                 Vec::new()
             } else {
-                blur_unchecked(&ones_img, w, h, 1, l)
+                kernel(&ones_img, w, h, 1, j)
             }
         })
         .collect();

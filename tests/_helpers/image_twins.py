@@ -249,6 +249,20 @@ def push_pull(rgba, levels):
     return cur
 
 
+def lens_kernel_radius(j):
+    return 0.0 if j == 0 else math.sqrt(2.0) if j == 1 else disc_radius(j - 1)
+
+
+def lens_kernel(x, j):
+    if j == 0:
+        return x
+    if j == 1:
+        p = np.pad(x, ((1, 1), (1, 1), (0, 0)))
+        r = 0.25 * p[:, :-2] + 0.5 * p[:, 1:-1] + 0.25 * p[:, 2:]
+        return 0.25 * r[:-2] + 0.5 * r[1:-1] + 0.25 * r[2:]
+    return pyramid_blur(x, j - 1)
+
+
 def lens_blur(rgba, depth, aperture, focus_distance, yfov):
     """src/image/lens.rs, float64: sub-images by circle of confusion, blended far to near."""
     h, w = depth.shape
@@ -258,9 +272,9 @@ def lens_blur(rgba, depth, aperture, focus_distance, yfov):
     with np.errstate(divide="ignore"):
         s = np.where(np.isinf(d), r_inf, r_inf * (1 - focus_distance / d))
     top = 0
-    while top < 8 and disc_radius(top) < np.abs(s).max():
+    while top < 9 and lens_kernel_radius(top) < np.abs(s).max():
         top += 1
-    radii = np.array([disc_radius(k) for k in range(top + 1)])
+    radii = np.array([lens_kernel_radius(j) for j in range(top + 1)])
     a = np.abs(s)
     k = np.searchsorted(radii, a, side="right") - 1
     hi = radii[np.minimum(k + 1, top)]
@@ -268,10 +282,10 @@ def lens_blur(rgba, depth, aperture, focus_distance, yfov):
     with np.errstate(invalid="ignore", divide="ignore"):
         t = np.where(k < top, np.clip((a * a - lo * lo) / (hi * hi - lo * lo), 0, 1), 0.0)
     pos = np.where(s >= 0, top - k, top + 1 + k)
-    ones = [None] + [pyramid_blur(np.ones((h, w, 1)), lv) for lv in range(1, top + 2)]
+    ones = [lens_kernel(np.ones((h, w, 1)), j) for j in range(top + 1)]
 
-    def nblur(x, lv):
-        return x if lv == 0 else pyramid_blur(x, lv) / ones[lv]
+    def nblur(x, j):
+        return lens_kernel(x, j) / ones[j]
 
     buf = np.zeros_like(img)
     for q in range(2 * top + 2):
