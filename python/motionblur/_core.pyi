@@ -36,6 +36,7 @@ __all__ = [
     "MAX_VELOCITY",
     "MAX_LEVELS",
     "MAX_LAYERS",
+    "MAX_LENS_LEVELS",
     "MAX_SAMPLES",
     "MAX_TAPS",
     "MIN_ALPHA",
@@ -64,6 +65,7 @@ __all__ = [
     "_pyramid_glow",
     "_pyramid_opaque_blur",
     "_depth_of_field",
+    "_lens_blur",
     "_camera_velocity",
     "_velocity_blur",
     "_camera_motion_blur",
@@ -264,6 +266,7 @@ MAX_FPS_RATIO: float
 MAX_VELOCITY: float
 MAX_LEVELS: int
 MAX_LAYERS: int
+MAX_LENS_LEVELS: int
 MAX_SAMPLES: int
 MAX_TAPS: int
 MIN_ALPHA: float
@@ -335,6 +338,17 @@ def _depth_of_field(
 ) -> np.ndarray:
     """Sub-image depth of field of rgba (H,W,4) f32 with view-axis depth (H,W) f32 (inf sky);
     focal_depth, focal_length in scene units, yfov radians. Returns (H,W,4) f32."""
+
+def _lens_blur(
+    rgba: np.ndarray,
+    depth: np.ndarray,
+    aperture: float,
+    focus_distance: float,
+    yfov: float,
+) -> np.ndarray:
+    """Thin-lens depth of field of premultiplied rgba (H,W,4) f32 with view-axis depth (H,W) f32
+    (inf sky); aperture (lens radius) and focus_distance in scene units, yfov radians. Returns
+    (H,W,4) f32."""
 
 def _camera_velocity(
     depth: np.ndarray,

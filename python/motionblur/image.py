@@ -37,6 +37,7 @@ __all__ = [
     "camera_velocity",
     "depth_of_field",
     "glow",
+    "lens_blur",
     "opaque_blur",
     "opaque_motion_blur",
     "pyramid_blur",
@@ -57,6 +58,8 @@ MAX_VELOCITY: float = _core.MAX_VELOCITY
 #: Most pyramid levels, depth-of-field sub-images and blur samples accepted.
 MAX_LEVELS: int = _core.MAX_LEVELS
 MAX_LAYERS: int = _core.MAX_LAYERS
+#: Most pyramid levels of :func:`lens_blur` (a circle of confusion of radius 362 pixels).
+MAX_LENS_LEVELS: int = _core.MAX_LENS_LEVELS
 MAX_SAMPLES: int = _core.MAX_SAMPLES
 #: Most gather taps per pixel of :func:`reconstruction_blur`.
 MAX_TAPS: int = _core.MAX_TAPS
@@ -146,8 +149,9 @@ def pyramid_blur(rgba, levels) -> np.ndarray:
     """Pyramid blur (section 3.2): ``levels`` analysis steps with a 4x4 box (each halves the size,
     rounding up, so any size works), then as many biquadratic B-spline expansions.
 
-    ``rgba``: (H,W,4) float32; ``levels``: int in [0, 16] (0 returns a copy; the blur radius is
-    about ``1.7 * 2**(levels - 1)`` pixels). Returns (H,W,4) float32.
+    ``rgba``: (H,W,4) float32; ``levels``: int in [0, 16] (0 returns a copy; the kernel's per-axis
+    variance is ``4**levels / 2 - 1/4`` pixels² about its centre, that of a disc of radius
+    ``sqrt(2 * 4**levels - 1)`` pixels, and its best Gaussian sigma about ``1.7 * 2**(levels - 1)``). Returns (H,W,4) float32.
     """
     return _core._pyramid_blur(_rgba(rgba), _levels(levels))
 
@@ -176,7 +180,9 @@ def depth_of_field(rgba, depth, focal_depth, focal_length, f_number, yfov, layer
     distance, > 0, ``inf`` for background (NaN raises); ``focal_depth`` and ``focal_length`` in
     scene units (> 0); ``f_number`` > 0; ``yfov`` in radians in (0, pi); ``layers``: number of
     sub-images in [1, 17], indices ``-(layers // 2) .. layers - 1 - layers // 2`` (negative in front
-    of the focal plane). Sub-image ``i`` has the blur radius ``1.7 * 2**(|i| - 1)`` pixels, the
+    of the focal plane). Sub-image ``i`` has the blur radius ``sqrt(2 * 4**|i| - 1)`` pixels (the
+    disc of the ``|i|``-level pyramid blur's second moment; Kraus's eq. 1, ``1.7 * 2**(|i| - 1)``,
+    is 1.6x smaller and blurred every circle of confusion 1.6x too wide), the
     thin-lens depth of eqs. 2-4 (infinite where eq. 4 turns negative; sub-images starting beyond
     infinity are dropped), the matting ramps of figure 2 and ``|i|`` pyramid levels; sub-images are
     blended over each other from far to near (eq. 6). Returns (H,W,4) float32 premultiplied.
@@ -198,6 +204,38 @@ def depth_of_field(rgba, depth, focal_depth, focal_length, f_number, yfov, layer
         raise ValueError(f"yfov: must be in (0, pi) radians, got {fov}")
     n = as_int(layers, "layers", minimum=1, maximum=MAX_LAYERS)
     return _core._depth_of_field(a, d, fd, fl, fn, fov, n)
+
+
+def lens_blur(rgba, depth, aperture, focus_distance, yfov) -> np.ndarray:
+    """Depth of field of a thin lens from a pinhole image and its depth (what
+    ``render(..., aperture=, focus_distance=)`` applies; Mitsuba's ``thinlens`` sensor).
+
+    ``rgba``: (H,W,4) float32 premultiplied pinhole image, alpha in [0, 1]; ``depth``: (H,W)
+    float32 view-axis distance, > 0, ``inf`` for background (NaN raises); ``aperture``: the lens's
+    *radius* (Mitsuba's ``aperture_radius``) and ``focus_distance``: the focal plane's distance
+    along the view axis, both scene units > 0; ``yfov``: vertical field of view in radians, in
+    (0, pi). A point at depth ``z`` spreads over the circle of confusion of radius
+    ``H * aperture * |1 - focus_distance / z| / (2 * focus_distance * tan(yfov / 2))`` pixels.
+
+    Sub-images by circle of confusion, each blurred with the mixture of two kernels that has the
+    disc's variance (the 3x3 binomial matches a disc of radius ``sqrt(2)`` pixels, the
+    ``L``-level pyramid blur one of radius ``sqrt(2 * 4**L - 1)``), extended under
+    nearer sub-images by push-pull interpolation (Kraus and Strengert 2007) and blended far to
+    near with ``over``; the image border does not fade, and a last push-pull fill closes what is
+    left uncovered where the pinhole image is opaque (``src/image/lens.rs``). Returns (H,W,4)
+    float32 premultiplied.
+    """
+    a = _rgba(rgba)
+    d = _depth(depth, a.shape[:2])
+    ap = as_float(aperture, "aperture")
+    fd = as_float(focus_distance, "focus_distance")
+    for name, v in (("aperture", ap), ("focus_distance", fd)):
+        if not (np.isfinite(v) and v > 0):
+            raise ValueError(f"{name}: must be finite and > 0 (scene units), got {v}")
+    fov = as_float(yfov, "yfov")
+    if not 0.0 < fov < np.pi:
+        raise ValueError(f"yfov: must be in (0, pi) radians, got {fov}")
+    return _core._lens_blur(a, d, ap, fd, fov)
 
 
 def _camera(camera, name, shape) -> tuple[np.ndarray, np.ndarray]:

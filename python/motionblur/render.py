@@ -117,12 +117,14 @@ def render(
     raise ValueError / TypeError; a method that does not apply to the scene (see
     :func:`methods_for`) warns with :class:`MethodNotApplicableWarning` and runs.
 
-    Depth of field (any method): ``aperture`` (the thin lens's radius, scene units, > 0) and
-    ``focus_distance`` (the focal plane's distance along the view axis, scene units, > 0), both
-    or neither, blur the method's frame with Kraus's sub-image depth of field
-    (:func:`motionblur.image.depth_of_field`, section 3.1) from its depth buffer: the lens of
-    Mitsuba's ``thinlens`` sensor (``reference.mitsuba(..., aperture=, focus_distance=)``), as
-    a post-process of the pinhole frame. ``stats`` then has ``dof`` (the lens).
+    Depth of field (any method): ``aperture`` is the thin lens's *radius* (not its diameter, not
+    an f-number), exactly Mitsuba's ``thinlens`` ``aperture_radius``, and ``focus_distance`` the
+    focal plane's distance along the view axis (Mitsuba's ``focus_distance``), both in scene
+    units, > 0, both or neither. They blur the method's frame from its depth buffer with
+    :func:`motionblur.image.lens_blur`, a point at depth ``z`` spreading over a circle of
+    confusion of radius ``H * aperture * |1 - focus_distance / z| / (2 * focus_distance *
+    tan(yfov / 2))`` pixels; the reference is ``reference.mitsuba(..., aperture=,
+    focus_distance=)`` with the same numbers. ``stats`` then has ``dof`` (the lens).
     """
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
@@ -178,10 +180,6 @@ ESTIMATOR: list[Callable[[Scene, str, dict], dict]] = []
 
 _RENDER_DOC = render.__doc__ or ""
 
-#: Sub-images of the depth of field that ``render(aperture=...)`` applies (Kraus's eq. 1 radii
-#: 0, 1.7, 3.4, 6.8, 13.6 pixels in front of and behind the focal plane).
-DOF_LAYERS = 9
-
 
 def _lens(aperture, focus_distance) -> tuple[float, float] | None:
     """(aperture, focus_distance) checked, or None when both are None."""
@@ -200,16 +198,14 @@ def _lens(aperture, focus_distance) -> tuple[float, float] | None:
 
 
 def _with_depth_of_field(frame: Frame, scene: Scene, aperture: float, focus: float) -> Frame:
-    """The frame blurred by the thin lens of radius ``aperture`` focused at ``focus``: Kraus's
-    eq. 5 takes the radius as ``focal_length / (2 f_number)``."""
-    from .image import depth_of_field
+    """The frame blurred by the thin lens of radius ``aperture`` focused at ``focus``."""
+    from .image import lens_blur
 
     depth = np.where(np.isfinite(frame.depth) & (frame.depth > 0), frame.depth, np.inf).astype(np.float32)
-    cam = scene.camera
-    rgba = depth_of_field(frame.rgba, depth, focus, 2.0 * aperture, 1.0, cam.yfov, layers=DOF_LAYERS)
+    rgba = lens_blur(frame.rgba, depth, aperture, focus, scene.camera.yfov)
     out = Frame(rgba, frame.depth, frame.ids, frame.velocity)
     out.stats.update(frame.stats)
-    out.stats["dof"] = {"aperture": aperture, "focus_distance": focus, "layers": DOF_LAYERS}
+    out.stats["dof"] = {"aperture": aperture, "focus_distance": focus}
     return out
 
 

@@ -17,6 +17,7 @@ mod camera;
 mod colors;
 mod dof;
 mod glow;
+mod lens;
 mod lines;
 mod opaque;
 mod opaque_row;
@@ -36,6 +37,7 @@ pub use camera::{
 pub use colors::{colored, pixel_bounds, sample_colors, MIN_ALPHA};
 pub use dof::{depth_of_field, DofParams, MAX_LAYERS};
 pub use glow::glow;
+pub use lens::{lens_blur, LensParams, MAX_LENS_LEVELS};
 pub use opaque::{opaque_blur, opaque_motion_blur};
 pub use opaque_row::Composite;
 pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};

@@ -192,3 +192,45 @@ pub(crate) fn opaque_unchecked(rgba: &[f32], w: usize, h: usize, levels: usize) 
         });
     blur
 }
+
+/// Pyramid blur of a `(h, w, c)` image over `levels` levels, unchecked (0 returns a copy).
+pub(crate) fn blur_unchecked(img: &[f32], w: usize, h: usize, c: usize, levels: usize) -> Vec<f32> {
+    synth_blur(&build(img, w, h, c, levels), c)
+}
+
+/// Push-pull fill of a `(h, w, 4)` premultiplied image over `levels` levels, unchecked: the
+/// glow's synthesis (eqs. 8-9) on every channel, `C_syn = C_ana + (1 - A_ana) C_exp`, so each
+/// pixel keeps its colour and the transparent part of it is filled from the nearest coarser
+/// level that has colour there (the pyramid interpolation of Kraus and Strengert 2007 that fills
+/// disoccluded pixels). Alpha is the pyramid glow's.
+pub(crate) fn push_pull_unchecked(rgba: &[f32], w: usize, h: usize, levels: usize) -> Vec<f32> {
+    let p = build(rgba, w, h, 4, levels);
+    let top = p.levels.len() - 1;
+    let mut cur = p.levels[top].clone();
+    for l in (0..top).rev() {
+        let (cw, ch) = p.sizes[l + 1];
+        let (w, h) = p.sizes[l];
+        let mut e = expand(&cur, cw, ch, w, h, 4);
+        e.par_chunks_mut(4)
+            .zip(p.levels[l].par_chunks(4))
+            .for_each(|(e, a)| {
+                let k = 1.0 - a[3];
+                for c in 0..4 {
+                    e[c] = a[c] + k * e[c];
+                }
+            });
+        cur = e;
+    }
+    cur
+}
+
+/// Levels that bring a `w` x `h` image down to one pixel (at most [`MAX_LEVELS`]).
+pub(crate) fn levels_to_one(w: usize, h: usize) -> usize {
+    let mut n = w.max(h);
+    let mut l = 0;
+    while n > 1 && l < MAX_LEVELS {
+        n = n.div_ceil(2);
+        l += 1;
+    }
+    l
+}

@@ -67,6 +67,12 @@ fn results_do_not_depend_on_the_thread_count() {
             layers: 5,
         };
         all.extend(depth_of_field(&img, &depth, w, h, &p).unwrap());
+        let lens = LensParams {
+            aperture: 0.2,
+            focus_distance: 2.5,
+            yfov: 0.8,
+        };
+        all.extend(lens_blur(&img, &depth, w, h, &lens).unwrap());
         all
     };
     let one = on_threads(1, run);
@@ -80,6 +86,57 @@ fn results_do_not_depend_on_the_thread_count() {
         .iter()
         .zip(&three)
         .all(|(a, b)| a.to_bits() == b.to_bits()));
+}
+
+#[test]
+fn lens_blur_keeps_the_focal_plane_and_a_uniform_image() {
+    let (w, h) = (57, 43);
+    let lens = LensParams {
+        aperture: 0.3,
+        focus_distance: 3.0,
+        yfov: 0.7,
+    };
+    // all at the focus: unchanged, bit for bit
+    let img = image(w, h, 4);
+    let focal = vec![3.0f32; w * h];
+    assert_eq!(lens_blur(&img, &focal, w, h, &lens).unwrap(), img);
+    // a uniform opaque image at scattered depths (and sky) stays uniform and opaque
+    let flat: Vec<f32> = (0..w * h).flat_map(|_| [0.2, 0.5, 0.1, 1.0]).collect();
+    let depth: Vec<f32> = (0..w * h)
+        .map(|i| match i % 7 {
+            0 => f32::INFINITY,
+            k => 0.5 + k as f32 * 1.3,
+        })
+        .collect();
+    let out = lens_blur(&flat, &depth, w, h, &lens).unwrap();
+    assert!(out.iter().zip(&flat).all(|(o, i)| (o - i).abs() < 1e-5));
+    // bad lens parameters name themselves
+    for (bad, name) in [
+        (
+            LensParams {
+                aperture: 0.0,
+                ..lens
+            },
+            "aperture",
+        ),
+        (
+            LensParams {
+                focus_distance: f64::NAN,
+                ..lens
+            },
+            "focus_distance",
+        ),
+        (LensParams { yfov: 3.5, ..lens }, "yfov"),
+    ] {
+        let e = lens_blur(&img, &focal, w, h, &bad).unwrap_err();
+        assert!(e.to_string().starts_with(name), "{e}");
+    }
+    let mut neg = focal.clone();
+    neg[3] = -1.0;
+    assert!(lens_blur(&img, &neg, w, h, &lens)
+        .unwrap_err()
+        .to_string()
+        .starts_with("depth"));
 }
 
 #[test]

@@ -8,7 +8,7 @@ use numpy::{
 use pyo3::prelude::*;
 
 use super::convert::{c_slice, detached_in_pool, rows, shaped};
-use crate::{CameraMatrices, Composite, DofParams, Error, Piece, ReconstructParams};
+use crate::{CameraMatrices, Composite, DofParams, Error, LensParams, Piece, ReconstructParams};
 
 type PyOut<'py> = PyResult<Bound<'py, PyAny>>;
 
@@ -354,6 +354,28 @@ fn _depth_of_field<'py>(
     shaped(py, out, [h, w, 4])
 }
 
+/// Thin-lens depth of field of rgba (H,W,4) f32 with depth (H,W) f32.
+#[pyfunction]
+fn _lens_blur<'py>(
+    py: Python<'py>,
+    rgba: PyReadonlyArray3<'py, f32>,
+    depth: PyReadonlyArray2<'py, f32>,
+    aperture: f64,
+    focus_distance: f64,
+    yfov: f64,
+) -> PyOut<'py> {
+    let (a, w, h) = img3(&rgba, "rgba", 4)?;
+    let (d, dw, dh) = img2(&depth, "depth")?;
+    same_size("depth", (dh, dw), (h, w))?;
+    let p = LensParams {
+        aperture,
+        focus_distance,
+        yfov,
+    };
+    let out = detached_in_pool(py, || crate::lens_blur(a, d, w, h, &p))?;
+    shaped(py, out, [h, w, 4])
+}
+
 /// Per-pixel velocity (H,W,2) f32 from depth (H,W) f32 and two cameras' view/projection (4,4) f64.
 #[pyfunction]
 fn _camera_velocity<'py>(
@@ -450,6 +472,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_pyramid_glow, m)?)?;
     m.add_function(wrap_pyfunction!(_pyramid_opaque_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_depth_of_field, m)?)?;
+    m.add_function(wrap_pyfunction!(_lens_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_camera_velocity, m)?)?;
     m.add_function(wrap_pyfunction!(_velocity_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_camera_motion_blur, m)?)?;
@@ -458,6 +481,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("MAX_VELOCITY", crate::MAX_VELOCITY)?;
     m.add("MAX_LEVELS", crate::MAX_LEVELS)?;
     m.add("MAX_LAYERS", crate::MAX_LAYERS)?;
+    m.add("MAX_LENS_LEVELS", crate::MAX_LENS_LEVELS)?;
     m.add("MAX_SAMPLES", crate::MAX_SAMPLES)?;
     m.add("MAX_TAPS", crate::MAX_TAPS)?;
     m.add("MIN_ALPHA", f64::from(crate::MIN_ALPHA))?;

@@ -194,10 +194,15 @@ def pyramid_opaque_blur(rgba, levels):
 # --- depth of field
 
 
+def disc_radius(levels):
+    """The disc with the second moment of the ``levels``-level pyramid blur."""
+    return math.sqrt(2 * 4.0**levels - 1) if levels else 0.0
+
+
 def layer_depth(i, zf, r_inf):
     if i == 0:
         return zf
-    r = 1.7 * 2.0 ** (abs(i) - 1)
+    r = disc_radius(abs(i))
     if i < 0:
         return zf / (1 + r / r_inf)
     return zf / (1 - r / r_inf) if r < r_inf else math.inf
@@ -232,6 +237,78 @@ def depth_of_field(rgba, depth, focal_depth, focal_length, f_number, yfov, layer
         if i != 0:
             sub = pyramid_opaque_blur(sub, abs(i))
         buf = sub + (1 - sub[..., 3:4]) * buf
+    return buf
+
+
+def push_pull(rgba, levels):
+    p = pyramid(rgba, levels)
+    cur = p[-1]
+    for lvl in range(levels - 1, -1, -1):
+        a = p[lvl]
+        cur = a + (1 - a[..., 3:4]) * expand(cur, *a.shape[:2])
+    return cur
+
+
+def lens_kernel_radius(j):
+    return 0.0 if j == 0 else math.sqrt(2.0) if j == 1 else disc_radius(j - 1)
+
+
+def lens_kernel(x, j):
+    if j == 0:
+        return x
+    if j == 1:
+        p = np.pad(x, ((1, 1), (1, 1), (0, 0)))
+        r = 0.25 * p[:, :-2] + 0.5 * p[:, 1:-1] + 0.25 * p[:, 2:]
+        return 0.25 * r[:-2] + 0.5 * r[1:-1] + 0.25 * r[2:]
+    return pyramid_blur(x, j - 1)
+
+
+def lens_blur(rgba, depth, aperture, focus_distance, yfov):
+    """src/image/lens.rs, float64: sub-images by circle of confusion, blended far to near."""
+    h, w = depth.shape
+    img = rgba.astype(np.float64)
+    r_inf = h * aperture / (2 * focus_distance * math.tan(yfov / 2))
+    d = depth.astype(np.float64)
+    with np.errstate(divide="ignore"):
+        s = np.where(np.isinf(d), r_inf, r_inf * (1 - focus_distance / d))
+    top = 0
+    while top < 9 and lens_kernel_radius(top) < np.abs(s).max():
+        top += 1
+    radii = np.array([lens_kernel_radius(j) for j in range(top + 1)])
+    a = np.abs(s)
+    k = np.searchsorted(radii, a, side="right") - 1
+    hi = radii[np.minimum(k + 1, top)]
+    lo = radii[k]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.where(k < top, np.clip((a * a - lo * lo) / (hi * hi - lo * lo), 0, 1), 0.0)
+    pos = np.where(s >= 0, top - k, top + 1 + k)
+    ones = [lens_kernel(np.ones((h, w, 1)), j) for j in range(top + 1)]
+
+    def nblur(x, j):
+        return lens_kernel(x, j) / ones[j]
+
+    buf = np.zeros_like(img)
+    for q in range(2 * top + 2):
+        m = pos == q
+        if not m.any():
+            continue
+        kq = top - q if q <= top else q - top - 1
+        ext = push_pull(img * m[..., None], kq + 2) * img[..., 3:4]
+        pa = np.where(m[..., None], img * (1 - t[..., None]), np.where((pos > q)[..., None], ext, 0.0))
+        sub = nblur(pa, kq)
+        if kq < top and (t[m] > 0).any():
+            sub = sub + nblur(img * (m * t)[..., None], kq + 1)
+        sub = sub / np.maximum(sub[..., 3:4], 1.0)
+        buf = sub + (1 - sub[..., 3:4]) * buf
+    n, lv = max(h, w), 0
+    while n > 1:
+        n, lv = -(-n // 2), lv + 1
+    fill = push_pull(buf, lv)
+    deficit = img[..., 3:4] - buf[..., 3:4]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        add = np.where((deficit > 0) & (fill[..., 3:4] > 1e-12), deficit / fill[..., 3:4], 0.0)
+    buf = buf + add * fill
+    buf[..., 3] = np.minimum(buf[..., 3], 1.0)
     return buf
 
 

@@ -116,7 +116,7 @@ def test_depth_of_field_infinite_far_layers_are_handled():
     h = img.shape[0]
     args = dict(focal_depth=2.0, focal_length=0.05, f_number=50.0, yfov=0.8, layers=7)
     r_inf = h / (2 * 2.0 * math.tan(0.4)) * 0.05 / (2 * 50.0)
-    assert r_inf < 1.7  # so z_1 = z_f / (1 - 1.7 / r_inf) would be negative
+    assert r_inf < tw.disc_radius(1)  # so z_1 = z_f / (1 - r_1 / r_inf) would be negative
     got = mi.depth_of_field(img, depth, **args)
     check(got, tw.depth_of_field(img, depth, **args))
     assert np.isfinite(got).all()
@@ -127,6 +127,19 @@ def test_depth_of_field_in_focus_plane_is_sharp():
     depth = np.full(img.shape[:2], 2.0, np.float32)
     got = mi.depth_of_field(img, depth, 2.0, 0.05, 2.0, 0.8, layers=5)
     check(got, img.astype(np.float64))
+
+
+@pytest.mark.parametrize("aperture", [0.005, 0.05, 0.3])
+def test_lens_blur_matches_twin(aperture):
+    img, depth = dof_scene()
+    got = mi.lens_blur(img, depth, aperture, 2.0, 0.8)
+    check(got, tw.lens_blur(img, depth, aperture, 2.0, 0.8), f"aperture {aperture}")
+
+
+def test_lens_blur_in_focus_plane_is_unchanged():
+    img, _ = dof_scene()
+    depth = np.full(img.shape[:2], 2.0, np.float32)
+    np.testing.assert_array_equal(mi.lens_blur(img, depth, 0.2, 2.0, 0.8), img)
 
 
 def cameras(w=64, h=48, move=(0.0, 0.0, 0.0), turn=0.0):

@@ -4,13 +4,7 @@
   transparent box (alpha 0.5, flat: a ``mask`` radiating alpha times its colour, a backdrop and
   a coverage pass for the alpha) in front of it: the reference agrees with 16-sample
   accumulation within the tolerances below (before, both scenes raised ValueError).
-- Depth of field: ``render(..., aperture=, focus_distance=)`` (Kraus's sub-images on the
-  pinhole frame) against Mitsuba's ``thinlens`` sensor with the same lens. Measured here it is
-  NOT closer to the thin lens than the pinhole frame (RMSE 0.033 against 0.027 at aperture
-  0.25, 0.051 against 0.043 at 0.5): the sub-images' fixed radii (0, 1.7, 3.4 ... pixels)
-  over-blur the small circles of confusion of a 64x48 image and the opaque blur spreads
-  colour across depth edges. The test holds the figure (within 1.5x the pinhole's) and the
-  lens's wiring (both options or neither, stats).
+- Depth of field against Mitsuba's ``thinlens``: tests/peers/test_depth_of_field_thinlens.py.
 
 Images are 64x48; Mitsuba 16 shutter times x 16 spp.
 """
@@ -70,23 +64,3 @@ def test_transparent_lambert_objects_raise_naming_the_scene():
     sc = mb.Scene([lit], CAM, lights=[mb.DirectionalLight([0, -1, -1])], ambient=0.0)
     with pytest.raises(ValueError, match="transparent"):
         reference.mitsuba(sc, times=1, spp=1)
-
-
-def test_depth_of_field_against_thinlens():
-    objs = []
-    for x, z, c in ((-0.9, 1.6, (0.9, 0.3, 0.1)), (0.0, 0.0, (0.2, 0.8, 0.3)), (0.9, -2.5, (0.2, 0.3, 0.9))):
-        v, f = mb.meshes.box((0.5, 0.9, 0.5))
-        objs.append(mb.Object(mb.Mesh(np.asarray(v) + [x, 0, z], f), color=c))
-    wv, wf = mb.meshes.box((14.0, 10.0, 0.1))  # fills the view: the sub-image blur is opaque
-    objs.append(mb.Object(mb.Mesh(np.asarray(wv) + [0, 0, -4.0], wf), color=(0.7, 0.7, 0.6)))
-    sc = mb.Scene(objs, CAM)
-    lens = {"aperture": 0.25, "focus_distance": 4.0}
-    ref = reference.mitsuba(sc, times=1, spp=64, **lens)
-    pinhole = mb.render(sc, "accumulation", samples=1, aa=2)
-    dof = mb.render(sc, "accumulation", samples=1, aa=2, **lens)
-    e, e0 = metrics.rmse(dof, ref), metrics.rmse(pinhole, ref)
-    assert 0.0 < e < 1.5 * e0, (e, e0)
-    assert not np.array_equal(dof.rgba, pinhole.rgba)
-    assert dof.stats["dof"]["aperture"] == 0.25
-    with pytest.raises(ValueError, match="focus_distance"):
-        mb.render(sc, "accumulation", samples=1, aperture=0.08)

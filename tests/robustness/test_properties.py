@@ -315,11 +315,14 @@ def test_depth_and_velocity_kernels(rgba, depth, velocity, samples, focal):
     shape = rgba.shape[:2] if isinstance(rgba, np.ndarray) and rgba.ndim == 3 else (4, 4)
     d = np.full(shape, 3.0, np.float32) if depth is None else depth
     vel = np.ones((*shape, 2), np.float32) if velocity is None else velocity
-    names = ("rgba", "depth", "velocity", "samples", "focal_depth", "yfov", "layers")
+    names = ("rgba", "depth", "velocity", "samples", "focal_depth", "yfov", "layers", "focus_distance")
     out = check(lambda: mbi.velocity_blur(rgba, vel, samples=samples), (rgba, vel), names)
     if out is not None:
         finite(out)
     out = check(lambda: mbi.depth_of_field(rgba, d, focal, 0.05, 2.0, 0.7), (rgba, d), names)
+    if out is not None:
+        finite(out)
+    out = check(lambda: mbi.lens_blur(rgba, d, 0.2, focal, 0.7), (rgba, d), names)
     if out is not None:
         finite(out)
 
