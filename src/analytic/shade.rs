@@ -7,6 +7,7 @@
 //! with `n` normalised and flipped on back faces; alpha is never shaded; the output is
 //! premultiplied.
 use super::input::{Input, Prepared};
+use super::poly::cubic_roots_between;
 use super::prim::{homogeneous_pixel, Corners, Edges, Prim, SampleEdges, OPAQUE};
 use super::resolve::Layers;
 use super::visibility::{Frag, Link, BACK, NONE};
@@ -299,6 +300,53 @@ impl Layers for SampleShader<'_> {
                 return (self.links[c as usize].prim | (f.prim & BACK), end);
             }
             c = next;
+        }
+    }
+
+    fn kinks(&mut self, p: u32, a: f64, b: f64, out: &mut Vec<f64>) {
+        let input = self.input;
+        let tp = &self.prims[(p & !BACK) as usize];
+        if !input.shade || !tp.lambert || input.lights.is_empty() {
+            return;
+        }
+        // local times of the piece within the prim's segment
+        let (lo, hi) = (
+            ((a - tp.t0) / tp.dt).clamp(0.0, 1.0),
+            ((b - tp.t0) / tp.dt).clamp(0.0, 1.0),
+        );
+        if !(hi > lo) {
+            return;
+        }
+        if self.last.0 != p & !BACK {
+            self.last = (p & !BACK, tp.edges.at(self.x, self.y));
+        }
+        let q = self.last.1;
+        for light in input.lights {
+            if light.intensity.iter().all(|x| *x <= 0.0) {
+                continue;
+            }
+            // n(tau) . -direction with n = sum_k f_k(tau) (n0_k + tau dn_k) (the barycentric
+            // weights before their positive normalisation): a cubic in the local time
+            let l = light.direction.map(|x| -f64::from(x));
+            let dot = |n: [f32; 3]| {
+                f64::from(n[0]) * l[0] + f64::from(n[1]) * l[1] + f64::from(n[2]) * l[2]
+            };
+            let mut c = [0.0f64; 4];
+            for k in 0..3 {
+                let [qa, qb, qc] = q[k];
+                let (m, e) = (dot(tp.normals[0][k]), dot(tp.normals[1][k]));
+                c[0] += qc * m;
+                c[1] += qb * m + qc * e;
+                c[2] += qa * m + qb * e;
+                c[3] += qa * e;
+            }
+            let (r, n) = cubic_roots_between(c, lo, hi);
+            for &tau in &r[..n] {
+                let t = tp.t0 + tau * tp.dt;
+                if t > a && t < b {
+                    out.push(t);
+                }
+            }
         }
     }
 
