@@ -59,7 +59,10 @@ def _gear(teeth: int = 12) -> tuple[np.ndarray, np.ndarray]:
     v = np.concatenate([np.c_[top, np.full(n + 1, 0.2)], np.c_[top, np.full(n + 1, -0.2)]])
     k = np.arange(n)
     nxt = (k + 1) % n
-    caps = [np.stack([np.zeros(n, int), 1 + k, 1 + nxt], -1), np.stack([np.full(n, n + 1), n + 2 + nxt, n + 2 + k], -1)]
+    caps = [
+        np.stack([np.zeros(n, int), 1 + k, 1 + nxt], -1),
+        np.stack([np.full(n, n + 1), n + 2 + nxt, n + 2 + k], -1),
+    ]
     side = [np.stack([1 + k, n + 2 + k, 1 + nxt], -1), np.stack([1 + nxt, n + 2 + k, n + 2 + nxt], -1)]
     return v, np.concatenate(caps + side).astype(np.int64)
 
@@ -208,7 +211,9 @@ def random_scene(seed: int, width: int = 96, height: int = 72, held_out: bool | 
         objects.append(
             Object((fv + (0.0, -1.3, -2.0), ff), color=(0.35, 0.35, 0.38), shading="lambert", name="floor")
         )
-    light = DirectionalLight(tuple(-np.abs(_axis(rng)) * [1, 1, 1] + [0, -0.5, 0]), float(rng.uniform(0.7, 1.2)))
+    light = DirectionalLight(
+        tuple(-np.abs(_axis(rng)) * [1, 1, 1] + [0, -0.5, 0]), float(rng.uniform(0.7, 1.2))
+    )
     camera_motion = _camera_motion(rng) if rng.random() < 0.2 else None
     background = (0.0, 0.0, 0.0, 0.0) if rng.random() < 0.5 else (*rng.uniform(0.0, 0.5, 3), 1.0)
     return Scene(

@@ -76,8 +76,10 @@ def _pilot_options(method: str, options: dict, scale: float) -> dict:
 
 def is_exact(method: str, options: dict) -> bool:
     """Whether ``method`` with ``options`` is :func:`exact` itself."""
-    return method == "analytic" and all(options.get(k) == v for k, v in EXACT_OPTIONS.items()) and not (
-        set(options) - {"aa", *EXACT_OPTIONS}
+    return (
+        method == "analytic"
+        and all(options.get(k) == v for k, v in EXACT_OPTIONS.items())
+        and not (set(options) - {"aa", *EXACT_OPTIONS})
     )
 
 
@@ -86,9 +88,15 @@ def pilot_estimate(scene: Scene, method: str, options: dict) -> dict:
     on ``scene`` from a pilot render (see the module docs)."""
     t0 = time.perf_counter()
     if is_exact(method, options):
-        return {"error_estimate": 0.0, "error_estimate_how": "exact: the reference itself", "estimate_ms": 0.0}
+        return {
+            "error_estimate": 0.0,
+            "error_estimate_how": "exact: the reference itself",
+            "estimate_ms": 0.0,
+        }
     small, scale = pilot_scene(scene)
-    frame = over_background(METHODS[method].fn(small, **_pilot_options(method, options, scale)), small.background)
+    frame = over_background(
+        METHODS[method].fn(small, **_pilot_options(method, options, scale)), small.background
+    )
     ref = exact(small, _aa(method, options))
     err = float(np.sqrt(np.mean(np.square(frame.rgba.astype(np.float64) - ref.rgba))))
     factor = PILOT_FACTOR.get(method, _DEFAULT_FACTOR)

@@ -79,7 +79,9 @@ def accumulation(
         # No two halves to compare (or the dimmed look, whose bias they do not see): render()
         # estimates the error with its pilot.
         return _accumulate(scene, times, weights, ref, dim, aa)
-    parts = [_accumulate(scene, times[h], weights[h] / m, _nearest(h, ref), dim, aa) for h, m in zip(halves, mass)]
+    parts = [
+        _accumulate(scene, times[h], weights[h] / m, _nearest(h, ref), dim, aa) for h, m in zip(halves, mass)
+    ]
     frame = parts[ref % 2]
     frame.rgba = (mass[0] * parts[0].rgba.astype(np.float64) + mass[1] * parts[1].rgba).astype(np.float32)
     frame.stats["samples"] = len(times)
