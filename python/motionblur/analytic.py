@@ -148,7 +148,8 @@ def rasterize_motion(
     of M equal strata. ``lights`` (pairs (direction (3,), intensity float or (3,))) and
     ``ambient`` light the lambert draws. ``gauss``: points in time per visible piece, 1 to
     4, or ``"auto"`` (1 to 3 by the piece's length); a piece is cut where the triangle covering
-    the sample changes, so each triangle is shaded at its own points. ``reference_time`` in [0, 1]: the instant depth, ids and velocity describe.
+    the sample changes, so each triangle is shaded at its own points, and where a light grazes
+    a lambert triangle (the kink of ``max(0, n . l)``). ``reference_time`` in [0, 1]: the instant depth, ids and velocity describe.
     ``background``: an opaque layer the draws are depth-tested and composited against, one
     entry per sample: ``(rgba (HS,WS,4) float32 premultiplied, depth (HS,WS) float32 view
     depth (inf where empty), ids (HS,WS) int32)``. ``shade=False`` gives coverage only (every

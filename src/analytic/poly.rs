@@ -125,37 +125,55 @@ pub fn quadratic_roots(a: f64, b: f64, c: f64) -> ([f64; 2], usize) {
 /// the derivative's roots split [0, 1] into monotone pieces, each bracketed root is found by
 /// bisection to full precision.
 pub fn cubic_roots(c: [f64; 4]) -> ([f64; 3], usize) {
+    cubic_roots_between(c, 0.0, 1.0)
+}
+
+/// [`cubic_roots`] strictly inside (`lo`, `hi`), a part of [0, 1]: only the monotone pieces
+/// within it are bisected.
+pub fn cubic_roots_between(c: [f64; 4], lo: f64, hi: f64) -> ([f64; 3], usize) {
+    let inside = |r: [f64; 2], n: usize| {
+        let mut out = [0.0; 3];
+        let mut m = 0;
+        for &x in &r[..n] {
+            if x > lo && x < hi {
+                out[m] = x;
+                m += 1;
+            }
+        }
+        (out, m)
+    };
     if c[3] == 0.0 {
         let (r, n) = quadratic_roots(c[2], c[1], c[0]);
-        return ([r[0], r[1], 0.0], n);
+        return inside(r, n);
     }
     let (d, nd) = quadratic_roots(3.0 * c[3], 2.0 * c[2], c[1]);
+    let (d, nd) = inside(d, nd);
     let mut cuts = [0.0; 4];
-    cuts[0] = 0.0;
+    cuts[0] = lo;
     cuts[1..1 + nd].copy_from_slice(&d[..nd]);
-    cuts[1 + nd] = 1.0;
+    cuts[1 + nd] = hi;
     let mut out = [0.0; 3];
     let mut n = 0;
     for w in cuts[..nd + 2].windows(2) {
-        let (mut lo, mut hi) = (w[0], w[1]);
-        let (flo, fhi) = (horner3(c, lo), horner3(c, hi));
+        let (mut lo_w, mut hi_w) = (w[0], w[1]);
+        let (flo, fhi) = (horner3(c, lo_w), horner3(c, hi_w));
         if flo == 0.0 || fhi == 0.0 || (flo > 0.0) == (fhi > 0.0) {
             continue; // no sign change inside (roots at the cuts are not crossings we need)
         }
         let rising = fhi > 0.0;
         for _ in 0..64 {
-            let mid = 0.5 * (lo + hi);
-            if mid <= lo || mid >= hi {
+            let mid = 0.5 * (lo_w + hi_w);
+            if mid <= lo_w || mid >= hi_w {
                 break;
             }
             if (horner3(c, mid) > 0.0) == rising {
-                hi = mid;
+                hi_w = mid;
             } else {
-                lo = mid;
+                lo_w = mid;
             }
         }
-        let r = 0.5 * (lo + hi);
-        if r > 0.0 && r < 1.0 && (n == 0 || r > out[n - 1]) {
+        let r = 0.5 * (lo_w + hi_w);
+        if r > lo && r < hi && (n == 0 || r > out[n - 1]) {
             out[n] = r;
             n += 1;
         }
@@ -488,6 +506,18 @@ mod tests {
         assert_eq!(pos.as_slice().len(), 2);
         assert!((pos.as_slice()[0][0] - 0.1).abs() < 1e-12);
         assert!((pos.as_slice()[1][1] - 1.0).abs() < 1e-15);
+        // within a part of [0, 1]: only the roots strictly inside it
+        let (b, m) = cubic_roots_between(c, 0.3, 0.95);
+        assert_eq!(m, 2);
+        assert!(
+            (b[0] - 0.5).abs() < 1e-12 && (b[1] - 0.9).abs() < 1e-12,
+            "{b:?}"
+        );
+        assert_eq!(cubic_roots_between(c, 0.5, 0.9).1, 0);
+        // a quadratic (no cubic term) the same way: (t - 0.2)(t - 0.6)
+        let (q, m) = cubic_roots_between([0.12, -0.8, 1.0, 0.0], 0.4, 1.0);
+        assert_eq!(m, 1);
+        assert!((q[0] - 0.6).abs() < 1e-12);
     }
 
     #[test]

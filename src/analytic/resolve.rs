@@ -6,7 +6,9 @@
 //! those composites. Coverage is therefore exact (up to the depth model, linear per triangle)
 //! and colour is a quadrature of the shading over time. A piece is cut where a layer's chain
 //! passes from one triangle to the next, so each sub-piece is shaded by one triangle per
-//! layer at its own Gauss points; layers of one colour skip the quadrature.
+//! layer at its own Gauss points, and where a light grazes a lambert layer (the kink of its
+//! `max(0, n . l)`, which the Gauss points would integrate as if smooth); layers of one colour
+//! skip the quadrature.
 use super::quadrature::{gauss, Quadrature};
 use super::visibility::{
     depth_at, sort, sweep, Backdrop, Frag, Link, Overflow, Sweep, BACKDROP, NONE,
@@ -33,6 +35,10 @@ pub trait Layers {
     /// Pushes the instants strictly inside `(a, b)` where fragment `f`'s chain passes from one
     /// triangle to the next, ascending.
     fn cuts(&mut self, i: usize, f: &Frag, a: f64, b: f64, out: &mut Vec<f64>);
+    /// Pushes the instants strictly inside `(a, b)` where the shading of triangle `p` (as
+    /// [`Layers::triangle`] gives it) at this sample has a kink: where a light grazes a lambert
+    /// surface (its `max(0, n . l)` turns on or off), ascending per light.
+    fn kinks(&mut self, p: u32, a: f64, b: f64, out: &mut Vec<f64>);
 }
 
 /// What one sample resolves to.
@@ -52,6 +58,7 @@ pub struct Scratch {
     sweep: Sweep,
     opaque: Vec<bool>,
     element_cuts: Vec<f64>,
+    kinks: Vec<f64>,
     tris: Vec<(u32, f64)>,
     /// Most depth crossings one stretch of a sample's time may hold ([`sweep`]'s `max_cuts`);
     /// unlimited by default.
@@ -64,6 +71,7 @@ impl Default for Scratch {
             sweep: Sweep::default(),
             opaque: Vec::new(),
             element_cuts: Vec::new(),
+            kinks: Vec::new(),
             tris: Vec::new(),
             max_cuts: usize::MAX,
         }
@@ -113,6 +121,7 @@ pub fn resolve(
     let mut acc = [0.0f64; 4];
     let mut ref_done = false;
     let mut cuts = std::mem::take(&mut sc.element_cuts);
+    let mut kinks = std::mem::take(&mut sc.kinks);
     let mut tris = std::mem::take(&mut sc.tris);
     sort(frags);
     let mut opaque = std::mem::take(&mut sc.opaque);
@@ -185,64 +194,86 @@ pub fn resolve(
                 if dw <= 0.0 {
                     continue;
                 }
-                let (half, mid) = (0.5 * (v - u), 0.5 * (u + v));
                 // each layer's triangle, found at the first point in time and kept while the
                 // points stay before its chain's next link
-                let (xs, ws) = gauss(quad.points(v - u, 0.0));
+                let mid = 0.5 * (u + v);
+                let (xs, _) = gauss(quad.points(v - u, 0.0));
+                let first = mid + 0.5 * (v - u) * xs[0];
                 let mut bend = 0.0f32;
                 tris.clear();
+                kinks.clear();
                 for &(_, i) in order {
                     if i == BACKDROP {
                         tris.push((NONE, f64::INFINITY));
                     } else {
-                        let tri = layers.triangle(i, &frags[i], mid + half * xs[0]);
+                        let tri = layers.triangle(i, &frags[i], first);
                         bend = bend.max(layers.bend(tri.0));
+                        layers.kinks(tri.0, u, v, &mut kinks);
                         tris.push(tri);
                     }
                 }
-                let (xs, ws) = if bend > 0.0 {
-                    gauss(quad.points(v - u, bend))
-                } else {
-                    (xs, ws)
-                };
-                let mut sum = [0.0f64; 4];
-                let mut wsum = 0.0;
-                for (x, w) in xs.iter().zip(ws) {
-                    let t = mid + half * x;
-                    let wt = w * density(shutter, t);
-                    if wt <= 0.0 {
+                // Lambert's clamp bends the shading where a light grazes a surface: the
+                // quadrature is exact only for smooth shading, so the piece is cut there too.
+                if kinks.len() > 1 {
+                    kinks.sort_unstable_by(f64::total_cmp);
+                }
+                let mut lo = u;
+                for k in 0..=kinks.len() {
+                    let hi = if k < kinks.len() { kinks[k] } else { v };
+                    if hi <= lo {
                         continue;
                     }
-                    let mut trans = 1.0f64;
-                    for (k, &(_, i)) in order.iter().enumerate() {
-                        let s = if i == BACKDROP {
-                            bg.rgba
-                        } else {
-                            if t >= tris[k].1 {
-                                tris[k] = layers.triangle(i, &frags[i], t);
-                            }
-                            layers.shade(tris[k].0, t)
-                        };
-                        for j in 0..4 {
-                            sum[j] += wt * trans * f64::from(s[j]);
-                        }
-                        trans *= 1.0 - f64::from(s[3]);
-                        if trans <= 0.0 {
-                            break;
-                        }
-                    }
-                    wsum += wt;
-                }
-                if wsum > 0.0 {
-                    if power_of_two(wsum) {
-                        // dividing by a power of two is multiplying by its exact reciprocal
-                        let inv = 1.0 / wsum;
-                        for j in 0..4 {
-                            acc[j] += dw * sum[j] * inv;
-                        }
+                    let dw = if kinks.is_empty() {
+                        dw
                     } else {
-                        for j in 0..4 {
-                            acc[j] += dw * sum[j] / wsum;
+                        weight(shutter, lo, hi)
+                    };
+                    let (a, b) = (lo, hi);
+                    lo = hi;
+                    if dw <= 0.0 {
+                        continue;
+                    }
+                    let (half, mid) = (0.5 * (b - a), 0.5 * (a + b));
+                    let (xs, ws) = gauss(quad.points(b - a, bend));
+                    let mut sum = [0.0f64; 4];
+                    let mut wsum = 0.0;
+                    for (x, w) in xs.iter().zip(ws) {
+                        let t = mid + half * x;
+                        let wt = w * density(shutter, t);
+                        if wt <= 0.0 {
+                            continue;
+                        }
+                        let mut trans = 1.0f64;
+                        for (k, &(_, i)) in order.iter().enumerate() {
+                            let s = if i == BACKDROP {
+                                bg.rgba
+                            } else {
+                                if t >= tris[k].1 {
+                                    tris[k] = layers.triangle(i, &frags[i], t);
+                                }
+                                layers.shade(tris[k].0, t)
+                            };
+                            for j in 0..4 {
+                                sum[j] += wt * trans * f64::from(s[j]);
+                            }
+                            trans *= 1.0 - f64::from(s[3]);
+                            if trans <= 0.0 {
+                                break;
+                            }
+                        }
+                        wsum += wt;
+                    }
+                    if wsum > 0.0 {
+                        if power_of_two(wsum) {
+                            // dividing by a power of two is multiplying by its exact reciprocal
+                            let inv = 1.0 / wsum;
+                            for j in 0..4 {
+                                acc[j] += dw * sum[j] * inv;
+                            }
+                        } else {
+                            for j in 0..4 {
+                                acc[j] += dw * sum[j] / wsum;
+                            }
                         }
                     }
                 }
@@ -251,6 +282,7 @@ pub fn resolve(
     );
     sc.opaque = opaque;
     sc.element_cuts = cuts;
+    sc.kinks = kinks;
     sc.tris = tris;
     swept?;
     out.rgba = acc.map(|x| x as f32);
@@ -310,6 +342,7 @@ mod tests {
             None
         }
         fn cuts(&mut self, _i: usize, _f: &Frag, _a: f64, _b: f64, _out: &mut Vec<f64>) {}
+        fn kinks(&mut self, _p: u32, _a: f64, _b: f64, _out: &mut Vec<f64>) {}
         fn triangle(&mut self, _i: usize, f: &Frag, _t: f64) -> (u32, f64) {
             (f.prim, f64::INFINITY)
         }

@@ -7,10 +7,11 @@
 //! with `n` normalised and flipped on back faces; alpha is never shaded; the output is
 //! premultiplied.
 use super::input::{Input, Prepared};
+use super::poly::cubic_roots_between;
 use super::prim::{homogeneous_pixel, Corners, Edges, Prim, SampleEdges, OPAQUE};
 use super::resolve::Layers;
 use super::visibility::{Frag, Link, BACK, NONE};
-use crate::raster::Shading;
+use crate::raster::{Light, Shading};
 
 /// A prim as one tile uses it: its edges and everything shading reads, gathered once.
 #[derive(Clone)]
@@ -34,6 +35,9 @@ pub struct TilePrim {
     pub uniform: Option<[f32; 4]>,
     /// How much the shading varies across the triangle ([`Quadrature::points`]).
     pub bend: f32,
+    /// A light may graze the triangle during its segment (lambert: some corner is lit and some
+    /// is not, at some time), so its shading may have a kink ([`Layers::kinks`]).
+    pub graze: bool,
 }
 
 impl TilePrim {
@@ -70,8 +74,43 @@ impl TilePrim {
             normals,
             uniform: d.uniform,
             bend: if lambert { spread(&normals) } else { 0.0 },
+            graze: lambert && input.shade && grazed(input, &normals),
         }
     }
+}
+
+/// The corner terms `n_k(tau) . l` of a light, with `n_k` the corner normal at the segment's
+/// start plus `tau` times its change: the term at local time `tau` is `m + tau e`.
+#[inline]
+fn corner_terms(light: &Light, normals: &[[[f32; 3]; 3]; 2]) -> [(f64, f64); 3] {
+    let l = light.direction.map(|x| -f64::from(x));
+    let dot =
+        |n: [f32; 3]| f64::from(n[0]) * l[0] + f64::from(n[1]) * l[1] + f64::from(n[2]) * l[2];
+    [0, 1, 2].map(|k| (dot(normals[0][k]), dot(normals[1][k])))
+}
+
+/// Whether the corner terms of the lights that shine take both signs over [`lo`, `hi`] (local
+/// time; each term is linear, so its ends tell): only then can a light graze the triangle
+/// there (the barycentric weights keep one sign while a sample is inside it).
+#[inline]
+fn terms_change_sign(terms: &[(f64, f64); 3], lo: f64, hi: f64) -> bool {
+    let (mut pos, mut neg) = (false, false);
+    for &(m, e) in terms {
+        for x in [m + lo * e, m + hi * e] {
+            // NaN counts as both
+            pos |= !(x <= 0.0);
+            neg |= !(x >= 0.0);
+        }
+    }
+    pos && neg
+}
+
+/// [`TilePrim::graze`]: some shining light's corner terms change sign over the segment.
+fn grazed(input: &Input, normals: &[[[f32; 3]; 3]; 2]) -> bool {
+    input.lights.iter().any(|light| {
+        light.intensity.iter().any(|x| *x > 0.0)
+            && terms_change_sign(&corner_terms(light, normals), 0.0, 1.0)
+    })
 }
 
 /// The largest distance between two of a triangle's unit corner normals, at the segment's
@@ -299,6 +338,53 @@ impl Layers for SampleShader<'_> {
                 return (self.links[c as usize].prim | (f.prim & BACK), end);
             }
             c = next;
+        }
+    }
+
+    fn kinks(&mut self, p: u32, a: f64, b: f64, out: &mut Vec<f64>) {
+        let tp = &self.prims[(p & !BACK) as usize];
+        if !tp.graze {
+            return;
+        }
+        // local times of the piece within the prim's segment
+        let (lo, hi) = (
+            ((a - tp.t0) / tp.dt).clamp(0.0, 1.0),
+            ((b - tp.t0) / tp.dt).clamp(0.0, 1.0),
+        );
+        if !(hi > lo) {
+            return;
+        }
+        for light in self.input.lights {
+            if light.intensity.iter().all(|x| *x <= 0.0) {
+                continue;
+            }
+            // n(tau) . l with n = sum_k f_k(tau) (n0_k + tau dn_k) (the barycentric weights
+            // before their positive normalisation): a cubic in the local time, which can only
+            // change sign where the corner terms do
+            let terms = corner_terms(light, &tp.normals);
+            if !terms_change_sign(&terms, lo, hi) {
+                continue;
+            }
+            if self.last.0 != p & !BACK {
+                self.last = (p & !BACK, tp.edges.at(self.x, self.y));
+            }
+            let q = self.last.1;
+            let mut c = [0.0f64; 4];
+            for k in 0..3 {
+                let [qa, qb, qc] = q[k];
+                let (m, e) = terms[k];
+                c[0] += qc * m;
+                c[1] += qb * m + qc * e;
+                c[2] += qa * m + qb * e;
+                c[3] += qa * e;
+            }
+            let (r, n) = cubic_roots_between(c, lo, hi);
+            for &tau in &r[..n] {
+                let t = tp.t0 + tau * tp.dt;
+                if t > a && t < b {
+                    out.push(t);
+                }
+            }
         }
     }
 

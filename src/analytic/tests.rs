@@ -321,6 +321,7 @@ impl resolve::Layers for FlatLayers {
     fn triangle(&mut self, _i: usize, f: &visibility::Frag, _t: f64) -> (u32, f64) {
         (f.prim, f64::INFINITY)
     }
+    fn kinks(&mut self, _p: u32, _a: f64, _b: f64, _out: &mut Vec<f64>) {}
     fn bend(&self, _p: u32) -> f32 {
         0.0
     }

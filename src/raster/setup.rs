@@ -283,7 +283,12 @@ fn emit(
         y.swap(1, 2);
         verts.swap(1, 2);
         if let Some(b) = bary.as_mut() {
+            // The rows follow the corners; the columns are coordinates in the face's vertices,
+            // whose order `verts` just swapped too.
             b.swap(1, 2);
+            for row in b.iter_mut() {
+                row.swap(1, 2);
+            }
         }
     }
     if front {

@@ -308,6 +308,29 @@ def test_vertices_behind_the_camera_do_not_wrap():
     assert frame.stats["clipped"] == 1
 
 
+@pytest.mark.parametrize("cull_back", [True, False])
+def test_clipped_triangles_interpolate_their_own_corners(cull_back):
+    """A front face crossing the near plane, with a colour per corner: where it is seen, every
+    pixel shows the colour of its surface point, as a triangle cut from the same plane wholly in
+    front of the camera (its corners coloured by their barycentric coordinates) shows it. The
+    clipped polygon is drawn as a fan of triangles whose corners are reordered to a positive
+    area; their barycentric coordinates in the face once followed the corners but not the face's
+    vertices, which swapped the colours of two corners."""
+    cam = mb.Camera(mb.look_at((0, 0.5, 3), (0, -0.5, 0)), 0.9, 64, 48, znear=0.3)
+    big = np.array([[-4.0, -1.0, 5.0], [4.0, -1.0, 5.0], [0.0, -1.0, -6.0]])  # the first two behind
+    rgb = np.eye(3, dtype=np.float32)
+    face = [[0, 1, 2]] if cull_back else [[0, 2, 1]]
+    clipped = mb.rasterize(cam, mb.Draw(big, face, rgb, cull_back=cull_back))
+    assert clipped.stats["clipped"] == 1
+    # a triangle of the same plane in front of the camera, corners at barycentric coordinates lam
+    lam = np.array([[0.4, 0.2, 0.4], [0.1, 0.4, 0.5], [0.05, 0.05, 0.9]])
+    inner = mb.rasterize(cam, mb.Draw(lam @ big, face, lam.astype(np.float32), cull_back=cull_back))
+    assert inner.stats["clipped"] == 0
+    both = (inner.ids == 0) & (clipped.ids == 0)
+    assert both.sum() > 200
+    np.testing.assert_allclose(clipped.rgba[both], inner.rgba[both], atol=2e-6)
+
+
 def test_one_pixel_and_4096_pixel_images():
     v, f = meshes.icosphere(4)
     draw = mb.Draw(v, f, (0.5, 0.5, 0.5))

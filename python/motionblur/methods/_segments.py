@@ -4,6 +4,8 @@ analytic frame's cost from its segment count)."""
 
 from __future__ import annotations
 
+import heapq
+
 import numpy as np
 
 from .._validate import as_float
@@ -15,8 +17,8 @@ __all__ = ["segment_times", "MAX_SEGMENTS", "MIN_PIECE", "NORMAL_TOLERANCE"]
 
 #: Most segments the automatic rule makes.
 MAX_SEGMENTS = 256
-#: Shortest piece the rule halves: a test point that crosses the camera's plane is never
-#: "straight" around the crossing, and halving towards it would end in equal boundaries.
+#: Shortest piece the rule halves: halving a piece that never comes straight (a point on a
+#: path with a kink, a NaN) would end in equal boundaries.
 MIN_PIECE = 1.0 / 1024.0
 #: Test points per deforming object in the segment rule.
 _DEFORMING_POINTS = 256
@@ -57,12 +59,16 @@ def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.01
     The rule: the shutter is first cut at every keyframe time of the objects' motions and of
     the camera's; each piece is then halved while, at its middle, some test point lies more
     than ``tolerance`` pixels from where motion linear in clip space between the piece's ends
-    puts it (points behind the camera count as off). Test points are the corners of each rigid
-    object's bounding box (the farthest points from any rotation axis) and up to 256 vertices
-    of each deforming one. A deforming lambert object's piece is also halved while a test
+    puts it, as far as it can be seen: a point off the image or nearer than the near plane is
+    measured as if it were at the image's border and at the near plane (its triangles show
+    only there; the distance in clip space, which is linear over a triangle, is what moves
+    them). Test points are the corners of each rigid object's bounding box (the farthest
+    points from any rotation axis) and up to 256 vertices of each deforming one. A deforming lambert object's piece is also halved while a test
     vertex's unit normal at the middle lies more than :data:`NORMAL_TOLERANCE` from the
     direction of the mean of its normals at the ends. At most :data:`MAX_SEGMENTS` segments, none
-    halved below :data:`MIN_PIECE` of the shutter."""
+    halved below :data:`MIN_PIECE` of the shutter: the piece furthest over its tolerance is
+    halved first, so a shutter that needs more than the cap ends with every piece about equally
+    far off (not with its start refined and its end left whole)."""
     tol = as_float(tolerance, "tolerance")
     if not tol > 0:
         raise ValueError(f"tolerance: must be > 0 pixels, got {tol}")
@@ -85,11 +91,26 @@ def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.01
         p = np.concatenate(world)
         return p @ vp[:3, :3].T + vp[:3, 3], p @ vp[3, :3] + vp[3, 3]
 
-    def pixels(xyz, wc):
+    near = camera.znear
+
+    def pixel_error(xyz_l, w_l, xyz_m, w_m) -> float:
+        """The largest screen distance (pixels) between the test points at ``(xyz_m, w_m)`` (clip
+        space) and at ``(xyz_l, w_l)``, as seen where it matters: the image distance of two
+        points is ``|d_xy - p d_w| / w_l`` per axis (``d`` their difference, ``p`` the NDC
+        position); a point off the image or nearer than the near plane is only seen through
+        the visible part of its triangles, which lies within the image (``|p| <= 1``) beyond
+        the near plane (``w >= znear``), so ``p`` is clamped to [-1, 1] and ``w_l`` to
+        ``znear`` and above."""
+        d, dw = xyz_l - xyz_m, w_l - w_m
         with np.errstate(divide="ignore", invalid="ignore"):
-            x = (xyz[:, 0] / wc + 1.0) * 0.5 * w
-            y = (1.0 - xyz[:, 1] / wc) * 0.5 * h
-        return x, y, wc > 1e-9
+            px = np.clip(xyz_m[:, 0] / w_m, -1.0, 1.0)
+            py = np.clip(xyz_m[:, 1] / w_m, -1.0, 1.0)
+            px = np.where(np.isfinite(px), px, 0.0)
+            py = np.where(np.isfinite(py), py, 0.0)
+        wl = np.maximum(w_l, near)
+        ex = np.abs(d[:, 0] - px * dw) / wl * (0.5 * w)
+        ey = np.abs(d[:, 1] - py * dw) / wl * (0.5 * h)
+        return float(np.hypot(ex, ey).max()) if len(ex) else 0.0
 
     cache: dict[float, tuple] = {}
 
@@ -108,26 +129,28 @@ def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.01
             ]
         return normal_cache[t]
 
-    def normals_straight(a: float, b: float) -> bool:
+    def normals_off(a: float, b: float) -> float:
+        """The largest normal deviation at the middle of [a, b] over NORMAL_TOLERANCE."""
+        worst = 0.0
         for na, nb, nm in zip(normals(a), normals(b), normals(0.5 * (a + b))):
             mean = na + nb
             length = np.linalg.norm(mean, axis=1, keepdims=True)
             ok = (length[:, 0] > 1e-12) & (np.linalg.norm(nm, axis=1) > 0)
             mean = mean / np.where(length > 1e-12, length, 1.0)
-            if not (np.linalg.norm(nm[ok] - mean[ok], axis=1) <= NORMAL_TOLERANCE).all():
-                return False
-        return True
+            dev = np.linalg.norm(nm[ok] - mean[ok], axis=1)
+            if dev.size:
+                d = float(dev.max()) / NORMAL_TOLERANCE
+                worst = max(worst, d if d == d else np.inf)
+        return worst
 
-    def straight(a: float, b: float) -> bool:
+    def off(a: float, b: float) -> float:
+        """How far [a, b] is from straight, in tolerances (> 1: halve it)."""
         (ca, wa), (cb, wb), (cm, wm) = at(a), at(b), at(0.5 * (a + b))
-        xl, yl, okl = pixels(0.5 * (ca + cb), 0.5 * (wa + wb))
-        xm, ym, okm = pixels(cm, wm)
-        if not (okl == okm).all():
-            return False
-        ok = okl & okm
-        if not (np.hypot(xl[ok] - xm[ok], yl[ok] - ym[ok]) <= tol).all():
-            return False
-        return normals_straight(a, b)
+        worst = pixel_error(0.5 * (ca + cb), 0.5 * (wa + wb), cm, wm) / tol
+        worst = worst if worst == worst else np.inf
+        if worst > 1.0:
+            return worst
+        return max(worst, normals_off(a, b))
 
     cuts = {0.0, 1.0}
     motions = [o.motion for o in objects if o.motion is not None]
@@ -136,14 +159,22 @@ def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.01
     for m in motions:
         cuts.update(float(t) for t in m.times if 0.0 < t < 1.0)
     todo = sorted(cuts)
-    out = [todo[0]]
-    stack = list(zip(todo[:-1], todo[1:]))[::-1]
-    while stack:
-        a, b = stack.pop()
-        if b - a > MIN_PIECE and len(out) - 1 + len(stack) + 1 < MAX_SEGMENTS and not straight(a, b):
-            m = 0.5 * (a + b)
-            stack.append((m, b))
-            stack.append((a, m))
-            continue
-        out.append(b)
-    return np.array(out)
+    # Worst piece first (a heap of (-off, a, b)); pieces at the tolerance or at MIN_PIECE are done.
+    heap: list[tuple[float, float, float]] = []
+    done = set(todo)
+
+    def push(a: float, b: float) -> None:
+        if b - a > MIN_PIECE:
+            e = off(a, b)
+            if e > 1.0:
+                heapq.heappush(heap, (-e, a, b))
+
+    for a, b in zip(todo[:-1], todo[1:]):
+        push(a, b)
+    while heap and len(done) - 1 < MAX_SEGMENTS:
+        _, a, b = heapq.heappop(heap)
+        m = 0.5 * (a + b)
+        done.add(m)
+        push(a, m)
+        push(m, b)
+    return np.array(sorted(done))

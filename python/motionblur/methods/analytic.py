@@ -89,7 +89,8 @@ def analytic(scene: Scene, aa: int = 1, gauss="auto", tolerance: float = 0.01, s
     piece's length, 1 below 1/32 of the shutter, 2 below 1/4, else 3; and by how far apart a
     lambert triangle's unit vertex normals are, 2 beyond 0.1, 3 beyond 0.5 and 4 beyond 1.0, since a sample
     sweeps the whole triangle within a short piece; a piece is cut where the triangle of a
-    surface covering the sample changes); ``tolerance`` pixels, the
+    surface covering the sample changes, and where a light grazes a lambert surface, the kink
+    of ``max(0, n . l)``); ``tolerance`` pixels, the
     chord rule of :func:`segment_times`; ``segments`` an int to cut the shutter into that many
     equal segments instead (plus every keyframe time). Depth, ids and velocity describe the
     surface in front at the scene's reference time. ``stats``: the kernel's (``prims``,
