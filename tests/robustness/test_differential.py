@@ -12,8 +12,11 @@ cannot model, with a ValueError that names the methods to use instead, and a fra
 than no blur must come with a :class:`motionblur.PoorBlurWarning`. ``auto`` must stay within 1.5x
 its tolerance on every scene (and meets it on at least 95%: the README's measured table). ``make test`` runs a few examples (profile ``ci``), ``make fuzz`` many.
 
-The bounds were read off the tuning seeds 0..29 at 64x48 (the worst seen, rounded up); the
-README lists them beside each method.
+The bounds were read off the tuning seeds 0..29 at 64x48 (the worst seen, rounded up), except
+the motion volume's: tuning showed 0.75 and 3% of alpha mass, but measuring seeds found 1.6x the
+unblurred frame's error under the paper's ramp shutter (with its PoorBlurWarning) and +22% mass
+on a concave gear under camera motion (the convex outline), so it keeps the issue's general
+bound. The README lists them beside each method.
 """
 
 from __future__ import annotations
@@ -35,9 +38,9 @@ pytestmark = pytest.mark.robustness
 BOUNDS = {
     "accumulation": (0.5, 0.05),
     "analytic": (0.1, 0.01),
-    "velocity": (1.5, 0.3),
-    "opaque_image": (1.5, 0.3),
-    "camera_velocity": (1.5, 0.3),
+    "velocity": (1.3, 0.3),
+    "opaque_image": (1.3, 0.3),
+    "camera_velocity": (1.0, 0.1),
     "blur_shell": (2.0, 0.6),
     "motion_volume": (2.0, 0.6),
 }

@@ -17,7 +17,9 @@ With ``tolerance`` (RMSE against the exact integral, premultiplied linear RGBA):
    is an odd multiple of the last count (with fewer than :data:`SURE_SAMPLES` samples the aim is
    lower: their halves spread more), and again while the estimate says it missed (each
    step predicted from the last two measurements, at most :data:`MAX_STEPS` steps);
-4. when that N would cost more than the analytic frame (predicted from its segment count and
+4. a scene with translucent objects that accumulation would draw in separate layers (see
+   :func:`layered_translucency`: its limit is not the exact integral there) is the analytic
+   frame; so is one where that N would cost more than the analytic frame (predicted from its segment count and
    accumulation's time per sample, only asked once N reaches :data:`ANALYTIC_FROM`), or exceed
    :data:`MAX_SAMPLES`, or the tolerance is under what accumulation can certify cheaply, the
    analytic method renders instead (at the exact options below :data:`ANALYTIC_ERROR` x 2).
@@ -47,6 +49,7 @@ from ._segments import segment_times
 
 __all__ = [
     "auto",
+    "layered_translucency",
     "renders_shutter",
     "DEFAULT_TOLERANCE",
     "SAFETY",
@@ -92,6 +95,18 @@ def renders_shutter(options: dict, scene: Scene) -> bool:
     on a box shutter). The report does not measure such a run against the scene's integral."""
     shutter = scene.shutter if isinstance(scene.shutter, str) else "weights"
     return options.get("filter", shutter) == shutter
+
+
+def layered_translucency(scene: Scene) -> bool:
+    """Whether accumulation's limit may differ from the exact integral on ``scene``: it draws
+    static and moving objects (under a still camera) and each shading mode as separate layers
+    merged with one depth per pixel, so a translucent surface hidden behind another layer's
+    surface can show through. Its halves cannot see that bias; ``auto`` renders the analytic
+    frame there."""
+    if not any(float(np.min(o.rgba[..., 3])) < 1.0 for o in scene.objects):
+        return False
+    layers = {o.shading for o in scene.objects}
+    return len(layers) > 1 or (not scene.camera_moves and any(not o.is_moving for o in scene.objects))
 
 
 def _moves(scene: Scene) -> bool:
@@ -187,6 +202,12 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
     if tol < 2 * ANALYTIC_ERROR:
         trials.run("analytic", **EXACT_OPTIONS)
         return f"tolerance {tol:g} < 2 x {ANALYTIC_ERROR:g}: the exact integral"
+    if layered_translucency(trials.scene):
+        trials.run("analytic")
+        return (
+            "translucent objects over layers accumulation merges with one depth a pixel: its limit "
+            f"is not the exact integral there; the analytic frame, exact to {ANALYTIC_ERROR:g}"
+        )
     aim = tol * SAFETY
     trials.accumulate(FIRST_SAMPLES)
     analytic_ms = None
