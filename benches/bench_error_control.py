@@ -29,7 +29,9 @@ from pathlib import Path
 import numpy as np
 
 import motionblur as mb
+from motionblur.evaluation import random_scenes
 from motionblur.evaluation.random_scenes import MEASURING_SEEDS, TUNING_SEEDS, random_scene
+from motionblur.methods import _segments
 
 TOLERANCES = (0.01, 0.004, 0.001)
 OUT = Path("out/bench/error_control")
@@ -50,7 +52,9 @@ def best_ms(fn, repeat: int = 3) -> tuple[float, object]:
 
 
 def reference(scene, seed: int, size: str) -> np.ndarray:
-    key = hashlib.sha1(f"{mb.__version__}{seed}{size}".encode()).hexdigest()[:12]
+    # keyed by the build as well: a change to the kernel or the segment rule changes the reference
+    build = b"".join(Path(m.__file__).read_bytes() for m in (mb._core, _segments, random_scenes))
+    key = hashlib.sha1(f"{mb.__version__}{seed}{size}".encode() + build).hexdigest()[:12]
     path = OUT / "refs" / f"{seed}_{size}_{key}.npy"
     if path.exists():
         return np.load(path)
