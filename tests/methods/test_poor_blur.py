@@ -1,0 +1,42 @@
+"""A method that blurs worse than none says so: the blur shell on the built-in ``curved`` scene
+(1.03x the unblurred frame's error against the exact integral at 64x48 and 160x120) warns with
+:class:`motionblur.PoorBlurWarning`, and one that blurs well (the blur shell on ``cube``) does not."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import motionblur as mb
+
+
+def _rmse(a, b) -> float:
+    return float(np.sqrt(np.mean(np.square(np.asarray(a, np.float64) - b))))
+
+
+def test_the_blur_shell_on_a_curved_path_warns_that_it_is_worse_than_no_blur():
+    scene = mb.SCENES["curved"](64, 48)
+    exact = mb.exact(scene).rgba
+    sharp = mb.render(scene, "accumulation", samples=1, error_estimate=False).rgba
+    with pytest.warns(mb.PoorBlurWarning, match="blur_shell"):
+        frame = mb.render(scene, "blur_shell")
+    assert _rmse(frame.rgba, exact) > _rmse(sharp, exact)  # the warning is true
+    assert frame.stats["error_estimate"] > frame.stats["unblurred_estimate"]
+
+
+def test_a_good_blur_does_not_warn_and_its_estimate_is_below_no_blur():
+    scene = mb.SCENES["cube"](64, 48)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", mb.PoorBlurWarning)
+        frame = mb.render(scene, "blur_shell")
+    assert frame.stats["error_estimate"] < frame.stats["unblurred_estimate"]  # 0.040 < 0.051 here
+
+
+def test_no_estimate_no_pilot_no_warning():
+    scene = mb.SCENES["curved"](64, 48)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", mb.PoorBlurWarning)
+        frame = mb.render(scene, "blur_shell", error_estimate=False)
+    assert "error_estimate" not in frame.stats
