@@ -67,10 +67,19 @@ def render_with_pid(k: int) -> tuple[int, np.ndarray]:
     return os.getpid(), render(k)
 
 
-def pool_threads() -> int:
-    """How many threads of this process are workers of motionblur's pool (named motionblur-N)."""
+def _named_workers() -> int:
     tasks = Path("/proc/self/task")
     return sum((t / "comm").read_text().startswith("motionblur-") for t in tasks.iterdir())
+
+
+def pool_threads() -> int:
+    """How many threads of this process are workers of motionblur's pool (named motionblur-N). A
+    worker names itself when it first runs, so on a loaded machine the count is read again until
+    it reaches the pool's size (``get_num_threads()``) or 10 s pass."""
+    n, deadline = mb.get_num_threads(), time.monotonic() + 10.0
+    while _named_workers() < n and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return _named_workers()
 
 
 def child_report(k: int) -> tuple[int, int, int, np.ndarray]:
