@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 import motionblur as mb
+from motionblur.evaluation.random_scenes import hand_held_path
 from motionblur.methods._estimate import EXACT_OPTIONS
 from motionblur.methods.analytic import MAX_SEGMENTS, segment_times
 from motionblur.scene import rotate, translate
@@ -38,17 +39,8 @@ def _camera() -> mb.Camera:
 
 
 def _hand_held(amount: float) -> mb.Motion:
-    """Five keys of small turns and shifts (as random_scenes' camera paths)."""
-    rng = np.random.default_rng(1)
-    walk = np.cumsum(rng.normal(size=(5, 3)) * 0.08 * amount, axis=0)
-    turn = np.cumsum(rng.normal(size=(5, 3)) * 0.05 * amount, axis=0)
-    mats = []
-    for p, r in zip(walk, turn):
-        m = translate(p)
-        for k in range(3):
-            m = m @ rotate(float(r[k]), np.eye(3)[k])
-        mats.append(m)
-    return mb.Motion(np.linspace(0.0, 1.0, 5), np.stack(mats))
+    """Five keys of small turns and shifts (random_scenes' camera paths, seed 1)."""
+    return hand_held_path(np.random.default_rng(1), amount)
 
 
 def test_a_floor_cut_by_the_near_plane_keeps_its_vertex_colours():

@@ -32,6 +32,7 @@ import pytest
 import motionblur as mb
 from motionblur import meshes
 from motionblur.evaluation.metrics import rmse
+from motionblur.evaluation.random_scenes import hand_held_path
 from motionblur.methods.motion_volume import _single
 from motionblur.scene import rotate, translate
 
@@ -116,15 +117,7 @@ def _random(seed, w=W, h=H):
     obj = mb.Object(mesh, (0.8, 0.5, 0.3), motion=mb.Motion(ts, mats))
     camera_motion = None
     if seed % 2 == 0:
-        walk = np.cumsum(rng.normal(size=(5, 3)) * 0.08, axis=0)
-        turn = np.cumsum(rng.normal(size=(5, 3)) * 0.05, axis=0)
-        keys = []
-        for p, r in zip(walk, turn):
-            m = translate(p)
-            for k in range(3):
-                m = m @ rotate(float(r[k]), np.eye(3)[k])
-            keys.append(m)
-        camera_motion = mb.Motion(ts, np.stack(keys))
+        camera_motion = hand_held_path(rng)
     return mb.Scene([obj], cam, camera_motion=camera_motion)
 
 

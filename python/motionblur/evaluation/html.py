@@ -20,17 +20,12 @@ import numpy as np
 
 from .._optional import require
 from ..raster import Frame
-from .report import matched
+from .report import limit_label, matched
 
 __all__ = ["write", "GAIN"]
 
 #: Scale of the difference view: an error of 1 / GAIN is drawn at full intensity.
 GAIN = 10.0
-
-
-def _limit_label(settings) -> str:
-    n = settings.get("limit_samples")
-    return "the exact time integral (motionblur.exact)" if n is None else f"accumulation, N = {n}"
 
 
 def _png(rgba: np.ndarray, path: Path) -> None:
@@ -147,7 +142,7 @@ def write(out, names, rows, paths: dict, references: dict, frames: dict, setting
                 f"Mitsuba, K = {settings['times']} x {settings['spp']} spp",
             )
         ]
-        entries.append(("limit", "reference: own limit", refs["limit"], _limit_label(settings)))
+        entries.append(("limit", "reference: own limit", refs["limit"], limit_label(settings)))
         for r in picks:
             rgba = frames.get((name, r["method"], r["options"]))
             if rgba is not None:
@@ -167,7 +162,7 @@ def write(out, names, rows, paths: dict, references: dict, frames: dict, setting
     info = (
         f"{settings['width']}x{settings['height']}, methods at aa = {settings['aa']}; references: Mitsuba "
         f"{settings['variant']} (K = {settings['times']} x {settings['spp']} spp) and each method's own limit "
-        f"({_limit_label(settings)}); run: {settings.get('runner', 'serial')}."
+        f"({limit_label(settings)}); run: {settings.get('runner', 'serial')}."
     )
     blob = json.dumps({"settings": info, "gain": GAIN, "scenes": scenes}).replace("</", "<\\/")
     page = folder / "index.html"

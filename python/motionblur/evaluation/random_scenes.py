@@ -30,6 +30,7 @@ from ..scenes_real import torus_knot
 __all__ = [
     "random_scene",
     "random_mesh",
+    "hand_held_path",
     "TUNING_SEEDS",
     "MEASURING_SEEDS",
     "TUNING_MESHES",
@@ -149,11 +150,13 @@ def _deforming(v: np.ndarray, start: np.ndarray, rng: np.random.Generator) -> Mo
     return Motion.deforming(ts, np.stack(frames))
 
 
-def _camera_motion(rng: np.random.Generator) -> Motion:
-    """A hand-held camera path: five keys of small turns and shifts."""
+def hand_held_path(rng: np.random.Generator, amount: float = 1.0) -> Motion:
+    """A hand-held camera path for ``Scene(camera_motion=...)``: five keys of small random
+    shifts (steps of about 0.08 ``amount`` scene units) and turns (0.05 ``amount`` rad about
+    each axis), drawn from ``rng``."""
     ts = np.linspace(0.0, 1.0, 5)
-    walk = np.cumsum(rng.normal(size=(5, 3)) * 0.08, axis=0)
-    turn = np.cumsum(rng.normal(size=(5, 3)) * 0.05, axis=0)
+    walk = np.cumsum(rng.normal(size=(5, 3)) * 0.08 * amount, axis=0)
+    turn = np.cumsum(rng.normal(size=(5, 3)) * 0.05 * amount, axis=0)
     mats = []
     for p, r in zip(walk, turn):
         m = translate(p)
@@ -214,7 +217,7 @@ def random_scene(seed: int, width: int = 96, height: int = 72, held_out: bool | 
     light = DirectionalLight(
         tuple(-np.abs(_axis(rng)) * [1, 1, 1] + [0, -0.5, 0]), float(rng.uniform(0.7, 1.2))
     )
-    camera_motion = _camera_motion(rng) if rng.random() < 0.2 else None
+    camera_motion = hand_held_path(rng) if rng.random() < 0.2 else None
     background = (0.0, 0.0, 0.0, 0.0) if rng.random() < 0.5 else (*rng.uniform(0.0, 0.5, 3), 1.0)
     return Scene(
         objects,

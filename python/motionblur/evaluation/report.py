@@ -18,7 +18,8 @@ from .sweep import _label
 __all__ = ["write", "save_reference", "matched"]
 
 
-def _limit_label(settings) -> str:
+def limit_label(settings) -> str:
+    """The own-limit reference of a run's ``settings``, in words."""
     n = settings.get("limit_samples")
     return "the exact time integral (motionblur.exact)" if n is None else f"accumulation, N = {n}"
 
@@ -88,7 +89,7 @@ def write(
             if "limit" in ref:
                 tiles.append(
                     (
-                        f"reference: own limit\n{_limit_label(settings)}\n",
+                        f"reference: own limit\n{limit_label(settings)}\n",
                         ref["limit"],
                     )
                 )
@@ -230,7 +231,7 @@ def _markdown(
         f"Machine: {_machine()} (shared with other jobs: timings are best of {settings['repeat']}). "
         f"Images {settings['width']}x{settings['height']}, methods at aa = {settings['aa']} (spatial samples per pixel per axis); reference: Mitsuba {settings['variant']}, "
         f"K = {settings['times']} shutter times x {settings['spp']} spp; second reference: each method's own limit, "
-        f"{_limit_label(settings)} on our rasterizer (no shadows: the blur "
+        f"{limit_label(settings)} on our rasterizer (no shadows: the blur "
         "method's own error). Pareto marks the front against Mitsuba. Error: RMSE over premultiplied RGBA; "
         "coverage error is signed (alpha summed over the image, relative)."
     )
