@@ -27,6 +27,7 @@ from motionblur.render import methods_for
 
 SIZES = ((64, 48), (96, 72))
 RANDOM = 8
+DOF = {"aperture": 0.05, "focus_distance": 5.0}
 
 
 def _digest(frame: mb.Frame) -> str:
@@ -44,21 +45,33 @@ def _scenes():
         yield f"random{seed}@96x72", random_scene(seed, 96, 72)
 
 
+def _one(scene, method: str, options: dict) -> str:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            return _digest(mb.render(scene, method, error_estimate=False, **options))
+        except Exception as e:  # a refusal is behaviour too
+            return f"raises {type(e).__name__}"
+
+
 def hashes() -> dict[str, str]:
-    """{scene@size/method: digest} for every applicable method but auto."""
+    """{scene@size/method[/options]: digest} for every applicable method but auto.
+
+    Default options on every scene; each method's report sweep (its option sets) on the built-in
+    scenes at the smaller size, so the way options cross into the core is covered too.
+    """
     out: dict[str, str] = {}
     for label, scene in _scenes():
         for method in methods_for(scene):
             if method == "auto":
                 continue
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                try:
-                    frame = mb.render(scene, method, error_estimate=False)
-                except Exception as e:  # a refusal is behaviour too
-                    out[f"{label}/{method}"] = f"raises {type(e).__name__}"
-                    continue
-            out[f"{label}/{method}"] = _digest(frame)
+            out[f"{label}/{method}"] = _one(scene, method, {})
+            if label.startswith("random") or not label.endswith(f"@{SIZES[0][0]}x{SIZES[0][1]}"):
+                continue
+            for options in mb.METHODS[method].sweep:
+                key = ",".join(f"{k}={v}" for k, v in sorted(options.items()))
+                out[f"{label}/{method}/{key}"] = _one(scene, method, options)
+            out[f"{label}/{method}/dof"] = _one(scene, method, DOF)
     return out
 
 
