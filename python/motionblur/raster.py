@@ -195,6 +195,24 @@ class Camera:
 
         return to_pyrender_camera(self)
 
+    def project(self, points: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
+        """``(pixels, depth)`` of world ``points`` (N,3): ``pixels`` (N,2) float64 image
+        coordinates (x right, y down, pixel centres at +0.5, the rasterizer's convention) and
+        ``depth`` (N,) float64 distance along the view axis (clip-space w). Points at or behind
+        the eye (``depth <= 1e-9``) have no image: their pixels are NaN. The arithmetic is the
+        compiled core's, operation for operation, so pixel bounds computed from it match its."""
+        p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        vp = self.view_projection
+        clip = p @ vp[:3, :3].T + vp[:3, 3]
+        depth = p @ vp[3, :3] + vp[3, 3]
+        front = depth > 1e-9
+        wc = np.where(front, depth, 1.0)
+        xy = np.empty((len(p), 2))
+        xy[:, 0] = (clip[:, 0] / wc + 1.0) * 0.5 * self.width
+        xy[:, 1] = (1.0 - clip[:, 1] / wc) * 0.5 * self.height
+        xy[~front] = np.nan
+        return xy, depth
+
     def resized(self, width: int, height: int) -> Camera:
         """The same camera (pose, field of view, clip planes) with an image of ``width`` x
         ``height`` pixels; only the size is checked (the rest was when this camera was made)."""

@@ -16,18 +16,10 @@ import motionblur as mb
 from motionblur import meshes
 
 
-def project(camera, v):
-    """Pixel coordinates (N,2) (pixel centres at +0.5, y down) and view-axis depth (N,) of points."""
-    h = np.c_[v, np.ones(len(v))] @ camera.view_projection.T
-    x = (h[:, 0] / h[:, 3] + 1) * 0.5 * camera.width
-    y = (1 - h[:, 1] / h[:, 3]) * 0.5 * camera.height
-    return np.c_[x, y], h[:, 3]
-
-
 def cover_count(camera, v, f, cull_back, eps=1e-3):
     """Numpy twin of coverage: how many faces contain each pixel centre, and a mask of pixels whose
     centre lies within ``eps`` pixels of some edge (where the fill rule, not geometry, decides)."""
-    p, w = project(camera, v)
+    p, w = camera.project(v)
     assert (w > 0).all(), "the twin handles unclipped scenes only"
     ys, xs = np.mgrid[0 : camera.height, 0 : camera.width] + 0.5
     count = np.zeros(xs.shape, np.int32)
@@ -189,8 +181,8 @@ def test_velocity_matches_a_numpy_twin():
     n = np.cross(v[1] - v[0], v[2] - v[0])
     t = ((v[0] - eye) @ n) / ((far - eye) @ n)
     point = eye + t[:, None] * (far - eye)
-    now, _ = project(cam, point)
-    before, _ = project(cam, point - shift)
+    now, _ = cam.project(point)
+    before, _ = cam.project(point - shift)
     np.testing.assert_allclose(frame.velocity[ys, xs], now - before, atol=1e-3)
     assert np.abs(now - before).max() > 2.0
     static = mb.rasterize(cam, mb.Draw(v, f, (1, 1, 1), previous_vertices=v, cull_back=False))
@@ -546,3 +538,20 @@ def test_unsorted_blending_tests_and_writes_depth_like_the_hardware():
     np.testing.assert_array_equal(front_first.rgba[centre], alone.rgba[centre])
     assert front_first.ids[centre] == 1
     assert np.abs(front_first.rgba[centre] - exact.rgba[centre]).max() > 0.1
+
+
+def test_camera_project_gives_pixels_and_view_depth():
+    """Camera.project: the view axis lands on the image centre at its distance, y grows down, a
+    point behind the eye has no pixel, and the bounds agree with the compiled core's."""
+    from motionblur import _core
+    from motionblur.methods._volume_colors import to_pixels
+
+    cam = mb.Camera(mb.look_at((0.0, 0.0, 5.0), (0.0, 0.0, 0.0)), 0.7, 64, 48)
+    xy, depth = cam.project([[0.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 6.0]])
+    np.testing.assert_allclose(xy[0], [32.0, 24.0])
+    np.testing.assert_allclose(depth, [5.0, 5.0, -1.0])
+    assert xy[1, 1] < 24.0 and np.isnan(xy[2]).all()
+    pts = np.random.default_rng(1).normal(0.0, 1.0, (200, 3))
+    xy, _ = cam.project(pts)
+    b = _core._pixel_bounds(to_pixels(cam), pts)
+    np.testing.assert_allclose(b, [*xy.min(axis=0), *xy.max(axis=0)], atol=1e-9)

@@ -42,13 +42,10 @@ def _scene(alpha: float = 1.0, lambert_pair: bool = True) -> mb.Scene:
 
 def _rect(cam, pts):
     """The sample rectangle of points (numpy, in the core's order)."""
-    vp = cam.view_projection
-    clip = pts @ vp[:3, :3].T + vp[:3, 3]
-    wc = pts @ vp[3, :3] + vp[3, 3]
-    if (wc <= 1e-9).any():
+    xy, depth = cam.project(pts)
+    if (depth <= 1e-9).any():
         return 0, 0, cam.width, cam.height
-    x = (clip[:, 0] / wc + 1.0) * 0.5 * cam.width
-    y = (1.0 - clip[:, 1] / wc) * 0.5 * cam.height
+    x, y = xy[:, 0], xy[:, 1]
     x0, y0 = max(0, int(np.floor(x.min())) - 1), max(0, int(np.floor(y.min())) - 1)
     x1, y1 = min(cam.width, int(np.ceil(x.max())) + 1), min(cam.height, int(np.ceil(y.max())) + 1)
     return None if x0 >= x1 or y0 >= y1 else (x0, y0, x1, y1)

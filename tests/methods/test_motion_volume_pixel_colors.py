@@ -225,7 +225,7 @@ def test_scatter_pieces_is_the_same_for_any_thread_count_and_releases_the_gil():
 
 
 def test_vertex_colour_kernels_match_their_numpy_forms_and_check_input():
-    from motionblur.methods._volume_colors import MIN_ALPHA, pixels
+    from motionblur.methods._volume_colors import MIN_ALPHA
 
     rng = np.random.default_rng(2)
     cam = mb.Camera(mb.look_at((0.0, 0.0, 5.0), (0.0, 0.0, 0.0)), 0.7, 64, 48)
@@ -234,7 +234,8 @@ def test_vertex_colour_kernels_match_their_numpy_forms_and_check_input():
     img[..., 3] = np.where(rng.random((20, 30)) < 0.3, 0.0, img[..., 3])
     rgba = rng.random((500, 4), dtype=np.float32)
     p0, r0, i0 = pts.copy(), rgba.copy(), img.copy()
-    x, y, front = pixels(cam.view_projection, pts, 64, 48)
+    xy, depth = cam.project(pts)
+    x, y, front = xy[:, 0], xy[:, 1], depth > 1e-9
     b = _core._pixel_bounds(vc.to_pixels(cam), pts)
     np.testing.assert_allclose(b, [x.min(), y.min(), x.max(), y.max()], atol=1e-9)
     got = _core._sample_colors(img, vc.to_pixels(cam, 10, 12), pts, rgba)

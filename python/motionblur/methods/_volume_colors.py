@@ -55,20 +55,10 @@ def place(obj: Object, m: np.ndarray) -> np.ndarray:
     return obj.mesh.vertices @ m[:3, :3].T + m[:3, 3]
 
 
-def pixels(vp: np.ndarray, p: np.ndarray, width: int, height: int):
-    """Pixel coordinates ``x``, ``y`` (N,) of the points ``p`` (N,3) under the view-projection
-    ``vp`` of a ``width`` x ``height`` image, and whether each is in front of the camera."""
-    clip = p @ vp[:3, :3].T + vp[:3, 3]
-    wc = p @ vp[3, :3] + vp[3, 3]
-    front = wc > 1e-9
-    wc = np.where(front, wc, 1.0)
-    return (clip[:, 0] / wc + 1.0) * 0.5 * width, (1.0 - clip[:, 1] / wc) * 0.5 * height, front
-
-
 def to_pixels(cam: Camera, x0: float = 0.0, y0: float = 0.0) -> np.ndarray:
     """(4,4) float64 taking a world point (x, y, z, 1) to homogeneous pixel coordinates
     ``(X, Y, ., W)`` of ``cam``'s image shifted by (x0, y0): the pixel is (X/W, Y/W) (as
-    :func:`pixels` gives, minus the shift), in front of the camera where W > 1e-9."""
+    :meth:`Camera.project <motionblur.Camera.project>` gives, minus the shift), in front of the camera where W > 1e-9."""
     viewport = np.array(
         [
             [0.5 * cam.width, 0.0, 0.0, 0.5 * cam.width - x0],
@@ -86,7 +76,7 @@ def sample(img: np.ndarray, x, y, front, fallback: np.ndarray) -> np.ndarray:
     the sampled alpha is below :data:`MIN_ALPHA` or the point is behind the camera."""
     h, w = img.shape[:2]
     flat = img.reshape(-1, 4)
-    px, py = x - 0.5, y - 0.5
+    px, py = np.where(front, x, 0.5) - 0.5, np.where(front, y, 0.5) - 0.5  # no image behind the eye
     i0 = np.clip(np.floor(px), 0, max(w - 2, 0)).astype(np.int64)
     j0 = np.clip(np.floor(py), 0, max(h - 2, 0)).astype(np.int64)
     i1, j1 = np.minimum(i0 + 1, w - 1), np.minimum(j0 + 1, h - 1)
@@ -116,16 +106,12 @@ def averaged_colors(
     its streak). Each vertex takes the blurred colour at its image (:func:`sample`)."""
     cam = scene.camera_at(scene.reference_t)
     c = obj.mesh.vertices.mean(axis=0)
-    ex, ey, ok = pixels(
-        cam.view_projection,
-        np.array([m[:3, :3] @ c + m[:3, 3] for m in (keys[0], keys[-1])]),
-        cam.width,
-        cam.height,
-    )
-    if not ok.all():
+    ends, depth = cam.project(np.array([m[:3, :3] @ c + m[:3, 3] for m in (keys[0], keys[-1])]))
+    if not (depth > 1e-9).all():
         return None
-    dx, dy = float(ex[1] - ex[0]), float(ey[1] - ey[0])
-    x, y, front = pixels(cam.view_projection, vol.vertices, cam.width, cam.height)
+    dx, dy = (float(v) for v in ends[1] - ends[0])
+    xy, depth = cam.project(vol.vertices)
+    x, y, front = xy[:, 0], xy[:, 1], depth > 1e-9
     win = _grown_window(cam, x, y, front, abs(dx), abs(dy))
     if win is None:
         return None
@@ -165,9 +151,10 @@ def _bounds(cam: Camera, point_sets, limit):
     """The pixel box (x0, y0, x1, y1) of the points of ``point_sets`` under ``cam``, cut to
     ``limit`` (all of ``limit`` when a point is behind the camera); None when empty."""
     pts = np.concatenate(point_sets)
-    x, y, front = pixels(cam.view_projection, pts, cam.width, cam.height)
-    if not front.all():
+    xy, depth = cam.project(pts)
+    if not (depth > 1e-9).all():
         return tuple(limit)
+    x, y = xy[:, 0], xy[:, 1]
     box = (
         max(int(np.floor(x.min())) - 1, limit[0]),
         max(int(np.floor(y.min())) - 1, limit[1]),
@@ -200,9 +187,9 @@ def scattered(scene: Scene, cam: Camera, movers, keys_of, win, pieces: int) -> n
     reach = np.zeros(2)
     for (_, o), ks in zip(movers, keys):
         c = mesh_constant(o.mesh, "centroid", _centroid)
-        px, py, ok = pixels(cam.view_projection, ks[:, :3, :3] @ c + ks[:, :3, 3], cam.width, cam.height)
-        if ok.all():
-            reach = np.maximum(reach, [px.max() - px.min(), py.max() - py.min()])
+        path, depth = cam.project(ks[:, :3, :3] @ c + ks[:, :3, 3])
+        if (depth > 1e-9).all():
+            reach = np.maximum(reach, path.max(axis=0) - path.min(axis=0))
         else:
             reach = np.array([cam.width, cam.height], float)
     grown = (
