@@ -141,3 +141,29 @@ def test_the_sweep_leaves_out_option_sets_that_render_another_shutter():
     tri = [o for m, o in bench._jobs(cube.with_(shutter="triangle"), ["motion_volume"], 2)]
     assert tri and all(o.get("filter", "triangle") == "triangle" for o in tri)
     assert {o["filter"] for o in tri if "filter" in o} == {"triangle"}
+
+
+@pytest.mark.mitsuba
+def test_the_report_runs_on_the_users_own_scenes(tmp_path):
+    """``run(scenes=[my_scene])`` measures a Scene object at its own camera's size, and the
+    command line's ``--scene file.glb`` reads a glTF file with Scene.from_gltf and measures it."""
+    from _helpers import gltf_writer as gw
+
+    mine = mb.SCENES["cube"](width=24, height=18)
+    sweeps = {"accumulation": [{"samples": 1}, {"samples": 4}]}
+    res = bench.run(tmp_path / "obj", scenes=[mine], times=4, spp=1, repeat=1, methods=list(sweeps), sweeps=sweeps,
+                    flip=False, pyrender_peer=False, auto=False, write_html=False, log=lambda *a: None)  # fmt: skip
+    assert {r["scene"] for r in res["rows"]} == {"scene_0"}
+    assert res["references"]["scene_0"]["mitsuba"].shape == (18, 24, 4)
+    assert [r["method"] for r in res["rows"]] == ["accumulation", "accumulation"]
+    with pytest.raises(TypeError, match="frames"):
+        bench.run(tmp_path / "bad", scenes=[mine], frames=3)
+    with pytest.raises(TypeError, match="scenes"):
+        bench.run(tmp_path / "bad", scenes=[3])
+    gl, blob = gw.animated_asset(parts=("cube", "camera"))
+    glb = gw.write(tmp_path, "glTF-Binary", gl, blob, name="my_asset")
+    argv = ["--out", str(tmp_path / "glb"), "--scene", str(glb), "--scenes", "--size", "32x24",
+            "--times", "4", "--spp", "1", "--repeat", "1", "--no-flip", "--no-pyrender"]  # fmt: skip
+    assert bench.main(argv) == 0
+    md = (tmp_path / "glb" / "results.md").read_text()
+    assert "## my_asset" in md

@@ -37,6 +37,7 @@ from __future__ import annotations
 import json
 import time
 from contextlib import contextmanager
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -44,6 +45,7 @@ import numpy as np
 from .._optional import require_all
 from ..methods.auto import DEFAULT_TOLERANCE, renders_shutter
 from ..render import METHODS
+from ..scene import Scene
 from ..scenes_builtin import SCENES
 from ..scenes_real import REAL_SCENES
 from . import html, report
@@ -52,7 +54,7 @@ from .cluster import Dask, SceneRef, Serial, call_task, client_for, error_task, 
 from .compare import equal_error, equal_time, front_row, landing, pareto_front
 from .sweep import _label, _with_aa, paired_factor, paired_times, pyrender_comparison
 
-__all__ = ["run", "main", "ALL_SCENES"]
+__all__ = ["run", "main", "BenchOptions", "ALL_SCENES"]
 
 #: Every scene the report knows: the built-in ones, then the real-mesh ones.
 ALL_SCENES = {**SCENES, **REAL_SCENES}
@@ -117,172 +119,256 @@ def _row(name, method, opts, ms, err, plan=None) -> dict:
     return row
 
 
+@dataclass
+class BenchOptions:
+    """The settings of a report run (:func:`run` takes them as keywords too).
+
+    ``width``, ``height``: pixels of the named scenes (a Scene passed in keeps its camera's);
+    ``times`` (K) and ``spp``: Mitsuba's shutter times and samples per pixel per time; ``repeat``:
+    timed renders per option set (best of, after a warm-up); ``methods``: restrict to these;
+    ``sweeps``: optional ``{method: [options, ...]}`` replacing the registered sweeps; ``flip``:
+    compute FLIP; ``pyrender_peer``: time 16-pose pyrender accumulation on the built-in scenes;
+    ``save_images``: every image under ``images/``; ``aa``: spatial samples per pixel per axis
+    given to every method that takes ``aa`` (and to the own-limit reference); ``limit_samples``:
+    None (the own limit is :func:`motionblur.exact`) or N for accumulation with N samples;
+    ``auto``: add an ``auto`` row per scene; ``write_html``: the static page under ``html/``;
+    ``seed``: Mitsuba's sampler seed."""
+
+    width: int = 320
+    height: int = 240
+    times: int = 256
+    spp: int = 4
+    repeat: int = 3
+    methods: list[str] | None = None
+    sweeps: dict[str, list[dict]] | None = None
+    flip: bool = True
+    pyrender_peer: bool = True
+    save_images: bool = False
+    aa: int | None = 2
+    limit_samples: int | None = None
+    auto: bool = True
+    write_html: bool = True
+    seed: int = 0
+
+
+def _options(options: BenchOptions | None, keywords: dict) -> BenchOptions:
+    """``options`` (default: the defaults) with ``keywords`` replacing its fields."""
+    base = BenchOptions() if options is None else options
+    if not isinstance(base, BenchOptions):
+        raise TypeError(f"options: expected a BenchOptions, got {type(base).__name__}")
+    unknown = sorted(set(keywords) - {f.name for f in fields(BenchOptions)})
+    if unknown:
+        raise TypeError(f"run() got unexpected keyword(s) {', '.join(unknown)}; see BenchOptions")
+    return replace(base, **keywords)
+
+
+def _scene_refs(scenes, width: int, height: int) -> dict[str, object]:
+    """``{name: SceneRef or Scene}`` of ``scenes``: names from :data:`ALL_SCENES`, Scenes (named
+    ``scene_<i>`` in the order given) or a ``{name: Scene or known name}`` dict."""
+    if scenes is None:
+        return {n: SceneRef(n, width, height) for n in ALL_SCENES}
+    if isinstance(scenes, (str, Scene)):
+        scenes = [scenes]
+    items = list(scenes.items()) if isinstance(scenes, dict) else [(None, s) for s in scenes]
+    out: dict[str, object] = {}
+    for i, (key, s) in enumerate(items):
+        if isinstance(s, Scene):
+            name = f"scene_{i}" if key is None else str(key)
+            out[name] = s
+        elif isinstance(s, str):
+            if s not in ALL_SCENES:
+                raise ValueError(
+                    f"scenes: unknown {s!r}; expected names from {', '.join(ALL_SCENES)} or motionblur.Scene objects"
+                )
+            out[s if key is None else str(key)] = SceneRef(s, width, height)
+        else:
+            raise TypeError(
+                f"scenes: expected scene names or motionblur.Scene objects, got {type(s).__name__}"
+            )
+    return out
+
+
+def _built(ref) -> Scene:
+    return ref.build() if isinstance(ref, SceneRef) else ref
+
+
+def _needed(opts: BenchOptions, refs_of: dict) -> list[str]:
+    """The optional packages this run needs."""
+    needed = ["mitsuba", "tqdm", "matplotlib", "PIL"] + ["flip_evaluator"] * bool(opts.flip)
+    needed += ["pyrender", "trimesh"] * bool(opts.pyrender_peer)
+    if any(isinstance(r, SceneRef) and r.name in REAL_SCENES for r in refs_of.values()):
+        needed += ["trimesh"]
+    return needed
+
+
+class _Run:
+    """One report run's state, filled by its numbered steps (:func:`run`)."""
+
+    def __init__(self, out: Path, refs_of: dict, opts: BenchOptions, log, client):
+        self.out, self.refs_of, self.opts, self.log = out, refs_of, opts, log
+        self.names = list(refs_of)
+        self.built = {n: _built(r) for n, r in refs_of.items()}
+        self.runner = Serial() if client is None else Dask(client)
+        self.phases = _Phases()
+        self.rows: list[dict] = []
+        self.frames: dict = {}
+        self.refs: dict = {}
+        self.comparisons: dict = {}
+        self.flip_comparisons: dict = {}
+        self.equal_times: dict = {}
+        self.paired: dict = {}
+        self.pyr: list = []
+        self.landings: dict = {}
+
+    def references(self) -> None:
+        """1. Every reference of the run, as parallel tasks on a cluster."""
+        o = self.opts
+        cache = str(self.out / "references")
+        kinds = [("mitsuba", {"times": o.times, "spp": o.spp, "seed": o.seed}),
+                 ("limit", {"samples": o.limit_samples, "aa": o.aa or 1})]  # fmt: skip
+        jobs = [(self.refs_of[n], k, s, cache) for n in self.names for k, s in kinds]
+        with self.phases("references"):
+            images = self.runner.map(reference_task, *zip(*jobs))
+        for i, n in enumerate(self.names):
+            self.refs[n] = {"mitsuba": images[2 * i], "limit": images[2 * i + 1]}
+        self.log(f"references: {len(jobs)} ({self.runner.name})")
+
+    def scene(self, name: str) -> None:
+        """2. One scene: timings one at a time, then the errors as tasks, the comparisons."""
+        o, ref, runner, refs = self.opts, self.refs_of[name], self.runner, self.refs[name]
+        real = isinstance(ref, SceneRef) and ref.name in REAL_SCENES
+        todo = _jobs(self.built[name], o.methods, o.aa, REAL_SWEEPS if real and not o.sweeps else None)
+        with self.phases("timed renders"):
+            timed = runner.timed(timed_task, [(ref, m, opts, o.repeat) for m, opts in todo])
+        with self.phases("errors"):
+            n = len(timed)
+            errs = runner.map(
+                error_task, [t[1] for t in timed], [refs["mitsuba"]] * n, [refs["limit"]] * n, [o.flip] * n
+            )
+        scene_rows = [_row(name, m, opts, t[0], e) for (m, opts), t, e in zip(todo, timed, errs)]
+        for r, t in zip(scene_rows, timed):
+            self.frames[(name, r["method"], r["options"])] = t[1]
+        self.rows += scene_rows
+        self.comparisons[name] = equal_error(scene_rows)
+        self.equal_times[name] = equal_time(scene_rows)
+        self.flip_comparisons[name] = equal_error(scene_rows, metric="flip") if o.flip else []
+        with self.phases("paired re-timing"):
+            self.paired[name] = runner.timed(
+                call_task, [(paired_factor, ref, scene_rows, "rmse", max(3, o.repeat))]
+            )[0]
+        # pyrender draws lambert flat: no comparison on the lit real scenes, nor on a user's scene
+        if o.pyrender_peer and isinstance(ref, SceneRef) and ref.name in SCENES:
+            with self.phases("pyrender"):
+                self.pyr += runner.timed(call_task, [(_pyrender, ref, name, refs["mitsuba"], o.repeat)])
+        for r in scene_rows:
+            self.log(f"  {name:<18} {r['method']:<14} {r['options']:<28} {r['ms']:9.2f} ms  "
+                     f"RMSE {r['rmse']:.5f}  own limit {r['rmse_limit']:.5f}")  # fmt: skip
+
+    def auto_row(self, name: str) -> dict:
+        """3. ``auto`` on one scene: its row, and where it lands against the Pareto front."""
+        o, ref, runner, refs = self.opts, self.refs_of[name], self.runner, self.refs[name]
+        opts = _with_aa(METHODS["auto"].fn, {}, o.aa)
+        t = runner.timed(timed_task, [(ref, "auto", opts, max(o.repeat, 5))])[0]
+        e = runner.map(error_task, [t[1]], [refs["mitsuba"]], [refs["limit"]], [o.flip])[0]
+        r = _row(name, "auto", opts, t[0], e, t[2])
+        self.frames[(name, "auto", r["options"])] = t[1]
+        srows = [x for x in self.rows if x["scene"] == name]
+        lg = landing(srows, r, DEFAULT_TOLERANCE)
+        front = front_row(srows, r["rmse_limit"])
+        if front is not None:  # re-timed in pairs: both under the same load
+            jobs = [("auto", opts), (front["method"], front["_opts"])]
+            pa, pf = runner.timed(call_task, [(paired_times, ref, jobs)])[0]
+            lg.update(paired_auto_ms=pa, paired_front_ms=pf, paired_ratio=pa / pf)
+            lg["front"] = f"{front['method']} {front['options']}"
+        self.landings[name] = lg
+        self.log(f"  {name:<18} auto {r['ms']:9.2f} ms  own limit {r['rmse_limit']:.5f}  front {lg['front_ms']:.2f} ms  "
+                 f"ratio {lg['ratio']:.2f}, re-timed in pairs {lg.get('paired_ratio', float('nan')):.2f}")  # fmt: skip
+        return r
+
+    def write(self) -> dict:
+        """4. The report's files: tables, plots, ``rows.json`` and the page."""
+        o, out, names, rows = self.opts, self.out, self.names, self.rows
+        fronts, fronts_limit = [], []
+        for name in names:
+            sel = [r for r in rows if r["scene"] == name]
+            fronts += pareto_front(sel)
+            fronts_limit += pareto_front([{**r, "rmse": r["rmse_limit"]} for r in sel])
+        sizes = {(s.camera.width, s.camera.height) for s in self.built.values()}
+        width, height = sizes.pop() if len(sizes) == 1 else (o.width, o.height)
+        settings = dict(width=width, height=height, times=o.times, spp=o.spp, repeat=o.repeat, aa=o.aa,
+                        variant=ref_mod.mitsuba_variant(), limit_samples=o.limit_samples, runner=self.runner.name,
+                        tolerance=DEFAULT_TOLERANCE, phases=self.phases.summary())  # fmt: skip
+        paths = report.write(
+            out, names, rows, fronts, settings, comparisons=self.comparisons, flip_comparisons=self.flip_comparisons,
+            paired=self.paired, equal_times=self.equal_times, pyrender_rows=self.pyr, fronts_limit=fronts_limit,
+            frames=self.frames, references=self.refs, landings=self.landings, save_images=o.save_images,
+        )  # fmt: skip
+        # the measurements with their option sets
+        (out / "rows.json").write_text(json.dumps({
+            "size": [width, height], "aa": o.aa,
+            "applies": {n: {m: METHODS[m].applies(self.built[n]) for m in METHODS} for n in names},
+            "rows": [{k: v for k, v in r.items() if k != "_plan"} for r in rows],
+        }, default=str))  # fmt: skip
+        if o.write_html:
+            paths["html"] = html.write(out, names, rows, paths, self.refs, self.frames, settings)
+        return paths
+
+
 def run(
     out="out/bench",
     scenes=None,
-    width: int = 320,
-    height: int = 240,
-    times: int = 256,
-    spp: int = 4,
-    repeat: int = 3,
-    methods=None,
-    sweeps=None,
-    flip: bool = True,
-    pyrender_peer: bool = True,
-    save_images: bool = False,
-    aa: int | None = 2,
+    options: BenchOptions | None = None,
+    *,
     log=print,
     client=None,
-    limit_samples: int | None = None,
-    auto: bool = True,
-    write_html: bool = True,
-    seed: int = 0,
+    **keywords,
 ) -> dict:
     """Run the report and write it to ``out``; returns ``{"rows", "comparisons", "auto", "paths", ...}``.
 
-    ``scenes``: names from :data:`ALL_SCENES` (default all); ``sweeps``: optional ``{method:
-    [options, ...]}`` replacing the registered sweeps; ``methods``: restrict to these; ``aa``:
-    spatial samples per pixel per axis given to every method that takes ``aa`` (and to the
-    own-limit reference); ``client``: a ``dask.distributed.Client`` (see :mod:`.cluster`);
-    ``limit_samples``: None (the own limit is :func:`motionblur.exact`, the exact time integral)
-    or N for accumulation with N samples instead; ``auto``: add an ``auto`` row per scene;
-    ``save_images``: every image under ``images/``;
-    ``write_html``: the static page under ``html/``.
+    ``scenes``: what to measure (default every scene of :data:`ALL_SCENES`): names from it, your
+    own :class:`motionblur.Scene` objects (``run(scenes=[my_scene])``, named ``scene_0``,
+    ``scene_1`` ... in the report and rendered at their own camera's size), or a ``{name: Scene
+    or known name}`` dict. ``options``: a :class:`BenchOptions`; its fields may also be given as
+    keywords (``width=160, times=32, methods=[...]``), which replace the ``options``' values.
+    ``client``: a ``dask.distributed.Client`` (see :mod:`.cluster`); ``log``: where progress lines go.
+
+    The run's steps: 1. every reference (Mitsuba and the own limit); 2. per scene, every method's
+    option sets timed and measured; 3. ``auto`` per scene against the Pareto front; 4. the files.
     """
-    names = list(ALL_SCENES) if scenes is None else list(scenes)
-    unknown = [n for n in names if n not in ALL_SCENES]
-    if unknown:
-        raise ValueError(f"scenes: unknown {unknown}; expected names from {', '.join(ALL_SCENES)}")
-    needed = ["mitsuba", "tqdm", "matplotlib", "PIL"] + ["flip_evaluator"] * bool(flip)
-    needed += ["pyrender", "trimesh"] * bool(pyrender_peer)
-    if any(n in REAL_SCENES for n in names):
-        needed += ["pymeshfix", "pyvista", "fast_simplification"]
-    require_all(needed, "the speed-against-error report")
+    opts = _options(options, keywords)
+    refs_of = _scene_refs(scenes, opts.width, opts.height)
+    require_all(_needed(opts, refs_of), "the speed-against-error report")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    runner = Serial() if client is None else Dask(client)
-    phases = _Phases()
+    state = _Run(out, refs_of, opts, log, client)
     saved = {}
-    if sweeps:
-        for m, s in sweeps.items():
-            saved[m] = METHODS[m].sweep
-            METHODS[m].sweep = [dict(o) for o in s]
-    refs_of = {name: SceneRef(name, width, height) for name in names}  # what tasks get: scenes do not pickle
-    built = {name: refs_of[name].build() for name in names}
-    cache = str(out / "references")
-    mits_settings = {"times": times, "spp": spp, "seed": seed}
-    limit_settings = {"samples": limit_samples, "aa": aa or 1}
-    rows, frames, refs, comparisons, flip_comparisons, equal_times, paired, pyr = (
-        [],
-        {},
-        {},
-        {},
-        {},
-        {},
-        {},
-        [],
-    )
+    for m, s in (opts.sweeps or {}).items():
+        saved[m] = METHODS[m].sweep
+        METHODS[m].sweep = [dict(o) for o in s]
     try:
-        # 1. every reference of the run, as parallel tasks on a cluster
-        kinds = [("mitsuba", mits_settings), ("limit", limit_settings)]
-        jobs = [(refs_of[n], k, s, cache) for n in names for k, s in kinds]
-        with phases("references"):
-            images = runner.map(reference_task, *zip(*jobs))
-        for i, n in enumerate(names):
-            refs[n] = {"mitsuba": images[2 * i], "limit": images[2 * i + 1]}
-        log(f"references: {len(jobs)} ({runner.name})")
-        # 2. per scene: timings one at a time, then the errors as tasks
-        for name in names:
-            scene = built[name]
-            todo = _jobs(scene, methods, aa, REAL_SWEEPS if name in REAL_SCENES and not sweeps else None)
-            with phases("timed renders"):
-                timed = runner.timed(timed_task, [(refs_of[name], m, o, repeat) for m, o in todo])
-            with phases("errors"):
-                errs = runner.map(
-                    error_task, [t[1] for t in timed], [refs[name]["mitsuba"]] * len(timed),
-                    [refs[name]["limit"]] * len(timed), [flip] * len(timed),
-                )  # fmt: skip
-            scene_rows = [_row(name, m, o, t[0], e) for (m, o), t, e in zip(todo, timed, errs)]
-            for r, t in zip(scene_rows, timed):
-                frames[(name, r["method"], r["options"])] = t[1]
-            rows += scene_rows
-            comparisons[name] = equal_error(scene_rows)
-            equal_times[name] = equal_time(scene_rows)
-            flip_comparisons[name] = equal_error(scene_rows, metric="flip") if flip else []
-            with phases("paired re-timing"):
-                paired[name] = runner.timed(
-                    call_task, [(paired_factor, refs_of[name], scene_rows, "rmse", max(3, repeat))]
-                )[0]
-            if (
-                pyrender_peer and name in SCENES
-            ):  # pyrender draws lambert flat: no comparison on the lit real scenes
-                with phases("pyrender"):
-                    pyr += runner.timed(
-                        call_task, [(_pyrender, refs_of[name], name, refs[name]["mitsuba"], repeat)]
-                    )
-            for r in scene_rows:
-                log(f"  {name:<18} {r['method']:<14} {r['options']:<28} {r['ms']:9.2f} ms  "
-                    f"RMSE {r['rmse']:.5f}  own limit {r['rmse_limit']:.5f}")  # fmt: skip
-        # 3. auto: one row per scene
-        with phases("auto"):
-            auto_rows, landings = [], {}
-            if auto and (methods is None or "auto" in methods):
-                for name in names:
-                    opts = _with_aa(METHODS["auto"].fn, {}, aa)
-                    t = runner.timed(timed_task, [(refs_of[name], "auto", opts, max(repeat, 5))])[0]
-                    e = runner.map(
-                        error_task, [t[1]], [refs[name]["mitsuba"]], [refs[name]["limit"]], [flip]
-                    )[0]
-                    r = _row(name, "auto", opts, t[0], e, t[2])
-                    frames[(name, "auto", r["options"])] = t[1]
-                    auto_rows.append(r)
-                    srows = [x for x in rows if x["scene"] == name]
-                    lg = landing(srows, r, DEFAULT_TOLERANCE)
-                    front = front_row(srows, r["rmse_limit"])
-                    if front is not None:  # re-timed in pairs: both under the same load
-                        jobs = [("auto", opts), (front["method"], front["_opts"])]
-                        pa, pf = runner.timed(call_task, [(paired_times, refs_of[name], jobs)])[0]
-                        lg.update(paired_auto_ms=pa, paired_front_ms=pf, paired_ratio=pa / pf)
-                        lg["front"] = f"{front['method']} {front['options']}"
-                    landings[name] = lg
-                    log(f"  {name:<18} auto {r['ms']:9.2f} ms  own limit {r['rmse_limit']:.5f}  front {lg['front_ms']:.2f} ms  "
-                        f"ratio {lg['ratio']:.2f}, re-timed in pairs {lg.get('paired_ratio', float('nan')):.2f}")  # fmt: skip
-        rows += auto_rows
+        state.references()
+        for name in state.names:
+            state.scene(name)
+        auto_rows = []
+        if opts.auto and (opts.methods is None or "auto" in opts.methods):
+            with state.phases("auto"):
+                auto_rows = [state.auto_row(name) for name in state.names]
+        state.rows += auto_rows
     finally:
         for m, s in saved.items():
             METHODS[m].sweep = s
-    fronts, fronts_limit = [], []
-    for name in names:
-        sel = [r for r in rows if r["scene"] == name]
-        fronts += pareto_front(sel)
-        fronts_limit += pareto_front([{**r, "rmse": r["rmse_limit"]} for r in sel])
-    settings = dict(width=width, height=height, times=times, spp=spp, repeat=repeat, aa=aa,
-                    variant=ref_mod.mitsuba_variant(), limit_samples=limit_samples, runner=runner.name,
-                    tolerance=DEFAULT_TOLERANCE, phases=phases.summary())  # fmt: skip
-    paths = report.write(
-        out, names, rows, fronts, settings, comparisons=comparisons, flip_comparisons=flip_comparisons,
-        paired=paired, equal_times=equal_times, pyrender_rows=pyr, fronts_limit=fronts_limit,
-        frames=frames, references=refs, landings=landings, save_images=save_images,
-    )  # fmt: skip
-    # the measurements with their option sets
-    (out / "rows.json").write_text(json.dumps({
-        "size": [width, height], "aa": aa,
-        "applies": {n: {m: METHODS[m].applies(built[n]) for m in METHODS} for n in names},
-        "rows": [{k: v for k, v in r.items() if k != "_plan"} for r in rows],
-    }, default=str))  # fmt: skip
-    if write_html:
-        paths["html"] = html.write(out, names, rows, paths, refs, frames, settings)
-    log(f"bench: {phases.summary()}")
+    paths = state.write()
+    log(f"bench: {state.phases.summary()}")
     return {
-        "rows": rows,
-        "comparisons": comparisons,
-        "flip_comparisons": flip_comparisons,
-        "paired": paired,
-        "equal_time": equal_times,
-        "pyrender": pyr,
-        "auto": landings,
+        "rows": state.rows,
+        "comparisons": state.comparisons,
+        "flip_comparisons": state.flip_comparisons,
+        "paired": state.paired,
+        "equal_time": state.equal_times,
+        "pyrender": state.pyr,
+        "auto": state.landings,
         "paths": paths,
-        "references": {n: {k: np.asarray(v) for k, v in r.items()} for n, r in refs.items()},
+        "references": {n: {k: np.asarray(v) for k, v in r.items()} for n, r in state.refs.items()},
     }
 
 
@@ -292,6 +378,10 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m motionblur bench", description=__doc__.splitlines()[0])
     p.add_argument("--out", default="out/bench")
     p.add_argument("--scenes", nargs="*", default=None, help=f"subset of {', '.join(ALL_SCENES)}")
+    p.add_argument(
+        "--scene", action="append", default=[], metavar="FILE",
+        help="your own scene: a .glb or .gltf file (read with Scene.from_gltf at --size); repeatable",
+    )  # fmt: skip
     p.add_argument(
         "--set", choices=["all", "builtin", "real"], default="all", help="which scenes (default all)"
     )
@@ -320,11 +410,15 @@ def main(argv=None) -> int:
     scenes = a.scenes if a.scenes is not None or not a.quick else list(QUICK_SCENES)
     if scenes is None and a.set != "all":
         scenes = list(SCENES if a.set == "builtin" else REAL_SCENES)
+    if a.scene:
+        files = {Path(f).stem: Scene.from_gltf(f, width=w, height=h) for f in a.scene}
+        scenes = {**{n: n for n in scenes or []}, **files}
+    opts = BenchOptions(width=w, height=h, times=a.times, spp=a.spp, repeat=a.repeat, flip=not a.no_flip,
+                        aa=a.aa, pyrender_peer=not a.no_pyrender, save_images=a.images,
+                        limit_samples=a.limit_samples)  # fmt: skip
     client = client_for(a.dask) if a.dask else None
     try:
-        res = run(a.out, scenes, w, h, a.times, a.spp, a.repeat, flip=not a.no_flip, aa=a.aa,
-                  pyrender_peer=not a.no_pyrender, save_images=a.images, client=client,
-                  limit_samples=a.limit_samples)  # fmt: skip
+        res = run(a.out, scenes, opts, client=client)
     finally:
         if client is not None:
             Dask(client, owns=True).close()
