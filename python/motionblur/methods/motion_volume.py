@@ -21,6 +21,7 @@ from __future__ import annotations
 import copy
 import threading
 from collections import OrderedDict
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -177,24 +178,22 @@ def spin_of(keys: np.ndarray, vertices: np.ndarray) -> dict | None:
     }
 
 
-def _single(
-    scene: Scene,
-    segments: int = 1,
-    filter: str | None = None,
-    aa: int = 1,
-    contour_line: bool = True,
-    exact_static: bool = True,
-    spin="auto",
-    colors: str = "pixel",
-    color_renders: int = 2,
-    contour_table=False,
-    window=(0.0, 1.0),
-):
-    """One motion volume per moving object over the whole shutter of ``scene`` (the paper's
-    method; the options as :func:`motion_volume`'s). ``window``: the part of the original shutter
-    ``scene``'s stands for (a piece, see :func:`motion_volume`): the coverage alphas weigh its
-    time by the filter over that part (a spin volume takes a box weight within it)."""
-    segments = as_segments(segments)
+@dataclass
+class _Volumes:
+    """A frame's draws, made by :func:`_volume_draws`: ``draws`` (drawn as, Draw) of the objects
+    with apparent motion (their volumes, or the object itself when it only moves with the
+    camera), ``still`` (index, Object) of the objects drawn sharp into the static layer,
+    ``movers`` (index, Object) of those drawn with their apparent motion and ``pending`` (draw
+    index, index, Object, volume) of the volumes waiting for per-pixel colours."""
+
+    draws: list = field(default_factory=list)
+    still: list = field(default_factory=list)
+    movers: list = field(default_factory=list)
+    pending: list = field(default_factory=list)
+
+
+def _checked_options(scene: Scene, filter, aa, contour_line, exact_static, spin, colors, color_renders):
+    """1. ``_single``'s options checked: (filter, aa, contour_line, exact_static, color_renders)."""
     if filter is None:
         if not isinstance(scene.shutter, str):
             raise ValueError(
@@ -211,24 +210,16 @@ def _single(
         raise ValueError(f"spin: expected 'auto', True or False, got {spin!r}")
     as_choice(colors, "colors", ("pixel", "averaged", "contour"), type_error=False)
     color_renders = as_int(color_renders, "color_renders", minimum=1, maximum=64)
-    table_for = _contour_tables(contour_table)
+    return filter, aa, contour_line, exact_static, color_renders
+
+
+def _volume_draws(scene: Scene, segments, filter, eye, contour_line, spin, colors, table_for, window, stats):
+    """2. Every object sorted: sharp into the static layer, or drawn with its apparent motion
+    (its motion volume, a spin volume, or itself where only the camera moves it)."""
+    out = _Volumes()
     tr = scene.reference_t
-    cam = supersampled(scene.camera_at(tr), aa)
-    eye = cam.pose[:3, 3]  # the perspective of the coverage alphas, with or without contour_line
-    draws: list[tuple[Object, Draw]] = []
-    still: list[tuple[int, Object]] = []
-    stats = {
-        "volumes": 0,
-        "volume_triangles": 0,
-        "spins": 0,
-        "averaged": 0,
-        "segments": segments,
-        "filter": filter,
-    }
     folds = camera_folds(scene, segments)
     spin_folds = None
-    movers: list[tuple[int, Object]] = []  # drawn with their apparent motion (pixel colours)
-    pending: list[tuple[int, int, Object, object]] = []  # (draw index, k, obj, vol): pixel colours
     for k, obj in enumerate(scene.objects):
         if obj.is_moving and obj.motion.is_deforming:
             raise ValueError(
@@ -238,19 +229,19 @@ def _single(
                 "accumulation"
             )
         if not obj.is_moving and not scene.camera_moves:
-            still.append((k, obj))  # no apparent motion, nothing to fold
+            out.still.append((k, obj))  # no apparent motion, nothing to fold
             continue
         apparent = apparent_motion(scene, obj, segments, folds)
         keys = apparent.transforms()
         turns = spin is True and _rotates(scene, obj)
         if _still(keys) and not turns:
             if not scene.camera_moves:
-                still.append((k, obj))
+                out.still.append((k, obj))
                 continue
             deforming = obj.motion is not None and obj.motion.is_deforming
             v = obj.world_vertices(tr) if deforming else place(obj, keys[-1])
-            draws.append((obj, Draw(v, obj.mesh.faces, obj.rgba, object_id=k)))
-            movers.append((k, obj))
+            out.draws.append((obj, Draw(v, obj.mesh.faces, obj.rgba, object_id=k)))
+            out.movers.append((k, obj))
             continue
         vol = None
         if turns:
@@ -271,42 +262,96 @@ def _single(
             if table is not None:
                 stats["contour_error"] = max(stats.get("contour_error", 0.0), vol.contour_error)
             if colors == "pixel":
-                pending.append((len(draws), k, obj, vol))
+                out.pending.append((len(out.draws), k, obj, vol))
             elif colors == "averaged" and not uniform(obj):
                 drawn_as = _averaged(scene, k, obj, keys, segments, vol, stats)
-        movers.append((k, obj))
-        draws.append(
-            (
-                drawn_as,
-                Draw._checked(vol.vertices, vol.faces, vol.rgba, vol.normals, k, True),
-            )
-        )
+        out.movers.append((k, obj))
+        out.draws.append((drawn_as, Draw._checked(vol.vertices, vol.faces, vol.rgba, vol.normals, k, True)))
         stats["volumes"] += 1
         stats["volume_triangles"] += len(vol.faces)
-    scatter = bool(pending) and not all(uniform(o) for _, o in movers)
+    return out, folds
+
+
+def _single(
+    scene: Scene,
+    segments: int = 1,
+    filter: str | None = None,
+    aa: int = 1,
+    contour_line: bool = True,
+    exact_static: bool = True,
+    spin="auto",
+    colors: str = "pixel",
+    color_renders: int = 2,
+    contour_table=False,
+    window=(0.0, 1.0),
+):
+    """One motion volume per moving object over the whole shutter of ``scene`` (the paper's
+    method; the options as :func:`motion_volume`'s). ``window``: the part of the original shutter
+    ``scene``'s stands for (a piece, see :func:`motion_volume`): the coverage alphas weigh its
+    time by the filter over that part (a spin volume takes a box weight within it).
+
+    Its steps: 1. the options checked; 2. the objects sorted into draws (:func:`_volume_draws`);
+    3. which volumes get per-pixel colours; 4. the frame: one full frame with a moving camera
+    (:func:`_moving_camera_frame`), else the volumes' window over the kept static layer
+    (:func:`_still_camera_frame`)."""
+    segments = as_segments(segments)
+    filter, aa, contour_line, exact_static, color_renders = _checked_options(
+        scene, filter, aa, contour_line, exact_static, spin, colors, color_renders
+    )
+    table_for = _contour_tables(contour_table)
+    tr = scene.reference_t
+    cam = supersampled(scene.camera_at(tr), aa)
+    eye = cam.pose[:3, 3]  # the perspective of the coverage alphas, with or without contour_line
+    stats = {
+        "volumes": 0,
+        "volume_triangles": 0,
+        "spins": 0,
+        "averaged": 0,
+        "segments": segments,
+        "filter": filter,
+    }
+    vols, folds = _volume_draws(
+        scene, segments, filter, eye, contour_line, spin, colors, table_for, window, stats
+    )
+    # 3. per-pixel colours, unless every mover has one flat colour; a spin volume in the frame
+    # makes them fall back to averaged vertex colours (as the docstring says)
+    scatter = bool(vols.pending) and not all(uniform(o) for _, o in vols.movers)
     if scatter and stats["spins"]:
         scatter = False
-        for i, k, obj, vol in pending:  # the fallback named in the docstring
+        for i, k, obj, vol in vols.pending:
             if not uniform(obj):
                 keys = apparent_keyframes(scene, obj, segments, folds)
-                draws[i] = (_averaged(scene, k, obj, keys, segments, vol, stats), draws[i][1])
-    pcam = scene.camera_at(tr)  # the colours' camera: one sample a pixel
+                vols.draws[i] = (_averaged(scene, k, obj, keys, segments, vol, stats), vols.draws[i][1])
     if scene.camera_moves:
-        # every object that moves on screen has a volume: one full frame
-        averaged = None
-        if scatter:
-            averaged = _scatter(
-                scene, pcam, movers, pending, draws, (0, 0, pcam.width, pcam.height), color_renders
-            )
-            stats["averaged"] += len(pending)
-        layer = raster_layer(cam, scene, draws) if draws else Layer.empty(cam.height, cam.width)
-        frame = resolve(layer, aa)
-        if averaged is not None:
-            frame.rgba = _colored(frame.rgba, averaged, None)
-        frame.stats.update(stats)
-        return frame
-    # Still camera: the static layer is kept across frames; the volumes are rasterized inside
-    # the pixel window they cover and composited over it by depth.
+        return _moving_camera_frame(scene, cam, aa, vols, scatter, color_renders, stats)
+    return _still_camera_frame(scene, cam, aa, vols, scatter, color_renders, exact_static, stats)
+
+
+def _moving_camera_frame(
+    scene: Scene, cam: Camera, aa: int, vols: _Volumes, scatter, color_renders, stats
+) -> Frame:
+    """4a. Every object that moves on screen has a volume: one full frame."""
+    pcam = scene.camera_at(scene.reference_t)  # the colours' camera: one sample a pixel
+    averaged = None
+    if scatter:
+        win = (0, 0, pcam.width, pcam.height)
+        averaged = _scatter(scene, pcam, vols.movers, vols.pending, vols.draws, win, color_renders)
+        stats["averaged"] += len(vols.pending)
+    draws = vols.draws
+    layer = raster_layer(cam, scene, draws) if draws else Layer.empty(cam.height, cam.width)
+    frame = resolve(layer, aa)
+    if averaged is not None:
+        frame.rgba = _colored(frame.rgba, averaged, None)
+    frame.stats.update(stats)
+    return frame
+
+
+def _still_camera_frame(
+    scene: Scene, cam: Camera, aa: int, vols: _Volumes, scatter, color_renders, exact_static, stats
+) -> Frame:
+    """4b. Still camera: the static layer is kept across frames; the volumes are rasterized
+    inside the pixel window they cover and composited over it by depth."""
+    draws, still = vols.draws, vols.still
     static = static_layer(scene, cam, still, aa)
     stats["static_cached"] = static.cached
     win = _window(cam, [d.vertices for _, d in draws])
@@ -327,23 +372,15 @@ def _single(
     pwin = tuple(v // aa for v in win)
     averaged = None
     if scatter:
-        averaged = _scatter(scene, pcam, movers, pending, draws, pwin, color_renders)
-        stats["averaged"] += len(pending)
+        pcam = scene.camera_at(scene.reference_t)  # the colours' camera: one sample a pixel
+        averaged = _scatter(scene, pcam, vols.movers, vols.pending, draws, pwin, color_renders)
+        stats["averaged"] += len(vols.pending)
     if averaged is not None and not empty and static.opaque:
-        # The volumes alone, per sample, over no colour but the static scene's depth (which
-        # hides them): their coverage A per sample; each sample is A times the averaged colour
-        # of its pixel over the static sample, then the samples are resolved.
-        scam = cam.resized(x1 - x0, y1 - y0)
-        depth = np.ascontiguousarray(base.depth)
-        under = Layer(np.zeros((*depth.shape, 4), np.float32), depth, np.ascontiguousarray(base.ids))
-        layer = raster_layer(scam, scene, draws, projection=proj, background=under)
-        per_sample = np.repeat(np.repeat(averaged, aa, axis=0), aa, axis=1) if aa > 1 else averaged
-        layer.rgba = _colored(layer.rgba, per_sample, base.rgba)
+        layer = _over_static_per_sample(scene, cam, aa, draws, win, proj, base, averaged)
         frame = paste(static, win, layer, aa)
-        frame.stats.update(stats)
-        return frame
-    one_call = ONE_PASS and len({o.shading for o, _ in draws}) == 1
-    if (averaged is not None and empty) or (one_call and (empty or (exact_static and static.opaque))):
+    elif (averaged is not None and empty) or (
+        ONE_PASS and len({o.shading for o, _ in draws}) == 1 and (empty or (exact_static and static.opaque))
+    ):
         # One rasterizer call, which resolves the aa x aa samples of each pixel itself. The
         # opaque static layer (read in place at the window) pre-loads it, colour and depth per
         # sample: only the volumes are drawn, depth-tested and composited over it exactly. With
@@ -356,20 +393,33 @@ def _single(
         if averaged is not None:
             layer.rgba = _colored(layer.rgba, averaged, None)
         frame = paste(static, pwin, layer, 1)
-        frame.stats.update(stats)
-        return frame
-    wcam = cam.resized(x1 - x0, y1 - y0)
-    if empty:
-        layer = raster_layer(wcam, scene, draws, projection=proj)
-    elif exact_static:
-        # the static objects redrawn with the volumes in the window: exact transparency always
-        statics = [(o, Draw(o.world_vertices(0.0), o.mesh.faces, o.rgba, object_id=k)) for k, o in still]
-        layer = raster_layer(wcam, scene, statics + draws, projection=proj)
     else:
-        layer = composite(raster_layer(wcam, scene, draws, projection=proj), base)
-    frame = paste(static, win, layer, aa)
+        wcam = cam.resized(x1 - x0, y1 - y0)
+        if empty:
+            layer = raster_layer(wcam, scene, draws, projection=proj)
+        elif exact_static:
+            # the static objects redrawn with the volumes in the window: exact transparency always
+            statics = [(o, Draw(o.world_vertices(0.0), o.mesh.faces, o.rgba, object_id=k)) for k, o in still]
+            layer = raster_layer(wcam, scene, statics + draws, projection=proj)
+        else:
+            layer = composite(raster_layer(wcam, scene, draws, projection=proj), base)
+        frame = paste(static, win, layer, aa)
     frame.stats.update(stats)
     return frame
+
+
+def _over_static_per_sample(scene: Scene, cam: Camera, aa: int, draws, win, proj, base: Layer, averaged):
+    """The volumes alone, per sample, over no colour but the static scene's depth (which hides
+    them): their coverage A per sample; each sample is A times the averaged colour of its pixel
+    over the static sample (the samples are resolved when pasted)."""
+    x0, y0, x1, y1 = win
+    scam = cam.resized(x1 - x0, y1 - y0)
+    depth = np.ascontiguousarray(base.depth)
+    under = Layer(np.zeros((*depth.shape, 4), np.float32), depth, np.ascontiguousarray(base.ids))
+    layer = raster_layer(scam, scene, draws, projection=proj, background=under)
+    per_sample = np.repeat(np.repeat(averaged, aa, axis=0), aa, axis=1) if aa > 1 else averaged
+    layer.rgba = _colored(layer.rgba, per_sample, base.rgba)
+    return layer
 
 
 @register(
