@@ -3,17 +3,19 @@
 Conventions (see the README): vertices (V,3) float, faces (F,3) int counter-clockwise front;
 images float32 (H,W,4) linear premultiplied RGBA, row 0 at the top; depth float32 (H,W) view-axis
 distance, inf for background; the shutter spans normalised time [0, 1].
+
+Importing the package loads the scene, the rasterizer and the rendering methods; the rest
+(evaluation, interop, the built-in scenes, meshes, the analytic kernel's API, image filters) is
+imported at its first use. Importing changes nothing in the process (see :func:`tune_malloc`).
 """
 
 from __future__ import annotations
 
+import importlib
+from typing import TYPE_CHECKING
+
 from . import (
-    _malloc,  # noqa: F401  (keeps freed frame buffers in the process; see the module)
-    analytic,
     budget,
-    image,
-    interop,
-    meshes,
     methods,  # noqa: F401  (registers every built-in rendering method)
     threads,
 )
@@ -24,19 +26,48 @@ from . import shell as _shell
 from ._core import __version__
 from ._namespace import tidy
 from ._optional import MissingDependencyError
-from .analytic import MovingDraw, coverage, rasterize_motion
 from .budget import memory_budget, set_memory_budget
-from .evaluation import metrics, reference
 from .geometry import *  # noqa: F403
-from .interop import read_image, to_mitsuba_dict
-from .methods._estimate import exact
-from .methods.accumulation import Sequence
 from .raster import *  # noqa: F403
 from .render import METHODS, MethodNotApplicableWarning, PoorBlurWarning, register, render
+from .renderer import Renderer
 from .scene import *  # noqa: F403
-from .scenes_builtin import SCENES, builtin_scene
 from .shell import *  # noqa: F403
 from .threads import get_num_threads, set_num_threads
+
+if TYPE_CHECKING:  # what the names served at first use are, for type checkers and linters
+    from . import analytic, evaluation, image, interop, meshes, scenes_builtin, scenes_real  # noqa: F401
+    from ._malloc import tune_malloc
+    from .analytic import MovingDraw, coverage, rasterize_motion
+    from .evaluation import metrics, reference
+    from .interop.images import read_image
+    from .interop.mitsuba import to_mitsuba_dict
+    from .methods._estimate import exact
+    from .methods.accumulation import Sequence
+    from .scenes_builtin import SCENES, builtin_scene
+
+#: Names served at their first use: name -> (module, attribute; None for the module itself).
+_LAZY: dict[str, tuple[str, str | None]] = {
+    "analytic": (".analytic", None),
+    "image": (".image", None),
+    "interop": (".interop", None),
+    "meshes": (".meshes", None),
+    "evaluation": (".evaluation", None),
+    "scenes_builtin": (".scenes_builtin", None),
+    "scenes_real": (".scenes_real", None),
+    "metrics": (".evaluation.metrics", None),
+    "reference": (".evaluation.reference", None),
+    "MovingDraw": (".analytic", "MovingDraw"),
+    "coverage": (".analytic", "coverage"),
+    "rasterize_motion": (".analytic", "rasterize_motion"),
+    "read_image": (".interop.images", "read_image"),
+    "to_mitsuba_dict": (".interop.mitsuba", "to_mitsuba_dict"),
+    "exact": (".methods._estimate", "exact"),
+    "Sequence": (".methods.accumulation", "Sequence"),
+    "SCENES": (".scenes_builtin", "SCENES"),
+    "builtin_scene": (".scenes_builtin", "builtin_scene"),
+    "tune_malloc": ("._malloc", "tune_malloc"),
+}
 
 __all__ = [
     "__version__",
@@ -60,6 +91,7 @@ __all__ += [
     "coverage",
     *_scene.__all__,
     "render",
+    "Renderer",
     "exact",
     "register",
     "METHODS",
@@ -73,6 +105,19 @@ __all__ += [
     "MissingDependencyError",
     "MethodNotApplicableWarning",
     "PoorBlurWarning",
+    "tune_malloc",
 ]
 
-tidy(__name__)
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        module, attr = _LAZY[name]
+        value = importlib.import_module(module, __name__)
+        if attr is not None:
+            value = getattr(value, attr)
+        globals()[name] = value  # once: the next lookup is an ordinary attribute
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+tidy(__name__, lazy=_LAZY)

@@ -1,24 +1,21 @@
-"""Keep freed memory in the process between frames (glibc only).
+"""Keep freed memory in the process between frames (glibc only), when the caller asks.
 
 glibc's malloc serves blocks of 128 KiB and more (its threshold grows up to 32 MiB as such
 blocks are freed) with fresh ``mmap`` pages and gives them back on ``free``, and it trims the top
 of the heap once 128 KiB are free there. A renderer allocates frame-sized buffers every call (the
-rasterizer's output, numpy temporaries), so every call would page-fault its buffers afresh
-(the README's "Memory and speed" gives what that costs).
+rasterizer's output, numpy temporaries), so every call may page-fault its buffers afresh.
 
-:func:`keep_freed_memory` raises both thresholds (blocks up to 64 MiB come from the heap; up to
-256 MiB of free heap is kept), so the pages are reused. The package calls it on import unless the
-environment sets ``MOTIONBLUR_SYSTEM_MALLOC=1``, or the malloc tunables are set already
-(``MALLOC_MMAP_THRESHOLD_`` or ``MALLOC_TRIM_THRESHOLD_``, which then stay the user's). The cost
-is memory: a process keeps up to the trim threshold of freed heap instead of returning it.
+:func:`tune_malloc` raises both thresholds (blocks up to 64 MiB come from the heap; up to 256 MiB
+of free heap is kept), so the pages are reused. Importing the package changes nothing: this is
+a process-wide setting, and the process is the caller's. The cost is memory: the process keeps
+up to the trim threshold of freed heap instead of returning it.
 """
 
 from __future__ import annotations
 
-import ctypes
-import ctypes.util
-import os
 import sys
+
+__all__ = ["tune_malloc"]
 
 #: glibc's mallopt parameters (malloc.h).
 _M_TRIM_THRESHOLD = -1
@@ -27,19 +24,29 @@ _M_MMAP_THRESHOLD = -3
 MMAP_THRESHOLD = 64 << 20
 TRIM_THRESHOLD = 256 << 20
 
-#: Whether :func:`keep_freed_memory` changed the thresholds in this process.
+#: Whether :func:`tune_malloc` changed the thresholds in this process.
 applied = False
 
 
-def keep_freed_memory(mmap_threshold: int = MMAP_THRESHOLD, trim_threshold: int = TRIM_THRESHOLD) -> bool:
-    """Raise glibc's mmap and trim thresholds (bytes) for this process; True when applied
-    (False on other C libraries or platforms, where nothing changes)."""
+def tune_malloc(mmap_threshold: int = MMAP_THRESHOLD, trim_threshold: int = TRIM_THRESHOLD) -> bool:
+    """Raise glibc's malloc thresholds for the whole process: blocks up to ``mmap_threshold``
+    bytes (default 64 MiB) come from the heap instead of fresh ``mmap`` pages, and up to
+    ``trim_threshold`` bytes (default 256 MiB) of freed heap are kept for reuse instead of being
+    returned to the system. A real-time loop that renders large frames then reuses its buffers'
+    pages instead of page-faulting them afresh every frame; the process keeps that much more
+    memory. Returns True when applied, False on other C libraries or platforms (nothing
+    changes). glibc's own ``MALLOC_MMAP_THRESHOLD_`` / ``MALLOC_TRIM_THRESHOLD_`` environment
+    variables do the same without code."""
     global applied
+    for name, v in (("mmap_threshold", mmap_threshold), ("trim_threshold", trim_threshold)):
+        if isinstance(v, bool) or not isinstance(v, int) or not 0 <= v <= 2**31 - 1:
+            raise ValueError(f"{name}: expected an int of bytes in [0, 2**31 - 1], got {v!r}")
     if not sys.platform.startswith("linux"):
         return False
+    import ctypes
+
     try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
-        mallopt = libc.mallopt
+        mallopt = ctypes.CDLL("libc.so.6").mallopt
     except (OSError, AttributeError):
         return False
     mallopt.argtypes, mallopt.restype = (ctypes.c_int, ctypes.c_int), ctypes.c_int
@@ -49,13 +56,5 @@ def keep_freed_memory(mmap_threshold: int = MMAP_THRESHOLD, trim_threshold: int 
     return ok
 
 
-def _on_import() -> None:
-    env = os.environ
-    if env.get("MOTIONBLUR_SYSTEM_MALLOC", "") not in ("", "0"):
-        return
-    if "MALLOC_MMAP_THRESHOLD_" in env or "MALLOC_TRIM_THRESHOLD_" in env:
-        return
-    keep_freed_memory()
-
-
-_on_import()
+#: The former name (0.1), kept for code that called it.
+keep_freed_memory = tune_malloc

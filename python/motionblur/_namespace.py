@@ -43,24 +43,29 @@ def public_names(module: ModuleType) -> list[str]:
     return sorted(names)
 
 
-def tidy(package: str) -> None:
-    """Import every submodule of ``package`` but ``__main__`` (none of them imports an optional
-    dependency at import time) and give each, and the package, a ``__dir__`` listing :func:`public_names`."""
+def tidy(package: str, lazy=(), walk: bool = False) -> None:
+    """Give the module or package ``package`` and every submodule of it loaded now a
+    ``__dir__`` listing :func:`public_names` (read when called, so names set later show).
+    ``lazy``: names the module serves through its ``__getattr__`` at first use, listed too;
+    ``walk``: import every submodule first (but ``__main__``; none of them imports an optional
+    dependency at import time). A module loaded later tidies itself (it calls this at its end)."""
     root = sys.modules[package]
-    for info in pkgutil.walk_packages(root.__path__, package + "."):
-        if info.name.rsplit(".", 1)[-1] != "__main__":  # runpy warns when `python -m` finds it loaded
-            importlib.import_module(info.name)
+    if walk:
+        for info in pkgutil.walk_packages(root.__path__, package + "."):
+            if info.name.rsplit(".", 1)[-1] != "__main__":  # runpy warns when `python -m` finds it loaded
+                importlib.import_module(info.name)
     for name, module in list(sys.modules.items()):
-        if module is not None and (name == package or name.startswith(package + ".")):
-            names = set(public_names(module))
-            own = vars(module).get("__dir__")
-            if callable(own) and not getattr(own, "_tidy", False):
-                # names the module serves through its own __getattr__ (old import paths) stay
-                names.update(n for n in own() if n not in vars(module))
-            listed = sorted(names)
+        if module is None or not (name == package or name.startswith(package + ".")):
+            continue
+        own = vars(module).get("__dir__")
+        if callable(own) and getattr(own, "_tidy", False):
+            continue
+        extra = set(lazy) if module is root else set()
+        if callable(own):  # names the module serves through its own __getattr__ stay
+            extra.update(n for n in own() if n not in vars(module))
 
-            def __dir__(listed=listed) -> list[str]:
-                return list(listed)
+        def __dir__(module=module, extra=frozenset(extra)) -> list[str]:
+            return sorted(set(public_names(module)) | extra)
 
-            __dir__._tidy = True  # type: ignore[attr-defined]
-            module.__dir__ = __dir__  # type: ignore[method-assign]
+        __dir__._tidy = True  # type: ignore[attr-defined]
+        module.__dir__ = __dir__  # type: ignore[method-assign]

@@ -240,3 +240,8 @@ def spinning_propeller(
     f = np.concatenate(faces)
     rot = _rot(2, 2.0 * np.pi * turns * t)
     return np.einsum("kij,vj->kvi", rot, v), f
+
+
+from ._namespace import tidy  # noqa: E402  (dir() lists the API only; see motionblur._namespace)
+
+tidy(__name__)

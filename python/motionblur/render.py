@@ -252,26 +252,3 @@ def _methods_doc() -> str:
             lines += textwrap.wrap(para, 92, initial_indent="        ", subsequent_indent="        ")
         lines.append("")
     return "\n".join(lines)
-
-
-# The methods' layer helpers are in motionblur.methods._layers. ``motionblur.render.<name>`` still
-# reaches them for old imports, loaded on first use so that this module imports no method.
-_MOVED = frozenset(
-    {
-        "Layer", "Static", "aligned_window", "clear_static_cache", "composite", "downsample",
-        "object_draw", "paste", "raster_layer", "raw_layer", "resolve", "resolve_arrays",
-        "static_layer", "supersampled", "window_projection",
-    }
-)  # fmt: skip
-
-
-def __getattr__(name: str):
-    if name in _MOVED:
-        from .methods import _layers
-
-        return getattr(_layers, name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *_MOVED])

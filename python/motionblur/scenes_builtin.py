@@ -201,3 +201,8 @@ def spinning_propeller_scene(width: int = 320, height: int = 240) -> Scene:
     spin = Motion(times, np.stack([rotate(2.0 * np.pi * 0.15 * t, (0.0, 0.0, 1.0)) for t in times]))
     prop = Object((pos[0], faces), color=(0.2, 0.6, 0.95), motion=spin, name="propeller")
     return Scene([prop], cam, shutter="box")
+
+
+from ._namespace import tidy  # noqa: E402  (dir() lists the API only; see motionblur._namespace)
+
+tidy(__name__)

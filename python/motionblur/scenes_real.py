@@ -291,3 +291,8 @@ def knot_twist(width: int = 320, height: int = 240) -> Scene:
 
 
 REAL_SCENES["knot_twist"] = knot_twist
+
+
+from ._namespace import tidy  # noqa: E402  (dir() lists the API only; see motionblur._namespace)
+
+tidy(__name__)

@@ -1,4 +1,5 @@
-"""The package raises glibc's malloc thresholds on import (motionblur._malloc), unless told not to."""
+"""glibc's malloc thresholds are the process's: importing the package leaves them alone, and
+motionblur.tune_malloc() raises them when the caller asks."""
 
 from __future__ import annotations
 
@@ -7,28 +8,27 @@ import platform
 import subprocess
 import sys
 
-CODE = "import motionblur, motionblur._malloc as m; print(m.applied)"
+import pytest
 
 
-def _run(**env):
-    e = {k: v for k, v in os.environ.items() if not k.startswith(("MALLOC_", "MOTIONBLUR_SYSTEM_MALLOC"))}
-    e.update(env)
-    out = subprocess.run([sys.executable, "-c", CODE], env=e, capture_output=True, text=True, check=True)
+def _run(code: str) -> str:
+    e = {k: v for k, v in os.environ.items() if not k.startswith("MALLOC_")}
+    out = subprocess.run([sys.executable, "-c", code], env=e, capture_output=True, text=True, check=True)
     return out.stdout.strip()
 
 
-def test_applied_on_import_and_opt_out():
-    """On glibc the thresholds are raised on import unless told not to; elsewhere nothing changes."""
-    glibc = str(platform.libc_ver()[0] == "glibc")
-    assert _run() == glibc
-    assert _run(MOTIONBLUR_SYSTEM_MALLOC="1") == "False"
-    # the user's own glibc tunables win
-    assert _run(MALLOC_MMAP_THRESHOLD_="131072") == "False"
-    assert _run(MOTIONBLUR_SYSTEM_MALLOC="0") == glibc
-
-
-def test_keep_freed_memory_reports_whether_it_applied():
-    from motionblur import _malloc
-
+def test_import_changes_nothing_and_tune_malloc_is_an_explicit_opt_in():
     glibc = sys.platform.startswith("linux") and platform.libc_ver()[0] == "glibc"
-    assert _malloc.keep_freed_memory() is glibc
+    code = (
+        "import sys, motionblur as mb; print('motionblur._malloc' in sys.modules); "
+        "from motionblur import _malloc; print(_malloc.applied); print(mb.tune_malloc()); print(_malloc.applied)"
+    )
+    assert _run(code).split() == ["False", "False", str(glibc), str(glibc)]
+
+
+def test_tune_malloc_checks_its_arguments():
+    import motionblur as mb
+
+    for bad in (-1, 2**31, 1.5, True):
+        with pytest.raises(ValueError, match="mmap_threshold"):
+            mb.tune_malloc(mmap_threshold=bad)

@@ -153,10 +153,9 @@ def test_unlocked_and_edited_mesh_is_not_served_from_the_cache():
 def test_the_per_mesh_cache_lets_meshes_go():
     import gc
 
-    from motionblur.methods import _painter
-
     cam = mb.Camera(mb.look_at((0.0, 0.0, 4.0), (0.0, 0.0, 0.0)), 0.7, 48, 36)
-    before = len(_painter._CONSTANTS)
+    renderer = mb.Renderer()
+    before = len(renderer.mesh_constants)
     for k in range(5):
         v, f = meshes.icosphere(1, 0.3 + 0.1 * k)
         obj = mb.Object(
@@ -164,8 +163,10 @@ def test_the_per_mesh_cache_lets_meshes_go():
             shading="lambert",
             motion=mb.Motion.linear(translate((-0.5, 0, 0)), translate((0.5, 0, 0))),
         )
-        mb.render(mb.Scene([obj], cam, lights=[mb.DirectionalLight((0, 0, -1))]), "accumulation", samples=2)
-        assert len(_painter._CONSTANTS) == before + 1  # this mesh's entry, the previous one's gone
+        renderer.render(
+            mb.Scene([obj], cam, lights=[mb.DirectionalLight((0, 0, -1))]), "accumulation", samples=2
+        )
+        assert len(renderer.mesh_constants) == before + 1  # this mesh's entry, the previous one's gone
         del obj
         gc.collect()
-    assert len(_painter._CONSTANTS) == before
+    assert len(renderer.mesh_constants) == before

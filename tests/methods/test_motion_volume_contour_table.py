@@ -13,7 +13,6 @@ import numpy as np
 import pytest
 
 import motionblur as mb
-from motionblur.methods import motion_volume as mv
 
 
 @pytest.mark.parametrize("name", ["cube", "sphere80k"])
@@ -37,10 +36,11 @@ def test_given_tables_are_used_for_their_mesh_only_and_kept_ones_reused():
     b = mb.render(scene, "motion_volume", contour_table=exact)
     np.testing.assert_array_equal(a.rgba, b.rgba)
     assert a.stats["contour_error"] == b.stats["contour_error"]
-    mb.render(scene, "motion_volume", contour_table=16)
-    kept = mv._TABLES[(id(mover.mesh), 16)]
-    mb.render(scene, "motion_volume", contour_table=16)
-    assert mv._TABLES[(id(mover.mesh), 16)] is kept and len(kept) == 16
+    renderer = mb.Renderer()
+    renderer.render(scene, "motion_volume", contour_table=16)
+    kept = renderer.contour_tables.get((id(mover.mesh), 16))
+    renderer.render(scene, "motion_volume", contour_table=16)
+    assert renderer.contour_tables.get((id(mover.mesh), 16)) is kept and len(kept) == 16
     for bad in ("yes", 0, [1]):
         with pytest.raises((TypeError, ValueError), match="contour_table"):
             mb.render(scene, "motion_volume", contour_table=bad)

@@ -8,3 +8,7 @@
   and :mod:`.report` (tables, csv, plots);
 - :mod:`.demo`: its small version (``python -m motionblur demo``).
 """
+
+from .._namespace import tidy  # noqa: E402  (dir() lists the API only; see motionblur._namespace)
+
+tidy(__name__, walk=True)

@@ -19,8 +19,9 @@ its samples) and summed. The conversion:
   flat objects never light lambert ones. Mitsuba casts shadows, the rasterizer does not: the
   built-in lit scenes have nothing that could shadow.
 
-The variant is ``llvm_ad_rgb`` when libLLVM 19 is installed (``DRJIT_LIBLLVM_PATH``, set here to
-Debian's path when it exists and the variable is unset), ``scalar_rgb`` otherwise. Long runs show
+The variant is ``llvm_ad_rgb`` when libLLVM 19 is installed (``DRJIT_LIBLLVM_PATH``, or Debian's
+path; the environment is never written: where Dr.Jit cannot find LLVM a RuntimeError says to set
+the variable), ``scalar_rgb`` otherwise. Long runs show
 a tqdm progress bar.
 
 ``pyrender(scene, t=None, samples=1)``: pyrender (OSMesa, ``RenderFlags.FLAT``) at one time, or
@@ -36,7 +37,7 @@ import numpy as np
 
 from .._optional import require, require_osmesa_pyopengl
 from .._validate import as_int
-from ..interop.mitsuba import OPENGL_TO_MITSUBA, mitsuba_variant, sensor_dict, vertex_normals
+from ..interop.mitsuba import OPENGL_TO_MITSUBA, mitsuba_variant, sensor_dict, set_variant, vertex_normals
 from ..methods.accumulation import sample_times
 from ..raster import Frame, over_background
 from ..scene import Scene
@@ -48,11 +49,7 @@ _FLIP = OPENGL_TO_MITSUBA
 
 def _mi(variant=None):
     variant = variant or mitsuba_variant()
-    mi = require("mitsuba")
-
-    if mi.variant() != variant:
-        mi.set_variant(variant)
-    return mi
+    return set_variant(require("mitsuba"), variant)
 
 
 def _check_colours(scene: Scene):

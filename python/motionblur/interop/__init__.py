@@ -21,3 +21,8 @@ from .images import read_image
 from .mitsuba import to_mitsuba_dict
 
 __all__ = ["read_image", "to_mitsuba_dict"]
+
+
+from .._namespace import tidy  # noqa: E402  (dir() lists the API only; see motionblur._namespace)
+
+tidy(__name__, walk=True)

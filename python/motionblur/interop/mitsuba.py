@@ -35,7 +35,14 @@ from .._optional import require
 from .._validate import as_float, as_int
 from ..scene import Scene
 
-__all__ = ["to_mitsuba_dict", "sensor_dict", "vertex_normals", "mitsuba_variant", "OPENGL_TO_MITSUBA"]
+__all__ = [
+    "to_mitsuba_dict",
+    "sensor_dict",
+    "vertex_normals",
+    "mitsuba_variant",
+    "set_variant",
+    "OPENGL_TO_MITSUBA",
+]
 
 _LLVM = "/usr/lib/x86_64-linux-gnu/libLLVM-19.so"
 
@@ -44,13 +51,37 @@ OPENGL_TO_MITSUBA = np.diag([-1.0, 1.0, -1.0, 1.0])
 
 
 def mitsuba_variant() -> str:
-    """The Mitsuba variant used by default: ``llvm_ad_rgb`` when libLLVM is found
-    (``DRJIT_LIBLLVM_PATH``, set to Debian's LLVM 19 when that exists and the variable is unset),
-    else ``scalar_rgb``."""
-    if "DRJIT_LIBLLVM_PATH" not in os.environ and os.path.exists(_LLVM):
-        os.environ["DRJIT_LIBLLVM_PATH"] = _LLVM
+    """The Mitsuba variant used by default: ``llvm_ad_rgb`` when libLLVM is there (the file
+    ``DRJIT_LIBLLVM_PATH`` names, or Debian's LLVM 19 at ``/usr/lib/x86_64-linux-gnu/libLLVM-19.so``),
+    else ``scalar_rgb``. The process environment is read, never written: where Dr.Jit cannot
+    load LLVM by itself, set ``DRJIT_LIBLLVM_PATH`` (:func:`set_variant` says so)."""
     path = os.environ.get("DRJIT_LIBLLVM_PATH")
-    return "llvm_ad_rgb" if path and os.path.exists(path) else "scalar_rgb"
+    if path:
+        return "llvm_ad_rgb" if os.path.exists(path) else "scalar_rgb"
+    return "llvm_ad_rgb" if os.path.exists(_LLVM) else "scalar_rgb"
+
+
+def set_variant(mi, variant: str):
+    """``mi`` (the mitsuba module) with ``variant`` set. An ``llvm`` variant that cannot load
+    raises RuntimeError naming ``DRJIT_LIBLLVM_PATH``, the variable that tells Dr.Jit where
+    libLLVM is."""
+    if mi.variant() == variant:
+        return mi
+    try:
+        mi.set_variant(variant)
+        if variant.startswith("llvm"):
+            mi.Float([1.0]) + 1.0  # the backend loads LLVM at its first use
+    except Exception as exc:  # Dr.Jit raises ImportError or RuntimeError, by version
+        if not variant.startswith("llvm"):
+            raise
+        where = os.environ.get("DRJIT_LIBLLVM_PATH")
+        raise RuntimeError(
+            f"Mitsuba's {variant} variant cannot load libLLVM"
+            + (f" from DRJIT_LIBLLVM_PATH={where!r}" if where else " (DRJIT_LIBLLVM_PATH is not set)")
+            + f": set DRJIT_LIBLLVM_PATH to libLLVM's shared library (Debian: {_LLVM}, package "
+            "libllvm19), or pass variant='scalar_rgb'"
+        ) from exc
+    return mi
 
 
 def vertex_normals(v, f) -> np.ndarray:
@@ -93,10 +124,9 @@ def sensor_dict(mi, camera, pose, spp: int, lens=None) -> dict:
 def _mi(variant):
     mi = require("mitsuba", "to_mitsuba_dict")
     if variant is not None:
-        if mi.variant() != variant:
-            mi.set_variant(variant)
-    elif mi.variant() is None:
-        mi.set_variant(mitsuba_variant())
+        return set_variant(mi, variant)
+    if mi.variant() is None:
+        return set_variant(mi, mitsuba_variant())
     return mi
 
 

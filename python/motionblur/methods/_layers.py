@@ -10,14 +10,13 @@ at a time into layers through one rasterizer call per shading mode (:func:`raste
 
 from __future__ import annotations
 
-import threading
-from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
 
 from .. import _core
 from ..raster import Camera, Draw, Frame, rasterize
+from ..renderer import current_renderer
 from ..scene import Object, Scene
 
 __all__ = [
@@ -261,14 +260,11 @@ def resolve(layer: Layer, samples: int) -> Frame:
 
 # ---------------------------------------------------------------- the static layer, kept across frames
 
-_STATIC_CACHE: OrderedDict = OrderedDict()
-_STATIC_LOCK = threading.Lock()  # renders in several threads share the cache
-_STATIC_CACHE_SIZE = 4
-
 
 def clear_static_cache() -> None:
-    """Forget the static layers kept across frames."""
-    _STATIC_CACHE.clear()
+    """Forget the static layers kept across frames (of the renderer running, else of the default
+    one: :meth:`motionblur.Renderer.clear` empties all of a renderer's stores)."""
+    current_renderer().static_layers.clear()
 
 
 def _fingerprint(scene: Scene, camera: Camera, objects, aa: int) -> tuple:
@@ -301,10 +297,8 @@ def static_layer(scene: Scene, camera: Camera, objects, aa: int) -> Static:
     and placement, the camera, the lights and ``aa`` stay the same, as a real-time loop reuses
     the static part of its frame."""
     key = _fingerprint(scene, camera, objects, aa)
-    with _STATIC_LOCK:
-        hit = _STATIC_CACHE.get(key)
-        if hit is not None:
-            _STATIC_CACHE.move_to_end(key)
+    kept = current_renderer().static_layers
+    hit = kept.get(key)
     if hit is not None:
         hit[0].cached = True
         return hit[0]
@@ -312,10 +306,7 @@ def static_layer(scene: Scene, camera: Camera, objects, aa: int) -> Static:
     st = Static(layer, aa)
     st.opaque = all(float(np.min(o.rgba[..., 3])) >= 1.0 for _, o in objects)
     # keep the objects alive with the entry, so the ids in the key stay theirs
-    with _STATIC_LOCK:
-        _STATIC_CACHE[key] = (st, [o for _, o in objects])
-        while len(_STATIC_CACHE) > _STATIC_CACHE_SIZE:
-            _STATIC_CACHE.popitem(last=False)
+    kept.put(key, (st, [o for _, o in objects]))
     return st
 
 

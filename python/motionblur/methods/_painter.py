@@ -6,38 +6,36 @@ constants kept across frames (:func:`mesh_constant`).
 
 from __future__ import annotations
 
-import threading
 import weakref
-from collections import OrderedDict
 
 import numpy as np
 
 from .. import _core
 from ..geometry import Mesh
+from ..renderer import current_renderer
 from ..scene import Object, Scene
 from ._layers import Layer
 
 __all__ = ["Painter", "painter_for", "facing_faces", "mesh_constant", "box_corners"]
 
 
-# Per-mesh constants kept across frames: {(id(vertices), id(faces)): (weak refs to both, {name:
-# read-only array})}, an entry dropped with its vertex array. Nothing here holds a mesh alive.
-_CONSTANTS: dict[tuple[int, int], tuple] = {}
-
-
 def mesh_constant(mesh: Mesh, name: str, compute) -> np.ndarray:
-    """``compute(mesh)`` kept across frames for ``mesh``. A Mesh owns read-only copies of its
+    """``compute(mesh)`` kept across frames for ``mesh`` (on the renderer running,
+    :class:`motionblur.Renderer`). A Mesh owns read-only copies of its
     vertices and faces (and its Rust side, which gives the normals, another copy), so what is
     computed from them is a constant of the mesh; should a caller unlock an array
     (``flags.writeable = True``) to edit it in place, nothing is kept or reused for that mesh."""
     v, f = mesh.vertices, mesh.faces
     if v.flags.writeable or f.flags.writeable:
         return compute(mesh)
+    # {(id(vertices), id(faces)): (weak refs to both, {name: read-only array})}: an entry is
+    # dropped with its vertex array and checked against both on use; nothing holds a mesh alive
+    store = current_renderer().mesh_constants
     key = (id(v), id(f))
-    hit = _CONSTANTS.get(key)
+    hit = store.get(key)
     if hit is None or hit[0]() is not v or hit[1]() is not f:
-        hit = (weakref.ref(v, lambda _r, k=key: _CONSTANTS.pop(k, None)), weakref.ref(f), {})
-        _CONSTANTS[key] = hit
+        hit = (weakref.ref(v, lambda _r, k=key: store.pop(k, None)), weakref.ref(f), {})
+        store[key] = hit
     values = hit[2]
     if name not in values:
         a = compute(mesh)
@@ -117,18 +115,13 @@ class Painter:
         )
 
 
-_PAINTERS: OrderedDict = OrderedDict()
-_PAINTERS_LOCK = threading.Lock()  # renders in several threads share the cache
-_PAINTERS_SIZE = 4
-
-
 def _parts(objects) -> list:
     """What a painter is made of, per object: the Object, its mesh's arrays and its motion."""
     return [p for _, o in objects for p in (o, o.mesh.vertices, o.mesh.faces, o.motion)]
 
 
 def painter_for(scene: Scene, objects: list[tuple[int, Object]], eye=None) -> Painter:
-    """A :class:`Painter` of ``objects`` kept across frames (up to 4) while the objects (the
+    """A :class:`Painter` of ``objects`` kept across frames (up to 4, on the renderer running) while the objects (the
     same Object, mesh and motion, colour and shading), the eye, the lights and the ambient
     light stay the same, as a real-time loop reuses what it set up. The entry holds no object
     alive (weak references; it goes with its objects), and is never made for a mesh whose
@@ -143,18 +136,11 @@ def painter_for(scene: Scene, objects: list[tuple[int, Object]], eye=None) -> Pa
         tuple((li.direction.tobytes(), li.intensity.tobytes()) for li in scene.lights),
         np.asarray(scene.ambient, dtype=np.float64).tobytes(),
     )
-    with _PAINTERS_LOCK:
-        hit = _PAINTERS.get(key)
-        if hit is not None and all(r() is p for r, p in zip(hit[1], parts)):
-            _PAINTERS.move_to_end(key)
-            return hit[0]
+    kept = current_renderer().painters
+    hit = kept.get(key, lambda hit: all(r() is p for r, p in zip(hit[1], parts)))
+    if hit is not None:
+        return hit[0]
     painter = Painter(scene, objects, eye)
-    refs = [
-        (lambda: None) if p is None else weakref.ref(p, lambda _r, k=key: _PAINTERS.pop(k, None))
-        for p in parts
-    ]
-    with _PAINTERS_LOCK:
-        _PAINTERS[key] = (painter, refs)
-        while len(_PAINTERS) > _PAINTERS_SIZE:
-            _PAINTERS.popitem(last=False)
+    refs = [(lambda: None) if p is None else weakref.ref(p, lambda _r, k=key: kept.discard(k)) for p in parts]
+    kept.put(key, (painter, refs))
     return painter

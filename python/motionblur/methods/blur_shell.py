@@ -24,9 +24,7 @@ normals from when each pair was recorded).
 
 from __future__ import annotations
 
-import threading
 import time
-from collections import OrderedDict
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -36,6 +34,7 @@ from .. import _core
 from .._validate import as_array, as_bool, as_choice, as_float, as_int, as_samples
 from ..raster import Draw, rasterize
 from ..render import register
+from ..renderer import current_renderer
 from ..scene import Object, Scene
 from ..shell import BlurShell
 from ._layers import Layer, composite, raster_layer, resolve, supersampled
@@ -43,13 +42,12 @@ from ._layers import Layer, composite, raster_layer, resolve, supersampled
 __all__ = ["blur_shell", "shell_times", "apparent_vertices"]
 
 
-#: Shells kept between renders (their mesh order and vertex-face tables are costly to build
-#: for large meshes): the last 8, keyed by mesh identity and options, reset before reuse (a reset
-#: shell behaves exactly like a new one). The mesh is held so its id stays unique. A shell has
-#: state (its updates), so a render takes it out for its own use and puts it back after: renders
-#: of one scene in several threads at once never share one.
-_SHELLS: OrderedDict = OrderedDict()
-_SHELLS_LOCK = threading.Lock()
+# Shells are kept between renders on the renderer running (:class:`motionblur.Renderer`; their
+# mesh order and vertex-face tables are costly to build for large meshes): the last 8, keyed by
+# mesh identity and options, reset before reuse (a reset shell behaves exactly like a new one).
+# The mesh is held so its id stays unique. A shell has state (its updates), so a render takes it
+# out for its own use and puts it back after: renders of one scene in several threads at once
+# never share one.
 
 
 @contextmanager
@@ -57,8 +55,8 @@ def _shell_for(
     mesh, nv: int, s: int, h: int, a: float, rgb: np.ndarray, side: str = "past"
 ) -> Iterator[BlurShell]:
     key = (id(mesh), nv, s, h, a, rgb.shape, rgb.tobytes(), side)
-    with _SHELLS_LOCK:
-        hit = _SHELLS.pop(key, None)
+    kept = current_renderer().shells
+    hit = kept.take(key)
     if hit is not None and hit[0] is mesh:
         shell = hit[1]
         shell.reset()
@@ -67,10 +65,7 @@ def _shell_for(
     try:
         yield shell
     finally:
-        with _SHELLS_LOCK:
-            _SHELLS[key] = (mesh, shell)
-            while len(_SHELLS) > 8:
-                _SHELLS.popitem(last=False)
+        kept.put(key, (mesh, shell))
 
 
 def _applies(scene: Scene) -> bool:

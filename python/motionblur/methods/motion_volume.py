@@ -19,8 +19,6 @@ of volumes, and the frames are summed weighted by the filter's weight of each pi
 from __future__ import annotations
 
 import copy
-import threading
-from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -32,6 +30,7 @@ from ..geometry import motion_volume as build_volume
 from ..geometry import spin_volume as build_spin
 from ..raster import Camera, Draw, Frame
 from ..render import register
+from ..renderer import current_renderer
 from ..scene import Object, Scene, shutter_cdf
 from ._layers import (
     Layer,
@@ -578,8 +577,6 @@ def _summed(frames, pieces: int, filter: str) -> Frame:
 
 #: Directions of the tables ``contour_table=True`` builds, and the meshes whose tables are kept.
 CONTOUR_DIRECTIONS = 128
-_TABLES: OrderedDict = OrderedDict()
-_TABLES_LOCK = threading.Lock()  # renders in several threads share the tables
 
 
 def _contour_tables(option):
@@ -595,18 +592,13 @@ def _contour_tables(option):
     k = CONTOUR_DIRECTIONS if option is True else as_int(option, "contour_table", minimum=1, maximum=65536)
 
     def table_for(mesh):
+        kept = current_renderer().contour_tables  # each table holds its mesh: the id stays its
         key = (id(mesh), k)
-        with _TABLES_LOCK:
-            hit = _TABLES.get(key)
-            if hit is not None and hit.mesh is mesh:
-                _TABLES.move_to_end(key)
-                return hit
-        table = ContourTable(mesh, directions=k)
-        with _TABLES_LOCK:
-            _TABLES[key] = table
-            while len(_TABLES) > 8:
-                _TABLES.popitem(last=False)
-        return table
+        hit = kept.get(key, lambda table: table.mesh is mesh)
+        if hit is None:
+            hit = ContourTable(mesh, directions=k)
+            kept.put(key, hit)
+        return hit
 
     return table_for
 
