@@ -35,9 +35,6 @@ PACKAGES: dict[str, tuple[str, str, str]] = {
     "OpenEXR": ("OpenEXR", "interop", "EXR files (Frame.save_exr, read_image)"),
     "PIL": ("pillow", "interop", "PNG files (Frame.save_png, read_image, the demo's sheets)"),
     "matplotlib": ("matplotlib", "bench", "the Pareto plots of the report"),
-    "pymeshfix": ("pymeshfix", "meshes", "the Stanford bunny scan of the report (a file in its wheel)"),
-    "pyvista": ("pyvista", "meshes", "the modelled ant of the report (a file in its wheel)"),
-    "fast_simplification": ("fast-simplification", "meshes", "decimating the real meshes of the report"),
     "dask": ("dask[distributed]", "bench", "the report's references and errors as Dask tasks (bench --dask)"),
     "distributed": (
         "dask[distributed]",

@@ -8,13 +8,14 @@ not: the report's second reference, each method's own limit, leaves that differe
 
 Meshes (each normalised to a largest extent of :data:`SIZE` scene units, its base on the floor):
 
-- ``bunny``: the Stanford bunny scan (Stanford 3D Scanning Repository; 50k vertices, 99,785
-  faces, with the scan's holes) as shipped in the wheel of ``pymeshfix`` 0.18 (the file
-  ``pymeshfix/examples/StanfordBunny.ply``, read here as data: pymeshfix itself, AGPL-3, is
-  never imported), decimated to :data:`BUNNY_FACES` faces with ``fast-simplification`` (MIT);
+- ``bunny``: the Stanford bunny scan (Stanford 3D Scanning Repository; the 99,785-face file
+  that pymeshfix 0.18's wheel carries, with the scan's holes) decimated to :data:`BUNNY_FACES`
+  faces (5,998) by quadric decimation (fast-simplification 0.2), shipped with the package as
+  ``motionblur/data/bunny.ply``;
 - ``ant``: the modelled ant of the PLY format's examples (912 faces, thin legs: the concave
-  case), as shipped in the wheel of ``pyvista`` 0.49 (MIT; ``pyvista/examples/ant.ply``, read
-  as data, pyvista not imported);
+  case), as pyvista 0.49 ships it (``pyvista/examples/ant.ply``), shipped with the package as
+  ``motionblur/data/ant.ply``. ``motionblur/data/README.md`` states both files' sources and
+  terms; they are read with trimesh (the ``meshes`` extra);
 - ``torus`` (a ring seen at an angle: the hole shows) and ``knot`` (a (2,3) torus knot tube),
   procedural.
 
@@ -26,7 +27,6 @@ vertical by up to 70 degrees at its top). Names are ``<mesh>_<motion>``.
 
 from __future__ import annotations
 
-import importlib.util
 from collections.abc import Callable
 from functools import cache
 from pathlib import Path
@@ -34,18 +34,19 @@ from pathlib import Path
 import numpy as np
 
 from . import meshes
-from ._optional import MissingDependencyError, _advice, require
+from ._optional import require
 from .raster import Camera, look_at
 from .scene import DirectionalLight, Motion, Object, Scene, rotate, translate
 
-__all__ = ["REAL_SCENES", "real_mesh", "read_ply", "torus_knot", "decimate", "MESHES", "MOTIONS"]
+__all__ = ["REAL_SCENES", "real_mesh", "shipped_mesh", "torus_knot", "MESHES", "MOTIONS"]
 
 #: Scenes by name: functions ``(width=..., height=...) -> Scene``.
 REAL_SCENES: dict[str, Callable[..., Scene]] = {}
 #: Largest extent of every mesh, scene units.
 SIZE = 0.8
-#: Faces the bunny scan is decimated to (from 99,785): the analytic method's time grows with
-#: the triangles it bins, and the report must stay within its time budget.
+#: Faces the bunny scan was decimated to (from 99,785; the decimation gave 5,998) before it was
+#: shipped: the analytic method's time grows with the triangles it bins, and the report must
+#: stay within its time budget.
 BUNNY_FACES = 6000
 #: Top of the static floor (scene units).
 FLOOR_Y = -0.6
@@ -57,99 +58,17 @@ _COLORS = {
     "torus": (0.25, 0.7, 0.35),
     "knot": (0.3, 0.45, 0.9),
 }
-# data files inside other packages' wheels: import name -> (file, pip package, extra)
-_FILES = {
-    "bunny": ("pymeshfix", "examples/StanfordBunny.ply"),
-    "ant": ("pyvista", "examples/ant.ply"),
-}
 
 
-def read_ply(path) -> tuple[np.ndarray, np.ndarray]:
-    """``(vertices (V,3) float64, faces (F,3) int64)`` of a triangle PLY file (ascii or
-    binary little/big endian; vertex x, y, z and any other scalar properties, faces as a list
-    property of 3 indices; polygons with more corners are fanned into triangles)."""
-    data = Path(path).read_bytes()
-    end = data.index(b"end_header") + len(b"end_header")
-    end = data.index(b"\n", end) + 1
-    header = data[:end].decode("ascii").splitlines()
-    fmt, elements = "", []
-    for line in header:
-        w = line.split()
-        if not w:
-            continue
-        if w[0] == "format":
-            fmt = w[1]
-        elif w[0] == "element":
-            elements.append((w[1], int(w[2]), []))
-        elif w[0] == "property":
-            elements[-1][2].append(w[1:])
-    types = {"char": "i1", "uchar": "u1", "int8": "i1", "uint8": "u1", "short": "i2", "ushort": "u2",
-             "int16": "i2", "uint16": "u2", "int": "i4", "uint": "u4", "int32": "i4", "uint32": "u4",
-             "float": "f4", "float32": "f4", "double": "f8", "float64": "f8"}  # fmt: skip
-    body = data[end:]
-    verts = faces = None
-    if fmt == "ascii":
-        tokens = iter(body.split())
-        for name, count, props in elements:
-            if name == "vertex":
-                rows = [[float(next(tokens)) for _ in props] for _ in range(count)]
-                names = [p[-1] for p in props]
-                arr = np.array(rows, np.float64).reshape(count, len(props))
-                verts = arr[:, [names.index(c) for c in "xyz"]]
-            elif name == "face":
-                tris = []
-                for _ in range(count):
-                    n = int(next(tokens))
-                    idx = [int(next(tokens)) for _ in range(n)]
-                    tris += [[idx[0], idx[i], idx[i + 1]] for i in range(1, n - 1)]
-                faces = np.array(tris, np.int64)
-        return verts, faces
-    order = "<" if fmt == "binary_little_endian" else ">"
-    pos = 0
-    for name, count, props in elements:
-        if any(p[0] == "list" for p in props):
-            if len(props) != 1 or name != "face":
-                raise ValueError(f"{path}: only a face element of one list property is read")
-            ct, it = np.dtype(order + types[props[0][1]]), np.dtype(order + types[props[0][2]])
-            first = int(np.frombuffer(body, ct, 1, pos)[0])
-            rec = np.dtype([("n", ct), ("i", it, first)])
-            arr = np.frombuffer(body, rec, count, pos)
-            if (arr["n"] != first).any():
-                raise ValueError(f"{path}: faces of mixed corner counts are not read")
-            faces = np.concatenate([arr["i"][:, [0, i, i + 1]] for i in range(1, first - 1)]).astype(np.int64)
-            pos += rec.itemsize * count
-        else:
-            rec = np.dtype([(p[1], order + types[p[0]]) for p in props])
-            arr = np.frombuffer(body, rec, count, pos)
-            pos += rec.itemsize * count
-            if name == "vertex":
-                verts = np.stack([arr[c].astype(np.float64) for c in "xyz"], -1)
-    return verts, faces
-
-
-def _data_file(mesh: str) -> Path:
-    """The path of ``mesh``'s file inside the installed package that ships it (not imported)."""
-    module, rel = _FILES[mesh]
-    spec = importlib.util.find_spec(module)
-    if spec is None or not spec.submodule_search_locations:
-        raise MissingDependencyError(
-            f"the real-mesh scene {mesh!r} reads {rel} from the Python package {module!r}, which is not "
-            f"installed: {_advice([module])}",
-            name=module,
-        )
-    return Path(list(spec.submodule_search_locations)[0]) / rel
-
-
-def decimate(vertices, faces, target: int) -> tuple[np.ndarray, np.ndarray]:
-    """Quadric decimation (``fast-simplification``) of a triangle mesh to about ``target`` faces;
-    the mesh itself when it has no more. Returns ``(vertices (V,3) float64, faces (F,3) int64)``."""
-    if len(faces) <= target:
-        return vertices, faces
-    fs = require("fast_simplification", "decimating the real meshes of the report")
-    v, f = fs.simplify(
-        np.asarray(vertices, np.float32), np.asarray(faces, np.int32), 1.0 - target / len(faces)
-    )
-    return np.asarray(v, np.float64), np.asarray(f, np.int64)
+def shipped_mesh(name: str) -> tuple[np.ndarray, np.ndarray]:
+    """``(vertices (V,3) float64, faces (F,3) int64)`` of the mesh file ``motionblur/data/<name>.ply``
+    shipped with the package (``"bunny"`` or ``"ant"``), as stored (not normalised), read with
+    trimesh (vertex order kept, nothing merged)."""
+    if name not in ("bunny", "ant"):
+        raise ValueError(f"name: unknown shipped mesh {name!r}; expected 'bunny' or 'ant'")
+    trimesh = require("trimesh", "the real meshes of the report")
+    mesh = trimesh.load(str(Path(__file__).parent / "data" / f"{name}.ply"), process=False, force="mesh")
+    return np.asarray(mesh.vertices, np.float64), np.asarray(mesh.faces, np.int64)
 
 
 def torus_knot(
@@ -194,7 +113,7 @@ def real_mesh(name: str) -> tuple[np.ndarray, np.ndarray]:
     """``(vertices (V,3) float64, faces (F,3) int64)`` of mesh ``name`` (:data:`MESHES`), in scene
     units, normalised (largest extent :data:`SIZE`, base at y = 0), read-only arrays."""
     if name == "bunny":
-        v, f = decimate(*read_ply(_data_file("bunny")), BUNNY_FACES)
+        v, f = shipped_mesh("bunny")  # decimated to BUNNY_FACES already
         v = (
             v
             @ (rotate(np.radians(-90.0), (1.0, 0.0, 0.0)) @ rotate(np.radians(-60.0), (0.0, 0.0, 1.0)))[
@@ -202,7 +121,7 @@ def real_mesh(name: str) -> tuple[np.ndarray, np.ndarray]:
             ].T
         )  # z-up scan
     elif name == "ant":
-        v, f = read_ply(_data_file("ant"))
+        v, f = shipped_mesh("ant")
         v = v @ rotate(np.radians(90.0), (0.0, 1.0, 0.0))[:3, :3].T  # its length along x (the file's z)
     elif name == "torus":
         v, f = meshes.torus(1.0, 0.38, 48, 16)

@@ -1,10 +1,10 @@
-"""The report's real-mesh scenes: the PLY reader against files written here, the meshes read from
-the wheels that ship them, and every scene's floor, light and motion."""
+"""The report's real-mesh scenes: the mesh files shipped with the package, and every scene's
+floor, light and motion."""
 
 from __future__ import annotations
 
-import struct
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,34 +14,22 @@ from motionblur import MissingDependencyError
 from motionblur import scenes_real as sr
 
 
-def _ascii_ply(path, v, quads):
-    lines = ["ply", "format ascii 1.0", f"element vertex {len(v)}", "property float x", "property float y",
-             "property float z", "property uchar red", f"element face {len(quads)}",
-             "property list uchar int vertex_indices", "end_header"]  # fmt: skip
-    lines += [f"{x} {y} {z} 7" for x, y, z in v] + [f"{len(q)} " + " ".join(map(str, q)) for q in quads]
-    path.write_text("\n".join(lines) + "\n")
+def test_the_shipped_meshes_are_package_data_with_their_sources():
+    """The decimated bunny and the ant ship with the package (read with trimesh), with a README
+    that states each file's source and terms; the counts are the report's."""
+    data = Path(sr.__file__).parent / "data"
+    v, f = sr.shipped_mesh("bunny")
+    assert (len(v), len(f)) == (2986, 5998) and abs(len(f) - sr.BUNNY_FACES) < 0.05 * sr.BUNNY_FACES
+    v, f = sr.shipped_mesh("ant")
+    assert (len(v), len(f)) == (486, 912) and v.dtype == np.float64 and f.dtype == np.int64
+    notes = (data / "README.md").read_text()
+    for words in ("Stanford 3D Scanning Repository", "bunny.ply", "ant.ply", "MIT", "pyvista"):
+        assert words in notes
+    with pytest.raises(ValueError, match="name"):
+        sr.shipped_mesh("teapot")
 
 
-def test_read_ply_reads_ascii_and_binary_and_fans_polygons(tmp_path, rng):
-    v = rng.random((6, 3))
-    _ascii_ply(tmp_path / "a.ply", v, [[0, 1, 2, 3], [3, 4, 5, 0]])
-    va, fa = sr.read_ply(tmp_path / "a.ply")
-    np.testing.assert_allclose(va, v, atol=1e-6)
-    assert fa.tolist() == [[0, 1, 2], [0, 2, 3], [3, 4, 5], [3, 5, 0]]
-    head = ("ply\nformat binary_big_endian 1.0\nelement vertex 6\nproperty double x\nproperty double y\n"
-            "property double z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n")  # fmt: skip
-    body = (
-        b"".join(struct.pack(">3d", *p) for p in v)
-        + struct.pack(">B3i", 3, 0, 1, 2)
-        + struct.pack(">B3i", 3, 5, 4, 3)
-    )
-    (tmp_path / "b.ply").write_bytes(head.encode() + body)
-    vb, fb = sr.read_ply(tmp_path / "b.ply")
-    np.testing.assert_array_equal(vb, v)
-    assert fb.tolist() == [[0, 1, 2], [5, 4, 3]]
-
-
-def test_the_real_meshes_come_from_the_wheels_normalised():
+def test_the_real_meshes_are_normalised():
     bunny, ant = sr.real_mesh("bunny"), sr.real_mesh("ant")
     assert abs(len(bunny[1]) - sr.BUNNY_FACES) < 0.05 * sr.BUNNY_FACES  # decimated from 99,785
     assert len(ant[1]) == 912
@@ -73,10 +61,10 @@ def test_every_scene_is_a_lit_mover_over_a_static_floor():
     assert np.degrees(np.arccos((np.trace(r0.T @ r1) - 1) / 2)) == pytest.approx(100.0, abs=0.01)
 
 
-def test_a_scene_renders_and_a_missing_wheel_names_its_extra(monkeypatch):
+def test_a_scene_renders_and_a_missing_reader_names_its_package(monkeypatch):
     frame = mb.render(sr.REAL_SCENES["ant_translate"](48, 36), "accumulation", samples=2)
     alpha = frame.rgba[..., 3]
     assert alpha[-1].min() > 0.99 and alpha[0].max() == 0.0  # the floor below, nothing behind it above
-    monkeypatch.setitem(sys.modules, "pyvista", None)
-    with pytest.raises(MissingDependencyError, match=r"motionblur\[meshes\]"):
-        sr._data_file("ant")
+    monkeypatch.setitem(sys.modules, "trimesh", None)
+    with pytest.raises(MissingDependencyError, match="trimesh"):
+        sr.shipped_mesh("ant")
