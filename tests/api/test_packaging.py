@@ -133,7 +133,9 @@ def test_the_wheel_carries_licence_script_metadata_and_a_stripped_module(wheel, 
         assert any(n.startswith(dist) and n.endswith("LICENSE") for n in names), names
         assert "motionblur/py.typed" in names and "motionblur/_core.pyi" in names
         # the report's meshes ship as package data, with their sources and terms
-        assert {"motionblur/data/bunny.ply", "motionblur/data/ant.ply", "motionblur/data/README.md"} <= set(names)
+        assert {"motionblur/data/bunny.ply", "motionblur/data/ant.ply", "motionblur/data/README.md"} <= set(
+            names
+        )
         entry = z.read(f"{dist}/entry_points.txt").decode()
         assert "motionblur=motionblur.__main__:main" in entry.replace(" ", ""), entry
         meta = email.message_from_bytes(z.read(f"{dist}/METADATA"))
