@@ -26,7 +26,9 @@ print("environment untouched:", dict(os.environ) == before)
 def _run(**env) -> str:
     e = {k: v for k, v in os.environ.items() if k != "DRJIT_LIBLLVM_PATH"}
     e.update(env)
-    return subprocess.run([sys.executable, "-c", CODE], env=e, capture_output=True, text=True, timeout=300).stdout
+    return subprocess.run(
+        [sys.executable, "-c", CODE], env=e, capture_output=True, text=True, timeout=300
+    ).stdout
 
 
 @pytest.mark.mitsuba
