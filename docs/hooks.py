@@ -51,7 +51,7 @@ def bench_results(folder: Path, root: Path) -> str:
     )
     if not found:
         return (
-            "!!! info \"No benchmark output in this build\"\n"
+            '!!! info "No benchmark output in this build"\n'
             "    This page shows the tables of the last benchmark run when the site is built after one.\n"
             "    Run `make bench` (every script under `benches/` and the speed-against-error report,\n"
             "    about 12 minutes on 2 cores; `python -m motionblur bench --quick` for the report\n"

@@ -64,7 +64,11 @@ def method_figure(method: str, scene_name: str, options: dict) -> Path:
 def hero() -> Path:
     scene, exact, sharp = _frames("curved")
     tiles = [("no blur\n\n", sharp)]
-    for method, opts in (("accumulation", {"samples": 8}), ("motion_volume", {}), ("auto", {"tolerance": 0.004})):
+    for method, opts in (
+        ("accumulation", {"samples": 8}),
+        ("motion_volume", {}),
+        ("auto", {"tolerance": 0.004}),
+    ):
         frame = mb.render(scene, method, **opts)
         err = _rmse(frame.rgba, exact)
         label = ", ".join(f"{k}={v}" for k, v in opts.items()) or "defaults"

@@ -25,7 +25,9 @@ HERE = Path(__file__).resolve().parent
 
 def store(path: Path) -> int:
     nb = nbformat.read(path, as_version=4)
-    NotebookClient(nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(HERE)}}).execute()
+    NotebookClient(
+        nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(HERE)}}
+    ).execute()
     problems = []
     for i, cell in enumerate(nb.cells):
         cell.metadata.pop("execution", None)
