@@ -46,6 +46,8 @@ def test_the_readme_is_a_front_page():
     ):
         assert f"\n{section}\n" in text, section
     assert "make demo" in text and "make test" in text
+    # the error control stays on the front page: the tuning/measuring split and the way to the details
+    assert "Tuning and measuring are kept apart" in text and "(docs/validation.md)" in text
     assert text.index("mb.render(") < text.index("## Which method when"), "render() comes first"
 
 
