@@ -83,8 +83,15 @@ $(DOCS_STAMP): $(STAMP) requirements-docs.txt
 	$(PY) -m pip install -q -r requirements-docs.txt
 	touch $@
 
-docs: build $(DOCS_STAMP) ## the documentation site in out/site: API from the docstrings, the notebooks executed
-	$(PY) -m mkdocs build --strict --clean
+docs: build $(DOCS_STAMP) ## the documentation site in out/site: guide, methods, API from the docstrings, the stored notebooks
+	@mkdir -p out
+	set -o pipefail; NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --clean 2>&1 | tee out/docs.log
+	@# --strict fails on mkdocs' warnings; this fails on any other warning or error line printed
+	@if grep -nE '^(ERROR|WARNING)|ERROR:|Warning:|Traceback' out/docs.log; then \
+	  echo "make docs: the build printed the lines above (warnings are errors here)"; exit 1; fi
+
+notebooks: build ## execute the notebooks and store them with their outputs (figures on GitHub and the site)
+	$(PY) notebooks/store_outputs.py
 
 fmt: venv ## format Rust and Python in place
 	cargo fmt

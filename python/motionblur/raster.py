@@ -400,6 +400,22 @@ class Frame:
     def __repr__(self) -> str:
         return f"Frame({self.width}x{self.height}, stats={self.stats})"
 
+    def _repr_png_(self) -> bytes | None:
+        """The frame as PNG bytes (what :meth:`save_png` writes), so that Jupyter and IPython
+        show a Frame as its picture. None (IPython then shows the repr) when Pillow is missing
+        or a pixel is NaN or inf."""
+        import io
+
+        try:
+            from PIL import Image
+        except ImportError:
+            return None
+        if not np.isfinite(self.rgba).all():
+            return None
+        buffer = io.BytesIO()
+        Image.fromarray(self.to_srgb8(), mode="RGBA").save(buffer, format="PNG")
+        return buffer.getvalue()
+
     def to_srgb8(self) -> np.ndarray:
         """(H,W,4) uint8: straight (un-premultiplied) colour, sRGB-encoded; alpha stays linear."""
         a = np.clip(self.rgba[..., 3:4], 0.0, 1.0)
@@ -432,11 +448,17 @@ class Frame:
         """Writes an OpenEXR file: linear float ``R``, ``G``, ``B``, ``A`` (premultiplied), depth
         as ``Z``, ids as ``id`` and velocity as ``velocity.X`` / ``velocity.Y``, the stats in the
         header (:mod:`motionblur.interop.exr`); every value round-trips bit-exactly through
-        :func:`motionblur.read_image`. Creates parent folders; returns the path. Needs the
-        ``OpenEXR`` package (``pip install "motionblur[interop]"``)."""
+        :func:`motionblur.read_image`. Creates parent folders; returns the path. EXR only:
+        ``path`` must end in ``.exr`` (any case), else ValueError (as :meth:`save_png` checks
+        ``.png``). Needs the ``OpenEXR`` package (``pip install "motionblur[interop]"``)."""
         from .interop.exr import write_exr
 
-        return write_exr(as_path(path), self.rgba, self.depth, self.ids, self.velocity, self.stats)
+        path = as_path(path)
+        if path.suffix.lower() != ".exr":
+            raise ValueError(
+                f"path: save_exr writes OpenEXR files only; expected a name ending in .exr, got {str(path)!r}"
+            )
+        return write_exr(path, self.rgba, self.depth, self.ids, self.velocity, self.stats)
 
 
 def over_background(frame: Frame, background) -> Frame:

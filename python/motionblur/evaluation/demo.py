@@ -6,8 +6,10 @@ accumulation (N = 1, 4, 16, 64), motion volumes (1 and 4 segments, box and ramp 
 shells, Kraus's opaque image blur and Chapman's camera blur. Each image is measured against a
 Mitsuba reference (K = 64 shutter times, cached), and ``out`` receives every image and the
 references as PNGs (``images/``), a labelled side-by-side sheet per scene (``sheet_<scene>.png``:
-the reference and each method with its options, ms and RMSE), ``results.csv``, ``results.md`` (the speed/error table) and a
-Pareto plot per scene. Well under a minute.
+the references and each method with its options, ms and two RMSEs: against Mitsuba, then against
+the exact frame), ``results.csv``, ``results.md`` (the speed/error table), a Pareto plot per scene
+and the static report page ``html/index.html`` (each image beside both references, with difference
+images), whose path the run prints. Well under a minute.
 """
 
 from __future__ import annotations
@@ -49,7 +51,13 @@ def run(out="out/demo", scenes=SCENES) -> int:
     md = Path(res["paths"]["md"]).read_text()
     print(md)
     sheets = ", ".join(str(p) for k, p in res["paths"].items() if k.startswith("sheet_"))
+    page = res["paths"].get("html")
     print(
         f"demo written to {out}/ in {time.perf_counter() - t0:.1f} s: sheets {sheets}, single images in {out}/images/"
+        + (
+            f"; the report page (every image beside both references, with difference images): {page}"
+            if page
+            else ""
+        )
     )
     return 0

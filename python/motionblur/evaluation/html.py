@@ -162,7 +162,10 @@ def write(out, names, rows, paths: dict, references: dict, frames: dict, setting
     info = (
         f"{settings['width']}x{settings['height']}, methods at aa = {settings['aa']}; references: Mitsuba "
         f"{settings['variant']} (K = {settings['times']} x {settings['spp']} spp) and each method's own limit "
-        f"({limit_label(settings)}); run: {settings.get('runner', 'serial')}."
+        f"({limit_label(settings)}); run: {settings.get('runner', 'serial')}. Each image has two RMSEs "
+        "(root mean square error over premultiplied linear RGBA): against Mitsuba, an independent path "
+        "tracer with its own sampling noise and shading, then against the own limit named above, which "
+        "shares this library's rasterization and shading and so measures the motion blur's error alone."
     )
     blob = json.dumps({"settings": info, "gain": GAIN, "scenes": scenes}).replace("</", "<\\/")
     page = folder / "index.html"

@@ -265,7 +265,8 @@ def mitsuba(
     cam = scene.camera
     if progress is None:
         progress = k * spp * cam.width * cam.height * len(passes) > 2e7
-    tqdm = require("tqdm.auto", "the progress bar of the Mitsuba reference").tqdm
+    # the plain text bar: tqdm.auto would look for ipywidgets in a notebook and warn without them
+    tqdm = require("tqdm", "the progress bar of the Mitsuba reference").tqdm
     bar = tqdm(total=k * len(passes), desc="mitsuba reference", disable=not progress, leave=False)
     acc = np.zeros((cam.height, cam.width, 4))
     coverage = np.zeros((cam.height, cam.width))

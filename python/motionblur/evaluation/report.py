@@ -50,7 +50,8 @@ def write(
     ``results.md``, ``settings.json`` and, given ``frames`` ({(scene, method, options): rgba}) and
     ``references`` ({scene: {"mitsuba": rgba, "limit": rgba}}), ``sheet_<scene>.png``: both
     references and, per method, its most accurate option set (own-limit RMSE) within the matched
-    time (:func:`matched`), labelled with method, options, ms and both RMSEs; with
+    time (:func:`matched`), labelled with method, options, ms and both RMSEs (against Mitsuba,
+    then against the own limit: the two reference tiles say so); with
     ``save_images`` every frame under ``images/``. ``images`` ({key: Frame}) is the old form of
     ``frames``. Returns the paths written."""
     if images:
@@ -84,12 +85,16 @@ def write(
             ref = (references or {}).get(name, {})
             if "mitsuba" in ref:
                 tiles.append(
-                    (f"reference: Mitsuba\nK = {settings['times']} x {settings['spp']} spp\n", ref["mitsuba"])
+                    (
+                        f"reference: Mitsuba\nK = {settings['times']} x {settings['spp']} spp\n"
+                        "each image's 1st RMSE is against this",
+                        ref["mitsuba"],
+                    )
                 )
             if "limit" in ref:
                 tiles.append(
                     (
-                        f"reference: own limit\n{limit_label(settings)}\n",
+                        f"reference: own limit\n{limit_label(settings)}\neach image's 2nd RMSE is against this",
                         ref["limit"],
                     )
                 )
@@ -104,9 +109,11 @@ def write(
 
 
 def _errors(r) -> str:
+    """A sheet label's error: the RMSE against Mitsuba, then against the own limit (the two
+    reference tiles say which is which), both over premultiplied linear RGBA."""
     if "rmse_limit" in r and r["rmse_limit"] == r["rmse_limit"]:
-        return f"RMSE {r['rmse']:.4f} / {r['rmse_limit']:.4f}"
-    return f"RMSE {r['rmse']:.5f}"
+        return f"RMSE {r['rmse']:.4f} Mitsuba / {r['rmse_limit']:.4f} own"
+    return f"RMSE {r['rmse']:.5f} Mitsuba"
 
 
 def _frame(rgba) -> Frame:
