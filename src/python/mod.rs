@@ -4,6 +4,7 @@ use pyo3::prelude::*;
 
 mod accumulate;
 mod analytic;
+mod args;
 mod budget;
 mod convert;
 mod geometry;
