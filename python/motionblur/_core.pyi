@@ -120,6 +120,15 @@ class _Samples(TypedDict):
     weights: np.ndarray
     reference: int
 
+class _Piece(TypedDict):
+    rgba: np.ndarray
+    depth: np.ndarray
+    ids: np.ndarray
+    ray: tuple[float, float, float, float]
+    weight: float
+    objects: np.ndarray
+    maps: np.ndarray
+
 class _StillCamera(TypedDict):
     view: np.ndarray
     projection: np.ndarray
@@ -389,11 +398,11 @@ def _splat_paths(colors: np.ndarray, paths: np.ndarray, width: int, height: int)
     segments (P = 1: still). Returns (height, width, 4) f32. Non-finite path points drop their
     segments. Releases the GIL; the same sums for any thread count."""
 
-def _scatter_pieces(pieces: list[tuple], points: int, width: int, height: int) -> np.ndarray:
+def _scatter_pieces(pieces: list[_Piece], points: int, width: int, height: int) -> np.ndarray:
     """The time average (height, width, 4) f32 of sharp renders splatted along their pixels'
-    image paths, the paths made on the fly. ``pieces``: tuples (rgba (H,W,4) f32 premultiplied,
+    image paths, the paths made on the fly. ``pieces``: dicts of rgba (H,W,4) f32 premultiplied,
     depth (H,W) f32 view depth, ids (H,W) i32, ray (4,) floats, weight float >= 0, objects (M,)
-    i32, maps (M,points,4,4) f64): each pixel with alpha > 0 and an id among ``objects`` is a
+    i32, maps (M,points,4,4) f64: each pixel with alpha > 0 and an id among ``objects`` is a
     source of colour rgba * weight at the camera-space point ``z (ray[0] (i + 0.5) + ray[1],
     ray[2] (j + 0.5) + ray[3], -1)`` (z its depth), whose path point s is ``(X/W, Y/W)`` of
     ``maps[obj, s] @ (point, 1)`` (dropped when W <= 1e-9); then as ``_splat_paths``. Releases

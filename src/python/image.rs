@@ -155,29 +155,41 @@ fn _splat_paths<'py>(
     shaped(py, out, [height, width, 4])
 }
 
-/// One piece of `_scatter_pieces`: rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32, ray (4,)
-/// f64, weight, objects (M,) i32, maps (M,P,4,4) f64.
-type PyPiece<'py> = (
-    PyReadonlyArray3<'py, f32>,
-    PyReadonlyArray2<'py, f32>,
-    PyReadonlyArray2<'py, i32>,
-    [f64; 4],
-    f32,
-    PyReadonlyArray1<'py, i32>,
-    PyReadonlyArray4<'py, f64>,
-);
+/// One piece of `_scatter_pieces`, the items of a dict: its layer `rgba` (H,W,4) f32, `depth`
+/// (H,W) f32, `ids` (H,W) i32, the camera `ray` (4,) f64, its shutter `weight`, the `objects`
+/// (M,) i32 and their `maps` (M,P,4,4) f64 (the core's [`Piece`]).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct PieceArg<'py> {
+    rgba: PyReadonlyArray3<'py, f32>,
+    depth: PyReadonlyArray2<'py, f32>,
+    ids: PyReadonlyArray2<'py, i32>,
+    ray: [f64; 4],
+    weight: f32,
+    objects: PyReadonlyArray1<'py, i32>,
+    maps: PyReadonlyArray4<'py, f64>,
+}
 
 /// Splat the pieces' covered pixels along their paths into a (height, width, 4) f32 image.
 #[pyfunction]
 fn _scatter_pieces<'py>(
     py: Python<'py>,
-    pieces: Vec<PyPiece<'py>>,
+    pieces: Vec<PieceArg<'py>>,
     points: usize,
     width: usize,
     height: usize,
 ) -> PyOut<'py> {
     let mut views = Vec::with_capacity(pieces.len());
-    for (rgba, depth, ids, ray, weight, objects, maps) in &pieces {
+    for PieceArg {
+        rgba,
+        depth,
+        ids,
+        ray,
+        weight,
+        objects,
+        maps,
+    } in &pieces
+    {
         let (c, w, h) = img3(rgba, "rgba", 4)?;
         let (d, dw, dh) = img2(depth, "depth")?;
         same_size("depth", (dh, dw), (h, w))?;

@@ -5,7 +5,7 @@ use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::prelude::*;
 
 use super::args::{LayerArg, LightArg};
-use super::convert::{c_slice, detached_in_pool, face_indices, rows, shaped};
+use super::convert::{c_slice, detached_in_pool, face_indices_u32, rows, shaped};
 use super::motion::PyKeyframes;
 use crate::{
     accumulate_moving, accumulate_still, Accumulated, Error, Mat4, PaintObject, Painter, Samples,
@@ -86,10 +86,8 @@ fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> Result<Mat4, Err
 
 fn object(o: &ObjectArg<'_>) -> Result<PaintObject, Error> {
     let vertices = rows::<f64, 3>(&o.vertices, "vertices")?.to_vec();
-    let faces = face_indices(
-        rows::<i64, 3>(&o.faces, "faces")?.as_flattened(),
-        vertices.len(),
-    )?;
+    // converted only: the rasterizer's `Draw::validate` checks the range of every draw it is given
+    let faces = face_indices_u32(rows::<i64, 3>(&o.faces, "faces")?);
     let rgba = rows::<f32, 4>(&o.rgba, "rgba")?.to_vec();
     if rgba.len() != 1 && rgba.len() != vertices.len() {
         return Err(Error::shape(
