@@ -40,8 +40,8 @@ mod python;
 
 pub use accumulate::{
     accumulate, accumulate_moving, accumulate_still, composite, facing_faces, over, pixel_rect,
-    resolve, sample_rects, window_projection, Accumulated, Layer, PaintObject, Painter, Rect,
-    Samples, StaticLayer, StillCamera,
+    resolve, sample_rects, window_projection, Accumulated, BuffersMut, Layer, PaintObject, Painter,
+    Rect, Samples, StaticLayer, StillCamera,
 };
 pub use analytic::{
     render as render_analytic, Backdrop, Frame as AnalyticFrame, Input as AnalyticInput,
@@ -57,9 +57,10 @@ pub use error::{Error, Result};
 pub use image::{
     box_blur, camera_motion_blur, camera_velocity, colored, depth_of_field, glow, lens_blur,
     opaque_blur, opaque_motion_blur, pixel_bounds, pyramid_blur, pyramid_glow, pyramid_opaque_blur,
-    reconstruct, sample_colors, scatter_pieces, splat_paths, velocity_blur, CameraMatrices,
-    Composite, DofParams, LensParams, Piece, ReconstructParams, MAX_FPS_RATIO, MAX_LAYERS,
-    MAX_LENGTH, MAX_LENS_LEVELS, MAX_LEVELS, MAX_SAMPLES, MAX_TAPS, MAX_VELOCITY, MIN_ALPHA,
+    reconstruct, sample_colors, scatter_pieces, splat_paths, velocity_blur, CameraBlur,
+    CameraMatrices, Composite, DofParams, LensParams, Piece, ReconstructParams, MAX_FPS_RATIO,
+    MAX_LAYERS, MAX_LENGTH, MAX_LENS_LEVELS, MAX_LEVELS, MAX_SAMPLES, MAX_TAPS, MAX_VELOCITY,
+    MIN_ALPHA,
 };
 pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats, MAX_COORD};
 pub use motion::{

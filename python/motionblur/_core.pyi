@@ -1,11 +1,141 @@
 """Type stubs of the compiled core. The public API wraps these; see the Python modules."""
 
-from typing import final
+from typing import Literal, Protocol, TypedDict, final
 
 import numpy as np
 from typing_extensions import Self
 
 # The compiled classes are PyO3 classes: built by __new__ (they have no __init__) and final.
+
+# The typed arguments the core reads (src/python/*.rs, `#[derive(FromPyObject)]`): objects
+# whose attributes it reads (Protocols) and dicts whose items it reads (TypedDicts). Private:
+# they exist only in these stubs.
+
+_Light = tuple[tuple[float, float, float], tuple[float, float, float]]
+
+class _LayerLike(Protocol):
+    """rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32, C-contiguous (a Frame, a Layer)."""
+
+    rgba: np.ndarray
+    depth: np.ndarray
+    ids: np.ndarray
+
+class _CameraLike(Protocol):
+    """view and projection (4,4) f64, C-contiguous (a motionblur.Camera)."""
+
+    view: np.ndarray
+    projection: np.ndarray
+
+class _DrawLike(Protocol):
+    """A motionblur.Draw: vertices f64 (V,3), faces i64 (F,3), straight rgba f32 (1|V,4),
+    normals f32 (V,3) | None, object_id, cull_back, previous_vertices f64 (V,3) | None."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    rgba: np.ndarray
+    normals: np.ndarray | None
+    object_id: int
+    cull_back: bool
+    previous_vertices: np.ndarray | None
+
+class _MovingDrawLike(Protocol):
+    """A motionblur.MovingDraw: positions f64 (K+1,V,3), faces i64 (F,3), straight rgba f32
+    (1|V,4), normals f32 (K+1,V,3) | None, object_id, cull_back, shading "flat" | "lambert"."""
+
+    positions: np.ndarray
+    faces: np.ndarray
+    rgba: np.ndarray
+    normals: np.ndarray | None
+    object_id: int
+    cull_back: bool
+    shading: str
+
+class _RasterOptions(TypedDict):
+    view: np.ndarray
+    projection: np.ndarray
+    width: int
+    height: int
+    samples: int
+    blend: str
+    shading: str
+    lights: list[_Light]
+    ambient: tuple[float, float, float]
+    origin: tuple[int, int]
+
+class _AnalyticOptions(TypedDict):
+    width: int
+    height: int
+    samples: int
+    times: np.ndarray
+    view_projections: np.ndarray
+    shutter: str | np.ndarray
+    lights: list[_Light]
+    ambient: tuple[float, float, float]
+    gauss: int | Literal["auto"]
+    reference_time: float
+    shade: bool
+    tile_budget: int
+
+class _VolumeOptions(TypedDict, total=False):
+    filter: str
+    colors: np.ndarray
+    face_colors: bool
+    normals: np.ndarray | None
+    camera_position: np.ndarray | None
+    contour_line: bool
+    visible_only: bool
+    contour_table: _ContourTable | None
+    window: tuple[float, float] | None
+
+class _Spin(TypedDict):
+    axis: np.ndarray
+    angle: float
+    center: np.ndarray
+    translation: np.ndarray
+    segments: int | None
+
+class _DofOptions(TypedDict):
+    focal_depth: float
+    focal_length: float
+    f_number: float
+    yfov: float
+    layers: int
+
+class _ShellOptions(TypedDict):
+    subdivisions: int
+    hysteresis: int
+    initial_alpha: float
+
+class _PaintObject(TypedDict):
+    id: int
+    shading: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    rgba: np.ndarray
+    normals: np.ndarray | None
+    keyframes: _Keyframes | None
+
+class _Samples(TypedDict):
+    times: np.ndarray
+    weights: np.ndarray
+    reference: int
+
+class _Piece(TypedDict):
+    rgba: np.ndarray
+    depth: np.ndarray
+    ids: np.ndarray
+    ray: tuple[float, float, float, float]
+    weight: float
+    objects: np.ndarray
+    maps: np.ndarray
+
+class _StillCamera(TypedDict):
+    view: np.ndarray
+    projection: np.ndarray
+    view_projection: np.ndarray
+    width: int
+    height: int
+    aa: int
 
 __all__ = [
     "__version__",
@@ -197,18 +327,11 @@ def motion_volume(
     mesh: _Mesh,
     keyframes: _Keyframes,
     segments: int,
-    filter: str,
-    colors: np.ndarray,
-    normals: np.ndarray | None = None,
-    camera_position: np.ndarray | None = None,
-    face_colors: bool = False,
-    contour_line: bool = True,
-    visible_only: bool = False,
-    contour_table: _ContourTable | None = None,
-    window: tuple[float, float] | None = None,
+    options: _VolumeOptions,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, float]:
     """Motion volume for rigid keyframes (K+1, at the times i/K), each interval cut into
-    segments (at most MAX_SEGMENTS in total), filter
+    segments (at most MAX_SEGMENTS in total). The options (filter, colors, face_colors, normals,
+    camera_position, contour_line required; visible_only, contour_table, window optional): filter
     'ramp' | 'box' | 'triangle' | 'gaussian', colors (1|V,4) float32 straight RGBA (or (F,4)
     per face with face_colors=True), normals
     (V,3) float64 | None, camera_position (3,) float64 | None, contour_line (camera: sweep only the
@@ -223,21 +346,12 @@ def motion_volume(
 
 def spin_volume(
     mesh: _Mesh,
-    axis: np.ndarray,
-    angle: float,
-    center: np.ndarray,
-    translation: np.ndarray,
-    segments: int | None,
-    filter: str,
-    colors: np.ndarray,
-    normals: np.ndarray | None = None,
-    camera_position: np.ndarray | None = None,
-    face_colors: bool = False,
-    contour_line: bool = True,
+    spin: _Spin,
+    options: _VolumeOptions,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, int, float]:
-    """Spin volume (section 4.3): axis (3,) f64, angle radians, center (3,) f64, translation
-    (3,) f64, segments (sweep steps) | None; the rest and the result as motion_volume
-    (contour_line is ignored: every contour edge is swept).
+    """Spin volume (section 4.3): spin axis (3,) f64, angle radians, center (3,) f64,
+    translation (3,) f64, segments (sweep steps) | None; the options and the result as
+    motion_volume (contour_line is ignored: every contour edge is swept).
     Releases the GIL."""
 
 @final
@@ -284,11 +398,11 @@ def _splat_paths(colors: np.ndarray, paths: np.ndarray, width: int, height: int)
     segments (P = 1: still). Returns (height, width, 4) f32. Non-finite path points drop their
     segments. Releases the GIL; the same sums for any thread count."""
 
-def _scatter_pieces(pieces: list[tuple], points: int, width: int, height: int) -> np.ndarray:
+def _scatter_pieces(pieces: list[_Piece], points: int, width: int, height: int) -> np.ndarray:
     """The time average (height, width, 4) f32 of sharp renders splatted along their pixels'
-    image paths, the paths made on the fly. ``pieces``: tuples (rgba (H,W,4) f32 premultiplied,
+    image paths, the paths made on the fly. ``pieces``: dicts of rgba (H,W,4) f32 premultiplied,
     depth (H,W) f32 view depth, ids (H,W) i32, ray (4,) floats, weight float >= 0, objects (M,)
-    i32, maps (M,points,4,4) f64): each pixel with alpha > 0 and an id among ``objects`` is a
+    i32, maps (M,points,4,4) f64: each pixel with alpha > 0 and an id among ``objects`` is a
     source of colour rgba * weight at the camera-space point ``z (ray[0] (i + 0.5) + ray[1],
     ray[2] (j + 0.5) + ray[3], -1)`` (z its depth), whose path point s is ``(X/W, Y/W)`` of
     ``maps[obj, s] @ (point, 1)`` (dropped when W <= 1e-9); then as ``_splat_paths``. Releases
@@ -327,17 +441,9 @@ def _pyramid_glow(alpha: np.ndarray, levels: int) -> np.ndarray:
 def _pyramid_opaque_blur(rgba: np.ndarray, levels: int) -> np.ndarray:
     """Pyramid blur rescaled to the pyramid glow (eq. 7). (H,W,4) f32 in and out."""
 
-def _depth_of_field(
-    rgba: np.ndarray,
-    depth: np.ndarray,
-    focal_depth: float,
-    focal_length: float,
-    f_number: float,
-    yfov: float,
-    layers: int,
-) -> np.ndarray:
+def _depth_of_field(rgba: np.ndarray, depth: np.ndarray, params: _DofOptions) -> np.ndarray:
     """Sub-image depth of field of rgba (H,W,4) f32 with view-axis depth (H,W) f32 (inf sky);
-    focal_depth, focal_length in scene units, yfov radians. Returns (H,W,4) f32."""
+    params: focal_depth, focal_length in scene units, yfov radians. Returns (H,W,4) f32."""
 
 def _lens_blur(
     rgba: np.ndarray,
@@ -350,15 +456,9 @@ def _lens_blur(
     (inf sky); aperture (lens radius) and focus_distance in scene units, yfov radians. Returns
     (H,W,4) f32."""
 
-def _camera_velocity(
-    depth: np.ndarray,
-    view: np.ndarray,
-    projection: np.ndarray,
-    previous_view: np.ndarray,
-    previous_projection: np.ndarray,
-) -> np.ndarray:
+def _camera_velocity(depth: np.ndarray, camera: _CameraLike, previous_camera: _CameraLike) -> np.ndarray:
     """Velocity (H,W,2) f32 pixels (current minus previous) of depth (H,W) f32 seen by the camera
-    with view/projection (4,4) f64 when it moved from the previous one."""
+    (its view/projection (4,4) f64) when it moved from the previous one."""
 
 def _velocity_blur(rgba: np.ndarray, velocity: np.ndarray, samples: int) -> np.ndarray:
     """Centred samples-tap blur of rgba (H,W,4) f32 along velocity (H,W,2) f32 pixels."""
@@ -366,10 +466,8 @@ def _velocity_blur(rgba: np.ndarray, velocity: np.ndarray, samples: int) -> np.n
 def _camera_motion_blur(
     rgba: np.ndarray,
     depth: np.ndarray,
-    view: np.ndarray,
-    projection: np.ndarray,
-    previous_view: np.ndarray,
-    previous_projection: np.ndarray,
+    camera: _CameraLike,
+    previous_camera: _CameraLike,
     samples: int,
     scale: float,
 ) -> np.ndarray:
@@ -396,9 +494,7 @@ class _BlurShell:
         cls,
         faces: np.ndarray,
         n_vertices: int,
-        subdivisions: int,
-        hysteresis: int,
-        initial_alpha: float,
+        options: _ShellOptions,
         mask: np.ndarray | None = None,
         color: np.ndarray | None = None,
     ) -> Self: ...
@@ -444,55 +540,37 @@ SHADINGS: tuple[str, ...]
 BLENDS: tuple[str, ...]
 
 def _analytic(
-    width: int,
-    height: int,
-    samples: int,
-    times: np.ndarray,
-    view_projections: np.ndarray,
-    draws: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, int, bool, str]],
-    shutter: str | np.ndarray,
-    lights: list[tuple[tuple[float, float, float], tuple[float, float, float]]],
-    ambient: tuple[float, float, float],
-    gauss: int,
-    reference_time: float,
-    shade: bool,
-    backdrop: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
-    tile_budget: int = ...,
+    draws: list[_MovingDrawLike],
+    options: _AnalyticOptions,
+    backdrop: _LayerLike | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, float]]:
-    """Analytic motion blur: draws (positions f64 (K+1,V,3) at the boundaries ``times`` f64
-    (K+1,) from 0 to 1, faces i64 (F,3), straight rgba f32 (1|V,4), normals f32 (K+1,V,3) | None,
-    object_id, cull_back, shading "flat" | "lambert") seen through ``view_projections`` f64
-    (1|K+1,4,4) into height x width pixels of samples x samples each. ``shutter`` a filter name
-    or f64 (M,) weights; ``gauss`` points per visible piece (0: auto); ``backdrop`` an opaque
-    layer per sample (rgba f32 (HS,WS,4), depth f32 (HS,WS), ids i32 (HS,WS)). Returns rgba
-    (H,W,4) f32 premultiplied (the shutter integral), depth (H,W) f32, ids (H,W) i32 and velocity
-    (H,W,2) f32 of the surface in front at ``reference_time``, and a stats dict. ``tile_budget``
-    bytes per tile pass (default 64 MiB); ``MemoryError`` where one sample alone needs more. The
-    GIL is released."""
+    """Analytic motion blur: draws (motionblur.MovingDraw: positions f64 (K+1,V,3) at the
+    boundaries ``times`` f64 (K+1,) from 0 to 1, faces i64 (F,3), straight rgba f32 (1|V,4),
+    normals f32 (K+1,V,3) | None, object_id, cull_back, shading "flat" | "lambert") seen through
+    ``view_projections`` f64 (1|K+1,4,4) into height x width pixels of samples x samples each.
+    ``shutter`` a filter name or f64 (M,) weights; ``gauss`` points per visible piece (1 to 4)
+    or "auto"; ``backdrop`` an opaque layer per sample (rgba f32 (HS,WS,4), depth f32 (HS,WS),
+    ids i32 (HS,WS)). Returns rgba (H,W,4) f32 premultiplied (the shutter integral), depth (H,W)
+    f32, ids (H,W) i32 and velocity (H,W,2) f32 of the surface in front at ``reference_time``,
+    and a stats dict. ``tile_budget`` bytes per tile pass; ``MemoryError`` where one sample
+    alone needs more. The GIL is released."""
 
 def _rasterize(
-    view: np.ndarray,
-    projection: np.ndarray,
-    width: int,
-    height: int,
-    draws: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, int, bool, np.ndarray | None]],
-    samples: int,
-    blend: str,
-    shading: str,
-    lights: list[tuple[tuple[float, float, float], tuple[float, float, float]]],
-    ambient: tuple[float, float, float],
-    background: tuple[np.ndarray, np.ndarray, np.ndarray, int, int] | None = None,
+    draws: list[_DrawLike],
+    options: _RasterOptions,
+    background: _LayerLike | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, dict[str, float]]:
-    """Render draws (vertices f64 (V,3), faces i64 (F,3), straight rgba f32 (1|V,4), normals f32
-    (V,3) | None, object_id, cull_back, previous_vertices f64 (V,3) | None) seen through view and
-    projection (4,4) f64 into an image of height x width. ``background``: optional opaque layer
-    the frame starts from, one entry per sample: (rgba f32 (R,S,4) premultiplied, finite; depth
-    f32 (R,S) view-axis distance > 0, inf where empty, pre-loading the z-buffer; ids i32 (R,S);
-    x0, y0): the frame's height * samples x width * samples samples are its window from sample
-    (x0, y0) (checked to fit); C-contiguous, read only. Returns rgba
-    (H,W,4) f32 premultiplied, depth (H,W) f32 view-axis distance (inf background), ids (H,W) i32
-    (-1 background), velocity (H,W,2) f32 pixels (None when no draw has previous vertices: the
-    motion is zero everywhere and is not written), and a stats dict. Releases the GIL."""
+    """Render draws (motionblur.Draw: vertices f64 (V,3), faces i64 (F,3), straight rgba f32
+    (1|V,4), normals f32 (V,3) | None, object_id, cull_back, previous_vertices f64 (V,3) | None)
+    seen through the options' view and projection (4,4) f64 into an image of height x width.
+    ``background``: optional opaque layer the frame starts from, one entry per sample (rgba f32
+    (R,S,4) premultiplied, finite; depth f32 (R,S) view-axis distance > 0, inf where empty,
+    pre-loading the z-buffer; ids i32 (R,S)): the frame's height * samples x width * samples
+    samples are its window from the options' sample ``origin`` (x0, y0) (checked to fit);
+    C-contiguous, read only. Returns rgba (H,W,4) f32 premultiplied, depth (H,W) f32 view-axis
+    distance (inf background), ids (H,W) i32 (-1 background), velocity (H,W,2) f32 pixels (None
+    when no draw has previous vertices: the motion is zero everywhere and is not written), and a
+    stats dict. Releases the GIL."""
 
 # --- scenes (accumulation kernels)
 
@@ -502,43 +580,25 @@ def _accumulate(
     depth: np.ndarray,
     limit: np.ndarray | None,
     weight: float,
-    x0: int = 0,
-    y0: int = 0,
+    origin: tuple[int, int] = ...,
 ) -> None:
     """In place: acc[y0:y0+h, x0:x0+w] (acc (H,W,4) f32) += weight * rgba (h,w,4) f32 where depth
-    (h,w) f32 < limit[y0:y0+h, x0:x0+w] (limit (H,W) f32; everywhere when None). All C-contiguous.
-    Releases the GIL."""
+    (h,w) f32 < limit[y0:y0+h, x0:x0+w] (limit (H,W) f32; everywhere when None), origin = (x0, y0).
+    All C-contiguous. Releases the GIL."""
 
 def _over(acc: np.ndarray, under: np.ndarray) -> None:
     """In place: acc (H,W,4) f32 += under (H,W,4) f32 * (1 - acc alpha). Releases the GIL."""
 
-def _composite(
-    a_rgba: np.ndarray,
-    a_depth: np.ndarray,
-    a_ids: np.ndarray,
-    b_rgba: np.ndarray,
-    b_depth: np.ndarray,
-    b_ids: np.ndarray,
-    x0: int = 0,
-    y0: int = 0,
-) -> None:
-    """In place into b (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32): layer a (h,w) at
-    (x0, y0) composited by depth, the nearer over the farther. Releases the GIL."""
+def _composite(a: _LayerLike, b: _LayerLike, origin: tuple[int, int] = ...) -> None:
+    """In place into layer b (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32, writable): layer
+    a (h,w) at origin (x0, y0) composited by depth, the nearer over the farther. Releases the
+    GIL."""
 
-def _resolve(
-    rgba: np.ndarray,
-    depth: np.ndarray,
-    ids: np.ndarray,
-    samples: int,
-    out_rgba: np.ndarray,
-    out_depth: np.ndarray,
-    out_ids: np.ndarray,
-    x0: int = 0,
-    y0: int = 0,
-) -> None:
-    """In place into out (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32) at pixel (x0, y0):
-    the supersampled layer (h*s,w*s) resolved to (h,w) pixels, the mean colour and the nearest
-    sample's depth and id (the first in row order on ties). Releases the GIL."""
+def _resolve(layer: _LayerLike, samples: int, out: _LayerLike, origin: tuple[int, int] = ...) -> None:
+    """In place into layer out (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32, writable) at
+    pixel origin (x0, y0): the supersampled layer (h*s,w*s) resolved to (h,w) pixels, the mean
+    colour and the nearest sample's depth and id (the first in row order on ties). Releases the
+    GIL."""
 
 # --- end scenes
 
@@ -558,15 +618,13 @@ class _Painter:
 
     def __new__(
         cls,
-        objects: list[
-            tuple[int, str, np.ndarray, np.ndarray, np.ndarray, np.ndarray | None, _Keyframes | None]
-        ],
-        lights: list[tuple[tuple[float, float, float], tuple[float, float, float]]],
+        objects: list[_PaintObject],
+        lights: list[_Light],
         ambient: tuple[float, float, float],
     ) -> Self:
-        """objects: (object id, shading 'flat' | 'lambert', vertices (V,3) f64 object space,
+        """objects: dicts of id, shading 'flat' | 'lambert', vertices (V,3) f64 object space,
         faces (F,3) i64, straight rgba (1|V,4) f32, normals (V,3) f32 | None, keyframes placing
-        (rigid) or replacing (deforming) the vertices | None); lights: (direction, intensity)."""
+        (rigid) or replacing (deforming) the vertices | None; lights: (direction, intensity)."""
     def layer(
         self, t: float, view: np.ndarray, projection: np.ndarray, width: int, height: int
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -575,29 +633,20 @@ class _Painter:
         Releases the GIL."""
     def accumulate_still(
         self,
-        times: np.ndarray,
-        weights: np.ndarray,
-        reference: int,
-        view: np.ndarray,
-        projection: np.ndarray,
-        view_projection: np.ndarray,
-        width: int,
-        height: int,
-        aa: int,
-        background: tuple[np.ndarray, np.ndarray, np.ndarray],
+        samples: _Samples,
+        camera: _StillCamera,
+        background: _LayerLike,
         opaque: bool,
     ) -> tuple[tuple[int, int, int, int], np.ndarray, np.ndarray, np.ndarray, int] | None:
-        """The still-camera accumulation frame of times, weights (N,) f64 (reference: the
-        sample whose depth and ids are kept), camera matrices (4,4) f64 of width x height
-        samples, aa, and the static layer (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32,
+        """The still-camera accumulation frame of the samples' times, weights (N,) f64
+        (reference: the sample whose depth and ids are kept), the camera's matrices (4,4) f64 of
+        width x height samples, aa, and the static layer (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32,
         C-contiguous) and its opacity: None when the objects are off the image, else the window
         (x0, y0, x1, y1), its rgba (h,w,4) f32 (static layer composited), depth, ids and the
         number of rasterizer passes. Releases the GIL."""
     def accumulate_moving(
         self,
-        times: np.ndarray,
-        weights: np.ndarray,
-        reference: int,
+        samples: _Samples,
         views: np.ndarray,
         projection: np.ndarray,
         width: int,

@@ -182,6 +182,52 @@ def as_rgb(value, name: str) -> np.ndarray:
     return arr
 
 
+def as_faces(value, name: str, n_vertices: int, *, allow_empty: bool = False) -> np.ndarray:
+    """(F,3) int64 vertex indices, each in ``[0, n_vertices)``: the draws' face rule (checked
+    here, when the draw is made; the core checks the indices that reach it once more)."""
+    f = as_array(value, name, np.int64, (None, 3), allow_empty=allow_empty)
+    if f.size and (f.min() < 0 or f.max() >= n_vertices):
+        raise ValueError(f"{name}: indices must be in [0, {n_vertices}), got [{f.min()}, {f.max()}]")
+    return f
+
+
+def as_colors(value, name: str, n_vertices: int) -> np.ndarray:
+    """The one colour rule: straight linear RGB(A), one colour (3,) or (4,) or one per vertex
+    (V,3) or (V,4) with V = ``n_vertices``, RGB >= 0 and alpha in [0, 1], as float32 in the shape
+    given (a read-only view: never the caller's array made writable or written). TypeError for
+    strings and non-numbers, ValueError naming ``name`` otherwise."""
+    if isinstance(value, (str, bytes)) or value is None:
+        raise TypeError(
+            f"{name}: expected an RGB(A) colour or per-vertex colours, got {type(value).__name__}"
+        )
+    c = np.asarray(value)
+    if c.ndim <= 1:
+        c = as_array(c, name, np.float32, (None,))
+    else:
+        c = as_array(c, name, np.float32, (n_vertices, None))
+    if c.shape[-1] not in (3, 4):
+        raise ValueError(f"{name}: expected (3,), (4,), (V,3) or (V,4), got shape {c.shape}")
+    if (c[..., :3] < 0).any() or (c.shape[-1] == 4 and ((c[..., 3] < 0) | (c[..., 3] > 1)).any()):
+        raise ValueError(f"{name}: RGB must be >= 0 and alpha in [0, 1]")
+    c = c.view()
+    c.flags.writeable = False
+    return c
+
+
+def with_alpha(colors: np.ndarray) -> np.ndarray:
+    """Colours from :func:`as_colors` as (1,4) or (V,4) float32 RGBA (alpha 1 where not given),
+    C-contiguous, what the core takes."""
+    c = np.atleast_2d(colors)
+    if c.shape[1] == 3:
+        c = np.concatenate([c, np.ones((len(c), 1), np.float32)], axis=1)
+    return np.ascontiguousarray(c, dtype=np.float32)
+
+
+def as_rgba(value, name: str, n_vertices: int) -> np.ndarray:
+    """:func:`as_colors` then :func:`with_alpha`: (1,4) or (V,4) float32 straight RGBA."""
+    return with_alpha(as_colors(value, name, n_vertices))
+
+
 def as_list(value, name: str, item_type: type, type_name: str) -> list:
     """``value`` (one ``item_type`` or an iterable of them, not a string) as a list; TypeError
     naming the argument and the item otherwise."""

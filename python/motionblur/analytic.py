@@ -12,12 +12,13 @@ surfaces cross) and colour is integrated with the shutter filter at Gauss points
 from __future__ import annotations
 
 from collections.abc import Sequence
+from types import SimpleNamespace
 
 import numpy as np
 
 from . import _core
-from ._validate import as_array, as_float, as_int
-from .raster import Camera, Frame
+from ._validate import as_array, as_faces, as_float, as_int, as_rgba
+from .raster import Camera, Frame, _readonly
 
 __all__ = ["MovingDraw", "rasterize_motion", "coverage", "TILE_BUDGET_BYTES"]
 
@@ -55,28 +56,11 @@ class MovingDraw:
         shading: str = "flat",
     ):
         p = as_array(positions, "positions", np.float64, (None, None, 3))
-        f = as_array(faces, "faces", np.int64, (None, 3), allow_empty=True)
-        nv = p.shape[1]
-        if f.size and (f.min() < 0 or f.max() >= nv):
-            raise ValueError(f"faces: indices must be in [0, {nv}), got [{f.min()}, {f.max()}]")
-        c = np.asarray(rgba) if not isinstance(rgba, str) else None
-        if c is None:
-            raise TypeError("rgba: expected a colour or per-vertex colours")
-        if c.ndim <= 1:
-            c = as_array(c, "rgba", np.float32, (None,))[None, :]
-        else:
-            c = as_array(c, "rgba", np.float32, (nv, None))
-        if c.shape[1] not in (3, 4):
-            raise ValueError(f"rgba: expected (3,), (4,), (V,3) or (V,4), got shape {np.shape(rgba)}")
-        if c.shape[1] == 3:
-            c = np.concatenate([c, np.ones((len(c), 1), np.float32)], axis=1)
-        if (c[:, :3] < 0).any() or ((c[:, 3] < 0) | (c[:, 3] > 1)).any():
-            raise ValueError("rgba: colours must be >= 0 and alpha in [0, 1]")
+        f = as_faces(faces, "faces", p.shape[1], allow_empty=True)
+        c = as_rgba(rgba, "rgba", p.shape[1])
         n = None if normals is None else as_array(normals, "normals", np.float32, p.shape)
-        self.positions, self.faces, self.rgba, self.normals = p, f, c, n
-        for a in (self.positions, self.faces, self.rgba, self.normals):
-            if a is not None:
-                a.flags.writeable = False
+        self.positions, self.faces, self.rgba = _readonly(p), _readonly(f), _readonly(c)
+        self.normals = _readonly(n)
         self.object_id = as_int(object_id, "object_id", minimum=-(2**31), maximum=2**31 - 1)
         if not isinstance(cull_back, (bool, np.bool_)):
             raise TypeError(f"cull_back: expected a bool, got {type(cull_back).__name__}")
@@ -86,19 +70,6 @@ class MovingDraw:
         if shading not in ("flat", "lambert"):
             raise ValueError(f"shading: expected 'flat' or 'lambert', got {shading!r}")
         self.shading = shading
-
-    def _args(self):
-        c = np.ascontiguousarray
-        n = None if self.normals is None else c(self.normals)
-        return (
-            c(self.positions),
-            c(self.faces),
-            c(self.rgba),
-            n,
-            self.object_id,
-            self.cull_back,
-            self.shading,
-        )
 
     def __repr__(self) -> str:
         k, v = self.positions.shape[:2]
@@ -179,9 +150,8 @@ def rasterize_motion(
     if isinstance(gauss, str):
         if gauss != "auto":
             raise ValueError(f"gauss: expected 'auto' or 1 to 4, got {gauss!r}")
-        g = 0
     else:
-        g = as_int(gauss, "gauss", minimum=1, maximum=4)
+        gauss = as_int(gauss, "gauss")  # its range is the core's to check
     light_args = []
     for i, li in enumerate(lights):
         try:
@@ -201,14 +171,26 @@ def rasterize_motion(
         except (TypeError, ValueError):
             raise TypeError("background: expected a triple (rgba, depth, ids)") from None
         c = np.ascontiguousarray
-        bd = (c(rgba, dtype=np.float32), c(depth, dtype=np.float32), c(ids, dtype=np.int32))
+        bd = SimpleNamespace(
+            rgba=c(rgba, dtype=np.float32), depth=c(depth, dtype=np.float32), ids=c(ids, dtype=np.int32)
+        )
     if not isinstance(shade, (bool, np.bool_)):
         raise TypeError(f"shade: expected a bool, got {type(shade).__name__}")
-    rgba, depth, ids, velocity, stats = _core._analytic(
-        w, h, samples, np.ascontiguousarray(t), vps, [d._args() for d in draws], _shutter_arg(shutter),
-        light_args, tuple(map(float, amb)), g, as_float(reference_time, "reference_time"),
-        bool(shade), bd, as_int(TILE_BUDGET_BYTES, "TILE_BUDGET_BYTES", minimum=1),
-    )  # fmt: skip
+    options = {
+        "width": w,
+        "height": h,
+        "samples": samples,
+        "times": np.ascontiguousarray(t),
+        "view_projections": vps,
+        "shutter": _shutter_arg(shutter),
+        "lights": light_args,
+        "ambient": tuple(map(float, amb)),
+        "gauss": gauss,
+        "reference_time": as_float(reference_time, "reference_time"),
+        "shade": bool(shade),
+        "tile_budget": as_int(TILE_BUDGET_BYTES, "TILE_BUDGET_BYTES", minimum=1),
+    }
+    rgba, depth, ids, velocity, stats = _core._analytic(draws, options, bd)
     return Frame(rgba, depth, ids, velocity, stats)
 
 

@@ -34,6 +34,7 @@ from ._validate import (
     as_coords,
     as_float,
     as_int,
+    as_rgba,
     as_segments,
     check_coords,
 )
@@ -333,21 +334,19 @@ def _keyframes(motion):
 def _colors(colors, n_vertices: int) -> np.ndarray:
     if colors is None:
         return np.ones((1, 4), dtype=np.float32)
-    c = np.asarray(colors)
-    if c.ndim == 1:
-        c = as_array(c, "colors", np.float32, (None,))
-        if len(c) not in (3, 4):
-            raise ValueError(f"colors: expected one RGB/RGBA colour or (V,3)/(V,4), got shape {c.shape}")
-        c = c[None]
-    else:
-        c = as_array(c, "colors", np.float32, (n_vertices, None))
-        if c.shape[1] not in (3, 4):
-            raise ValueError(f"colors: expected shape (V,3) or (V,4), got {c.shape}")
-    if c.shape[1] == 3:
-        c = np.concatenate([c, np.ones((len(c), 1), np.float32)], axis=1)
-    if (c[:, :3] < 0).any() or (c[:, 3] < 0).any() or (c[:, 3] > 1).any():
-        raise ValueError("colors: RGB must be >= 0 and alpha in [0, 1]")
-    return np.ascontiguousarray(c, dtype=np.float32)
+    return as_rgba(colors, "colors", n_vertices)
+
+
+def _volume_options(filter, colors, face_colors, normals, camera_position, contour_line) -> dict:
+    """The options both volume kernels take (``_core.motion_volume``, ``_core.spin_volume``)."""
+    return {
+        "filter": filter,
+        "colors": colors,
+        "face_colors": face_colors,
+        "normals": normals,
+        "camera_position": camera_position,
+        "contour_line": contour_line,
+    }
 
 
 def _vertex_or_face_colors(colors, face_colors, n_vertices: int, n_faces: int):
@@ -473,10 +472,9 @@ def motion_volume(
             raise ValueError("contour_table: was computed for another mesh (its faces differ from mesh's)")
         table = contour_table._core
     win = as_array(window, "window", np.float64, (2,))
-    out = _core.motion_volume(
-        m._core, keys, seg, filter, col, nrm, cam, per_face, contour_line, visible_only, table,
-        (float(win[0]), float(win[1])),
-    )  # fmt: skip
+    options = _volume_options(filter, col, per_face, nrm, cam, contour_line)
+    options.update(visible_only=visible_only, contour_table=table, window=(float(win[0]), float(win[1])))
+    out = _core.motion_volume(m._core, keys, seg, options)
     _check_output(out[0], "motion")
     return MotionVolume(*out)
 
@@ -542,7 +540,8 @@ def spin_volume(
     nrm = None if normals is None else as_array(normals, "normals", np.float64, (nv, 3))
     cam = None if camera_position is None else _vec3(camera_position, "camera_position")
     try:
-        out = _core.spin_volume(m._core, ax, ang, c, t, seg, filter, col, nrm, cam, per_face)
+        spin = {"axis": ax, "angle": ang, "center": c, "translation": t, "segments": seg}
+        out = _core.spin_volume(m._core, spin, _volume_options(filter, col, per_face, nrm, cam, True))
     except ValueError as exc:  # the core's keyframes of the spin are called "motion": not an argument here
         if not str(exc).startswith("motion:"):
             raise

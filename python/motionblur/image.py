@@ -203,7 +203,8 @@ def depth_of_field(rgba, depth, focal_depth, focal_length, f_number, yfov, layer
     if not 0.0 < fov < np.pi:
         raise ValueError(f"yfov: must be in (0, pi) radians, got {fov}")
     n = as_int(layers, "layers", minimum=1, maximum=MAX_LAYERS)
-    return _core._depth_of_field(a, d, fd, fl, fn, fov, n)
+    params = {"focal_depth": fd, "focal_length": fl, "f_number": fn, "yfov": fov, "layers": n}
+    return _core._depth_of_field(a, d, params)
 
 
 def lens_blur(rgba, depth, aperture, focus_distance, yfov) -> np.ndarray:
@@ -238,7 +239,9 @@ def lens_blur(rgba, depth, aperture, focus_distance, yfov) -> np.ndarray:
     return _core._lens_blur(a, d, ap, fd, fov)
 
 
-def _camera(camera, name, shape) -> tuple[np.ndarray, np.ndarray]:
+def _camera(camera, name, shape):
+    """``camera`` (a ``motionblur.Camera`` of the image's size), checked; the core reads its
+    ``view`` and ``projection``."""
     from .raster import Camera
 
     if not isinstance(camera, Camera):
@@ -247,7 +250,7 @@ def _camera(camera, name, shape) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(
             f"{name}: camera is {camera.width}x{camera.height} but the image is {shape[1]}x{shape[0]}"
         )
-    return np.ascontiguousarray(camera.view), np.ascontiguousarray(camera.projection)
+    return camera
 
 
 def _depth(depth, shape=None) -> np.ndarray:
@@ -271,9 +274,9 @@ def camera_velocity(depth, camera, previous_camera) -> np.ndarray:
     behind the previous camera.
     """
     d = _depth(depth)
-    v, p = _camera(camera, "camera", d.shape)
-    pv, pp = _camera(previous_camera, "previous_camera", d.shape)
-    return _core._camera_velocity(d, v, p, pv, pp)
+    cam = _camera(camera, "camera", d.shape)
+    prev = _camera(previous_camera, "previous_camera", d.shape)
+    return _core._camera_velocity(d, cam, prev)
 
 
 def velocity_blur(rgba, velocity, samples=16) -> np.ndarray:
@@ -336,8 +339,8 @@ def camera_motion_blur(
     """
     a = _rgba(rgba)
     d = _depth(depth, a.shape[:2])
-    v, p = _camera(camera, "camera", d.shape)
-    pv, pp = _camera(previous_camera, "previous_camera", d.shape)
+    cam = _camera(camera, "camera", d.shape)
+    prev = _camera(previous_camera, "previous_camera", d.shape)
     n = as_int(samples, "samples", minimum=1, maximum=MAX_SAMPLES)
     if (target_fps is None) != (fps is None):
         raise ValueError("target_fps: give both target_fps and fps, or neither")
@@ -351,4 +354,4 @@ def camera_motion_blur(
         scale = f / t
         if not scale <= MAX_FPS_RATIO:
             raise ValueError(f"fps: fps / target_fps must be <= {MAX_FPS_RATIO:g}, got {f:g} / {t:g}")
-    return _core._camera_motion_blur(a, d, v, p, pv, pp, n, scale)
+    return _core._camera_motion_blur(a, d, cam, prev, n, scale)

@@ -30,6 +30,7 @@ import os
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -42,10 +43,12 @@ from ._validate import (
     as_bool,
     as_choice,
     as_coords,
+    as_faces,
     as_float,
     as_int,
     as_path,
     as_rgb,
+    as_rgba,
     as_samples,
     check_coords,
 )
@@ -263,25 +266,8 @@ class Draw:
         previous_vertices: ArrayLike | None = None,
     ) -> None:
         v = as_coords(vertices, "vertices", (None, 3))
-        f = as_array(faces, "faces", np.int64, (None, 3))
-        if f.min() < 0 or f.max() >= len(v):
-            raise ValueError(f"faces: indices must be in [0, {len(v)}), got [{f.min()}, {f.max()}]")
-        c = np.asarray(rgba)
-        if c.ndim == 1:
-            c = as_array(c, "rgba", np.float32, (None,))
-            if c.shape[0] not in (3, 4):
-                raise ValueError(f"rgba: expected shape (3,), (4,), (V,3) or (V,4), got {c.shape}")
-            c = c[None, :]
-        else:
-            c = as_array(c, "rgba", np.float32, (len(v), None))
-            if c.shape[1] not in (3, 4):
-                raise ValueError(f"rgba: expected shape (3,), (4,), (V,3) or (V,4), got {c.shape}")
-        if c.shape[1] == 3:
-            c = np.concatenate([c, np.ones((len(c), 1), np.float32)], axis=1)
-        if (c[:, :3] < 0).any():
-            raise ValueError("rgba: colours must be >= 0")
-        if ((c[:, 3] < 0) | (c[:, 3] > 1)).any():
-            raise ValueError("rgba: alpha must be in [0, 1]")
+        f = as_faces(faces, "faces", len(v))
+        c = as_rgba(rgba, "rgba", len(v))
         n = None if normals is None else as_array(normals, "normals", np.float32, (len(v), 3))
         p = (
             None
@@ -306,17 +292,6 @@ class Draw:
 
     def __repr__(self) -> str:
         return f"Draw({len(self.vertices)} vertices, {len(self.faces)} faces, object_id={self.object_id})"
-
-    def _args(self):
-        return (
-            self.vertices,
-            self.faces,
-            self.rgba,
-            self.normals,
-            self.object_id,
-            self.cull_back,
-            self.previous_vertices,
-        )
 
 
 def _frame_array(value, name: str, dtype, shape) -> np.ndarray:
@@ -498,8 +473,9 @@ def _lights(lights) -> list[tuple[tuple[float, ...], tuple[float, ...]]]:
     return out
 
 
-def _background(background, height: int, width: int):
-    """(rgba, depth, ids) C-contiguous float32 / float32 / int32 arrays of a background given as
+def _background(background, height: int, width: int) -> SimpleNamespace:
+    """The ``rgba``, ``depth``, ``ids`` C-contiguous float32 / float32 / int32 arrays (as
+    attributes, what the core reads) of a background given as
     an object with ``.rgba``, ``.depth``, ``.ids`` (a Frame) or as such a triple, shapes checked
     against ``height`` x ``width`` samples; new arrays or read-only views, never the caller's
     arrays made writable."""
@@ -518,7 +494,7 @@ def _background(background, height: int, width: int):
         bad = depth[~(depth > 0)][0]
         raise ValueError(f"background depth: must be > 0 (inf where empty), got {bad}")
     ids = as_array(parts[2], "background ids", np.int32, (height, width))
-    return _readonly(rgba), _readonly(depth), _readonly(ids)
+    return SimpleNamespace(rgba=_readonly(rgba), depth=_readonly(depth), ids=_readonly(ids))
 
 
 def rasterize(
@@ -605,19 +581,19 @@ def rasterize(
     as_choice(shading, "shading", _core.SHADINGS)
     amb = as_rgb(ambient, "ambient")
     if background is not None:
-        background = (*_background(background, camera.height * samples, camera.width * samples), 0, 0)
-    rgba, depth, ids, velocity, stats = _core._rasterize(
-        camera.view,
-        camera.projection,
-        camera.width,
-        camera.height,
-        [d._args() for d in draws],
-        samples,
-        blend,
-        shading,
-        _lights(lights),
-        tuple(map(float, amb)),
-        background,
-    )
+        background = _background(background, camera.height * samples, camera.width * samples)
+    options = {
+        "view": camera.view,
+        "projection": camera.projection,
+        "width": camera.width,
+        "height": camera.height,
+        "samples": samples,
+        "blend": blend,
+        "shading": shading,
+        "lights": _lights(lights),
+        "ambient": tuple(map(float, amb)),
+        "origin": (0, 0),
+    }
+    rgba, depth, ids, velocity, stats = _core._rasterize(draws, options, background)
     stats["ms"] = (time.perf_counter() - t0) * 1e3
     return Frame(rgba, depth, ids, velocity, stats)

@@ -20,7 +20,7 @@ import math
 import numpy as np
 
 from . import _core
-from ._validate import as_array, as_choice, as_coords, as_float, as_list, as_rgb
+from ._validate import as_array, as_choice, as_colors, as_coords, as_float, as_list, as_rgb, with_alpha
 from .geometry import Mesh, as_mesh
 from .raster import Camera, unit_vector
 
@@ -183,21 +183,7 @@ class Object:
     def __init__(self, mesh, color=(1.0, 1.0, 1.0), shading: str = "flat", motion=None, name=None):
         self.mesh = _as_scene_mesh(mesh)
         nv = len(self.mesh.vertices)
-        c = np.asarray(color) if not isinstance(color, str) else None
-        if c is None:
-            raise TypeError("color: expected an RGB(A) colour or per-vertex colours")
-        if c.ndim <= 1:
-            c = as_array(c, "color", np.float32, (None,))
-            if len(c) not in (3, 4):
-                raise ValueError(f"color: expected (3,), (4,), (V,3) or (V,4), got shape {c.shape}")
-        else:
-            c = as_array(c, "color", np.float32, (nv, None))
-            if c.shape[1] not in (3, 4):
-                raise ValueError(f"color: expected (3,), (4,), (V,3) or (V,4), got shape {c.shape}")
-        if (c[..., :3] < 0).any() or (c.shape[-1] == 4 and ((c[..., 3] < 0) | (c[..., 3] > 1)).any()):
-            raise ValueError("color: RGB must be >= 0 and alpha in [0, 1]")
-        self.color = c.view()  # c may be the caller's own float32 array
-        self.color.flags.writeable = False
+        self.color = as_colors(color, "color", nv)
         self.shading = as_choice(shading, "shading", _core.SHADINGS)
         if motion is not None and not isinstance(motion, Motion):
             raise TypeError(f"motion: expected a motionblur.Motion or None, got {type(motion).__name__}")
@@ -217,9 +203,7 @@ class Object:
     def rgba(self) -> np.ndarray:
         """(4,) or (V,4) float32 straight RGBA."""
         c = self.color
-        if c.shape[-1] == 4:
-            return c
-        return np.concatenate([c, np.ones((*c.shape[:-1], 1), np.float32)], axis=-1)
+        return c if c.shape[-1] == 4 else with_alpha(c).reshape(*c.shape[:-1], 4)
 
     def transform_at(self, t: float) -> np.ndarray:
         """(4,4) rigid placement at ``t`` (identity for static and deforming objects)."""

@@ -236,15 +236,12 @@ class BlurShell:
             raise ValueError(f"faces: indices must be < the vertex count {nv}, got {self._faces.max()}")
         if self._color is not None and len(self._color) not in (1, nv):
             raise ValueError(f"color: expected (3,) or ({nv},3), got {self._color.shape}")
-        self._core = _core._BlurShell(
-            self._faces,
-            nv,
-            self.subdivisions,
-            self.hysteresis,
-            np.float32(self.initial_alpha).item(),
-            self._mask,
-            self._color,
-        )
+        options = {
+            "subdivisions": self.subdivisions,
+            "hysteresis": self.hysteresis,
+            "initial_alpha": np.float32(self.initial_alpha).item(),
+        }
+        self._core = _core._BlurShell(self._faces, nv, options, self._mask, self._color)
 
     @property
     def faces(self) -> np.ndarray:

@@ -137,7 +137,6 @@ pub fn over(acc: &mut [f32], under: &[f32]) -> Result<()> {
 /// the farther one (premultiplied), the smaller depth and the nearer one's id. Exact for
 /// opaque surfaces and for one transparent surface per layer and sample. `a_*` cover `rect`,
 /// `b_*` the whole buffer.
-#[allow(clippy::too_many_arguments)]
 pub fn composite(
     a_rgba: &[f32],
     a_depth: &[f32],
@@ -213,21 +212,35 @@ pub fn composite(
     Ok(())
 }
 
+/// A layer written in place: row-major `rgba` (4 per sample, premultiplied), `depth` and `ids`
+/// (one per sample), whole buffers.
+#[derive(Debug)]
+pub struct BuffersMut<'a> {
+    /// Premultiplied RGBA, 4 per sample.
+    pub rgba: &'a mut [f32],
+    /// Depth, `inf` where empty.
+    pub depth: &'a mut [f32],
+    /// Object ids, -1 where empty.
+    pub ids: &'a mut [i32],
+}
+
 /// Resolve a supersampled layer into a rectangle of a pixel-size one: `rgba` (4 per sample),
 /// `depth` and `ids` are `(rect.height * s) x (rect.width * s)` samples; each pixel of `rect`
-/// in `out_*` (whole buffers, `rect.stride` pixels wide) gets the mean colour of its `s x s`
+/// in `out` (whole buffers, `rect.stride` pixels wide) gets the mean colour of its `s x s`
 /// samples and the depth and id of the nearest one (the first in row order on ties).
-#[allow(clippy::too_many_arguments)]
 pub fn resolve(
     rgba: &[f32],
     depth: &[f32],
     ids: &[i32],
     s: usize,
-    out_rgba: &mut [f32],
-    out_depth: &mut [f32],
-    out_ids: &mut [i32],
+    out: BuffersMut<'_>,
     rect: Rect,
 ) -> Result<()> {
+    let BuffersMut {
+        rgba: out_rgba,
+        depth: out_depth,
+        ids: out_ids,
+    } = out;
     let (sw, sh) = (rect.width * s, rect.height * s);
     if s == 0 || rgba.len() != 4 * sw * sh || depth.len() != sw * sh || ids.len() != sw * sh {
         return Err(Error::shape(
@@ -291,6 +304,10 @@ pub fn resolve(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn out<'a>(rgba: &'a mut [f32], depth: &'a mut [f32], ids: &'a mut [i32]) -> BuffersMut<'a> {
+        BuffersMut { rgba, depth, ids }
+    }
 
     #[test]
     fn masked_weighted_sum_then_over() {
@@ -417,11 +434,11 @@ mod tests {
             height: 1,
             stride: 3,
         };
-        resolve(&rgba, &depth, &ids, 2, &mut o, &mut d, &mut i, rect).unwrap();
+        resolve(&rgba, &depth, &ids, 2, out(&mut o, &mut d, &mut i), rect).unwrap();
         assert_eq!(&o[4..8], &[6.0, 7.0, 8.0, 9.0]);
         assert_eq!((d[1], i[1]), (1.0, 8));
         assert_eq!((d[0], i[0], d[2], i[2]), (-1.0, -5, -1.0, -5));
         let bad = Rect { x0: 3, ..rect };
-        assert!(resolve(&rgba, &depth, &ids, 2, &mut o, &mut d, &mut i, bad).is_err());
+        assert!(resolve(&rgba, &depth, &ids, 2, out(&mut o, &mut d, &mut i), bad).is_err());
     }
 }

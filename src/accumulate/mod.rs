@@ -12,5 +12,5 @@ pub use frame::{
     accumulate_moving, accumulate_still, pixel_rect, sample_rects, window_projection, Accumulated,
     Samples, StaticLayer, StillCamera,
 };
-pub use kernels::{accumulate, composite, over, resolve, Rect};
+pub use kernels::{accumulate, composite, over, resolve, BuffersMut, Rect};
 pub use painter::{Layer, PaintObject, Painter};

@@ -194,27 +194,43 @@ fn blur_unchecked(rgba: &[f32], velocity: &[f32], w: usize, h: usize, samples: u
     out
 }
 
+/// The parameters of [`camera_motion_blur`]: the two cameras, the taps and the velocity's scale.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraBlur {
+    /// The camera of the image.
+    pub current: CameraMatrices,
+    /// The camera of the previous frame.
+    pub previous: CameraMatrices,
+    /// Taps of the centred blur, 1 to [`MAX_SAMPLES`].
+    pub samples: usize,
+    /// The velocity's factor, the target-fps factor `fps / target_fps` (1 by default), in
+    /// `[0, MAX_FPS_RATIO]`.
+    pub scale: f64,
+}
+
 /// Chapman's camera motion blur of a `(h, w, 4)` image with its `(h, w)` depth: velocity from
-/// the cameras times `scale` (the target-fps factor `fps / target_fps`, 1 by default), then the
-/// centred `samples`-sample blur. A static camera returns the image unchanged.
-#[allow(clippy::too_many_arguments)]
+/// the cameras times `scale`, then the centred `samples`-sample blur ([`CameraBlur`]). A static
+/// camera returns the image unchanged.
 pub fn camera_motion_blur(
     rgba: &[f32],
     depth: &[f32],
     w: usize,
     h: usize,
-    current: &CameraMatrices,
-    previous: &CameraMatrices,
-    samples: usize,
-    scale: f64,
+    blur: &CameraBlur,
 ) -> Result<Vec<f32>> {
+    let &CameraBlur {
+        current,
+        previous,
+        samples,
+        scale,
+    } = blur;
     if !(0.0..=MAX_FPS_RATIO).contains(&scale) {
         return Err(Error::value(
             "fps",
             format!("fps / target_fps must be in [0, {MAX_FPS_RATIO}], got {scale}"),
         ));
     }
-    let mut v = camera_velocity(depth, w, h, current, previous)?;
+    let mut v = camera_velocity(depth, w, h, &current, &previous)?;
     if scale != 1.0 {
         v.par_iter_mut()
             .for_each(|x| *x = (*x as f64 * scale) as f32);

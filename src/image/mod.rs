@@ -31,8 +31,8 @@ mod splat;
 
 pub use boxblur::box_blur;
 pub use camera::{
-    camera_motion_blur, camera_velocity, velocity_blur, CameraMatrices, MAX_FPS_RATIO, MAX_SAMPLES,
-    MAX_VELOCITY,
+    camera_motion_blur, camera_velocity, velocity_blur, CameraBlur, CameraMatrices, MAX_FPS_RATIO,
+    MAX_SAMPLES, MAX_VELOCITY,
 };
 pub use colors::{colored, pixel_bounds, sample_colors, MIN_ALPHA};
 pub use dof::{depth_of_field, DofParams, MAX_LAYERS};

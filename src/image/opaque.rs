@@ -313,7 +313,6 @@ pub fn opaque_blur(
 
 /// Opaque motion blur (figures 6 and 7): `opaque_blur(rgba)` composited `mode` the base image
 /// (`rgba` itself when `base` is `None`).
-#[allow(clippy::too_many_arguments)]
 pub fn opaque_motion_blur(
     rgba: &[f32],
     base: Option<&[f32]>,

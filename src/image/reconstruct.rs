@@ -149,27 +149,50 @@ pub fn reconstruct(
     let half = half_velocities(velocity, params.tile as f32);
     let (tx, nmax) = neighbour_max(&half, w, h, params.tile);
     let mut out = vec![0.0f32; w * h * 4];
+    let g = Gather {
+        rgba,
+        depth,
+        half: &half,
+        nmax: &nmax,
+        tx,
+        w,
+        h,
+        params,
+    };
     out.par_chunks_mut(w * 4).enumerate().for_each(|(y, row)| {
         for x in 0..w {
             let o = &mut row[x * 4..x * 4 + 4];
-            gather(rgba, depth, &half, &nmax, tx, (x, y), (w, h), params, o);
+            gather(&g, (x, y), o);
         }
     });
     Ok(out)
 }
 
-#[allow(clippy::too_many_arguments)]
-fn gather(
-    rgba: &[f32],
-    depth: &[f32],
-    half: &[[f32; 2]],
-    nmax: &[[f32; 2]],
+/// What every pixel's gather reads: the image and its depth, the half velocities, the tiles'
+/// neighbour max (`tx` tiles a row), the size `w` x `h` and the parameters.
+#[derive(Clone, Copy)]
+struct Gather<'a> {
+    rgba: &'a [f32],
+    depth: &'a [f32],
+    half: &'a [[f32; 2]],
+    nmax: &'a [[f32; 2]],
     tx: usize,
-    (x, y): (usize, usize),
-    (w, h): (usize, usize),
+    w: usize,
+    h: usize,
     params: ReconstructParams,
-    out: &mut [f32],
-) {
+}
+
+fn gather(g: &Gather<'_>, (x, y): (usize, usize), out: &mut [f32]) {
+    let Gather {
+        rgba,
+        depth,
+        half,
+        nmax,
+        tx,
+        w,
+        h,
+        params,
+    } = *g;
     let i = y * w + x;
     let n = nmax[(y / params.tile) * tx + x / params.tile];
     let c = half[i];

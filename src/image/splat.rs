@@ -101,19 +101,18 @@ fn add(out: &mut [[f32; 4]], o: usize, c: [f32; 4], wgt: f32) {
 /// The columns a part crosses completely (weight `per`, height at `i + 0.5`) run in a tight
 /// loop; the partial columns at its ends take the general form. Both give the same floats as
 /// evaluating the general form everywhere.
-#[allow(clippy::too_many_arguments)]
+///
+/// The segment `[a, b]` is clipped to the image grown by one pixel on every side.
 fn segment(
     out: &mut [[f32; 4]],
     w: usize,
     h: usize,
-    a: [f32; 2],
-    b: [f32; 2],
-    lo: [f32; 2],
-    hi: [f32; 2],
+    [a, b]: [[f32; 2]; 2],
     c: [f32; 4],
     time: f32,
     breaks: &[[f32; 2]],
 ) {
+    let (lo, hi) = ([-1.0f32, -1.0], [w as f32 + 1.0, h as f32 + 1.0]);
     let d = [b[0] - a[0], b[1] - a[1]];
     // major axis k, minor axis 1 - k
     let k = usize::from(d[1].abs() > d[0].abs());
@@ -335,12 +334,11 @@ pub(super) fn trace(out: &mut [[f32; 4]], w: usize, h: usize, c: [f32; 4], path:
         }
         return;
     }
-    let (lo, hi) = ([-1.0f32, -1.0], [w as f32 + 1.0, h as f32 + 1.0]);
     let seg_time = 1.0 / (path.len() - 1) as f32;
     for s in path.windows(2) {
         let (a, b) = (s[0], s[1]);
         if a.iter().chain(&b).all(|v| v.is_finite()) {
-            segment(out, w, h, a, b, lo, hi, c, seg_time, &[]);
+            segment(out, w, h, [a, b], c, seg_time, &[]);
         }
     }
 }
@@ -359,20 +357,8 @@ pub(super) fn trace_straight(
     if c == [0.0; 4] {
         return;
     }
-    let (lo, hi) = ([-1.0f32, -1.0], [w as f32 + 1.0, h as f32 + 1.0]);
     let n = path.len();
-    segment(
-        out,
-        w,
-        h,
-        path[0],
-        path[n - 1],
-        lo,
-        hi,
-        c,
-        1.0,
-        &path[1..n - 1],
-    );
+    segment(out, w, h, [path[0], path[n - 1]], c, 1.0, &path[1..n - 1]);
 }
 
 /// The per-run buffers (each `n` pixels) summed in run order (the same sums for any thread

@@ -1,19 +1,19 @@
 //! Bindings for the accumulation kernels: in-place on a float32 accumulation buffer, and the
 //! facing-face selection; GIL released.
 use numpy::{
-    PyArray2, PyReadonlyArray2, PyReadonlyArray3, PyReadwriteArray2, PyReadwriteArray3,
-    PyUntypedArrayMethods,
+    PyArray2, PyReadonlyArray2, PyReadonlyArray3, PyReadwriteArray3, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 
+use super::args::{LayerArg, LayerMutArg};
 use super::convert::{c_slice, c_slice_mut, detached_in_pool, flat_rows_array, rows};
-use crate::{accumulate, composite, facing_faces, over, resolve, Error, Rect};
+use crate::{accumulate, composite, facing_faces, over, resolve, BuffersMut, Error, Rect};
 
 /// acc[y0:y0+h, x0:x0+w] (H,W,4) f32 += weight * rgba (h,w,4) f32 where depth (h,w) <
-/// limit[y0:y0+h, x0:x0+w] (limit (H,W), or everywhere when None). In place; releases the GIL.
+/// limit[y0:y0+h, x0:x0+w] (limit (H,W), or everywhere when None), `origin` = (x0, y0). In
+/// place; releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (acc, rgba, depth, limit, weight, x0=0, y0=0))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (acc, rgba, depth, limit, weight, origin=[0, 0]))]
 fn _accumulate(
     py: Python<'_>,
     mut acc: PyReadwriteArray3<'_, f32>,
@@ -21,9 +21,9 @@ fn _accumulate(
     depth: PyReadonlyArray2<'_, f32>,
     limit: Option<PyReadonlyArray2<'_, f32>>,
     weight: f32,
-    x0: usize,
-    y0: usize,
+    origin: [usize; 2],
 ) -> PyResult<()> {
+    let [x0, y0] = origin;
     let shape = acc.shape().to_vec();
     let sub = rgba.shape().to_vec();
     if shape[2] != 4 || sub[2] != 4 || depth.shape() != &sub[..2] {
@@ -73,104 +73,71 @@ fn _over(
     Ok(detached_in_pool(py, || over(a, u))?)
 }
 
-/// In place into b (b_rgba (H,W,4) f32, b_depth (H,W) f32, b_ids (H,W) i32): layer a (a_rgba
-/// (h,w,4), a_depth (h,w), a_ids (h,w), at (x0, y0) of b) composited by depth, the nearer over
-/// the farther. Releases the GIL.
+/// In place into layer `b` (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32 attributes):
+/// layer `a` (rgba (h,w,4), depth (h,w), ids (h,w)) at `origin` (x0, y0) of b composited by
+/// depth, the nearer over the farther. Releases the GIL.
 #[pyfunction]
-#[pyo3(signature = (a_rgba, a_depth, a_ids, b_rgba, b_depth, b_ids, x0=0, y0=0))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (a, b, origin=[0, 0]))]
 fn _composite(
     py: Python<'_>,
-    a_rgba: PyReadonlyArray3<'_, f32>,
-    a_depth: PyReadonlyArray2<'_, f32>,
-    a_ids: PyReadonlyArray2<'_, i32>,
-    mut b_rgba: PyReadwriteArray3<'_, f32>,
-    mut b_depth: PyReadwriteArray2<'_, f32>,
-    mut b_ids: PyReadwriteArray2<'_, i32>,
-    x0: usize,
-    y0: usize,
+    a: LayerArg<'_>,
+    mut b: LayerMutArg<'_>,
+    origin: [usize; 2],
 ) -> PyResult<()> {
-    let sub = a_rgba.shape().to_vec();
-    let full = b_rgba.shape().to_vec();
-    if sub[2] != 4 || full[2] != 4 || a_depth.shape() != &sub[..2] || a_ids.shape() != &sub[..2] {
-        return Err(Error::shape("a_rgba", "a: rgba (h,w,4), depth and ids (h,w) expected").into());
-    }
-    if b_depth.shape() != &full[..2] || b_ids.shape() != &full[..2] {
-        return Err(Error::shape("b_rgba", "b: rgba (H,W,4), depth and ids (H,W) expected").into());
-    }
-    if y0 + sub[0] > full[0] || x0 + sub[1] > full[1] {
-        return Err(Error::shape("a_rgba", "the rectangle must lie inside b").into());
-    }
-    let ar = c_slice(&a_rgba, "a_rgba")?;
-    let ad = c_slice(&a_depth, "a_depth")?;
-    let ai = c_slice(&a_ids, "a_ids")?;
-    let br = c_slice_mut(&mut b_rgba, "b_rgba")?;
-    let bd = c_slice_mut(&mut b_depth, "b_depth")?;
-    let bi = c_slice_mut(&mut b_ids, "b_ids")?;
+    let [h, w] = a.size("a")?;
+    let [_, stride] = b.size("b")?;
     let rect = Rect {
-        x0,
-        y0,
-        width: sub[1],
-        height: sub[0],
-        stride: full[1],
+        x0: origin[0],
+        y0: origin[1],
+        width: w,
+        height: h,
+        stride,
     };
+    let (ar, ad, ai) = a.planes("a")?;
+    let (br, bd, bi) = b.planes("b")?;
     Ok(detached_in_pool(py, || {
         composite(ar, ad, ai, br, bd, bi, rect)
     })?)
 }
 
-/// In place into out (out_rgba (H,W,4) f32, out_depth (H,W) f32, out_ids (H,W) i32) at pixel
-/// (x0, y0): the supersampled layer rgba (h*s,w*s,4) f32, depth (h*s,w*s) f32, ids (h*s,w*s)
-/// i32 resolved to (h,w) pixels (mean colour, nearest depth and its id). Releases the GIL.
+/// In place into layer `out` (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32 attributes) at
+/// pixel `origin` (x0, y0): the supersampled `layer` (rgba (h*s,w*s,4), depth and ids
+/// (h*s,w*s)) resolved to (h,w) pixels (mean colour, nearest depth and its id). Releases the
+/// GIL.
 #[pyfunction]
-#[pyo3(signature = (rgba, depth, ids, samples, out_rgba, out_depth, out_ids, x0=0, y0=0))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (layer, samples, out, origin=[0, 0]))]
 fn _resolve(
     py: Python<'_>,
-    rgba: PyReadonlyArray3<'_, f32>,
-    depth: PyReadonlyArray2<'_, f32>,
-    ids: PyReadonlyArray2<'_, i32>,
+    layer: LayerArg<'_>,
     samples: usize,
-    mut out_rgba: PyReadwriteArray3<'_, f32>,
-    mut out_depth: PyReadwriteArray2<'_, f32>,
-    mut out_ids: PyReadwriteArray2<'_, i32>,
-    x0: usize,
-    y0: usize,
+    mut out: LayerMutArg<'_>,
+    origin: [usize; 2],
 ) -> PyResult<()> {
-    let sub = rgba.shape().to_vec();
-    let full = out_rgba.shape().to_vec();
-    if samples == 0 || sub[0] % samples != 0 || sub[1] % samples != 0 {
+    let [h, w] = layer.size("layer")?;
+    if samples == 0 || h % samples != 0 || w % samples != 0 {
         return Err(Error::shape(
             "samples",
             "must be >= 1 and divide the layer's height and width",
         )
         .into());
     }
-    if sub[2] != 4 || full[2] != 4 || depth.shape() != &sub[..2] || ids.shape() != &sub[..2] {
-        return Err(Error::shape("rgba", "rgba (h,w,4), depth and ids (h,w) expected").into());
-    }
-    if out_depth.shape() != &full[..2] || out_ids.shape() != &full[..2] {
-        return Err(Error::shape(
-            "out_rgba",
-            "out: rgba (H,W,4), depth and ids (H,W) expected",
-        )
-        .into());
-    }
+    let [_, stride] = out.size("out")?;
     let rect = Rect {
-        x0,
-        y0,
-        width: sub[1] / samples,
-        height: sub[0] / samples,
-        stride: full[1],
+        x0: origin[0],
+        y0: origin[1],
+        width: w / samples,
+        height: h / samples,
+        stride,
     };
-    let r = c_slice(&rgba, "rgba")?;
-    let d = c_slice(&depth, "depth")?;
-    let i = c_slice(&ids, "ids")?;
-    let or = c_slice_mut(&mut out_rgba, "out_rgba")?;
-    let od = c_slice_mut(&mut out_depth, "out_depth")?;
-    let oi = c_slice_mut(&mut out_ids, "out_ids")?;
+    let (r, d, i) = layer.planes("layer")?;
+    let (or, od, oi) = out.planes("out")?;
     Ok(detached_in_pool(py, || {
-        resolve(r, d, i, samples, or, od, oi, rect)
+        let out = BuffersMut {
+            rgba: or,
+            depth: od,
+            ids: oi,
+        };
+        resolve(r, d, i, samples, out, rect)
     })?)
 }
 

@@ -4,30 +4,78 @@ use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArray
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use super::convert::{c_slice, detached_in_pool, face_indices, shaped, ToDict};
+use super::args::{lights, LayerArg, LightArg};
+use super::convert::{c_slice, detached_in_pool, face_indices_u32, rows, shaped, ToDict};
 use crate::{
-    render_analytic, AnalyticInput, AnalyticStats, Backdrop, Error, Light, MovingDraw, Quadrature,
-    Shading, Shutter, ANALYTIC_TILE_BUDGET,
+    render_analytic, AnalyticInput, AnalyticStats, Backdrop, Error, MovingDraw, Quadrature,
+    Shading, Shutter,
 };
 
-/// One moving draw: (positions f64 (K+1,V,3), faces i64 (F,3), rgba f32 (1|V,4), normals f32
-/// (K+1,V,3) | None, object_id, cull_back, shading name).
-type DrawArgs<'py> = (
-    PyReadonlyArray3<'py, f64>,
-    PyReadonlyArray2<'py, i64>,
-    PyReadonlyArray2<'py, f32>,
-    Option<PyReadonlyArray3<'py, f32>>,
-    i32,
-    bool,
-    String,
-);
+/// One moving draw, read off the attributes of a `motionblur.MovingDraw`: `positions` f64
+/// (K+1,V,3), `faces` i64 (F,3), `rgba` f32 (1|V,4), `normals` f32 (K+1,V,3) | None,
+/// `object_id`, `cull_back`, `shading` name.
+#[derive(FromPyObject)]
+struct MovingDrawArg<'py> {
+    positions: PyReadonlyArray3<'py, f64>,
+    faces: PyReadonlyArray2<'py, i64>,
+    rgba: PyReadonlyArray2<'py, f32>,
+    normals: Option<PyReadonlyArray3<'py, f32>>,
+    object_id: i32,
+    cull_back: bool,
+    shading: String,
+}
 
-/// The backdrop: (rgba f32 (HS,WS,4), depth f32 (HS,WS), ids i32 (HS,WS)), one entry a sample.
-type BackdropArgs<'py> = (
-    PyReadonlyArray3<'py, f32>,
-    PyReadonlyArray2<'py, f32>,
-    PyReadonlyArray2<'py, i32>,
-);
+/// The shutter: a filter name or (M,) f64 weights of M equal strata.
+#[derive(FromPyObject)]
+enum ShutterArg<'py> {
+    Name(String),
+    Weights(PyReadonlyArray1<'py, f64>),
+}
+
+/// Gauss points in time per visible piece: a count or `"auto"`.
+#[derive(FromPyObject)]
+enum GaussArg {
+    Points(i64),
+    Name(String),
+}
+
+impl GaussArg {
+    /// The core's quadrature (a count that fits a `u8`; its range is the core's `validate`'s
+    /// to check).
+    fn quadrature(&self) -> Result<Quadrature, Error> {
+        match self {
+            GaussArg::Name(n) if n == "auto" => Ok(Quadrature::Auto),
+            GaussArg::Name(n) => Err(Error::value(
+                "gauss",
+                format!("expected 'auto' or 1 to 4, got {n:?}"),
+            )),
+            GaussArg::Points(n) => u8::try_from(*n)
+                .map(Quadrature::Points)
+                .map_err(|_| Error::value("gauss", "must be 1 to 4 points (or auto)")),
+        }
+    }
+}
+
+/// The options of one `_analytic` call, the items of a dict: the fields of the core's
+/// [`AnalyticInput`] but the draws and the backdrop: `width`, `height`, `samples`, `times` (K+1,)
+/// f64, `view_projections` (1|K+1,4,4) f64, `shutter`, `lights`, `ambient`, `gauss`,
+/// `reference_time`, `shade`, `tile_budget` bytes.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct AnalyticArgs<'py> {
+    width: u32,
+    height: u32,
+    samples: u32,
+    times: PyReadonlyArray1<'py, f64>,
+    view_projections: PyReadonlyArray3<'py, f64>,
+    shutter: ShutterArg<'py>,
+    lights: Vec<LightArg>,
+    ambient: [f64; 3],
+    gauss: GaussArg,
+    reference_time: f64,
+    shade: bool,
+    tile_budget: usize,
+}
 
 struct Owned {
     positions: Vec<[f64; 3]>,
@@ -49,25 +97,20 @@ fn as_rows<T: Copy + Default, const K: usize>(flat: &[T]) -> Vec<[T; K]> {
         .collect()
 }
 
-fn owned(d: &DrawArgs<'_>, k1: usize) -> Result<Owned, Error> {
-    let s = d.0.shape();
+/// The core's draw, owned. Face indices are converted to `u32` only: the core's `validate`
+/// checks their range.
+fn owned(d: &MovingDrawArg<'_>, k1: usize) -> Result<Owned, Error> {
+    let s = d.positions.shape();
     if s[0] != k1 || s[2] != 3 {
         return Err(Error::shape(
             "positions",
             format!("expected ({k1},V,3) (one (V,3) per boundary), got {s:?}"),
         ));
     }
-    let nv = s[1];
-    let positions = as_rows::<f64, 3>(c_slice(&d.0, "positions")?);
-    if d.1.shape()[1] != 3 {
-        return Err(Error::shape("faces", "expected (F,3)"));
-    }
-    let faces = face_indices(c_slice(&d.1, "faces")?, nv)?;
-    if d.2.shape()[1] != 4 {
-        return Err(Error::shape("rgba", "expected (1,4) or (V,4)"));
-    }
-    let rgba = as_rows::<f32, 4>(c_slice(&d.2, "rgba")?);
-    let normals = match &d.3 {
+    let positions = as_rows::<f64, 3>(c_slice(&d.positions, "positions")?);
+    let faces = face_indices_u32(rows::<i64, 3>(&d.faces, "faces")?);
+    let rgba = rows::<f32, 4>(&d.rgba, "rgba")?.to_vec();
+    let normals = match &d.normals {
         None => None,
         Some(n) => {
             if n.shape() != s {
@@ -81,65 +124,56 @@ fn owned(d: &DrawArgs<'_>, k1: usize) -> Result<Owned, Error> {
         faces,
         rgba,
         normals,
-        object_id: d.4,
-        cull_back: d.5,
-        shading: Shading::parse(&d.6)?,
+        object_id: d.object_id,
+        cull_back: d.cull_back,
+        shading: Shading::parse(&d.shading)?,
     })
 }
 
-/// Renders moving draws analytically; returns (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W)
-/// i32, velocity (H,W,2) f32, stats dict). `shutter` is a filter name or (M,) f64 weights;
-/// `gauss` 0 means auto; `tile_budget` is [`AnalyticInput::tile_budget`] in bytes. The GIL is
-/// released while rendering.
-#[pyfunction]
-#[pyo3(signature = (width, height, samples, times, view_projections, draws, shutter, lights, ambient, gauss, reference_time, shade, backdrop=None, tile_budget=ANALYTIC_TILE_BUDGET))]
-#[allow(clippy::too_many_arguments, clippy::type_complexity)]
-fn _analytic<'py>(
-    py: Python<'py>,
-    width: u32,
-    height: u32,
-    samples: u32,
-    times: PyReadonlyArray1<'py, f64>,
-    view_projections: PyReadonlyArray3<'py, f64>,
-    draws: Vec<DrawArgs<'py>>,
-    shutter: &Bound<'py, PyAny>,
-    lights: Vec<([f64; 3], [f64; 3])>,
-    ambient: [f64; 3],
-    gauss: u8,
-    reference_time: f64,
-    shade: bool,
-    backdrop: Option<BackdropArgs<'py>>,
-    tile_budget: usize,
-) -> PyResult<(
+fn view_projections(a: &PyReadonlyArray3<'_, f64>) -> Result<Vec<DMat4>, Error> {
+    let vs = a.shape();
+    if vs[1] != 4 || vs[2] != 4 {
+        return Err(Error::shape("view_projections", "expected (N,4,4)"));
+    }
+    Ok(c_slice(a, "view_projections")?
+        .chunks_exact(16)
+        .map(|m| DMat4::from_cols_slice(m).transpose())
+        .collect())
+}
+
+/// The image arrays of a frame: rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32, velocity
+/// (H,W,2) f32, stats.
+type FrameOut<'py> = (
     Bound<'py, PyAny>,
     Bound<'py, PyAny>,
     Bound<'py, PyAny>,
     Bound<'py, PyAny>,
     Bound<'py, PyDict>,
-)> {
-    let times_v = c_slice(&times, "times")?.to_vec();
-    let k1 = times_v.len();
-    let vs = view_projections.shape();
-    if vs[1] != 4 || vs[2] != 4 {
-        return Err(Error::shape("view_projections", "expected (N,4,4)").into());
-    }
-    let vps: Vec<DMat4> = c_slice(&view_projections, "view_projections")?
-        .chunks_exact(16)
-        .map(|m| DMat4::from_cols_slice(m).transpose())
-        .collect();
-    let shutter = if let Ok(name) = shutter.extract::<String>() {
-        Shutter::parse(&name)?
-    } else {
-        let w: PyReadonlyArray1<f64> = shutter.extract()?;
-        Shutter::weights(c_slice(&w, "shutter")?)?
+);
+
+/// Renders `draws` (`motionblur.MovingDraw` objects) analytically with `options`
+/// ([`AnalyticArgs`]) over `backdrop` (an object with `rgba` (HS,WS,4), `depth`, `ids` (HS,WS),
+/// one entry a sample) when given; returns (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32,
+/// velocity (H,W,2) f32, stats dict). The GIL is released while rendering.
+#[pyfunction]
+#[pyo3(signature = (draws, options, backdrop=None))]
+fn _analytic<'py>(
+    py: Python<'py>,
+    draws: Vec<MovingDrawArg<'py>>,
+    options: AnalyticArgs<'py>,
+    backdrop: Option<LayerArg<'py>>,
+) -> PyResult<FrameOut<'py>> {
+    let o = &options;
+    let times = c_slice(&o.times, "times")?;
+    let vps = view_projections(&o.view_projections)?;
+    let shutter = match &o.shutter {
+        ShutterArg::Name(name) => Shutter::parse(name)?,
+        ShutterArg::Weights(w) => Shutter::weights(c_slice(w, "shutter")?)?,
     };
-    let lights: Vec<Light> = lights
-        .iter()
-        .map(|(d, i)| Light::new(*d, *i))
-        .collect::<Result<_, _>>()?;
+    let lights = lights(&o.lights)?;
     let owned: Vec<Owned> = draws
         .iter()
-        .map(|d| owned(d, k1))
+        .map(|d| owned(d, times.len()))
         .collect::<Result<_, _>>()?;
     drop(draws);
     let moving: Vec<MovingDraw> = owned
@@ -156,31 +190,26 @@ fn _analytic<'py>(
         .collect();
     let backdrop = match &backdrop {
         None => None,
-        Some(b) => Some(Backdrop {
-            rgba: c_slice(&b.0, "backdrop")?,
-            depth: c_slice(&b.1, "backdrop")?,
-            ids: c_slice(&b.2, "backdrop")?,
-        }),
+        Some(b) => {
+            let (rgba, depth, ids) = b.planes("backdrop")?;
+            Some(Backdrop { rgba, depth, ids })
+        }
     };
     let input = AnalyticInput {
-        width,
-        height,
-        samples,
-        times: &times_v,
+        width: o.width,
+        height: o.height,
+        samples: o.samples,
+        times,
         view_projections: &vps,
         draws: &moving,
         backdrop,
         shutter: &shutter,
         lights: &lights,
-        ambient: ambient.map(|a| a as f32),
-        quadrature: if gauss == 0 {
-            Quadrature::Auto
-        } else {
-            Quadrature::Points(gauss)
-        },
-        reference_time,
-        shade,
-        tile_budget,
+        ambient: o.ambient.map(|a| a as f32),
+        quadrature: o.gauss.quadrature()?,
+        reference_time: o.reference_time,
+        shade: o.shade,
+        tile_budget: o.tile_budget,
     };
     let frame = detached_in_pool(py, || render_analytic(&input))?;
     let (h, w) = (frame.height as usize, frame.width as usize);

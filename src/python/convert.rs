@@ -135,6 +135,17 @@ pub(crate) fn vec3(a: &PyReadonlyArray1<'_, f64>, name: &'static str) -> Result<
     Ok([v[0], v[1], v[2]])
 }
 
+/// Face rows of int64 indices as the core's `u32` triples, converted only: an index no `u32`
+/// holds (negative, or past 2^32 - 1) becomes `u32::MAX`, past every vertex the core accepts, so
+/// the core's one range check (`Draw::validate`, the analytic `validate`) rejects it naming
+/// `faces`.
+pub(crate) fn face_indices_u32(faces: &[[i64; 3]]) -> Vec<[u32; 3]> {
+    faces
+        .iter()
+        .map(|f| f.map(|i| u32::try_from(i).unwrap_or(u32::MAX)))
+        .collect()
+}
+
 /// `faces` (flat int64 triples) as `u32` triples, every index in `[0, nv)`; else an error
 /// naming `faces` and the first bad face.
 pub(crate) fn face_indices(faces: &[i64], nv: usize) -> Result<Vec<[u32; 3]>, Error> {

@@ -177,40 +177,75 @@ type VolumeTuple<'py> = (
     f64,
 );
 
+/// The options of a volume, the items of a dict: the core's [`VolumeOptions`] (`filter` name,
+/// `colors` f32 (1|V|F,4), `face_colors` (one colour a face), `normals` f64 (V,3) | None,
+/// `camera_position` (3,) f64 | None, `contour_line`), and, for `motion_volume` only (absent:
+/// the defaults), `visible_only`, `contour_table` (built for this mesh) and `window`.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct VolumeArgs<'py> {
+    filter: String,
+    colors: PyReadonlyArray2<'py, f32>,
+    face_colors: bool,
+    normals: Option<PyReadonlyArray2<'py, f64>>,
+    camera_position: Option<PyReadonlyArray1<'py, f64>>,
+    contour_line: bool,
+    #[pyo3(default)]
+    visible_only: bool,
+    #[pyo3(default)]
+    contour_table: Option<PyRef<'py, PyContourTable>>,
+    #[pyo3(default)]
+    window: Option<(f64, f64)>,
+}
+
+impl VolumeArgs<'_> {
+    /// The core's options: colours (one, per vertex, or per face), normals and the camera
+    /// position, each checked and named.
+    fn options(&self) -> PyResult<VolumeOptions> {
+        let c = rows_any_layout::<f32, 4>(&self.colors, "colors")?.into_owned();
+        let colors = if self.face_colors {
+            Colors::PerFace(c)
+        } else if c.len() == 1 {
+            Colors::Uniform(c[0])
+        } else {
+            Colors::PerVertex(c)
+        };
+        let normals = self
+            .normals
+            .as_ref()
+            .map(|n| rows_any_layout::<f64, 3>(n, "normals").map(Cow::into_owned))
+            .transpose()?;
+        Ok(VolumeOptions {
+            filter: Filter::parse(&self.filter)?,
+            colors,
+            normals,
+            camera: self
+                .camera_position
+                .as_ref()
+                .map(|c| vec3(c, "camera_position"))
+                .transpose()?,
+            contour_line: self.contour_line,
+            visible_only: self.visible_only,
+            contours: self.contour_table.as_ref().map(|t| t.inner.clone()),
+            window: self.window.unwrap_or((0.0, 1.0)),
+        })
+    }
+}
+
 /// The motion volume of `mesh` along `keyframes` (rigid, at the equally spaced shutter times
-/// `i / K`), each interval cut into `segments` joining segments; with `contour_table` (built for
-/// this mesh) the face split and contour come from its nearest stored direction; `window`: the
-/// part of the shutter the keyframes stand for (see `VolumeOptions::window`; None: all of it).
+/// `i / K`), each interval cut into `segments` joining segments, with `options`
+/// ([`VolumeArgs`]); with a `contour_table` the face split and contour come from its nearest
+/// stored direction; `window`: the part of the shutter the keyframes stand for (see
+/// `VolumeOptions::window`; None: all of it).
 #[pyfunction]
-#[pyo3(signature = (mesh, keyframes, segments, filter, colors, normals = None, camera_position = None, face_colors = false, contour_line = true, visible_only = false, contour_table = None, window = None))]
-#[allow(clippy::too_many_arguments)]
 fn motion_volume<'py>(
     py: Python<'py>,
     mesh: &PyMesh,
     keyframes: &PyKeyframes,
     segments: usize,
-    filter: &str,
-    colors: PyReadonlyArray2<'_, f32>,
-    normals: Option<PyReadonlyArray2<'_, f64>>,
-    camera_position: Option<PyReadonlyArray1<'_, f64>>,
-    face_colors: bool,
-    contour_line: bool,
-    visible_only: bool,
-    contour_table: Option<&PyContourTable>,
-    window: Option<(f64, f64)>,
+    options: VolumeArgs<'_>,
 ) -> PyResult<VolumeTuple<'py>> {
-    let filter = Filter::parse(filter)?;
-    let mut opts = volume_options(
-        filter,
-        &colors,
-        face_colors,
-        normals.as_ref(),
-        camera_position.as_ref(),
-        contour_line,
-    )?;
-    opts.visible_only = visible_only;
-    opts.contours = contour_table.map(|t| t.inner.clone());
-    opts.window = window.unwrap_or((0.0, 1.0));
+    let opts = options.options()?;
     let keys = keyframes.rigid().to_vec();
     let inner = mesh.inner.clone();
     let vol = detached_in_pool(py, move || {
@@ -221,40 +256,36 @@ fn motion_volume<'py>(
     Ok(volume_tuple(py, vol))
 }
 
+/// A spin, the items of a dict: the core's [`Spin`] (`axis`, `center`, `translation` (3,) f64,
+/// `angle` radians, `segments` | None).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct SpinArgs<'py> {
+    axis: PyReadonlyArray1<'py, f64>,
+    angle: f64,
+    center: PyReadonlyArray1<'py, f64>,
+    translation: PyReadonlyArray1<'py, f64>,
+    segments: Option<usize>,
+}
+
+/// The volume of `mesh` spun by `spin` ([`SpinArgs`]) with `options` ([`VolumeArgs`]; every
+/// contour edge is swept whatever `contour_line`).
 #[pyfunction]
-#[pyo3(signature = (mesh, axis, angle, center, translation, segments, filter, colors, normals = None, camera_position = None, face_colors = false, contour_line = true))]
-#[allow(clippy::too_many_arguments)]
 fn spin_volume<'py>(
     py: Python<'py>,
     mesh: &PyMesh,
-    axis: PyReadonlyArray1<'_, f64>,
-    angle: f64,
-    center: PyReadonlyArray1<'_, f64>,
-    translation: PyReadonlyArray1<'_, f64>,
-    segments: Option<usize>,
-    filter: &str,
-    colors: PyReadonlyArray2<'_, f32>,
-    normals: Option<PyReadonlyArray2<'_, f64>>,
-    camera_position: Option<PyReadonlyArray1<'_, f64>>,
-    face_colors: bool,
-    contour_line: bool,
+    spin: SpinArgs<'_>,
+    options: VolumeArgs<'_>,
 ) -> PyResult<VolumeTuple<'py>> {
-    let filter = Filter::parse(filter)?;
+    let segments = spin.segments;
     let spin = Spin {
-        axis: vec3(&axis, "axis")?,
-        angle,
-        center: vec3(&center, "center")?,
-        translation: vec3(&translation, "translation")?,
+        axis: vec3(&spin.axis, "axis")?,
+        angle: spin.angle,
+        center: vec3(&spin.center, "center")?,
+        translation: vec3(&spin.translation, "translation")?,
         segments,
     };
-    let opts = volume_options(
-        filter,
-        &colors,
-        face_colors,
-        normals.as_ref(),
-        camera_position.as_ref(),
-        contour_line,
-    )?;
+    let opts = options.options()?;
     let inner = mesh.inner.clone();
     let vol = detached_in_pool(py, move || {
         if let Some(s) = segments.filter(|&s| s <= MAX_SEGMENTS) {
@@ -265,41 +296,6 @@ fn spin_volume<'py>(
         crate::spin_volume(&inner, &spin, &opts)
     })?;
     Ok(volume_tuple(py, vol))
-}
-
-/// The options both volume bindings share: colours (one, per vertex, or per face), normals and
-/// the camera position, each checked and named.
-fn volume_options(
-    filter: Filter,
-    colors: &PyReadonlyArray2<'_, f32>,
-    face_colors: bool,
-    normals: Option<&PyReadonlyArray2<'_, f64>>,
-    camera_position: Option<&PyReadonlyArray1<'_, f64>>,
-    contour_line: bool,
-) -> PyResult<VolumeOptions> {
-    let c = rows_any_layout::<f32, 4>(colors, "colors")?.into_owned();
-    let colors = if face_colors {
-        Colors::PerFace(c)
-    } else if c.len() == 1 {
-        Colors::Uniform(c[0])
-    } else {
-        Colors::PerVertex(c)
-    };
-    let normals = normals
-        .map(|n| rows_any_layout::<f64, 3>(n, "normals").map(Cow::into_owned))
-        .transpose()?;
-    Ok(VolumeOptions {
-        filter,
-        colors,
-        normals,
-        camera: camera_position
-            .map(|c| vec3(c, "camera_position"))
-            .transpose()?,
-        contour_line,
-        visible_only: false,
-        contours: None,
-        window: (0.0, 1.0),
-    })
 }
 
 fn volume_tuple(py: Python<'_>, vol: MotionVolume) -> VolumeTuple<'_> {

@@ -8,7 +8,9 @@ use numpy::{
 use pyo3::prelude::*;
 
 use super::convert::{c_slice, detached_in_pool, rows, shaped};
-use crate::{CameraMatrices, Composite, DofParams, Error, LensParams, Piece, ReconstructParams};
+use crate::{
+    CameraBlur, CameraMatrices, Composite, DofParams, Error, LensParams, Piece, ReconstructParams,
+};
 
 type PyOut<'py> = PyResult<Bound<'py, PyAny>>;
 
@@ -66,23 +68,34 @@ fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<DMat4> 
     Ok(DMat4::from_cols_array(&map16(a, name)?).transpose())
 }
 
-fn cameras(
-    view: &PyReadonlyArray2<'_, f64>,
-    projection: &PyReadonlyArray2<'_, f64>,
-    previous_view: &PyReadonlyArray2<'_, f64>,
-    previous_projection: &PyReadonlyArray2<'_, f64>,
-) -> PyResult<(CameraMatrices, CameraMatrices)> {
-    let cur = CameraMatrices::new(
-        matrix(view, "camera")?,
-        matrix(projection, "camera")?,
-        "camera",
-    )?;
-    let prev = CameraMatrices::new(
-        matrix(previous_view, "previous_camera")?,
-        matrix(previous_projection, "previous_camera")?,
-        "previous_camera",
-    )?;
-    Ok((cur, prev))
+/// A camera, read off the attributes `view` and `projection` (4,4) f64 of a
+/// `motionblur.Camera`.
+#[derive(FromPyObject)]
+struct CameraArg<'py> {
+    view: PyReadonlyArray2<'py, f64>,
+    projection: PyReadonlyArray2<'py, f64>,
+}
+
+impl CameraArg<'_> {
+    /// The core's matrices; errors name `name`.
+    fn matrices(&self, name: &'static str) -> PyResult<CameraMatrices> {
+        Ok(CameraMatrices::new(
+            matrix(&self.view, name)?,
+            matrix(&self.projection, name)?,
+            name,
+        )?)
+    }
+}
+
+/// The parameters of `_depth_of_field`, the items of a dict: the core's [`DofParams`].
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct DofArgs {
+    focal_depth: f64,
+    focal_length: f64,
+    f_number: f64,
+    yfov: f64,
+    layers: usize,
 }
 
 /// Eq. 10 glow of alpha (H,W) f32 along direction over width pixels.
@@ -142,29 +155,41 @@ fn _splat_paths<'py>(
     shaped(py, out, [height, width, 4])
 }
 
-/// One piece of `_scatter_pieces`: rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32, ray (4,)
-/// f64, weight, objects (M,) i32, maps (M,P,4,4) f64.
-type PyPiece<'py> = (
-    PyReadonlyArray3<'py, f32>,
-    PyReadonlyArray2<'py, f32>,
-    PyReadonlyArray2<'py, i32>,
-    [f64; 4],
-    f32,
-    PyReadonlyArray1<'py, i32>,
-    PyReadonlyArray4<'py, f64>,
-);
+/// One piece of `_scatter_pieces`, the items of a dict: its layer `rgba` (H,W,4) f32, `depth`
+/// (H,W) f32, `ids` (H,W) i32, the camera `ray` (4,) f64, its shutter `weight`, the `objects`
+/// (M,) i32 and their `maps` (M,P,4,4) f64 (the core's [`Piece`]).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct PieceArg<'py> {
+    rgba: PyReadonlyArray3<'py, f32>,
+    depth: PyReadonlyArray2<'py, f32>,
+    ids: PyReadonlyArray2<'py, i32>,
+    ray: [f64; 4],
+    weight: f32,
+    objects: PyReadonlyArray1<'py, i32>,
+    maps: PyReadonlyArray4<'py, f64>,
+}
 
 /// Splat the pieces' covered pixels along their paths into a (height, width, 4) f32 image.
 #[pyfunction]
 fn _scatter_pieces<'py>(
     py: Python<'py>,
-    pieces: Vec<PyPiece<'py>>,
+    pieces: Vec<PieceArg<'py>>,
     points: usize,
     width: usize,
     height: usize,
 ) -> PyOut<'py> {
     let mut views = Vec::with_capacity(pieces.len());
-    for (rgba, depth, ids, ray, weight, objects, maps) in &pieces {
+    for PieceArg {
+        rgba,
+        depth,
+        ids,
+        ray,
+        weight,
+        objects,
+        maps,
+    } in &pieces
+    {
         let (c, w, h) = img3(rgba, "rgba", 4)?;
         let (d, dw, dh) = img2(depth, "depth")?;
         same_size("depth", (dh, dw), (h, w))?;
@@ -327,28 +352,23 @@ fn _pyramid_opaque_blur<'py>(
     shaped(py, out, [h, w, 4])
 }
 
-/// Depth of field of rgba (H,W,4) f32 with depth (H,W) f32.
+/// Depth of field of rgba (H,W,4) f32 with depth (H,W) f32 ([`DofArgs`]).
 #[pyfunction]
-#[allow(clippy::too_many_arguments)]
 fn _depth_of_field<'py>(
     py: Python<'py>,
     rgba: PyReadonlyArray3<'py, f32>,
     depth: PyReadonlyArray2<'py, f32>,
-    focal_depth: f64,
-    focal_length: f64,
-    f_number: f64,
-    yfov: f64,
-    layers: usize,
+    params: DofArgs,
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
     let (d, dw, dh) = img2(&depth, "depth")?;
     same_size("depth", (dh, dw), (h, w))?;
     let p = DofParams {
-        focal_depth,
-        focal_length,
-        f_number,
-        yfov,
-        layers,
+        focal_depth: params.focal_depth,
+        focal_length: params.focal_length,
+        f_number: params.f_number,
+        yfov: params.yfov,
+        layers: params.layers,
     };
     let out = detached_in_pool(py, || crate::depth_of_field(a, d, w, h, &p))?;
     shaped(py, out, [h, w, 4])
@@ -376,18 +396,17 @@ fn _lens_blur<'py>(
     shaped(py, out, [h, w, 4])
 }
 
-/// Per-pixel velocity (H,W,2) f32 from depth (H,W) f32 and two cameras' view/projection (4,4) f64.
+/// Per-pixel velocity (H,W,2) f32 from depth (H,W) f32 and two cameras ([`CameraArg`]).
 #[pyfunction]
 fn _camera_velocity<'py>(
     py: Python<'py>,
     depth: PyReadonlyArray2<'py, f32>,
-    view: PyReadonlyArray2<'py, f64>,
-    projection: PyReadonlyArray2<'py, f64>,
-    previous_view: PyReadonlyArray2<'py, f64>,
-    previous_projection: PyReadonlyArray2<'py, f64>,
+    camera: CameraArg<'py>,
+    previous_camera: CameraArg<'py>,
 ) -> PyOut<'py> {
     let (d, w, h) = img2(&depth, "depth")?;
-    let (cur, prev) = cameras(&view, &projection, &previous_view, &previous_projection)?;
+    let cur = camera.matrices("camera")?;
+    let prev = previous_camera.matrices("previous_camera")?;
     let out = detached_in_pool(py, || crate::camera_velocity(d, w, h, &cur, &prev))?;
     shaped(py, out, [h, w, 2])
 }
@@ -407,27 +426,28 @@ fn _velocity_blur<'py>(
     shaped(py, out, [h, w, 4])
 }
 
-/// Chapman's camera motion blur of rgba (H,W,4) f32 with depth (H,W) f32.
+/// Chapman's camera motion blur of rgba (H,W,4) f32 with depth (H,W) f32 seen by two cameras
+/// ([`CameraArg`]): `samples` taps, the velocity times `scale`.
 #[pyfunction]
-#[allow(clippy::too_many_arguments)]
 fn _camera_motion_blur<'py>(
     py: Python<'py>,
     rgba: PyReadonlyArray3<'py, f32>,
     depth: PyReadonlyArray2<'py, f32>,
-    view: PyReadonlyArray2<'py, f64>,
-    projection: PyReadonlyArray2<'py, f64>,
-    previous_view: PyReadonlyArray2<'py, f64>,
-    previous_projection: PyReadonlyArray2<'py, f64>,
+    camera: CameraArg<'py>,
+    previous_camera: CameraArg<'py>,
     samples: usize,
     scale: f64,
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
     let (d, dw, dh) = img2(&depth, "depth")?;
     same_size("depth", (dh, dw), (h, w))?;
-    let (cur, prev) = cameras(&view, &projection, &previous_view, &previous_projection)?;
-    let out = detached_in_pool(py, || {
-        crate::camera_motion_blur(a, d, w, h, &cur, &prev, samples, scale)
-    })?;
+    let blur = CameraBlur {
+        current: camera.matrices("camera")?,
+        previous: previous_camera.matrices("previous_camera")?,
+        samples,
+        scale,
+    };
+    let out = detached_in_pool(py, || crate::camera_motion_blur(a, d, w, h, &blur))?;
     shaped(py, out, [h, w, 4])
 }
 

@@ -1,35 +1,76 @@
 //! Bindings for the painter and the accumulation frame: `_Painter` (objects drawn at any
 //! shutter time) with `layer` (one time), `accumulate_still` and `accumulate_moving` (a whole
 //! frame's samples in one call). The GIL is released while they draw.
-use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
+use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::prelude::*;
 
-use super::convert::{c_slice, detached_in_pool, face_indices, rows, shaped};
+use super::args::{LayerArg, LightArg};
+use super::convert::{c_slice, detached_in_pool, face_indices_u32, rows, shaped};
 use super::motion::PyKeyframes;
 use crate::{
     accumulate_moving, accumulate_still, Accumulated, Error, Mat4, PaintObject, Painter, Samples,
     Shading, StaticLayer, StillCamera,
 };
 
-/// One object as the Python layer passes it: (object id, shading name, vertices f64 (V,3),
-/// faces i64 (F,3), rgba f32 (1|V,4), normals f32 (V,3) | None, keyframes | None).
-type ObjectArgs<'py> = (
-    i32,
-    String,
-    PyReadonlyArray2<'py, f64>,
-    PyReadonlyArray2<'py, i64>,
-    PyReadonlyArray2<'py, f32>,
-    Option<PyReadonlyArray2<'py, f32>>,
-    Option<PyRef<'py, PyKeyframes>>,
-);
+/// One object, the items of a dict: `id`, `shading` name, `vertices` f64 (V,3), `faces` i64
+/// (F,3), `rgba` f32 (1|V,4), `normals` f32 (V,3) | None, `keyframes` | None.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct ObjectArg<'py> {
+    id: i32,
+    shading: String,
+    vertices: PyReadonlyArray2<'py, f64>,
+    faces: PyReadonlyArray2<'py, i64>,
+    rgba: PyReadonlyArray2<'py, f32>,
+    normals: Option<PyReadonlyArray2<'py, f32>>,
+    keyframes: Option<PyRef<'py, PyKeyframes>>,
+}
 
-/// The static layer as the Python layer passes it: rgba f32 (H,W,4), depth f32 (H,W), ids i32
-/// (H,W), one entry per sample.
-type StaticArgs<'py> = (
-    PyReadonlyArray3<'py, f32>,
-    PyReadonlyArray2<'py, f32>,
-    PyReadonlyArray2<'py, i32>,
-);
+/// The time samples of an accumulation frame, the items of a dict: `times` and `weights` (N,)
+/// f64, `reference` (the sample whose depth and ids the frame keeps).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct SamplesArg<'py> {
+    times: PyReadonlyArray1<'py, f64>,
+    weights: PyReadonlyArray1<'py, f64>,
+    reference: usize,
+}
+
+impl SamplesArg<'_> {
+    fn samples(&self) -> Result<Samples<'_>, Error> {
+        Ok(Samples {
+            times: c_slice(&self.times, "times")?,
+            weights: c_slice(&self.weights, "weights")?,
+            reference: self.reference,
+        })
+    }
+}
+
+/// The supersampled still camera, the items of a dict: `view`, `projection`, `view_projection`
+/// (4,4) f64, `width` x `height` samples, `aa` samples a pixel along each axis.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct StillCameraArg<'py> {
+    view: PyReadonlyArray2<'py, f64>,
+    projection: PyReadonlyArray2<'py, f64>,
+    view_projection: PyReadonlyArray2<'py, f64>,
+    width: usize,
+    height: usize,
+    aa: usize,
+}
+
+impl StillCameraArg<'_> {
+    fn camera(&self) -> Result<StillCamera, Error> {
+        Ok(StillCamera {
+            view: matrix(&self.view, "view")?,
+            projection: matrix(&self.projection, "projection")?,
+            view_projection: matrix(&self.view_projection, "view_projection")?,
+            width: self.width,
+            height: self.height,
+            aa: self.aa,
+        })
+    }
+}
 
 /// A (4,4) float64 matrix, row-major.
 fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> Result<Mat4, Error> {
@@ -43,34 +84,33 @@ fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> Result<Mat4, Err
     Ok(std::array::from_fn(|r| std::array::from_fn(|c| v[[r, c]])))
 }
 
-fn object(o: &ObjectArgs<'_>) -> Result<PaintObject, Error> {
-    let vertices = rows::<f64, 3>(&o.2, "vertices")?.to_vec();
-    let faces = face_indices(
-        rows::<i64, 3>(&o.3, "faces")?.as_flattened(),
-        vertices.len(),
-    )?;
-    let rgba = rows::<f32, 4>(&o.4, "rgba")?.to_vec();
+fn object(o: &ObjectArg<'_>) -> Result<PaintObject, Error> {
+    let vertices = rows::<f64, 3>(&o.vertices, "vertices")?.to_vec();
+    // converted only: the rasterizer's `Draw::validate` checks the range of every draw it is given
+    let faces = face_indices_u32(rows::<i64, 3>(&o.faces, "faces")?);
+    let rgba = rows::<f32, 4>(&o.rgba, "rgba")?.to_vec();
     if rgba.len() != 1 && rgba.len() != vertices.len() {
         return Err(Error::shape(
             "rgba",
             "expected one colour or one per vertex",
         ));
     }
-    let normals =
-        o.5.as_ref()
-            .map(|n| rows::<f32, 3>(n, "normals").map(<[_]>::to_vec))
-            .transpose()?;
+    let normals = o
+        .normals
+        .as_ref()
+        .map(|n| rows::<f32, 3>(n, "normals").map(<[_]>::to_vec))
+        .transpose()?;
     if normals.as_ref().is_some_and(|n| n.len() != vertices.len()) {
         return Err(Error::shape("normals", "expected one normal per vertex"));
     }
     Ok(PaintObject {
-        id: o.0,
-        shading: Shading::parse(&o.1)?,
+        id: o.id,
+        shading: Shading::parse(&o.shading)?,
         vertices,
         faces,
         rgba,
         normals,
-        motion: o.6.as_ref().map(|k| k.inner.clone()),
+        motion: o.keyframes.as_ref().map(|k| k.inner.clone()),
     })
 }
 
@@ -109,12 +149,12 @@ pub struct PyPainter {
 
 #[pymethods]
 impl PyPainter {
-    /// `objects`: list of (id, shading, vertices, faces, rgba, normals, keyframes); `lights`:
-    /// (direction, intensity) pairs; `ambient` RGB.
+    /// `objects`: list of dicts ([`ObjectArg`]); `lights`: (direction, intensity) pairs;
+    /// `ambient` RGB.
     #[new]
     fn new(
-        objects: Vec<ObjectArgs<'_>>,
-        lights: Vec<([f64; 3], [f64; 3])>,
+        objects: Vec<ObjectArg<'_>>,
+        lights: Vec<LightArg>,
         ambient: [f64; 3],
     ) -> PyResult<Self> {
         let objects = objects.iter().map(object).collect::<Result<Vec<_>, _>>()?;
@@ -140,51 +180,31 @@ impl PyPainter {
         arrays(py, l.rgba, l.depth, l.ids, width as usize, height as usize)
     }
 
-    /// The still-camera accumulation frame: `times`, `weights` (N,) float64, `reference`
-    /// sample; the supersampled camera's `view`, `projection`, `view_projection` (4,4),
-    /// `width` x `height` samples, `aa`; the static layer (rgba, depth, ids) of that size and
-    /// whether it is opaque. Returns None (nothing on the image) or ((x0, y0, x1, y1) window,
-    /// rgba (h,w,4) f32, depth (h,w) f32, ids (h,w) i32, draw calls).
-    #[allow(clippy::too_many_arguments)]
-    #[pyo3(signature = (times, weights, reference, view, projection, view_projection, width, height, aa, background, opaque))]
+    /// The still-camera accumulation frame of `samples` ([`SamplesArg`]) seen by `camera`
+    /// ([`StillCameraArg`]) over the static layer `background` (`rgba`, `depth`, `ids`
+    /// attributes of the camera's size), `opaque` when every static object is. Returns None
+    /// (nothing on the image) or ((x0, y0, x1, y1) window, rgba (h,w,4) f32, depth (h,w) f32,
+    /// ids (h,w) i32, draw calls).
     fn accumulate_still<'py>(
         &self,
         py: Python<'py>,
-        times: PyReadonlyArray1<'_, f64>,
-        weights: PyReadonlyArray1<'_, f64>,
-        reference: usize,
-        view: PyReadonlyArray2<'_, f64>,
-        projection: PyReadonlyArray2<'_, f64>,
-        view_projection: PyReadonlyArray2<'_, f64>,
-        width: usize,
-        height: usize,
-        aa: usize,
-        background: StaticArgs<'_>,
+        samples: SamplesArg<'_>,
+        camera: StillCameraArg<'_>,
+        background: LayerArg<'_>,
         opaque: bool,
     ) -> PyResult<Option<StillFrame<'py>>> {
-        let camera = StillCamera {
-            view: matrix(&view, "view")?,
-            projection: matrix(&projection, "projection")?,
-            view_projection: matrix(&view_projection, "view_projection")?,
-            width,
-            height,
-            aa,
-        };
-        if background.0.shape() != [height, width, 4] {
+        let camera = camera.camera()?;
+        if background.size("background")? != [camera.height, camera.width] {
             return Err(Error::shape("background", "rgba must be (height, width, 4)").into());
         }
+        let (rgba, depth, ids) = background.planes("background")?;
         let bg = StaticLayer {
-            rgba: c_slice(&background.0, "background")?,
-            depth: c_slice(&background.1, "background")?,
-            ids: c_slice(&background.2, "background")?,
+            rgba,
+            depth,
+            ids,
             opaque,
         };
-        let (ts, ws) = (c_slice(&times, "times")?, c_slice(&weights, "weights")?);
-        let samples = Samples {
-            times: ts,
-            weights: ws,
-            reference,
-        };
+        let samples = samples.samples()?;
         let inner = &self.inner;
         let out = detached_in_pool(py, || accumulate_still(inner, &camera, samples, bg))?;
         let Some(Accumulated {
@@ -202,16 +222,13 @@ impl PyPainter {
         Ok(Some((win, r, d, i, draw_calls)))
     }
 
-    /// The moving-camera accumulation frame: `times`, `weights` (N,) float64, `reference`
-    /// sample, one view (N,4,4) float64 per sample, the `projection` (4,4), `width` x `height`
-    /// samples. Returns (rgba (height,width,4) f32, depth, ids of the reference sample).
-    #[allow(clippy::too_many_arguments)]
+    /// The moving-camera accumulation frame of `samples` ([`SamplesArg`]): one view (N,4,4)
+    /// float64 per sample, the `projection` (4,4), `width` x `height` samples. Returns (rgba
+    /// (height,width,4) f32, depth, ids of the reference sample).
     fn accumulate_moving<'py>(
         &self,
         py: Python<'py>,
-        times: PyReadonlyArray1<'_, f64>,
-        weights: PyReadonlyArray1<'_, f64>,
-        reference: usize,
+        samples: SamplesArg<'_>,
         views: PyReadonlyArray3<'_, f64>,
         projection: PyReadonlyArray2<'_, f64>,
         width: usize,
@@ -230,12 +247,7 @@ impl PyPainter {
             .map(|m| std::array::from_fn(|r| std::array::from_fn(|c| m[[r, c]])))
             .collect();
         let p = matrix(&projection, "projection")?;
-        let (ts, ws) = (c_slice(&times, "times")?, c_slice(&weights, "weights")?);
-        let samples = Samples {
-            times: ts,
-            weights: ws,
-            reference,
-        };
+        let samples = samples.samples()?;
         let inner = &self.inner;
         let out = detached_in_pool(py, || {
             accumulate_moving(inner, &views, &p, width, height, samples)

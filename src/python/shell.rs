@@ -142,6 +142,16 @@ impl OneBuffer {
     }
 }
 
+/// The core's [`ShellOptions`], the items of a dict: `subdivisions`, `hysteresis`,
+/// `initial_alpha`.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct ShellArgs {
+    subdivisions: u32,
+    hysteresis: u32,
+    initial_alpha: f32,
+}
+
 /// The Rust blur shell. See `motionblur.BlurShell`.
 #[pyclass(name = "_BlurShell", module = "motionblur._core")]
 pub struct PyBlurShell {
@@ -151,15 +161,12 @@ pub struct PyBlurShell {
 #[pymethods]
 impl PyBlurShell {
     #[new]
-    #[pyo3(signature = (faces, n_vertices, subdivisions, hysteresis, initial_alpha, mask=None, color=None))]
-    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (faces, n_vertices, options, mask=None, color=None))]
     fn new(
         py: Python<'_>,
         faces: PyReadonlyArray2<'_, i64>,
         n_vertices: usize,
-        subdivisions: u32,
-        hysteresis: u32,
-        initial_alpha: f32,
+        options: ShellArgs,
         mask: Option<PyReadonlyArray1<'_, bool>>,
         color: Option<PyReadonlyArray2<'_, f32>>,
     ) -> PyResult<Self> {
@@ -190,9 +197,9 @@ impl PyBlurShell {
             }
         };
         let opts = ShellOptions {
-            subdivisions,
-            hysteresis,
-            initial_alpha,
+            subdivisions: options.subdivisions,
+            hysteresis: options.hysteresis,
+            initial_alpha: options.initial_alpha,
         };
         let inner = detached_in_pool(py, move || BlurShell::new(f, n_vertices, opts, mask, color))?;
         Ok(PyBlurShell { inner })

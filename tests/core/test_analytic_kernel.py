@@ -192,6 +192,10 @@ def test_the_callers_arrays_are_left_alone():
     keep = pos.copy(), f.copy()
     mb.rasterize_motion(_cam(), [mb.MovingDraw(pos, f, (1, 0, 0))], [0.0, 1.0], samples=2)
     assert np.array_equal(pos, keep[0]) and np.array_equal(f, keep[1])
+    # the draw keeps read-only views: the caller's own float64 / int64 arrays stay writable
+    f = np.ascontiguousarray(f, dtype=np.int64)
+    draw = mb.MovingDraw(pos, f, np.ones((pos.shape[1], 4), np.float32))
+    assert pos.flags.writeable and f.flags.writeable and not draw.positions.flags.writeable
 
 
 def test_the_result_does_not_depend_on_the_thread_count():

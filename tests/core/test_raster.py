@@ -7,6 +7,7 @@ Tolerances are stated per test; "exact" means bit-equal float32.
 from __future__ import annotations
 
 import textwrap
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -415,12 +416,18 @@ def test_the_core_rechecks_what_reaches_it():
 
     cam = mb.Camera(np.eye(4), 0.8, 8, 8)
     v = np.zeros((3, 3))
-    bad = (v, np.array([[0, 1, 5]]), np.ones((1, 4), np.float32), None, 0, True, None)
-    args = (cam.view, cam.projection, 8, 8)
+    bad = SimpleNamespace(
+        vertices=v, faces=np.array([[0, 1, 5]]), rgba=np.ones((1, 4), np.float32), normals=None, object_id=0,
+        cull_back=True, previous_vertices=None,
+    )  # fmt: skip
+    options = dict(
+        view=cam.view, projection=cam.projection, width=8, height=8, samples=1, blend="exact", shading="flat",
+        lights=[], ambient=(0.0, 0.0, 0.0), origin=(0, 0),
+    )  # fmt: skip
     with pytest.raises(ValueError, match="faces"):
-        _core._rasterize(*args, [bad], 1, "exact", "flat", [], (0.0, 0.0, 0.0))
+        _core._rasterize([bad], options)
     with pytest.raises(ValueError, match="width"):
-        _core._rasterize(cam.view, cam.projection, 0, 8, [], 1, "exact", "flat", [], (0.0, 0.0, 0.0))
+        _core._rasterize([], {**options, "width": 0})
 
 
 def test_callers_arrays_are_never_written():

@@ -10,6 +10,7 @@ the static objects with the volumes (``exact_static`` with a non-opaque static l
 from __future__ import annotations
 
 import textwrap
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -161,7 +162,7 @@ def test_a_transparent_static_object_keeps_the_redraw_path(monkeypatch):
     raw = _core._rasterize
 
     def spy(*args):
-        seen.append(len(args) > 10 and args[10] is not None)
+        seen.append(len(args) > 2 and args[2] is not None)
         return raw(*args)
 
     monkeypatch.setattr(_core, "_rasterize", spy)
@@ -211,7 +212,15 @@ def test_bad_background_names_the_argument(change, exc, text):
 
 def test_the_core_rechecks_the_background():
     cam = mb.Camera(np.eye(4), 0.8, 8, 8)
-    args = (cam.view, cam.projection, 8, 8, [], 1, "exact", "flat", [], (0.0, 0.0, 0.0))
+    options = dict(
+        view=cam.view, projection=cam.projection, width=8, height=8, samples=1, blend="exact", shading="flat",
+        lights=[], ambient=(0.0, 0.0, 0.0),
+    )  # fmt: skip
+
+    def raster(rgba, depth, ids, x0, y0):
+        layer = SimpleNamespace(rgba=rgba, depth=depth, ids=ids)
+        return _core._rasterize([], {**options, "origin": (x0, y0)}, layer)
+
     rgba, depth, ids = _bg()
     big = _bg(16, 16)
     for bad in [
@@ -226,13 +235,13 @@ def test_the_core_rechecks_the_background():
         (rgba, depth, ids, 1, 0),
     ]:
         with pytest.raises(ValueError, match="background"):
-            _core._rasterize(*args, bad)
+            raster(*bad)
     with pytest.raises(TypeError):
-        _core._rasterize(*args, (rgba.astype(np.float64), depth, ids, 0, 0))
-    with pytest.raises(OverflowError):
-        _core._rasterize(*args, (*big, -1, 0))
-    _core._rasterize(*args, (rgba, depth, ids, 0, 0))  # the right ones pass
-    _core._rasterize(*args, (*big, 8, 8))
+        raster(rgba.astype(np.float64), depth, ids, 0, 0)
+    with pytest.raises(TypeError, match="origin"):  # a negative origin is no sample index
+        raster(*big, -1, 0)
+    raster(rgba, depth, ids, 0, 0)  # the right ones pass
+    raster(*big, 8, 8)
 
 
 def test_a_window_of_a_larger_background_is_read_in_place():

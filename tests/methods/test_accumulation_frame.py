@@ -96,7 +96,7 @@ def serial_twin(scene: mb.Scene, n: int, aa: int):
             depth[sy0:sy1, sx0:sx1], ids[sy0:sy1, sx0:sx1] = kept.depth, kept.ids
         if exact:
             _core._accumulate(
-                acc, layer.rgba, layer.depth, base.depth if has_static else None, float(w), sx0, sy0
+                acc, layer.rgba, layer.depth, base.depth if has_static else None, float(w), (sx0, sy0)
             )
         else:
             full = base.rgba.copy()
@@ -117,8 +117,10 @@ def one_call(scene: mb.Scene, n: int, aa: int):
     c = np.ascontiguousarray
     layer = static.layer
     return painter.core.accumulate_still(
-        times, weights, ref, c(cam.view), c(cam.projection), c(cam.view_projection), cam.width, cam.height,
-        aa, (c(layer.rgba), c(layer.depth), c(layer.ids)), static.opaque,
+        dict(times=times, weights=weights, reference=ref),
+        dict(view=c(cam.view), projection=c(cam.projection), view_projection=c(cam.view_projection),
+             width=cam.width, height=cam.height, aa=aa),
+        Layer(c(layer.rgba), c(layer.depth), c(layer.ids)), static.opaque,
     )  # fmt: skip
 
 
@@ -145,7 +147,7 @@ def test_moving_camera_equals_the_serial_loop():
     painter = Painter(sc, everything)
     cam = sc.camera
     rgba, depth, ids = painter.core.accumulate_moving(
-        times, weights, 4, views, cam.projection, cam.width, cam.height
+        dict(times=times, weights=weights, reference=4), views, cam.projection, cam.width, cam.height
     )
     acc = None
     for i, t in enumerate(times):
@@ -194,21 +196,27 @@ def test_bad_requests_name_the_argument():
     cam = sc.camera
     times, weights = sample_times(sc, 4)
     painter = Painter(sc, [(0, sc.objects[0])])
-    bg = (np.zeros((cam.height, cam.width, 4), np.float32), np.full((cam.height, cam.width), np.inf, np.float32),
-          np.full((cam.height, cam.width), -1, np.int32))  # fmt: skip
-    args = (cam.view, cam.projection, cam.view_projection, cam.width, cam.height, 1)
+    bg = Layer(np.zeros((cam.height, cam.width, 4), np.float32), np.full((cam.height, cam.width), np.inf, np.float32),
+               np.full((cam.height, cam.width), -1, np.int32))  # fmt: skip
+    camera = dict(view=cam.view, projection=cam.projection, view_projection=cam.view_projection, width=cam.width,
+                  height=cam.height, aa=1)  # fmt: skip
+
+    def samples(weights, reference):
+        return dict(times=times, weights=weights, reference=reference)
+
     with pytest.raises(ValueError, match="weights"):
-        painter.core.accumulate_still(times, weights[:3], 0, *args, bg, True)
+        painter.core.accumulate_still(samples(weights[:3], 0), camera, bg, True)
     with pytest.raises(ValueError, match="reference"):
-        painter.core.accumulate_still(times, weights, 4, *args, bg, True)
+        painter.core.accumulate_still(samples(weights, 4), camera, bg, True)
     with pytest.raises(ValueError, match="background"):
-        painter.core.accumulate_still(times, weights, 0, *args, (bg[0][1:], bg[1], bg[2]), True)
+        painter.core.accumulate_still(samples(weights, 0), camera, Layer(bg.rgba[1:], bg.depth, bg.ids), True)
     with pytest.raises(ValueError, match="views"):
-        painter.core.accumulate_moving(times, weights, 0, np.zeros((3, 4, 4)), cam.projection, 8, 8)
+        painter.core.accumulate_moving(samples(weights, 0), np.zeros((3, 4, 4)), cam.projection, 8, 8)
+    v, f = meshes.box()
+    obj = dict(id=0, shading="phong", vertices=v, faces=f, rgba=np.ones((1, 4), np.float32), normals=None,
+               keyframes=None)  # fmt: skip
     with pytest.raises(ValueError, match="shading"):
-        _core._Painter(
-            [(0, "phong", *meshes.box(), np.ones((1, 4), np.float32), None, None)], [], (0.0, 0.0, 0.0)
-        )
+        _core._Painter([obj], [], (0.0, 0.0, 0.0))
 
 
 def test_the_painter_is_kept_across_frames_while_its_objects_stay_the_same():

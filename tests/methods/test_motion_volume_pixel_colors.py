@@ -156,6 +156,11 @@ def _piece(seed=5, w=40, h=30, straight=True):
     return rgba, depth, ids, ray, np.float32(0.75), np.array([3, 8], np.int32), np.array(maps)
 
 
+def _arg(piece) -> dict:
+    """A piece as ``_core._scatter_pieces`` reads it: a dict of its parts."""
+    return dict(zip(("rgba", "depth", "ids", "ray", "weight", "objects", "maps"), piece))
+
+
 def _explicit(piece, w, h):
     """The same splat with every path made in numpy (the previous implementation's way)."""
     rgba, depth, ids, ray, weight, objects, maps = piece
@@ -174,7 +179,7 @@ def _explicit(piece, w, h):
 def test_scatter_pieces_is_the_splat_of_explicit_paths(straight):
     piece = _piece(straight=straight)
     before = [np.array(a, copy=True) for a in piece if isinstance(a, np.ndarray)]
-    out = _core._scatter_pieces([piece], 9, 48, 36)
+    out = _core._scatter_pieces([_arg(piece)], 9, 48, 36)
     np.testing.assert_allclose(out, _explicit(piece, 48, 36), atol=2e-6)
     assert out[..., 3].sum() > 100.0
     for a, b in zip([a for a in piece if isinstance(a, np.ndarray)], before):
@@ -187,7 +192,7 @@ def test_scatter_pieces_checks_its_input():
     def with_(k, v):
         p = list(piece)
         p[k] = v
-        return [tuple(p)]
+        return [_arg(p)]
 
     for pieces, name in [
         (with_(0, piece[0][..., :3].copy()), "rgba"),
@@ -205,22 +210,22 @@ def test_scatter_pieces_checks_its_input():
     with pytest.raises(ValueError, match="rgba"):
         _core._scatter_pieces(with_(0, bad), 9, 48, 36)
     with pytest.raises(ValueError, match="points"):
-        _core._scatter_pieces([piece], 0, 48, 36)
+        _core._scatter_pieces([_arg(piece)], 0, 48, 36)
     with pytest.raises(ValueError, match="size"):
-        _core._scatter_pieces([piece], 9, 0, 36)
+        _core._scatter_pieces([_arg(piece)], 9, 0, 36)
     assert not _core._scatter_pieces([], 9, 8, 6).any()
 
 
 def test_scatter_pieces_is_the_same_for_any_thread_count_and_releases_the_gil():
     script = (
         f"import hashlib, sys; sys.path.insert(0, {HERE!r})\n"
-        "from test_motion_volume_pixel_colors import _piece\n"
+        "from test_motion_volume_pixel_colors import _arg, _piece\n"
         "from motionblur import _core\n"
-        "ps = [_piece(seed=s, w=160, h=120, straight=s % 2 == 0) for s in range(3)]\n"
+        "ps = [_arg(_piece(seed=s, w=160, h=120, straight=s % 2 == 0)) for s in range(3)]\n"
         "print(hashlib.sha256(_core._scatter_pieces(ps, 9, 170, 130).tobytes()).hexdigest())\n"
     )
     assert len(set(digests(script))) == 1
-    ps = [_piece(seed=s, w=160, h=120) for s in range(3)]
+    ps = [_arg(_piece(seed=s, w=160, h=120)) for s in range(3)]
     assert ticks_during(lambda: _core._scatter_pieces(ps, 9, 170, 130)) > 0
 
 

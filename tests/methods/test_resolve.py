@@ -41,10 +41,10 @@ def test_resolve_matches_numpy_with_ties_and_empty_samples(s):
         np.full((20, 30), 7, np.float32),
         np.full((20, 30), 7, np.int32),
     )
-    _core._resolve(layer.rgba, layer.depth, layer.ids, s, *out, 3, 4)
+    _core._resolve(layer, s, Layer(*out), (3, 4))
     np.testing.assert_array_equal(out[2][4:11, 3:8], want[2])
     assert (out[2][:4] == 7).all() and (out[2][:, :3] == 7).all() and (out[0][11:] == 7).all()
     with pytest.raises(ValueError, match="rectangle"):
-        _core._resolve(layer.rgba, layer.depth, layer.ids, s, *out, 27, 0)
+        _core._resolve(layer, s, Layer(*out), (27, 0))
     with pytest.raises(ValueError, match="samples"):
-        _core._resolve(layer.rgba[:, :-1], layer.depth[:, :-1], layer.ids[:, :-1], s, *out)
+        _core._resolve(Layer(layer.rgba[:, :-1], layer.depth[:, :-1], layer.ids[:, :-1]), s, Layer(*out))

@@ -80,8 +80,9 @@ def accumulate(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> F
         views = np.linalg.inv(scene.camera_poses_at(times))  # each sample's camera_at(t).view
         painter = painter_for(scene, everything)
         rgba, depth, ids = painter.core.accumulate_moving(
-            times, weights, ref, views, np.ascontiguousarray(cam.projection), cam.width, cam.height
-        )
+            {"times": times, "weights": weights, "reference": ref}, views,
+            np.ascontiguousarray(cam.projection), cam.width, cam.height,
+        )  # fmt: skip
         stats["draw_calls"] = len(times)
         if dim < 1.0:
             cam = supersampled(scene.camera_at(scene.reference_t), aa)
@@ -101,8 +102,10 @@ def accumulate(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> F
     c = np.ascontiguousarray
     layer = static.layer
     out = painter.core.accumulate_still(
-        times, weights, ref, c(cam.view), c(cam.projection), c(cam.view_projection), cam.width, cam.height,
-        aa, (c(layer.rgba), c(layer.depth), c(layer.ids)), static.opaque,
+        {"times": times, "weights": weights, "reference": ref},
+        {"view": c(cam.view), "projection": c(cam.projection), "view_projection": c(cam.view_projection),
+         "width": cam.width, "height": cam.height, "aa": aa},
+        Layer(c(layer.rgba), c(layer.depth), c(layer.ids)), static.opaque,
     )  # fmt: skip
     if out is None:
         frame = Frame(

@@ -63,8 +63,9 @@ def composite(a: Layer, b: Layer) -> Layer:
     depth = np.array(b.depth, dtype=np.float32, order="C")
     ids = np.array(b.ids, dtype=np.int32, order="C")
     c = np.ascontiguousarray
-    _core._composite(c(a.rgba), c(a.depth), c(a.ids), rgba, depth, ids)
-    return Layer(rgba, depth, ids)
+    out = Layer(rgba, depth, ids)
+    _core._composite(Layer(c(a.rgba), c(a.depth), c(a.ids)), out)
+    return out
 
 
 def object_draw(obj: Object, t: float, object_id: int, vertices=None) -> Draw:
@@ -172,21 +173,24 @@ def raw_layer(
     never written."""
     if background is not None:
         c = np.ascontiguousarray
-        background = (
+        background = Layer(
             c(background.rgba, dtype=np.float32), c(background.depth, dtype=np.float32),
-            c(background.ids, dtype=np.int32), *map(int, background_origin),
+            c(background.ids, dtype=np.int32),
         )  # fmt: skip
     rgba, depth, ids, _velocity, _stats = _core._rasterize(
-        np.ascontiguousarray(view, dtype=np.float64),
-        np.ascontiguousarray(projection, dtype=np.float64),
-        int(width),
-        int(height),
-        [d._args() for d in draws],
-        int(samples),
-        "exact",
-        shading,
-        lights,
-        tuple(map(float, np.broadcast_to(ambient, (3,)))),
+        draws,
+        {
+            "view": np.ascontiguousarray(view, dtype=np.float64),
+            "projection": np.ascontiguousarray(projection, dtype=np.float64),
+            "width": int(width),
+            "height": int(height),
+            "samples": int(samples),
+            "blend": "exact",
+            "shading": shading,
+            "lights": lights,
+            "ambient": tuple(map(float, np.broadcast_to(ambient, (3,)))),
+            "origin": tuple(map(int, background_origin)),
+        },
         background,
     )
     return Layer(rgba, depth, ids)
@@ -247,8 +251,8 @@ def _resolve_into(layer: Layer, samples: int, rgba, depth, ids, x0: int, y0: int
     """Resolve the supersampled ``layer`` into the pixel arrays at pixel (x0, y0), in place (Rust)."""
     c = np.ascontiguousarray
     _core._resolve(
-        c(layer.rgba, dtype=np.float32), c(layer.depth, dtype=np.float32), c(layer.ids, dtype=np.int32),
-        samples, rgba, depth, ids, x0, y0,
+        Layer(c(layer.rgba, dtype=np.float32), c(layer.depth, dtype=np.float32), c(layer.ids, dtype=np.int32)),
+        samples, Layer(rgba, depth, ids), (x0, y0),
     )  # fmt: skip
 
 

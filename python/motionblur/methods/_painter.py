@@ -100,7 +100,10 @@ class Painter:
             rgba = np.ascontiguousarray(np.atleast_2d(o.rgba), dtype=np.float32)
             normals = mesh_constant(o.mesh, "normals32", _normals32) if o.shading == "lambert" else None
             keys = None if o.motion is None else o.motion._keys
-            items.append((k, o.shading, o.mesh.vertices, faces, rgba, normals, keys))
+            items.append(
+                {"id": k, "shading": o.shading, "vertices": o.mesh.vertices, "faces": faces, "rgba": rgba,
+                 "normals": normals, "keyframes": keys}
+            )  # fmt: skip
         lights = [(tuple(map(float, li.direction)), tuple(map(float, li.intensity))) for li in scene.lights]
         self.core = _core._Painter(items, lights, tuple(map(float, scene.ambient)))
 

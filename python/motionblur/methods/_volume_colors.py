@@ -245,7 +245,10 @@ def scattered(scene: Scene, cam: Camera, movers, keys_of, win, pieces: int) -> n
                 for (_, o), ks in zip(movers, keys)
             ]
         )
-        work.append((lay.rgba, lay.depth, lay.ids, ray, np.float32(weight), objects, maps))
+        work.append(
+            {"rgba": lay.rgba, "depth": lay.depth, "ids": lay.ids, "ray": ray, "weight": np.float32(weight),
+             "objects": objects, "maps": maps}
+        )  # fmt: skip
     if not work:
         return np.zeros((y1 - y0, x1 - x0, 4), np.float32)
     if step == 1:
