@@ -45,6 +45,7 @@ if TYPE_CHECKING:  # what the names served at first use are, for type checkers a
     from .methods._estimate import exact
     from .methods.accumulation import Sequence
     from .scenes_builtin import SCENES, builtin_scene
+    from .shake import BlurKernels, blur_kernels, camera_shake
 
 #: Names served at their first use: name -> (module, attribute; None for the module itself).
 _LAZY: dict[str, tuple[str, str | None]] = {
@@ -67,6 +68,10 @@ _LAZY: dict[str, tuple[str, str | None]] = {
     "SCENES": (".scenes_builtin", "SCENES"),
     "builtin_scene": (".scenes_builtin", "builtin_scene"),
     "tune_malloc": ("._malloc", "tune_malloc"),
+    "shake": (".shake", None),
+    "camera_shake": (".shake", "camera_shake"),
+    "blur_kernels": (".shake", "blur_kernels"),
+    "BlurKernels": (".shake", "BlurKernels"),
 }
 
 __all__ = [
@@ -106,6 +111,10 @@ __all__ += [
     "MethodNotApplicableWarning",
     "PoorBlurWarning",
     "tune_malloc",
+    "shake",
+    "camera_shake",
+    "blur_kernels",
+    "BlurKernels",
 ]
 
 
