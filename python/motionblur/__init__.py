@@ -36,7 +36,17 @@ from .shell import *  # noqa: F403
 from .threads import get_num_threads, set_num_threads
 
 if TYPE_CHECKING:  # what the names served at first use are, for type checkers and linters
-    from . import analytic, evaluation, image, interop, meshes, scenes_builtin, scenes_real  # noqa: F401
+    from . import (  # noqa: F401
+        analytic,
+        evaluation,
+        ground_truth,
+        image,
+        interop,
+        meshes,
+        scenes_builtin,
+        scenes_real,
+        shake,
+    )
     from ._malloc import tune_malloc
     from .analytic import MovingDraw, coverage, rasterize_motion
     from .evaluation import metrics, reference
@@ -69,6 +79,7 @@ _LAZY: dict[str, tuple[str, str | None]] = {
     "builtin_scene": (".scenes_builtin", "builtin_scene"),
     "tune_malloc": ("._malloc", "tune_malloc"),
     "shake": (".shake", None),
+    "ground_truth": (".ground_truth", None),
     "camera_shake": (".shake", "camera_shake"),
     "blur_kernels": (".shake", "blur_kernels"),
     "BlurKernels": (".shake", "BlurKernels"),
@@ -112,6 +123,7 @@ __all__ += [
     "PoorBlurWarning",
     "tune_malloc",
     "shake",
+    "ground_truth",
     "camera_shake",
     "blur_kernels",
     "BlurKernels",

@@ -144,34 +144,14 @@ def _grid_points(scene: Scene, grid) -> np.ndarray:
     return np.stack([x.ravel(), y.ravel()], axis=1)
 
 
-def _camera_rays(scene: Scene, points: np.ndarray) -> np.ndarray:
-    """(N,3) camera-space directions through ``points`` with view-axis length 1 (z = -1)."""
-    cam = scene.camera
-    t = np.tan(cam.yfov / 2.0)
-    x = (2.0 * points[:, 0] / cam.width - 1.0) * t * cam.aspect
-    y = (1.0 - 2.0 * points[:, 1] / cam.height) * t
-    return np.stack([x, y, -np.ones(len(points))], axis=1)
-
-
-def _project(scene: Scene, pose: np.ndarray, world: np.ndarray, w: float) -> np.ndarray:
-    """(N,2) pixels of homogeneous world points ``world`` (N,3) with weight ``w`` (1 a point,
-    0 a direction) seen from camera-to-world ``pose``."""
-    cam = scene.camera
-    view = np.linalg.inv(pose)
-    c = world @ view[:3, :3].T + w * view[:3, 3]
-    t = np.tan(cam.yfov / 2.0)
-    depth = -c[:, 2]
-    x = c[:, 0] / (depth * t * cam.aspect)
-    y = c[:, 1] / (depth * t)
-    return np.stack([(x + 1.0) * cam.width / 2.0, (1.0 - y) * cam.height / 2.0], axis=1)
-
-
 def _splat(
     path: np.ndarray, weights: np.ndarray, centre: np.ndarray, radius: int
 ) -> tuple[np.ndarray, float]:
     n = 2 * radius + 1
     k = np.zeros((n, n), np.float64)
-    d = path - centre + radius
+    seen = np.isfinite(path).all(axis=1)  # a path point behind the camera is clipped weight
+    d = path[seen] - centre + radius
+    weights = weights[seen]
     x0, y0 = np.floor(d[:, 0]).astype(np.int64), np.floor(d[:, 1]).astype(np.int64)
     fx, fy = d[:, 0] - x0, d[:, 1] - y0
     for dx, dy, f in (
@@ -204,53 +184,17 @@ def blur_kernels(
     path). Raises ValueError for a deforming object seen at a point (its surface points have no
     rigid path). Returns :class:`BlurKernels`.
     """
+    from .ground_truth import surface_paths
     from .methods._accumulate import sample_times
-    from .methods._sharp import sharp_frame
 
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
-    if points is None:
-        pts = _grid_points(scene, grid)
-    else:
-        pts = as_array(points, "points", np.float64, (None, 2)).copy()
-        inside = (pts >= 0).all(1) & (pts[:, 0] < scene.camera.width) & (pts[:, 1] < scene.camera.height)
-        if not inside.all():
-            raise ValueError("points: every point must lie inside the image")
+    pts = _grid_points(scene, grid) if points is None else points
     times, weights = sample_times(scene, samples, "stratified")
-    ref_t = scene.reference_t
-    frame = sharp_frame(scene, ref_t, velocity=None)
-    px = np.minimum(pts.astype(np.int64), [scene.camera.width - 1, scene.camera.height - 1])
-    depth = frame.depth[px[:, 1], px[:, 0]].astype(np.float64)
-    ids = frame.ids[px[:, 1], px[:, 0]].astype(np.int32)
-    ref_pose = scene.camera_pose_at(ref_t)
-    rays = _camera_rays(scene, pts)
-    far = ~np.isfinite(depth)
-    world = np.where(
-        far[:, None],
-        rays @ ref_pose[:3, :3].T,
-        (rays * np.where(far, 0, depth)[:, None]) @ ref_pose[:3, :3].T + ref_pose[:3, 3],
-    )
-    paths = np.empty((len(pts), len(times), 2))
-    local = world.copy()
-    for i, k in enumerate(ids):
-        if k >= 0:
-            obj = scene.objects[k]
-            if obj.motion is not None and obj.motion.is_deforming:
-                raise ValueError(
-                    f"points: point {i} sees object {k}, which deforms; kernels need rigid motion"
-                )
-            local[i] = np.linalg.solve(obj.transform_at(ref_t), np.append(world[i], 1.0))[:3]
-    poses = scene.camera_poses_at(times)
-    for j, t in enumerate(times):
-        moved = local.copy()
-        for i, k in enumerate(ids):
-            if k >= 0:
-                m = scene.objects[k].transform_at(t)
-                moved[i] = m[:3, :3] @ local[i] + m[:3, 3]
-        paths[far, j] = _project(scene, poses[j], moved[far], 0.0)
-        paths[~far, j] = _project(scene, poses[j], moved[~far], 1.0)
+    found = surface_paths(scene, pts, times)
+    pts, paths = found.points, found.paths
     if radius is None:
-        reach = np.abs(paths - pts[:, None, :]).max() if len(pts) else 0.0
+        reach = np.nanmax(np.abs(paths - pts[:, None, :]), initial=0.0)
         radius = int(np.ceil(reach)) + 1
     radius = as_int(radius, "radius", minimum=0, maximum=1024)
     out = [_splat(paths[i], weights, pts[i], radius) for i in range(len(pts))]
@@ -258,4 +202,4 @@ def blur_kernels(
         np.stack([k for k, _ in out]) if out else np.zeros((0, 2 * radius + 1, 2 * radius + 1), np.float32)
     )
     clipped = np.array([c for _, c in out], np.float32)
-    return BlurKernels(pts, kernels, paths, times, weights, clipped, ids)
+    return BlurKernels(pts, kernels, paths, times, weights, clipped, found.ids)

@@ -1,0 +1,223 @@
+"""Ground truth that follows surfaces through the shutter: optical flow, sharp frames, the blur's
+mean motion and the objects' screen trajectories.
+
+Every function here follows the surface seen at a pixel at one time (from a sharp render's depth
+and ids) with its object's rigid motion and the camera's motion, and projects it at other
+times; the background, where nothing is seen, is a point at infinity (it moves with the camera's
+rotation only). These are closed forms of the scene's motion, not estimates from images.
+Deforming objects have no rigid path for their surface points: pixels that see one raise
+ValueError naming the object.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._validate import as_array, as_int
+from .raster import Frame
+from .scene import Scene
+
+__all__ = ["SurfacePaths", "surface_paths", "flow", "sharp_frames", "mean_motion", "trajectories"]
+
+_NAMED_TIMES = {"open": 0.0, "center": 0.5, "close": 1.0}
+
+
+def _times(times, name: str = "times") -> np.ndarray:
+    if times is None:
+        return np.array([0.0, 0.5, 1.0])
+    t = np.array(
+        [_NAMED_TIMES.get(x, x) if isinstance(x, str) else x for x in np.atleast_1d(times)], dtype=object
+    )
+    t = as_array(t.astype(np.float64), name, np.float64, (None,))
+    if ((t < 0.0) | (t > 1.0)).any():
+        raise ValueError(f"{name}: shutter times must be in [0, 1]")
+    return t
+
+
+def _camera_rays(scene: Scene, points: np.ndarray) -> np.ndarray:
+    """(N,3) camera-space directions through pixel ``points`` (N,2) with view-axis length 1."""
+    cam = scene.camera
+    t = np.tan(cam.yfov / 2.0)
+    x = (2.0 * points[:, 0] / cam.width - 1.0) * t * cam.aspect
+    y = (1.0 - 2.0 * points[:, 1] / cam.height) * t
+    return np.stack([x, y, -np.ones(len(points))], axis=1)
+
+
+def _project(scene: Scene, pose: np.ndarray, world: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """(N,2) pixels of homogeneous world points (``world`` (N,3), ``w`` (N,) 1 for a point, 0 for
+    a direction) seen from camera-to-world ``pose``."""
+    cam = scene.camera
+    view = np.linalg.inv(pose)
+    c = world @ view[:3, :3].T + w[:, None] * view[:3, 3]
+    t = np.tan(cam.yfov / 2.0)
+    depth = np.where(-c[:, 2] > 0.0, -c[:, 2], np.nan)  # behind the camera: no pixel
+    x = c[:, 0] / (depth * t * cam.aspect)
+    y = c[:, 1] / (depth * t)
+    return np.stack([(x + 1.0) * cam.width / 2.0, (1.0 - y) * cam.height / 2.0], axis=1)
+
+
+@dataclass(frozen=True)
+class SurfacePaths:
+    """Where the surfaces seen at N pixels at time ``source`` are at other shutter times.
+
+    ``points`` (N,2) float64 pixels (x right, y down, pixel centres at +0.5); ``ids`` (N,) int32
+    object seen (-1 background); ``depth`` (N,) float64 view-axis distance at ``source`` (inf
+    for background); ``times`` (S,) float64; ``paths`` (N,S,2) float64 pixel positions at those
+    times (NaN where the point is behind the camera then)."""
+
+    points: NDArray[np.float64]
+    ids: NDArray[np.int32]
+    depth: NDArray[np.float64]
+    source: float
+    times: NDArray[np.float64]
+    paths: NDArray[np.float64]
+
+
+def _local_points(scene: Scene, world: np.ndarray, ids: np.ndarray, t: float) -> np.ndarray:
+    """World points (N,3) seen on objects ``ids`` at ``t`` in their objects' own frames."""
+    local = world.copy()
+    for k in np.unique(ids[ids >= 0]):
+        obj = scene.objects[int(k)]
+        if obj.motion is not None and obj.motion.is_deforming:
+            raise ValueError(f"scene: object {int(k)} deforms; its surface points have no rigid path")
+        m = np.linalg.inv(obj.transform_at(t))
+        sel = ids == k
+        local[sel] = world[sel] @ m[:3, :3].T + m[:3, 3]
+    return local
+
+
+def _ray_depth(scene: Scene, k: int, t: float, eye: np.ndarray, rays: np.ndarray) -> np.ndarray:
+    """(N,) the view-axis distance along ``rays`` (N,3, view-axis length 1) from ``eye`` to the
+    nearest triangle of object ``k`` at time ``t`` (Moller-Trumbore), inf where none is hit."""
+    obj = scene.objects[k]
+    v = obj.world_vertices(t)[obj.mesh.faces]  # (F,3,3)
+    e1, e2 = v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
+    out = np.full(len(rays), np.inf)
+    for i, d in enumerate(rays):
+        p = np.cross(d, e2)
+        det = (e1 * p).sum(1)
+        ok = np.abs(det) > 1e-12
+        inv = np.where(ok, 1.0 / np.where(ok, det, 1.0), 0.0)
+        s = eye - v[:, 0]
+        u = (s * p).sum(1) * inv
+        q = np.cross(s, e1)
+        w = (q * d).sum(1) * inv
+        dist = (q * e2).sum(1) * inv
+        hit = ok & (u >= 0) & (w >= 0) & (u + w <= 1) & (dist > 0)
+        if hit.any():
+            out[i] = dist[hit].min()
+    return out
+
+
+def surface_paths(scene: Scene, points, times, *, source=None, frame: Frame | None = None) -> SurfacePaths:
+    """Follow the surfaces seen at ``points`` (N,2) pixels at shutter time ``source`` (default
+    the scene's reference time) to each of ``times`` (S,) (floats in [0, 1] or 'open', 'center',
+    'close'). ``frame``: the sharp frame at ``source`` to read the object seen (ids) and, at
+    pixel centres, its depth from (rendered when None); at other points the depth is found by
+    casting the ray onto that object's triangles. Returns :class:`SurfacePaths`."""
+    from .methods._sharp import sharp_frame
+
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
+    src = scene.reference_t if source is None else float(_times(source, "source")[0])
+    ts = _times(times)
+    pts = as_array(points, "points", np.float64, (None, 2)).copy()
+    w, h = scene.camera.width, scene.camera.height
+    if len(pts) and not ((pts >= 0).all() and (pts[:, 0] < w).all() and (pts[:, 1] < h).all()):
+        raise ValueError("points: every point must lie inside the image")
+    if frame is None:
+        frame = sharp_frame(scene, src, velocity=None)
+    px = pts.astype(np.int64)
+    depth = frame.depth[px[:, 1], px[:, 0]].astype(np.float64)
+    ids = frame.ids[px[:, 1], px[:, 0]].astype(np.int32)
+    pose = scene.camera_pose_at(src)
+    rays = _camera_rays(scene, pts) @ pose[:3, :3].T
+    off = (ids >= 0) & (np.abs(pts - px - 0.5) > 1e-9).any(axis=1)  # not a pixel centre: cast
+    for k in np.unique(ids[off]):
+        sel = off & (ids == k)
+        depth[sel] = _ray_depth(scene, int(k), src, pose[:3, 3], rays[sel])
+    ids[~np.isfinite(depth)] = -1
+    far = ~np.isfinite(depth)
+    world = np.where(far[:, None], rays, rays * np.where(far, 0.0, depth)[:, None] + pose[:3, 3])
+    local = _local_points(scene, world, ids, src)
+    weight = np.where(far, 0.0, 1.0)
+    paths = np.empty((len(pts), len(ts), 2))
+    for j, (t, cam_pose) in enumerate(zip(ts, scene.camera_poses_at(ts))):
+        moved = local.copy()
+        for k in np.unique(ids[ids >= 0]):
+            m = scene.objects[int(k)].transform_at(float(t))
+            sel = ids == k
+            moved[sel] = local[sel] @ m[:3, :3].T + m[:3, 3]
+        paths[:, j] = _project(scene, cam_pose, moved, weight)
+    return SurfacePaths(pts, ids, depth, src, ts, paths)
+
+
+def _pixel_centres(scene: Scene) -> np.ndarray:
+    h, w = scene.camera.height, scene.camera.width
+    y, x = np.mgrid[0:h, 0:w] + 0.5
+    return np.stack([x.ravel(), y.ravel()], axis=1)
+
+
+def flow(scene: Scene, times=None, *, source=None) -> NDArray[np.float32]:
+    """(S,H,W,2) float32 optical flow in pixels (+x right, +y down) from time ``source`` (default
+    the scene's reference time) to each of ``times`` (default open, center, close): where the
+    surface seen at each pixel centre at ``source`` is at that time, minus the pixel centre.
+    Backward flow (from a time to ``source``) is ``flow(scene, [source], source=time)``."""
+    h, w = scene.camera.height, scene.camera.width
+    p = surface_paths(scene, _pixel_centres(scene), _times(times), source=source)
+    d = p.paths - p.points[:, None, :]
+    return np.ascontiguousarray(d.reshape(h, w, -1, 2).transpose(2, 0, 1, 3)).astype(np.float32)
+
+
+def mean_motion(scene: Scene, samples: int = 64) -> NDArray[np.float32]:
+    """(H,W,2) float32 the blur's mean motion per pixel: the shutter-weighted mean displacement,
+    from its pixel centre at the reference time, of the surface seen there (``samples``
+    stratified shutter times)."""
+    from .methods._accumulate import sample_times
+
+    h, w = scene.camera.height, scene.camera.width
+    times, weights = sample_times(scene, samples, "stratified")
+    p = surface_paths(scene, _pixel_centres(scene), times)
+    d = ((p.paths - p.points[:, None, :]) * weights[None, :, None]).sum(axis=1)
+    return d.reshape(h, w, 2).astype(np.float32)
+
+
+def sharp_frames(scene: Scene, times=None, aa: int = 1) -> list[Frame]:
+    """Sharp frames (rgba, depth, ids) at shutter ``times`` (default open, center, close), each the
+    scene rasterized by the camera at that time with ``aa`` (1, 2 or 4) samples per pixel along
+    each axis; ``stats["time"]`` is the time."""
+    from .methods._sharp import sharp_frame
+
+    out = []
+    for t in _times(times):
+        f = sharp_frame(scene, float(t), as_int(aa, "aa", minimum=1, maximum=4), velocity=None)
+        f.stats["time"] = float(t)
+        out.append(f)
+    return out
+
+
+def trajectories(scene: Scene, samples: int = 64) -> list[dict]:
+    """Per object, its screen-space path over the shutter: a list (one dict per object, in
+    ``scene.objects`` order) with ``name``, ``times`` (S,) stratified shutter times, ``origin``
+    (S,2) the pixel position of the object's origin (its mesh's coordinate origin moved by its
+    motion; NaN when behind the camera) and ``bbox`` (S,4) the pixel bounding box (x0, y0, x1,
+    y1) of its projected vertices in front of the camera (NaN when none is)."""
+    from .methods._accumulate import sample_times
+
+    samples = as_int(samples, "samples", minimum=1, maximum=1 << 16)
+    times, _ = sample_times(scene, samples, "stratified")
+    poses = scene.camera_poses_at(times)
+    out = []
+    for obj in scene.objects:
+        origin, bbox = np.empty((len(times), 2)), np.full((len(times), 4), np.nan)
+        for j, t in enumerate(times):
+            origin[j] = _project(scene, poses[j], obj.transform_at(float(t))[None, :3, 3], np.ones(1))[0]
+            q = _project(scene, poses[j], obj.world_vertices(float(t)), np.ones(len(obj.mesh.vertices)))
+            q = q[np.isfinite(q).all(axis=1)]
+            if len(q):
+                bbox[j] = [*q.min(0), *q.max(0)]
+        out.append({"name": obj.name, "times": times, "origin": origin, "bbox": bbox})
+    return out
