@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._validate import as_array, as_int
-from .raster import Frame
+from .raster import Camera, Frame
 from .scene import Scene
 
 __all__ = ["SurfacePaths", "surface_paths", "flow", "sharp_frames", "mean_motion", "trajectories"]
@@ -46,17 +46,12 @@ def _camera_rays(scene: Scene, points: np.ndarray) -> np.ndarray:
     return np.stack([x, y, -np.ones(len(points))], axis=1)
 
 
-def _project(scene: Scene, pose: np.ndarray, world: np.ndarray, w: np.ndarray) -> np.ndarray:
+def _project(camera: Camera, world: np.ndarray, w: np.ndarray) -> np.ndarray:
     """(N,2) pixels of homogeneous world points (``world`` (N,3), ``w`` (N,) 1 for a point, 0 for
-    a direction) seen from camera-to-world ``pose``."""
-    cam = scene.camera
-    view = np.linalg.inv(pose)
-    c = world @ view[:3, :3].T + w[:, None] * view[:3, 3]
-    t = np.tan(cam.yfov / 2.0)
-    depth = np.where(-c[:, 2] > 0.0, -c[:, 2], np.nan)  # behind the camera: no pixel
-    x = c[:, 0] / (depth * t * cam.aspect)
-    y = c[:, 1] / (depth * t)
-    return np.stack([(x + 1.0) * cam.width / 2.0, (1.0 - y) * cam.height / 2.0], axis=1)
+    a direction) seen by ``camera`` (:meth:`Camera.project`; a direction d is the point at d
+    from this camera's eye, NaN behind the eye)."""
+    points = np.where(w[:, None] > 0.0, world, camera.pose[:3, 3] + world)
+    return camera.project(points)[0]
 
 
 @dataclass(frozen=True)
@@ -145,13 +140,13 @@ def surface_paths(scene: Scene, points, times, *, source=None, frame: Frame | No
     local = _local_points(scene, world, ids, src)
     weight = np.where(far, 0.0, 1.0)
     paths = np.empty((len(pts), len(ts), 2))
-    for j, (t, cam_pose) in enumerate(zip(ts, scene.camera_poses_at(ts))):
+    for j, t in enumerate(ts):
         moved = local.copy()
         for k in np.unique(ids[ids >= 0]):
             m = scene.objects[int(k)].transform_at(float(t))
             sel = ids == k
             moved[sel] = local[sel] @ m[:3, :3].T + m[:3, 3]
-        paths[:, j] = _project(scene, cam_pose, moved, weight)
+        paths[:, j] = _project(scene.camera_at(float(t)), moved, weight)
     return SurfacePaths(pts, ids, depth, src, ts, paths)
 
 
@@ -209,15 +204,20 @@ def trajectories(scene: Scene, samples: int = 64) -> list[dict]:
 
     samples = as_int(samples, "samples", minimum=1, maximum=1 << 16)
     times, _ = sample_times(scene, samples, "stratified")
-    poses = scene.camera_poses_at(times)
+    cameras = [scene.camera_at(float(t)) for t in times]
     out = []
     for obj in scene.objects:
         origin, bbox = np.empty((len(times), 2)), np.full((len(times), 4), np.nan)
         for j, t in enumerate(times):
-            origin[j] = _project(scene, poses[j], obj.transform_at(float(t))[None, :3, 3], np.ones(1))[0]
-            q = _project(scene, poses[j], obj.world_vertices(float(t)), np.ones(len(obj.mesh.vertices)))
+            origin[j] = cameras[j].project(obj.transform_at(float(t))[None, :3, 3])[0][0]
+            q = cameras[j].project(obj.world_vertices(float(t)))[0]
             q = q[np.isfinite(q).all(axis=1)]
             if len(q):
                 bbox[j] = [*q.min(0), *q.max(0)]
         out.append({"name": obj.name, "times": times, "origin": origin, "bbox": bbox})
     return out
+
+
+from ._namespace import tidy  # noqa: E402  (dir() lists the API only; see motionblur._namespace)
+
+tidy(__name__)

@@ -203,3 +203,8 @@ def blur_kernels(
     )
     clipped = np.array([c for _, c in out], np.float32)
     return BlurKernels(pts, kernels, paths, times, weights, clipped, found.ids)
+
+
+from ._namespace import tidy  # noqa: E402  (dir() lists the API only; see motionblur._namespace)
+
+tidy(__name__)
