@@ -11,7 +11,7 @@
 //! skip the quadrature.
 use super::quadrature::{gauss, Quadrature};
 use super::visibility::{
-    depth_at, sort, sweep, Backdrop, Frag, Link, Overflow, Sweep, BACKDROP, NONE,
+    depth_at, sort, sweep, Frag, Link, Overflow, StaticSample, Sweep, BACKDROP, NONE,
 };
 use crate::shutter::Shutter;
 
@@ -105,7 +105,7 @@ fn density(shutter: &Shutter, t: f64) -> f64 {
 pub fn resolve(
     frags: &mut [Frag],
     links: &[Link],
-    bg: &Backdrop,
+    bg: &StaticSample,
     layers: &mut impl Layers,
     shutter: &Shutter,
     breaks: &[f64],
@@ -302,7 +302,7 @@ fn power_of_two(x: f64) -> bool {
 fn composite_uniform(
     order: &[(f64, usize)],
     frags: &[Frag],
-    bg: &Backdrop,
+    bg: &StaticSample,
     layers: &impl Layers,
 ) -> Option<[f64; 4]> {
     let mut sum = [0.0f64; 4];
@@ -374,7 +374,7 @@ mod tests {
         next: NONE,
     }];
 
-    const EMPTY: Backdrop = Backdrop {
+    const EMPTY: StaticSample = StaticSample {
         rgba: [0.0; 4],
         depth: f32::INFINITY,
         id: -1,
@@ -455,7 +455,7 @@ mod tests {
         let mut l = Flat {
             colors: vec![[1.0, 0.0, 0.0, 0.5]],
         };
-        let bg = Backdrop {
+        let bg = StaticSample {
             rgba: [0.0, 0.0, 1.0, 1.0],
             depth: 5.0,
             id: 3,

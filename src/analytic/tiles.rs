@@ -17,7 +17,7 @@ use super::poly::MAX_SPANS;
 use super::prim::{Corners, Cover, Edges, Prim};
 use super::resolve::{self, Scratch};
 use super::shade::{SampleShader, TilePrim};
-use super::visibility::{Backdrop as Behind, Frag, Link, Overflow, BACK, NONE};
+use super::visibility::{Frag, Link, Overflow, StaticSample, BACK, NONE};
 use crate::error::{Error, Result};
 
 /// Tile side in samples (a multiple of every supersampling factor).
@@ -548,22 +548,17 @@ impl Ctx<'_> {
         }
         Ok(())
     }
-    fn behind(&self, ix: i32, iy: i32) -> Behind {
+    fn behind(&self, ix: i32, iy: i32) -> StaticSample {
         match &self.input.backdrop {
-            None => Behind {
+            None => StaticSample {
                 rgba: [0.0; 4],
                 depth: f32::INFINITY,
                 id: -1,
             },
             Some(b) => {
                 let i = (iy * self.ws + ix) as usize;
-                Behind {
-                    rgba: [
-                        b.rgba[4 * i],
-                        b.rgba[4 * i + 1],
-                        b.rgba[4 * i + 2],
-                        b.rgba[4 * i + 3],
-                    ],
+                StaticSample {
+                    rgba: b.rgba_at(i),
                     depth: b.depth[i],
                     id: b.ids[i],
                 }

@@ -48,9 +48,10 @@ pub const NONE: u32 = u32::MAX;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Overflow;
 
-/// The static scene behind the moving triangles at this sample: opaque colour and its depth.
+/// The static layer (the frame's backdrop) at one sample: the opaque colour behind the moving
+/// triangles, its depth and id.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Backdrop {
+pub struct StaticSample {
     /// Premultiplied RGBA.
     pub rgba: [f32; 4],
     /// View depth, `inf` where nothing is there.
@@ -144,7 +145,7 @@ pub fn sort(frags: &mut [Frag]) {
 pub fn sweep(
     frags: &[Frag],
     links: &[Link],
-    bg: &Backdrop,
+    bg: &StaticSample,
     opaque: &[bool],
     breaks: &[f64],
     max_cuts: usize,
@@ -348,7 +349,7 @@ mod tests {
         assert_eq!(depth_at(&chain, &links, 0.25), 2.0);
         assert_eq!(depth_at(&chain, &links, 0.875), 1.5);
         let frags = [chain, flat];
-        let bg = Backdrop {
+        let bg = StaticSample {
             rgba: [0.0; 4],
             depth: f32::INFINITY,
             id: -1,

@@ -6,7 +6,7 @@ use pyo3::types::PyDict;
 
 use super::convert::{c_slice, detached_in_pool, face_indices, shaped, ToDict};
 use crate::{
-    render_analytic, AnalyticInput, AnalyticStats, Backdrop, Error, Light, MovingDraw, Quadrature,
+    render_analytic, AnalyticInput, AnalyticStats, Error, Layer, Light, MovingDraw, Quadrature,
     Shading, Shutter, ANALYTIC_TILE_BUDGET,
 };
 
@@ -156,7 +156,9 @@ fn _analytic<'py>(
         .collect();
     let backdrop = match &backdrop {
         None => None,
-        Some(b) => Some(Backdrop {
+        Some(b) => Some(Layer {
+            width: b.1.shape()[1],
+            height: b.1.shape()[0],
             rgba: c_slice(&b.0, "backdrop")?,
             depth: c_slice(&b.1, "backdrop")?,
             ids: c_slice(&b.2, "backdrop")?,
@@ -182,14 +184,15 @@ fn _analytic<'py>(
         shade,
         tile_budget,
     };
-    let frame = detached_in_pool(py, || render_analytic(&input))?;
+    let (frame, stats) = detached_in_pool(py, || render_analytic(&input))?;
     let (h, w) = (frame.height as usize, frame.width as usize);
+    let velocity = frame.velocity.unwrap_or_else(|| vec![0.0; 2 * h * w]);
     Ok((
         shaped(py, frame.rgba, [h, w, 4])?,
         shaped(py, frame.depth, [h, w])?,
         shaped(py, frame.ids, [h, w])?,
-        shaped(py, frame.velocity, [h, w, 2])?,
-        frame.stats.to_dict(py)?,
+        shaped(py, velocity, [h, w, 2])?,
+        stats.to_dict(py)?,
     ))
 }
 

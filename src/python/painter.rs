@@ -7,8 +7,8 @@ use pyo3::prelude::*;
 use super::convert::{c_slice, detached_in_pool, face_indices, rows, shaped};
 use super::motion::PyKeyframes;
 use crate::{
-    accumulate_moving, accumulate_still, Accumulated, Error, Mat4, PaintObject, Painter, Samples,
-    Shading, StaticLayer, StillCamera,
+    accumulate_moving, accumulate_still, Accumulated, Error, Frame, Layer, Mat4, PaintObject,
+    Painter, Samples, Shading, StillCamera,
 };
 
 /// One object as the Python layer passes it: (object id, shading name, vertices f64 (V,3),
@@ -173,11 +173,12 @@ impl PyPainter {
         if background.0.shape() != [height, width, 4] {
             return Err(Error::shape("background", "rgba must be (height, width, 4)").into());
         }
-        let bg = StaticLayer {
+        let bg = Layer {
+            width,
+            height,
             rgba: c_slice(&background.0, "background")?,
             depth: c_slice(&background.1, "background")?,
             ids: c_slice(&background.2, "background")?,
-            opaque,
         };
         let (ts, ws) = (c_slice(&times, "times")?, c_slice(&weights, "weights")?);
         let samples = Samples {
@@ -186,11 +187,11 @@ impl PyPainter {
             reference,
         };
         let inner = &self.inner;
-        let out = detached_in_pool(py, || accumulate_still(inner, &camera, samples, bg))?;
+        let out = detached_in_pool(py, || accumulate_still(inner, &camera, samples, bg, opaque))?;
         let Some(Accumulated {
-            rgba,
-            depth,
-            ids,
+            frame: Frame {
+                rgba, depth, ids, ..
+            },
             window: w,
             draw_calls,
         }) = out
@@ -240,7 +241,8 @@ impl PyPainter {
         let out = detached_in_pool(py, || {
             accumulate_moving(inner, &views, &p, width, height, samples)
         })?;
-        arrays(py, out.rgba, out.depth, out.ids, width, height)
+        let f = out.frame;
+        arrays(py, f.rgba, f.depth, f.ids, width, height)
     }
 }
 

@@ -6,8 +6,8 @@ use pyo3::types::{PyDict, PyTuple};
 
 use super::convert::{c_slice, detached_in_pool, rows, shaped, ToDict};
 use crate::{
-    faces_from_i64, rasterize_over, Background, Blend, Camera, Draw, Error, Light, RasterOptions,
-    Shading, FRAGMENT_CAP, MAX_INTERNAL_SIDE, MAX_PIXELS, MAX_SIDE, SAMPLES,
+    faces_from_i64, rasterize_over, Background, Blend, Camera, Draw, Error, Layer, Light,
+    RasterOptions, Shading, FRAGMENT_CAP, MAX_INTERNAL_SIDE, MAX_PIXELS, MAX_SIDE, SAMPLES,
 };
 
 /// One draw as the Python layer passes it: (vertices f64 (V,3), faces i64 (F,3), rgba f32 (1|V,4),
@@ -48,10 +48,13 @@ fn background<'a>(b: &'a BackgroundArgs<'_>) -> Result<Background<'a>, Error> {
         ));
     }
     Ok(Background {
-        rgba: c_slice(&b.0, "background")?,
-        depth: c_slice(&b.1, "background")?,
-        ids: c_slice(&b.2, "background")?,
-        stride: cols,
+        layer: Layer {
+            width: cols,
+            height: rows,
+            rgba: c_slice(&b.0, "background")?,
+            depth: c_slice(&b.1, "background")?,
+            ids: c_slice(&b.2, "background")?,
+        },
         x0: b.3,
         y0: b.4,
     })
@@ -137,16 +140,17 @@ fn _rasterize<'py>(
     let owned: Vec<Draw> = draws.iter().map(owned_draw).collect::<Result<_, _>>()?;
     drop(draws);
     let bg = background.as_ref().map(self::background).transpose()?;
-    let frame = detached_in_pool(py, || rasterize_over(&camera, &owned, &opts, bg.as_ref()))?;
+    let (frame, stats) =
+        detached_in_pool(py, || rasterize_over(&camera, &owned, &opts, bg.as_ref()))?;
     let (h, w) = (frame.height as usize, frame.width as usize);
-    let stats = frame.stats.to_dict(py)?;
+    let stats = stats.to_dict(py)?;
     Ok((
         shaped(py, frame.rgba, [h, w, 4])?,
         shaped(py, frame.depth, [h, w])?,
         shaped(py, frame.ids, [h, w])?,
-        match frame.velocity.is_empty() {
-            true => py.None().into_bound(py),
-            false => shaped(py, frame.velocity, [h, w, 2])?,
+        match frame.velocity {
+            None => py.None().into_bound(py),
+            Some(v) => shaped(py, v, [h, w, 2])?,
         },
         stats,
     ))

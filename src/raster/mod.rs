@@ -36,7 +36,8 @@ mod tile;
 
 pub use background::Background;
 pub use blend::FRAGMENT_CAP;
-pub use buffers::{Frame, Stats};
+pub use buffers::Stats;
+use buffers::{assume_written, Output};
 pub use camera::check_size;
 pub use camera::{Camera, MAX_INTERNAL_SIDE, MAX_PIXELS, MAX_SIDE, SAMPLES};
 pub use draw::{faces_from_i64, vertex_normals, Draw};
@@ -45,6 +46,7 @@ pub use options::{Blend, Light, Options, Shading};
 
 use crate::budget::{self, Need};
 use crate::error::{Error, Result};
+use crate::frame::Frame;
 use bins::TILE;
 use rayon::prelude::*;
 use setup::{Chunk, Screen, Viewport};
@@ -159,8 +161,9 @@ fn frame_need(camera: &Camera, draws: &[Draw]) -> Result<Need> {
         )
 }
 
-/// Renders `draws` seen by `camera`. Errors name the offending argument.
-pub fn rasterize(camera: &Camera, draws: &[Draw], opts: &Options) -> Result<Frame> {
+/// Renders `draws` seen by `camera`: the frame (velocity only when a draw carries previous
+/// positions) and its counts and timings. Errors name the offending argument.
+pub fn rasterize(camera: &Camera, draws: &[Draw], opts: &Options) -> Result<(Frame, Stats)> {
     rasterize_over(camera, draws, opts, None)
 }
 
@@ -171,7 +174,7 @@ pub fn rasterize_over(
     draws: &[Draw],
     opts: &Options,
     background: Option<&Background>,
-) -> Result<Frame> {
+) -> Result<(Frame, Stats)> {
     let t0 = Instant::now();
     check_size(camera.width, camera.height, opts.samples)?;
     check_options(opts)?;
@@ -198,7 +201,7 @@ pub fn rasterize_over(
     let (w, h) = (camera.width, camera.height);
     let s = opts.samples;
     let vp_matrix = camera.view_projection();
-    let mut frame = Frame::unwritten(w, h, draws.iter().any(|d| d.previous.is_some()))?;
+    let mut frame = Frame::with_capacity(w, h, draws.iter().any(|d| d.previous.is_some()))?;
 
     let viewport = Viewport::new(w * s, h * s);
     let (prepared, screens): (Vec<Prepared>, Vec<Screen>) = draws
@@ -243,7 +246,7 @@ pub fn rasterize_over(
         width: f64::from(w),
         height: f64::from(h),
     };
-    let out = frame.output();
+    let out = Output::new(&mut frame);
     let tiles_x = bins.tiles_x;
     let pixels_per_tile = (TILE as u32 / s) as usize;
     let report = (0..bins.tiles_x * bins.tiles_y)
@@ -297,7 +300,7 @@ pub fn rasterize_over(
     }
     // SAFETY: the tiles partition the frame (tiles_x * tiles_y tiles of pixels_per_tile
     // pixels, clamped to the image, cover every pixel) and each wrote its rectangle above.
-    unsafe { frame.assume_written() };
+    unsafe { assume_written(&mut frame) };
     let t4 = Instant::now();
 
     if bins.refs.capacity() <= KEEP_REFS {
@@ -305,7 +308,7 @@ pub fn rasterize_over(
         KEPT_BINS.with(|kept| kept.replace(bins));
     }
     let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
-    frame.stats = Stats {
+    let stats = Stats {
         triangles: chunks.iter().map(|c| c.tris.len() as u64).sum(),
         fragments,
         approximated: report.approximated,
@@ -321,7 +324,7 @@ pub fn rasterize_over(
         ms_resolve: report.ms[3],
         ms_total: ms(t0, t4),
     };
-    Ok(frame)
+    Ok((frame, stats))
 }
 
 #[cfg(test)]
