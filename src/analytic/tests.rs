@@ -390,10 +390,12 @@ fn uniform_layers_resolve_as_their_shading_does() {
                     &links,
                     &bg,
                     &mut l,
-                    &shutter,
-                    &shutter.breaks(),
-                    quad,
-                    0.5,
+                    resolve::Timing {
+                        shutter: &shutter,
+                        breaks: &shutter.breaks(),
+                        quad,
+                        t_ref: 0.5,
+                    },
                     &mut resolve::Scratch::default(),
                 )
                 .unwrap()

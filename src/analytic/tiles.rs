@@ -209,7 +209,7 @@ impl Ctx<'_> {
         let mut out = std::mem::take(&mut sc.out);
         out.clear();
         out.resize((TILE * TILE) as usize, EMPTY);
-        sc.sweep.max_cuts = self.input.tile_budget / std::mem::size_of::<f64>();
+        sc.sweep.sweep.max_cuts = self.input.tile_budget / std::mem::size_of::<f64>();
         // a stack of rectangles to do: each split pushes two halves of at most 10 levels
         let mut todo = [whole; 12];
         let mut n = 1;
@@ -518,10 +518,12 @@ impl Ctx<'_> {
                     &sc.found.links,
                     &bg,
                     &mut shader,
-                    self.input.shutter,
-                    self.breaks,
-                    self.input.quadrature,
-                    t_ref,
+                    resolve::Timing {
+                        shutter: self.input.shutter,
+                        breaks: self.breaks,
+                        quad: self.input.quadrature,
+                        t_ref,
+                    },
                     &mut sc.sweep,
                 )
                 .map_err(|_| (ix, iy))?;

@@ -2,7 +2,7 @@
 //! to the assembly.
 use rayon::prelude::*;
 
-use super::assemble::{assemble, select_contour, AlphaMode};
+use super::assemble::{assemble, select_contour, AlphaMode, Seen, Sweep};
 use super::coverage::{default_view, CoverageModel};
 use super::filter::Filter;
 use super::rim::Rim;
@@ -62,18 +62,14 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
     if path.is_static() && face_colors {
         let front = vec![true; mesh.faces().len()];
         let alpha = AlphaMode::Rings(vec![1.0; n + 1]);
-        return assemble(
+        let sweep = Sweep {
             mesh,
             path,
-            &front,
-            &[],
-            &[],
-            false,
-            &alpha,
-            opts,
-            None,
-            false,
-        );
+            front: &front,
+            contour: &[],
+            edge_visibility: &[],
+        };
+        return assemble(sweep, false, &alpha, opts, None);
     }
     if path.is_static() {
         // The mesh itself (every vertex, in order), placed by T_0, all leading and opaque.
@@ -195,19 +191,19 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         .filter(|_| !path.is_translation() && !turns_in_place(verts, first, last, total))
         .map(|eye| (path, eye));
     let (contour, edge_vis) = select_contour(mesh, contour, &front, vis.as_ref(), strips);
-    let facing = vis.as_ref().map(|(l, t)| (l.as_slice(), t.as_slice()));
-    let mut vol = assemble(
+    let seen = vis.as_ref().map(|(lead, trail)| Seen {
+        lead,
+        trail,
+        only: opts.visible_only,
+    });
+    let sweep = Sweep {
         mesh,
         path,
-        &front,
-        &contour,
-        &edge_vis,
-        line_eye.is_some(),
-        &alpha,
-        opts,
-        facing,
-        opts.visible_only,
-    )?;
+        front: &front,
+        contour: &contour,
+        edge_visibility: &edge_vis,
+    };
+    let mut vol = assemble(sweep, line_eye.is_some(), &alpha, opts, seen)?;
     vol.contour_error = stored.map_or(0.0, |(_, angle)| angle);
     Ok(vol)
 }
