@@ -342,12 +342,13 @@ impl Ctx<'_> {
             // room for every span the prim can add, so that the pushes below never allocate
             sc.found.reserve(most)?;
             let e = &tp.edges;
-            let span = SpanOf {
+            let mut span = SpanOf {
+                tp,
                 li: sc.prims.len() as u32,
                 t0: times[p.seg as usize],
                 dt: times[p.seg as usize + 1] - times[p.seg as usize],
+                spans: 0,
             };
-            let spans = counts.spans;
             let simple = Edges::simple(p);
             let rows = &mut sc.rows[..(yb - ya) as usize];
             let hull = &p.hull[..p.nhull as usize];
@@ -362,71 +363,25 @@ impl Ctx<'_> {
                     let q = e.at_row(f64::from(ix) + 0.5, &row);
                     counts.tests += 1;
                     let j = ((iy - y0) * TILE + (ix - x0)) as usize;
+                    let mut add = |s: [f64; 2], flag: u32| {
+                        sc.found.add_span(&sc.prims, &mut span, (&q, j), s, flag)
+                    };
                     if let Some(front) = simple {
                         match e.covered_front(front, &q) {
                             Cover::Nothing => {}
-                            Cover::One(a, b) => {
-                                sc.found.add_span(
-                                    &sc.prims,
-                                    &span,
-                                    tp,
-                                    &q,
-                                    j,
-                                    a,
-                                    b,
-                                    0,
-                                    &mut counts.spans,
-                                );
-                            }
-                            Cover::Many(s) => {
-                                for s in s.as_slice() {
-                                    sc.found.add_span(
-                                        &sc.prims,
-                                        &span,
-                                        tp,
-                                        &q,
-                                        j,
-                                        s[0],
-                                        s[1],
-                                        0,
-                                        &mut counts.spans,
-                                    );
-                                }
-                            }
+                            Cover::One(a, b) => add([a, b], 0),
+                            Cover::Many(s) => s.as_slice().iter().for_each(|s| add(*s, 0)),
                         }
                         continue;
                     }
                     let (front, back) = e.covered(p, &q);
-                    for s in front.as_slice() {
-                        sc.found.add_span(
-                            &sc.prims,
-                            &span,
-                            tp,
-                            &q,
-                            j,
-                            s[0],
-                            s[1],
-                            0,
-                            &mut counts.spans,
-                        );
-                    }
-                    for s in back.as_slice() {
-                        sc.found.add_span(
-                            &sc.prims,
-                            &span,
-                            tp,
-                            &q,
-                            j,
-                            s[0],
-                            s[1],
-                            BACK,
-                            &mut counts.spans,
-                        );
-                    }
+                    front.as_slice().iter().for_each(|s| add(*s, 0));
+                    back.as_slice().iter().for_each(|s| add(*s, BACK));
                 }
             }
             // a prim is kept when a fragment or link refers to it (every counted span does)
-            if counts.spans > spans {
+            counts.spans += span.spans;
+            if span.spans > 0 {
                 sc.prims.try_reserve(1).map_err(|_| Overflow)?;
                 sc.prims.push(tp.clone());
                 if Self::held(sc) > budget {
@@ -434,39 +389,7 @@ impl Ctx<'_> {
                 }
             }
         }
-        // group by sample (a stable counting sort)
-        let n = (TILE * TILE) as usize;
-        sc.start.clear();
-        sc.start.resize(n + 1, 0);
-        for (j, _) in &sc.found.raw {
-            sc.start[*j as usize + 1] += 1;
-        }
-        for j in 0..n {
-            sc.start[j + 1] += sc.start[j];
-        }
-        sc.frags.clear();
-        sc.frags
-            .try_reserve(sc.found.raw.len())
-            .map_err(|_| Overflow)?;
-        sc.frags.resize(
-            sc.found.raw.len(),
-            Frag {
-                t0: 0.0,
-                t1: 0.0,
-                z0: 0.0,
-                z1: 0.0,
-                prim: 0,
-                chain: 0,
-                n: 0,
-            },
-        );
-        let mut fill: [u32; (TILE * TILE) as usize] = [0; (TILE * TILE) as usize];
-        fill.copy_from_slice(&sc.start[..n]);
-        for (j, f) in &sc.found.raw {
-            sc.frags[fill[*j as usize] as usize] = *f;
-            fill[*j as usize] += 1;
-        }
-        Ok(())
+        group_by_sample(sc)
     }
 
     /// Resolves and shades the samples of `r` (tile origin `(x0, y0)`) from the fragments
@@ -567,4 +490,41 @@ impl Ctx<'_> {
             }
         }
     }
+}
+
+/// Groups the fragments found into `sc.frags` by sample, each sample's in the order found (a
+/// stable counting sort), `sc.start` the first of every sample's.
+fn group_by_sample(sc: &mut TileScratch) -> std::result::Result<(), Overflow> {
+    let n = (TILE * TILE) as usize;
+    sc.start.clear();
+    sc.start.resize(n + 1, 0);
+    for (j, _) in &sc.found.raw {
+        sc.start[*j as usize + 1] += 1;
+    }
+    for j in 0..n {
+        sc.start[j + 1] += sc.start[j];
+    }
+    sc.frags.clear();
+    sc.frags
+        .try_reserve(sc.found.raw.len())
+        .map_err(|_| Overflow)?;
+    sc.frags.resize(
+        sc.found.raw.len(),
+        Frag {
+            t0: 0.0,
+            t1: 0.0,
+            z0: 0.0,
+            z1: 0.0,
+            prim: 0,
+            chain: 0,
+            n: 0,
+        },
+    );
+    let mut fill: [u32; (TILE * TILE) as usize] = [0; (TILE * TILE) as usize];
+    fill.copy_from_slice(&sc.start[..n]);
+    for (j, f) in &sc.found.raw {
+        sc.frags[fill[*j as usize] as usize] = *f;
+        fill[*j as usize] += 1;
+    }
+    Ok(())
 }
