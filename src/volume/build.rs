@@ -2,10 +2,11 @@
 //! to the assembly.
 use rayon::prelude::*;
 
-use super::assemble::{assemble, select_contour, AlphaMode, Seen, Sweep};
+use super::assemble::{assemble, AlphaMode, Seen, Sweep};
 use super::coverage::{default_view, CoverageModel};
 use super::filter::Filter;
 use super::rim::Rim;
+use super::select::select_contour;
 use super::subdivide::{subdivided, subdivision_factor};
 use super::types::{check_options, check_segments, Colors, MotionVolume, VolumeOptions, LEADING};
 use crate::contour::{classify_faces, classify_faces_seen, contour_from_sides};

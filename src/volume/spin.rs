@@ -41,10 +41,11 @@
 //!   rings do not map to one time and the weight is 1.
 use rayon::prelude::*;
 
-use super::assemble::{assemble, select_contour, AlphaMode, Sweep};
+use super::assemble::{assemble, AlphaMode, Sweep};
 use super::build::motion_volume;
 use super::filter::Filter;
 use super::polar::{polar_occupancy, ANGLES, RADII};
+use super::select::select_contour;
 use super::subdivide::{subdivided, subdivision_for_edge};
 use super::types::{check_options, check_segments, MotionVolume, VolumeOptions};
 use crate::contour::contour_from_sides;
