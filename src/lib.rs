@@ -13,6 +13,7 @@
 //! - `accumulate`: the accumulation buffer's kernels;
 //! - `raster`: the software rasterizer;
 //! - `image`: image-space blur;
+//! - `frame`: the one owned frame type and the one borrowed layer view every stage shares;
 //! - `budget`: the memory budget every kernel checks before it allocates;
 //! - `analytic`: analytic motion blur, exact covered time per sample;
 //! - `shutter`: the shutter filters;
@@ -25,6 +26,7 @@ mod analytic;
 mod budget;
 mod contour;
 mod error;
+mod frame;
 mod image;
 mod mesh;
 mod motion;
@@ -40,12 +42,12 @@ mod python;
 
 pub use accumulate::{
     accumulate, accumulate_moving, accumulate_still, composite, facing_faces, over, pixel_rect,
-    resolve, sample_rects, window_projection, Accumulated, BuffersMut, Layer, PaintObject, Painter,
-    Rect, Samples, StaticLayer, StillCamera,
+    resolve, sample_rects, window_projection, Accumulated, BuffersMut, PaintObject, Painter, Rect,
+    Samples, StillCamera,
 };
 pub use analytic::{
-    render as render_analytic, Backdrop, Frame as AnalyticFrame, Input as AnalyticInput,
-    MovingDraw, Quadrature, Stats as AnalyticStats, DEFAULT_TILE_BUDGET as ANALYTIC_TILE_BUDGET,
+    render as render_analytic, Input as AnalyticInput, MovingDraw, Quadrature,
+    Stats as AnalyticStats, DEFAULT_TILE_BUDGET as ANALYTIC_TILE_BUDGET,
 };
 pub use budget::{
     memory_budget, set_memory_budget, Need, DEFAULT_MEMORY_BUDGET, MIN_MEMORY_BUDGET,
@@ -54,6 +56,7 @@ pub use contour::{
     contour_edges, contour_pairs, motion_silhouette, ContourEdge, ContourSet, ContourTable,
 };
 pub use error::{Error, Result};
+pub use frame::{Frame, Layer};
 pub use image::{
     box_blur, camera_motion_blur, camera_velocity, colored, depth_of_field, glow, lens_blur,
     opaque_blur, opaque_motion_blur, pixel_bounds, pyramid_blur, pyramid_glow, pyramid_opaque_blur,
@@ -68,7 +71,7 @@ pub use motion::{
     uniform_times, Keyframe, Keyframes, Keys, Mat3, Mat4, Path, Similarity, IDENTITY4,
 };
 pub use raster::{
-    faces_from_i64, rasterize, rasterize_over, Background, Blend, Camera, Draw, Frame, Light,
+    faces_from_i64, rasterize, rasterize_over, Background, Blend, Camera, Draw, Light,
     Options as RasterOptions, Shading, Stats as RasterStats, FRAGMENT_CAP, MAX_INTERNAL_SIDE,
     MAX_PIXELS, MAX_SIDE, SAMPLES,
 };

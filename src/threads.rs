@@ -277,7 +277,10 @@ mod tests {
                 .map(|i| install(|| (0..i).into_par_iter().sum::<u64>()))
                 .sum()
         });
-        assert_eq!(sum, (0..64u64).map(|i| i * i.saturating_sub(1) / 2).sum());
+        assert_eq!(
+            sum,
+            (0..64u64).map(|i| i * i.saturating_sub(1) / 2).sum::<u64>()
+        );
         // From a worker of a foreign pool: runs there.
         let foreign = crate::on_threads(3, || install(rayon::current_num_threads));
         assert_eq!(foreign, 3);

@@ -22,9 +22,10 @@
 //! and the sums are the kernels of `kernels.rs` in sample order, so the frame is the same bit
 //! for bit, for any thread count.
 use super::kernels::{accumulate, composite, over, Rect};
-use super::painter::{Layer, Painter};
+use super::painter::Painter;
 use crate::budget::Need;
 use crate::error::{Error, Result};
+use crate::frame::{Frame, Layer};
 use crate::motion::{linear_part, mat4_mul, place, row_times, Mat4, IDENTITY4};
 
 /// The shutter samples of a frame.
@@ -74,29 +75,12 @@ pub struct StillCamera {
     pub aa: usize,
 }
 
-/// The static objects' layer, one entry per sample of the whole (supersampled) image.
-#[derive(Debug, Clone, Copy)]
-pub struct StaticLayer<'a> {
-    /// Premultiplied RGBA, 4 per sample.
-    pub rgba: &'a [f32],
-    /// Depth, `inf` where empty.
-    pub depth: &'a [f32],
-    /// Object ids.
-    pub ids: &'a [i32],
-    /// Whether every static object is opaque.
-    pub opaque: bool,
-}
-
-/// An accumulated frame (or its window): `rgba` premultiplied, the reference sample's `depth`
-/// and `ids`, `width` x `height` samples at `window` (x0, y0, x1, y1) of the image.
+/// An accumulated frame (or its window) of the samples at `window` (x0, y0, x1, y1) of the
+/// image: the weighted sum's premultiplied `rgba`, the reference sample's `depth` and `ids`.
 #[derive(Debug, Clone)]
 pub struct Accumulated {
-    /// Premultiplied RGBA, 4 per sample.
-    pub rgba: Vec<f32>,
-    /// Depth of the reference sample.
-    pub depth: Vec<f32>,
-    /// Ids of the reference sample.
-    pub ids: Vec<i32>,
+    /// The sum and the reference sample's depth and ids (no velocity), the window's size.
+    pub frame: Frame,
     /// The samples' rectangle in the image (the whole image with a moving camera).
     pub window: [usize; 4],
     /// Rasterizer passes over the objects (one per sample drawn).
@@ -208,25 +192,24 @@ fn add_weighted(acc: &mut [f32], add: &[f32], weight: f32) {
 }
 
 /// The still-camera frame (see the module doc): the painter's (moving) objects at every
-/// sample over `background`, the static layer of `camera`'s size. None when the objects are
-/// off the image at every sample.
+/// sample over `background`, the static layer of `camera`'s size (`opaque` when every static
+/// object is). None when the objects are off the image at every sample.
 pub fn accumulate_still(
     painter: &Painter,
     camera: &StillCamera,
     samples: Samples<'_>,
-    background: StaticLayer<'_>,
+    background: Layer<'_>,
+    opaque: bool,
 ) -> Result<Option<Accumulated>> {
     samples.check()?;
     let (iw, ih) = (camera.width, camera.height);
-    if background.depth.len() != iw * ih
-        || background.rgba.len() != 4 * iw * ih
-        || background.ids.len() != iw * ih
-    {
+    if (background.width, background.height) != (iw, ih) {
         return Err(Error::shape(
             "background",
             "one entry per sample of the image expected",
         ));
     }
+    background.check_lengths("background")?;
     if camera.aa == 0 {
         return Err(Error::value("aa", "must be >= 1"));
     }
@@ -263,12 +246,12 @@ pub fn accumulate_still(
     let base_depth = crop(background.depth, iw, 1, win);
     let base_ids = crop(background.ids, iw, 1, win);
     let has_static = base_depth.iter().any(|d| d.is_finite());
-    let exact_sum = !has_static || background.opaque;
+    let exact_sum = !has_static || opaque;
     let mut acc = vec![0.0f32; 4 * ww * wh];
     let mut keep_depth = base_depth.clone();
     let mut keep_ids = base_ids.clone();
     let mut draw_calls = 0;
-    let draw = |i: usize| -> Result<Option<Layer>> {
+    let draw = |i: usize| -> Result<Option<Frame>> {
         let Some(r) = rects[i] else { return Ok(None) };
         let proj = window_projection(&camera.projection, iw, ih, r);
         let (w, h) = ((r[2] - r[0]) as u32, (r[3] - r[1]) as u32);
@@ -316,13 +299,18 @@ pub fn accumulate_still(
             add_weighted(&mut acc, &full, w);
         }
     }
-    if has_static && background.opaque {
+    if has_static && opaque {
         over(&mut acc, &base_rgba)?;
     }
     Ok(Some(Accumulated {
-        rgba: acc,
-        depth: keep_depth,
-        ids: keep_ids,
+        frame: Frame {
+            width: ww as u32,
+            height: wh as u32,
+            rgba: acc,
+            depth: keep_depth,
+            ids: keep_ids,
+            velocity: None,
+        },
         window: win,
         draw_calls,
     }))
@@ -348,8 +336,8 @@ pub fn accumulate_moving(
         .add(&[("width", width as u64), ("height", height as u64)], 72)?
         .check()?;
     let mut acc: Vec<f32> = Vec::new();
-    let mut keep: Option<Layer> = None;
-    let draw = |i: usize| -> Result<Layer> {
+    let mut keep: Option<Frame> = None;
+    let draw = |i: usize| -> Result<Frame> {
         painter.layer(
             samples.times[i],
             &views[i],
@@ -379,9 +367,7 @@ pub fn accumulate_moving(
     }
     let keep = keep.expect("the reference sample was drawn");
     Ok(Accumulated {
-        rgba: acc,
-        depth: keep.depth,
-        ids: keep.ids,
+        frame: Frame { rgba: acc, ..keep },
         window: [0, 0, width, height],
         draw_calls: samples.times.len(),
     })

@@ -10,7 +10,7 @@ mod painter;
 pub use facing::facing_faces;
 pub use frame::{
     accumulate_moving, accumulate_still, pixel_rect, sample_rects, window_projection, Accumulated,
-    Samples, StaticLayer, StillCamera,
+    Samples, StillCamera,
 };
 pub use kernels::{accumulate, composite, over, resolve, BuffersMut, Rect};
-pub use painter::{Layer, PaintObject, Painter};
+pub use painter::{PaintObject, Painter};

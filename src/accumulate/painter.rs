@@ -15,6 +15,7 @@ use std::sync::Arc;
 
 use super::kernels::{composite, Rect};
 use crate::error::{Error, Result};
+use crate::frame::Frame;
 use crate::motion::{
     det3, linear_part, mat4_mul, place, translation_part, transpose_times, turn, Keyframes, Mat3,
     Mat4, IDENTITY4,
@@ -110,17 +111,6 @@ fn rotation(m: &Mat4) -> Mat3 {
     l.map(|row| row.map(|x| x / s))
 }
 
-/// One layer: `rgba` (4 per sample, premultiplied), `depth` (inf where empty), `ids`.
-#[derive(Debug, Clone)]
-pub struct Layer {
-    /// Premultiplied RGBA, row-major.
-    pub rgba: Vec<f32>,
-    /// View-axis depth, `inf` where empty.
-    pub depth: Vec<f32>,
-    /// Object ids, -1 where empty.
-    pub ids: Vec<i32>,
-}
-
 struct Group {
     shading: Shading,
     objects: Vec<usize>,
@@ -212,7 +202,7 @@ impl Painter {
     }
 
     /// The objects at shutter time `t` seen through `view` and `projection` (4x4, row-major)
-    /// in a `width` x `height` layer, one sample a pixel.
+    /// in a `width` x `height` frame, one sample a pixel (rgba, depth, ids; no velocity).
     pub fn layer(
         &self,
         t: f64,
@@ -220,9 +210,9 @@ impl Painter {
         projection: &Mat4,
         width: u32,
         height: u32,
-    ) -> Result<Layer> {
+    ) -> Result<Frame> {
         let glam = |m: &Mat4| DMat4::from_cols_array_2d(m).transpose();
-        let mut out: Option<Layer> = None;
+        let mut out: Option<Frame> = None;
         for g in &self.groups {
             let mut placed: Vec<Draw> = Vec::new();
             let (vm, lights) = if g.object_space {
@@ -264,12 +254,7 @@ impl Painter {
                     .collect::<Result<_>>()?,
                 ambient: self.ambient,
             };
-            let f = rasterize_over(&camera, draws, &opts, None)?;
-            let mut layer = Layer {
-                rgba: f.rgba,
-                depth: f.depth,
-                ids: f.ids,
-            };
+            let (mut layer, _) = rasterize_over(&camera, draws, &opts, None)?;
             if let Some(a) = out {
                 let n = layer.depth.len();
                 composite(
@@ -284,13 +269,6 @@ impl Painter {
             }
             out = Some(layer);
         }
-        Ok(out.unwrap_or_else(|| {
-            let n = width as usize * height as usize;
-            Layer {
-                rgba: vec![0.0; 4 * n],
-                depth: vec![f32::INFINITY; n],
-                ids: vec![-1; n],
-            }
-        }))
+        Ok(out.unwrap_or_else(|| Frame::new(width, height, false)))
     }
 }

@@ -9,13 +9,17 @@ use super::prim::{Edges, SampleEdges, OPAQUE};
 use super::shade::TilePrim;
 use super::visibility::{Frag, Link, Overflow, BACK, NONE};
 
-/// The current prim's segment, as its spans are recorded.
-pub struct SpanOf {
+/// The current prim and its segment, as its spans are recorded.
+pub struct SpanOf<'a> {
+    /// The prim, set up for the tile.
+    pub tp: &'a TilePrim,
     /// The prim's index among the pass's prims (`TileScratch::prims` in `tiles.rs`).
     pub li: u32,
     /// The segment's start and length in shutter time.
     pub t0: f64,
     pub dt: f64,
+    /// Spans recorded for the prim so far.
+    pub spans: u64,
 }
 
 /// Two spans join into one chain only where their depths meet at the shared instant (the same
@@ -48,21 +52,17 @@ impl Found {
         self.links.try_reserve(n).map_err(|_| Overflow)
     }
 
-    /// Records the span `[a, b]` (local time) of the current prim at tile sample `j`: joined to
-    /// the sample's last fragment when it continues it, else a new fragment.
-    #[allow(clippy::too_many_arguments)]
+    /// Records the span `[a, b]` (local time) of the current prim at tile sample `j` (its
+    /// edges there `q`), with `flag` (`BACK` for a back-facing span): joined to the sample's last
+    /// fragment when it continues it, else a new fragment.
     #[inline(always)]
     pub fn add_span(
         &mut self,
         prims: &[TilePrim],
-        span: &SpanOf,
-        tp: &TilePrim,
-        q: &SampleEdges,
-        j: usize,
-        a: f64,
-        b: f64,
+        span: &mut SpanOf,
+        (q, j): (&SampleEdges, usize),
+        [a, b]: [f64; 2],
         flag: u32,
-        spans: &mut u64,
     ) {
         let (t0, t1) = (
             (span.t0 + a * span.dt) as f32,
@@ -71,7 +71,8 @@ impl Found {
         if !(t1 > t0) {
             return;
         }
-        *spans += 1;
+        span.spans += 1;
+        let tp = span.tp;
         let e = &tp.edges;
         let f = Frag {
             t0,

@@ -10,6 +10,7 @@ use super::prim::{self, Corners, Prim, OPAQUE};
 use super::shade::TilePrim;
 use super::tiles::{corners, Counts, Ctx, SampleOut, TILE};
 use crate::error::{Error, Result};
+use crate::frame::Frame;
 
 /// Faces set up per parallel job.
 const CHUNK: usize = 2048;
@@ -54,31 +55,14 @@ pub struct Stats {
     pub ms_total: f64,
 }
 
-/// A rendered frame, row-major `height` x `width` pixels.
-#[derive(Clone, Debug, Default)]
-pub struct Frame {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// (H,W,4) premultiplied linear RGBA, integrated over the shutter.
-    pub rgba: Vec<f32>,
-    /// (H,W) view depth of the surface in front at the reference time, inf for none.
-    pub depth: Vec<f32>,
-    /// (H,W) object id of that surface, -1 for none.
-    pub ids: Vec<i32>,
-    /// (H,W,2) its screen motion over the shutter, pixels.
-    pub velocity: Vec<f32>,
-    /// Counts and timings.
-    pub stats: Stats,
-}
-
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
-/// Renders one frame. Errors name the offending argument.
-pub fn render(input: &Input) -> Result<Frame> {
+/// Renders one frame: rgba integrated over the shutter; depth, ids and velocity (always
+/// written) of the surface in front at the reference time; and the frame's counts and
+/// timings. Errors name the offending argument.
+pub fn render(input: &Input) -> Result<(Frame, Stats)> {
     let t_all = Instant::now();
     validate(input)?;
     let s = input.samples;
@@ -136,22 +120,15 @@ pub fn render(input: &Input) -> Result<Frame> {
     // rows: only the rows in flight hold their samples' results (a frame's worth of them at
     // 1080p with 2x2 samples would be 265 MB), the tiles of a row run in parallel too.
     let (w, h) = (input.width as usize, input.height as usize);
-    let mut frame = Frame {
-        width: input.width,
-        height: input.height,
-        rgba: vec![0.0; 4 * w * h],
-        depth: vec![f32::INFINITY; w * h],
-        ids: vec![-1; w * h],
-        velocity: vec![0.0; 2 * w * h],
-        stats: Stats::default(),
-    };
+    let mut frame = Frame::new(input.width, input.height, false);
+    let mut velocity = vec![0.0; 2 * w * h];
     let band = (TILE as usize / s as usize) * w;
     let rows: Vec<Vec<Counts>> = frame
         .rgba
         .par_chunks_mut(4 * band)
         .zip(frame.depth.par_chunks_mut(band))
         .zip(frame.ids.par_chunks_mut(band))
-        .zip(frame.velocity.par_chunks_mut(2 * band))
+        .zip(velocity.par_chunks_mut(2 * band))
         .enumerate()
         .map(|(y, (((rgba, depth), ids), velocity))| {
             let y = y as i32;
@@ -188,8 +165,8 @@ pub fn render(input: &Input) -> Result<Frame> {
         stats.ms_resolve += counts.ns_resolve as f64 * 1e-6;
     }
     stats.ms_total = ms(t_all);
-    frame.stats = stats;
-    Ok(frame)
+    frame.velocity = Some(velocity);
+    Ok((frame, stats))
 }
 
 /// Every face of every draw over every segment, in (segment, draw, face) order.

@@ -5,6 +5,7 @@ use rayon::prelude::*;
 
 use super::quadrature::Quadrature;
 use crate::error::{Error, Result};
+use crate::frame::Layer;
 use crate::raster::{check_size, vertex_normals, Light, Shading};
 use crate::shutter::Shutter;
 
@@ -28,17 +29,6 @@ pub struct MovingDraw<'a> {
     pub shading: Shading,
 }
 
-/// The opaque static scene behind the moving draws, one entry per sample (`ws * hs`).
-#[derive(Clone, Copy, Debug)]
-pub struct Backdrop<'a> {
-    /// Premultiplied linear RGBA, 4 per sample.
-    pub rgba: &'a [f32],
-    /// View depth, `inf` where nothing is there.
-    pub depth: &'a [f32],
-    /// Object ids, -1 where nothing is there.
-    pub ids: &'a [i32],
-}
-
 /// Everything one frame needs.
 #[derive(Clone, Debug)]
 pub struct Input<'a> {
@@ -54,8 +44,9 @@ pub struct Input<'a> {
     pub view_projections: &'a [DMat4],
     /// The moving meshes.
     pub draws: &'a [MovingDraw<'a>],
-    /// The static scene behind them, if any.
-    pub backdrop: Option<Backdrop<'a>>,
+    /// The opaque static scene behind them, if any: one entry per sample (`width * samples`
+    /// x `height * samples`), depth `inf` and id -1 where nothing is there.
+    pub backdrop: Option<Layer<'a>>,
     /// The shutter filter.
     pub shutter: &'a Shutter,
     /// Directional lights (lambert shading).
@@ -193,13 +184,18 @@ pub fn validate(input: &Input) -> Result<()> {
         return Err(Error::value("tile_budget", "must be at least 1 byte"));
     }
     if let Some(b) = &input.backdrop {
-        let ns = (input.width * input.samples) as usize * (input.height * input.samples) as usize;
-        if b.depth.len() != ns || b.ids.len() != ns || b.rgba.len() != 4 * ns {
+        let ws = (input.width * input.samples) as usize;
+        let hs = (input.height * input.samples) as usize;
+        if (b.width, b.height) != (ws, hs) {
             return Err(Error::shape(
                 "backdrop",
-                format!("expected one entry per sample ({ns})"),
+                format!(
+                    "expected one entry per sample ({hs}x{ws}), got {}x{}",
+                    b.height, b.width
+                ),
             ));
         }
+        b.check_lengths("backdrop")?;
         if b.depth.iter().any(|z| z.is_nan() || *z <= 0.0) || !b.rgba.iter().all(|x| x.is_finite())
         {
             return Err(Error::value(

@@ -42,6 +42,6 @@ mod visibility;
 #[cfg(test)]
 mod tests;
 
-pub use frame::{render, Frame, Stats};
-pub use input::{Backdrop, Input, MovingDraw, DEFAULT_TILE_BUDGET};
+pub use frame::{render, Stats};
+pub use input::{Input, MovingDraw, DEFAULT_TILE_BUDGET};
 pub use quadrature::Quadrature;

@@ -11,7 +11,7 @@
 //! skip the quadrature.
 use super::quadrature::{gauss, Quadrature};
 use super::visibility::{
-    depth_at, sort, sweep, Backdrop, Frag, Link, Overflow, Sweep, BACKDROP, NONE,
+    depth_at, sort, sweep, Frag, Link, Overflow, StaticSample, Sweep, BACKDROP, NONE,
 };
 use crate::shutter::Shutter;
 
@@ -54,28 +54,15 @@ pub struct Resolved {
 }
 
 /// Per-thread buffers of [`resolve`], kept across samples, and their limit.
+#[derive(Default)]
 pub struct Scratch {
-    sweep: Sweep,
+    /// [`sweep`]'s buffers and its limit (most depth crossings one stretch of a sample's time
+    /// may hold; unlimited by default).
+    pub sweep: Sweep,
     opaque: Vec<bool>,
     element_cuts: Vec<f64>,
     kinks: Vec<f64>,
     tris: Vec<(u32, f64)>,
-    /// Most depth crossings one stretch of a sample's time may hold ([`sweep`]'s `max_cuts`);
-    /// unlimited by default.
-    pub max_cuts: usize,
-}
-
-impl Default for Scratch {
-    fn default() -> Self {
-        Scratch {
-            sweep: Sweep::default(),
-            opaque: Vec::new(),
-            element_cuts: Vec::new(),
-            kinks: Vec::new(),
-            tris: Vec::new(),
-            max_cuts: usize::MAX,
-        }
-    }
 }
 
 /// `W(b) - W(a)` ([`Shutter::cumulative`]), the box filter's inline.
@@ -96,21 +83,207 @@ fn density(shutter: &Shutter, t: f64) -> f64 {
     }
 }
 
-/// Resolves the fragments of one sample (sorted here) over the backdrop `bg`: the shutter
-/// integral of the composited colour, and the layer in front at `t_ref`. `breaks` are the
-/// filter's interior breaks ([`Shutter::breaks`]). Fails where [`sweep`] does (more depth
-/// crossings than `sc.max_cuts`).
-#[allow(clippy::too_many_arguments)]
+/// The shutter one sample is resolved over: the filter, its interior breaks
+/// ([`Shutter::breaks`]), the points in time per visible piece and the reference time (the
+/// instant whose front layer the sample reports).
+#[derive(Clone, Copy)]
+pub struct Timing<'a> {
+    pub shutter: &'a Shutter,
+    pub breaks: &'a [f64],
+    pub quad: Quadrature,
+    pub t_ref: f64,
+}
+
+/// The time integral of one sample's colour as the pieces come (see the module doc), with the
+/// buffers it reuses.
+struct Integral<'s, L> {
+    layers: &'s mut L,
+    bg: &'s StaticSample,
+    time: Timing<'s>,
+    /// The sum so far, `W(v) - W(u)` times each piece's mean composite.
+    acc: [f64; 4],
+    /// Where the piece's chains pass from one triangle to the next.
+    cuts: Vec<f64>,
+    /// Where a sub-piece's shading has a kink.
+    kinks: Vec<f64>,
+    /// Each layer's triangle of the sub-piece, and the time its chain's next one starts.
+    tris: Vec<(u32, f64)>,
+}
+
+impl<L: Layers> Integral<'_, L> {
+    /// Adds the piece `[a, b]` of filter weight `dw` with its layers `order` (front to back).
+    #[inline(always)]
+    fn piece(&mut self, a: f64, b: f64, dw: f64, order: &[(f64, usize)], frags: &[Frag]) {
+        if order.len() == 1 && order[0].1 == BACKDROP {
+            for j in 0..4 {
+                self.acc[j] += dw * f64::from(self.bg.rgba[j]);
+            }
+            return;
+        }
+        // Layers of one colour each: the composite is the same at every point in time, so its
+        // filter-weighted mean over the piece is itself (whichever triangle of a chain covers
+        // the sample).
+        if let Some(c) = composite_uniform(order, frags, self.bg, self.layers) {
+            for j in 0..4 {
+                self.acc[j] += dw * c[j];
+            }
+            return;
+        }
+        // Cut where a layer's chain passes from one triangle to the next: every sub-piece is
+        // shaded by the same triangles throughout.
+        let mut cuts = std::mem::take(&mut self.cuts);
+        cuts.clear();
+        cuts.push(a);
+        let mut chained = 0;
+        for &(_, i) in order {
+            if i != BACKDROP && frags[i].n > 1 {
+                let before = cuts.len();
+                self.layers.cuts(i, &frags[i], a, b, &mut cuts);
+                chained += usize::from(cuts.len() > before);
+            }
+        }
+        cuts.push(b);
+        // each layer's cuts come ascending; several layers' cuts interleave
+        if chained > 1 {
+            let n = cuts.len();
+            cuts[1..n - 1].sort_unstable_by(f64::total_cmp);
+        }
+        for c in 0..cuts.len() - 1 {
+            let (u, v) = (cuts[c], cuts[c + 1]);
+            if v <= u {
+                continue;
+            }
+            let dw = if cuts.len() == 2 {
+                dw
+            } else {
+                weight(self.time.shutter, u, v)
+            };
+            if dw > 0.0 {
+                self.sub_piece(u, v, dw, order, frags);
+            }
+        }
+        self.cuts = cuts;
+    }
+
+    /// Adds the sub-piece `[u, v]` (of weight `dw`), shaded by one triangle per layer, cut
+    /// where a light grazes one of them.
+    #[inline(always)]
+    fn sub_piece(&mut self, u: f64, v: f64, dw: f64, order: &[(f64, usize)], frags: &[Frag]) {
+        // each layer's triangle, found at the first point in time and kept while the points
+        // stay before its chain's next link
+        let quad = self.time.quad;
+        let mid = 0.5 * (u + v);
+        let (xs, _) = gauss(quad.points(v - u, 0.0));
+        let first = mid + 0.5 * (v - u) * xs[0];
+        let mut bend = 0.0f32;
+        self.tris.clear();
+        self.kinks.clear();
+        for &(_, i) in order {
+            if i == BACKDROP {
+                self.tris.push((NONE, f64::INFINITY));
+            } else {
+                let tri = self.layers.triangle(i, &frags[i], first);
+                bend = bend.max(self.layers.bend(tri.0));
+                self.layers.kinks(tri.0, u, v, &mut self.kinks);
+                self.tris.push(tri);
+            }
+        }
+        // Lambert's clamp bends the shading where a light grazes a surface: the quadrature is
+        // exact only for smooth shading, so the piece is cut there too.
+        if self.kinks.len() > 1 {
+            self.kinks.sort_unstable_by(f64::total_cmp);
+        }
+        let mut lo = u;
+        for k in 0..=self.kinks.len() {
+            let hi = if k < self.kinks.len() {
+                self.kinks[k]
+            } else {
+                v
+            };
+            if hi <= lo {
+                continue;
+            }
+            let dw = if self.kinks.is_empty() {
+                dw
+            } else {
+                weight(self.time.shutter, lo, hi)
+            };
+            let (a, b) = (lo, hi);
+            lo = hi;
+            if dw > 0.0 {
+                self.quadrature((a, b), dw, bend, order, frags);
+            }
+        }
+    }
+
+    /// Adds `dw` times the filter-weighted mean of the composites at the Gauss points of
+    /// `[a, b]` (a smooth stretch whose shading bends by `bend`).
+    #[inline(always)]
+    fn quadrature(
+        &mut self,
+        (a, b): (f64, f64),
+        dw: f64,
+        bend: f32,
+        order: &[(f64, usize)],
+        frags: &[Frag],
+    ) {
+        let shutter = self.time.shutter;
+        let (half, mid) = (0.5 * (b - a), 0.5 * (a + b));
+        let (xs, ws) = gauss(self.time.quad.points(b - a, bend));
+        let mut sum = [0.0f64; 4];
+        let mut wsum = 0.0;
+        for (x, w) in xs.iter().zip(ws) {
+            let t = mid + half * x;
+            let wt = w * density(shutter, t);
+            if wt <= 0.0 {
+                continue;
+            }
+            let mut trans = 1.0f64;
+            for (k, &(_, i)) in order.iter().enumerate() {
+                let s = if i == BACKDROP {
+                    self.bg.rgba
+                } else {
+                    if t >= self.tris[k].1 {
+                        self.tris[k] = self.layers.triangle(i, &frags[i], t);
+                    }
+                    self.layers.shade(self.tris[k].0, t)
+                };
+                for j in 0..4 {
+                    sum[j] += wt * trans * f64::from(s[j]);
+                }
+                trans *= 1.0 - f64::from(s[3]);
+                if trans <= 0.0 {
+                    break;
+                }
+            }
+            wsum += wt;
+        }
+        if wsum > 0.0 {
+            if power_of_two(wsum) {
+                // dividing by a power of two is multiplying by its exact reciprocal
+                let inv = 1.0 / wsum;
+                for j in 0..4 {
+                    self.acc[j] += dw * sum[j] * inv;
+                }
+            } else {
+                for j in 0..4 {
+                    self.acc[j] += dw * sum[j] / wsum;
+                }
+            }
+        }
+    }
+}
+
+/// Resolves the fragments of one sample (sorted here) over the backdrop `bg`: the integral
+/// over the shutter `time` of the composited colour, and the layer in front at its reference
+/// time. Fails where [`sweep`] does (more depth crossings than `sc.sweep.max_cuts`).
 #[inline(always)]
 pub fn resolve(
     frags: &mut [Frag],
     links: &[Link],
-    bg: &Backdrop,
+    bg: &StaticSample,
     layers: &mut impl Layers,
-    shutter: &Shutter,
-    breaks: &[f64],
-    quad: Quadrature,
-    t_ref: f64,
+    time: Timing,
     sc: &mut Scratch,
 ) -> Result<Resolved, Overflow> {
     let mut out = Resolved {
@@ -118,22 +291,27 @@ pub fn resolve(
         front: None,
         pieces: 0,
     };
-    let mut acc = [0.0f64; 4];
     let mut ref_done = false;
-    let mut cuts = std::mem::take(&mut sc.element_cuts);
-    let mut kinks = std::mem::take(&mut sc.kinks);
-    let mut tris = std::mem::take(&mut sc.tris);
+    let t_ref = time.t_ref;
+    let mut integral = Integral {
+        layers,
+        bg,
+        time,
+        acc: [0.0; 4],
+        cuts: std::mem::take(&mut sc.element_cuts),
+        kinks: std::mem::take(&mut sc.kinks),
+        tris: std::mem::take(&mut sc.tris),
+    };
     sort(frags);
     let mut opaque = std::mem::take(&mut sc.opaque);
     opaque.clear();
-    opaque.extend(frags.iter().map(|f| layers.opaque(f)));
+    opaque.extend(frags.iter().map(|f| integral.layers.opaque(f)));
     let swept = sweep(
         frags,
         links,
         bg,
         &opaque,
-        breaks,
-        sc.max_cuts,
+        time.breaks,
         &mut sc.sweep,
         |a, b, order, frags| {
             if !ref_done && t_ref >= a && t_ref <= b {
@@ -143,149 +321,20 @@ pub fn resolve(
                     _ => None,
                 };
             }
-            let dw = weight(shutter, a, b);
+            let dw = weight(time.shutter, a, b);
             if dw <= 0.0 {
                 return;
             }
             out.pieces += 1;
-            if order.len() == 1 && order[0].1 == BACKDROP {
-                for j in 0..4 {
-                    acc[j] += dw * f64::from(bg.rgba[j]);
-                }
-                return;
-            }
-            // Layers of one colour each: the composite is the same at every point in time, so its
-            // filter-weighted mean over the piece is itself (whichever triangle of a chain covers
-            // the sample).
-            if let Some(c) = composite_uniform(order, frags, bg, layers) {
-                for j in 0..4 {
-                    acc[j] += dw * c[j];
-                }
-                return;
-            }
-            // Cut where a layer's chain passes from one triangle to the next: every sub-piece is
-            // shaded by the same triangles throughout.
-            cuts.clear();
-            cuts.push(a);
-            let mut chained = 0;
-            for &(_, i) in order {
-                if i != BACKDROP && frags[i].n > 1 {
-                    let before = cuts.len();
-                    layers.cuts(i, &frags[i], a, b, &mut cuts);
-                    chained += usize::from(cuts.len() > before);
-                }
-            }
-            cuts.push(b);
-            // each layer's cuts come ascending; several layers' cuts interleave
-            if chained > 1 {
-                let n = cuts.len();
-                cuts[1..n - 1].sort_unstable_by(f64::total_cmp);
-            }
-            for c in 0..cuts.len() - 1 {
-                let (u, v) = (cuts[c], cuts[c + 1]);
-                if v <= u {
-                    continue;
-                }
-                let dw = if cuts.len() == 2 {
-                    dw
-                } else {
-                    weight(shutter, u, v)
-                };
-                if dw <= 0.0 {
-                    continue;
-                }
-                // each layer's triangle, found at the first point in time and kept while the
-                // points stay before its chain's next link
-                let mid = 0.5 * (u + v);
-                let (xs, _) = gauss(quad.points(v - u, 0.0));
-                let first = mid + 0.5 * (v - u) * xs[0];
-                let mut bend = 0.0f32;
-                tris.clear();
-                kinks.clear();
-                for &(_, i) in order {
-                    if i == BACKDROP {
-                        tris.push((NONE, f64::INFINITY));
-                    } else {
-                        let tri = layers.triangle(i, &frags[i], first);
-                        bend = bend.max(layers.bend(tri.0));
-                        layers.kinks(tri.0, u, v, &mut kinks);
-                        tris.push(tri);
-                    }
-                }
-                // Lambert's clamp bends the shading where a light grazes a surface: the
-                // quadrature is exact only for smooth shading, so the piece is cut there too.
-                if kinks.len() > 1 {
-                    kinks.sort_unstable_by(f64::total_cmp);
-                }
-                let mut lo = u;
-                for k in 0..=kinks.len() {
-                    let hi = if k < kinks.len() { kinks[k] } else { v };
-                    if hi <= lo {
-                        continue;
-                    }
-                    let dw = if kinks.is_empty() {
-                        dw
-                    } else {
-                        weight(shutter, lo, hi)
-                    };
-                    let (a, b) = (lo, hi);
-                    lo = hi;
-                    if dw <= 0.0 {
-                        continue;
-                    }
-                    let (half, mid) = (0.5 * (b - a), 0.5 * (a + b));
-                    let (xs, ws) = gauss(quad.points(b - a, bend));
-                    let mut sum = [0.0f64; 4];
-                    let mut wsum = 0.0;
-                    for (x, w) in xs.iter().zip(ws) {
-                        let t = mid + half * x;
-                        let wt = w * density(shutter, t);
-                        if wt <= 0.0 {
-                            continue;
-                        }
-                        let mut trans = 1.0f64;
-                        for (k, &(_, i)) in order.iter().enumerate() {
-                            let s = if i == BACKDROP {
-                                bg.rgba
-                            } else {
-                                if t >= tris[k].1 {
-                                    tris[k] = layers.triangle(i, &frags[i], t);
-                                }
-                                layers.shade(tris[k].0, t)
-                            };
-                            for j in 0..4 {
-                                sum[j] += wt * trans * f64::from(s[j]);
-                            }
-                            trans *= 1.0 - f64::from(s[3]);
-                            if trans <= 0.0 {
-                                break;
-                            }
-                        }
-                        wsum += wt;
-                    }
-                    if wsum > 0.0 {
-                        if power_of_two(wsum) {
-                            // dividing by a power of two is multiplying by its exact reciprocal
-                            let inv = 1.0 / wsum;
-                            for j in 0..4 {
-                                acc[j] += dw * sum[j] * inv;
-                            }
-                        } else {
-                            for j in 0..4 {
-                                acc[j] += dw * sum[j] / wsum;
-                            }
-                        }
-                    }
-                }
-            }
+            integral.piece(a, b, dw, order, frags);
         },
     );
     sc.opaque = opaque;
-    sc.element_cuts = cuts;
-    sc.kinks = kinks;
-    sc.tris = tris;
+    sc.element_cuts = integral.cuts;
+    sc.kinks = integral.kinks;
+    sc.tris = integral.tris;
     swept?;
-    out.rgba = acc.map(|x| x as f32);
+    out.rgba = integral.acc.map(|x| x as f32);
     Ok(out)
 }
 
@@ -302,7 +351,7 @@ fn power_of_two(x: f64) -> bool {
 fn composite_uniform(
     order: &[(f64, usize)],
     frags: &[Frag],
-    bg: &Backdrop,
+    bg: &StaticSample,
     layers: &impl Layers,
 ) -> Option<[f64; 4]> {
     let mut sum = [0.0f64; 4];
@@ -374,7 +423,7 @@ mod tests {
         next: NONE,
     }];
 
-    const EMPTY: Backdrop = Backdrop {
+    const EMPTY: StaticSample = StaticSample {
         rgba: [0.0; 4],
         depth: f32::INFINITY,
         id: -1,
@@ -402,10 +451,12 @@ mod tests {
             &LINK,
             &EMPTY,
             &mut l,
-            &Shutter::Box,
-            &[],
-            Quadrature::Auto,
-            0.1,
+            Timing {
+                shutter: &Shutter::Box,
+                breaks: &[],
+                quad: Quadrature::Auto,
+                t_ref: 0.1,
+            },
             &mut Scratch::default(),
         )
         .unwrap();
@@ -425,10 +476,12 @@ mod tests {
             &LINK,
             &EMPTY,
             &mut l,
-            &Shutter::Box,
-            &[],
-            Quadrature::Auto,
-            1.0,
+            Timing {
+                shutter: &Shutter::Box,
+                breaks: &[],
+                quad: Quadrature::Auto,
+                t_ref: 1.0,
+            },
             &mut Scratch::default(),
         )
         .unwrap();
@@ -440,10 +493,12 @@ mod tests {
             &LINK,
             &EMPTY,
             &mut l,
-            &Shutter::Ramp,
-            &[],
-            Quadrature::Auto,
-            1.0,
+            Timing {
+                shutter: &Shutter::Ramp,
+                breaks: &[],
+                quad: Quadrature::Auto,
+                t_ref: 1.0,
+            },
             &mut Scratch::default(),
         )
         .unwrap();
@@ -455,7 +510,7 @@ mod tests {
         let mut l = Flat {
             colors: vec![[1.0, 0.0, 0.0, 0.5]],
         };
-        let bg = Backdrop {
+        let bg = StaticSample {
             rgba: [0.0, 0.0, 1.0, 1.0],
             depth: 5.0,
             id: 3,
@@ -466,10 +521,12 @@ mod tests {
             &LINK,
             &bg,
             &mut l,
-            &Shutter::Box,
-            &[],
-            Quadrature::Auto,
-            0.75,
+            Timing {
+                shutter: &Shutter::Box,
+                breaks: &[],
+                quad: Quadrature::Auto,
+                t_ref: 0.75,
+            },
             &mut Scratch::default(),
         )
         .unwrap();
@@ -483,10 +540,12 @@ mod tests {
             &LINK,
             &bg,
             &mut l,
-            &Shutter::Box,
-            &[],
-            Quadrature::Auto,
-            0.5,
+            Timing {
+                shutter: &Shutter::Box,
+                breaks: &[],
+                quad: Quadrature::Auto,
+                t_ref: 0.5,
+            },
             &mut Scratch::default(),
         )
         .unwrap();

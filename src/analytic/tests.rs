@@ -4,6 +4,7 @@ use glam::{DMat4, DVec3};
 
 use super::*;
 use crate::analytic::{resolve, visibility};
+use crate::frame::Frame;
 use crate::raster::Shading;
 use crate::shutter::Shutter;
 
@@ -52,7 +53,12 @@ fn on_plane(ix: u32, iy: u32) -> (f64, f64) {
     (xn * t * f64::from(W) / f64::from(H), yn * t)
 }
 
-fn render_square(pos: &[[f64; 3]], faces: &[[u32; 3]], times: &[f64], shutter: &Shutter) -> Frame {
+fn render_square(
+    pos: &[[f64; 3]],
+    faces: &[[u32; 3]],
+    times: &[f64],
+    shutter: &Shutter,
+) -> (Frame, Stats) {
     render_within(pos, faces, times, shutter, DEFAULT_TILE_BUDGET).unwrap()
 }
 
@@ -62,7 +68,7 @@ fn render_within(
     times: &[f64],
     shutter: &Shutter,
     tile_budget: usize,
-) -> crate::Result<Frame> {
+) -> crate::Result<(Frame, Stats)> {
     let vp = [camera()];
     let rgba = [[1.0f32, 1.0, 1.0, 1.0]];
     let draws = [MovingDraw {
@@ -95,7 +101,7 @@ fn render_within(
 fn check_square(n: usize, shutter: Shutter) {
     let (h, x0, x1) = (0.6, -1.5, 1.2);
     let (pos, faces) = grid_square(h, n, &[x0, x1]);
-    let f = render_square(&pos, &faces, &[0.0, 1.0], &shutter);
+    let (f, _) = render_square(&pos, &faces, &[0.0, 1.0], &shutter);
     let mut worst: f64 = 0.0;
     for iy in 0..H {
         for ix in 0..W {
@@ -140,8 +146,8 @@ fn segments_of_a_linear_motion_change_nothing_but_rounding() {
     let (pos1, faces) = grid_square(0.6, 3, &[-1.5, 1.2]);
     let xs: Vec<f64> = (0..=4).map(|k| -1.5 + 2.7 * k as f64 / 4.0).collect();
     let (pos4, _) = grid_square(0.6, 3, &xs);
-    let a = render_square(&pos1, &faces, &[0.0, 1.0], &Shutter::Box);
-    let b = render_square(&pos4, &faces, &[0.0, 0.25, 0.5, 0.75, 1.0], &Shutter::Box);
+    let (a, _) = render_square(&pos1, &faces, &[0.0, 1.0], &Shutter::Box);
+    let (b, _) = render_square(&pos4, &faces, &[0.0, 0.25, 0.5, 0.75, 1.0], &Shutter::Box);
     let worst = a
         .rgba
         .iter()
@@ -155,10 +161,10 @@ fn segments_of_a_linear_motion_change_nothing_but_rounding() {
 fn the_result_does_not_depend_on_the_thread_count() {
     let (pos, faces) = grid_square(0.6, 9, &[-1.5, 1.2]);
     let one = crate::on_threads(1, || {
-        render_square(&pos, &faces, &[0.0, 1.0], &Shutter::Gaussian)
+        render_square(&pos, &faces, &[0.0, 1.0], &Shutter::Gaussian).0
     });
     let two = crate::on_threads(3, || {
-        render_square(&pos, &faces, &[0.0, 1.0], &Shutter::Gaussian)
+        render_square(&pos, &faces, &[0.0, 1.0], &Shutter::Gaussian).0
     });
     assert_eq!(one.rgba, two.rgba);
     assert_eq!(one.depth, two.depth);
@@ -172,20 +178,20 @@ fn a_small_memory_budget_splits_tiles_and_changes_no_bit() {
     let xs = [-1.5, -0.4, 0.3, 1.2];
     let (pos, faces) = grid_square(0.6, 9, &xs);
     let times = [0.0, 0.3, 0.7, 1.0];
-    let whole = render_square(&pos, &faces, &times, &Shutter::Triangle);
-    assert_eq!(whole.stats.splits, 0);
+    let (whole, whole_stats) = render_square(&pos, &faces, &times, &Shutter::Triangle);
+    assert_eq!(whole_stats.splits, 0);
     let mut splits = Vec::new();
     for budget in [200_000, 40_000, 12_000] {
-        let f = render_within(&pos, &faces, &times, &Shutter::Triangle, budget).unwrap();
+        let (f, stats) = render_within(&pos, &faces, &times, &Shutter::Triangle, budget).unwrap();
         assert_eq!(f.rgba, whole.rgba, "budget {budget}");
         assert_eq!(f.depth, whole.depth);
         assert_eq!(f.ids, whole.ids);
         assert_eq!(f.velocity, whole.velocity);
         assert_eq!(
-            (f.stats.intervals, f.stats.spans, f.stats.pieces),
-            (whole.stats.intervals, whole.stats.spans, whole.stats.pieces)
+            (stats.intervals, stats.spans, stats.pieces),
+            (whole_stats.intervals, whole_stats.spans, whole_stats.pieces)
         );
-        splits.push(f.stats.splits);
+        splits.push(stats.splits);
     }
     // a smaller budget splits more, down to rows and single samples
     assert!(
@@ -200,14 +206,15 @@ fn a_small_memory_budget_splits_tiles_and_changes_no_bit() {
             assert!(msg.starts_with("draws:"), "{msg}");
             assert!(msg.contains("TILE_BUDGET_BYTES"), "{msg}");
         }
-        other => panic!("expected a memory error, got {:?}", other.map(|f| f.stats)),
+        other => panic!("expected a memory error, got {:?}", other.map(|f| f.1)),
     }
 }
 
 #[test]
 fn depth_ids_and_velocity_describe_the_surface_at_the_reference_time() {
     let (pos, faces) = grid_square(0.6, 1, &[-1.5, 1.2]);
-    let f = render_square(&pos, &faces, &[0.0, 1.0], &Shutter::Box);
+    let (f, _) = render_square(&pos, &faces, &[0.0, 1.0], &Shutter::Box);
+    let velocity = f.velocity.expect("the analytic frame writes velocity");
     // at the close the square is centred at x = 1.2
     let (ix, iy) = (W / 2 + 9, H / 2);
     let (x, _) = on_plane(ix, iy);
@@ -217,8 +224,8 @@ fn depth_ids_and_velocity_describe_the_surface_at_the_reference_time() {
     assert!((f.depth[i] - DIST as f32).abs() < 1e-4, "{}", f.depth[i]);
     // 2.7 world units at distance 5 with this field of view, in pixels
     let px = 2.7 / ((YFOV / 2.0).tan() * DIST) * f64::from(H) / 2.0;
-    assert!((f64::from(f.velocity[2 * i]) - px).abs() < 1e-3);
-    assert!(f.velocity[2 * i + 1].abs() < 1e-4);
+    assert!((f64::from(velocity[2 * i]) - px).abs() < 1e-3);
+    assert!(velocity[2 * i + 1].abs() < 1e-4);
     let far = 0; // the top-left pixel never sees it
     assert_eq!((f.ids[far], f.depth[far]), (-1, f32::INFINITY));
 }
@@ -358,7 +365,7 @@ fn uniform_layers_resolve_as_their_shading_does() {
         chain: prim,
         n: if prim == 0 { 2 } else { 1 },
     };
-    let bg = visibility::Backdrop {
+    let bg = visibility::StaticSample {
         rgba: [0.05, 0.1, 0.15, 1.0],
         depth: 3.0,
         id: 1,
@@ -383,10 +390,12 @@ fn uniform_layers_resolve_as_their_shading_does() {
                     &links,
                     &bg,
                     &mut l,
-                    &shutter,
-                    &shutter.breaks(),
-                    quad,
-                    0.5,
+                    resolve::Timing {
+                        shutter: &shutter,
+                        breaks: &shutter.breaks(),
+                        quad,
+                        t_ref: 0.5,
+                    },
                     &mut resolve::Scratch::default(),
                 )
                 .unwrap()

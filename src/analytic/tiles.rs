@@ -17,7 +17,7 @@ use super::poly::MAX_SPANS;
 use super::prim::{Corners, Cover, Edges, Prim};
 use super::resolve::{self, Scratch};
 use super::shade::{SampleShader, TilePrim};
-use super::visibility::{Backdrop as Behind, Frag, Link, Overflow, BACK, NONE};
+use super::visibility::{Frag, Link, Overflow, StaticSample, BACK, NONE};
 use crate::error::{Error, Result};
 
 /// Tile side in samples (a multiple of every supersampling factor).
@@ -209,7 +209,7 @@ impl Ctx<'_> {
         let mut out = std::mem::take(&mut sc.out);
         out.clear();
         out.resize((TILE * TILE) as usize, EMPTY);
-        sc.sweep.max_cuts = self.input.tile_budget / std::mem::size_of::<f64>();
+        sc.sweep.sweep.max_cuts = self.input.tile_budget / std::mem::size_of::<f64>();
         // a stack of rectangles to do: each split pushes two halves of at most 10 levels
         let mut todo = [whole; 12];
         let mut n = 1;
@@ -342,12 +342,13 @@ impl Ctx<'_> {
             // room for every span the prim can add, so that the pushes below never allocate
             sc.found.reserve(most)?;
             let e = &tp.edges;
-            let span = SpanOf {
+            let mut span = SpanOf {
+                tp,
                 li: sc.prims.len() as u32,
                 t0: times[p.seg as usize],
                 dt: times[p.seg as usize + 1] - times[p.seg as usize],
+                spans: 0,
             };
-            let spans = counts.spans;
             let simple = Edges::simple(p);
             let rows = &mut sc.rows[..(yb - ya) as usize];
             let hull = &p.hull[..p.nhull as usize];
@@ -362,71 +363,25 @@ impl Ctx<'_> {
                     let q = e.at_row(f64::from(ix) + 0.5, &row);
                     counts.tests += 1;
                     let j = ((iy - y0) * TILE + (ix - x0)) as usize;
+                    let mut add = |s: [f64; 2], flag: u32| {
+                        sc.found.add_span(&sc.prims, &mut span, (&q, j), s, flag)
+                    };
                     if let Some(front) = simple {
                         match e.covered_front(front, &q) {
                             Cover::Nothing => {}
-                            Cover::One(a, b) => {
-                                sc.found.add_span(
-                                    &sc.prims,
-                                    &span,
-                                    tp,
-                                    &q,
-                                    j,
-                                    a,
-                                    b,
-                                    0,
-                                    &mut counts.spans,
-                                );
-                            }
-                            Cover::Many(s) => {
-                                for s in s.as_slice() {
-                                    sc.found.add_span(
-                                        &sc.prims,
-                                        &span,
-                                        tp,
-                                        &q,
-                                        j,
-                                        s[0],
-                                        s[1],
-                                        0,
-                                        &mut counts.spans,
-                                    );
-                                }
-                            }
+                            Cover::One(a, b) => add([a, b], 0),
+                            Cover::Many(s) => s.as_slice().iter().for_each(|s| add(*s, 0)),
                         }
                         continue;
                     }
                     let (front, back) = e.covered(p, &q);
-                    for s in front.as_slice() {
-                        sc.found.add_span(
-                            &sc.prims,
-                            &span,
-                            tp,
-                            &q,
-                            j,
-                            s[0],
-                            s[1],
-                            0,
-                            &mut counts.spans,
-                        );
-                    }
-                    for s in back.as_slice() {
-                        sc.found.add_span(
-                            &sc.prims,
-                            &span,
-                            tp,
-                            &q,
-                            j,
-                            s[0],
-                            s[1],
-                            BACK,
-                            &mut counts.spans,
-                        );
-                    }
+                    front.as_slice().iter().for_each(|s| add(*s, 0));
+                    back.as_slice().iter().for_each(|s| add(*s, BACK));
                 }
             }
             // a prim is kept when a fragment or link refers to it (every counted span does)
-            if counts.spans > spans {
+            counts.spans += span.spans;
+            if span.spans > 0 {
                 sc.prims.try_reserve(1).map_err(|_| Overflow)?;
                 sc.prims.push(tp.clone());
                 if Self::held(sc) > budget {
@@ -434,39 +389,7 @@ impl Ctx<'_> {
                 }
             }
         }
-        // group by sample (a stable counting sort)
-        let n = (TILE * TILE) as usize;
-        sc.start.clear();
-        sc.start.resize(n + 1, 0);
-        for (j, _) in &sc.found.raw {
-            sc.start[*j as usize + 1] += 1;
-        }
-        for j in 0..n {
-            sc.start[j + 1] += sc.start[j];
-        }
-        sc.frags.clear();
-        sc.frags
-            .try_reserve(sc.found.raw.len())
-            .map_err(|_| Overflow)?;
-        sc.frags.resize(
-            sc.found.raw.len(),
-            Frag {
-                t0: 0.0,
-                t1: 0.0,
-                z0: 0.0,
-                z1: 0.0,
-                prim: 0,
-                chain: 0,
-                n: 0,
-            },
-        );
-        let mut fill: [u32; (TILE * TILE) as usize] = [0; (TILE * TILE) as usize];
-        fill.copy_from_slice(&sc.start[..n]);
-        for (j, f) in &sc.found.raw {
-            sc.frags[fill[*j as usize] as usize] = *f;
-            fill[*j as usize] += 1;
-        }
-        Ok(())
+        group_by_sample(sc)
     }
 
     /// Resolves and shades the samples of `r` (tile origin `(x0, y0)`) from the fragments
@@ -518,10 +441,12 @@ impl Ctx<'_> {
                     &sc.found.links,
                     &bg,
                     &mut shader,
-                    self.input.shutter,
-                    self.breaks,
-                    self.input.quadrature,
-                    t_ref,
+                    resolve::Timing {
+                        shutter: self.input.shutter,
+                        breaks: self.breaks,
+                        quad: self.input.quadrature,
+                        t_ref,
+                    },
                     &mut sc.sweep,
                 )
                 .map_err(|_| (ix, iy))?;
@@ -548,26 +473,58 @@ impl Ctx<'_> {
         }
         Ok(())
     }
-    fn behind(&self, ix: i32, iy: i32) -> Behind {
+    fn behind(&self, ix: i32, iy: i32) -> StaticSample {
         match &self.input.backdrop {
-            None => Behind {
+            None => StaticSample {
                 rgba: [0.0; 4],
                 depth: f32::INFINITY,
                 id: -1,
             },
             Some(b) => {
                 let i = (iy * self.ws + ix) as usize;
-                Behind {
-                    rgba: [
-                        b.rgba[4 * i],
-                        b.rgba[4 * i + 1],
-                        b.rgba[4 * i + 2],
-                        b.rgba[4 * i + 3],
-                    ],
+                StaticSample {
+                    rgba: b.rgba_at(i),
                     depth: b.depth[i],
                     id: b.ids[i],
                 }
             }
         }
     }
+}
+
+/// Groups the fragments found into `sc.frags` by sample, each sample's in the order found (a
+/// stable counting sort), `sc.start` the first of every sample's.
+fn group_by_sample(sc: &mut TileScratch) -> std::result::Result<(), Overflow> {
+    let n = (TILE * TILE) as usize;
+    sc.start.clear();
+    sc.start.resize(n + 1, 0);
+    for (j, _) in &sc.found.raw {
+        sc.start[*j as usize + 1] += 1;
+    }
+    for j in 0..n {
+        sc.start[j + 1] += sc.start[j];
+    }
+    sc.frags.clear();
+    sc.frags
+        .try_reserve(sc.found.raw.len())
+        .map_err(|_| Overflow)?;
+    sc.frags.resize(
+        sc.found.raw.len(),
+        Frag {
+            t0: 0.0,
+            t1: 0.0,
+            z0: 0.0,
+            z1: 0.0,
+            prim: 0,
+            chain: 0,
+            n: 0,
+        },
+    );
+    let mut fill: [u32; (TILE * TILE) as usize] = [0; (TILE * TILE) as usize];
+    fill.copy_from_slice(&sc.start[..n]);
+    for (j, f) in &sc.found.raw {
+        sc.frags[fill[*j as usize] as usize] = *f;
+        fill[*j as usize] += 1;
+    }
+    Ok(())
 }

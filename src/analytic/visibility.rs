@@ -48,9 +48,10 @@ pub const NONE: u32 = u32::MAX;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Overflow;
 
-/// The static scene behind the moving triangles at this sample: opaque colour and its depth.
+/// The static layer (the frame's backdrop) at one sample: the opaque colour behind the moving
+/// triangles, its depth and id.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Backdrop {
+pub struct StaticSample {
     /// Premultiplied RGBA.
     pub rgba: [f32; 4],
     /// View depth, `inf` where nothing is there.
@@ -59,8 +60,7 @@ pub struct Backdrop {
     pub id: i32,
 }
 
-/// Per-thread buffers of [`sweep`], kept across samples.
-#[derive(Default)]
+/// Per-thread buffers of [`sweep`], kept across samples, and its limit.
 pub struct Sweep {
     active: Vec<usize>,
     cuts: Vec<f64>,
@@ -68,6 +68,91 @@ pub struct Sweep {
     sub: Vec<f64>,
     lines: Vec<(usize, [f64; 4])>,
     cursor: Vec<u32>,
+    /// Most depth crossings the layers present together over one stretch of time may have
+    /// (unlimited by default).
+    pub max_cuts: usize,
+}
+
+impl Default for Sweep {
+    fn default() -> Self {
+        Sweep {
+            active: Vec::new(),
+            cuts: Vec::new(),
+            order: Vec::new(),
+            sub: Vec::new(),
+            lines: Vec::new(),
+            cursor: Vec::new(),
+            max_cuts: usize::MAX,
+        }
+    }
+}
+
+impl Sweep {
+    /// Cuts `[u, v]` where an active chain passes from one link to the next, into `sub`
+    /// (ascending, from `u` to `v`): every layer's depth is one straight piece between cuts.
+    #[inline(always)]
+    fn link_cuts(&mut self, frags: &[Frag], links: &[Link], u: f64, v: f64) {
+        self.sub.clear();
+        self.sub.push(u);
+        for &i in &self.active {
+            if frags[i].n > 1 {
+                let mut c = frags[i].chain;
+                while let Some(next) = Some(links[c as usize].next).filter(|&x| x != NONE) {
+                    let t = f64::from(links[next as usize].t0);
+                    if t >= v {
+                        break;
+                    }
+                    if t > u {
+                        self.sub.push(t);
+                    }
+                    c = next;
+                }
+            }
+        }
+        self.sub.push(v);
+        if self.sub.len() > 3 {
+            self.sub[1..].sort_unstable_by(f64::total_cmp);
+        }
+    }
+
+    /// Cuts `[p, q]` where any two of the straight `lines` cross in depth, into `cuts`
+    /// (ascending, from `p` to `q`); [`Overflow`] past `max_cuts` crossings.
+    #[inline(always)]
+    fn crossing_cuts(&mut self, p: f64, q: f64) -> Result<(), Overflow> {
+        self.cuts.clear();
+        self.cuts.push(p);
+        for a in 0..self.lines.len() {
+            for b in a + 1..self.lines.len() {
+                let (la, lb) = (&self.lines[a].1, &self.lines[b].1);
+                let g0 = line_at(la, p) - line_at(lb, p);
+                let g1 = line_at(la, q) - line_at(lb, q);
+                if (g0 < 0.0 && g1 > 0.0) || (g0 > 0.0 && g1 < 0.0) {
+                    let x = p + (q - p) * (g0 / (g0 - g1));
+                    if x > p && x < q {
+                        if self.cuts.len() > self.max_cuts {
+                            return Err(Overflow);
+                        }
+                        self.cuts.push(x);
+                    }
+                }
+            }
+        }
+        self.cuts.push(q);
+        if self.cuts.len() > 3 {
+            self.cuts[1..].sort_unstable_by(f64::total_cmp);
+        }
+        Ok(())
+    }
+}
+
+/// The depth of the straight piece `l` = `[t_a, z_a, t_b, z_b]` at time `t` (clamped to it).
+#[inline(always)]
+fn line_at(l: &[f64; 4], t: f64) -> f64 {
+    if l[2] > l[0] {
+        l[1] + (l[3] - l[1]) * ((t - l[0]) / (l[2] - l[0])).clamp(0.0, 1.0)
+    } else {
+        l[1]
+    }
 }
 
 /// A layer of a piece: a fragment index, or the backdrop.
@@ -137,17 +222,15 @@ pub fn sort(frags: &mut [Frag]) {
 /// `piece(a, b, layers)` gets each piece `[a, b]` with its layers front to back (fragment
 /// indices, or `BACKDROP`), cut after the first opaque one. Pieces with no layer are skipped.
 /// `breaks` are extra instants to cut at. Fails with [`Overflow`] where the layers present
-/// together over one stretch of time cross in depth more than `max_cuts` times (the instants
-/// would take more memory than the caller's budget).
-#[allow(clippy::too_many_arguments)]
+/// together over one stretch of time cross in depth more than `sc.max_cuts` times (the
+/// instants would take more memory than the caller's budget).
 #[inline(always)]
 pub fn sweep(
     frags: &[Frag],
     links: &[Link],
-    bg: &Backdrop,
+    bg: &StaticSample,
     opaque: &[bool],
     breaks: &[f64],
-    max_cuts: usize,
     sc: &mut Sweep,
     mut piece: impl FnMut(f64, f64, &[(f64, usize)], &[Frag]),
 ) -> Result<(), Overflow> {
@@ -204,27 +287,7 @@ pub fn sweep(
         }
         // Chains change triangle (and depth slope) at their links: cut there first, so that
         // every layer's depth is one straight piece on each sub-interval.
-        sc.sub.clear();
-        sc.sub.push(u);
-        for &i in &sc.active {
-            if frags[i].n > 1 {
-                let mut c = frags[i].chain;
-                while let Some(next) = Some(links[c as usize].next).filter(|&x| x != NONE) {
-                    let t = f64::from(links[next as usize].t0);
-                    if t >= v {
-                        break;
-                    }
-                    if t > u {
-                        sc.sub.push(t);
-                    }
-                    c = next;
-                }
-            }
-        }
-        sc.sub.push(v);
-        if sc.sub.len() > 3 {
-            sc.sub[1..].sort_unstable_by(f64::total_cmp);
-        }
+        sc.link_cuts(frags, links, u, v);
         for k in 0..sc.sub.len() - 1 {
             let (p, q) = (sc.sub[k], sc.sub[k + 1]);
             if q <= p {
@@ -241,36 +304,8 @@ pub fn sweep(
                 let z = f64::from(bg.depth);
                 sc.lines.push((BACKDROP, [0.0, z, 1.0, z]));
             }
-            let at = |l: &[f64; 4], t: f64| {
-                if l[2] > l[0] {
-                    l[1] + (l[3] - l[1]) * ((t - l[0]) / (l[2] - l[0])).clamp(0.0, 1.0)
-                } else {
-                    l[1]
-                }
-            };
             // cut where any two layers cross in depth
-            sc.cuts.clear();
-            sc.cuts.push(p);
-            for a in 0..sc.lines.len() {
-                for b in a + 1..sc.lines.len() {
-                    let (la, lb) = (&sc.lines[a].1, &sc.lines[b].1);
-                    let g0 = at(la, p) - at(lb, p);
-                    let g1 = at(la, q) - at(lb, q);
-                    if (g0 < 0.0 && g1 > 0.0) || (g0 > 0.0 && g1 < 0.0) {
-                        let x = p + (q - p) * (g0 / (g0 - g1));
-                        if x > p && x < q {
-                            if sc.cuts.len() > max_cuts {
-                                return Err(Overflow);
-                            }
-                            sc.cuts.push(x);
-                        }
-                    }
-                }
-            }
-            sc.cuts.push(q);
-            if sc.cuts.len() > 3 {
-                sc.cuts[1..].sort_unstable_by(f64::total_cmp);
-            }
+            sc.crossing_cuts(p, q)?;
             for c in 0..sc.cuts.len() - 1 {
                 let (a, b) = (sc.cuts[c], sc.cuts[c + 1]);
                 if b <= a {
@@ -279,7 +314,7 @@ pub fn sweep(
                 let m = 0.5 * (a + b);
                 sc.order.clear();
                 for (i, l) in &sc.lines {
-                    sc.order.push((at(l, m), *i));
+                    sc.order.push((line_at(l, m), *i));
                 }
                 sc.order
                     .sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
@@ -348,7 +383,7 @@ mod tests {
         assert_eq!(depth_at(&chain, &links, 0.25), 2.0);
         assert_eq!(depth_at(&chain, &links, 0.875), 1.5);
         let frags = [chain, flat];
-        let bg = Backdrop {
+        let bg = StaticSample {
             rgba: [0.0; 4],
             depth: f32::INFINITY,
             id: -1,
@@ -362,8 +397,10 @@ mod tests {
                 &bg,
                 &[true, true],
                 &[],
-                max_cuts,
-                &mut Sweep::default(),
+                &mut Sweep {
+                    max_cuts,
+                    ..Sweep::default()
+                },
                 |a, b, o, _| pieces.push((a, b, o[0].1, o.len())),
             )
         };

@@ -140,78 +140,61 @@ fn normalized_blur(img: &[f32], w: usize, h: usize, j: usize, ones: &[f32]) -> V
     out
 }
 
-/// Thin-lens depth of field of a `(h, w, 4)` premultiplied pinhole image with view-axis `depth`
-/// `(h, w)` (finite > 0 or +inf). Returns the `(h, w, 4)` premultiplied result.
-pub fn lens_blur(
-    rgba: &[f32],
-    depth: &[f32],
-    w: usize,
-    h: usize,
-    p: &LensParams,
-) -> Result<Vec<f32>> {
-    check_image("rgba", rgba, w, h, 4)?;
-    check_image("depth", depth, w, h, 1)?;
-    check(p)?;
-    check_premultiplied("rgba", rgba, 4)?;
-    if depth.par_iter().any(|d| d.is_nan() || *d <= 0.0) {
-        return Err(Error::value(
-            "depth",
-            "contains NaN or values <= 0 (use +inf for background)",
-        ));
-    }
-    let r_inf = lens_r_infinity(p, h);
-    let f = p.focus_distance;
-    let coc = |d: f32| -> f64 {
-        if d.is_infinite() {
-            r_inf
-        } else {
-            r_inf * (1.0 - f / d as f64)
-        }
-    };
-    let s_max = depth
-        .par_iter()
-        .map(|&d| coc(d).abs())
-        .reduce(|| 0.0, f64::max);
-    let mut top = 0;
-    while top < MAX_LENS_LEVELS + 1 && lens_kernel_radius(top) < s_max {
-        top += 1;
-    }
-    let radii: Vec<f64> = (0..=top).map(lens_kernel_radius).collect();
-    // Sub-image of each pixel, in blending order: back k = top..0 at 0..=top, front k = 0..top
-    // at top+1..=2top+1; and its weight t of K_{k+1}.
-    let (pos, t): (Vec<u16>, Vec<f32>) = depth
-        .par_iter()
-        .map(|&d| {
-            let s = coc(d);
-            let a = s.abs();
-            let k = radii.iter().rposition(|&r| r <= a).unwrap_or(0);
-            let t = if k < top {
-                let (lo, hi) = (radii[k] * radii[k], radii[k + 1] * radii[k + 1]);
-                ((a * a - lo) / (hi - lo)).clamp(0.0, 1.0) as f32
+/// Which sub-image every pixel of a lens blur goes to: `pos`, in blending order (back layers
+/// k = top..0 at 0..=top, front layers k = 0..top at top+1..=2top+1), and its weight `t` of
+/// kernel `K_{k+1}` (the rest of `K_k`).
+struct SubImages {
+    /// The largest kernel level the circles of confusion need.
+    top: usize,
+    pos: Vec<u16>,
+    t: Vec<f32>,
+}
+
+impl SubImages {
+    /// The sub-images of the pixels at view-axis `depth` of an image `h` rows high.
+    fn new(depth: &[f32], p: &LensParams, h: usize) -> Self {
+        let r_inf = lens_r_infinity(p, h);
+        let f = p.focus_distance;
+        let coc = |d: f32| -> f64 {
+            if d.is_infinite() {
+                r_inf
             } else {
-                0.0
-            };
-            let pos = if s >= 0.0 { top - k } else { top + 1 + k };
-            (pos as u16, t)
-        })
-        .unzip();
-    let mut used = vec![false; 2 * top + 2];
-    for &q in &pos {
-        used[q as usize] = true;
-    }
-    let ones_img = vec![1.0f32; w * h];
-    let ones: Vec<Vec<f32>> = (0..=top)
-        .map(|j| {
-            if j == 0 {
-                Vec::new()
-            } else {
-                kernel(&ones_img, w, h, 1, j)
+                r_inf * (1.0 - f / d as f64)
             }
-        })
-        .collect();
-    drop(ones_img);
-    let mut buf = vec![0.0f32; w * h * 4];
-    for (q, _) in used.iter().enumerate().filter(|(_, u)| **u) {
+        };
+        let s_max = depth
+            .par_iter()
+            .map(|&d| coc(d).abs())
+            .reduce(|| 0.0, f64::max);
+        let mut top = 0;
+        while top < MAX_LENS_LEVELS + 1 && lens_kernel_radius(top) < s_max {
+            top += 1;
+        }
+        let radii: Vec<f64> = (0..=top).map(lens_kernel_radius).collect();
+        let (pos, t): (Vec<u16>, Vec<f32>) = depth
+            .par_iter()
+            .map(|&d| {
+                let s = coc(d);
+                let a = s.abs();
+                let k = radii.iter().rposition(|&r| r <= a).unwrap_or(0);
+                let t = if k < top {
+                    let (lo, hi) = (radii[k] * radii[k], radii[k + 1] * radii[k + 1]);
+                    ((a * a - lo) / (hi - lo)).clamp(0.0, 1.0) as f32
+                } else {
+                    0.0
+                };
+                let pos = if s >= 0.0 { top - k } else { top + 1 + k };
+                (pos as u16, t)
+            })
+            .unzip();
+        SubImages { top, pos, t }
+    }
+
+    /// Sub-image `q` of the `(h, w, 4)` image `rgba`, blurred: its pixels (those not moved to
+    /// `K_{k+1}`) blurred by `K_k` over the pixels behind it pushed and pulled in, plus the
+    /// moved part blurred by `K_{k+1}`; `ones[j]` is `K_j` of an all-ones image.
+    fn blurred(&self, rgba: &[f32], w: usize, h: usize, q: usize, ones: &[Vec<f32>]) -> Vec<f32> {
+        let (top, pos, t) = (self.top, &self.pos, &self.t);
         let k = if q <= top { top - q } else { q - top - 1 };
         let q = q as u16;
         let layer: Vec<f32> = rgba
@@ -271,6 +254,50 @@ pub fn lens_blur(
                 .zip(b.par_iter())
                 .for_each(|(s, b)| *s += b);
         }
+        sub
+    }
+}
+
+/// Thin-lens depth of field of a `(h, w, 4)` premultiplied pinhole image with view-axis `depth`
+/// `(h, w)` (finite > 0 or +inf). Returns the `(h, w, 4)` premultiplied result.
+pub fn lens_blur(
+    rgba: &[f32],
+    depth: &[f32],
+    w: usize,
+    h: usize,
+    p: &LensParams,
+) -> Result<Vec<f32>> {
+    check_image("rgba", rgba, w, h, 4)?;
+    check_image("depth", depth, w, h, 1)?;
+    check(p)?;
+    check_premultiplied("rgba", rgba, 4)?;
+    if depth.par_iter().any(|d| d.is_nan() || *d <= 0.0) {
+        return Err(Error::value(
+            "depth",
+            "contains NaN or values <= 0 (use +inf for background)",
+        ));
+    }
+    let subs = SubImages::new(depth, p, h);
+    let top = subs.top;
+    let mut used = vec![false; 2 * top + 2];
+    for &q in &subs.pos {
+        used[q as usize] = true;
+    }
+    let ones_img = vec![1.0f32; w * h];
+    let ones: Vec<Vec<f32>> = (0..=top)
+        .map(|j| {
+            if j == 0 {
+                Vec::new()
+            } else {
+                kernel(&ones_img, w, h, 1, j)
+            }
+        })
+        .collect();
+    drop(ones_img);
+    // The sub-images composited back to front.
+    let mut buf = vec![0.0f32; w * h * 4];
+    for (q, _) in used.iter().enumerate().filter(|(_, u)| **u) {
+        let sub = subs.blurred(rgba, w, h, q, &ones);
         buf.par_chunks_mut(4)
             .zip(sub.par_chunks(4))
             .for_each(|(o, s)| {

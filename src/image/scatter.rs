@@ -12,6 +12,7 @@ use rayon::prelude::*;
 
 use super::splat::{sum_buffers, trace, trace_straight, MAX_PATH_POINTS};
 use crate::error::{Error, Result};
+use crate::frame::Layer;
 
 /// Largest image accepted (pixels), output or piece, as for the rasterizer.
 const MAX_PIXELS: usize = 1 << 25;
@@ -25,16 +26,9 @@ const RUNS: usize = 8;
 /// One sharp render of the movers and how its pixels move.
 #[derive(Clone, Copy)]
 pub struct Piece<'a> {
-    /// `(height, width, 4)` premultiplied colours.
-    pub rgba: &'a [f32],
-    /// `(height, width)` depth along the view axis (positive in front of the camera).
-    pub depth: &'a [f32],
-    /// `(height, width)` object id per pixel.
-    pub ids: &'a [i32],
-    /// Columns of the render.
-    pub width: usize,
-    /// Rows of the render.
-    pub height: usize,
+    /// The render: premultiplied colours, depth along the view axis (positive in front of the
+    /// camera) and object id per pixel.
+    pub layer: Layer<'a>,
     /// The camera-space point of pixel `(i, j)` at depth `z` is
     /// `z (ray[0] (i + 0.5) + ray[1], ray[2] (j + 0.5) + ray[3], -1)`.
     pub ray: [f64; 4],
@@ -79,13 +73,13 @@ fn straight(path: &[[f32; 2]]) -> bool {
 }
 
 fn check_piece(k: usize, p: &Piece, points: usize) -> Result<()> {
-    let n = p.width.saturating_mul(p.height);
+    let n = p.layer.width.saturating_mul(p.layer.height);
     if n == 0 || n > MAX_PIXELS {
         return Err(Error::value(
             "pieces",
             format!(
                 "piece {k}: expected 1..={MAX_PIXELS} pixels, got {}x{}",
-                p.width, p.height
+                p.layer.width, p.layer.height
             ),
         ));
     }
@@ -95,14 +89,14 @@ fn check_piece(k: usize, p: &Piece, points: usize) -> Result<()> {
             format!("piece {k}: expected {want} values, got {got}"),
         )
     };
-    if p.rgba.len() != 4 * n {
-        return Err(bad("rgba", 4 * n, p.rgba.len()));
+    if p.layer.rgba.len() != 4 * n {
+        return Err(bad("rgba", 4 * n, p.layer.rgba.len()));
     }
-    if p.depth.len() != n {
-        return Err(bad("depth", n, p.depth.len()));
+    if p.layer.depth.len() != n {
+        return Err(bad("depth", n, p.layer.depth.len()));
     }
-    if p.ids.len() != n {
-        return Err(bad("ids", n, p.ids.len()));
+    if p.layer.ids.len() != n {
+        return Err(bad("ids", n, p.layer.ids.len()));
     }
     if p.maps.len() != p.objects.len() * points * 16 {
         return Err(bad("maps", p.objects.len() * points * 16, p.maps.len()));
@@ -136,7 +130,7 @@ fn sources(k: usize, piece: &Piece, out: &mut Vec<[u32; 3]>) -> Result<()> {
         .collect();
     slots.sort_by_key(|&(id, s)| (id, s));
     slots.dedup_by_key(|v| v.0); // the first slot of a repeated id
-    for (px, c) in piece.rgba.chunks_exact(4).enumerate() {
+    for (px, c) in piece.layer.rgba.chunks_exact(4).enumerate() {
         if c[3].is_nan() || c[3] <= 0.0 {
             continue;
         }
@@ -146,7 +140,7 @@ fn sources(k: usize, piece: &Piece, out: &mut Vec<[u32; 3]>) -> Result<()> {
                 format!("piece {k}: contains NaN or inf"),
             ));
         }
-        if let Ok(at) = slots.binary_search_by_key(&piece.ids[px], |v| v.0) {
+        if let Ok(at) = slots.binary_search_by_key(&piece.layer.ids[px], |v| v.0) {
             out.push([k as u32, px as u32, slots[at].1]);
         }
     }
@@ -195,10 +189,13 @@ pub fn scatter_pieces(
             for &[k, px, slot] in chunk {
                 let p = &pieces[k as usize];
                 let px = px as usize;
-                let c = &p.rgba[4 * px..4 * px + 4];
+                let c = &p.layer.rgba[4 * px..4 * px + 4];
                 let c = [c[0], c[1], c[2], c[3]].map(|v| v * p.weight);
-                let z = p.depth[px] as f64;
-                let (i, j) = ((px % p.width) as f64 + 0.5, (px / p.width) as f64 + 0.5);
+                let z = p.layer.depth[px] as f64;
+                let (i, j) = (
+                    (px % p.layer.width) as f64 + 0.5,
+                    (px / p.layer.width) as f64 + 0.5,
+                );
                 let q = [
                     z * (p.ray[0] * i + p.ray[1]),
                     z * (p.ray[2] * j + p.ray[3]),
@@ -289,11 +286,13 @@ mod tests {
         let m = maps(points, 1.5);
         // ray: x = (i + 0.5) / 6 * 2 - 1, y = 1 - (j + 0.5) / 5 * 2 (a 90 degree square-ish camera)
         let piece = Piece {
-            rgba: &rgba,
-            depth: &depth,
-            ids: &ids,
-            width: 6,
-            height: 5,
+            layer: Layer {
+                rgba: &rgba,
+                depth: &depth,
+                ids: &ids,
+                width: 6,
+                height: 5,
+            },
             ray: [2.0 / 6.0, -1.0, -2.0 / 5.0, 1.0],
             weight: 0.5,
             objects: &[3, 7],
@@ -328,11 +327,13 @@ mod tests {
         let (rgba, depth, ids) = piece_data();
         let m = maps(2, 1.0);
         let good = || Piece {
-            rgba: &rgba,
-            depth: &depth,
-            ids: &ids,
-            width: 6,
-            height: 5,
+            layer: Layer {
+                rgba: &rgba,
+                depth: &depth,
+                ids: &ids,
+                width: 6,
+                height: 5,
+            },
             ray: [0.3, -1.0, -0.4, 1.0],
             weight: 1.0,
             objects: &[7],
@@ -342,7 +343,19 @@ mod tests {
         assert!(scatter_pieces(0, 6, &[good()], 2).is_err());
         assert!(scatter_pieces(9, 6, &[good()], 3).is_err()); // maps of 2 points
         assert!(scatter_pieces(9, 6, &[good()], 0).is_err());
-        assert!(scatter_pieces(9, 6, &[Piece { width: 5, ..good() }], 2).is_err());
+        assert!(scatter_pieces(
+            9,
+            6,
+            &[Piece {
+                layer: Layer {
+                    width: 5,
+                    ..good().layer
+                },
+                ..good()
+            }],
+            2
+        )
+        .is_err());
         assert!(scatter_pieces(
             9,
             6,
@@ -370,7 +383,10 @@ mod tests {
             9,
             6,
             &[Piece {
-                rgba: &bad,
+                layer: Layer {
+                    rgba: &bad,
+                    ..good().layer
+                },
                 ..good()
             }],
             2

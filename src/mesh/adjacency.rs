@@ -157,6 +157,24 @@ unsafe impl<T: Send> Send for SharedSlots<T> {}
 pub fn build_adjacency(faces: &[[u32; 3]], n_vertices: usize) -> Adjacency {
     let nv = n_vertices.max(1);
     let width = nv.div_ceil(1024).max(1);
+    let (tmp, coarse_start) = coarse_scatter(faces, nv, width);
+    let (entries, start, run_counts) = sort_buckets(tmp, &coarse_start, nv, width);
+    let (edges, offsets) = edges_of(&entries, &start, &run_counts, width, n_vertices);
+    let half_edges: Vec<u32> = entries.par_iter().map(|e| e.1 >> 1).collect();
+    let forward: Vec<bool> = entries.par_iter().map(|e| e.1 & 1 == 1).collect();
+    Adjacency {
+        edges,
+        offsets,
+        half_edges,
+        forward,
+    }
+}
+
+/// Step 1 of [`build_adjacency`]: every half-edge's key `(lower, higher, id * 2 + forward)`
+/// scattered into coarse buckets of `width` consecutive lower vertices (counts per chunk of
+/// faces, prefix sums, a disjoint parallel scatter); returns the keys and each bucket's start
+/// (`nv.div_ceil(width) + 1` of them).
+fn coarse_scatter(faces: &[[u32; 3]], nv: usize, width: usize) -> (Vec<[u32; 3]>, Vec<usize>) {
     let n_coarse = nv.div_ceil(width);
     let chunks = rayon::current_num_threads().clamp(1, 8);
     let per = faces.len().div_ceil(chunks).max(1);
@@ -166,7 +184,6 @@ pub fn build_adjacency(faces: &[[u32; 3]], n_vertices: usize) -> Adjacency {
         let (a, b) = (f[k], f[(k + 1) % 3]);
         (a != b).then(|| [a.min(b), a.max(b), ((h + k as u32) << 1) | u32::from(a < b)])
     };
-    // 1. Coarse counts per chunk of faces, prefix sums, scatter.
     let counts: Vec<Vec<u32>> = faces
         .par_chunks(per)
         .map(|part| {
@@ -214,10 +231,21 @@ pub fn build_adjacency(faces: &[[u32; 3]], n_vertices: usize) -> Adjacency {
                 }
             }
         });
-    drop(cursors);
-    drop(counts);
-    // 2. Inside every coarse bucket: counting sort by vertex, sort each vertex's half-edges,
-    //    count the edges (runs of equal higher vertex).
+    (tmp, coarse_start)
+}
+
+/// Step 2 of [`build_adjacency`]: inside every coarse bucket of `tmp` (from `coarse_scatter`),
+/// a counting sort by vertex, each vertex's half-edges sorted by (higher vertex, key); returns
+/// the `(higher, key)` entries, each vertex's first entry (`nv + 1`) and the number of edges
+/// (runs of equal higher vertex) per bucket.
+fn sort_buckets(
+    tmp: Vec<[u32; 3]>,
+    coarse_start: &[usize],
+    nv: usize,
+    width: usize,
+) -> (Vec<(u32, u32)>, Vec<u32>, Vec<usize>) {
+    let n_coarse = coarse_start.len() - 1;
+    let total = coarse_start[n_coarse];
     let mut entries = vec![(0u32, 0u32); total];
     let mut start = vec![0u32; nv + 1];
     let mut run_counts = vec![0usize; n_coarse];
@@ -267,8 +295,20 @@ pub fn build_adjacency(faces: &[[u32; 3]], n_vertices: usize) -> Adjacency {
         });
     }
     start[nv] = total as u32;
-    drop(tmp);
-    // 3. Fill edges and offsets per coarse bucket.
+    (entries, start, run_counts)
+}
+
+/// Step 3 of [`build_adjacency`]: the edges `[lower, higher]` and each edge's first entry
+/// (its half-edges' offsets), filled per coarse bucket in parallel.
+fn edges_of(
+    entries: &[(u32, u32)],
+    start: &[u32],
+    run_counts: &[usize],
+    width: usize,
+    n_vertices: usize,
+) -> (Vec<[u32; 2]>, Vec<u32>) {
+    let n_coarse = run_counts.len();
+    let total = entries.len();
     let n_edges: usize = run_counts.iter().sum();
     let mut edges = vec![[0u32; 2]; n_edges];
     let mut offsets = vec![0u32; n_edges + 1];
@@ -283,7 +323,6 @@ pub fn build_adjacency(faces: &[[u32; 3]], n_vertices: usize) -> Adjacency {
             jobs.push((b, eh, oh));
             (e_rest, o_rest) = (et, ot);
         }
-        let (entries, start) = (&entries, &start);
         jobs.into_par_iter().for_each(|(b, e_out, o_out)| {
             let mut j = 0;
             for a in b * width..((b + 1) * width).min(n_vertices) {
@@ -299,14 +338,7 @@ pub fn build_adjacency(faces: &[[u32; 3]], n_vertices: usize) -> Adjacency {
             }
         });
     }
-    let half_edges: Vec<u32> = entries.par_iter().map(|e| e.1 >> 1).collect();
-    let forward: Vec<bool> = entries.par_iter().map(|e| e.1 & 1 == 1).collect();
-    Adjacency {
-        edges,
-        offsets,
-        half_edges,
-        forward,
-    }
+    (edges, offsets)
 }
 
 #[cfg(test)]

@@ -16,5 +16,6 @@ pub use numeric::{
     det3, dot, linear_part, mat4_mul, norm, place, row_times, translation_part, transpose_times,
     turn, Mat3, Mat4, IDENTITY4,
 };
+pub(crate) use path::Placer;
 pub use path::{Keyframe, Path};
 pub use similarity::{axis_angle, Similarity};

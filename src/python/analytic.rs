@@ -7,8 +7,7 @@ use pyo3::types::PyDict;
 use super::args::{lights, LayerArg, LightArg};
 use super::convert::{c_slice, detached_in_pool, face_indices_u32, rows, shaped, ToDict};
 use crate::{
-    render_analytic, AnalyticInput, AnalyticStats, Backdrop, Error, MovingDraw, Quadrature,
-    Shading, Shutter,
+    render_analytic, AnalyticInput, AnalyticStats, Error, MovingDraw, Quadrature, Shading, Shutter,
 };
 
 /// One moving draw, read off the attributes of a `motionblur.MovingDraw`: `positions` f64
@@ -188,13 +187,7 @@ fn _analytic<'py>(
             shading: o.shading,
         })
         .collect();
-    let backdrop = match &backdrop {
-        None => None,
-        Some(b) => {
-            let (rgba, depth, ids) = b.planes("backdrop")?;
-            Some(Backdrop { rgba, depth, ids })
-        }
-    };
+    let backdrop = backdrop.as_ref().map(|b| b.layer("backdrop")).transpose()?;
     let input = AnalyticInput {
         width: o.width,
         height: o.height,
@@ -211,14 +204,15 @@ fn _analytic<'py>(
         shade: o.shade,
         tile_budget: o.tile_budget,
     };
-    let frame = detached_in_pool(py, || render_analytic(&input))?;
+    let (frame, stats) = detached_in_pool(py, || render_analytic(&input))?;
     let (h, w) = (frame.height as usize, frame.width as usize);
+    let velocity = frame.velocity.unwrap_or_else(|| vec![0.0; 2 * h * w]);
     Ok((
         shaped(py, frame.rgba, [h, w, 4])?,
         shaped(py, frame.depth, [h, w])?,
         shaped(py, frame.ids, [h, w])?,
-        shaped(py, frame.velocity, [h, w, 2])?,
-        frame.stats.to_dict(py)?,
+        shaped(py, velocity, [h, w, 2])?,
+        stats.to_dict(py)?,
     ))
 }
 

@@ -8,7 +8,7 @@ use numpy::{PyReadonlyArray2, PyReadonlyArray3, PyReadwriteArray2, PyReadwriteAr
 use pyo3::prelude::*;
 
 use super::convert::{c_slice, c_slice_mut};
-use crate::{Error, Light};
+use crate::{Error, Layer, Light};
 
 /// A layer of samples as the Python layer has it: the attributes `rgba` (H,W,4) float32,
 /// `depth` (H,W) float32 and `ids` (H,W) int32 of any object, read-only.
@@ -47,6 +47,20 @@ impl LayerArg<'_> {
             c_slice(&self.depth, name)?,
             c_slice(&self.ids, name)?,
         ))
+    }
+
+    /// The core's borrowed [`Layer`] of it after the checks of [`Self::size`] and
+    /// [`Self::planes`]; errors name `name`.
+    pub fn layer(&self, name: &'static str) -> Result<Layer<'_>, Error> {
+        let [height, width] = self.size(name)?;
+        let (rgba, depth, ids) = self.planes(name)?;
+        Ok(Layer {
+            width,
+            height,
+            rgba,
+            depth,
+            ids,
+        })
     }
 }
 

@@ -9,7 +9,8 @@ use pyo3::prelude::*;
 
 use super::convert::{c_slice, detached_in_pool, rows, shaped};
 use crate::{
-    CameraBlur, CameraMatrices, Composite, DofParams, Error, LensParams, Piece, ReconstructParams,
+    CameraBlur, CameraMatrices, Composite, DofParams, Error, Layer, LensParams, Piece,
+    ReconstructParams,
 };
 
 type PyOut<'py> = PyResult<Bound<'py, PyAny>>;
@@ -207,11 +208,13 @@ fn _scatter_pieces<'py>(
             .into());
         }
         views.push(Piece {
-            rgba: c,
-            depth: d,
-            ids: c_slice(ids, "ids")?,
-            width: w,
-            height: h,
+            layer: Layer {
+                rgba: c,
+                depth: d,
+                ids: c_slice(ids, "ids")?,
+                width: w,
+                height: h,
+            },
             ray: *ray,
             weight: *weight,
             objects: c_slice(objects, "objects")?,

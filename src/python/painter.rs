@@ -8,8 +8,8 @@ use super::args::{LayerArg, LightArg};
 use super::convert::{c_slice, detached_in_pool, face_indices_u32, rows, shaped};
 use super::motion::PyKeyframes;
 use crate::{
-    accumulate_moving, accumulate_still, Accumulated, Error, Mat4, PaintObject, Painter, Samples,
-    Shading, StaticLayer, StillCamera,
+    accumulate_moving, accumulate_still, Accumulated, Error, Frame, Mat4, PaintObject, Painter,
+    Samples, Shading, StillCamera,
 };
 
 /// One object, the items of a dict: `id`, `shading` name, `vertices` f64 (V,3), `faces` i64
@@ -197,20 +197,14 @@ impl PyPainter {
         if background.size("background")? != [camera.height, camera.width] {
             return Err(Error::shape("background", "rgba must be (height, width, 4)").into());
         }
-        let (rgba, depth, ids) = background.planes("background")?;
-        let bg = StaticLayer {
-            rgba,
-            depth,
-            ids,
-            opaque,
-        };
+        let bg = background.layer("background")?;
         let samples = samples.samples()?;
         let inner = &self.inner;
-        let out = detached_in_pool(py, || accumulate_still(inner, &camera, samples, bg))?;
+        let out = detached_in_pool(py, || accumulate_still(inner, &camera, samples, bg, opaque))?;
         let Some(Accumulated {
-            rgba,
-            depth,
-            ids,
+            frame: Frame {
+                rgba, depth, ids, ..
+            },
             window: w,
             draw_calls,
         }) = out
@@ -252,7 +246,8 @@ impl PyPainter {
         let out = detached_in_pool(py, || {
             accumulate_moving(inner, &views, &p, width, height, samples)
         })?;
-        arrays(py, out.rgba, out.depth, out.ids, width, height)
+        let f = out.frame;
+        arrays(py, f.rgba, f.depth, f.ids, width, height)
     }
 }
 

@@ -83,13 +83,8 @@ fn owned_draw(d: &DrawArg<'_>) -> Result<Draw, Error> {
 /// The background's data after checking its shapes (the window of the frame's samples is
 /// checked by the core).
 fn background<'a>(b: &'a LayerArg<'_>, origin: [usize; 2]) -> Result<Background<'a>, Error> {
-    let [_, cols] = b.size("background")?;
-    let (rgba, depth, ids) = b.planes("background")?;
     Ok(Background {
-        rgba,
-        depth,
-        ids,
-        stride: cols,
+        layer: b.layer("background")?,
         x0: origin[0],
         y0: origin[1],
     })
@@ -136,16 +131,17 @@ fn _rasterize<'py>(
         .as_ref()
         .map(|b| self::background(b, options.origin))
         .transpose()?;
-    let frame = detached_in_pool(py, || rasterize_over(&camera, &owned, &opts, bg.as_ref()))?;
+    let (frame, stats) =
+        detached_in_pool(py, || rasterize_over(&camera, &owned, &opts, bg.as_ref()))?;
     let (h, w) = (frame.height as usize, frame.width as usize);
-    let stats = frame.stats.to_dict(py)?;
+    let stats = stats.to_dict(py)?;
     Ok((
         shaped(py, frame.rgba, [h, w, 4])?,
         shaped(py, frame.depth, [h, w])?,
         shaped(py, frame.ids, [h, w])?,
-        match frame.velocity.is_empty() {
-            true => py.None().into_bound(py),
-            false => shaped(py, frame.velocity, [h, w, 2])?,
+        match frame.velocity {
+            None => py.None().into_bound(py),
+            Some(v) => shaped(py, v, [h, w, 2])?,
         },
         stats,
     ))

@@ -11,24 +11,20 @@
 use super::bins::TILE;
 use super::blend::Sample;
 use crate::error::{Error, Result};
+use crate::frame::Layer;
 
-/// Per-sample arrays of the background, row-major with `stride` samples a row. The frame's
-/// `ws` x `hs` samples read the window of these arrays whose top-left sample is (`x0`, `y0`)
-/// (0, 0 and `stride` = `ws` for arrays of exactly the frame's samples), so a window of a kept
-/// layer needs no copy.
+/// The window of a kept layer a frame starts from: the frame's `ws` x `hs` samples read the
+/// samples of `layer` (one entry per sample, `layer.width` a row) whose top-left one is
+/// (`x0`, `y0`) ((0, 0) and a layer of exactly the frame's samples for the whole layer), so a
+/// window of a kept layer needs no copy. Colours premultiplied and finite, depths > 0 (`inf`
+/// where there is no surface).
 #[derive(Clone, Copy, Debug)]
 pub struct Background<'a> {
-    /// Premultiplied linear RGBA, 4 floats a sample, finite.
-    pub rgba: &'a [f32],
-    /// View-axis distance of the opaque surface, > 0; `inf` where there is none.
-    pub depth: &'a [f32],
-    /// Object id of that surface (-1 where there is none).
-    pub ids: &'a [i32],
-    /// Samples per row of the arrays.
-    pub stride: usize,
-    /// The arrays' sample under the frame's sample (0, 0).
+    /// The kept layer, one entry per sample.
+    pub layer: Layer<'a>,
+    /// The layer's sample under the frame's sample (0, 0).
     pub x0: usize,
-    /// The arrays' row under the frame's sample row 0.
+    /// The layer's row under the frame's sample row 0.
     pub y0: usize,
 }
 
@@ -42,30 +38,14 @@ impl Background<'_> {
     /// Checks the lengths against a `ws` x `hs`-sample frame (the values are left to `load`,
     /// which reports bad ones of the samples it reads, and to `validate_values`).
     pub fn validate_shape(&self, ws: usize, hs: usize) -> Result<()> {
-        let rows = self.depth.len().checked_div(self.stride).unwrap_or(0);
-        if self.stride * rows != self.depth.len()
-            || self.x0 + ws > self.stride
-            || self.y0 + hs > rows
-        {
+        self.layer.check_lengths("background")?;
+        let l = &self.layer;
+        if self.x0 + ws > l.width || self.y0 + hs > l.height {
             return Err(Error::shape(
                 "background",
                 format!(
-                    "depth must hold the frame's {hs}x{ws} samples from ({}, {}), got {} values in rows of {}",
-                    self.y0,
-                    self.x0,
-                    self.depth.len(),
-                    self.stride
-                ),
-            ));
-        }
-        if self.rgba.len() != 4 * self.depth.len() || self.ids.len() != self.depth.len() {
-            return Err(Error::shape(
-                "background",
-                format!(
-                    "rgba must be ({rows},{s},4) and ids ({rows},{s}) like depth, got {} and {} values",
-                    self.rgba.len(),
-                    self.ids.len(),
-                    s = self.stride
+                    "must hold the frame's {hs}x{ws} samples from ({}, {}), got {}x{}",
+                    self.y0, self.x0, l.height, l.width
                 ),
             ));
         }
@@ -79,17 +59,17 @@ impl Background<'_> {
         // exponent bits set.
         let (mut bad_depth, mut bad_rgba) = (false, false);
         for iy in self.y0..self.y0 + hs {
-            let row = iy * self.stride + self.x0;
-            bad_depth |= self.depth[row..row + ws]
+            let row = iy * self.layer.width + self.x0;
+            bad_depth |= self.layer.depth[row..row + ws]
                 .iter()
                 .fold(false, |bad, d| bad | bad_depth_bits(*d));
-            bad_rgba |= self.rgba[4 * row..4 * (row + ws)]
+            bad_rgba |= self.layer.rgba[4 * row..4 * (row + ws)]
                 .iter()
                 .fold(false, |bad, c| bad | bad_colour_bits(*c));
         }
         if bad_depth {
             let d = (self.y0..self.y0 + hs)
-                .flat_map(|iy| &self.depth[iy * self.stride + self.x0..][..ws])
+                .flat_map(|iy| &self.layer.depth[iy * self.layer.width + self.x0..][..ws])
                 .find(|d| !(**d > 0.0))
                 .expect("one is bad");
             return Err(Error::value(
@@ -106,12 +86,12 @@ impl Background<'_> {
     /// The sample under the frame's sample (ix, iy) as the opaque pass would leave it.
     #[inline]
     pub fn sample(&self, ix: usize, iy: usize) -> Sample {
-        let i = (iy + self.y0) * self.stride + ix + self.x0;
-        let c = &self.rgba[4 * i..4 * i + 4];
+        let i = (iy + self.y0) * self.layer.width + ix + self.x0;
+        let c = &self.layer.rgba[4 * i..4 * i + 4];
         Sample {
             rgba: [c[0], c[1], c[2], c[3]],
-            invw: 1.0 / self.depth[i],
-            id: self.ids[i],
+            invw: 1.0 / self.layer.depth[i],
+            id: self.layer.ids[i],
             velocity: [0.0; 2],
         }
     }
@@ -126,15 +106,15 @@ impl Background<'_> {
         let mut bad = false;
         for iy in y0..y1 {
             let row = (iy - y0) * TILE as usize;
-            let i = (iy + self.y0) * self.stride + x0 + self.x0;
+            let i = (iy + self.y0) * self.layer.width + x0 + self.x0;
             let z = &mut zbuf[row..row + w];
-            for (z, &d) in z.iter_mut().zip(&self.depth[i..i + w]) {
+            for (z, &d) in z.iter_mut().zip(&self.layer.depth[i..i + w]) {
                 *z = 1.0 / d;
                 bad |= bad_depth_bits(d);
             }
-            let rgba = &self.rgba[4 * i..4 * (i + w)];
+            let rgba = &self.layer.rgba[4 * i..4 * (i + w)];
             bad |= rgba.iter().fold(false, |bad, c| bad | bad_colour_bits(*c));
-            let ids = &self.ids[i..i + w];
+            let ids = &self.layer.ids[i..i + w];
             for (((smp, c), &id), &invw) in samples[row..row + w]
                 .iter_mut()
                 .zip(rgba.chunks_exact(4))
@@ -175,10 +155,13 @@ mod tests {
         let ids = [0i32; 2];
         let check = |depth: [f32; 2], rgba: &[f32]| {
             Background {
-                rgba,
-                depth: &depth,
-                ids: &ids,
-                stride: 2,
+                layer: Layer {
+                    width: 2,
+                    height: 1,
+                    rgba,
+                    depth: &depth,
+                    ids: &ids,
+                },
                 x0: 0,
                 y0: 0,
             }
@@ -213,10 +196,13 @@ mod tests {
         let rgba: Vec<f32> = (0..48).map(|i| i as f32).collect();
         let ids: Vec<i32> = (0..12).collect();
         let mut bg = Background {
-            rgba: &rgba,
-            depth: &depth,
-            ids: &ids,
-            stride: 4,
+            layer: Layer {
+                width: 4,
+                height: 3,
+                rgba: &rgba,
+                depth: &depth,
+                ids: &ids,
+            },
             x0: 1,
             y0: 1,
         };
@@ -230,11 +216,11 @@ mod tests {
         assert!(bg.validate(2, 3).is_err(), "y0 + hs > rows");
         let mut outside = depth.clone();
         outside[0] = f32::NAN; // outside the window: not read, not checked
-        bg.depth = &outside;
+        bg.layer.depth = &outside;
         assert!(bg.validate(2, 2).is_ok());
         let mut inside = depth.clone();
         inside[5] = f32::NAN;
-        bg.depth = &inside;
+        bg.layer.depth = &inside;
         assert!(bg.validate(2, 2).is_err());
     }
 }

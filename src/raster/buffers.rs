@@ -1,12 +1,12 @@
-//! The frame's buffers (colour, depth, ids, velocity) and the box resolve of supersampled tiles.
+//! The raster frame's stats, the tiles' writer into a [`Frame`] and the box resolve of
+//! supersampled tiles.
 //!
 //! Resolve: the colour of a pixel is the mean of its s x s samples (a box filter). Depth, id and
 //! velocity come from the pixel's *nearest* sample (smallest depth; the first in row order on
 //! ties), so they always describe one real surface rather than a blend of two.
 use super::bins::TILE;
 use super::blend::Sample;
-use crate::budget::try_reserve;
-use crate::error::Result;
+use crate::frame::Frame;
 
 /// Timings and counts of one frame.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -44,26 +44,6 @@ pub struct Stats {
     pub ms_total: f64,
 }
 
-/// A rendered frame: row-major buffers of `height` x `width` pixels.
-#[derive(Clone, Debug, Default)]
-pub struct Frame {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// (H,W,4) premultiplied linear RGBA.
-    pub rgba: Vec<f32>,
-    /// (H,W) view-axis distance of the nearest surface, inf for background.
-    pub depth: Vec<f32>,
-    /// (H,W) object id of the nearest surface, -1 for background.
-    pub ids: Vec<i32>,
-    /// (H,W,2) screen motion in pixels of the nearest surface; empty when no draw carries
-    /// previous positions (the motion is zero everywhere, and is not written).
-    pub velocity: Vec<f32>,
-    /// Counts and timings of the frame.
-    pub stats: Stats,
-}
-
 /// Raw pointers into the frame's buffers, shared by the tile workers. Each tile writes only its
 /// own pixel rectangle, and rectangles of different tiles are disjoint.
 pub struct Output {
@@ -80,73 +60,44 @@ pub struct Output {
 unsafe impl Send for Output {}
 unsafe impl Sync for Output {}
 
-impl Frame {
-    /// A frame of the given size with background-initialised buffers.
-    pub fn new(width: u32, height: u32) -> Self {
-        let n = width as usize * height as usize;
-        Frame {
-            width,
-            height,
-            rgba: vec![0.0; 4 * n],
-            depth: vec![f32::INFINITY; n],
-            ids: vec![-1; n],
-            velocity: vec![0.0; 2 * n],
-            stats: Stats::default(),
-        }
-    }
-
-    /// A frame of the given size whose buffers are allocated but empty (length 0), to be
-    /// filled by the tiles through `output` and then `assume_written`: the tiles write every
-    /// pixel, so filling the buffers first would only write the frame's 24 or 32 bytes a pixel
-    /// twice. Without `velocity` the velocity buffer stays empty. An allocation the system
-    /// refuses is an error naming `width`.
-    pub fn unwritten(width: u32, height: u32, velocity: bool) -> Result<Self> {
-        let n = width as usize * height as usize;
-        let mut frame = Frame {
-            width,
-            height,
-            ..Default::default()
-        };
-        try_reserve(&mut frame.rgba, 4 * n, "width")?;
-        try_reserve(&mut frame.depth, n, "width")?;
-        try_reserve(&mut frame.ids, n, "width")?;
-        if velocity {
-            try_reserve(&mut frame.velocity, 2 * n, "width")?;
-        }
-        Ok(frame)
-    }
-
-    /// The pointers the tiles write through (into the buffers' capacity; velocity only when
-    /// the frame has room for it). `self` must outlive every use.
-    pub fn output(&mut self) -> Output {
-        let n = self.width as usize * self.height as usize;
+impl Output {
+    /// The pointers the tiles write through, into the spare capacity of a frame made by
+    /// [`Frame::with_capacity`] (velocity only when the frame has that channel). `frame` must
+    /// outlive every use and not be touched until [`assume_written`].
+    pub fn new(frame: &mut Frame) -> Output {
+        let n = frame.len();
         Output {
-            rgba: self.rgba.as_mut_ptr(),
-            depth: self.depth.as_mut_ptr(),
-            ids: self.ids.as_mut_ptr(),
-            velocity: (self.velocity.capacity() >= 2 * n && n > 0)
-                .then_some(self.velocity.as_mut_ptr()),
-            width: self.width as usize,
-            height: self.height as usize,
+            rgba: frame.rgba.as_mut_ptr(),
+            depth: frame.depth.as_mut_ptr(),
+            ids: frame.ids.as_mut_ptr(),
+            velocity: frame
+                .velocity
+                .as_mut()
+                .filter(|v| v.capacity() >= 2 * n && n > 0)
+                .map(|v| v.as_mut_ptr()),
+            width: frame.width as usize,
+            height: frame.height as usize,
         }
     }
+}
 
-    /// Gives the buffers of an `unwritten` frame their full length.
-    ///
-    /// # Safety
-    /// Every pixel of the frame must have been written through `output` (`Output::write_tile`
-    /// over tiles that cover the frame).
-    pub unsafe fn assume_written(&mut self) {
-        let n = self.width as usize * self.height as usize;
-        debug_assert!(self.depth.capacity() >= n && self.rgba.capacity() >= 4 * n);
-        // SAFETY: the capacities were reserved by `unwritten` and the caller guarantees every
-        // element up to these lengths was written (f32 and i32 have no invalid bit patterns).
-        unsafe {
-            self.rgba.set_len(4 * n);
-            self.depth.set_len(n);
-            self.ids.set_len(n);
-            if self.velocity.capacity() >= 2 * n {
-                self.velocity.set_len(2 * n);
+/// Gives the buffers of a [`Frame::with_capacity`] frame their full length.
+///
+/// # Safety
+/// Every pixel of the frame must have been written through its [`Output`]
+/// (`Output::write_tile` over tiles that cover the frame).
+pub unsafe fn assume_written(frame: &mut Frame) {
+    let n = frame.len();
+    debug_assert!(frame.depth.capacity() >= n && frame.rgba.capacity() >= 4 * n);
+    // SAFETY: the capacities were reserved by `with_capacity` and the caller guarantees every
+    // element up to these lengths was written (f32 and i32 have no invalid bit patterns).
+    unsafe {
+        frame.rgba.set_len(4 * n);
+        frame.depth.set_len(n);
+        frame.ids.set_len(n);
+        if let Some(v) = &mut frame.velocity {
+            if v.capacity() >= 2 * n {
+                v.set_len(2 * n);
             }
         }
     }
@@ -354,12 +305,12 @@ mod tests {
             .collect();
         for (w, h, velocity) in [(64, 64, true), (61, 37, false), (13, 5, true)] {
             let run = |simd| {
-                let mut f = Frame::unwritten(w as u32, h as u32, velocity).unwrap();
-                let out = f.output();
+                let mut f = Frame::with_capacity(w as u32, h as u32, velocity).unwrap();
+                let out = Output::new(&mut f);
                 // SAFETY: one tile covering the frame, written once.
                 unsafe {
                     out.copy_samples(&samples, [0, 0, w, h], simd);
-                    f.assume_written();
+                    assume_written(&mut f);
                 }
                 f
             };
@@ -368,8 +319,9 @@ mod tests {
             assert_eq!(bits(&a.rgba), bits(&b.rgba));
             assert_eq!(bits(&a.depth), bits(&b.depth));
             assert_eq!(a.ids, b.ids);
-            assert_eq!(bits(&a.velocity), bits(&b.velocity));
-            assert_eq!(a.velocity.len(), if velocity { 2 * w * h } else { 0 });
+            let vel = |f: &Frame| f.velocity.as_deref().map(bits);
+            assert_eq!(vel(&a), vel(&b));
+            assert_eq!(a.velocity.map(|v| v.len()), velocity.then_some(2 * w * h));
         }
     }
 }

@@ -36,7 +36,8 @@ mod tile;
 
 pub use background::Background;
 pub use blend::FRAGMENT_CAP;
-pub use buffers::{Frame, Stats};
+pub use buffers::Stats;
+use buffers::{assume_written, Output};
 pub use camera::check_size;
 pub use camera::{Camera, MAX_INTERNAL_SIDE, MAX_PIXELS, MAX_SIDE, SAMPLES};
 pub use draw::{faces_from_i64, vertex_normals, Draw};
@@ -45,6 +46,7 @@ pub use options::{Blend, Light, Options, Shading};
 
 use crate::budget::{self, Need};
 use crate::error::{Error, Result};
+use crate::frame::Frame;
 use bins::TILE;
 use rayon::prelude::*;
 use setup::{Chunk, Screen, Viewport};
@@ -159,26 +161,26 @@ fn frame_need(camera: &Camera, draws: &[Draw]) -> Result<Need> {
         )
 }
 
-/// Renders `draws` seen by `camera`. Errors name the offending argument.
-pub fn rasterize(camera: &Camera, draws: &[Draw], opts: &Options) -> Result<Frame> {
+/// Renders `draws` seen by `camera`: the frame (velocity only when a draw carries previous
+/// positions) and its counts and timings. Errors name the offending argument.
+pub fn rasterize(camera: &Camera, draws: &[Draw], opts: &Options) -> Result<(Frame, Stats)> {
     rasterize_over(camera, draws, opts, None)
 }
 
-/// Renders `draws` seen by `camera` over the opaque `background` (one entry per sample, see
-/// `background.rs`), or over nothing when None. Errors name the offending argument.
-pub fn rasterize_over(
+/// Checks a frame's request before anything is allocated: the size, options, the background's
+/// lengths (its values are checked by the tiles as they load them), the draws, the number of
+/// set-up jobs and the memory the frame needs before binning (returned).
+fn check_frame(
     camera: &Camera,
     draws: &[Draw],
     opts: &Options,
     background: Option<&Background>,
-) -> Result<Frame> {
-    let t0 = Instant::now();
+) -> Result<Need> {
     check_size(camera.width, camera.height, opts.samples)?;
     check_options(opts)?;
-    // The background's values are checked by the tiles as they load them (see below).
-    let bg_size = [camera.width, camera.height].map(|v| v as usize * opts.samples as usize);
     if let Some(bg) = background {
-        bg.validate_shape(bg_size[0], bg_size[1])?;
+        let s = opts.samples as usize;
+        bg.validate_shape(camera.width as usize * s, camera.height as usize * s)?;
     }
     for d in draws {
         d.validate()?;
@@ -195,18 +197,16 @@ pub fn rasterize_over(
     }
     let need = frame_need(camera, draws)?;
     need.check()?;
-    let (w, h) = (camera.width, camera.height);
-    let s = opts.samples;
-    let vp_matrix = camera.view_projection();
-    let mut frame = Frame::unwritten(w, h, draws.iter().any(|d| d.previous.is_some()))?;
+    Ok(need)
+}
 
-    let viewport = Viewport::new(w * s, h * s);
-    let (prepared, screens): (Vec<Prepared>, Vec<Screen>) = draws
-        .iter()
-        .map(|d| transform(d, vp_matrix, &viewport, opts, f64::from(w), f64::from(h)))
-        .unzip();
-    let t1 = Instant::now();
-
+/// Sets up every draw's faces, runs of `CHUNK_FACES` in parallel, in submission order.
+fn setup_chunks(
+    draws: &[Draw],
+    vp: &glam::DMat4,
+    screens: &[Screen],
+    viewport: &Viewport,
+) -> Vec<Chunk> {
     let jobs: Vec<(usize, std::ops::Range<usize>)> = draws
         .iter()
         .enumerate()
@@ -216,37 +216,25 @@ pub fn rasterize_over(
                 .map(move |a| (di, a..(a + CHUNK_FACES).min(d.faces.len())))
         })
         .collect();
-    let chunks: Vec<Chunk> = jobs
-        .into_par_iter()
+    jobs.into_par_iter()
         .map(|(di, range)| {
-            setup::setup_chunk(
-                di as u32,
-                &draws[di],
-                &vp_matrix,
-                &screens[di],
-                range,
-                &viewport,
-            )
+            setup::setup_chunk(di as u32, &draws[di], vp, &screens[di], range, viewport)
         })
-        .collect();
-    let t2 = Instant::now();
+        .collect()
+}
 
-    let mut bins = KEPT_BINS.with(RefCell::take);
-    bins.build(&chunks, viewport.ws, viewport.hs, need)?;
-    let t3 = Instant::now();
-
-    let shader = Shader {
-        draws,
-        prepared: &prepared,
-        chunks: &chunks,
-        opts,
-        width: f64::from(w),
-        height: f64::from(h),
-    };
-    let out = frame.output();
+/// Renders every tile of `bins` in parallel over `background` (or nothing) and resolves it
+/// into `out`, the frame's `w` x `h` pixels of `s` x `s` samples; the tiles' reports summed.
+fn render_tiles(
+    bins: &bins::Bins,
+    shader: &Shader,
+    background: Option<&Background>,
+    out: &Output,
+    [w, h, s]: [u32; 3],
+) -> TileReport {
     let tiles_x = bins.tiles_x;
     let pixels_per_tile = (TILE as u32 / s) as usize;
-    let report = (0..bins.tiles_x * bins.tiles_y)
+    (0..bins.tiles_x * bins.tiles_y)
         .into_par_iter()
         .map(|t| {
             let (tx, ty) = (t % tiles_x, t / tiles_x);
@@ -270,7 +258,13 @@ pub fn rasterize_over(
                         ..Default::default()
                     },
                     _ => tile::render_tile(
-                        rect, refs, tris, &shader, opts.blend, background, scratch,
+                        rect,
+                        refs,
+                        tris,
+                        shader,
+                        shader.opts.blend,
+                        background,
+                        scratch,
                     ),
                 };
                 let t = Instant::now();
@@ -280,16 +274,60 @@ pub fn rasterize_over(
                 report
             })
         })
-        .reduce(TileReport::default, TileReport::add);
+        .reduce(TileReport::default, TileReport::add)
+}
+
+/// Renders `draws` seen by `camera` over the opaque `background` (one entry per sample, see
+/// `background.rs`), or over nothing when None. Errors name the offending argument.
+pub fn rasterize_over(
+    camera: &Camera,
+    draws: &[Draw],
+    opts: &Options,
+    background: Option<&Background>,
+) -> Result<(Frame, Stats)> {
+    let t0 = Instant::now();
+    let need = check_frame(camera, draws, opts, background)?;
+    let (w, h) = (camera.width, camera.height);
+    let s = opts.samples;
+    let vp_matrix = camera.view_projection();
+    let mut frame = Frame::with_capacity(w, h, draws.iter().any(|d| d.previous.is_some()))?;
+
+    // 1. Transform.
+    let viewport = Viewport::new(w * s, h * s);
+    let (prepared, screens): (Vec<Prepared>, Vec<Screen>) = draws
+        .iter()
+        .map(|d| transform(d, vp_matrix, &viewport, opts, f64::from(w), f64::from(h)))
+        .unzip();
+    let t1 = Instant::now();
+
+    // 2. Set-up.
+    let chunks = setup_chunks(draws, &vp_matrix, &screens, &viewport);
+    let t2 = Instant::now();
+
+    // 3. Binning.
+    let mut bins = KEPT_BINS.with(RefCell::take);
+    bins.build(&chunks, viewport.ws, viewport.hs, need)?;
+    let t3 = Instant::now();
+
+    // 4. Tiles.
+    let shader = Shader {
+        draws,
+        prepared: &prepared,
+        chunks: &chunks,
+        opts,
+        width: f64::from(w),
+        height: f64::from(h),
+    };
+    let out = Output::new(&mut frame);
+    let report = render_tiles(&bins, &shader, background, &out, [w, h, s]);
     if report.refused > 0 {
         return Err(budget::refused("draws", report.refused));
     }
-    let (fragments, bad_background) = (report.fragments, report.bad_background);
     // The tiles partition the frame, so together they loaded every sample of the background's
     // window: a bad value anywhere in it was seen (rendering over it reads no value as an index
     // and cannot fail). The full check names it.
-    if let (true, Some(bg)) = (bad_background, background) {
-        bg.validate_values(bg_size[0], bg_size[1])?;
+    if let (true, Some(bg)) = (report.bad_background, background) {
+        bg.validate_values((w * s) as usize, (h * s) as usize)?;
         return Err(Error::value(
             "background",
             "depth must be > 0 and rgba finite",
@@ -297,7 +335,7 @@ pub fn rasterize_over(
     }
     // SAFETY: the tiles partition the frame (tiles_x * tiles_y tiles of pixels_per_tile
     // pixels, clamped to the image, cover every pixel) and each wrote its rectangle above.
-    unsafe { frame.assume_written() };
+    unsafe { assume_written(&mut frame) };
     let t4 = Instant::now();
 
     if bins.refs.capacity() <= KEEP_REFS {
@@ -305,9 +343,9 @@ pub fn rasterize_over(
         KEPT_BINS.with(|kept| kept.replace(bins));
     }
     let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
-    frame.stats = Stats {
+    let stats = Stats {
         triangles: chunks.iter().map(|c| c.tris.len() as u64).sum(),
-        fragments,
+        fragments: report.fragments,
         approximated: report.approximated,
         culled: chunks.iter().map(|c| c.culled).sum(),
         clipped: chunks.iter().map(|c| c.clipped).sum(),
@@ -321,7 +359,7 @@ pub fn rasterize_over(
         ms_resolve: report.ms[3],
         ms_total: ms(t0, t4),
     };
-    Ok(frame)
+    Ok((frame, stats))
 }
 
 #[cfg(test)]

@@ -213,9 +213,12 @@ pub fn setup_chunk(
             // centre of the image, which `emit`'s bounds find.
             let attr = || face.map(|i| screen.attr[i as usize]);
             let (x, y) = (q.map(|v| v[0]), q.map(|v| v[1]));
-            emit(
-                &mut chunk, vp, draw, draw_index, flags, x, y, attr, face, None,
-            );
+            let kept = Kept {
+                face,
+                flags,
+                bary: None,
+            };
+            emit(&mut chunk, vp, draw, draw_index, kept, [x, y], attr);
             continue;
         }
         let p = face.map(|i| clip_position(m, &draw.vertices[i as usize]));
@@ -241,31 +244,46 @@ pub fn setup_chunk(
             let bary = idx.map(|j| poly[j].bary.map(|b| b as f32));
             let (x, y) = (corners.map(|k| k.x), corners.map(|k| k.y));
             let attr = || corners.map(|k| [k.rx, k.ry, k.iw]);
-            let bary = Some(bary);
-            emit(
-                &mut chunk, vp, draw, draw_index, flags, x, y, attr, face, bary,
-            );
+            let kept = Kept {
+                face,
+                flags,
+                bary: Some(bary),
+            };
+            emit(&mut chunk, vp, draw, draw_index, kept, [x, y], attr);
         }
     }
     chunk
 }
 
-/// Culls, orients and bounds the triangle with fixed-point corners `x`, `y` (the corners'
-/// residuals and 1/w come from `attr`, asked only for a triangle that is kept) and pushes it.
-#[allow(clippy::too_many_arguments)]
+/// A triangle of a face on its way to `emit`.
+#[derive(Clone, Copy)]
+struct Kept {
+    /// The face's vertices.
+    face: [u32; 3],
+    /// `MAY_OPAQUE`, `MAY_TRANSPARENT`.
+    flags: u8,
+    /// For a piece of a clipped face, its corners' barycentric coordinates in the face.
+    bary: Option<[[f32; 3]; 3]>,
+}
+
+/// Culls, orients and bounds the triangle `kept` of draw `draw_index` with fixed-point corners
+/// `[x, y]` (the corners' residuals and 1/w come from `attr`, asked only for a triangle that
+/// is kept) and pushes it.
 #[inline]
 fn emit(
     chunk: &mut Chunk,
     vp: &Viewport,
     draw: &Draw,
     draw_index: u32,
-    mut flags: u8,
-    mut x: [i32; 3],
-    mut y: [i32; 3],
+    kept: Kept,
+    [mut x, mut y]: [[i32; 3]; 2],
     attr: impl FnOnce() -> [[f32; 3]; 3],
-    face: [u32; 3],
-    mut bary: Option<[[f32; 3]; 3]>,
 ) {
+    let Kept {
+        face,
+        mut flags,
+        mut bary,
+    } = kept;
     let [a, b, c] = [0, 1, 2].map(|k| (i64::from(x[k]), i64::from(y[k])));
     let area = (b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1);
     if area == 0 {

@@ -1,6 +1,7 @@
 //! Whole-pipeline tests of the rasterizer in pure Rust.
 use super::camera::look_at;
 use super::*;
+use crate::frame::Layer;
 use glam::{DMat4, DVec3};
 
 fn camera(w: u32, h: u32) -> Camera {
@@ -48,7 +49,7 @@ fn a_transparent_mesh_covers_every_sample_exactly_once() {
     let (v, f) = grid(9, 0.08);
     let d = draw(v, f, [1.0, 1.0, 1.0, 0.5]);
     let cam = camera(97, 61);
-    let frame = rasterize(&cam, &[d], &Options::default()).unwrap();
+    let (frame, _) = rasterize(&cam, &[d], &Options::default()).unwrap();
     let alphas: Vec<f32> = frame.rgba.chunks(4).map(|c| c[3]).collect();
     assert!(
         alphas.iter().all(|&a| a == 0.0 || a == 0.5),
@@ -78,7 +79,9 @@ fn output_does_not_depend_on_the_thread_count() {
     let cam = camera(300, 200);
     let run = |threads| {
         crate::on_threads(threads, || {
-            rasterize(&cam, &[d.clone(), back.clone()], &opts).unwrap()
+            rasterize(&cam, &[d.clone(), back.clone()], &opts)
+                .unwrap()
+                .0
         })
     };
     let (a, b) = (run(1), run(2));
@@ -99,7 +102,7 @@ fn depth_is_the_view_axis_distance() {
         [-9.0, 9.0, -2.0],
     ];
     let d = draw(v, vec![[0, 1, 2], [0, 2, 3]], [0.5, 0.5, 0.5, 1.0]);
-    let frame = rasterize(&camera(32, 24), &[d], &Options::default()).unwrap();
+    let (frame, _) = rasterize(&camera(32, 24), &[d], &Options::default()).unwrap();
     for z in &frame.depth {
         assert!((z - 5.0).abs() < 5e-6, "{z}");
     }
@@ -111,8 +114,8 @@ fn triangles_crossing_the_near_plane_are_clipped_not_dropped() {
     // A floor through the camera position: half of it lies behind the camera.
     let v = vec![[-50.0, -1.0, 50.0], [50.0, -1.0, 50.0], [0.0, -1.0, -50.0]];
     let d = draw(v, vec![[0, 1, 2]], [1.0, 1.0, 1.0, 1.0]);
-    let frame = rasterize(&camera(64, 48), &[d], &Options::default()).unwrap();
-    assert!(frame.stats.clipped >= 1);
+    let (frame, stats) = rasterize(&camera(64, 48), &[d], &Options::default()).unwrap();
+    assert!(stats.clipped >= 1);
     // The lower half of the image sees the floor; depth grows towards the horizon.
     let col = 32;
     let depths: Vec<f32> = (30..48).map(|y| frame.depth[y * 64 + col]).collect();
@@ -127,10 +130,10 @@ fn back_faces_are_culled_only_when_asked() {
     let v = vec![[-1.0, -1.0, 0.0], [0.0, 1.0, 0.0], [1.0, -1.0, 0.0]];
     let mut d = draw(v, vec![[0, 1, 2]], [1.0, 0.0, 0.0, 1.0]);
     let cam = camera(16, 16);
-    let f = rasterize(&cam, std::slice::from_ref(&d), &Options::default()).unwrap();
+    let (f, _) = rasterize(&cam, std::slice::from_ref(&d), &Options::default()).unwrap();
     assert!(f.ids.iter().all(|&i| i == -1));
     d.cull_back = false;
-    let f = rasterize(&cam, &[d], &Options::default()).unwrap();
+    let (f, _) = rasterize(&cam, &[d], &Options::default()).unwrap();
     assert!(f.ids.contains(&7));
 }
 
@@ -147,12 +150,15 @@ fn velocity_is_the_screen_motion_in_pixels() {
     let mut d = draw(v.clone(), vec![[0, 1, 2], [0, 2, 3]], [1.0; 4]);
     let dx = 0.1;
     d.previous = Some(v.iter().map(|p| [p[0] - dx, p[1] + dx, p[2]]).collect());
-    let f = rasterize(&camera(64, 64), &[d], &Options::default()).unwrap();
+    let (f, _) = rasterize(&camera(64, 64), &[d], &Options::default()).unwrap();
     let want = dx * 32.0 / (0.45f64).tan() / 3.0;
     let i = 32 * 64 + 32;
-    assert!((f64::from(f.velocity[2 * i]) - want).abs() < 1e-4);
+    let velocity = f
+        .velocity
+        .expect("a draw with previous positions writes velocity");
+    assert!((f64::from(velocity[2 * i]) - want).abs() < 1e-4);
     assert!(
-        (f64::from(f.velocity[2 * i + 1]) - want).abs() < 1e-4,
+        (f64::from(velocity[2 * i + 1]) - want).abs() < 1e-4,
         "y is down: moving up is +y over time"
     );
 }
@@ -163,7 +169,7 @@ fn a_one_pixel_image_and_far_away_coordinates_work() {
     let d = draw(v, vec![[0, 1, 2]], [1.0; 4]);
     let pose = DMat4::IDENTITY;
     let cam = Camera::new(pose, 1.0, 1, 1, 0.05, 1e7).unwrap();
-    let f = rasterize(&cam, &[d], &Options::default()).unwrap();
+    let (f, _) = rasterize(&cam, &[d], &Options::default()).unwrap();
     assert_eq!(f.ids, vec![7]);
     assert!((f.depth[0] - 1e6).abs() < 1.0);
 }
@@ -212,11 +218,11 @@ fn kept_tile_buffers_change_no_result_even_after_a_very_deep_tile() {
     let shallow = [draw(v, f, [0.2, 0.4, 0.8, 0.5])];
     let cam = camera(64, 64);
     let opts = Options::default();
-    let s0 = rasterize(&cam, &shallow, &opts).unwrap();
-    let d0 = rasterize(&cam, &layers, &opts).unwrap();
-    assert!(d0.stats.fragments >= 80 * 64 * 64);
-    let d1 = rasterize(&cam, &layers, &opts).unwrap();
-    let s1 = rasterize(&cam, &shallow, &opts).unwrap();
+    let (s0, _) = rasterize(&cam, &shallow, &opts).unwrap();
+    let (d0, stats) = rasterize(&cam, &layers, &opts).unwrap();
+    assert!(stats.fragments >= 80 * 64 * 64);
+    let (d1, _) = rasterize(&cam, &layers, &opts).unwrap();
+    let (s1, _) = rasterize(&cam, &shallow, &opts).unwrap();
     assert_eq!(d0.rgba, d1.rgba);
     assert_eq!(d0.ids, d1.ids);
     assert_eq!(s0.rgba, s1.rgba);
@@ -240,10 +246,13 @@ fn a_bad_background_value_anywhere_in_the_window_is_an_error() {
     let ids = vec![3i32; stride * rows];
     let render = |rgba: &[f32], depth: &[f32]| {
         let bg = Background {
-            rgba,
-            depth,
-            ids: &ids,
-            stride,
+            layer: Layer {
+                width: stride,
+                height: rows,
+                rgba,
+                depth,
+                ids: &ids,
+            },
             x0,
             y0,
         };
@@ -254,8 +263,8 @@ fn a_bad_background_value_anywhere_in_the_window_is_an_error() {
             Some(&bg),
         )
     };
-    let good = render(&rgba, &depth).unwrap();
-    assert!(good.stats.fragments > 0 && good.ids.contains(&7) && good.ids.contains(&3));
+    let (good, stats) = render(&rgba, &depth).unwrap();
+    assert!(stats.fragments > 0 && good.ids.contains(&7) && good.ids.contains(&3));
     let index = |x: usize, y: usize| (y + y0) * stride + x + x0;
     for (x, y) in [(75, 35), (70, 30), (10, 66), (w - 1, h - 1), (0, 0)] {
         for bad in [f32::NAN, 0.0, -1.0, f32::NEG_INFINITY] {
@@ -275,7 +284,7 @@ fn a_bad_background_value_anywhere_in_the_window_is_an_error() {
     let mut dd = depth.clone();
     dd[0] = f32::NAN;
     dd[stride * rows - 1] = -1.0;
-    let same = render(&rgba, &dd).unwrap();
+    let (same, _) = render(&rgba, &dd).unwrap();
     assert_eq!(same.rgba, good.rgba);
     assert_eq!(same.ids, good.ids);
 }

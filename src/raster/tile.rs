@@ -99,109 +99,97 @@ impl TileScratch {
     }
 }
 
-/// Renders the samples `rect` = [x0, y0, x1, y1) of a tile from its triangle references and
-/// their triangles (`Bins::tile`, in submission order) into `scratch.samples` (row stride TILE), starting from `bg` when given
-/// (else from the empty background). Returns the fragment count, and whether `bg` holds a bad
-/// value in the rectangle (`Background::load`).
-pub fn render_tile(
+/// One tile's samples and its triangles, as the passes of `render_tile` read them.
+struct Tile<'a> {
+    /// The samples [x0, y0, x1, y1).
     rect: [i32; 4],
-    refs: &[u32],
-    tris: &[Tri],
-    sh: &Shader,
-    blend: Blend,
-    bg: Option<&Background>,
-    scratch: &mut TileScratch,
-) -> TileReport {
-    let [tx0, ty0, tx1, ty1] = rect;
-    let clamp = |t: &Tri| {
+    /// The triangles' references and the triangles (`Bins::tile`, in submission order).
+    refs: &'a [u32],
+    tris: &'a [Tri],
+    sh: &'a Shader<'a>,
+}
+
+impl Tile<'_> {
+    /// The triangle's box clamped to the tile (empty when `x0 > x1` or `y0 > y1`).
+    #[inline(always)]
+    fn clamp(&self, t: &Tri) -> [i32; 4] {
+        let [tx0, ty0, tx1, ty1] = self.rect;
         [
             t.bbox[0].max(tx0),
             t.bbox[1].max(ty0),
             t.bbox[2].min(tx1 - 1),
             t.bbox[3].min(ty1 - 1),
         ]
-    };
-    let local = |ix: i32, iy: i32| ((iy - ty0) * TILE + (ix - tx0)) as usize;
-    let TileScratch {
-        zbuf,
-        winner,
-        samples,
-        frags,
-    } = scratch;
-    let bad_background = match bg {
-        // Samples outside `rect` are never read back; the opaque pass only touches `rect`.
-        Some(bg) => bg.load(rect, zbuf, samples),
-        None => {
-            zbuf.fill(0.0);
-            false
-        }
-    };
-    let t0 = Instant::now();
-    let mut fragments = 0u64;
-    let mut any_transparent = false;
-    // Whether a triangle that may be opaque reaches the tile (`winner` is reset then only).
-    let mut any_opaque = false;
-
-    // Pass 1: opaque fragments, nearest wins (strictly nearer: the first submitted keeps ties).
-    for (i, (&r, t)) in refs.iter().zip(tris).enumerate() {
-        let i = i as u32;
-        any_transparent |= t.flags & MAY_TRANSPARENT != 0;
-        if t.flags & MAY_OPAQUE == 0 {
-            continue;
-        }
-        let bx = clamp(t);
-        if bx[0] > bx[2] || bx[1] > bx[3] {
-            continue;
-        }
-        if !any_opaque {
-            winner.fill(NONE);
-            any_opaque = true;
-        }
-        // only a triangle that may also be transparent needs its alpha per sample
-        let mixed = (t.flags & MAY_TRANSPARENT != 0).then(|| sh.prepare(r, t));
-        let planes = Planes::new(t);
-        cover(t, bx, |ix, iy| {
-            fragments += 1;
-            if let Some(ts) = &mixed {
-                if ts.alpha(ts.lambdas(&planes, ix, iy)) < 1.0 {
-                    return;
-                }
-            }
-            let z = planes.invw(ix, iy) as f32;
-            let s = local(ix, iy);
-            if z > zbuf[s] {
-                zbuf[s] = z;
-                winner[s] = i;
-            }
-        });
     }
 
-    let t1 = Instant::now();
-    // Shade the opaque winners (neighbouring samples mostly share a triangle: keep its planes).
-    // Without opaque triangles every sample keeps the background.
-    if !any_opaque {
-        if bg.is_none() {
-            for iy in ty0..ty1 {
-                let row = local(tx0, iy);
-                samples[row..row + (tx1 - tx0) as usize].fill(Sample::BACKGROUND);
+    /// The index of sample (ix, iy) in the tile's buffers (row stride TILE).
+    #[inline(always)]
+    fn local(&self, ix: i32, iy: i32) -> usize {
+        ((iy - self.rect[1]) * TILE + (ix - self.rect[0])) as usize
+    }
+
+    /// Pass 1: opaque fragments, nearest wins (strictly nearer: the first submitted keeps
+    /// ties), into `zbuf` and `winner` (reset only when a triangle that may be opaque reaches
+    /// the tile). Returns the fragments, whether a triangle may be transparent, and whether
+    /// one may be opaque.
+    fn opaque_pass(&self, zbuf: &mut [f32], winner: &mut [u32]) -> (u64, bool, bool) {
+        let mut fragments = 0u64;
+        let mut any_transparent = false;
+        let mut any_opaque = false;
+        for (i, (&r, t)) in self.refs.iter().zip(self.tris).enumerate() {
+            let i = i as u32;
+            any_transparent |= t.flags & MAY_TRANSPARENT != 0;
+            if t.flags & MAY_OPAQUE == 0 {
+                continue;
             }
+            let bx = self.clamp(t);
+            if bx[0] > bx[2] || bx[1] > bx[3] {
+                continue;
+            }
+            if !any_opaque {
+                winner.fill(NONE);
+                any_opaque = true;
+            }
+            // only a triangle that may also be transparent needs its alpha per sample
+            let mixed = (t.flags & MAY_TRANSPARENT != 0).then(|| self.sh.prepare(r, t));
+            let planes = Planes::new(t);
+            cover(t, bx, |ix, iy| {
+                fragments += 1;
+                if let Some(ts) = &mixed {
+                    if ts.alpha(ts.lambdas(&planes, ix, iy)) < 1.0 {
+                        return;
+                    }
+                }
+                let z = planes.invw(ix, iy) as f32;
+                let s = self.local(ix, iy);
+                if z > zbuf[s] {
+                    zbuf[s] = z;
+                    winner[s] = i;
+                }
+            });
         }
-    } else {
-        // (the planes only when the shading varies over the triangle)
+        (fragments, any_transparent, any_opaque)
+    }
+
+    /// Shades the opaque winners into `samples` (neighbouring samples mostly share a
+    /// triangle: its planes are kept, and made only when the shading varies over it). A
+    /// sample without a winner keeps the background loaded when `has_bg`, else is empty.
+    fn shade_winners(&self, zbuf: &[f32], winner: &[u32], samples: &mut [Sample], has_bg: bool) {
+        let [tx0, ty0, tx1, ty1] = self.rect;
         let mut cached = (NONE, None::<(Option<Planes>, TriShade)>);
         for iy in ty0..ty1 {
             for ix in tx0..tx1 {
-                let s = local(ix, iy);
+                let s = self.local(ix, iy);
                 let i = winner[s];
-                if i == NONE && bg.is_some() {
+                if i == NONE && has_bg {
                     continue; // the background sample loaded above stays
                 }
                 samples[s] = if i == NONE {
                     Sample::BACKGROUND
                 } else {
                     if cached.0 != i {
-                        let t = &tris[i as usize];
-                        let ts = sh.prepare(refs[i as usize], t);
+                        let t = &self.tris[i as usize];
+                        let ts = self.sh.prepare(self.refs[i as usize], t);
                         let planes = ts.constant().is_none().then(|| Planes::new(t));
                         cached = (i, Some((planes, ts)));
                     }
@@ -220,6 +208,129 @@ pub fn render_tile(
             }
         }
     }
+
+    /// Pass 2: the transparent fragments in front of the opaque surface (`zbuf`), into `frags`
+    /// (`Blend::Exact`) or blended into `samples` as they come (`Blend::Unsorted`). Returns the
+    /// fragments.
+    fn transparent_pass(
+        &self,
+        zbuf: &[f32],
+        samples: &mut [Sample],
+        frags: &mut FragLists,
+        blend: Blend,
+    ) -> u64 {
+        let mut fragments = 0u64;
+        let mut keep = |f: Frag| match blend {
+            Blend::Exact => frags.push(f),
+            Blend::Unsorted => frags.blend_unsorted(samples, f),
+        };
+        for (&r, t) in self.refs.iter().zip(self.tris) {
+            if t.flags & MAY_TRANSPARENT == 0 {
+                continue;
+            }
+            let bx = self.clamp(t);
+            if bx[0] > bx[2] || bx[1] > bx[3] {
+                continue;
+            }
+            let planes = Planes::new(t);
+            let mixed = t.flags & MAY_OPAQUE != 0;
+            let ts = self.sh.prepare(r, t);
+            if let Some(shaded) = ts.constant() {
+                // A constant triangle has one alpha, so it is never mixed: one loop without the
+                // shading's tests (the same fragments, in the same order).
+                let visible = shaded.rgba[3] > 0.0;
+                spans(t, bx, |iy, x0, x1| {
+                    for ix in x0..=x1 {
+                        let s = self.local(ix, iy);
+                        let z = planes.invw(ix, iy) as f32;
+                        if z <= zbuf[s] {
+                            continue;
+                        }
+                        fragments += 1;
+                        if visible {
+                            keep(Frag {
+                                sample: s as u32,
+                                invw: z,
+                                shaded,
+                            });
+                        }
+                    }
+                });
+                continue;
+            }
+            spans(t, bx, |iy, x0, x1| {
+                for ix in x0..=x1 {
+                    let s = self.local(ix, iy);
+                    let z = planes.invw(ix, iy) as f32;
+                    if z <= zbuf[s] {
+                        continue;
+                    }
+                    let lam = ts.lambdas(&planes, ix, iy);
+                    if mixed && ts.alpha(lam) >= 1.0 {
+                        continue;
+                    }
+                    let shaded = ts.shade(lam);
+                    fragments += 1;
+                    if shaded.rgba[3] > 0.0 {
+                        keep(Frag {
+                            sample: s as u32,
+                            invw: z,
+                            shaded,
+                        });
+                    }
+                }
+            });
+        }
+        fragments
+    }
+}
+
+/// Renders the samples `rect` = [x0, y0, x1, y1) of a tile from its triangle references and
+/// their triangles (`Bins::tile`, in submission order) into `scratch.samples` (row stride
+/// TILE), starting from `bg` when given (else from the empty background). Returns the fragment
+/// count, and whether `bg` holds a bad value in the rectangle (`Background::load`).
+pub fn render_tile(
+    rect: [i32; 4],
+    refs: &[u32],
+    tris: &[Tri],
+    sh: &Shader,
+    blend: Blend,
+    bg: Option<&Background>,
+    scratch: &mut TileScratch,
+) -> TileReport {
+    let tile = Tile {
+        rect,
+        refs,
+        tris,
+        sh,
+    };
+    let TileScratch {
+        zbuf,
+        winner,
+        samples,
+        frags,
+    } = scratch;
+    let bad_background = match bg {
+        // Samples outside `rect` are never read back; the opaque pass only touches `rect`.
+        Some(bg) => bg.load(rect, zbuf, samples),
+        None => {
+            zbuf.fill(0.0);
+            false
+        }
+    };
+    let t0 = Instant::now();
+    let (mut fragments, any_transparent, any_opaque) = tile.opaque_pass(zbuf, winner);
+    let t1 = Instant::now();
+    if any_opaque {
+        tile.shade_winners(zbuf, winner, samples, bg.is_some());
+    } else if bg.is_none() {
+        // Without opaque triangles every sample keeps the background.
+        let [tx0, ty0, tx1, ty1] = rect;
+        for iy in ty0..ty1 {
+            let row = tile.local(tx0, iy);
+            samples[row..row + (tx1 - tx0) as usize].fill(Sample::BACKGROUND);
+        }
+    }
     let t2 = Instant::now();
     let mut report = TileReport {
         fragments,
@@ -230,74 +341,8 @@ pub fn render_tile(
     if !any_transparent {
         return report;
     }
-
-    // Pass 2: transparent fragments in front of the opaque surface.
     frags.clear((TILE * TILE) as usize);
-    for (&r, t) in refs.iter().zip(tris) {
-        if t.flags & MAY_TRANSPARENT == 0 {
-            continue;
-        }
-        let bx = clamp(t);
-        if bx[0] > bx[2] || bx[1] > bx[3] {
-            continue;
-        }
-        let planes = Planes::new(t);
-        let mixed = t.flags & MAY_OPAQUE != 0;
-        let ts = sh.prepare(r, t);
-        if let Some(shaded) = ts.constant() {
-            // A constant triangle has one alpha, so it is never mixed: one loop without the
-            // shading's tests (the same fragments, in the same order).
-            let keep = shaded.rgba[3] > 0.0;
-            spans(t, bx, |iy, x0, x1| {
-                for ix in x0..=x1 {
-                    let s = local(ix, iy);
-                    let z = planes.invw(ix, iy) as f32;
-                    if z <= zbuf[s] {
-                        continue;
-                    }
-                    fragments += 1;
-                    if keep {
-                        let f = Frag {
-                            sample: s as u32,
-                            invw: z,
-                            shaded,
-                        };
-                        match blend {
-                            Blend::Exact => frags.push(f),
-                            Blend::Unsorted => frags.blend_unsorted(samples, f),
-                        }
-                    }
-                }
-            });
-            continue;
-        }
-        spans(t, bx, |iy, x0, x1| {
-            for ix in x0..=x1 {
-                let s = local(ix, iy);
-                let z = planes.invw(ix, iy) as f32;
-                if z <= zbuf[s] {
-                    continue;
-                }
-                let lam = ts.lambdas(&planes, ix, iy);
-                if mixed && ts.alpha(lam) >= 1.0 {
-                    continue;
-                }
-                let shaded = ts.shade(lam);
-                fragments += 1;
-                if shaded.rgba[3] > 0.0 {
-                    let f = Frag {
-                        sample: s as u32,
-                        invw: z,
-                        shaded,
-                    };
-                    match blend {
-                        Blend::Exact => frags.push(f),
-                        Blend::Unsorted => frags.blend_unsorted(samples, f),
-                    }
-                }
-            }
-        });
-    }
+    fragments += tile.transparent_pass(zbuf, samples, frags, blend);
     if blend == Blend::Exact {
         report.approximated = frags.composite(&mut samples[..(TILE * TILE) as usize]);
     }

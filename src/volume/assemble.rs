@@ -1,16 +1,17 @@
 //! Assembly of motion volumes: the leading, trailing and joining surfaces of a face split and
 //! its contour, with placed vertices, colours, normals and filter alphas (see `build.rs`
-//! for the construction and `spin.rs` for the spinning case).
+//! for the construction, `select.rs` for the contour edges swept and `spin.rs` for the spinning
+//! case).
 use rayon::prelude::*;
 
 use super::coverage::CoverageModel;
 use super::refine::{refine, Surface};
 use super::sides::{leading_then_trailing, mark_sides};
 use super::types::{Colors, MotionVolume, VolumeOptions, JOINING, LEADING, TRAILING};
-use crate::contour::{contour_line, ContourEdge};
+use crate::contour::ContourEdge;
 use crate::error::{Error, Result};
 use crate::mesh::{normalize, Mesh, MAX_ELEMENTS};
-use crate::motion::Path;
+use crate::motion::{Path, Placer};
 
 /// Where an output vertex comes from: mesh vertex; placement at `frac` of the way from keyframe
 /// `seg` to `seg + 1` (0: the keyframe itself); keyframe for its normal.
@@ -40,84 +41,6 @@ pub(crate) enum AlphaMode {
     PerVertex(Vec<f64>, Vec<f64>),
 }
 
-/// The `contour` edges of a face split (from `front`); with the camera sides of the faces
-/// (facing the camera at close, at open), the contour line and, per edge, whether its leading
-/// (front faces at close) and trailing (back faces at open) sides face the camera.
-///
-/// With `strips` (the path and the eye, for a path that turns) an edge is also kept when a
-/// triangle of its joining strip between two keyframes faces the eye: a turning object shows
-/// strips of edges whose faces face away both at close (leading side) and at open (trailing
-/// side), and dropping them emptied the frame of a box that turned 1.4 rad while moving 2 units
-/// (the section 3.2 contour line assumes a translation).
-pub(crate) fn select_contour(
-    mesh: &Mesh,
-    contour: Vec<ContourEdge>,
-    front: &[bool],
-    sides: Option<&(Vec<bool>, Vec<bool>)>,
-    strips: Option<(&Path, [f64; 3])>,
-) -> (Vec<ContourEdge>, Vec<(bool, bool)>) {
-    let Some((vis_lead, vis_trail)) = sides else {
-        return (contour, Vec::new());
-    };
-    let visible: Vec<bool> = (0..front.len())
-        .into_par_iter()
-        .map(|f| if front[f] { vis_lead[f] } else { vis_trail[f] })
-        .collect();
-    let contour = match strips {
-        None => contour_line(mesh, contour, &visible),
-        Some((path, eye)) => {
-            let adj = mesh.adjacency();
-            let verts = mesh.vertices();
-            contour
-                .into_par_iter()
-                .filter(|c| {
-                    adj.incident(c.edge as usize)
-                        .iter()
-                        .any(|&h| visible[(h / 3) as usize])
-                        || strip_faces(path, verts[c.a as usize], verts[c.b as usize], eye)
-                })
-                .collect()
-        }
-    };
-    let adj = mesh.adjacency();
-    let vis = contour
-        .par_iter()
-        .map(|c| {
-            let inc = adj.incident(c.edge as usize);
-            let lead = inc
-                .iter()
-                .any(|&h| front[(h / 3) as usize] && vis_lead[(h / 3) as usize]);
-            let trail = inc
-                .iter()
-                .any(|&h| !front[(h / 3) as usize] && vis_trail[(h / 3) as usize]);
-            (lead, trail)
-        })
-        .collect();
-    (contour, vis)
-}
-
-/// Whether a triangle of the joining strip of the edge `(a, b)` (object space) between two
-/// keyframes of `path` faces `eye`, as `assemble` emits them: `a0 b0 b1` and `a0 b1 a1`,
-/// counter-clockwise.
-fn strip_faces(path: &Path, a: [f64; 3], b: [f64; 3], eye: [f64; 3]) -> bool {
-    let sub = |p: [f64; 3], q: [f64; 3]| [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
-    let cross = |u: [f64; 3], v: [f64; 3]| {
-        [
-            u[1] * v[2] - u[2] * v[1],
-            u[2] * v[0] - u[0] * v[2],
-            u[0] * v[1] - u[1] * v[0],
-        ]
-    };
-    let facing = |p: [f64; 3], q: [f64; 3], r: [f64; 3]| {
-        crate::mesh::dot(cross(sub(q, p), sub(r, p)), sub(eye, p)) > 0.0
-    };
-    path.frames.windows(2).any(|w| {
-        let (a0, b0) = (w[0].point(a), w[0].point(b));
-        let (a1, b1) = (w[1].point(a), w[1].point(b));
-        facing(a0, b0, b1) || facing(a0, b1, a1)
-    })
-}
-
 /// The ring points `(segment, fraction)` of one contour vertex, trailing (0, 0) to leading (n, 0).
 fn ring_points(alpha: &AlphaMode, path: &Path, p: [f64; 3]) -> Vec<(u32, f64)> {
     let n = path.segments();
@@ -141,90 +64,133 @@ fn ring_points(alpha: &AlphaMode, path: &Path, p: [f64; 3]) -> Vec<(u32, f64)> {
     }
 }
 
-/// Assemble leading, trailing and joining surfaces (the module docs) with vertex attributes.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn assemble(
-    mesh: &Mesh,
-    path: &Path,
-    front: &[bool],
-    contour: &[ContourEdge],
-    edge_visibility: &[(bool, bool)],
-    per_edge: bool,
-    alpha: &AlphaMode,
-    opts: &VolumeOptions,
-    facing: Option<(&[bool], &[bool])>,
-    visible_only: bool,
-) -> Result<MotionVolume> {
-    let faces = mesh.faces();
-    let verts = mesh.vertices();
-    let nv = verts.len();
-    let n = path.segments();
-    let frames = &path.frames;
-    const NONE: u32 = u32::MAX;
-    // Ring points per contour vertex.
-    let mut ring = vec![NONE; nv];
-    let mut ring_vertices = Vec::new();
-    for c in contour {
-        for i in [c.a, c.b] {
-            if ring[i as usize] == NONE {
-                ring[i as usize] = ring_vertices.len() as u32;
-                ring_vertices.push(i);
-            }
+/// No source, ring point or face.
+const NONE: u32 = u32::MAX;
+
+/// A face split swept along a path: what [`assemble`] turns into a volume.
+#[derive(Clone, Copy)]
+pub(crate) struct Sweep<'a> {
+    /// The mesh, in object space.
+    pub mesh: &'a Mesh,
+    /// Its placements over the shutter.
+    pub path: &'a Path,
+    /// Per face: leading (placed at close) or trailing (placed at open).
+    pub front: &'a [bool],
+    /// The contour edges whose joining strips are swept.
+    pub contour: &'a [ContourEdge],
+    /// Per contour edge, whether its leading and its trailing side face the camera (both, for
+    /// an edge past the end).
+    pub edge_visibility: &'a [(bool, bool)],
+}
+
+/// What the camera sees of a face split: per mesh face, whether it faces the camera at close
+/// (`lead`) and at open (`trail`); with `only` ([`VolumeOptions::visible_only`]) the volume
+/// keeps only the faces it sees.
+#[derive(Clone, Copy)]
+pub(crate) struct Seen<'a> {
+    pub lead: &'a [bool],
+    pub trail: &'a [bool],
+    pub only: bool,
+}
+
+/// The placements of the mesh's vertices along the path.
+struct Places<'a> {
+    path: &'a Path,
+    verts: &'a [[f64; 3]],
+    /// Each keyframe's placer.
+    placers: Vec<Placer>,
+}
+
+impl<'a> Places<'a> {
+    fn new(path: &'a Path, verts: &'a [[f64; 3]]) -> Self {
+        let placers = path.frames.iter().map(|f| f.placer()).collect();
+        Places {
+            path,
+            verts,
+            placers,
         }
     }
-    let points: Vec<Vec<(u32, f64)>> = ring_vertices
-        .par_iter()
-        .map(|&v| ring_points(alpha, path, verts[v as usize]))
-        .collect();
-    let rings = points.first().map_or(n + 1, |p| p.len());
-    // Placement of mesh vertex `v` at `frac` of segment `seg` (a keyframe's own placer at 0).
-    let placers: Vec<_> = frames.iter().map(|f| f.placer()).collect();
-    let place_at = |v: u32, (j, u): (u32, f64)| {
+
+    /// Placement of mesh vertex `v` at `frac` of segment `seg` (a keyframe's own placer at 0).
+    fn at(&self, v: u32, (j, u): (u32, f64)) -> [f64; 3] {
         let j = j as usize;
         if u == 0.0 {
-            placers[j].point(verts[v as usize])
+            self.placers[j].point(self.verts[v as usize])
         } else {
-            path.between(j, u).point(verts[v as usize])
+            self.path.between(j, u).point(self.verts[v as usize])
         }
-    };
-    // The coverage of every ring point, once: a contour vertex on two swept edges has its
-    // strip vertices at the same points twice, and the rings' mean alphas read them again.
-    let ring_coverage: Vec<f64> = match alpha {
-        AlphaMode::Coverage(model, _) => ring_vertices
+    }
+}
+
+/// The ring points of the contour vertices.
+struct Rings {
+    /// Per mesh vertex, its index among the contour vertices (`NONE` for the others).
+    index: Vec<u32>,
+    /// The contour vertices, in the order the contour first reaches them.
+    vertices: Vec<u32>,
+    /// Each contour vertex's ring points (`ring_points`).
+    points: Vec<Vec<(u32, f64)>>,
+    /// Ring points per contour vertex.
+    count: usize,
+    /// The coverage of every ring point, computed once (coverage alphas only): a contour vertex
+    /// on two swept edges has its strip vertices at the same points twice, and the rings' mean
+    /// alphas read them again.
+    coverage: Vec<f64>,
+}
+
+impl Rings {
+    fn new(sweep: &Sweep, alpha: &AlphaMode, places: &Places) -> Rings {
+        let verts = sweep.mesh.vertices();
+        let mut index = vec![NONE; verts.len()];
+        let mut vertices = Vec::new();
+        for c in sweep.contour {
+            for i in [c.a, c.b] {
+                if index[i as usize] == NONE {
+                    index[i as usize] = vertices.len() as u32;
+                    vertices.push(i);
+                }
+            }
+        }
+        let points: Vec<Vec<(u32, f64)>> = vertices
             .par_iter()
-            .zip(&points)
-            .flat_map_iter(|(&v, pts)| pts.iter().map(move |&pt| model.coverage(place_at(v, pt))))
-            .collect(),
-        _ => Vec::new(),
-    };
-    let joining = contour.len().saturating_mul(2 * (rings - 1));
-    if joining > MAX_ELEMENTS || faces.len() + joining > MAX_ELEMENTS {
-        return Err(Error::value(
-            "segments",
-            format!("{n} segments give too many joining faces"),
-        ));
-    }
-    // Sources: leading, trailing, then ring vertices. Per-face colours give every leading and
-    // trailing face its own corners and every joining strip its own vertices.
-    let face_colors = matches!(opts.colors, Colors::PerFace(_));
-    let strips = per_edge || face_colors;
-    let mut lead = vec![NONE; nv];
-    let mut trail = vec![NONE; nv];
-    if !face_colors {
-        mark_sides(faces, front, &mut lead, &mut trail);
-    }
-    if !strips {
-        for &v in &ring_vertices {
-            lead[v as usize] = 0;
-            trail[v as usize] = 0;
+            .map(|&v| ring_points(alpha, sweep.path, verts[v as usize]))
+            .collect();
+        let count = points
+            .first()
+            .map_or(sweep.path.segments() + 1, |p| p.len());
+        let coverage: Vec<f64> = match alpha {
+            AlphaMode::Coverage(model, _) => vertices
+                .par_iter()
+                .zip(&points)
+                .flat_map_iter(|(&v, pts)| {
+                    pts.iter().map(move |&pt| model.coverage(places.at(v, pt)))
+                })
+                .collect(),
+            _ => Vec::new(),
+        };
+        Rings {
+            index,
+            vertices,
+            points,
+            count,
+            coverage,
         }
     }
-    // At most every mesh vertex twice (or three corners a face), and the strips' vertices.
-    let mut sources = Vec::with_capacity(
-        if face_colors { 3 * faces.len() } else { 2 * nv } + 2 * rings * contour.len(),
-    );
-    let nr = n as u32;
-    let source = |v: u32, (seg, frac): (u32, f64), normal_ring: u32| Source {
+
+    /// Ring point `r` of the `k`-th contour vertex in `coverage` (`NONE` without it).
+    fn slot(&self, k: usize, r: usize) -> u32 {
+        if self.coverage.is_empty() {
+            NONE
+        } else {
+            (k * self.count + r) as u32
+        }
+    }
+}
+
+/// The source of mesh vertex `v` at ring point `(seg, frac)`, its normal from keyframe
+/// `normal_ring`, vertex colours, no ring point.
+fn source(v: u32, (seg, frac): (u32, f64), normal_ring: u32) -> Source {
+    Source {
         v,
         seg,
         frac,
@@ -233,54 +199,227 @@ pub(crate) fn assemble(
         back: NONE,
         towards_front: 1.0,
         ring_point: NONE,
+    }
+}
+
+/// The keyframe nearest a ring point.
+fn nearest((seg, frac): (u32, f64)) -> u32 {
+    if frac < 0.5 {
+        seg
+    } else {
+        seg + 1
+    }
+}
+
+/// The volume's sources and faces as `assemble` builds them.
+#[derive(Default)]
+struct Parts {
+    /// Where each output vertex comes from: leading, trailing, then ring vertices.
+    sources: Vec<Source>,
+    /// Per mesh vertex, its leading and its trailing source (`NONE` where it has none).
+    lead: Vec<u32>,
+    trail: Vec<u32>,
+    /// The first ring vertex's source.
+    ring_base: usize,
+    /// Counter-clockwise faces over the sources, and their part (`LEADING`, ...).
+    faces: Vec<[u32; 3]>,
+    part: Vec<u8>,
+}
+
+/// What every step of `assemble` reads.
+struct Assembly<'a> {
+    sweep: Sweep<'a>,
+    alpha: &'a AlphaMode,
+    opts: &'a VolumeOptions,
+    places: Places<'a>,
+    rings: Rings,
+    /// Per-face colours: every leading and trailing face has its own corners and every joining
+    /// strip its own vertices.
+    face_colors: bool,
+    /// Every contour edge's strip has its own vertices (per-edge visibility or per-face
+    /// colours).
+    strips: bool,
+}
+
+/// Assemble leading, trailing and joining surfaces (the module docs) with vertex attributes:
+/// `sweep` (with `per_edge` each contour edge's strip gets its own vertices, for its own
+/// visibility), filter opacities by `alpha`, colours and normals by `opts`, and with `seen`
+/// the faces the camera sees.
+pub(crate) fn assemble(
+    sweep: Sweep,
+    per_edge: bool,
+    alpha: &AlphaMode,
+    opts: &VolumeOptions,
+    seen: Option<Seen>,
+) -> Result<MotionVolume> {
+    let n = sweep.path.segments();
+    // 1. The ring points of every contour vertex, and their coverage once.
+    let places = Places::new(sweep.path, sweep.mesh.vertices());
+    let rings = Rings::new(&sweep, alpha, &places);
+    let nfaces = sweep.mesh.faces().len();
+    let joining = sweep.contour.len().saturating_mul(2 * (rings.count - 1));
+    if joining > MAX_ELEMENTS || nfaces + joining > MAX_ELEMENTS {
+        return Err(Error::value(
+            "segments",
+            format!("{n} segments give too many joining faces"),
+        ));
+    }
+    let face_colors = matches!(opts.colors, Colors::PerFace(_));
+    let a = Assembly {
+        sweep,
+        alpha,
+        opts,
+        places,
+        rings,
+        face_colors,
+        strips: per_edge || face_colors,
     };
-    let mut out_faces = Vec::with_capacity(faces.len() + joining);
-    let mut part = Vec::with_capacity(out_faces.capacity());
-    if face_colors {
-        for (want, tag, ring) in [(true, LEADING, nr), (false, TRAILING, 0)] {
-            for (f, face) in faces.iter().enumerate() {
-                if front[f] == want {
-                    let base = sources.len() as u32;
-                    for &v in face {
-                        sources.push(Source {
-                            front: f as u32,
-                            back: f as u32,
-                            ..source(v, (ring, 0.0), ring)
-                        });
+    // 2. Sources: leading, trailing, then ring vertices.
+    let mut parts = a.side_sources(joining);
+    a.ring_sources(&mut parts.sources);
+    if parts.sources.len() > MAX_ELEMENTS {
+        return Err(Error::value(
+            "segments",
+            format!("{n} segments give too many vertices"),
+        ));
+    }
+    // 3. Faces: leading and trailing, then the joining strips.
+    a.faces(&mut parts, joining);
+    // 4. The faces the camera sees (leading faces facing it at close, trailing ones at open,
+    // every joining face); with `Seen::only` only those are kept: the vertices keep their
+    // places, and those no face uses skip their coverage alpha (0).
+    let front = sweep.front;
+    let seen_faces = seen.map(|s| seen_faces(parts.faces.len(), front, s.lead, s.trail));
+    let only = seen.is_some_and(|s| s.only);
+    let used = seen_faces
+        .as_ref()
+        .filter(|_| only)
+        .map(|seen| keep_seen(seen, &mut parts));
+    // The faces whose edges refinement tests: the seen ones (all, without a camera).
+    let testable = if only { None } else { seen_faces };
+    // 5. Attributes: places, colours, normals and filter alphas.
+    let volume = a.attributes(parts, used.as_deref(), testable);
+    // 6. The mean filter alpha of every keyframe ring.
+    Ok(MotionVolume {
+        ring_alpha: a.ring_alpha(),
+        ..volume
+    })
+}
+
+/// Keeps the faces of `parts` that are `seen`; returns per source whether a kept face uses it.
+fn keep_seen(seen: &[bool], parts: &mut Parts) -> Vec<bool> {
+    let mut k = seen.iter();
+    parts.faces.retain(|_| *k.next().unwrap_or(&true));
+    let mut k = seen.iter();
+    parts.part.retain(|_| *k.next().unwrap_or(&true));
+    let mut used = vec![false; parts.sources.len()];
+    for f in &parts.faces {
+        for &i in f {
+            used[i as usize] = true;
+        }
+    }
+    used
+}
+
+impl Assembly<'_> {
+    /// The leading and trailing sources (per-face colours: with their faces): every mesh vertex
+    /// on a leading face at close, on a trailing face at open (the contour vertices too when
+    /// they have no strips of their own). Room for `joining` more faces.
+    fn side_sources(&self, joining: usize) -> Parts {
+        let (faces, front) = (self.sweep.mesh.faces(), self.sweep.front);
+        let nv = self.sweep.mesh.vertices().len();
+        let rings = &self.rings;
+        let mut lead = vec![NONE; nv];
+        let mut trail = vec![NONE; nv];
+        if !self.face_colors {
+            mark_sides(faces, front, &mut lead, &mut trail);
+        }
+        if !self.strips {
+            for &v in &rings.vertices {
+                lead[v as usize] = 0;
+                trail[v as usize] = 0;
+            }
+        }
+        // At most every mesh vertex twice (or three corners a face), and the strips' vertices.
+        let mut sources = Vec::with_capacity(
+            if self.face_colors {
+                3 * faces.len()
+            } else {
+                2 * nv
+            } + 2 * rings.count * self.sweep.contour.len(),
+        );
+        let nr = self.sweep.path.segments() as u32;
+        let mut out_faces = Vec::with_capacity(faces.len() + joining);
+        let mut part = Vec::with_capacity(out_faces.capacity());
+        if self.face_colors {
+            for (want, tag, ring) in [(true, LEADING, nr), (false, TRAILING, 0)] {
+                for (f, face) in faces.iter().enumerate() {
+                    if front[f] == want {
+                        let base = sources.len() as u32;
+                        for &v in face {
+                            sources.push(Source {
+                                front: f as u32,
+                                back: f as u32,
+                                ..source(v, (ring, 0.0), ring)
+                            });
+                        }
+                        out_faces.push([base, base + 1, base + 2]);
+                        part.push(tag);
                     }
-                    out_faces.push([base, base + 1, base + 2]);
-                    part.push(tag);
                 }
             }
         }
-    }
-    for (v, slot) in lead.iter_mut().enumerate() {
-        if *slot == 0 {
-            *slot = sources.len() as u32;
-            sources.push(source(v as u32, (nr, 0.0), nr));
+        for (v, slot) in lead.iter_mut().enumerate() {
+            if *slot == 0 {
+                *slot = sources.len() as u32;
+                sources.push(source(v as u32, (nr, 0.0), nr));
+            }
+        }
+        for (v, slot) in trail.iter_mut().enumerate() {
+            if *slot == 0 {
+                *slot = sources.len() as u32;
+                sources.push(source(v as u32, (0, 0.0), 0));
+            }
+        }
+        Parts {
+            ring_base: sources.len(),
+            sources,
+            lead,
+            trail,
+            faces: out_faces,
+            part,
         }
     }
-    for (v, slot) in trail.iter_mut().enumerate() {
-        if *slot == 0 {
-            *slot = sources.len() as u32;
-            sources.push(source(v as u32, (0, 0.0), 0));
+
+    /// The ring vertices' sources: with strips, both ends of every contour edge at every ring
+    /// point (normal and per-face colour by the edge's visible sides); without, every contour
+    /// vertex at every inner ring point.
+    fn ring_sources(&self, sources: &mut Vec<Source>) {
+        let rings = &self.rings;
+        let (n, nr) = (
+            self.sweep.path.segments(),
+            self.sweep.path.segments() as u32,
+        );
+        if !self.strips {
+            for r in 1..rings.count.saturating_sub(1) {
+                for (k, (pts, &v)) in rings.points.iter().zip(&rings.vertices).enumerate() {
+                    sources.push(Source {
+                        ring_point: rings.slot(k, r),
+                        ..source(v, pts[r], nearest(pts[r]))
+                    });
+                }
+            }
+            return;
         }
-    }
-    let nearest = |(seg, frac): (u32, f64)| if frac < 0.5 { seg } else { seg + 1 };
-    // Ring point `r` of the `k`-th contour vertex in `ring_coverage` (none without it).
-    let slot = |k: usize, r: usize| {
-        if ring_coverage.is_empty() {
-            NONE
-        } else {
-            (k * rings + r) as u32
-        }
-    };
-    let ring_base = sources.len();
-    let ring_count = ring_vertices.len();
-    if strips {
-        let adj = mesh.adjacency();
-        for (k, c) in contour.iter().enumerate() {
-            let (vl, vt) = edge_visibility.get(k).copied().unwrap_or((true, true));
+        let adj = self.sweep.mesh.adjacency();
+        let front = self.sweep.front;
+        for (k, c) in self.sweep.contour.iter().enumerate() {
+            let (vl, vt) = self
+                .sweep
+                .edge_visibility
+                .get(k)
+                .copied()
+                .unwrap_or((true, true));
             // The strip's front and back faces (a boundary edge has only one).
             let inc = adj.incident(c.edge as usize);
             let pick = |want: bool| {
@@ -293,9 +432,9 @@ pub(crate) fn assemble(
                 (Some(x), None) | (None, Some(x)) => (x, x),
                 (None, None) => (NONE, NONE),
             };
-            for r in 0..rings {
+            for r in 0..rings.count {
                 for v in [c.a, c.b] {
-                    let pt = points[ring[v as usize] as usize]
+                    let pt = rings.points[rings.index[v as usize] as usize]
                         .get(r)
                         .copied()
                         .unwrap_or((0, 0.0));
@@ -309,200 +448,222 @@ pub(crate) fn assemble(
                         (false, true) => 0.0,
                         _ => ((pt.0 as f64 + pt.1) / n as f64) as f32,
                     };
-                    let (front, back) = if face_colors { (ff, fb) } else { (NONE, NONE) };
+                    let (front, back) = if self.face_colors {
+                        (ff, fb)
+                    } else {
+                        (NONE, NONE)
+                    };
                     sources.push(Source {
                         front,
                         back,
                         towards_front,
-                        ring_point: slot(ring[v as usize] as usize, r),
+                        ring_point: rings.slot(rings.index[v as usize] as usize, r),
                         ..source(v, pt, normal_ring)
                     });
                 }
             }
         }
-    } else {
-        for r in 1..rings.saturating_sub(1) {
-            for (k, (pts, &v)) in points.iter().zip(&ring_vertices).enumerate() {
-                sources.push(Source {
-                    ring_point: slot(k, r),
-                    ..source(v, pts[r], nearest(pts[r]))
-                });
+    }
+
+    /// The leading and trailing faces over their sources (per-face colours: already made), then
+    /// two triangles between consecutive ring points of every contour edge.
+    fn faces(&self, parts: &mut Parts, joining: usize) {
+        let (faces, front) = (self.sweep.mesh.faces(), self.sweep.front);
+        let rings = &self.rings;
+        let count = rings.count;
+        let ring_count = rings.vertices.len();
+        // The source of contour vertex `v` (the `k`-th edge's end `which`) at ring point `r`.
+        let id = |k: usize, v: u32, r: usize, which: usize| -> u32 {
+            if self.strips {
+                (parts.ring_base + k * 2 * count + 2 * r + which) as u32
+            } else if r == count - 1 {
+                parts.lead[v as usize]
+            } else if r == 0 {
+                parts.trail[v as usize]
+            } else {
+                (parts.ring_base + (r - 1) * ring_count + rings.index[v as usize] as usize) as u32
+            }
+        };
+        let mut joined = Vec::with_capacity(joining);
+        for (k, c) in self.sweep.contour.iter().enumerate() {
+            for r in 1..count {
+                let (a0, b0) = (id(k, c.a, r - 1, 0), id(k, c.b, r - 1, 1));
+                let (a1, b1) = (id(k, c.a, r, 0), id(k, c.b, r, 1));
+                joined.push([a0, b0, b1]);
+                joined.push([a0, b1, a1]);
             }
         }
-    }
-    if sources.len() > MAX_ELEMENTS {
-        return Err(Error::value(
-            "segments",
-            format!("{n} segments give too many vertices"),
-        ));
-    }
-    let id = |k: usize, v: u32, r: usize, which: usize| -> u32 {
-        if strips {
-            (ring_base + k * 2 * rings + 2 * r + which) as u32
-        } else if r == rings - 1 {
-            lead[v as usize]
-        } else if r == 0 {
-            trail[v as usize]
-        } else {
-            (ring_base + (r - 1) * ring_count + ring[v as usize] as usize) as u32
+        if !self.face_colors {
+            let (sides, leading) = leading_then_trailing(faces, front, &parts.lead, &parts.trail);
+            parts.faces = sides;
+            parts.faces.reserve(joining);
+            parts.part.resize(leading, LEADING);
+            parts.part.resize(faces.len(), TRAILING);
         }
-    };
-    if !face_colors {
-        let (sides, leading) = leading_then_trailing(faces, front, &lead, &trail);
-        out_faces = sides;
-        out_faces.reserve(joining);
-        part.resize(leading, LEADING);
-        part.resize(faces.len(), TRAILING);
+        parts.part.resize(parts.faces.len() + joined.len(), JOINING);
+        parts.faces.extend(joined);
     }
-    for (k, c) in contour.iter().enumerate() {
-        for r in 1..rings {
-            let (a0, b0) = (id(k, c.a, r - 1, 0), id(k, c.b, r - 1, 1));
-            let (a1, b1) = (id(k, c.a, r, 0), id(k, c.b, r, 1));
-            out_faces.push([a0, b0, b1]);
-            out_faces.push([a0, b1, a1]);
-            part.push(JOINING);
-            part.push(JOINING);
-        }
-    }
-    // The faces the camera sees (leading faces facing it at close, trailing ones at open, every
-    // joining face); with `VolumeOptions::visible_only` only those are kept: the vertices keep
-    // their places, and those no face uses skip their coverage alpha (0).
-    let seen = facing.map(|(lead, trail)| seen_faces(out_faces.len(), front, lead, trail));
-    let used = seen.as_ref().filter(|_| visible_only).map(|seen| {
-        let mut k = seen.iter();
-        out_faces.retain(|_| *k.next().unwrap_or(&true));
-        let mut k = seen.iter();
-        part.retain(|_| *k.next().unwrap_or(&true));
-        let mut used = vec![false; sources.len()];
-        for f in &out_faces {
-            for &i in f {
-                used[i as usize] = true;
+
+    /// The filter alpha of source `s` placed at `p`.
+    fn filter_alpha(&self, s: &Source, p: [f64; 3]) -> f64 {
+        match self.alpha {
+            AlphaMode::Rings(r) => r[s.seg as usize],
+            AlphaMode::Coverage(_, _) if s.ring_point != NONE => {
+                self.rings.coverage[s.ring_point as usize]
             }
+            AlphaMode::Coverage(model, _) => model.coverage(p),
+            AlphaMode::PerVertex(a, w) => (a[s.v as usize] * w[s.seg as usize]).clamp(0.0, 1.0),
         }
-        used
-    });
-    // The faces whose edges refinement tests: the seen ones (all, without a camera).
-    let testable = if visible_only { None } else { seen };
-    // Attributes.
-    let obj_normals: &[[f64; 3]] = match &opts.normals {
-        Some(nr) => nr,
-        None => mesh.cached_vertex_normals(),
-    };
-    let color = |s: &Source| match &opts.colors {
-        Colors::Uniform(c) => *c,
-        Colors::PerVertex(c) => c[s.v as usize],
-        Colors::PerFace(c) if s.front != NONE => {
-            let (f, b, t) = (c[s.front as usize], c[s.back as usize], s.towards_front);
-            [0, 1, 2, 3].map(|i| b[i] + (f[i] - b[i]) * t)
+    }
+
+    /// The colour of source `s`.
+    fn color(&self, s: &Source) -> [f32; 4] {
+        match &self.opts.colors {
+            Colors::Uniform(c) => *c,
+            Colors::PerVertex(c) => c[s.v as usize],
+            Colors::PerFace(c) if s.front != NONE => {
+                let (f, b, t) = (c[s.front as usize], c[s.back as usize], s.towards_front);
+                [0, 1, 2, 3].map(|i| b[i] + (f[i] - b[i]) * t)
+            }
+            Colors::PerFace(_) => [1.0; 4],
         }
-        Colors::PerFace(_) => [1.0; 4],
-    };
-    let place = |s: &Source| place_at(s.v, (s.seg, s.frac));
-    let vertices: Vec<[f64; 3]> = sources.par_iter().map(place).collect();
-    let filter_alpha = |s: &Source, p: [f64; 3]| match alpha {
-        AlphaMode::Rings(r) => r[s.seg as usize],
-        AlphaMode::Coverage(_, _) if s.ring_point != NONE => ring_coverage[s.ring_point as usize],
-        AlphaMode::Coverage(model, _) => model.coverage(p),
-        AlphaMode::PerVertex(a, w) => (a[s.v as usize] * w[s.seg as usize]).clamp(0.0, 1.0),
-    };
-    let normals: Vec<[f32; 3]> = sources
-        .par_iter()
-        .map(|s| {
-            let w = normalize(placers[s.normal_ring as usize].normal(obj_normals[s.v as usize]));
-            [w[0] as f32, w[1] as f32, w[2] as f32]
-        })
-        .collect();
-    let (vertices, out_faces, part, rgba, normals) = match alpha {
-        AlphaMode::Coverage(model, _) => {
-            // Coverage alphas, then the faces cut where they bend (`refine.rs`).
-            let cover = sources
-                .par_iter()
-                .zip(&vertices)
-                .enumerate()
-                .map(|(i, (s, p))| {
-                    if used.as_ref().is_some_and(|u| !u[i]) {
-                        0.0
-                    } else {
-                        filter_alpha(s, *p)
-                    }
-                })
-                .collect();
-            let mut surface = Surface {
-                vertices,
-                faces: out_faces,
-                part,
-                cover,
-                colors: sources.par_iter().map(color).collect(),
-                normals,
-                testable: testable.unwrap_or_default(),
-            };
-            refine(model, &mut surface);
-            let rgba = surface
-                .colors
-                .par_iter()
-                .zip(&surface.cover)
-                .map(|(c, a)| [c[0], c[1], c[2], (c[3] as f64 * a) as f32])
-                .collect();
-            (
-                surface.vertices,
-                surface.faces,
-                surface.part,
-                rgba,
-                surface.normals,
-            )
-        }
-        _ => {
+    }
+
+    /// The volume of `parts`: every source placed, coloured, lit and given its filter alpha
+    /// (0 where `used` says no kept face uses it); with coverage alphas the faces are then cut
+    /// where they bend (`refine.rs`, testing the edges of the `testable` faces, all when None).
+    /// Its ring alphas are left empty.
+    fn attributes(
+        &self,
+        parts: Parts,
+        used: Option<&[bool]>,
+        testable: Option<Vec<bool>>,
+    ) -> MotionVolume {
+        let Parts {
+            sources,
+            faces,
+            part,
+            ..
+        } = parts;
+        let obj_normals: &[[f64; 3]] = match &self.opts.normals {
+            Some(nr) => nr,
+            None => self.sweep.mesh.cached_vertex_normals(),
+        };
+        let place = |s: &Source| self.places.at(s.v, (s.seg, s.frac));
+        let vertices: Vec<[f64; 3]> = sources.par_iter().map(place).collect();
+        let placers = &self.places.placers;
+        let normals: Vec<[f32; 3]> = sources
+            .par_iter()
+            .map(|s| {
+                let w =
+                    normalize(placers[s.normal_ring as usize].normal(obj_normals[s.v as usize]));
+                [w[0] as f32, w[1] as f32, w[2] as f32]
+            })
+            .collect();
+        let unused = |i: usize| used.is_some_and(|u| !u[i]);
+        let volume = |vertices, faces, part, rgba, normals| MotionVolume {
+            vertices,
+            faces,
+            rgba,
+            normals,
+            part,
+            ring_alpha: Vec::new(),
+            contour_edges: self.sweep.contour.len(),
+            contour_error: 0.0,
+        };
+        let AlphaMode::Coverage(model, _) = self.alpha else {
             let rgba = sources
                 .par_iter()
                 .zip(&vertices)
                 .enumerate()
                 .map(|(i, (s, p))| {
-                    let c = color(s);
-                    if used.as_ref().is_some_and(|u| !u[i]) {
+                    let c = self.color(s);
+                    if unused(i) {
                         return [c[0], c[1], c[2], 0.0];
                     }
-                    [c[0], c[1], c[2], (c[3] as f64 * filter_alpha(s, *p)) as f32]
+                    [
+                        c[0],
+                        c[1],
+                        c[2],
+                        (c[3] as f64 * self.filter_alpha(s, *p)) as f32,
+                    ]
                 })
                 .collect();
-            (vertices, out_faces, part, rgba, normals)
+            return volume(vertices, faces, part, rgba, normals);
+        };
+        // Coverage alphas, then the faces cut where they bend (`refine.rs`).
+        let cover = sources
+            .par_iter()
+            .zip(&vertices)
+            .enumerate()
+            .map(|(i, (s, p))| {
+                if unused(i) {
+                    0.0
+                } else {
+                    self.filter_alpha(s, *p)
+                }
+            })
+            .collect();
+        let mut surface = Surface {
+            vertices,
+            faces,
+            part,
+            cover,
+            colors: sources.par_iter().map(|s| self.color(s)).collect(),
+            normals,
+            testable: testable.unwrap_or_default(),
+        };
+        refine(model, &mut surface);
+        let rgba = surface
+            .colors
+            .par_iter()
+            .zip(&surface.cover)
+            .map(|(c, a)| [c[0], c[1], c[2], (c[3] as f64 * a) as f32])
+            .collect();
+        volume(
+            surface.vertices,
+            surface.faces,
+            surface.part,
+            rgba,
+            surface.normals,
+        )
+    }
+
+    /// The mean filter alpha of the contour vertices at every keyframe (1 without them).
+    fn ring_alpha(&self) -> Vec<f64> {
+        let n = self.sweep.path.segments();
+        let rings = &self.rings;
+        let ring_count = rings.vertices.len();
+        match self.alpha {
+            AlphaMode::Rings(r) => r.clone(),
+            _ if rings.vertices.is_empty() => vec![1.0; n + 1],
+            // Ring `i` is ring point `i (q + 2)` of every contour vertex (see `ring_points`).
+            AlphaMode::Coverage(_, _) => (0..=n)
+                .map(|i| {
+                    let r = i * ((rings.count - 1) / n);
+                    let sum: f64 = (0..ring_count)
+                        .map(|k| rings.coverage[k * rings.count + r])
+                        .sum();
+                    sum / ring_count as f64
+                })
+                .collect(),
+            _ => (0..=n)
+                .map(|i| {
+                    // Collected first, then summed in order: the same for any thread count.
+                    let each: Vec<f64> = rings
+                        .vertices
+                        .par_iter()
+                        .map(|&v| {
+                            let s = source(v, (i as u32, 0.0), i as u32);
+                            self.filter_alpha(&s, self.places.at(s.v, (s.seg, s.frac)))
+                        })
+                        .collect();
+                    let sum: f64 = each.iter().sum();
+                    sum / ring_count as f64
+                })
+                .collect(),
         }
-    };
-    let ring_alpha = match alpha {
-        AlphaMode::Rings(r) => r.clone(),
-        _ if ring_vertices.is_empty() => vec![1.0; n + 1],
-        // Ring `i` is ring point `i (q + 2)` of every contour vertex (see `ring_points`).
-        AlphaMode::Coverage(_, _) => (0..=n)
-            .map(|i| {
-                let r = i * ((rings - 1) / n);
-                let sum: f64 = (0..ring_count).map(|k| ring_coverage[k * rings + r]).sum();
-                sum / ring_count as f64
-            })
-            .collect(),
-        _ => (0..=n)
-            .map(|i| {
-                // Collected first, then summed in order: the same for any thread count.
-                let each: Vec<f64> = ring_vertices
-                    .par_iter()
-                    .map(|&v| {
-                        let s = source(v, (i as u32, 0.0), i as u32);
-                        filter_alpha(&s, place(&s))
-                    })
-                    .collect();
-                let sum: f64 = each.iter().sum();
-                sum / ring_vertices.len() as f64
-            })
-            .collect(),
-    };
-    Ok(MotionVolume {
-        vertices,
-        faces: out_faces,
-        rgba,
-        normals,
-        part,
-        ring_alpha,
-        contour_edges: contour.len(),
-        contour_error: 0.0,
-    })
+    }
 }
 
 /// Per face of the `count` a volume has, whether the camera sees it: the leading faces facing it

@@ -2,10 +2,11 @@
 //! to the assembly.
 use rayon::prelude::*;
 
-use super::assemble::{assemble, select_contour, AlphaMode};
+use super::assemble::{assemble, AlphaMode, Seen, Sweep};
 use super::coverage::{default_view, CoverageModel};
 use super::filter::Filter;
 use super::rim::Rim;
+use super::select::select_contour;
 use super::subdivide::{subdivided, subdivision_factor};
 use super::types::{check_options, check_segments, Colors, MotionVolume, VolumeOptions, LEADING};
 use crate::contour::{classify_faces, classify_faces_seen, contour_from_sides};
@@ -52,77 +53,75 @@ fn mean(vertices: &[[f64; 3]]) -> [f64; 3] {
     [s[0] / k, s[1] / k, s[2] / k]
 }
 
-/// Build the motion volume of `mesh` moving along `path` (already subdivided).
-pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<MotionVolume> {
-    check_options(mesh, opts)?;
+/// A subdivided mesh, its options and each new face's parent face (`subdivided`).
+type Subdivided = (Mesh, VolumeOptions, Vec<u32>);
+
+/// The volume of a path that does not move: the mesh placed at the keyframe, all leading and
+/// opaque (with per-face colours, through `assemble`).
+fn static_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<MotionVolume> {
     let n = path.segments();
-    check_segments(n)?;
     let verts = mesh.vertices();
     let face_colors = matches!(opts.colors, Colors::PerFace(_));
-    if path.is_static() && face_colors {
+    if face_colors {
         let front = vec![true; mesh.faces().len()];
         let alpha = AlphaMode::Rings(vec![1.0; n + 1]);
-        return assemble(
+        let sweep = Sweep {
             mesh,
             path,
-            &front,
-            &[],
-            &[],
-            false,
-            &alpha,
-            opts,
-            None,
-            false,
-        );
-    }
-    if path.is_static() {
-        // The mesh itself (every vertex, in order), placed by T_0, all leading and opaque.
-        let f0 = &path.frames[0];
-        let c = |v: usize| match &opts.colors {
-            Colors::PerVertex(c) => c[v],
-            Colors::Uniform(c) => *c,
-            // Not reached: per-face colours take the assemble path above.
-            Colors::PerFace(c) => c.first().copied().unwrap_or([1.0; 4]),
+            front: &front,
+            contour: &[],
+            edge_visibility: &[],
         };
-        let obj_normals = opts
-            .normals
-            .as_deref()
-            .unwrap_or_else(|| mesh.cached_vertex_normals());
-        return Ok(MotionVolume {
-            vertices: verts.par_iter().map(|v| f0.point(*v)).collect(),
-            faces: mesh.faces().to_vec(),
-            rgba: (0..verts.len()).map(c).collect(),
-            normals: obj_normals
-                .iter()
-                .map(|n| {
-                    let w = normalize(f0.normal(*n));
-                    [w[0] as f32, w[1] as f32, w[2] as f32]
-                })
-                .collect(),
-            part: vec![LEADING; mesh.faces().len()],
-            ring_alpha: vec![1.0; n + 1],
-            contour_edges: 0,
-            contour_error: 0.0,
-        });
+        return assemble(sweep, false, &alpha, opts, None);
     }
-    // Motion vector, extent, ring opacities.
-    let centroid = mean(verts);
-    let (first, last) = (&path.frames[0], &path.frames[n]);
-    let total = if path.is_translation() {
-        let (p, q) = (first.translation, last.translation);
-        [q[0] - p[0], q[1] - p[1], q[2] - p[2]]
-    } else {
-        let (p, q) = (first.point(centroid), last.point(centroid));
-        [q[0] - p[0], q[1] - p[1], q[2] - p[2]]
+    // The mesh itself (every vertex, in order), placed by T_0, all leading and opaque.
+    let f0 = &path.frames[0];
+    let c = |v: usize| match &opts.colors {
+        Colors::PerVertex(c) => c[v],
+        Colors::Uniform(c) => *c,
+        // Not reached: per-face colours take the assemble path above.
+        Colors::PerFace(c) => c.first().copied().unwrap_or([1.0; 4]),
     };
-    let m_obj = last.inverse_vector(total);
+    let obj_normals = opts
+        .normals
+        .as_deref()
+        .unwrap_or_else(|| mesh.cached_vertex_normals());
+    Ok(MotionVolume {
+        vertices: verts.par_iter().map(|v| f0.point(*v)).collect(),
+        faces: mesh.faces().to_vec(),
+        rgba: (0..verts.len()).map(c).collect(),
+        normals: obj_normals
+            .iter()
+            .map(|n| {
+                let w = normalize(f0.normal(*n));
+                [w[0] as f32, w[1] as f32, w[2] as f32]
+            })
+            .collect(),
+        part: vec![LEADING; mesh.faces().len()],
+        ring_alpha: vec![1.0; n + 1],
+        contour_edges: 0,
+        contour_error: 0.0,
+    })
+}
+
+/// The filter opacities of the volume of `mesh` moving along `path` (its centroid by `total`
+/// over the shutter): the ramp's ring alphas, or the coverage model of the other filters with
+/// the mesh subdivided where its faces are too large for the model's knots.
+fn alpha_mode(
+    mesh: &Mesh,
+    path: &Path,
+    opts: &VolumeOptions,
+    centroid: [f64; 3],
+    total: [f64; 3],
+) -> Result<(AlphaMode, Option<Subdivided>)> {
+    let verts = mesh.vertices();
     let lengths: Vec<f64> = path
         .segment_vectors(centroid)
         .into_iter()
         .map(|s| dot(s, s).sqrt())
         .collect();
     let extent = extent_along(mesh, path, total);
-    let (alpha, sub) = match opts.filter {
+    Ok(match opts.filter {
         Filter::Ramp => (
             AlphaMode::Rings(Filter::Ramp.ring_alphas(&lengths, extent)),
             None,
@@ -148,7 +147,30 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
                 sub,
             )
         }
+    })
+}
+
+/// Build the motion volume of `mesh` moving along `path` (already subdivided).
+pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<MotionVolume> {
+    check_options(mesh, opts)?;
+    let n = path.segments();
+    check_segments(n)?;
+    if path.is_static() {
+        return static_volume(mesh, path, opts);
+    }
+    let verts = mesh.vertices();
+    // Motion vector, extent, ring opacities.
+    let centroid = mean(verts);
+    let (first, last) = (&path.frames[0], &path.frames[n]);
+    let total = if path.is_translation() {
+        let (p, q) = (first.translation, last.translation);
+        [q[0] - p[0], q[1] - p[1], q[2] - p[2]]
+    } else {
+        let (p, q) = (first.point(centroid), last.point(centroid));
+        [q[0] - p[0], q[1] - p[1], q[2] - p[2]]
     };
+    let m_obj = last.inverse_vector(total);
+    let (alpha, sub) = alpha_mode(mesh, path, opts, centroid, total)?;
     // A subdivided face takes the sides of its parent face: the split of a face parallel to
     // the motion (n . m = 0) must not depend on the rounding of the new vertices.
     let line_eye = opts.camera.filter(|_| opts.contour_line);
@@ -195,19 +217,19 @@ pub fn motion_volume(mesh: &Mesh, path: &Path, opts: &VolumeOptions) -> Result<M
         .filter(|_| !path.is_translation() && !turns_in_place(verts, first, last, total))
         .map(|eye| (path, eye));
     let (contour, edge_vis) = select_contour(mesh, contour, &front, vis.as_ref(), strips);
-    let facing = vis.as_ref().map(|(l, t)| (l.as_slice(), t.as_slice()));
-    let mut vol = assemble(
+    let seen = vis.as_ref().map(|(lead, trail)| Seen {
+        lead,
+        trail,
+        only: opts.visible_only,
+    });
+    let sweep = Sweep {
         mesh,
         path,
-        &front,
-        &contour,
-        &edge_vis,
-        line_eye.is_some(),
-        &alpha,
-        opts,
-        facing,
-        opts.visible_only,
-    )?;
+        front: &front,
+        contour: &contour,
+        edge_visibility: &edge_vis,
+    };
+    let mut vol = assemble(sweep, line_eye.is_some(), &alpha, opts, seen)?;
     vol.contour_error = stored.map_or(0.0, |(_, angle)| angle);
     Ok(vol)
 }

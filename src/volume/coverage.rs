@@ -250,6 +250,243 @@ pub fn default_view(motion: [f64; 3]) -> [f64; 3] {
     normalize([axis[0] - c * m[0], axis[1] - c * m[1], axis[2] - c * m[2]])
 }
 
+/// Whether two placements are the same up to rounding (relative 1e-12).
+fn same_placement(a: &Keyframe, b: &Keyframe) -> bool {
+    let scale = 1.0 + a.translation.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let lin = a.linear.iter().flatten().zip(b.linear.iter().flatten());
+    let tr = a.translation.iter().zip(&b.translation);
+    lin.chain(tr).all(|(x, y)| (x - y).abs() <= 1e-12 * scale)
+}
+
+/// The unit view direction `d` (along -z when `view` is zero) and the image axes `e1`, `e2`
+/// across it.
+fn view_axes(view: [f64; 3]) -> [[f64; 3]; 3] {
+    let d = normalize(view);
+    let d = if d == [0.0; 3] { [0.0, 0.0, -1.0] } else { d };
+    let helper = if d[0].abs() < 0.9 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let e1 = normalize(cross3(helper, d));
+    let e2 = cross3(d, e1);
+    [d, e1, e2]
+}
+
+/// What [`CoverageModel::new`] builds its segments from: the projection, the hulls of the
+/// mesh at every placement the segments ask for, and the path of its centroid.
+struct Segments<'a> {
+    path: &'a Path,
+    eye: Option<[f64; 3]>,
+    /// `d`, `e1`, `e2` (see [`view_axes`]).
+    axes: [[f64; 3]; 3],
+    centroid: [f64; 3],
+    /// Orthographic translation: every segment's silhouette is the first one moved.
+    pure: bool,
+    /// The distinct placements the hulls were taken at, and the hulls.
+    placements: Vec<Keyframe>,
+    hulls: Vec<Vec<[f64; 2]>>,
+    /// The orthographic translation's (first) hull.
+    base: Option<Vec<[f64; 2]>>,
+    /// Below this projected length a segment counts as not moving.
+    still: f64,
+}
+
+impl<'a> Segments<'a> {
+    /// The hulls of `vertices` (with `rim`, see [`CoverageModel::new`]) placed along `path`
+    /// at the middle of every span of its segments and of `sub`'s, seen along `axes`.
+    fn new(
+        vertices: &[[f64; 3]],
+        rim: Option<Rim>,
+        path: &'a Path,
+        sub: Option<&Path>,
+        eye: Option<[f64; 3]>,
+        axes: [[f64; 3]; 3],
+    ) -> Self {
+        let k = vertices.len() as f64;
+        let centroid = {
+            let s = vertices
+                .iter()
+                .fold([0.0; 3], |a, v| [a[0] + v[0], a[1] + v[1], a[2] + v[2]]);
+            [s[0] / k, s[1] / k, s[2] / k]
+        };
+        let pure = path.is_translation() && eye.is_none();
+        // Hulls by placement: the middle sub-segment of an odd subdivision is placed (up to
+        // rounding) where its path segment's middle is, and shares that hull (the first
+        // placement asked for, in the order the segments ask).
+        let mids = |p: &Path| -> Vec<Keyframe> {
+            spans(p.segments())
+                .into_iter()
+                .map(|s| middle(p, s))
+                .collect()
+        };
+        let mut placements: Vec<Keyframe> = Vec::new();
+        let wanted = if pure {
+            vec![path.frames[0]]
+        } else {
+            let mut w = mids(path);
+            w.extend(sub.map(mids).unwrap_or_default());
+            w
+        };
+        for f in wanted {
+            if !placements.iter().any(|k| same_placement(k, &f)) {
+                placements.push(f);
+            }
+        }
+        let hulls = hulls_of(vertices, rim, &placements, eye, axes);
+        let mut segments = Segments {
+            path,
+            eye,
+            axes,
+            centroid,
+            pure,
+            placements,
+            hulls,
+            base: None,
+            still: 0.0,
+        };
+        segments.base = pure.then(|| segments.hull_at(&path.frames[0]));
+        let size = segments
+            .base
+            .as_ref()
+            .map(|h| {
+                h.iter()
+                    .map(|p| p[0].abs().max(p[1].abs()))
+                    .fold(0.0, f64::max)
+            })
+            .unwrap_or(1.0);
+        segments.still = 1e-12 * size.max(1e-300);
+        segments
+    }
+
+    fn proj(&self, p: [f64; 3]) -> [f64; 2] {
+        let [d, e1, e2] = self.axes;
+        project(self.eye, d, e1, e2, p)
+    }
+
+    /// The hull at placement `f` (that of the first same placement).
+    fn hull_at(&self, f: &Keyframe) -> Vec<[f64; 2]> {
+        let k = self
+            .placements
+            .iter()
+            .position(|k| same_placement(k, f))
+            .unwrap_or(0);
+        self.hulls[k].clone()
+    }
+
+    /// The projected path of span (a, b) of `p`: its ends' images (the translation's, or the
+    /// centroid's placed).
+    fn ends(&self, p: &Path, (a, b): (usize, usize)) -> ([f64; 2], [f64; 2]) {
+        let (fa, fb) = (&p.frames[a], &p.frames[b]);
+        if self.pure {
+            (self.proj(fa.translation), self.proj(fb.translation))
+        } else {
+            (
+                self.proj(fa.point(self.centroid)),
+                self.proj(fb.point(self.centroid)),
+            )
+        }
+    }
+
+    /// The segment of span (a, b) of `p` with the image `hull` at its middle, its chord table
+    /// of `rows` rows.
+    fn make(&self, p: &Path, (a, b): (usize, usize), hull: Vec<[f64; 2]>, rows: usize) -> Segment {
+        let n = p.segments();
+        let (pa, pb) = self.ends(p, (a, b));
+        let disp = [pb[0] - pa[0], pb[1] - pa[1]];
+        let len = (disp[0] * disp[0] + disp[1] * disp[1]).sqrt();
+        let dir = if len > self.still {
+            [disp[0] / len, disp[1] / len]
+        } else {
+            [1.0, 0.0]
+        };
+        let perp = [-dir[1], dir[0]];
+        let local: Vec<[f64; 2]> = hull
+            .iter()
+            .map(|p| {
+                [
+                    p[0] * dir[0] + p[1] * dir[1],
+                    p[0] * perp[0] + p[1] * perp[1],
+                ]
+            })
+            .collect();
+        Segment {
+            t0: a as f64 / n as f64,
+            t1: b as f64 / n as f64,
+            dir,
+            perp,
+            len,
+            table: ChordTable::new(&local, rows),
+        }
+    }
+
+    /// The orthographic translation's hull `h` (the first one) moved to the span's middle.
+    fn moved(&self, p: &Path, span: (usize, usize), h: &[[f64; 2]]) -> Vec<[f64; 2]> {
+        let (pa, pb) = self.ends(p, span);
+        let o = self.proj(self.path.frames[0].translation);
+        let off = [0.5 * (pa[0] + pb[0]) - o[0], 0.5 * (pa[1] + pb[1]) - o[1]];
+        h.iter().map(|q| [q[0] + off[0], q[1] + off[1]]).collect()
+    }
+
+    /// One segment per span of `p`'s segments, with the hull at the span's middle.
+    fn build(&self, p: &Path) -> Vec<Segment> {
+        let spans = spans(p.segments());
+        let rows = (65_536 / spans.len().max(1)).clamp(64, 1024);
+        spans
+            .into_iter()
+            .map(|span| {
+                let hull = match &self.base {
+                    Some(h) => self.moved(p, span, h),
+                    None => self.hull_at(&middle(p, span)),
+                };
+                self.make(p, span, hull, rows)
+            })
+            .collect()
+    }
+
+    /// Every segment of the path (more than `MAX_MODEL_SEGMENTS`), with the hull of its span
+    /// moved by the centroid's image from the span's middle to the segment's (as the model
+    /// moves a hull along its span).
+    fn every_segment(&self) -> Vec<Segment> {
+        let path = self.path;
+        let n = path.segments();
+        let rows = (65_536 / n).clamp(64, 1024);
+        let groups = spans(n);
+        let centres: Vec<[f64; 2]> = groups
+            .iter()
+            .map(|&g| self.proj(middle(path, g).point(self.centroid)))
+            .collect();
+        let group_hulls: Vec<Vec<[f64; 2]>> = match &self.base {
+            Some(_) => Vec::new(),
+            None => groups
+                .iter()
+                .map(|&g| self.hull_at(&middle(path, g)))
+                .collect(),
+        };
+        let mut g = 0;
+        (0..n)
+            .map(|j| {
+                while groups[g].1 <= j {
+                    g += 1;
+                }
+                let hull = match &self.base {
+                    Some(h) => self.moved(path, (j, j + 1), h),
+                    None => {
+                        let (pa, pb) = self.ends(path, (j, j + 1));
+                        let c = centres[g];
+                        let off = [0.5 * (pa[0] + pb[0]) - c[0], 0.5 * (pa[1] + pb[1]) - c[1]];
+                        group_hulls[g]
+                            .iter()
+                            .map(|q| [q[0] + off[0], q[1] + off[1]])
+                            .collect()
+                    }
+                };
+                self.make(path, (j, j + 1), hull, rows)
+            })
+            .collect()
+    }
+}
+
 impl CoverageModel {
     /// The model of `vertices` (object space) placed along `path` and seen along `view`, from
     /// the camera at `eye` (perspective) or orthographically. With `rim` (the faces of a closed
@@ -263,39 +500,14 @@ impl CoverageModel {
         view: [f64; 3],
         eye: Option<[f64; 3]>,
     ) -> Self {
-        let d = normalize(view);
-        let d = if d == [0.0; 3] { [0.0, 0.0, -1.0] } else { d };
-        let helper = if d[0].abs() < 0.9 {
-            [1.0, 0.0, 0.0]
-        } else {
-            [0.0, 1.0, 0.0]
-        };
-        let e1 = normalize(cross3(helper, d));
-        let e2 = cross3(d, e1);
+        let axes = view_axes(view);
         let n = path.segments();
-        let k = vertices.len() as f64;
-        let centroid = {
-            let s = vertices
-                .iter()
-                .fold([0.0; 3], |a, v| [a[0] + v[0], a[1] + v[1], a[2] + v[2]]);
-            [s[0] / k, s[1] / k, s[2] / k]
-        };
-        let proj = |p: [f64; 3]| project(eye, d, e1, e2, p);
-        // Hulls by placement: the middle sub-segment of an odd subdivision is placed (up to
-        // rounding) where its path segment's middle is, and shares that hull (the first placement
-        // asked for, in the order the segments below ask).
-        let same = |a: &Keyframe, b: &Keyframe| {
-            let scale = 1.0 + a.translation.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-            let lin = a.linear.iter().flatten().zip(b.linear.iter().flatten());
-            let tr = a.translation.iter().zip(&b.translation);
-            lin.chain(tr).all(|(x, y)| (x - y).abs() <= 1e-12 * scale)
-        };
-        // Orthographic translation: every segment's silhouette is the first one moved.
-        let pure = path.is_translation() && eye.is_none();
         // Under perspective the silhouette changes along the path and its points move at speeds
         // that differ with depth, so the coverage integral follows it on at least 8
-        // sub-segments; a translated dense mesh (hull of many points per sub-segment) gets 3.
+        // sub-segments; a translated dense mesh (hull of many points per sub-segment) gets 3;
+        // an orthographic translation needs no more than the path's.
         // The cuts of the joining strips use the path's own segments.
+        let pure = path.is_translation() && eye.is_none();
         let parts = if pure || n > MAX_MODEL_SEGMENTS {
             1
         } else if path.is_translation() && vertices.len() > DENSE_VERTICES {
@@ -304,149 +516,16 @@ impl CoverageModel {
             8usize.div_ceil(n)
         };
         let sub = (parts > 1).then(|| path.subdivide(parts));
-        let mids = |p: &Path| -> Vec<Keyframe> {
-            spans(p.segments())
-                .into_iter()
-                .map(|s| middle(p, s))
-                .collect()
-        };
-        let mut placements: Vec<Keyframe> = Vec::new();
-        let wanted = if pure {
-            vec![path.frames[0]]
+        let s = Segments::new(vertices, rim, path, sub.as_ref(), eye, axes);
+        let segments = s.build(sub.as_ref().unwrap_or(path));
+        let geometric = if n > MAX_MODEL_SEGMENTS {
+            s.every_segment()
+        } else if sub.is_some() {
+            s.build(path)
         } else {
-            let mut w = mids(path);
-            w.extend(sub.as_ref().map(mids).unwrap_or_default());
-            w
+            segments.clone()
         };
-        for f in wanted {
-            if !placements.iter().any(|k| same(k, &f)) {
-                placements.push(f);
-            }
-        }
-        let hulls = hulls_of(vertices, rim, &placements, eye, [d, e1, e2]);
-        let hull_at = |f: &Keyframe| -> Vec<[f64; 2]> {
-            let k = placements.iter().position(|k| same(k, f)).unwrap_or(0);
-            hulls[k].clone()
-        };
-        let base = if pure {
-            Some(hull_at(&path.frames[0]))
-        } else {
-            None
-        };
-        let size = base
-            .as_ref()
-            .map(|h| {
-                h.iter()
-                    .map(|p| p[0].abs().max(p[1].abs()))
-                    .fold(0.0, f64::max)
-            })
-            .unwrap_or(1.0);
-        let still = 1e-12 * size.max(1e-300);
-        // The projected path of span (a, b) of `p`: its ends' images (the translation's, or the
-        // centroid's placed).
-        let ends = |p: &Path, (a, b): (usize, usize)| -> ([f64; 2], [f64; 2]) {
-            let (fa, fb) = (&p.frames[a], &p.frames[b]);
-            if pure {
-                (proj(fa.translation), proj(fb.translation))
-            } else {
-                (proj(fa.point(centroid)), proj(fb.point(centroid)))
-            }
-        };
-        // The segment of span (a, b) of `p` (`n` segments) with the image `hull` at its middle.
-        let make = |p: &Path, (a, b): (usize, usize), hull: Vec<[f64; 2]>, rows: usize| {
-            let n = p.segments();
-            let (pa, pb) = ends(p, (a, b));
-            let disp = [pb[0] - pa[0], pb[1] - pa[1]];
-            let len = (disp[0] * disp[0] + disp[1] * disp[1]).sqrt();
-            let dir = if len > still {
-                [disp[0] / len, disp[1] / len]
-            } else {
-                [1.0, 0.0]
-            };
-            let perp = [-dir[1], dir[0]];
-            let local: Vec<[f64; 2]> = hull
-                .iter()
-                .map(|p| {
-                    [
-                        p[0] * dir[0] + p[1] * dir[1],
-                        p[0] * perp[0] + p[1] * perp[1],
-                    ]
-                })
-                .collect();
-            Segment {
-                t0: a as f64 / n as f64,
-                t1: b as f64 / n as f64,
-                dir,
-                perp,
-                len,
-                table: ChordTable::new(&local, rows),
-            }
-        };
-        // The orthographic translation's hull: the first one moved to the span's middle.
-        let moved = |p: &Path, span: (usize, usize), h: &[[f64; 2]]| -> Vec<[f64; 2]> {
-            let (pa, pb) = ends(p, span);
-            let o = proj(path.frames[0].translation);
-            let off = [0.5 * (pa[0] + pb[0]) - o[0], 0.5 * (pa[1] + pb[1]) - o[1]];
-            h.iter().map(|q| [q[0] + off[0], q[1] + off[1]]).collect()
-        };
-        let build = |p: &Path| -> Vec<Segment> {
-            let spans = spans(p.segments());
-            let rows = (65_536 / spans.len().max(1)).clamp(64, 1024);
-            spans
-                .into_iter()
-                .map(|span| {
-                    let hull = match &base {
-                        Some(h) => moved(p, span, h),
-                        None => hull_at(&middle(p, span)),
-                    };
-                    make(p, span, hull, rows)
-                })
-                .collect()
-        };
-        let segments = match &sub {
-            Some(s) => build(s),
-            None => build(path),
-        };
-        let geometric = if n <= MAX_MODEL_SEGMENTS {
-            match &sub {
-                Some(_) => build(path),
-                None => segments.clone(),
-            }
-        } else {
-            // Every path segment, with the hull of its span moved by the centroid's image from
-            // the span's middle to the segment's (as the model moves a hull along its span).
-            let rows = (65_536 / n).clamp(64, 1024);
-            let groups = spans(n);
-            let centres: Vec<[f64; 2]> = groups
-                .iter()
-                .map(|&g| proj(middle(path, g).point(centroid)))
-                .collect();
-            let group_hulls: Vec<Vec<[f64; 2]>> = match &base {
-                Some(_) => Vec::new(),
-                None => groups.iter().map(|&g| hull_at(&middle(path, g))).collect(),
-            };
-            let mut g = 0;
-            (0..n)
-                .map(|j| {
-                    while groups[g].1 <= j {
-                        g += 1;
-                    }
-                    let hull = match &base {
-                        Some(h) => moved(path, (j, j + 1), h),
-                        None => {
-                            let (pa, pb) = ends(path, (j, j + 1));
-                            let c = centres[g];
-                            let off = [0.5 * (pa[0] + pb[0]) - c[0], 0.5 * (pa[1] + pb[1]) - c[1]];
-                            group_hulls[g]
-                                .iter()
-                                .map(|q| [q[0] + off[0], q[1] + off[1]])
-                                .collect()
-                        }
-                    };
-                    make(path, (j, j + 1), hull, rows)
-                })
-                .collect()
-        };
+        let [d, e1, e2] = axes;
         CoverageModel {
             filter,
             eye,
@@ -455,7 +534,7 @@ impl CoverageModel {
             e2,
             segments,
             geometric,
-            still,
+            still: s.still,
             window: (0.0, 1.0),
             window_weight: 1.0,
         }

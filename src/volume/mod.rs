@@ -23,12 +23,12 @@
 //! multiplies the colour's own (straight) alpha. If every keyframe is the same, the result is the
 //! mesh itself placed by `T_0`, all leading and opaque (colour alpha only).
 //!
-//! Files: `types.rs` (options and result), `build.rs` (the construction), `assemble.rs`
-//! (surfaces and attributes) with `sides.rs` (its leading and trailing faces) and `refine.rs`
-//! (faces cut where linear alphas miss the coverage), `filter.rs` (shutter filters),
-//! `coverage.rs` (coverage alphas), `hulls.rs` and `rim.rs` (the coverage model's projected
-//! hulls), `subdivide.rs` (finer meshes for the alphas), `spin.rs` (section 4.3's spinning
-//! objects) and `polar.rs` (their occupancy seen along the axis).
+//! Files: `types.rs` (options and result), `build.rs` (the construction), `select.rs` (the
+//! contour edges swept), `assemble.rs` (surfaces and attributes) with `sides.rs` (its leading
+//! and trailing faces) and `refine.rs` (faces cut where linear alphas miss the coverage),
+//! `filter.rs` (shutter filters), `coverage.rs` (coverage alphas), `hulls.rs` and `rim.rs` (the
+//! coverage model's projected hulls), `subdivide.rs` (finer meshes for the alphas), `spin.rs`
+//! (section 4.3's spinning objects) and `polar.rs` (their occupancy seen along the axis).
 mod assemble;
 mod build;
 mod coverage;
@@ -37,6 +37,7 @@ mod hulls;
 mod polar;
 mod refine;
 mod rim;
+mod select;
 mod sides;
 mod spin;
 mod subdivide;

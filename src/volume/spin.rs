@@ -41,10 +41,11 @@
 //!   rings do not map to one time and the weight is 1.
 use rayon::prelude::*;
 
-use super::assemble::{assemble, select_contour, AlphaMode};
+use super::assemble::{assemble, AlphaMode, Sweep};
 use super::build::motion_volume;
 use super::filter::Filter;
 use super::polar::{polar_occupancy, ANGLES, RADII};
+use super::select::select_contour;
 use super::subdivide::{subdivided, subdivision_for_edge};
 use super::types::{check_options, check_segments, MotionVolume, VolumeOptions};
 use crate::contour::contour_from_sides;
@@ -220,18 +221,15 @@ pub fn spin_volume(mesh: &Mesh, spin: &Spin, opts: &VolumeOptions) -> Result<Mot
     // Every contour edge is swept: the contour-line test of section 3.2 judges a swept sector by
     // the faces at its ends, which for a turning object drops sectors that are in view.
     let (contour, vis) = select_contour(mesh, contour_from_sides(mesh, &front), &front, None, None);
-    assemble(
+    let sweep = Sweep {
         mesh,
-        &path,
-        &front,
-        &contour,
-        &vis,
-        false,
-        &AlphaMode::PerVertex(per_vertex, weights),
-        opts,
-        None,
-        false,
-    )
+        path: &path,
+        front: &front,
+        contour: &contour,
+        edge_visibility: &vis,
+    };
+    let alpha = AlphaMode::PerVertex(per_vertex, weights);
+    assemble(sweep, false, &alpha, opts, None)
 }
 
 /// Front (`true`) per face: its raw normal has `n . (w x (centroid - c)) >= 0`.
