@@ -338,6 +338,10 @@ def run(
     opts = _options(options, keywords)
     refs_of = _scene_refs(scenes, opts.width, opts.height)
     require_all(_needed(opts, refs_of), "the speed-against-error report")
+    if opts.pyrender_peer:
+        from .reference import _require_gl_platform
+
+        _require_gl_platform()  # before any work: the pyrender peer needs a GL platform
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     state = _Run(out, refs_of, opts, log, client)

@@ -324,8 +324,24 @@ def _backdrop_distance(scene: Scene) -> float:
 _renderers: dict = {}
 
 
+def _require_gl_platform() -> None:
+    """Refuse to start pyrender where it has no way to open a GL context: no
+    ``PYOPENGL_PLATFORM`` (``osmesa`` or ``egl`` render offscreen) and no display. The process
+    environment is read, never written (PyOpenGL reads the variable once, when OpenGL is first
+    imported, so it must be set before that)."""
+    if os.environ.get("PYOPENGL_PLATFORM") or os.environ.get("DISPLAY"):
+        return
+    raise RuntimeError(
+        "reference.pyrender: no GL platform: set PYOPENGL_PLATFORM=osmesa (or egl) in the "
+        "environment before Python imports OpenGL, or run with a display"
+    )
+
+
 def pyrender(scene: Scene, t: float | None = None, samples: int = 1) -> Frame:
     """pyrender (offscreen OSMesa, ``RenderFlags.FLAT``: unlit base colour) of ``scene``.
+
+    Needs ``PYOPENGL_PLATFORM=osmesa`` (or ``egl``) in the environment, or a display: without
+    either, RuntimeError says so (the environment is never written here).
 
     ``t``: one shutter time (default the reference time) when ``samples`` is 1; otherwise the
     weighted mean of ``samples`` renders at the stratified shutter times (the classic
@@ -336,7 +352,7 @@ def pyrender(scene: Scene, t: float | None = None, samples: int = 1) -> Frame:
     """
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
-    os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
+    _require_gl_platform()
     require_osmesa_pyopengl()
     pr = require("pyrender")
     trimesh = require("trimesh", "the pyrender peer")
