@@ -67,9 +67,15 @@ def render_with_pid(k: int) -> tuple[int, np.ndarray]:
     return os.getpid(), render(k)
 
 
+def _comm(task: Path) -> str:
+    try:
+        return (task / "comm").read_text()
+    except (FileNotFoundError, ProcessLookupError):  # the thread ended between listing and reading
+        return ""
+
+
 def _named_workers() -> int:
-    tasks = Path("/proc/self/task")
-    return sum((t / "comm").read_text().startswith("motionblur-") for t in tasks.iterdir())
+    return sum(_comm(t).startswith("motionblur-") for t in Path("/proc/self/task").iterdir())
 
 
 def pool_threads() -> int:
