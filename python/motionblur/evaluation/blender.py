@@ -8,19 +8,24 @@ datasets get their motion-blurred ground truth. The conversion:
 - axes: Blender is Z-up, so every world matrix (object placement, camera pose) is
   ``A @ M`` with ``A`` taking our (x, y, z) to Blender's (x, -z, y); meshes keep their object
   space vertices;
-- time: normalised shutter time ``t`` is frame ``0.5 + t``; frame 1 is rendered with
-  ``motion_blur_shutter = 1`` frame centred on it; the shutter curve is Blender's default
-  (flat): the ``box`` filter. Other shutter filters raise ValueError;
+- time: the shutter curve is Blender's default (flat), the ``box`` filter; other shutter filters
+  raise ValueError. Cycles turns the curve into a 256-entry inverse-CDF table whose entries
+  run from 0.0019 to 0.9941 of the shutter, so its rays sample that part only (a box 0.8 %
+  shorter and 0.2 % early). The conversion compensates: Blender's shutter is
+  ``1 / (0.9941 - 0.0019)`` frames centred on frame 1, and scene time ``t`` is placed where the
+  rays' times land, ``[0, 1]`` exactly;
 - rigid motion: Cycles samples an object's (and the camera's) transform at ``2**s + 1`` evenly
   spaced motion steps (``cycles.motion_steps = s``) and interpolates between them as this
   package does (translation and scale lerped, rotation slerped). Keys (LINEAR) are inserted at
-  every step time with the exact transform there, and ``s`` is the smallest that puts every
-  keyframe time of the scene on a step, so Cycles' motion equals the scene's. Keyframe times off
-  the ``i / 128`` grid and deforming motion (Cycles would need shape keys) raise ValueError;
+  every step with the exact transform of its scene time, the first and last segment extended
+  past [0, 1] for the steps outside it. ``s`` = 1 for motions of two keyframes (exact); 6 (65
+  steps, 1/64 apart) when a keyframe lies inside the shutter, which Cycles then rounds to the
+  step grid. Deforming motion (Cycles would need shape keys) raises ValueError;
 - camera: ``sensor_fit='VERTICAL'`` and the lens of the camera's ``yfov``; near clip ``znear``
   (a plane, as Cycles clips along the view axis), far clip ``zfar`` (at most 1e6);
 - film: ``film_transparent`` (alpha = coverage), box pixel filter of width 1 (the pixel's
-  square, as ``aa`` supersampling averages it), adaptive sampling and denoising off, a fixed
+  square; ``aa=n`` gives the exact method's n x n point samples instead), adaptive sampling and
+  denoising off, a fixed
   ``seed``, the view transform ``Standard`` (the EXR keeps linear values);
 - colours: ``flat`` objects are an Emission shader of their colour (strength 1) and reflect
   nothing, so they look as the rasterizer draws them; ``lambert`` objects a Diffuse BSDF of their
@@ -64,8 +69,10 @@ __all__ = ["blender", "motion_steps", "TO_BLENDER", "MAX_MOTION_STEPS"]
 #: our world (Y-up) to Blender's (Z-up): (x, y, z) -> (x, -z, y)
 TO_BLENDER = np.array([[1.0, 0, 0, 0], [0, 0, -1.0, 0], [0, 1.0, 0, 0], [0, 0, 0, 1.0]])
 
-#: the largest ``cycles.motion_steps`` (``2**7 + 1`` = 129 transform samples per object)
-MAX_MOTION_STEPS = 7
+#: the ``cycles.motion_steps`` used for motions with keyframes inside the shutter (``2**6 + 1`` =
+#: 65 transform samples, 1/64 frame apart; Blender merges keyframes closer than 0.01 frame, so
+#: its largest setting, 7, would lose half of them)
+MAX_MOTION_STEPS = 6
 
 #: Cycles' SHUTTER_TABLE_SIZE (``intern/cycles/scene/tables.h``)
 _SHUTTER_TABLE_SIZE = 256
@@ -104,8 +111,8 @@ def _bpy():
 def motion_steps(scene: Scene) -> int:
     """The ``cycles.motion_steps`` s of the conversion: 1 (3 transform samples, exact for motions
     of two keyframes, which extend linearly past the shutter) when no motion of the scene has a
-    keyframe inside (0, 1), else :data:`MAX_MOTION_STEPS` (129 samples: Cycles interpolates
-    linearly between them, so a keyframe inside the shutter is rounded within 1/128 of it).
+    keyframe inside (0, 1), else :data:`MAX_MOTION_STEPS` (65 samples: Cycles interpolates
+    between them, so a keyframe inside the shutter is rounded within 1/64 of it).
     Raises ValueError for deforming motion (Cycles would need shape keys)."""
     motions = [(f"objects[{k}]", o.motion) for k, o in enumerate(scene.objects) if o.is_moving]
     if scene.camera_moves:
@@ -196,6 +203,7 @@ def _key(obj, pose_at, frames, times) -> None:
 def _material(bpy, o, k: int):
     mat = bpy.data.materials.new(f"mat{k}")
     mat.use_nodes = True
+    mat.cycles.emission_sampling = "NONE"  # a flat object is no light for lambert ones
     nodes, links = mat.node_tree.nodes, mat.node_tree.links
     nodes.clear()
     out = nodes.new("ShaderNodeOutputMaterial")
@@ -360,7 +368,7 @@ def blender(
     ``stats`` has ``samples``, ``seed``, ``motion_steps``, ``blender`` (its version), ``ms`` and
     ``ms_render``. Nothing casts shadows and light does not bounce (see the module docstring),
     so flat and lambert shading match the rasterizer's. Raises ValueError for a shutter other
-    than ``box``, deforming motion and keyframe times off Cycles' 1/128 motion-step grid;
+    than ``box`` and for deforming motion;
     :class:`~motionblur.MissingDependencyError` when ``bpy`` is not installed (the ``blender``
     extra, Python 3.11 only).
     """
