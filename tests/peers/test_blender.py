@@ -1,7 +1,7 @@
 """Blender Cycles (``reference.blender``) renders the scene the exact method renders (issue 27).
 
 A 96x72 sphere translating across the view, lambert-lit by one sun. Measured on the 2-core
-machine (Blender 4.4.0; RMSE over the alpha channel, against ``render(scene, "analytic", aa=4)``):
+machine (Blender 4.4.0; RMSE over the alpha channel, against ``motionblur.exact(scene, aa=4)``):
 
 - box pixel filter (what a dataset pipeline uses), 256 spp, seeds 0 to 2: 2.9e-3 to 3.1e-3:
   Cycles' noise plus the filter difference (the exact frame is 4x4 point samples of each pixel,
@@ -49,7 +49,7 @@ def _alpha_rmse(a: mb.Frame, b: mb.Frame) -> float:
 
 @pytest.fixture(scope="module")
 def exact() -> mb.Frame:
-    return mb.render(_sphere_scene(), "analytic", aa=4)
+    return mb.exact(_sphere_scene(), aa=4)
 
 
 def test_cycles_coverage_and_colour_agree_with_the_exact_frame(exact):
