@@ -53,6 +53,7 @@ import contextlib
 import os
 import sys
 import tempfile
+import threading
 import time
 
 import numpy as np
@@ -76,6 +77,9 @@ MAX_MOTION_STEPS = 6
 
 #: Cycles' SHUTTER_TABLE_SIZE (``intern/cycles/scene/tables.h``)
 _SHUTTER_TABLE_SIZE = 256
+
+# bpy holds one Blender session per process: one render at a time
+_LOCK = threading.Lock()
 
 
 @contextlib.contextmanager
@@ -166,12 +170,14 @@ def _matrix(m: np.ndarray):
 
 
 def _pose_at(motion, base: np.ndarray, t: float) -> np.ndarray:
-    """(4,4) ``motion(t) @ base`` for any t: inside [0, 1] the motion's own transform; outside,
-    its first or last segment extended (translation and scale linearly, rotation along the same
-    great circle), as Cycles' interpolation between motion steps continues it."""
+    """(4,4) ``motion(t) @ base`` for any t: inside [0, 1] the motion's own transform; before 0
+    (after 1), when a keyframe sits at 0 (1), its first (last) segment extended (translation and
+    scale linearly, rotation along the same great circle), as Cycles' interpolation between
+    motion steps continues it; otherwise the held transform."""
     times = motion.times
-    if times[0] <= t <= times[-1] or len(times) < 2:
-        return motion.transform_at(float(np.clip(t, times[0], times[-1]))) @ base
+    before, after = t < times[0] <= 0.0, t > times[-1] >= 1.0
+    if len(times) < 2 or not (before or after):
+        return motion.transform_at(float(np.clip(t, 0.0, 1.0))) @ base
     from mathutils import Matrix  # noqa: PLC0415 (bpy's module, importable once bpy is)
 
     i = 0 if t < times[0] else len(times) - 2
@@ -354,40 +360,13 @@ def _read_exr(bpy, path: str, h: int, w: int) -> np.ndarray:
     return px.reshape(h, w, 4)[::-1].astype(np.float32)  # rows bottom-up
 
 
-def blender(
-    scene: Scene, samples: int = 256, seed: int = 0, threads: int | None = None, aa: int | None = None
-) -> Frame:
-    """Blender Cycles (CPU) render of ``scene`` with its motion blur over the whole shutter.
-
-    ``samples`` S >= 1 samples per pixel (each at a random position in the pixel's square and a
-    random shutter time; no adaptive sampling, no denoising), ``seed`` the Cycles seed (the same
-    seed gives the same image), ``threads`` the render threads (default: all cores).
-
-    Returns a Frame: ``rgba`` (H,W,4) float32 premultiplied linear RGBA (alpha = coverage)
-    composited over the scene background; ``depth`` (inf) and ``ids`` (-1) are not computed;
-    ``stats`` has ``samples``, ``seed``, ``motion_steps``, ``blender`` (its version), ``ms`` and
-    ``ms_render``. Nothing casts shadows and light does not bounce (see the module docstring),
-    so flat and lambert shading match the rasterizer's. Raises ValueError for a shutter other
-    than ``box`` and for deforming motion;
-    :class:`~motionblur.MissingDependencyError` when ``bpy`` is not installed (the ``blender``
-    extra, Python 3.11 only).
-    """
-    _check(scene)
-    samples = as_int(samples, "samples", minimum=1, maximum=1 << 24)
-    seed = as_int(seed, "seed", minimum=0, maximum=(1 << 31) - 1)
-    if threads is not None:
-        threads = as_int(threads, "threads", minimum=1, maximum=1024)
-    sub = 1 if aa is None else as_int(aa, "aa")
-    if sub not in (1, 2, 4):
-        raise ValueError(f"aa: must be None, 1, 2 or 4, got {aa}")
-    if samples % (sub * sub):
-        raise ValueError(f"samples: must be a multiple of aa**2 = {sub * sub} with aa={aa}, got {samples}")
-    steps = motion_steps(scene)
-    t0 = time.perf_counter()
+def _render(scene: Scene, samples: int, seed: int, threads, sub: int, aa, steps: int):
+    """(rgba (H,W,4) float32 at the camera's size, render milliseconds, Blender's version) of
+    ``scene`` built afresh in bpy's session, ``samples`` per (sub-)pixel."""
     bpy = _bpy()
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.context.preferences.edit.keyframe_new_interpolation_type = "LINEAR"
-    _settings(bpy, scene, samples // (sub * sub), seed, threads, sub, point=aa is not None)
+    _settings(bpy, scene, samples, seed, threads, sub, point=aa is not None)
     sc = bpy.context.scene
     shutter, frames, times = _timing(steps)
     sc.render.motion_blur_shutter = shutter
@@ -420,6 +399,50 @@ def blender(
             bpy.ops.render.render(write_still=True)
         ms_render = (time.perf_counter() - t1) * 1e3
         rgba = downsample(_read_exr(bpy, path, cam.height * sub, cam.width * sub), sub)
+    return rgba, ms_render, bpy.app.version_string
+
+
+def blender(
+    scene: Scene, samples: int = 256, seed: int = 0, threads: int | None = None, aa: int | None = None
+) -> Frame:
+    """Blender Cycles (CPU) render of ``scene`` with its motion blur over the whole shutter.
+
+    ``samples`` S >= 1 samples per pixel (each at a random position in the pixel's square and a
+    random shutter time; no adaptive sampling, no denoising), ``seed`` the Cycles seed (the same
+    seed gives the same image), ``threads`` the render threads (default: all cores).
+
+    ``aa`` None (default): Cycles' box pixel filter of width 1, each sample at a random position
+    in the pixel's square (the pixel's area integral, as datasets render). ``aa`` = n (1, 2 or
+    4): the spatial samples of ``motionblur.exact(scene, aa=n)`` instead: Cycles renders n times
+    the width and height with its narrowest pixel filter (a Gaussian of width 0.01 sub-pixel:
+    every sample within 0.015 of the sub-pixel's centre; Blender gives Cycles' box filter width
+    1 whatever is set) and ``samples / n**2`` samples each (``samples`` must be a multiple of
+    ``n**2``), and the n x n blocks are averaged: Cycles and the exact method then estimate the
+    same image, and their difference is Cycles' noise.
+
+    Returns a Frame: ``rgba`` (H,W,4) float32 premultiplied linear RGBA (alpha = coverage)
+    composited over the scene background; ``depth`` (inf) and ``ids`` (-1) are not computed;
+    ``stats`` has ``samples``, ``seed``, ``motion_steps``, ``blender`` (its version), ``ms`` and
+    ``ms_render``. Nothing casts shadows and light does not bounce (see the module docstring),
+    so flat and lambert shading match the rasterizer's. Raises ValueError for a shutter other
+    than ``box`` and for deforming motion;
+    :class:`~motionblur.MissingDependencyError` when ``bpy`` is not installed (the ``blender``
+    extra, Python 3.11 only).
+    """
+    _check(scene)
+    samples = as_int(samples, "samples", minimum=1, maximum=1 << 24)
+    seed = as_int(seed, "seed", minimum=0, maximum=(1 << 31) - 1)
+    if threads is not None:
+        threads = as_int(threads, "threads", minimum=1, maximum=1024)
+    sub = 1 if aa is None else as_int(aa, "aa")
+    if sub not in (1, 2, 4):
+        raise ValueError(f"aa: must be None, 1, 2 or 4, got {aa}")
+    if samples % (sub * sub):
+        raise ValueError(f"samples: must be a multiple of aa**2 = {sub * sub} with aa={aa}, got {samples}")
+    steps = motion_steps(scene)
+    t0 = time.perf_counter()
+    with _LOCK:
+        rgba, ms_render, version = _render(scene, samples // (sub * sub), seed, threads, sub, aa, steps)
     h, w = rgba.shape[:2]
     frame = Frame(
         rgba, np.full((h, w), np.inf, np.float32), np.full((h, w), -1, np.int32), np.zeros((h, w, 2))
@@ -430,7 +453,7 @@ def blender(
         aa=aa,
         seed=seed,
         motion_steps=steps,
-        blender=bpy.app.version_string,
+        blender=version,
         ms=(time.perf_counter() - t0) * 1e3,
         ms_render=ms_render,
     )
