@@ -85,7 +85,7 @@ _LOCK = threading.Lock()
 @contextlib.contextmanager
 def _quiet(fd: int, keep_on_error: bool = False):
     """Send the C-level output of file descriptor ``fd`` to a temporary file (Blender prints its
-    render progress to stdout, and bpy's import a NumPy ABI notice to stderr); with
+    render progress to stdout, and bpy's import an audio notice and a NumPy ABI notice); with
     ``keep_on_error``, write it back when the block raises."""
     sys.stdout.flush()
     sys.stderr.flush()
@@ -108,7 +108,7 @@ def _quiet(fd: int, keep_on_error: bool = False):
 def _bpy():
     if sys.modules.get("bpy") is not None:
         return sys.modules["bpy"]
-    with _quiet(2, keep_on_error=True):
+    with _quiet(1, keep_on_error=True), _quiet(2, keep_on_error=True):
         return require("bpy")
 
 
