@@ -27,6 +27,7 @@ __all__ = [
 #: import name -> (pip package, extra that installs it, what it is used for)
 PACKAGES: dict[str, tuple[str, str, str]] = {
     "mitsuba": ("mitsuba", "reference", "the Mitsuba 3 reference (motionblur.reference.mitsuba)"),
+    "bpy": ("bpy", "blender", "the Blender Cycles reference (motionblur.reference.blender; Python 3.11)"),
     "tqdm": ("tqdm", "reference", "the progress bar of long references"),
     "flip_evaluator": ("flip-evaluator", "metrics", "the FLIP metric (motionblur.metrics.flip)"),
     "pyrender": ("pyrender", "pyrender", "the pyrender peer (motionblur.reference.pyrender)"),

@@ -26,6 +26,9 @@ a tqdm progress bar.
 
 ``pyrender(scene, t=None, samples=1)``: pyrender (OSMesa, ``RenderFlags.FLAT``) at one time, or
 the mean of ``samples`` poses over the shutter (the 16-pose accumulation peer of the benchmark).
+
+``blender(scene, samples=S)``: Blender Cycles (CPU) with its own motion blur, no shadows
+(:mod:`motionblur.evaluation.blender`).
 """
 
 from __future__ import annotations
@@ -41,8 +44,9 @@ from ..interop.mitsuba import OPENGL_TO_MITSUBA, mitsuba_variant, sensor_dict, s
 from ..methods.accumulation import sample_times
 from ..raster import Frame, over_background
 from ..scene import Scene
+from .blender import blender
 
-__all__ = ["mitsuba", "pyrender", "mitsuba_variant"]
+__all__ = ["mitsuba", "pyrender", "blender", "mitsuba_variant"]
 
 _FLIP = OPENGL_TO_MITSUBA
 
