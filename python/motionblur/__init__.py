@@ -1,12 +1,12 @@
 """motionblur: make objects and cameras look as if they moved while the shutter was open.
 
-Conventions (see the README): vertices (V,3) float, faces (F,3) int counter-clockwise front;
+Conventions (docs: guide/conventions.md): vertices (V,3) float, faces (F,3) int counter-clockwise front;
 images float32 (H,W,4) linear premultiplied RGBA, row 0 at the top; depth float32 (H,W) view-axis
 distance, inf for background; the shutter spans normalised time [0, 1].
 
 Importing the package loads the scene, the rasterizer and the rendering methods; the rest
 (evaluation, interop, the built-in scenes, meshes, the analytic kernel's API, image filters) is
-imported at its first use. Importing changes nothing in the process (see :func:`tune_malloc`).
+imported at its first use. Importing changes nothing in the process (see [`tune_malloc`][motionblur.tune_malloc]).
 """
 
 from __future__ import annotations

@@ -5,7 +5,7 @@ blocks are freed) with fresh ``mmap`` pages and gives them back on ``free``, and
 of the heap once 128 KiB are free there. A renderer allocates frame-sized buffers every call (the
 rasterizer's output, numpy temporaries), so every call may page-fault its buffers afresh.
 
-:func:`tune_malloc` raises both thresholds (blocks up to 64 MiB come from the heap; up to 256 MiB
+[`tune_malloc`][motionblur._malloc.tune_malloc] raises both thresholds (blocks up to 64 MiB come from the heap; up to 256 MiB
 of free heap is kept), so the pages are reused. Importing the package changes nothing: this is
 a process-wide setting, and the process is the caller's. The cost is memory: the process keeps
 up to the trim threshold of freed heap instead of returning it.
@@ -24,7 +24,7 @@ _M_MMAP_THRESHOLD = -3
 MMAP_THRESHOLD = 64 << 20
 TRIM_THRESHOLD = 256 << 20
 
-#: Whether :func:`tune_malloc` changed the thresholds in this process.
+#: Whether [`tune_malloc`][motionblur._malloc.tune_malloc] changed the thresholds in this process.
 applied = False
 
 

@@ -2,7 +2,7 @@
 
 A module's globals also hold what it imported for its own use (``np``, ``os``, ``math``), the
 ``annotations`` feature of ``from __future__ import annotations`` and private helpers; tab
-completion in Jupyter and ``dir()`` would show them all. :func:`tidy` gives every module of the
+completion in Jupyter and ``dir()`` would show them all. `tidy` gives every module of the
 package a module-level ``__dir__`` (PEP 562) that returns its public names only: ``__all__``
 where the module has one, else the public names it defines itself; plus its public submodules
 and the dunder names. Nothing is deleted: ``module.np`` still works for code that uses it.
@@ -31,7 +31,7 @@ def _defined_here(module: ModuleType, name: str, value: object) -> bool:
 
 
 def public_names(module: ModuleType) -> list[str]:
-    """The names :func:`tidy` lets ``dir(module)`` show (sorted)."""
+    """The names `tidy` lets ``dir(module)`` show (sorted)."""
     g = vars(module)
     names = {n for n in g if n.startswith("__") and n.endswith("__") and n != "__builtins__"}
     exported = g.get("__all__")
@@ -45,7 +45,7 @@ def public_names(module: ModuleType) -> list[str]:
 
 def tidy(package: str, lazy=(), walk: bool = False) -> None:
     """Give the module or package ``package`` and every submodule of it loaded now a
-    ``__dir__`` listing :func:`public_names` (read when called, so names set later show).
+    ``__dir__`` listing `public_names` (read when called, so names set later show).
     ``lazy``: names the module serves through its ``__getattr__`` at first use, listed too;
     ``walk``: import every submodule first (but ``__main__``; none of them imports an optional
     dependency at import time). A module loaded later tidies itself (it calls this at its end)."""

@@ -1,10 +1,10 @@
 """Optional dependencies: import them on first use, and say what to install when they are missing.
 
 The core (``pip install motionblur``) needs numpy only. The peers, metrics, file formats and
-plots come with extras (``pip install "motionblur[reference]"`` ...); see the README, section
-Install. :func:`require` imports one such package or raises :class:`MissingDependencyError`
+plots come with extras (``pip install "motionblur[reference]"`` ...); see the docs,
+guide/install.md. `require` imports one such package or raises [`MissingDependencyError`][motionblur._optional.MissingDependencyError]
 (a ``ModuleNotFoundError``) naming the pip package and the extra that brings it;
-:func:`require_all` checks all the packages of a task at once, before the task writes anything.
+`require_all` checks all the packages of a task at once, before the task writes anything.
 """
 
 from __future__ import annotations
@@ -73,9 +73,9 @@ def missing(modules) -> list[str]:
 
 
 def require(module: str, purpose: str | None = None) -> ModuleType:
-    """Import ``module`` (an import name of :data:`PACKAGES`, or any other) and return it.
+    """Import ``module`` (an import name of `PACKAGES`, or any other) and return it.
 
-    Raises :class:`MissingDependencyError` when it is not installed, naming what needs it
+    Raises [`MissingDependencyError`][motionblur._optional.MissingDependencyError] when it is not installed, naming what needs it
     (``purpose``, default: the package's use), the pip package and the extra to install.
     """
     try:
@@ -92,7 +92,7 @@ def require(module: str, purpose: str | None = None) -> ModuleType:
 
 
 def require_all(modules, task: str) -> None:
-    """Raise one :class:`MissingDependencyError` listing every package of ``modules`` (import
+    """Raise one [`MissingDependencyError`][motionblur._optional.MissingDependencyError] listing every package of ``modules`` (import
     names) that is not installed, saying that ``task`` needs them; call it before the task
     writes anything."""
     gone = missing(modules)

@@ -215,7 +215,7 @@ def as_colors(value, name: str, n_vertices: int) -> np.ndarray:
 
 
 def with_alpha(colors: np.ndarray) -> np.ndarray:
-    """Colours from :func:`as_colors` as (1,4) or (V,4) float32 RGBA (alpha 1 where not given),
+    """Colours from `as_colors` as (1,4) or (V,4) float32 RGBA (alpha 1 where not given),
     C-contiguous, what the core takes."""
     c = np.atleast_2d(colors)
     if c.shape[1] == 3:
@@ -224,7 +224,7 @@ def with_alpha(colors: np.ndarray) -> np.ndarray:
 
 
 def as_rgba(value, name: str, n_vertices: int) -> np.ndarray:
-    """:func:`as_colors` then :func:`with_alpha`: (1,4) or (V,4) float32 straight RGBA."""
+    """`as_colors` then `with_alpha`: (1,4) or (V,4) float32 straight RGBA."""
     return with_alpha(as_colors(value, name, n_vertices))
 
 

@@ -6,7 +6,7 @@ triangle's edge functions at a sample are quadratics in time and the covered tim
 from their roots (Korein and Badler's continuous algorithm in Gribel et al.'s rasterizer form).
 Visibility is resolved over time per sample (linear depth per covered span, split where two
 surfaces cross) and colour is integrated with the shutter filter at Gauss points in time.
-:func:`rasterize_motion` is the kernel behind ``render(scene, "analytic")``.
+[`rasterize_motion`][motionblur.analytic.rasterize_motion] is the kernel behind ``render(scene, "analytic")``.
 """
 
 from __future__ import annotations
@@ -112,8 +112,8 @@ def rasterize_motion(
 ) -> Frame:
     """Rasterizes moving meshes with the exact covered time per sample.
 
-    ``cameras``: one :class:`Camera`, or one per boundary (a moving camera; same image size).
-    ``draws``: :class:`MovingDraw` s. ``times`` (K+1,) float: the segment boundaries, strictly
+    ``cameras``: one [`Camera`][motionblur.analytic.Camera], or one per boundary (a moving camera; same image size).
+    ``draws``: [`MovingDraw`][motionblur.analytic.MovingDraw] s. ``times`` (K+1,) float: the segment boundaries, strictly
     increasing from 0 to 1 (normalised shutter time). ``samples``: 1, 2 or 4 per pixel along
     each axis. ``shutter``: ``"box"``, ``"ramp"``, ``"triangle"``, ``"gaussian"`` or (M,) weights
     of M equal strata. ``lights`` (pairs (direction (3,), intensity float or (3,))) and
@@ -126,12 +126,12 @@ def rasterize_motion(
     depth (inf where empty), ids (HS,WS) int32)``. ``shade=False`` gives coverage only (every
     surface opaque white).
 
-    Returns a :class:`Frame`: ``rgba`` (H,W,4) float32 premultiplied, the shutter-weighted
+    Returns a [`Frame`][motionblur.analytic.Frame]: ``rgba`` (H,W,4) float32 premultiplied, the shutter-weighted
     time integral; ``depth`` (H,W) float32, ``ids`` (H,W) int32 and ``velocity`` (H,W,2) float32
     (pixels, the surface's screen motion from the first to the last boundary) of the surface in
     front at ``reference_time`` (of each pixel's nearest sample); ``stats`` with ``prims``,
     ``bin_entries``, ``intervals`` (covered spans found), ``pieces`` (visible pieces shaded),
-    ``splits`` (tile passes redone in halves to stay within :data:`TILE_BUDGET_BYTES`),
+    ``splits`` (tile passes redone in halves to stay within `TILE_BUDGET_BYTES`),
     ``segments`` and ``ms_*`` per stage. Bit-identical for any thread count and any budget; the
     GIL is released. ``MemoryError`` (naming the sample) where one sample alone needs more than
     the budget.
@@ -196,6 +196,6 @@ def rasterize_motion(
 
 def coverage(cameras, draws: Sequence[MovingDraw], times, samples: int = 1, shutter="box") -> np.ndarray:
     """(H,W) float32: the shutter-weighted fraction of the time each pixel is covered by any of
-    the ``draws`` (see :func:`rasterize_motion` for the arguments), without shading."""
+    the ``draws`` (see [`rasterize_motion`][motionblur.analytic.rasterize_motion] for the arguments), without shading."""
     f = rasterize_motion(cameras, draws, times, samples=samples, shutter=shutter, shade=False)
     return f.rgba[..., 3].copy()

@@ -1,4 +1,4 @@
-"""The memory budget: the most bytes one call may allocate (README, "Memory and time budgets").
+"""The memory budget: the most bytes one call may allocate (docs: guide/resources.md, "Memory and time budgets").
 
 Every kernel whose memory is a product of sizes (pixels x samples, faces x directions,
 faces x segments, vertices x subdivisions, ...) computes what it will allocate before it
@@ -7,10 +7,10 @@ over the budget; a count so large that its bytes overflow 64 bits raises ``Value
 allocation the system refuses within the budget (a process under ``ulimit -v``) is a
 ``MemoryError`` too, never an abort of the interpreter.
 
-The budget is one number for the process, :data:`DEFAULT_MEMORY_BUDGET` (4 GiB, whatever the
+The budget is one number for the process, `DEFAULT_MEMORY_BUDGET` (4 GiB, whatever the
 machine, so that a call accepted on one machine is accepted on every other) unless the
 environment sets ``MOTIONBLUR_MEMORY_BUDGET`` (bytes) when the package is imported.
-:func:`set_memory_budget` changes it; :func:`memory_budget` reads it.
+[`set_memory_budget`][motionblur.budget.set_memory_budget] changes it; [`memory_budget`][motionblur.budget.memory_budget] reads it.
 """
 
 from __future__ import annotations

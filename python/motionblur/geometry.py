@@ -1,13 +1,13 @@
 """Object-space geometry of the motion-volume paper (Wloka and Zeleznik 1996, sections 3 and 4).
 
-- :class:`Mesh`: an indexed triangle mesh with a cached edge adjacency (built once in Rust).
-- :func:`contour_edges`: the edges between faces facing the motion and faces facing away.
-- :func:`motion_volume`: leading, trailing and joining surfaces with per-vertex colour and alpha.
-- :func:`spin_volume`: the special case of section 4.3 for objects that spin but barely move.
-- :class:`ContourTable`: contour sets precomputed for K directions, looked up by the nearest one.
+- [`Mesh`][motionblur.geometry.Mesh]: an indexed triangle mesh with a cached edge adjacency (built once in Rust).
+- [`contour_edges`][motionblur.geometry.contour_edges]: the edges between faces facing the motion and faces facing away.
+- [`motion_volume`][motionblur.geometry.motion_volume]: leading, trailing and joining surfaces with per-vertex colour and alpha.
+- [`spin_volume`][motionblur.geometry.spin_volume]: the special case of section 4.3 for objects that spin but barely move.
+- [`ContourTable`][motionblur.geometry.ContourTable]: contour sets precomputed for K directions, looked up by the nearest one.
 
-Every function that takes a mesh accepts a :class:`Mesh` or any object with ``.vertices`` and
-``.faces`` (a ``trimesh.Trimesh``); wrap it once in :class:`Mesh` to reuse the adjacency.
+Every function that takes a mesh accepts a [`Mesh`][motionblur.geometry.Mesh] or any object with ``.vertices`` and
+``.faces`` (a ``trimesh.Trimesh``); wrap it once in [`Mesh`][motionblur.geometry.Mesh] to reuse the adjacency.
 
 Edge rule (boundary and non-manifold edges): for an edge, add +1 for each front face that runs
 it from its lower to its higher vertex index and -1 for the other direction (``net_front``), the
@@ -81,25 +81,23 @@ def _readonly(a: np.ndarray) -> np.ndarray:
 class Mesh:
     """An indexed triangle mesh.
 
-    Parameters
-    ----------
-    vertices : (V,3) float32 or float64 array, scene units; copied (float64).
-    faces : (F,3) integer array of any dtype, counter-clockwise seen from the front; copied
-        (int64). Every index must be in ``[0, V)``.
+    Args:
+        vertices: (V,3) float32 or float64 array, scene units; copied (float64).
+        faces: (F,3) integer array of any dtype, counter-clockwise seen from the front; copied
+            (int64). Every index must be in ``[0, V)``.
 
     Or ``Mesh(obj)`` with any object that has ``.vertices`` and ``.faces`` (``trimesh.Trimesh``).
 
-    Attributes
-    ----------
-    vertices : (V,3) float64, read-only (the mesh's own copy).
-    faces : (F,3) int64, read-only.
-    stats : dict with ``faces``, ``vertices``, ``edges``, ``degenerate_faces`` (zero cross
-        product), ``boundary_edges`` (one face), ``nonmanifold_edges`` (three or more faces),
-        ``inconsistent_edges`` (two faces running the edge the same way),
-        ``unreferenced_vertices`` and ``closed`` (no boundary, non-manifold or inconsistent edge).
+    Attributes:
+        vertices: (V,3) float64, read-only (the mesh's own copy).
+        faces: (F,3) int64, read-only.
+        stats: dict with ``faces``, ``vertices``, ``edges``, ``degenerate_faces`` (zero cross
+            product), ``boundary_edges`` (one face), ``nonmanifold_edges`` (three or more faces),
+            ``inconsistent_edges`` (two faces running the edge the same way),
+            ``unreferenced_vertices`` and ``closed`` (no boundary, non-manifold or inconsistent edge).
 
     The edge adjacency is built in Rust on first use and kept on the object;
-    :meth:`with_vertices` makes a deformed copy that shares it. Every coordinate must lie within
+    [`with_vertices`][motionblur.geometry.Mesh.with_vertices] makes a deformed copy that shares it. Every coordinate must lie within
     ``+-MAX_COORD`` (the coordinate range). A mesh pickles and deep-copies through its two arrays
     (the copy builds its adjacency again when used).
     """
@@ -167,7 +165,7 @@ class Mesh:
         return self._core.edges()
 
     def edge_face_counts(self) -> np.ndarray:
-        """(E,) int64 number of faces on each edge of :meth:`edges` (1 boundary, 3+ non-manifold)."""
+        """(E,) int64 number of faces on each edge of [`edges`][motionblur.geometry.Mesh.edges] (1 boundary, 3+ non-manifold)."""
         return self._core.edge_face_counts()
 
     @property
@@ -197,7 +195,7 @@ class Mesh:
 
 
 def as_mesh(mesh, name: str = "mesh") -> Mesh:
-    """``mesh`` as a :class:`Mesh` (itself if it is one; else built from ``.vertices``/``.faces``)."""
+    """``mesh`` as a [`Mesh`][motionblur.geometry.Mesh] (itself if it is one; else built from ``.vertices``/``.faces``)."""
     if isinstance(mesh, Mesh):
         return mesh
     if hasattr(mesh, "vertices") and hasattr(mesh, "faces"):
@@ -228,17 +226,15 @@ def contour_edges(mesh, motion, camera_position=None) -> np.ndarray:
     contour edge joins a front and a back face (see the module docs for boundary, non-manifold
     and degenerate cases).
 
-    Parameters
-    ----------
-    mesh : Mesh or trimesh-like.
-    motion : (3,) float, the motion vector in the mesh's coordinates (only its direction matters).
-    camera_position : optional (3,) float, scene units. If given, only the contour line: the
-        edges with at least one adjacent face front-facing to the camera, ``n . (eye - a) > 0``.
+    Args:
+        mesh: Mesh or trimesh-like.
+        motion: (3,) float, the motion vector in the mesh's coordinates (only its direction matters).
+        camera_position: optional (3,) float, scene units. If given, only the contour line: the
+            edges with at least one adjacent face front-facing to the camera, ``n . (eye - a) > 0``.
 
-    Returns
-    -------
-    (E,2) int64 vertex indices ``(a, b)``, oriented as the edge runs counter-clockwise in its
-    front face (so the back face is on the other side); rows in sorted order of ``(min, max)``.
+    Returns:
+        (E,2) int64 vertex indices ``(a, b)``, oriented as the edge runs counter-clockwise in its
+            front face (so the back face is on the other side); rows in sorted order of ``(min, max)``.
     """
     m = as_mesh(mesh)
     mv = _vec3(motion, "motion")
@@ -249,20 +245,19 @@ def contour_edges(mesh, motion, camera_position=None) -> np.ndarray:
 class MotionVolume:
     """The motion volume of a mesh: leading, trailing and joining surfaces.
 
-    Attributes
-    ----------
-    vertices : (N,3) float64, scene units (world placement given by the keyframes).
-    faces : (M,3) int64, counter-clockwise seen from outside the volume.
-    rgba : (N,4) float32 straight (non-premultiplied) linear RGBA; alpha is the colour's alpha
-        times the temporal filter's opacity at the vertex's shutter time.
-    normals : (N,3) float32 unit lighting normals (zeros where the mesh normal is undefined).
-    part : (M,) uint8, ``LEADING`` (0), ``TRAILING`` (1) or ``JOINING`` (2) per face.
-    ring_alpha : (n+1,) float64 filter opacity of the contour rings at the keyframe times,
-        shutter open to close (for box/triangle/gaussian: the mean over the ring's vertices).
-    contour_count : number of contour edges swept.
-    segments : number of joining segments n.
-    contour_error : with a ``contour_table``, the angle (radians) between the summed motion and
-        the stored direction whose face split and contour were swept; 0.0 otherwise.
+    Attributes:
+        vertices: (N,3) float64, scene units (world placement given by the keyframes).
+        faces: (M,3) int64, counter-clockwise seen from outside the volume.
+        rgba: (N,4) float32 straight (non-premultiplied) linear RGBA; alpha is the colour's alpha
+            times the temporal filter's opacity at the vertex's shutter time.
+        normals: (N,3) float32 unit lighting normals (zeros where the mesh normal is undefined).
+        part: (M,) uint8, ``LEADING`` (0), ``TRAILING`` (1) or ``JOINING`` (2) per face.
+        ring_alpha: (n+1,) float64 filter opacity of the contour rings at the keyframe times,
+            shutter open to close (for box/triangle/gaussian: the mean over the ring's vertices).
+        contour_count: number of contour edges swept.
+        segments: number of joining segments n.
+        contour_error: with a ``contour_table``, the angle (radians) between the summed motion and
+            the stored direction whose face split and contour were swept; 0.0 otherwise.
     """
 
     __slots__ = (
@@ -380,79 +375,77 @@ def motion_volume(
 ) -> MotionVolume:
     """Build the motion volume of ``mesh`` over the shutter (paper sections 3.3-3.4, 4.1-4.4).
 
-    Parameters
-    ----------
-    mesh : Mesh or trimesh-like; vertices in object space (scene units).
-    motion : either a (3,) translation ``m`` over the shutter, meaning the keyframes
-        ``[identity, translate(m)]``: the given vertices are the placement at shutter OPEN and the
-        leading surface sits at ``v + m`` at shutter close; or a rigid :class:`motionblur.Motion`
-        (resampled at the times ``i / K`` for its K keyframe intervals); or rigid keyframes (K+1,4,4) float
-        (rotation, positive uniform scale, translation; row-major, acting on column vectors) at
-        the equally spaced shutter times ``i / K``, applied to the vertices (the methods pass
-        the core's keyframe object, ``_core._Keyframes``, at those times).
-    segments : int >= 1. Each keyframe interval is cut into ``segments`` joining segments
-        (translation lerp, rotation slerp, scale lerp: the keyframe engine's interpolation);
-        the total is ``K * segments``, so the keyframes are always followed and ``segments``
-        only subdivides them (at most ``_core.MAX_SEGMENTS`` in total).
-    filter : ``"ramp"``, the paper's, exactly as stated there (leading opaque, trailing and ring
-        alpha ``max(0.1, 1 - D/E)`` with D the path length to the leading ring and E the extent
-        along the motion; a look, its total coverage is not the object's area); or ``"box"``,
-        ``"triangle"``, ``"gaussian"`` shutter weights (our own design): every vertex gets the
-        weighted fraction of the shutter during which the object covers its image, so the
-        volume drawn with back-face culling and exact blending has the coverage of the
-        time-averaged image (within 5% of an accumulation of rasterized renders in the tests,
-        per pixel within 15%). The image is modelled with the convex hull of the object's
-        projection (perspective from ``camera_position``; without one, orthographic along the
-        world axis least aligned with the motion, which is less accurate), so concave objects
-        are approximated: holes count as covered and a folded contour sweeps overlapping
-        strips (measured +14% to +97% total coverage on a torus and a bumpy blob, the ramp
-        +30% to +230%). For these filters each joining segment is cut at the two times the
-        object's ends pass each contour vertex (plus 3 more cuts for triangle, 5 for gaussian),
-        and coarse meshes are subdivided (each edge into up to 16 parts, at most 2**20 faces)
-        so that alphas can follow the coverage profile; then faces are cut (up to three passes)
-        where the linearly interpolated alpha misses the coverage by more than 0.02, chiefly
-        along the outline of an object whose image grows, shrinks or turns across its motion.
-        Past 64 segments the model follows the path on 64 spans, so the time is linear in the
-        segments. No 0.1 floor: long streaks are faint. See ``src/volume/coverage.rs`` and
-        ``src/volume/refine.rs``.
-    colors : None (white, opaque), one RGB/RGBA colour, or (V,3)/(V,4) per vertex; linear,
-        straight alpha, RGB >= 0, alpha in [0, 1].
-    face_colors : optional (F,3)/(F,4) colour per face (linear, straight alpha), instead of
-        ``colors``. Every leading and trailing face then has its own three vertices and every
-        joining strip its own vertices, coloured from its front face (leading end) to its back
-        face (trailing end), or all in the visible side's colour when the camera sees only one
-        side (section 4.1). The volume stays closed geometrically, not as an indexed mesh.
-    normals : optional (V,3) lighting normals in object space; default area-weighted normals.
-    camera_position : optional (3,) world position of the camera (at shutter close). If given,
-        only the contour line is swept (edges whose front face at close or back face at open
-        faces the camera) and joining vertices take the normal of the visible side when only
-        one side is visible (section 4.1); joining strips then have their own vertices. The
-        box/triangle/gaussian alphas use it for a perspective view.
-    contour_line : bool, default True. With ``camera_position``, False sweeps every contour
-        edge (shared ring vertices, a closed volume) and uses the camera for the alphas only.
-    visible_only : bool, default False. With ``camera_position`` and ``contour_line``, leave out
-        the leading faces that face away from the camera at shutter close and the trailing faces
-        that face away from it at open: drawn with back-face culling the volume gives the same
-        image from fewer faces (about half of a dense mesh's), but it is no longer closed.
-        Ignored otherwise.
-    contour_table : optional :class:`ContourTable` of this mesh (paper section 4.4): the face
-        split and contour edges of its stored direction nearest to the summed motion (object
-        space) are swept instead of the ones computed for the motion itself (a coarse mesh
-        subdivided for the alphas maps the split to its new faces and finds their contour);
-        ``MotionVolume.contour_error`` is the angle between the two. The alphas still follow the
-        true motion. Exactly the volume without a table when the motion's direction is stored.
-    window : (a, b) with 0 <= a < b <= 1, default (0, 1): the part of the shutter the keyframes
-        stand for (their times ``i / K`` are the shutter times ``a + (b - a) i / K``); the
-        box/triangle/gaussian alphas weigh the time by the filter over ``[a, b]``, normalised to
-        unit weight (one piece of a shutter drawn as several volumes, as ``render(...,
-        "motion_volume")`` does for motions one volume cannot follow). The ramp ignores it.
+    Args:
+        mesh: Mesh or trimesh-like; vertices in object space (scene units).
+        motion: either a (3,) translation ``m`` over the shutter, meaning the keyframes
+            ``[identity, translate(m)]``: the given vertices are the placement at shutter OPEN and the
+            leading surface sits at ``v + m`` at shutter close; or a rigid [`motionblur.Motion`][motionblur.Motion]
+            (resampled at the times ``i / K`` for its K keyframe intervals); or rigid keyframes (K+1,4,4) float
+            (rotation, positive uniform scale, translation; row-major, acting on column vectors) at
+            the equally spaced shutter times ``i / K``, applied to the vertices (the methods pass
+            the core's keyframe object, ``_core._Keyframes``, at those times).
+        segments: int >= 1. Each keyframe interval is cut into ``segments`` joining segments
+            (translation lerp, rotation slerp, scale lerp: the keyframe engine's interpolation);
+            the total is ``K * segments``, so the keyframes are always followed and ``segments``
+            only subdivides them (at most ``_core.MAX_SEGMENTS`` in total).
+        filter: ``"ramp"``, the paper's, exactly as stated there (leading opaque, trailing and ring
+            alpha ``max(0.1, 1 - D/E)`` with D the path length to the leading ring and E the extent
+            along the motion; a look, its total coverage is not the object's area); or ``"box"``,
+            ``"triangle"``, ``"gaussian"`` shutter weights (our own design): every vertex gets the
+            weighted fraction of the shutter during which the object covers its image, so the
+            volume drawn with back-face culling and exact blending has the coverage of the
+            time-averaged image (within 5% of an accumulation of rasterized renders in the tests,
+            per pixel within 15%). The image is modelled with the convex hull of the object's
+            projection (perspective from ``camera_position``; without one, orthographic along the
+            world axis least aligned with the motion, which is less accurate), so concave objects
+            are approximated: holes count as covered and a folded contour sweeps overlapping
+            strips (measured +14% to +97% total coverage on a torus and a bumpy blob, the ramp
+            +30% to +230%). For these filters each joining segment is cut at the two times the
+            object's ends pass each contour vertex (plus 3 more cuts for triangle, 5 for gaussian),
+            and coarse meshes are subdivided (each edge into up to 16 parts, at most 2**20 faces)
+            so that alphas can follow the coverage profile; then faces are cut (up to three passes)
+            where the linearly interpolated alpha misses the coverage by more than 0.02, chiefly
+            along the outline of an object whose image grows, shrinks or turns across its motion.
+            Past 64 segments the model follows the path on 64 spans, so the time is linear in the
+            segments. No 0.1 floor: long streaks are faint. See ``src/volume/coverage.rs`` and
+            ``src/volume/refine.rs``.
+        colors: None (white, opaque), one RGB/RGBA colour, or (V,3)/(V,4) per vertex; linear,
+            straight alpha, RGB >= 0, alpha in [0, 1].
+        face_colors: optional (F,3)/(F,4) colour per face (linear, straight alpha), instead of
+            ``colors``. Every leading and trailing face then has its own three vertices and every
+            joining strip its own vertices, coloured from its front face (leading end) to its back
+            face (trailing end), or all in the visible side's colour when the camera sees only one
+            side (section 4.1). The volume stays closed geometrically, not as an indexed mesh.
+        normals: optional (V,3) lighting normals in object space; default area-weighted normals.
+        camera_position: optional (3,) world position of the camera (at shutter close). If given,
+            only the contour line is swept (edges whose front face at close or back face at open
+            faces the camera) and joining vertices take the normal of the visible side when only
+            one side is visible (section 4.1); joining strips then have their own vertices. The
+            box/triangle/gaussian alphas use it for a perspective view.
+        contour_line: bool, default True. With ``camera_position``, False sweeps every contour
+            edge (shared ring vertices, a closed volume) and uses the camera for the alphas only.
+        visible_only: bool, default False. With ``camera_position`` and ``contour_line``, leave out
+            the leading faces that face away from the camera at shutter close and the trailing faces
+            that face away from it at open: drawn with back-face culling the volume gives the same
+            image from fewer faces (about half of a dense mesh's), but it is no longer closed.
+            Ignored otherwise.
+        contour_table: optional [`ContourTable`][motionblur.geometry.ContourTable] of this mesh (paper section 4.4): the face
+            split and contour edges of its stored direction nearest to the summed motion (object
+            space) are swept instead of the ones computed for the motion itself (a coarse mesh
+            subdivided for the alphas maps the split to its new faces and finds their contour);
+            ``MotionVolume.contour_error`` is the angle between the two. The alphas still follow the
+            true motion. Exactly the volume without a table when the motion's direction is stored.
+        window: (a, b) with 0 <= a < b <= 1, default (0, 1): the part of the shutter the keyframes
+            stand for (their times ``i / K`` are the shutter times ``a + (b - a) i / K``); the
+            box/triangle/gaussian alphas weigh the time by the filter over ``[a, b]``, normalised to
+            unit weight (one piece of a shutter drawn as several volumes, as ``render(...,
+            "motion_volume")`` does for motions one volume cannot follow). The ramp ignores it.
 
-    Returns
-    -------
-    MotionVolume, to be drawn with back-face culling (``Draw(..., cull_back=True)``) and
-    ``blend="exact"``. Without a camera, a closed consistently wound mesh gives a closed
-    consistently wound volume. If every keyframe is equal (zero motion), the mesh itself, all ``LEADING`` and
-    opaque.
+    Returns:
+        MotionVolume, to be drawn with back-face culling (``Draw(..., cull_back=True)``) and
+            ``blend="exact"``. Without a camera, a closed consistently wound mesh gives a closed
+            consistently wound volume. If every keyframe is equal (zero motion), the mesh itself, all ``LEADING`` and
+            opaque.
     """
     m = as_mesh(mesh)
     keys = _keyframes(motion)
@@ -507,24 +500,25 @@ def spin_volume(
     more than one turn). Draw it with back-face culling and ``blend="exact"``.
 
     Use it when the rotation dominates (a propeller, a wheel seen along its axle);
-    :func:`motion_volume` with rotating keyframes handles slow rotation with translation.
+    [`motion_volume`][motionblur.geometry.motion_volume] with rotating keyframes handles slow rotation with translation.
 
-    Parameters
-    ----------
-    mesh : Mesh or trimesh-like; vertices are the placement at shutter OPEN (scene units).
-    axis : (3,) float, the rotation axis (non-zero; normalised).
-    angle : float, radians turned over the shutter, right hand about ``axis`` (any sign, any
-        size; 0 gives :func:`motion_volume` of the translation, the mesh itself without one).
-    center : (3,) float, a point on the axis.
-    translation : optional (3,) float, a (small) translation over the shutter.
-    segments : optional int in 1..``_core.MAX_SEGMENTS``, the number of sweep steps (default one
-        per pi/12).
-    filter : ``"box"``, ``"ramp"``, ``"triangle"`` or ``"gaussian"``.
-    colors, normals, camera_position, face_colors : as in :func:`motion_volume`.
+    Args:
+        mesh: Mesh or trimesh-like; vertices are the placement at shutter OPEN (scene units).
+        axis: (3,) float, the rotation axis (non-zero; normalised).
+        angle: float, radians turned over the shutter, right hand about ``axis`` (any sign, any
+            size; 0 gives [`motion_volume`][motionblur.geometry.motion_volume] of the translation, the mesh itself without one).
+        center: (3,) float, a point on the axis.
+        translation: optional (3,) float, a (small) translation over the shutter.
+        segments: optional int in 1..``_core.MAX_SEGMENTS``, the number of sweep steps (default one
+            per pi/12).
+        filter: ``"box"``, ``"ramp"``, ``"triangle"`` or ``"gaussian"``.
+        colors: as in [`motion_volume`][motionblur.geometry.motion_volume].
+        normals: as in [`motion_volume`][motionblur.geometry.motion_volume].
+        camera_position: as in [`motion_volume`][motionblur.geometry.motion_volume].
+        face_colors: as in [`motion_volume`][motionblur.geometry.motion_volume].
 
-    Returns
-    -------
-    MotionVolume (``ring_alpha`` is the mean alpha of each ring's contour vertices).
+    Returns:
+        MotionVolume (``ring_alpha`` is the mean alpha of each ring's contour vertices).
     """
     m = as_mesh(mesh)
     ax = _vec3(axis, "axis")
@@ -553,13 +547,12 @@ def spin_volume(
 class ContourTable:
     """Contour sets precomputed for K motion directions (paper section 4.4).
 
-    Parameters
-    ----------
-    mesh : Mesh or trimesh-like.
-    directions : int K (1..65536): K directions drawn uniformly on the unit sphere from ``seed``
-        (stochastic, as the paper recommends); or a (K,3) float array of directions (normalised),
-        e.g. clustered around a preferred direction of motion.
-    seed : int >= 0, the generator's seed (splitmix64; the same seed gives the same table).
+    Args:
+        mesh: Mesh or trimesh-like.
+        directions: int K (1..65536): K directions drawn uniformly on the unit sphere from ``seed``
+            (stochastic, as the paper recommends); or a (K,3) float array of directions (normalised),
+            e.g. clustered around a preferred direction of motion.
+        seed: int >= 0, the generator's seed (splitmix64; the same seed gives the same table).
 
     A table pickles and deep-copies (rebuilt from its mesh, directions and seed: the same sets).
 
@@ -609,7 +602,7 @@ class ContourTable:
 
     def lookup(self, motion) -> tuple[np.ndarray, float]:
         """The (E,2) int64 contour edges of the nearest stored direction to the (3,) ``motion``
-        (as :func:`contour_edges` gives for that direction) and the angular error in radians."""
+        (as [`contour_edges`][motionblur.geometry.contour_edges] gives for that direction) and the angular error in radians."""
         i, err = self.nearest(motion)
         return self._core.edges(i), err
 

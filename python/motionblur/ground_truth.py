@@ -48,7 +48,7 @@ def _camera_rays(scene: Scene, points: np.ndarray) -> np.ndarray:
 
 def _project(camera: Camera, world: np.ndarray, w: np.ndarray) -> np.ndarray:
     """(N,2) pixels of homogeneous world points (``world`` (N,3), ``w`` (N,) 1 for a point, 0 for
-    a direction) seen by ``camera`` (:meth:`Camera.project`; a direction d is the point at d
+    a direction) seen by ``camera`` ([`Camera.project`][motionblur.raster.Camera.project]; a direction d is the point at d
     from this camera's eye, NaN behind the eye)."""
     points = np.where(w[:, None] > 0.0, world, camera.pose[:3, 3] + world)
     return camera.project(points)[0]
@@ -112,7 +112,7 @@ def surface_paths(scene: Scene, points, times, *, source=None, frame: Frame | No
     the scene's reference time) to each of ``times`` (S,) (floats in [0, 1] or 'open', 'center',
     'close'). ``frame``: the sharp frame at ``source`` to read the object seen (ids) and, at
     pixel centres, its depth from (rendered when None); at other points the depth is found by
-    casting the ray onto that object's triangles. Returns :class:`SurfacePaths`."""
+    casting the ray onto that object's triangles. Returns [`SurfacePaths`][motionblur.ground_truth.SurfacePaths]."""
     from .methods._sharp import sharp_frame
 
     if not isinstance(scene, Scene):

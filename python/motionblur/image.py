@@ -52,16 +52,16 @@ __all__ = [
 MAX_LENGTH: float = _core.MAX_LENGTH
 #: Largest accepted ``fps`` / ``target_fps`` ratio of ``camera_motion_blur``.
 MAX_FPS_RATIO: float = _core.MAX_FPS_RATIO
-#: Longest velocity component :func:`velocity_blur` takes, in pixels (a streak that long
-#: crosses any image); :func:`camera_motion_blur` and the ``camera_velocity`` method clamp to it.
+#: Longest velocity component [`velocity_blur`][motionblur.image.velocity_blur] takes, in pixels (a streak that long
+#: crosses any image); [`camera_motion_blur`][motionblur.image.camera_motion_blur] and the ``camera_velocity`` method clamp to it.
 MAX_VELOCITY: float = _core.MAX_VELOCITY
 #: Most pyramid levels, depth-of-field sub-images and blur samples accepted.
 MAX_LEVELS: int = _core.MAX_LEVELS
 MAX_LAYERS: int = _core.MAX_LAYERS
-#: Most pyramid levels of :func:`lens_blur` (a circle of confusion of radius 362 pixels).
+#: Most pyramid levels of [`lens_blur`][motionblur.image.lens_blur] (a circle of confusion of radius 362 pixels).
 MAX_LENS_LEVELS: int = _core.MAX_LENS_LEVELS
 MAX_SAMPLES: int = _core.MAX_SAMPLES
-#: Most gather taps per pixel of :func:`reconstruction_blur`.
+#: Most gather taps per pixel of [`reconstruction_blur`][motionblur.image.reconstruction_blur].
 MAX_TAPS: int = _core.MAX_TAPS
 
 

@@ -1,4 +1,4 @@
-"""Image error metrics: moved to :mod:`motionblur.evaluation.metrics`. This old path is that module."""
+"""Image error metrics: moved to [`motionblur.evaluation.metrics`][motionblur.evaluation.metrics]. This old path is that module."""
 
 import sys
 

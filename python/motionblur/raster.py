@@ -60,7 +60,7 @@ __all__ = ["Camera", "Draw", "Frame", "look_at", "rasterize"]
 MAX_SIDE: int = _core.MAX_SIDE
 MAX_PIXELS: int = _core.MAX_PIXELS
 #: Transparent fragments of one sample composited exactly with ``blend="exact"`` (see
-#: :func:`rasterize`).
+#: [`rasterize`][motionblur.raster.rasterize]).
 FRAGMENT_CAP: int = _core.FRAGMENT_CAP
 #: The accepted vertical fields of view, radians: ``[MIN_YFOV, pi - MIN_YFOV]``. Below it the
 #: projection's scale ``1 / tan(yfov / 2)`` sends points of the coordinate range past float32
@@ -121,7 +121,7 @@ class Camera:
     ``MIN_YFOV``] (1e-6); ``width``, ``height`` in pixels (1..``MAX_SIDE``, at most ``MAX_PIXELS`` pixels);
     ``znear`` > 0 and ``zfar`` > znear in scene units. The defaults are pyrender's:
     ``znear=0.05`` and ``zfar=inf``, its infinite projection (pyrender's ``zfar=None``), so
-    nothing far away is clipped whatever the scene's units. :meth:`from_pyrender` converts a
+    nothing far away is clipped whatever the scene's units. [`from_pyrender`][motionblur.raster.Camera.from_pyrender] converts a
     pyrender camera.
 
     Attributes: ``pose``, ``yfov``, ``width``, ``height``, ``znear``, ``zfar``, ``aspect``
@@ -182,11 +182,11 @@ class Camera:
 
     @classmethod
     def from_pyrender(cls, camera, pose, width: int, height: int) -> Camera:
-        """The :class:`Camera` of a ``pyrender.PerspectiveCamera`` seen from ``pose`` (4,4)
+        """The [`Camera`][motionblur.raster.Camera] of a ``pyrender.PerspectiveCamera`` seen from ``pose`` (4,4)
         camera-to-world (its node's pose) rendering ``width`` x ``height`` pixels: the same
         projection matrix as pyrender's (``zfar=None`` there is ``zfar=inf`` here). TypeError for
         other pyrender cameras, ValueError when its ``aspectRatio`` is not ``width / height``
-        (:mod:`motionblur.interop.pyrender`)."""
+        ([`motionblur.interop.pyrender`][motionblur.interop.pyrender])."""
         from .interop.pyrender import camera_parameters
 
         return cls(**camera_parameters(camera, pose, width, height))
@@ -376,7 +376,7 @@ class Frame:
         return f"Frame({self.width}x{self.height}, stats={self.stats})"
 
     def _repr_png_(self) -> bytes | None:
-        """The frame as PNG bytes (what :meth:`save_png` writes), so that Jupyter and IPython
+        """The frame as PNG bytes (what [`save_png`][motionblur.raster.Frame.save_png] writes), so that Jupyter and IPython
         show a Frame as its picture. None (IPython then shows the repr) when Pillow is missing
         or a pixel is NaN or inf."""
         import io
@@ -402,10 +402,10 @@ class Frame:
         return np.round(out * 255.0).astype(np.uint8)
 
     def save_png(self, path: str | os.PathLike[str]) -> None:
-        """Writes an 8-bit RGBA PNG (sRGB colour, straight alpha: :meth:`to_srgb8`, which clips
+        """Writes an 8-bit RGBA PNG (sRGB colour, straight alpha: [`to_srgb8`][motionblur.raster.Frame.to_srgb8], which clips
         colour and alpha to [0, 1]). Creates parent folders. PNG only: ``path`` must end in
         ``.png`` (any case), else ValueError (other formats would drop alpha or palettize
-        silently; :meth:`save_exr` keeps every value). ValueError naming ``rgba`` when a pixel
+        silently; [`save_exr`][motionblur.raster.Frame.save_exr] keeps every value). ValueError naming ``rgba`` when a pixel
         is NaN or inf (nothing is written)."""
         path = as_path(path)
         if path.suffix.lower() != ".png":
@@ -422,9 +422,9 @@ class Frame:
     def save_exr(self, path: str | os.PathLike[str]) -> Path:
         """Writes an OpenEXR file: linear float ``R``, ``G``, ``B``, ``A`` (premultiplied), depth
         as ``Z``, ids as ``id`` and velocity as ``velocity.X`` / ``velocity.Y``, the stats in the
-        header (:mod:`motionblur.interop.exr`); every value round-trips bit-exactly through
-        :func:`motionblur.read_image`. Creates parent folders; returns the path. EXR only:
-        ``path`` must end in ``.exr`` (any case), else ValueError (as :meth:`save_png` checks
+        header ([`motionblur.interop.exr`][motionblur.interop.exr]); every value round-trips bit-exactly through
+        [`motionblur.read_image`][motionblur.read_image]. Creates parent folders; returns the path. EXR only:
+        ``path`` must end in ``.exr`` (any case), else ValueError (as [`save_png`][motionblur.raster.Frame.save_png] checks
         ``.png``). Needs the ``OpenEXR`` package (``pip install "motionblur[interop]"``)."""
         from .interop.exr import write_exr
 

@@ -1,4 +1,4 @@
-"""References (Mitsuba 3, pyrender): moved to :mod:`motionblur.evaluation.reference`. This old path is that module."""
+"""References (Mitsuba 3, pyrender): moved to [`motionblur.evaluation.reference`][motionblur.evaluation.reference]. This old path is that module."""
 
 import sys
 

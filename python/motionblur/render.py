@@ -1,15 +1,15 @@
 """``render(scene, method=..., **options) -> Frame`` and the registry of rendering methods.
 
-Every method lives in its own module of :mod:`motionblur.methods` and registers itself with
-:func:`register`::
+Every method lives in its own module of `motionblur.methods` and registers itself with
+[`register`][motionblur.render.register]::
 
     @register("accumulation", sweep=[{"samples": n} for n in (1, 4, 16)], applies=lambda scene: True)
     def accumulation(scene, samples=16, ...) -> Frame: ...
 
-``sweep`` lists the option sets the speed-against-error report (:mod:`motionblur.evaluation`)
+``sweep`` lists the option sets the speed-against-error report (`motionblur.evaluation`)
 runs for the method on every built-in scene where ``applies(scene)`` is true. Importing
-:mod:`motionblur` imports :mod:`motionblur.methods`, which registers every built-in method; this
-module knows none of them. The layers the methods share are in :mod:`motionblur.methods._layers`.
+`motionblur` imports `motionblur.methods`, which registers every built-in method; this
+module knows none of them. The layers the methods share are in `motionblur.methods._layers`.
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ class PoorBlurWarning(UserWarning):
 
 
 class MethodNotApplicableWarning(UserWarning):
-    """:func:`render` was asked for a method whose ``applies(scene)`` is false: the method runs,
+    """[`render`][motionblur.render.render] was asked for a method whose ``applies(scene)`` is false: the method runs,
     but it does nothing useful for this scene (e.g. ``camera_velocity`` with a still camera gives
     the sharp frame)."""
 
@@ -66,14 +66,14 @@ class MethodSpec:
     needs: str = ""
 
 
-#: Every rendering method, by name (filled by ``@register`` when :mod:`motionblur.methods` loads).
+#: Every rendering method, by name (filled by ``@register`` when `motionblur.methods` loads).
 METHODS: dict[str, MethodSpec] = {}
 
 
 def register(name: str, sweep=(), applies: Callable[[Scene], bool] | None = None, needs: str = ""):
     """Decorator: register ``fn(scene, **options) -> Frame`` as method ``name`` (see the module
     docs). ``needs``: what ``applies`` asks of a scene, in words (``"a moving camera"``).
-    :func:`render`'s docstring lists the method's options from ``fn``'s signature and the
+    [`render`][motionblur.render.render]'s docstring lists the method's options from ``fn``'s signature and the
     ``Options:`` paragraph of its docstring."""
     if not isinstance(name, str) or not name:
         raise TypeError("name: expected a non-empty string")
@@ -110,18 +110,18 @@ def render(
 ) -> Frame:
     """Render ``scene`` with the registered ``method`` (``accumulation``, ``motion_volume``, ...).
 
-    Returns a :class:`Frame` of ``scene.camera`` size: ``rgba`` (H,W,4) float32 premultiplied
+    Returns a [`Frame`][motionblur.render.Frame] of ``scene.camera`` size: ``rgba`` (H,W,4) float32 premultiplied
     linear RGBA composited over ``scene.background``, ``depth`` (H,W) float32, ``ids`` (H,W) int32
     (object index in ``scene.objects``, -1 background), ``velocity`` (H,W,2) and ``stats`` with
     ``method``, ``options`` and ``ms`` (wall time of the whole call). Unknown methods and options
     raise ValueError / TypeError; a method that does not apply to the scene (see
-    :func:`methods_for`) warns with :class:`MethodNotApplicableWarning` and runs.
+    [`methods_for`][motionblur.render.methods_for]) warns with [`MethodNotApplicableWarning`][motionblur.render.MethodNotApplicableWarning] and runs.
 
     Depth of field (any method): ``aperture`` is the thin lens's *radius* (not its diameter, not
     an f-number), exactly Mitsuba's ``thinlens`` ``aperture_radius``, and ``focus_distance`` the
     focal plane's distance along the view axis (Mitsuba's ``focus_distance``), both in scene
     units, > 0, both or neither. They blur the method's frame from its depth buffer with
-    :func:`motionblur.image.lens_blur`, a point at depth ``z`` spreading over a circle of
+    [`motionblur.image.lens_blur`][motionblur.image.lens_blur], a point at depth ``z`` spreading over a circle of
     confusion of radius ``H * aperture * |1 - focus_distance / z| / (2 * focus_distance *
     tan(yfov / 2))`` pixels; the reference is ``reference.mitsuba(..., aperture=,
     focus_distance=)`` with the same numbers. ``stats`` then has ``dof`` (the lens).
@@ -173,8 +173,8 @@ def render(
     return frame
 
 
-#: The pilot estimator ``fn(scene, method, options) -> dict`` that :func:`render` calls when a
-#: method did not measure its own error (set by :mod:`motionblur.methods._estimate`).
+#: The pilot estimator ``fn(scene, method, options) -> dict`` that [`render`][motionblur.render.render] calls when a
+#: method did not measure its own error (set by `motionblur.methods._estimate`).
 ESTIMATOR: list[Callable[[Scene, str, dict], dict]] = []
 
 
@@ -231,7 +231,7 @@ def _options_paragraph(doc: str) -> str:
 
 
 def _methods_doc() -> str:
-    """The part of :func:`render`'s docstring listing every registered method, its options with
+    """The part of [`render`][motionblur.render.render]'s docstring listing every registered method, its options with
     their defaults, and what its docstring says of them (units included)."""
     lines = [
         "",

@@ -4,8 +4,8 @@ A real-time loop renders the same objects frame after frame, and several methods
 they set up for the previous frame: the static layer (the objects that do not move, rasterized
 once), the compiled painters of the time-sampling methods, per-mesh constants (normals, box
 corners, centroids), the motion volume's contour tables and the blur shells. All of it lives on
-a :class:`Renderer`; :func:`motionblur.render` uses the process's default one
-(:func:`default_renderer`), and a loop that wants its own (or wants to empty it) makes one.
+a [`Renderer`][motionblur.renderer.Renderer]; `motionblur.render` uses the process's default one
+(`default_renderer`), and a loop that wants its own (or wants to empty it) makes one.
 """
 
 from __future__ import annotations
@@ -69,9 +69,9 @@ class _Kept:
 class Renderer:
     """Renders scenes and keeps, between frames, what the methods can reuse.
 
-    ``Renderer().render(scene, method, **options)`` is :func:`motionblur.render` (same
-    arguments, same Frame) with this renderer's stores; :func:`motionblur.render` itself uses
-    :func:`default_renderer`. Keep one per real-time loop: a frame whose static objects, camera
+    ``Renderer().render(scene, method, **options)`` is `motionblur.render` (same
+    arguments, same Frame) with this renderer's stores; `motionblur.render` itself uses
+    `default_renderer`. Keep one per real-time loop: a frame whose static objects, camera
     and lights equal the previous frame's reuses its static layer; a painter, a contour table
     or a blur shell set up for a mesh is reused while that mesh (the same object) is rendered.
 
@@ -88,7 +88,7 @@ class Renderer:
 
     Every entry is keyed by the identity of the objects it was made from and holds a
     reference (or a weak reference checked on use) to them, so an identity reused after garbage
-    collection never finds another object's entry. :meth:`clear` empties every store (memory
+    collection never finds another object's entry. [`clear`][motionblur.renderer.Renderer.clear] empties every store (memory
     back; the next frame sets everything up again). Renders in several threads may share one
     renderer."""
 
@@ -100,7 +100,7 @@ class Renderer:
         self.mesh_constants: dict = {}
 
     def render(self, scene, method: str = "accumulation", **options):
-        """:func:`motionblur.render` ``(scene, method, **options)`` with this renderer's stores:
+        """`motionblur.render` ``(scene, method, **options)`` with this renderer's stores:
         returns its Frame, raises what it raises."""
         from .render import render
 
@@ -132,7 +132,7 @@ _DEFAULT_LOCK = threading.Lock()
 
 
 def default_renderer() -> Renderer:
-    """The renderer :func:`motionblur.render` uses (made at its first use)."""
+    """The renderer `motionblur.render` uses (made at its first use)."""
     if not _DEFAULT:
         with _DEFAULT_LOCK:
             if not _DEFAULT:
@@ -141,7 +141,7 @@ def default_renderer() -> Renderer:
 
 
 def current_renderer() -> Renderer:
-    """The renderer of the render running in this thread: the one whose :meth:`Renderer.render`
-    called it, else :func:`default_renderer`."""
+    """The renderer of the render running in this thread: the one whose [`Renderer.render`][motionblur.renderer.Renderer.render]
+    called it, else `default_renderer`."""
     r = _CURRENT.get()
     return default_renderer() if r is None else r

@@ -1,12 +1,12 @@
 """Scenes in motion: Motion, Object, DirectionalLight, Scene and the shutter filters.
 
-Time is normalised: the shutter opens at t = 0 and closes at t = 1. A :class:`Motion` is
+Time is normalised: the shutter opens at t = 0 and closes at t = 1. A [`Motion`][motionblur.scene.Motion] is
 keyframes over that interval, either rigid transforms (K,4,4) interpolated with lerp for the
 translation, slerp for the rotation and linear interpolation of a positive uniform scale, or
 vertex positions (K,V,3) of a deforming mesh interpolated linearly. Before the first keyframe
 and after the last one the motion holds still.
 
-A :class:`Scene` holds objects, a camera (whose pose may move with ``camera_motion``), lights
+A [`Scene`][motionblur.scene.Scene] holds objects, a camera (whose pose may move with ``camera_motion``), lights
 and a shutter filter: ``"box"`` (uniform), ``"ramp"`` (weight 2t, rising to the close, the
 motion-volume paper's), ``"triangle"`` (peak at 0.5), ``"gaussian"`` (centred at 0.5, sigma
 1/6, truncated to [0, 1]) or a (M,) array of non-negative weights for M equal strata of the
@@ -73,7 +73,7 @@ class Motion:
     [0, 1], ``transforms`` (K,4,4) float (row-major, acting on column vectors: ``p' = M @ [p, 1]``),
     each a rotation times a positive uniform scale plus a translation. Between keyframes the
     translation is lerped, the rotation slerped (shorter arc) and the scale lerped; before the first
-    and after the last keyframe the transform holds. Use :meth:`deforming` for vertex keyframes.
+    and after the last keyframe the transform holds. Use [`deforming`][motionblur.scene.Motion.deforming] for vertex keyframes.
 
     The keyframes are validated and split into translation, rotation and scale once, by the
     compiled core's keyframe engine (``src/motion/``), which also samples them.
@@ -124,7 +124,7 @@ class Motion:
 
     @property
     def is_deforming(self) -> bool:
-        """True for vertex keyframes (:meth:`deforming`), False for rigid ones."""
+        """True for vertex keyframes ([`deforming`][motionblur.scene.Motion.deforming]), False for rigid ones."""
         return self.vertices is not None
 
     @property
@@ -139,7 +139,7 @@ class Motion:
 
     def transforms_at(self, times) -> np.ndarray:
         """(N,4,4) float64 rigid transforms at the shutter times ``times`` (N,) (identities for
-        deforming motion); each equals :meth:`transform_at` of its time."""
+        deforming motion); each equals [`transform_at`][motionblur.scene.Motion.transform_at] of its time."""
         return self._keys.transforms_at(as_array(times, "times", np.float64, (None,), allow_empty=True))
 
     def vertices_at(self, t: float) -> np.ndarray:
@@ -173,10 +173,10 @@ def _as_scene_mesh(mesh) -> Mesh:
 class Object:
     """A mesh in the scene.
 
-    ``mesh``: :class:`Mesh`, a trimesh-like object or a ``(vertices, faces)`` tuple, in object
+    ``mesh``: [`Mesh`][motionblur.scene.Mesh], a trimesh-like object or a ``(vertices, faces)`` tuple, in object
     space. ``color``: linear straight RGB(A), one (3,)/(4,) or per vertex (V,3)/(V,4), RGB >= 0 and
     alpha in [0, 1]. ``shading``: ``"flat"`` (unlit colour) or ``"lambert"`` (lights + ambient).
-    ``motion``: None (static), a rigid :class:`Motion` (placing the mesh's vertices in the world)
+    ``motion``: None (static), a rigid [`Motion`][motionblur.scene.Motion] (placing the mesh's vertices in the world)
     or a deforming one (world positions, V must match). ``name``: a label.
     """
 
@@ -274,9 +274,9 @@ def _check_shutter(shutter):
 class Scene:
     """Objects, a camera, lights and a shutter.
 
-    ``objects``: sequence of :class:`Object`. ``camera``: a :class:`motionblur.Camera` (its pose
+    ``objects``: sequence of [`Object`][motionblur.scene.Object]. ``camera``: a [`motionblur.Camera`][motionblur.Camera] (its pose
     is the pose at every time unless ``camera_motion`` is given). ``lights``: sequence of
-    :class:`DirectionalLight`. ``camera_motion``: None or a rigid :class:`Motion` without scale
+    [`DirectionalLight`][motionblur.scene.DirectionalLight]. ``camera_motion``: None or a rigid [`Motion`][motionblur.scene.Motion] without scale
     that moves the camera as an object's motion moves its mesh: ``pose(t) = M(t) @ camera.pose``.
     ``shutter``: a filter name (``box``, ``ramp``, ``triangle``, ``gaussian``) or (M,) weights
     for M equal strata of [0, 1]. ``background``: straight RGBA (4,) behind everything (the
@@ -356,14 +356,14 @@ class Scene:
 
     def camera_poses_at(self, times) -> np.ndarray:
         """(N,4,4) camera-to-world poses at the shutter times ``times`` (N,), each equal to
-        :meth:`camera_pose_at` of its time."""
+        [`camera_pose_at`][motionblur.scene.Scene.camera_pose_at] of its time."""
         times = as_array(times, "times", np.float64, (None,))
         if self.camera_motion is None:
             return np.repeat(np.array(self.camera.pose)[None], len(times), axis=0)
         return self.camera_motion.transforms_at(times) @ self.camera.pose
 
     def camera_at(self, t: float) -> Camera:
-        """The :class:`Camera` at shutter time ``t`` (same intrinsics, moved pose)."""
+        """The [`Camera`][motionblur.scene.Camera] at shutter time ``t`` (same intrinsics, moved pose)."""
         if self.camera_motion is None:
             return self.camera
         c = self.camera
@@ -408,8 +408,8 @@ class Scene:
     ) -> Scene:
         """A still scene from a ``trimesh.Scene`` (or ``Trimesh``): every mesh placed by the graph,
         with its colours, named after its node; ``camera`` None: the scene's own, else one framing
-        it (``width`` x ``height``). ``options`` go to :class:`Scene`. Needs ``motionblur[interop]``;
-        details in :mod:`motionblur.interop.trimesh`."""
+        it (``width`` x ``height``). ``options`` go to [`Scene`][motionblur.scene.Scene]. Needs ``motionblur[interop]``;
+        details in [`motionblur.interop.trimesh`][motionblur.interop.trimesh]."""
         from .interop.trimesh import read_trimesh
 
         parts, cam = read_trimesh(scene, camera, width=width, height=height)
@@ -434,8 +434,8 @@ class Scene:
         by the node hierarchy, moved by one ``animation``'s TRS keyframes, morph targets and skins;
         the shutter [0, 1] spans ``shutter = (start, end)`` seconds of it (default: all of it).
         ``camera`` None: the file's first camera, else one framing the scene; ``resample`` N adds
-        N + 1 evenly spaced keyframes. ``options`` go to :class:`Scene`. Needs
-        ``motionblur[interop]``; details and limits in :mod:`motionblur.interop.gltf`."""
+        N + 1 evenly spaced keyframes. ``options`` go to [`Scene`][motionblur.scene.Scene]. Needs
+        ``motionblur[interop]``; details and limits in [`motionblur.interop.gltf`][motionblur.interop.gltf]."""
         from .interop.gltf import read_gltf
 
         parts, cam, cam_keys = read_gltf(

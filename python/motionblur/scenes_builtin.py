@@ -1,7 +1,7 @@
 """Built-in scenes for demos, tests and the speed-against-error report.
 
 ``SCENES[name](width=..., height=...) -> Scene``. Each scene is a function decorated with
-:func:`builtin_scene`; other modules add scenes by adding decorated functions at the end of this
+[`builtin_scene`][motionblur.scenes_builtin.builtin_scene]; other modules add scenes by adding decorated functions at the end of this
 file. Shading is chosen so that the Mitsuba reference sees the same light as the rasterizer:
 scenes with static backdrops are flat (no shadows to disagree about), lit scenes have no
 surface another object could shadow.

@@ -1,15 +1,15 @@
 """Scenes built from real scanned and modelled meshes, and from procedural concave ones.
 
 ``REAL_SCENES[name](width=..., height=...) -> Scene``, the same signature as
-:data:`motionblur.SCENES`; the speed-against-error report runs both sets. Every scene is one
+`motionblur.SCENES`; the speed-against-error report runs both sets. Every scene is one
 mesh over a static floor, lambert-lit by one directional light (ambient 0, so that Mitsuba sees
 the same light; Mitsuba also draws the mover's shadow on the floor, which the rasterizer does
 not: the report's second reference, each method's own limit, leaves that difference out).
 
-Meshes (each normalised to a largest extent of :data:`SIZE` scene units, its base on the floor):
+Meshes (each normalised to a largest extent of `SIZE` scene units, its base on the floor):
 
 - ``bunny``: the Stanford bunny scan (Stanford 3D Scanning Repository; the 99,785-face file
-  that pymeshfix 0.18's wheel carries, with the scan's holes) decimated to :data:`BUNNY_FACES`
+  that pymeshfix 0.18's wheel carries, with the scan's holes) decimated to `BUNNY_FACES`
   faces (5,998) by quadric decimation (fast-simplification 0.2), shipped with the package as
   ``motionblur/data/bunny.ply``;
 - ``ant``: the modelled ant of the PLY format's examples (912 faces, thin legs: the concave
@@ -110,8 +110,8 @@ def _normalised(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 @cache
 def real_mesh(name: str) -> tuple[np.ndarray, np.ndarray]:
-    """``(vertices (V,3) float64, faces (F,3) int64)`` of mesh ``name`` (:data:`MESHES`), in scene
-    units, normalised (largest extent :data:`SIZE`, base at y = 0), read-only arrays."""
+    """``(vertices (V,3) float64, faces (F,3) int64)`` of mesh ``name`` (`MESHES`), in scene
+    units, normalised (largest extent `SIZE`, base at y = 0), read-only arrays."""
     if name == "bunny":
         v, f = shipped_mesh("bunny")  # decimated to BUNNY_FACES already
         v = (

@@ -1,6 +1,6 @@
 """Hand-held camera shake and the blur kernels it (or any motion) makes.
 
-:func:`camera_shake` draws a seeded 6-DoF hand-held trajectory over an exposure, in the spirit of
+[`camera_shake`][motionblur.shake.camera_shake] draws a seeded 6-DoF hand-held trajectory over an exposure, in the spirit of
 Boracchi and Foi (2012, "Modeling the performance of image restoration from motion blur"): the
 camera's angular and linear velocities are random walks pulled back towards rest (an
 Ornstein-Uhlenbeck process with a weak spring on the pose), with rare impulsive jerks, stepped at
@@ -8,7 +8,7 @@ Ornstein-Uhlenbeck process with a weak spring on the pose), with rare impulsive 
 translation matters near the camera. A longer exposure with the same seed extends the same walk:
 the trajectory of a short exposure is the start of a longer one's.
 
-:func:`blur_kernels` gives the point-spread function of a scene at chosen pixels: the screen path,
+[`blur_kernels`][motionblur.shake.blur_kernels] gives the point-spread function of a scene at chosen pixels: the screen path,
 weighted by the shutter, of the surface seen at each pixel at the scene's reference time (the path
 the exact time integral sweeps that surface point along), splatted into a small image.
 """
@@ -28,7 +28,7 @@ __all__ = ["camera_shake", "blur_kernels", "BlurKernels", "MAX_EXPOSURE", "STEP"
 STEP = 1e-3
 """Seconds between the random walk's steps."""
 MAX_EXPOSURE = 10.0
-"""Longest exposure :func:`camera_shake` accepts, in seconds."""
+"""Longest exposure [`camera_shake`][motionblur.shake.camera_shake] accepts, in seconds."""
 _DAMPING = 8.0  # 1/s: velocities forget their past over about 1/8 s (hand tremor is 4-12 Hz)
 _SPRING = 2.0  # 1/s^2: a weak pull of the pose back to where it started, so long walks stay bounded
 _JERK_RATE = 2.0  # impulsive jerks per second
@@ -80,10 +80,10 @@ def camera_shake(
     of yaw and pitch at intensity 1 (roll gets half); ``translation``: RMS speed in scene units per
     second at intensity 1. ``seed``: the same seed, pose and parameters give the same trajectory,
     and a longer ``exposure`` continues the same walk. ``keys`` >= 2 keyframes, evenly spaced over
-    the shutter (the motion between them is interpolated as any :class:`Motion`'s); the default,
+    the shutter (the motion between them is interpolated as any [`Motion`][motionblur.shake.Motion]'s); the default,
     one per step of the walk up to 257, keeps every wiggle the walk has.
 
-    Returns a rigid :class:`Motion` whose ``transform_at(t) @ pose`` is the shaken pose at t.
+    Returns a rigid [`Motion`][motionblur.shake.Motion] whose ``transform_at(t) @ pose`` is the shaken pose at t.
     """
     pose = as_array(pose, "pose", np.float64, (4, 4))
     exposure = as_float(exposure, "exposure")
@@ -117,7 +117,7 @@ def camera_shake(
 
 @dataclass(frozen=True)
 class BlurKernels:
-    """Point-spread functions at N pixels (:func:`blur_kernels`).
+    """Point-spread functions at N pixels ([`blur_kernels`][motionblur.shake.blur_kernels]).
 
     ``points`` (N,2) float64 pixel positions (x right, y down, pixel centres at +0.5);
     ``kernels`` (N,2R+1,2R+1) float32, each the shutter-weighted path splatted bilinearly with
@@ -182,7 +182,7 @@ def blur_kernels(
     ``points``: (N,2) float pixel positions (x right, y down), or None for a ``grid`` (gx, gy) of
     evenly spread pixel centres. ``radius`` R in pixels (default: large enough to hold every
     path). Raises ValueError for a deforming object seen at a point (its surface points have no
-    rigid path). Returns :class:`BlurKernels`.
+    rigid path). Returns [`BlurKernels`][motionblur.shake.BlurKernels].
     """
     from .ground_truth import surface_paths
     from .methods._accumulate import sample_times

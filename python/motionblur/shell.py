@@ -2,7 +2,7 @@
 
 A blur shell is a set of quad strips trailing a moving (possibly deforming) mesh: at every
 *update* each polygon finds whether one of its edges is on the *silhouette of motion* and keeps
-a ring of the edge's recent positions; :meth:`BlurShell.build` joins those positions into strips
+a ring of the edge's recent positions; [`BlurShell.build`][motionblur.shell.BlurShell.build] joins those positions into strips
 attached to the current mesh, their alpha falling towards the past. Drawn with culling off and
 transparency, the shell looks like motion blur (or speed lines, with a colour of its own).
 
@@ -11,7 +11,7 @@ Rules (the paper leaves some open; each choice is stated here and tested):
 - **Facing.** A vertex that does not move (``p == p_prev`` in float32) is neutral (0); a
   moving vertex is back (-1) when ``n . (p - p_prev) < 0`` and front (+1) otherwise, so one
   moving in its tangent plane (``n . d == 0``) is front, the ``>= 0`` convention of
-  :func:`motionblur.contour_edges` (a symmetric mesh moving along an axis keeps its whole
+  [`motionblur.contour_edges`][motionblur.contour_edges] (a symmetric mesh moving along an axis keeps its whole
   silhouette). ``n`` is the given normal, or the unnormalised sum of the raw normals
   ``(b - a) x (c - a)`` of the faces around the vertex, added in face order. A neutral vertex
   is neither front nor back. Everything is evaluated in float32 (positions rounded to float32 first, fixed operation
@@ -91,19 +91,18 @@ def _rows(value, name: str, n: int | None = None) -> np.ndarray:
 
 
 class ShellMesh:
-    """The shell built by :meth:`BlurShell.build`.
+    """The shell built by [`BlurShell.build`][motionblur.shell.BlurShell.build].
 
-    Attributes
-    ----------
-    vertices : (N,3) float64, scene units. Each strip's base pair is the polygon's edge on the
-        current mesh: exactly the positions given to ``build``, or else the float32 snapshot of
-        the last update; older pairs come from float32 snapshots.
-    faces : (M,3) int64, two triangles per quad; draw with culling off.
-    rgba : (N,4) float32 straight (non-premultiplied) linear colour and alpha in [0, 1].
-    normals : (N,3) float32 unit normals (the mesh's vertex normals when the pair was recorded:
-        the given ones, or the float32 area-weighted ones of that update's positions).
-    face : (N,) int64, the mesh polygon whose strip each vertex belongs to.
-    step : (N,) int32, the pair index ``j`` along the strip (0 = base on the current mesh).
+    Attributes:
+        vertices: (N,3) float64, scene units. Each strip's base pair is the polygon's edge on the
+            current mesh: exactly the positions given to ``build``, or else the float32 snapshot of
+            the last update; older pairs come from float32 snapshots.
+        faces: (M,3) int64, two triangles per quad; draw with culling off.
+        rgba: (N,4) float32 straight (non-premultiplied) linear colour and alpha in [0, 1].
+        normals: (N,3) float32 unit normals (the mesh's vertex normals when the pair was recorded:
+            the given ones, or the float32 area-weighted ones of that update's positions).
+        face: (N,) int64, the mesh polygon whose strip each vertex belongs to.
+        step: (N,) int32, the pair index ``j`` along the strip (0 = base on the current mesh).
 
     Strips are stored one after the other in increasing polygon order; pair ``j`` of a strip is
     at rows ``2j`` (edge start) and ``2j + 1`` (edge end) from the strip's first row.
@@ -154,8 +153,8 @@ class ShellMesh:
         )
 
     def draw(self, object_id: int = 0):
-        """A :class:`motionblur.Draw` with culling off (the paper draws blur polygons unculled).
-        Raises ValueError for an empty shell (check :attr:`is_empty`)."""
+        """A [`motionblur.Draw`][motionblur.Draw] with culling off (the paper draws blur polygons unculled).
+        Raises ValueError for an empty shell (check `is_empty`)."""
         from .raster import Draw
 
         if self.is_empty:
@@ -168,22 +167,21 @@ class ShellMesh:
 class BlurShell:
     """The stateful blur shell of one mesh (Jones and Keyser, section 3); rules in the module docs.
 
-    Parameters
-    ----------
-    faces : (F,3) int, counter-clockwise front; or a mesh object with ``.vertices`` and
-        ``.faces`` (then its vertex count is used).
-    subdivisions : int in 1..``_core.MAX_SUBDIVISIONS``: ring length, and pairs per full strip
-        minus one.
-    hysteresis : int in 0..``_core.MAX_HYSTERESIS``: updates a polygon keeps its full strip
-        after losing its edge.
-    initial_alpha : float in (0, 1]: alpha of the base pair.
-    mask : optional (F,) bool: False polygons never get a strip (selective blurring).
-    color : optional RGB, (3,) for every strip (speed lines) or (V,3) per mesh vertex (e.g.
-        the mesh's own colours); default white. Linear, >= 0.
-    n_vertices : optional int V; default: the length of the first ``update``'s vertices.
+    Args:
+        faces: (F,3) int, counter-clockwise front; or a mesh object with ``.vertices`` and
+            ``.faces`` (then its vertex count is used).
+        subdivisions: int in 1..``_core.MAX_SUBDIVISIONS``: ring length, and pairs per full strip
+            minus one.
+        hysteresis: int in 0..``_core.MAX_HYSTERESIS``: updates a polygon keeps its full strip
+            after losing its edge.
+        initial_alpha: float in (0, 1]: alpha of the base pair.
+        mask: optional (F,) bool: False polygons never get a strip (selective blurring).
+        color: optional RGB, (3,) for every strip (speed lines) or (V,3) per mesh vertex (e.g.
+            the mesh's own colours); default white. Linear, >= 0.
+        n_vertices: optional int V; default: the length of the first ``update``'s vertices.
 
     ``update(vertices, normals=None)`` feeds world positions (V,3) at one update;
-    ``build(vertices=None, normals=None)`` returns the :class:`ShellMesh`; ``reset()`` forgets
+    ``build(vertices=None, normals=None)`` returns the [`ShellMesh`][motionblur.shell.ShellMesh]; ``reset()`` forgets
     every update. The vertex count is fixed: an update with another count raises ValueError.
     The heavy work runs in Rust with the GIL released; results do not depend on thread count.
 
@@ -281,7 +279,7 @@ class BlurShell:
             self._core.update(v, n)
 
     def build(self, vertices=None, normals=None) -> ShellMesh:
-        """The shell after the last update, as a :class:`ShellMesh` (empty before any update).
+        """The shell after the last update, as a [`ShellMesh`][motionblur.shell.ShellMesh] (empty before any update).
 
         ``vertices`` / ``normals`` (V,3): the current mesh when it moved since the last update
         (a frame between updates); default: those of the last update. The base pairs take
@@ -380,7 +378,7 @@ class MotionSilhouette:
 
 
 def motion_silhouette(mesh, previous_vertices, normals=None) -> MotionSilhouette:
-    """The silhouette of motion (section 3.2) of ``mesh`` (a :class:`motionblur.Mesh` or any
+    """The silhouette of motion (section 3.2) of ``mesh`` (a [`motionblur.Mesh`][motionblur.Mesh] or any
     object with ``.vertices`` (V,3) and ``.faces`` (F,3): its current positions) moving from
     ``previous_vertices`` (V,3) float. ``normals`` (V,3): vertex normals for the facing test
     (default: the unnormalised sums of the face normals around each vertex). Rules in the module
@@ -434,7 +432,7 @@ def shell_over_shutter(
     ``subdivisions + 1`` evenly spaced times from ``times[0]`` to ``times[-1]`` (linear between
     keyframes); the shell is updated at all but the last and built at the last (the frame), so
     its strips span the whole shutter, with alpha ``initial_alpha`` at the mesh at ``times[-1]``
-    falling to 0 at its position at ``times[0]``. Other options as :class:`BlurShell`."""
+    falling to 0 at its position at ``times[0]``. Other options as [`BlurShell`][motionblur.shell.BlurShell]."""
     shell = BlurShell(faces, subdivisions, hysteresis, initial_alpha, mask, color)
     _, ps = sample_positions(times, positions, shell.subdivisions + 1)
     for p in ps[:-1]:

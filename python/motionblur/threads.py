@@ -1,16 +1,16 @@
-"""The threads the parallel kernels run on (README, "Sharing").
+"""The threads the parallel kernels run on (docs: guide/conventions.md, "Sharing").
 
 Every parallel kernel (rendering, contour edges, motion volumes, blur shells, image blurs, even
-building a :class:`~motionblur.Mesh`) runs in one thread pool of the process, built on first use
+building a [`Mesh`][motionblur.Mesh]) runs in one thread pool of the process, built on first use
 and built afresh in a child process made by ``fork`` (a ``multiprocessing`` fork pool, a
 PyTorch ``DataLoader`` worker, ``os.fork()``), so a child renders in parallel too and gives the
 parent's bits.
 
 The number of threads, in order:
 
-1. :func:`set_num_threads` (in this process; a forked child keeps its parent's count);
+1. [`set_num_threads`][motionblur.threads.set_num_threads] (in this process; a forked child keeps its parent's count);
 2. the environment variable ``MOTIONBLUR_NUM_THREADS``, read once, at the first parallel call
-   or :func:`get_num_threads` of the process (a value that is not a whole number in
+   or [`get_num_threads`][motionblur.threads.get_num_threads] of the process (a value that is not a whole number in
    1 to ``MAX_THREADS`` raises ``ValueError`` naming it there);
 3. ``RAYON_NUM_THREADS``, as rayon reads it;
 4. the cores this process may use.
@@ -27,7 +27,7 @@ from . import _core
 
 __all__ = ["get_num_threads", "set_num_threads", "MAX_THREADS", "NUM_THREADS_ENV"]
 
-#: The most threads :func:`set_num_threads` accepts.
+#: The most threads [`set_num_threads`][motionblur.threads.set_num_threads] accepts.
 MAX_THREADS: int = _core.MAX_THREADS
 #: The environment variable read for the thread count at first use.
 NUM_THREADS_ENV: str = "MOTIONBLUR_NUM_THREADS"
@@ -37,12 +37,12 @@ def get_num_threads() -> int:
     """The number of threads the parallel kernels of this process run on.
 
     Returns:
-        int: the count set by :func:`set_num_threads`, else ``MOTIONBLUR_NUM_THREADS`` (read by
+        int: the count set by [`set_num_threads`][motionblur.threads.set_num_threads], else ``MOTIONBLUR_NUM_THREADS`` (read by
         the first call of the process), else ``RAYON_NUM_THREADS``, else the usable cores.
 
     Raises:
         ValueError: ``MOTIONBLUR_NUM_THREADS`` is set to anything but a whole number in
-            1 to ``MAX_THREADS`` (and :func:`set_num_threads` was not called).
+            1 to ``MAX_THREADS`` (and [`set_num_threads`][motionblur.threads.set_num_threads] was not called).
     """
     return int(_core.get_num_threads())
 

@@ -1,12 +1,12 @@
 """Evaluation: how close each method comes to a physically correct render, and how fast.
 
-- :mod:`.reference`: the same scene rendered by Mitsuba 3 (time-sampled, the ground truth) and
+- [`reference`][motionblur.evaluation.reference]: the same scene rendered by Mitsuba 3 (time-sampled, the ground truth) and
   by pyrender (the OpenGL peer);
-- :mod:`.metrics`: image errors (RMSE, PSNR, FLIP, coverage);
-- :mod:`.bench`: the speed-against-error report (``python -m motionblur bench``), built from
-  :mod:`.sweep` (rendering and timing), :mod:`.compare` (Pareto front, equal error, equal time)
-  and :mod:`.report` (tables, csv, plots);
-- :mod:`.demo`: its small version (``python -m motionblur demo``).
+- [`metrics`][motionblur.evaluation.metrics]: image errors (RMSE, PSNR, FLIP, coverage);
+- [`bench`][motionblur.evaluation.bench]: the speed-against-error report (``python -m motionblur bench``), built from
+  `sweep` (rendering and timing), `compare` (Pareto front, equal error, equal time)
+  and `report` (tables, csv, plots);
+- `demo`: its small version (``python -m motionblur demo``).
 """
 
 from .._namespace import tidy  # noqa: E402  (dir() lists the API only; see motionblur._namespace)

@@ -1,35 +1,35 @@
 """The speed-against-error report: every registered method on every built-in and real-mesh scene.
 
-Scenes: :data:`motionblur.SCENES` (procedural, mostly convex) and
-:data:`motionblur.scenes_real.REAL_SCENES` (the bunny scan, the modelled ant, a torus and a
+Scenes: `motionblur.SCENES` (procedural, mostly convex) and
+`motionblur.scenes_real.REAL_SCENES` (the bunny scan, the modelled ant, a torus and a
 torus knot; translating, turning, coming toward the camera, one deforming). For each scene and
-each method of :data:`motionblur.METHODS` whose ``applies(scene)`` is true, every option set of
+each method of `motionblur.METHODS` whose ``applies(scene)`` is true, every option set of
 the method's ``sweep`` is rendered and timed (best of ``repeat`` after a warm-up), and measured
 against **two references**:
 
 - Mitsuba 3, time-sampled (K shutter times x spp): the physical ground truth. It casts shadows
   the rasterizer does not draw, so on the real-mesh scenes (a mover over a lit floor) every
   method carries that difference too;
-- the method's own limit: the exact time integral (:func:`motionblur.exact`, the analytic method
+- the method's own limit: the exact time integral ([`motionblur.exact`][motionblur.exact], the analytic method
   at a tight setting), or accumulation with ``limit_samples`` samples when given, on our
   rasterizer, at the same ``aa``: what a method would give with unlimited time, so the RMSE
   against it is the blur method's own error, without the renderers' differences.
 
 References are cached under ``<out>/references/`` keyed by a hash of the scene and the
-reference's settings (:mod:`.cache`). ``auto`` (the planner) gets one row per scene at its
+reference's settings ([`cache`][motionblur.evaluation.cache]). ``auto`` (the planner) gets one row per scene at its
 default tolerance, and where it lands against the Pareto front (time at the error it reaches) is
 reported. Outputs in ``<out>``:
 ``results.csv``, ``results.md`` (tables per scene, both references, the comparisons below),
 ``pareto_<scene>.png`` (error against time for both references, the front annotated),
 ``sheet_<scene>.png`` (labelled: the references and each method's most accurate option set
-within a matched time, ``auto``'s) and ``html/index.html`` (a static page, :mod:`.html`).
+within a matched time, ``auto``'s) and ``html/index.html`` (a static page, [`html`][motionblur.evaluation.bench.html]).
 
 Comparisons, measured in the same run: motion_volume against accumulation at equal error (and
 re-timed in pairs), every method against accumulation at equal time, and accumulation with the
-static layer drawn once against 16-pose pyrender accumulation (see :mod:`.sweep`).
+static layer drawn once against 16-pose pyrender accumulation (see `sweep`).
 
 With a ``dask.distributed`` client (``client=``, or ``--dask local|ADDRESS`` on the command line)
-the references and the errors are Dask tasks; the timings stay undisturbed (:mod:`.cluster`).
+the references and the errors are Dask tasks; the timings stay undisturbed ([`cluster`][motionblur.evaluation.cluster]).
 """
 
 from __future__ import annotations
@@ -121,7 +121,7 @@ def _row(name, method, opts, ms, err, plan=None) -> dict:
 
 @dataclass
 class BenchOptions:
-    """The settings of a report run (:func:`run` takes them as keywords too).
+    """The settings of a report run ([`run`][motionblur.evaluation.bench.run] takes them as keywords too).
 
     ``width``, ``height``: pixels of the named scenes (a Scene passed in keeps its camera's);
     ``times`` (K) and ``spp``: Mitsuba's shutter times and samples per pixel per time; ``repeat``:
@@ -130,7 +130,7 @@ class BenchOptions:
     compute FLIP; ``pyrender_peer``: time 16-pose pyrender accumulation on the built-in scenes;
     ``save_images``: every image under ``images/``; ``aa``: spatial samples per pixel per axis
     given to every method that takes ``aa`` (and to the own-limit reference); ``limit_samples``:
-    None (the own limit is :func:`motionblur.exact`) or N for accumulation with N samples;
+    None (the own limit is [`motionblur.exact`][motionblur.exact]) or N for accumulation with N samples;
     ``auto``: add an ``auto`` row per scene; ``write_html``: the static page under ``html/``;
     ``seed``: Mitsuba's sampler seed."""
 
@@ -163,7 +163,7 @@ def _options(options: BenchOptions | None, keywords: dict) -> BenchOptions:
 
 
 def _scene_refs(scenes, width: int, height: int) -> dict[str, object]:
-    """``{name: SceneRef or Scene}`` of ``scenes``: names from :data:`ALL_SCENES`, Scenes (named
+    """``{name: SceneRef or Scene}`` of ``scenes``: names from `ALL_SCENES`, Scenes (named
     ``scene_<i>`` in the order given) or a ``{name: Scene or known name}`` dict."""
     if scenes is None:
         return {n: SceneRef(n, width, height) for n in ALL_SCENES}
@@ -202,7 +202,7 @@ def _needed(opts: BenchOptions, refs_of: dict) -> list[str]:
 
 
 class _Run:
-    """One report run's state, filled by its numbered steps (:func:`run`)."""
+    """One report run's state, filled by its numbered steps ([`run`][motionblur.evaluation.bench.run])."""
 
     def __init__(self, out: Path, refs_of: dict, opts: BenchOptions, log, client):
         self.out, self.refs_of, self.opts, self.log = out, refs_of, opts, log
@@ -325,12 +325,12 @@ def run(
 ) -> dict:
     """Run the report and write it to ``out``; returns ``{"rows", "comparisons", "auto", "paths", ...}``.
 
-    ``scenes``: what to measure (default every scene of :data:`ALL_SCENES`): names from it, your
-    own :class:`motionblur.Scene` objects (``run(scenes=[my_scene])``, named ``scene_0``,
+    ``scenes``: what to measure (default every scene of `ALL_SCENES`): names from it, your
+    own [`motionblur.Scene`][motionblur.Scene] objects (``run(scenes=[my_scene])``, named ``scene_0``,
     ``scene_1`` ... in the report and rendered at their own camera's size), or a ``{name: Scene
-    or known name}`` dict. ``options``: a :class:`BenchOptions`; its fields may also be given as
+    or known name}`` dict. ``options``: a [`BenchOptions`][motionblur.evaluation.bench.BenchOptions]; its fields may also be given as
     keywords (``width=160, times=32, methods=[...]``), which replace the ``options``' values.
-    ``client``: a ``dask.distributed.Client`` (see :mod:`.cluster`); ``log``: where progress lines go.
+    ``client``: a ``dask.distributed.Client`` (see [`cluster`][motionblur.evaluation.cluster]); ``log``: where progress lines go.
 
     The run's steps: 1. every reference (Mitsuba and the own limit); 2. per scene, every method's
     option sets timed and measured; 3. ``auto`` per scene against the Pareto front; 4. the files.

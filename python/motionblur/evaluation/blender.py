@@ -1,4 +1,4 @@
-"""The same :class:`~motionblur.Scene` rendered by Blender Cycles (CPU) with its motion blur.
+"""The same [`Scene`][motionblur.Scene] rendered by Blender Cycles (CPU) with its motion blur.
 
 ``blender(scene, samples=S, seed=0)`` builds a fresh Blender scene through ``bpy`` (Blender as a
 Python module, the ``blender`` extra) and renders one frame whose shutter spans the scene's
@@ -42,7 +42,7 @@ datasets get their motion-blurred ground truth. The conversion:
   renormalises it per sample (as the rasterizer), its triangles are the same, but its pixel is
   sampled at random positions and times (noise) where the exact method integrates.
 
-The result is a :class:`~motionblur.Frame` (``rgba`` premultiplied linear, over the scene
+The result is a [`Frame`][motionblur.Frame] (``rgba`` premultiplied linear, over the scene
 background) whose ``stats`` hold ``samples``, ``seed``, ``motion_steps``, ``ms`` (the whole
 call: scene build, sync, render, read-back) and ``ms_render`` (``bpy.ops.render.render`` alone).
 """
@@ -115,7 +115,7 @@ def _bpy():
 def motion_steps(scene: Scene) -> int:
     """The ``cycles.motion_steps`` s of the conversion: 1 (3 transform samples, exact for motions
     of two keyframes, which extend linearly past the shutter) when no motion of the scene has a
-    keyframe inside (0, 1), else :data:`MAX_MOTION_STEPS` (65 samples: Cycles interpolates
+    keyframe inside (0, 1), else `MAX_MOTION_STEPS` (65 samples: Cycles interpolates
     between them, so a keyframe inside the shutter is rounded within 1/64 of it).
     Raises ValueError for deforming motion (Cycles would need shape keys)."""
     motions = [(f"objects[{k}]", o.motion) for k, o in enumerate(scene.objects) if o.is_moving]
@@ -426,7 +426,7 @@ def blender(
     ``ms_render``. Nothing casts shadows and light does not bounce (see the module docstring),
     so flat and lambert shading match the rasterizer's. Raises ValueError for a shutter other
     than ``box`` and for deforming motion;
-    :class:`~motionblur.MissingDependencyError` when ``bpy`` is not installed (the ``blender``
+    [`MissingDependencyError`][motionblur.MissingDependencyError] when ``bpy`` is not installed (the ``blender``
     extra, Python 3.11 only).
     """
     _check(scene)

@@ -2,11 +2,11 @@
 
 A full report renders dozens of references (Mitsuba at K = 256 shutter times each, and each
 method's own limit, accumulation with 1024 samples); a rerun, or another worker of a Dask
-cluster sharing the folder, must render none of them twice. :func:`scene_hash` digests
-everything a render of a :class:`~motionblur.Scene` depends on (every object's vertices, faces,
+cluster sharing the folder, must render none of them twice. [`scene_hash`][motionblur.evaluation.cache.scene_hash] digests
+everything a render of a [`Scene`][motionblur.Scene] depends on (every object's vertices, faces,
 colours, shading and motion keyframes, the camera and its motion, lights, ambient, shutter,
 background, reference time), so two scenes with equal hashes render equal images and a scene
-changed in any of these gets a new key; :func:`cached` reads or renders and writes one
+changed in any of these gets a new key; [`cached`][motionblur.evaluation.cache.cached] reads or renders and writes one
 ``(H,W,4)`` float32 image under ``<folder>/<label>_<hash>.npy``. Writes go to a temporary
 file renamed into place, so concurrent workers never read half a file.
 """

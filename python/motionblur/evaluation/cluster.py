@@ -1,23 +1,23 @@
 """Where the report's work runs: in this process, or as Dask tasks on a ``dask.distributed`` cluster.
 
-The report does three kinds of work (:mod:`.bench` drives them, scene by scene):
+The report does three kinds of work ([`bench`][motionblur.evaluation.bench] drives them, scene by scene):
 
-- **references** (:func:`reference_task`): Mitsuba at K shutter times, and each method's own
+- **references** ([`reference_task`][motionblur.evaluation.cluster.reference_task]): Mitsuba at K shutter times, and each method's own
   N -> infinity limit (accumulation with 1024 samples on our rasterizer); the slow part. Each is
-  cached on disk keyed by a hash of the scene and the reference's settings (:mod:`.cache`), so a
+  cached on disk keyed by a hash of the scene and the reference's settings ([`cache`][motionblur.evaluation.cache]), so a
   rerun renders nothing twice, and workers sharing the folder share the cache;
-- **timed renders** (:func:`timed_task`): a method's frame, timed (best of ``repeat`` after one
+- **timed renders** ([`timed_task`][motionblur.evaluation.cluster.timed_task]): a method's frame, timed (best of ``repeat`` after one
   warm-up), returning the wall time, the image and the frame's plan (``auto``);
-- **errors** (:func:`error_task`): RMSE, PSNR, FLIP and coverage against both references.
+- **errors** ([`error_task`][motionblur.evaluation.cluster.error_task]): RMSE, PSNR, FLIP and coverage against both references.
 
-:class:`Serial` runs them in this process, one after another. :class:`Dask` runs references and
+[`Serial`][motionblur.evaluation.cluster.Serial] runs them in this process, one after another. [`Dask`][motionblur.evaluation.cluster.Dask] runs references and
 errors as Dask tasks spread over the cluster's workers (``client.map``), and keeps timings
 undisturbed: every timed render is a task pinned to one worker (the first, by address,
 ``workers=[w], allow_other_workers=False``) and submitted only after the previous one finished,
 and only while no other task of the report runs (the references of the whole run are finished
 before the first timing; a scene's errors are computed after its timings and waited for before
 the next scene's timings start). So one render at a time runs anywhere on the cluster while a
-timing is taken, as in the serial run. :func:`client_for` makes the client of ``--dask local``
+timing is taken, as in the serial run. [`client_for`][motionblur.evaluation.cluster.client_for] makes the client of ``--dask local``
 (a ``LocalCluster`` of processes, one thread each) or of a scheduler's address.
 """
 
@@ -81,18 +81,18 @@ def _scene(s) -> Scene:
 
 
 def call_task(fn: Callable, scene, *args):
-    """``fn(scene, *args)`` with a :class:`SceneRef` built first (for timed comparisons)."""
+    """``fn(scene, *args)`` with a [`SceneRef`][motionblur.evaluation.cluster.SceneRef] built first (for timed comparisons)."""
     return fn(_scene(scene), *args)
 
 
 def reference_task(scene: Scene, kind: str, settings: dict, folder: str) -> np.ndarray:
     """(H,W,4) float32 reference of ``scene``, from the cache ``folder`` or rendered into it.
 
-    ``kind`` ``"mitsuba"``: settings ``times`` (K), ``spp``, ``seed``: :func:`.reference.mitsuba`;
+    ``kind`` ``"mitsuba"``: settings ``times`` (K), ``spp``, ``seed``: [`reference.mitsuba`][motionblur.evaluation.reference.mitsuba];
     ``"limit"``: settings ``samples`` and ``aa``: the exact time integral on our rasterizer
-    (:func:`motionblur.exact`) when ``samples`` is None, else stratified accumulation with that
+    ([`motionblur.exact`][motionblur.exact]) when ``samples`` is None, else stratified accumulation with that
     many samples: the limit every method approaches (no shadows, our shading). ``scene``: a
-    Scene or a :class:`SceneRef`."""
+    Scene or a [`SceneRef`][motionblur.evaluation.cluster.SceneRef]."""
     scene = _scene(scene)
     if kind == "mitsuba":
         key = reference_key(scene, kind, variant=ref_mod.mitsuba_variant(), **settings)
@@ -122,7 +122,7 @@ TIMING_BUDGET_S = 1.5
 def timed_task(scene: Scene, method: str, options: dict, repeat: int) -> tuple[float, np.ndarray, dict]:
     """``(ms, rgba (H,W,4) float32, plan)``: one warm-up render of ``method`` with ``options``
     (caches, first-call costs), then the best wall time of ``repeat`` renders, stopping early
-    once the timed renders add up to :data:`TIMING_BUDGET_S` (a render of over 0.75 s is timed
+    once the timed renders add up to `TIMING_BUDGET_S` (a render of over 0.75 s is timed
     once or twice: the load's share of its time is the smaller); ``plan`` is the frame's
     ``stats["plan"]`` (auto) or ``{}``."""
     scene = _scene(scene)

@@ -2,12 +2,12 @@
 
 A row is a dict with at least ``method``, ``ms`` and an error column (``rmse``, ``flip``).
 
-- :func:`pareto_front`: the rows no other row beats in both time and error.
-- :func:`equal_error`: for each motion-volume row, the time accumulation needs for the same
+- `pareto_front`: the rows no other row beats in both time and error.
+- `equal_error`: for each motion-volume row, the time accumulation needs for the same
   error, interpolated log-log between the two sample counts that bracket it (if even N = 1 is
   better, its time is an upper bound, marked ``<=``; if even the largest N is worse, ``>=``).
-- :func:`equal_time`: for each row of another method, accumulation's error in the same time.
-- :func:`front_row`, :func:`front_time`, :func:`landing`: where an ``auto`` row lands against
+- `equal_time`: for each row of another method, accumulation's error in the same time.
+- `front_row`, `front_time`, `landing`: where an ``auto`` row lands against
   the fastest swept run at least as accurate.
 """
 

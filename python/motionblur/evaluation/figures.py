@@ -1,10 +1,10 @@
 """Pictures of the report: a labelled side-by-side sheet per scene and the Pareto plots.
 
-- :func:`sheet`: the reference and every method's image of one scene side by side, each tile
+- [`sheet`][motionblur.evaluation.figures.sheet]: the reference and every method's image of one scene side by side, each tile
   labelled with the method, its options, its time (ms) and its RMSE against the reference
   (``sheet_<scene>.png``, written by the demo and by ``bench --images``);
-- :func:`pareto_plot`: error against time, log-log, one colour per method that is the same in
-  every plot (:func:`method_colors`, from the sorted names of every registered method), the
+- [`pareto_plot`][motionblur.evaluation.figures.pareto_plot]: error against time, log-log, one colour per method that is the same in
+  every plot ([`method_colors`][motionblur.evaluation.figures.method_colors], from the sorted names of every registered method), the
   Pareto front drawn and each of its points labelled with its options.
 """
 
@@ -99,7 +99,7 @@ def _tile_rgb(rgba: np.ndarray, background: float = 0.0) -> np.ndarray:
 
 def sheet(tiles, path, columns: int = 4) -> list[str]:
     """Write the PNG ``path``: ``tiles`` (a list of ``(label, rgba)``, label up to
-    :data:`TILE_LABEL_LINES` lines, rgba (H,W,4) premultiplied linear, all the same size) on a
+    `TILE_LABEL_LINES` lines, rgba (H,W,4) premultiplied linear, all the same size) on a
     grid of ``columns``, each image over black with its label under it on white. Returns the
     labels as drawn (for tests)."""
     image = require("PIL.Image", "the demo's sheets")

@@ -3,9 +3,9 @@
 ``<out>/html/index.html`` with its pictures under ``<out>/html/img/``: per scene, the Pareto
 plot (error against Mitsuba and against the own limit, the fronts annotated) and an image
 viewer: the two references, ``auto`` and each method's most accurate option set within the
-matched time (:func:`.report.matched`), any one of them shown large beside its difference
+matched time (`report.matched`), any one of them shown large beside its difference
 from the chosen reference (absolute difference of premultiplied RGBA, averaged over the
-channels, times :data:`GAIN`, black -> red -> yellow -> white). The page's data is one JSON
+channels, times `GAIN`, black -> red -> yellow -> white). The page's data is one JSON
 object in the page; its script builds the viewer, and it marks ``<body data-ready="1">`` once
 every picture has loaded (``data-failed`` counts pictures that did not) so a test can wait for it.
 """

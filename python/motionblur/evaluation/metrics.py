@@ -1,7 +1,7 @@
 """Image error metrics between a rendered frame and a reference.
 
 Every function takes Frames, (H,W,4) / (H,W,3) float arrays of premultiplied linear RGBA (RGB)
-or paths of image files (``.exr``, ``.png``, read with :func:`motionblur.read_image`), with the
+or paths of image files (``.exr``, ``.png``, read with [`motionblur.read_image`][motionblur.read_image]), with the
 same shape on both sides: real numbers (no complex or object arrays), finite, not empty,
 else ValueError / TypeError naming ``image`` or ``reference``. RMSE and PSNR use all four
 channels (colour and coverage);

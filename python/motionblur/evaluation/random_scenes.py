@@ -9,10 +9,10 @@ gives the same scene.
 
 Two disjoint sets, kept apart on purpose:
 
-- **tuning** (:data:`TUNING_SEEDS`, meshes :data:`TUNING_MESHES`): the only scenes any constant
+- **tuning** (`TUNING_SEEDS`, meshes `TUNING_MESHES`): the only scenes any constant
   of the library (an estimate's factor, ``auto``'s safety margin) was chosen on;
-- **measuring** (:data:`MEASURING_SEEDS`, which also draw from :data:`HELD_OUT_MESHES`): the
-  scenes the README's figures and the calibration tables are measured on, never tuned on.
+- **measuring** (`MEASURING_SEEDS`, which also draw from `HELD_OUT_MESHES`): the
+  scenes the documented figures (docs/validation.md) and the calibration tables are measured on, never tuned on.
 
 Held-out meshes are procedural (a (3,7) torus knot, a gear, a lumpy concave blob) so that the
 set needs no data files.
@@ -178,7 +178,7 @@ def _shutter(rng: np.random.Generator):
 def random_scene(seed: int, width: int = 96, height: int = 72, held_out: bool | None = None) -> Scene:
     """A seeded random scene (see the module docs) of ``width`` x ``height`` pixels.
 
-    ``held_out``: draw half the meshes from :data:`HELD_OUT_MESHES` (default: exactly when
+    ``held_out``: draw half the meshes from `HELD_OUT_MESHES` (default: exactly when
     ``seed`` is a measuring seed). The same arguments give the same scene."""
     seed = int(seed)
     rng = np.random.default_rng(seed)

@@ -1,4 +1,4 @@
-"""References: the same :class:`~motionblur.Scene` rendered by Mitsuba 3 and by pyrender.
+"""References: the same [`Scene`][motionblur.Scene] rendered by Mitsuba 3 and by pyrender.
 
 ``mitsuba(scene, times=K, spp=S, seed=0)``: Mitsuba 3.9 has no shape that moves with the ray
 time, so the reference is K renders at the stratified shutter times ``(i + 0.5) / K``, each
@@ -28,7 +28,7 @@ a tqdm progress bar.
 the mean of ``samples`` poses over the shutter (the 16-pose accumulation peer of the benchmark).
 
 ``blender(scene, samples=S)``: Blender Cycles (CPU) with its own motion blur, no shadows
-(:mod:`motionblur.evaluation.blender`).
+([`motionblur.evaluation.blender`][motionblur.evaluation.blender]).
 """
 
 from __future__ import annotations

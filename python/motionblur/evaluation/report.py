@@ -1,5 +1,5 @@
 """Writing the report: the markdown tables, the csv, the settings, and the pictures (Pareto plots
-and per-scene sheets, drawn by :mod:`.figures`)."""
+and per-scene sheets, drawn by [`figures`][motionblur.evaluation.figures])."""
 
 from __future__ import annotations
 
@@ -45,12 +45,12 @@ def write(
     images=None,
 ) -> dict:
     """Write the report into ``out``: ``pareto_<scene>.png`` per scene of ``names`` (error
-    against both references, :func:`.figures.pareto_plot`), ``results.csv`` (the rows, ``fronts``
+    against both references, [`figures.pareto_plot`][motionblur.evaluation.figures.pareto_plot]), ``results.csv`` (the rows, ``fronts``
     and ``fronts_limit`` marking the Pareto fronts against Mitsuba and against the own limit),
     ``results.md``, ``settings.json`` and, given ``frames`` ({(scene, method, options): rgba}) and
     ``references`` ({scene: {"mitsuba": rgba, "limit": rgba}}), ``sheet_<scene>.png``: both
     references and, per method, its most accurate option set (own-limit RMSE) within the matched
-    time (:func:`matched`), labelled with method, options, ms and both RMSEs (against Mitsuba,
+    time (`matched`), labelled with method, options, ms and both RMSEs (against Mitsuba,
     then against the own limit: the two reference tiles say so); with
     ``save_images`` every frame under ``images/``. ``images`` ({key: Frame}) is the old form of
     ``frames``. Returns the paths written."""
@@ -211,7 +211,7 @@ def _machine() -> str:
 
 def _equal_error_table(comparisons: dict, metric: str, label: str, fmt: str) -> list[str]:
     """Markdown lines: per scene the most accurate motion_volume row by ``metric`` and its
-    :func:`equal_error` factor, and the best factor over all the scene's option sets."""
+    `equal_error` factor, and the best factor over all the scene's option sets."""
     most = "most accurate motion_volume" + ("" if metric == "rmse" else f" ({label})")
     lines = [
         f"| scene | {most} | its ms | its {label} | accumulation ms at that {label} | factor | best factor (options) |",

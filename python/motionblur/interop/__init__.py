@@ -1,12 +1,12 @@
 """Interop with the tools graphics researchers already use.
 
-- :mod:`.trimesh`: ``Scene.from_trimesh`` (a ``trimesh.Scene`` with its graph transforms and
+- [`trimesh`][motionblur.interop.trimesh]: ``Scene.from_trimesh`` (a ``trimesh.Scene`` with its graph transforms and
   colours) and ``Mesh.to_trimesh``;
-- :mod:`.gltf` (with :mod:`._gltf_data`): ``Scene.from_gltf``, animated glTF 2.0 (node
+- [`gltf`][motionblur.interop.gltf] (with `_gltf_data`): ``Scene.from_gltf``, animated glTF 2.0 (node
   hierarchy, TRS keyframes, morph targets, skins) over a shutter interval;
-- :mod:`.pyrender`: ``Camera.from_pyrender``;
-- :mod:`.mitsuba`: :func:`to_mitsuba_dict`, the Mitsuba 3 scene dictionary of a scene at a time;
-- :mod:`.exr` and :mod:`.images`: ``Frame.save_exr`` and :func:`read_image` (EXR and PNG back
+- [`pyrender`][motionblur.interop.pyrender]: ``Camera.from_pyrender``;
+- [`mitsuba`][motionblur.interop.mitsuba]: [`to_mitsuba_dict`][motionblur.interop.to_mitsuba_dict], the Mitsuba 3 scene dictionary of a scene at a time;
+- [`exr`][motionblur.interop.exr] and [`images`][motionblur.interop.images]: ``Frame.save_exr`` and [`read_image`][motionblur.interop.read_image] (EXR and PNG back
   into a Frame, for the metrics).
 
 The classes' methods (``Scene.from_trimesh`` ...) import these modules when called; these

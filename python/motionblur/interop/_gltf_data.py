@@ -1,5 +1,5 @@
 """The data of a loaded glTF 2.0 file as numpy: accessors, primitives, node placements at any
-animation time, morph targets and skins (:mod:`.gltf` turns them into scene parts).
+animation time, morph targets and skins ([`gltf`][motionblur.interop.gltf] turns them into scene parts).
 
 glTF conventions used here: matrices are stored column-major; rotations are unit quaternions
 ``(x, y, z, w)``; a node's local placement is ``T @ R @ S`` (or its ``matrix``); times are

@@ -17,7 +17,7 @@ channel                         type     content
 
 The header carries ``motionblur.stats`` (the frame's stats as JSON, values that JSON cannot hold
 written as strings). Every value round-trips bit-exactly. This module imports nothing of the
-package; :mod:`.images` turns what it reads into a :class:`~motionblur.Frame`.
+package; [`images`][motionblur.interop.images] turns what it reads into a [`Frame`][motionblur.Frame].
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from .._optional import require
 
 __all__ = ["write_exr", "read_exr", "CHANNELS"]
 
-#: channel names, in the order of :func:`read_exr`'s arrays
+#: channel names, in the order of [`read_exr`][motionblur.interop.exr.read_exr]'s arrays
 CHANNELS = ("R", "G", "B", "A", "Z", "id", "velocity.X", "velocity.Y")
 
 

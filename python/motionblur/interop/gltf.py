@@ -1,8 +1,8 @@
 """Animated glTF 2.0 in: ``Scene.from_gltf`` delegates here.
 
-:func:`read_gltf` reads a ``.gltf`` (buffers in ``.bin`` files beside it or embedded as data
+[`read_gltf`][motionblur.interop.gltf.read_gltf] reads a ``.gltf`` (buffers in ``.bin`` files beside it or embedded as data
 URIs) or ``.glb`` file with pygltflib (the ``interop`` extra) into the parts of a
-:class:`~motionblur.Scene` over a shutter interval:
+[`Scene`][motionblur.Scene] over a shutter interval:
 
 - **meshes**: every primitive drawn as triangles (``TRIANGLES``, ``TRIANGLE_STRIP``,
   ``TRIANGLE_FAN``; points and lines are left out) of every node of the file's scene, one
@@ -26,7 +26,7 @@ URIs) or ``.glb`` file with pygltflib (the ``interop`` extra) into the parts of 
   placements times their ``inverseBindMatrices``; the skinned node's own placement is ignored,
   as the specification says) make a deforming motion of world vertex positions.
 - an object whose world placement is a rotation times a positive uniform scale at every key
-  gets a rigid :class:`~motionblur.Motion` of its local mesh; a non-uniform scale, shear or
+  gets a rigid [`Motion`][motionblur.Motion] of its local mesh; a non-uniform scale, shear or
   mirror gives a deforming motion (a mirror also reverses the faces to keep them
   counter-clockwise); an object that does not move gets no motion.
 - **camera**: the first node with a perspective camera (``yfov``, ``znear``, ``zfar``; its
@@ -34,7 +34,7 @@ URIs) or ``.glb`` file with pygltflib (the ``interop`` extra) into the parts of 
   ``camera_motion``; without one, a camera framing every position the objects take.
 
 KHR extensions (lights, materials, compression) are not read; a file that requires one raises
-ValueError. This module never imports :mod:`motionblur.scene` (which calls it).
+ValueError. This module never imports [`motionblur.scene`][motionblur.scene] (which calls it).
 """
 
 from __future__ import annotations
@@ -75,7 +75,7 @@ class GltfPart:
 
 def _similar(m: np.ndarray) -> np.ndarray | None:
     """``m`` (4,4) made an exact rotation times a positive uniform scale plus a translation, or
-    None when it is not one within :data:`_SIMILAR_TOL`."""
+    None when it is not one within `_SIMILAR_TOL`."""
     lin = m[:3, :3]
     det = float(np.linalg.det(lin))
     if not det > 0 or abs(m[3] - [0, 0, 0, 1]).max() > 1e-9:
@@ -207,7 +207,7 @@ def _unscaled(m: np.ndarray) -> np.ndarray:
 def read_gltf(path, *, shutter=None, animation=0, camera=None, width: int = 640, height: int = 480,
               resample: int = 0):  # fmt: skip
     """``(parts, camera, camera_keys)`` of the glTF file ``path`` (module docs): a list of
-    :class:`GltfPart`, a :class:`~motionblur.Camera` (``camera`` when given) and None or
+    [`GltfPart`][motionblur.interop.gltf.GltfPart], a [`Camera`][motionblur.Camera] (``camera`` when given) and None or
     ``(times (K,), transforms (K,4,4))`` of the camera's motion ``pose(t) = M(t) @ camera.pose``.
 
     Raises FileNotFoundError for a missing file, ValueError for a file that is not glTF 2.0,

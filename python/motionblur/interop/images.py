@@ -1,12 +1,12 @@
-"""Reading images back as :class:`~motionblur.Frame`\\ s, for the metrics and for comparisons.
+"""Reading images back as [`Frame`][motionblur.Frame]\\ s, for the metrics and for comparisons.
 
-:func:`read_image` reads what :meth:`Frame.save_exr <motionblur.Frame.save_exr>` and
-:meth:`Frame.save_png <motionblur.Frame.save_png>` write (and any other RGB(A) EXR or PNG):
+[`read_image`][motionblur.interop.images.read_image] reads what `Frame.save_exr` and
+`Frame.save_png` write (and any other RGB(A) EXR or PNG):
 
-- EXR: every channel as written (:mod:`.exr`), bit-exact: premultiplied linear RGBA, depth, ids,
+- EXR: every channel as written ([`exr`][motionblur.interop.exr]), bit-exact: premultiplied linear RGBA, depth, ids,
   velocity and the stats;
 - PNG (8 or 16 bit, grey or RGB, with or without alpha): straight sRGB colour decoded to linear
-  and premultiplied by the alpha, as :meth:`Frame.to_srgb8 <motionblur.Frame.to_srgb8>` inverted
+  and premultiplied by the alpha, as `Frame.to_srgb8` inverted
   (so within half an 8-bit step of what was saved); depth ``inf``, ids -1, velocity 0.
 """
 
@@ -44,7 +44,7 @@ def _png(path: Path) -> np.ndarray:
 
 
 def read_image(path) -> Frame:
-    """The image file ``path`` (``.exr`` or ``.png``) as a :class:`~motionblur.Frame` of
+    """The image file ``path`` (``.exr`` or ``.png``) as a [`Frame`][motionblur.Frame] of
     premultiplied linear RGBA (float32 (H,W,4)); see the module docs for what each format gives.
 
     Raises FileNotFoundError for a missing file, ValueError naming ``path`` for another suffix.

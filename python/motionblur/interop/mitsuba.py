@@ -1,8 +1,8 @@
-"""A :class:`~motionblur.Scene` at one shutter time as a Mitsuba 3 scene dictionary.
+"""A [`Scene`][motionblur.Scene] at one shutter time as a Mitsuba 3 scene dictionary.
 
 ``to_mitsuba_dict(scene, t)`` gives what ``mitsuba.load_dict`` takes, for users who want to
 render the scene their own way (another integrator, more bounces, a different film). It follows
-the conversion of the time-sampled reference (:mod:`motionblur.evaluation.reference`, which
+the conversion of the time-sampled reference ([`motionblur.evaluation.reference`][motionblur.evaluation.reference], which
 uses the same sensor):
 
 - every object is an ``mi.Mesh`` of its world vertex positions at ``t`` (rigid, deforming or
@@ -54,7 +54,7 @@ def mitsuba_variant() -> str:
     """The Mitsuba variant used by default: ``llvm_ad_rgb`` when libLLVM is there (the file
     ``DRJIT_LIBLLVM_PATH`` names, or Debian's LLVM 19 at ``/usr/lib/x86_64-linux-gnu/libLLVM-19.so``),
     else ``scalar_rgb``. The process environment is read, never written: where Dr.Jit cannot
-    load LLVM by itself, set ``DRJIT_LIBLLVM_PATH`` (:func:`set_variant` says so)."""
+    load LLVM by itself, set ``DRJIT_LIBLLVM_PATH`` ([`set_variant`][motionblur.interop.mitsuba.set_variant] says so)."""
     path = os.environ.get("DRJIT_LIBLLVM_PATH")
     if path:
         return "llvm_ad_rgb" if os.path.exists(path) else "scalar_rgb"
@@ -98,7 +98,7 @@ def vertex_normals(v, f) -> np.ndarray:
 
 
 def sensor_dict(mi, camera, pose, spp: int, lens=None) -> dict:
-    """The ``perspective`` sensor dict of ``camera`` (a :class:`~motionblur.Camera`) at ``pose``
+    """The ``perspective`` sensor dict of ``camera`` (a [`Camera`][motionblur.Camera]) at ``pose``
     (4,4) camera-to-world, with an rgba ``hdrfilm`` (box filter) and ``spp`` samples per pixel;
     with ``lens`` = (aperture radius, focus distance) in scene units, a ``thinlens`` sensor."""
     extra = {} if lens is None else {"aperture_radius": float(lens[0]), "focus_distance": float(lens[1])}

@@ -1,6 +1,6 @@
 """pyrender cameras in: ``Camera.from_pyrender`` delegates here.
 
-A ``pyrender.PerspectiveCamera`` has the same conventions as :class:`~motionblur.Camera`
+A ``pyrender.PerspectiveCamera`` has the same conventions as [`Camera`][motionblur.Camera]
 (camera-to-world pose, looking down -Z, ``yfov`` in radians) and the same projection matrix;
 pyrender keeps the pose on the scene node and the image size on the renderer, so both are given
 here. Its ``zfar=None`` (the default: an infinite projection) is ``zfar=inf`` here, which is
@@ -20,7 +20,7 @@ __all__ = ["camera_parameters", "to_pyrender_camera"]
 
 
 def camera_parameters(camera, pose, width: int, height: int) -> dict:
-    """Keyword arguments of :class:`~motionblur.Camera` (``pose``, ``yfov``, ``width``, ``height``,
+    """Keyword arguments of [`Camera`][motionblur.Camera] (``pose``, ``yfov``, ``width``, ``height``,
     ``znear``, ``zfar``) for a ``pyrender.PerspectiveCamera`` seen from ``pose`` (4,4)
     camera-to-world (the pose of its node, ``scene.get_pose(node)``) rendering ``width`` x
     ``height`` pixels.
@@ -54,7 +54,7 @@ def camera_parameters(camera, pose, width: int, height: int) -> dict:
 
 def to_pyrender_camera(camera):
     """A ``pyrender.PerspectiveCamera`` with the projection of ``camera`` (a
-    :class:`~motionblur.Camera`): its ``yfov``, ``znear``, ``zfar`` (``inf`` becomes pyrender's
+    [`Camera`][motionblur.Camera]): its ``yfov``, ``znear``, ``zfar`` (``inf`` becomes pyrender's
     ``None``: passing ``inf`` to pyrender gives a NaN projection) and ``aspectRatio = width /
     height``. The pose goes on the node: ``scene.add(cam, pose=camera.pose)``."""
     from .._optional import require

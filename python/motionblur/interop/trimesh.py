@@ -1,7 +1,7 @@
 """trimesh in and out: ``Scene.from_trimesh`` and ``Mesh.to_trimesh`` delegate here.
 
-:func:`read_trimesh` turns a ``trimesh.Scene`` (or one ``trimesh.Trimesh``) into parts a
-:class:`~motionblur.Scene` is made of: for every node of the scene graph that holds a triangle
+[`read_trimesh`][motionblur.interop.trimesh.read_trimesh] turns a ``trimesh.Scene`` (or one ``trimesh.Trimesh``) into parts a
+[`Scene`][motionblur.Scene] is made of: for every node of the scene graph that holds a triangle
 mesh, the mesh's vertices placed in the world by the graph's transform, its faces and its
 colour, and a camera (the scene's own camera when it has one, else one that frames the scene).
 
@@ -11,9 +11,9 @@ whole mesh stays one colour; per-vertex colours stay per vertex; per-face colour
 per-vertex colours of unshared vertices (each face gets its own three vertices, so its colour
 does not bleed into its neighbours); a texture is sampled at the vertices' UVs
 (``visual.to_color()``); a mesh without colour is white (the default of
-:class:`~motionblur.Object`). Point clouds and paths in the scene are left out.
+[`Object`][motionblur.Object]). Point clouds and paths in the scene are left out.
 
-This module never imports :mod:`motionblur.scene` (which calls it), so there is no import cycle.
+This module never imports [`motionblur.scene`][motionblur.scene] (which calls it), so there is no import cycle.
 """
 
 from __future__ import annotations
@@ -69,9 +69,9 @@ def _colour(geom, vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, 
 def read_trimesh(scene, camera=None, *, width: int = 640, height: int = 480, yfov: float = 0.8):
     """``(parts, camera)`` of a ``trimesh.Scene`` or ``trimesh.Trimesh`` (module docs).
 
-    ``camera``: a :class:`~motionblur.Camera`, or None: the trimesh scene's camera when it has
+    ``camera``: a [`Camera`][motionblur.Camera], or None: the trimesh scene's camera when it has
     one (its vertical field of view and pose, at ``width`` x ``height``), else
-    :func:`framing_camera` with ``yfov`` radians. The caller's scene is not modified (no
+    [`framing_camera`][motionblur.interop.trimesh.framing_camera] with ``yfov`` radians. The caller's scene is not modified (no
     camera is added to it). Raises TypeError for another type and ValueError for a scene
     without triangles.
     """

@@ -1,13 +1,13 @@
 """Rendering methods, one module each; importing this package registers all of them.
 
 Adding a method is adding a module here that decorates its function with
-:func:`motionblur.render.register`, and importing it below. The modules whose names start with
+[`motionblur.render.register`][motionblur.render.register], and importing it below. The modules whose names start with
 an underscore hold what the methods share, and a method imports them, never another method:
 ``_layers`` (rasterizing into layers, compositing, supersampling, the static layer kept across
 frames), ``_painter`` (objects drawn at any shutter time, per-mesh constants),
 ``_volume_colors`` (the colours of motion volumes), ``_sharp`` (the sharp frame the image-space
 methods blur), ``_accumulate`` (the accumulation kernel call and its two halves of samples) and
-``_estimate`` (the exact reference :func:`exact` and every frame's error estimate).
+``_estimate`` (the exact reference [`exact`][motionblur.methods.exact] and every frame's error estimate).
 """
 
 from __future__ import annotations

@@ -1,10 +1,10 @@
 """The accumulation buffer's kernel call and its two halves, shared by ``accumulation`` and ``auto``.
 
-:func:`accumulate` renders the weighted mean of a set of shutter times (the compiled core draws
-and sums them in one call). :class:`HalfSums` keeps an accumulation as two interleaved halves of
+`accumulate` renders the weighted mean of a set of shutter times (the compiled core draws
+and sums them in one call). `HalfSums` keeps an accumulation as two interleaved halves of
 its time samples (even and odd strata), each a weighted mean with its weight: the frame is their
 sum, and their RMS difference measures the frame's own error against the exact time integral
-(see :data:`HALVES_FACTOR`). ``auto`` adds samples to the halves it already has instead of
+(see `HALVES_FACTOR`). ``auto`` adds samples to the halves it already has instead of
 rendering again.
 """
 
@@ -27,13 +27,13 @@ __all__ = [
     "MAX_TIME_SAMPLES",
 ]
 
-#: Most time samples a frame (``accumulation``'s ``samples``) or a :class:`Sequence` averages.
+#: Most time samples a frame (``accumulation``'s ``samples``) or a `Sequence` averages.
 MAX_TIME_SAMPLES = 1 << 16
 
 
 #: The error of an N-sample frame over the RMS difference of its two interleaved halves (each
 #: normalised) times 2 sqrt(wA wB) / (wA + wB) (1 for equal halves), by sampling; chosen on the
-#: tuning scenes of :mod:`motionblur.evaluation.random_scenes` (``benches/bench_error_control.py
+#: tuning scenes of [`motionblur.evaluation.random_scenes`][motionblur.evaluation.random_scenes] (``benches/bench_error_control.py
 #: --set tuning``). Stratified halves are two regular grids offset by one stratum: their errors
 #: are anti-correlated, so the difference overstates the frame's error by about 4.
 HALVES_FACTOR = {"stratified": 0.25, "jittered": 0.38}
@@ -70,7 +70,7 @@ def composited_difference(a: np.ndarray, b: np.ndarray, background) -> np.ndarra
 
 def accumulate(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> Frame:
     """The accumulation buffer of ``times`` with ``weights`` (summing to 1), depth and ids of
-    sample ``ref``; the method's body (see :func:`accumulation`)."""
+    sample ``ref``; the method's body (see `accumulation`)."""
     stats = {"samples": len(times), "draw_calls": 0, "static_draws": 0, "window": None}
     everything = list(enumerate(scene.objects))
 
@@ -127,9 +127,9 @@ class HalfSums:
     """An accumulation kept as its even and odd halves of time samples (see the module docs).
 
     ``add(times, weights, half)`` renders ``times`` (weights: the shutter's mass of each one's
-    stratum, on the frame's final grid) into half 0 or 1; :meth:`reweight` gives every sample
+    stratum, on the frame's final grid) into half 0 or 1; `reweight` gives every sample
     rendered so far a new weight (a box shutter's samples all weigh 1/N, so a finer grid that
-    keeps the old times only changes their weights); :meth:`frame` is the sum with
+    keeps the old times only changes their weights); `frame` is the sum with
     ``stats["error_estimate"]`` from the halves."""
 
     def __init__(self, scene: Scene, aa: int, sampling: str = "stratified") -> None:

@@ -2,13 +2,13 @@
 
 ``render()`` puts ``stats["error_estimate"]`` on every frame: the estimated RMSE of the frame
 (premultiplied linear RGBA, composited over the scene's background, all four channels) against
-:func:`exact` of the same scene at the same ``aa``. A method that can measure its own error does
-so (accumulation compares the halves of its samples, :mod:`.accumulation`); for every other
-method and option set, :func:`pilot_estimate` renders the scene again at a low resolution
-(about :data:`PILOT_PIXELS` pixels) with the method and with :func:`exact`, and scales their RMSE
-by the method's :data:`PILOT_FACTOR`. The factors were chosen on the tuning scenes of
-:mod:`motionblur.evaluation.random_scenes` only; the calibration on the measuring scenes is in
-the README.
+[`exact`][motionblur.methods._estimate.exact] of the same scene at the same ``aa``. A method that can measure its own error does
+so (accumulation compares the halves of its samples, `accumulation`); for every other
+method and option set, `pilot_estimate` renders the scene again at a low resolution
+(about `PILOT_PIXELS` pixels) with the method and with [`exact`][motionblur.methods._estimate.exact], and scales their RMSE
+by the method's `PILOT_FACTOR`. The factors were chosen on the tuning scenes of
+[`motionblur.evaluation.random_scenes`][motionblur.evaluation.random_scenes] only; the calibration on the measuring scenes is in
+the docs (validation.md).
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ __all__ = [
 ]
 
 #: The analytic method's options for the exact time integral (chord tolerance in pixels, Gauss
-#: points per piece): its distance from the true integral is stated in the README.
+#: points per piece): its distance from the true integral is stated in the docs (validation.md).
 EXACT_OPTIONS = {"tolerance": 0.002, "gauss": 4}
 #: Pixels of the pilot render (the image is scaled down to about this many, never up).
 PILOT_PIXELS = 64 * 48
@@ -43,9 +43,9 @@ _DEFAULT_FACTOR = 1.0
 
 
 def exact(scene: Scene, aa: int = 1) -> Frame:
-    """The exact time integral of ``scene``: the analytic method at :data:`EXACT_OPTIONS`,
+    """The exact time integral of ``scene``: the analytic method at `EXACT_OPTIONS`,
     composited over the scene's background. ``aa`` 1, 2 or 4 samples per pixel along each axis.
-    Returns a :class:`Frame` of the camera's size (``rgba`` (H,W,4) float32 premultiplied linear
+    Returns a [`Frame`][motionblur.methods._estimate.Frame] of the camera's size (``rgba`` (H,W,4) float32 premultiplied linear
     RGBA); its ``stats["error_estimate"]`` is 0: it is the reference every estimate is against."""
     frame = METHODS["analytic"].fn(scene, aa=aa, **EXACT_OPTIONS)
     frame = over_background(frame, scene.background)
@@ -82,7 +82,7 @@ def _pilot_options(method: str, options: dict, scale: float) -> dict:
 
 
 def is_exact(method: str, options: dict) -> bool:
-    """Whether ``method`` with ``options`` is :func:`exact` itself."""
+    """Whether ``method`` with ``options`` is [`exact`][motionblur.methods._estimate.exact] itself."""
     return (
         method == "analytic"
         and all(options.get(k) == v for k, v in EXACT_OPTIONS.items())
@@ -94,7 +94,7 @@ def pilot_estimate(scene: Scene, method: str, options: dict) -> dict:
     """``{"error_estimate", "error_estimate_how", "estimate_ms", "unblurred_estimate"}`` of
     ``method`` with ``options`` on ``scene`` from a pilot render (see the module docs);
     ``unblurred_estimate`` is the same measure of the sharp frame at mid-shutter, so that a blur
-    worse than none is seen (:class:`PoorBlurWarning`)."""
+    worse than none is seen ([`PoorBlurWarning`][motionblur.PoorBlurWarning])."""
     t0 = time.perf_counter()
     if is_exact(method, options):
         return {

@@ -1,11 +1,11 @@
 """The layers every rendering method shares.
 
-A :class:`Layer` is one sample per pixel: colour, depth and object id. The methods draw objects
-at a time into layers through one rasterizer call per shading mode (:func:`raster_layer`, or
-:func:`raw_layer` for the bare compiled call), composite layers per sample by depth
-(:func:`composite`), supersample by rendering at ``samples`` times the size and resolving down
-(:func:`supersampled`, :func:`resolve`), and keep the static objects' layer across frames
-(:func:`static_layer`), pasting what they redraw into it (:func:`paste`).
+A `Layer` is one sample per pixel: colour, depth and object id. The methods draw objects
+at a time into layers through one rasterizer call per shading mode (`raster_layer`, or
+`raw_layer` for the bare compiled call), composite layers per sample by depth
+(`composite`), supersample by rendering at ``samples`` times the size and resolving down
+(`supersampled`, `resolve`), and keep the static objects' layer across frames
+(`static_layer`), pasting what they redraw into it (`paste`).
 """
 
 from __future__ import annotations
@@ -257,7 +257,7 @@ def _resolve_into(layer: Layer, samples: int, rgba, depth, ids, x0: int, y0: int
 
 
 def resolve(layer: Layer, samples: int) -> Frame:
-    """A full-size Frame from a supersampled layer (see :func:`resolve_arrays`)."""
+    """A full-size Frame from a supersampled layer (see `resolve_arrays`)."""
     rgba, depth, ids = resolve_arrays(layer, samples)
     return Frame(rgba, depth, ids, np.zeros((*rgba.shape[:2], 2), np.float32))
 
@@ -267,7 +267,7 @@ def resolve(layer: Layer, samples: int) -> Frame:
 
 def clear_static_cache() -> None:
     """Forget the static layers kept across frames (of the renderer running, else of the default
-    one: :meth:`motionblur.Renderer.clear` empties all of a renderer's stores)."""
+    one: `motionblur.Renderer.clear` empties all of a renderer's stores)."""
     current_renderer().static_layers.clear()
 
 

@@ -1,7 +1,7 @@
 """The painter the time-sampling methods share: a fixed set of objects rasterized at any shutter
-time with the least per-sample work (:class:`Painter`, the compiled core's), the faces a
-translating object turns away during the whole shutter (:func:`facing_faces`), and per-mesh
-constants kept across frames (:func:`mesh_constant`).
+time with the least per-sample work (`Painter`, the compiled core's), the faces a
+translating object turns away during the whole shutter (`facing_faces`), and per-mesh
+constants kept across frames (`mesh_constant`).
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ __all__ = ["Painter", "painter_for", "facing_faces", "mesh_constant", "box_corne
 
 def mesh_constant(mesh: Mesh, name: str, compute) -> np.ndarray:
     """``compute(mesh)`` kept across frames for ``mesh`` (on the renderer running,
-    :class:`motionblur.Renderer`). A Mesh owns read-only copies of its
+    [`motionblur.Renderer`][motionblur.Renderer]). A Mesh owns read-only copies of its
     vertices and faces (and its Rust side, which gives the normals, another copy), so what is
     computed from them is a constant of the mesh; should a caller unlock an array
     (``flags.writeable = True``) to edit it in place, nothing is kept or reused for that mesh."""
@@ -86,9 +86,9 @@ class Painter:
     vertex is touched per sample; other groups get world vertices (and rotated normals) per
     sample. With a still camera ``eye``, a rigidly translating object (every keyframe with the
     same rotation and scale) loses the faces that face away from the eye during the whole
-    shutter, once (:func:`facing_faces`): along a straight segment ``n . (eye - p(t))`` is
+    shutter, once (`facing_faces`): along a straight segment ``n . (eye - p(t))`` is
     linear in t, so a face back-facing at every keyframe is back-facing throughout and the
-    rasterizer would cull it at every sample anyway. :meth:`layer` draws one time;
+    rasterizer would cull it at every sample anyway. `layer` draws one time;
     ``core.accumulate_still`` and ``core.accumulate_moving`` a whole accumulation frame."""
 
     def __init__(self, scene: Scene, objects: list[tuple[int, Object]], eye=None):
@@ -124,7 +124,7 @@ def _parts(objects) -> list:
 
 
 def painter_for(scene: Scene, objects: list[tuple[int, Object]], eye=None) -> Painter:
-    """A :class:`Painter` of ``objects`` kept across frames (up to 4, on the renderer running) while the objects (the
+    """A `Painter` of ``objects`` kept across frames (up to 4, on the renderer running) while the objects (the
     same Object, mesh and motion, colour and shading), the eye, the lights and the ambient
     light stay the same, as a real-time loop reuses what it set up. The entry holds no object
     alive (weak references; it goes with its objects), and is never made for a mesh whose

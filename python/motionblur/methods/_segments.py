@@ -64,9 +64,9 @@ def segment_times(scene: Scene, objects, camera: Camera, tolerance: float = 0.01
     only there; the distance in clip space, which is linear over a triangle, is what moves
     them). Test points are the corners of each rigid object's bounding box (the farthest
     points from any rotation axis) and up to 256 vertices of each deforming one. A deforming lambert object's piece is also halved while a test
-    vertex's unit normal at the middle lies more than :data:`NORMAL_TOLERANCE` from the
-    direction of the mean of its normals at the ends. At most :data:`MAX_SEGMENTS` segments, none
-    halved below :data:`MIN_PIECE` of the shutter: the piece furthest over its tolerance is
+    vertex's unit normal at the middle lies more than `NORMAL_TOLERANCE` from the
+    direction of the mean of its normals at the ends. At most `MAX_SEGMENTS` segments, none
+    halved below `MIN_PIECE` of the shutter: the piece furthest over its tolerance is
     halved first, so a shutter that needs more than the cap ends with every piece about equally
     far off (not with its start refined and its end left whole)."""
     tol = as_float(tolerance, "tolerance")

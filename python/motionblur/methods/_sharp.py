@@ -5,7 +5,7 @@ An image-space method renders the scene once, sharp, at the centroid ``t_c`` of 
 filter (0.5 for a box shutter), so that a blur centred on each pixel covers the whole shutter,
 and then blurs that frame's pixels with a box (uniform) weight along each pixel's motion. Such a
 blur honours a box shutter only (or custom weights that are all equal):
-:func:`require_box_shutter` raises for any other, naming ``shutter``, instead of blurring it as
+`require_box_shutter` raises for any other, naming ``shutter``, instead of blurring it as
 a box.
 """
 

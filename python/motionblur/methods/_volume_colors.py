@@ -1,14 +1,14 @@
 """Colours of motion volumes: the time-averaged colour the camera sees, per volume vertex or per
-pixel (used by :mod:`motionblur.methods.motion_volume`).
+pixel (used by `motionblur.methods.motion_volume`).
 
 The paper's volume carries the object's own surface colours, the joining surfaces those of the
 contour. A motion-blurred pixel instead shows the shutter-average of the surfaces passing over
 it. Two estimates of that average are made here from sharp renders of the moving objects:
 
-- :func:`averaged_colors` (``colors="averaged"``): one sharp render at mid-shutter, box-blurred
+- `averaged_colors` (``colors="averaged"``): one sharp render at mid-shutter, box-blurred
   along the image path of the object's centroid (exact for a translation seen orthographically),
   sampled at the volume's vertices.
-- :func:`scattered` (``colors="pixel"``): K sharp renders, at the middle of K equal pieces of the
+- `scattered` (``colors="pixel"``): K sharp renders, at the middle of K equal pieces of the
   shutter, each pixel carried back to its 3D point (from the depth buffer) and splatted along the
   image path that point follows during its piece (``_core._scatter_pieces``, the paths made and
   splatted in Rust as ``_core._splat_paths`` splats them). Every point blurs by
@@ -31,11 +31,11 @@ from ._painter import Painter, box_corners, mesh_constant
 #: Stand-in for an object drawn unlit: colours already shaded (``raster_layer`` groups by it).
 UNLIT = SimpleNamespace(shading="flat")
 
-#: Path points per piece of the shutter in :func:`scattered` (4 straight segments: perspective
+#: Path points per piece of the shutter in `scattered` (4 straight segments: perspective
 #: speed changes and rotation follow them).
 PATH_STEPS = 4
 
-#: Splat work (sources x pixels of path) a colour render may cost before :func:`scattered` works
+#: Splat work (sources x pixels of path) a colour render may cost before `scattered` works
 #: on a coarser grid: it grows with the object's area times its image motion, so a long streak
 #: at a large size (1080p) would cost far more than its accumulation; one grid step ``s`` divides
 #: it by ``s^3`` (s^2 sources, paths s times shorter in grid pixels).
@@ -58,7 +58,7 @@ def place(obj: Object, m: np.ndarray) -> np.ndarray:
 def to_pixels(cam: Camera, x0: float = 0.0, y0: float = 0.0) -> np.ndarray:
     """(4,4) float64 taking a world point (x, y, z, 1) to homogeneous pixel coordinates
     ``(X, Y, ., W)`` of ``cam``'s image shifted by (x0, y0): the pixel is (X/W, Y/W) (as
-    :meth:`Camera.project <motionblur.Camera.project>` gives, minus the shift), in front of the camera where W > 1e-9."""
+    `Camera.project` gives, minus the shift), in front of the camera where W > 1e-9."""
     viewport = np.array(
         [
             [0.5 * cam.width, 0.0, 0.0, 0.5 * cam.width - x0],
@@ -73,7 +73,7 @@ def to_pixels(cam: Camera, x0: float = 0.0, y0: float = 0.0) -> np.ndarray:
 def sample(img: np.ndarray, x, y, front, fallback: np.ndarray) -> np.ndarray:
     """Straight RGB (N,3) float32 at image positions ``x``, ``y`` (N,) (pixel centres at +0.5) of
     the premultiplied ``img`` (H,W,4), bilinear, clamped to its edge; ``fallback`` (N,3) where
-    the sampled alpha is below :data:`MIN_ALPHA` or the point is behind the camera."""
+    the sampled alpha is below `MIN_ALPHA` or the point is behind the camera."""
     h, w = img.shape[:2]
     flat = img.reshape(-1, 4)
     px, py = np.where(front, x, 0.5) - 0.5, np.where(front, y, 0.5) - 0.5  # no image behind the eye
@@ -103,7 +103,7 @@ def averaged_colors(
     path of its centroid from shutter open to close: for a translation seen orthographically that
     blurred layer is exactly the time average of the object's image (the window reaches beyond the
     view by the image path, at most one image size, so an object leaving the view still colours
-    its streak). Each vertex takes the blurred colour at its image (:func:`sample`)."""
+    its streak). Each vertex takes the blurred colour at its image (`sample`)."""
     cam = scene.camera_at(scene.reference_t)
     c = obj.mesh.vertices.mean(axis=0)
     ends, depth = cam.project(np.array([m[:3, :3] @ c + m[:3, 3] for m in (keys[0], keys[-1])]))
@@ -174,7 +174,7 @@ def scattered(scene: Scene, cam: Camera, movers, keys_of, win, pieces: int) -> n
     movers are rendered sharp together (so they hide each other as at that time) at the piece's
     middle, in the window grown by their image motion; every covered pixel is carried to its 3D
     point by its depth and splatted with its premultiplied colour along the image path of that
-    point through the piece (:data:`PATH_STEPS` straight segments). Per piece only its layer and
+    point through the piece (`PATH_STEPS` straight segments). Per piece only its layer and
     one (4,4) map per mover and path time (camera point at the piece's middle to output pixel)
     are made here; the sources and their paths are made and splatted by
     ``_core._scatter_pieces`` (a uniform straight path as one segment cut at its points)."""
@@ -264,9 +264,9 @@ def _up(n: int, step: int) -> int:
 
 
 def _grid_step(cam: Camera, corners, keys, n: int, pieces: int, reach: float) -> int:
-    """The grid step of :func:`scattered`'s colour renders and splat: 1 (pixels) unless the
+    """The grid step of `scattered`'s colour renders and splat: 1 (pixels) unless the
     movers' projected area at mid-shutter times their image path per piece exceeds
-    :data:`SPLAT_BUDGET`, then the smallest step that brings it under."""
+    `SPLAT_BUDGET`, then the smallest step that brings it under."""
     mid = n // 2
     box = _bounds(
         cam,

@@ -16,22 +16,22 @@ frame (its volumes over the static scene) is such an average. Compositing the vo
 pieces with *over* instead would count a pixel covered in two pieces as ``a + b - ab``.
 
 A piece must hold, for every object with apparent motion (the camera's folded in, section 3.1),
-on a fine grid of the shutter (:data:`GRID` steps and every keyframe time):
+on a fine grid of the shutter (`GRID` steps and every keyframe time):
 
-- the rotation of the object's placement turns at most :data:`MAX_TURN` radians (the sum of the
+- the rotation of the object's placement turns at most `MAX_TURN` radians (the sum of the
   grid steps' angles), and its arc (the angle times the farthest vertex's distance from the
-  centroid) is at most :data:`DOMINANCE` times the centroid's displacement over the piece (the
-  paper's "rotates slowly compared to its translation") or below :data:`ARC_PX` pixels (an
+  centroid) is at most `DOMINANCE` times the centroid's displacement over the piece (the
+  paper's "rotates slowly compared to its translation") or below `ARC_PX` pixels (an
   object that turns in place is drawn about as a sample per piece);
-- the vertex centroid stays within :data:`MAX_BEND` object radii of the chord of the piece
+- the vertex centroid stays within `MAX_BEND` object radii of the chord of the piece
   followed at constant speed (the volume follows the chord with ``segments=1``, and its alphas
   take the time spent along it as uniform: a path that bends, or slows down at a keyframe, is
   cut there);
-- the centroid's path crosses at most :data:`MAX_SWEEP` radians of the view seen from the
+- the centroid's path crosses at most `MAX_SWEEP` radians of the view seen from the
   camera (perspective: the image of the object changes along a long path).
 
 ``plan`` cuts the shutter greedily, each piece as long as the grid allows; more than
-:data:`MAX_PIECES` pieces raise ``ValueError`` naming ``pieces`` and the exact methods. The
+`MAX_PIECES` pieces raise ``ValueError`` naming ``pieces`` and the exact methods. The
 constants were tuned on the turning-box, long-translation and seeded random cases of
 ``tests/methods/test_motion_volume_exact.py`` (tuning seeds only).
 """
@@ -271,7 +271,7 @@ class PieceScene(Scene):
     [0, 1] is the original ``a + (b - a) u``): each moving object moves by its own motion over
     ``[a, b]`` (sampled at PIECE_KEYS + 1 times and the keyframe times within, exact between
     keyframes: rigid keyframes interpolate the same), static objects are the original ones, the
-    camera poses are the original scene's (exactly, :meth:`camera_pose_at`; ``camera_motion``
+    camera poses are the original scene's (exactly, [`camera_pose_at`][motionblur.scene.Scene.camera_pose_at]; ``camera_motion``
     samples them like the objects, for the tests that read its keyframes), the shutter is a
     box (the methods take the filter's weight of the piece themselves) and the reference time is
     the original one in piece time, ``(t_r - a) / (b - a)``, which may lie outside [0, 1]: the
@@ -316,5 +316,5 @@ class PieceScene(Scene):
 
 
 def piece_scene(scene: Scene, a: float, b: float) -> PieceScene:
-    """The scene over the piece ``[a, b]`` of the shutter (see :class:`PieceScene`)."""
+    """The scene over the piece ``[a, b]`` of the shutter (see `PieceScene`)."""
     return PieceScene(scene, a, b)

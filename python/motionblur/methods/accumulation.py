@@ -9,7 +9,7 @@ per sample by depth before accumulating. The dimmed-blur variant (``dim < 1``) l
 scene with weight ``1 - dim`` and accumulates the full scene with weight ``dim``, which makes the
 blurred objects look faster (fainter).
 
-:class:`Sequence` keeps the accumulation buffer's running total across consecutive frames.
+`Sequence` keeps the accumulation buffer's running total across consecutive frames.
 """
 
 from __future__ import annotations
@@ -47,7 +47,7 @@ def accumulation(
 
     The even and the odd samples are drawn and summed by the compiled core in one call each
     (``_core._Painter.accumulate_still`` / ``accumulate_moving``, ``src/accumulate/frame.rs``);
-    their difference is the frame's ``stats["error_estimate"]`` (:mod:`._accumulate`).
+    their difference is the frame's ``stats["error_estimate"]`` (`_accumulate`).
     """
     times, weights = sample_times(scene, samples, sampling, seed)
     dim = as_float(dim, "dim")
@@ -72,7 +72,7 @@ class Sequence:
     ``render_at(t) -> (H,W,4) array or Frame`` renders the scene sharp at (animation) time ``t``;
     ``samples`` N renders (1..``MAX_TIME_SAMPLES``) are averaged per frame, ``step`` apart in
     time. Frame k (from 0) is the mean of the renders at ``t0 + (k + j) * step``, j = 0..N-1.
-    The first :meth:`next` draws N times; every later one draws twice: it adds the newest render
+    The first `next` draws N times; every later one draws twice: it adds the newest render
     and subtracts the oldest one, rendered again (``keep_images=False``, the book's way) or kept
     from before (``keep_images=True``: one draw per frame). The total is kept in float64 so the
     subtraction does not drift. ``draws`` counts the calls to ``render_at``.
@@ -83,7 +83,7 @@ class Sequence:
     other N - 1 are drawn: past it ``MemoryError`` names ``samples`` and the bytes.
 
     Every render must be a Frame or a real, finite (H,W,4) array of the same shape as the
-    first; otherwise :meth:`next` raises TypeError / ValueError naming ``render_at`` and the
+    first; otherwise `next` raises TypeError / ValueError naming ``render_at`` and the
     time. ``keep_images`` is True or False (anything else raises TypeError).
     """
 

@@ -3,7 +3,7 @@ during which each moving triangle covers it, visibility resolved over time, colo
 with the shutter filter at Gauss points.
 
 The shutter is cut into segments within which every vertex moves linearly in clip space (see
-:func:`segment_times` for the rule); objects that do not move (with a still camera) are
+`segment_times` for the rule); objects that do not move (with a still camera) are
 rasterized once into the static layer kept across frames, which the moving triangles are
 depth-tested and composited against. With a moving camera every object is drawn analytically.
 """
@@ -91,11 +91,11 @@ def analytic(scene: Scene, aa: int = 1, gauss="auto", tolerance: float = 0.01, s
     sweeps the whole triangle within a short piece; a piece is cut where the triangle of a
     surface covering the sample changes, and where a light grazes a lambert surface, the kink
     of ``max(0, n . l)``); ``tolerance`` pixels, the
-    chord rule of :func:`segment_times`; ``segments`` an int to cut the shutter into that many
+    chord rule of `segment_times`; ``segments`` an int to cut the shutter into that many
     equal segments instead (plus every keyframe time). Depth, ids and velocity describe the
     surface in front at the scene's reference time. ``stats``: the kernel's (``prims``,
     ``intervals``, ``pieces``, ``splits``, ``ms_*``) plus ``segments``. Memory per thread is
-    bounded by :data:`motionblur.analytic.TILE_BUDGET_BYTES`.
+    bounded by `motionblur.analytic.TILE_BUDGET_BYTES`.
     """
     aa = as_int(aa, "aa")
     if aa not in (1, 2, 4):

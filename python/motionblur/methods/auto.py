@@ -2,27 +2,27 @@
 accurate frame that fits a time budget.
 
 ``auto`` certifies what it returns by measurement, not by prediction. Its candidates are the two
-methods that measure their own distance from the exact time integral (:func:`motionblur.exact`)
+methods that measure their own distance from the exact time integral ([`motionblur.exact`][motionblur.exact])
 while they render: accumulation, whose two interleaved halves of time samples give its error
 (``stats["error_estimate"]``, the halves' RMS difference; its error falls as 1/N), and the
-analytic method, exact to about :data:`ANALYTIC_ERROR` at its defaults and to 1e-5 at
-:data:`motionblur.methods._estimate.EXACT_OPTIONS`.
+analytic method, exact to about `ANALYTIC_ERROR` at its defaults and to 1e-5 at
+`motionblur.methods._estimate.EXACT_OPTIONS`.
 
 With ``tolerance`` (RMSE against the exact integral, premultiplied linear RGBA):
 
 1. a scene where nothing moves on screen is one sharp frame (its error is 0);
-2. accumulation with :data:`FIRST_SAMPLES` samples measures the scene's error at that N;
-3. since the error falls about as 1/N (:data:`RATE`), the N that brings the estimate under
-   ``tolerance`` x :data:`SAFETY` is predicted and rendered, keeping the samples drawn when N
-   is an odd multiple of the last count (with fewer than :data:`SURE_SAMPLES` samples the aim is
+2. accumulation with `FIRST_SAMPLES` samples measures the scene's error at that N;
+3. since the error falls about as 1/N (`RATE`), the N that brings the estimate under
+   ``tolerance`` x `SAFETY` is predicted and rendered, keeping the samples drawn when N
+   is an odd multiple of the last count (with fewer than `SURE_SAMPLES` samples the aim is
    lower: their halves spread more), and again while the estimate says it missed (each
-   step predicted from the last two measurements, at most :data:`MAX_STEPS` steps);
+   step predicted from the last two measurements, at most `MAX_STEPS` steps);
 4. a scene with translucent objects that accumulation would draw in separate layers (see
-   :func:`layered_translucency`: its limit is not the exact integral there) is the analytic
+   [`layered_translucency`][motionblur.methods.auto.layered_translucency]: its limit is not the exact integral there) is the analytic
    frame; so is one where that N would cost more than the analytic frame (predicted from its segment count and
-   accumulation's time per sample, only asked once N reaches :data:`ANALYTIC_FROM`), or exceed
-   :data:`MAX_SAMPLES`, or the tolerance is under what accumulation can certify cheaply, the
-   analytic method renders instead (at the exact options below :data:`ANALYTIC_ERROR` x 2).
+   accumulation's time per sample, only asked once N reaches `ANALYTIC_FROM`), or exceed
+   `MAX_SAMPLES`, or the tolerance is under what accumulation can certify cheaply, the
+   analytic method renders instead (at the exact options below `ANALYTIC_ERROR` x 2).
 
 With ``budget_ms``: accumulation with the most samples that fit the budget at the per-sample
 time measured on the first render (the analytic frame instead when its predicted time fits
@@ -175,7 +175,7 @@ class _Trials:
         )
 
     def analytic_ms(self) -> float:
-        """The analytic frame's predicted time: :data:`ANALYTIC_COST` x (its segments + 8) x the
+        """The analytic frame's predicted time: `ANALYTIC_COST` x (its segments + 8) x the
         accumulation's time per sample (the segments by the analytic method's rule)."""
         scene = self.scene
         moving = scene.objects if scene.camera_moves else [o for o in scene.objects if o.is_moving]
@@ -264,12 +264,12 @@ def _for_budget(trials: _Trials, budget: float) -> str:
 def auto(scene: Scene, tolerance=None, budget_ms=None, aa: int = 1) -> Frame:
     """A frame whose measured error meets a tolerance, or the most accurate one within a time budget.
 
-    Options: ``tolerance`` RMSE against the exact time integral (:func:`motionblur.exact`;
-    premultiplied linear RGBA), default :data:`DEFAULT_TOLERANCE` (0.01); ``budget_ms`` instead,
+    Options: ``tolerance`` RMSE against the exact time integral ([`motionblur.exact`][motionblur.exact];
+    premultiplied linear RGBA), default `DEFAULT_TOLERANCE` (0.01); ``budget_ms`` instead,
     milliseconds per frame measured on this machine as it renders; ``aa`` 1, 2 or 4 samples per
     pixel along each axis. ``stats["plan"]``: ``goal``, ``tolerance`` or ``budget_ms``,
     ``tried`` (every render: method, options, ms, error estimate), ``kept`` (the method and
-    options of the frame returned) and ``why`` (see :mod:`motionblur.methods.auto`).
+    options of the frame returned) and ``why`` (see [`motionblur.methods.auto`][motionblur.methods.auto]).
     """
     aa = as_int(aa, "aa")
     if tolerance is not None and budget_ms is not None:

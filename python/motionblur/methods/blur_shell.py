@@ -2,7 +2,7 @@
 
 The paper's frame (``centred=False``) is rendered once with the camera at the scene's reference
 time ``t_r`` (shutter close by default). Each moving object (rigid or deforming) feeds a
-:class:`motionblur.BlurShell` with its positions at ``subdivisions + 1`` times over ``[0, t_r]``:
+[`motionblur.BlurShell`][motionblur.BlurShell] with its positions at ``subdivisions + 1`` times over ``[0, t_r]``:
 updated at all but the last, built at the last, so its strips join the mesh at ``t_r`` to where
 its silhouette of motion was at shutter open. The times are the quantiles of the shutter filter
 (uniform for a box shutter): pair ``j`` of a strip, at alpha ``initial_alpha * (1 - j / S)``,
@@ -42,7 +42,7 @@ from ._layers import Layer, composite, raster_layer, resolve, supersampled
 __all__ = ["blur_shell", "shell_times", "apparent_vertices"]
 
 
-# Shells are kept between renders on the renderer running (:class:`motionblur.Renderer`; their
+# Shells are kept between renders on the renderer running ([`motionblur.Renderer`][motionblur.Renderer]; their
 # mesh order and vertex-face tables are costly to build for large meshes): the last 8, keyed by
 # mesh identity and options, reset before reuse (a reset shell behaves exactly like a new one).
 # The mesh is held so its id stays unique. A shell has state (its updates), so a render takes it

@@ -9,20 +9,20 @@ the whole shutter, and then blur the frame's pixels:
 * ``opaque_image`` (Kraus 2013, section 4.1): the frame carries each object's screen motion over
   the shutter in its velocity buffer. For every moving object, farthest first, the mask is its
   pixels in the id buffer, the direction and the length are the mean of its velocity there, and
-  :func:`motionblur.image.opaque_motion_blur` of the masked layer is composited *over* what is
+  [`motionblur.image.opaque_motion_blur`][motionblur.image.opaque_motion_blur] of the masked layer is composited *over* what is
   behind the object and *under* what is in front of it by depth (section 4.1's "under").
   Applies to scenes with moving objects and a still camera. Limit (the paper's): the background
   behind the object is never disoccluded (the blurred object stays opaque where it was, and the
   glow keeps the streak near it opaque), so a motion longer than the object is over-covered.
 * ``camera_velocity`` (Chapman 2011): the velocity of every pixel follows from the frame's depth
-  and the camera at the shutter's start (:func:`motionblur.image.camera_velocity`; the sky moves
-  only with the camera's rotation) and :func:`motionblur.image.velocity_blur` blurs along it.
+  and the camera at the shutter's start ([`motionblur.image.camera_velocity`][motionblur.image.camera_velocity]; the sky moves
+  only with the camera's rotation) and [`motionblur.image.velocity_blur`][motionblur.image.velocity_blur] blurs along it.
   Pixels of moving objects take their rasterized velocity with the camera's motion folded in, so
   an object the camera follows stays sharp. Applies to scenes whose camera moves.
 * ``velocity`` (McGuire et al. 2012's reconstruction filter with Guertin et al. 2014's
   improvements): the velocity buffer holds every moving object's screen motion over the whole
   shutter per vertex, so a deforming or turning object has its own velocity at every pixel, and
-  :func:`motionblur.image.reconstruction_blur` gathers each pixel from the pixels whose motion
+  [`motionblur.image.reconstruction_blur`][motionblur.image.reconstruction_blur] gathers each pixel from the pixels whose motion
   reaches it (tile max and neighbour max say how far to look, the depth buffer splits the taps
   into foreground blurred over the pixel and background filling what it leaves). It is what
   users pick instead of motion volumes. Limits: one sharp frame, so a surface hidden at
@@ -223,7 +223,7 @@ def camera_velocity(scene: Scene, samples: int = 16, aa: int = 1) -> Frame:
     Options: ``samples`` N in [1, 1024] blur taps per pixel; ``aa`` 1, 2 or 4 spatial samples per
     pixel along each axis for the sharp frame. The velocity from the camera at ``t_c`` back to the
     camera at the shutter's start is scaled by ``1 / t_c`` to span the whole shutter and clamped
-    to ``MAX_VELOCITY`` pixels (as :func:`motionblur.image.camera_motion_blur`). Pixels of
+    to ``MAX_VELOCITY`` pixels (as [`motionblur.image.camera_motion_blur`][motionblur.image.camera_motion_blur]). Pixels of
     moving objects take the rasterizer's velocity of the object with the camera's motion folded
     in instead (Chapman's static-scene velocity would blur an object the camera follows).
     ``stats``: ``t``, ``samples``.

@@ -13,7 +13,7 @@ transparency.
 A motion one volume cannot follow (an object that turns, a path that bends or changes speed,
 a long path seen in perspective) is cut into pieces of the shutter, each drawn as its own frame
 of volumes, and the frames are summed weighted by the filter's weight of each piece (see
-:mod:`motionblur.methods._volume_pieces`); beyond 64 pieces the method raises ValueError.
+`motionblur.methods._volume_pieces`); beyond 64 pieces the method raises ValueError.
 """
 
 from __future__ import annotations
@@ -77,7 +77,7 @@ def apparent_motion(scene: Scene, obj: Object, segments: int, folds=None):
     ``i / S`` as the camera at the reference time sees them: ``P(t_r) @ inv(P(t)) @ O(t)``
     (paper section 3.1). With a still camera these are the object's own keyframes resampled
     (interpolated from their parts, not split again); a moving camera makes new matrices,
-    split once. ``folds``: optional :func:`camera_folds` of the same ``segments``."""
+    split once. ``folds``: optional `camera_folds` of the same ``segments``."""
     if not scene.camera_moves and obj.is_moving:
         return obj.motion._keys.resampled(segments)
     times = np.linspace(0.0, 1.0, segments + 1)
@@ -93,7 +93,7 @@ def apparent_motion(scene: Scene, obj: Object, segments: int, folds=None):
 
 def apparent_keyframes(scene: Scene, obj: Object, segments: int, folds=None) -> np.ndarray:
     """(S+1,4,4) float64 placements of ``obj`` at the times ``i / S`` as the camera at the
-    reference time sees them: the matrices of :func:`apparent_motion`."""
+    reference time sees them: the matrices of `apparent_motion`."""
     if not scene.camera_moves:
         if obj.is_moving:
             return obj.motion.transforms_at(np.linspace(0.0, 1.0, segments + 1))
@@ -179,7 +179,7 @@ def spin_of(keys: np.ndarray, vertices: np.ndarray) -> dict | None:
 
 @dataclass
 class _Volumes:
-    """A frame's draws, made by :func:`_volume_draws`: ``draws`` (drawn as, Draw) of the objects
+    """A frame's draws, made by `_volume_draws`: ``draws`` (drawn as, Draw) of the objects
     with apparent motion (their volumes, or the object itself when it only moves with the
     camera), ``still`` (index, Object) of the objects drawn sharp into the static layer,
     ``movers`` (index, Object) of those drawn with their apparent motion and ``pending`` (draw
@@ -285,14 +285,14 @@ def _single(
     window=(0.0, 1.0),
 ):
     """One motion volume per moving object over the whole shutter of ``scene`` (the paper's
-    method; the options as :func:`motion_volume`'s). ``window``: the part of the original shutter
-    ``scene``'s stands for (a piece, see :func:`motion_volume`): the coverage alphas weigh its
+    method; the options as [`motion_volume`][motionblur.motion_volume]'s). ``window``: the part of the original shutter
+    ``scene``'s stands for (a piece, see [`motion_volume`][motionblur.motion_volume]): the coverage alphas weigh its
     time by the filter over that part (a spin volume takes a box weight within it).
 
-    Its steps: 1. the options checked; 2. the objects sorted into draws (:func:`_volume_draws`);
+    Its steps: 1. the options checked; 2. the objects sorted into draws (`_volume_draws`);
     3. which volumes get per-pixel colours; 4. the frame: one full frame with a moving camera
-    (:func:`_moving_camera_frame`), else the volumes' window over the kept static layer
-    (:func:`_still_camera_frame`)."""
+    (`_moving_camera_frame`), else the volumes' window over the kept static layer
+    (`_still_camera_frame`)."""
     segments = as_segments(segments)
     filter, aa, contour_line, exact_static, color_renders = _checked_options(
         scene, filter, aa, contour_line, exact_static, spin, colors, color_renders
@@ -447,7 +447,7 @@ def motion_volume(
     """Motion-volume rendering: each moving object becomes its motion volume, drawn transparent.
 
     Options: ``pieces`` ``"auto"`` (default) or an int P >= 1: the shutter is cut into pieces,
-    each short enough for one volume (see :mod:`motionblur.methods._volume_pieces`: per piece an
+    each short enough for one volume (see `motionblur.methods._volume_pieces`: per piece an
     object turns at most 0.35 rad, less when it turns in place, its centroid stays within 0.03
     object radii of the chord followed at constant speed and crosses at most 0.6 rad of the
     view), every piece is rendered as its own frame of volumes
@@ -472,8 +472,8 @@ def motion_volume(
     False composites the volumes over the kept static layer per sample by depth instead (exact
     unless a volume passes through a static surface); ``spin`` (paper section 4.3, objects that spin but
     barely move) ``"auto"`` (default), True or False: with True every moving object whose
-    folded motion turns about one fixed axis (see :func:`spin_of`: 32 steps, each step's axis
-    within 3 degrees of the mean) is drawn as :func:`motionblur.spin_volume` (contour from the
+    folded motion turns about one fixed axis (see `spin_of`: 32 steps, each step's axis
+    within 3 degrees of the mean) is drawn as [`motionblur.spin_volume`][motionblur.spin_volume] (contour from the
     axis, alpha from the rotational speed; ``segments`` then does not apply, one ring per
     pi/12; its rotation does not count against the pieces' limits). It is the paper's
     approximation: measured against the exact integral it gave +27% coverage for a box spun
@@ -484,7 +484,7 @@ def motion_volume(
     (joining surfaces take theirs from the contour edges, section 4.1, which the paper itself
     names a weakness: a shaded sphere's streak shows its rim's shading, not the average of its
     surface). The other two give a translation volume (not a spin volume) the time-averaged
-    colour the camera sees, drawn unlit (see :mod:`motionblur.methods._volume_colors`):
+    colour the camera sees, drawn unlit (see `motionblur.methods._volume_colors`):
     ``"averaged"`` per volume vertex, from one sharp render at mid-shutter box-blurred along the
     centroid's image path (one extra pass); ``"pixel"`` per pixel, from ``color_renders`` K >= 1
     sharp renders of the moving objects at the middles of K equal pieces of the shutter, each
@@ -495,7 +495,7 @@ def motion_volume(
     image, stand in). Scenes whose moving objects all have one flat colour skip it (nothing to
     average); with a spin volume in the frame ``"pixel"`` falls back to ``"averaged"``.
     ``contour_table`` (paper section 4.4) False (default); True or an int K: each moving
-    object's mesh gets a :class:`motionblur.ContourTable` of K (True: 128) stochastic directions,
+    object's mesh gets a [`motionblur.ContourTable`][motionblur.ContourTable] of K (True: 128) stochastic directions,
     built at its first frame and kept (the last 8 meshes), and its volume sweeps the face split
     and contour stored for the direction nearest its motion instead of computing them; or
     ContourTables (one, or a list), used for the objects whose mesh they were built for.
@@ -542,7 +542,7 @@ def motion_volume(
 
 
 def _spun(scene: Scene) -> frozenset:
-    """Indices of the objects ``spin=True`` draws as spin volumes (see :func:`spin_of`)."""
+    """Indices of the objects ``spin=True`` draws as spin volumes (see `spin_of`)."""
     folds = camera_folds(scene, SPIN_STEPS) if scene.camera_moves else None
     out = set()
     for k, obj in enumerate(scene.objects):
@@ -658,7 +658,7 @@ def _rotates(scene: Scene, obj: Object) -> bool:
 
 
 def _averaged(scene: Scene, k: int, obj: Object, keys: np.ndarray, segments: int, vol, stats) -> object:
-    """``colors="averaged"``: the volume's vertex colours set to :func:`averaged_colors`; returns
+    """``colors="averaged"``: the volume's vertex colours set to `averaged_colors`; returns
     what the volume is drawn as (unlit when the colours were set)."""
     mid = keys[segments // 2] if segments % 2 == 0 else apparent_keyframes(scene, obj, 2)[1]
     rgb = averaged_colors(scene, k, obj, keys, mid, vol)
@@ -671,7 +671,7 @@ def _averaged(scene: Scene, k: int, obj: Object, keys: np.ndarray, segments: int
 
 def _scatter(scene: Scene, pcam: Camera, movers, pending, draws, pwin, pieces: int) -> np.ndarray:
     """``colors="pixel"``: the movers' time-averaged image in the pixel window ``pwin`` of
-    ``pcam`` (:func:`scattered`); every pending volume is redrawn unlit with its vertex colours
+    ``pcam`` (`scattered`); every pending volume is redrawn unlit with its vertex colours
     sampled from it (the stand-in where the per-pixel colour is not trusted)."""
     folds: dict[int, np.ndarray | None] = {}
 
