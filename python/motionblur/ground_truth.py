@@ -20,7 +20,17 @@ from ._validate import as_array, as_int
 from .raster import Camera, Frame
 from .scene import Scene
 
-__all__ = ["SurfacePaths", "surface_paths", "flow", "sharp_frames", "mean_motion", "trajectories"]
+__all__ = [
+    "SurfacePaths",
+    "surface_paths",
+    "stratified_times",
+    "flow",
+    "sharp_frames",
+    "mean_motion",
+    "trajectories",
+    "OUTPUTS",
+    "outputs",
+]
 
 _NAMED_TIMES = {"open": 0.0, "center": 0.5, "close": 1.0}
 
@@ -35,6 +45,14 @@ def _times(times, name: str = "times") -> np.ndarray:
     if ((t < 0.0) | (t > 1.0)).any():
         raise ValueError(f"{name}: shutter times must be in [0, 1]")
     return t
+
+
+def stratified_times(scene: Scene, samples: int) -> tuple[np.ndarray, np.ndarray]:
+    """(times (N,), weights (N,)): N stratified shutter times ``(i + 0.5) / N`` and the
+    shutter filter's integral over each stratum (summing to 1)."""
+    n = as_int(samples, "samples", minimum=1, maximum=1 << 16)
+    w = np.diff(scene.shutter_cdf(np.arange(n + 1) / n))
+    return (np.arange(n) + 0.5) / n, w / w.sum()
 
 
 def _camera_rays(scene: Scene, points: np.ndarray) -> np.ndarray:
@@ -171,10 +189,8 @@ def mean_motion(scene: Scene, samples: int = 64) -> NDArray[np.float32]:
     """(H,W,2) float32 the blur's mean motion per pixel: the shutter-weighted mean displacement,
     from its pixel centre at the reference time, of the surface seen there (``samples``
     stratified shutter times)."""
-    from .methods._accumulate import sample_times
-
     h, w = scene.camera.height, scene.camera.width
-    times, weights = sample_times(scene, samples, "stratified")
+    times, weights = stratified_times(scene, samples)
     p = surface_paths(scene, _pixel_centres(scene), times)
     d = ((p.paths - p.points[:, None, :]) * weights[None, :, None]).sum(axis=1)
     return d.reshape(h, w, 2).astype(np.float32)
@@ -200,10 +216,7 @@ def trajectories(scene: Scene, samples: int = 64) -> list[dict]:
     (S,2) the pixel position of the object's origin (its mesh's coordinate origin moved by its
     motion; NaN when behind the camera) and ``bbox`` (S,4) the pixel bounding box (x0, y0, x1,
     y1) of its projected vertices in front of the camera (NaN when none is)."""
-    from .methods._accumulate import sample_times
-
-    samples = as_int(samples, "samples", minimum=1, maximum=1 << 16)
-    times, _ = sample_times(scene, samples, "stratified")
+    times, _ = stratified_times(scene, samples)
     cameras = [scene.camera_at(float(t)) for t in times]
     out = []
     for obj in scene.objects:
@@ -215,6 +228,56 @@ def trajectories(scene: Scene, samples: int = 64) -> list[dict]:
             if len(q):
                 bbox[j] = [*q.min(0), *q.max(0)]
         out.append({"name": obj.name, "times": times, "origin": origin, "bbox": bbox})
+    return out
+
+
+#: The ground-truth outputs [`render`][motionblur.render.render] gives with ``outputs=[...]``,
+#: each with the methods that give it (None: every method; they are closed forms of the scene).
+OUTPUTS: dict[str, tuple[str, ...] | None] = {"sharp": None, "flow": None, "trajectory": None}
+
+
+def _check_outputs(names, method: str) -> list[str]:
+    if isinstance(names, str) or not all(isinstance(n, str) for n in names):
+        raise TypeError("outputs: expected a list of names such as ['sharp', 'flow']")
+    out = []
+    for n in names:
+        if n not in OUTPUTS:
+            raise ValueError(f"outputs: unknown output {n!r}; expected some of {', '.join(OUTPUTS)}")
+        given_by = OUTPUTS[n]
+        if given_by is not None and method not in given_by:
+            raise ValueError(
+                f"outputs: {n!r} is given by {', '.join(given_by)} only, not by method {method!r}"
+            )
+        out.append(n)
+    return list(dict.fromkeys(out))
+
+
+def outputs(scene: Scene, names, method: str, times=None) -> dict:
+    """The ground-truth outputs ``names`` (from `OUTPUTS`) of
+    ``scene`` for a frame rendered with ``method``, at shutter ``times`` (default open, center,
+    close; S of them), as [`render`][motionblur.render.render] puts them on ``Frame.outputs``:
+
+    - ``sharp``: ``sharp`` a list of S [`Frame`][motionblur.Frame]s (rgba, depth, ids) at the times;
+    - ``flow``: ``flow`` (S,H,W,2) float32 forward flow in pixels from the reference time to each
+      time, ``flow_backward`` (S,H,W,2) from each time back to the reference time (at the pixels
+      of the sharp frame at that time), ``mean_motion`` (H,W,2) the blur's mean motion;
+    - ``trajectory``: ``trajectory``, per object, its screen origin path and bounding box over
+      the shutter ([`trajectories`][motionblur.ground_truth.trajectories]).
+
+    ``times`` (S,) is returned as ``times``. Raises ValueError naming ``outputs`` for an unknown
+    name or one the method cannot give, and for deforming objects where a flow is asked."""
+    names = _check_outputs(names, method)
+    ts = _times(times, "output_times")
+    out: dict = {"times": ts}
+    if "sharp" in names:
+        out["sharp"] = sharp_frames(scene, ts)
+    if "flow" in names:
+        out["flow"] = flow(scene, ts)
+        ref = np.array([scene.reference_t])
+        out["flow_backward"] = np.stack([flow(scene, ref, source=float(t))[0] for t in ts])
+        out["mean_motion"] = mean_motion(scene)
+    if "trajectory" in names:
+        out["trajectory"] = trajectories(scene)
     return out
 
 

@@ -317,7 +317,9 @@ class Frame:
     distance of the nearest surface with alpha > 0, ``inf`` for background; ``ids`` (H,W) int32
     object id of that surface, -1 for background; ``velocity`` (H,W,2) float32 screen motion of
     that surface in pixels (+x right, +y down); ``stats`` dict (triangles, fragments, ms per
-    stage). ``coverage`` is the alpha channel (H,W).
+    stage). ``coverage`` is the alpha channel (H,W). ``outputs``: the ground-truth channels
+    asked of [`render`][motionblur.render.render] with ``outputs=[...]`` (empty otherwise; see
+    [`motionblur.ground_truth`][motionblur.ground_truth]), by name.
 
     Any code may build a Frame from numpy arrays: ``Frame(rgba, depth, ids, velocity, stats=None)``
     (dtypes are converted; the arrays are not copied when they already match). ``velocity=None``
@@ -329,6 +331,7 @@ class Frame:
     depth: NDArray[np.float32]
     ids: NDArray[np.int32]
     stats: dict[str, Any]
+    outputs: dict[str, Any]
 
     def __init__(
         self,
@@ -347,6 +350,7 @@ class Frame:
         if velocity is not None:
             self._velocity = _frame_array(velocity, "velocity", np.float32, (h, w, 2))
         self.stats = dict(stats) if stats is not None else {}
+        self.outputs = {}
 
     @property
     def velocity(self) -> NDArray[np.float32]:
@@ -422,7 +426,10 @@ class Frame:
     def save_exr(self, path: str | os.PathLike[str]) -> Path:
         """Writes an OpenEXR file: linear float ``R``, ``G``, ``B``, ``A`` (premultiplied), depth
         as ``Z``, ids as ``id`` and velocity as ``velocity.X`` / ``velocity.Y``, the stats in the
-        header ([`motionblur.interop.exr`][motionblur.interop.exr]); every value round-trips bit-exactly through
+        header ([`motionblur.interop.exr`][motionblur.interop.exr]), and the ground-truth
+        ``outputs`` as named channels (``sharp.<k>.R/G/B/A/Z/id``, ``flow.<k>.X/Y``,
+        ``flow_backward.<k>.X/Y``, ``mean_motion.X/Y``; k indexes ``stats["output_times"]``);
+        every value round-trips bit-exactly through
         [`motionblur.read_image`][motionblur.read_image]. Creates parent folders; returns the path. EXR only:
         ``path`` must end in ``.exr`` (any case), else ValueError (as [`save_png`][motionblur.raster.Frame.save_png] checks
         ``.png``). Needs the ``OpenEXR`` package (``pip install "motionblur[interop]"``)."""
@@ -433,7 +440,31 @@ class Frame:
             raise ValueError(
                 f"path: save_exr writes OpenEXR files only; expected a name ending in .exr, got {str(path)!r}"
             )
-        return write_exr(path, self.rgba, self.depth, self.ids, self.velocity, self.stats)
+        extra = _output_channels(self.outputs) if self.outputs else None
+        return write_exr(path, self.rgba, self.depth, self.ids, self.velocity, self.stats, extra)
+
+
+def _output_channels(outputs: dict) -> dict[str, np.ndarray]:
+    """Frame ``outputs`` as named (H,W) EXR channels: ``sharp.<k>.R/G/B/A/Z/id``,
+    ``flow.<k>.X/Y``, ``flow_backward.<k>.X/Y`` (k the index into ``times``, which the frame's
+    stats name), ``mean_motion.X/Y``, and whatever (H,W) planes ``channels`` holds (as read back
+    by [`motionblur.read_image`][motionblur.read_image]). Trajectories are metadata, not
+    channels (they are in the frame's stats)."""
+    ch: dict[str, np.ndarray] = dict(outputs.get("channels", {}))
+    for k, f in enumerate(outputs.get("sharp", [])):
+        for i, c in enumerate("RGBA"):
+            ch[f"sharp.{k}.{c}"] = f.rgba[..., i]
+        ch[f"sharp.{k}.Z"] = f.depth
+        ch[f"sharp.{k}.id"] = f.ids.view(np.uint32)
+    for name in ("flow", "flow_backward"):
+        for k, v in enumerate(outputs.get(name, [])):
+            ch[f"{name}.{k}.X"], ch[f"{name}.{k}.Y"] = v[..., 0], v[..., 1]
+    if "mean_motion" in outputs:
+        ch["mean_motion.X"], ch["mean_motion.Y"] = (
+            outputs["mean_motion"][..., 0],
+            outputs["mean_motion"][..., 1],
+        )
+    return ch
 
 
 def over_background(frame: Frame, background) -> Frame:

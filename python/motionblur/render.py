@@ -19,7 +19,7 @@ import re
 import textwrap
 import time
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -106,6 +106,8 @@ def render(
     aperture: float | None = None,
     focus_distance: float | None = None,
     error_estimate: bool = True,
+    outputs: Sequence[str] = (),
+    output_times: Any = None,
     **options: Any,
 ) -> Frame:
     """Render ``scene`` with the registered ``method`` (``accumulation``, ``motion_volume``, ...).
@@ -125,6 +127,13 @@ def render(
     confusion of radius ``H * aperture * |1 - focus_distance / z| / (2 * focus_distance *
     tan(yfov / 2))`` pixels; the reference is ``reference.mitsuba(..., aperture=,
     focus_distance=)`` with the same numbers. ``stats`` then has ``dof`` (the lens).
+
+    Ground truth: ``outputs`` names channels to give with the frame on ``frame.outputs``
+    (``"sharp"``, ``"flow"``, ``"trajectory"``; what each holds and which method gives it:
+    [`motionblur.ground_truth.outputs`][motionblur.ground_truth.outputs]) at the shutter times
+    ``output_times`` (default open, center, close); ``stats["output_times"]`` lists them and
+    ``stats["trajectory"]`` holds the trajectories. ``Frame.save_exr`` writes them as named
+    channels.
     """
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
@@ -150,6 +159,10 @@ def render(
             f"its options: {', '.join(_parameters(spec.fn)) or 'none'} (help(motionblur.render))"
         )
     lens = _lens(aperture, focus_distance)
+    if outputs:
+        from .ground_truth import _check_outputs
+
+        outputs = _check_outputs(outputs, method)  # before rendering: a refusal costs nothing
     t0 = time.perf_counter()
     frame = spec.fn(scene, **options)
     if lens is not None:
@@ -170,7 +183,26 @@ def render(
             )
     if lens is not None and "error_estimate" in frame.stats:
         frame.stats["error_estimate_how"] += " (of the motion blur before the lens)"
+    if outputs:
+        _add_outputs(frame, scene, method, outputs, output_times)
     return frame
+
+
+def _add_outputs(frame: Frame, scene: Scene, method: str, names, times) -> None:
+    """Put the ground-truth ``names`` at ``times`` on ``frame.outputs`` (and their times and
+    trajectories in its stats, which EXR headers carry)."""
+    from .ground_truth import outputs as ground_truth
+
+    t0 = time.perf_counter()
+    out = ground_truth(scene, names, method, times)
+    frame.stats["output_times"] = [float(t) for t in out.pop("times")]
+    if "trajectory" in out:
+        frame.stats["trajectory"] = [
+            {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in tr.items()}
+            for tr in out["trajectory"]
+        ]
+    frame.outputs.update(out)
+    frame.stats["outputs_ms"] = (time.perf_counter() - t0) * 1e3
 
 
 #: The pilot estimator ``fn(scene, method, options) -> dict`` that [`render`][motionblur.render.render] calls when a

@@ -184,13 +184,12 @@ def blur_kernels(
     path). Raises ValueError for a deforming object seen at a point (its surface points have no
     rigid path). Returns [`BlurKernels`][motionblur.shake.BlurKernels].
     """
-    from .ground_truth import surface_paths
-    from .methods._accumulate import sample_times
+    from .ground_truth import stratified_times, surface_paths
 
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
     pts = _grid_points(scene, grid) if points is None else points
-    times, weights = sample_times(scene, samples, "stratified")
+    times, weights = stratified_times(scene, samples)
     found = surface_paths(scene, pts, times)
     pts, paths = found.points, found.paths
     if radius is None:

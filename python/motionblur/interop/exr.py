@@ -40,11 +40,13 @@ def _plane(a: np.ndarray, dtype) -> np.ndarray:
     return np.ascontiguousarray(a, dtype=dtype)
 
 
-def write_exr(path, rgba: np.ndarray, depth=None, ids=None, velocity=None, stats=None) -> Path:
+def write_exr(path, rgba: np.ndarray, depth=None, ids=None, velocity=None, stats=None, extra=None) -> Path:
     """Write ``rgba`` (H,W,4) float32 premultiplied linear RGBA and, when given, ``depth`` (H,W)
     float32, ``ids`` (H,W) int32 and ``velocity`` (H,W,2) float32 to the EXR file ``path``
-    (parent folders are created). ``stats``: a dict stored in the header as JSON. Returns the
-    path. Raises ValueError naming the argument for wrong shapes."""
+    (parent folders are created). ``stats``: a dict stored in the header as JSON. ``extra``:
+    more channels by name, ``{name: (H,W) float32 or uint32 array}`` (names other than the
+    module's `CHANNELS`). Returns the path. Raises ValueError
+    naming the argument for wrong shapes or names."""
     openexr = require("OpenEXR", "EXR files (Frame.save_exr)")
     rgba = np.asarray(rgba)
     if rgba.ndim != 3 or rgba.shape[2] != 4 or rgba.size == 0:
@@ -68,6 +70,13 @@ def write_exr(path, rgba: np.ndarray, depth=None, ids=None, velocity=None, stats
     if velocity is not None:
         channels["velocity.X"] = _plane(np.asarray(velocity)[..., 0], np.float32)
         channels["velocity.Y"] = _plane(np.asarray(velocity)[..., 1], np.float32)
+    for name, value in (extra or {}).items():
+        value = np.asarray(value)
+        if name in CHANNELS or name in channels or np.shape(value) != (h, w):
+            raise ValueError(
+                f"extra: channel {name!r} must be a new name of shape {(h, w)}, got {value.shape}"
+            )
+        channels[name] = _plane(value, np.uint32 if value.dtype == np.uint32 else np.float32)
     header = {"compression": openexr.ZIP_COMPRESSION, "type": openexr.scanlineimage}
     if stats:
         header["motionblur.stats"] = json.dumps(stats, default=str, sort_keys=True)
@@ -80,7 +89,9 @@ def write_exr(path, rgba: np.ndarray, depth=None, ids=None, velocity=None, stats
 def read_exr(path) -> dict:
     """The channels of the EXR file ``path``: a dict with ``rgba`` (H,W,4) float32 (RGB without
     ``A`` gets alpha 1; a lone ``Y`` is grey), and where the file has them ``depth`` (H,W)
-    float32, ``ids`` (H,W) int32, ``velocity`` (H,W,2) float32 and ``stats`` (dict). Raises
+    float32, ``ids`` (H,W) int32, ``velocity`` (H,W,2) float32, ``stats`` (dict) and ``extra``
+    (``{name: (H,W) array}``, every other channel, as [`write_exr`][motionblur.interop.exr.write_exr]'s
+    ``extra`` wrote it). Raises
     FileNotFoundError for a missing file and ValueError for a file without colour channels."""
     openexr = require("OpenEXR", "EXR files (read_image)")
     path = Path(path)
@@ -103,6 +114,10 @@ def read_exr(path) -> dict:
         out["ids"] = ids.view(np.int32) if ids.dtype == np.uint32 else ids.astype(np.int32)
     if "velocity.X" in ch and "velocity.Y" in ch:
         out["velocity"] = np.stack([ch["velocity.X"], ch["velocity.Y"]], axis=-1).astype(np.float32)
+    known = set(CHANNELS) | {"Y"}
+    extra = {k: v for k, v in ch.items() if k not in known}
+    if extra:
+        out["extra"] = extra
     stats = f.header().get("motionblur.stats")
     if isinstance(stats, str):
         out["stats"] = json.loads(stats)

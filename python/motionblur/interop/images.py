@@ -62,10 +62,13 @@ def read_image(path) -> Frame:
         parts = read_exr(path)
         rgba = parts["rgba"]
     h, w = rgba.shape[:2]
-    return Frame(
+    frame = Frame(
         rgba,
         parts.get("depth", np.full((h, w), np.inf, np.float32)),
         parts.get("ids", np.full((h, w), -1, np.int32)),
         parts.get("velocity", np.zeros((h, w, 2), np.float32)),
         stats=parts.get("stats"),
     )
+    if "extra" in parts:  # the ground-truth channels Frame.save_exr wrote, by name
+        frame.outputs["channels"] = parts["extra"]
+    return frame
