@@ -73,7 +73,8 @@ pub struct SegmentCamera<'a> {
 }
 
 /// (K+1,) segment boundaries from 0 to 1 for `objects` seen by `camera` (see the module).
-/// `tolerance` in pixels, > 0. No objects: `[0, 1]`.
+/// `tolerance` in pixels, > 0. No objects: `[0, 1]`. Errors name `tolerance`, or `objects` for
+/// a deforming motion whose vertex count is not its mesh's.
 pub fn segment_times(
     objects: &[SegmentObject<'_>],
     camera: &SegmentCamera<'_>,
@@ -184,10 +185,19 @@ impl<'a> Rule<'a> {
     ) -> Result<Self> {
         let mut points = Vec::with_capacity(objects.len());
         let mut probes = Vec::new();
-        for o in objects {
+        for (i, o) in objects.iter().enumerate() {
             match o.motion {
                 Some(k) if k.is_deforming() => {
-                    let rows = test_rows(o.mesh.vertices().len());
+                    let n = o.mesh.vertices().len();
+                    if let Keys::Deforming { count, .. } = k.keys() {
+                        if *count != n {
+                            return Err(Error::shape(
+                                "objects",
+                                format!("object {i}: its motion moves {count} vertices, its mesh has {n}"),
+                            ));
+                        }
+                    }
+                    let rows = test_rows(n);
                     if let Some(p) = Probe::new(o, k, &rows)? {
                         probes.push(p);
                     }
@@ -575,6 +585,12 @@ mod tests {
         assert_eq!(segment_times(&[o], &camera(), 0.01).unwrap(), [0.0, 1.0]);
         o.lambert = true;
         assert!(segment_times(&[o], &camera(), 0.01).unwrap().len() > 2);
+        let small = Mesh::new(vec![[0.0; 3]; 3], vec![[0, 1, 2]]).unwrap();
+        o.mesh = &small;
+        let err = segment_times(&[o], &camera(), 0.01)
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with("objects: object 0"), "{err}");
     }
 
     #[test]

@@ -59,41 +59,16 @@ fn _segment_times<'py>(
     options: SegmentArgs<'py>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let o = &options;
-    let meshes: Vec<_> = o
+    // The pyclasses are frozen: their cores are borrowed for the call, never copied.
+    let objects: Vec<SegmentObject> = o
         .objects
         .iter()
-        .map(|x| x.mesh.get().inner.clone())
-        .collect();
-    let motions: Vec<_> = o
-        .objects
-        .iter()
-        .map(|x| x.motion.as_ref().map(|k| k.get().inner.clone()))
-        .collect();
-    for (i, (mesh, motion)) in meshes.iter().zip(&motions).enumerate() {
-        if let Some(crate::Keys::Deforming { count, .. }) = motion.as_ref().map(|k| k.keys()) {
-            if *count != mesh.vertices().len() {
-                return Err(Error::shape(
-                    "objects",
-                    format!(
-                        "object {i}: the motion moves {count} vertices, the mesh has {}",
-                        mesh.vertices().len()
-                    ),
-                )
-                .into());
-            }
-        }
-    }
-    let objects: Vec<SegmentObject> = meshes
-        .iter()
-        .zip(&motions)
-        .zip(&o.objects)
-        .map(|((mesh, motion), x)| SegmentObject {
-            mesh,
-            motion: motion.as_deref(),
+        .map(|x| SegmentObject {
+            mesh: &x.mesh.get().inner,
+            motion: x.motion.as_ref().map(|k| &*k.get().inner),
             lambert: x.lambert,
         })
         .collect();
-    let camera_motion = o.camera_motion.as_ref().map(|k| k.get().inner.clone());
     let camera = SegmentCamera {
         width: o.width,
         height: o.height,
@@ -101,7 +76,7 @@ fn _segment_times<'py>(
         view_projection: mat4(&o.view_projection, "view_projection")?,
         projection: mat4(&o.projection, "projection")?,
         pose: mat4(&o.pose, "pose")?,
-        motion: camera_motion.as_deref(),
+        motion: o.camera_motion.as_ref().map(|k| &*k.get().inner),
     };
     let tolerance = o.tolerance;
     let times = detached_in_pool(py, || segment_times(&objects, &camera, tolerance))?;
