@@ -15,7 +15,7 @@
 //! - `image`: image-space blur;
 //! - `frame`: the one owned frame type and the one borrowed layer view every stage shares;
 //! - `budget`: the memory budget every kernel checks before it allocates;
-//! - `analytic`: analytic motion blur, exact covered time per sample;
+//! - `analytic`: analytic motion blur, exact covered time per sample, and its segment rule;
 //! - `shutter`: the shutter filters;
 //! - `simd`: the switch over the kernels' vector forms;
 //! - `threads`: the per-process thread pool every parallel kernel runs in (safe after `fork`).
@@ -46,8 +46,11 @@ pub use accumulate::{
     Samples, StillCamera,
 };
 pub use analytic::{
-    render as render_analytic, Input as AnalyticInput, MovingDraw, Quadrature,
-    Stats as AnalyticStats, DEFAULT_TILE_BUDGET as ANALYTIC_TILE_BUDGET,
+    render as render_analytic, segment_times, Input as AnalyticInput, MovingDraw, Quadrature,
+    SegmentCamera, SegmentObject, Stats as AnalyticStats,
+    DEFAULT_TILE_BUDGET as ANALYTIC_TILE_BUDGET, DEFORMING_POINTS as ANALYTIC_DEFORMING_POINTS,
+    MAX_SEGMENTS as ANALYTIC_MAX_SEGMENTS, MIN_PIECE as ANALYTIC_MIN_PIECE,
+    NORMAL_TOLERANCE as ANALYTIC_NORMAL_TOLERANCE,
 };
 pub use budget::{
     memory_budget, set_memory_budget, Need, DEFAULT_MEMORY_BUDGET, MIN_MEMORY_BUDGET,

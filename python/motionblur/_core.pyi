@@ -657,3 +657,40 @@ class _Painter:
         Releases the GIL."""
 
 # --- end acc-frame
+
+# --- segments (the analytic method's segment rule)
+
+__all__ += [
+    "ANALYTIC_MAX_SEGMENTS",
+    "ANALYTIC_MIN_PIECE",
+    "ANALYTIC_NORMAL_TOLERANCE",
+    "_segment_times",
+]
+
+ANALYTIC_MAX_SEGMENTS: int
+ANALYTIC_MIN_PIECE: float
+ANALYTIC_NORMAL_TOLERANCE: float
+
+class _SegmentObject(TypedDict):
+    mesh: _Mesh
+    motion: _Keyframes | None
+    lambert: bool
+
+class _SegmentOptions(TypedDict):
+    objects: list[_SegmentObject]
+    width: int
+    height: int
+    znear: float
+    view_projection: np.ndarray
+    projection: np.ndarray
+    pose: np.ndarray
+    camera_motion: _Keyframes | None
+    tolerance: float
+
+def _segment_times(options: _SegmentOptions) -> np.ndarray:
+    """(K+1,) f64 segment boundaries from 0 to 1 of the analytic method's rule for the objects
+    (mesh, rigid or deforming keyframes or None, lambert) seen in a width x height image with
+    near plane znear: the scene camera's view_projection, projection and pose (4,4) f64 (moved
+    by camera_motion when given); tolerance pixels > 0. Releases the GIL."""
+
+# --- end segments

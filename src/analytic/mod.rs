@@ -21,6 +21,9 @@
 //! 5. the box resolve of each pixel's samples (colour mean; depth, id and velocity of the
 //!    nearest sample).
 //!
+//! The segments' boundaries come from the caller; [`segment_times`] is the method's own rule
+//! for them (`segments.rs`).
+//!
 //! Depth, ids and velocity describe the surface in front at the reference time. Every step is
 //! deterministic per sample, so the output does not depend on the thread count.
 // Numeric kernels: index loops over corners and coefficients read like the formulas, and
@@ -35,6 +38,7 @@ mod poly;
 mod prim;
 mod quadrature;
 mod resolve;
+mod segments;
 mod shade;
 mod tiles;
 mod visibility;
@@ -45,3 +49,7 @@ mod tests;
 pub use frame::{render, Stats};
 pub use input::{Input, MovingDraw, DEFAULT_TILE_BUDGET};
 pub use quadrature::Quadrature;
+pub use segments::{
+    segment_times, SegmentCamera, SegmentObject, DEFORMING_POINTS, MAX_SEGMENTS, MIN_PIECE,
+    NORMAL_TOLERANCE,
+};

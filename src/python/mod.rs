@@ -16,6 +16,7 @@ mod image;
 mod motion;
 mod painter;
 mod raster;
+mod segments;
 mod shell;
 
 #[pymodule]
@@ -30,5 +31,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     accumulate::register(m)?;
     painter::register(m)?;
     analytic::register(m)?;
+    segments::register(m)?;
     Ok(())
 }
