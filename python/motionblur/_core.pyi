@@ -3,7 +3,7 @@
 from typing import Literal, Protocol, TypedDict, final
 
 import numpy as np
-from typing_extensions import Self
+from typing_extensions import NotRequired, Self
 
 # The compiled classes are PyO3 classes: built by __new__ (they have no __init__) and final.
 
@@ -75,6 +75,7 @@ class _AnalyticOptions(TypedDict):
     reference_time: float
     shade: bool
     tile_budget: int
+    exposure: NotRequired[int | None]
 
 class _VolumeOptions(TypedDict, total=False):
     filter: str
@@ -543,7 +544,14 @@ def _analytic(
     draws: list[_MovingDrawLike],
     options: _AnalyticOptions,
     backdrop: _LayerLike | None = None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, float]]:
+) -> tuple[
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    dict[str, float],
+    tuple[np.ndarray, np.ndarray, np.ndarray] | None,
+]:
     """Analytic motion blur: draws (motionblur.MovingDraw: positions f64 (K+1,V,3) at the
     boundaries ``times`` f64 (K+1,) from 0 to 1, faces i64 (F,3), straight rgba f32 (1|V,4),
     normals f32 (K+1,V,3) | None, object_id, cull_back, shading "flat" | "lambert") seen through
@@ -552,8 +560,9 @@ def _analytic(
     or "auto"; ``backdrop`` an opaque layer per sample (rgba f32 (HS,WS,4), depth f32 (HS,WS),
     ids i32 (HS,WS)). Returns rgba (H,W,4) f32 premultiplied (the shutter integral), depth (H,W)
     f32, ids (H,W) i32 and velocity (H,W,2) f32 of the surface in front at ``reference_time``,
-    and a stats dict. ``tile_budget`` bytes per tile pass; ``MemoryError`` where one sample
-    alone needs more. The GIL is released."""
+    a stats dict, and with ``exposure`` N (object ids -1..N-1) the exposure channel's fraction,
+    first and last (H,W,N+1) f32 (plane N for id -1), else None. ``tile_budget`` bytes per tile
+    pass; ``MemoryError`` where one sample alone needs more. The GIL is released."""
 
 def _rasterize(
     draws: list[_DrawLike],

@@ -109,6 +109,7 @@ def rasterize_motion(
     reference_time: float = 1.0,
     background=None,
     shade: bool = True,
+    exposure: int | None = None,
 ) -> Frame:
     """Rasterizes moving meshes with the exact covered time per sample.
 
@@ -124,7 +125,11 @@ def rasterize_motion(
     ``background``: an opaque layer the draws are depth-tested and composited against, one
     entry per sample: ``(rgba (HS,WS,4) float32 premultiplied, depth (HS,WS) float32 view
     depth (inf where empty), ids (HS,WS) int32)``. ``shade=False`` gives coverage only (every
-    surface opaque white).
+    surface opaque white). ``exposure``: None, or the number N of object ids (every draw's
+    ``object_id`` and every ``background`` id in -1..N-1) to also return the exposure channel
+    in ``stats["exposure"]``: a dict of ``fraction``, ``first`` and ``last``, each (H,W,N+1)
+    float32, plane k for object id k and the last plane for id -1 (no surface): see
+    [`exposure`][motionblur.ground_truth.exposure] for what they hold.
 
     Returns a [`Frame`][motionblur.analytic.Frame]: ``rgba`` (H,W,4) float32 premultiplied, the shutter-weighted
     time integral; ``depth`` (H,W) float32, ``ids`` (H,W) int32 and ``velocity`` (H,W,2) float32
@@ -176,6 +181,8 @@ def rasterize_motion(
         )
     if not isinstance(shade, (bool, np.bool_)):
         raise TypeError(f"shade: expected a bool, got {type(shade).__name__}")
+    if exposure is not None:
+        exposure = as_int(exposure, "exposure", minimum=0, maximum=2**31 - 1)
     options = {
         "width": w,
         "height": h,
@@ -189,9 +196,13 @@ def rasterize_motion(
         "reference_time": as_float(reference_time, "reference_time"),
         "shade": bool(shade),
         "tile_budget": as_int(TILE_BUDGET_BYTES, "TILE_BUDGET_BYTES", minimum=1),
+        "exposure": exposure,
     }
-    rgba, depth, ids, velocity, stats = _core._analytic(draws, options, bd)
-    return Frame(rgba, depth, ids, velocity, stats)
+    rgba, depth, ids, velocity, stats, planes = _core._analytic(draws, options, bd)
+    frame = Frame(rgba, depth, ids, velocity, stats)
+    if planes is not None:
+        frame.stats["exposure"] = dict(zip(("fraction", "first", "last"), planes))
+    return frame
 
 
 def coverage(cameras, draws: Sequence[MovingDraw], times, samples: int = 1, shutter="box") -> np.ndarray:

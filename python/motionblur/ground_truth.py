@@ -30,6 +30,8 @@ __all__ = [
     "trajectories",
     "OUTPUTS",
     "outputs",
+    "Exposure",
+    "exposure",
 ]
 
 _NAMED_TIMES = {"open": 0.0, "center": 0.5, "close": 1.0}
@@ -279,6 +281,52 @@ def outputs(scene: Scene, names, method: str, times=None) -> dict:
     if "trajectory" in names:
         out["trajectory"] = trajectories(scene)
     return out
+
+
+@dataclass(frozen=True)
+class Exposure:
+    """Per pixel and object, how long the object is the visible one there over the shutter.
+
+    The K = N + 1 planes are the scene's N objects (ids 0..N-1, in ``scene.objects`` order)
+    and, last, id -1: no surface at all (an empty background). ``fraction`` (H,W,K) float32 in
+    [0, 1]: the shutter-weighted fraction of the shutter during which the object is visible,
+    the mean over the pixel's samples (the planes of a pixel sum to 1); ``first`` and ``last``
+    (H,W,K) float32 shutter times in [0, 1]: the earliest and latest instant it is visible at
+    any of the pixel's samples, NaN where it never is; ``ids`` (K,) int32 the object id of each
+    plane. The arrays are read-only."""
+
+    fraction: NDArray[np.float32]
+    first: NDArray[np.float32]
+    last: NDArray[np.float32]
+    ids: NDArray[np.int32]
+
+
+def exposure(scene: Scene, aa: int = 1, *, tolerance: float = 0.01, segments=None) -> Exposure:
+    """The exposure channel of ``scene`` from the analytic method (its exact covered times and
+    visibility over time), rendered with ``aa`` (1, 2 or 4) samples per pixel along each axis;
+    ``tolerance`` and ``segments`` as the analytic method has them (how the shutter is cut into
+    segments of linear motion). Returns an [`Exposure`][motionblur.ground_truth.Exposure].
+
+    Visible, at a sample and an instant, is the object of the frontmost surface there, whatever
+    its alpha (a half-transparent object in front is the visible one; a triangle of alpha 0 at
+    all its corners is not drawn at all), or where no moving surface is in front of it, the
+    object of the static layer (still objects, rasterized once); id -1 where there is nothing.
+    A sample's fraction is the shutter filter's weight of the times the object is visible (its
+    integral over them: a ramp shutter counts late times more), and a pixel's is the mean over
+    its samples. ``first`` and ``last`` are the earliest start and latest end over the pixel's
+    samples of the stretches of time of positive length the object is visible, whatever the
+    filter's weight there (a time the filter gives weight 0 still counts)."""
+    from .methods.analytic import analytic
+
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
+    f = analytic(scene, aa, tolerance=tolerance, segments=segments, exposure=True)
+    planes = f.stats["exposure"]
+    ids = np.append(np.arange(len(scene.objects), dtype=np.int32), np.int32(-1))
+    out = [planes["fraction"], planes["first"], planes["last"], ids]
+    for a in out:
+        a.setflags(write=False)
+    return Exposure(*out)
 
 
 from ._namespace import tidy  # noqa: E402  (dir() lists the API only; see motionblur._namespace)

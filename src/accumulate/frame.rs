@@ -310,6 +310,7 @@ pub fn accumulate_still(
             depth: keep_depth,
             ids: keep_ids,
             velocity: None,
+            exposure: None,
         },
         window: win,
         draw_calls,

@@ -8,9 +8,9 @@ use super::hull;
 use super::input::{prepare, validate, Input, Prepared};
 use super::prim::{self, Corners, Prim, OPAQUE};
 use super::shade::TilePrim;
-use super::tiles::{corners, Counts, Ctx, SampleOut, TILE};
+use super::tiles::{corners, Counts, Ctx, SampleOut, TileOut, Visible, TILE};
 use crate::error::{Error, Result};
-use crate::frame::Frame;
+use crate::frame::{Exposure, Frame};
 
 /// Faces set up per parallel job.
 const CHUNK: usize = 2048;
@@ -60,8 +60,9 @@ fn ms(t: Instant) -> f64 {
 }
 
 /// Renders one frame: rgba integrated over the shutter; depth, ids and velocity (always
-/// written) of the surface in front at the reference time; and the frame's counts and
-/// timings. Errors name the offending argument.
+/// written) of the surface in front at the reference time; with [`Input::exposure`], the
+/// exposure channel (see [`write_exposure`]); and the frame's counts and timings. Errors name
+/// the offending argument.
 pub fn render(input: &Input) -> Result<(Frame, Stats)> {
     let t_all = Instant::now();
     validate(input)?;
@@ -122,17 +123,40 @@ pub fn render(input: &Input) -> Result<(Frame, Stats)> {
     let (w, h) = (input.width as usize, input.height as usize);
     let mut frame = Frame::new(input.width, input.height, false);
     let mut velocity = vec![0.0; 2 * w * h];
+    let mut exposure = input
+        .exposure
+        .map(|n| Exposure::new(input.width, input.height, n + 1, "exposure"))
+        .transpose()?;
     let band = (TILE as usize / s as usize) * w;
+    let exposure_bands: Vec<Option<ExposureBand>> = match &mut exposure {
+        None => (0..h.div_ceil(band / w)).map(|_| None).collect(),
+        Some(e) => {
+            let p = e.planes as usize;
+            (e.fraction.chunks_mut(p * band))
+                .zip(e.first.chunks_mut(p * band))
+                .zip(e.last.chunks_mut(p * band))
+                .map(|((fraction, first), last)| {
+                    Some(ExposureBand {
+                        fraction,
+                        first,
+                        last,
+                        planes: p,
+                    })
+                })
+                .collect()
+        }
+    };
     let rows: Vec<Vec<Counts>> = frame
         .rgba
         .par_chunks_mut(4 * band)
         .zip(frame.depth.par_chunks_mut(band))
         .zip(frame.ids.par_chunks_mut(band))
         .zip(velocity.par_chunks_mut(2 * band))
+        .zip(exposure_bands)
         .enumerate()
-        .map(|(y, (((rgba, depth), ids), velocity))| {
+        .map(|(y, ((((rgba, depth), ids), velocity), exposure))| {
             let y = y as i32;
-            let tiles: Vec<(Vec<SampleOut>, Counts)> = (0..tx)
+            let tiles: Vec<TileOut> = (0..tx)
                 .into_par_iter()
                 .map(|x| {
                     let i = (y * tx + x) as usize;
@@ -144,14 +168,16 @@ pub fn render(input: &Input) -> Result<(Frame, Stats)> {
                 depth,
                 ids,
                 velocity,
+                exposure,
                 width: w,
                 y0: y * TILE / s as i32,
             };
-            for (x, (samples, _)) in tiles.iter().enumerate() {
+            for (x, (samples, visible, _)) in tiles.iter().enumerate() {
                 let (x0, y0) = (x as i32 * TILE, y * TILE);
                 write_pixels(&mut out, samples, x0, y0, ws as i32, hs as i32, s as i32);
+                write_exposure(&mut out, visible, x0, y0, s as i32);
             }
-            Ok(tiles.into_iter().map(|(_, c)| c).collect())
+            Ok(tiles.into_iter().map(|(_, _, c)| c).collect())
         })
         .collect::<Result<_>>()?;
     stats.ms_tiles = ms(t);
@@ -166,6 +192,7 @@ pub fn render(input: &Input) -> Result<(Frame, Stats)> {
     }
     stats.ms_total = ms(t_all);
     frame.velocity = Some(velocity);
+    frame.exposure = exposure;
     Ok((frame, stats))
 }
 
@@ -328,6 +355,8 @@ struct Band<'a> {
     depth: &'a mut [f32],
     ids: &'a mut [i32],
     velocity: &'a mut [f32],
+    /// The exposure channel's rows, when it is on.
+    exposure: Option<ExposureBand<'a>>,
     /// Pixels per row.
     width: usize,
     /// The band's first pixel row in the frame.
@@ -374,5 +403,40 @@ fn write_pixels(
                 band.velocity[2 * i + 1] = b.velocity[1];
             }
         }
+    }
+}
+
+/// The exposure channel's pixel rows of one band: (rows, W, planes) each.
+struct ExposureBand<'a> {
+    fraction: &'a mut [f32],
+    first: &'a mut [f32],
+    last: &'a mut [f32],
+    planes: usize,
+}
+
+/// Adds the objects visible at a tile's samples to the band's exposure (when it is on): per
+/// pixel and object, the mean over the pixel's samples of the filter's weight of the time the
+/// object is in front there (a sample where it never is counts 0), and the earliest first and
+/// latest last instant over them (NaN where it never is in front).
+fn write_exposure(band: &mut Band, visible: &[Visible], x0: i32, y0: i32, s: i32) {
+    let Some(ex) = &mut band.exposure else {
+        return;
+    };
+    let norm = 1.0 / f64::from(s * s);
+    for v in visible {
+        let (sx, sy) = (x0 + v.sample as i32 % TILE, y0 + v.sample as i32 / TILE);
+        let plane = if v.id < 0 {
+            ex.planes - 1
+        } else {
+            v.id as usize
+        };
+        if plane >= ex.planes {
+            continue; // ids are checked against the planes by `validate`
+        }
+        let i = ((sy / s - band.y0) as usize * band.width + (sx / s) as usize) * ex.planes + plane;
+        ex.fraction[i] += (v.weight * norm) as f32;
+        // `min` and `max` of NaN (never seen so far) and a number are the number
+        ex.first[i] = ex.first[i].min(v.first);
+        ex.last[i] = ex.last[i].max(v.last);
     }
 }

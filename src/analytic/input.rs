@@ -62,6 +62,10 @@ pub struct Input<'a> {
     /// Most bytes one pass over a tile may hold in fragments, links and prims (per thread);
     /// past it the tile is done in smaller passes, with the same result ([`DEFAULT_TILE_BUDGET`]).
     pub tile_budget: usize,
+    /// The exposure channel ([`crate::frame::Exposure`]) for object ids `0..n`, or None (off:
+    /// the frame has none, and the render is the same bits). Every draw's `object_id` and every
+    /// backdrop id must then lie in `-1..n`.
+    pub exposure: Option<u32>,
 }
 
 /// The default of [`Input::tile_budget`]: 64 MiB.
@@ -183,6 +187,7 @@ pub fn validate(input: &Input) -> Result<()> {
     if input.tile_budget == 0 {
         return Err(Error::value("tile_budget", "must be at least 1 byte"));
     }
+    validate_exposure(input)?;
     if let Some(b) = &input.backdrop {
         let ws = (input.width * input.samples) as usize;
         let hs = (input.height * input.samples) as usize;
@@ -201,6 +206,37 @@ pub fn validate(input: &Input) -> Result<()> {
             return Err(Error::value(
                 "backdrop",
                 "depth must be > 0 (inf where empty) and colours finite",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// With the exposure channel on for `n` objects: every draw's and the backdrop's ids in
+/// `-1..n`, each of which has a plane.
+fn validate_exposure(input: &Input) -> Result<()> {
+    let Some(n) = input.exposure else {
+        return Ok(());
+    };
+    if n == u32::MAX {
+        return Err(Error::value("exposure", "too many objects"));
+    }
+    let fits = |id: i32| id >= -1 && i64::from(id) < i64::from(n);
+    if let Some(d) = input.draws.iter().find(|d| !fits(d.object_id)) {
+        return Err(Error::value(
+            "object_id",
+            format!(
+                "{} is not an id of the exposure's {n} objects (-1 to {})",
+                d.object_id,
+                i64::from(n) - 1
+            ),
+        ));
+    }
+    if let Some(b) = &input.backdrop {
+        if let Some(id) = b.ids.iter().find(|i| !fits(**i)) {
+            return Err(Error::value(
+                "backdrop",
+                format!("id {id} is not an id of the exposure's {n} objects"),
             ));
         }
     }

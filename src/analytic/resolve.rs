@@ -63,6 +63,44 @@ pub struct Scratch {
     element_cuts: Vec<f64>,
     kinks: Vec<f64>,
     tris: Vec<(u32, f64)>,
+    /// Whether [`resolve`] notes which layer is in front when ([`Scratch::seen`]).
+    pub exposure: bool,
+    /// With `exposure`, the sample's layers that were in front, after [`resolve`].
+    pub seen: Vec<Seen>,
+}
+
+/// No layer at all: neither a fragment nor the backdrop is there.
+pub const NOTHING: usize = usize::MAX - 1;
+
+/// A layer in front at one sample over part of the shutter: the frontmost one (whatever its
+/// alpha), the backdrop where no fragment is in front of it, or [`NOTHING`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Seen {
+    /// A fragment index (of the sorted fragments), `BACKDROP` or [`NOTHING`].
+    pub layer: usize,
+    /// The filter's weight of the time it is in front (`W(b) - W(a)` summed over its pieces).
+    pub weight: f64,
+    /// The first and last instant it is in front (over pieces of positive length, whatever
+    /// their weight).
+    pub first: f64,
+    pub last: f64,
+}
+
+/// Adds the piece `[a, b]` of weight `dw` to `layer`'s entry in `seen`.
+fn note(seen: &mut Vec<Seen>, layer: usize, a: f64, b: f64, dw: f64) {
+    match seen.iter_mut().find(|s| s.layer == layer) {
+        Some(s) => {
+            s.weight += dw;
+            s.first = s.first.min(a);
+            s.last = s.last.max(b);
+        }
+        None => seen.push(Seen {
+            layer,
+            weight: dw,
+            first: a,
+            last: b,
+        }),
+    }
 }
 
 /// `W(b) - W(a)` ([`Shutter::cumulative`]), the box filter's inline.
@@ -303,6 +341,11 @@ pub fn resolve(
         tris: std::mem::take(&mut sc.tris),
     };
     sort(frags);
+    let exposure = sc.exposure;
+    let mut seen = std::mem::take(&mut sc.seen);
+    seen.clear();
+    // the end of the last piece so far: the time before the next one has no layer
+    let mut covered = 0.0f64;
     let mut opaque = std::mem::take(&mut sc.opaque);
     opaque.clear();
     opaque.extend(frags.iter().map(|f| integral.layers.opaque(f)));
@@ -322,6 +365,19 @@ pub fn resolve(
                 };
             }
             let dw = weight(time.shutter, a, b);
+            if exposure {
+                if a > covered {
+                    note(
+                        &mut seen,
+                        NOTHING,
+                        covered,
+                        a,
+                        weight(time.shutter, covered, a),
+                    );
+                }
+                note(&mut seen, order.first().map_or(NOTHING, |o| o.1), a, b, dw);
+                covered = b;
+            }
             if dw <= 0.0 {
                 return;
             }
@@ -329,6 +385,16 @@ pub fn resolve(
             integral.piece(a, b, dw, order, frags);
         },
     );
+    if exposure && covered < 1.0 {
+        note(
+            &mut seen,
+            NOTHING,
+            covered,
+            1.0,
+            weight(time.shutter, covered, 1.0),
+        );
+    }
+    sc.seen = seen;
     sc.opaque = opaque;
     sc.element_cuts = integral.cuts;
     sc.kinks = integral.kinks;

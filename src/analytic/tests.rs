@@ -95,6 +95,7 @@ fn render_within(
         reference_time: 1.0,
         shade: true,
         tile_budget,
+        exposure: None,
     })
 }
 
@@ -259,6 +260,7 @@ fn bad_input_names_the_argument() {
         reference_time: 1.0,
         shade: true,
         tile_budget: DEFAULT_TILE_BUDGET,
+        exposure: None,
     };
     assert!(render(&good).is_ok());
     let err = |i: Input| render(&i).unwrap_err().to_string();
@@ -410,4 +412,98 @@ fn uniform_layers_resolve_as_their_shading_does() {
             }
         }
     }
+}
+
+/// The translating square of [`check_square`] (object 7, over nothing) with the exposure
+/// channel for 8 objects.
+fn render_exposure(shutter: &Shutter, exposure: Option<u32>, samples: u32) -> crate::Result<Frame> {
+    let (pos, faces) = grid_square(0.6, 3, &[-1.5, 1.2]);
+    let vp = [camera()];
+    let rgba = [[1.0f32, 1.0, 1.0, 0.5]];
+    let draws = [MovingDraw {
+        positions: &pos,
+        faces: &faces,
+        rgba: &rgba,
+        normals: None,
+        object_id: 7,
+        cull_back: true,
+        shading: Shading::Flat,
+    }];
+    let input = Input {
+        width: W,
+        height: H,
+        samples,
+        times: &[0.0, 1.0],
+        view_projections: &vp,
+        draws: &draws,
+        backdrop: None,
+        shutter,
+        lights: &[],
+        ambient: [0.0; 3],
+        quadrature: Quadrature::Auto,
+        reference_time: 1.0,
+        shade: true,
+        tile_budget: DEFAULT_TILE_BUDGET,
+        exposure,
+    };
+    render(&input).map(|r| r.0)
+}
+
+#[test]
+fn exposure_is_the_closed_form_time_in_front_and_changes_nothing_else() {
+    let (h, x0, x1) = (0.6, -1.5, 1.2);
+    for shutter in [Shutter::Box, Shutter::Ramp] {
+        let off = render_exposure(&shutter, None, 1).unwrap();
+        let on = render_exposure(&shutter, Some(8), 1).unwrap();
+        assert!(off.exposure.is_none());
+        let e = on.exposure.clone().expect("asked for");
+        assert_eq!((on.rgba, on.depth, on.ids), (off.rgba, off.depth, off.ids));
+        assert_eq!(e.planes, 9);
+        for iy in 0..H {
+            for ix in 0..W {
+                let (x, y) = on_plane(ix, iy);
+                let i = (iy * W + ix) as usize * 9;
+                let (a, b) = (
+                    ((x - h - x0) / (x1 - x0)).clamp(0.0, 1.0),
+                    ((x + h - x0) / (x1 - x0)).clamp(0.0, 1.0),
+                );
+                // alpha 0.5: in front (so counted) however transparent
+                let inside = y.abs() <= h && b > a;
+                let want = if inside {
+                    shutter.cumulative(b) - shutter.cumulative(a)
+                } else {
+                    0.0
+                };
+                let got = f64::from(e.fraction[i + 7]);
+                assert!((got - want).abs() < 1e-5, "({ix}, {iy}): {got} {want}");
+                let sum: f32 = e.fraction[i..i + 9].iter().sum();
+                assert!((sum - 1.0).abs() < 1e-6, "{sum}");
+                assert!(e.fraction[i..i + 7].iter().all(|f| *f == 0.0));
+                if inside {
+                    assert!((f64::from(e.first[i + 7]) - a).abs() < 1e-5);
+                    assert!((f64::from(e.last[i + 7]) - b).abs() < 1e-5);
+                } else {
+                    assert!(e.first[i + 7].is_nan() && e.last[i + 7].is_nan());
+                }
+            }
+        }
+    }
+    // supersampled: every pixel's fractions still sum to 1
+    let e = render_exposure(&Shutter::Box, Some(8), 2)
+        .unwrap()
+        .exposure
+        .unwrap();
+    for p in e.fraction.chunks(9) {
+        assert!((p.iter().sum::<f32>() - 1.0).abs() < 1e-6);
+    }
+}
+
+#[test]
+fn exposure_ids_outside_its_objects_and_too_large_planes_are_errors() {
+    let e = render_exposure(&Shutter::Box, Some(7), 1).unwrap_err();
+    assert!(e.to_string().starts_with("object_id"), "{e}");
+    let _lock = crate::budget::tests::BUDGET_LOCK.lock().unwrap();
+    let e = render_exposure(&Shutter::Box, Some(4_000_000), 1).unwrap_err();
+    assert!(matches!(e, crate::Error::Memory { .. }), "{e}");
+    assert!(e.to_string().starts_with("exposure"), "{e}");
 }

@@ -15,9 +15,9 @@ use super::hull;
 use super::input::{Input, Prepared};
 use super::poly::MAX_SPANS;
 use super::prim::{Corners, Cover, Edges, Prim};
-use super::resolve::{self, Scratch};
+use super::resolve::{self, Scratch, Seen, NOTHING};
 use super::shade::{SampleShader, TilePrim};
-use super::visibility::{Frag, Link, Overflow, StaticSample, BACK, NONE};
+use super::visibility::{Frag, Link, Overflow, StaticSample, BACK, BACKDROP, NONE};
 use crate::error::{Error, Result};
 
 /// Tile side in samples (a multiple of every supersampling factor).
@@ -49,6 +49,23 @@ pub struct SampleOut {
     pub id: i32,
     pub velocity: [f32; 2],
 }
+
+/// One object visible at one sample of a tile (the exposure channel, [`Input::exposure`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Visible {
+    /// The sample: row-major index in the tile (TILE wide).
+    pub sample: u32,
+    /// The object id (-1: no surface).
+    pub id: i32,
+    /// The filter's weight of the time it is in front, its first and last instant then.
+    pub weight: f64,
+    pub first: f32,
+    pub last: f32,
+}
+
+/// What one tile gives: its samples' results (row-major, TILE wide), the objects visible at
+/// them (empty unless the exposure channel is on) and its counts.
+pub type TileOut = (Vec<SampleOut>, Vec<Visible>, Counts);
 
 /// What a sample outside the image (in a tile at the edge) holds.
 const EMPTY: SampleOut = SampleOut {
@@ -96,6 +113,7 @@ struct TileScratch {
     cursor: Vec<u32>,
     sweep: Scratch,
     out: Vec<SampleOut>,
+    visible: Vec<Visible>,
 }
 
 impl Default for TileScratch {
@@ -109,6 +127,7 @@ impl Default for TileScratch {
             cursor: Vec::new(),
             sweep: Scratch::default(),
             out: Vec::new(),
+            visible: Vec::new(),
         }
     }
 }
@@ -145,9 +164,9 @@ pub fn corners(input: &Input, prepared: &[Prepared], p: &Prim, ws: i32, hs: i32)
 }
 
 impl Ctx<'_> {
-    /// One tile: its samples' results (row-major, TILE wide) and counts. Fails only where one
+    /// One tile: its samples' results, the objects visible at them and its counts. Fails only where one
     /// sample alone needs more than the memory budget ([`Input::tile_budget`]).
-    pub fn tile(&self, tx: i32, ty: i32, bin: &[u32]) -> Result<(Vec<SampleOut>, Counts)> {
+    pub fn tile(&self, tx: i32, ty: i32, bin: &[u32]) -> Result<TileOut> {
         SCRATCH.with(|cell| match cell.try_borrow_mut() {
             Ok(mut sc) => self.tile_dispatch(tx, ty, bin, &mut sc),
             Err(_) => self.tile_dispatch(tx, ty, bin, &mut TileScratch::default()),
@@ -164,7 +183,7 @@ impl Ctx<'_> {
         ty: i32,
         bin: &[u32],
         sc: &mut TileScratch,
-    ) -> Result<(Vec<SampleOut>, Counts)> {
+    ) -> Result<TileOut> {
         #[cfg(target_arch = "x86_64")]
         if crate::simd::simd_enabled() {
             // SAFETY: `tile_avx2` only requires AVX2, which the CPU was just found to have.
@@ -182,7 +201,7 @@ impl Ctx<'_> {
         ty: i32,
         bin: &[u32],
         sc: &mut TileScratch,
-    ) -> Result<(Vec<SampleOut>, Counts)> {
+    ) -> Result<TileOut> {
         self.tile_with(tx, ty, bin, sc)
     }
 
@@ -191,13 +210,7 @@ impl Ctx<'_> {
     /// down to one sample. A sample's result depends on its own fragments only, which are the
     /// same in any pass that holds it, so the output is the same bits whatever the budget.
     #[inline(always)]
-    fn tile_with(
-        &self,
-        tx: i32,
-        ty: i32,
-        bin: &[u32],
-        sc: &mut TileScratch,
-    ) -> Result<(Vec<SampleOut>, Counts)> {
+    fn tile_with(&self, tx: i32, ty: i32, bin: &[u32], sc: &mut TileScratch) -> Result<TileOut> {
         let (x0, y0) = (tx * TILE, ty * TILE);
         let whole = Rect {
             x0,
@@ -210,6 +223,8 @@ impl Ctx<'_> {
         out.clear();
         out.resize((TILE * TILE) as usize, EMPTY);
         sc.sweep.sweep.max_cuts = self.input.tile_budget / std::mem::size_of::<f64>();
+        sc.sweep.exposure = self.input.exposure.is_some();
+        sc.visible.clear();
         // a stack of rectangles to do: each split pushes two halves of at most 10 levels
         let mut todo = [whole; 12];
         let mut n = 1;
@@ -242,7 +257,7 @@ impl Ctx<'_> {
         }
         let result = out.clone();
         sc.out = out;
-        Ok((result, counts))
+        Ok((result, sc.visible.clone(), counts))
     }
 
     /// The memory error of sample `(ix, iy)`, which alone holds `what` than the budget allows.
@@ -412,6 +427,20 @@ impl Ctx<'_> {
                 let frags = &mut sc.frags[sc.start[j] as usize..sc.start[j + 1] as usize];
                 let bg = self.behind(ix, iy);
                 if frags.is_empty() {
+                    if sc.sweep.exposure {
+                        let layer = if bg.depth.is_finite() {
+                            BACKDROP
+                        } else {
+                            NOTHING
+                        };
+                        let whole = Seen {
+                            layer,
+                            weight: 1.0,
+                            first: 0.0,
+                            last: 1.0,
+                        };
+                        sc.visible.push(visible(j, bg.id, &whole));
+                    }
                     out[j] = SampleOut {
                         rgba: if bg.depth.is_finite() {
                             bg.rgba
@@ -451,6 +480,14 @@ impl Ctx<'_> {
                 )
                 .map_err(|_| (ix, iy))?;
                 counts.pieces += u64::from(r.pieces);
+                for s in &sc.sweep.seen {
+                    let id = match s.layer {
+                        BACKDROP => bg.id,
+                        NOTHING => -1,
+                        fi => shader.object_id(shader.prim_at(&frags[fi], s.first)),
+                    };
+                    sc.visible.push(visible(j, id, s));
+                }
                 out[j] = match r.front {
                     Some((fi, z)) => {
                         let p = shader.prim_at(&frags[fi], t_ref);
@@ -489,6 +526,17 @@ impl Ctx<'_> {
                 }
             }
         }
+    }
+}
+
+/// Sample `j`'s entry of the layer `s` in front there, object `id`.
+fn visible(j: usize, id: i32, s: &Seen) -> Visible {
+    Visible {
+        sample: j as u32,
+        id,
+        weight: s.weight,
+        first: s.first as f32,
+        last: s.last as f32,
     }
 }
 

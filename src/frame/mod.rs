@@ -14,7 +14,7 @@
 //! stage says), `rgba` 4 floats an entry.
 //!
 //! This module depends on no stage, so every stage may use it.
-use crate::budget::try_reserve;
+use crate::budget::{try_reserve, try_vec, Need};
 use crate::error::{Error, Result};
 
 /// An owned image of surfaces: row-major buffers of `height` x `width` entries.
@@ -33,6 +33,59 @@ pub struct Frame {
     /// (H,W,2) screen motion in pixels of the nearest surface, or None when the render does not
     /// write it (the rasterizer without previous positions: the motion is zero everywhere).
     pub velocity: Option<Vec<f32>>,
+    /// Per pixel and object id, how long each object is visible there over the shutter, or
+    /// None when the render does not write it (only the analytic renderer can, on request).
+    pub exposure: Option<Exposure>,
+}
+
+/// Per pixel and object id, the time each object is the visible one over the shutter:
+/// `height` x `width` x `planes` row-major (one plane per object id `0..planes-1`, the last
+/// plane for id -1: no surface). Which object is visible is the renderer's to define (the
+/// analytic renderer: the frontmost surface at the sample, whatever its alpha).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Exposure {
+    /// Planes per pixel: the object ids `0..planes-1` and, last, id -1.
+    pub planes: u32,
+    /// (H,W,P) the shutter-weighted fraction of the shutter the object is visible, in [0, 1]
+    /// (the mean over the pixel's samples).
+    pub fraction: Vec<f32>,
+    /// (H,W,P) the first shutter time it is visible at any of the pixel's samples, NaN where it
+    /// never is.
+    pub first: Vec<f32>,
+    /// (H,W,P) the last shutter time it is visible at any of the pixel's samples, NaN where it
+    /// never is.
+    pub last: Vec<f32>,
+}
+
+impl Exposure {
+    /// An empty exposure of `width` x `height` pixels and `planes` planes (fractions 0, times
+    /// NaN), after checking its 12 bytes per pixel and plane against the memory budget (the
+    /// error names `name`, the argument that asked for it).
+    pub fn new(width: u32, height: u32, planes: u32, name: &'static str) -> Result<Self> {
+        let sizes = [
+            (name, u64::from(planes)),
+            ("height", u64::from(height)),
+            ("width", u64::from(width)),
+        ];
+        Need::new("exposure").add(&sizes, 12)?.check()?;
+        let n = planes as usize * width as usize * height as usize;
+        Ok(Exposure {
+            planes,
+            fraction: try_vec(n, 0.0, name)?,
+            first: try_vec(n, f32::NAN, name)?,
+            last: try_vec(n, f32::NAN, name)?,
+        })
+    }
+
+    /// The plane of object id `id` (-1 is the last), or None when it has none.
+    #[inline]
+    pub fn plane(&self, id: i32) -> Option<usize> {
+        match id {
+            -1 => Some(self.planes as usize - 1),
+            i if i >= 0 && (i as u32) + 1 < self.planes => Some(i as usize),
+            _ => None,
+        }
+    }
 }
 
 impl Frame {
@@ -47,6 +100,7 @@ impl Frame {
             depth: vec![f32::INFINITY; n],
             ids: vec![-1; n],
             velocity: velocity.then(|| vec![0.0; 2 * n]),
+            exposure: None,
         }
     }
 

@@ -58,7 +58,8 @@ impl GaussArg {
 /// The options of one `_analytic` call, the items of a dict: the fields of the core's
 /// [`AnalyticInput`] but the draws and the backdrop: `width`, `height`, `samples`, `times` (K+1,)
 /// f64, `view_projections` (1|K+1,4,4) f64, `shutter`, `lights`, `ambient`, `gauss`,
-/// `reference_time`, `shade`, `tile_budget` bytes.
+/// `reference_time`, `shade`, `tile_budget` bytes, and (optional) `exposure`: the number of
+/// object ids of the exposure channel, or None (off).
 #[derive(FromPyObject)]
 #[pyo3(from_item_all)]
 struct AnalyticArgs<'py> {
@@ -74,6 +75,8 @@ struct AnalyticArgs<'py> {
     reference_time: f64,
     shade: bool,
     tile_budget: usize,
+    #[pyo3(default)]
+    exposure: Option<u32>,
 }
 
 struct Owned {
@@ -141,19 +144,24 @@ fn view_projections(a: &PyReadonlyArray3<'_, f64>) -> Result<Vec<DMat4>, Error> 
 }
 
 /// The image arrays of a frame: rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32, velocity
-/// (H,W,2) f32, stats.
+/// (H,W,2) f32, stats, and the exposure channel's (fraction, first, last) (H,W,P) f32 or None.
 type FrameOut<'py> = (
     Bound<'py, PyAny>,
     Bound<'py, PyAny>,
     Bound<'py, PyAny>,
     Bound<'py, PyAny>,
     Bound<'py, PyDict>,
+    Option<ExposureOut<'py>>,
 );
+
+/// The exposure channel's fraction, first and last (H,W,P) f32.
+type ExposureOut<'py> = (Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>);
 
 /// Renders `draws` (`motionblur.MovingDraw` objects) analytically with `options`
 /// ([`AnalyticArgs`]) over `backdrop` (an object with `rgba` (HS,WS,4), `depth`, `ids` (HS,WS),
 /// one entry a sample) when given; returns (rgba (H,W,4) f32, depth (H,W) f32, ids (H,W) i32,
-/// velocity (H,W,2) f32, stats dict). The GIL is released while rendering.
+/// velocity (H,W,2) f32, stats dict, exposure (fraction, first, last) (H,W,P) f32 or None).
+/// The GIL is released while rendering.
 #[pyfunction]
 #[pyo3(signature = (draws, options, backdrop=None))]
 fn _analytic<'py>(
@@ -203,16 +211,29 @@ fn _analytic<'py>(
         reference_time: o.reference_time,
         shade: o.shade,
         tile_budget: o.tile_budget,
+        exposure: o.exposure,
     };
     let (frame, stats) = detached_in_pool(py, || render_analytic(&input))?;
     let (h, w) = (frame.height as usize, frame.width as usize);
     let velocity = frame.velocity.unwrap_or_else(|| vec![0.0; 2 * h * w]);
+    let exposure = match frame.exposure {
+        None => None,
+        Some(e) => {
+            let p = e.planes as usize;
+            Some((
+                shaped(py, e.fraction, [h, w, p])?,
+                shaped(py, e.first, [h, w, p])?,
+                shaped(py, e.last, [h, w, p])?,
+            ))
+        }
+    };
     Ok((
         shaped(py, frame.rgba, [h, w, 4])?,
         shaped(py, frame.depth, [h, w])?,
         shaped(py, frame.ids, [h, w])?,
         shaped(py, velocity, [h, w, 2])?,
         stats.to_dict(py)?,
+        exposure,
     ))
 }
 

@@ -81,7 +81,9 @@ def _draw(scene: Scene, obj: Object, k: int, times: np.ndarray) -> MovingDraw:
     sweep=[{"gauss": "auto"}, {"gauss": 1}, {"gauss": 2}, {"aa": 1}, {"tolerance": 0.25}],
     applies=lambda scene: True,
 )
-def analytic(scene: Scene, aa: int = 1, gauss="auto", tolerance: float = 0.01, segments=None) -> Frame:
+def analytic(
+    scene: Scene, aa: int = 1, gauss="auto", tolerance: float = 0.01, segments=None, exposure: bool = False
+) -> Frame:
     """Analytic motion blur: the exact covered time of every sample, visibility over time.
 
     Options: ``aa`` 1, 2 or 4 samples per pixel along each axis; ``gauss`` points in time per
@@ -92,8 +94,9 @@ def analytic(scene: Scene, aa: int = 1, gauss="auto", tolerance: float = 0.01, s
     surface covering the sample changes, and where a light grazes a lambert surface, the kink
     of ``max(0, n . l)``); ``tolerance`` pixels, the
     chord rule of `segment_times`; ``segments`` an int to cut the shutter into that many
-    equal segments instead (plus every keyframe time). Depth, ids and velocity describe the
-    surface in front at the scene's reference time. ``stats``: the kernel's (``prims``,
+    equal segments instead (plus every keyframe time); ``exposure`` True: also the exposure
+    channel, in ``stats["exposure"]`` (see `motionblur.ground_truth.exposure`). Depth, ids
+    and velocity describe the surface in front at the scene's reference time. ``stats``: the kernel's (``prims``,
     ``intervals``, ``pieces``, ``splits``, ``ms_*``) plus ``segments``. Memory per thread is
     bounded by `motionblur.analytic.TILE_BUDGET_BYTES`.
     """
@@ -108,13 +111,17 @@ def analytic(scene: Scene, aa: int = 1, gauss="auto", tolerance: float = 0.01, s
         moving = [(k, o) for k, o in everything if o.is_moving]
         still = [(k, o) for k, o in everything if not o.is_moving]
     static = static_layer(scene, cam, still, aa) if (still or not moving) else None
-    if not moving:
+    if not isinstance(exposure, (bool, np.bool_)):
+        raise TypeError(f"exposure: expected a bool, got {type(exposure).__name__}")
+    if not moving and not exposure:
         f = Frame(
             static.rgba.copy(), static.depth.copy(), static.ids.copy(), np.zeros((*static.ids.shape, 2))
         )
         f.stats.update({"segments": 0})
         return f
-    if segments is None:
+    if not moving:  # the exposure of the static layer alone, through the same kernel
+        times = np.array([0.0, 1.0])
+    elif segments is None:
         times = segment_times(scene, [o for _, o in moving], scene.camera, tolerance)
     else:
         n = as_int(segments, "segments", minimum=1, maximum=MAX_SEGMENTS)
@@ -135,6 +142,7 @@ def analytic(scene: Scene, aa: int = 1, gauss="auto", tolerance: float = 0.01, s
     frame = rasterize_motion(
         cams, draws, times, samples=aa, shutter=scene.shutter, lights=lights,
         ambient=scene.ambient, gauss=gauss, reference_time=scene.reference_t, background=background,
+        exposure=len(scene.objects) if exposure else None,
     )  # fmt: skip
     frame.stats["segments"] = len(times) - 1
     return frame
