@@ -59,7 +59,7 @@ pub use contour::{
     contour_edges, contour_pairs, motion_silhouette, ContourEdge, ContourSet, ContourTable,
 };
 pub use error::{Error, Result};
-pub use frame::{Frame, Layer};
+pub use frame::{Exposure, Frame, Layer};
 pub use image::{
     box_blur, camera_motion_blur, camera_velocity, colored, depth_of_field, glow, lens_blur,
     opaque_blur, opaque_motion_blur, pixel_bounds, pyramid_blur, pyramid_glow, pyramid_opaque_blur,

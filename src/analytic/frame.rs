@@ -61,7 +61,7 @@ fn ms(t: Instant) -> f64 {
 
 /// Renders one frame: rgba integrated over the shutter; depth, ids and velocity (always
 /// written) of the surface in front at the reference time; with [`Input::exposure`], the
-/// exposure channel (see [`write_exposure`]); and the frame's counts and timings. Errors name
+/// exposure channel; and the frame's counts and timings. Errors name
 /// the offending argument.
 pub fn render(input: &Input) -> Result<(Frame, Stats)> {
     let t_all = Instant::now();

@@ -62,9 +62,14 @@ pub struct Input<'a> {
     /// Most bytes one pass over a tile may hold in fragments, links and prims (per thread);
     /// past it the tile is done in smaller passes, with the same result ([`DEFAULT_TILE_BUDGET`]).
     pub tile_budget: usize,
-    /// The exposure channel ([`crate::frame::Exposure`]) for object ids `0..n`, or None (off:
-    /// the frame has none, and the render is the same bits). Every draw's `object_id` and every
-    /// backdrop id must then lie in `-1..n`.
+    /// The exposure channel ([`crate::Exposure`]) for object ids `0..n`, or None (off: the
+    /// frame has none, and the render is the same bits). Every draw's `object_id` and every
+    /// backdrop id must then lie in `-1..n`. Visible at a sample and an instant is the object
+    /// of the frontmost fragment, whatever its alpha (faces of alpha 0 at every corner are not
+    /// drawn), else the backdrop's where it has a surface, else -1; a sample's fraction is the
+    /// filter's weight of those instants, its first and last the ends of the stretches of
+    /// positive length (whatever their weight); a pixel's, the mean of its samples' fractions
+    /// and the earliest first and latest last.
     pub exposure: Option<u32>,
 }
 
