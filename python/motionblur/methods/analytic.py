@@ -95,8 +95,9 @@ def analytic(
     of ``max(0, n . l)``); ``tolerance`` pixels, the
     chord rule of `segment_times`; ``segments`` an int to cut the shutter into that many
     equal segments instead (plus every keyframe time); ``exposure`` True: also the exposure
-    channel, in ``stats["exposure"]`` (see `motionblur.ground_truth.exposure`). Depth, ids
-    and velocity describe the surface in front at the scene's reference time. ``stats``: the kernel's (``prims``,
+    channel, in ``stats["exposure"]`` (see
+    [`exposure`][motionblur.ground_truth.exposure]). Depth, ids and velocity describe the
+    surface in front at the scene's reference time. ``stats``: the kernel's (``prims``,
     ``intervals``, ``pieces``, ``splits``, ``ms_*``) plus ``segments``. Memory per thread is
     bounded by `motionblur.analytic.TILE_BUDGET_BYTES`.
     """
