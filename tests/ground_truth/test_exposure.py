@@ -143,6 +143,19 @@ def test_ramp_shutter_weights_the_fraction_by_its_integral():
     np.testing.assert_array_equal(ramp.last, box.last)
 
 
+def test_times_the_filter_gives_no_weight_still_count_as_visible():
+    # weights (1, 0): the second half of the shutter weighs nothing
+    a, b, edge = _interval()
+    box, half = exposure(_scene("box")), exposure(_scene(np.array([1.0, 0.0])))
+    want = mb.shutter_cdf(np.array([1.0, 0.0]), b.ravel()) - mb.shutter_cdf(np.array([1.0, 0.0]), a.ravel())
+    # 1e-5 as above
+    np.testing.assert_allclose(half.fraction[..., 0][~edge], want.reshape(H, W)[~edge], atol=1e-5)
+    late = ~edge & (a > 0.55) & (b > a)  # visible only in the weightless half
+    assert late.sum() > 20 and (half.fraction[..., 0][late] == 0).all()
+    np.testing.assert_array_equal(half.first, box.first)
+    np.testing.assert_array_equal(half.last, box.last)
+
+
 def test_accumulating_the_frontmost_id_at_many_times_agrees_within_one_over_n():
     n = 128
     turn = mb.rotate(np.pi / 3, (0.0, 0.0, 1.0), (0.0, 0.0, 0.5))
