@@ -19,7 +19,10 @@
 //!    triangle, split where two cross) over the static backdrop, and [`resolve`] shades the
 //!    visible pieces at Gauss points in time;
 //! 5. the box resolve of each pixel's samples (colour mean; depth, id and velocity of the
-//!    nearest sample).
+//!    nearest sample);
+//! 6. on request ([`Input::exposure`]), the exposure channel: per sample, the object in front
+//!    on each piece of the sweep with the filter's weight of its time and its first and last
+//!    instant; per pixel, the mean weight and the extreme instants over its samples.
 //!
 //! The segments' boundaries come from the caller; [`segment_times`] is the method's own rule
 //! for them (`segments.rs`).

@@ -314,7 +314,10 @@ impl<L: Layers> Integral<'_, L> {
 
 /// Resolves the fragments of one sample (sorted here) over the backdrop `bg`: the integral
 /// over the shutter `time` of the composited colour, and the layer in front at its reference
-/// time. Fails where [`sweep`] does (more depth crossings than `sc.sweep.max_cuts`).
+/// time. With `sc.exposure`, `sc.seen` then holds every layer that was in front (the first of
+/// a piece's, whatever its alpha; [`NOTHING`] where no layer is there) with the filter's weight
+/// of those times and their first and last instant. Fails where [`sweep`] does (more depth
+/// crossings than `sc.sweep.max_cuts`).
 #[inline(always)]
 pub fn resolve(
     frags: &mut [Frag],

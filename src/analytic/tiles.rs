@@ -164,8 +164,8 @@ pub fn corners(input: &Input, prepared: &[Prepared], p: &Prim, ws: i32, hs: i32)
 }
 
 impl Ctx<'_> {
-    /// One tile: its samples' results, the objects visible at them and its counts. Fails only where one
-    /// sample alone needs more than the memory budget ([`Input::tile_budget`]).
+    /// One tile: its samples' results, the objects visible at them and its counts. Fails only
+    /// where one sample alone needs more than the memory budget ([`Input::tile_budget`]).
     pub fn tile(&self, tx: i32, ty: i32, bin: &[u32]) -> Result<TileOut> {
         SCRATCH.with(|cell| match cell.try_borrow_mut() {
             Ok(mut sc) => self.tile_dispatch(tx, ty, bin, &mut sc),
