@@ -11,6 +11,7 @@ ValueError naming the object.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -301,6 +302,20 @@ class Exposure:
     ids: NDArray[np.int32]
 
 
+#: The renderer of the exposure channel, handed over by the analytic method when `motionblur`
+#: loads it (``fn(scene, aa, *, tolerance, segments, exposure=True) -> Frame``): ground truth sits
+#: below the rendering methods ([`render`][motionblur.render.render] imports it for
+#: ``outputs=``), so it is given the method rather than importing it (as ``render`` is given
+#: its methods by ``register``).
+_EXPOSURE_RENDERER: list[Callable[..., Frame]] = []
+
+
+def _renders_exposure(fn: Callable[..., Frame]) -> Callable[..., Frame]:
+    """Decorator: ``fn`` renders the exposure channel for [`exposure`][motionblur.ground_truth.exposure]."""
+    _EXPOSURE_RENDERER[:] = [fn]
+    return fn
+
+
 def exposure(scene: Scene, aa: int = 1, *, tolerance: float = 0.01, segments=None) -> Exposure:
     """The exposure channel of ``scene`` from the analytic method (its exact covered times and
     visibility over time), rendered with ``aa`` (1, 2 or 4) samples per pixel along each axis;
@@ -316,10 +331,9 @@ def exposure(scene: Scene, aa: int = 1, *, tolerance: float = 0.01, segments=Non
     its samples. ``first`` and ``last`` are the earliest start and latest end over the pixel's
     samples of the stretches of time of positive length the object is visible, whatever the
     filter's weight there (a time the filter gives weight 0 still counts)."""
-    from .methods.analytic import analytic
-
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
+    (analytic,) = _EXPOSURE_RENDERER  # set when motionblur loads motionblur.methods
     f = analytic(scene, aa, tolerance=tolerance, segments=segments, exposure=True)
     planes = f.stats["exposure"]
     ids = np.append(np.arange(len(scene.objects), dtype=np.int32), np.int32(-1))

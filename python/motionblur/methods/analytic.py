@@ -14,6 +14,7 @@ import numpy as np
 
 from .._validate import as_int
 from ..analytic import MovingDraw, rasterize_motion
+from ..ground_truth import _renders_exposure
 from ..raster import Frame
 from ..render import register
 from ..scene import Object, Scene
@@ -76,6 +77,7 @@ def _draw(scene: Scene, obj: Object, k: int, times: np.ndarray) -> MovingDraw:
     return MovingDraw(pos, obj.mesh.faces, obj.rgba, normals, object_id=k, shading=obj.shading)
 
 
+@_renders_exposure
 @register(
     "analytic",
     sweep=[{"gauss": "auto"}, {"gauss": 1}, {"gauss": 2}, {"aa": 1}, {"tolerance": 0.25}],
