@@ -236,7 +236,12 @@ def trajectories(scene: Scene, samples: int = 64) -> list[dict]:
 
 #: The ground-truth outputs [`render`][motionblur.render.render] gives with ``outputs=[...]``,
 #: each with the methods that give it (None: every method; they are closed forms of the scene).
-OUTPUTS: dict[str, tuple[str, ...] | None] = {"sharp": None, "flow": None, "trajectory": None}
+OUTPUTS: dict[str, tuple[str, ...] | None] = {
+    "sharp": None,
+    "flow": None,
+    "trajectory": None,
+    "exposure": ("analytic",),
+}
 
 
 def _check_outputs(names, method: str) -> list[str]:
@@ -265,7 +270,10 @@ def outputs(scene: Scene, names, method: str, times=None) -> dict:
       time, ``flow_backward`` (S,H,W,2) from each time back to the reference time (at the pixels
       of the sharp frame at that time), ``mean_motion`` (H,W,2) the blur's mean motion;
     - ``trajectory``: ``trajectory``, per object, its screen origin path and bounding box over
-      the shutter ([`trajectories`][motionblur.ground_truth.trajectories]).
+      the shutter ([`trajectories`][motionblur.ground_truth.trajectories]);
+    - ``exposure`` (the analytic method only: it comes from the same render, which
+      [`render`][motionblur.render.render] asks for it): ``exposure``, an
+      [`Exposure`][motionblur.ground_truth.Exposure]; not made here.
 
     ``times`` (S,) is returned as ``times``. Raises ValueError naming ``outputs`` for an unknown
     name or one the method cannot give, and for deforming objects where a flow is asked."""
@@ -282,6 +290,14 @@ def outputs(scene: Scene, names, method: str, times=None) -> dict:
     if "trajectory" in names:
         out["trajectory"] = trajectories(scene)
     return out
+
+
+def _exposure_of(planes: dict, n_objects: int) -> Exposure:
+    ids = np.append(np.arange(n_objects, dtype=np.int32), np.int32(-1))
+    out = [planes["fraction"], planes["first"], planes["last"], ids]
+    for a in out:
+        a.setflags(write=False)
+    return Exposure(*out)
 
 
 @dataclass(frozen=True)
@@ -335,12 +351,7 @@ def exposure(scene: Scene, aa: int = 1, *, tolerance: float = 0.01, segments=Non
         raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
     (analytic,) = _EXPOSURE_RENDERER  # set when motionblur loads motionblur.methods
     f = analytic(scene, aa, tolerance=tolerance, segments=segments, exposure=True)
-    planes = f.stats["exposure"]
-    ids = np.append(np.arange(len(scene.objects), dtype=np.int32), np.int32(-1))
-    out = [planes["fraction"], planes["first"], planes["last"], ids]
-    for a in out:
-        a.setflags(write=False)
-    return Exposure(*out)
+    return _exposure_of(f.stats["exposure"], len(scene.objects))
 
 
 from ._namespace import tidy  # noqa: E402  (dir() lists the API only; see motionblur._namespace)

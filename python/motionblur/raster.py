@@ -428,7 +428,8 @@ class Frame:
         as ``Z``, ids as ``id`` and velocity as ``velocity.X`` / ``velocity.Y``, the stats in the
         header ([`motionblur.interop.exr`][motionblur.interop.exr]), and the ground-truth
         ``outputs`` as named channels (``sharp.<k>.R/G/B/A/Z/id``, ``flow.<k>.X/Y``,
-        ``flow_backward.<k>.X/Y``, ``mean_motion.X/Y``; k indexes ``stats["output_times"]``);
+        ``flow_backward.<k>.X/Y``, ``mean_motion.X/Y``, ``exposure.<id>.fraction/first/last``;
+        k indexes ``stats["output_times"]``);
         every value round-trips bit-exactly through
         [`motionblur.read_image`][motionblur.read_image]. Creates parent folders; returns the path. EXR only:
         ``path`` must end in ``.exr`` (any case), else ValueError (as [`save_png`][motionblur.raster.Frame.save_png] checks
@@ -459,6 +460,11 @@ def _output_channels(outputs: dict) -> dict[str, np.ndarray]:
     for name in ("flow", "flow_backward"):
         for k, v in enumerate(outputs.get(name, [])):
             ch[f"{name}.{k}.X"], ch[f"{name}.{k}.Y"] = v[..., 0], v[..., 1]
+    ex = outputs.get("exposure")
+    if ex is not None:
+        for j, i in enumerate(ex.ids):
+            for name in ("fraction", "first", "last"):
+                ch[f"exposure.{int(i)}.{name}"] = getattr(ex, name)[..., j]
     if "mean_motion" in outputs:
         ch["mean_motion.X"], ch["mean_motion.Y"] = (
             outputs["mean_motion"][..., 0],

@@ -129,7 +129,7 @@ def render(
     focus_distance=)`` with the same numbers. ``stats`` then has ``dof`` (the lens).
 
     Ground truth: ``outputs`` names channels to give with the frame on ``frame.outputs``
-    (``"sharp"``, ``"flow"``, ``"trajectory"``; what each holds and which method gives it:
+    (``"sharp"``, ``"flow"``, ``"trajectory"``, ``"exposure"``; what each holds and which method gives it:
     [`motionblur.ground_truth.outputs`][motionblur.ground_truth.outputs]) at the shutter times
     ``output_times`` (default open, center, close); ``stats["output_times"]`` lists them and
     ``stats["trajectory"]`` holds the trajectories. ``Frame.save_exr`` writes them as named
@@ -164,7 +164,8 @@ def render(
 
         outputs = _check_outputs(outputs, method)  # before rendering: a refusal costs nothing
     t0 = time.perf_counter()
-    frame = spec.fn(scene, **options)
+    exposure = "exposure" in outputs  # the analytic method's own render gives it
+    frame = spec.fn(scene, **options, exposure=True) if exposure else spec.fn(scene, **options)
     if lens is not None:
         frame = _with_depth_of_field(frame, scene, *lens)
     frame = over_background(frame, scene.background)
@@ -195,6 +196,10 @@ def _add_outputs(frame: Frame, scene: Scene, method: str, names, times) -> None:
 
     t0 = time.perf_counter()
     out = ground_truth(scene, names, method, times)
+    if "exposure" in names:
+        from .ground_truth import _exposure_of
+
+        out["exposure"] = _exposure_of(frame.stats.pop("exposure"), len(scene.objects))
     frame.stats["output_times"] = [float(t) for t in out.pop("times")]
     if "trajectory" in out:
         frame.stats["trajectory"] = [

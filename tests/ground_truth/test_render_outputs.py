@@ -73,3 +73,25 @@ def test_outputs_round_trip_through_exr_by_name(tmp_path):
     # written again from what was read: the same channels
     again = mb.read_image(back.save_exr(tmp_path / "again.exr"))
     assert sorted(again.outputs["channels"]) == sorted(ch)
+
+
+def test_exposure_comes_with_the_analytic_frame_and_is_refused_elsewhere(tmp_path):
+    from motionblur.ground_truth import exposure
+
+    scene = _scene()
+    f = mb.render(scene, "analytic", outputs=["exposure"], error_estimate=False)
+    ex = f.outputs["exposure"]
+    alone = exposure(scene)
+    np.testing.assert_array_equal(ex.fraction, alone.fraction)  # the same render's planes
+    np.testing.assert_array_equal(ex.ids, [0, -1])
+    np.testing.assert_allclose(ex.fraction.sum(axis=-1), 1.0, atol=1e-5)
+    assert "exposure" not in f.stats
+    plain = mb.render(scene, "analytic", error_estimate=False)
+    np.testing.assert_array_equal(f.rgba, plain.rgba)  # asking for it changes no pixel
+    back = mb.read_image(f.save_exr(tmp_path / "ex.exr")).outputs["channels"]
+    np.testing.assert_array_equal(back["exposure.0.fraction"], ex.fraction[..., 0])
+    np.testing.assert_array_equal(back["exposure.-1.last"], ex.last[..., 1])
+    with pytest.raises(
+        ValueError, match="outputs: 'exposure' is given by analytic only, not by method 'accumulation'"
+    ):
+        mb.render(scene, "accumulation", outputs=["exposure"])
