@@ -117,3 +117,24 @@ def test_bad_times_name_themselves():
         flow(scene, [1.5])
     with pytest.raises(ValueError, match="points"):
         surface_paths(scene, [[W + 1.0, 0.0]], [0.0])
+
+
+@pytest.mark.parametrize("camera_turns", [False, True])
+def test_flow_equals_the_rasterizers_motion_of_its_sample_at_close(camera_turns):
+    """An independent implementation: the rasterizer's velocity buffer of the sample at shutter
+    close, drawn with each vertex's position at the open (the camera's motion folded in), is
+    minus the flow from close to open. 1e-4 px: float32 buffers over motions of about 60 px."""
+    from motionblur.methods._sharp import sharp_frame
+
+    v, f = mb.meshes.icosphere(3)
+    m = mb.Motion.linear(
+        mb.translate((-0.5, 0, 0)), mb.translate((0.5, 0.2, 0.3)) @ mb.rotate(0.8, (0.3, 1, 0))
+    )
+    obj = mb.Object((v, f), color=(1, 1, 1), motion=m)
+    turn = mb.Motion.linear(np.eye(4), mb.rotate(0.05, (0, 1, 0))) if camera_turns else None
+    scene = mb.Scene([obj], _camera(), camera_motion=turn)
+    to_open = flow(scene, [0.0])[0]
+    close = sharp_frame(scene, 1.0, velocity="since_open")
+    seen = close.ids == 0
+    assert np.abs(to_open[seen]).max() > 30.0
+    np.testing.assert_allclose(to_open[seen], -close.velocity[seen], atol=1e-4)
