@@ -47,7 +47,7 @@ pub use accumulate::{
 };
 pub use analytic::{
     render as render_analytic, segment_times, Input as AnalyticInput, MovingDraw, Quadrature,
-    SegmentCamera, SegmentObject, Stats as AnalyticStats,
+    Rolling, SegmentCamera, SegmentObject, Stats as AnalyticStats,
     DEFAULT_TILE_BUDGET as ANALYTIC_TILE_BUDGET, DEFORMING_POINTS as ANALYTIC_DEFORMING_POINTS,
     MAX_SEGMENTS as ANALYTIC_MAX_SEGMENTS, MIN_PIECE as ANALYTIC_MIN_PIECE,
     NORMAL_TOLERANCE as ANALYTIC_NORMAL_TOLERANCE,

@@ -17,7 +17,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from . import _core
-from ._validate import as_array, as_faces, as_float, as_int, as_rgba
+from ._validate import as_array, as_choice, as_faces, as_float, as_int, as_rgba
 from .raster import Camera, Frame, _readonly
 
 __all__ = ["MovingDraw", "rasterize_motion", "coverage", "TILE_BUDGET_BYTES"]
@@ -110,6 +110,8 @@ def rasterize_motion(
     background=None,
     shade: bool = True,
     exposure: int | None = None,
+    rolling: float = 0.0,
+    rolling_direction: str = "top_to_bottom",
 ) -> Frame:
     """Rasterizes moving meshes with the exact covered time per sample.
 
@@ -129,7 +131,13 @@ def rasterize_motion(
     ``object_id`` and every ``background`` id in -1..N-1) to also return the exposure channel
     in ``stats["exposure"]``: a dict of ``fraction``, ``first`` and ``last``, each (H,W,N+1)
     float32, plane k for object id k and the last plane for id -1 (no surface): see
-    [`exposure`][motionblur.ground_truth.exposure] for what they hold.
+    [`exposure`][motionblur.ground_truth.exposure] for what they hold. ``rolling``: a rolling
+    shutter's readout ``R`` in [0, 1) and ``rolling_direction`` (``"top_to_bottom"`` or
+    ``"bottom_to_top"``): pixel row ``y`` of ``H`` is exposed over ``[o, o + 1 - R]`` only,
+    ``o = R * y / H`` (``R * (H - 1 - y) / H`` bottom to top), the filter rescaled to it, and
+    depth, ids and velocity describe its instant ``o + (1 - R) * reference_time`` (see
+    [`Scene`][motionblur.scene.Scene]); 0 (the default) is a global shutter, the same bits as
+    before. The exposure channel's times stay the scene's.
 
     Returns a [`Frame`][motionblur.analytic.Frame]: ``rgba`` (H,W,4) float32 premultiplied, the shutter-weighted
     time integral; ``depth`` (H,W) float32, ``ids`` (H,W) int32 and ``velocity`` (H,W,2) float32
@@ -198,6 +206,13 @@ def rasterize_motion(
         "tile_budget": as_int(TILE_BUDGET_BYTES, "TILE_BUDGET_BYTES", minimum=1),
         "exposure": exposure,
     }
+    readout = as_float(rolling, "rolling")
+    if not 0.0 <= readout < 1.0:
+        raise ValueError(f"rolling: the readout must be in [0, 1), got {readout}")
+    direction = as_choice(rolling_direction, "rolling_direction", ("top_to_bottom", "bottom_to_top"))
+    if readout > 0.0:
+        options["rolling"] = readout
+        options["rolling_bottom_to_top"] = direction == "bottom_to_top"
     rgba, depth, ids, velocity, stats, planes = _core._analytic(draws, options, bd)
     frame = Frame(rgba, depth, ids, velocity, stats)
     if planes is not None:

@@ -39,6 +39,12 @@ __all__ = [
 ]
 
 
+#: The methods that model a rolling shutter (``Scene(rolling=R)``, R > 0): ``analytic``
+#: exactly, ``auto`` by rendering the analytic frame. [`render`][motionblur.render.render]
+#: refuses the others with a ValueError naming ``rolling``.
+ROLLING_METHODS = frozenset({"analytic", "auto"})
+
+
 class PoorBlurWarning(UserWarning):
     """The frame's error estimate is larger than the unblurred frame's (the sharp frame at
     mid-shutter, measured by the same pilot): on this scene the method blurs worse than not
@@ -144,6 +150,11 @@ def render(
     if method not in METHODS:
         raise ValueError(f"method: unknown method {method!r}; expected one of {', '.join(sorted(METHODS))}")
     spec = METHODS[method]
+    if scene.rolling > 0.0 and method not in ROLLING_METHODS:
+        raise ValueError(
+            f"rolling: method {method!r} cannot model a rolling shutter (Scene(rolling={scene.rolling})); "
+            f"the methods that do: {', '.join(sorted(ROLLING_METHODS))}"
+        )
     if not spec.applies(scene):
         warnings.warn(
             f"method {method!r} does not apply to this scene"

@@ -35,6 +35,9 @@ __all__ = [
     "rotate",
 ]
 
+#: The directions a rolling shutter reads its rows in (``Scene(rolling_direction=...)``).
+ROLLING_DIRECTIONS = ("top_to_bottom", "bottom_to_top")
+
 #: The shutter filters' names (the motion volume's filters, defined by the compiled core).
 SHUTTER_FILTERS: tuple[str, ...] = tuple(_core.FILTERS)
 
@@ -284,6 +287,15 @@ class Scene:
     ``"close"`` (t = 1, as the motion-volume paper), ``"center"`` (0.5), ``"open"`` (0) or a
     float in [0, 1]: the instant of the sharp geometry and of the camera that motion-volume style
     methods render with. ``ambient``: float or RGB ambient light of lambert shading.
+
+    ``rolling``: a rolling shutter's readout ``R`` in [0, 1) (0, the default: a global shutter).
+    The scene's time [0, 1] then spans the whole capture and pixel row ``y`` (0 at the top) of
+    an image ``H`` rows high is exposed over ``[o, o + 1 - R]``, ``o = R * y / H`` with
+    ``rolling_direction="top_to_bottom"`` (the default) or ``o = R * (H - 1 - y) / H`` with
+    ``"bottom_to_top"``; every sample of a pixel uses its pixel's row, and the shutter filter
+    applies within each row's window, rescaled to it. Only ``analytic`` (and ``auto``, which
+    then renders the analytic frame) model it; [`render`][motionblur.render.render] refuses it
+    for the other methods (`ROLLING_METHODS`).
     """
 
     def __init__(
@@ -296,6 +308,8 @@ class Scene:
         background=(0.0, 0.0, 0.0, 0.0),
         reference_time="close",
         ambient=0.0,
+        rolling=0.0,
+        rolling_direction="top_to_bottom",
     ) -> None:
         objects = as_list(objects, "objects", Object, "motionblur.Object")
         if not isinstance(camera, Camera):
@@ -335,6 +349,11 @@ class Scene:
             self.reference_t = rt
         self.reference_time = reference_time
         self.ambient = as_rgb(ambient, "ambient")
+        r = as_float(rolling, "rolling")
+        if not 0.0 <= r < 1.0:  # NaN fails too
+            raise ValueError(f"rolling: the readout must be in [0, 1), got {r}")
+        self.rolling = r
+        self.rolling_direction = as_choice(rolling_direction, "rolling_direction", ROLLING_DIRECTIONS)
 
     @property
     def camera_moves(self) -> bool:
@@ -398,6 +417,8 @@ class Scene:
             background=self.background,
             reference_time=self.reference_time,
             ambient=self.ambient,
+            rolling=self.rolling,
+            rolling_direction=self.rolling_direction,
         )
         args.update(changes)
         return Scene(**args)

@@ -71,6 +71,38 @@ pub struct Input<'a> {
     /// positive length (whatever their weight); a pixel's, the mean of its samples' fractions
     /// and the earliest first and latest last.
     pub exposure: Option<u32>,
+    /// A rolling shutter, or the default: a global one ([`Rolling`]).
+    pub rolling: Rolling,
+}
+
+/// A rolling shutter: each image row is exposed over its own window of the scene's time.
+///
+/// Pixel row `y` (0 at the top) of an image `H` pixels high is exposed over `[o, o + 1 - R]`
+/// with `o = R y / H` (top to bottom) or `o = R (H - 1 - y) / H` (`bottom_to_top`), `R` the
+/// `readout` in [0, 1); every sample of a pixel uses its pixel's row. The shutter filter
+/// applies within each row's window, rescaled to it; depth, ids and velocity describe the
+/// instant `o + (1 - R) reference_time`. `R = 0` (the default) is a global shutter, resolved
+/// as before, bit for bit.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Rolling {
+    /// The fraction `R` of the frame time the readout takes, in [0, 1).
+    pub readout: f64,
+    /// False: the readout runs from the top row down; true: from the bottom row up.
+    pub bottom_to_top: bool,
+}
+
+impl Rolling {
+    /// Pixel row `y`'s window `(o, s)` in an image `height` pixels high, or None for a global
+    /// shutter.
+    pub fn window(&self, y: i32, height: u32) -> Option<(f64, f64)> {
+        if self.readout == 0.0 {
+            return None;
+        }
+        let h = f64::from(height);
+        let y = f64::from(y);
+        let k = if self.bottom_to_top { h - 1.0 - y } else { y };
+        Some((self.readout * k / h, 1.0 - self.readout))
+    }
 }
 
 /// The default of [`Input::tile_budget`]: 64 MiB.
@@ -128,6 +160,9 @@ pub fn validate(input: &Input) -> Result<()> {
     }
     if !(0.0..=1.0).contains(&input.reference_time) {
         return Err(Error::value("reference_time", "must be in [0, 1]"));
+    }
+    if !(0.0..1.0).contains(&input.rolling.readout) {
+        return Err(Error::value("rolling", "must be in [0, 1)"));
     }
     if let Quadrature::Points(n) = input.quadrature {
         if !(1..=4).contains(&n) {

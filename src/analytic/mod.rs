@@ -50,7 +50,7 @@ mod visibility;
 mod tests;
 
 pub use frame::{render, Stats};
-pub use input::{Input, MovingDraw, DEFAULT_TILE_BUDGET};
+pub use input::{Input, MovingDraw, Rolling, DEFAULT_TILE_BUDGET};
 pub use quadrature::Quadrature;
 pub use segments::{
     segment_times, SegmentCamera, SegmentObject, DEFORMING_POINTS, MAX_SEGMENTS, MIN_PIECE,

@@ -124,12 +124,46 @@ fn density(shutter: &Shutter, t: f64) -> f64 {
 /// The shutter one sample is resolved over: the filter, its interior breaks
 /// ([`Shutter::breaks`]), the points in time per visible piece and the reference time (the
 /// instant whose front layer the sample reports).
+///
+/// `window`: a rolling shutter's row exposure `(o, s)`, or None (a global shutter, the whole of
+/// [0, 1]). The sample is then exposed over `[o, o + s]` only, the filter rescaled to it:
+/// `W_row(t) = W((t - o) / s)` and `w_row(t) = w((t - o) / s) / s` inside it, 0 outside.
+/// `breaks` must then hold the window's ends (those inside (0, 1)) and the filter's breaks
+/// mapped into it, and `t_ref` the reference instant mapped into it (`o + s t_ref`).
 #[derive(Clone, Copy)]
 pub struct Timing<'a> {
     pub shutter: &'a Shutter,
     pub breaks: &'a [f64],
     pub quad: Quadrature,
     pub t_ref: f64,
+    pub window: Option<(f64, f64)>,
+}
+
+impl Timing<'_> {
+    /// The filter's weight of `[a, b]` (in the row's window, if any).
+    #[inline(always)]
+    fn weight(&self, a: f64, b: f64) -> f64 {
+        match self.window {
+            None => weight(self.shutter, a, b),
+            Some((o, s)) => weight(self.shutter, (a - o) / s, (b - o) / s),
+        }
+    }
+
+    /// The filter's density at `t` (in the row's window, if any: 0 outside it).
+    #[inline(always)]
+    fn density(&self, t: f64) -> f64 {
+        match self.window {
+            None => density(self.shutter, t),
+            Some((o, s)) => {
+                let u = (t - o) / s;
+                if (0.0..=1.0).contains(&u) {
+                    density(self.shutter, u) / s
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
 }
 
 /// The time integral of one sample's colour as the pieces come (see the module doc), with the
@@ -194,7 +228,7 @@ impl<L: Layers> Integral<'_, L> {
             let dw = if cuts.len() == 2 {
                 dw
             } else {
-                weight(self.time.shutter, u, v)
+                self.time.weight(u, v)
             };
             if dw > 0.0 {
                 self.sub_piece(u, v, dw, order, frags);
@@ -244,7 +278,7 @@ impl<L: Layers> Integral<'_, L> {
             let dw = if self.kinks.is_empty() {
                 dw
             } else {
-                weight(self.time.shutter, lo, hi)
+                self.time.weight(lo, hi)
             };
             let (a, b) = (lo, hi);
             lo = hi;
@@ -265,14 +299,13 @@ impl<L: Layers> Integral<'_, L> {
         order: &[(f64, usize)],
         frags: &[Frag],
     ) {
-        let shutter = self.time.shutter;
         let (half, mid) = (0.5 * (b - a), 0.5 * (a + b));
         let (xs, ws) = gauss(self.time.quad.points(b - a, bend));
         let mut sum = [0.0f64; 4];
         let mut wsum = 0.0;
         for (x, w) in xs.iter().zip(ws) {
             let t = mid + half * x;
-            let wt = w * density(shutter, t);
+            let wt = w * self.time.density(t);
             if wt <= 0.0 {
                 continue;
             }
@@ -367,16 +400,10 @@ pub fn resolve(
                     _ => None,
                 };
             }
-            let dw = weight(time.shutter, a, b);
+            let dw = time.weight(a, b);
             if exposure {
                 if a > covered {
-                    note(
-                        &mut seen,
-                        NOTHING,
-                        covered,
-                        a,
-                        weight(time.shutter, covered, a),
-                    );
+                    note(&mut seen, NOTHING, covered, a, time.weight(covered, a));
                 }
                 note(&mut seen, order.first().map_or(NOTHING, |o| o.1), a, b, dw);
                 covered = b;
@@ -389,13 +416,7 @@ pub fn resolve(
         },
     );
     if exposure && covered < 1.0 {
-        note(
-            &mut seen,
-            NOTHING,
-            covered,
-            1.0,
-            weight(time.shutter, covered, 1.0),
-        );
+        note(&mut seen, NOTHING, covered, 1.0, time.weight(covered, 1.0));
     }
     sc.seen = seen;
     sc.opaque = opaque;
@@ -525,6 +546,7 @@ mod tests {
                 breaks: &[],
                 quad: Quadrature::Auto,
                 t_ref: 0.1,
+                window: None,
             },
             &mut Scratch::default(),
         )
@@ -550,6 +572,7 @@ mod tests {
                 breaks: &[],
                 quad: Quadrature::Auto,
                 t_ref: 1.0,
+                window: None,
             },
             &mut Scratch::default(),
         )
@@ -567,6 +590,7 @@ mod tests {
                 breaks: &[],
                 quad: Quadrature::Auto,
                 t_ref: 1.0,
+                window: None,
             },
             &mut Scratch::default(),
         )
@@ -595,6 +619,7 @@ mod tests {
                 breaks: &[],
                 quad: Quadrature::Auto,
                 t_ref: 0.75,
+                window: None,
             },
             &mut Scratch::default(),
         )
@@ -614,6 +639,7 @@ mod tests {
                 breaks: &[],
                 quad: Quadrature::Auto,
                 t_ref: 0.5,
+                window: None,
             },
             &mut Scratch::default(),
         )

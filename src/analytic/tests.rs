@@ -96,6 +96,7 @@ fn render_within(
         shade: true,
         tile_budget,
         exposure: None,
+        rolling: Default::default(),
     })
 }
 
@@ -260,6 +261,7 @@ fn bad_input_names_the_argument() {
         reference_time: 1.0,
         shade: true,
         tile_budget: DEFAULT_TILE_BUDGET,
+        rolling: Default::default(),
         exposure: None,
     };
     assert!(render(&good).is_ok());
@@ -397,6 +399,7 @@ fn uniform_layers_resolve_as_their_shading_does() {
                         breaks: &shutter.breaks(),
                         quad,
                         t_ref: 0.5,
+                        window: None,
                     },
                     &mut resolve::Scratch::default(),
                 )
@@ -444,6 +447,7 @@ fn render_exposure(shutter: &Shutter, exposure: Option<u32>, samples: u32) -> cr
         reference_time: 1.0,
         shade: true,
         tile_budget: DEFAULT_TILE_BUDGET,
+        rolling: Default::default(),
         exposure,
     };
     render(&input).map(|r| r.0)

@@ -420,8 +420,14 @@ impl Ctx<'_> {
         out: &mut [SampleOut],
         counts: &mut Counts,
     ) -> std::result::Result<(), (i32, i32)> {
-        let t_ref = self.input.reference_time;
+        let mut row_breaks = Vec::new();
         for iy in r.y0..r.y1 {
+            let (window, t_ref) = self.row_window(iy, &mut row_breaks);
+            let breaks = if window.is_some() {
+                &row_breaks[..]
+            } else {
+                self.breaks
+            };
             for ix in r.x0..r.x1 {
                 let j = ((iy - y0) * TILE + (ix - x0)) as usize;
                 let frags = &mut sc.frags[sc.start[j] as usize..sc.start[j + 1] as usize];
@@ -472,9 +478,10 @@ impl Ctx<'_> {
                     &mut shader,
                     resolve::Timing {
                         shutter: self.input.shutter,
-                        breaks: self.breaks,
+                        breaks,
                         quad: self.input.quadrature,
                         t_ref,
+                        window,
                     },
                     &mut sc.sweep,
                 )
@@ -510,6 +517,26 @@ impl Ctx<'_> {
         }
         Ok(())
     }
+
+    /// Sample row `iy`'s rolling-shutter window ([`crate::analytic::Rolling`]) and reference
+    /// instant; with a window, `breaks` then holds its ends inside (0, 1) and the filter's
+    /// breaks mapped into it, ascending. A global shutter: None and the reference time.
+    fn row_window(&self, iy: i32, breaks: &mut Vec<f64>) -> (Option<(f64, f64)>, f64) {
+        let t_ref = self.input.reference_time;
+        let y = iy / self.input.samples as i32;
+        match self.input.rolling.window(y, self.input.height) {
+            None => (None, t_ref),
+            Some((o, s)) => {
+                breaks.clear();
+                breaks.push(o);
+                breaks.extend(self.breaks.iter().map(|b| o + s * b));
+                breaks.push(o + s);
+                breaks.retain(|b| *b > 0.0 && *b < 1.0);
+                (Some((o, s)), o + s * t_ref)
+            }
+        }
+    }
+
     fn behind(&self, ix: i32, iy: i32) -> StaticSample {
         match &self.input.backdrop {
             None => StaticSample {

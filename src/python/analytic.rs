@@ -7,7 +7,8 @@ use pyo3::types::PyDict;
 use super::args::{lights, LayerArg, LightArg};
 use super::convert::{c_slice, detached_in_pool, face_indices_u32, rows, shaped, ToDict};
 use crate::{
-    render_analytic, AnalyticInput, AnalyticStats, Error, MovingDraw, Quadrature, Shading, Shutter,
+    render_analytic, AnalyticInput, AnalyticStats, Error, MovingDraw, Quadrature, Rolling, Shading,
+    Shutter,
 };
 
 /// One moving draw, read off the attributes of a `motionblur.MovingDraw`: `positions` f64
@@ -59,7 +60,8 @@ impl GaussArg {
 /// [`AnalyticInput`] but the draws and the backdrop: `width`, `height`, `samples`, `times` (K+1,)
 /// f64, `view_projections` (1|K+1,4,4) f64, `shutter`, `lights`, `ambient`, `gauss`,
 /// `reference_time`, `shade`, `tile_budget` bytes, and (optional) `exposure`: the number of
-/// object ids of the exposure channel, or None (off).
+/// object ids of the exposure channel, or None (off); (optional) `rolling`: the readout
+/// fraction of a rolling shutter (0: global) and `rolling_bottom_to_top`.
 #[derive(FromPyObject)]
 #[pyo3(from_item_all)]
 struct AnalyticArgs<'py> {
@@ -77,6 +79,10 @@ struct AnalyticArgs<'py> {
     tile_budget: usize,
     #[pyo3(default)]
     exposure: Option<u32>,
+    #[pyo3(default)]
+    rolling: f64,
+    #[pyo3(default)]
+    rolling_bottom_to_top: bool,
 }
 
 struct Owned {
@@ -212,6 +218,10 @@ fn _analytic<'py>(
         shade: o.shade,
         tile_budget: o.tile_budget,
         exposure: o.exposure,
+        rolling: Rolling {
+            readout: o.rolling,
+            bottom_to_top: o.rolling_bottom_to_top,
+        },
     };
     let (frame, stats) = detached_in_pool(py, || render_analytic(&input))?;
     let (h, w) = (frame.height as usize, frame.width as usize);

@@ -99,7 +99,8 @@ def analytic(
     equal segments instead (plus every keyframe time); ``exposure`` True: also the exposure
     channel, in ``stats["exposure"]`` (see
     [`exposure`][motionblur.ground_truth.exposure]). Depth, ids and velocity describe the
-    surface in front at the scene's reference time. ``stats``: the kernel's (``prims``,
+    surface in front at the scene's reference time (with a rolling shutter, ``Scene(rolling=)``,
+    each row's: its window's instant at that fraction of it; the rolling shutter is exact). ``stats``: the kernel's (``prims``,
     ``intervals``, ``pieces``, ``splits``, ``ms_*``) plus ``segments``. Memory per thread is
     bounded by `motionblur.analytic.TILE_BUDGET_BYTES`.
     """
@@ -145,7 +146,8 @@ def analytic(
     frame = rasterize_motion(
         cams, draws, times, samples=aa, shutter=scene.shutter, lights=lights,
         ambient=scene.ambient, gauss=gauss, reference_time=scene.reference_t, background=background,
-        exposure=len(scene.objects) if exposure else None,
+        exposure=len(scene.objects) if exposure else None, rolling=scene.rolling,
+        rolling_direction=scene.rolling_direction,
     )  # fmt: skip
     frame.stats["segments"] = len(times) - 1
     return frame

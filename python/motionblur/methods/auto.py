@@ -284,6 +284,9 @@ def auto(scene: Scene, tolerance=None, budget_ms=None, aa: int = 1) -> Frame:
     if not _moves(scene):
         trials.run("accumulation", samples=1)
         why = "nothing moves on screen: one sharp frame"
+    elif scene.rolling > 0.0:
+        trials.run("analytic", **EXACT_OPTIONS)
+        why = "a rolling shutter: the analytic frame, the one method that models it (exactly)"
     elif budget is not None:
         why = _for_budget(trials, budget)
     else:
