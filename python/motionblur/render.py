@@ -40,9 +40,9 @@ __all__ = [
 
 
 #: The methods that model a rolling shutter (``Scene(rolling=R)``, R > 0): ``analytic``
-#: exactly, ``auto`` by rendering the analytic frame. [`render`][motionblur.render.render]
-#: refuses the others with a ValueError naming ``rolling``.
-ROLLING_METHODS = frozenset({"analytic", "auto"})
+#: exactly, ``accumulation`` per row (converging to it), ``auto`` by rendering the analytic
+#: frame. [`render`][motionblur.render.render] refuses the others with a ValueError naming ``rolling``.
+ROLLING_METHODS = frozenset({"analytic", "accumulation", "auto"})
 
 
 class PoorBlurWarning(UserWarning):

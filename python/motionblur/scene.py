@@ -293,9 +293,9 @@ class Scene:
     an image ``H`` rows high is exposed over ``[o, o + 1 - R]``, ``o = R * y / H`` with
     ``rolling_direction="top_to_bottom"`` (the default) or ``o = R * (H - 1 - y) / H`` with
     ``"bottom_to_top"``; every sample of a pixel uses its pixel's row, and the shutter filter
-    applies within each row's window, rescaled to it. Only ``analytic`` (and ``auto``, which
-    then renders the analytic frame) model it; [`render`][motionblur.render.render] refuses it
-    for the other methods (`ROLLING_METHODS`).
+    applies within each row's window, rescaled to it. ``analytic`` models it exactly,
+    ``accumulation`` per row (converging to it) and ``auto`` renders the analytic frame;
+    [`render`][motionblur.render.render] refuses it for the other methods (`ROLLING_METHODS`).
     """
 
     def __init__(

@@ -599,6 +599,62 @@ mod tests {
     }
 
     #[test]
+    fn a_rolling_window_weighs_only_its_own_time_rescaled() {
+        let mut l = Flat {
+            colors: vec![[1.0, 0.0, 0.0, 1.0]],
+        };
+        // red over [0, 0.5]; the row's window [0.25, 0.75] sees it half of its time
+        let mut f = vec![frag(0.0, 0.5, 1.0, 1.0, 0)];
+        let time = |shutter, breaks| Timing {
+            shutter,
+            breaks,
+            quad: Quadrature::Auto,
+            t_ref: 0.5,
+            window: Some((0.25, 0.5)),
+        };
+        let r = resolve(
+            &mut f,
+            &LINK,
+            &EMPTY,
+            &mut l,
+            time(&Shutter::Box, &[0.25, 0.75]),
+            &mut Scratch::default(),
+        )
+        .unwrap();
+        assert_eq!(r.rgba, [0.5, 0.0, 0.0, 0.5]);
+        // a ramp over the window weighs its first half W(0.5) = 0.25
+        let r = resolve(
+            &mut f,
+            &LINK,
+            &EMPTY,
+            &mut l,
+            time(&Shutter::Ramp, &[0.25, 0.75]),
+            &mut Scratch::default(),
+        )
+        .unwrap();
+        assert!((r.rgba[0] - 0.25).abs() < 1e-7 && (r.rgba[3] - 0.25).abs() < 1e-7);
+        assert_eq!(r.front.map(|x| f[x.0].prim), Some(0));
+    }
+
+    #[test]
+    fn rows_windows_follow_the_readout_and_its_direction() {
+        use super::super::input::Rolling;
+        assert_eq!(Rolling::default().window(5, 10), None);
+        let down = Rolling {
+            readout: 0.5,
+            bottom_to_top: false,
+        };
+        assert_eq!(down.window(0, 10), Some((0.0, 0.5)));
+        assert_eq!(down.window(9, 10), Some((0.45, 0.5)));
+        let up = Rolling {
+            bottom_to_top: true,
+            ..down
+        };
+        assert_eq!(up.window(9, 10), Some((0.0, 0.5)));
+        assert_eq!(up.window(0, 10), Some((0.45, 0.5)));
+    }
+
+    #[test]
     fn transparent_layers_composite_over_the_backdrop() {
         let mut l = Flat {
             colors: vec![[1.0, 0.0, 0.0, 0.5]],

@@ -25,7 +25,14 @@ from ..render import register
 from ..scene import Scene
 from ._accumulate import MAX_TIME_SAMPLES, HalfSums, accumulate, sample_times
 
-__all__ = ["accumulation", "sample_times", "Sequence", "MAX_TIME_SAMPLES"]
+__all__ = [
+    "accumulation",
+    "sample_times",
+    "Sequence",
+    "MAX_TIME_SAMPLES",
+    "rolling_accumulation",
+    "row_offsets",
+]
 
 
 @register(
@@ -48,12 +55,17 @@ def accumulation(
     The even and the odd samples are drawn and summed by the compiled core in one call each
     (``_core._Painter.accumulate_still`` / ``accumulate_moving``, ``src/accumulate/frame.rs``);
     their difference is the frame's ``stats["error_estimate"]`` (`_accumulate`).
+
+    A rolling shutter (``Scene(rolling=R)``): see `rolling_accumulation` (about N renders per
+    row, each row weighing every render by its own window's filter).
     """
     times, weights = sample_times(scene, samples, sampling, seed)
     dim = as_float(dim, "dim")
     if not 0.0 < dim <= 1.0:
         raise ValueError(f"dim: must be in (0, 1], got {dim}")
     aa = as_samples(aa, "aa")
+    if scene.rolling > 0.0:
+        return rolling_accumulation(scene, len(times), sampling, seed, dim, aa)
     ref = int(np.argmin(np.abs(times - scene.reference_t)))
     halves = [np.arange(len(times))[j::2] for j in (0, 1)]
     if len(times) < 2 or min(float(weights[h].sum()) for h in halves) <= 0.0 or dim < 1.0:
@@ -64,6 +76,55 @@ def accumulation(
     for j, h in enumerate(halves):
         sums.add(times[h], weights[h], j)
     return sums.frame()
+
+
+def row_offsets(scene: Scene, height: int) -> np.ndarray:
+    """(height,) float64: each pixel row's rolling-shutter offset ``o`` (``Scene(rolling=)``):
+    ``R * y / H`` top to bottom, ``R * (H - 1 - y) / H`` bottom to top."""
+    y = np.arange(height, dtype=np.float64)
+    k = y if scene.rolling_direction == "top_to_bottom" else (height - 1) - y
+    return scene.rolling * k / height
+
+
+def rolling_accumulation(scene: Scene, samples: int, sampling: str, seed: int, dim: float, aa: int) -> Frame:
+    """The accumulation buffer under a rolling shutter (``scene.rolling`` R > 0).
+
+    The whole capture [0, 1] is cut into ``M = ceil(N / (1 - R))`` strata (at most
+    `MAX_TIME_SAMPLES`), one render each at its stratified (or jittered) time; pixel row ``y``
+    weighs render ``j`` by its filter's weight of stratum ``[a, b] = [j / M, (j + 1) / M]``
+    within its own window, ``W((b - o) / s) - W((a - o) / s)`` (``o`` its offset, `row_offsets`;
+    ``s = 1 - R``; W clamped to [0, 1]), so every row's weights sum to 1 and each row averages
+    about N renders; only the strata cut by a window's ends are weighed in part. It converges to
+    the analytic frame as N grows. Depth, ids and velocity of each row are those of the render
+    nearest its reference instant ``o + s * reference_t``. ``stats["samples"]`` is M; the
+    error estimate is ``render``'s pilot (no halves)."""
+    s = 1.0 - scene.rolling
+    m = min(int(np.ceil(samples / s)), MAX_TIME_SAMPLES)
+    times, _ = sample_times(scene, m, sampling, seed)
+    height = scene.camera.height
+    o = row_offsets(scene, height)[:, None]
+    cdf = scene.shutter_cdf((np.arange(m + 1)[None, :] / m - o) / s)
+    weights = np.diff(cdf, axis=1)  # (H, M): each row's filter weight of every stratum
+    nearest = np.argmin(np.abs(times[None, :] - (o + s * scene.reference_t)), axis=1)
+    rgba = depth = ids = velocity = None
+    draw_calls = 0
+    for j in range(len(times)):
+        rows = weights[:, j] > 0.0
+        if not rows.any() and not (nearest == j).any():
+            continue
+        f = accumulate(scene, times[j : j + 1], np.ones(1), 0, dim, aa)
+        draw_calls += f.stats["draw_calls"]
+        if rgba is None:
+            rgba = np.zeros(f.rgba.shape, np.float64)
+            depth, ids, velocity = f.depth.copy(), f.ids.copy(), np.zeros((*f.ids.shape, 2))
+        rgba += weights[:, j, None, None] * f.rgba
+        near = nearest == j
+        depth[near], ids[near] = f.depth[near], f.ids[near]
+        if f.velocity is not None:
+            velocity[near] = f.velocity[near]
+    frame = Frame(rgba.astype(np.float32), depth, ids, velocity)
+    frame.stats.update(samples=m, draw_calls=draw_calls, rolling=scene.rolling)
+    return frame
 
 
 class Sequence:
