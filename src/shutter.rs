@@ -24,6 +24,15 @@ pub enum Shutter {
         /// Cumulative weights at the strata boundaries, from 0 to 1.
         cum: Vec<f64>,
     },
+    /// A trapezoid, as a mechanical shutter opens and closes: the density rises linearly over
+    /// `[0, open]`, holds, and falls linearly over `[1 - close, 1]` (RenderMan's and Cycles'
+    /// shutter curves of this shape).
+    Trapezoid {
+        /// Length of the opening ramp, in [0, 1].
+        open: f64,
+        /// Length of the closing ramp, in [0, 1 - open].
+        close: f64,
+    },
 }
 
 const SQRT_2PI: f64 = 2.506_628_274_631_000_5;
@@ -74,6 +83,19 @@ impl Shutter {
         Ok(Shutter::Weights { cum })
     }
 
+    /// The trapezoid of ramps `open` and `close` (each >= 0, `open + close <= 1`); an error
+    /// naming `shutter` otherwise.
+    pub fn trapezoid(open: f64, close: f64) -> Result<Self> {
+        let ok = |x: f64| x.is_finite() && x >= 0.0;
+        if !(ok(open) && ok(close) && open + close <= 1.0) {
+            return Err(Error::value(
+                "shutter",
+                format!("trapezoid ramps must be >= 0 with open + close <= 1, got {open} and {close}"),
+            ));
+        }
+        Ok(Shutter::Trapezoid { open, close })
+    }
+
     /// `W(t)`, the weight of [0, t] (`W(0) = 0`, `W(1) = 1`).
     pub fn cumulative(&self, t: f64) -> f64 {
         let t = t.clamp(0.0, 1.0);
@@ -97,6 +119,7 @@ impl Shutter {
                 let i = (x.floor() as usize).min(m - 1);
                 cum[i] + (x - i as f64) * (cum[i + 1] - cum[i])
             }
+            Shutter::Trapezoid { open, close } => trapezoid_cumulative(*open, *close, t),
         }
     }
 
@@ -116,6 +139,12 @@ impl Shutter {
                 let i = ((t * m as f64).floor() as usize).min(m - 1);
                 (cum[i + 1] - cum[i]) * m as f64
             }
+            Shutter::Trapezoid { open, close } => {
+                let h = 1.0 / (1.0 - 0.5 * (open + close)); // the flat part's height
+                let rise = if *open > 0.0 { t / open } else { 1.0 };
+                let fall = if *close > 0.0 { (1.0 - t) / close } else { 1.0 };
+                h * rise.min(fall).min(1.0)
+            }
         }
     }
 
@@ -128,9 +157,27 @@ impl Shutter {
                 let m = cum.len() - 1;
                 (1..m).map(|i| i as f64 / m as f64).collect()
             }
+            Shutter::Trapezoid { open, close } => [*open, 1.0 - close]
+                .into_iter()
+                .filter(|&t| t > 0.0 && t < 1.0)
+                .collect(),
             _ => Vec::new(),
         }
     }
+}
+
+/// `W(t)` of the trapezoid with ramps `open` and `close` (`t` in [0, 1]).
+fn trapezoid_cumulative(open: f64, close: f64, t: f64) -> f64 {
+    let h = 1.0 / (1.0 - 0.5 * (open + close));
+    if t < open {
+        return 0.5 * h * t * t / open;
+    }
+    let end = 1.0 - close;
+    if t <= end {
+        return h * (0.5 * open + (t - open));
+    }
+    let left = 1.0 - t; // the weight after t: a triangle of height h * left / close
+    1.0 - 0.5 * h * left * left / close
 }
 
 /// The error function: its Taylor series for |x| < 3 (absolute error below 1e-13 there), an
@@ -187,6 +234,9 @@ mod tests {
             Shutter::Triangle,
             Shutter::Gaussian,
             Shutter::weights(&[1.0, 0.0, 3.0, 2.0]).unwrap(),
+            Shutter::trapezoid(0.1, 0.25).unwrap(),
+            Shutter::trapezoid(0.0, 0.5).unwrap(),
+            Shutter::trapezoid(0.5, 0.5).unwrap(),
         ];
         for f in filters {
             assert!(f.cumulative(0.0).abs() < 1e-15);

@@ -19,6 +19,7 @@ import numpy as np
 from . import _core
 from ._validate import as_array, as_choice, as_faces, as_float, as_int, as_rgba
 from .raster import Camera, Frame, _readonly
+from .scene import Trapezoid
 
 __all__ = ["MovingDraw", "rasterize_motion", "coverage", "TILE_BUDGET_BYTES"]
 
@@ -91,8 +92,8 @@ def _view_projections(cameras, k1: int):
 
 
 def _shutter_arg(shutter):
-    if isinstance(shutter, str):
-        return shutter
+    if isinstance(shutter, (str, Trapezoid)):
+        return shutter  # a Trapezoid crosses as its open and close ramps
     w = as_array(shutter, "shutter", np.float64, (None,))
     return np.ascontiguousarray(w)
 

@@ -30,6 +30,7 @@ __all__ = [
     "DirectionalLight",
     "Scene",
     "SHUTTER_FILTERS",
+    "Trapezoid",
     "shutter_cdf",
     "translate",
     "rotate",
@@ -242,9 +243,58 @@ class DirectionalLight:
 # ---------------------------------------------------------------- shutter filters
 
 
+class Trapezoid:
+    """A trapezoid shutter curve, as a mechanical shutter opens and closes (RenderMan's and
+    Cycles' curves of this shape): for ``Scene(shutter=Trapezoid(open, close))``, the weight
+    rises linearly over the first ``open`` of the shutter, holds, and falls linearly over the
+    last ``close`` (fractions of the shutter, each >= 0, ``open + close <= 1``; (0, 0) is the
+    box). Like every filter it weighs time within the exposure: the frame is the weighted
+    average, as bright as a box shutter's. Honoured by accumulation, the analytic method,
+    ``auto`` and the blur shell; the image-space methods (box only) and the motion volume (named
+    filters only) refuse it."""
+
+    __slots__ = ("open", "close")
+
+    def __init__(self, open: float = 0.1, close: float = 0.1) -> None:
+        o, c = as_float(open, "open"), as_float(close, "close")
+        if not (o >= 0.0 and c >= 0.0 and o + c <= 1.0):
+            raise ValueError(f"open, close: ramps must be >= 0 with open + close <= 1, got {o} and {c}")
+        object.__setattr__(self, "open", o)
+        object.__setattr__(self, "close", c)
+
+    def __setattr__(self, name, value):
+        raise AttributeError("Trapezoid is immutable")
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, Trapezoid) and (self.open, self.close) == (other.open, other.close)
+
+    def __hash__(self) -> int:
+        return hash((Trapezoid, self.open, self.close))
+
+    def __reduce__(self):
+        return (Trapezoid, (self.open, self.close))
+
+    def __repr__(self) -> str:
+        return f"Trapezoid(open={self.open:g}, close={self.close:g})"
+
+    def cdf(self, t: np.ndarray) -> np.ndarray:
+        """W(t) at ``t`` (clipped to [0, 1]): the weight of [0, t]."""
+        o, c = self.open, self.close
+        h = 1.0 / (1.0 - 0.5 * (o + c))
+        t = np.clip(np.asarray(t, np.float64), 0.0, 1.0)
+        rise = 0.5 * h * t * t / o if o > 0 else np.zeros_like(t)
+        flat = h * (0.5 * o + (t - o))
+        left = 1.0 - t
+        fall = 1.0 - 0.5 * h * left * left / c if c > 0 else np.ones_like(t)
+        return np.where(t < o, rise, np.where(t <= 1.0 - c, flat, fall))
+
+
 def shutter_cdf(shutter, t) -> np.ndarray:
-    """Cumulative shutter weight W(t) (W(0) = 0, W(1) = 1) of a filter name or (M,) weights, at ``t``."""
+    """Cumulative shutter weight W(t) (W(0) = 0, W(1) = 1) of a filter name, (M,) weights or a
+    [`Trapezoid`][motionblur.scene.Trapezoid], at ``t``."""
     t = np.clip(as_array(t, "t", np.float64, (None,) * np.ndim(t), allow_empty=True), 0.0, 1.0)
+    if isinstance(shutter, Trapezoid):
+        return shutter.cdf(t)
     if isinstance(shutter, str):
         if shutter == "box":
             return t.copy()
@@ -264,6 +314,8 @@ def shutter_cdf(shutter, t) -> np.ndarray:
 
 
 def _check_shutter(shutter):
+    if isinstance(shutter, Trapezoid):
+        return shutter
     if isinstance(shutter, str):
         return as_choice(shutter, "shutter", SHUTTER_FILTERS)
     w = as_array(shutter, "shutter", np.float64, (None,))
@@ -484,5 +536,5 @@ class Scene:
     def __repr__(self) -> str:
         return (
             f"Scene({len(self.objects)} objects ({len(self.moving_objects)} moving), {len(self.lights)} lights, "
-            f"camera_moves={self.camera_moves}, shutter={self.shutter if isinstance(self.shutter, str) else 'weights'})"
+            f"camera_moves={self.camera_moves}, shutter={self.shutter if isinstance(self.shutter, (str, Trapezoid)) else 'weights'})"
         )

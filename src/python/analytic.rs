@@ -25,10 +25,12 @@ struct MovingDrawArg<'py> {
     shading: String,
 }
 
-/// The shutter: a filter name or (M,) f64 weights of M equal strata.
+/// The shutter: a filter name, a `motionblur.Trapezoid` (its `open` and `close` ramps) or (M,)
+/// f64 weights of M equal strata.
 #[derive(FromPyObject)]
 enum ShutterArg<'py> {
     Name(String),
+    Trapezoid { open: f64, close: f64 },
     Weights(PyReadonlyArray1<'py, f64>),
 }
 
@@ -181,6 +183,7 @@ fn _analytic<'py>(
     let vps = view_projections(&o.view_projections)?;
     let shutter = match &o.shutter {
         ShutterArg::Name(name) => Shutter::parse(name)?,
+        ShutterArg::Trapezoid { open, close } => Shutter::trapezoid(*open, *close)?,
         ShutterArg::Weights(w) => Shutter::weights(c_slice(w, "shutter")?)?,
     };
     let lights = lights(&o.lights)?;

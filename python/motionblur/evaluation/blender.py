@@ -156,7 +156,11 @@ def _check(scene: Scene) -> None:
     if not isinstance(scene, Scene):
         raise TypeError(f"scene: expected a motionblur.Scene, got {type(scene).__name__}")
     if not (isinstance(scene.shutter, str) and scene.shutter == "box"):
-        name = scene.shutter if isinstance(scene.shutter, str) else "custom weights"
+        name = (
+            scene.shutter
+            if isinstance(scene.shutter, str)
+            else (repr(scene.shutter) if hasattr(scene.shutter, "open") else "custom weights")
+        )
         raise ValueError(
             f"scene: shutter {name!r}: the Blender reference renders the box shutter only (its shutter "
             "curve is sampled into a table, not the exact filter); use shutter='box'"

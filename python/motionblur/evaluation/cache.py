@@ -67,7 +67,12 @@ def scene_hash(scene: Scene) -> str:
     _arr(h, scene.ambient)
     _arr(h, scene.background)
     shutter = scene.shutter
-    h.update(shutter.encode() if isinstance(shutter, str) else np.asarray(shutter, np.float64).tobytes())
+    if isinstance(shutter, str):
+        h.update(shutter.encode())
+    elif hasattr(shutter, "open") and hasattr(shutter, "close"):  # a Trapezoid
+        h.update(repr(shutter).encode())
+    else:
+        h.update(np.asarray(shutter, np.float64).tobytes())
     h.update(repr(float(scene.reference_t)).encode())
     return h.hexdigest()[:16]
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from .._validate import as_samples
 from ..raster import Draw, Frame, rasterize
-from ..scene import Scene
+from ..scene import Scene, Trapezoid
 
 __all__ = ["shutter_centroid", "sharp_frame", "require_box_shutter", "check_aa"]
 
@@ -24,7 +24,11 @@ def require_box_shutter(scene: Scene, method: str) -> None:
     """Raise ValueError naming ``shutter`` unless the scene's shutter is a box (the name, or
     custom weights all equal): ``method`` blurs with a uniform weight over the shutter."""
     sh = scene.shutter
-    if isinstance(sh, str):
+    if isinstance(sh, Trapezoid):
+        if sh.open == 0.0 and sh.close == 0.0:
+            return
+        what = f"shutter curve {sh!r}"
+    elif isinstance(sh, str):
         if sh == "box":
             return
         what = repr(sh)

@@ -197,7 +197,7 @@ def _checked_options(scene: Scene, filter, aa, contour_line, exact_static, spin,
         if not isinstance(scene.shutter, str):
             raise ValueError(
                 "shutter: motion_volume's coverage model integrates the named filters only, not "
-                "custom shutter weights; pass filter='box', 'ramp', 'triangle' or 'gaussian' to "
+                "custom shutter weights or a Trapezoid; pass filter='box', 'ramp', 'triangle' or 'gaussian' to "
                 "choose one, or use accumulation or blur_shell, which integrate the weights"
             )
         filter = scene.shutter
