@@ -141,7 +141,10 @@ def _dataset(args) -> int:
         return 1
     finally:
         if client is not None:
+            cluster = client.cluster if args.dask == "local" else None
             client.close()
+            if cluster is not None:
+                cluster.close()
     print(f"{args.out}: {len(run['rendered'])} frames rendered, {len(run['skipped'])} already there")
     return 0
 

@@ -431,7 +431,8 @@ def _write_gif(out: Path, ks, fps: float) -> None:
     """``preview.gif`` of the frames' PNG previews (Pillow), at ``fps``."""
     from ._optional import require
 
-    image = require("PIL", "the dataset's GIF preview").Image
+    require("PIL", "the dataset's GIF preview")
+    from PIL import Image as image
     pics = []
     for k in ks:
         with image.open(out / f"{_stem(k)}.png") as im:

@@ -162,3 +162,43 @@ def test_one_frame_at_360_degrees_is_the_scene_itself(tmp_path):
                  options={"samples": 8}, width=64, height=48, progress=False)  # fmt: skip
     want = mb.render(mb.SCENES["curved"](width=64, height=48), "accumulation", samples=8).rgba
     np.testing.assert_allclose(_arrays(tmp_path, 0)["rgba"], want, rtol=0, atol=1e-5)
+
+
+def test_a_failed_write_leaves_no_file_behind(tmp_path):
+    from motionblur.dataset import _replace_into
+
+    target = tmp_path / "frame_000000.exr"
+
+    def half_then_fail(p):
+        p.write_bytes(b"half")
+        raise OSError("disk full")
+
+    with pytest.raises(OSError, match="disk full"):
+        _replace_into(target, half_then_fail)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_progress_bar_and_a_scene_object(tmp_path, capsys):
+    scene = mb.SCENES["cube"](width=40, height=30)
+    run = make_dataset(scene, tmp_path, frames=(2, 4), method="accumulation", options={"samples": 2})
+    assert run["rendered"] == [2, 3] and run["width"] == 40
+    assert "2/2" in capsys.readouterr().err
+    m = json.loads((tmp_path / "frame_000003.json").read_text())
+    assert m["shutter"]["window"] == pytest.approx([0.5, 0.75])
+
+
+@pytest.mark.dask
+def test_the_command_line_on_a_local_cluster(tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(Path(mb.__file__).parents[1])}
+    args = ["cube", "--frames", "0:2", "--method", "analytic", "--outputs", "blurred,flow", "--width", "40",
+            "--height", "30", "--no-progress"]  # fmt: skip
+    for extra in ([], ["--dask", "local"]):
+        out = str(tmp_path / ("dask" if extra else "serial"))
+        cmd = [sys.executable, "-m", "motionblur", "dataset", *args, "--out", out, *extra]
+        done = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=120)
+        assert done.returncode == 0, done.stderr
+    for k in range(2):
+        a, b = _arrays(tmp_path / "serial", k), _arrays(tmp_path / "dask", k)
+        assert a.keys() == b.keys()
+        for n in a:
+            np.testing.assert_array_equal(a[n], b[n], err_msg=n)
