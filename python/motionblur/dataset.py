@@ -433,6 +433,7 @@ def _write_gif(out: Path, ks, fps: float) -> None:
 
     require("PIL", "the dataset's GIF preview")
     from PIL import Image as image
+
     pics = []
     for k in ks:
         with image.open(out / f"{_stem(k)}.png") as im:
