@@ -134,14 +134,18 @@ def _frame_scene(job: dict) -> Scene:
 
 
 def _untimed(x):
-    """``x`` without timings (keys ``ms`` or ending in ``_ms``/``seconds``): files stay bit-stable."""
+    """``x`` without what varies from run to run: timings (keys ``ms``, ``ms_*``, ``*_ms``,
+    ``*seconds``) and the static-layer cache's state (``static_*``, which depends on what the
+    process rendered before): files stay bit-stable."""
     if isinstance(x, dict):
-        return {
-            k: _untimed(v) for k, v in x.items() if not (k == "ms" or str(k).endswith(("_ms", "seconds")))
-        }
+        return {k: _untimed(v) for k, v in x.items() if not _varies(str(k))}
     if isinstance(x, list | tuple):
         return [_untimed(v) for v in x]
     return x
+
+
+def _varies(key: str) -> bool:
+    return key == "ms" or key.startswith(("ms_", "static_")) or key.endswith(("_ms", "seconds"))
 
 
 def _jsonable(x):

@@ -202,3 +202,18 @@ def test_the_command_line_on_a_local_cluster(tmp_path):
         assert a.keys() == b.keys()
         for n in a:
             np.testing.assert_array_equal(a[n], b[n], err_msg=n)
+
+
+def test_the_same_bytes_for_every_thread_count(tmp_path):
+    old = mb.get_num_threads()
+    try:
+        for n in (1, 3):
+            mb.set_num_threads(n)
+            make_dataset("curved", tmp_path / str(n), frames=(0, 2), method="analytic", width=48, height=32,
+                         outputs=["blurred", "sharp", "flow"], progress=False)  # fmt: skip
+    finally:
+        mb.set_num_threads(old)
+    for k in range(2):
+        for e in ("exr", "png", "json"):
+            name = f"frame_{k:06d}.{e}"
+            assert (tmp_path / "1" / name).read_bytes() == (tmp_path / "3" / name).read_bytes(), name
