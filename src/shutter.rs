@@ -90,7 +90,9 @@ impl Shutter {
         if !(ok(open) && ok(close) && open + close <= 1.0) {
             return Err(Error::value(
                 "shutter",
-                format!("trapezoid ramps must be >= 0 with open + close <= 1, got {open} and {close}"),
+                format!(
+                    "trapezoid ramps must be >= 0 with open + close <= 1, got {open} and {close}"
+                ),
             ));
         }
         Ok(Shutter::Trapezoid { open, close })
