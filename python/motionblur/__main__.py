@@ -86,6 +86,8 @@ def _dataset_parser(sub) -> None:
     d.add_argument("--shutter-angle", type=float, default=180.0, help="degrees in (0, 360] (default 180)")
     d.add_argument("--shake", type=float, help="hand-held camera shake intensity (default none)")
     d.add_argument("--seed", type=int, default=0, help="seed of the shake (default 0)")
+    d.add_argument("--rolling", type=float, default=0.0,
+                   help="rolling shutter readout in [0, 1) of the exposure, rows top to bottom (default 0: global)")  # fmt: skip
     d.add_argument("--method", default="auto", help="a rendering method (default auto)")
     d.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
                    help="an option of the method, e.g. --option aa=2 (repeatable)")  # fmt: skip
@@ -133,7 +135,7 @@ def _dataset(args) -> int:
         run = make_dataset(
             args.scene, args.out, frames=frames, fps=args.fps, shutter_angle=args.shutter_angle,
             method=args.method, options=options, outputs=[o.strip() for o in args.outputs.split(",") if o.strip()],
-            shake=args.shake, seed=args.seed, width=args.width, height=args.height, client=client,
+            shake=args.shake, seed=args.seed, rolling=args.rolling, width=args.width, height=args.height, client=client,
             progress=not args.no_progress,
         )  # fmt: skip
     except (ValueError, TypeError, FileNotFoundError) as exc:

@@ -128,9 +128,11 @@ def _frame_scene(job: dict) -> Scene:
             scene.camera.pose, exposure=exposure, intensity=job["shake"], seed=job["shake_seed"]
         )
         camera_motion = _compose(camera_motion, shake)
+    rolling = job.get("rolling", 0.0)
     if builtin:
-        return _retime_scene(scene, *window, camera_motion)
-    return scene.with_(camera_motion=camera_motion)
+        scene = _retime_scene(scene, *window, camera_motion)
+        return scene.with_(rolling=rolling) if rolling else scene
+    return scene.with_(camera_motion=camera_motion, rolling=rolling)
 
 
 def _untimed(x):
@@ -139,7 +141,7 @@ def _untimed(x):
     process rendered before): files stay bit-stable."""
     if isinstance(x, dict):
         return {k: _untimed(v) for k, v in x.items() if not _varies(str(k))}
-    if isinstance(x, list | tuple):
+    if isinstance(x, (list, tuple)):
         return [_untimed(v) for v in x]
     return x
 
@@ -151,13 +153,13 @@ def _varies(key: str) -> bool:
 def _jsonable(x):
     if isinstance(x, dict):
         return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
+    if isinstance(x, (list, tuple)):
         return [_jsonable(v) for v in x]
     if isinstance(x, np.ndarray):
         return x.tolist()
     if isinstance(x, np.generic):
         return x.item()
-    if isinstance(x, float | int | str | bool) or x is None:
+    if isinstance(x, (float, int, str, bool)) or x is None:
         return x
     return str(x)
 
@@ -231,6 +233,7 @@ def render_frame(job: dict) -> dict:
         "seed": job["seed"],
         "shake": job["shake"],
         "shake_seed": job["shake_seed"],
+        "rolling": job.get("rolling", 0.0),
         "files": {"exr": f"{_stem(k)}.exr", "png": f"{_stem(k)}.png"},
     }
     _write_json(meta_path, meta)  # last: the frame is done
@@ -245,7 +248,7 @@ def _source_of(scene_or_path) -> tuple[tuple[str, Any], str]:
 
     if isinstance(scene_or_path, Scene):
         return ("scene", scene_or_path), "Scene"
-    if isinstance(scene_or_path, str | os.PathLike):
+    if isinstance(scene_or_path, (str, os.PathLike)):
         text = os.fspath(scene_or_path)
         if text in SCENES:
             return ("builtin", text), text
@@ -261,18 +264,25 @@ def _source_of(scene_or_path) -> tuple[tuple[str, Any], str]:
     )
 
 
-def _check(frames, fps, shutter_angle, method, options, outputs, shake, seed, width, height):
-    from .render import METHODS
+def _check(frames, fps, shutter_angle, method, options, outputs, shake, seed, width, height, rolling=0.0):
+    from .render import METHODS, ROLLING_METHODS
+
+    if isinstance(rolling, bool) or not isinstance(rolling, (int, float)) or not 0.0 <= rolling < 1.0:
+        raise ValueError(f"rolling: expected a readout in [0, 1), got {rolling!r}")
+    if rolling > 0.0 and method not in ROLLING_METHODS:
+        raise ValueError(
+            f"rolling: method {method!r} cannot model a rolling shutter; use one of {', '.join(sorted(ROLLING_METHODS))}"
+        )
 
     if (
         not isinstance(frames, Sequence)
         or len(frames) != 2
-        or not all(isinstance(f, int | np.integer) and not isinstance(f, bool) for f in frames)
+        or not all(isinstance(f, (int, np.integer)) and not isinstance(f, bool) for f in frames)
         or not 0 <= frames[0] < frames[1]
     ):
         raise ValueError(f"frames: expected (A, B) integers with 0 <= A < B, got {frames!r}")
     for name, v in (("fps", fps), ("shutter_angle", shutter_angle)):
-        if isinstance(v, bool) or not isinstance(v, int | float) or not np.isfinite(v):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
             raise ValueError(f"{name}: expected a finite number, got {v!r}")
     if not fps > 0:
         raise ValueError(f"fps: must be > 0, got {fps!r}")
@@ -292,15 +302,15 @@ def _check(frames, fps, shutter_angle, method, options, outputs, shake, seed, wi
     if "exposure" in outputs and method != "analytic":
         raise ValueError(f"outputs: 'exposure' is given by method 'analytic' only, not by {method!r}")
     if shake is not None and (
-        isinstance(shake, bool) or not isinstance(shake, int | float) or not shake >= 0
+        isinstance(shake, bool) or not isinstance(shake, (int, float)) or not shake >= 0
     ):
         raise ValueError(f"shake: expected None or an intensity >= 0, got {shake!r}")
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"seed: expected an integer >= 0, got {seed!r}")
     from ._core import MAX_PIXELS
 
     for name, v in (("width", width), ("height", height)):
-        if isinstance(v, bool) or not isinstance(v, int | np.integer) or not v >= 1:
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not v >= 1:
             raise ValueError(f"{name}: expected an integer >= 1 pixels, got {v!r}")
     if width * height > MAX_PIXELS:
         raise ValueError(f"width: width x height must be at most {MAX_PIXELS} pixels, got {width}x{height}")
@@ -318,6 +328,7 @@ def make_dataset(
     outputs: Sequence[str] = ("blurred",),
     shake: float | None = None,
     seed: int = 0,
+    rolling: float = 0.0,
     width: int = 320,
     height: int = 240,
     client=None,
@@ -337,7 +348,9 @@ def make_dataset(
     EXR), ``sharp``, ``flow``, ``trajectory``, ``exposure`` (ground truth at the shutter's open,
     centre and close; ``exposure`` needs ``method="analytic"``). ``shake``: None or a hand-held
     camera shake's intensity >= 0 ([`camera_shake`][motionblur.shake.camera_shake]), seeded per frame from
-    ``seed`` (an integer >= 0) and the frame number. ``width``, ``height``: pixels.
+    ``seed`` (an integer >= 0) and the frame number. ``rolling``: a rolling shutter's readout in
+    [0, 1) of each frame's exposure, rows read top to bottom (``Scene(rolling=...)``; 0 a global
+    shutter; the methods of ``motionblur.render.ROLLING_METHODS`` only). ``width``, ``height``: pixels.
     ``client``: None (frames rendered here, one after another) or a ``dask.distributed.Client``
     (frames as tasks; its workers must see ``out``). ``progress``: a tqdm bar on stderr (needs tqdm).
 
@@ -350,7 +363,7 @@ def make_dataset(
     source, scene_name = _source_of(scene_or_path)
     options = dict(options or {})
     outputs = list(dict.fromkeys(outputs))
-    _check(frames, fps, shutter_angle, method, options, outputs, shake, seed, width, height)
+    _check(frames, fps, shutter_angle, method, options, outputs, shake, seed, width, height, rolling)
     from .render import METHODS, _unknown_options
 
     bad = _unknown_options(METHODS[method].fn, options)
@@ -384,6 +397,7 @@ def make_dataset(
             "shake": None if shake is None else float(shake),
             "seed": int(seed),
             "shake_seed": None if shake is None else _shake_seed(seed, k),
+            "rolling": float(rolling),
         }
         for k in range(a, b)
     ]
@@ -416,6 +430,7 @@ def make_dataset(
         "outputs": outputs,
         "shake": shake,
         "seed": int(seed),
+        "rolling": float(rolling),
         "width": int(width),
         "height": int(height),
         "frame_files": [f"{_stem(k)}.json" for k in range(a, b)],

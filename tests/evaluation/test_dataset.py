@@ -217,3 +217,22 @@ def test_the_same_bytes_for_every_thread_count(tmp_path):
         for e in ("exr", "png", "json"):
             name = f"frame_{k:06d}.{e}"
             assert (tmp_path / "1" / name).read_bytes() == (tmp_path / "3" / name).read_bytes(), name
+
+
+def test_a_rolling_shutter_reaches_every_frame(tmp_path):
+    """--rolling: each frame's scene has the readout (the metadata says so), and the frame equals
+    the analytic render of a rolling-shutter scene, which leans (differs from the global one)."""
+    from motionblur.dataset import make_dataset
+
+    kw = dict(frames=(0, 2), method="analytic", width=64, height=48, progress=False)
+    make_dataset("cube", tmp_path / "r", rolling=0.5, **kw)
+    make_dataset("cube", tmp_path / "g", **kw)
+    meta = json.loads((tmp_path / "r" / "frame_000001.json").read_text())
+    assert meta["rolling"] == 0.5
+    rolled = mb.read_image(tmp_path / "r" / "frame_000001.exr").rgba
+    still = mb.read_image(tmp_path / "g" / "frame_000001.exr").rgba
+    assert np.abs(rolled - still).max() > 1e-3
+    with pytest.raises(ValueError, match="rolling"):
+        make_dataset("cube", tmp_path / "x", rolling=0.5, frames=(0, 1), method="velocity", progress=False)
+    with pytest.raises(ValueError, match="rolling"):
+        make_dataset("cube", tmp_path / "x", rolling=1.0, frames=(0, 1), progress=False)
