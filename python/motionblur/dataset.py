@@ -92,20 +92,16 @@ def _shake_seed(seed: int, k: int) -> int:
 # ---------------------------------------------------------------- one frame
 
 
-_BUILT: dict[tuple, Scene] = {}
-
-
 def _source_scene(source, width: int, height: int, window) -> Scene:
+    """The scene a frame is cut from (built per frame: no module-level store, and a built-in
+    scene costs milliseconds against a frame's render)."""
     kind, value = source
     if kind == "gltf":
         return Scene.from_gltf(value, shutter=window, width=width, height=height)
     if kind == "builtin":
-        key = (value, width, height)
-        if key not in _BUILT:
-            from .scenes_builtin import SCENES
+        from .scenes_builtin import SCENES
 
-            _BUILT[key] = SCENES[value](width=width, height=height)
-        return _BUILT[key]
+        return SCENES[value](width=width, height=height)
     return value
 
 

@@ -161,12 +161,15 @@ def surface_paths(scene: Scene, points, times, *, source=None, frame: Frame | No
     local = _local_points(scene, world, ids, src)
     weight = np.where(far, 0.0, 1.0)
     paths = np.empty((len(pts), len(ts), 2))
+    # the points of each moving object, found once (a still object's points stay where they are)
+    groups = [
+        (k, np.flatnonzero(ids == k)) for k in np.unique(ids[ids >= 0]) if scene.objects[int(k)].is_moving
+    ]
+    moved = local.copy()
     for j, t in enumerate(ts):
-        moved = local.copy()
-        for k in np.unique(ids[ids >= 0]):
+        for k, idx in groups:
             m = scene.objects[int(k)].transform_at(float(t))
-            sel = ids == k
-            moved[sel] = local[sel] @ m[:3, :3].T + m[:3, 3]
+            moved[idx] = local[idx] @ m[:3, :3].T + m[:3, 3]
         paths[:, j] = _project(scene.camera_at(float(t)), moved, weight)
     return SurfacePaths(pts, ids, depth, src, ts, paths)
 
@@ -197,6 +200,30 @@ def mean_motion(scene: Scene, samples: int = 64) -> NDArray[np.float32]:
     p = surface_paths(scene, _pixel_centres(scene), times)
     d = ((p.paths - p.points[:, None, :]) * weights[None, :, None]).sum(axis=1)
     return d.reshape(h, w, 2).astype(np.float32)
+
+
+def _flows(scene: Scene, ts: np.ndarray, sharp: list[Frame]) -> dict:
+    """``flow``, ``flow_backward`` and ``mean_motion`` of [`outputs`][motionblur.ground_truth.outputs],
+    from one sharp frame per time (``sharp``, at ``ts``): the surfaces seen at the reference time
+    are followed once to the output times and the mean motion's times together."""
+    h, w = scene.camera.height, scene.camera.width
+    ref = scene.reference_t
+    at_ref = [f for t, f in zip(ts, sharp) if t == ref]
+    mm_times, weights = stratified_times(scene, MEAN_MOTION_SAMPLES)
+    p = surface_paths(
+        scene, _pixel_centres(scene), np.concatenate([ts, mm_times]), frame=at_ref[0] if at_ref else None
+    )
+    d = p.paths - p.points[:, None, :]
+    back = [
+        surface_paths(scene, p.points, [ref], source=float(t), frame=f).paths[:, 0] - p.points
+        for t, f in zip(ts, sharp)
+    ]
+    as_image = lambda a: a.reshape(h, w, 2).astype(np.float32)  # noqa: E731
+    return {
+        "flow": np.stack([as_image(d[:, j]) for j in range(len(ts))]),
+        "flow_backward": np.stack([as_image(b) for b in back]),
+        "mean_motion": as_image((d[:, len(ts) :] * weights[None, :, None]).sum(axis=1)),
+    }
 
 
 def sharp_frames(scene: Scene, times=None, aa: int = 1) -> list[Frame]:
@@ -285,13 +312,12 @@ def outputs(scene: Scene, names, method: str, times=None) -> dict:
     names = _check_outputs(names, method)
     ts = _times(times, "output_times")
     out: dict = {"times": ts}
-    if "sharp" in names:
-        out["sharp"] = sharp_frames(scene, ts)
+    if "sharp" in names or "flow" in names:
+        sharp = sharp_frames(scene, ts)  # each drawn once: the output and the flows' sources
+        out["sharp" if "sharp" in names else "_sharp"] = sharp
     if "flow" in names:
-        out["flow"] = flow(scene, ts)
-        ref = np.array([scene.reference_t])
-        out["flow_backward"] = np.stack([flow(scene, ref, source=float(t))[0] for t in ts])
-        out["mean_motion"] = mean_motion(scene, samples=MEAN_MOTION_SAMPLES)
+        out.update(_flows(scene, ts, sharp))
+        out.pop("_sharp", None)
     if "trajectory" in names:
         out["trajectory"] = trajectories(scene)
     return out

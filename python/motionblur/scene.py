@@ -16,6 +16,7 @@ shutter. These are the same filters as the motion volume's (``src/volume/filter.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -243,6 +244,7 @@ class DirectionalLight:
 # ---------------------------------------------------------------- shutter filters
 
 
+@dataclass(frozen=True)
 class Trapezoid:
     """A trapezoid shutter curve, as a mechanical shutter opens and closes (RenderMan's and
     Cycles' curves of this shape): for ``Scene(shutter=Trapezoid(open, close))``, the weight
@@ -253,29 +255,15 @@ class Trapezoid:
     ``auto`` and the blur shell; the image-space methods (box only) and the motion volume (named
     filters only) refuse it."""
 
-    __slots__ = ("open", "close")
+    open: float = 0.1
+    close: float = 0.1
 
-    def __init__(self, open: float = 0.1, close: float = 0.1) -> None:
-        o, c = as_float(open, "open"), as_float(close, "close")
+    def __post_init__(self) -> None:
+        o, c = as_float(self.open, "open"), as_float(self.close, "close")
         if not (o >= 0.0 and c >= 0.0 and o + c <= 1.0):
             raise ValueError(f"open, close: ramps must be >= 0 with open + close <= 1, got {o} and {c}")
-        object.__setattr__(self, "open", o)
+        object.__setattr__(self, "open", o)  # stored as floats (frozen: set once, here)
         object.__setattr__(self, "close", c)
-
-    def __setattr__(self, name, value):
-        raise AttributeError("Trapezoid is immutable")
-
-    def __eq__(self, other) -> bool:
-        return isinstance(other, Trapezoid) and (self.open, self.close) == (other.open, other.close)
-
-    def __hash__(self) -> int:
-        return hash((Trapezoid, self.open, self.close))
-
-    def __reduce__(self):
-        return (Trapezoid, (self.open, self.close))
-
-    def __repr__(self) -> str:
-        return f"Trapezoid(open={self.open:g}, close={self.close:g})"
 
     def cdf(self, t: np.ndarray) -> np.ndarray:
         """W(t) at ``t`` (clipped to [0, 1]): the weight of [0, t]."""

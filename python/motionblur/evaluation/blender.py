@@ -63,7 +63,7 @@ from .._validate import as_int
 from ..interop.mitsuba import vertex_normals
 from ..methods._layers import downsample
 from ..raster import Frame, over_background
-from ..scene import Scene
+from ..scene import Scene, Trapezoid
 
 __all__ = ["blender", "motion_steps", "TO_BLENDER", "MAX_MOTION_STEPS"]
 
@@ -159,7 +159,7 @@ def _check(scene: Scene) -> None:
         name = (
             scene.shutter
             if isinstance(scene.shutter, str)
-            else (repr(scene.shutter) if hasattr(scene.shutter, "open") else "custom weights")
+            else (repr(scene.shutter) if isinstance(scene.shutter, Trapezoid) else "custom weights")
         )
         raise ValueError(
             f"scene: shutter {name!r}: the Blender reference renders the box shutter only (its shutter "

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..scene import Motion, Scene
+from ..scene import Motion, Scene, Trapezoid
 
 __all__ = ["scene_hash", "reference_key", "cached"]
 
@@ -69,7 +69,7 @@ def scene_hash(scene: Scene) -> str:
     shutter = scene.shutter
     if isinstance(shutter, str):
         h.update(shutter.encode())
-    elif hasattr(shutter, "open") and hasattr(shutter, "close"):  # a Trapezoid
+    elif isinstance(shutter, Trapezoid):
         h.update(repr(shutter).encode())
     else:
         h.update(np.asarray(shutter, np.float64).tobytes())
