@@ -2,7 +2,11 @@
 //! time with the least per-sample work.
 //!
 //! Objects are grouped by shading mode (groups in the order their first object comes), one
-//! rasterizer call per group and the groups composited by depth. A group of one rigid object
+//! rasterizer call per group and the groups composited by depth. Compositing two layers by
+//! their nearest depth is exact for opaque surfaces only: when an object is transparent and
+//! there are several shading modes, all objects are one group instead (world space, each draw
+//! with its own shading), so the rasterizer sorts every transparent surface with the others and
+//! the layer is the exact one of the whole scene at that time. A group of one rigid object
 //! is drawn in object space: its placement at the time is folded into the view matrix and the
 //! lights are turned into object space, so no vertex is touched per sample. Other groups get
 //! world vertices (and turned normals) per sample. Placements come from the keyframe engine;
@@ -100,6 +104,7 @@ impl WithoutVertices for Draw {
             object_id: self.object_id,
             cull_back: self.cull_back,
             previous: None,
+            shading: self.shading,
         }
     }
 }
@@ -112,6 +117,7 @@ fn rotation(m: &Mat4) -> Mat3 {
 }
 
 struct Group {
+    /// The shading of the rasterizer call (each draw keeps its own, see `Draw::shading`).
     shading: Shading,
     objects: Vec<usize>,
     /// One object drawn in object space.
@@ -144,6 +150,9 @@ impl Painter {
             return Err(Error::value("ambient", "must be finite and >= 0"));
         }
         let mut groups: Vec<Group> = Vec::new();
+        let transparent = objects.iter().any(|o| o.rgba.iter().any(|c| c[3] < 1.0));
+        let modes = |s: Shading| objects.iter().any(|o| o.shading == s);
+        let one_group = transparent && modes(Shading::Flat) && modes(Shading::Lambert);
         for (i, o) in objects.iter().enumerate() {
             if let Some(crate::motion::Keys::Deforming { count, .. }) =
                 o.motion.as_ref().map(|m| m.keys())
@@ -158,10 +167,16 @@ impl Painter {
                     ));
                 }
             }
-            match groups.iter_mut().find(|g| g.shading == o.shading) {
+            // one group: lambert for the call, so the lights reach the lambert draws
+            let shading = if one_group {
+                Shading::Lambert
+            } else {
+                o.shading
+            };
+            match groups.iter_mut().find(|g| g.shading == shading) {
                 Some(g) => g.objects.push(i),
                 None => groups.push(Group {
-                    shading: o.shading,
+                    shading,
                     objects: vec![i],
                     object_space: false,
                     draws: Vec::new(),
@@ -184,6 +199,7 @@ impl Painter {
                         object_id: o.id,
                         cull_back: true,
                         previous: None,
+                        shading: (o.shading != g.shading).then_some(o.shading),
                     }
                 })
                 .collect();

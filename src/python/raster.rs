@@ -77,6 +77,7 @@ fn owned_draw(d: &DrawArg<'_>) -> Result<Draw, Error> {
         object_id: d.object_id,
         cull_back: d.cull_back,
         previous,
+        shading: None,
     })
 }
 

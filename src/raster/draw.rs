@@ -1,4 +1,5 @@
 //! One mesh to draw: positions, faces, straight colours, normals, id, culling, previous positions.
+use super::options::Shading;
 use crate::error::{Error, Result};
 
 /// Largest coordinate magnitude accepted: the one coordinate range of every entry point.
@@ -24,6 +25,9 @@ pub struct Draw {
     pub cull_back: bool,
     /// World positions at the previous time, for the velocity buffer.
     pub previous: Option<Vec<[f64; 3]>>,
+    /// This mesh's shading when it differs from the frame's (`Options::shading`): one call
+    /// then draws flat and lambert meshes, their transparent surfaces sorted together.
+    pub shading: Option<Shading>,
 }
 
 /// Faces from signed indices, each checked to lie in `0..n_vertices`.
@@ -195,6 +199,7 @@ mod tests {
             object_id: 3,
             cull_back: true,
             previous: None,
+            shading: None,
         }
     }
 

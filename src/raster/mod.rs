@@ -91,7 +91,7 @@ fn transform(
             .map(|p| homogeneous_pixel(&project(p), w, h))
             .collect()
     });
-    let normals = match (opts.shading, &draw.normals) {
+    let normals = match (draw.shading.unwrap_or(opts.shading), &draw.normals) {
         (Shading::Flat, _) => None,
         (Shading::Lambert, Some(n)) => Some(n.clone()),
         (Shading::Lambert, None) => Some(vertex_normals(&draw.vertices, &draw.faces)),

@@ -14,7 +14,7 @@
 //! The output colour is premultiplied.
 use super::draw::Draw;
 use super::interp::Planes;
-use super::options::{Options, Shading};
+use super::options::Options;
 use super::setup::{Chunk, Tri, FRONT, NO_CLIP};
 
 /// Per-draw data computed once a frame: clip-space positions and previous homogeneous screen
@@ -73,10 +73,8 @@ impl<'a> Shader<'a> {
         } else {
             Some(v.map(|k| d.rgba[k as usize]))
         };
-        let normals = match (self.opts.shading, &p.normals) {
-            (Shading::Lambert, Some(n)) => Some(v.map(|k| n[k as usize])),
-            _ => None,
-        };
+        // a draw's normals are prepared when it is lambert-shaded (its own or the options')
+        let normals = p.normals.as_ref().map(|n| v.map(|k| n[k as usize]));
         let mut ts = TriShade {
             constant: None,
             clip: (tri.clip != NO_CLIP).then(|| self.chunks[c].clips[tri.clip as usize]),

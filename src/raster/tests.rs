@@ -18,6 +18,7 @@ fn draw(vertices: Vec<[f64; 3]>, faces: Vec<[u32; 3]>, rgba: [f32; 4]) -> Draw {
         object_id: 7,
         cull_back: true,
         previous: None,
+        shading: None,
     }
 }
 

@@ -95,6 +95,10 @@ def accumulate(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> F
     cam = supersampled(scene.camera, aa)
     static_objs = [(k, o) for k, o in everything if not o.is_moving]
     moving = [(k, o) for k, o in everything if o.is_moving]
+    if dim >= 1.0 and static_objs and any(float(np.min(o.rgba[..., 3])) < 1.0 for o in scene.objects):
+        # A transparent surface between two others cannot be composited with one depth a pixel
+        # per layer: every object is drawn at every sample, sorted together (exact).
+        static_objs, moving = [], everything
     static = static_layer(scene, cam, static_objs, aa)
     stats["static_draws"] = 0 if (static.cached or not static_objs) else 1
     stats["static_cached"] = static.cached

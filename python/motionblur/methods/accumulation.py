@@ -5,7 +5,10 @@ or jittered ``(i + u_i) / N``, each weighted by the shutter filter's integral ov
 ``[i / N, (i + 1) / N]``. Static objects (and, with a still camera, everything that does not
 move) are rasterized once into a static layer; each time sample then rasterizes only the moving
 objects, inside the pixel window their motion covers, and composites them with the static layer
-per sample by depth before accumulating. The dimmed-blur variant (``dim < 1``) loads the static
+per sample by depth before accumulating. With a translucent object that one depth a pixel per
+layer cannot sort (a surface between two of the other layer's), every object is drawn at every
+sample instead, and objects of both shading modes in one rasterizer call, so the frame converges
+to the exact time integral ([`motionblur.exact`][motionblur.exact]) there too. The dimmed-blur variant (``dim < 1``) loads the static
 scene with weight ``1 - dim`` and accumulates the full scene with weight ``dim``, which makes the
 blurred objects look faster (fainter).
 
