@@ -161,16 +161,34 @@ class HalfSums:
     def samples(self) -> int:
         return sum(len(t) for _, t, _, _ in self.parts)
 
-    def _half(self, j: int) -> tuple[float, np.ndarray]:
-        sel = [(float(w.sum()), f.rgba) for h, _, w, f in self.parts if h == j]
+    def _window(self) -> tuple[int, int, int, int] | None:
+        """The pixels (x0, y0, x1, y1) any part drew moving objects in (the whole image with a
+        moving camera), None when none did: outside it every part is the same static layer."""
+        h, w = self.parts[0][3].rgba.shape[:2]
+        if self.scene.camera_moves:
+            return 0, 0, w, h
+        wins = [p[3].stats["window"] for p in self.parts if p[3].stats["window"] is not None]
+        if not wins:
+            return None
+        return tuple(f(v[i] for v in wins) // self.aa for i, f in enumerate((min, min, max, max)))
+
+    def _half(self, j: int, rows: slice, cols: slice) -> tuple[float, np.ndarray]:
+        sel = [(float(w.sum()), f.rgba[rows, cols]) for h, _, w, f in self.parts if h == j]
         mass = sum(m for m, _ in sel)
         return mass, sum(m * r.astype(np.float64) for m, r in sel) / mass
 
     def frame(self) -> Frame:
-        (ma, a), (mb, b) = self._half(0), self._half(1)
         ref_t = self.scene.reference_t
         nearest = min(self.parts, key=lambda p: float(np.min(np.abs(p[1] - ref_t))))[3]
-        frame = Frame(((ma * a + mb * b) / (ma + mb)).astype(np.float32), nearest.depth, nearest.ids, None)
+        rgba, square_sum = nearest.rgba.copy(), 0.0
+        win = self._window()
+        if win is not None:  # the halves' sums over the window only (the same arithmetic)
+            rows, cols = slice(win[1], win[3]), slice(win[0], win[2])
+            (ma, a), (mb, b) = self._half(0, rows, cols), self._half(1, rows, cols)
+            rgba[rows, cols] = ((ma * a + mb * b) / (ma + mb)).astype(np.float32)
+            square_sum = float(np.sum(np.square(composited_difference(a, b, self.scene.background))))
+            m = (ma * mb) ** 0.5 / (ma + mb)
+        frame = Frame(rgba, nearest.depth, nearest.ids, None)
         calls = [p[3].stats for p in self.parts]
         wins = [c["window"] for c in calls if c["window"] is not None]
         frame.stats.update(
@@ -180,9 +198,7 @@ class HalfSums:
             static_cached=calls[0].get("static_cached", False),
             window=tuple(f(w[i] for w in wins) for i, f in enumerate((min, min, max, max))) if wins else None,
         )
-        diff = composited_difference(a, b, self.scene.background)
-        m = (ma * mb) ** 0.5 / (ma + mb)
-        scale = HALVES_FACTOR[self.sampling] * 2.0 * m
-        frame.stats["error_estimate"] = float(scale * np.sqrt(np.mean(np.square(diff))))
+        scale = HALVES_FACTOR[self.sampling] * 2.0 * m if win is not None else 0.0
+        frame.stats["error_estimate"] = float(scale * np.sqrt(square_sum / rgba.size))
         frame.stats["error_estimate_how"] = "halves: the even and the odd time samples compared"
         return frame
