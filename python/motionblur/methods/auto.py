@@ -11,15 +11,16 @@ analytic method, exact to about `ANALYTIC_ERROR` at its defaults and to 1e-5 at
 With ``tolerance`` (RMSE against the exact integral, premultiplied linear RGBA):
 
 1. a scene where nothing moves on screen is one sharp frame (its error is 0);
-2. accumulation with `FIRST_SAMPLES` samples measures the scene's error at that N;
+2. accumulation with [`first_samples`][motionblur.methods.auto.first_samples] samples (what the
+   easier tuning scenes need at that tolerance, 4 to 12) measures the scene's error at that N;
 3. since the error falls about as 1/N (`RATE`), the N that brings the estimate under
    ``tolerance`` x `SAFETY` is predicted and rendered, keeping the samples drawn when N
-   is an odd multiple of the last count (with fewer than `SURE_SAMPLES` samples the aim is
+   is an odd multiple of the last count (under a box shutter the next N is such a multiple
+   unless that draws over `REUSE_DRAWS` x the new samples of a fresh render; with fewer
+   than `SURE_SAMPLES` samples the aim is
    lower: their halves spread more), and again while the estimate says it missed (each
    step predicted from the last two measurements, at most `MAX_STEPS` steps);
-4. a scene with translucent objects that accumulation would draw in separate layers (see
-   [`layered_translucency`][motionblur.methods.auto.layered_translucency]: its limit is not the exact integral there) is the analytic
-   frame; so is one where that N would cost more than the analytic frame (predicted from its segment count and
+4. where that N would cost more than the analytic frame (predicted from its segment count and
    accumulation's time per sample, only asked once N reaches `ANALYTIC_FROM`), or exceed
    `MAX_SAMPLES`, or the tolerance is under what accumulation can certify cheaply, the
    analytic method renders instead (at the exact options below `ANALYTIC_ERROR` x 2).
@@ -54,6 +55,9 @@ __all__ = [
     "DEFAULT_TOLERANCE",
     "SAFETY",
     "FIRST_SAMPLES",
+    "FIRST_SCALE",
+    "FIRST_MAX",
+    "first_samples",
     "MAX_SAMPLES",
     "RATE",
     "SURE_SAMPLES",
@@ -61,6 +65,7 @@ __all__ = [
     "ANALYTIC_ERROR",
     "ANALYTIC_FROM",
     "ANALYTIC_COST",
+    "REUSE_DRAWS",
 ]
 
 #: The default tolerance: RMSE against the exact time integral (premultiplied linear RGBA).
@@ -69,9 +74,15 @@ DEFAULT_TOLERANCE = 0.01
 SAFETY = 0.85
 #: Below this many samples the halves hold few samples each and their estimate spreads more:
 #: the aim shrinks as sqrt(N / SURE_SAMPLES) (chosen on the tuning scenes).
-SURE_SAMPLES = 8
-#: Time samples of the first accumulation render (two halves of 2).
+SURE_SAMPLES = 6
+#: Fewest time samples of the first accumulation render (two halves of 2).
 FIRST_SAMPLES = 4
+#: The first render's samples for tolerance ``tol``: ``FIRST_SCALE / tol`` rounded to even, at
+#: least `FIRST_SAMPLES` and at most `FIRST_MAX`, about what the easier tuning scenes need at
+#: that tolerance, so that the first render is often the last (`first_samples`).
+FIRST_SCALE = 0.06
+#: Most time samples of the first accumulation render.
+FIRST_MAX = 12
 #: The rate auto first assumes the error falls at, as N^-RATE (1 for an edge's coverage at one
 #: point; slower where a pixel sees many edges), until two renders show their own.
 RATE = 1.0
@@ -84,6 +95,9 @@ ANALYTIC_FROM = 512
 #: The analytic frame's time over (its segments + 8) accumulation samples' (the largest ratio
 #: on most tuning scenes; chosen there).
 ANALYTIC_COST = 4.0
+#: How many more new samples than a fresh render a refinement that keeps the drawn ones may
+#: draw (`_next_count`; chosen on the tuning scenes).
+REUSE_DRAWS = 1.5
 #: The analytic method's error against the exact integral at its defaults (largest measured on
 #: the tuning scenes, with margin): below twice this tolerance it runs at the exact options.
 ANALYTIC_ERROR = 1e-4
@@ -98,11 +112,11 @@ def renders_shutter(options: dict, scene: Scene) -> bool:
 
 
 def layered_translucency(scene: Scene) -> bool:
-    """Whether accumulation's limit may differ from the exact integral on ``scene``: it draws
-    static and moving objects (under a still camera) and each shading mode as separate layers
-    merged with one depth per pixel, so a translucent surface hidden behind another layer's
-    surface can show through. Its halves cannot see that bias; ``auto`` renders the analytic
-    frame there."""
+    """Whether ``scene`` has translucent objects with another shading mode or (under a still
+    camera) static objects: where accumulation once merged separate layers with one depth a
+    pixel (a bias its halves could not see). It now draws such a scene's objects together at
+    every sample, sorted by depth, so its limit is the exact integral and ``auto`` treats the
+    scene like any other."""
     if not any(float(np.min(o.rgba[..., 3])) < 1.0 for o in scene.objects):
         return False
     layers = {o.shading for o in scene.objects}
@@ -139,14 +153,18 @@ class _Trials:
             est = 0.0  # the one sharp frame of a scene where nothing moves
         return self._record(method, options, frame, ms, est)
 
+    @property
+    def reuses(self) -> bool:
+        """Whether a finer grid keeps the samples drawn (a box shutter: see `accumulate`)."""
+        return isinstance(self.scene.shutter, str) and self.scene.shutter == "box"
+
     def accumulate(self, n: int) -> Frame:
         """Accumulation with ``n`` stratified samples; under a box shutter the samples already
         drawn are kept when ``n`` is an odd multiple of the last count (their times are on the
         new grid) and only the others are drawn."""
         t0 = time.perf_counter()
-        box = isinstance(self.scene.shutter, str) and self.scene.shutter == "box"
         last = self.sums.samples if self.sums is not None else 0
-        if not (box and last and n % last == 0 and (n // last) % 2 == 1):
+        if not (self.reuses and last and n % last == 0 and (n // last) % 2 == 1):
             self.sums, last = HalfSums(self.scene, self.aa), 0
         times, weights = sample_times(self.scene, n)
         j = np.arange(n)
@@ -188,13 +206,21 @@ class _Trials:
         return ANALYTIC_COST * (segments + 8) * self.per_sample_ms()
 
 
-def _next_count(n: int, want: float) -> int:
+def _next_count(n: int, want: float, reuse: bool = True) -> int:
     """The sample count after ``n`` for an estimated need of ``want``: the smallest odd multiple
     of ``n`` at least ``want`` (whose grid keeps the ``n`` samples drawn, so it draws the others
-    only) when that draws no more new samples than ``want`` rounded up to even does afresh."""
+    only) when ``reuse`` and that draws at most `REUSE_DRAWS` x as many new samples as ``want``
+    rounded up to even does afresh (a render saved outweighs a few more samples, and the frame
+    gets them too); else that even count, afresh."""
     odd = n * (2 * math.ceil((want / n - 1) / 2) + 1)
     fresh = 2 * math.ceil(want / 2)
-    return int(min(MAX_SAMPLES, odd if odd - n <= fresh else fresh))
+    return int(min(MAX_SAMPLES, odd if reuse and odd - n <= REUSE_DRAWS * fresh else fresh))
+
+
+def first_samples(tol: float) -> int:
+    """The time samples of auto's first accumulation render at tolerance ``tol`` (see
+    `FIRST_SCALE`): 6 at 0.01, 12 at 0.005 and below."""
+    return int(min(FIRST_MAX, max(FIRST_SAMPLES, 2 * round(FIRST_SCALE / tol / 2))))
 
 
 def _for_tolerance(trials: _Trials, tol: float) -> str:
@@ -202,14 +228,8 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
     if tol < 2 * ANALYTIC_ERROR:
         trials.run("analytic", **EXACT_OPTIONS)
         return f"tolerance {tol:g} < 2 x {ANALYTIC_ERROR:g}: the exact integral"
-    if layered_translucency(trials.scene):
-        trials.run("analytic")
-        return (
-            "translucent objects over layers accumulation merges with one depth a pixel: its limit "
-            f"is not the exact integral there; the analytic frame, exact to {ANALYTIC_ERROR:g}"
-        )
     aim = tol * SAFETY
-    trials.accumulate(FIRST_SAMPLES)
+    trials.accumulate(first_samples(tol))
     analytic_ms = None
     rate = RATE
     for _ in range(MAX_STEPS + 1):
@@ -234,7 +254,7 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
                     f"accumulation would need {want:.0f} samples (about {want * trials.per_sample_ms():.0f} ms); "
                     f"the analytic frame, predicted {analytic_ms:.0f} ms, is exact to {ANALYTIC_ERROR:g}"
                 )
-        trials.accumulate(_next_count(n, want))
+        trials.accumulate(_next_count(n, want, trials.reuses))
     trials.run("analytic")
     return f"accumulation still estimated over the tolerance after {MAX_STEPS} steps: the analytic frame"
 
