@@ -76,3 +76,17 @@ def test_an_opaque_scene_with_two_shading_modes_keeps_its_frame():
     )
     f = mb.render(scene, "accumulation", samples=1)
     np.testing.assert_array_equal(f.rgba, mb.exact(scene).rgba)
+
+
+def test_the_translucent_frame_does_not_depend_on_the_thread_count():
+    """One rasterizer call for both shading modes, at a size with many tiles."""
+    scene = random_scene(0, 4 * W, 4 * H)
+    frames = []
+    old = mb.get_num_threads()
+    try:
+        for n in (1, 3):
+            mb.set_num_threads(n)
+            frames.append(mb.render(scene, "accumulation", samples=12, error_estimate=False).rgba)
+    finally:
+        mb.set_num_threads(old)
+    np.testing.assert_array_equal(frames[0], frames[1])
