@@ -165,4 +165,4 @@ def test_refinement_draws_only_the_new_samples():
 
 
 def test_the_first_render_is_sized_by_the_tolerance():
-    assert [auto_mod.first_samples(t) for t in (0.03, 0.01, 0.0075, 0.004, 0.001)] == [4, 6, 8, 12, 12]
+    assert [auto_mod.first_samples(t) for t in (0.03, 0.01, 0.0075, 0.004, 0.001)] == [4, 8, 10, 12, 12]
