@@ -62,7 +62,8 @@ EXACT_OPTIONS = {"tolerance": 0.002, "gauss": 4}
 PILOT_PIXELS = 64 * 48
 #: The pilot's reference for every method but ``analytic``: accumulation with the first of these
 #: sample counts whose own (halves) estimate is at most `REFERENCE_SHARE` of the method's pilot
-#: RMSE, else [`exact`][motionblur.methods._estimate.exact] at the pilot's size.
+#: RMSE (a count the last one's error says is too few, at 1/N, is skipped), else
+#: [`exact`][motionblur.methods._estimate.exact] at the pilot's size.
 REFERENCE_SAMPLES = (64, 256, 1024)
 #: The pilot reference's largest own error, as a share of the method's pilot RMSE (it adds at
 #: most 3% to the estimate in quadrature).
@@ -148,11 +149,16 @@ def _reference(small: Scene, scale: float, method: str, aa: int, rgba: np.ndarra
     """The pilot's reference RGBA (float64, over the background): see `REFERENCE_SAMPLES`; the
     analytic method's is [`exact`][motionblur.methods._estimate.exact] with its chord tolerance scaled as the pilot's."""
     if method != "analytic":
+        wanted = 0.0  # sample count the last reference's own error asks for (it falls as 1/N)
         for n in REFERENCE_SAMPLES:
+            if n < wanted:
+                continue
             acc = METHODS["accumulation"].fn(small, samples=n, aa=aa)
             ref = over_background(acc, small.background).rgba.astype(np.float64)
-            if acc.stats["error_estimate"] <= REFERENCE_SHARE * _rmse(rgba, ref):
+            share = REFERENCE_SHARE * _rmse(rgba, ref)
+            if acc.stats["error_estimate"] <= share:
                 return ref
+            wanted = n * acc.stats["error_estimate"] / share if share > 0.0 else math.inf
         return exact(small, aa).rgba.astype(np.float64)
     opts = dict(EXACT_OPTIONS, tolerance=EXACT_OPTIONS["tolerance"] * scale)
     ref = over_background(METHODS["analytic"].fn(small, aa=aa, **opts), small.background)

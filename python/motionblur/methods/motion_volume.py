@@ -46,7 +46,15 @@ from ._layers import (
 from ._volume_colors import UNLIT, averaged_colors, place, scattered, to_pixels, uniform
 from ._volume_pieces import MAX_PIECES, check_equal, piece_scene, plan
 
-__all__ = ["motion_volume", "apparent_keyframes", "apparent_motion", "camera_folds", "spin_of"]
+__all__ = [
+    "motion_volume",
+    "apparent_keyframes",
+    "apparent_motion",
+    "camera_folds",
+    "spin_of",
+    "piece_bounds",
+    "pieces_frame",
+]
 
 FILTERS: tuple[str, ...] = tuple(_core.FILTERS)
 
