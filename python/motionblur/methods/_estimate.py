@@ -70,7 +70,7 @@ REFERENCE_SAMPLES = (64, 256, 1024)
 REFERENCE_SHARE = 0.25
 #: The analytic method's smallest estimate (RMSE) where its frame differs from the reference at
 #: all: [`exact`][motionblur.methods._estimate.exact]'s own distance from the limit (the
-#: largest measured against accumulation with 16384 samples on the tuning scenes, docs:
+#: largest measured against accumulation with 2**14 samples on the tuning scenes, docs:
 #: validation.md); below it a difference from the reference is not a measured error.
 ANALYTIC_FLOOR = 3e-5
 #: Measured error over pilot RMSE, by method (chosen on the tuning scenes; none is needed).
