@@ -77,7 +77,8 @@ def _dataset_parser(sub) -> None:
         help="render frames of a clip (glTF file or built-in scene) to EXR + PNG + JSON, resumable",
         description="Render frames A:B of SCENE (a .glb/.gltf file, its animation in seconds, or a "
         "built-in scene whose shutter [0, 1] is the whole clip) into --out: per frame an EXR with every "
-        "channel by name, a PNG preview and a JSON of metadata; dataset.json and preview.gif for the run. "
+        "channel by name, a PNG preview and a JSON of metadata; dataset.json and a preview of the sequence "
+        "(--preview: gif, mp4 or none) for the run. "
         "Frames already written are skipped; the same command gives the same bits.",
     )
     d.add_argument("scene", help="a .glb/.gltf file or a built-in scene name (motionblur.SCENES)")
@@ -99,6 +100,9 @@ def _dataset_parser(sub) -> None:
     d.add_argument("--dask", metavar="local|ADDRESS",
                    help="render frames as Dask tasks: 'local' (a LocalCluster) or a scheduler's address")  # fmt: skip
     d.add_argument("--no-progress", action="store_true", help="no progress bar")
+    d.add_argument("--preview", choices=("gif", "mp4", "none"), default="gif",
+                   help="the sequence's preview: preview.gif (default), preview.mp4 (H.264; needs "
+                   "motionblur[video]) or none")  # fmt: skip
 
 
 def _parse_options(items: list[str], command: str) -> dict | None:
@@ -136,7 +140,7 @@ def _dataset(args) -> int:
             args.scene, args.out, frames=frames, fps=args.fps, shutter_angle=args.shutter_angle,
             method=args.method, options=options, outputs=[o.strip() for o in args.outputs.split(",") if o.strip()],
             shake=args.shake, seed=args.seed, rolling=args.rolling, width=args.width, height=args.height, client=client,
-            progress=not args.no_progress,
+            progress=not args.no_progress, preview=args.preview,
         )  # fmt: skip
     except (ValueError, TypeError, FileNotFoundError) as exc:
         print(f"motionblur dataset: {exc}", file=sys.stderr)
