@@ -10,7 +10,9 @@ it; its motions are re-timed to that window exactly ([`retime`][motionblur.datas
 Every frame gives ``frame_KKKKKK.exr`` (every channel by name: ``R G B A`` the blurred frame,
 ``Z`` depth, ``id`` object ids, ``velocity.X/Y``, and the ground-truth outputs asked for),
 ``frame_KKKKKK.png`` (an 8-bit preview) and ``frame_KKKKKK.json`` (camera, shutter, method,
-options, error estimate, seed, library version); ``dataset.json`` describes the run and a
+options, error estimate, seed, library version), with ``kernels=(GX, GY)`` also
+``frame_KKKKKK_kernels.npz`` (the blur's point-spread functions at a GX x GY grid of pixels,
+[`blur_kernels`][motionblur.shake.blur_kernels]); ``dataset.json`` describes the run and a
 preview shows the sequence: ``preview.gif`` (the default), ``preview.mp4`` (H.264 through the
 ``ffmpeg`` that ``motionblur[video]`` installs, encoded single-threaded with bit-exact flags, so
 the same frames give the same file) or none. Each file is written under a temporary name in the same
@@ -186,6 +188,18 @@ def _stem(k: int) -> str:
     return f"frame_{k:06d}"
 
 
+def _write_kernels(scene: Scene, grid, path: Path) -> dict:
+    """The frame's blur kernels at a ``grid`` (GX, GY) of pixels into ``path`` (.npz: ``points``,
+    ``kernels``, ``paths``, ``times``, ``weights``, ``clipped``, ``ids``, as in
+    [`BlurKernels`][motionblur.shake.BlurKernels]); returns what the frame's JSON says of them."""
+    from .shake import blur_kernels
+
+    bk = blur_kernels(scene, grid=tuple(grid))
+    arrays = {n: getattr(bk, n) for n in ("points", "kernels", "paths", "times", "weights", "clipped", "ids")}
+    _replace_into(path, lambda p: np.savez(p, **arrays))  # zip entries carry no time: same bytes
+    return {"file": path.name, "grid": list(grid), "radius": (bk.kernels.shape[1] - 1) // 2}
+
+
 def render_frame(job: dict) -> dict:
     """Render and write one frame of a dataset (a task: ``job`` is plain data) and return its
     metadata. Skips the frame (returning the metadata on disk) when its JSON exists."""
@@ -202,6 +216,11 @@ def render_frame(job: dict) -> dict:
     frame.stats = _untimed(frame.stats)
     _replace_into(out / f"{_stem(k)}.exr", frame.save_exr)
     _replace_into(out / f"{_stem(k)}.png", frame.save_png)
+    files = {"exr": f"{_stem(k)}.exr", "png": f"{_stem(k)}.png"}
+    kernels = None
+    if job.get("kernels"):
+        kernels = _write_kernels(scene, job["kernels"], out / f"{_stem(k)}_kernels.npz")
+        files["kernels"] = kernels["file"]
     cam = scene.camera
     meta = {
         "frame": k,
@@ -234,7 +253,8 @@ def render_frame(job: dict) -> dict:
         "shake": job["shake"],
         "shake_seed": job["shake_seed"],
         "rolling": job.get("rolling", 0.0),
-        "files": {"exr": f"{_stem(k)}.exr", "png": f"{_stem(k)}.png"},
+        "kernels": kernels,
+        "files": files,
     }
     _write_json(meta_path, meta)  # last: the frame is done
     return {**meta, "skipped": False}
@@ -264,8 +284,39 @@ def _source_of(scene_or_path) -> tuple[tuple[str, Any], str]:
     )
 
 
-def _check(frames, fps, shutter_angle, method, options, outputs, shake, seed, width, height, rolling=0.0):
+def _check(
+    frames,
+    fps,
+    shutter_angle,
+    method,
+    options,
+    outputs,
+    shake,
+    seed,
+    width,
+    height,
+    rolling=0.0,
+    kernels=None,
+):
     from .render import METHODS, ROLLING_METHODS
+
+    if kernels is not None:
+        if (
+            isinstance(kernels, str)
+            or not isinstance(kernels, Sequence)
+            or len(kernels) != 2
+            or not all(
+                isinstance(g, (int, np.integer)) and not isinstance(g, bool) and 1 <= g <= 1024
+                for g in kernels
+            )
+        ):
+            raise ValueError(
+                f"kernels: expected None or a grid (GX, GY) of integers in [1, 1024], got {kernels!r}"
+            )
+        if rolling:
+            raise ValueError(
+                "kernels: blur kernels follow a global shutter; they cannot be given with rolling > 0"
+            )
 
     if isinstance(rolling, bool) or not isinstance(rolling, (int, float)) or not 0.0 <= rolling < 1.0:
         raise ValueError(f"rolling: expected a readout in [0, 1), got {rolling!r}")
@@ -334,6 +385,7 @@ def make_dataset(
     client=None,
     progress: bool = True,
     preview: str = "gif",
+    kernels: tuple[int, int] | None = None,
 ) -> dict:
     """Render frames ``A:B`` of a clip into the folder ``out`` (see the module's text for the
     files and how a frame's shutter is placed in the clip).
@@ -358,7 +410,12 @@ def make_dataset(
     ``"mp4"`` (``preview.mp4``, H.264 in yuv420p at ``fps``, its size rounded up to even pixels by
     repeating the last row/column; needs ``motionblur[video]``, else MissingDependencyError naming
     it before anything is written) or ``"none"``. A rerun that renders nothing rewrites no preview
-    that exists.
+    that exists. ``kernels``: None, or a grid ``(GX, GY)`` of evenly spread pixels (integers in
+    [1, 1024]) at which each frame's blur kernels are written (``frame_KKKKKK_kernels.npz``: the
+    point-spread function of the surface seen at each pixel at the frame's reference time, from
+    its exact screen path over the shutter, its radius the smallest that holds every path;
+    [`blur_kernels`][motionblur.shake.blur_kernels]); not with ``rolling`` > 0, and a frame
+    where a deforming object is seen at a grid pixel raises its ValueError.
 
     Returns the run's metadata (also in ``out/dataset.json``) with ``rendered`` and ``skipped``,
     the frame numbers rendered now and those already on disk. Bad arguments raise ValueError or
@@ -369,7 +426,7 @@ def make_dataset(
     source, scene_name = _source_of(scene_or_path)
     options = dict(options or {})
     outputs = list(dict.fromkeys(outputs))
-    _check(frames, fps, shutter_angle, method, options, outputs, shake, seed, width, height, rolling)
+    _check(frames, fps, shutter_angle, method, options, outputs, shake, seed, width, height, rolling, kernels)
     from .render import METHODS, _unknown_options
 
     bad = _unknown_options(METHODS[method].fn, options)
@@ -407,10 +464,44 @@ def make_dataset(
             "seed": int(seed),
             "shake_seed": None if shake is None else _shake_seed(seed, k),
             "rolling": float(rolling),
+            "kernels": None if kernels is None else [int(g) for g in kernels],
         }
         for k in range(a, b)
     ]
     bar = tqdm(total=len(jobs), desc="motionblur dataset", unit="frame") if tqdm else None
+    metas = _run_jobs(jobs, client, bar)
+    run = {
+        "library_version": __version__,
+        "scene": scene_name,
+        "frames": [a, b],
+        "fps": fps,
+        "shutter_angle": shutter_angle,
+        "exposure_seconds": (shutter_angle / 360.0) / fps,
+        "method": method,
+        "options": options,
+        "outputs": outputs,
+        "shake": shake,
+        "seed": int(seed),
+        "rolling": float(rolling),
+        "kernels": None if kernels is None else [int(g) for g in kernels],
+        "width": int(width),
+        "height": int(height),
+        "frame_files": [f"{_stem(k)}.json" for k in range(a, b)],
+        "preview": None if preview == "none" else f"preview.{preview}",
+    }
+    _write_json(out / "dataset.json", run)
+    if run["preview"] and (any(not m["skipped"] for m in metas) or not (out / run["preview"]).exists()):
+        (_write_gif if preview == "gif" else _write_mp4)(out, range(a, b), fps)
+    return {
+        **run,
+        "rendered": [m["frame"] for m in metas if not m["skipped"]],
+        "skipped": [m["frame"] for m in metas if m["skipped"]],
+    }
+
+
+def _run_jobs(jobs: list[dict], client, bar) -> list[dict]:
+    """Every frame's metadata, rendered here one after another (``client`` None) or as Dask
+    tasks, in frame order; ``bar`` (a tqdm bar or None) counts the frames done and is closed."""
     metas = []
     if client is None:
         for job in jobs:
@@ -427,32 +518,7 @@ def make_dataset(
         metas = client.gather(futures)
     if bar:
         bar.close()
-    run = {
-        "library_version": __version__,
-        "scene": scene_name,
-        "frames": [a, b],
-        "fps": fps,
-        "shutter_angle": shutter_angle,
-        "exposure_seconds": (shutter_angle / 360.0) / fps,
-        "method": method,
-        "options": options,
-        "outputs": outputs,
-        "shake": shake,
-        "seed": int(seed),
-        "rolling": float(rolling),
-        "width": int(width),
-        "height": int(height),
-        "frame_files": [f"{_stem(k)}.json" for k in range(a, b)],
-        "preview": None if preview == "none" else f"preview.{preview}",
-    }
-    _write_json(out / "dataset.json", run)
-    if run["preview"] and (any(not m["skipped"] for m in metas) or not (out / run["preview"]).exists()):
-        (_write_gif if preview == "gif" else _write_mp4)(out, range(a, b), fps)
-    return {
-        **run,
-        "rendered": [m["frame"] for m in metas if not m["skipped"]],
-        "skipped": [m["frame"] for m in metas if m["skipped"]],
-    }
+    return metas
 
 
 def _require_preview(preview: str) -> None:

@@ -85,6 +85,9 @@ def test_bad_arguments_name_themselves_before_writing(tmp_path):
         (dict(width=0), "width"),
         (dict(method="accumulation", options={"nope": 1}), "options"),
         (dict(preview="webm"), "preview"),
+        (dict(kernels=(0, 3)), "kernels"),
+        (dict(kernels="4x3"), "kernels"),
+        (dict(kernels=(4, 3), rolling=0.5, method="analytic"), "kernels"),
     ]
     for kw, name in cases:
         with pytest.raises((ValueError, TypeError), match=name):
@@ -338,3 +341,40 @@ def test_an_mp4_preview_without_the_video_extra_names_it_before_writing(tmp_path
                "--no-progress", "--out", str(tmp_path / "gif"), block="imageio_ffmpeg")  # fmt: skip
     assert gif.returncode == 0, gif.stderr
     assert (tmp_path / "gif" / "preview.gif").exists() and not (tmp_path / "gif" / "preview.mp4").exists()
+
+
+def test_blur_kernels_per_frame_are_those_of_the_frames_scene(tmp_path):
+    """kernels=(GX, GY): each frame's .npz holds blur_kernels of the scene the frame was rendered
+    from (its window and its shake), the same bytes twice; the CLI's --kernels gives the same."""
+    from motionblur.dataset import _frame_scene
+
+    kw = dict(frames=(0, 2), method="analytic", width=64, height=48, shake=1.0, seed=3, progress=False)
+    run = make_dataset("cube", tmp_path / "a", kernels=(4, 3), **kw)
+    assert run["kernels"] == [4, 3]
+    meta = json.loads((tmp_path / "a" / "frame_000001.json").read_text())
+    assert meta["kernels"]["file"] == meta["files"]["kernels"] == "frame_000001_kernels.npz"
+    got = np.load(tmp_path / "a" / "frame_000001_kernels.npz")
+    assert got["points"].shape == (12, 2) and got["kernels"].shape[0] == 12
+    assert got["kernels"].shape[1] == 2 * meta["kernels"]["radius"] + 1
+    np.testing.assert_allclose(got["kernels"].sum(axis=(1, 2)) + got["clipped"], 1.0, atol=1e-5)
+    # the same as blur_kernels of frame 1's own scene (window 1/2 .. 3/4 of the clip, its shake)
+    job = {"source": ("builtin", "cube"), "window": (0.5, 0.75), "width": 64, "height": 48, "fps": 24.0,
+           "shutter_angle": 180.0, "shake": 1.0, "shake_seed": meta["shake_seed"]}  # fmt: skip
+    want = mb.blur_kernels(_frame_scene(job), grid=(4, 3))
+    np.testing.assert_array_equal(got["kernels"], want.kernels)
+    np.testing.assert_array_equal(got["ids"], want.ids)
+    assert (got["ids"] >= 0).any(), "the grid sees the cube"
+    # the shake is in them: without it, the kernels differ
+    still = make_dataset("cube", tmp_path / "still", kernels=(4, 3), **{**kw, "shake": None})
+    assert still["rendered"] == [0, 1]
+    k0 = np.load(tmp_path / "still" / "frame_000001_kernels.npz")["paths"]
+    assert not np.allclose(k0, got["paths"], equal_nan=True)
+
+    done = _cli(tmp_path, "cube", "--frames", "0:2", "--method", "analytic", "--width", "64", "--height", "48",
+                "--shake", "1", "--seed", "3", "--kernels", "4x3", "--no-progress", "--out", str(tmp_path / "cli"))  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    for k in range(2):
+        name = f"frame_{k:06d}_kernels.npz"
+        assert (tmp_path / "cli" / name).read_bytes() == (tmp_path / "a" / name).read_bytes(), name
+    bad = _cli(tmp_path, "cube", "--kernels", "4by3", "--out", str(tmp_path / "bad"))
+    assert bad.returncode == 2 and "--kernels" in bad.stderr and not (tmp_path / "bad").exists()
