@@ -14,8 +14,8 @@ options, error estimate, seed, library version), with ``kernels=(GX, GY)`` also
 ``frame_KKKKKK_kernels.npz`` (the blur's point-spread functions at a GX x GY grid of pixels,
 [`blur_kernels`][motionblur.shake.blur_kernels]); ``dataset.json`` describes the run and a
 preview shows the sequence: ``preview.gif`` (the default), ``preview.mp4`` (H.264 through the
-``ffmpeg`` that ``motionblur[video]`` installs, encoded single-threaded with bit-exact flags, so
-the same frames give the same file) or none. Each file is written under a temporary name in the same
+ffmpeg that ``motionblur[video]`` installs, encoded on one thread with bit-exact muxing, so the
+same frames give the same file) or none. Each file is written under a temporary name in the same
 folder and renamed into place, the JSON last: a frame whose JSON exists is done and a rerun skips
 it; no half-written file is ever left under a final name. The same command gives the same bits
 (nothing timed goes into the files).
@@ -284,39 +284,28 @@ def _source_of(scene_or_path) -> tuple[tuple[str, Any], str]:
     )
 
 
-def _check(
-    frames,
-    fps,
-    shutter_angle,
-    method,
-    options,
-    outputs,
-    shake,
-    seed,
-    width,
-    height,
-    rolling=0.0,
-    kernels=None,
-):
-    from .render import METHODS, ROLLING_METHODS
+def _check_kernels(kernels, rolling) -> None:
+    if kernels is None:
+        return
+    if (
+        isinstance(kernels, str)
+        or not isinstance(kernels, Sequence)
+        or len(kernels) != 2
+        or not all(
+            isinstance(g, (int, np.integer)) and not isinstance(g, bool) and 1 <= g <= 1024 for g in kernels
+        )
+    ):
+        raise ValueError(
+            f"kernels: expected None or a grid (GX, GY) of integers in [1, 1024], got {kernels!r}"
+        )
+    if rolling > 0.0:
+        raise ValueError(
+            "kernels: blur kernels follow a global shutter; they cannot be given with rolling > 0"
+        )
 
-    if kernels is not None:
-        if (
-            isinstance(kernels, str)
-            or not isinstance(kernels, Sequence)
-            or len(kernels) != 2
-            or not all(
-                isinstance(g, (int, np.integer)) and not isinstance(g, bool) and 1 <= g <= 1024
-                for g in kernels
-            )
-        ):
-            raise ValueError(
-                f"kernels: expected None or a grid (GX, GY) of integers in [1, 1024], got {kernels!r}"
-            )
-        if rolling:
-            raise ValueError(
-                "kernels: blur kernels follow a global shutter; they cannot be given with rolling > 0"
-            )
+
+def _check(frames, fps, shutter_angle, method, options, outputs, shake, seed, width, height, rolling=0.0):
+    from .render import METHODS, ROLLING_METHODS
 
     if isinstance(rolling, bool) or not isinstance(rolling, (int, float)) or not 0.0 <= rolling < 1.0:
         raise ValueError(f"rolling: expected a readout in [0, 1), got {rolling!r}")
@@ -426,7 +415,8 @@ def make_dataset(
     source, scene_name = _source_of(scene_or_path)
     options = dict(options or {})
     outputs = list(dict.fromkeys(outputs))
-    _check(frames, fps, shutter_angle, method, options, outputs, shake, seed, width, height, rolling, kernels)
+    _check(frames, fps, shutter_angle, method, options, outputs, shake, seed, width, height, rolling)
+    _check_kernels(kernels, rolling)
     from .render import METHODS, _unknown_options
 
     bad = _unknown_options(METHODS[method].fn, options)
