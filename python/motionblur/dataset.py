@@ -196,7 +196,9 @@ def _write_kernels(scene: Scene, grid, path: Path) -> dict:
 
     bk = blur_kernels(scene, grid=tuple(grid))
     arrays = {n: getattr(bk, n) for n in ("points", "kernels", "paths", "times", "weights", "clipped", "ids")}
-    _replace_into(path, lambda p: np.savez(p, **arrays))  # zip entries carry no time: same bytes
+    # deflated (a kernel image is mostly zeros, so this is hundreds of times smaller); the zip
+    # entries carry no time, so the same kernels give the same bytes
+    _replace_into(path, lambda p: np.savez_compressed(p, **arrays))
     return {"file": path.name, "grid": list(grid), "radius": (bk.kernels.shape[1] - 1) // 2}
 
 
