@@ -87,8 +87,8 @@ mod tests {
         let r = Reach::new(&speed, w, h, 20.0, 0.0);
         assert_eq!(r.cell[r.index(40, 20)], 3.0);
         assert_eq!(r.cell.iter().filter(|&&v| v > 0.0).count(), 1);
-        // taps reach 21 pixels along x: cells 2 and 4 (pixels 32..48 +- 21 cover 40) and the
-        // cell's row only (ny = 0: one pixel up or down stays within the neighbouring cells)
+        // taps reach 21 pixels along x (2 cells either side) and 1 along y (1 cell either side):
+        // every pixel a tap from which can land on (40, 20) sees its speed
         for x in 0..w {
             for y in 0..h {
                 let near = (x as i64 - 40).abs() <= 21 && (y as i64 - 20).abs() <= 1;
@@ -97,7 +97,9 @@ mod tests {
                 }
             }
         }
-        assert_eq!(r.reach[r.index(99, 49)], 0.0);
-        assert_eq!(r.reach[r.index(0, 0)], 0.0);
+        // and the cells 3 or more cells across, or 2 or more down, do not
+        assert_eq!(r.reach[r.index(99, 20)], 0.0);
+        assert_eq!(r.reach[r.index(40, 49)], 0.0);
+        assert_eq!(r.reach[r.index(0, 16)], 3.0);
     }
 }
