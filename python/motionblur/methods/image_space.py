@@ -41,10 +41,11 @@ import numpy as np
 
 from .. import _core, image
 from .._validate import as_bool, as_choice, as_float, as_int
-from ..raster import Draw, Frame, rasterize
+from ..raster import Draw, Frame
+from ..raster import _lights as raster_lights
 from ..render import register
 from ..scene import Scene
-from ._layers import Static, static_layer, supersampled
+from ._layers import Layer, Static, static_layer, supersampled, window_projection
 from ._sharp import check_aa, require_box_shutter, sharp_frame, shutter_centroid
 
 __all__ = ["opaque_image", "camera_velocity", "velocity", "shutter_centroid"]
@@ -72,25 +73,58 @@ def _static_part(scene: Scene, aa: int) -> Static | None:
 
 def _sharp(scene: Scene, t: float, aa: int, velocity: str | None, static: Static | None) -> Frame:
     """`sharp_frame` (same arguments), the moving objects drawn over the ``static`` layer of
-    `_static_part` when there is one (one rasterizer pass over the moving triangles only)."""
-    if static is None:
+    `_static_part` when there is one: the rasterizer runs on the window of pixels their
+    vertices project to (the camera's projection narrowed to it, the layer read from the
+    window's first sample) and the static pixels are copied around it, the bits of drawing
+    everything (tests/methods/test_image_space_fast_paths.py)."""
+    if static is None or velocity == "since_open":
         return sharp_frame(scene, t, aa, velocity=velocity)
-    fold = scene.camera_pose_at(t) @ np.linalg.inv(scene.camera_pose_at(0.0))
-    draws = []
+    cam = scene.camera_at(t)
+    draws, points = [], []
     for k, o in enumerate(scene.objects):
         if not o.is_moving:
             continue
         v, prev = o.world_vertices(t), None  # the previous vertices exactly as sharp_frame's
         if velocity == "shutter":
             prev = v - (o.world_vertices(1.0) - o.world_vertices(0.0))
-        elif velocity == "since_open":
-            prev = o.world_vertices(0.0) @ fold[:3, :3].T + fold[:3, 3]
         draws.append(Draw(v, o.mesh.faces, o.rgba, object_id=k, previous_vertices=prev))
-    layer = static.layer
-    return rasterize(
-        scene.camera_at(t), draws, samples=aa, shading=scene.objects[0].shading, lights=scene.lights,
-        ambient=scene.ambient, background=(layer.rgba, layer.depth, layer.ids),
-    )  # fmt: skip
+        points.append(v[np.unique(o.mesh.faces)] if len(o.mesh.faces) else v[:0])
+    rgba, depth, ids = static.rgba.copy(), static.depth.copy(), static.ids.copy()
+    vel = np.zeros((*ids.shape, 2), np.float32)
+    win = _window(cam, np.concatenate(points) if points else np.zeros((0, 3)))
+    if win is not None:
+        x0, y0, x1, y1 = win
+        layer = static.layer
+        c = np.ascontiguousarray
+        options = {
+            "view": cam.view, "projection": window_projection(cam.projection, cam.width, cam.height, win),
+            "width": x1 - x0, "height": y1 - y0, "samples": aa, "blend": "exact",
+            "shading": scene.objects[0].shading, "lights": raster_lights(scene.lights),
+            "ambient": tuple(map(float, scene.ambient)), "origin": (x0 * aa, y0 * aa),
+        }  # fmt: skip
+        part = _core._rasterize(draws, options, Layer(c(layer.rgba), c(layer.depth), c(layer.ids)))
+        rgba[y0:y1, x0:x1], depth[y0:y1, x0:x1], ids[y0:y1, x0:x1] = part[:3]
+        if part[3] is not None:  # (no velocity buffer when no draw has previous vertices)
+            vel[y0:y1, x0:x1] = part[3]
+    return Frame(rgba, depth, ids, vel)
+
+
+def _window(cam, points: np.ndarray):
+    """(x0, y0, x1, y1): the pixels of ``cam`` that triangles of ``points`` (N,3) world can
+    cover (their projected box, 2 pixels more), the whole image when one is not in front of the
+    near plane; None when there are none or the box misses the image."""
+    if len(points) == 0:
+        return None
+    w, h = cam.width, cam.height
+    clip = points @ cam.view_projection[:3, :3].T + cam.view_projection[:3, 3]
+    cw = points @ cam.view_projection[3, :3] + cam.view_projection[3, 3]
+    if not np.all(cw > cam.znear):
+        return (0, 0, w, h)
+    px = (clip[:, 0] / cw + 1.0) * 0.5 * w
+    py = (1.0 - clip[:, 1] / cw) * 0.5 * h
+    x0, x1 = max(0, int(np.floor(px.min())) - 2), min(w, int(np.ceil(px.max())) + 2)
+    y0, y1 = max(0, int(np.floor(py.min())) - 2), min(h, int(np.ceil(py.max())) + 2)
+    return (x0, y0, x1, y1) if x0 < x1 and y0 < y1 else None
 
 
 @register(
