@@ -24,15 +24,30 @@ from ._segments import MAX_SEGMENTS, MIN_PIECE, NORMAL_TOLERANCE, segment_times
 __all__ = ["analytic", "segment_times", "MAX_SEGMENTS", "MIN_PIECE", "NORMAL_TOLERANCE"]
 
 
-def _homogeneous(p: np.ndarray) -> np.ndarray:
-    return np.concatenate([p, np.ones((*p.shape[:-1], 1))], axis=-1)
+class _Transform:
+    """Points transformed by 4x4 matrices: the sums in numpy's einsum order for four terms (even
+    and odd terms first), into an output given, with two temporaries of one boundary's size that
+    stay in cache."""
 
+    def __init__(self, v: int):
+        self.tmp = np.empty((v, 4))
+        self.odd = np.empty((v, 4))
 
-def _transform(m: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """(K,V,4) points ``p`` each transformed by its (K,4,4) matrix ``m``: the sums in numpy's
-    einsum order for four terms (even and odd terms first), in a tenth of its time."""
-    t = [p[..., j : j + 1] * m[:, None, :, j] for j in range(4)]
-    return (t[0] + t[2]) + (t[1] + t[3])
+    def __call__(self, m: np.ndarray, p: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """(V,4) points ``p`` (or (V,3): w = 1, which multiplies exactly, so they give the bits of
+        their homogeneous form) transformed by the 4x4 matrix ``m`` into ``out`` (V,4)."""
+        tmp, odd = self.tmp, self.odd
+        np.multiply(p[:, 0:1], m[None, :, 0], out=out)
+        np.multiply(p[:, 2:3], m[None, :, 2], out=tmp)
+        out += tmp
+        np.multiply(p[:, 1:2], m[None, :, 1], out=odd)
+        if p.shape[-1] == 4:
+            np.multiply(p[:, 3:4], m[None, :, 3], out=tmp)
+            odd += tmp
+        else:
+            odd += m[None, :, 3]
+        out += odd
+        return out
 
 
 def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
@@ -44,24 +59,53 @@ def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
     bow of the segments beside it, towards the bow, so the piecewise-linear path lies half
     outside and half inside the true one: its largest distance halves and the covered area
     errors on either side cancel. Straight motion (translation, vertex keyframes between their
-    times, a still camera) is left exactly as it is."""
+    times, a still camera) is left exactly as it is.
+
+    Computed one boundary at a time (the arithmetic of whole-array numpy, element for element):
+    besides the result, only the clip positions and the bows are held."""
     pos = np.stack([obj.world_vertices(t) for t in times])
     if len(times) < 2:
         return pos
+    k, v = len(times) - 1, pos.shape[1]
     mids = 0.5 * (times[1:] + times[:-1])
     vp = np.stack([scene.camera_at(t).view_projection for t in times])
     vpm = np.stack([scene.camera_at(t).view_projection for t in mids])
-    clip = _transform(vp, _homogeneous(pos))
-    mid = _transform(vpm, _homogeneous(np.stack([obj.world_vertices(t) for t in mids])))
-    bow = mid - 0.5 * (clip[1:] + clip[:-1])  # (K,V,4): chord middle to the true middle
-    if not np.abs(bow).max() > 1e-12 * (1.0 + np.abs(clip).max()):
+    transform = _Transform(v)
+    clip = np.empty((k + 1, v, 4))
+    for i in range(k + 1):
+        transform(vp[i], pos[i], clip[i])
+    bow = np.empty((k, v, 4))  # chord middle to the true middle
+    chord = np.empty((v, 4))
+    big_bow = 0.0
+    for i in range(k):
+        transform(vpm[i], obj.world_vertices(mids[i]), bow[i])
+        np.add(clip[i + 1], clip[i], out=chord)
+        chord *= 0.5
+        bow[i] -= chord
+        big_bow = max(big_bow, float(np.abs(bow[i]).max()))
+    if not big_bow > 1e-12 * (1.0 + float(np.abs(clip).max())):
         return pos
-    shift = np.zeros_like(clip)
-    shift[:-1] += 0.5 * bow
-    shift[1:] += 0.5 * bow
-    shift[1:-1] *= 0.5
-    moved = _transform(np.linalg.inv(vp), clip + 0.5 * shift)
-    return moved[..., :3] / moved[..., 3:4]
+    inv = np.linalg.inv(vp)
+    shift = np.empty((v, 4))
+    half = np.empty((v, 4))
+    moved = np.empty((v, 4))
+    out = np.empty((k + 1, v, 3))
+    for i in range(k + 1):
+        # shift: 0 plus half the bow after, plus half the bow before, halved between two
+        shift.fill(0.0)
+        if i < k:
+            np.multiply(bow[i], 0.5, out=half)
+            shift += half
+        if i > 0:
+            np.multiply(bow[i - 1], 0.5, out=half)
+            shift += half
+        if 0 < i < k:
+            shift *= 0.5
+        shift *= 0.5
+        shift += clip[i]
+        transform(inv[i], shift, moved)
+        np.divide(moved[:, :3], moved[:, 3:4], out=out[i])
+    return out
 
 
 def _draw(scene: Scene, obj: Object, k: int, times: np.ndarray) -> MovingDraw:
