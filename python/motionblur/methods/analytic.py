@@ -61,8 +61,8 @@ def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
     errors on either side cancel. Straight motion (translation, vertex keyframes between their
     times, a still camera) is left exactly as it is.
 
-    Computed one boundary at a time (the arithmetic of whole-array numpy, element for element):
-    besides the result, only the clip positions and the bows are held."""
+    Computed one boundary at a time (the arithmetic of whole-array numpy, element for element),
+    the result written over the unmoved positions: besides them only the bows are held."""
     pos = np.stack([obj.world_vertices(t) for t in times])
     if len(times) < 2:
         return pos
@@ -71,27 +71,27 @@ def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
     vp = np.stack([scene.camera_at(t).view_projection for t in times])
     vpm = np.stack([scene.camera_at(t).view_projection for t in mids])
     transform = _Transform(v)
-    clip = np.empty((k + 1, v, 4))
-    for i in range(k + 1):
-        transform(vp[i], pos[i], clip[i])
     bow = np.empty((k, v, 4))  # chord middle to the true middle
+    clip = (np.empty((v, 4)), np.empty((v, 4)))  # the clip positions at boundaries i and i + 1
     chord = np.empty((v, 4))
-    big_bow = 0.0
+    big_bow = big_clip = 0.0
+    transform(vp[0], pos[0], clip[0])
     for i in range(k):
+        c0, c1 = clip[i % 2], clip[(i + 1) % 2]
+        transform(vp[i + 1], pos[i + 1], c1)
         transform(vpm[i], obj.world_vertices(mids[i]), bow[i])
-        np.add(clip[i + 1], clip[i], out=chord)
+        np.add(c1, c0, out=chord)
         chord *= 0.5
         bow[i] -= chord
         big_bow = max(big_bow, float(np.abs(bow[i]).max()))
-    if not big_bow > 1e-12 * (1.0 + float(np.abs(clip).max())):
+        big_clip = max(big_clip, float(np.abs(c0).max()), float(np.abs(c1).max()))
+    if not big_bow > 1e-12 * (1.0 + big_clip):
         return pos
     inv = np.linalg.inv(vp)
-    shift = np.empty((v, 4))
-    half = np.empty((v, 4))
-    moved = np.empty((v, 4))
-    out = np.empty((k + 1, v, 3))
+    shift, half, moved = clip[0], clip[1], chord
     for i in range(k + 1):
-        # shift: 0 plus half the bow after, plus half the bow before, halved between two
+        # 0 plus half the bow after, plus half the bow before, halved between two; halved, plus
+        # the boundary's clip position
         shift.fill(0.0)
         if i < k:
             np.multiply(bow[i], 0.5, out=half)
@@ -102,10 +102,10 @@ def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
         if 0 < i < k:
             shift *= 0.5
         shift *= 0.5
-        shift += clip[i]
+        shift += transform(vp[i], pos[i], half)
         transform(inv[i], shift, moved)
-        np.divide(moved[:, :3], moved[:, 3:4], out=out[i])
-    return out
+        np.divide(moved[:, :3], moved[:, 3:4], out=pos[i])
+    return pos
 
 
 def _draw(scene: Scene, obj: Object, k: int, times: np.ndarray) -> MovingDraw:
@@ -113,11 +113,11 @@ def _draw(scene: Scene, obj: Object, k: int, times: np.ndarray) -> MovingDraw:
     normals = None
     if obj.shading == "lambert" and not (obj.motion is not None and obj.motion.is_deforming):
         n0 = obj.mesh.vertex_normals()
-        rows = []
-        for t in times:
+        # each boundary's float64 normals rounded to float32 as they are made (astype's rounding)
+        normals = np.empty((len(times), *n0.shape), np.float32)
+        for i, t in enumerate(times):
             m = obj.transform_at(t)[:3, :3]
-            rows.append(n0 @ (m / np.cbrt(np.linalg.det(m))).T)
-        normals = np.stack(rows).astype(np.float32)
+            normals[i] = n0 @ (m / np.cbrt(np.linalg.det(m))).T
     return MovingDraw(pos, obj.mesh.faces, obj.rgba, normals, object_id=k, shading=obj.shading)
 
 
