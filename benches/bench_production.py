@@ -22,7 +22,7 @@ Also printed: the analytic kernel's profile (thread time finding covered spans a
 samples, prim set-up, the Python side: segment rule and the straddled positions), and where a
 target is missed, why.
 
-Usage: python benches/bench_production.py [--quick] [--repeat 2] [--level 2]
+Usage: python benches/bench_production.py [--quick] [--repeat 2] [--level 2] [--sections target,memory,scaling]
 Writes out/bench/production.md, production_resolution.png and production_faces.png.
 """
 
@@ -161,18 +161,24 @@ def target(mesh, a, lines: list[str]) -> None:
     print("\n".join(notes), flush=True)
 
 
+# The child's own peak: VmHWM of its memory map (ru_maxrss would carry the parent's peak over
+# the exec on Linux).
 _CHILD = """
-import json, resource, sys, time
+import json, sys, time
 sys.path.insert(0, sys.argv[1])
 import bench_production as bp
+def hwm():
+    for line in open("/proc/self/status"):
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1])
 mesh = bp.bunny(int(sys.argv[2]))
 w, h, kind = int(sys.argv[3]), int(sys.argv[4]), sys.argv[5]
 s = bp.scene(mesh, kind, w, h)
-before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+before = hwm()
 t = time.perf_counter()
 f = bp.analytic(s)
 dt = time.perf_counter() - t
-after = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+after = hwm()
 print(json.dumps({"before_kib": before, "peak_kib": after, "s": dt, "segments": f.stats["segments"],
                   "splits": f.stats["splits"]}))
 """
@@ -277,19 +283,23 @@ def main() -> None:
     ap.add_argument("--max-level", type=int, default=None, help="most subdivisions in the faces table")
     ap.add_argument("--faces-size", default="960x540")
     ap.add_argument("--error-size", default="480x270")
+    ap.add_argument("--sections", default="target,memory,scaling", help="which tables, comma-separated")
     a = ap.parse_args()
     if a.max_level is None:
         a.max_level = 2 if a.quick else 4
     mesh = bunny(a.level)
     lines = ["# The exact method at production scale (issue 27, section 1)", ""]
     print(lines[0], flush=True)
-    target(mesh, a, lines)
-    memory(a, lines)
-    res = scaling(mesh, a, lines)
-    lines.append(f"Load average at the end: {load()}")
+    sections = set(a.sections.split(","))
+    if "target" in sections:
+        target(mesh, a, lines)
+    if "memory" in sections:
+        memory(a, lines)
     out = Path("out/bench")
     out.mkdir(parents=True, exist_ok=True)
-    plots(res, out)
+    if "scaling" in sections:
+        plots(scaling(mesh, a, lines), out)
+    lines.append(f"Load average at the end: {load()}")
     (out / "production.md").write_text("\n".join(lines) + "\n")
 
 
