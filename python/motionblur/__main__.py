@@ -77,7 +77,8 @@ def _dataset_parser(sub) -> None:
         help="render frames of a clip (glTF file or built-in scene) to EXR + PNG + JSON, resumable",
         description="Render frames A:B of SCENE (a .glb/.gltf file, its animation in seconds, or a "
         "built-in scene whose shutter [0, 1] is the whole clip) into --out: per frame an EXR with every "
-        "channel by name, a PNG preview and a JSON of metadata; dataset.json and preview.gif for the run. "
+        "channel by name, a PNG preview and a JSON of metadata; dataset.json and a preview of the sequence "
+        "(--preview: gif, mp4 or none) for the run. "
         "Frames already written are skipped; the same command gives the same bits.",
     )
     d.add_argument("scene", help="a .glb/.gltf file or a built-in scene name (motionblur.SCENES)")
@@ -93,12 +94,17 @@ def _dataset_parser(sub) -> None:
                    help="an option of the method, e.g. --option aa=2 (repeatable)")  # fmt: skip
     d.add_argument("--outputs", default="blurred",
                    help="comma-separated: blurred,sharp,exposure,flow,depth,ids,trajectory (default blurred)")  # fmt: skip
+    d.add_argument("--kernels", metavar="GXxGY",
+                   help="also write each frame's blur kernels at a GX x GY grid of pixels (e.g. 8x6) to frame_KKKKKK_kernels.npz")  # fmt: skip
     d.add_argument("--width", type=int, default=320, help="pixels (default 320)")
     d.add_argument("--height", type=int, default=240, help="pixels (default 240)")
     d.add_argument("--out", required=True, help="the folder to write")
     d.add_argument("--dask", metavar="local|ADDRESS",
                    help="render frames as Dask tasks: 'local' (a LocalCluster) or a scheduler's address")  # fmt: skip
     d.add_argument("--no-progress", action="store_true", help="no progress bar")
+    d.add_argument("--preview", choices=("gif", "mp4", "none"), default="gif",
+                   help="the sequence's preview: preview.gif (default), preview.mp4 (H.264; needs "
+                   "motionblur[video]) or none")  # fmt: skip
 
 
 def _parse_options(items: list[str], command: str) -> dict | None:
@@ -126,6 +132,19 @@ def _dataset(args) -> int:
     if not sep or frames is None:
         print(f"motionblur dataset: --frames: expected A:B, got {args.frames!r}", file=sys.stderr)
         return 2
+    kernels = None
+    if args.kernels is not None:
+        gx, sep, gy = args.kernels.lower().partition("x")
+        try:
+            kernels = (int(gx), int(gy))
+        except ValueError:
+            sep = ""
+        if not sep:
+            print(
+                f"motionblur dataset: --kernels: expected GXxGY such as 8x6, got {args.kernels!r}",
+                file=sys.stderr,
+            )
+            return 2
     client = None
     try:
         if args.dask:
@@ -136,7 +155,7 @@ def _dataset(args) -> int:
             args.scene, args.out, frames=frames, fps=args.fps, shutter_angle=args.shutter_angle,
             method=args.method, options=options, outputs=[o.strip() for o in args.outputs.split(",") if o.strip()],
             shake=args.shake, seed=args.seed, rolling=args.rolling, width=args.width, height=args.height, client=client,
-            progress=not args.no_progress,
+            progress=not args.no_progress, preview=args.preview, kernels=kernels,
         )  # fmt: skip
     except (ValueError, TypeError, FileNotFoundError) as exc:
         print(f"motionblur dataset: {exc}", file=sys.stderr)

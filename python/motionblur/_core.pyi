@@ -201,6 +201,8 @@ __all__ = [
     "_velocity_blur",
     "_camera_motion_blur",
     "_reconstruct",
+    "_max_speed",
+    "_camera_frame_blur",
     "_BlurShell",
     "_motion_silhouette",
     "_resolve",
@@ -473,6 +475,24 @@ def _camera_motion_blur(
     scale: float,
 ) -> np.ndarray:
     """Chapman's camera blur: _camera_velocity times scale, then _velocity_blur. (H,W,4) f32."""
+
+def _max_speed(velocity: np.ndarray) -> float:
+    """The longest velocity, max sqrt(vx^2 + vy^2) in float64, of velocity (H,W,2) f32 (NaN if any is)."""
+
+def _camera_frame_blur(
+    rgba: np.ndarray,
+    depth: np.ndarray,
+    ids: np.ndarray,
+    velocity: np.ndarray,
+    moving: list[bool],
+    camera: _CameraLike,
+    previous_camera: _CameraLike,
+    scale: float,
+    samples: int,
+) -> np.ndarray:
+    """The camera_velocity method's blur: each pixel's velocity its moving object's (ids (H,W) i32,
+    velocity (H,W,2) f32, moving[id]) or the camera's from depth (H,W) f32, times the f32 scale,
+    clamped to MAX_VELOCITY, then the centred samples-tap blur of rgba (H,W,4) f32."""
 
 def _reconstruct(
     rgba: np.ndarray, depth: np.ndarray, velocity: np.ndarray, samples: int, tile: int, soft_depth: float

@@ -35,6 +35,7 @@ PACKAGES: dict[str, tuple[str, str, str]] = {
     "pygltflib": ("pygltflib", "interop", "glTF files (Scene.from_gltf)"),
     "OpenEXR": ("OpenEXR", "interop", "EXR files (Frame.save_exr, read_image)"),
     "PIL": ("pillow", "interop", "PNG files (Frame.save_png, read_image, the demo's sheets)"),
+    "imageio_ffmpeg": ("imageio-ffmpeg", "video", "the MP4 preview of motionblur dataset (--preview mp4)"),
     "matplotlib": ("matplotlib", "bench", "the Pareto plots of the report"),
     "dask": ("dask[distributed]", "bench", "the report's references and errors as Dask tasks (bench --dask)"),
     "distributed": (

@@ -144,7 +144,7 @@ def rasterize_motion(
     time integral; ``depth`` (H,W) float32, ``ids`` (H,W) int32 and ``velocity`` (H,W,2) float32
     (pixels, the surface's screen motion from the first to the last boundary) of the surface in
     front at ``reference_time`` (of each pixel's nearest sample); ``stats`` with ``prims``,
-    ``bin_entries``, ``intervals`` (covered spans found), ``pieces`` (visible pieces shaded),
+    ``bin_entries``, ``intervals`` (covered spans found), ``pieces`` (stretches of time shaded, each of fixed layers and triangles),
     ``splits`` (tile passes redone in halves to stay within `TILE_BUDGET_BYTES`),
     ``segments`` and ``ms_*`` per stage. Bit-identical for any thread count and any budget; the
     GIL is released. ``MemoryError`` (naming the sample) where one sample alone needs more than

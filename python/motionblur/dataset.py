@@ -10,8 +10,12 @@ it; its motions are re-timed to that window exactly ([`retime`][motionblur.datas
 Every frame gives ``frame_KKKKKK.exr`` (every channel by name: ``R G B A`` the blurred frame,
 ``Z`` depth, ``id`` object ids, ``velocity.X/Y``, and the ground-truth outputs asked for),
 ``frame_KKKKKK.png`` (an 8-bit preview) and ``frame_KKKKKK.json`` (camera, shutter, method,
-options, error estimate, seed, library version); ``dataset.json`` describes the run and
-``preview.gif`` shows the sequence. Each file is written under a temporary name in the same
+options, error estimate, seed, library version), with ``kernels=(GX, GY)`` also
+``frame_KKKKKK_kernels.npz`` (the blur's point-spread functions at a GX x GY grid of pixels,
+[`blur_kernels`][motionblur.shake.blur_kernels]); ``dataset.json`` describes the run and a
+preview shows the sequence: ``preview.gif`` (the default), ``preview.mp4`` (H.264 through the
+ffmpeg that ``motionblur[video]`` installs, encoded on one thread with bit-exact muxing, so the
+same frames give the same file) or none. Each file is written under a temporary name in the same
 folder and renamed into place, the JSON last: a frame whose JSON exists is done and a rerun skips
 it; no half-written file is ever left under a final name. The same command gives the same bits
 (nothing timed goes into the files).
@@ -29,12 +33,14 @@ import numpy as np
 
 from .scene import Motion, Object, Scene
 
-__all__ = ["make_dataset", "retime", "frame_window", "OUTPUT_NAMES"]
+__all__ = ["make_dataset", "retime", "frame_window", "OUTPUT_NAMES", "PREVIEWS"]
 
 #: The ``outputs`` a dataset can hold: ``blurred``, ``depth`` and ``ids`` are the frame's own
 #: buffers (always in the EXR); the others are [`render`][motionblur.render.render]'s ground truth.
 OUTPUT_NAMES = ("blurred", "depth", "ids", "sharp", "flow", "exposure", "trajectory")
 _BASE = {"blurred", "depth", "ids"}
+#: The ``preview`` a dataset can have: ``gif`` (Pillow), ``mp4`` (``motionblur[video]``) or ``none``.
+PREVIEWS = ("gif", "mp4", "none")
 
 
 # ---------------------------------------------------------------- re-timing
@@ -182,6 +188,20 @@ def _stem(k: int) -> str:
     return f"frame_{k:06d}"
 
 
+def _write_kernels(scene: Scene, grid, path: Path) -> dict:
+    """The frame's blur kernels at a ``grid`` (GX, GY) of pixels into ``path`` (.npz: ``points``,
+    ``kernels``, ``paths``, ``times``, ``weights``, ``clipped``, ``ids``, as in
+    [`BlurKernels`][motionblur.shake.BlurKernels]); returns what the frame's JSON says of them."""
+    from .shake import blur_kernels
+
+    bk = blur_kernels(scene, grid=tuple(grid))
+    arrays = {n: getattr(bk, n) for n in ("points", "kernels", "paths", "times", "weights", "clipped", "ids")}
+    # deflated (a kernel image is mostly zeros, so this is hundreds of times smaller); the zip
+    # entries carry no time, so the same kernels give the same bytes
+    _replace_into(path, lambda p: np.savez_compressed(p, **arrays))
+    return {"file": path.name, "grid": list(grid), "radius": (bk.kernels.shape[1] - 1) // 2}
+
+
 def render_frame(job: dict) -> dict:
     """Render and write one frame of a dataset (a task: ``job`` is plain data) and return its
     metadata. Skips the frame (returning the metadata on disk) when its JSON exists."""
@@ -198,6 +218,11 @@ def render_frame(job: dict) -> dict:
     frame.stats = _untimed(frame.stats)
     _replace_into(out / f"{_stem(k)}.exr", frame.save_exr)
     _replace_into(out / f"{_stem(k)}.png", frame.save_png)
+    files = {"exr": f"{_stem(k)}.exr", "png": f"{_stem(k)}.png"}
+    kernels = None
+    if job.get("kernels"):
+        kernels = _write_kernels(scene, job["kernels"], out / f"{_stem(k)}_kernels.npz")
+        files["kernels"] = kernels["file"]
     cam = scene.camera
     meta = {
         "frame": k,
@@ -230,7 +255,8 @@ def render_frame(job: dict) -> dict:
         "shake": job["shake"],
         "shake_seed": job["shake_seed"],
         "rolling": job.get("rolling", 0.0),
-        "files": {"exr": f"{_stem(k)}.exr", "png": f"{_stem(k)}.png"},
+        "kernels": kernels,
+        "files": files,
     }
     _write_json(meta_path, meta)  # last: the frame is done
     return {**meta, "skipped": False}
@@ -258,6 +284,26 @@ def _source_of(scene_or_path) -> tuple[tuple[str, Any], str]:
     raise TypeError(
         f"scene_or_path: expected a Scene, a path or a scene name, got {type(scene_or_path).__name__}"
     )
+
+
+def _check_kernels(kernels, rolling) -> None:
+    if kernels is None:
+        return
+    if (
+        isinstance(kernels, str)
+        or not isinstance(kernels, Sequence)
+        or len(kernels) != 2
+        or not all(
+            isinstance(g, (int, np.integer)) and not isinstance(g, bool) and 1 <= g <= 1024 for g in kernels
+        )
+    ):
+        raise ValueError(
+            f"kernels: expected None or a grid (GX, GY) of integers in [1, 1024], got {kernels!r}"
+        )
+    if rolling > 0.0:
+        raise ValueError(
+            "kernels: blur kernels follow a global shutter; they cannot be given with rolling > 0"
+        )
 
 
 def _check(frames, fps, shutter_angle, method, options, outputs, shake, seed, width, height, rolling=0.0):
@@ -329,6 +375,8 @@ def make_dataset(
     height: int = 240,
     client=None,
     progress: bool = True,
+    preview: str = "gif",
+    kernels: tuple[int, int] | None = None,
 ) -> dict:
     """Render frames ``A:B`` of a clip into the folder ``out`` (see the module's text for the
     files and how a frame's shutter is placed in the clip).
@@ -349,6 +397,16 @@ def make_dataset(
     shutter; the methods of ``motionblur.render.ROLLING_METHODS`` only). ``width``, ``height``: pixels.
     ``client``: None (frames rendered here, one after another) or a ``dask.distributed.Client``
     (frames as tasks; its workers must see ``out``). ``progress``: a tqdm bar on stderr (needs tqdm).
+    ``preview``: the sequence's preview, one of ``PREVIEWS``: ``"gif"`` (``preview.gif``, Pillow),
+    ``"mp4"`` (``preview.mp4``, H.264 in yuv420p at ``fps``, its size rounded up to even pixels by
+    repeating the last row/column; needs ``motionblur[video]``, else MissingDependencyError naming
+    it before anything is written) or ``"none"``. A rerun that renders nothing rewrites no preview
+    that exists. ``kernels``: None, or a grid ``(GX, GY)`` of evenly spread pixels (integers in
+    [1, 1024]) at which each frame's blur kernels are written (``frame_KKKKKK_kernels.npz``: the
+    point-spread function of the surface seen at each pixel at the frame's reference time, from
+    its exact screen path over the shutter, its radius the smallest that holds every path;
+    [`blur_kernels`][motionblur.shake.blur_kernels]); not with ``rolling`` > 0, and a frame
+    where a deforming object is seen at a grid pixel raises its ValueError.
 
     Returns the run's metadata (also in ``out/dataset.json``) with ``rendered`` and ``skipped``,
     the frame numbers rendered now and those already on disk. Bad arguments raise ValueError or
@@ -360,11 +418,15 @@ def make_dataset(
     options = dict(options or {})
     outputs = list(dict.fromkeys(outputs))
     _check(frames, fps, shutter_angle, method, options, outputs, shake, seed, width, height, rolling)
+    _check_kernels(kernels, rolling)
     from .render import METHODS, _unknown_options
 
     bad = _unknown_options(METHODS[method].fn, options)
     if bad:
         raise TypeError(f"options: method {method!r} has no option {', '.join(map(repr, bad))}")
+    if not isinstance(preview, str) or preview not in PREVIEWS:
+        raise ValueError(f"preview: expected one of {', '.join(map(repr, PREVIEWS))}, got {preview!r}")
+    _require_preview(preview)
     if source[0] == "scene":
         width, height = source[1].camera.width, source[1].camera.height
     a, b = int(frames[0]), int(frames[1])
@@ -394,10 +456,44 @@ def make_dataset(
             "seed": int(seed),
             "shake_seed": None if shake is None else _shake_seed(seed, k),
             "rolling": float(rolling),
+            "kernels": None if kernels is None else [int(g) for g in kernels],
         }
         for k in range(a, b)
     ]
     bar = tqdm(total=len(jobs), desc="motionblur dataset", unit="frame") if tqdm else None
+    metas = _run_jobs(jobs, client, bar)
+    run = {
+        "library_version": __version__,
+        "scene": scene_name,
+        "frames": [a, b],
+        "fps": fps,
+        "shutter_angle": shutter_angle,
+        "exposure_seconds": (shutter_angle / 360.0) / fps,
+        "method": method,
+        "options": options,
+        "outputs": outputs,
+        "shake": shake,
+        "seed": int(seed),
+        "rolling": float(rolling),
+        "kernels": None if kernels is None else [int(g) for g in kernels],
+        "width": int(width),
+        "height": int(height),
+        "frame_files": [f"{_stem(k)}.json" for k in range(a, b)],
+        "preview": None if preview == "none" else f"preview.{preview}",
+    }
+    _write_json(out / "dataset.json", run)
+    if run["preview"] and (any(not m["skipped"] for m in metas) or not (out / run["preview"]).exists()):
+        (_write_gif if preview == "gif" else _write_mp4)(out, range(a, b), fps)
+    return {
+        **run,
+        "rendered": [m["frame"] for m in metas if not m["skipped"]],
+        "skipped": [m["frame"] for m in metas if m["skipped"]],
+    }
+
+
+def _run_jobs(jobs: list[dict], client, bar) -> list[dict]:
+    """Every frame's metadata, rendered here one after another (``client`` None) or as Dask
+    tasks, in frame order; ``bar`` (a tqdm bar or None) counts the frames done and is closed."""
     metas = []
     if client is None:
         for job in jobs:
@@ -414,39 +510,22 @@ def make_dataset(
         metas = client.gather(futures)
     if bar:
         bar.close()
-    run = {
-        "library_version": __version__,
-        "scene": scene_name,
-        "frames": [a, b],
-        "fps": fps,
-        "shutter_angle": shutter_angle,
-        "exposure_seconds": (shutter_angle / 360.0) / fps,
-        "method": method,
-        "options": options,
-        "outputs": outputs,
-        "shake": shake,
-        "seed": int(seed),
-        "rolling": float(rolling),
-        "width": int(width),
-        "height": int(height),
-        "frame_files": [f"{_stem(k)}.json" for k in range(a, b)],
-        "preview": "preview.gif",
-    }
-    _write_json(out / "dataset.json", run)
-    if any(not m["skipped"] for m in metas) or not (out / "preview.gif").exists():
-        _write_gif(out, range(a, b), fps)
-    return {
-        **run,
-        "rendered": [m["frame"] for m in metas if not m["skipped"]],
-        "skipped": [m["frame"] for m in metas if m["skipped"]],
-    }
+    return metas
+
+
+def _require_preview(preview: str) -> None:
+    """Raise MissingDependencyError, naming the extra, when ``preview`` needs a package that is
+    not installed (before anything is written)."""
+    from ._optional import require
+
+    if preview in ("gif", "mp4"):
+        require("PIL", f"the dataset's {preview.upper()} preview (preview={preview!r})")
+    if preview == "mp4":
+        require("imageio_ffmpeg", "the dataset's MP4 preview (preview='mp4', --preview mp4)")
 
 
 def _write_gif(out: Path, ks, fps: float) -> None:
     """``preview.gif`` of the frames' PNG previews (Pillow), at ``fps``."""
-    from ._optional import require
-
-    require("PIL", "the dataset's GIF preview")
     from PIL import Image as image
 
     pics = []
@@ -459,6 +538,63 @@ def _write_gif(out: Path, ks, fps: float) -> None:
         pics[0].save(p, save_all=True, append_images=pics[1:], duration=ms, loop=0)
 
     _replace_into(out / "preview.gif", write)
+
+
+#: ffmpeg's output options for ``preview.mp4``: H.264 (x264, fixed preset and quality) in yuv420p
+#: for every player; one thread and bit-exact muxing (no encoder version string, no creation time,
+#: no metadata), so the same frames give the same bytes.
+_MP4_OPTIONS = (
+    "-an", "-c:v", "libx264", "-preset", "medium", "-crf", "18", "-pix_fmt", "yuv420p",
+    "-threads", "1", "-fflags", "+bitexact", "-flags:v", "+bitexact", "-map_metadata", "-1",
+    "-movflags", "+faststart",
+)  # fmt: skip
+
+
+def _even_rgb(path: Path) -> np.ndarray:
+    """The PNG at ``path`` as 8-bit RGB, padded to even width and height by repeating the last
+    column/row (yuv420p halves the chroma both ways)."""
+    from PIL import Image as image
+
+    with image.open(path) as im:
+        rgb = np.asarray(im.convert("RGB"))
+    h, w = rgb.shape[:2]
+    return np.ascontiguousarray(np.pad(rgb, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge"))
+
+
+def _write_mp4(out: Path, ks, fps: float) -> None:
+    """``preview.mp4`` of the frames' PNG previews at ``fps``: the frames are piped to the ffmpeg
+    that imageio-ffmpeg ships (``_MP4_OPTIONS``); RuntimeError with ffmpeg's message if it fails."""
+    import subprocess
+    import tempfile
+    from fractions import Fraction
+
+    import imageio_ffmpeg
+
+    ks = list(ks)
+    first = _even_rgb(out / f"{_stem(ks[0])}.png")
+    h, w = first.shape[:2]
+    rate = Fraction(fps).limit_denominator(1001)
+
+    def write(p):
+        cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-nostdin", "-y", "-v", "error", "-f", "rawvideo",
+               "-pix_fmt", "rgb24", "-s", f"{w}x{h}", "-r", str(rate), "-i", "-", *_MP4_OPTIONS,
+               "-f", "mp4", str(p)]  # fmt: skip
+        with tempfile.TemporaryFile() as log:
+            proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=log)
+            try:
+                for i, k in enumerate(ks):
+                    proc.stdin.write((first if i == 0 else _even_rgb(out / f"{_stem(k)}.png")).tobytes())
+            except BrokenPipeError:
+                pass  # ffmpeg stopped: its return code and message say why
+            finally:
+                proc.stdin.close()
+                code = proc.wait()
+            if code != 0:
+                log.seek(0)
+                message = log.read().decode(errors="replace").strip()
+                raise RuntimeError(f"ffmpeg could not write the MP4 preview (exit {code}): {message}")
+
+    _replace_into(out / "preview.mp4", write)
 
 
 from ._namespace import tidy  # noqa: E402  (dir() lists the API only; see motionblur._namespace)

@@ -28,7 +28,8 @@ pub struct Stats {
     pub bin_entries: u64,
     /// Spans of covered time found at samples (fragments).
     pub intervals: u64,
-    /// Visible pieces shaded.
+    /// Stretches of time shaded, each of fixed layers and triangles (one quadrature) or of one
+    /// uniform composite.
     pub pieces: u64,
     /// Tile passes that outgrew the memory budget ([`Input::tile_budget`]) and were done again
     /// as two halves (the result is the same; only the time grows).

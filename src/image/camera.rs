@@ -11,7 +11,7 @@
 use glam::{DMat4, DVec4};
 use rayon::prelude::*;
 
-use super::check_image;
+use super::{check_image, filled, put4};
 use crate::error::{Error, Result};
 
 /// A perspective camera as matrices (OpenGL conventions, as `motionblur.Camera`).
@@ -66,6 +66,66 @@ pub fn camera_velocity(
     Ok(velocity_unchecked(depth, w, h, current, previous, 1.0))
 }
 
+/// The screen motion of a pixel of known depth between two cameras (module docs).
+#[derive(Clone, Copy)]
+pub(crate) struct PixelMotion {
+    m: DMat4,
+    p00: f64,
+    p11: f64,
+    p02: f64,
+    p12: f64,
+    wf: f64,
+    hf: f64,
+    /// Whether the cameras are the same (exactly no motion).
+    pub still: bool,
+}
+
+impl PixelMotion {
+    /// The motion of a `w` x `h` image seen by `cur` that was seen by `prev`.
+    pub fn new(cur: &CameraMatrices, prev: &CameraMatrices, w: usize, h: usize) -> Self {
+        let p = &cur.projection;
+        PixelMotion {
+            m: prev.projection * prev.view * cur.view.inverse(),
+            p00: p.x_axis.x,
+            p11: p.y_axis.y,
+            p02: p.z_axis.x,
+            p12: p.z_axis.y,
+            wf: w as f64,
+            hf: h as f64,
+            // A static camera: exactly no motion (the matrix product would leave ~1e-13 pixels).
+            still: cur.view == prev.view && cur.projection == prev.projection,
+        }
+    }
+
+    /// The velocity of pixel `(x, y)` at view-axis depth `d` times `scale` (0 behind the
+    /// previous camera, or for a still camera).
+    #[inline]
+    pub fn at(&self, x: usize, y: usize, d: f32, scale: f64) -> [f32; 2] {
+        if self.still {
+            return [0.0, 0.0];
+        }
+        let ny = 1.0 - 2.0 * (y as f64 + 0.5) / self.hf;
+        let nx = 2.0 * (x as f64 + 0.5) / self.wf - 1.0;
+        let d = d as f64;
+        let q = self.m
+            * DVec4::new(
+                (nx + self.p02) / self.p00,
+                (ny + self.p12) / self.p11,
+                -1.0,
+                1.0 / d,
+            );
+        if q.w <= 0.0 {
+            return [0.0, 0.0];
+        }
+        let px = (q.x / q.w + 1.0) * 0.5 * self.wf;
+        let py = (1.0 - q.y / q.w) * 0.5 * self.hf;
+        [
+            ((x as f64 + 0.5 - px) * scale) as f32,
+            ((y as f64 + 0.5 - py) * scale) as f32,
+        ]
+    }
+}
+
 fn velocity_unchecked(
     depth: &[f32],
     w: usize,
@@ -74,28 +134,16 @@ fn velocity_unchecked(
     prev: &CameraMatrices,
     scale: f64,
 ) -> Vec<f32> {
-    let m = prev.projection * prev.view * cur.view.inverse();
-    let p = &cur.projection;
-    let (p00, p11, p02, p12) = (p.x_axis.x, p.y_axis.y, p.z_axis.x, p.z_axis.y);
-    let (wf, hf) = (w as f64, h as f64);
+    let motion = PixelMotion::new(cur, prev, w, h);
     let mut out = vec![0.0f32; w * h * 2];
-    if cur.view == prev.view && cur.projection == prev.projection {
-        // A static camera: exactly no motion (the matrix product would leave ~1e-13 pixels).
+    if motion.still {
         return out;
     }
     out.par_chunks_mut(w * 2).enumerate().for_each(|(y, row)| {
-        let ny = 1.0 - 2.0 * (y as f64 + 0.5) / hf;
         for x in 0..w {
-            let nx = 2.0 * (x as f64 + 0.5) / wf - 1.0;
-            let d = depth[y * w + x] as f64;
-            let q = m * DVec4::new((nx + p02) / p00, (ny + p12) / p11, -1.0, 1.0 / d);
-            if q.w <= 0.0 {
-                continue;
-            }
-            let px = (q.x / q.w + 1.0) * 0.5 * wf;
-            let py = (1.0 - q.y / q.w) * 0.5 * hf;
-            row[2 * x] = ((x as f64 + 0.5 - px) * scale) as f32;
-            row[2 * x + 1] = ((y as f64 + 0.5 - py) * scale) as f32;
+            let v = motion.at(x, y, depth[y * w + x], scale);
+            row[2 * x] = v[0];
+            row[2 * x + 1] = v[1];
         }
     });
     out
@@ -155,43 +203,180 @@ pub fn velocity_blur(
 }
 
 fn blur_unchecked(rgba: &[f32], velocity: &[f32], w: usize, h: usize, samples: usize) -> Vec<f32> {
-    let mut out = vec![0.0f32; w * h * 4];
-    let inv = 1.0 / samples as f32;
-    let fetch = |x: i64, y: i64| -> &[f32] {
-        let x = x.clamp(0, w as i64 - 1) as usize;
-        let y = y.clamp(0, h as i64 - 1) as usize;
-        &rgba[(y * w + x) * 4..(y * w + x) * 4 + 4]
-    };
-    out.par_chunks_mut(w * 4).enumerate().for_each(|(y, row)| {
-        for x in 0..w {
-            let i = y * w + x;
-            let (vx, vy) = (velocity[2 * i], velocity[2 * i + 1]);
-            let o = &mut row[x * 4..x * 4 + 4];
-            if samples == 1 || (vx == 0.0 && vy == 0.0) {
-                o.copy_from_slice(&rgba[i * 4..i * 4 + 4]);
-                continue;
+    let taps = Taps::new(samples);
+    filled(w * h * 4, |out| {
+        out.par_chunks_mut(w * 4).enumerate().for_each(|(y, row)| {
+            for x in 0..w {
+                let i = y * w + x;
+                let v = [velocity[2 * i], velocity[2 * i + 1]];
+                put4(row, x, taps.blur(rgba, (w, h), (x, y), v));
             }
-            let mut acc = [0.0f32; 4];
-            for s in 0..samples {
-                let t = s as f32 / (samples - 1) as f32 - 0.5;
-                let (px, py) = (x as f32 + vx * t, y as f32 + vy * t);
-                let (x0, y0) = (floorf(px), floorf(py));
-                let (fx, fy) = (px - x0, py - y0);
-                let (x0, y0) = (x0 as i64, y0 as i64);
-                let (a, b) = (fetch(x0, y0), fetch(x0 + 1, y0));
-                let (c, d) = (fetch(x0, y0 + 1), fetch(x0 + 1, y0 + 1));
-                for k in 0..4 {
-                    let top = a[k] + fx * (b[k] - a[k]);
-                    let bot = c[k] + fx * (d[k] - c[k]);
-                    acc[k] += top + fy * (bot - top);
-                }
-            }
+        })
+    })
+}
+
+/// The taps of the centred blur: `t_i = i / (N - 1) - 1/2` and `1 / N`.
+pub(crate) struct Taps {
+    t: Vec<f32>,
+    inv: f32,
+}
+
+impl Taps {
+    /// The taps of an `samples`-sample blur (>= 1).
+    pub fn new(samples: usize) -> Self {
+        let t = if samples == 1 {
+            vec![]
+        } else {
+            (0..samples)
+                .map(|s| s as f32 / (samples - 1) as f32 - 0.5)
+                .collect()
+        };
+        Taps {
+            t,
+            inv: 1.0 / samples as f32,
+        }
+    }
+
+    /// Pixel `(x, y)` of the `(w, h)` image `rgba` blurred along `v` (module docs of
+    /// [`velocity_blur`]): the pixel itself for one sample or a zero velocity. Far enough from
+    /// the edges that no tap is clamped, the four texels of a tap are read as two pairs.
+    #[inline]
+    pub fn blur(
+        &self,
+        rgba: &[f32],
+        (w, h): (usize, usize),
+        (x, y): (usize, usize),
+        v: [f32; 2],
+    ) -> [f32; 4] {
+        let i = y * w + x;
+        let [vx, vy] = v;
+        if self.t.is_empty() || (vx == 0.0 && vy == 0.0) {
+            return [
+                rgba[i * 4],
+                rgba[i * 4 + 1],
+                rgba[i * 4 + 2],
+                rgba[i * 4 + 3],
+            ];
+        }
+        // |t| <= 1/2: every tap within |v| / 2 of the pixel (one pixel more for the texel to its
+        // right or below, one for the rounding)
+        let (ex, ey) = (0.5 * vx.abs() + 2.0, 0.5 * vy.abs() + 2.0);
+        let (xf, yf) = (x as f32, y as f32);
+        let inside = xf - ex >= 0.0
+            && yf - ey >= 0.0
+            && xf + ex <= (w - 1) as f32
+            && yf + ey <= (h - 1) as f32;
+        let mut acc = [0.0f32; 4];
+        for &t in &self.t {
+            let (px, py) = (xf + vx * t, yf + vy * t);
+            let (x0, y0) = (floorf(px), floorf(py));
+            let (fx, fy) = (px - x0, py - y0);
+            let (x0, y0) = (x0 as i64, y0 as i64);
+            let (a, b, c, d) = if inside {
+                let top = (y0 as usize * w + x0 as usize) * 4;
+                let bot = top + w * 4;
+                let (ab, cd) = (&rgba[top..top + 8], &rgba[bot..bot + 8]);
+                (&ab[..4], &ab[4..], &cd[..4], &cd[4..])
+            } else {
+                let fetch = |x: i64, y: i64| -> &[f32] {
+                    let x = x.clamp(0, w as i64 - 1) as usize;
+                    let y = y.clamp(0, h as i64 - 1) as usize;
+                    &rgba[(y * w + x) * 4..(y * w + x) * 4 + 4]
+                };
+                (
+                    fetch(x0, y0),
+                    fetch(x0 + 1, y0),
+                    fetch(x0, y0 + 1),
+                    fetch(x0 + 1, y0 + 1),
+                )
+            };
             for k in 0..4 {
-                o[k] = acc[k] * inv;
+                let top = a[k] + fx * (b[k] - a[k]);
+                let bot = c[k] + fx * (d[k] - c[k]);
+                acc[k] += top + fy * (bot - top);
             }
         }
+        acc.map(|a| a * self.inv)
+    }
+}
+
+/// What [`camera_frame_blur`] reads of a rendered frame besides its colour and depth: the
+/// velocity buffer `(h, w, 2)` of its moving objects (pixels over the shutter so far), the
+/// object id of each pixel `(h, w)` (-1 for none) and which ids are moving objects.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameMotion<'a> {
+    /// The rasterizer's velocity buffer, `(h, w, 2)`.
+    pub velocity: &'a [f32],
+    /// Object id per pixel, `(h, w)`.
+    pub ids: &'a [i32],
+    /// `moving[id]`: whether object `id` moves (ids past the end do not).
+    pub moving: &'a [bool],
+}
+
+/// The blur of the `camera_velocity` method in one pass: each pixel's velocity is its moving
+/// object's from the velocity buffer, else the camera's ([`camera_velocity`] from `depth`),
+/// times `scale` (float32), clamped to `+-MAX_VELOCITY`, and the pixel is blurred along it as
+/// [`velocity_blur`] does with `samples` taps; no velocity image is made. Errors name `rgba`
+/// (not finite), `depth` (NaN or <= 0) or `velocity` (NaN after the scaling).
+pub fn camera_frame_blur(
+    rgba: &[f32],
+    depth: &[f32],
+    (w, h): (usize, usize),
+    frame: FrameMotion<'_>,
+    cameras: (&CameraMatrices, &CameraMatrices),
+    (scale, samples): (f32, usize),
+) -> Result<Vec<f32>> {
+    check_image("rgba", rgba, w, h, 4)?;
+    check_image("depth", depth, w, h, 1)?;
+    check_image("velocity", frame.velocity, w, h, 2)?;
+    if frame.ids.len() != w * h {
+        return Err(Error::shape("ids", format!("expected ({h},{w}) values")));
+    }
+    if samples == 0 || samples > MAX_SAMPLES {
+        return Err(Error::value(
+            "samples",
+            format!("must be in [1, {MAX_SAMPLES}], got {samples}"),
+        ));
+    }
+    super::check_finite("rgba", rgba)?;
+    if depth.par_iter().any(|d| d.is_nan() || *d <= 0.0) {
+        return Err(Error::value(
+            "depth",
+            "contains NaN or values <= 0 (use +inf for background)",
+        ));
+    }
+    let motion = PixelMotion::new(cameras.0, cameras.1, w, h);
+    let taps = Taps::new(samples);
+    let moves = |id: i32| id >= 0 && frame.moving.get(id as usize).copied().unwrap_or(false);
+    let mut bad = false;
+    let out = filled(w * h * 4, |out| {
+        bad = out
+            .par_chunks_mut(w * 4)
+            .enumerate()
+            .map(|(y, row)| {
+                let mut bad = false;
+                for x in 0..w {
+                    let i = y * w + x;
+                    let v = if moves(frame.ids[i]) {
+                        [frame.velocity[2 * i], frame.velocity[2 * i + 1]]
+                    } else {
+                        motion.at(x, y, depth[i], 1.0)
+                    };
+                    let v = v.map(|c| (c * scale).clamp(-MAX_VELOCITY, MAX_VELOCITY));
+                    bad |= v[0].is_nan() || v[1].is_nan();
+                    put4(row, x, taps.blur(rgba, (w, h), (x, y), v));
+                }
+                bad
+            })
+            .reduce(|| false, |a, b| a | b);
     });
-    out
+    if bad {
+        return Err(Error::value(
+            "velocity",
+            "is NaN (a camera or depth too extreme)",
+        ));
+    }
+    Ok(out)
 }
 
 /// The parameters of [`camera_motion_blur`]: the two cameras, the taps and the velocity's scale.
@@ -239,4 +424,99 @@ pub fn camera_motion_blur(
     v.par_iter_mut()
         .for_each(|x| *x = x.clamp(-MAX_VELOCITY, MAX_VELOCITY));
     velocity_blur(rgba, &v, w, h, samples)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The blur with every texel fetched through the edge clamp (no inside shortcut), serial.
+    fn clamped(rgba: &[f32], velocity: &[f32], w: usize, h: usize, samples: usize) -> Vec<f32> {
+        let mut out = rgba.to_vec();
+        let fetch = |x: i64, y: i64| {
+            let (x, y) = (
+                x.clamp(0, w as i64 - 1) as usize,
+                y.clamp(0, h as i64 - 1) as usize,
+            );
+            &rgba[(y * w + x) * 4..(y * w + x) * 4 + 4]
+        };
+        for y in 0..h {
+            for x in 0..w {
+                let i = y * w + x;
+                let (vx, vy) = (velocity[2 * i], velocity[2 * i + 1]);
+                if samples == 1 || (vx == 0.0 && vy == 0.0) {
+                    continue;
+                }
+                let mut acc = [0.0f32; 4];
+                for s in 0..samples {
+                    let t = s as f32 / (samples - 1) as f32 - 0.5;
+                    let (px, py) = (x as f32 + vx * t, y as f32 + vy * t);
+                    let (x0, y0) = (floorf(px), floorf(py));
+                    let (fx, fy) = (px - x0, py - y0);
+                    let (x0, y0) = (x0 as i64, y0 as i64);
+                    let (a, b) = (fetch(x0, y0), fetch(x0 + 1, y0));
+                    let (c, d) = (fetch(x0, y0 + 1), fetch(x0 + 1, y0 + 1));
+                    for k in 0..4 {
+                        let top = a[k] + fx * (b[k] - a[k]);
+                        let bot = c[k] + fx * (d[k] - c[k]);
+                        acc[k] += top + fy * (bot - top);
+                    }
+                }
+                for k in 0..4 {
+                    out[i * 4 + k] = acc[k] * (1.0 / samples as f32);
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn taps_inside_the_image_read_what_the_clamped_taps_read() {
+        // velocities from sub-pixel to longer than the image, pixels at and near every edge
+        let (w, h) = (53, 31);
+        let rgba: Vec<f32> = (0..w * h * 4)
+            .map(|i| ((i * 37) % 101) as f32 / 101.0)
+            .collect();
+        let velocity: Vec<f32> = (0..w * h * 2)
+            .map(|i| (((i * 7919) % 211) as f32 - 105.0) * [0.01, 0.1, 0.5, 1.0][i % 4])
+            .collect();
+        for samples in [1, 2, 5, 16] {
+            let ours = velocity_blur(&rgba, &velocity, w, h, samples).unwrap();
+            let want = clamped(&rgba, &velocity, w, h, samples);
+            assert!(
+                ours.iter()
+                    .zip(&want)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "samples {samples}"
+            );
+        }
+    }
+
+    #[test]
+    fn camera_frame_blur_same_on_one_thread() {
+        let (w, h) = (40, 30);
+        let rgba: Vec<f32> = (0..w * h * 4).map(|i| (i % 7) as f32 / 7.0).collect();
+        let depth: Vec<f32> = (0..w * h).map(|i| 1.0 + (i % 5) as f32).collect();
+        let velocity: Vec<f32> = (0..w * h * 2).map(|i| (i % 9) as f32 - 4.0).collect();
+        let ids: Vec<i32> = (0..w * h).map(|i| (i % 3) as i32 - 1).collect();
+        let eye = |x: f64| {
+            let mut v = glam::DMat4::IDENTITY;
+            v.w_axis.x = x;
+            v.w_axis.z = -4.0;
+            v
+        };
+        let proj = glam::DMat4::perspective_rh_gl(0.8, w as f64 / h as f64, 0.1, 50.0);
+        let cur = CameraMatrices::new(eye(0.0), proj, "camera").unwrap();
+        let prev = CameraMatrices::new(eye(0.2), proj, "previous_camera").unwrap();
+        let frame = FrameMotion {
+            velocity: &velocity,
+            ids: &ids,
+            moving: &[true, false],
+        };
+        let run = || camera_frame_blur(&rgba, &depth, (w, h), frame, (&cur, &prev), (2.0, 16));
+        let a = run().unwrap();
+        let b = crate::on_threads(1, run).unwrap();
+        assert_eq!(a, b);
+        assert_ne!(a, rgba);
+    }
 }

@@ -23,6 +23,7 @@ mod opaque;
 mod opaque_row;
 mod pool;
 mod pyramid;
+mod reach;
 mod reconstruct;
 mod scatter;
 mod sheared_finish;
@@ -31,8 +32,8 @@ mod splat;
 
 pub use boxblur::box_blur;
 pub use camera::{
-    camera_motion_blur, camera_velocity, velocity_blur, CameraBlur, CameraMatrices, MAX_FPS_RATIO,
-    MAX_SAMPLES, MAX_VELOCITY,
+    camera_frame_blur, camera_motion_blur, camera_velocity, velocity_blur, CameraBlur,
+    CameraMatrices, FrameMotion, MAX_FPS_RATIO, MAX_SAMPLES, MAX_VELOCITY,
 };
 pub use colors::{colored, pixel_bounds, sample_colors, MIN_ALPHA};
 pub use dof::{depth_of_field, DofParams, MAX_LAYERS};
@@ -41,7 +42,7 @@ pub use lens::{lens_blur, LensParams, MAX_LENS_LEVELS};
 pub use opaque::{opaque_blur, opaque_motion_blur};
 pub use opaque_row::Composite;
 pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};
-pub use reconstruct::{reconstruct, ReconstructParams, MAX_TAPS};
+pub use reconstruct::{max_speed, reconstruct, ReconstructParams, MAX_TAPS};
 pub use scatter::{scatter_pieces, Piece};
 pub use splat::splat_paths;
 

@@ -480,8 +480,55 @@ fn _reconstruct<'py>(
     shaped(py, out, [h, w, 4])
 }
 
+/// The longest velocity (float64 pixels) of a velocity buffer (H,W,2) f32.
+#[pyfunction]
+fn _max_speed(py: Python<'_>, velocity: PyReadonlyArray3<'_, f32>) -> PyResult<f64> {
+    let (v, _, _) = img3(&velocity, "velocity", 2)?;
+    Ok(py.detach(|| crate::max_speed(v)))
+}
+
+/// The `camera_velocity` method's blur of a frame: rgba (H,W,4) f32, depth (H,W) f32, ids
+/// (H,W) i32, velocity (H,W,2) f32, `moving[id]`, the two cameras, the f32 scale and the taps.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+fn _camera_frame_blur<'py>(
+    py: Python<'py>,
+    rgba: PyReadonlyArray3<'py, f32>,
+    depth: PyReadonlyArray2<'py, f32>,
+    ids: PyReadonlyArray2<'py, i32>,
+    velocity: PyReadonlyArray3<'py, f32>,
+    moving: Vec<bool>,
+    camera: CameraArg<'py>,
+    previous_camera: CameraArg<'py>,
+    scale: f32,
+    samples: usize,
+) -> PyOut<'py> {
+    let (a, w, h) = img3(&rgba, "rgba", 4)?;
+    let (d, dw, dh) = img2(&depth, "depth")?;
+    same_size("depth", (dh, dw), (h, w))?;
+    let (v, vw, vh) = img3(&velocity, "velocity", 2)?;
+    same_size("velocity", (vh, vw), (h, w))?;
+    if ids.shape() != [h, w] {
+        return Err(Error::shape("ids", format!("expected shape ({h},{w})")).into());
+    }
+    let ids = c_slice(&ids, "ids")?;
+    let cur = camera.matrices("camera")?;
+    let prev = previous_camera.matrices("previous_camera")?;
+    let frame = crate::FrameMotion {
+        velocity: v,
+        ids,
+        moving: &moving,
+    };
+    let out = detached_in_pool(py, || {
+        crate::camera_frame_blur(a, d, (w, h), frame, (&cur, &prev), (scale, samples))
+    })?;
+    shaped(py, out, [h, w, 4])
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_reconstruct, m)?)?;
+    m.add_function(wrap_pyfunction!(_max_speed, m)?)?;
+    m.add_function(wrap_pyfunction!(_camera_frame_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_glow, m)?)?;
     m.add_function(wrap_pyfunction!(_box_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_splat_paths, m)?)?;

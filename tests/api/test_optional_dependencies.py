@@ -16,6 +16,7 @@ import pytest
 import motionblur as mb
 from motionblur import MissingDependencyError, _optional
 from motionblur.__main__ import main
+from motionblur.dataset import make_dataset
 
 
 def _hide(monkeypatch, name: str) -> None:
@@ -42,6 +43,11 @@ CASES = {
     "OpenEXR": ("OpenEXR", "interop", lambda tmp: _frame().save_exr(tmp / "new" / "a.exr")),
     "trimesh": ("trimesh", "interop", lambda tmp: mb.Mesh(*mb.meshes.box()).to_trimesh()),
     "pygltflib": ("pygltflib", "interop", lambda tmp: mb.Scene.from_gltf(_any_file(tmp))),
+    "imageio_ffmpeg": (
+        "imageio-ffmpeg",
+        "video",
+        lambda tmp: make_dataset("cube", tmp / "new", frames=(0, 1), preview="mp4", progress=False),
+    ),
 }
 
 

@@ -63,10 +63,21 @@ def test_extras_by_purpose_and_all_is_their_union():
     assert "peers" not in extras
     others = sorted(set(extras) - {"all", "dev"})
     assert extras["all"] == [
-        f"motionblur[{','.join(o for o in ['reference', 'metrics', 'pyrender', 'interop', 'meshes', 'bench'])}]"
+        f"motionblur[{','.join(o for o in ['reference', 'metrics', 'pyrender', 'interop', 'meshes', 'bench', 'video'])}]"
     ]
     # blender (bpy) is left out of `all`: its wheels are for Python 3.11 only
-    assert set(others) == {"reference", "metrics", "pyrender", "interop", "meshes", "bench", "blender"}
+    assert set(others) == {
+        "reference",
+        "metrics",
+        "pyrender",
+        "interop",
+        "meshes",
+        "bench",
+        "blender",
+        "video",
+    }
+    # the MP4 preview of motionblur dataset: imageio-ffmpeg ships the ffmpeg it runs
+    assert any(r.startswith("imageio-ffmpeg") for r in extras["video"])
     # the real meshes of the report come with the bench, not with the library
     assert "motionblur[reference,metrics,meshes]" in extras["bench"]
     # pyrender 0.1.45 pins PyOpenGL==3.1.0: an extra asking for a newer PyOpenGL cannot resolve

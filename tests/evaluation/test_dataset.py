@@ -84,6 +84,10 @@ def test_bad_arguments_name_themselves_before_writing(tmp_path):
         (dict(seed=-2), "seed"),
         (dict(width=0), "width"),
         (dict(method="accumulation", options={"nope": 1}), "options"),
+        (dict(preview="webm"), "preview"),
+        (dict(kernels=(0, 3)), "kernels"),
+        (dict(kernels="4x3"), "kernels"),
+        (dict(kernels=(4, 3), rolling=0.5, method="analytic"), "kernels"),
     ]
     for kw, name in cases:
         with pytest.raises((ValueError, TypeError), match=name):
@@ -236,3 +240,141 @@ def test_a_rolling_shutter_reaches_every_frame(tmp_path):
         make_dataset("cube", tmp_path / "x", rolling=0.5, frames=(0, 1), method="velocity", progress=False)
     with pytest.raises(ValueError, match="rolling"):
         make_dataset("cube", tmp_path / "x", rolling=1.0, frames=(0, 1), progress=False)
+
+
+def _decoded(path: Path) -> tuple[dict, list[np.ndarray]]:
+    """The MP4 decoded by imageio-ffmpeg's ffmpeg: its metadata and every frame (8-bit RGB)."""
+    import imageio_ffmpeg
+
+    frames = imageio_ffmpeg.read_frames(str(path))
+    meta = next(frames)
+    w, h = meta["size"]
+    return meta, [np.frombuffer(f, np.uint8).reshape(h, w, 3) for f in frames]
+
+
+def _png_rgb(path: Path) -> np.ndarray:
+    from PIL import Image
+
+    with Image.open(path) as im:
+        return np.asarray(im.convert("RGB"))
+
+
+def test_an_mp4_preview_is_the_frames_the_same_bytes_twice_and_resumes(tmp_path):
+    """preview='mp4': an H.264 file of every frame at fps, its odd size rounded up to even, whose
+    decoded frames are the PNG previews (up to the codec's loss); the same command writes the
+    same bytes; a rerun rewrites it only when a frame was rendered or it is missing."""
+    kw = dict(frames=(0, 5), fps=10.0, method="analytic", width=63, height=47, progress=False, preview="mp4")
+    a, b = tmp_path / "a", tmp_path / "b"
+    run = make_dataset("cube", a, **kw)
+    assert (
+        run["preview"] == "preview.mp4"
+        and json.loads((a / "dataset.json").read_text())["preview"] == "preview.mp4"
+    )
+    assert not (a / "preview.gif").exists() and not [p for p in a.iterdir() if ".tmp" in p.name]
+    meta, frames = _decoded(a / "preview.mp4")
+    assert meta["codec"] == "h264" and meta["fps"] == pytest.approx(10.0)
+    assert meta["size"] == (64, 48) and len(frames) == 5
+    for k, got in enumerate(frames):
+        want = np.pad(_png_rgb(a / f"frame_{k:06d}.png"), ((0, 1), (0, 1), (0, 0)), mode="edge")
+        err = np.abs(got.astype(float) - want).mean()
+        assert err < 4.0, (k, err)  # 8-bit levels: crf 18 and 4:2:0 chroma lose little
+    # the frames differ, and the video follows them (not one frame repeated)
+    assert np.abs(frames[0].astype(float) - frames[4]).mean() > 4 * max(
+        np.abs(
+            f.astype(float)
+            - np.pad(_png_rgb(a / f"frame_{k:06d}.png"), ((0, 1), (0, 1), (0, 0)), mode="edge")
+        ).mean()
+        for k, f in enumerate(frames)
+    )
+
+    make_dataset("cube", b, **kw)
+    assert (a / "preview.mp4").read_bytes() == (b / "preview.mp4").read_bytes()
+
+    before = _files(a)
+    assert make_dataset("cube", a, **kw)["rendered"] == []
+    assert _files(a) == before  # nothing re-encoded, not even touched
+    (a / "frame_000002.json").unlink()
+    assert make_dataset("cube", a, **kw)["rendered"] == [2]
+    assert (a / "preview.mp4").read_bytes() == before["preview.mp4"][1]  # re-encoded, same bytes
+    (a / "preview.mp4").unlink()
+    assert make_dataset("cube", a, **kw)["rendered"] == []
+    assert (a / "preview.mp4").read_bytes() == before["preview.mp4"][1]  # a missing preview is written
+
+    none = make_dataset("cube", tmp_path / "none", **{**kw, "frames": (0, 1), "preview": "none"})
+    assert none["preview"] is None and not [p for p in (tmp_path / "none").iterdir() if "preview" in p.name]
+
+
+def _cli(tmp_path: Path, *args: str, block: str | None = None) -> subprocess.CompletedProcess:
+    """``motionblur dataset ARGS`` in a new Python; ``block``: an import name made missing there
+    the way Python reports one (``sys.modules[name] = None``: ``import name`` raises
+    ModuleNotFoundError), before motionblur is imported."""
+    env = {**os.environ, "PYTHONPATH": str(Path(mb.__file__).parents[1])}
+    hide = f"sys.modules[{block!r}] = None; " if block else ""
+    code = f"import sys; {hide}from motionblur.__main__ import main; sys.exit(main(sys.argv[1:]))"
+    cmd = [sys.executable, "-c", code, "dataset", *args]
+    return subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=180)
+
+
+def test_the_command_line_writes_an_mp4_preview(tmp_path):
+    out = tmp_path / "cli"
+    done = _cli(tmp_path, "spinning_propeller", "--frames", "0:3", "--fps", "12", "--method", "analytic",
+                "--width", "40", "--height", "30", "--no-progress", "--preview", "mp4", "--out", str(out))  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert "3 frames rendered" in done.stdout
+    meta, frames = _decoded(out / "preview.mp4")
+    assert meta["size"] == (40, 30) and len(frames) == 3 and meta["fps"] == pytest.approx(12.0)
+    assert not (out / "preview.gif").exists()
+    bad = _cli(tmp_path, "cube", "--preview", "webm", "--out", str(tmp_path / "bad"))
+    assert bad.returncode == 2 and "--preview" in bad.stderr and not (tmp_path / "bad").exists()
+
+
+def test_an_mp4_preview_without_the_video_extra_names_it_before_writing(tmp_path):
+    """imageio-ffmpeg missing: the command says which extra brings it and writes nothing (it
+    does not fall back to a GIF); the default GIF preview does not need it."""
+    out = tmp_path / "x"
+    done = _cli(tmp_path, "cube", "--frames", "0:1", "--preview", "mp4", "--no-progress", "--out", str(out),
+                block="imageio_ffmpeg")  # fmt: skip
+    assert done.returncode == 1, (done.stdout, done.stderr)
+    assert "motionblur[video]" in done.stderr and "imageio-ffmpeg" in done.stderr, done.stderr
+    assert not out.exists()
+    gif = _cli(tmp_path, "cube", "--frames", "0:1", "--method", "analytic", "--width", "32", "--height", "24",
+               "--no-progress", "--out", str(tmp_path / "gif"), block="imageio_ffmpeg")  # fmt: skip
+    assert gif.returncode == 0, gif.stderr
+    assert (tmp_path / "gif" / "preview.gif").exists() and not (tmp_path / "gif" / "preview.mp4").exists()
+
+
+def test_blur_kernels_per_frame_are_those_of_the_frames_scene(tmp_path):
+    """kernels=(GX, GY): each frame's .npz holds blur_kernels of the scene the frame was rendered
+    from (its window and its shake), the same bytes twice; the CLI's --kernels gives the same."""
+    from motionblur.dataset import _frame_scene
+
+    kw = dict(frames=(0, 2), method="analytic", width=64, height=48, shake=1.0, seed=3, progress=False)
+    run = make_dataset("cube", tmp_path / "a", kernels=(4, 3), **kw)
+    assert run["kernels"] == [4, 3]
+    meta = json.loads((tmp_path / "a" / "frame_000001.json").read_text())
+    assert meta["kernels"]["file"] == meta["files"]["kernels"] == "frame_000001_kernels.npz"
+    got = np.load(tmp_path / "a" / "frame_000001_kernels.npz")
+    assert got["points"].shape == (12, 2) and got["kernels"].shape[0] == 12
+    assert got["kernels"].shape[1] == 2 * meta["kernels"]["radius"] + 1
+    np.testing.assert_allclose(got["kernels"].sum(axis=(1, 2)) + got["clipped"], 1.0, atol=1e-5)
+    # the same as blur_kernels of frame 1's own scene (window 1/2 .. 3/4 of the clip, its shake)
+    job = {"source": ("builtin", "cube"), "window": (0.5, 0.75), "width": 64, "height": 48, "fps": 24.0,
+           "shutter_angle": 180.0, "shake": 1.0, "shake_seed": meta["shake_seed"]}  # fmt: skip
+    want = mb.blur_kernels(_frame_scene(job), grid=(4, 3))
+    np.testing.assert_array_equal(got["kernels"], want.kernels)
+    np.testing.assert_array_equal(got["ids"], want.ids)
+    assert (got["ids"] >= 0).any(), "the grid sees the cube"
+    # the shake is in them: without it, the kernels differ
+    still = make_dataset("cube", tmp_path / "still", kernels=(4, 3), **{**kw, "shake": None})
+    assert still["rendered"] == [0, 1]
+    k0 = np.load(tmp_path / "still" / "frame_000001_kernels.npz")["paths"]
+    assert not np.allclose(k0, got["paths"], equal_nan=True)
+
+    done = _cli(tmp_path, "cube", "--frames", "0:2", "--method", "analytic", "--width", "64", "--height", "48",
+                "--shake", "1", "--seed", "3", "--kernels", "4x3", "--no-progress", "--out", str(tmp_path / "cli"))  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    for k in range(2):
+        name = f"frame_{k:06d}_kernels.npz"
+        assert (tmp_path / "cli" / name).read_bytes() == (tmp_path / "a" / name).read_bytes(), name
+    bad = _cli(tmp_path, "cube", "--kernels", "4by3", "--out", str(tmp_path / "bad"))
+    assert bad.returncode == 2 and "--kernels" in bad.stderr and not (tmp_path / "bad").exists()

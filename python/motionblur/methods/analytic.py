@@ -24,15 +24,30 @@ from ._segments import MAX_SEGMENTS, MIN_PIECE, NORMAL_TOLERANCE, segment_times
 __all__ = ["analytic", "segment_times", "MAX_SEGMENTS", "MIN_PIECE", "NORMAL_TOLERANCE"]
 
 
-def _homogeneous(p: np.ndarray) -> np.ndarray:
-    return np.concatenate([p, np.ones((*p.shape[:-1], 1))], axis=-1)
+class _Transform:
+    """Points transformed by 4x4 matrices: the sums in numpy's einsum order for four terms (even
+    and odd terms first), into an output given, with two temporaries of one boundary's size that
+    stay in cache."""
 
+    def __init__(self, v: int):
+        self.tmp = np.empty((v, 4))
+        self.odd = np.empty((v, 4))
 
-def _transform(m: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """(K,V,4) points ``p`` each transformed by its (K,4,4) matrix ``m``: the sums in numpy's
-    einsum order for four terms (even and odd terms first), in a tenth of its time."""
-    t = [p[..., j : j + 1] * m[:, None, :, j] for j in range(4)]
-    return (t[0] + t[2]) + (t[1] + t[3])
+    def __call__(self, m: np.ndarray, p: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """(V,4) points ``p`` (or (V,3): w = 1, which multiplies exactly, so they give the bits of
+        their homogeneous form) transformed by the 4x4 matrix ``m`` into ``out`` (V,4)."""
+        tmp, odd = self.tmp, self.odd
+        np.multiply(p[:, 0:1], m[None, :, 0], out=out)
+        np.multiply(p[:, 2:3], m[None, :, 2], out=tmp)
+        out += tmp
+        np.multiply(p[:, 1:2], m[None, :, 1], out=odd)
+        if p.shape[-1] == 4:
+            np.multiply(p[:, 3:4], m[None, :, 3], out=tmp)
+            odd += tmp
+        else:
+            odd += m[None, :, 3]
+        out += odd
+        return out
 
 
 def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
@@ -44,24 +59,53 @@ def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
     bow of the segments beside it, towards the bow, so the piecewise-linear path lies half
     outside and half inside the true one: its largest distance halves and the covered area
     errors on either side cancel. Straight motion (translation, vertex keyframes between their
-    times, a still camera) is left exactly as it is."""
+    times, a still camera) is left exactly as it is.
+
+    Computed one boundary at a time (the arithmetic of whole-array numpy, element for element),
+    the result written over the unmoved positions: besides them only the bows are held."""
     pos = np.stack([obj.world_vertices(t) for t in times])
     if len(times) < 2:
         return pos
+    k, v = len(times) - 1, pos.shape[1]
     mids = 0.5 * (times[1:] + times[:-1])
     vp = np.stack([scene.camera_at(t).view_projection for t in times])
     vpm = np.stack([scene.camera_at(t).view_projection for t in mids])
-    clip = _transform(vp, _homogeneous(pos))
-    mid = _transform(vpm, _homogeneous(np.stack([obj.world_vertices(t) for t in mids])))
-    bow = mid - 0.5 * (clip[1:] + clip[:-1])  # (K,V,4): chord middle to the true middle
-    if not np.abs(bow).max() > 1e-12 * (1.0 + np.abs(clip).max()):
+    transform = _Transform(v)
+    bow = np.empty((k, v, 4))  # chord middle to the true middle
+    clip = (np.empty((v, 4)), np.empty((v, 4)))  # the clip positions at boundaries i and i + 1
+    chord = np.empty((v, 4))
+    big_bow = big_clip = 0.0
+    transform(vp[0], pos[0], clip[0])
+    for i in range(k):
+        c0, c1 = clip[i % 2], clip[(i + 1) % 2]
+        transform(vp[i + 1], pos[i + 1], c1)
+        transform(vpm[i], obj.world_vertices(mids[i]), bow[i])
+        np.add(c1, c0, out=chord)
+        chord *= 0.5
+        bow[i] -= chord
+        big_bow = max(big_bow, float(np.abs(bow[i]).max()))
+        big_clip = max(big_clip, float(np.abs(c0).max()), float(np.abs(c1).max()))
+    if not big_bow > 1e-12 * (1.0 + big_clip):
         return pos
-    shift = np.zeros_like(clip)
-    shift[:-1] += 0.5 * bow
-    shift[1:] += 0.5 * bow
-    shift[1:-1] *= 0.5
-    moved = _transform(np.linalg.inv(vp), clip + 0.5 * shift)
-    return moved[..., :3] / moved[..., 3:4]
+    inv = np.linalg.inv(vp)
+    shift, half, moved = clip[0], clip[1], chord
+    for i in range(k + 1):
+        # 0 plus half the bow after, plus half the bow before, halved between two; halved, plus
+        # the boundary's clip position
+        shift.fill(0.0)
+        if i < k:
+            np.multiply(bow[i], 0.5, out=half)
+            shift += half
+        if i > 0:
+            np.multiply(bow[i - 1], 0.5, out=half)
+            shift += half
+        if 0 < i < k:
+            shift *= 0.5
+        shift *= 0.5
+        shift += transform(vp[i], pos[i], half)
+        transform(inv[i], shift, moved)
+        np.divide(moved[:, :3], moved[:, 3:4], out=pos[i])
+    return pos
 
 
 def _draw(scene: Scene, obj: Object, k: int, times: np.ndarray) -> MovingDraw:
@@ -69,11 +113,11 @@ def _draw(scene: Scene, obj: Object, k: int, times: np.ndarray) -> MovingDraw:
     normals = None
     if obj.shading == "lambert" and not (obj.motion is not None and obj.motion.is_deforming):
         n0 = obj.mesh.vertex_normals()
-        rows = []
-        for t in times:
+        # each boundary's float64 normals rounded to float32 as they are made (astype's rounding)
+        normals = np.empty((len(times), *n0.shape), np.float32)
+        for i, t in enumerate(times):
             m = obj.transform_at(t)[:3, :3]
-            rows.append(n0 @ (m / np.cbrt(np.linalg.det(m))).T)
-        normals = np.stack(rows).astype(np.float32)
+            normals[i] = n0 @ (m / np.cbrt(np.linalg.det(m))).T
     return MovingDraw(pos, obj.mesh.faces, obj.rgba, normals, object_id=k, shading=obj.shading)
 
 

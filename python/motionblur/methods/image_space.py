@@ -4,7 +4,13 @@ velocity-buffer post-process of game engines and Blender EEVEE (``velocity``).
 
 Both render the scene once, sharp, at the centroid ``t_c`` of the shutter filter
 (``1 - integral of W(t) dt``; 0.5 for a box shutter), so that a blur centred on each pixel covers
-the whole shutter, and then blur the frame's pixels:
+the whole shutter, and then blur the frame's pixels. With a still camera, one shading mode and
+opaque static objects, the static objects' layer is kept across frames (the one ``accumulation``
+keeps) and only the moving objects are drawn over it: the same pixels as drawing everything, at
+the cost of the moving triangles. The blurs skip what does not move: ``velocity``'s gather
+counts the taps no moving surface can reach without reading them, ``opaque_image`` composites
+only the windows its blurred masks cover, and ``camera_velocity`` blurs along each pixel's
+velocity as the core computes it, with no velocity image in between:
 
 * ``opaque_image`` (Kraus 2013, section 4.1): the frame carries each object's screen motion over
   the shutter in its velocity buffer. For every moving object, farthest first, the mask is its
@@ -35,9 +41,11 @@ import numpy as np
 
 from .. import _core, image
 from .._validate import as_bool, as_choice, as_float, as_int
-from ..raster import Frame
+from ..raster import Draw, Frame
+from ..raster import _lights as raster_lights
 from ..render import register
 from ..scene import Scene
+from ._layers import Layer, Static, static_layer, supersampled, window_projection
 from ._sharp import check_aa, require_box_shutter, sharp_frame, shutter_centroid
 
 __all__ = ["opaque_image", "camera_velocity", "velocity", "shutter_centroid"]
@@ -48,6 +56,75 @@ __all__ = ["opaque_image", "camera_velocity", "velocity", "shutter_centroid"]
 #: blurred along its own mean velocity.
 VELOCITY_SECTORS = 16
 VELOCITY_RATIO = 1.5
+
+
+def _static_part(scene: Scene, aa: int) -> Static | None:
+    """The still camera's static layer (kept across frames, as ``accumulation`` keeps it), when
+    drawing the moving objects over it gives the bits of `sharp_frame`: one shading mode for
+    every object and opaque static objects (a sample of the layer hides what is behind it);
+    None otherwise."""
+    if scene.camera_moves or len({o.shading for o in scene.objects}) != 1:
+        return None
+    statics = [(k, o) for k, o in enumerate(scene.objects) if not o.is_moving]
+    if not all(float(np.min(o.rgba[..., 3])) >= 1.0 for _, o in statics):
+        return None
+    return static_layer(scene, supersampled(scene.camera, aa), statics, aa)
+
+
+def _sharp(scene: Scene, t: float, aa: int, velocity: str | None, static: Static | None) -> Frame:
+    """`sharp_frame` (same arguments), the moving objects drawn over the ``static`` layer of
+    `_static_part` when there is one: the rasterizer runs on the window of pixels their
+    vertices project to (the camera's projection narrowed to it, the layer read from the
+    window's first sample) and the static pixels are copied around it, the bits of drawing
+    everything (tests/methods/test_image_space_fast_paths.py)."""
+    if static is None or velocity == "since_open":
+        return sharp_frame(scene, t, aa, velocity=velocity)
+    cam = scene.camera_at(t)
+    draws, points = [], []
+    for k, o in enumerate(scene.objects):
+        if not o.is_moving:
+            continue
+        v, prev = o.world_vertices(t), None  # the previous vertices exactly as sharp_frame's
+        if velocity == "shutter":
+            prev = v - (o.world_vertices(1.0) - o.world_vertices(0.0))
+        draws.append(Draw(v, o.mesh.faces, o.rgba, object_id=k, previous_vertices=prev))
+        points.append(v[np.unique(o.mesh.faces)] if len(o.mesh.faces) else v[:0])
+    rgba, depth, ids = static.rgba.copy(), static.depth.copy(), static.ids.copy()
+    vel = np.zeros((*ids.shape, 2), np.float32)
+    win = _window(cam, np.concatenate(points) if points else np.zeros((0, 3)))
+    if win is not None:
+        x0, y0, x1, y1 = win
+        layer = static.layer
+        c = np.ascontiguousarray
+        options = {
+            "view": cam.view, "projection": window_projection(cam.projection, cam.width, cam.height, win),
+            "width": x1 - x0, "height": y1 - y0, "samples": aa, "blend": "exact",
+            "shading": scene.objects[0].shading, "lights": raster_lights(scene.lights),
+            "ambient": tuple(map(float, scene.ambient)), "origin": (x0 * aa, y0 * aa),
+        }  # fmt: skip
+        part = _core._rasterize(draws, options, Layer(c(layer.rgba), c(layer.depth), c(layer.ids)))
+        rgba[y0:y1, x0:x1], depth[y0:y1, x0:x1], ids[y0:y1, x0:x1] = part[:3]
+        if part[3] is not None:  # (no velocity buffer when no draw has previous vertices)
+            vel[y0:y1, x0:x1] = part[3]
+    return Frame(rgba, depth, ids, vel)
+
+
+def _window(cam, points: np.ndarray):
+    """(x0, y0, x1, y1): the pixels of ``cam`` that triangles of ``points`` (N,3) world can
+    cover (their projected box, 2 pixels more), the whole image when one is not in front of the
+    near plane; None when there are none or the box misses the image."""
+    if len(points) == 0:
+        return None
+    w, h = cam.width, cam.height
+    clip = points @ cam.view_projection[:3, :3].T + cam.view_projection[:3, 3]
+    cw = points @ cam.view_projection[3, :3] + cam.view_projection[3, 3]
+    if not np.all(cw > cam.znear):
+        return (0, 0, w, h)
+    px = (clip[:, 0] / cw + 1.0) * 0.5 * w
+    py = (1.0 - clip[:, 1] / cw) * 0.5 * h
+    x0, x1 = max(0, int(np.floor(px.min())) - 2), min(w, int(np.ceil(px.max())) + 2)
+    y0, y1 = max(0, int(np.floor(py.min())) - 2), min(h, int(np.ceil(py.max())) + 2)
+    return (x0, y0, x1, y1) if x0 < x1 and y0 < y1 else None
 
 
 @register(
@@ -88,30 +165,61 @@ def opaque_image(
     as_choice(glow, "glow", ("coverage", "opaque"), type_error=False)
     require_box_shutter(scene, "opaque_image")
     tc = shutter_centroid(scene)
-    frame = sharp_frame(scene, tc, aa, velocity="shutter")
-    order = []  # (depth, object, mean velocity (2,), mask)
-    for k, o in enumerate(scene.objects):
-        mask = frame.ids == k
-        if not o.is_moving or not mask.any():
-            continue
-        v = frame.velocity[mask].astype(np.float64).mean(axis=0)
-        order.append((float(np.mean(frame.depth[mask])), k, v, mask))
+    static = _static_part(scene, aa)
+    frame = _sharp(scene, tc, aa, "shutter", static)
+    order = []  # (depth, object, mean velocity (2,), (its pixels' window, mask there))
+    for k, (y0, y1, x0, x1) in _moving_windows(scene, frame.ids):
+        mask = frame.ids[y0:y1, x0:x1] == k
+        v = frame.velocity[y0:y1, x0:x1][mask].astype(np.float64).mean(axis=0)
+        order.append((float(np.mean(frame.depth[y0:y1, x0:x1][mask])), k, v, ((y0, y1, x0, x1), mask)))
     order.sort(key=lambda e: -e[0])
     lengths = {k: float(np.hypot(v[0], v[1])) for _, k, v, _ in order}
     if glow == "coverage":
-        rgba, masks, front_pixels = _coverage_blur(scene, frame, tc, aa, order, layers, groups)
+        rgba, masks, front_pixels = _coverage_blur(scene, frame, tc, aa, order, layers, groups, static)
     else:
+        order = [(z, k, v, _full_mask(frame.ids.shape, win, m)) for z, k, v, (win, m) in order]
         rgba, masks, front_pixels = _opaque_blur(frame, order, layers, groups)
     out = Frame(rgba, frame.depth, frame.ids, frame.velocity)
     out.stats.update(t=tc, blurred=len(order), lengths=lengths, masks=masks, front_pixels=front_pixels)
     return out
 
 
-def _velocity_masks(frame: Frame, mask: np.ndarray, mean, groups: bool):
-    """[(window (y0, y1, x0, x1), its mask, velocity (2,))]: the pixels of ``mask`` in each
-    velocity group (``groups``) with the group's mean velocity, or all of them with ``mean``."""
+def _moving_windows(scene: Scene, ids: np.ndarray):
+    """[(k, (y0, y1, x0, x1))]: each moving object ``k`` seen in the frame, with the rows and
+    columns that hold its pixels (``ids == k``), in object order."""
+    out = []
+    for k, o in enumerate(scene.objects):
+        if not o.is_moving:
+            continue
+        mask = ids == k
+        rows = np.flatnonzero(mask.any(axis=1))
+        if len(rows) == 0:
+            continue
+        y0, y1 = int(rows[0]), int(rows[-1]) + 1
+        cols = np.flatnonzero(mask[y0:y1].any(axis=0))
+        out.append((k, (y0, y1, int(cols[0]), int(cols[-1]) + 1)))
+    return out
+
+
+def _full_mask(shape, window, mask: np.ndarray) -> np.ndarray:
+    """(H,W) bool: ``mask`` placed at ``window`` (y0, y1, x0, x1) of a frame of ``shape``."""
+    full = np.zeros(shape, bool)
+    y0, y1, x0, x1 = window
+    full[y0:y1, x0:x1] = mask
+    return full
+
+
+def _velocity_masks(frame: Frame, mask, mean, groups: bool):
+    """[(window (y0, y1, x0, x1), its mask, velocity (2,))]: the pixels of ``mask`` (an (H,W)
+    bool, or a pair (window, mask there)) in each velocity group (``groups``) with the group's
+    mean velocity, or all of them with ``mean``; windows in frame pixels."""
+    if isinstance(mask, tuple):
+        (oy, _, ox, _), mask = mask
+    else:
+        oy = ox = 0
     ys, xs = np.nonzero(mask)
-    v = frame.velocity[ys, xs].astype(np.float64)
+    v = frame.velocity[ys + oy, xs + ox].astype(np.float64)
+    ys, xs = ys + oy, xs + ox
     if groups:
         sector = np.floor((np.arctan2(v[:, 1], v[:, 0]) + np.pi) / (2 * np.pi) * VELOCITY_SECTORS)
         size = np.floor(np.log(np.maximum(np.hypot(v[:, 0], v[:, 1]), 1.0)) / np.log(VELOCITY_RATIO))
@@ -121,11 +229,11 @@ def _velocity_masks(frame: Frame, mask: np.ndarray, mean, groups: bool):
     else:
         parts = [np.arange(len(ys))]
     out = []
+    h, w = frame.ids.shape
     for sel in parts:
         vel = v[sel].mean(axis=0) if groups else np.asarray(mean, np.float64)
         py, px = ys[sel], xs[sel]
         r = int(np.ceil(0.5 * float(np.hypot(vel[0], vel[1])))) + 2
-        h, w = mask.shape
         y0, y1 = max(0, int(py.min()) - r), min(h, int(py.max()) + r + 1)
         x0, x1 = max(0, int(px.min()) - r), min(w, int(px.max()) + r + 1)
         m = np.zeros((y1 - y0, x1 - x0), bool)
@@ -159,42 +267,58 @@ def _opaque_blur(frame: Frame, order, layers: bool, groups: bool):
     return rgba, masks, front_pixels
 
 
-def _coverage_blur(scene: Scene, frame: Frame, tc: float, aa: int, order, layers: bool, groups: bool):
+def _coverage_blur(
+    scene: Scene, frame: Frame, tc: float, aa: int, order, layers: bool, groups: bool, static: Static | None
+):
     """Each moving object's velocity masks box-blurred, opacity included (the coverage glow),
     summed (a turning object's masks sweep into each other: opacity capped at 1), and
-    composited farthest first over the static objects rendered alone; with ``layers`` a static
-    pixel nearer than the object's blurred depth there stays in front of it."""
-    statics = scene.with_(objects=[o for o in scene.objects if not o.is_moving])
-    back = sharp_frame(statics, tc, aa, velocity=None)
-    rgba = back.rgba.copy()
+    composited farthest first over the static objects rendered alone (the kept ``static``
+    layer when there is one); with ``layers`` a static pixel nearer than the object's blurred
+    depth there stays in front of it. Only the window each object's blurred masks cover is
+    computed: elsewhere nothing reaches and the static pixels are kept as they are."""
+    if static is None:
+        statics = scene.with_(objects=[o for o in scene.objects if not o.is_moving])
+        back = sharp_frame(statics, tc, aa, velocity=None)
+        back_rgba, back_depth = back.rgba, back.depth
+    else:  # the same pixels (ids aside, which are not read)
+        back_rgba, back_depth = static.rgba, static.depth
+    rgba = back_rgba.copy()
     masks = front_pixels = 0
     for _, _, v, mask in order:
-        blurred = np.zeros_like(rgba)
-        depth = np.zeros((*mask.shape, 4), np.float32)  # (z m, 0, 0, m) blurred alike
-        z = np.where(mask, frame.depth, 0.0).astype(np.float32)
-        for (y0, y1, x0, x1), m, vel in _velocity_masks(frame, mask, v, groups):
+        parts = _velocity_masks(frame, mask, v, groups)
+        wy0, wx0 = min(p[0][0] for p in parts), min(p[0][2] for p in parts)
+        wy1, wx1 = max(p[0][1] for p in parts), max(p[0][3] for p in parts)
+        sub = rgba[wy0:wy1, wx0:wx1]
+        blurred = np.zeros_like(sub)
+        depth = np.zeros((*sub.shape[:2], 4), np.float32)  # (z m, 0, 0, m) blurred alike
+        (oy0, oy1, ox0, ox1), m0 = mask
+        z = np.zeros(sub.shape[:2], np.float32)
+        zs = z[oy0 - wy0 : oy1 - wy0, ox0 - wx0 : ox1 - wx0]
+        zs[...] = np.where(m0, frame.depth[oy0:oy1, ox0:ox1], 0.0)
+        for (y0, y1, x0, x1), m, vel in parts:
             layer = np.ascontiguousarray(frame.rgba[y0:y1, x0:x1] * m[..., None])
             zm = m.astype(np.float32)
-            zl = np.ascontiguousarray(np.stack([z[y0:y1, x0:x1] * zm, 0 * zm, 0 * zm, zm], axis=-1))
+            zw = z[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0]
+            zl = np.ascontiguousarray(np.stack([zw * zm, 0 * zm, 0 * zm, zm], axis=-1))
             length = float(np.hypot(vel[0], vel[1]))
             if length >= 1.0:
                 masks += 1
                 layer = image.box_blur(layer, (vel[0], vel[1]), length)
                 zl = image.box_blur(zl, (vel[0], vel[1]), length)
-            blurred[y0:y1, x0:x1] += layer
-            depth[y0:y1, x0:x1] += zl
+            blurred[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0] += layer
+            depth[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0] += zl
         a = blurred[..., 3:4]
         blurred *= np.where(a > 1.0, 1.0 / np.maximum(a, 1e-30), 1.0).astype(np.float32)
-        over = blurred + (1.0 - blurred[..., 3:4]) * rgba
+        over = blurred + (1.0 - blurred[..., 3:4]) * sub
         if not layers:
-            rgba = over
+            rgba[wy0:wy1, wx0:wx1] = over
             continue
         reach = depth[..., 3] > 1e-6
         zbar = np.where(reach, depth[..., 0] / np.maximum(depth[..., 3], 1e-30), np.inf)
-        front = reach & (back.depth < zbar)
+        front = reach & (back_depth[wy0:wy1, wx0:wx1] < zbar)
         front_pixels += int(front.sum())
-        under = rgba + (1.0 - rgba[..., 3:4]) * blurred
-        rgba = np.where(front[..., None], under, over).astype(np.float32)
+        under = sub + (1.0 - sub[..., 3:4]) * blurred
+        rgba[wy0:wy1, wx0:wx1] = np.where(front[..., None], under, over)
     return rgba, masks, front_pixels
 
 
@@ -232,17 +356,20 @@ def camera_velocity(scene: Scene, samples: int = 16, aa: int = 1) -> Frame:
     aa = check_aa(aa)
     require_box_shutter(scene, "camera_velocity")
     tc = shutter_centroid(scene)
-    frame = sharp_frame(scene, tc, aa, velocity="since_open")
+    frame = _sharp(scene, tc, aa, "since_open", _static_part(scene, aa))
     rgba = frame.rgba
     if scene.camera_moves and tc > 0.0:
         cam, start = scene.camera_at(tc), scene.camera_at(0.0)
-        vel = image.camera_velocity(frame.depth, cam, start)
-        moving = np.isin(frame.ids, [k for k, o in enumerate(scene.objects) if o.is_moving])
-        vel = np.where(moving[..., None], frame.velocity, vel) * np.float32(1.0 / tc)
-        # as camera_motion_blur: a streak past MAX_VELOCITY pixels crosses the image anyway (a
-        # very narrow field of view, a point near the previous camera plane)
-        vel = np.clip(vel, -image.MAX_VELOCITY, image.MAX_VELOCITY, out=vel)
-        rgba = image.velocity_blur(rgba, vel, samples)
+        # one pass in the core: per pixel, the moving object's velocity or the camera's from the
+        # depth (image.camera_velocity), times 1 / tc in float32, clamped as camera_motion_blur
+        # clamps (a streak past MAX_VELOCITY pixels crosses the image anyway: a very narrow
+        # field of view, a point near the previous camera plane), blurred as image.velocity_blur
+        c = np.ascontiguousarray
+        moving = [o.is_moving for o in scene.objects]
+        rgba = _core._camera_frame_blur(
+            c(rgba), c(frame.depth), c(frame.ids), c(frame.velocity), moving, cam, start,
+            float(np.float32(1.0 / tc)), samples,
+        )  # fmt: skip
     out = Frame(rgba, frame.depth, frame.ids, frame.velocity)
     out.stats.update(t=tc, samples=samples)
     return out
@@ -281,12 +408,14 @@ def velocity(scene: Scene, samples: int = 16, aa: int = 1, tile=None, soft_depth
             "this camera moves (use camera_velocity, accumulation or motion_volume)"
         )
     tc = shutter_centroid(scene)
-    frame = sharp_frame(scene, tc, aa, velocity="shutter")
+    frame = _sharp(scene, tc, aa, "shutter", _static_part(scene, aa))
     vel = np.ascontiguousarray(frame.velocity, dtype=np.float32)
-    vmax = float(np.sqrt((vel.astype(np.float64) ** 2).sum(axis=-1)).max())
+    vmax = _core._max_speed(vel)
     if tile is None:
         tile = max(8, int(np.ceil(0.5 * vmax)))
-    rgba = image.reconstruction_blur(frame.rgba, frame.depth, vel, samples, tile, soft_depth)
+    # the frame is the rasterizer's (finite, depth > 0): the core checks it once more
+    c = np.ascontiguousarray
+    rgba = _core._reconstruct(c(frame.rgba), c(frame.depth), vel, samples, tile, soft_depth)
     out = Frame(rgba, frame.depth, frame.ids, frame.velocity)
     out.stats.update(t=tc, samples=samples, tile=tile, max_velocity=vmax)
     return out

@@ -46,7 +46,15 @@ from ._layers import (
 from ._volume_colors import UNLIT, averaged_colors, place, scattered, to_pixels, uniform
 from ._volume_pieces import MAX_PIECES, check_equal, piece_scene, plan
 
-__all__ = ["motion_volume", "apparent_keyframes", "apparent_motion", "camera_folds", "spin_of"]
+__all__ = [
+    "motion_volume",
+    "apparent_keyframes",
+    "apparent_motion",
+    "camera_folds",
+    "spin_of",
+    "piece_bounds",
+    "pieces_frame",
+]
 
 FILTERS: tuple[str, ...] = tuple(_core.FILTERS)
 
@@ -504,23 +512,35 @@ def motion_volume(
     colours (summed over the pieces), and with tables has ``contour_error``, the largest angle
     (radians) between an object's motion and the stored direction it swept.
     """
-    if not (isinstance(pieces, str) and pieces == "auto"):
-        if isinstance(pieces, str):
-            raise ValueError(f"pieces: expected 'auto' or an int >= 1, got {pieces!r}")
-        pieces = as_int(pieces, "pieces", minimum=1, maximum=MAX_PIECES)
     if filter is None and isinstance(scene.shutter, str):
         filter = scene.shutter
     options = dict(
         segments=segments, filter=filter, aa=aa, contour_line=contour_line, exact_static=exact_static,
         spin=spin, colors=colors, color_renders=color_renders, contour_table=contour_table,
     )  # fmt: skip
+    return pieces_frame(scene, piece_bounds(scene, filter, spin, pieces), options)
+
+
+def piece_bounds(scene: Scene, filter, spin, pieces) -> np.ndarray:
+    """Boundaries (P+1,) of the pieces [`motion_volume`][motionblur.motion_volume] cuts ``scene``'s shutter
+    into (``filter``: the resolved filter, None for custom weights). The error estimate's pilot
+    renders a smaller camera at the full frame's boundaries (the turn-in-place limit is in pixels)."""
+    if not (isinstance(pieces, str) and pieces == "auto"):
+        if isinstance(pieces, str):
+            raise ValueError(f"pieces: expected 'auto' or an int >= 1, got {pieces!r}")
+        pieces = as_int(pieces, "pieces", minimum=1, maximum=MAX_PIECES)
     moves = scene.camera_moves or any(o.is_moving for o in scene.objects)
     if filter is None or not _rigid(scene) or not moves:
-        bounds = np.array([0.0, 1.0])  # _single raises (custom weights, deforming objects) or no motion
-    else:
-        as_choice(filter, "filter", FILTERS, type_error=False)
-        spun = _spun(scene) if spin is True else frozenset()
-        bounds = plan(scene, spun) if pieces == "auto" else check_equal(scene, pieces, spun)
+        return np.array([0.0, 1.0])  # _single raises (custom weights, deforming objects) or no motion
+    as_choice(filter, "filter", FILTERS, type_error=False)
+    spun = _spun(scene) if spin is True else frozenset()
+    return plan(scene, spun) if pieces == "auto" else check_equal(scene, pieces, spun)
+
+
+def pieces_frame(scene: Scene, bounds: np.ndarray, options: dict) -> Frame:
+    """The motion-volume frame of ``scene`` cut at ``bounds`` (see `piece_bounds`), ``options``
+    [`motion_volume`][motionblur.motion_volume]'s with the filter resolved."""
+    filter = options["filter"]
     if len(bounds) == 2:
         frame = _single(scene, **options)
         frame.stats["pieces"] = 1

@@ -1,0 +1,250 @@
+"""The image-space methods at production resolution against one sharp frame of the same scene
+(issue 27, section 2): does a post-process blur cost less than rendering more samples?
+
+Scenes, each at 1920x1080 and 3840x2160:
+
+* ``bunny``: the shipped Stanford bunny (5,998 faces, decimated) translating across the view over
+  a static floor (``REAL_SCENES["bunny_translate"]``): ``velocity`` (McGuire/Guertin) and
+  ``opaque_image`` (Kraus);
+* ``knot70k``: a procedural (2,3) torus knot of 70,000 faces on the same motion, the dense mesh
+  (the 69k-face bunny scan is not shipped);
+* ``pan``: the built-in camera pan (``SCENES["pan"]``): ``camera_velocity`` (Chapman).
+
+For each: one sharp frame (``accumulation`` with ``samples=1``), each method's time, the ratio
+method / sharp against the target (at most 2x: the method's own sharp frame included) and each
+method's RMSE against the analytic frame (``motionblur.exact``) at 1080p; at 4K the analytic frame
+is not rendered (tens of seconds) and the 1080p error stands for it. Times are wall-clock
+milliseconds of ``render(..., error_estimate=False)``, best of several rounds, the method and its
+sharp frame alternating call by call (paired), warm: with a still camera both reuse the static
+layer kept across frames (``accumulation`` keeps it, and so do the image-space methods), as a
+real-time loop does; the first frame after ``clear_static_cache`` is printed too. Each method's
+time is split into stages (its sharp frame, its blur) so that a missed target says where the time
+goes. Last, the horizontal opaque blur of an image with every pixel opaque against ``np.copyto``
+of the same array (target 1.5x).
+
+The machine has 2 cores shared with other jobs: the load average is printed before and after;
+ratios measured in the same run are the meaningful figures. ``--quick``: 1080p only, 3 rounds;
+``--no-errors``: times only (the analytic references take minutes). Writes
+out/bench/production_image.csv.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+import motionblur as mb
+import motionblur.image as mi
+from motionblur import _core
+from motionblur.evaluation.metrics import rmse
+from motionblur.methods import image_space as ims
+from motionblur.methods._layers import clear_static_cache
+from motionblur.methods._sharp import shutter_centroid
+from motionblur.scene import DirectionalLight, Object, Scene, rotate
+from motionblur.scenes_real import REAL_SCENES, real_mesh, torus_knot
+
+SIZES = ((1920, 1080), (3840, 2160))
+TARGET = 2.0
+BLUR_TARGET = 1.5
+QUICK = "--quick" in sys.argv  # fewer rounds, 1080p only (a smoke run)
+NO_ERRORS = "--no-errors" in sys.argv  # times only (the analytic references take minutes)
+
+
+def knot70k(width: int, height: int) -> Scene:
+    """The bunny scene's floor, camera, light and motion with a 70,000-face torus knot."""
+    bunny = REAL_SCENES["bunny_translate"](width, height)
+    v, f = torus_knot(n=1750, sections=20)
+    v = v @ rotate(np.radians(70.0), (1.0, 0.0, 0.0))[:3, :3].T
+    lo, hi = v.min(0), v.max(0)
+    size = float((real_mesh("bunny")[0].max(0) - real_mesh("bunny")[0].min(0)).max())
+    v = (v - [(lo[0] + hi[0]) / 2, lo[1], (lo[2] + hi[2]) / 2]) * (size / (hi - lo).max())
+    mover = bunny.objects[0]
+    obj = Object((v, f), color=(0.3, 0.45, 0.9), shading="lambert", motion=mover.motion, name="knot")
+    light = DirectionalLight((-0.35, -1.0, -0.55), 1.0)
+    return Scene([obj, bunny.objects[1]], bunny.camera, lights=[light], ambient=0.0, shutter="box")
+
+
+SCENES = {
+    "bunny": (lambda w, h: REAL_SCENES["bunny_translate"](w, h), ("velocity", "opaque_image")),
+    "knot70k": (knot70k, ("velocity", "opaque_image")),
+    "pan": (lambda w, h: mb.SCENES["pan"](width=w, height=h), ("camera_velocity",)),
+}
+
+
+def render_ms(scene: Scene, method: str) -> float:
+    opts = {"samples": 1} if method == "accumulation" else {}
+    t0 = time.perf_counter()
+    mb.render(scene, method, error_estimate=False, **opts)
+    return (time.perf_counter() - t0) * 1e3
+
+
+def paired(fns, rounds: int) -> list[float]:
+    """Best time (ms) of each of ``fns`` (functions returning their own ms), called in turn
+    one by one for ``rounds`` rounds after one warm-up call each."""
+    for f in fns:
+        f()
+    ts = [[] for _ in fns]
+    for _ in range(rounds):
+        for i, f in enumerate(fns):
+            ts[i].append(f())
+    return [min(t) for t in ts]
+
+
+def best(fn, rounds: int) -> float:
+    fn()
+    out = []
+    for _ in range(rounds):
+        t0 = time.perf_counter()
+        fn()
+        out.append((time.perf_counter() - t0) * 1e3)
+    return min(out)
+
+
+def stages(scene: Scene, method: str, rounds: int) -> dict[str, float]:
+    """Milliseconds of each stage of ``method`` on ``scene``, best of ``rounds``: its sharp
+    frame and its blur (the kernels it calls)."""
+    tc = shutter_centroid(scene)
+    static = ims._static_part(scene, 1)
+    c = np.ascontiguousarray
+    if method == "camera_velocity":
+        frame = ims._sharp(scene, tc, 1, "since_open", static)
+        cam, start = scene.camera_at(tc), scene.camera_at(0.0)
+        moving = [o.is_moving for o in scene.objects]
+        scale = float(np.float32(1.0 / tc))
+        blur = best(
+            lambda: _core._camera_frame_blur(
+                c(frame.rgba), c(frame.depth), c(frame.ids), c(frame.velocity), moving, cam, start, scale, 16
+            ),
+            rounds,
+        )
+        return {
+            "sharp frame": best(lambda: ims._sharp(scene, tc, 1, "since_open", static), rounds),
+            "blur": blur,
+        }
+    frame = ims._sharp(scene, tc, 1, "shutter", static)
+    out = {"sharp frame": best(lambda: ims._sharp(scene, tc, 1, "shutter", static), rounds)}
+    if method == "velocity":
+        vel = c(frame.velocity)
+        vmax = _core._max_speed(vel)
+        tile = max(8, int(np.ceil(0.5 * vmax)))
+        out["max speed"] = best(lambda: _core._max_speed(vel), rounds)
+        out["reconstruct"] = best(
+            lambda: _core._reconstruct(c(frame.rgba), c(frame.depth), vel, 16, tile, 0.02), rounds
+        )
+        out["moving pixels %"] = 100.0 * float(np.mean(np.hypot(vel[..., 0], vel[..., 1]) > 0))
+    else:
+        out["method"] = best(lambda: mb.render(scene, method, error_estimate=False), rounds)
+        out["blur (method - sharp)"] = out["method"] - out["sharp frame"]
+        del out["method"]
+    return out
+
+
+def errors(name: str) -> dict[str, float]:
+    """RMSE of the sharp frame and of each method against the analytic frame at 1080p."""
+    build, methods = SCENES[name]
+    scene = build(1920, 1080)
+    t0 = time.perf_counter()
+    ref = mb.exact(scene).rgba
+    out = {"analytic s": time.perf_counter() - t0}
+    out["sharp"] = rmse(mb.render(scene, "accumulation", samples=1, error_estimate=False).rgba, ref)
+    for m in methods:
+        out[m] = rmse(mb.render(scene, m, error_estimate=False).rgba, ref)
+    return out
+
+
+def opaque_vs_copy(w: int, h: int, rounds: int) -> tuple[float, float]:
+    """Horizontal opaque motion blur (101 pixels) of a (h, w) image with every pixel opaque, and
+    np.copyto of the same array, paired: (blur ms, copy ms)."""
+    y, x = np.mgrid[0:h, 0:w]
+    rng = np.random.default_rng(0)
+    bg = np.stack(
+        [0.5 + 0.5 * np.sin(x / 17.0), 0.5 + 0.5 * np.cos(y / 23.0), rng.random((h, w)), np.ones((h, w))], -1
+    ).astype(np.float32)
+    dst = np.empty_like(bg)
+
+    def blur() -> float:
+        t0 = time.perf_counter()
+        mi.opaque_motion_blur(bg, (1, 0), 101, "over", bg)
+        return (time.perf_counter() - t0) * 1e3
+
+    def copy() -> float:
+        t0 = time.perf_counter()
+        np.copyto(dst, bg)
+        return (time.perf_counter() - t0) * 1e3
+
+    a, b = paired([blur, copy], rounds)
+    return a, b
+
+
+def main() -> None:
+    warnings.simplefilter("ignore")
+    out = Path("out/bench")
+    out.mkdir(parents=True, exist_ok=True)
+    rounds = 3 if QUICK else 7
+    sizes = SIZES[:1] if QUICK else SIZES
+    print(
+        f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores (shared), "
+        f"{mb.get_num_threads()} threads; load average {os.getloadavg()}"
+    )
+    rows = []
+    nan = float("nan")
+    errs = {n: {"sharp": nan, **{m: nan for m in ms}} for n, (_, ms) in SCENES.items()}
+    if not NO_ERRORS:
+        errs = {name: errors(name) for name in SCENES}
+    for name, e in errs.items() if not NO_ERRORS else ():
+        print(
+            f"{name}: analytic reference at 1920x1080 took {e['analytic s']:.1f} s; RMSE sharp frame {e['sharp']:.2e}, "
+            + ", ".join(f"{m} {e[m]:.2e}" for m in SCENES[name][1])
+        )
+    print()
+    for w, h in sizes:
+        for name, (build, methods) in SCENES.items():
+            scene = build(w, h)
+            for m in methods:
+                clear_static_cache()
+                cold = (render_ms(scene, "accumulation"), 0.0)
+                clear_static_cache()
+                cold = (cold[0], render_ms(scene, m))
+                sharp, ms = paired(
+                    [lambda s=scene: render_ms(s, "accumulation"), lambda s=scene, m=m: render_ms(s, m)],
+                    rounds,
+                )
+                ratio = ms / sharp
+                ok = "meets" if ratio <= TARGET else "MISSES"
+                note = "" if h <= 1080 else " (1080p error)"
+                print(
+                    f"{w}x{h} {name:8s} {m:16s} sharp {sharp:8.1f} ms  method {ms:8.1f} ms  "
+                    f"ratio {ratio:5.2f} ({ok} <= {TARGET:g}x)  RMSE {errs[name][m]:.2e}{note}  "
+                    f"[first frame: sharp {cold[0]:.0f} ms, method {cold[1]:.0f} ms]"
+                )
+                if hasattr(ims, "_static_part"):  # (a tree before the fast paths has no stages to time)
+                    prof = stages(scene, m, rounds)
+                    print("      stages (ms): " + ", ".join(f"{k} {v:.1f}" for k, v in prof.items()))
+                rows.append((w, h, name, m, sharp, ms, ratio, errs[name][m]))
+    print()
+    for w, h in sizes:
+        blur, copy = opaque_vs_copy(w, h, 15 if not QUICK else 5)
+        ok = "meets" if blur / copy <= BLUR_TARGET else "MISSES"
+        print(
+            f"{w}x{h} horizontal opaque blur, every pixel opaque: {blur:.2f} ms, np.copyto {copy:.2f} ms, "
+            f"ratio {blur / copy:.2f} ({ok} <= {BLUR_TARGET:g}x)"
+        )
+        rows.append(
+            (w, h, "full alpha", "opaque_motion_blur vs np.copyto", copy, blur, blur / copy, float("nan"))
+        )
+    print(f"\nload average {os.getloadavg()}")
+    with open(out / "production_image.csv", "w") as f:
+        f.write("width,height,scene,method,sharp_ms,method_ms,ratio,rmse_1080p\n")
+        for r in rows:
+            f.write(",".join(str(v) if not isinstance(v, float) else f"{v:.4g}" for v in r) + "\n")
+    print(f"wrote {out / 'production_image.csv'}")
+
+
+if __name__ == "__main__":
+    main()

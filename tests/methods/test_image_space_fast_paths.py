@@ -1,0 +1,175 @@
+"""The fast paths of the image-space methods, each against the slow path it replaces as oracle
+(bit for bit):
+
+* the sharp frame drawn over the static layer kept across frames (only the moving triangles
+  rasterized) against `sharp_frame` (every object rasterized);
+* ``camera_velocity``'s one-pass blur in the core against the composition it fuses
+  (`motionblur.image.camera_velocity`, the moving objects' velocities, the float32 scale and
+  clamp in numpy, `motionblur.image.velocity_blur`);
+* the longest velocity in the core against numpy's float64 formula;
+* the reconstruction filter's skipped taps (a big still frame around a small mover) against the
+  same frame with the mover's motion removed where it cannot reach: the pixels out of reach do
+  not change.
+
+The reconstruction filter's skipping is also checked against its serial, unskipped twin in the
+core's own tests (``src/image/reconstruct.rs``, ``skipped_taps_give_the_bits_of_every_tap``).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from _helpers import threads
+
+import motionblur as mb
+from motionblur import _core, image
+from motionblur.evaluation.random_scenes import MEASURING_SEEDS, random_scene
+from motionblur.methods import image_space as ims
+from motionblur.methods._layers import clear_static_cache
+from motionblur.methods._sharp import require_box_shutter, sharp_frame, shutter_centroid
+
+
+def _same(a: mb.Frame, b: mb.Frame) -> bool:
+    return all(
+        np.array_equal(x, y)
+        for x, y in ((a.rgba, b.rgba), (a.depth, b.depth), (a.ids, b.ids), (a.velocity, b.velocity))
+    )
+
+
+def _still_scenes():
+    yield from (mb.SCENES[n](width=72, height=54) for n in ("cube", "curved", "airplane", "bending_arm"))
+    yield from (random_scene(s, 64, 48) for s in list(MEASURING_SEEDS)[:12])
+
+
+@pytest.mark.parametrize("aa", [1, 2])
+def test_sharp_frame_over_the_kept_static_layer_is_the_full_sharp_frame(aa):
+    used = 0
+    for scene in _still_scenes():
+        static = ims._static_part(scene, aa)
+        if static is None:
+            # refused: a moving camera, several shading modes, or a static object not opaque
+            shadings = {o.shading for o in scene.objects}
+            statics_opaque = all(
+                float(np.min(o.rgba[..., 3])) >= 1.0 for o in scene.objects if not o.is_moving
+            )
+            assert scene.camera_moves or len(shadings) != 1 or not statics_opaque
+            continue
+        used += 1
+        t = shutter_centroid(scene)
+        for velocity in ("shutter", "since_open", None):
+            assert _same(
+                ims._sharp(scene, t, aa, velocity, static), sharp_frame(scene, t, aa, velocity=velocity)
+            )
+        # the cached layer (a second frame) gives the same bits as the freshly drawn one
+        assert _same(
+            ims._sharp(scene, t, aa, "shutter", ims._static_part(scene, aa)), sharp_frame(scene, t, aa)
+        )
+        clear_static_cache()
+    assert used >= 6, used
+
+
+def _camera_blur_numpy(scene, samples=16):
+    """``camera_velocity``'s blur as it was composed before the core fused it."""
+    t = shutter_centroid(scene)
+    frame = sharp_frame(scene, t, 1, velocity="since_open")
+    vel = image.camera_velocity(frame.depth, scene.camera_at(t), scene.camera_at(0.0))
+    moving = np.isin(frame.ids, [k for k, o in enumerate(scene.objects) if o.is_moving])
+    vel = np.where(moving[..., None], frame.velocity, vel) * np.float32(1.0 / t)
+    vel = np.clip(vel, -image.MAX_VELOCITY, image.MAX_VELOCITY, out=vel)
+    return image.velocity_blur(frame.rgba, vel, samples)
+
+
+def _box_shutter(scene) -> bool:
+    try:
+        require_box_shutter(scene, "camera_velocity")
+    except ValueError:
+        return False
+    return True
+
+
+def test_camera_velocity_in_one_pass_is_the_composition_it_fuses():
+    scenes = [mb.SCENES["pan"](width=96, height=72), mb.SCENES["pan"](width=61, height=37)]
+    scenes += [
+        s
+        for s in (random_scene(k, 80, 60) for k in list(MEASURING_SEEDS)[:24])
+        if s.camera_moves and _box_shutter(s)
+    ]
+    assert any(s.moving_objects for s in scenes), "a moving camera with moving objects"
+    for scene in scenes:
+        for samples in (1, 4, 16):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                ours = ims.camera_velocity(scene, samples=samples).rgba
+            np.testing.assert_array_equal(ours, _camera_blur_numpy(scene, samples))
+
+
+def test_camera_frame_blur_names_bad_input():
+    scene = mb.SCENES["pan"](width=16, height=12)
+    t = shutter_centroid(scene)
+    f = sharp_frame(scene, t, 1, velocity="since_open")
+    cam, start = scene.camera_at(t), scene.camera_at(0.0)
+    args = [f.rgba, f.depth, f.ids, f.velocity, [False] * len(scene.objects), cam, start, 2.0, 16]
+    bad = f.rgba.copy()
+    bad[3, 4, 1] = np.nan
+    with pytest.raises(ValueError, match="rgba"):
+        _core._camera_frame_blur(bad, *args[1:])
+    with pytest.raises(ValueError, match="depth"):
+        _core._camera_frame_blur(f.rgba, np.zeros_like(f.depth), *args[2:])
+    with pytest.raises(ValueError, match="ids"):
+        _core._camera_frame_blur(f.rgba, f.depth, f.ids[:, :-1].copy(), *args[3:])
+    with pytest.raises(ValueError, match="samples"):
+        _core._camera_frame_blur(*args[:-1], 0)
+
+
+def test_max_speed_is_numpys_float64_formula():
+    rng = np.random.default_rng(3)
+    for shape in ((1, 1, 2), (7, 5, 2), (300, 401, 2)):
+        v = (rng.standard_normal(shape) * rng.choice([1e-3, 1.0, 300.0, 1e6])).astype(np.float32)
+        want = float(np.sqrt((v.astype(np.float64) ** 2).sum(axis=-1)).max())
+        assert _core._max_speed(v) == want
+    v[5, 7, 1] = np.nan
+    assert np.isnan(_core._max_speed(v))
+
+
+def test_reconstruction_out_of_reach_ignores_the_mover():
+    # a 600x400 textured wall with a small block moving 40 pixels right: recolouring the block
+    # leaves every pixel beyond its reach (its half velocity + 1 along the tap lines, a margin
+    # more) with the same bits, the pixels whose taps the core skips there included, and
+    # changes the streak near it
+    h, w = 400, 600
+    rng = np.random.default_rng(5)
+    rgba = rng.random((h, w, 4), dtype=np.float32)
+    rgba[..., 3] = 1.0
+    depth = np.full((h, w), 10.0, np.float32)
+    vel = np.zeros((h, w, 2), np.float32)
+    depth[200:220, 300:320] = 4.0
+    vel[200:220, 300:320] = (40.0, 0.0)
+    other = rgba.copy()
+    other[200:220, 300:320, :3] = (0.9, 0.1, 0.5)
+    a = image.reconstruction_blur(rgba, depth, vel, samples=16, tile=20)
+    b = image.reconstruction_blur(other, depth, vel, samples=16, tile=20)
+    near = np.zeros((h, w), bool)
+    near[200 - 2 : 220 + 2, 300 - 25 : 320 + 25] = True
+    np.testing.assert_array_equal(a[~near], b[~near])
+    assert np.abs(a[near] - b[near]).max() > 0.05
+    # the tiles around the block gather (not a copy of the frame) where the block cannot reach
+    gathered = np.zeros((h, w), bool)
+    gathered[180:240, 280:340] = True
+    assert not np.array_equal(a[gathered & ~near], rgba[gathered & ~near])
+
+
+def test_fast_paths_same_for_any_thread_count():
+    script = (
+        "import hashlib, numpy as np, motionblur as mb\n"
+        "from motionblur.scenes_real import REAL_SCENES\n"
+        "h = hashlib.sha256()\n"
+        "sc = REAL_SCENES['bunny_translate'](400, 240)\n"
+        "for m in ('velocity', 'opaque_image'):\n"
+        "    h.update(mb.render(sc, m, error_estimate=False).rgba.tobytes())\n"
+        "h.update(mb.render(mb.SCENES['pan'](320, 240), 'camera_velocity', error_estimate=False).rgba.tobytes())\n"
+        "print(h.hexdigest())\n"
+    )
+    d = threads.digests(script)
+    assert len(set(d)) == 1, d
