@@ -249,7 +249,9 @@ class Draw:
     ``normals`` (V,3) for lambert shading (None: area-weighted vertex normals of the faces,
     computed when rendering); ``object_id`` int32 written to ``Frame.ids``; ``cull_back`` drops
     back faces; ``previous_vertices`` (V,3) world positions at the previous time, which give the
-    velocity buffer (zero without them).
+    velocity buffer (zero without them); ``shading`` "flat" or "lambert" for this mesh when it
+    differs from the call's (None: the call's), so that one call sorts the transparent surfaces
+    of meshes of both shading modes together.
 
     The arrays are stored as read-only float64 / int64 / float32 views or copies; the caller's
     arrays are never written.
@@ -264,6 +266,7 @@ class Draw:
         object_id: int = 0,
         cull_back: bool = True,
         previous_vertices: ArrayLike | None = None,
+        shading: str | None = None,
     ) -> None:
         v = as_coords(vertices, "vertices", (None, 3))
         f = as_faces(faces, "faces", len(v))
@@ -276,6 +279,7 @@ class Draw:
         )
         self.object_id = as_int(object_id, "object_id", minimum=-(2**31), maximum=2**31 - 1)
         self.cull_back = as_bool(cull_back, "cull_back")
+        self.shading = None if shading is None else as_choice(shading, "shading", _core.SHADINGS)
         self.vertices, self.faces, self.rgba = _readonly(v), _readonly(f), _readonly(c)
         self.normals, self.previous_vertices = _readonly(n), _readonly(p)
 
@@ -287,7 +291,7 @@ class Draw:
         d = object.__new__(cls)
         d.vertices, d.faces, d.rgba = _readonly(vertices), _readonly(faces), _readonly(rgba)
         d.normals, d.previous_vertices = _readonly(normals), None
-        d.object_id, d.cull_back = int(object_id), bool(cull_back)
+        d.object_id, d.cull_back, d.shading = int(object_id), bool(cull_back), None
         return d
 
     def __repr__(self) -> str:

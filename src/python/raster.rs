@@ -13,7 +13,8 @@ use crate::{
 
 /// One draw, read off the attributes of a `motionblur.Draw` (or any object that has them):
 /// `vertices` f64 (V,3), `faces` i64 (F,3), `rgba` f32 (1|V,4), `normals` f32 (V,3) | None,
-/// `object_id`, `cull_back`, `previous_vertices` f64 (V,3) | None.
+/// `object_id`, `cull_back`, `previous_vertices` f64 (V,3) | None, `shading` name | None (the
+/// call's shading when None).
 #[derive(FromPyObject)]
 struct DrawArg<'py> {
     vertices: PyReadonlyArray2<'py, f64>,
@@ -23,6 +24,8 @@ struct DrawArg<'py> {
     object_id: i32,
     cull_back: bool,
     previous_vertices: Option<PyReadonlyArray2<'py, f64>>,
+    #[pyo3(default)]
+    shading: Option<String>,
 }
 
 /// The options of one `_rasterize` call, the items of a dict: the camera's `view` and
@@ -77,7 +80,7 @@ fn owned_draw(d: &DrawArg<'_>) -> Result<Draw, Error> {
         object_id: d.object_id,
         cull_back: d.cull_back,
         previous,
-        shading: None,
+        shading: d.shading.as_deref().map(Shading::parse).transpose()?,
     })
 }
 

@@ -57,8 +57,7 @@ def test_a_translucent_surface_between_two_of_another_shading_mode_is_sorted():
     """Lambert glass in front, a flat translucent quad in the middle, a lambert wall behind: the
     flat one once vanished behind the lambert layer's nearest depth (0.27 off). The sharp frame
     is the three one-object frames composited front over back (each quad alone is one surface a
-    pixel: nothing to sort). The exact frame of such a still scene (the analytic method's) has
-    the same old fault, so it is not the reference here."""
+    pixel: nothing to sort); test_analytic_translucency holds the exact frame to the same."""
     colors = [(0.2, 0.5, 0.9, 0.5), (0.9, 0.3, 0.1, 0.6), (0.8, 0.8, 0.8, 1.0)]
     scene = _still_scene(colors, ["lambert", "flat", "lambert"])
     alone = [mb.render(scene.with_(objects=[o]), "accumulation", samples=1).rgba for o in scene.objects]

@@ -10,6 +10,7 @@ at a time into layers through one rasterizer call per shading mode (`raster_laye
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 
 import numpy as np
@@ -94,10 +95,11 @@ def raster_layer(
     frame's first sample (a window of a kept layer, read without a copy). With several shading
     modes the first group is drawn over it and the others are composited by depth (per resolved
     pixel when ``samples`` > 1: use one shading mode, or ``samples=1`` on a supersampled camera,
-    where exactness per sample matters). Returns a Layer of the camera's size."""
-    groups: dict[str, list[Draw]] = {}
-    for obj, d in draws:
-        groups.setdefault(obj.shading, []).append(d)
+    where exactness per sample matters). When a draw is transparent the modes are one call
+    instead (each flat draw with its own shading), since compositing by one depth a pixel would
+    hide a transparent surface lying between two of the other mode's. Returns a Layer of the
+    camera's size."""
+    groups = _shading_groups(draws)
     out = None
     for shading, ds in groups.items():
         under = background if out is None else None
@@ -135,6 +137,26 @@ def raster_layer(
                 background.ids[y0 : y0 + hs, x0 : x0 + ws],
             )
             out = _copy(window) if samples == 1 else Layer(*resolve_arrays(window, samples))
+    return out
+
+
+def _shading_groups(draws: list[tuple[Object, Draw]]) -> dict[str, list[Draw]]:
+    """The draws by shading mode, one rasterizer call each; or, when there are two modes and a
+    draw is transparent, all of them in one "lambert" call, the flat ones marked flat."""
+    groups: dict[str, list[Draw]] = {}
+    for obj, d in draws:
+        groups.setdefault(obj.shading, []).append(d)
+    if len(groups) > 1 and any(float(np.min(d.rgba[:, 3])) < 1.0 for _, d in draws):
+        return {
+            "lambert": [d if obj.shading == "lambert" else _with_shading(d, obj.shading) for obj, d in draws]
+        }
+    return groups
+
+
+def _with_shading(draw: Draw, shading: str) -> Draw:
+    """A shallow copy of ``draw`` (its read-only arrays shared) drawn with ``shading``."""
+    out = copy.copy(draw)
+    out.shading = shading
     return out
 
 

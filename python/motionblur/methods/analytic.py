@@ -108,6 +108,11 @@ def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
     return pos
 
 
+def _transparent(obj: Object) -> bool:
+    """Whether some part of ``obj`` has alpha under 1."""
+    return float(np.min(obj.rgba[..., 3])) < 1.0
+
+
 def _draw(scene: Scene, obj: Object, k: int, times: np.ndarray) -> MovingDraw:
     pos = straddled(scene, obj, times)
     normals = None
@@ -153,7 +158,11 @@ def analytic(
         raise ValueError(f"aa: must be 1, 2 or 4, got {aa}")
     cam = supersampled(scene.camera, aa)
     everything = list(enumerate(scene.objects))
-    if scene.camera_moves:
+    if scene.camera_moves or any(_transparent(o) for o in scene.objects if not o.is_moving):
+        # A still transparent surface cannot be one entry a sample of the static layer: a moving
+        # surface behind it, or a still one of another shading mode, would be lost. Every object
+        # then goes through the kernel, which sorts them all (a still one has the same positions
+        # at every boundary).
         moving, still = everything, []
     else:
         moving = [(k, o) for k, o in everything if o.is_moving]
