@@ -45,6 +45,11 @@ __all__ = [
 ROLLING_METHODS = frozenset({"analytic", "accumulation", "auto"})
 
 
+#: Estimates under this RMSE are below what the pilot can tell apart (the exact reference's own
+#: distance from the limit is of the order of 1e-5): a PoorBlurWarning needs an estimate above it.
+POOR_BLUR_FLOOR = 1e-5
+
+
 class PoorBlurWarning(UserWarning):
     """The frame's error estimate is larger than the unblurred frame's (the sharp frame at
     mid-shutter, measured by the same pilot): on this scene the method blurs worse than not
@@ -185,7 +190,8 @@ def render(
     frame.stats["ms"] = (time.perf_counter() - t0) * 1e3
     if error_estimate and "error_estimate" not in frame.stats and ESTIMATOR:
         frame.stats.update(ESTIMATOR[0](scene, method, options))
-        if frame.stats.get("error_estimate", 0.0) > frame.stats.get("unblurred_estimate", float("inf")) > 0.0:
+        est = frame.stats.get("error_estimate", 0.0)
+        if est > max(frame.stats.get("unblurred_estimate", float("inf")), POOR_BLUR_FLOOR):
             warnings.warn(
                 f"method {method!r}: estimated RMSE {frame.stats['error_estimate']:.3g} against the exact "
                 f"integral is above the unblurred frame's {frame.stats['unblurred_estimate']:.3g} on this "
