@@ -1,5 +1,7 @@
 //! What a frame of the analytic method is given, its checks, and the per-draw preparation
 //! (clip positions and normals at every segment boundary).
+use std::borrow::Cow;
+
 use glam::{DMat4, DVec4};
 use rayon::prelude::*;
 
@@ -109,13 +111,13 @@ impl Rolling {
 pub const DEFAULT_TILE_BUDGET: usize = 64 << 20;
 
 /// A draw's positions in clip space and its normals at every boundary.
-pub struct Prepared {
+pub struct Prepared<'a> {
     /// Vertices per boundary.
     pub nv: usize,
     /// `(K+1) * V` clip positions.
     pub clip: Vec<[f64; 4]>,
-    /// `(K+1) * V` world normals (lambert), else empty.
-    pub normals: Vec<[f32; 3]>,
+    /// `(K+1) * V` world normals (lambert): the draw's own, borrowed, or computed; else empty.
+    pub normals: Cow<'a, [[f32; 3]]>,
     /// The draw's alpha range per face is read from here: all corners opaque.
     pub opaque_everywhere: bool,
     /// The premultiplied colour every triangle of the draw shows at every point, when shading
@@ -284,7 +286,7 @@ fn validate_exposure(input: &Input) -> Result<()> {
 }
 
 /// Clip positions (camera of each boundary) and, for lambert shading, normals of one draw.
-pub fn prepare(input: &Input, d: &MovingDraw) -> Prepared {
+pub fn prepare<'a>(input: &Input, d: &MovingDraw<'a>) -> Prepared<'a> {
     let k1 = input.times.len();
     let nv = d.positions.len() / k1;
     let vps = input.view_projections;
@@ -300,12 +302,14 @@ pub fn prepare(input: &Input, d: &MovingDraw) -> Prepared {
         })
         .collect();
     let normals = match (d.shading, input.shade, d.normals) {
-        (Shading::Lambert, true, Some(n)) => n.to_vec(),
-        (Shading::Lambert, true, None) => (0..k1)
-            .into_par_iter()
-            .flat_map_iter(|k| vertex_normals(&d.positions[k * nv..(k + 1) * nv], d.faces))
-            .collect(),
-        _ => Vec::new(),
+        (Shading::Lambert, true, Some(n)) => Cow::Borrowed(n),
+        (Shading::Lambert, true, None) => Cow::Owned(
+            (0..k1)
+                .into_par_iter()
+                .flat_map_iter(|k| vertex_normals(&d.positions[k * nv..(k + 1) * nv], d.faces))
+                .collect(),
+        ),
+        _ => Cow::Owned(Vec::new()),
     };
     Prepared {
         nv,

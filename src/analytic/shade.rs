@@ -140,7 +140,7 @@ fn spread(normals: &[[[f32; 3]; 3]; 2]) -> f32 {
 /// The tile's triangles as seen from one sample.
 pub struct SampleShader<'a> {
     pub input: &'a Input<'a>,
-    pub prepared: &'a [Prepared],
+    pub prepared: &'a [Prepared<'a>],
     /// The tile's prims, by tile index.
     pub prims: &'a [TilePrim],
     /// The tile's chain links, and per fragment of the sample the link shading reached.

@@ -140,7 +140,7 @@ thread_local! {
 pub struct Ctx<'a> {
     /// The frame's input and its draws prepared.
     pub input: &'a Input<'a>,
-    pub prepared: &'a [Prepared],
+    pub prepared: &'a [Prepared<'a>],
     /// Every prim of the frame (bins hold indices into it).
     pub prims: &'a [Prim],
     /// Every prim set up for the tiles, or empty: each tile sets up its own.
