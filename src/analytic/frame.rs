@@ -43,6 +43,9 @@ pub struct Stats {
     pub ms_resolve: f64,
     /// Segments of the shutter.
     pub segments: u64,
+    /// Strips of tile rows the frame was set up and rendered in, one at a time (1: the whole
+    /// frame at once; more where its prims would pass twice [`Input::tile_budget`]).
+    pub strips: u64,
     /// Milliseconds preparing the draws (clip positions, normals).
     pub ms_prepare: f64,
     /// Milliseconds setting up prims (and sharing them between tiles).
@@ -79,7 +82,7 @@ pub fn render(input: &Input) -> Result<(Frame, Stats)> {
 
     let (tx, ty) = ((ws as i32 + TILE - 1) / TILE, (hs as i32 + TILE - 1) / TILE);
     let t = Instant::now();
-    let plan = Plan::new(input, &prepared, ws, hs, ty)?;
+    let plan = Plan::new(input, &prepared, ws, hs, ty);
     stats.ms_setup = ms(t);
 
     // The frame is written one row of tiles at a time, each row into its own band of pixel
@@ -136,14 +139,13 @@ pub fn render(input: &Input) -> Result<(Frame, Stats)> {
         hs,
         tx,
     };
+    stats.strips = plan.strips.len() as u64;
     let mut rest = &mut bands[..];
+    let mut bound = 0;
     for &(r0, r1) in &plan.strips {
         let (now, later) = rest.split_at_mut((r1 - r0) as usize);
         rest = later;
-        frame_ctx.strip(r0, now, &mut stats)?;
-    }
-    if let Some(n) = plan.prims() {
-        stats.prims = n;
+        frame_ctx.strip(r0, now, &mut bound, &mut stats)?;
     }
     drop(bands);
     stats.ms_total = ms(t_all);
@@ -166,14 +168,25 @@ struct FrameCtx<'a> {
 impl FrameCtx<'_> {
     /// The tile rows `r0..` of `bands` (one band of pixel rows each): their prims set up,
     /// binned (shared between tiles within a memory budget) and their tiles rendered into
-    /// the bands; adds to `stats`.
-    fn strip(&self, r0: i32, bands: &mut [Band], stats: &mut Stats) -> Result<()> {
+    /// the bands; adds to `stats`, and to `bound` the tiles the bounds of the prims that start
+    /// here span (each prim is counted in its first strip only: the frame's sum, checked
+    /// against [`MAX_BIN_ENTRIES`] as it grows).
+    fn strip(&self, r0: i32, bands: &mut [Band], bound: &mut u64, stats: &mut Stats) -> Result<()> {
         let (input, prepared) = (self.input, self.prepared);
         let (ws, hs, tx) = (self.ws, self.hs, self.tx);
         let r1 = r0 + bands.len() as i32;
         let t = Instant::now();
         let prims = self.plan.prims_of(input, prepared, ws, hs, r0, r1);
-        stats.prims += prims.len() as u64;
+        for p in &prims {
+            let (a, b, c, d) = tiles_of(p);
+            if b >= r0 {
+                stats.prims += 1;
+                *bound += ((c - a) * (d - b)) as u64;
+            }
+        }
+        if *bound > MAX_BIN_ENTRIES {
+            return Err(too_many_bins(*bound));
+        }
         stats.ms_setup += ms(t);
 
         let t = Instant::now();
@@ -183,9 +196,9 @@ impl FrameCtx<'_> {
 
         // Prims that reach several tiles are set up once for all of them, within a budget.
         let t = Instant::now();
-        let shared: Vec<TilePrim> = if entries.len() > prims.len()
-            && prims.len() * std::mem::size_of::<TilePrim>() <= SHARED_PRIM_BYTES
-        {
+        let fits = entries.len() > prims.len()
+            && prims.len() * std::mem::size_of::<TilePrim>() <= SHARED_PRIM_BYTES;
+        let shared: Vec<TilePrim> = if self.plan.shares(input, prims.len(), fits) {
             prims
                 .par_iter()
                 .with_min_len(256)
@@ -246,18 +259,19 @@ impl FrameCtx<'_> {
 }
 
 /// The tiles `[x0, y0, x1, y1)` a prim's bounds reach (unclipped to the image).
-pub(super) fn tiles_of(p: &Prim) -> (i32, i32, i32, i32) {
+fn tiles_of(p: &Prim) -> (i32, i32, i32, i32) {
     let b = p.bbox;
-    (
-        b[0] / TILE,
-        b[1] / TILE,
-        (b[2] - 1) / TILE + 1,
-        (b[3] - 1) / TILE + 1,
-    )
+    let (y0, y1) = tile_rows(b[1], b[3]);
+    (b[0] / TILE, y0, (b[2] - 1) / TILE + 1, y1)
+}
+
+/// The tile rows `[r0, r1)` of the sample rows `[y0, y1)` (not empty).
+pub(super) fn tile_rows(y0: i32, y1: i32) -> (i32, i32) {
+    (y0 / TILE, (y1 - 1) / TILE + 1)
 }
 
 /// The error of a frame whose prims' bounds span `bound` tiles, past [`MAX_BIN_ENTRIES`].
-pub(super) fn too_many_bins(bound: u64) -> Error {
+fn too_many_bins(bound: u64) -> Error {
     Error::value(
         "draws",
         format!(

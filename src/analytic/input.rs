@@ -63,6 +63,8 @@ pub struct Input<'a> {
     pub shade: bool,
     /// Most bytes one pass over a tile may hold in fragments, links and prims (per thread);
     /// past it the tile is done in smaller passes, with the same result ([`DEFAULT_TILE_BUDGET`]).
+    /// Twice it: most bytes of prims set up at once; past it the frame is set up and rendered
+    /// strip by strip of tile rows, with the same result.
     pub tile_budget: usize,
     /// The exposure channel ([`crate::Exposure`]) for object ids `0..n`, or None (off: the
     /// frame has none, and the render is the same bits). Every draw's `object_id` and every
@@ -114,8 +116,8 @@ pub const DEFAULT_TILE_BUDGET: usize = 64 << 20;
 pub struct Prepared<'a> {
     /// Vertices per boundary.
     pub nv: usize,
-    /// `(K+1) * V` clip positions.
-    pub clip: Vec<[f64; 4]>,
+    /// `(K+1) * V` clip positions (camera of each boundary), read through [`Prepared::clip`].
+    clip: Vec<[f64; 4]>,
     /// `(K+1) * V` world normals (lambert): the draw's own, borrowed, or computed; else empty.
     pub normals: Cow<'a, [[f32; 3]]>,
     /// The draw's alpha range per face is read from here: all corners opaque.
@@ -286,7 +288,7 @@ fn validate_exposure(input: &Input) -> Result<()> {
 }
 
 /// Clip positions (camera of each boundary) and, for lambert shading, normals of one draw.
-pub fn prepare<'a>(input: &Input, d: &MovingDraw<'a>) -> Prepared<'a> {
+pub fn prepare<'a>(input: &Input<'a>, d: &MovingDraw<'a>) -> Prepared<'a> {
     let k1 = input.times.len();
     let nv = d.positions.len() / k1;
     let vps = input.view_projections;
@@ -317,6 +319,15 @@ pub fn prepare<'a>(input: &Input, d: &MovingDraw<'a>) -> Prepared<'a> {
         normals,
         opaque_everywhere: d.rgba.iter().all(|c| c[3] >= 1.0),
         uniform: uniform_colour(input, d),
+    }
+}
+
+impl Prepared<'_> {
+    /// The clip position of point `i` of the `(K+1) * V` (boundary-major), seen by the camera
+    /// of its boundary.
+    #[inline]
+    pub fn clip(&self, i: usize) -> [f64; 4] {
+        self.clip[i]
     }
 }
 

@@ -1,26 +1,27 @@
 //! The prims of a frame, set up strip by strip of tile rows: a frame whose prims would hold
-//! more than [`WHOLE_PRIM_BYTES`] (a turning mesh of 100k faces over a hundred segments: 6M
-//! prims, 750 MB, and their bins) first records where each prim reaches (12 bytes each), then
+//! more than twice the tile budget ([`Input::tile_budget`], 128 MiB by default; a turning mesh
+//! of 100k faces over a hundred segments: 6M prims, 750 MB, and their bins) first finds which
+//! tile rows each face-segment can reach (12 bytes each; a cheap bound, not the prim), then
 //! sets up, bins and renders one strip at a time with only the prims that reach it. Each strip
-//! sets up its prims in the frame's order (the whole frame's list, filtered), so every tile
-//! sees the same prims in the same order as in one pass: the same bits.
+//! sets up its prims in the frame's order (the whole frame's list, filtered: each group's
+//! order along the motion is a stable sort, so sorting the strip's part gives the whole
+//! list's order restricted to it), so every tile sees the same prims in the same order as in
+//! one pass: the same bits.
 use rayon::prelude::*;
 
-use super::frame::{tiles_of, too_many_bins, MAX_BIN_ENTRIES};
+use super::frame::tile_rows;
 use super::input::{Input, Prepared};
 use super::prim::{self, Corners, Prim, OPAQUE};
 use super::shade::TilePrim;
-use crate::error::Result;
 
 /// Faces set up per parallel job.
 const CHUNK: usize = 2048;
 /// Most bytes of prims (at most, before culling: faces x segments) set up for the whole frame
-/// at once; past it the frame goes strip by strip.
-const WHOLE_PRIM_BYTES: usize = 128 << 20;
-/// Most bytes of one strip's prims and their shared set-up (`Prim` and `TilePrim` each).
-const STRIP_BYTES: usize = 160 << 20;
+/// at once, and of one strip's prims and their shared set-up (`Prim` and `TilePrim` each), in
+/// tile budgets.
+const STRIP_BUDGETS: usize = 2;
 
-/// Where one prim of a (segment, draw) group reaches: its face, its tile rows `[r0, r1)`.
+/// The tile rows `[r0, r1)` face `face` of a (segment, draw) group can reach.
 #[derive(Clone, Copy)]
 struct Reach {
     face: u32,
@@ -32,60 +33,53 @@ struct Reach {
 pub(super) struct Plan {
     /// The strips of tile rows `[r0, r1)`, covering every row in order.
     pub strips: Vec<(i32, i32)>,
-    /// The (segment, draw) groups, in frame order, and per group where its prims reach (in
-    /// the frame's order): empty when the frame is set up whole.
+    /// The (segment, draw) groups, in frame order, and per group the rows its faces can reach
+    /// (in face order): empty when the frame is set up whole.
     groups: Vec<(usize, usize)>,
     reach: Vec<Vec<Reach>>,
 }
 
 impl Plan {
     /// The plan of a frame of `ws` x `hs` samples, `ty` tile rows.
-    pub fn new(input: &Input, prepared: &[Prepared], ws: u32, hs: u32, ty: i32) -> Result<Plan> {
+    pub fn new(input: &Input, prepared: &[Prepared], ws: u32, hs: u32, ty: i32) -> Plan {
         let segs = input.times.len() - 1;
         let most: usize = input.draws.iter().map(|d| d.faces.len() * segs).sum();
-        if most.saturating_mul(std::mem::size_of::<Prim>()) <= WHOLE_PRIM_BYTES {
-            return Ok(Plan {
+        let bytes = input.tile_budget.saturating_mul(STRIP_BUDGETS);
+        if most.saturating_mul(std::mem::size_of::<Prim>()) <= bytes {
+            return Plan {
                 strips: vec![(0, ty)],
                 groups: Vec::new(),
                 reach: Vec::new(),
-            });
+            };
         }
         let groups = groups(input);
-        let per: Vec<(Vec<Reach>, u64)> = groups
+        let reach: Vec<Vec<Reach>> = groups
             .par_iter()
             .map(|&(seg, di)| {
-                let g = group_prims(input, prepared, seg, di, ws, hs);
-                let mut bound = 0u64;
-                let reach = g
-                    .iter()
-                    .map(|p| {
-                        let (a, b, c, d) = tiles_of(p);
-                        bound += ((c - a) * (d - b)) as u64;
-                        Reach {
-                            face: p.face,
-                            r0: b,
-                            r1: d,
-                        }
-                    })
-                    .collect();
-                (reach, bound)
+                let (d, p) = (&input.draws[di], &prepared[di]);
+                let mut v = Vec::new();
+                for (fi, f) in d.faces.iter().enumerate() {
+                    let c0 = f.map(|i| p.clip(seg * p.nv + i as usize));
+                    let c1 = f.map(|i| p.clip((seg + 1) * p.nv + i as usize));
+                    let c = Corners::new(c0, c1, f64::from(ws), f64::from(hs));
+                    let (y0, y1) = prim::rows(&c, hs);
+                    if y0 < y1 {
+                        let (r0, r1) = tile_rows(y0, y1);
+                        v.push(Reach {
+                            face: fi as u32,
+                            r0,
+                            r1,
+                        });
+                    }
+                }
+                v
             })
             .collect();
-        let bound: u64 = per.iter().map(|p| p.1).sum();
-        if bound > MAX_BIN_ENTRIES {
-            return Err(too_many_bins(bound));
-        }
-        let reach: Vec<Vec<Reach>> = per.into_iter().map(|p| p.0).collect();
-        Ok(Plan {
-            strips: strips(&reach, ty),
+        Plan {
+            strips: strips(&reach, ty, bytes),
             groups,
             reach,
-        })
-    }
-
-    /// Prims of the whole frame when it goes strip by strip (else None: the one strip's).
-    pub fn prims(&self) -> Option<u64> {
-        (!self.groups.is_empty()).then(|| self.reach.iter().map(|g| g.len() as u64).sum())
+        }
     }
 
     /// The prims that reach tile rows `r0..r1`, in the frame's order (all of them when the
@@ -106,22 +100,51 @@ impl Plan {
             .groups
             .par_iter()
             .zip(&self.reach)
-            .flat_map_iter(|(&(seg, di), reach)| reach.chunks(CHUNK).map(move |c| (seg, di, c)))
-            .map(|(seg, di, chunk)| {
-                chunk
-                    .iter()
-                    .filter(|r| r.r0 < r1 && r.r1 > r0)
-                    .filter_map(|r| face_prim(input, &prepared[di], di, seg, r.face, ws, hs))
-                    .collect()
+            .map(|(&(seg, di), reach)| {
+                let p = &prepared[di];
+                let chunks: Vec<Vec<Prim>> = reach
+                    .par_chunks(CHUNK)
+                    .map(|c| {
+                        c.iter()
+                            .filter(|r| r.r0 < r1 && r.r1 > r0)
+                            .filter_map(|r| face_prim(input, p, di, seg, r.face, ws, hs))
+                            .filter(|q| {
+                                let (b, d) = tile_rows(q.bbox[1], q.bbox[3]);
+                                b < r1 && d > r0
+                            })
+                            .collect()
+                    })
+                    .collect();
+                let mut group = concat(chunks);
+                order_along_motion(&mut group, p, seg, ws, hs);
+                group
             })
             .collect();
-        per.into_iter().flatten().collect()
+        concat(per)
+    }
+
+    /// Whether a strip of `prims` prims may set them up once for all its tiles: always the
+    /// whole frame's rule (`fits`), and a strip's prims and their set-ups within its budget.
+    pub fn shares(&self, input: &Input, prims: usize, fits: bool) -> bool {
+        use std::mem::size_of;
+        let bytes = input.tile_budget.saturating_mul(STRIP_BUDGETS);
+        fits && (self.groups.is_empty()
+            || prims.saturating_mul(size_of::<Prim>() + size_of::<TilePrim>()) <= bytes)
     }
 }
 
-/// Strips of tile rows holding at most [`STRIP_BYTES`] of prims and shared set-up (one row
-/// at least).
-fn strips(reach: &[Vec<Reach>], ty: i32) -> Vec<(i32, i32)> {
+/// The vectors of `parts` one after the other, each freed once copied (the peak is the
+/// parts and one part more, not twice them).
+fn concat(parts: Vec<Vec<Prim>>) -> Vec<Prim> {
+    let mut out = Vec::with_capacity(parts.iter().map(Vec::len).sum());
+    for p in parts {
+        out.extend(p);
+    }
+    out
+}
+
+/// Strips of tile rows holding at most `bytes` of prims and shared set-up (one row at least).
+fn strips(reach: &[Vec<Reach>], ty: i32, bytes: usize) -> Vec<(i32, i32)> {
     let rows = ty.max(0) as usize;
     // starts[r]: prims that start above row r; ends[r]: prims that end at or above it
     let (mut starts, mut ends) = (vec![0usize; rows + 1], vec![0usize; rows + 1]);
@@ -136,7 +159,7 @@ fn strips(reach: &[Vec<Reach>], ty: i32) -> Vec<(i32, i32)> {
         starts[r + 1] += starts[r];
         ends[r + 1] += ends[r];
     }
-    let cap = STRIP_BYTES / (std::mem::size_of::<Prim>() + std::mem::size_of::<TilePrim>());
+    let cap = bytes / std::mem::size_of::<Prim>();
     let mut out = Vec::new();
     let mut r0 = 0;
     while r0 < rows {
@@ -169,7 +192,7 @@ fn setup_prims(input: &Input, prepared: &[Prepared], ws: u32, hs: u32) -> Vec<Pr
         .par_iter()
         .map(|&(seg, di)| group_prims(input, prepared, seg, di, ws, hs))
         .collect();
-    per_group.into_iter().flatten().collect()
+    concat(per_group)
 }
 
 /// The prims of one draw over one segment, in the frame's order.
@@ -192,7 +215,7 @@ fn group_prims(
                 .collect()
         })
         .collect();
-    let mut group: Vec<Prim> = chunks.into_iter().flatten().collect();
+    let mut group = concat(chunks);
     order_along_motion(&mut group, p, seg, ws, hs);
     group
 }
@@ -214,8 +237,8 @@ fn face_prim(
     if alpha.iter().all(|a| *a <= 0.0) {
         return None;
     }
-    let c0 = f.map(|i| p.clip[seg * p.nv + i as usize]);
-    let c1 = f.map(|i| p.clip[(seg + 1) * p.nv + i as usize]);
+    let c0 = f.map(|i| p.clip(seg * p.nv + i as usize));
+    let c1 = f.map(|i| p.clip((seg + 1) * p.nv + i as usize));
     let corners = Corners::new(c0, c1, f64::from(ws), f64::from(hs));
     let (flags, front, back, bbox, hull, nhull) =
         prim::setup(&corners, &c0, &c1, d.cull_back, ws, hs)?;
@@ -241,7 +264,7 @@ fn order_along_motion(group: &mut [Prim], p: &Prepared, seg: usize, ws: u32, hs:
     let step = (p.nv / 1024).max(1);
     let (mut dx, mut dy) = (0.0, 0.0);
     for v in (0..p.nv).step_by(step) {
-        let (a, b) = (p.clip[seg * p.nv + v], p.clip[(seg + 1) * p.nv + v]);
+        let (a, b) = (p.clip(seg * p.nv + v), p.clip((seg + 1) * p.nv + v));
         if a[3] > 0.0 && b[3] > 0.0 {
             let pa = prim::homogeneous_pixel(&a, w, h);
             let pb = prim::homogeneous_pixel(&b, w, h);

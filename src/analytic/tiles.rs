@@ -158,8 +158,8 @@ pub fn corners(input: &Input, prepared: &[Prepared], p: &Prim, ws: i32, hs: i32)
     let pr = &prepared[p.draw as usize];
     let f = d.faces[p.face as usize];
     let k = p.seg as usize;
-    let c0 = f.map(|i| pr.clip[k * pr.nv + i as usize]);
-    let c1 = f.map(|i| pr.clip[(k + 1) * pr.nv + i as usize]);
+    let c0 = f.map(|i| pr.clip(k * pr.nv + i as usize));
+    let c1 = f.map(|i| pr.clip((k + 1) * pr.nv + i as usize));
     Corners::new(c0, c1, f64::from(ws), f64::from(hs))
 }
 

@@ -265,6 +265,7 @@ impl ToDict for AnalyticStats {
         d.set_item("ms_cover", self.ms_cover)?;
         d.set_item("ms_resolve", self.ms_resolve)?;
         d.set_item("segments", self.segments)?;
+        d.set_item("strips", self.strips)?;
         d.set_item("ms_prepare", self.ms_prepare)?;
         d.set_item("ms_setup", self.ms_setup)?;
         d.set_item("ms_bin", self.ms_bin)?;
