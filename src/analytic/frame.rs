@@ -9,7 +9,7 @@ use super::input::{prepare, validate, Input, Prepared};
 use super::prim::Prim;
 use super::shade::TilePrim;
 use super::strips::Plan;
-use super::tiles::{corners, Counts, Ctx, SampleOut, TileOut, Visible, TILE};
+use super::tiles::{corners, tile_rows, Counts, Ctx, SampleOut, TileOut, Visible, TILE};
 use crate::error::{Error, Result};
 use crate::frame::{Exposure, Frame};
 
@@ -263,11 +263,6 @@ fn tiles_of(p: &Prim) -> (i32, i32, i32, i32) {
     let b = p.bbox;
     let (y0, y1) = tile_rows(b[1], b[3]);
     (b[0] / TILE, y0, (b[2] - 1) / TILE + 1, y1)
-}
-
-/// The tile rows `[r0, r1)` of the sample rows `[y0, y1)` (not empty).
-pub(super) fn tile_rows(y0: i32, y1: i32) -> (i32, i32) {
-    (y0 / TILE, (y1 - 1) / TILE + 1)
 }
 
 /// The error of a frame whose prims' bounds span `bound` tiles, past [`MAX_BIN_ENTRIES`].

@@ -9,10 +9,10 @@
 //! one pass: the same bits.
 use rayon::prelude::*;
 
-use super::frame::tile_rows;
 use super::input::{Input, Prepared};
 use super::prim::{self, Corners, Prim, OPAQUE};
 use super::shade::TilePrim;
+use super::tiles::tile_rows;
 
 /// Faces set up per parallel job.
 const CHUNK: usize = 2048;
@@ -57,7 +57,7 @@ impl Plan {
             .par_iter()
             .map(|&(seg, di)| {
                 let (d, p) = (&input.draws[di], &prepared[di]);
-                let mut v = Vec::new();
+                let mut v = Vec::with_capacity(d.faces.len());
                 for (fi, f) in d.faces.iter().enumerate() {
                     let c0 = f.map(|i| p.clip(seg * p.nv + i as usize));
                     let c1 = f.map(|i| p.clip((seg + 1) * p.nv + i as usize));

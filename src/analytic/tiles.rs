@@ -23,6 +23,11 @@ use crate::error::{Error, Result};
 /// Tile side in samples (a multiple of every supersampling factor).
 pub const TILE: i32 = 32;
 
+/// The tile rows `[r0, r1)` of the sample rows `[y0, y1)` (not empty).
+pub fn tile_rows(y0: i32, y1: i32) -> (i32, i32) {
+    (y0 / TILE, (y1 - 1) / TILE + 1)
+}
+
 /// What one tile counted.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Counts {
