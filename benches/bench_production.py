@@ -111,7 +111,7 @@ def profile(f, wall: float) -> str:
     st = f.stats
     py = wall * 1e3 - st["ms_total"]
     return (
-        f"segments {st['segments']}, prims {st['prims']:,}, sample tests {st['tests']:,}, spans "
+        f"segments {st['segments']}, prims {st['prims']:,} (set up in {st.get('strips', 1)} strips of tile rows), sample tests {st['tests']:,}, spans "
         f"{st['spans']:,}, fragments {st['intervals']:,}, shaded pieces {st['pieces']:,}; thread time: "
         f"finding spans {st['ms_cover'] / 1e3:.2f} s, resolving and shading {st['ms_resolve'] / 1e3:.2f} s; "
         f"wall: prim set-up {st['ms_setup'] / 1e3:.2f} s, binning {st['ms_bin'] / 1e3:.2f} s, tiles "
@@ -180,7 +180,7 @@ f = bp.analytic(s)
 dt = time.perf_counter() - t
 after = hwm()
 print(json.dumps({"before_kib": before, "peak_kib": after, "s": dt, "segments": f.stats["segments"],
-                  "splits": f.stats["splits"]}))
+                  "splits": f.stats["splits"], "strips": f.stats.get("strips", 1), "prims": f.stats["prims"]}))
 """
 
 
@@ -190,8 +190,8 @@ def memory(a, lines: list[str]) -> None:
         f"## Peak memory: analytic at {w}x{h}, default budget "
         f"({mb.budget.memory_budget() / 2**30:.0f} GiB), each in a fresh process (load {load()})",
         "",
-        "| motion | segments | process peak MiB | of which the frame MiB | target < 1024 MiB | s |",
-        "|---|---:|---:|---:|---|---:|",
+        "| motion | segments | prims | strips | process peak MiB | of which the frame MiB | target < 1024 MiB | s |",
+        "|---|---:|---:|---:|---:|---:|---|---:|",
     ]
     for kind in ("translate", "turn"):
         out = subprocess.run(
@@ -201,7 +201,7 @@ def memory(a, lines: list[str]) -> None:
         r = json.loads(out.strip().splitlines()[-1])
         peak = r["peak_kib"] * 1024
         row = (
-            f"| {kind} | {r['segments']} | {peak / 2**20:.0f} | {(r['peak_kib'] - r['before_kib']) / 1024:.0f} | "
+            f"| {kind} | {r['segments']} | {r['prims']:,} | {r['strips']} | {peak / 2**20:.0f} | {(r['peak_kib'] - r['before_kib']) / 1024:.0f} | "
             f"{'met' if peak < MEMORY_TARGET else 'MISSED'} | {r['s']:.1f} |"
         )
         print(row, flush=True)

@@ -29,7 +29,9 @@ __all__ = ["MovingDraw", "rasterize_motion", "coverage", "TILE_BUDGET_BYTES"]
 #: result is the same bits, only slower (``stats["splits"]`` counts the halvings). A single
 #: sample that alone needs more (thousands of moving triangles stacked over it) raises
 #: ``MemoryError`` naming it; raise this setting to let it through. Each thread's buffers may
-#: reach twice this and are kept for the next tile.
+#: reach twice this and are kept for the next tile. Twice this bounds the triangle set-ups held
+#: at once (about 124 bytes per triangle and segment): past it the frame is set up and rendered
+#: strip by strip of tile rows (``stats["strips"]``), the same bits.
 TILE_BUDGET_BYTES = 64 << 20
 
 
@@ -146,7 +148,9 @@ def rasterize_motion(
     front at ``reference_time`` (of each pixel's nearest sample); ``stats`` with ``prims``,
     ``bin_entries``, ``intervals`` (covered spans found), ``pieces`` (stretches of time shaded, each of fixed layers and triangles),
     ``splits`` (tile passes redone in halves to stay within `TILE_BUDGET_BYTES`),
-    ``segments`` and ``ms_*`` per stage. Bit-identical for any thread count and any budget; the
+    ``segments``, ``strips`` (strips of tile rows set up and rendered one at a time: past twice
+    `TILE_BUDGET_BYTES` of triangle set-ups, a frame is done strip by strip, the same bits) and
+    ``ms_*`` per stage. Bit-identical for any thread count and any budget; the
     GIL is released. ``MemoryError`` (naming the sample) where one sample alone needs more than
     the budget.
     """

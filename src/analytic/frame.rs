@@ -6,14 +6,13 @@ use rayon::prelude::*;
 
 use super::hull;
 use super::input::{prepare, validate, Input, Prepared};
-use super::prim::{self, Corners, Prim, OPAQUE};
+use super::prim::Prim;
 use super::shade::TilePrim;
-use super::tiles::{corners, Counts, Ctx, SampleOut, TileOut, Visible, TILE};
+use super::strips::Plan;
+use super::tiles::{corners, tile_rows, Counts, Ctx, SampleOut, TileOut, Visible, TILE};
 use crate::error::{Error, Result};
 use crate::frame::{Exposure, Frame};
 
-/// Faces set up per parallel job.
-const CHUNK: usize = 2048;
 /// Most (tile, prim) pairs a frame may bin (8 bytes each while binning).
 pub const MAX_BIN_ENTRIES: u64 = 1 << 27;
 /// Most bytes of prims set up once for all the tiles they reach (`TilePrim`, about 520 bytes
@@ -44,6 +43,9 @@ pub struct Stats {
     pub ms_resolve: f64,
     /// Segments of the shutter.
     pub segments: u64,
+    /// Strips of tile rows the frame was set up and rendered in, one at a time (1: the whole
+    /// frame at once; more where its prims would pass twice [`Input::tile_budget`]).
+    pub strips: u64,
     /// Milliseconds preparing the draws (clip positions, normals).
     pub ms_prepare: f64,
     /// Milliseconds setting up prims (and sharing them between tiles).
@@ -78,46 +80,11 @@ pub fn render(input: &Input) -> Result<(Frame, Stats)> {
     let prepared: Vec<Prepared> = input.draws.iter().map(|d| prepare(input, d)).collect();
     stats.ms_prepare = ms(t);
 
+    let (tx, ty) = ((ws as i32 + TILE - 1) / TILE, (hs as i32 + TILE - 1) / TILE);
     let t = Instant::now();
-    let prims = setup_prims(input, &prepared, ws, hs);
-    stats.prims = prims.len() as u64;
+    let plan = Plan::new(input, &prepared, ws, hs, ty);
     stats.ms_setup = ms(t);
 
-    let t = Instant::now();
-    let (tx, ty) = ((ws as i32 + TILE - 1) / TILE, (hs as i32 + TILE - 1) / TILE);
-    let (offsets, entries) = bin(&prims, tx, ty)?;
-    stats.bin_entries = entries.len() as u64;
-    stats.ms_bin = ms(t);
-
-    // Prims that reach several tiles are set up once for all of them, within a memory budget.
-    let t = Instant::now();
-    let shared: Vec<TilePrim> = if entries.len() > prims.len()
-        && prims.len() * std::mem::size_of::<TilePrim>() <= SHARED_PRIM_BYTES
-    {
-        prims
-            .par_iter()
-            .with_min_len(256)
-            .map(|p| {
-                let c = corners(input, &prepared, p, ws as i32, hs as i32);
-                TilePrim::new(input, &prepared, p, &c)
-            })
-            .collect()
-    } else {
-        Vec::new()
-    };
-    stats.ms_setup += ms(t);
-
-    let t = Instant::now();
-    let breaks = input.shutter.breaks();
-    let ctx = Ctx {
-        input,
-        prepared: &prepared,
-        prims: &prims,
-        shared: &shared,
-        breaks: &breaks,
-        ws: ws as i32,
-        hs: hs as i32,
-    };
     // The frame is written one row of tiles at a time, each row into its own band of pixel
     // rows: only the rows in flight hold their samples' results (a frame's worth of them at
     // 1080p with 2x2 samples would be 265 MB), the tiles of a row run in parallel too.
@@ -147,150 +114,173 @@ pub fn render(input: &Input) -> Result<(Frame, Stats)> {
                 .collect()
         }
     };
-    let rows: Vec<Vec<Counts>> = frame
-        .rgba
-        .par_chunks_mut(4 * band)
-        .zip(frame.depth.par_chunks_mut(band))
-        .zip(frame.ids.par_chunks_mut(band))
-        .zip(velocity.par_chunks_mut(2 * band))
+    let mut bands: Vec<Band> = (frame.rgba.chunks_mut(4 * band))
+        .zip(frame.depth.chunks_mut(band))
+        .zip(frame.ids.chunks_mut(band))
+        .zip(velocity.chunks_mut(2 * band))
         .zip(exposure_bands)
         .enumerate()
-        .map(|(y, ((((rgba, depth), ids), velocity), exposure))| {
-            let y = y as i32;
-            let tiles: Vec<TileOut> = (0..tx)
-                .into_par_iter()
-                .map(|x| {
-                    let i = (y * tx + x) as usize;
-                    ctx.tile(x, y, &entries[offsets[i] as usize..offsets[i + 1] as usize])
-                })
-                .collect::<Result<_>>()?;
-            let mut out = Band {
-                rgba,
-                depth,
-                ids,
-                velocity,
-                exposure,
-                width: w,
-                y0: y * TILE / s as i32,
-            };
-            for (x, (samples, visible, _)) in tiles.iter().enumerate() {
-                let (x0, y0) = (x as i32 * TILE, y * TILE);
-                write_pixels(&mut out, samples, x0, y0, ws as i32, hs as i32, s as i32);
-                write_exposure(&mut out, visible, x0, y0, s as i32);
-            }
-            Ok(tiles.into_iter().map(|(_, _, c)| c).collect())
+        .map(|(y, ((((rgba, depth), ids), velocity), exposure))| Band {
+            rgba,
+            depth,
+            ids,
+            velocity,
+            exposure,
+            width: w,
+            y0: y as i32 * TILE / s as i32,
         })
-        .collect::<Result<_>>()?;
-    stats.ms_tiles = ms(t);
-    for counts in rows.iter().flatten() {
-        stats.intervals += counts.intervals;
-        stats.pieces += counts.pieces;
-        stats.splits += counts.splits;
-        stats.tests += counts.tests;
-        stats.spans += counts.spans;
-        stats.ms_cover += counts.ns_cover as f64 * 1e-6;
-        stats.ms_resolve += counts.ns_resolve as f64 * 1e-6;
+        .collect();
+    // The rows of tiles strip by strip, each with only the prims that reach it set up.
+    let frame_ctx = FrameCtx {
+        input,
+        prepared: &prepared,
+        plan: &plan,
+        ws,
+        hs,
+        tx,
+    };
+    stats.strips = plan.strips.len() as u64;
+    let mut rest = &mut bands[..];
+    let mut bound = 0;
+    for &(r0, r1) in &plan.strips {
+        let (now, later) = rest.split_at_mut((r1 - r0) as usize);
+        rest = later;
+        frame_ctx.strip(r0, now, &mut bound, &mut stats)?;
     }
+    drop(bands);
     stats.ms_total = ms(t_all);
     frame.velocity = Some(velocity);
     frame.exposure = exposure;
     Ok((frame, stats))
 }
 
-/// Every face of every draw over every segment, in (segment, draw, face) order.
-fn setup_prims(input: &Input, prepared: &[Prepared], ws: u32, hs: u32) -> Vec<Prim> {
-    // (segment, draw) groups in parallel too: a deforming or turning mesh of a few hundred
-    // faces cut into dozens of segments is one chunk per group
-    let groups: Vec<(usize, usize)> = (0..input.times.len() - 1)
-        .flat_map(|seg| (0..input.draws.len()).map(move |di| (seg, di)))
-        .collect();
-    let per_group: Vec<Vec<Prim>> = groups
-        .par_iter()
-        .map(|&(seg, di)| {
-            let (d, p) = (&input.draws[di], &prepared[di]);
-            let chunks: Vec<Vec<Prim>> = d
-                .faces
-                .par_chunks(CHUNK)
-                .enumerate()
-                .map(|(ci, faces)| {
-                    let mut v = Vec::new();
-                    for (j, f) in faces.iter().enumerate() {
-                        let alpha =
-                            f.map(|i| d.rgba[if d.rgba.len() == 1 { 0 } else { i as usize }][3]);
-                        if alpha.iter().all(|a| *a <= 0.0) {
-                            continue;
-                        }
-                        let c0 = f.map(|i| p.clip[seg * p.nv + i as usize]);
-                        let c1 = f.map(|i| p.clip[(seg + 1) * p.nv + i as usize]);
-                        let corners = Corners::new(c0, c1, f64::from(ws), f64::from(hs));
-                        let Some((flags, front, back, bbox, hull, nhull)) =
-                            prim::setup(&corners, &c0, &c1, d.cull_back, ws, hs)
-                        else {
-                            continue;
-                        };
-                        let opaque = p.opaque_everywhere || alpha.iter().all(|a| *a >= 1.0);
-                        v.push(Prim {
-                            draw: di as u32,
-                            face: (ci * CHUNK + j) as u32,
-                            seg: seg as u32,
-                            flags: flags | if opaque { OPAQUE } else { 0 },
-                            front,
-                            back,
-                            bbox,
-                            hull,
-                            nhull,
-                        });
-                    }
-                    v
-                })
-                .collect();
-            let mut group: Vec<Prim> = chunks.into_iter().flatten().collect();
-            order_along_motion(&mut group, p, seg, ws, hs);
-            group
-        })
-        .collect();
-    per_group.into_iter().flatten().collect()
+/// What every strip of tile rows reads.
+struct FrameCtx<'a> {
+    input: &'a Input<'a>,
+    prepared: &'a [Prepared<'a>],
+    plan: &'a Plan,
+    /// Image size in samples, and in tiles across.
+    ws: u32,
+    hs: u32,
+    tx: i32,
 }
 
-/// Orders one draw's prims of one segment so that its leading side comes first: along the
-/// draw's mean screen motion, a sample is reached by the triangles in this order, so the spans
-/// of neighbouring triangles arrive one after the other and chain (a stable sort: ties keep
-/// face order).
-fn order_along_motion(group: &mut [Prim], p: &Prepared, seg: usize, ws: u32, hs: u32) {
-    let (w, h) = (f64::from(ws), f64::from(hs));
-    let step = (p.nv / 1024).max(1);
-    let (mut dx, mut dy) = (0.0, 0.0);
-    for v in (0..p.nv).step_by(step) {
-        let (a, b) = (p.clip[seg * p.nv + v], p.clip[(seg + 1) * p.nv + v]);
-        if a[3] > 0.0 && b[3] > 0.0 {
-            let pa = prim::homogeneous_pixel(&a, w, h);
-            let pb = prim::homogeneous_pixel(&b, w, h);
-            dx += pb[0] / pb[2] - pa[0] / pa[2];
-            dy += pb[1] / pb[2] - pa[1] / pa[2];
+impl FrameCtx<'_> {
+    /// The tile rows `r0..` of `bands` (one band of pixel rows each): their prims set up,
+    /// binned (shared between tiles within a memory budget) and their tiles rendered into
+    /// the bands; adds to `stats`, and to `bound` the tiles the bounds of the prims that start
+    /// here span (each prim is counted in its first strip only: the frame's sum, checked
+    /// against [`MAX_BIN_ENTRIES`] as it grows).
+    fn strip(&self, r0: i32, bands: &mut [Band], bound: &mut u64, stats: &mut Stats) -> Result<()> {
+        let (input, prepared) = (self.input, self.prepared);
+        let (ws, hs, tx) = (self.ws, self.hs, self.tx);
+        let r1 = r0 + bands.len() as i32;
+        let t = Instant::now();
+        let prims = self.plan.prims_of(input, prepared, ws, hs, r0, r1);
+        for p in &prims {
+            let (a, b, c, d) = tiles_of(p);
+            if b >= r0 {
+                stats.prims += 1;
+                *bound += ((c - a) * (d - b)) as u64;
+            }
         }
+        if *bound > MAX_BIN_ENTRIES {
+            return Err(too_many_bins(*bound));
+        }
+        stats.ms_setup += ms(t);
+
+        let t = Instant::now();
+        let (offsets, entries) = bin(&prims, tx, r0, r1)?;
+        stats.bin_entries += entries.len() as u64;
+        stats.ms_bin += ms(t);
+
+        // Prims that reach several tiles are set up once for all of them, within a budget.
+        let t = Instant::now();
+        let fits = entries.len() > prims.len()
+            && prims.len() * std::mem::size_of::<TilePrim>() <= SHARED_PRIM_BYTES;
+        let shared: Vec<TilePrim> = if self.plan.shares(input, prims.len(), fits) {
+            prims
+                .par_iter()
+                .with_min_len(256)
+                .map(|p| {
+                    let c = corners(input, prepared, p, ws as i32, hs as i32);
+                    TilePrim::new(input, prepared, p, &c)
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        stats.ms_setup += ms(t);
+
+        let t = Instant::now();
+        let breaks = input.shutter.breaks();
+        let ctx = Ctx {
+            input,
+            prepared,
+            prims: &prims,
+            shared: &shared,
+            breaks: &breaks,
+            ws: ws as i32,
+            hs: hs as i32,
+        };
+        let s = input.samples as i32;
+        let rows: Vec<Vec<Counts>> = bands
+            .par_iter_mut()
+            .enumerate()
+            .map(|(i, out)| {
+                let y = r0 + i as i32;
+                let tiles: Vec<TileOut> = (0..tx)
+                    .into_par_iter()
+                    .map(|x| {
+                        let i = ((y - r0) * tx + x) as usize;
+                        ctx.tile(x, y, &entries[offsets[i] as usize..offsets[i + 1] as usize])
+                    })
+                    .collect::<Result<_>>()?;
+                for (x, (samples, visible, _)) in tiles.iter().enumerate() {
+                    let (x0, y0) = (x as i32 * TILE, y * TILE);
+                    write_pixels(out, samples, x0, y0, ws as i32, hs as i32, s);
+                    write_exposure(out, visible, x0, y0, s);
+                }
+                Ok(tiles.into_iter().map(|(_, _, c)| c).collect())
+            })
+            .collect::<Result<_>>()?;
+        stats.ms_tiles += ms(t);
+        for counts in rows.iter().flatten() {
+            stats.intervals += counts.intervals;
+            stats.pieces += counts.pieces;
+            stats.splits += counts.splits;
+            stats.tests += counts.tests;
+            stats.spans += counts.spans;
+            stats.ms_cover += counts.ns_cover as f64 * 1e-6;
+            stats.ms_resolve += counts.ns_resolve as f64 * 1e-6;
+        }
+        Ok(())
     }
-    if !(dx * dx + dy * dy > 0.0) {
-        return;
-    }
-    let key = |q: &Prim| {
-        let cx = f64::from(q.bbox[0] + q.bbox[2]);
-        let cy = f64::from(q.bbox[1] + q.bbox[3]);
-        -(cx * dx + cy * dy)
-    };
-    group.sort_by(|a, b| key(a).total_cmp(&key(b)));
 }
 
-/// Tile bins: `offsets` (tiles + 1) into `entries` (prim indices, in prim order per tile).
-fn bin(prims: &[Prim], tx: i32, ty: i32) -> Result<(Vec<u32>, Vec<u32>)> {
-    let tiles_of = |p: &Prim| {
-        let b = p.bbox;
-        (
-            b[0] / TILE,
-            b[1] / TILE,
-            (b[2] - 1) / TILE + 1,
-            (b[3] - 1) / TILE + 1,
-        )
-    };
+/// The tiles `[x0, y0, x1, y1)` a prim's bounds reach (unclipped to the image).
+fn tiles_of(p: &Prim) -> (i32, i32, i32, i32) {
+    let b = p.bbox;
+    let (y0, y1) = tile_rows(b[1], b[3]);
+    (b[0] / TILE, y0, (b[2] - 1) / TILE + 1, y1)
+}
+
+/// The error of a frame whose prims' bounds span `bound` tiles, past [`MAX_BIN_ENTRIES`].
+fn too_many_bins(bound: u64) -> Error {
+    Error::value(
+        "draws",
+        format!(
+            "the moving triangles' swept bounds span {bound} tiles in all, past the budget of \
+             {MAX_BIN_ENTRIES} ({} MiB); use fewer or smaller triangles, fewer segments or a \
+             smaller image",
+            (MAX_BIN_ENTRIES * 8) >> 20
+        ),
+    )
+}
+
+/// Tile bins of the tile rows `r0..r1`: `offsets` (tiles + 1) into `entries` (prim indices,
+/// in prim order per tile).
+fn bin(prims: &[Prim], tx: i32, r0: i32, r1: i32) -> Result<(Vec<u32>, Vec<u32>)> {
     let bound: u64 = prims
         .par_iter()
         .map(|p| {
@@ -299,15 +289,7 @@ fn bin(prims: &[Prim], tx: i32, ty: i32) -> Result<(Vec<u32>, Vec<u32>)> {
         })
         .sum();
     if bound > MAX_BIN_ENTRIES {
-        return Err(Error::value(
-            "draws",
-            format!(
-                "the moving triangles' swept bounds span {bound} tiles in all, past the budget of \
-                 {MAX_BIN_ENTRIES} ({} MiB); use fewer or smaller triangles, fewer segments or a \
-                 smaller image",
-                (MAX_BIN_ENTRIES * 8) >> 20
-            ),
-        ));
+        return Err(too_many_bins(bound));
     }
     let pairs: Vec<Vec<(u32, u32)>> = prims
         .par_chunks(4096)
@@ -317,11 +299,11 @@ fn bin(prims: &[Prim], tx: i32, ty: i32) -> Result<(Vec<u32>, Vec<u32>)> {
             for (j, p) in chunk.iter().enumerate() {
                 let (a, b, c, d) = tiles_of(p);
                 let sep = hull::Separator::new(p.bbox, &p.hull[..p.nhull as usize]);
-                for y in b..d.min(ty) {
+                for y in b.max(r0)..d.min(r1) {
                     for x in a..c.min(tx) {
                         let r = [x * TILE, y * TILE, (x + 1) * TILE, (y + 1) * TILE];
                         if sep.overlaps(r[0], r[1], r[2], r[3]) {
-                            v.push(((y * tx + x) as u32, (ci * 4096 + j) as u32));
+                            v.push((((y - r0) * tx + x) as u32, (ci * 4096 + j) as u32));
                         }
                     }
                 }
@@ -329,7 +311,7 @@ fn bin(prims: &[Prim], tx: i32, ty: i32) -> Result<(Vec<u32>, Vec<u32>)> {
             v
         })
         .collect();
-    let n = (tx * ty) as usize;
+    let n = (tx * (r1 - r0)) as usize;
     let mut offsets = vec![0u32; n + 1];
     for v in &pairs {
         for &(t, _) in v {

@@ -1,5 +1,7 @@
 //! What a frame of the analytic method is given, its checks, and the per-draw preparation
 //! (clip positions and normals at every segment boundary).
+use std::borrow::Cow;
+
 use glam::{DMat4, DVec4};
 use rayon::prelude::*;
 
@@ -61,6 +63,8 @@ pub struct Input<'a> {
     pub shade: bool,
     /// Most bytes one pass over a tile may hold in fragments, links and prims (per thread);
     /// past it the tile is done in smaller passes, with the same result ([`DEFAULT_TILE_BUDGET`]).
+    /// Twice it: most bytes of prims set up at once; past it the frame is set up and rendered
+    /// strip by strip of tile rows, with the same result.
     pub tile_budget: usize,
     /// The exposure channel ([`crate::Exposure`]) for object ids `0..n`, or None (off: the
     /// frame has none, and the render is the same bits). Every draw's `object_id` and every
@@ -109,13 +113,13 @@ impl Rolling {
 pub const DEFAULT_TILE_BUDGET: usize = 64 << 20;
 
 /// A draw's positions in clip space and its normals at every boundary.
-pub struct Prepared {
+pub struct Prepared<'a> {
     /// Vertices per boundary.
     pub nv: usize,
-    /// `(K+1) * V` clip positions.
-    pub clip: Vec<[f64; 4]>,
-    /// `(K+1) * V` world normals (lambert), else empty.
-    pub normals: Vec<[f32; 3]>,
+    /// `(K+1) * V` clip positions (camera of each boundary), read through [`Prepared::clip`].
+    clip: Vec<[f64; 4]>,
+    /// `(K+1) * V` world normals (lambert): the draw's own, borrowed, or computed; else empty.
+    pub normals: Cow<'a, [[f32; 3]]>,
     /// The draw's alpha range per face is read from here: all corners opaque.
     pub opaque_everywhere: bool,
     /// The premultiplied colour every triangle of the draw shows at every point, when shading
@@ -284,7 +288,7 @@ fn validate_exposure(input: &Input) -> Result<()> {
 }
 
 /// Clip positions (camera of each boundary) and, for lambert shading, normals of one draw.
-pub fn prepare(input: &Input, d: &MovingDraw) -> Prepared {
+pub fn prepare<'a>(input: &Input<'a>, d: &MovingDraw<'a>) -> Prepared<'a> {
     let k1 = input.times.len();
     let nv = d.positions.len() / k1;
     let vps = input.view_projections;
@@ -300,12 +304,14 @@ pub fn prepare(input: &Input, d: &MovingDraw) -> Prepared {
         })
         .collect();
     let normals = match (d.shading, input.shade, d.normals) {
-        (Shading::Lambert, true, Some(n)) => n.to_vec(),
-        (Shading::Lambert, true, None) => (0..k1)
-            .into_par_iter()
-            .flat_map_iter(|k| vertex_normals(&d.positions[k * nv..(k + 1) * nv], d.faces))
-            .collect(),
-        _ => Vec::new(),
+        (Shading::Lambert, true, Some(n)) => Cow::Borrowed(n),
+        (Shading::Lambert, true, None) => Cow::Owned(
+            (0..k1)
+                .into_par_iter()
+                .flat_map_iter(|k| vertex_normals(&d.positions[k * nv..(k + 1) * nv], d.faces))
+                .collect(),
+        ),
+        _ => Cow::Owned(Vec::new()),
     };
     Prepared {
         nv,
@@ -313,6 +319,15 @@ pub fn prepare(input: &Input, d: &MovingDraw) -> Prepared {
         normals,
         opaque_everywhere: d.rgba.iter().all(|c| c[3] >= 1.0),
         uniform: uniform_colour(input, d),
+    }
+}
+
+impl Prepared<'_> {
+    /// The clip position of point `i` of the `(K+1) * V` (boundary-major), seen by the camera
+    /// of its boundary.
+    #[inline]
+    pub fn clip(&self, i: usize) -> [f64; 4] {
+        self.clip[i]
     }
 }
 

@@ -43,6 +43,7 @@ mod quadrature;
 mod resolve;
 mod segments;
 mod shade;
+mod strips;
 mod tiles;
 mod visibility;
 

@@ -167,6 +167,30 @@ impl Corners {
     }
 }
 
+/// The sample rows `[y0, y1)` the prim of `corners` can reach, were it set up: the rows of
+/// [`setup`]'s bounds (the same arithmetic), or all `hs` rows where it clips or a corner is
+/// not finite. A prim [`setup`] drops reaches rows here too.
+pub fn rows(corners: &Corners, hs: u32) -> (i32, i32) {
+    if corners.clips() {
+        return (0, hs as i32);
+    }
+    let (mut y0, mut y1) = (f64::MAX, f64::MIN);
+    for i in 0..3 {
+        let (a, d) = (corners.a[i], corners.d[i]);
+        let b = add(a, d);
+        for y in [a[1] / a[2], b[1] / b[2]] {
+            if !y.is_finite() {
+                return (0, hs as i32);
+            }
+            y0 = y0.min(y);
+            y1 = y1.max(y);
+        }
+    }
+    let lo = ceil_i64(y0 - 0.5).max(0).min(hs as i64) as i32;
+    let hi = floor_i64(y1 - 0.5).saturating_add(1).max(0).min(hs as i64) as i32;
+    (lo, hi)
+}
+
 /// What [`setup`] finds of a prim: flags, front and back facing, sample bounds, hull and its
 /// number of points.
 pub type Setup = (u8, Facing, Facing, [i32; 4], [[f32; 2]; 6], u8);

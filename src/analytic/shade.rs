@@ -140,7 +140,7 @@ fn spread(normals: &[[[f32; 3]; 3]; 2]) -> f32 {
 /// The tile's triangles as seen from one sample.
 pub struct SampleShader<'a> {
     pub input: &'a Input<'a>,
-    pub prepared: &'a [Prepared],
+    pub prepared: &'a [Prepared<'a>],
     /// The tile's prims, by tile index.
     pub prims: &'a [TilePrim],
     /// The tile's chain links, and per fragment of the sample the link shading reached.
@@ -240,7 +240,7 @@ impl SampleShader<'_> {
         let at = |k: usize| {
             let mut h = [0.0f64; 3];
             for c in 0..3 {
-                let hp = homogeneous_pixel(&d.clip[k * d.nv + face[c] as usize], ws, hs);
+                let hp = homogeneous_pixel(&d.clip(k * d.nv + face[c] as usize), ws, hs);
                 for j in 0..3 {
                     h[j] += lam[c] * hp[j];
                 }

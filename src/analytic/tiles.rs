@@ -23,6 +23,11 @@ use crate::error::{Error, Result};
 /// Tile side in samples (a multiple of every supersampling factor).
 pub const TILE: i32 = 32;
 
+/// The tile rows `[r0, r1)` of the sample rows `[y0, y1)` (not empty).
+pub fn tile_rows(y0: i32, y1: i32) -> (i32, i32) {
+    (y0 / TILE, (y1 - 1) / TILE + 1)
+}
+
 /// What one tile counted.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Counts {
@@ -140,7 +145,7 @@ thread_local! {
 pub struct Ctx<'a> {
     /// The frame's input and its draws prepared.
     pub input: &'a Input<'a>,
-    pub prepared: &'a [Prepared],
+    pub prepared: &'a [Prepared<'a>],
     /// Every prim of the frame (bins hold indices into it).
     pub prims: &'a [Prim],
     /// Every prim set up for the tiles, or empty: each tile sets up its own.
@@ -158,8 +163,8 @@ pub fn corners(input: &Input, prepared: &[Prepared], p: &Prim, ws: i32, hs: i32)
     let pr = &prepared[p.draw as usize];
     let f = d.faces[p.face as usize];
     let k = p.seg as usize;
-    let c0 = f.map(|i| pr.clip[k * pr.nv + i as usize]);
-    let c1 = f.map(|i| pr.clip[(k + 1) * pr.nv + i as usize]);
+    let c0 = f.map(|i| pr.clip(k * pr.nv + i as usize));
+    let c1 = f.map(|i| pr.clip((k + 1) * pr.nv + i as usize));
     Corners::new(c0, c1, f64::from(ws), f64::from(hs))
 }
 

@@ -6,6 +6,7 @@ rounding of the exact integral's distance and does not depend on the thread coun
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -138,3 +139,87 @@ def test_a_dense_turning_frame_does_not_depend_on_the_thread_count():
         )
         digests.append(out.stdout.strip().splitlines()[-1])
     assert digests[0] == digests[1]
+
+
+def _strip_scene(seed: int) -> Scene:
+    """A random sphere of 1,280 faces turning (or deforming) over a panning camera's view, with
+    a translucent second one crossing it: many prims over a few segments."""
+    rng = np.random.default_rng(100 + seed)
+    v, f = meshes.icosphere(3, 0.4 + 0.2 * rng.random())
+    ts = np.linspace(0.0, 1.0, 3 + int(rng.integers(0, 3)))
+    axis = tuple(rng.normal(size=3))
+    start = rng.normal(scale=0.3, size=3)
+    mats = [translate(tuple(start + t * rng.normal(scale=0.4, size=3))) @ rotate(1.5 * t, axis) for t in ts]
+    objs = [
+        Object((v, f), color=(0.8, 0.5, 0.3), shading="lambert", motion=Motion(ts, np.stack(mats))),
+        Object(
+            (v * 0.7, f),
+            color=(0.2, 0.5, 0.9, 0.6),
+            shading="flat",
+            motion=Motion.linear(translate((0.7, 0.1, -0.5)), translate((-0.7, -0.1, -0.3))),
+        ),
+    ]
+    cam = Camera(look_at((0.0, 0.3, 3.0), (0.0, 0.0, 0.0)), 0.8, 128, 96)
+    cam_motion = Motion.linear(np.eye(4), rotate(0.1 * float(rng.normal()), (0.0, 1.0, 0.0)))
+    return Scene(objs, cam, camera_motion=cam_motion, lights=[DirectionalLight((-0.3, -1.0, -0.5), 1.0)])
+
+
+def _planes(f) -> list[np.ndarray]:
+    return [f.rgba, f.depth, f.ids, f.velocity]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_frame_set_up_strip_by_strip_is_the_bits_of_the_whole_frame(seed, monkeypatch):
+    scene = _strip_scene(seed)
+    whole = mb.render(scene, "analytic", aa=2, error_estimate=False)
+    assert whole.stats["strips"] == 1
+    # a small budget: the frame's prims pass twice it, so it is done strip by strip
+    monkeypatch.setattr(mb.analytic, "TILE_BUDGET_BYTES", 256 << 10)
+    strips = mb.render(scene, "analytic", aa=2, error_estimate=False)
+    assert strips.stats["strips"] > 2
+    for k in ("prims", "bin_entries", "spans", "pieces"):
+        assert strips.stats[k] == whole.stats[k], k
+    for a, b in zip(_planes(strips), _planes(whole), strict=True):
+        np.testing.assert_array_equal(a, b)
+        np.testing.assert_array_equal(np.signbit(a), np.signbit(b))
+
+
+_MEMORY_CHILD = """
+import json, sys
+sys.path.insert(0, sys.argv[1])
+import motionblur as mb
+import test_analytic_scale as t
+def hwm():
+    for line in open("/proc/self/status"):
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) * 1024
+w, h = int(sys.argv[2]), int(sys.argv[3])
+scene = t._dense_turning(w, h)
+before = hwm()
+f = mb.render(scene, "analytic", error_estimate=False)
+print(json.dumps({"before": before, "peak": hwm(), "segments": f.stats["segments"],
+                  "prims": f.stats["prims"], "strips": f.stats["strips"]}))
+"""
+
+
+def test_the_peak_memory_of_a_dense_turning_frame_is_bounded_by_its_pixels_and_budget():
+    """In a fresh process: the peak while rendering grows by no more than the frame's own
+    arrays (outputs and the per-sample backdrop), the boundary positions and normals, and the
+    budgets (the strip's prims, two threads' tile buffers) with 96 MiB to spare, not with the
+    prims of the whole frame (set up at once they would be ~2.4M x 124 bytes here)."""
+    w, h = 320, 240
+    out = subprocess.run(
+        [sys.executable, "-c", _MEMORY_CHILD, os.path.dirname(__file__), str(w), str(h)],
+        capture_output=True, text=True, check=True,
+    ).stdout  # fmt: skip
+    r = json.loads(out.strip().splitlines()[-1])
+    assert r["strips"] > 1
+    budget = mb.analytic.TILE_BUDGET_BYTES
+    vertices = 2 * len(meshes.icosphere(5, 0.5)[0])  # the two moving spheres
+    boundaries = r["segments"] + 1
+    # positions f64 and normals f32 per boundary and vertex, twice (the Python side builds them)
+    inputs = 2 * boundaries * vertices * 3 * (8 + 4)
+    pixels = w * h * (16 + 4 + 4 + 8 + 24)  # outputs and the per-sample backdrop
+    bound = inputs + pixels + 2 * budget + 2 * 2 * budget + (96 << 20)
+    grown = r["peak"] - r["before"]
+    assert grown < bound, f"peak grew {grown >> 20} MiB, bound {bound >> 20} MiB ({r})"
