@@ -102,6 +102,12 @@ class _DofOptions(TypedDict):
     yfov: float
     layers: int
 
+class _CameraFrameOptions(TypedDict):
+    camera: _CameraLike
+    previous_camera: _CameraLike
+    scale: float
+    samples: int
+
 class _ShellOptions(TypedDict):
     subdivisions: int
     hysteresis: int
@@ -485,14 +491,13 @@ def _camera_frame_blur(
     ids: np.ndarray,
     velocity: np.ndarray,
     moving: list[bool],
-    camera: _CameraLike,
-    previous_camera: _CameraLike,
-    scale: float,
-    samples: int,
+    options: _CameraFrameOptions,
 ) -> np.ndarray:
     """The camera_velocity method's blur: each pixel's velocity its moving object's (ids (H,W) i32,
-    velocity (H,W,2) f32, moving[id]) or the camera's from depth (H,W) f32, times the f32 scale,
-    clamped to MAX_VELOCITY, then the centred samples-tap blur of rgba (H,W,4) f32."""
+    velocity (H,W,2) f32, moving[id]) or the camera's from depth (H,W) f32, times the f32
+    ``options["scale"]``, clamped to MAX_VELOCITY, then the centred ``options["samples"]``-tap
+    blur of rgba (H,W,4) f32; ``options["camera"]`` and ``options["previous_camera"]`` are the
+    two cameras."""
 
 def _reconstruct(
     rgba: np.ndarray, depth: np.ndarray, velocity: np.ndarray, samples: int, tile: int, soft_depth: float

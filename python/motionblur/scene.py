@@ -205,6 +205,12 @@ class Object:
         return self.motion is not None and not self.motion.is_static
 
     @property
+    def is_transparent(self) -> bool:
+        """True when some part of the object has alpha under 1 (its surfaces must be sorted with
+        the others' to be composited exactly)."""
+        return float(np.min(self.rgba[..., 3])) < 1.0
+
+    @property
     def rgba(self) -> np.ndarray:
         """(4,) or (V,4) float32 straight RGBA."""
         c = self.color

@@ -487,10 +487,20 @@ fn _max_speed(py: Python<'_>, velocity: PyReadonlyArray3<'_, f32>) -> PyResult<f
     Ok(py.detach(|| crate::max_speed(v)))
 }
 
+/// The options of `_camera_frame_blur`, the items of a dict: the two cameras
+/// ([`CameraArg`]), the f32 velocity `scale` and the `samples` taps.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct CameraFrameArgs<'py> {
+    camera: CameraArg<'py>,
+    previous_camera: CameraArg<'py>,
+    scale: f32,
+    samples: usize,
+}
+
 /// The `camera_velocity` method's blur of a frame: rgba (H,W,4) f32, depth (H,W) f32, ids
-/// (H,W) i32, velocity (H,W,2) f32, `moving[id]`, the two cameras, the f32 scale and the taps.
+/// (H,W) i32, velocity (H,W,2) f32, `moving[id]` and the options ([`CameraFrameArgs`]).
 #[pyfunction]
-#[allow(clippy::too_many_arguments)]
 fn _camera_frame_blur<'py>(
     py: Python<'py>,
     rgba: PyReadonlyArray3<'py, f32>,
@@ -498,10 +508,7 @@ fn _camera_frame_blur<'py>(
     ids: PyReadonlyArray2<'py, i32>,
     velocity: PyReadonlyArray3<'py, f32>,
     moving: Vec<bool>,
-    camera: CameraArg<'py>,
-    previous_camera: CameraArg<'py>,
-    scale: f32,
-    samples: usize,
+    options: CameraFrameArgs<'py>,
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
     let (d, dw, dh) = img2(&depth, "depth")?;
@@ -512,15 +519,16 @@ fn _camera_frame_blur<'py>(
         return Err(Error::shape("ids", format!("expected shape ({h},{w})")).into());
     }
     let ids = c_slice(&ids, "ids")?;
-    let cur = camera.matrices("camera")?;
-    let prev = previous_camera.matrices("previous_camera")?;
+    let cur = options.camera.matrices("camera")?;
+    let prev = options.previous_camera.matrices("previous_camera")?;
     let frame = crate::FrameMotion {
         velocity: v,
         ids,
         moving: &moving,
     };
+    let taps = (options.scale, options.samples);
     let out = detached_in_pool(py, || {
-        crate::camera_frame_blur(a, d, (w, h), frame, (&cur, &prev), (scale, samples))
+        crate::camera_frame_blur(a, d, (w, h), frame, (&cur, &prev), taps)
     })?;
     shaped(py, out, [h, w, 4])
 }

@@ -110,7 +110,8 @@ def test_camera_frame_blur_names_bad_input():
     t = shutter_centroid(scene)
     f = sharp_frame(scene, t, 1, velocity="since_open")
     cam, start = scene.camera_at(t), scene.camera_at(0.0)
-    args = [f.rgba, f.depth, f.ids, f.velocity, [False] * len(scene.objects), cam, start, 2.0, 16]
+    options = {"camera": cam, "previous_camera": start, "scale": 2.0, "samples": 16}
+    args = [f.rgba, f.depth, f.ids, f.velocity, [False] * len(scene.objects), options]
     bad = f.rgba.copy()
     bad[3, 4, 1] = np.nan
     with pytest.raises(ValueError, match="rgba"):
@@ -120,7 +121,7 @@ def test_camera_frame_blur_names_bad_input():
     with pytest.raises(ValueError, match="ids"):
         _core._camera_frame_blur(f.rgba, f.depth, f.ids[:, :-1].copy(), *args[3:])
     with pytest.raises(ValueError, match="samples"):
-        _core._camera_frame_blur(*args[:-1], 0)
+        _core._camera_frame_blur(*args[:-1], {**options, "samples": 0})
 
 
 def test_max_speed_is_numpys_float64_formula():

@@ -58,7 +58,7 @@ def _mi(variant=None):
 
 def _check_colours(scene: Scene):
     for k, o in enumerate(scene.objects):
-        if o.shading == "lambert" and float(np.min(o.rgba[..., 3])) < 1.0:
+        if o.shading == "lambert" and o.is_transparent:
             raise ValueError(
                 f"scene: object {k}: the Mitsuba reference takes transparent objects with flat "
                 "shading only (its direct integrator stops at the first surface); use alpha 1 or "
@@ -68,10 +68,6 @@ def _check_colours(scene: Scene):
         raise ValueError(
             "scene: the Mitsuba reference has no ambient light; use ambient=0 with lambert objects"
         )
-
-
-def _transparent(o) -> bool:
-    return float(np.min(o.rgba[..., 3])) < 1.0
 
 
 def _colour(o, scale: float = 1.0) -> dict:
@@ -99,7 +95,7 @@ class _MitsubaScene:
         cam = scene.camera
         d = {"type": "scene"}
         coverage = pass_ == "coverage"
-        layers = sum(_transparent(o) for o in scene.objects)
+        layers = sum(o.is_transparent for o in scene.objects)
         if pass_ in ("flat", "coverage"):
             # a transparent surface is a null interaction: each one seen through costs a bounce
             d["integrator"] = {"type": "path", "max_depth": 1 + 2 * layers}
@@ -115,7 +111,7 @@ class _MitsubaScene:
             lit = o.shading == "lambert" and pass_ in ("lambert", "all")
             if coverage:
                 emits = lit = False
-            clear = _transparent(o)
+            clear = o.is_transparent
             # alpha as opacity: a mask of that opacity over the BSDF; a transparent emitter
             # radiates alpha times its colour (premultiplied, as the rasterizer composites it);
             # the coverage pass makes every object emit its alpha
@@ -263,7 +259,7 @@ def mitsuba(
     )
     if shadings == {"flat", "lambert"} and not scene.lights:
         passes = ["flat"]
-    if any(_transparent(o) for o in scene.objects):
+    if any(o.is_transparent for o in scene.objects):
         passes.append("coverage")
     ts, ws = sample_times(scene, k, "stratified")
     cam = scene.camera

@@ -95,7 +95,7 @@ def accumulate(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> F
     cam = supersampled(scene.camera, aa)
     static_objs = [(k, o) for k, o in everything if not o.is_moving]
     moving = [(k, o) for k, o in everything if o.is_moving]
-    if dim >= 1.0 and static_objs and any(float(np.min(o.rgba[..., 3])) < 1.0 for o in scene.objects):
+    if dim >= 1.0 and static_objs and any(o.is_transparent for o in scene.objects):
         # A transparent surface between two others cannot be composited with one depth a pixel
         # per layer: every object is drawn at every sample, sorted together (exact).
         static_objs, moving = [], everything

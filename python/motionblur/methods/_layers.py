@@ -146,7 +146,7 @@ def _shading_groups(draws: list[tuple[Object, Draw]]) -> dict[str, list[Draw]]:
     groups: dict[str, list[Draw]] = {}
     for obj, d in draws:
         groups.setdefault(obj.shading, []).append(d)
-    if len(groups) > 1 and any(float(np.min(d.rgba[:, 3])) < 1.0 for _, d in draws):
+    if len(groups) > 1 and any(obj.is_transparent for obj, _ in draws):
         return {
             "lambert": [d if obj.shading == "lambert" else _with_shading(d, obj.shading) for obj, d in draws]
         }
@@ -330,7 +330,7 @@ def static_layer(scene: Scene, camera: Camera, objects, aa: int) -> Static:
         return hit[0]
     layer = raster_layer(camera, scene, [(o, object_draw(o, 0.0, k)) for k, o in objects])
     st = Static(layer, aa)
-    st.opaque = all(float(np.min(o.rgba[..., 3])) >= 1.0 for _, o in objects)
+    st.opaque = not any(o.is_transparent for _, o in objects)
     # keep the objects alive with the entry, so the ids in the key stay theirs
     kept.put(key, (st, [o for _, o in objects]))
     return st

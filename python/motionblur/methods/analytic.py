@@ -108,11 +108,6 @@ def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
     return pos
 
 
-def _transparent(obj: Object) -> bool:
-    """Whether some part of ``obj`` has alpha under 1."""
-    return float(np.min(obj.rgba[..., 3])) < 1.0
-
-
 def _draw(scene: Scene, obj: Object, k: int, times: np.ndarray) -> MovingDraw:
     pos = straddled(scene, obj, times)
     normals = None
@@ -158,7 +153,7 @@ def analytic(
         raise ValueError(f"aa: must be 1, 2 or 4, got {aa}")
     cam = supersampled(scene.camera, aa)
     everything = list(enumerate(scene.objects))
-    if scene.camera_moves or any(_transparent(o) for o in scene.objects if not o.is_moving):
+    if scene.camera_moves or any(o.is_transparent for o in scene.objects if not o.is_moving):
         # A still transparent surface cannot be one entry a sample of the static layer: a moving
         # surface behind it, or a still one of another shading mode, would be lost. Every object
         # then goes through the kernel, which sorts them all (a still one has the same positions

@@ -118,7 +118,7 @@ def layered_translucency(scene: Scene) -> bool:
     pixel (a bias its halves could not see). It now draws such a scene's objects together at
     every sample, sorted by depth, so its limit is the exact integral and ``auto`` treats the
     scene like any other."""
-    if not any(float(np.min(o.rgba[..., 3])) < 1.0 for o in scene.objects):
+    if not any(o.is_transparent for o in scene.objects):
         return False
     layers = {o.shading for o in scene.objects}
     return len(layers) > 1 or (not scene.camera_moves and any(not o.is_moving for o in scene.objects))

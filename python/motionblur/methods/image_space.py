@@ -66,7 +66,7 @@ def _static_part(scene: Scene, aa: int) -> Static | None:
     if scene.camera_moves or len({o.shading for o in scene.objects}) != 1:
         return None
     statics = [(k, o) for k, o in enumerate(scene.objects) if not o.is_moving]
-    if not all(float(np.min(o.rgba[..., 3])) >= 1.0 for _, o in statics):
+    if any(o.is_transparent for _, o in statics):
         return None
     return static_layer(scene, supersampled(scene.camera, aa), statics, aa)
 
@@ -367,8 +367,8 @@ def camera_velocity(scene: Scene, samples: int = 16, aa: int = 1) -> Frame:
         c = np.ascontiguousarray
         moving = [o.is_moving for o in scene.objects]
         rgba = _core._camera_frame_blur(
-            c(rgba), c(frame.depth), c(frame.ids), c(frame.velocity), moving, cam, start,
-            float(np.float32(1.0 / tc)), samples,
+            c(rgba), c(frame.depth), c(frame.ids), c(frame.velocity), moving,
+            {"camera": cam, "previous_camera": start, "scale": float(np.float32(1.0 / tc)), "samples": samples},
         )  # fmt: skip
     out = Frame(rgba, frame.depth, frame.ids, frame.velocity)
     out.stats.update(t=tc, samples=samples)
