@@ -166,3 +166,24 @@ def test_refinement_draws_only_the_new_samples():
 
 def test_the_first_render_is_sized_by_the_tolerance():
     assert [auto_mod.first_samples(t) for t in (0.03, 0.01, 0.0075, 0.004, 0.001)] == [4, 8, 10, 12, 12]
+
+
+@pytest.mark.parametrize(
+    "shutter", ["triangle", "gaussian", np.array([0.0, 0.0, 1.0, 1.0]), mb.Trapezoid(0.3, 0.2)]
+)
+def test_refinement_keeps_the_drawn_samples_under_any_shutter(shutter):
+    """Accumulation's samples cut the shutter's mass into equal strata, so under a shutter other
+    than the box too an odd multiple of the count keeps the samples drawn (once such a shutter
+    rendered afresh at every step): 8 then 24 draws 24 times in all, and the frame is
+    accumulation's with 24 samples."""
+    scene = random_scene(1, W, H).with_(shutter=shutter)
+    trials = auto_mod._Trials(scene, 1)
+    trials.accumulate(8)
+    kept = trials.accumulate(24)
+    assert kept.stats["draw_calls"] == 24 and kept.stats["samples"] == 24
+    fresh = mb.METHODS["accumulation"].fn(scene, samples=24)
+    np.testing.assert_allclose(kept.rgba, fresh.rgba, atol=2e-6)
+    assert kept.stats["error_estimate"] == pytest.approx(fresh.stats["error_estimate"], rel=1e-4)
+    ref = mb.exact(scene).rgba
+    err = [_rmse(mb.render(scene, "auto", tolerance=tol).rgba, ref) for tol in (0.01, 0.002)]
+    assert err[1] <= 0.002 and err[0] <= 0.01 and err[1] < err[0], err

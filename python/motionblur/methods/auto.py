@@ -154,24 +154,20 @@ class _Trials:
             est = 0.0  # the one sharp frame of a scene where nothing moves
         return self._record(method, options, frame, ms, est)
 
-    @property
-    def reuses(self) -> bool:
-        """Whether a finer grid keeps the samples drawn (a box shutter: see `accumulate`)."""
-        return isinstance(self.scene.shutter, str) and self.scene.shutter == "box"
-
     def accumulate(self, n: int) -> Frame:
-        """Accumulation with ``n`` stratified samples; under a box shutter the samples already
-        drawn are kept when ``n`` is an odd multiple of the last count (their times are on the
-        new grid) and only the others are drawn."""
+        """Accumulation with ``n`` samples of equal weight (`sample_times`); the samples already
+        drawn are kept when ``n`` is an odd multiple of the last count (their times are among the
+        new ones, under any shutter: the strata are of the shutter's mass) and only the others
+        are drawn."""
         t0 = time.perf_counter()
         last = self.sums.samples if self.sums is not None else 0
-        if not (self.reuses and last and n % last == 0 and (n // last) % 2 == 1):
+        if not (last and n % last == 0 and (n // last) % 2 == 1):
             self.sums, last = HalfSums(self.scene, self.aa), 0
         times, weights = sample_times(self.scene, n)
         j = np.arange(n)
         if last:
             step = n // last
-            self.sums.reweight(lambda t: (np.full(len(t), 1.0 / n), int(round(t[0] * n - 0.5)) % 2))
+            self.sums.reweight(lambda t: (np.full(len(t), 1.0 / n), _position(times, t[0]) % 2))
             j = j[(j % step) != step // 2]  # the new times only
         for half in (0, 1):
             sel = j[j % 2 == half]
@@ -205,6 +201,12 @@ class _Trials:
             {"method": "analytic", "options": {"pilot": f"{segments} segments"}, "ms": round(ms, 3)}
         )
         return ANALYTIC_COST * (segments + 8) * self.per_sample_ms()
+
+
+def _position(times: np.ndarray, t: float) -> int:
+    """The index of the time in ``times`` (increasing) nearest ``t``."""
+    k = int(np.searchsorted(times, t))
+    return k - 1 if k == len(times) or (k > 0 and t - times[k - 1] < times[k] - t) else k
 
 
 def _next_count(n: int, want: float, reuse: bool = True) -> int:
@@ -255,7 +257,7 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
                     f"accumulation would need {want:.0f} samples (about {want * trials.per_sample_ms():.0f} ms); "
                     f"the analytic frame, predicted {analytic_ms:.0f} ms, is exact to {ANALYTIC_ERROR:g}"
                 )
-        trials.accumulate(_next_count(n, want, trials.reuses))
+        trials.accumulate(_next_count(n, want))
     trials.run("analytic")
     return f"accumulation still estimated over the tolerance after {MAX_STEPS} steps: the analytic frame"
 
