@@ -206,7 +206,7 @@ def test_the_trapezoid_grid_keeps_the_drawn_samples_and_is_the_trapezoid_rule(sh
 
 
 def test_the_first_render_is_sized_by_the_tolerance():
-    assert [auto_mod.first_samples(t) for t in (0.03, 0.01, 0.0075, 0.004, 0.001)] == [4, 8, 10, 12, 12]
+    assert [auto_mod.first_samples(t) for t in (0.03, 0.0133, 0.01, 0.004, 0.001)] == [4, 6, 8, 8, 8]
 
 
 @pytest.mark.parametrize(
