@@ -78,7 +78,7 @@ def test_static_once_equals_drawing_everything_every_sample(aa, shutter):
         samples=1,
         aa=aa,
     )
-    t_ref = (11 + 0.5) / 12
+    t_ref = sample_times(sc, 12)[0][-1]  # the last sample's time: (11 + 0.5) / 12 under the box
     near = mb.render(
         sc.with_(objects=[mb.Object((o.world_vertices(t_ref), o.mesh.faces), o.color) for o in sc.objects]),
         "accumulation",

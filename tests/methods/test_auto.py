@@ -40,7 +40,8 @@ def test_a_tighter_tolerance_gives_a_measurably_smaller_error():
     scene = random_scene(3, W, H)
     ref = mb.exact(scene).rgba
     errs = [_rmse(mb.render(scene, "auto", tolerance=t).rgba, ref) for t in (0.01, 0.0025, 0.0006)]
-    assert errs[0] > 2 * errs[1] > 4 * errs[2] > 0, errs
+    # (at 0.0006 the analytic frame may be predicted cheaper: 0 off mb.exact on this scene)
+    assert errs[0] > 2 * errs[1] > 4 * errs[2] >= 0 and errs[2] <= 0.0006, errs
 
 
 def test_shutter_weights_are_honoured_not_collapsed_to_one_sample():
@@ -149,11 +150,16 @@ def test_translucent_layered_scenes_keep_accumulation_and_meet_the_tolerance(see
 def test_refinement_draws_only_the_new_samples():
     """From 6 samples a need of 14 goes to 18 (an odd multiple: the 6 are on its grid), drawing
     12 more, not 14 afresh plus the 6 thrown away; the frame is accumulation's with 18 samples
-    (to float32 rounding of the sums) and so is its estimate."""
-    assert auto_mod._next_count(6, 14.0) == 18
-    assert auto_mod._next_count(6, 14.0, reuse=False) == 14
-    assert auto_mod._next_count(12, 40.0) == 60  # 48 new <= 1.5 x 40
-    assert auto_mod._next_count(12, 26.0) == 36
+    (to float32 rounding of the sums) and so is its estimate. Where the trapezoid grid draws
+    fewer (12 -> 49 for 40: 37 new, not 48 for 60), it is taken, and it refines to any multiple."""
+    assert auto_mod._next_grid((6, False), 14.0) == (18, False)
+    assert auto_mod._next_grid((12, False), 26.0) == (36, False)  # 24 new; the trapezoid's 49, 37
+    assert auto_mod._next_grid((12, False), 40.0) == (48, True)
+    assert auto_mod._next_grid((12, False), 13.0) == (24, True)  # 13 new, not 24
+    assert auto_mod._next_grid((24, True), 30.0) == (48, True)
+    assert auto_mod._next_grid((24, True), 80.0) == (96, True)
+    assert auto_mod._holds((48, True), (12, False)) and auto_mod._holds((72, True), (24, True))
+    assert not auto_mod._holds((36, True), (12, False)) and not auto_mod._holds((36, False), (12, True))
     scene = random_scene(1, W, H)
     trials = auto_mod._Trials(scene, 1)
     trials.accumulate(6)
@@ -164,5 +170,61 @@ def test_refinement_draws_only_the_new_samples():
     assert kept.stats["error_estimate"] == pytest.approx(fresh.stats["error_estimate"], rel=1e-4)
 
 
+@pytest.mark.parametrize("shutter", ["box", "triangle"])
+def test_the_trapezoid_grid_keeps_the_drawn_samples_and_is_the_trapezoid_rule(shutter):
+    """12 stratified samples, then the trapezoid grid of 24 strata (25 samples: 13 drawn), then
+    of 72 (73: 48 drawn): the frame is the trapezoid rule over the shutter's mass (times
+    W^-1(k / 72), weights 1/72, the ends 1/144), rendered at once, and its error against the
+    exact integral falls as the samples grow."""
+    from motionblur.methods._accumulate import HalfSums, shutter_quantiles
+
+    scene = random_scene(1, W, H).with_(shutter=shutter)
+    trials = auto_mod._Trials(scene, 1)
+    trials.accumulate(12)
+    mid = trials.accumulate(24, trapezoid=True)
+    assert mid.stats["draw_calls"] == 25 and trials.tried[-1]["options"] == {
+        "samples": 25,
+        "grid": "trapezoid",
+    }
+    kept = trials.accumulate(72, trapezoid=True)
+    assert kept.stats["draw_calls"] == 73 and kept.stats["samples"] == 73
+    k = np.arange(73)
+    times, weights = shutter_quantiles(scene.shutter, k / 72), np.full(73, 1 / 72)
+    weights[[0, -1]] = 1 / 144
+    once = HalfSums(scene, 1, "trapezoid")
+    for half in (0, 1):
+        once.add(times[half::2], weights[half::2], half)
+    want = once.frame()
+    np.testing.assert_allclose(kept.rgba, want.rgba, atol=2e-6)
+    assert kept.stats["error_estimate"] == pytest.approx(want.stats["error_estimate"], rel=1e-4)
+    ref = mb.exact(scene).rgba
+    first = mb.METHODS["accumulation"].fn(scene, samples=12)
+    bg = np.asarray(scene.background)
+    over = lambda f: f.rgba + (1 - f.rgba[..., 3:]) * np.r_[bg[:3] * bg[3], bg[3]]  # noqa: E731
+    errs = [_rmse(over(f), ref) for f in (first, mid, kept)]
+    assert errs[0] > errs[1] > errs[2], errs
+
+
 def test_the_first_render_is_sized_by_the_tolerance():
-    assert [auto_mod.first_samples(t) for t in (0.03, 0.01, 0.0075, 0.004, 0.001)] == [4, 8, 10, 12, 12]
+    assert [auto_mod.first_samples(t) for t in (0.03, 0.0133, 0.01, 0.004, 0.001)] == [4, 6, 8, 8, 8]
+
+
+@pytest.mark.parametrize(
+    "shutter", ["triangle", "gaussian", np.array([0.0, 0.0, 1.0, 1.0]), mb.Trapezoid(0.3, 0.2)]
+)
+def test_refinement_keeps_the_drawn_samples_under_any_shutter(shutter):
+    """Accumulation's samples cut the shutter's mass into equal strata, so under a shutter other
+    than the box too an odd multiple of the count keeps the samples drawn (once such a shutter
+    rendered afresh at every step): 8 then 24 draws 24 times in all, and the frame is
+    accumulation's with 24 samples."""
+    scene = random_scene(1, W, H).with_(shutter=shutter)
+    trials = auto_mod._Trials(scene, 1)
+    trials.accumulate(8)
+    kept = trials.accumulate(24)
+    assert kept.stats["draw_calls"] == 24 and kept.stats["samples"] == 24
+    fresh = mb.METHODS["accumulation"].fn(scene, samples=24)
+    np.testing.assert_allclose(kept.rgba, fresh.rgba, atol=2e-6)
+    assert kept.stats["error_estimate"] == pytest.approx(fresh.stats["error_estimate"], rel=1e-4)
+    ref = mb.exact(scene).rgba
+    err = [_rmse(mb.render(scene, "auto", tolerance=tol).rgba, ref) for tol in (0.01, 0.002)]
+    assert err[1] <= 0.002 and err[0] <= 0.01 and err[1] < err[0], err

@@ -1,9 +1,9 @@
 """References: the same [`Scene`][motionblur.Scene] rendered by Mitsuba 3 and by pyrender.
 
 ``mitsuba(scene, times=K, spp=S, seed=0)``: Mitsuba 3.9 has no shape that moves with the ray
-time, so the reference is K renders at the stratified shutter times ``(i + 0.5) / K``, each
-weighted by the shutter filter's integral over its stratum (as the accumulation method weighs
-its samples) and summed. The conversion:
+time, so the reference is K renders at accumulation's stratified shutter times (the box's
+``(i + 0.5) / K``; under another filter the times cut its weight into K equal strata), each
+weighing 1/K (`motionblur.methods.accumulation.sample_times`), summed. The conversion:
 
 - meshes from numpy (``mi.Mesh`` filled through ``mi.traverse``); a moving lambert object is a
   shape group instanced with ``to_world`` = its rigid transform at the sample time; flat objects
@@ -221,8 +221,8 @@ def mitsuba(
 ) -> Frame:
     """The Mitsuba 3 time-sampled reference of ``scene``.
 
-    ``times`` K >= 1 renders at the stratified shutter times ``(i + 0.5) / K`` with weights from
-    the shutter filter; ``spp`` S >= 1 samples per pixel each (independent sampler, seed
+    ``times`` K >= 1 renders at accumulation's stratified shutter times (``(i + 0.5) / K`` under
+    the box; equal strata of the filter's weight under another), 1/K each; ``spp`` S >= 1 samples per pixel each (independent sampler, seed
     ``seed * K + i``; the same seed gives the same image); ``variant`` overrides the Mitsuba
     variant; ``progress`` True/False forces the tqdm bar (default: when K * S * pixels is large).
 

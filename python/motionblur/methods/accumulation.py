@@ -1,8 +1,10 @@
 """The accumulation buffer (OpenGL Programming for the Advanced Programmer, section 14.2).
 
-The frame is the weighted mean of N renders at shutter times ``t_i``: stratified ``(i + 0.5) / N``
-or jittered ``(i + u_i) / N``, each weighted by the shutter filter's integral over its stratum
-``[i / N, (i + 1) / N]``. Static objects (and, with a still camera, everything that does not
+The frame is the mean of N renders at shutter times ``t_i``: the shutter filter's mass is cut
+into N equal strata and ``t_i`` is the time at which the filter's cumulative weight W reaches the
+stratum's stratified point ``(i + 0.5) / N`` (or a jittered one, ``(i + u_i) / N``), so every
+sample weighs 1/N and the samples are denser where the filter weighs more (under the box shutter
+``t_i = (i + 0.5) / N``; see `sample_times`). Static objects (and, with a still camera, everything that does not
 move) are rasterized once into a static layer; each time sample then rasterizes only the moving
 objects, inside the pixel window their motion covers, and composites them with the static layer
 per sample by depth before accumulating. With a translucent object that one depth a pixel per
@@ -26,7 +28,7 @@ from ..budget import need
 from ..raster import Frame
 from ..render import register
 from ..scene import Scene
-from ._accumulate import MAX_TIME_SAMPLES, HalfSums, accumulate, sample_times
+from ._accumulate import MAX_TIME_SAMPLES, HalfSums, accumulate, sample_times, uniform_times
 
 __all__ = [
     "accumulation",
@@ -92,8 +94,9 @@ def row_offsets(scene: Scene, height: int) -> np.ndarray:
 def rolling_accumulation(scene: Scene, samples: int, sampling: str, seed: int, dim: float, aa: int) -> Frame:
     """The accumulation buffer under a rolling shutter (``scene.rolling`` R > 0).
 
-    The whole capture [0, 1] is cut into ``M = ceil(N / (1 - R))`` strata (at most
-    `MAX_TIME_SAMPLES`), one render each at its stratified (or jittered) time; pixel row ``y``
+    The whole capture [0, 1] is cut into ``M = ceil(N / (1 - R))`` equal strata of time (at most
+    `MAX_TIME_SAMPLES`), one render each at its stratified (or jittered) time (`uniform_times`:
+    the rows' windows differ, so no one filter's mass can cut them); pixel row ``y``
     weighs render ``j`` by its filter's weight of stratum ``[a, b] = [j / M, (j + 1) / M]``
     within its own window, ``W((b - o) / s) - W((a - o) / s)`` (``o`` its offset, `row_offsets`;
     ``s = 1 - R``; W clamped to [0, 1]), so every row's weights sum to 1 and each row averages
@@ -103,7 +106,7 @@ def rolling_accumulation(scene: Scene, samples: int, sampling: str, seed: int, d
     error estimate is ``render``'s pilot (no halves)."""
     s = 1.0 - scene.rolling
     m = min(int(np.ceil(samples / s)), MAX_TIME_SAMPLES)
-    times, _ = sample_times(scene, m, sampling, seed)
+    times = uniform_times(m, sampling, seed)
     height = scene.camera.height
     o = row_offsets(scene, height)[:, None]
     cdf = scene.shutter_cdf((np.arange(m + 1)[None, :] / m - o) / s)

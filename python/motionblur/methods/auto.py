@@ -12,18 +12,21 @@ With ``tolerance`` (RMSE against the exact integral, premultiplied linear RGBA):
 
 1. a scene where nothing moves on screen is one sharp frame (its error is 0);
 2. accumulation with [`first_samples`][motionblur.methods.auto.first_samples] samples (what the
-   easier tuning scenes need at that tolerance, 4 to 12) measures the scene's error at that N;
+   easier tuning scenes need at that tolerance, 4 to 8) measures the scene's error at that N;
 3. since the error falls about as 1/N (`RATE`), the N that brings the estimate under
-   ``tolerance`` x `SAFETY` is predicted and rendered, keeping the samples drawn when N
-   is an odd multiple of the last count (under a box shutter the next N is such a multiple
-   unless that draws over `REUSE_DRAWS` x the new samples of a fresh render; with fewer
-   than `SURE_SAMPLES` samples the aim is
-   lower: their halves spread more), and again while the estimate says it missed (each
-   step predicted from the last two measurements, at most `MAX_STEPS` steps);
-4. where that N would cost more than the analytic frame (predicted from its segment count and
-   accumulation's time per sample, only asked once N reaches `ANALYTIC_FROM`), or exceed
-   `MAX_SAMPLES`, or the tolerance is under what accumulation can certify cheaply, the
-   analytic method renders instead (at the exact options below `ANALYTIC_ERROR` x 2).
+   ``tolerance`` x `SAFETY` is predicted and rendered, keeping the samples drawn (`_next_grid`):
+   accumulation's samples cut the shutter's mass into equal strata under any shutter, so an
+   odd multiple of the count holds them, and so does the trapezoid grid (`_Trials._trapezoid`,
+   the strata's ends instead of their middles, one sample more) of any even multiple, which
+   then refines to any multiple of itself; a fresh render is taken when keeping them would
+   draw over `REUSE_DRAWS` x its new samples. With fewer than `SURE_SAMPLES` samples the aim
+   is lower: their halves spread more. Again while the estimate says it missed (each step
+   predicted from the last two measurements, at most `MAX_STEPS` steps);
+4. where the analytic frame's predicted time (`ANALYTIC_FIT`, from the first render's time per
+   sample, the segments, the moving triangles, the shutter and the camera) x `ANALYTIC_MARGIN`
+   is under that of the samples accumulation would still draw, or N would exceed `MAX_SAMPLES`,
+   or the tolerance is under what accumulation can certify cheaply, the analytic method
+   renders instead (at the exact options below `ANALYTIC_ERROR` x 2).
 
 With ``budget_ms``: accumulation with the most samples that fit the budget at the per-sample
 time measured on the first render (the analytic frame instead when its predicted time fits
@@ -44,7 +47,7 @@ from .._validate import as_float, as_int
 from ..raster import Frame
 from ..render import METHODS, register
 from ..scene import Scene
-from ._accumulate import HalfSums, sample_times
+from ._accumulate import HalfSums, sample_times, shutter_quantiles
 from ._estimate import EXACT_OPTIONS
 from ._segments import segment_times
 
@@ -64,7 +67,9 @@ __all__ = [
     "MAX_STEPS",
     "ANALYTIC_ERROR",
     "ANALYTIC_FROM",
-    "ANALYTIC_COST",
+    "ANALYTIC_FIT",
+    "MARGINAL_SAMPLE",
+    "ANALYTIC_MARGIN",
     "REUSE_DRAWS",
 ]
 
@@ -82,8 +87,10 @@ FIRST_SAMPLES = 4
 #: least `FIRST_SAMPLES` and at most `FIRST_MAX`, about what the easier tuning scenes need at
 #: that tolerance, so that the first render is often the last (`first_samples`).
 FIRST_SCALE = 0.08
-#: Most time samples of the first accumulation render.
-FIRST_MAX = 12
+#: Most time samples of the first accumulation render (12 before the trapezoid grid: from 8 a
+#: refinement to 17 or 33 keeps them; on tuning seeds 0-39 at 0.004 and 0.001 auto drew 0.89-0.97x
+#: the samples of 12 first, mean over scenes).
+FIRST_MAX = 8
 #: The rate auto first assumes the error falls at, as N^-RATE (1 for an edge's coverage at one
 #: point; slower where a pixel sees many edges), until two renders show their own.
 RATE = 1.0
@@ -91,13 +98,25 @@ RATE = 1.0
 MAX_SAMPLES = 1 << 12
 #: Most accumulation renders after the first.
 MAX_STEPS = 3
-#: Sample count from which the analytic frame is timed as the alternative.
+#: With ``budget_ms``: the sample count from which the analytic frame is weighed as the alternative.
 ANALYTIC_FROM = 512
-#: The analytic frame's time over (its segments + 8) accumulation samples' (the largest ratio
-#: on most tuning scenes; chosen there).
-ANALYTIC_COST = 4.0
+#: The analytic frame's predicted time (ms): ``exp(c[0]) * ms^c[1] * n^c[2] * (segments + 1)^c[3]
+#: * triangles^c[4] * exp(c[5] * other_shutter + c[6] * camera_moves)``, ``ms`` the first
+#: accumulation render's time per sample and ``n`` its samples, ``segments`` by the analytic
+#: method's rule, ``triangles`` those of the moving objects (all with a moving camera),
+#: ``other_shutter`` 1 under a shutter other than the box. Least squares on log time over tuning
+#: scenes (seeds 0-59 at 96x72, 0-39 at 192x144; CPU time, one thread): the prediction is within
+#: a factor 0.33-1.9 of the time on 90% of them (leave-one-seed-out).
+ANALYTIC_FIT = (-0.261, 0.927, 0.449, 0.753, 0.247, 0.32, 0.267)
+#: The time of one more accumulation sample over the first render's time per sample (which
+#: carries the frame's fixed costs; median on the same tuning scenes, 8 and 12 samples).
+MARGINAL_SAMPLE = 0.6
+#: The analytic frame replaces accumulation when its predicted time x this is under the
+#: predicted time of the samples accumulation still needs (chosen on the same tuning scenes:
+#: the lowest mean time over the cheaper of the two, simulated for 12 to 384 more samples).
+ANALYTIC_MARGIN = 1.2
 #: How many more new samples than a fresh render a refinement that keeps the drawn ones may
-#: draw (`_next_count`; chosen on the tuning scenes).
+#: draw (`_next_grid`; chosen on the tuning scenes).
 REUSE_DRAWS = 1.5
 #: The analytic method's error against the exact integral at its defaults (largest measured on
 #: the tuning scenes, with margin): below twice this tolerance it runs at the exact options.
@@ -134,6 +153,7 @@ class _Trials:
     def __init__(self, scene: Scene, aa: int) -> None:
         self.scene, self.aa, self.tried, self.frames = scene, aa, [], []
         self.sums: HalfSums | None = None
+        self.grid: tuple[int, bool] | None = None  # the strata of the samples drawn, trapezoid or not
 
     def _record(self, method: str, options: dict, frame: Frame, ms: float, est: float) -> Frame:
         frame.stats["error_estimate"] = est
@@ -154,32 +174,64 @@ class _Trials:
             est = 0.0  # the one sharp frame of a scene where nothing moves
         return self._record(method, options, frame, ms, est)
 
-    @property
-    def reuses(self) -> bool:
-        """Whether a finer grid keeps the samples drawn (a box shutter: see `accumulate`)."""
-        return isinstance(self.scene.shutter, str) and self.scene.shutter == "box"
-
-    def accumulate(self, n: int) -> Frame:
-        """Accumulation with ``n`` stratified samples; under a box shutter the samples already
-        drawn are kept when ``n`` is an odd multiple of the last count (their times are on the
-        new grid) and only the others are drawn."""
+    def accumulate(self, n: int, trapezoid: bool = False) -> Frame:
+        """Accumulation with ``n`` samples of equal weight (`sample_times`), or with the
+        ``n + 1`` of the trapezoid grid of ``n`` strata (``trapezoid``: see `_trapezoid`). The
+        samples already drawn are kept when the new grid holds them (`_holds`: their times are
+        among the new ones under any shutter, whose strata are of the shutter's mass) and only
+        the others are drawn."""
         t0 = time.perf_counter()
-        last = self.sums.samples if self.sums is not None else 0
-        if not (self.reuses and last and n % last == 0 and (n // last) % 2 == 1):
-            self.sums, last = HalfSums(self.scene, self.aa), 0
+        keep = self.grid is not None and _holds((n, trapezoid), self.grid)
+        if not keep:
+            self.sums = HalfSums(self.scene, self.aa)
+        if trapezoid:
+            self._trapezoid(n, keep)
+        else:
+            self._stratified(n, keep)
+        self.grid = (n, trapezoid)
+        frame = self.sums.frame()
+        ms = (time.perf_counter() - t0) * 1e3
+        options = {"samples": self.sums.samples, **({"grid": "trapezoid"} if trapezoid else {})}
+        return self._record("accumulation", options, frame, ms, frame.stats["error_estimate"])
+
+    def _stratified(self, n: int, keep: bool) -> None:
+        """Accumulation's own ``n`` samples, the drawn ones (an ``n / last``-th of them) kept."""
         times, weights = sample_times(self.scene, n)
         j = np.arange(n)
-        if last:
-            step = n // last
-            self.sums.reweight(lambda t: (np.full(len(t), 1.0 / n), int(round(t[0] * n - 0.5)) % 2))
+        if keep:
+            step = n // self.grid[0]
+            self.sums.reweight(lambda t: (np.full(len(t), 1.0 / n), _position(times, t[0]) % 2))
             j = j[(j % step) != step // 2]  # the new times only
         for half in (0, 1):
             sel = j[j % 2 == half]
             if len(sel):
                 self.sums.add(times[sel], weights[sel], half)
-        frame = self.sums.frame()
-        ms = (time.perf_counter() - t0) * 1e3
-        return self._record("accumulation", {"samples": n}, frame, ms, frame.stats["error_estimate"])
+
+    def _trapezoid(self, m: int, keep: bool) -> None:
+        """The trapezoid grid of ``m`` strata of the shutter's mass: times ``W^-1(k / m)``, k = 0..m,
+        weights 1/m but 1/(2m) at the two ends; its halves are the even and the odd k (the
+        trapezoid and the midpoint rules of m / 2 strata). It holds any midpoint grid of
+        ``m / (2 q)`` strata and trapezoid grid of ``m / q``, so a refinement may go to any
+        multiple (the stratified grids only to odd ones)."""
+        assert self.sums is not None
+        self.sums.sampling = "trapezoid"
+        k = np.arange(m + 1)
+        times = shutter_quantiles(self.scene.shutter, k / m)
+        weights = np.full(m + 1, 1.0 / m)
+        weights[[0, -1]] = 0.5 / m
+        new = np.ones(m + 1, bool)
+        if keep:
+
+            def weight_of(t):
+                at = _position(times, t)
+                new[at] = False
+                return weights[at], int(at[0]) % 2
+
+            self.sums.reweight(weight_of)
+        for half in (0, 1):
+            sel = k[new & (k % 2 == half)]
+            if len(sel):
+                self.sums.add(times[sel], weights[sel], half)
 
     @property
     def last(self) -> dict:
@@ -193,35 +245,102 @@ class _Trials:
             1, self.sums.samples if self.sums else acc[-1]["options"]["samples"]
         )
 
-    def analytic_ms(self) -> float:
-        """The analytic frame's predicted time: `ANALYTIC_COST` x (its segments + 8) x the
-        accumulation's time per sample (the segments by the analytic method's rule)."""
+    def analytic_ms(self, segments: int | None = None) -> float:
+        """The analytic frame's predicted time (`ANALYTIC_FIT`) from the first accumulation
+        render; ``segments`` by the analytic method's rule unless given (a pilot, listed in
+        ``tried``)."""
         scene = self.scene
         moving = scene.objects if scene.camera_moves else [o for o in scene.objects if o.is_moving]
-        t0 = time.perf_counter()
-        segments = len(segment_times(scene, moving, scene.camera)) - 1
-        ms = (time.perf_counter() - t0) * 1e3
-        self.tried.append(
-            {"method": "analytic", "options": {"pilot": f"{segments} segments"}, "ms": round(ms, 3)}
-        )
-        return ANALYTIC_COST * (segments + 8) * self.per_sample_ms()
+        if segments is None:
+            t0 = time.perf_counter()
+            segments = len(segment_times(scene, moving, scene.camera)) - 1
+            ms = (time.perf_counter() - t0) * 1e3
+            self.tried.append(
+                {"method": "analytic", "options": {"pilot": f"{segments} segments"}, "ms": round(ms, 3)}
+            )
+        first = self.tried[0]
+        n = first["options"]["samples"]
+        per_sample = max(first["ms"], 1e-3) / n
+        triangles = max(1, sum(len(o.mesh.faces) for o in moving))
+        other = not (isinstance(scene.shutter, str) and scene.shutter == "box")
+        c = ANALYTIC_FIT
+        return math.exp(
+            c[0] + c[1] * math.log(per_sample) + c[2] * math.log(n) + c[3] * math.log(segments + 1)
+            + c[4] * math.log(triangles) + c[5] * other + c[6] * scene.camera_moves
+        )  # fmt: skip
 
 
-def _next_count(n: int, want: float, reuse: bool = True) -> int:
-    """The sample count after ``n`` for an estimated need of ``want``: the smallest odd multiple
-    of ``n`` at least ``want`` (whose grid keeps the ``n`` samples drawn, so it draws the others
-    only) when ``reuse`` and that draws at most `REUSE_DRAWS` x as many new samples as ``want``
-    rounded up to even does afresh (a render saved outweighs a few more samples, and the frame
-    gets them too); else that even count, afresh."""
-    odd = n * (2 * math.ceil((want / n - 1) / 2) + 1)
-    fresh = 2 * math.ceil(want / 2)
-    return int(min(MAX_SAMPLES, odd if reuse and odd - n <= REUSE_DRAWS * fresh else fresh))
+def _samples(grid: tuple[int, bool]) -> int:
+    """The samples of a grid (m strata, trapezoid or not): m, or m + 1 for the trapezoid's."""
+    return grid[0] + grid[1]
+
+
+def _holds(new: tuple[int, bool], old: tuple[int, bool]) -> bool:
+    """Whether grid ``new`` holds every time of grid ``old`` (each (strata, trapezoid)): a
+    stratified grid holds one of ``m / q`` strata for odd q; a trapezoid grid holds a stratified
+    one of ``m / (2 q)`` strata and a trapezoid one of ``m / q``, any q."""
+    (m, trap), (m0, trap0) = new, old
+    if not trap:
+        return not trap0 and m % m0 == 0 and (m // m0) % 2 == 1
+    return m % m0 == 0 and (m // m0 > 1) and (trap0 or (m // m0) % 2 == 0)
+
+
+def _position(times: np.ndarray, t) -> np.ndarray | int:
+    """The index in ``times`` (increasing) of the time nearest each of ``t`` (or of the scalar)."""
+    x = np.asarray(t, np.float64)
+    if len(times) == 1:
+        k = np.zeros(x.shape, np.int64)
+    else:
+        k = np.clip(np.searchsorted(times, x), 1, len(times) - 1)
+        k = np.where(x - times[k - 1] < times[k] - x, k - 1, k)
+    return int(k) if k.ndim == 0 else k
+
+
+def _next_grid(grid: tuple[int, bool], want: float) -> tuple[int, bool]:
+    """The grid (strata, trapezoid) after ``grid`` for an estimated need of ``want`` samples:
+    of the grids that hold the samples drawn (`_holds`: an odd multiple of a stratified grid, a
+    trapezoid grid of any multiple) with at least ``want`` samples, the one that draws the
+    fewest new samples (the stratified one on a tie), when it draws at most `REUSE_DRAWS` x as
+    many as ``want`` rounded up to even does afresh (a render saved outweighs a few more
+    samples, and the frame gets them too); else that even count, afresh."""
+    m0, trap0 = grid
+    have = _samples(grid)
+    options = []
+    if not trap0:
+        options.append((m0 * (2 * math.ceil((want / m0 - 1) / 2) + 1), False))
+        options.append((2 * m0 * max(1, math.ceil((want - 1) / (2 * m0))), True))
+    else:
+        options.append((m0 * max(2, math.ceil((want - 1) / m0)), True))
+    best = min(options, key=lambda g: (_samples(g) - have, g[1]))
+    fresh = (2 * math.ceil(want / 2), False)
+    if _samples(best) - have <= REUSE_DRAWS * _samples(fresh) and _samples(best) <= MAX_SAMPLES:
+        return best
+    return (min(MAX_SAMPLES, fresh[0]), False)
 
 
 def first_samples(tol: float) -> int:
     """The time samples of auto's first accumulation render at tolerance ``tol`` (see
-    `FIRST_SCALE`): 8 at 0.01, 12 at 0.007 and below."""
+    `FIRST_SCALE`, `FIRST_MAX`): 4 at 0.02 and above, 6 at 0.0133, 8 at 0.01 and below."""
     return int(min(FIRST_MAX, max(FIRST_SAMPLES, 2 * round(FIRST_SCALE / tol / 2))))
+
+
+def _analytic_instead(trials: _Trials, draws: int, analytic: list) -> str | None:
+    """Why the analytic frame replaces accumulation's next ``draws`` samples, or None: when its
+    predicted time x `ANALYTIC_MARGIN` is under theirs (`MARGINAL_SAMPLE` x the first render's
+    time per sample each). ``analytic`` caches the prediction; the segment pilot runs only when
+    even a one-segment frame would be cheaper."""
+    first = trials.tried[0]
+    acc_ms = draws * MARGINAL_SAMPLE * first["ms"] / first["options"]["samples"]
+    if not analytic and trials.analytic_ms(segments=1) * ANALYTIC_MARGIN >= acc_ms:
+        return None
+    if not analytic:
+        analytic.append(trials.analytic_ms())
+    if analytic[0] * ANALYTIC_MARGIN >= acc_ms:
+        return None
+    return (
+        f"accumulation would draw {draws} more samples (about {acc_ms:.1f} ms); the analytic frame, "
+        f"predicted {analytic[0]:.1f} ms, is exact to {ANALYTIC_ERROR:g}"
+    )
 
 
 def _for_tolerance(trials: _Trials, tol: float) -> str:
@@ -231,7 +350,7 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
         return f"tolerance {tol:g} < 2 x {ANALYTIC_ERROR:g}: the exact integral"
     aim = tol * SAFETY
     trials.accumulate(first_samples(tol))
-    analytic_ms = None
+    analytic: list[float] = []
     rate = RATE
     for _ in range(MAX_STEPS + 1):
         est, n = trials.last["error_estimate"], trials.last["options"]["samples"]
@@ -246,16 +365,17 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
             (n0, e0), (n1, e1) = measured[-2:]
             rate = min(1.2, max(0.5, math.log(e0 / e1) / math.log(n1 / n0)))
         want = max(n * (est / aim) ** (1.0 / rate), n + 2)
-        if want >= ANALYTIC_FROM:
-            if analytic_ms is None:
-                analytic_ms = trials.analytic_ms()
-            if want > MAX_SAMPLES or analytic_ms < want * trials.per_sample_ms():
-                trials.run("analytic")
-                return (
-                    f"accumulation would need {want:.0f} samples (about {want * trials.per_sample_ms():.0f} ms); "
-                    f"the analytic frame, predicted {analytic_ms:.0f} ms, is exact to {ANALYTIC_ERROR:g}"
-                )
-        trials.accumulate(_next_count(n, want, trials.reuses))
+        if want > MAX_SAMPLES:
+            trials.run("analytic")
+            return f"accumulation would need {want:.0f} samples, over {MAX_SAMPLES}: the analytic frame"
+        assert trials.grid is not None
+        nxt = _next_grid(trials.grid, want)
+        draws = _samples(nxt) - (n if _holds(nxt, trials.grid) else 0)
+        why = _analytic_instead(trials, draws, analytic)
+        if why is not None:
+            trials.run("analytic")
+            return why
+        trials.accumulate(*nxt)
     trials.run("analytic")
     return f"accumulation still estimated over the tolerance after {MAX_STEPS} steps: the analytic frame"
 
