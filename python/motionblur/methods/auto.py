@@ -25,9 +25,11 @@ With ``tolerance`` (RMSE against the exact integral, premultiplied linear RGBA):
    `MAX_SAMPLES`, or the tolerance is under what accumulation can certify cheaply, the
    analytic method renders instead (at the exact options below `ANALYTIC_ERROR` x 2).
 
-With ``budget_ms``: accumulation with the most samples that fit the budget at the per-sample
-time measured on the first render (the analytic frame instead when its predicted time fits
-and it is the more accurate), measured against the clock.
+With ``budget_ms``: accumulation with 4 samples measures the time per sample; the analytic
+frame follows where its predicted time fits `BUDGET_SHARE` of the time left (it is more
+accurate than any accumulation that fits); else accumulation grows, keeping the samples drawn
+under a box shutter (odd multiples), to the most that fit `BUDGET_SHARE` of the time left at
+the time per sample its last render took, measured against the clock at every step.
 
 ``Frame.stats["plan"]`` lists every render tried (method, options, ms, error estimate) and why
 the last was kept; ``stats["error_estimate"]`` is the kept frame's own.
@@ -66,6 +68,7 @@ __all__ = [
     "ANALYTIC_FROM",
     "ANALYTIC_COST",
     "REUSE_DRAWS",
+    "BUDGET_SHARE",
 ]
 
 #: The default tolerance: RMSE against the exact time integral (premultiplied linear RGBA).
@@ -99,6 +102,9 @@ ANALYTIC_COST = 4.0
 #: How many more new samples than a fresh render a refinement that keeps the drawn ones may
 #: draw (`_next_count`; chosen on the tuning scenes).
 REUSE_DRAWS = 1.5
+#: The share of the budget's remaining time a render is planned to take (the rest is margin
+#: for the time per sample's spread).
+BUDGET_SHARE = 0.8
 #: The analytic method's error against the exact integral at its defaults (largest measured on
 #: the tuning scenes, with margin): below twice this tolerance it runs at the exact options.
 ANALYTIC_ERROR = 1e-4
@@ -260,25 +266,45 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
     return f"accumulation still estimated over the tolerance after {MAX_STEPS} steps: the analytic frame"
 
 
+def _budget_step(trials: _Trials, room: float) -> tuple[int, int]:
+    """``(n, drawn)``: the next accumulation's sample count when ``room`` more samples fit the
+    budget, and how many it draws: the largest odd multiple of the samples drawn (keeping them,
+    under a box shutter), else a fresh render of ``room`` samples when that is 25% more; ``(0,
+    0)`` when neither fits."""
+    last = trials.sums.samples if trials.sums is not None else 0
+    if trials.reuses and last:
+        most = MAX_SAMPLES // last
+        k = min(2 * int(room / (2 * last)) + 1, most - (most + 1) % 2)  # odd, (k - 1) x last <= room
+        if k >= 3:
+            return k * last, (k - 1) * last
+    n = min(MAX_SAMPLES, 2 * int(room // 2))
+    return (n, n) if n >= 1.25 * last and n > last else (0, 0)
+
+
 def _for_budget(trials: _Trials, budget: float) -> str:
     """The most accurate frame the budget allows (see the module docs); returns why."""
     start = time.perf_counter()
-    trials.accumulate(4)
-    left = budget - (time.perf_counter() - start) * 1e3
-    n = int(left * 0.9 / max(trials.per_sample_ms(), 1e-6))
-    if n >= ANALYTIC_FROM:
-        an = trials.analytic_ms()
-        left = budget - (time.perf_counter() - start) * 1e3
-        if an < 0.8 * left:
-            trials.run("analytic")
-            return f"the analytic frame (predicted {an:.0f} ms) fits the {budget:g} ms budget"
-        n = int(left * 0.9 / max(trials.per_sample_ms(), 1e-6))
-    if n <= 4:
-        return (
-            f"the first render (4 samples) used the budget's time: {trials.last['ms']:.1f} ms of {budget:g}"
-        )
-    trials.accumulate(min(MAX_SAMPLES, n - n % 2))
-    return f"accumulation with the most samples that fit {budget:g} ms at {trials.per_sample_ms():.3f} ms a sample"
+
+    def left() -> float:
+        return budget - (time.perf_counter() - start) * 1e3
+
+    trials.accumulate(FIRST_SAMPLES)
+    est, drawn = trials.last["error_estimate"], FIRST_SAMPLES
+    an = trials.analytic_ms()
+    # where it fits, the analytic frame (about 1e-5 from the exact integral) is more accurate
+    # than any accumulation that fits; unless the first render shows no error at all
+    if an < BUDGET_SHARE * left() and est > 0.0:
+        trials.run("analytic")
+        return f"the analytic frame (predicted {an:.0f} ms) fits the {budget:g} ms budget"
+    for _ in range(MAX_STEPS + 1):
+        per = trials.last["ms"] / drawn  # the last render's time per sample it drew
+        n, new = _budget_step(trials, BUDGET_SHARE * left() / max(per, 1e-6))
+        if not n:
+            break
+        trials.accumulate(n)
+        drawn = new
+    n = trials.sums.samples
+    return f"accumulation-{n}: the most samples that fit {budget:g} ms at the time per sample measured"
 
 
 @register("auto", sweep=[{}, {"tolerance": 0.003}, {"tolerance": 0.03}], applies=lambda scene: True)
