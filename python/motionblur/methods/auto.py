@@ -28,9 +28,11 @@ With ``tolerance`` (RMSE against the exact integral, premultiplied linear RGBA):
    or the tolerance is under what accumulation can certify cheaply, the analytic method
    renders instead (at the exact options below `ANALYTIC_ERROR` x 2).
 
-With ``budget_ms``: accumulation with the most samples that fit the budget at the per-sample
-time measured on the first render (the analytic frame instead when its predicted time fits
-and it is the more accurate), measured against the clock.
+With ``budget_ms``: accumulation with 4 samples measures the time per sample; the analytic
+frame follows where its predicted time fits `BUDGET_SHARE` of the time left (it is more
+accurate than any accumulation that fits); else accumulation grows, keeping the samples drawn
+(`_holds`: an odd multiple, or a trapezoid grid), to the most that fit `BUDGET_SHARE` of the
+time left at the time per sample its last render took, measured against the clock at every step.
 
 ``Frame.stats["plan"]`` lists every render tried (method, options, ms, error estimate) and why
 the last was kept; ``stats["error_estimate"]`` is the kept frame's own.
@@ -66,11 +68,11 @@ __all__ = [
     "SURE_SAMPLES",
     "MAX_STEPS",
     "ANALYTIC_ERROR",
-    "ANALYTIC_FROM",
     "ANALYTIC_FIT",
     "MARGINAL_SAMPLE",
     "ANALYTIC_MARGIN",
     "REUSE_DRAWS",
+    "BUDGET_SHARE",
 ]
 
 #: The default tolerance: RMSE against the exact time integral (premultiplied linear RGBA).
@@ -98,8 +100,6 @@ RATE = 1.0
 MAX_SAMPLES = 1 << 12
 #: Most accumulation renders after the first.
 MAX_STEPS = 3
-#: With ``budget_ms``: the sample count from which the analytic frame is weighed as the alternative.
-ANALYTIC_FROM = 512
 #: The analytic frame's predicted time (ms): ``exp(c[0]) * ms^c[1] * n^c[2] * (segments + 1)^c[3]
 #: * triangles^c[4] * exp(c[5] * other_shutter + c[6] * camera_moves)``, ``ms`` the first
 #: accumulation render's time per sample and ``n`` its samples, ``segments`` by the analytic
@@ -118,6 +118,9 @@ ANALYTIC_MARGIN = 1.2
 #: How many more new samples than a fresh render a refinement that keeps the drawn ones may
 #: draw (`_next_grid`; chosen on the tuning scenes).
 REUSE_DRAWS = 1.5
+#: The share of the budget's remaining time a render is planned to take (the rest is margin
+#: for the time per sample's spread).
+BUDGET_SHARE = 0.8
 #: The analytic method's error against the exact integral at its defaults (largest measured on
 #: the tuning scenes, with margin): below twice this tolerance it runs at the exact options.
 ANALYTIC_ERROR = 1e-4
@@ -380,25 +383,54 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
     return f"accumulation still estimated over the tolerance after {MAX_STEPS} steps: the analytic frame"
 
 
+def _budget_grid(grid: tuple[int, bool], room: float) -> tuple[int, bool] | None:
+    """The next accumulation grid (strata, trapezoid) when ``room`` more samples fit the
+    budget: of the grids that hold the samples drawn (`_holds`) and draw at most ``room`` new
+    ones, the one with the most samples; else a fresh even count, when it has at least 1.25x
+    the samples drawn; None when neither fits (all at most `MAX_SAMPLES` + 1)."""
+    m0, trap0 = grid
+    have = _samples(grid)
+    room = min(room, MAX_SAMPLES - have)
+    options = []
+    if trap0:
+        options.append((m0 * (int(room // m0) + 1), True))  # any multiple: (q - 1) m0 new
+    else:
+        options.append((m0 * (2 * int(room // (2 * m0)) + 1), False))  # odd multiple: (k - 1) m0 new
+        options.append((2 * m0 * int((room + m0 - 1) // (2 * m0)), True))  # 2q m0 + 1 - m0 new
+    grown = [g for g in options if _samples(g) > have and _holds(g, grid)]
+    best = max(grown, key=_samples, default=None)
+    fresh = 2 * int(min(room + have, MAX_SAMPLES) // 2)
+    if fresh >= 1.25 * have and fresh > (_samples(best) if best else 0):
+        return (fresh, False)
+    return best
+
+
 def _for_budget(trials: _Trials, budget: float) -> str:
     """The most accurate frame the budget allows (see the module docs); returns why."""
     start = time.perf_counter()
-    trials.accumulate(4)
-    left = budget - (time.perf_counter() - start) * 1e3
-    n = int(left * 0.9 / max(trials.per_sample_ms(), 1e-6))
-    if n >= ANALYTIC_FROM:
-        an = trials.analytic_ms()
-        left = budget - (time.perf_counter() - start) * 1e3
-        if an < 0.8 * left:
-            trials.run("analytic")
-            return f"the analytic frame (predicted {an:.0f} ms) fits the {budget:g} ms budget"
-        n = int(left * 0.9 / max(trials.per_sample_ms(), 1e-6))
-    if n <= 4:
-        return (
-            f"the first render (4 samples) used the budget's time: {trials.last['ms']:.1f} ms of {budget:g}"
-        )
-    trials.accumulate(min(MAX_SAMPLES, n - n % 2))
-    return f"accumulation with the most samples that fit {budget:g} ms at {trials.per_sample_ms():.3f} ms a sample"
+
+    def left() -> float:
+        return budget - (time.perf_counter() - start) * 1e3
+
+    trials.accumulate(FIRST_SAMPLES)
+    est, drawn = trials.last["error_estimate"], FIRST_SAMPLES
+    an = trials.analytic_ms()
+    # where it fits, the analytic frame (about 1e-5 from the exact integral) is more accurate
+    # than any accumulation that fits; unless the first render shows no error at all
+    if an < BUDGET_SHARE * left() and est > 0.0:
+        trials.run("analytic")
+        return f"the analytic frame (predicted {an:.0f} ms) fits the {budget:g} ms budget"
+    for _ in range(MAX_STEPS + 1):
+        assert trials.grid is not None
+        per = trials.last["ms"] / drawn  # the last render's time per sample it drew
+        grid = _budget_grid(trials.grid, BUDGET_SHARE * left() / max(per, 1e-6))
+        if grid is None:
+            break
+        have = _samples(trials.grid)
+        drawn = _samples(grid) - (have if _holds(grid, trials.grid) else 0)
+        trials.accumulate(*grid)
+    n = trials.last["options"]["samples"]
+    return f"accumulation-{n}: the most samples that fit {budget:g} ms at the time per sample measured"
 
 
 @register("auto", sweep=[{}, {"tolerance": 0.003}, {"tolerance": 0.03}], applies=lambda scene: True)
