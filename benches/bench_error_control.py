@@ -85,7 +85,8 @@ def calibration_rows(scene, ref, seed, size, methods=None) -> list[dict]:
                 {"seed": seed, "size": size, "method": method, "options": opts, "refused": str(exc)[:120]}
             )
             continue
-        measured = rmse(f.rgba, reference(scene, seed, size, "limit") if method == "analytic" else ref)
+        limit = "limit" + hashlib.sha1(repr(_estimate.LIMIT_OPTIONS).encode()).hexdigest()[:6]
+        measured = rmse(f.rgba, reference(scene, seed, size, limit) if method == "analytic" else ref)
         rows.append(
             {
                 "seed": seed, "size": size, "method": method, "options": opts, "measured": measured,

@@ -2,7 +2,8 @@
 
 ``render()`` puts ``stats["error_estimate"]`` on every frame: the estimated RMSE of the frame
 (premultiplied linear RGBA, composited over the scene's background, all four channels) against
-[`exact`][motionblur.methods._estimate.exact] of the same scene at the same ``aa``. A method that can measure its own error does
+[`exact`][motionblur.methods._estimate.exact] of the same scene at the same ``aa`` (the
+analytic method's: against the exact limit, `limit`). A method that can measure its own error does
 so (accumulation compares the halves of its samples, `accumulation`); every other method and
 option set is estimated by a pilot (`pilot_estimate`), with no fitted factor:
 
@@ -17,9 +18,11 @@ option set is estimated by a pilot (`pilot_estimate`), with no fitted factor:
   is held to its own segments each cut into `ANALYTIC_SPLIT` (`refined`, 4 Gauss points): a
   vertex's distance from its chord, and with it the error of every sample, falls by the
   square of the split, with the same sign, so the difference is ``1 - 1 / split**2`` of the
-  pilot's error and is taken up by that (Richardson's step). Its estimate is its RMSE against
-  the exact limit (`limit`), not against ``exact``, which is itself about a fifth as far off
-  as the analytic default;
+  pilot's error and is taken up by that (Richardson's step); and none of its segments is
+  longer than `ANALYTIC_LONGEST`, so that the quadrature of a long piece whose shading swings
+  (which no segment rule cuts where the motion is straight) is resolved too. Its estimate is
+  its RMSE against the exact limit (`limit`), not against ``exact``, which is itself about a
+  quarter as far off as the analytic default;
 - **the frame's size**: a frame larger than the pilot gets a second pilot at a quarter of the
   pixels; an error along edges shrinks with the pixel size (MSE ``a + b / s``), one over areas
   does not, and the two pilots say how much of each (`_extrapolated`);
@@ -32,11 +35,15 @@ option set is estimated by a pilot (`pilot_estimate`), with no fitted factor:
   MSE of random subsets of a sixteenth and a quarter of them gives the growth ``n**beta``
   (``beta`` 0 for a light tail, 1 at most, `_tail_trend`), and the pilot's MSE is carried to
   the frame's pixel count with half of it in log (as `_extrapolated` takes half its trend:
-  two subset sizes of one pilot are a noisy read of the slope).
+  two subset sizes of one pilot are a noisy read of the slope). A frame of at most
+  `ANALYTIC_OWN_PIXELS` is its own pilot: the estimate is then its measured error against the
+  reference, as no smaller pilot would predict where its few large errors fall.
 
 The rules were chosen on the tuning scenes of
-[`motionblur.evaluation.random_scenes`][motionblur.evaluation.random_scenes] only; the
-calibration on the measuring scenes is in the docs (validation.md).
+[`motionblur.evaluation.random_scenes`][motionblur.evaluation.random_scenes] only (but the
+analytic method's `ANALYTIC_LONGEST` and `ANALYTIC_OWN_PIXELS`, added for misses diagnosed on
+measuring scenes, then measured on fresh ones); the calibration on the measuring scenes is in
+the docs (validation.md).
 """
 
 from __future__ import annotations
@@ -62,6 +69,8 @@ __all__ = [
     "REFERENCE_SAMPLES",
     "REFERENCE_SHARE",
     "ANALYTIC_SPLIT",
+    "ANALYTIC_LONGEST",
+    "ANALYTIC_OWN_PIXELS",
     "LIMIT_OPTIONS",
     "TAIL_DRAWS",
     "limit",
@@ -90,11 +99,21 @@ REFERENCE_SHARE = 0.25
 #: ``split**2 / (split**2 - 1)``). 2 costs about what the pilot does; 4 moved the tuning
 #: estimates by no more than the scenes' spread, at twice the cost.
 ANALYTIC_SPLIT = 2
+#: ... and no segment of the reference longer than this share of the shutter: the analytic
+#: method's other error is its Gauss quadrature (at most 4 points a piece) over a long visible
+#: piece of one triangle whose shading swings across it, which a straight motion (one segment)
+#: does not cut at all.
+ANALYTIC_LONGEST = 0.125
+#: The largest frame (pixels) the analytic method's pilot is the frame itself for: its error is
+#: heavy-tailed (one to three pixels may hold most of a frame's MSE), which a pilot samples no
+#: better than the frame's own pixels, and a pilot of a quarter of these costs nearly as much.
+ANALYTIC_OWN_PIXELS = 4 * PILOT_PIXELS
 #: The exact limit the analytic estimate is against (`limit`): the analytic method at a chord
-#: tolerance of 2e-4 px and 4 Gauss points, each segment cut into 4 (whatever the segment cap);
-#: cutting each into 8 moves it by under a tenth of the analytic default's error on the tuning
-#: scenes (docs: validation.md).
-LIMIT_OPTIONS = {"tolerance": 0.0002, "gauss": 4, "split": 4}
+#: tolerance of 2e-4 px and 4 Gauss points, each segment cut into 4 (whatever the segment cap)
+#: and none longer than 1/64 of the shutter; cutting each into 8, or none longer than 1/128,
+#: moves it by under a tenth of the analytic default's error on the tuning scenes (docs:
+#: validation.md).
+LIMIT_OPTIONS = {"tolerance": 0.0002, "gauss": 4, "split": 4, "longest": 1 / 64}
 #: Random subsets of the analytic pilot's pixels per size, whose median MSE gives the growth of a
 #: frame's MSE with its pixel count (`_tail_trend`).
 TAIL_DRAWS = 64
@@ -197,7 +216,7 @@ def _reference(small: Scene, options: dict, method: str, aa: int, rgba: np.ndarr
             wanted = n * acc.stats["error_estimate"] / share if share > 0.0 else math.inf
         return exact(small, aa).rgba.astype(np.float64)
     cuts = {k: options[k] for k in ("tolerance", "segments") if k in options}
-    ref = refined(small, aa, gauss=4, split=ANALYTIC_SPLIT, **cuts)
+    ref = refined(small, aa, gauss=4, split=ANALYTIC_SPLIT, longest=ANALYTIC_LONGEST, **cuts)
     return over_background(ref, small.background).rgba.astype(np.float64)
 
 
@@ -248,7 +267,10 @@ def pilot_estimate(scene: Scene, method: str, options: dict) -> dict:
             "error_estimate_how": "exact: the reference itself",
             "estimate_ms": 0.0,
         }
-    p = pilot_errors(scene, method, options)
+    pixels = scene.camera.width * scene.camera.height
+    if method != "analytic" or pixels > ANALYTIC_OWN_PIXELS:
+        pixels = PILOT_PIXELS
+    p = pilot_errors(scene, method, options, pixels)
     est, how = p["rmse"], f"pilot: the method against the exact integral at {p['size']}"
     if p["scale"] < 1.0 and est > 0.0 and method != "analytic":
         coarse = pilot_errors(scene, method, options, PILOT_PIXELS // 4)
