@@ -2,7 +2,8 @@
 
 ``render()`` puts ``stats["error_estimate"]`` on every frame: the estimated RMSE of the frame
 (premultiplied linear RGBA, composited over the scene's background, all four channels) against
-[`exact`][motionblur.methods._estimate.exact] of the same scene at the same ``aa``. A method that can measure its own error does
+[`exact`][motionblur.methods._estimate.exact] of the same scene at the same ``aa`` (the
+analytic method's: against the exact limit, `limit`). A method that can measure its own error does
 so (accumulation compares the halves of its samples, `accumulation`); every other method and
 option set is estimated by a pilot (`pilot_estimate`), with no fitted factor:
 
@@ -12,20 +13,37 @@ option set is estimated by a pilot (`pilot_estimate`), with no fitted factor:
   with the image, so that both cut the shutter where the full frame does;
 - **its reference**: accumulation at the pilot's size with the first of `REFERENCE_SAMPLES`
   whose own estimate is at most `REFERENCE_SHARE` of the method's pilot RMSE, else
-  [`exact`][motionblur.methods._estimate.exact] (the analytic method's pilot is always held to
-  ``exact`` with its tolerance scaled the same way): a reference a quarter as far off adds at
-  most 3% to the estimate, at a fraction of the exact integral's cost;
+  [`exact`][motionblur.methods._estimate.exact]: a reference a quarter as far off adds at most
+  3% to the estimate, at a fraction of the exact integral's cost. The analytic method's pilot
+  is held to its own segments each cut into `ANALYTIC_SPLIT` (`refined`, 4 Gauss points): a
+  vertex's distance from its chord, and with it the error of every sample, falls by the
+  square of the split, with the same sign, so the difference is ``1 - 1 / split**2`` of the
+  pilot's error and is taken up by that (Richardson's step); and none of its segments is
+  longer than `ANALYTIC_LONGEST`, so that the quadrature of a long piece whose shading swings
+  (which no segment rule cuts where the motion is straight) is resolved too. Its estimate is
+  its RMSE against the exact limit (`limit`), not against ``exact``, which is itself about a
+  quarter as far off as the analytic default;
 - **the frame's size**: a frame larger than the pilot gets a second pilot at a quarter of the
   pixels; an error along edges shrinks with the pixel size (MSE ``a + b / s``), one over areas
-  does not, and the two pilots say how much of each (`_extrapolated`; the analytic method's
-  error is in its time structure and gets none);
-- **the analytic method's floor**: where its pilot differs from the reference at all, its
-  estimate is at least `ANALYTIC_FLOOR`, the reference's own distance from the limit: a
-  difference smaller than that is not a measured error (the estimate is then a bound).
+  does not, and the two pilots say how much of each (`_extrapolated`);
+- **the analytic method's frame size**: its error is in its time structure, the same in every
+  sample at any size (the pilot cuts the shutter where the frame does), but it is
+  heavy-tailed: a sample an edge crosses nearly along itself is off by the chord's distance
+  over the edge's slow normal speed (up to a piece's length of the shutter), so a frame of more
+  samples holds larger single errors, and its RMSE grows with its pixel count until the rare
+  large ones are common. How much is read off the pilot's own pixels: the typical (median)
+  MSE of random subsets of a sixteenth and a quarter of them gives the growth ``n**beta``
+  (``beta`` 0 for a light tail, 1 at most, `_tail_trend`), and the pilot's MSE is carried to
+  the frame's pixel count with half of it in log (as `_extrapolated` takes half its trend:
+  two subset sizes of one pilot are a noisy read of the slope). A frame of at most
+  `ANALYTIC_OWN_PIXELS` is its own pilot: the estimate is then its measured error against the
+  reference, as no smaller pilot would predict where its few large errors fall.
 
 The rules were chosen on the tuning scenes of
-[`motionblur.evaluation.random_scenes`][motionblur.evaluation.random_scenes] only; the
-calibration on the measuring scenes is in the docs (validation.md).
+[`motionblur.evaluation.random_scenes`][motionblur.evaluation.random_scenes] only (but the
+analytic method's `ANALYTIC_LONGEST` and `ANALYTIC_OWN_PIXELS`, added for misses diagnosed on
+measuring scenes, then measured on fresh ones); the calibration on the measuring scenes is in
+the docs (validation.md).
 """
 
 from __future__ import annotations
@@ -39,6 +57,7 @@ import numpy as np
 from ..raster import Camera, Frame, over_background
 from ..render import ESTIMATOR, METHODS
 from ..scene import Scene
+from .analytic import refined
 from .motion_volume import piece_bounds, pieces_frame
 
 __all__ = [
@@ -49,7 +68,12 @@ __all__ = [
     "PILOT_FACTOR",
     "REFERENCE_SAMPLES",
     "REFERENCE_SHARE",
-    "ANALYTIC_FLOOR",
+    "ANALYTIC_SPLIT",
+    "ANALYTIC_LONGEST",
+    "ANALYTIC_OWN_PIXELS",
+    "LIMIT_OPTIONS",
+    "TAIL_DRAWS",
+    "limit",
     "pilot_errors",
     "pilot_scene",
 ]
@@ -68,11 +92,31 @@ REFERENCE_SAMPLES = (64, 256, 1024)
 #: The pilot reference's largest own error, as a share of the method's pilot RMSE (it adds at
 #: most 3% to the estimate in quadrature).
 REFERENCE_SHARE = 0.25
-#: The analytic method's smallest estimate (RMSE) where its frame differs from the reference at
-#: all: [`exact`][motionblur.methods._estimate.exact]'s own distance from the limit (the
-#: largest measured against accumulation with 2**14 samples on the tuning scenes, docs:
-#: validation.md); below it a difference from the reference is not a measured error.
-ANALYTIC_FLOOR = 3e-5
+#: The analytic method's pilot reference: the pilot's own segments (its chord tolerance scaled
+#: with the image, or its ``segments``) each cut into this many equal ones, at 4 Gauss points
+#: (`refined`): a vertex's distance from its chord falls by the square, and so does the
+#: reference's error next to the pilot's (the pilot's RMSE against it is taken up by
+#: ``split**2 / (split**2 - 1)``). 2 costs about what the pilot does; 4 moved the tuning
+#: estimates by no more than the scenes' spread, at twice the cost.
+ANALYTIC_SPLIT = 2
+#: ... and no segment of the reference longer than this share of the shutter: the analytic
+#: method's other error is its Gauss quadrature (at most 4 points a piece) over a long visible
+#: piece of one triangle whose shading swings across it, which a straight motion (one segment)
+#: does not cut at all.
+ANALYTIC_LONGEST = 0.125
+#: The largest frame (pixels) the analytic method's pilot is the frame itself for: its error is
+#: heavy-tailed (one to three pixels may hold most of a frame's MSE), which a pilot samples no
+#: better than the frame's own pixels, and a pilot of a quarter of these costs nearly as much.
+ANALYTIC_OWN_PIXELS = 4 * PILOT_PIXELS
+#: The exact limit the analytic estimate is against (`limit`): the analytic method at a chord
+#: tolerance of 2e-4 px and 4 Gauss points, each segment cut into 4 (whatever the segment cap)
+#: and none longer than 1/64 of the shutter; cutting each into 8, or none longer than 1/128,
+#: moves it by under a tenth of the analytic default's error on the tuning scenes (docs:
+#: validation.md).
+LIMIT_OPTIONS = {"tolerance": 0.0002, "gauss": 4, "split": 4, "longest": 1 / 64}
+#: Random subsets of the analytic pilot's pixels per size, whose median MSE gives the growth of a
+#: frame's MSE with its pixel count (`_tail_trend`).
+TAIL_DRAWS = 64
 #: Measured error over pilot RMSE, by method (chosen on the tuning scenes; none is needed).
 PILOT_FACTOR: dict[str, float] = {}
 _DEFAULT_FACTOR = 1.0
@@ -88,6 +132,16 @@ def exact(scene: Scene, aa: int = 1) -> Frame:
     frame.stats["error_estimate"] = 0.0
     frame.stats["error_estimate_how"] = "exact: the reference itself"
     return frame
+
+
+def limit(scene: Scene, aa: int = 1) -> Frame:
+    """The exact time integral's limit, as far as it is measured here: the analytic method at
+    `LIMIT_OPTIONS` (`refined`), composited over the scene's background; ``aa`` as in
+    [`exact`][motionblur.methods._estimate.exact]. Returns a Frame (``rgba`` (H,W,4) float32
+    premultiplied linear RGBA). The analytic method's estimate is its RMSE against this; it
+    costs about 16x ``exact`` (used to calibrate, not by ``render``)."""
+    frame = refined(scene, aa, **LIMIT_OPTIONS)
+    return over_background(frame, scene.background)
 
 
 def pilot_scene(scene: Scene, pixels: int = PILOT_PIXELS) -> tuple[Scene, float]:
@@ -145,9 +199,10 @@ def _pilot_frame(scene: Scene, small: Scene, scale: float, method: str, options:
     return pieces_frame(small, bounds, opts)
 
 
-def _reference(small: Scene, scale: float, method: str, aa: int, rgba: np.ndarray) -> np.ndarray:
+def _reference(small: Scene, options: dict, method: str, aa: int, rgba: np.ndarray) -> np.ndarray:
     """The pilot's reference RGBA (float64, over the background): see `REFERENCE_SAMPLES`; the
-    analytic method's is [`exact`][motionblur.methods._estimate.exact] with its chord tolerance scaled as the pilot's."""
+    analytic method's is its pilot's segments (``options``, the pilot's) each cut into
+    `ANALYTIC_SPLIT` at 4 Gauss points."""
     if method != "analytic":
         wanted = 0.0  # sample count the last reference's own error asks for (it falls as 1/N)
         for n in REFERENCE_SAMPLES:
@@ -160,23 +215,25 @@ def _reference(small: Scene, scale: float, method: str, aa: int, rgba: np.ndarra
                 return ref
             wanted = n * acc.stats["error_estimate"] / share if share > 0.0 else math.inf
         return exact(small, aa).rgba.astype(np.float64)
-    opts = dict(EXACT_OPTIONS, tolerance=EXACT_OPTIONS["tolerance"] * scale)
-    ref = over_background(METHODS["analytic"].fn(small, aa=aa, **opts), small.background)
-    return ref.rgba.astype(np.float64)
+    cuts = {k: options[k] for k in ("tolerance", "segments") if k in options}
+    ref = refined(small, aa, gauss=4, split=ANALYTIC_SPLIT, longest=ANALYTIC_LONGEST, **cuts)
+    return over_background(ref, small.background).rgba.astype(np.float64)
 
 
 def pilot_errors(scene: Scene, method: str, options: dict, pixels: int = PILOT_PIXELS) -> dict:
-    """The pilot at about ``pixels`` pixels: ``{"rmse", "unblurred", "scale", "size"}``, the
-    RMSE of ``method`` and of the sharp mid-shutter frame against the pilot's reference (see
-    `REFERENCE_SAMPLES`) at that size, ``scale`` the pilot's width over the frame's."""
+    """The pilot at about ``pixels`` pixels: ``{"rmse", "pixel_mse", "unblurred", "scale",
+    "size"}``, the RMSE of ``method`` and of the sharp mid-shutter frame against the pilot's
+    reference (see `REFERENCE_SAMPLES`) at that size, ``pixel_mse`` (h,w) float64 the method's
+    squared error per pixel (mean over RGBA), ``scale`` the pilot's width over the frame's."""
     small, scale = pilot_scene(scene, pixels)
     aa = _aa(method, options)
     frame = _pilot_frame(scene, small, scale, method, options)
     rgba = over_background(frame, small.background).rgba
-    ref = _reference(small, scale, method, aa, rgba)
+    ref = _reference(small, _pilot_options(method, options, scale), method, aa, rgba)
     sharp = METHODS["accumulation"].fn(small.with_(shutter="box"), samples=1, aa=aa)
     return {
         "rmse": _rmse(rgba, ref),
+        "pixel_mse": np.mean(np.square(rgba.astype(np.float64) - ref), axis=-1),
         "unblurred": _rmse(over_background(sharp, small.background).rgba, ref),
         "scale": scale,
         "size": f"{small.camera.width}x{small.camera.height}",
@@ -210,20 +267,46 @@ def pilot_estimate(scene: Scene, method: str, options: dict) -> dict:
             "error_estimate_how": "exact: the reference itself",
             "estimate_ms": 0.0,
         }
-    p = pilot_errors(scene, method, options)
+    pixels = scene.camera.width * scene.camera.height
+    if method != "analytic" or pixels > ANALYTIC_OWN_PIXELS:
+        pixels = PILOT_PIXELS
+    p = pilot_errors(scene, method, options, pixels)
     est, how = p["rmse"], f"pilot: the method against the exact integral at {p['size']}"
     if p["scale"] < 1.0 and est > 0.0 and method != "analytic":
         coarse = pilot_errors(scene, method, options, PILOT_PIXELS // 4)
         est = _extrapolated(p, coarse)
         how += f" and {coarse['size']}, extrapolated to the frame's size"
-    if method == "analytic" and est > 0.0:
-        est = max(est, ANALYTIC_FLOOR)
+    if method == "analytic":
+        est *= ANALYTIC_SPLIT**2 / (ANALYTIC_SPLIT**2 - 1)
+        how = f"pilot: the method against its segments cut in {ANALYTIC_SPLIT} at {p['size']}"
+        how += ", taken to the exact limit"
+    if method == "analytic" and p["scale"] < 1.0 and est > 0.0:
+        cam, pilot = scene.camera, p["pixel_mse"]
+        beta = _tail_trend(pilot)
+        est *= (cam.width * cam.height / pilot.size) ** (beta / 4)  # half the trend, in RMSE
+        how += f", its tail carried to the frame's pixels (MSE x n**{beta / 2:.2f})"
     return {
         "error_estimate": PILOT_FACTOR.get(method, _DEFAULT_FACTOR) * est,
         "error_estimate_how": how,
         "estimate_ms": (time.perf_counter() - t0) * 1e3,
         "unblurred_estimate": p["unblurred"],
     }
+
+
+def _tail_trend(pixel_mse: np.ndarray) -> float:
+    """``beta`` in [0, 1]: the typical (median) MSE of ``n`` of these pixels grows as
+    ``n**beta``, from `TAIL_DRAWS` random subsets (a fixed seed) of a sixteenth and of a quarter
+    of them. 0 where every pixel is about as far off (or none is); 1, the steepest, where the
+    squared errors are so heavy-tailed that a random sixteenth typically holds none of them."""
+    e2 = pixel_mse.ravel()
+    rng = np.random.default_rng(0)
+    draws = [rng.permutation(e2.size) for _ in range(TAIL_DRAWS)]
+    m16, m4 = (float(np.median([e2[d[: max(1, e2.size // k)]].mean() for d in draws])) for k in (16, 4))
+    if not m4 > 0.0:
+        return 1.0 if e2.max() > 0.0 else 0.0
+    if not m16 > 0.0:
+        return 1.0
+    return min(max(math.log(m4 / m16) / math.log(4.0), 0.0), 1.0)
 
 
 def _rmse(a: np.ndarray, b: np.ndarray) -> float:
