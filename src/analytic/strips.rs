@@ -1,14 +1,13 @@
 //! The prims of a frame, set up strip by strip of tile rows: a frame whose prims would hold
 //! more than twice the tile budget ([`Input::tile_budget`], 128 MiB by default; a turning mesh
 //! of 100k faces over a hundred segments: 6M prims, 750 MB, and their bins) first finds which
-//! tile rows each face-segment can reach (4 bytes each; a cheap bound, not the prim), then
-//! sets up, bins and renders one strip at a time with only the prims that reach it, and only
-//! the clip positions those use ([`Plan::tables`]: the frame's would be 32 bytes per vertex and
-//! boundary). Each strip
-//! sets up its prims in the frame's order (the whole frame's list, filtered: each group's
-//! order along the motion is a stable sort, so sorting the strip's part gives the whole
-//! list's order restricted to it), so every tile sees the same prims in the same order as in
-//! one pass: the same bits.
+//! tile rows each face-segment can reach (a cheap bound, not the prim: 4 bytes each, then 2 as
+//! a range of strips), then sets up, bins and renders one strip at a time with only the prims
+//! that reach it and only the clip positions those use ([`Plan::tables`]; the frame's would be
+//! 32 bytes per vertex and boundary). Each strip sets up its prims in the frame's order (the
+//! whole frame's list, filtered: each group's order along the motion is a stable sort, so
+//! sorting the strip's part gives the whole list's order restricted to it), so every tile sees
+//! the same prims in the same order as in one pass: the same bits.
 use rayon::prelude::*;
 
 use super::clip::{ClipTable, Marks};

@@ -4,9 +4,9 @@
 //!
 //! Memory is bounded: a pass over the tile holds at most about [`Input::tile_budget`] bytes
 //! of fragments, links and prims (the vectors' capacity may reach twice that, and is kept by
-//! the thread for the next tile); past it the pass stops and the tile is done again in halves,
-//! down to single samples, with the same result. Only a single sample past the budget on its
-//! own fails, with a memory error naming it.
+//! the thread for its next tile until the strip of tile rows is done); past it the pass stops
+//! and the tile is done again in halves, down to single samples, with the same result. Only a
+//! single sample past the budget on its own fails, with a memory error naming it.
 use std::cell::RefCell;
 use std::time::Instant;
 
