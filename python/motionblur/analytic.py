@@ -29,9 +29,10 @@ __all__ = ["MovingDraw", "rasterize_motion", "coverage", "TILE_BUDGET_BYTES"]
 #: result is the same bits, only slower (``stats["splits"]`` counts the halvings). A single
 #: sample that alone needs more (thousands of moving triangles stacked over it) raises
 #: ``MemoryError`` naming it; raise this setting to let it through. Each thread's buffers may
-#: reach twice this and are kept for the next tile. Twice this bounds the triangle set-ups held
-#: at once (about 124 bytes per triangle and segment): past it the frame is set up and rendered
-#: strip by strip of tile rows (``stats["strips"]``), the same bits.
+#: reach twice this and are kept for its next tile until the strip of tile rows (below) is
+#: done. Twice this bounds the triangle set-ups held at once (about 124 bytes per triangle and
+#: segment): past it the frame is set up and rendered strip by strip of tile rows
+#: (``stats["strips"]``), the same bits.
 TILE_BUDGET_BYTES = 64 << 20
 
 

@@ -8,8 +8,10 @@ use super::hull;
 use super::input::{prepare, validate, Input, Prepared};
 use super::prim::Prim;
 use super::shade::TilePrim;
-use super::strips::Plan;
-use super::tiles::{corners, tile_rows, Counts, Ctx, SampleOut, TileOut, Visible, TILE};
+use super::strips::{self, Plan};
+use super::tiles::{
+    corners, release_scratch, tile_rows, Counts, Ctx, SampleOut, TileOut, Visible, TILE,
+};
 use crate::error::{Error, Result};
 use crate::frame::{Exposure, Frame};
 
@@ -77,7 +79,13 @@ pub fn render(input: &Input) -> Result<(Frame, Stats)> {
     };
 
     let t = Instant::now();
-    let prepared: Vec<Prepared> = input.draws.iter().map(|d| prepare(input, d)).collect();
+    // a frame set up strip by strip computes the clip positions each strip uses (`clip.rs`)
+    let whole = strips::whole(input);
+    let prepared: Vec<Prepared> = input
+        .draws
+        .iter()
+        .map(|d| prepare(input, d, whole))
+        .collect();
     stats.ms_prepare = ms(t);
 
     let (tx, ty) = ((ws as i32 + TILE - 1) / TILE, (hs as i32 + TILE - 1) / TILE);
@@ -142,10 +150,10 @@ pub fn render(input: &Input) -> Result<(Frame, Stats)> {
     stats.strips = plan.strips.len() as u64;
     let mut rest = &mut bands[..];
     let mut bound = 0;
-    for &(r0, r1) in &plan.strips {
+    for (si, &(r0, r1)) in plan.strips.iter().enumerate() {
         let (now, later) = rest.split_at_mut((r1 - r0) as usize);
         rest = later;
-        frame_ctx.strip(r0, now, &mut bound, &mut stats)?;
+        frame_ctx.strip(si, r0, now, &mut bound, &mut stats)?;
     }
     drop(bands);
     stats.ms_total = ms(t_all);
@@ -166,17 +174,34 @@ struct FrameCtx<'a> {
 }
 
 impl FrameCtx<'_> {
-    /// The tile rows `r0..` of `bands` (one band of pixel rows each): their prims set up,
-    /// binned (shared between tiles within a memory budget) and their tiles rendered into
-    /// the bands; adds to `stats`, and to `bound` the tiles the bounds of the prims that start
-    /// here span (each prim is counted in its first strip only: the frame's sum, checked
+    /// Strip `si`, the tile rows `r0..` of `bands` (one band of pixel rows each): their prims
+    /// and the clip positions they use set up, binned (shared between tiles within a memory
+    /// budget) and their tiles rendered into the bands, the threads' tile buffers freed after;
+    /// adds to `stats`, and to `bound` the tiles the bounds of the prims that start here span (each prim is counted in its first strip only: the frame's sum, checked
     /// against [`MAX_BIN_ENTRIES`] as it grows).
-    fn strip(&self, r0: i32, bands: &mut [Band], bound: &mut u64, stats: &mut Stats) -> Result<()> {
-        let (input, prepared) = (self.input, self.prepared);
+    fn strip(
+        &self,
+        si: usize,
+        r0: i32,
+        bands: &mut [Band],
+        bound: &mut u64,
+        stats: &mut Stats,
+    ) -> Result<()> {
+        let input = self.input;
         let (ws, hs, tx) = (self.ws, self.hs, self.tx);
         let r1 = r0 + bands.len() as i32;
         let t = Instant::now();
-        let prims = self.plan.prims_of(input, prepared, ws, hs, r0, r1);
+        let prims = self.plan.prims_of(input, self.prepared, ws, hs, si);
+        // the draws reading the clip positions of this strip's prims, when it has its own
+        let tables = self.plan.tables(input, self.prepared, &prims);
+        let views: Vec<Prepared> = (self.prepared.iter().zip(&tables))
+            .map(|(p, t)| p.with_table(t))
+            .collect();
+        let prepared = if tables.is_empty() {
+            self.prepared
+        } else {
+            &views[..]
+        };
         for p in &prims {
             let (a, b, c, d) = tiles_of(p);
             if b >= r0 {
@@ -244,6 +269,7 @@ impl FrameCtx<'_> {
                 Ok(tiles.into_iter().map(|(_, _, c)| c).collect())
             })
             .collect::<Result<_>>()?;
+        release_scratch();
         stats.ms_tiles += ms(t);
         for counts in rows.iter().flatten() {
             stats.intervals += counts.intervals;

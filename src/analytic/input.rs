@@ -5,6 +5,7 @@ use std::borrow::Cow;
 use glam::{DMat4, DVec4};
 use rayon::prelude::*;
 
+use super::clip::{ClipTable, Marks};
 use super::quadrature::Quadrature;
 use crate::error::{Error, Result};
 use crate::frame::Layer;
@@ -116,8 +117,11 @@ pub const DEFAULT_TILE_BUDGET: usize = 64 << 20;
 pub struct Prepared<'a> {
     /// Vertices per boundary.
     pub nv: usize,
-    /// `(K+1) * V` clip positions (camera of each boundary), read through [`Prepared::clip`].
-    clip: Vec<[f64; 4]>,
+    /// Where the clip positions are read ([`Prepared::clip_at`]).
+    clip: Clip<'a>,
+    /// The world positions at every boundary and the camera's view-projection at each (or one).
+    positions: &'a [[f64; 3]],
+    view_projections: &'a [DMat4],
     /// `(K+1) * V` world normals (lambert): the draw's own, borrowed, or computed; else empty.
     pub normals: Cow<'a, [[f32; 3]]>,
     /// The draw's alpha range per face is read from here: all corners opaque.
@@ -125,6 +129,15 @@ pub struct Prepared<'a> {
     /// The premultiplied colour every triangle of the draw shows at every point, when shading
     /// cannot vary: flat shading of one colour for all vertices, or no shading at all.
     pub uniform: Option<[f32; 4]>,
+}
+
+/// Where a draw's clip positions come from: all computed once (a frame set up whole), computed
+/// when asked (a frame set up strip by strip, before a strip's table), or a strip's table of
+/// the points its triangles use (`clip.rs`). Each is the same product, so the same bits.
+enum Clip<'a> {
+    Dense(Vec<[f64; 4]>),
+    Direct,
+    Table(&'a ClipTable),
 }
 
 fn finite3(p: &[f64; 3]) -> bool {
@@ -287,23 +300,30 @@ fn validate_exposure(input: &Input) -> Result<()> {
     Ok(())
 }
 
-/// Clip positions (camera of each boundary) and, for lambert shading, normals of one draw.
-pub fn prepare<'a>(input: &Input<'a>, d: &MovingDraw<'a>) -> Prepared<'a> {
+/// Clip positions (camera of each boundary) and, for lambert shading, normals of one draw:
+/// the clip positions of every point computed at once when `dense`, else each when asked (or
+/// from a strip's table, [`Prepared::with_table`]).
+pub fn prepare<'a>(input: &Input<'a>, d: &MovingDraw<'a>, dense: bool) -> Prepared<'a> {
     let k1 = input.times.len();
     let nv = d.positions.len() / k1;
-    let vps = input.view_projections;
-    let clip: Vec<[f64; 4]> = d
-        .positions
-        .par_iter()
-        .with_min_len(4096)
-        .enumerate()
-        .map(|(i, p)| {
-            let m = vps[if vps.len() == 1 { 0 } else { i / nv }];
-            let c = m * DVec4::new(p[0], p[1], p[2], 1.0);
-            [c.x, c.y, c.z, c.w]
-        })
-        .collect();
-    let normals = match (d.shading, input.shade, d.normals) {
+    let mut p = Prepared {
+        nv,
+        clip: Clip::Direct,
+        positions: d.positions,
+        view_projections: input.view_projections,
+        normals: Cow::Owned(Vec::new()),
+        opaque_everywhere: d.rgba.iter().all(|c| c[3] >= 1.0),
+        uniform: uniform_colour(input, d),
+    };
+    if dense {
+        let clip = (0..d.positions.len())
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|i| p.compute(i / nv, i))
+            .collect();
+        p.clip = Clip::Dense(clip);
+    }
+    p.normals = match (d.shading, input.shade, d.normals) {
         (Shading::Lambert, true, Some(n)) => Cow::Borrowed(n),
         (Shading::Lambert, true, None) => Cow::Owned(
             (0..k1)
@@ -313,21 +333,61 @@ pub fn prepare<'a>(input: &Input<'a>, d: &MovingDraw<'a>) -> Prepared<'a> {
         ),
         _ => Cow::Owned(Vec::new()),
     };
-    Prepared {
-        nv,
-        clip,
-        normals,
-        opaque_everywhere: d.rgba.iter().all(|c| c[3] >= 1.0),
-        uniform: uniform_colour(input, d),
-    }
+    p
 }
 
 impl Prepared<'_> {
+    /// The clip position of point `i` (of boundary `k`) of the `(K+1) * V`, boundary-major:
+    /// its world position seen by the camera of its boundary.
+    #[inline]
+    fn compute(&self, k: usize, i: usize) -> [f64; 4] {
+        let vps = self.view_projections;
+        let m = vps[if vps.len() == 1 { 0 } else { k }];
+        let p = self.positions[i];
+        let c = m * DVec4::new(p[0], p[1], p[2], 1.0);
+        [c.x, c.y, c.z, c.w]
+    }
+
+    /// The clip position of vertex `v` at boundary `k`, seen by the camera of that boundary
+    /// (from a strip's table: a point its triangles use).
+    #[inline]
+    pub fn clip_at(&self, k: usize, v: usize) -> [f64; 4] {
+        let i = k * self.nv + v;
+        match &self.clip {
+            Clip::Dense(c) => c[i],
+            Clip::Table(t) => t.get(i),
+            Clip::Direct => self.compute(k, i),
+        }
+    }
+
     /// The clip position of point `i` of the `(K+1) * V` (boundary-major), seen by the camera
-    /// of its boundary.
+    /// of its boundary ([`Prepared::clip_at`]).
     #[inline]
     pub fn clip(&self, i: usize) -> [f64; 4] {
-        self.clip[i]
+        match &self.clip {
+            Clip::Dense(c) => c[i],
+            Clip::Table(t) => t.get(i),
+            Clip::Direct => self.compute(i / self.nv, i),
+        }
+    }
+
+    /// The points of `marks` (boundary-major indices) computed into a table.
+    pub fn table(&self, marks: Marks) -> ClipTable {
+        ClipTable::new(marks, |i| self.compute(i / self.nv, i))
+    }
+
+    /// This draw reading its clip positions from `table` ([`Prepared::table`]), the rest
+    /// borrowed.
+    pub fn with_table<'b>(&'b self, table: &'b ClipTable) -> Prepared<'b> {
+        Prepared {
+            nv: self.nv,
+            clip: Clip::Table(table),
+            positions: self.positions,
+            view_projections: self.view_projections,
+            normals: Cow::Borrowed(&self.normals[..]),
+            opaque_everywhere: self.opaque_everywhere,
+            uniform: self.uniform,
+        }
     }
 }
 

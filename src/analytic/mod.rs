@@ -34,6 +34,7 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 mod chain;
+mod clip;
 mod frame;
 mod hull;
 mod input;

@@ -4,9 +4,9 @@
 //!
 //! Memory is bounded: a pass over the tile holds at most about [`Input::tile_budget`] bytes
 //! of fragments, links and prims (the vectors' capacity may reach twice that, and is kept by
-//! the thread for the next tile); past it the pass stops and the tile is done again in halves,
-//! down to single samples, with the same result. Only a single sample past the budget on its
-//! own fails, with a memory error naming it.
+//! the thread for its next tile until the strip of tile rows is done); past it the pass stops
+//! and the tile is done again in halves, down to single samples, with the same result. Only a
+//! single sample past the budget on its own fails, with a memory error naming it.
 use std::cell::RefCell;
 use std::time::Instant;
 
@@ -141,6 +141,19 @@ thread_local! {
     static SCRATCH: RefCell<TileScratch> = RefCell::new(TileScratch::default());
 }
 
+/// Frees the tile buffers every thread of the current pool keeps for its next tile (up to
+/// twice the tile budget each): between strips of a frame, whose tiles may need far less than
+/// the last strip's, and at its end.
+pub fn release_scratch() {
+    rayon::broadcast(|_| {
+        SCRATCH.with(|cell| {
+            if let Ok(mut sc) = cell.try_borrow_mut() {
+                *sc = TileScratch::default();
+            }
+        })
+    });
+}
+
 /// What every tile reads.
 pub struct Ctx<'a> {
     /// The frame's input and its draws prepared.
@@ -163,8 +176,8 @@ pub fn corners(input: &Input, prepared: &[Prepared], p: &Prim, ws: i32, hs: i32)
     let pr = &prepared[p.draw as usize];
     let f = d.faces[p.face as usize];
     let k = p.seg as usize;
-    let c0 = f.map(|i| pr.clip(k * pr.nv + i as usize));
-    let c1 = f.map(|i| pr.clip((k + 1) * pr.nv + i as usize));
+    let c0 = f.map(|i| pr.clip_at(k, i as usize));
+    let c1 = f.map(|i| pr.clip_at(k + 1, i as usize));
     Corners::new(c0, c1, f64::from(ws), f64::from(hs))
 }
 
@@ -338,6 +351,10 @@ impl Ctx<'_> {
         let budget = self.input.tile_budget;
         sc.found.clear((TILE * TILE) as usize);
         sc.prims.clear();
+        // room for every prim of the bin at once (within the budget): grown by doubling, the
+        // prims (520 bytes each) would hold up to twice what they need
+        let room = bin.len().min(budget / std::mem::size_of::<TilePrim>() + 1);
+        sc.prims.try_reserve(room).map_err(|_| Overflow)?;
         // most spans one prim adds in `r`: front and back spans at every sample
         let most = ((r.x1 - r.x0) * (r.y1 - r.y0)) as usize * 2 * MAX_SPANS;
         for (k, &pi) in bin.iter().enumerate() {

@@ -223,3 +223,55 @@ def test_the_peak_memory_of_a_dense_turning_frame_is_bounded_by_its_pixels_and_b
     bound = inputs + pixels + 2 * budget + 2 * 2 * budget + (96 << 20)
     grown = r["peak"] - r["before"]
     assert grown < bound, f"peak grew {grown >> 20} MiB, bound {bound >> 20} MiB ({r})"
+
+
+_KERNEL_MEMORY_CHILD = """
+import json, sys
+import numpy as np
+import motionblur as mb
+from motionblur import meshes
+from motionblur.analytic import MovingDraw, rasterize_motion
+from motionblur.raster import Camera, look_at
+from motionblur.scene import rotate, translate
+def status(key):
+    for line in open("/proc/self/status"):
+        if line.startswith(key):
+            return int(line.split()[1]) * 1024
+k, w, h, budget = (int(a) for a in sys.argv[1:5])
+mb.analytic.TILE_BUDGET_BYTES = budget
+v, f = meshes.icosphere(5, 0.5)
+times = np.linspace(0.0, 1.0, k + 1)
+hom = np.concatenate([v, np.ones((len(v), 1))], axis=1)
+turn = [translate((-0.4 + 0.8 * t, 0.0, 0.0)) @ rotate(1.2 * t, (0, 1, 0)) for t in times]
+draw = MovingDraw(np.stack([(hom @ m.T)[:, :3] for m in turn]), f, (0.8, 0.5, 0.3))
+cam = Camera(look_at((0.0, 0.0, 1.0), (0.0, 0.0, 0.0)), 0.8, w, h)
+with open("/proc/self/clear_refs", "w") as fh:
+    fh.write("5")  # VmHWM from here on
+before = status("VmRSS:")
+fr = rasterize_motion(cam, [draw], times)
+print(json.dumps({"grown": status("VmHWM:") - before, "strips": fr.stats["strips"],
+                  "faces": len(f), "vertices": len(v)}))
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/self/status")
+def test_the_kernel_holds_no_clip_position_of_every_vertex_and_boundary_when_done_strip_by_strip():
+    """A sphere of 10k vertices turning over 256 segments, seen close up, with a 4 MiB tile
+    budget: done strip by strip, the kernel's peak grows by its frame, the plan (4 then 2 bytes
+    per face and segment), a strip's prims (twice the budget, or one row of tiles), the two
+    threads' tile buffers (twice the budget each) and 16 MiB to spare (allocator, tables of the
+    strip's clip positions), not by every vertex's clip position at every boundary (32 bytes
+    each, 84 MB here) nor 12 bytes of plan per face and segment (which took 174 MiB in all)."""
+    k, w, h, budget = 256, 320, 240, 4 << 20
+    out = subprocess.run(
+        [sys.executable, "-c", _KERNEL_MEMORY_CHILD, str(k), str(w), str(h), str(budget)],
+        env={**os.environ, "MOTIONBLUR_NUM_THREADS": "2"}, capture_output=True, text=True, check=True,
+    ).stdout  # fmt: skip
+    r = json.loads(out.strip().splitlines()[-1])
+    assert r["strips"] > 1
+    frame = w * h * (16 + 4 + 4 + 8)
+    plan = 6 * r["faces"] * k
+    bound = frame + plan + 2 * 2 * budget + 2 * 2 * budget + (16 << 20)
+    every_clip = 32 * (k + 1) * r["vertices"]
+    assert every_clip > bound // 2
+    assert r["grown"] < bound, f"the kernel grew {r['grown'] >> 20} MiB, bound {bound >> 20} MiB ({r})"
