@@ -119,7 +119,8 @@ def stages(scene: Scene, method: str, rounds: int) -> dict[str, float]:
         scale = float(np.float32(1.0 / tc))
         blur = best(
             lambda: _core._camera_frame_blur(
-                c(frame.rgba), c(frame.depth), c(frame.ids), c(frame.velocity), moving, cam, start, scale, 16
+                c(frame.rgba), c(frame.depth), c(frame.ids), c(frame.velocity), moving,
+                {"camera": cam, "previous_camera": start, "scale": scale, "samples": 16},
             ),
             rounds,
         )

@@ -40,7 +40,7 @@
 use rayon::prelude::*;
 
 use super::reach::Reach;
-use super::{check_finite, check_image, filled};
+use super::{check_finite, check_image, filled, filled_with};
 use crate::error::{Error, Result};
 
 /// Largest number of gather taps per pixel.
@@ -109,31 +109,37 @@ fn max_len2(v: &[[f32; 2]]) -> f32 {
 }
 
 /// Half velocities clamped to `tile` pixels and their lengths, per pixel; None when a
-/// velocity is not finite.
+/// velocity is not finite. Both buffers are written once, never zeroed first.
 fn half_velocities(velocity: &[f32], tile: f32) -> Option<(Vec<[f32; 2]>, Vec<f32>)> {
     const BLOCK: usize = 1 << 14;
     let n = velocity.len() / 2;
-    let (mut half, mut speed) = (vec![[0.0f32; 2]; n], vec![0.0f32; n]);
-    let finite = half
-        .par_chunks_mut(BLOCK)
-        .zip(speed.par_chunks_mut(BLOCK))
-        .zip(velocity.par_chunks(2 * BLOCK))
-        .map(|((hs, ss), vs)| {
-            let mut ok = true;
-            for ((hv, sv), v) in hs.iter_mut().zip(ss.iter_mut()).zip(vs.chunks_exact(2)) {
-                ok &= v[0].is_finite() & v[1].is_finite();
-                let h = [0.5 * v[0], 0.5 * v[1]];
-                let l = len2(h).sqrt();
-                *hv = if l > tile {
-                    [h[0] * tile / l, h[1] * tile / l]
-                } else {
-                    h
-                };
-                *sv = len2(*hv).sqrt();
-            }
-            ok
-        })
-        .reduce(|| true, |a, b| a & b);
+    let mut finite = true;
+    let mut speed = Vec::new();
+    let half = filled_with(n, |half| {
+        speed = filled_with(n, |speed| {
+            finite = half
+                .par_chunks_mut(BLOCK)
+                .zip(speed.par_chunks_mut(BLOCK))
+                .zip(velocity.par_chunks(2 * BLOCK))
+                .map(|((hs, ss), vs)| {
+                    let mut ok = true;
+                    for ((hv, sv), v) in hs.iter_mut().zip(ss.iter_mut()).zip(vs.chunks_exact(2)) {
+                        ok &= v[0].is_finite() & v[1].is_finite();
+                        let h = [0.5 * v[0], 0.5 * v[1]];
+                        let l = len2(h).sqrt();
+                        let c = if l > tile {
+                            [h[0] * tile / l, h[1] * tile / l]
+                        } else {
+                            h
+                        };
+                        hv.write(c);
+                        sv.write(len2(c).sqrt());
+                    }
+                    ok
+                })
+                .reduce(|| true, |a, b| a & b);
+        });
+    });
     finite.then_some((half, speed))
 }
 
