@@ -233,13 +233,29 @@ def _velocity_masks(frame: Frame, mask, mean, groups: bool):
     for sel in parts:
         vel = v[sel].mean(axis=0) if groups else np.asarray(mean, np.float64)
         py, px = ys[sel], xs[sel]
-        r = int(np.ceil(0.5 * float(np.hypot(vel[0], vel[1])))) + 2
-        y0, y1 = max(0, int(py.min()) - r), min(h, int(py.max()) + r + 1)
-        x0, x1 = max(0, int(px.min()) - r), min(w, int(px.max()) + r + 1)
+        ry, rx = _reach(vel)
+        y0, y1 = max(0, int(py.min()) - ry), min(h, int(py.max()) + ry + 1)
+        x0, x1 = max(0, int(px.min()) - rx), min(w, int(px.max()) + rx + 1)
         m = np.zeros((y1 - y0, x1 - x0), bool)
         m[py - y0, px - x0] = True
         out.append(((y0, y1, x0, x1), m, vel))
     return out
+
+
+def _reach(vel) -> tuple[int, int]:
+    """(rows, columns) a box blur of length ``|vel|`` along ``vel`` (2,) spreads a mask by, at
+    most, on each side. Along its major axis (the one the core filters along: y when ``|vy| >
+    |vx|`` in float32, as ``image.box_blur`` receives it) ``ceil(|vel| / 2) + 2``, the reach
+    the windows have always had: the window's first column (row) there sets where the sheared
+    rows sample the layer, so it stays. Across it, the shear moves the taps by at most half the
+    minor component, and the two interpolations (into the shear and back) by a row each: ``ceil(
+    |minor| / 2) + 3``. A window any larger only adds pixels nothing reaches, which composite
+    to the static pixels unchanged."""
+    r = int(np.ceil(0.5 * float(np.hypot(vel[0], vel[1])))) + 2
+    dx, dy = abs(float(np.float32(vel[0]))), abs(float(np.float32(vel[1])))
+    if dy > dx:
+        return r, min(r, int(np.ceil(0.5 * dx)) + 3)
+    return min(r, int(np.ceil(0.5 * dy)) + 3), r
 
 
 def _opaque_blur(frame: Frame, order, layers: bool, groups: bool):
