@@ -79,6 +79,20 @@ def _sharp(scene: Scene, t: float, aa: int, velocity: str | None, static: Static
     everything (tests/methods/test_image_space_fast_paths.py)."""
     if static is None or velocity == "since_open":
         return sharp_frame(scene, t, aa, velocity=velocity)
+    frame, pasted = _sharp_over(scene, t, aa, velocity, static)
+    rgba = static.rgba.copy()
+    if pasted is not None:
+        (y0, y1, x0, x1), part = pasted
+        rgba[y0:y1, x0:x1] = part
+    return Frame(rgba, frame.depth, frame.ids, frame.velocity)
+
+
+def _sharp_over(scene: Scene, t: float, aa: int, velocity: str | None, static: Static):
+    """`_sharp` over the ``static`` layer, its colour left apart: (a Frame whose ``rgba`` is
+    the static layer's own array, not to be written, with the depth, ids and velocity of the
+    sharp frame; ``((y0, y1, x0, x1), rgba there)``, the window the moving objects were drawn
+    in, or None). The sharp frame's colour is the static colour with that window pasted in:
+    `_window_rgba` reads a window of it without making the whole image."""
     cam = scene.camera_at(t)
     draws, points = [], []
     for k, o in enumerate(scene.objects):
@@ -89,9 +103,10 @@ def _sharp(scene: Scene, t: float, aa: int, velocity: str | None, static: Static
             prev = v - (o.world_vertices(1.0) - o.world_vertices(0.0))
         draws.append(Draw(v, o.mesh.faces, o.rgba, object_id=k, previous_vertices=prev))
         points.append(v[np.unique(o.mesh.faces)] if len(o.mesh.faces) else v[:0])
-    rgba, depth, ids = static.rgba.copy(), static.depth.copy(), static.ids.copy()
+    depth, ids = static.depth.copy(), static.ids.copy()
     vel = np.zeros((*ids.shape, 2), np.float32)
     win = _window(cam, np.concatenate(points) if points else np.zeros((0, 3)))
+    pasted = None
     if win is not None:
         x0, y0, x1, y1 = win
         layer = static.layer
@@ -103,10 +118,23 @@ def _sharp(scene: Scene, t: float, aa: int, velocity: str | None, static: Static
             "ambient": tuple(map(float, scene.ambient)), "origin": (x0 * aa, y0 * aa),
         }  # fmt: skip
         part = _core._rasterize(draws, options, Layer(c(layer.rgba), c(layer.depth), c(layer.ids)))
-        rgba[y0:y1, x0:x1], depth[y0:y1, x0:x1], ids[y0:y1, x0:x1] = part[:3]
+        depth[y0:y1, x0:x1], ids[y0:y1, x0:x1] = part[1:3]
+        pasted = ((y0, y1, x0, x1), part[0])
         if part[3] is not None:  # (no velocity buffer when no draw has previous vertices)
             vel[y0:y1, x0:x1] = part[3]
-    return Frame(rgba, depth, ids, vel)
+    return Frame(static.rgba, depth, ids, vel), pasted
+
+
+def _window_rgba(frame: Frame, pasted, y0: int, y1: int, x0: int, x1: int) -> np.ndarray:
+    """The sharp frame's colour over rows ``y0:y1`` and columns ``x0:x1``, a new array:
+    ``frame.rgba`` there with the ``pasted`` window of `_sharp_over` (or None) laid over it."""
+    out = frame.rgba[y0:y1, x0:x1].copy()
+    if pasted is not None:
+        (py0, py1, px0, px1), part = pasted
+        a0, a1, b0, b1 = max(y0, py0), min(y1, py1), max(x0, px0), min(x1, px1)
+        if a0 < a1 and b0 < b1:
+            out[a0 - y0 : a1 - y0, b0 - x0 : b1 - x0] = part[a0 - py0 : a1 - py0, b0 - px0 : b1 - px0]
+    return out
 
 
 def _window(cam, points: np.ndarray):
@@ -166,7 +194,10 @@ def opaque_image(
     require_box_shutter(scene, "opaque_image")
     tc = shutter_centroid(scene)
     static = _static_part(scene, aa)
-    frame = _sharp(scene, tc, aa, "shutter", static)
+    if glow == "coverage" and static is not None:  # (its colour read by windows: no full copy)
+        frame, pasted = _sharp_over(scene, tc, aa, "shutter", static)
+    else:
+        frame, pasted = _sharp(scene, tc, aa, "shutter", static), None
     order = []  # (depth, object, mean velocity (2,), (its pixels' window, mask there))
     for k, (y0, y1, x0, x1) in _moving_windows(scene, frame.ids):
         mask = frame.ids[y0:y1, x0:x1] == k
@@ -175,7 +206,9 @@ def opaque_image(
     order.sort(key=lambda e: -e[0])
     lengths = {k: float(np.hypot(v[0], v[1])) for _, k, v, _ in order}
     if glow == "coverage":
-        rgba, masks, front_pixels = _coverage_blur(scene, frame, tc, aa, order, layers, groups, static)
+        rgba, masks, front_pixels = _coverage_blur(
+            scene, (frame, pasted), tc, aa, order, layers, groups, static
+        )
     else:
         order = [(z, k, v, _full_mask(frame.ids.shape, win, m)) for z, k, v, (win, m) in order]
         rgba, masks, front_pixels = _opaque_blur(frame, order, layers, groups)
@@ -284,14 +317,16 @@ def _opaque_blur(frame: Frame, order, layers: bool, groups: bool):
 
 
 def _coverage_blur(
-    scene: Scene, frame: Frame, tc: float, aa: int, order, layers: bool, groups: bool, static: Static | None
+    scene: Scene, sharp, tc: float, aa: int, order, layers: bool, groups: bool, static: Static | None
 ):
     """Each moving object's velocity masks box-blurred, opacity included (the coverage glow),
     summed (a turning object's masks sweep into each other: opacity capped at 1), and
     composited farthest first over the static objects rendered alone (the kept ``static``
     layer when there is one); with ``layers`` a static pixel nearer than the object's blurred
     depth there stays in front of it. Only the window each object's blurred masks cover is
-    computed: elsewhere nothing reaches and the static pixels are kept as they are."""
+    computed: elsewhere nothing reaches and the static pixels are kept as they are. ``sharp``:
+    (the sharp frame, the window pasted over its colour or None: `_sharp_over`)."""
+    frame, pasted = sharp
     if static is None:
         statics = scene.with_(objects=[o for o in scene.objects if not o.is_moving])
         back = sharp_frame(statics, tc, aa, velocity=None)
@@ -312,7 +347,7 @@ def _coverage_blur(
         zs = z[oy0 - wy0 : oy1 - wy0, ox0 - wx0 : ox1 - wx0]
         zs[...] = np.where(m0, frame.depth[oy0:oy1, ox0:ox1], 0.0)
         for (y0, y1, x0, x1), m, vel in parts:
-            layer = np.ascontiguousarray(frame.rgba[y0:y1, x0:x1] * m[..., None])
+            layer = np.ascontiguousarray(_window_rgba(frame, pasted, y0, y1, x0, x1) * m[..., None])
             zm = m.astype(np.float32)
             zw = z[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0]
             zl = np.ascontiguousarray(np.stack([zw * zm, 0 * zm, 0 * zm, zm], axis=-1))
