@@ -350,7 +350,8 @@ def _coverage_blur(
             layer = np.ascontiguousarray(_window_rgba(frame, pasted, y0, y1, x0, x1) * m[..., None])
             zm = m.astype(np.float32)
             zw = z[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0]
-            zl = np.ascontiguousarray(np.stack([zw * zm, 0 * zm, 0 * zm, zm], axis=-1))
+            zl = np.zeros((*zm.shape, 4), np.float32)  # (z m, 0, 0, m)
+            zl[..., 0], zl[..., 3] = zw * zm, zm
             length = float(np.hypot(vel[0], vel[1]))
             if length >= 1.0:
                 masks += 1
@@ -358,18 +359,22 @@ def _coverage_blur(
                 zl = image.box_blur(zl, (vel[0], vel[1]), length)
             blurred[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0] += layer
             depth[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0] += zl
-        a = blurred[..., 3:4]
-        blurred *= np.where(a > 1.0, 1.0 / np.maximum(a, 1e-30), 1.0).astype(np.float32)
-        over = blurred + (1.0 - blurred[..., 3:4]) * sub
-        if not layers:
-            rgba[wy0:wy1, wx0:wx1] = over
-            continue
-        reach = depth[..., 3] > 1e-6
-        zbar = np.where(reach, depth[..., 0] / np.maximum(depth[..., 3], 1e-30), np.inf)
-        front = reach & (back_depth[wy0:wy1, wx0:wx1] < zbar)
-        front_pixels += int(front.sum())
-        under = sub + (1.0 - sub[..., 3:4]) * blurred
-        rgba[wy0:wy1, wx0:wx1] = np.where(front[..., None], under, over)
+        a = blurred[..., 3]
+        big = a > 1.0  # opacity capped at 1 (elsewhere the scale is 1: no change)
+        if big.any():
+            blurred[big] *= (1.0 / a[big])[:, None]
+        over = (1.0 - blurred[..., 3:4]) * sub  # blurred over the static pixels
+        over += blurred
+        if layers:  # the static pixels nearer than the blurred depth there in front instead
+            reach = depth[..., 3] > 1e-6
+            front = reach.copy()
+            zbar = depth[..., 0][reach] / np.maximum(depth[..., 3][reach], 1e-30)
+            front[reach] = back_depth[wy0:wy1, wx0:wx1][reach] < zbar
+            front_pixels += int(front.sum())
+            if front.any():
+                near = sub[front]
+                over[front] = near + (1.0 - near[:, 3:4]) * blurred[front]
+        sub[...] = over  # (a view of rgba)
     return rgba, masks, front_pixels
 
 
