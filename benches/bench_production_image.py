@@ -25,11 +25,16 @@ of the same array (target 1.5x).
 The machine has 2 cores shared with other jobs: the load average is printed before and after;
 ratios measured in the same run are the meaningful figures. ``--quick``: 1080p only, 3 rounds;
 ``--no-errors``: times only (the analytic references take minutes). Writes
-out/bench/production_image.csv.
+out/bench/production_image.csv. ``--hash``: no timing; the SHA-1 of every method's frame at
+each size (with ``--quick``, 1080p only) printed and written to
+out/bench/production_image_hashes.json, to check that a faster kernel gives the same bits
+(run it on both trees and compare the files).
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
 import platform
 import sys
@@ -54,6 +59,7 @@ TARGET = 2.0
 BLUR_TARGET = 1.5
 QUICK = "--quick" in sys.argv  # fewer rounds, 1080p only (a smoke run)
 NO_ERRORS = "--no-errors" in sys.argv  # times only (the analytic references take minutes)
+HASH = "--hash" in sys.argv  # the frames' hashes instead of times
 
 
 def knot70k(width: int, height: int) -> Scene:
@@ -119,7 +125,12 @@ def stages(scene: Scene, method: str, rounds: int) -> dict[str, float]:
         scale = float(np.float32(1.0 / tc))
         blur = best(
             lambda: _core._camera_frame_blur(
-                c(frame.rgba), c(frame.depth), c(frame.ids), c(frame.velocity), moving, cam, start, scale, 16
+                c(frame.rgba),
+                c(frame.depth),
+                c(frame.ids),
+                c(frame.velocity),
+                moving,
+                {"camera": cam, "previous_camera": start, "scale": scale, "samples": 16},
             ),
             rounds,
         )
@@ -182,10 +193,29 @@ def opaque_vs_copy(w: int, h: int, rounds: int) -> tuple[float, float]:
     return a, b
 
 
+def hashes(sizes, out: Path) -> None:
+    """SHA-1 of the RGBA of each method's frame (and of the sharp frame) at each size."""
+    got = {}
+    for w, h in sizes:
+        for name, (build, methods) in SCENES.items():
+            scene = build(w, h)
+            for m in ("accumulation", *methods):
+                opts = {"samples": 1} if m == "accumulation" else {}
+                rgba = np.ascontiguousarray(mb.render(scene, m, error_estimate=False, **opts).rgba)
+                key = f"{w}x{h} {name} {m}"
+                got[key] = hashlib.sha1(rgba.tobytes()).hexdigest()
+                print(f"{key}: {got[key]}", flush=True)
+    (out / "production_image_hashes.json").write_text(json.dumps(got, indent=1) + "\n")
+    print(f"wrote {out / 'production_image_hashes.json'}")
+
+
 def main() -> None:
     warnings.simplefilter("ignore")
     out = Path("out/bench")
     out.mkdir(parents=True, exist_ok=True)
+    if HASH:
+        hashes(SIZES[:1] if QUICK else SIZES, out)
+        return
     rounds = 3 if QUICK else 7
     sizes = SIZES[:1] if QUICK else SIZES
     print(

@@ -184,14 +184,24 @@ pub(crate) fn check_direction(
 /// read). It is not zeroed first: for a full-size image, zeroing costs as much as a blur's own
 /// write pass.
 pub(crate) fn filled(n: usize, fill: impl FnOnce(&mut [std::mem::MaybeUninit<f32>])) -> Vec<f32> {
-    let mut v: Vec<std::mem::MaybeUninit<f32>> = Vec::with_capacity(n);
+    filled_with(n, fill)
+}
+
+/// [`filled`] for any plain type `T` (floats, pairs of floats). A large buffer is backed by
+/// huge pages ([`pool::advise_huge`]) before `fill` first touches it.
+pub(crate) fn filled_with<T: Copy>(
+    n: usize,
+    fill: impl FnOnce(&mut [std::mem::MaybeUninit<T>]),
+) -> Vec<T> {
+    let mut v: Vec<std::mem::MaybeUninit<T>> = Vec::with_capacity(n);
+    pool::advise_huge(&v);
     // SAFETY: MaybeUninit needs no initialisation.
     unsafe { v.set_len(n) };
     fill(&mut v);
     let mut v = std::mem::ManuallyDrop::new(v);
-    // SAFETY: `fill` initialised every element (its contract); MaybeUninit<f32> has the layout
-    // of f32, and the allocation is handed over unchanged.
-    unsafe { Vec::from_raw_parts(v.as_mut_ptr() as *mut f32, v.len(), v.capacity()) }
+    // SAFETY: `fill` initialised every element (its contract); MaybeUninit<T> has the layout
+    // of T, and the allocation is handed over unchanged.
+    unsafe { Vec::from_raw_parts(v.as_mut_ptr() as *mut T, v.len(), v.capacity()) }
 }
 
 /// Copies `src` into the uninitialised `dst` (of the same length), as one memcpy.
@@ -214,7 +224,9 @@ pub(crate) fn put4(o: &mut [std::mem::MaybeUninit<f32>], x: usize, v: [f32; 4]) 
 /// Transposes a `(h, w, C)` image into `(w, h, C)`, in cache blocks, in parallel over output rows.
 pub(crate) fn transpose<const C: usize>(src: &[f32], w: usize, h: usize) -> Vec<f32> {
     use rayon::prelude::*;
-    let mut out = vec![0.0f32; src.len()];
+    let mut out = Vec::with_capacity(src.len());
+    pool::advise_huge(&out);
+    out.resize(src.len(), 0.0f32);
     const B: usize = 32;
     out.par_chunks_mut(B * h * C)
         .enumerate()

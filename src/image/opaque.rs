@@ -20,6 +20,10 @@ use super::{check_direction, check_image, check_premultiplied, filled, put4, sim
 use crate::error::Result;
 use std::mem::MaybeUninit;
 
+/// From this many output floats (16 MiB, a 1280x720 frame and up) the rows are written with
+/// non-temporal stores (`box_finish`'s `stream`): an image that size leaves the cache anyway.
+const STREAM_FLOATS: usize = 4 << 20;
+
 #[derive(Default)]
 struct RowScratch {
     glow: GlowScratch,
@@ -43,6 +47,7 @@ fn rows_path(
 ) -> bool {
     let simd = simd();
     let same = std::ptr::eq(rgba, base);
+    let stream = out.len() >= STREAM_FLOATS;
     out.par_chunks_mut(2 * w * 4)
         .zip(rgba.par_chunks(2 * w * 4))
         .zip(base.par_chunks(2 * w * 4))
@@ -103,7 +108,7 @@ fn rows_path(
                     });
                 }
             }
-            box_finish(&mut jobs, w, r, comp, simd);
+            box_finish(&mut jobs, w, r, comp, simd, stream);
             true
         })
         .reduce(|| true, |a, b| a & b)

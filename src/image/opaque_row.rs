@@ -183,12 +183,16 @@ pub(crate) struct RowJob<'a> {
 /// Writes pixels `xa .. xb` of each job's output row: the mean of the `2r + 1` source pixels
 /// `x - r ..= x + r` (zero outside the row; running sums in f64, started at `xa - r`), eq. 7 with
 /// the job's glow, and the composite with its base. Every row has `n` pixels; one or two jobs.
+/// `stream`: the output is too large to stay in the cache (a full frame), so the vector form
+/// writes it with non-temporal stores, which do not read each line before writing it: the same
+/// values, a third less memory traffic.
 pub(crate) fn box_finish(
     jobs: &mut [RowJob],
     n: usize,
     r: usize,
     comp: Option<Composite>,
     simd: bool,
+    stream: bool,
 ) {
     for j in jobs.iter() {
         let (xa, xb) = j.span;
@@ -201,10 +205,10 @@ pub(crate) fn box_finish(
     #[cfg(target_arch = "x86_64")]
     if simd {
         // SAFETY: AVX2 was detected; the lengths were checked above.
-        unsafe { avx::box_finish(jobs, n, r, comp) };
+        unsafe { avx::box_finish(jobs, n, r, comp, stream) };
         return;
     }
-    let _ = simd;
+    let _ = (simd, stream);
     for j in jobs.iter_mut() {
         let (xa, xb) = j.span;
         let (base, out, glow) = (j.base, &mut *j.out, j.glow);
@@ -435,9 +439,10 @@ mod avx {
     }
 
     /// Pixels `x .. x + 4` of two rows: four steps of both running sums, then eq. 7 of the
-    /// eight pixels with one division (`super::finish`'s operations, lane for lane).
+    /// eight pixels with one division (`super::finish`'s operations, lane for lane). `NT`:
+    /// non-temporal stores (both output rows 16-byte aligned).
     #[inline(always)]
-    unsafe fn block4<const C: u8>(
+    unsafe fn block4<const C: u8, const NT: bool>(
         a: &mut Row,
         b: &mut Row,
         x: usize,
@@ -491,7 +496,12 @@ mod avx {
                     }
                     _ => sub,
                 };
-                _mm256_storeu2_m128(b.out.add((x + $i) * 4), a.out.add((x + $i) * 4), o);
+                if NT {
+                    _mm_stream_ps(a.out.add((x + $i) * 4), _mm256_castps256_ps128(o));
+                    _mm_stream_ps(b.out.add((x + $i) * 4), _mm256_extractf128_ps::<1>(o));
+                } else {
+                    _mm256_storeu2_m128(b.out.add((x + $i) * 4), a.out.add((x + $i) * 4), o);
+                }
             }};
         }
         finish!(0);
@@ -506,16 +516,27 @@ mod avx {
         n: usize,
         r: usize,
         comp: Option<Composite>,
+        stream: bool,
     ) {
-        match comp {
-            None => rows::<NONE>(jobs, n, r),
-            Some(Composite::Over) => rows::<OVER>(jobs, n, r),
-            Some(Composite::Under) => rows::<UNDER>(jobs, n, r),
+        // non-temporal stores need 16-byte aligned pixels (every pixel is when its row is)
+        let aligned = jobs.iter().all(|j| j.out.as_ptr() as usize % 16 == 0);
+        match (comp, stream && aligned) {
+            (None, false) => rows::<NONE, false>(jobs, n, r),
+            (Some(Composite::Over), false) => rows::<OVER, false>(jobs, n, r),
+            (Some(Composite::Under), false) => rows::<UNDER, false>(jobs, n, r),
+            (None, true) => rows::<NONE, true>(jobs, n, r),
+            (Some(Composite::Over), true) => rows::<OVER, true>(jobs, n, r),
+            (Some(Composite::Under), true) => rows::<UNDER, true>(jobs, n, r),
+        }
+        if stream {
+            // the non-temporal stores ordered before whatever this thread does next (the
+            // rayon join that hands the rows over)
+            _mm_sfence();
         }
     }
 
     #[target_feature(enable = "avx2")]
-    unsafe fn rows<const C: u8>(jobs: &mut [RowJob], n: usize, r: usize) {
+    unsafe fn rows<const C: u8, const NT: bool>(jobs: &mut [RowJob], n: usize, r: usize) {
         let inv = _mm256_set1_pd(1.0 / (2 * r + 1) as f64);
         let (a, b) = match jobs {
             [a, b] => (a, b),
@@ -542,7 +563,7 @@ mod avx {
         }
         let mut x = m0;
         while x + 4 <= m1 {
-            block4::<C>(&mut a, &mut b, x, n, r, inv);
+            block4::<C, NT>(&mut a, &mut b, x, n, r, inv);
             x += 4;
         }
         for x in x..m1 {

@@ -40,7 +40,7 @@
 use rayon::prelude::*;
 
 use super::reach::Reach;
-use super::{check_finite, check_image, filled};
+use super::{check_finite, check_image, filled, filled_with};
 use crate::error::{Error, Result};
 
 /// Largest number of gather taps per pixel.
@@ -74,22 +74,37 @@ fn len2(v: [f32; 2]) -> f32 {
 /// (what picks the default tile), NaN when any length is NaN, 0 for no pixels. The same for
 /// any thread count (a maximum does not depend on the order).
 pub fn max_speed(velocity: &[f32]) -> f64 {
-    let most = |a: f64, b: f64| {
-        if a.is_nan() || b.is_nan() {
-            f64::NAN
-        } else {
-            a.max(b)
-        }
-    };
-    velocity
+    // sqrt is correctly rounded and non-decreasing, so the longest length is the square root of
+    // the largest squared length: one root for the image, not one a pixel. Lanes of 8 pixels
+    // keep the largest squared length and whether one is NaN apart, so that the loop vectorises.
+    let (most, nan) = velocity
         .par_chunks(2 << 12)
         .map(|c| {
-            c.chunks_exact(2).fold(0.0f64, |m, v| {
+            let mut lanes = [0.0f64; 8];
+            let mut nan = false;
+            let mut pixels = c.chunks_exact(16);
+            for p in &mut pixels {
+                for k in 0..8 {
+                    let (x, y) = (p[2 * k] as f64, p[2 * k + 1] as f64);
+                    let l = x * x + y * y;
+                    nan |= l.is_nan();
+                    lanes[k] = lanes[k].max(l);
+                }
+            }
+            for v in pixels.remainder().chunks_exact(2) {
                 let (x, y) = (v[0] as f64, v[1] as f64);
-                most(m, (x * x + y * y).sqrt())
-            })
+                let l = x * x + y * y;
+                nan |= l.is_nan();
+                lanes[0] = lanes[0].max(l);
+            }
+            (lanes.iter().fold(0.0f64, |m, l| m.max(*l)), nan)
         })
-        .reduce(|| 0.0, most)
+        .reduce(|| (0.0, false), |a, b| (a.0.max(b.0), a.1 | b.1));
+    if nan {
+        f64::NAN
+    } else {
+        most.sqrt()
+    }
 }
 
 /// The largest squared length of `v` (0 for none), over 8 lanes.
@@ -109,31 +124,37 @@ fn max_len2(v: &[[f32; 2]]) -> f32 {
 }
 
 /// Half velocities clamped to `tile` pixels and their lengths, per pixel; None when a
-/// velocity is not finite.
+/// velocity is not finite. Both buffers are written once, never zeroed first.
 fn half_velocities(velocity: &[f32], tile: f32) -> Option<(Vec<[f32; 2]>, Vec<f32>)> {
     const BLOCK: usize = 1 << 14;
     let n = velocity.len() / 2;
-    let (mut half, mut speed) = (vec![[0.0f32; 2]; n], vec![0.0f32; n]);
-    let finite = half
-        .par_chunks_mut(BLOCK)
-        .zip(speed.par_chunks_mut(BLOCK))
-        .zip(velocity.par_chunks(2 * BLOCK))
-        .map(|((hs, ss), vs)| {
-            let mut ok = true;
-            for ((hv, sv), v) in hs.iter_mut().zip(ss.iter_mut()).zip(vs.chunks_exact(2)) {
-                ok &= v[0].is_finite() & v[1].is_finite();
-                let h = [0.5 * v[0], 0.5 * v[1]];
-                let l = len2(h).sqrt();
-                *hv = if l > tile {
-                    [h[0] * tile / l, h[1] * tile / l]
-                } else {
-                    h
-                };
-                *sv = len2(*hv).sqrt();
-            }
-            ok
-        })
-        .reduce(|| true, |a, b| a & b);
+    let mut finite = true;
+    let mut speed = Vec::new();
+    let half = filled_with(n, |half| {
+        speed = filled_with(n, |speed| {
+            finite = half
+                .par_chunks_mut(BLOCK)
+                .zip(speed.par_chunks_mut(BLOCK))
+                .zip(velocity.par_chunks(2 * BLOCK))
+                .map(|((hs, ss), vs)| {
+                    let mut ok = true;
+                    for ((hv, sv), v) in hs.iter_mut().zip(ss.iter_mut()).zip(vs.chunks_exact(2)) {
+                        ok &= v[0].is_finite() & v[1].is_finite();
+                        let h = [0.5 * v[0], 0.5 * v[1]];
+                        let l = len2(h).sqrt();
+                        let c = if l > tile {
+                            [h[0] * tile / l, h[1] * tile / l]
+                        } else {
+                            h
+                        };
+                        hv.write(c);
+                        sv.write(len2(c).sqrt());
+                    }
+                    ok
+                })
+                .reduce(|| true, |a, b| a & b);
+        });
+    });
     finite.then_some((half, speed))
 }
 
@@ -214,8 +235,6 @@ pub fn reconstruct(
         depth,
         half: &half,
         speed: &speed,
-        nmax: &nmax,
-        tx,
         w,
         h,
         params,
@@ -227,8 +246,15 @@ pub fn reconstruct(
             .par_chunks_mut(w * 4)
             .enumerate()
             .map(|(y, row)| {
-                for x in 0..w {
-                    super::put4(row, x, gather(&g, (x, y)));
+                // the row's pixels tile by tile: one neighbour max (and its length) a tile,
+                // not two integer divisions a pixel
+                let tiles = &nmax[(y / params.tile) * tx..];
+                for (k, xs) in (0..w).step_by(params.tile).enumerate() {
+                    let n = tiles[k];
+                    let rn = len2(n).sqrt();
+                    for x in xs..(xs + params.tile).min(w) {
+                        super::put4(row, x, gather(&g, (x, y), (n, rn)));
+                    }
                 }
                 let src = &rgba[y * w * 4..(y + 1) * w * 4];
                 src.iter().fold(true, |ok, v| ok & v.is_finite())
@@ -271,8 +297,8 @@ fn check_params(params: ReconstructParams) -> Result<()> {
     Ok(())
 }
 
-/// What every pixel's gather reads: the image and its depth, the half velocities, the tiles'
-/// neighbour max (`tx` tiles a row), the size `w` x `h`, the parameters and the cells' speeds.
+/// What every pixel's gather reads besides its tile's neighbour max: the image and its depth,
+/// the half velocities, the size `w` x `h`, the parameters and the cells' speeds.
 #[derive(Clone, Copy)]
 struct Gather<'a> {
     rgba: &'a [f32],
@@ -280,8 +306,6 @@ struct Gather<'a> {
     half: &'a [[f32; 2]],
     /// `|half|` per pixel.
     speed: &'a [f32],
-    nmax: &'a [[f32; 2]],
-    tx: usize,
     w: usize,
     h: usize,
     params: ReconstructParams,
@@ -305,23 +329,23 @@ struct Sums {
     taps: f32,
 }
 
-fn gather(g: &Gather<'_>, (x, y): (usize, usize)) -> [f32; 4] {
+/// The gather of pixel `(x, y)` (module docs); `n` the neighbour max of its tile, `rn` its
+/// length.
+fn gather(g: &Gather<'_>, (x, y): (usize, usize), (n, rn): ([f32; 2], f32)) -> [f32; 4] {
     let Gather {
         rgba,
         depth,
         half,
         speed,
-        nmax,
-        tx,
         w,
         h,
         params,
         reach,
+        ..
     } = *g;
     let i = y * w + x;
-    let n = nmax[(y / params.tile) * tx + x / params.tile];
     let c = half[i];
-    let (rn, rc) = (len2(n).sqrt(), speed[i]);
+    let rc = speed[i];
     if rn.max(rc) < 0.5 {
         return [
             rgba[i * 4],
@@ -502,6 +526,26 @@ mod tests {
         let i = (10 * w + 17) * 4;
         assert!((out[i] - out[i + 3]).abs() < 1e-5);
         assert!((out[i + 1] - 0.5 * out[i + 3]).abs() < 1e-5);
+    }
+
+    #[test]
+    fn max_speed_is_the_longest_length() {
+        // the root of the largest squared length against the largest root, with tails of every
+        // length and chunks of several threads
+        for n in [0usize, 1, 7, 9, 5000, 20001] {
+            let v: Vec<f32> = (0..2 * n)
+                .map(|i| ((i * 7919 % 1013) as f32 - 506.0) * 0.37)
+                .collect();
+            let want = v.chunks_exact(2).fold(0.0f64, |m, p| {
+                m.max(((p[0] as f64).powi(2) + (p[1] as f64).powi(2)).sqrt())
+            });
+            assert_eq!(max_speed(&v).to_bits(), want.to_bits(), "{n}");
+            if n > 0 {
+                let mut bad = v.clone();
+                bad[2 * n - 1] = f32::NAN;
+                assert!(max_speed(&bad).is_nan());
+            }
+        }
     }
 
     #[test]

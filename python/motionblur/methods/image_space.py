@@ -79,6 +79,20 @@ def _sharp(scene: Scene, t: float, aa: int, velocity: str | None, static: Static
     everything (tests/methods/test_image_space_fast_paths.py)."""
     if static is None or velocity == "since_open":
         return sharp_frame(scene, t, aa, velocity=velocity)
+    frame, pasted = _sharp_over(scene, t, aa, velocity, static)
+    rgba = static.rgba.copy()
+    if pasted is not None:
+        (y0, y1, x0, x1), part = pasted
+        rgba[y0:y1, x0:x1] = part
+    return Frame(rgba, frame.depth, frame.ids, frame.velocity)
+
+
+def _sharp_over(scene: Scene, t: float, aa: int, velocity: str | None, static: Static):
+    """`_sharp` over the ``static`` layer, its colour left apart: (a Frame whose ``rgba`` is
+    the static layer's own array, not to be written, with the depth, ids and velocity of the
+    sharp frame; ``((y0, y1, x0, x1), rgba there)``, the window the moving objects were drawn
+    in, or None). The sharp frame's colour is the static colour with that window pasted in:
+    `_window_rgba` reads a window of it without making the whole image."""
     cam = scene.camera_at(t)
     draws, points = [], []
     for k, o in enumerate(scene.objects):
@@ -89,9 +103,10 @@ def _sharp(scene: Scene, t: float, aa: int, velocity: str | None, static: Static
             prev = v - (o.world_vertices(1.0) - o.world_vertices(0.0))
         draws.append(Draw(v, o.mesh.faces, o.rgba, object_id=k, previous_vertices=prev))
         points.append(v[np.unique(o.mesh.faces)] if len(o.mesh.faces) else v[:0])
-    rgba, depth, ids = static.rgba.copy(), static.depth.copy(), static.ids.copy()
+    depth, ids = static.depth.copy(), static.ids.copy()
     vel = np.zeros((*ids.shape, 2), np.float32)
     win = _window(cam, np.concatenate(points) if points else np.zeros((0, 3)))
+    pasted = None
     if win is not None:
         x0, y0, x1, y1 = win
         layer = static.layer
@@ -103,10 +118,23 @@ def _sharp(scene: Scene, t: float, aa: int, velocity: str | None, static: Static
             "ambient": tuple(map(float, scene.ambient)), "origin": (x0 * aa, y0 * aa),
         }  # fmt: skip
         part = _core._rasterize(draws, options, Layer(c(layer.rgba), c(layer.depth), c(layer.ids)))
-        rgba[y0:y1, x0:x1], depth[y0:y1, x0:x1], ids[y0:y1, x0:x1] = part[:3]
+        depth[y0:y1, x0:x1], ids[y0:y1, x0:x1] = part[1:3]
+        pasted = ((y0, y1, x0, x1), part[0])
         if part[3] is not None:  # (no velocity buffer when no draw has previous vertices)
             vel[y0:y1, x0:x1] = part[3]
-    return Frame(rgba, depth, ids, vel)
+    return Frame(static.rgba, depth, ids, vel), pasted
+
+
+def _window_rgba(frame: Frame, pasted, y0: int, y1: int, x0: int, x1: int) -> np.ndarray:
+    """The sharp frame's colour over rows ``y0:y1`` and columns ``x0:x1``, a new array:
+    ``frame.rgba`` there with the ``pasted`` window of `_sharp_over` (or None) laid over it."""
+    out = frame.rgba[y0:y1, x0:x1].copy()
+    if pasted is not None:
+        (py0, py1, px0, px1), part = pasted
+        a0, a1, b0, b1 = max(y0, py0), min(y1, py1), max(x0, px0), min(x1, px1)
+        if a0 < a1 and b0 < b1:
+            out[a0 - y0 : a1 - y0, b0 - x0 : b1 - x0] = part[a0 - py0 : a1 - py0, b0 - px0 : b1 - px0]
+    return out
 
 
 def _window(cam, points: np.ndarray):
@@ -166,7 +194,10 @@ def opaque_image(
     require_box_shutter(scene, "opaque_image")
     tc = shutter_centroid(scene)
     static = _static_part(scene, aa)
-    frame = _sharp(scene, tc, aa, "shutter", static)
+    if glow == "coverage" and static is not None:  # (its colour read by windows: no full copy)
+        frame, pasted = _sharp_over(scene, tc, aa, "shutter", static)
+    else:
+        frame, pasted = _sharp(scene, tc, aa, "shutter", static), None
     order = []  # (depth, object, mean velocity (2,), (its pixels' window, mask there))
     for k, (y0, y1, x0, x1) in _moving_windows(scene, frame.ids):
         mask = frame.ids[y0:y1, x0:x1] == k
@@ -175,7 +206,9 @@ def opaque_image(
     order.sort(key=lambda e: -e[0])
     lengths = {k: float(np.hypot(v[0], v[1])) for _, k, v, _ in order}
     if glow == "coverage":
-        rgba, masks, front_pixels = _coverage_blur(scene, frame, tc, aa, order, layers, groups, static)
+        rgba, masks, front_pixels = _coverage_blur(
+            scene, (frame, pasted), tc, aa, order, layers, groups, static
+        )
     else:
         order = [(z, k, v, _full_mask(frame.ids.shape, win, m)) for z, k, v, (win, m) in order]
         rgba, masks, front_pixels = _opaque_blur(frame, order, layers, groups)
@@ -233,13 +266,29 @@ def _velocity_masks(frame: Frame, mask, mean, groups: bool):
     for sel in parts:
         vel = v[sel].mean(axis=0) if groups else np.asarray(mean, np.float64)
         py, px = ys[sel], xs[sel]
-        r = int(np.ceil(0.5 * float(np.hypot(vel[0], vel[1])))) + 2
-        y0, y1 = max(0, int(py.min()) - r), min(h, int(py.max()) + r + 1)
-        x0, x1 = max(0, int(px.min()) - r), min(w, int(px.max()) + r + 1)
+        ry, rx = _reach(vel)
+        y0, y1 = max(0, int(py.min()) - ry), min(h, int(py.max()) + ry + 1)
+        x0, x1 = max(0, int(px.min()) - rx), min(w, int(px.max()) + rx + 1)
         m = np.zeros((y1 - y0, x1 - x0), bool)
         m[py - y0, px - x0] = True
         out.append(((y0, y1, x0, x1), m, vel))
     return out
+
+
+def _reach(vel) -> tuple[int, int]:
+    """(rows, columns) a box blur of length ``|vel|`` along ``vel`` (2,) spreads a mask by, at
+    most, on each side. Along its major axis (the one the core filters along: y when ``|vy| >
+    |vx|`` in float32, as ``image.box_blur`` receives it) ``ceil(|vel| / 2) + 2``, the reach
+    the windows have always had: the window's first column (row) there sets where the sheared
+    rows sample the layer, so it stays. Across it, the shear moves the taps by at most half the
+    minor component, and the two interpolations (into the shear and back) by a row each: ``ceil(
+    |minor| / 2) + 3``. A window any larger only adds pixels nothing reaches, which composite
+    to the static pixels unchanged."""
+    r = int(np.ceil(0.5 * float(np.hypot(vel[0], vel[1])))) + 2
+    dx, dy = abs(float(np.float32(vel[0]))), abs(float(np.float32(vel[1])))
+    if dy > dx:
+        return r, min(r, int(np.ceil(0.5 * dx)) + 3)
+    return min(r, int(np.ceil(0.5 * dy)) + 3), r
 
 
 def _opaque_blur(frame: Frame, order, layers: bool, groups: bool):
@@ -268,14 +317,16 @@ def _opaque_blur(frame: Frame, order, layers: bool, groups: bool):
 
 
 def _coverage_blur(
-    scene: Scene, frame: Frame, tc: float, aa: int, order, layers: bool, groups: bool, static: Static | None
+    scene: Scene, sharp, tc: float, aa: int, order, layers: bool, groups: bool, static: Static | None
 ):
     """Each moving object's velocity masks box-blurred, opacity included (the coverage glow),
     summed (a turning object's masks sweep into each other: opacity capped at 1), and
     composited farthest first over the static objects rendered alone (the kept ``static``
     layer when there is one); with ``layers`` a static pixel nearer than the object's blurred
     depth there stays in front of it. Only the window each object's blurred masks cover is
-    computed: elsewhere nothing reaches and the static pixels are kept as they are."""
+    computed: elsewhere nothing reaches and the static pixels are kept as they are. ``sharp``:
+    (the sharp frame, the window pasted over its colour or None: `_sharp_over`)."""
+    frame, pasted = sharp
     if static is None:
         statics = scene.with_(objects=[o for o in scene.objects if not o.is_moving])
         back = sharp_frame(statics, tc, aa, velocity=None)
@@ -296,10 +347,11 @@ def _coverage_blur(
         zs = z[oy0 - wy0 : oy1 - wy0, ox0 - wx0 : ox1 - wx0]
         zs[...] = np.where(m0, frame.depth[oy0:oy1, ox0:ox1], 0.0)
         for (y0, y1, x0, x1), m, vel in parts:
-            layer = np.ascontiguousarray(frame.rgba[y0:y1, x0:x1] * m[..., None])
+            layer = np.ascontiguousarray(_window_rgba(frame, pasted, y0, y1, x0, x1) * m[..., None])
             zm = m.astype(np.float32)
             zw = z[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0]
-            zl = np.ascontiguousarray(np.stack([zw * zm, 0 * zm, 0 * zm, zm], axis=-1))
+            zl = np.zeros((*zm.shape, 4), np.float32)  # (z m, 0, 0, m)
+            zl[..., 0], zl[..., 3] = zw * zm, zm
             length = float(np.hypot(vel[0], vel[1]))
             if length >= 1.0:
                 masks += 1
@@ -307,18 +359,22 @@ def _coverage_blur(
                 zl = image.box_blur(zl, (vel[0], vel[1]), length)
             blurred[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0] += layer
             depth[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0] += zl
-        a = blurred[..., 3:4]
-        blurred *= np.where(a > 1.0, 1.0 / np.maximum(a, 1e-30), 1.0).astype(np.float32)
-        over = blurred + (1.0 - blurred[..., 3:4]) * sub
-        if not layers:
-            rgba[wy0:wy1, wx0:wx1] = over
-            continue
-        reach = depth[..., 3] > 1e-6
-        zbar = np.where(reach, depth[..., 0] / np.maximum(depth[..., 3], 1e-30), np.inf)
-        front = reach & (back_depth[wy0:wy1, wx0:wx1] < zbar)
-        front_pixels += int(front.sum())
-        under = sub + (1.0 - sub[..., 3:4]) * blurred
-        rgba[wy0:wy1, wx0:wx1] = np.where(front[..., None], under, over)
+        a = blurred[..., 3]
+        big = a > 1.0  # opacity capped at 1 (elsewhere the scale is 1: no change)
+        if big.any():
+            blurred[big] *= (1.0 / a[big])[:, None]
+        over = (1.0 - blurred[..., 3:4]) * sub  # blurred over the static pixels
+        over += blurred
+        if layers:  # the static pixels nearer than the blurred depth there in front instead
+            reach = depth[..., 3] > 1e-6
+            front = reach.copy()
+            zbar = depth[..., 0][reach] / np.maximum(depth[..., 3][reach], 1e-30)
+            front[reach] = back_depth[wy0:wy1, wx0:wx1][reach] < zbar
+            front_pixels += int(front.sum())
+            if front.any():
+                near = sub[front]
+                over[front] = near + (1.0 - near[:, 3:4]) * blurred[front]
+        sub[...] = over  # (a view of rgba)
     return rgba, masks, front_pixels
 
 
