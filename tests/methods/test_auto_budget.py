@@ -70,3 +70,22 @@ def test_a_budget_smaller_than_the_first_render_returns_the_first_render():
     f = mb.render(scene, "auto", budget_ms=1e-3)
     assert _accumulations(f) == [auto_mod.FIRST_SAMPLES]
     assert f.stats["plan"]["kept"]["method"] == "accumulation"
+
+
+def test_each_budget_step_draws_no_more_samples_than_fit():
+    """`_budget_grid` over grids and rooms: the samples it draws (all of a fresh render's, the
+    new ones of a grid that holds the drawn ones) are at most the room, it grows the frame, and
+    it declines only where no grid or fresh render of 1.25x fits. A fresh render sized by the
+    room plus the samples already drawn once overran 10 ms budgets by 1.2-1.6x."""
+    for grid in [(4, False), (8, False), (12, False), (32, True), (24, True), (20, False)]:
+        have = auto_mod._samples(grid)
+        for room in [0.5, 1, 3, 7, 8, 9, 15, 21, 30, 47, 100, 333, 5000]:
+            nxt = auto_mod._budget_grid(grid, room)
+            if nxt is None:
+                least = grid[0] + (not grid[1])  # the fewest new samples a grid that holds them draws
+                assert 2 * int(room // 2) < 1.25 * have and room < least, (grid, room)
+                continue
+            kept = auto_mod._holds(nxt, grid)
+            drawn = auto_mod._samples(nxt) - (have if kept else 0)
+            assert drawn <= room and auto_mod._samples(nxt) > have, (grid, room, nxt)
+            assert auto_mod._samples(nxt) <= auto_mod.MAX_SAMPLES + 1

@@ -390,6 +390,7 @@ def _budget_grid(grid: tuple[int, bool], room: float) -> tuple[int, bool] | None
     the samples drawn; None when neither fits (all at most `MAX_SAMPLES` + 1)."""
     m0, trap0 = grid
     have = _samples(grid)
+    fresh = 2 * int(min(room, MAX_SAMPLES) // 2)  # a fresh render draws all its samples
     room = min(room, MAX_SAMPLES - have)
     options = []
     if trap0:
@@ -399,7 +400,6 @@ def _budget_grid(grid: tuple[int, bool], room: float) -> tuple[int, bool] | None
         options.append((2 * m0 * int((room + m0 - 1) // (2 * m0)), True))  # 2q m0 + 1 - m0 new
     grown = [g for g in options if _samples(g) > have and _holds(g, grid)]
     best = max(grown, key=_samples, default=None)
-    fresh = 2 * int(min(room + have, MAX_SAMPLES) // 2)
     if fresh >= 1.25 * have and fresh > (_samples(best) if best else 0):
         return (fresh, False)
     return best
@@ -420,9 +420,11 @@ def _for_budget(trials: _Trials, budget: float) -> str:
     if an < BUDGET_SHARE * left() and est > 0.0:
         trials.run("analytic")
         return f"the analytic frame (predicted {an:.0f} ms) fits the {budget:g} ms budget"
+    share = MARGINAL_SAMPLE  # the first render's time per sample carries the frame's fixed costs
     for _ in range(MAX_STEPS + 1):
         assert trials.grid is not None
-        per = trials.last["ms"] / drawn  # the last render's time per sample it drew
+        per = share * trials.last["ms"] / drawn  # the last render's time per sample it drew
+        share = 1.0
         grid = _budget_grid(trials.grid, BUDGET_SHARE * left() / max(per, 1e-6))
         if grid is None:
             break
