@@ -22,14 +22,21 @@ Also printed: the analytic kernel's profile (thread time finding covered spans a
 samples, prim set-up, the Python side: segment rule and the straddled positions), and where a
 target is missed, why.
 
-Usage: python benches/bench_production.py [--quick] [--repeat 2] [--level 2] [--sections target,memory,scaling]
-Writes out/bench/production.md, production_resolution.png and production_faces.png.
+``motion``: time against the translation's length and the turn's angle at ``--faces-size``,
+beside accumulation with 256 samples and accumulation at the analytic frame's own error (its
+sample count extrapolated from its errors at 64 and 256 samples, its time taken as linear in
+the count), errors against the exact integral at the same size.
+
+Usage: python benches/bench_production.py [--quick] [--repeat 2] [--level 2] [--sections target,memory,scaling,motion]
+Writes out/bench/production.md, production_resolution.png, production_faces.png and
+production_motion.png.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import subprocess
 import sys
@@ -62,18 +69,20 @@ def bunny(level: int) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(m.vertices), np.asarray(m.faces)
 
 
-def motion(kind: str, angle: float = 1.2) -> Motion:
+def motion(kind: str, angle: float = 1.2, length: float = 1.2) -> Motion:
+    """``translate``: ``length`` scene units across the view; ``turn``: ``angle`` radians about the
+    vertical while moving 0.8 units across, five keys."""
     y = FLOOR_Y + 0.002
     if kind == "translate":
-        return Motion.linear(translate((-0.75, y, 0.0)), translate((0.45, y, 0.0)))
+        return Motion.linear(translate((-0.15 - length / 2, y, 0.0)), translate((-0.15 + length / 2, y, 0.0)))
     ts = np.linspace(0.0, 1.0, 5)
     return Motion(
         ts, np.stack([translate((-0.5 + 0.8 * t, y, 0.0)) @ rotate(angle * t, (0, 1, 0)) for t in ts])
     )
 
 
-def scene(mesh, kind: str, w: int, h: int) -> Scene:
-    obj = Object(mesh, color=_COLORS["bunny"], shading="lambert", motion=motion(kind), name="bunny")
+def scene(mesh, kind: str, w: int, h: int, **shape) -> Scene:
+    obj = Object(mesh, color=_COLORS["bunny"], shading="lambert", motion=motion(kind, **shape), name="bunny")
     light = DirectionalLight((-0.35, -1.0, -0.55), 1.0)
     return Scene([obj, _floor()], _camera(w, h), lights=[light], ambient=0.0, shutter="box")
 
@@ -253,6 +262,91 @@ def scaling(mesh, a, lines: list[str]) -> dict:
     return res
 
 
+LENGTHS = (0.15, 0.3, 0.6, 1.2)  # scene units across the view (about 110 px a unit at 960x540)
+ANGLES = (0.3, 0.6, 1.2, 2.4)  # radians about the vertical while moving
+
+
+def equal_error(e64: float, e256: float, ea: float, t256: float) -> tuple[float, float]:
+    """``(samples, seconds)`` of accumulation at the analytic frame's error ``ea``: the rate
+    accumulation's error falls at, read from its errors at 64 and 256 samples (clamped to
+    N^-0.5..N^-1.5), carried from 256 samples down to ``ea``; its time taken as linear in N."""
+    rate = min(1.5, max(0.5, math.log(e64 / e256) / math.log(4.0))) if e64 > e256 > 0 else 1.0
+    n = 256.0 * (e256 / ea) ** (1.0 / rate) if ea > 0 else math.inf
+    return n, t256 * n / 256.0
+
+
+def _streak_px(s: Scene) -> float:
+    """The longest screen path (pixels) of a mesh vertex over the shutter (33 times)."""
+    obj = s.objects[0]
+    v = np.asarray(obj.mesh.vertices, np.float64)[:: max(1, len(obj.mesh.vertices) // 2000)]
+    pts = []
+    for m in obj.motion.transforms_at(np.linspace(0.0, 1.0, 33)):
+        pts.append(s.camera.project(v @ m[:3, :3].T + m[:3, 3])[0])
+    steps = np.linalg.norm(np.diff(np.stack(pts), axis=0), axis=-1)
+    return float(np.nanmax(steps.sum(axis=0)))
+
+
+def motions(mesh, a, lines: list[str]) -> dict:
+    """Time against motion length and turn angle, at ``--faces-size``, beside accumulation with
+    256 samples and accumulation at the analytic frame's own error (`equal_error`)."""
+    w, h = (int(v) for v in a.faces_size.split("x"))
+    lines += [
+        f"## Time against motion: {len(mesh[1]):,} faces at {w}x{h} (load {load()}); errors against "
+        "the exact integral at the same size; accumulation at the analytic frame's error "
+        "extrapolated from its errors at 64 and 256 samples",
+        "",
+        "| motion | streak px | segments | analytic s | acc-256 s | ratio | analytic RMSE | "
+        "acc-256 RMSE | acc at equal error: samples, s | analytic / that |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    res = {"length": [], "angle": []}
+    cases = [("translate", {"length": v}) for v in LENGTHS] + [("turn", {"angle": v}) for v in ANGLES]
+    for kind, shape in cases:
+        s = scene(mesh, kind, w, h, **shape)
+        t, out = paired({"analytic": lambda s=s: analytic(s), "acc256": lambda s=s: accumulation(256)(s)}, 1)
+        ref = exact(s).rgba
+        ea, e256 = rmse(out["analytic"].rgba, ref), rmse(out["acc256"].rgba, ref)
+        e64 = rmse(accumulation(64)(s).rgba, ref)
+        n_eq, t_eq = equal_error(e64, e256, ea, t["acc256"])
+        label = (
+            f"{kind} {shape.get('length', shape.get('angle'))}{' units' if kind == 'translate' else ' rad'}"
+        )
+        px = _streak_px(s)
+        row = (
+            f"| {label} | {px:.0f} | {out['analytic'].stats['segments']} | {t['analytic']:.2f} | "
+            f"{t['acc256']:.2f} | {t['analytic'] / t['acc256']:.2f} | {ea:.1e} | {e256:.1e} | "
+            f"{n_eq:,.0f}, {t_eq:.1f} | {t['analytic'] / t_eq:.3f} |"
+        )
+        print(row, flush=True)
+        lines.append(row)
+        res["length" if kind == "translate" else "angle"].append(
+            (shape.get("length", shape.get("angle")), t["analytic"], t["acc256"], t_eq)
+        )
+    lines.append("")
+    return res
+
+
+def motion_plot(res: dict, out: Path) -> None:
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.5))
+    for ax, key, label in zip(
+        axes, ("length", "angle"), ("translation (scene units)", "turn (rad)"), strict=True
+    ):
+        pts = np.array(res[key])
+        ax.loglog(pts[:, 0], pts[:, 1], "o-", label="analytic")
+        ax.loglog(pts[:, 0], pts[:, 2], "s-", label="accumulation-256")
+        ax.loglog(pts[:, 0], pts[:, 3], "^--", label="accumulation at the analytic's error")
+        ax.set_xticks(pts[:, 0], [f"{v:g}" for v in pts[:, 0]])
+        ax.minorticks_off()
+        ax.set_xlabel(label)
+        ax.set_ylabel("seconds")
+    axes[0].legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out / "production_motion.png", dpi=100)
+    plt.close(fig)
+
+
 def plots(res: dict, out: Path) -> None:
     try:
         import matplotlib.pyplot as plt
@@ -283,7 +377,9 @@ def main() -> None:
     ap.add_argument("--max-level", type=int, default=None, help="most subdivisions in the faces table")
     ap.add_argument("--faces-size", default="960x540")
     ap.add_argument("--error-size", default="480x270")
-    ap.add_argument("--sections", default="target,memory,scaling", help="which tables, comma-separated")
+    ap.add_argument(
+        "--sections", default="target,memory,scaling,motion", help="which tables, comma-separated"
+    )
     a = ap.parse_args()
     if a.max_level is None:
         a.max_level = 2 if a.quick else 4
@@ -299,6 +395,8 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     if "scaling" in sections:
         plots(scaling(mesh, a, lines), out)
+    if "motion" in sections:
+        motion_plot(motions(mesh, a, lines), out)
     lines.append(f"Load average at the end: {load()}")
     (out / "production.md").write_text("\n".join(lines) + "\n")
 
