@@ -170,7 +170,7 @@ def test_refinement_draws_only_the_new_samples():
     assert kept.stats["error_estimate"] == pytest.approx(fresh.stats["error_estimate"], rel=1e-4)
 
 
-@pytest.mark.parametrize("shutter", ["box", "triangle"])
+@pytest.mark.parametrize("shutter", ["box", "triangle", np.array([0.0, 0.0, 1.0, 1.0])], ids=str)
 def test_the_trapezoid_grid_keeps_the_drawn_samples_and_is_the_trapezoid_rule(shutter):
     """12 stratified samples, then the trapezoid grid of 24 strata (25 samples: 13 drawn), then
     of 72 (73: 48 drawn): the frame is the trapezoid rule over the shutter's mass (times

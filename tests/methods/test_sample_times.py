@@ -48,6 +48,10 @@ def test_no_time_falls_where_the_shutter_weighs_nothing():
     assert np.all(times >= 0.5)
     # u exactly at a flat part's level: the first time that reaches it (its left end)
     assert shutter_quantiles(np.array([1.0, 0.0, 1.0]), np.array([0.5]))[0] == pytest.approx(1 / 3)
+    # u = 0 (the trapezoid grid's first time) under a shutter that starts closed: where it opens
+    assert shutter_quantiles(np.array([0.0, 0.0, 1.0, 1.0]), np.array([0.0]))[0] == 0.5
+    for shutter in ("box", "ramp", "triangle", "gaussian", np.array([1.0, 0.0, 1.0])):
+        assert shutter_quantiles(shutter, np.array([0.0]))[0] == 0.0
 
 
 @pytest.mark.parametrize("shutter", SHUTTERS, ids=str)

@@ -85,8 +85,10 @@ def _trapezoid_quantiles(shape: Trapezoid, u: np.ndarray) -> np.ndarray:
 
 def shutter_quantiles(shutter, u) -> np.ndarray:
     """(N,) float64 shutter times ``t`` with ``W(t) = u`` for ``u`` (N,) in [0, 1], ``W`` the
-    shutter's cumulative weight (`motionblur.scene.shutter_cdf`): the first such time, so a
-    time never falls inside a part of zero weight. Closed form for the box (``t = u``, bit for
+    shutter's cumulative weight (`motionblur.scene.shutter_cdf`): the first such time (for
+    ``u = 0`` the last, where the shutter opens), so a time never falls inside a part of zero
+    weight, except the left end of a gap in the middle of the shutter (at that gap's level of
+    ``u``). Closed form for the box (``t = u``, bit for
     bit), ramp, triangle and `Trapezoid`; a (M,) weights shutter inverts its piecewise-linear W
     exactly; the gaussian inverts W tabulated at `QUANTILE_KNOTS` points."""
     u = np.asarray(u, np.float64)
@@ -106,7 +108,11 @@ def shutter_quantiles(shutter, u) -> np.ndarray:
     k = np.clip(np.searchsorted(cum, u, side="left") - 1, 0, len(knots) - 2)
     d = cum[k + 1] - cum[k]
     f = np.clip((u - cum[k]) / np.where(d > 0, d, 1.0), 0.0, 1.0)
-    return knots[k] + (knots[k + 1] - knots[k]) * f
+    t = knots[k] + (knots[k + 1] - knots[k]) * f
+    # u = 0 (the trapezoid grid's first time): where the shutter opens, the last time W is 0,
+    # not time 0 when the shutter starts closed
+    opens = knots[np.clip(np.searchsorted(cum, 0.0, side="right") - 1, 0, len(knots) - 1)]
+    return np.where(u <= 0.0, opens, t)
 
 
 def sample_times(scene: Scene, n: int, sampling: str = "stratified", seed: int = 0):
