@@ -98,6 +98,7 @@ def calibration_rows(scene, ref, seed, size, methods=None) -> list[dict]:
             {
                 "seed": seed, "size": size, "method": method, "options": opts, "measured": measured,
                 "estimate": f.stats["error_estimate"], "how": f.stats["error_estimate_how"].split(":")[0],
+                "ms": f.stats["ms"], "estimate_ms": f.stats.get("estimate_ms"),
             }
         )  # fmt: skip
     return rows

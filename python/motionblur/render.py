@@ -185,11 +185,12 @@ def render(
     if lens is not None:
         frame = _with_depth_of_field(frame, scene, *lens)
     frame = over_background(frame, scene.background)
+    blurred = frame if lens is None else None  # the motion blur alone, which the estimate is of
     frame.stats["method"] = method
     frame.stats["options"] = dict(options)
     frame.stats["ms"] = (time.perf_counter() - t0) * 1e3
     if error_estimate and "error_estimate" not in frame.stats and ESTIMATOR:
-        frame.stats.update(ESTIMATOR[0](scene, method, options))
+        frame.stats.update(ESTIMATOR[0](scene, method, options, blurred))
         est = frame.stats.get("error_estimate", 0.0)
         if est > max(frame.stats.get("unblurred_estimate", float("inf")), POOR_BLUR_FLOOR):
             warnings.warn(
@@ -227,9 +228,11 @@ def _add_outputs(frame: Frame, scene: Scene, method: str, names, times) -> None:
     frame.stats["outputs_ms"] = (time.perf_counter() - t0) * 1e3
 
 
-#: The pilot estimator ``fn(scene, method, options) -> dict`` that [`render`][motionblur.render.render] calls when a
-#: method did not measure its own error (set by `motionblur.methods._estimate`).
-ESTIMATOR: list[Callable[[Scene, str, dict], dict]] = []
+#: The pilot estimator ``fn(scene, method, options, frame) -> dict`` that
+#: [`render`][motionblur.render.render] calls when a method did not measure its own error (set by
+#: `motionblur.methods._estimate`); ``frame`` is the one rendered (over the background), None
+#: under a lens.
+ESTIMATOR: list[Callable[[Scene, str, dict, Frame | None], dict]] = []
 
 
 _RENDER_DOC = render.__doc__ or ""

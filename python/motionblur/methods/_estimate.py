@@ -36,8 +36,10 @@ option set is estimated by a pilot (`pilot_estimate`), with no fitted factor:
   (``beta`` 0 for a light tail, 1 at most, `_tail_trend`), and the pilot's MSE is carried to
   the frame's pixel count with half of it in log (as `_extrapolated` takes half its trend:
   two subset sizes of one pilot are a noisy read of the slope). A frame of at most
-  `ANALYTIC_OWN_PIXELS` is its own pilot: the estimate is then its measured error against the
-  reference, as no smaller pilot would predict where its few large errors fall.
+  `ANALYTIC_OWN_PIXELS` (320x240) is its own pilot: the estimate is then its measured error
+  against the reference, as no smaller pilot predicts where its few large errors fall, and the
+  frame is the one ``render`` made (passed in), so that the estimate costs the reference alone,
+  about twice the frame's time. Only a larger frame is carried from a 64x48 pilot.
 
 The rules were chosen on the tuning scenes of
 [`motionblur.evaluation.random_scenes`][motionblur.evaluation.random_scenes] only (but the
@@ -104,10 +106,13 @@ ANALYTIC_SPLIT = 2
 #: piece of one triangle whose shading swings across it, which a straight motion (one segment)
 #: does not cut at all.
 ANALYTIC_LONGEST = 0.125
-#: The largest frame (pixels) the analytic method's pilot is the frame itself for: its error is
-#: heavy-tailed (one to three pixels may hold most of a frame's MSE), which a pilot samples no
-#: better than the frame's own pixels, and a pilot of a quarter of these costs nearly as much.
-ANALYTIC_OWN_PIXELS = 4 * PILOT_PIXELS
+#: The largest frame (pixels) the analytic method's pilot is the frame itself for (the frame
+#: ``render`` made, so that only its reference is rendered, about twice the frame's time): its
+#: error is heavy-tailed (one to three pixels may hold most of a frame's MSE), where they fall
+#: no smaller pilot predicts (on tuning scenes at 192x144 and 320x240, pilots of 3072 to 19200
+#: pixels, carried to the frame's pixels or not, missed 0.5x-2x on 7-20% of frames, down to
+#: 0.2x), and a pilot of a quarter of the frame's pixels costs about as much.
+ANALYTIC_OWN_PIXELS = 320 * 240
 #: The exact limit the analytic estimate is against (`limit`): the analytic method at a chord
 #: tolerance of 2e-4 px and 4 Gauss points, each segment cut into 4 (whatever the segment cap)
 #: and none longer than 1/64 of the shutter; cutting each into 8, or none longer than 1/128,
@@ -220,15 +225,23 @@ def _reference(small: Scene, options: dict, method: str, aa: int, rgba: np.ndarr
     return over_background(ref, small.background).rgba.astype(np.float64)
 
 
-def pilot_errors(scene: Scene, method: str, options: dict, pixels: int = PILOT_PIXELS) -> dict:
+def pilot_errors(
+    scene: Scene, method: str, options: dict, pixels: int = PILOT_PIXELS, rgba: np.ndarray | None = None
+) -> dict:
     """The pilot at about ``pixels`` pixels: ``{"rmse", "pixel_mse", "unblurred", "scale",
     "size"}``, the RMSE of ``method`` and of the sharp mid-shutter frame against the pilot's
     reference (see `REFERENCE_SAMPLES`) at that size, ``pixel_mse`` (h,w) float64 the method's
-    squared error per pixel (mean over RGBA), ``scale`` the pilot's width over the frame's."""
+    squared error per pixel (mean over RGBA), ``scale`` the pilot's width over the frame's.
+    ``rgba``: the analytic frame itself (H,W,4, over the background), when the pilot is the
+    frame (``pixels`` at least the frame's): used instead of rendering it again."""
     small, scale = pilot_scene(scene, pixels)
     aa = _aa(method, options)
-    frame = _pilot_frame(scene, small, scale, method, options)
-    rgba = over_background(frame, small.background).rgba
+    if rgba is not None and method == "analytic" and scale >= 1.0:
+        if rgba.shape != (scene.camera.height, scene.camera.width, 4):
+            raise ValueError(f"rgba: expected the frame's ({scene.camera.height}, {scene.camera.width}, 4)")
+    else:
+        frame = _pilot_frame(scene, small, scale, method, options)
+        rgba = over_background(frame, small.background).rgba
     ref = _reference(small, _pilot_options(method, options, scale), method, aa, rgba)
     sharp = METHODS["accumulation"].fn(small.with_(shutter="box"), samples=1, aa=aa)
     return {
@@ -255,11 +268,13 @@ def _extrapolated(fine: dict, coarse: dict) -> float:
     return math.sqrt(fine["rmse"] * fitted)
 
 
-def pilot_estimate(scene: Scene, method: str, options: dict) -> dict:
+def pilot_estimate(scene: Scene, method: str, options: dict, frame: Frame | None = None) -> dict:
     """``{"error_estimate", "error_estimate_how", "estimate_ms", "unblurred_estimate"}`` of
     ``method`` with ``options`` on ``scene`` from a pilot render (see the module docs);
     ``unblurred_estimate`` is the same measure of the sharp frame at mid-shutter, so that a blur
-    worse than none is seen ([`PoorBlurWarning`][motionblur.PoorBlurWarning])."""
+    worse than none is seen ([`PoorBlurWarning`][motionblur.PoorBlurWarning]). ``frame``: the
+    frame ``render`` made (over the background, no lens), which an analytic frame that is its
+    own pilot uses instead of rendering itself again."""
     t0 = time.perf_counter()
     if is_exact(method, options):
         return {
@@ -270,7 +285,8 @@ def pilot_estimate(scene: Scene, method: str, options: dict) -> dict:
     pixels = scene.camera.width * scene.camera.height
     if method != "analytic" or pixels > ANALYTIC_OWN_PIXELS:
         pixels = PILOT_PIXELS
-    p = pilot_errors(scene, method, options, pixels)
+    own = frame.rgba if frame is not None and method == "analytic" else None  # used at scale 1
+    p = pilot_errors(scene, method, options, pixels, own)
     est, how = p["rmse"], f"pilot: the method against the exact integral at {p['size']}"
     if p["scale"] < 1.0 and est > 0.0 and method != "analytic":
         coarse = pilot_errors(scene, method, options, PILOT_PIXELS // 4)
