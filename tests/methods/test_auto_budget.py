@@ -8,6 +8,7 @@ the reverse), so that the plan, not the machine's load, decides each assertion; 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 import motionblur as mb
 from motionblur.evaluation.random_scenes import random_scene
@@ -77,15 +78,35 @@ def test_each_budget_step_draws_no_more_samples_than_fit():
     new ones of a grid that holds the drawn ones) are at most the room, it grows the frame, and
     it declines only where no grid or fresh render of 1.25x fits. A fresh render sized by the
     room plus the samples already drawn once overran 10 ms budgets by 1.2-1.6x."""
-    for grid in [(4, False), (8, False), (12, False), (32, True), (24, True), (20, False)]:
+    grids = [
+        (4, False),
+        (8, False),
+        (12, False),
+        (32, True),
+        (24, True),
+        (20, False),
+        (2048, True),
+        (4000, False),
+    ]
+    for grid in grids:
         have = auto_mod._samples(grid)
         for room in [0.5, 1, 3, 7, 8, 9, 15, 21, 30, 47, 100, 333, 5000]:
             nxt = auto_mod._budget_grid(grid, room)
             if nxt is None:
                 least = grid[0] + (not grid[1])  # the fewest new samples a grid that holds them draws
-                assert 2 * int(room // 2) < 1.25 * have and room < least, (grid, room)
+                most = auto_mod.MAX_SAMPLES
+                assert 2 * int(min(room, most) // 2) < 1.25 * have, (grid, room)
+                assert min(room, most - have) < least, (grid, room)
                 continue
             kept = auto_mod._holds(nxt, grid)
             drawn = auto_mod._samples(nxt) - (have if kept else 0)
             assert drawn <= room and auto_mod._samples(nxt) > have, (grid, room, nxt)
             assert auto_mod._samples(nxt) <= auto_mod.MAX_SAMPLES + 1
+
+
+def test_a_budget_under_a_rolling_shutter_raises_naming_budget_ms():
+    """auto renders the exact analytic frame under a rolling shutter; it cannot plan a budget
+    there, so it says so instead of returning a frame that may take many times the budget."""
+    scene = random_scene(0, 32, 24).with_(rolling=0.5)
+    with pytest.raises(ValueError, match=r"^budget_ms: .*rolling"):
+        mb.render(scene, "auto", budget_ms=50.0)
