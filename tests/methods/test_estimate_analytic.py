@@ -153,12 +153,12 @@ def test_a_long_piece_of_swinging_shading_is_resolved_by_the_reference():
         refined(scene, longest=0.0)
 
 
-def test_a_frame_up_to_320x240_is_its_own_pilot_and_a_larger_one_is_carried_from_64x48():
-    small = mb.render(random_scene(6, 96, 72), "analytic").stats["error_estimate_how"]
-    assert 320 * 240 == _estimate.ANALYTIC_OWN_PIXELS
-    assert "at 96x72" in small and "carried" not in small
-    large = mb.render(random_scene(6, 384, 288), "analytic").stats["error_estimate_how"]
-    assert "at 64x48" in large and "carried to the frame's pixels" in large
+def test_a_frame_up_to_640x480_is_its_own_pilot_and_a_larger_one_is_carried_from_160x120():
+    assert 640 * 480 == _estimate.ANALYTIC_OWN_PIXELS and 160 * 120 == _estimate.ANALYTIC_PILOT_PIXELS
+    small = mb.render(random_scene(6, 640, 480), "analytic").stats["error_estimate_how"]
+    assert "at 640x480" in small and "carried" not in small
+    large = mb.render(random_scene(6, 672, 504), "analytic").stats["error_estimate_how"]
+    assert "at 160x120" in large and "carried to the frame's pixels" in large
 
 
 def test_an_own_pilot_is_the_frame_render_made_not_a_second_render(monkeypatch):

@@ -31,15 +31,16 @@ option set is estimated by a pilot (`pilot_estimate`), with no fitted factor:
   heavy-tailed: a sample an edge crosses nearly along itself is off by the chord's distance
   over the edge's slow normal speed (up to a piece's length of the shutter), so a frame of more
   samples holds larger single errors, and its RMSE grows with its pixel count until the rare
-  large ones are common. How much is read off the pilot's own pixels: the typical (median)
-  MSE of random subsets of a sixteenth and a quarter of them gives the growth ``n**beta``
-  (``beta`` 0 for a light tail, 1 at most, `_tail_trend`), and the pilot's MSE is carried to
-  the frame's pixel count with half of it in log (as `_extrapolated` takes half its trend:
-  two subset sizes of one pilot are a noisy read of the slope). A frame of at most
-  `ANALYTIC_OWN_PIXELS` (320x240) is its own pilot: the estimate is then its measured error
-  against the reference, as no smaller pilot predicts where its few large errors fall, and the
-  frame is the one ``render`` made (passed in), so that the estimate costs the reference alone,
-  about twice the frame's time. Only a larger frame is carried from a 64x48 pilot.
+  large ones are common. No smaller pilot predicts where a frame's few large errors fall, so
+  a frame of at most `ANALYTIC_OWN_PIXELS` (640x480) is its own pilot: the estimate is then
+  its measured error against the reference, and the frame is the one ``render`` made (passed
+  in), so that the estimate costs the reference alone, about twice the frame's time. Only a
+  larger frame (not calibrated) is carried from a pilot of `ANALYTIC_PILOT_PIXELS`
+  (160x120): the typical MSE of random sixteenths and quarters of the pilot's pixels gives
+  the growth ``n**beta`` (``beta`` 0 for a light tail, 1 at most, `_tail_trend`), and the
+  pilot's MSE is carried to the frame's pixel count with half of it in log (as
+  `_extrapolated` takes half its trend: two subset sizes of one pilot are a noisy read of the
+  slope).
 
 The rules were chosen on the tuning scenes of
 [`motionblur.evaluation.random_scenes`][motionblur.evaluation.random_scenes] only (but the
@@ -73,6 +74,7 @@ __all__ = [
     "ANALYTIC_SPLIT",
     "ANALYTIC_LONGEST",
     "ANALYTIC_OWN_PIXELS",
+    "ANALYTIC_PILOT_PIXELS",
     "LIMIT_OPTIONS",
     "TAIL_PERMUTATIONS",
     "limit",
@@ -111,8 +113,13 @@ ANALYTIC_LONGEST = 0.125
 #: error is heavy-tailed (one to three pixels may hold most of a frame's MSE), where they fall
 #: no smaller pilot predicts (on tuning scenes at 192x144 and 320x240, pilots of 3072 to 19200
 #: pixels, carried to the frame's pixels or not, missed 0.5x-2x on 7-20% of frames, down to
-#: 0.2x), and a pilot of a quarter of the frame's pixels costs about as much.
-ANALYTIC_OWN_PIXELS = 320 * 240
+#: 0.2x; at 640x480, pilots of 3072 to 76800 pixels read 0.1-0.2x of a frame whose own read
+#: was 1.1x), and a pilot of a quarter of the frame's pixels costs about as much.
+ANALYTIC_OWN_PIXELS = 640 * 480
+#: The analytic method's pilot for a frame larger than `ANALYTIC_OWN_PIXELS`, its MSE carried to
+#: the frame's pixels (`_tail_trend`): on the 640x480 tuning frames the closest of the pilots
+#: of 3072, 19200 and 76800 pixels that cost less than the frame (about half of it).
+ANALYTIC_PILOT_PIXELS = 160 * 120
 #: The exact limit the analytic estimate is against (`limit`): the analytic method at a chord
 #: tolerance of 2e-4 px and 4 Gauss points, each segment cut into 4 (whatever the segment cap)
 #: and none longer than 1/64 of the shutter; cutting each into 8, or none longer than 1/128,
@@ -284,8 +291,10 @@ def pilot_estimate(scene: Scene, method: str, options: dict, frame: Frame | None
             "estimate_ms": 0.0,
         }
     pixels = scene.camera.width * scene.camera.height
-    if method != "analytic" or pixels > ANALYTIC_OWN_PIXELS:
+    if method != "analytic":
         pixels = PILOT_PIXELS
+    elif pixels > ANALYTIC_OWN_PIXELS:
+        pixels = ANALYTIC_PILOT_PIXELS
     own = frame.rgba if frame is not None and method == "analytic" else None  # used at scale 1
     p = pilot_errors(scene, method, options, pixels, own)
     est, how = p["rmse"], f"pilot: the method against the exact integral at {p['size']}"
