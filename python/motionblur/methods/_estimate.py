@@ -31,15 +31,16 @@ option set is estimated by a pilot (`pilot_estimate`), with no fitted factor:
   heavy-tailed: a sample an edge crosses nearly along itself is off by the chord's distance
   over the edge's slow normal speed (up to a piece's length of the shutter), so a frame of more
   samples holds larger single errors, and its RMSE grows with its pixel count until the rare
-  large ones are common. How much is read off the pilot's own pixels: the typical (median)
-  MSE of random subsets of a sixteenth and a quarter of them gives the growth ``n**beta``
-  (``beta`` 0 for a light tail, 1 at most, `_tail_trend`), and the pilot's MSE is carried to
-  the frame's pixel count with half of it in log (as `_extrapolated` takes half its trend:
-  two subset sizes of one pilot are a noisy read of the slope). A frame of at most
-  `ANALYTIC_OWN_PIXELS` (320x240) is its own pilot: the estimate is then its measured error
-  against the reference, as no smaller pilot predicts where its few large errors fall, and the
-  frame is the one ``render`` made (passed in), so that the estimate costs the reference alone,
-  about twice the frame's time. Only a larger frame is carried from a 64x48 pilot.
+  large ones are common. No smaller pilot predicts where a frame's few large errors fall, so
+  a frame of at most `ANALYTIC_OWN_PIXELS` (640x480) is its own pilot: the estimate is then
+  its measured error against the reference, and the frame is the one ``render`` made (passed
+  in), so that the estimate costs the reference alone, about twice the frame's time. Only a
+  larger frame (not calibrated) is carried from a pilot of `ANALYTIC_PILOT_PIXELS`
+  (160x120): the typical MSE of random sixteenths and quarters of the pilot's pixels gives
+  the growth ``n**beta`` (``beta`` 0 for a light tail, 1 at most, `_tail_trend`), and the
+  pilot's MSE is carried to the frame's pixel count with half of it in log (as
+  `_extrapolated` takes half its trend: two subset sizes of one pilot are a noisy read of the
+  slope).
 
 The rules were chosen on the tuning scenes of
 [`motionblur.evaluation.random_scenes`][motionblur.evaluation.random_scenes] only (but the
@@ -73,8 +74,9 @@ __all__ = [
     "ANALYTIC_SPLIT",
     "ANALYTIC_LONGEST",
     "ANALYTIC_OWN_PIXELS",
+    "ANALYTIC_PILOT_PIXELS",
     "LIMIT_OPTIONS",
-    "TAIL_DRAWS",
+    "TAIL_PERMUTATIONS",
     "limit",
     "pilot_errors",
     "pilot_scene",
@@ -111,17 +113,23 @@ ANALYTIC_LONGEST = 0.125
 #: error is heavy-tailed (one to three pixels may hold most of a frame's MSE), where they fall
 #: no smaller pilot predicts (on tuning scenes at 192x144 and 320x240, pilots of 3072 to 19200
 #: pixels, carried to the frame's pixels or not, missed 0.5x-2x on 7-20% of frames, down to
-#: 0.2x), and a pilot of a quarter of the frame's pixels costs about as much.
-ANALYTIC_OWN_PIXELS = 320 * 240
+#: 0.2x; at 640x480, pilots of 3072 to 76800 pixels read 0.1-0.2x of a frame whose own read
+#: was 1.1x), and a pilot of a quarter of the frame's pixels costs about as much.
+ANALYTIC_OWN_PIXELS = 640 * 480
+#: The analytic method's pilot for a frame larger than `ANALYTIC_OWN_PIXELS`, its MSE carried to
+#: the frame's pixels (`_tail_trend`): on the 640x480 tuning frames the closest of the pilots
+#: of 3072, 19200 and 76800 pixels that cost less than the frame (about half of it).
+ANALYTIC_PILOT_PIXELS = 160 * 120
 #: The exact limit the analytic estimate is against (`limit`): the analytic method at a chord
 #: tolerance of 2e-4 px and 4 Gauss points, each segment cut into 4 (whatever the segment cap)
 #: and none longer than 1/64 of the shutter; cutting each into 8, or none longer than 1/128,
 #: moves it by under a tenth of the analytic default's error on the tuning scenes (docs:
 #: validation.md).
 LIMIT_OPTIONS = {"tolerance": 0.0002, "gauss": 4, "split": 4, "longest": 1 / 64}
-#: Random subsets of the analytic pilot's pixels per size, whose median MSE gives the growth of a
-#: frame's MSE with its pixel count (`_tail_trend`).
-TAIL_DRAWS = 64
+#: Random orders of the analytic pilot's pixels, each cut into sixteenths and quarters, whose
+#: typical MSE gives the growth of a frame's MSE with its pixel count (`_tail_trend`): 128 give
+#: 2048 sixteenths and 512 quarters, in about 30 ms at 64x48.
+TAIL_PERMUTATIONS = 128
 #: Measured error over pilot RMSE, by method (chosen on the tuning scenes; none is needed).
 PILOT_FACTOR: dict[str, float] = {}
 _DEFAULT_FACTOR = 1.0
@@ -283,8 +291,10 @@ def pilot_estimate(scene: Scene, method: str, options: dict, frame: Frame | None
             "estimate_ms": 0.0,
         }
     pixels = scene.camera.width * scene.camera.height
-    if method != "analytic" or pixels > ANALYTIC_OWN_PIXELS:
+    if method != "analytic":
         pixels = PILOT_PIXELS
+    elif pixels > ANALYTIC_OWN_PIXELS:
+        pixels = ANALYTIC_PILOT_PIXELS
     own = frame.rgba if frame is not None and method == "analytic" else None  # used at scale 1
     p = pilot_errors(scene, method, options, pixels, own)
     est, how = p["rmse"], f"pilot: the method against the exact integral at {p['size']}"
@@ -310,14 +320,24 @@ def pilot_estimate(scene: Scene, method: str, options: dict, frame: Frame | None
 
 
 def _tail_trend(pixel_mse: np.ndarray) -> float:
-    """``beta`` in [0, 1]: the typical (median) MSE of ``n`` of these pixels grows as
-    ``n**beta``, from `TAIL_DRAWS` random subsets (a fixed seed) of a sixteenth and of a quarter
-    of them. 0 where every pixel is about as far off (or none is); 1, the steepest, where the
-    squared errors are so heavy-tailed that a random sixteenth typically holds none of them."""
+    """``beta`` in [0, 1]: the typical MSE of ``n`` of these pixels grows as ``n**beta``, read
+    from random sixteenths and quarters of them: `TAIL_PERMUTATIONS` random orders (a fixed
+    seed), each cut into 16 and into 4 disjoint parts, and the typical MSE of a part is the mean
+    of the middle half of the parts' MSEs (a median of few parts jumps with the whole count of
+    rare errors a part holds; this read moves by about 0.03 between seeds where that one moved
+    by 0.16). 0 where every pixel is about as far off (or none is); 1, the steepest, where the
+    squared errors are so heavy-tailed that a sixteenth typically holds none of them; a Pareto
+    tail of index ``a`` in (1/2, 1) gives about ``1/a - 1``."""
     e2 = pixel_mse.ravel()
-    rng = np.random.default_rng(0)
-    draws = [rng.permutation(e2.size) for _ in range(TAIL_DRAWS)]
-    m16, m4 = (float(np.median([e2[d[: max(1, e2.size // k)]].mean() for d in draws])) for k in (16, 4))
+    n = e2.size
+    order = np.random.default_rng(0).random((TAIL_PERMUTATIONS, n)).argsort(axis=1)
+    typical = []
+    for k in (16, 4):
+        part = max(1, n // k)
+        mse = np.sort(e2[order[:, : k * part]].reshape(-1, part).mean(axis=1))
+        q = mse.size // 4
+        typical.append(float(mse[q : mse.size - q].mean()))
+    m16, m4 = typical
     if not m4 > 0.0:
         return 1.0 if e2.max() > 0.0 else 0.0
     if not m16 > 0.0:
