@@ -254,14 +254,14 @@ print(json.dumps({"grown": status("VmHWM:") - before, "strips": fr.stats["strips
 """
 
 
-@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/self/status")
 def test_the_kernel_holds_no_clip_position_of_every_vertex_and_boundary_when_done_strip_by_strip():
     """A sphere of 10k vertices turning over 256 segments, seen close up, with a 4 MiB tile
     budget: done strip by strip, the kernel's peak grows by its frame, the plan (4 then 2 bytes
     per face and segment), a strip's prims (twice the budget, or one row of tiles), the two
     threads' tile buffers (twice the budget each) and 16 MiB to spare (allocator, tables of the
     strip's clip positions), not by every vertex's clip position at every boundary (32 bytes
-    each, 84 MB here) nor 12 bytes of plan per face and segment (which took 174 MiB in all)."""
+    each, 84 MB here) nor 12 bytes of plan per face and segment (which took 174 MiB in all).
+    Linux only, like the memory test above: it reads /proc/self/status, and fails elsewhere."""
     k, w, h, budget = 256, 320, 240, 4 << 20
     out = subprocess.run(
         [sys.executable, "-c", _KERNEL_MEMORY_CHILD, str(k), str(w), str(h), str(budget)],
