@@ -157,6 +157,7 @@ class _Trials:
         self.scene, self.aa, self.tried, self.frames = scene, aa, [], []
         self.sums: HalfSums | None = None
         self.grid: tuple[int, bool] | None = None  # the strata of the samples drawn, trapezoid or not
+        self.segments: int | None = None  # the analytic method's segments, once its pilot ran
 
     def _record(self, method: str, options: dict, frame: Frame, ms: float, est: float) -> Frame:
         frame.stats["error_estimate"] = est
@@ -241,28 +242,34 @@ class _Trials:
         """The last render of the frame itself (not a timing pilot)."""
         return [t for t in self.tried if "pilot" not in t["options"]][-1]
 
+    @property
+    def first_ms_per_sample(self) -> float:
+        """The first accumulation render's milliseconds per sample (its fixed costs included)."""
+        first = self.tried[0]
+        return max(first["ms"], 1e-3) / first["options"]["samples"]
+
     def analytic_ms(self, segments: int | None = None) -> float:
         """The analytic frame's predicted time (`ANALYTIC_FIT`) from the first accumulation
-        render; ``segments`` by the analytic method's rule unless given (a pilot, listed in
-        ``tried``)."""
+        render; ``segments`` by the analytic method's rule unless given (its pilot runs once,
+        listed in ``tried``; the count is kept in ``self.segments``)."""
         scene = self.scene
         moving = scene.objects if scene.camera_moves else [o for o in scene.objects if o.is_moving]
-        if segments is None:
+        if segments is None and self.segments is None:
             t0 = time.perf_counter()
-            segments = len(segment_times(scene, moving, scene.camera)) - 1
+            self.segments = len(segment_times(scene, moving, scene.camera)) - 1
             ms = (time.perf_counter() - t0) * 1e3
             self.tried.append(
-                {"method": "analytic", "options": {"pilot": f"{segments} segments"}, "ms": round(ms, 3)}
+                {"method": "analytic", "options": {"pilot": f"{self.segments} segments"}, "ms": round(ms, 3)}
             )
-        first = self.tried[0]
-        n = first["options"]["samples"]
-        per_sample = max(first["ms"], 1e-3) / n
+        segments = self.segments if segments is None else segments
+        n = self.tried[0]["options"]["samples"]
         triangles = max(1, sum(len(o.mesh.faces) for o in moving))
         other = not (isinstance(scene.shutter, str) and scene.shutter == "box")
         c = ANALYTIC_FIT
         return math.exp(
-            c[0] + c[1] * math.log(per_sample) + c[2] * math.log(n) + c[3] * math.log(segments + 1)
-            + c[4] * math.log(triangles) + c[5] * other + c[6] * scene.camera_moves
+            c[0] + c[1] * math.log(self.first_ms_per_sample) + c[2] * math.log(n)
+            + c[3] * math.log(segments + 1) + c[4] * math.log(triangles) + c[5] * other
+            + c[6] * scene.camera_moves
         )  # fmt: skip
 
 
@@ -281,6 +288,23 @@ def _holds(new: tuple[int, bool], old: tuple[int, bool]) -> bool:
     return m % m0 == 0 and (m // m0 > 1) and (trap0 or (m // m0) % 2 == 0)
 
 
+def _draws(new: tuple[int, bool], old: tuple[int, bool]) -> int:
+    """The samples grid ``new`` draws after grid ``old``: all of them, less those of ``old`` it
+    holds (`_holds`)."""
+    return _samples(new) - (_samples(old) if _holds(new, old) else 0)
+
+
+def _holding_grids(grid: tuple[int, bool]) -> list[tuple[int, bool]]:
+    """The grids of at most `MAX_SAMPLES` samples that hold ``grid``'s samples and add to them
+    (`_holds`): odd multiples of a stratified grid and trapezoid grids of its even multiples;
+    trapezoid grids of any multiple of a trapezoid grid."""
+    m0, trap0 = grid
+    most = MAX_SAMPLES // m0
+    grids = [] if trap0 else [(k * m0, False) for k in range(3, most + 1, 2)]
+    grids += [(q * m0, True) for q in range(2, most + 1, 1 if trap0 else 2)]
+    return [g for g in grids if _samples(g) <= MAX_SAMPLES]
+
+
 def _position(times: np.ndarray, t) -> np.ndarray | int:
     """The index in ``times`` (increasing) of the time nearest each of ``t`` (or of the scalar)."""
     x = np.asarray(t, np.float64)
@@ -294,24 +318,16 @@ def _position(times: np.ndarray, t) -> np.ndarray | int:
 
 def _next_grid(grid: tuple[int, bool], want: float) -> tuple[int, bool]:
     """The grid (strata, trapezoid) after ``grid`` for an estimated need of ``want`` samples:
-    of the grids that hold the samples drawn (`_holds`: an odd multiple of a stratified grid, a
-    trapezoid grid of any multiple) with at least ``want`` samples, the one that draws the
-    fewest new samples (the stratified one on a tie), when it draws at most `REUSE_DRAWS` x as
-    many as ``want`` rounded up to even does afresh (a render saved outweighs a few more
-    samples, and the frame gets them too); else that even count, afresh."""
-    m0, trap0 = grid
-    have = _samples(grid)
-    options = []
-    if not trap0:
-        options.append((m0 * (2 * math.ceil((want / m0 - 1) / 2) + 1), False))
-        options.append((2 * m0 * max(1, math.ceil((want - 1) / (2 * m0))), True))
-    else:
-        options.append((m0 * max(2, math.ceil((want - 1) / m0)), True))
-    best = min(options, key=lambda g: (_samples(g) - have, g[1]))
-    fresh = (2 * math.ceil(want / 2), False)
-    if _samples(best) - have <= REUSE_DRAWS * _samples(fresh) and _samples(best) <= MAX_SAMPLES:
+    of the grids that hold the samples drawn (`_holding_grids`) with at least ``want`` samples,
+    the one that draws the fewest new samples (the stratified one on a tie), when it draws at
+    most `REUSE_DRAWS` x as many as ``want`` rounded up to even does afresh (a render saved
+    outweighs a few more samples, and the frame gets them too); else that even count, afresh."""
+    fresh = min(MAX_SAMPLES, 2 * math.ceil(want / 2))
+    enough = [g for g in _holding_grids(grid) if _samples(g) >= want]
+    best = min(enough, key=lambda g: (_draws(g, grid), g[1]), default=None)
+    if best is not None and _draws(best, grid) <= REUSE_DRAWS * fresh:
         return best
-    return (min(MAX_SAMPLES, fresh[0]), False)
+    return (fresh, False)
 
 
 def first_samples(tol: float) -> int:
@@ -320,22 +336,20 @@ def first_samples(tol: float) -> int:
     return int(min(FIRST_MAX, max(FIRST_SAMPLES, 2 * round(FIRST_SCALE / tol / 2))))
 
 
-def _analytic_instead(trials: _Trials, draws: int, analytic: list) -> str | None:
+def _analytic_instead(trials: _Trials, draws: int) -> str | None:
     """Why the analytic frame replaces accumulation's next ``draws`` samples, or None: when its
     predicted time x `ANALYTIC_MARGIN` is under theirs (`MARGINAL_SAMPLE` x the first render's
-    time per sample each). ``analytic`` caches the prediction; the segment pilot runs only when
-    even a one-segment frame would be cheaper."""
-    first = trials.tried[0]
-    acc_ms = draws * MARGINAL_SAMPLE * first["ms"] / first["options"]["samples"]
-    if not analytic and trials.analytic_ms(segments=1) * ANALYTIC_MARGIN >= acc_ms:
+    time per sample each). The segment pilot runs only when even a one-segment frame would be
+    cheaper (`_Trials.analytic_ms` keeps its count)."""
+    acc_ms = draws * MARGINAL_SAMPLE * trials.first_ms_per_sample
+    if trials.segments is None and trials.analytic_ms(segments=1) * ANALYTIC_MARGIN >= acc_ms:
         return None
-    if not analytic:
-        analytic.append(trials.analytic_ms())
-    if analytic[0] * ANALYTIC_MARGIN >= acc_ms:
+    predicted = trials.analytic_ms()
+    if predicted * ANALYTIC_MARGIN >= acc_ms:
         return None
     return (
         f"accumulation would draw {draws} more samples (about {acc_ms:.1f} ms); the analytic frame, "
-        f"predicted {analytic[0]:.1f} ms, is exact to {ANALYTIC_ERROR:g}"
+        f"predicted {predicted:.1f} ms, is exact to {ANALYTIC_ERROR:g}"
     )
 
 
@@ -346,7 +360,6 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
         return f"tolerance {tol:g} < 2 x {ANALYTIC_ERROR:g}: the exact integral"
     aim = tol * SAFETY
     trials.accumulate(first_samples(tol))
-    analytic: list[float] = []
     rate = RATE
     for _ in range(MAX_STEPS + 1):
         est, n = trials.last["error_estimate"], trials.last["options"]["samples"]
@@ -366,8 +379,7 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
             return f"accumulation would need {want:.0f} samples, over {MAX_SAMPLES}: the analytic frame"
         assert trials.grid is not None
         nxt = _next_grid(trials.grid, want)
-        draws = _samples(nxt) - (n if _holds(nxt, trials.grid) else 0)
-        why = _analytic_instead(trials, draws, analytic)
+        why = _analytic_instead(trials, _draws(nxt, trials.grid))
         if why is not None:
             trials.run("analytic")
             return why
@@ -378,22 +390,13 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
 
 def _budget_grid(grid: tuple[int, bool], room: float) -> tuple[int, bool] | None:
     """The next accumulation grid (strata, trapezoid) when ``room`` more samples fit the
-    budget: of the grids that hold the samples drawn (`_holds`) and draw at most ``room`` new
-    ones, the one with the most samples; else a fresh even count, when it has at least 1.25x
-    the samples drawn; None when neither fits (all at most `MAX_SAMPLES` + 1)."""
-    m0, trap0 = grid
-    have = _samples(grid)
+    budget: of the grids that hold the samples drawn (`_holding_grids`) and draw at most
+    ``room`` new ones, the one with the most samples; else a fresh even count, when it has at
+    least 1.25x the samples drawn; None when neither fits."""
+    fitting = [g for g in _holding_grids(grid) if _draws(g, grid) <= room]
+    best = max(fitting, key=_samples, default=None)
     fresh = 2 * int(min(room, MAX_SAMPLES) // 2)  # a fresh render draws all its samples
-    room = min(room, MAX_SAMPLES - have)
-    options = []
-    if trap0:
-        options.append((m0 * (int(room // m0) + 1), True))  # any multiple: (q - 1) m0 new
-    else:
-        options.append((m0 * (2 * int(room // (2 * m0)) + 1), False))  # odd multiple: (k - 1) m0 new
-        options.append((2 * m0 * int((room + m0 - 1) // (2 * m0)), True))  # 2q m0 + 1 - m0 new
-    grown = [g for g in options if _samples(g) > have and _holds(g, grid)]
-    best = max(grown, key=_samples, default=None)
-    if fresh >= 1.25 * have and fresh > (_samples(best) if best else 0):
+    if fresh >= 1.25 * _samples(grid) and fresh > (_samples(best) if best else 0):
         return (fresh, False)
     return best
 
@@ -422,8 +425,7 @@ def _for_budget(trials: _Trials, budget: float) -> str:
         grid = _budget_grid(trials.grid, BUDGET_SHARE * left() / max(per, 1e-6))
         if grid is None:
             break
-        have = _samples(trials.grid)
-        drawn = _samples(grid) - (have if _holds(grid, trials.grid) else 0)
+        drawn = _draws(grid, trials.grid)
         trials.accumulate(*grid)
     n = trials.last["options"]["samples"]
     return f"accumulation-{n}: the most samples that fit {budget:g} ms at the time per sample measured"
