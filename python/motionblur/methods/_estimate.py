@@ -290,32 +290,41 @@ def pilot_estimate(scene: Scene, method: str, options: dict, frame: Frame | None
             "error_estimate_how": "exact: the reference itself",
             "estimate_ms": 0.0,
         }
-    pixels = scene.camera.width * scene.camera.height
-    if method != "analytic":
-        pixels = PILOT_PIXELS
-    elif pixels > ANALYTIC_OWN_PIXELS:
-        pixels = ANALYTIC_PILOT_PIXELS
-    own = frame.rgba if frame is not None and method == "analytic" else None  # used at scale 1
-    p = pilot_errors(scene, method, options, pixels, own)
+    if method == "analytic":
+        return _analytic_estimate(scene, options, frame, t0)
+    p = pilot_errors(scene, method, options)
     est, how = p["rmse"], f"pilot: the method against the exact integral at {p['size']}"
-    if p["scale"] < 1.0 and est > 0.0 and method != "analytic":
+    if p["scale"] < 1.0 and est > 0.0:
         coarse = pilot_errors(scene, method, options, PILOT_PIXELS // 4)
         est = _extrapolated(p, coarse)
         how += f" and {coarse['size']}, extrapolated to the frame's size"
-    if method == "analytic":
-        est *= ANALYTIC_SPLIT**2 / (ANALYTIC_SPLIT**2 - 1)
-        how = f"pilot: the method against its segments cut in {ANALYTIC_SPLIT} at {p['size']}"
-        how += ", taken to the exact limit"
-    if method == "analytic" and p["scale"] < 1.0 and est > 0.0:
-        cam, pilot = scene.camera, p["pixel_mse"]
-        beta = _tail_trend(pilot)
-        est *= (cam.width * cam.height / pilot.size) ** (beta / 4)  # half the trend, in RMSE
+    return _estimate_stats(PILOT_FACTOR.get(method, _DEFAULT_FACTOR) * est, how, p, t0)
+
+
+def _analytic_estimate(scene: Scene, options: dict, frame: Frame | None, t0: float) -> dict:
+    """`pilot_estimate` of the analytic method: the frame itself (``frame`` when given) up to
+    `ANALYTIC_OWN_PIXELS`, else a pilot of `ANALYTIC_PILOT_PIXELS` with its tail carried to the
+    frame's pixels (`_tail_trend`), against its refined segments and taken to the limit."""
+    cam = scene.camera
+    own = cam.width * cam.height <= ANALYTIC_OWN_PIXELS
+    rgba = frame.rgba if frame is not None and own else None
+    pixels = cam.width * cam.height if own else ANALYTIC_PILOT_PIXELS
+    p = pilot_errors(scene, "analytic", options, pixels, rgba)
+    est = p["rmse"] * (ANALYTIC_SPLIT**2 / (ANALYTIC_SPLIT**2 - 1))
+    how = f"pilot: the method against its segments cut in {ANALYTIC_SPLIT} at {p['size']}, taken to the exact limit"
+    if p["scale"] < 1.0 and est > 0.0:
+        beta = _tail_trend(p["pixel_mse"])
+        est *= (cam.width * cam.height / p["pixel_mse"].size) ** (beta / 4)  # half the trend, in RMSE
         how += f", its tail carried to the frame's pixels (MSE x n**{beta / 2:.2f})"
+    return _estimate_stats(PILOT_FACTOR.get("analytic", _DEFAULT_FACTOR) * est, how, p, t0)
+
+
+def _estimate_stats(est: float, how: str, pilot: dict, t0: float) -> dict:
     return {
-        "error_estimate": PILOT_FACTOR.get(method, _DEFAULT_FACTOR) * est,
+        "error_estimate": est,
         "error_estimate_how": how,
         "estimate_ms": (time.perf_counter() - t0) * 1e3,
-        "unblurred_estimate": p["unblurred"],
+        "unblurred_estimate": pilot["unblurred"],
     }
 
 
