@@ -360,17 +360,6 @@ impl Prepared<'_> {
         }
     }
 
-    /// The clip position of point `i` of the `(K+1) * V` (boundary-major), seen by the camera
-    /// of its boundary ([`Prepared::clip_at`]).
-    #[inline]
-    pub fn clip(&self, i: usize) -> [f64; 4] {
-        match &self.clip {
-            Clip::Dense(c) => c[i],
-            Clip::Table(t) => t.get(i),
-            Clip::Direct => self.compute(i / self.nv, i),
-        }
-    }
-
     /// The points of `marks` (boundary-major indices) computed into a table.
     pub fn table(&self, marks: Marks) -> ClipTable {
         ClipTable::new(marks, |i| self.compute(i / self.nv, i))

@@ -240,7 +240,7 @@ impl SampleShader<'_> {
         let at = |k: usize| {
             let mut h = [0.0f64; 3];
             for c in 0..3 {
-                let hp = homogeneous_pixel(&d.clip(k * d.nv + face[c] as usize), ws, hs);
+                let hp = homogeneous_pixel(&d.clip_at(k, face[c] as usize), ws, hs);
                 for j in 0..3 {
                     h[j] += lam[c] * hp[j];
                 }

@@ -224,28 +224,27 @@ pub(crate) fn put4(o: &mut [std::mem::MaybeUninit<f32>], x: usize, v: [f32; 4]) 
 /// Transposes a `(h, w, C)` image into `(w, h, C)`, in cache blocks, in parallel over output rows.
 pub(crate) fn transpose<const C: usize>(src: &[f32], w: usize, h: usize) -> Vec<f32> {
     use rayon::prelude::*;
-    let mut out = Vec::with_capacity(src.len());
-    pool::advise_huge(&out);
-    out.resize(src.len(), 0.0f32);
     const B: usize = 32;
-    out.par_chunks_mut(B * h * C)
-        .enumerate()
-        .for_each(|(bx, block)| {
-            // block = output rows x in [bx*B, bx*B + B) (output row x has h pixels).
-            let x0 = bx * B;
-            let nx = block.len() / (h * C);
-            for y0 in (0..h).step_by(B) {
-                let y1 = (y0 + B).min(h);
-                for y in y0..y1 {
-                    let srow = &src[(y * w + x0) * C..(y * w + x0 + nx) * C];
-                    for dx in 0..nx {
-                        let o = (dx * h + y) * C;
-                        block[o..o + C].copy_from_slice(&srow[dx * C..dx * C + C]);
+    filled(src.len(), |out| {
+        out.par_chunks_mut(B * h * C)
+            .enumerate()
+            .for_each(|(bx, block)| {
+                // block = output rows x in [bx*B, bx*B + B) (output row x has h pixels); every
+                // element of it is written once, for each dx < nx and y < h.
+                let x0 = bx * B;
+                let nx = block.len() / (h * C);
+                for y0 in (0..h).step_by(B) {
+                    let y1 = (y0 + B).min(h);
+                    for y in y0..y1 {
+                        let srow = &src[(y * w + x0) * C..(y * w + x0 + nx) * C];
+                        for dx in 0..nx {
+                            let o = (dx * h + y) * C;
+                            write_copy(&mut block[o..o + C], &srow[dx * C..dx * C + C]);
+                        }
                     }
                 }
-            }
-        });
-    out
+            })
+    })
 }
 
 #[cfg(test)]
