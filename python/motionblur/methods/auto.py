@@ -294,15 +294,33 @@ def _draws(new: tuple[int, bool], old: tuple[int, bool]) -> int:
     return _samples(new) - (_samples(old) if _holds(new, old) else 0)
 
 
-def _holding_grids(grid: tuple[int, bool]) -> list[tuple[int, bool]]:
-    """The grids of at most `MAX_SAMPLES` samples that hold ``grid``'s samples and add to them
-    (`_holds`): odd multiples of a stratified grid and trapezoid grids of its even multiples;
-    trapezoid grids of any multiple of a trapezoid grid."""
+def _holding_families(grid: tuple[int, bool]) -> list[tuple[bool, int, int, int]]:
+    """The grids that hold ``grid``'s samples and add to them (`_holds`), as families
+    ``(trapezoid, first, step, last)``: strata ``j * m0`` for j = first, first + step, ...,
+    last, of at most `MAX_SAMPLES` samples. Odd multiples of a stratified grid and trapezoid
+    grids of its even multiples; trapezoid grids of any multiple of a trapezoid grid."""
     m0, trap0 = grid
-    most = MAX_SAMPLES // m0
-    grids = [] if trap0 else [(k * m0, False) for k in range(3, most + 1, 2)]
-    grids += [(q * m0, True) for q in range(2, most + 1, 1 if trap0 else 2)]
-    return [g for g in grids if _samples(g) <= MAX_SAMPLES]
+    families = [] if trap0 else [(False, 3, 2, MAX_SAMPLES // m0)]
+    families.append((True, 2, 1 if trap0 else 2, (MAX_SAMPLES - 1) // m0))
+    return families
+
+
+def _holding_grid(grid: tuple[int, bool], least: float = 0.0, most: float = math.inf, largest: bool = False):
+    """Of the grids that hold ``grid``'s samples (`_holding_families`) with between ``least``
+    and ``most`` samples, the one with the fewest (the most, ``largest``); the stratified one
+    on a tie; None when there is none. In closed form: each family's samples rise with j."""
+    m0, found = grid[0], []
+    for trap, first, step, last in _holding_families(grid):
+        lo = max(first, math.ceil((least - trap) / m0))
+        hi = min(last, math.floor((most - trap) / m0)) if math.isfinite(most) else last
+        lo += (lo - first) % step  # onto the family's steps: up from the least
+        hi -= (hi - first) % step  # and down from the most
+        if lo <= hi:
+            found.append(((hi if largest else lo) * m0, trap))
+    if not found:
+        return None
+    pick = max if largest else min
+    return pick(found, key=lambda g: (_samples(g), -g[1] if largest else g[1]))
 
 
 def _position(times: np.ndarray, t) -> np.ndarray | int:
@@ -318,13 +336,12 @@ def _position(times: np.ndarray, t) -> np.ndarray | int:
 
 def _next_grid(grid: tuple[int, bool], want: float) -> tuple[int, bool]:
     """The grid (strata, trapezoid) after ``grid`` for an estimated need of ``want`` samples:
-    of the grids that hold the samples drawn (`_holding_grids`) with at least ``want`` samples,
+    of the grids that hold the samples drawn (`_holding_grid`) with at least ``want`` samples,
     the one that draws the fewest new samples (the stratified one on a tie), when it draws at
     most `REUSE_DRAWS` x as many as ``want`` rounded up to even does afresh (a render saved
     outweighs a few more samples, and the frame gets them too); else that even count, afresh."""
     fresh = min(MAX_SAMPLES, 2 * math.ceil(want / 2))
-    enough = [g for g in _holding_grids(grid) if _samples(g) >= want]
-    best = min(enough, key=lambda g: (_draws(g, grid), g[1]), default=None)
+    best = _holding_grid(grid, least=want)
     if best is not None and _draws(best, grid) <= REUSE_DRAWS * fresh:
         return best
     return (fresh, False)
@@ -390,11 +407,10 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
 
 def _budget_grid(grid: tuple[int, bool], room: float) -> tuple[int, bool] | None:
     """The next accumulation grid (strata, trapezoid) when ``room`` more samples fit the
-    budget: of the grids that hold the samples drawn (`_holding_grids`) and draw at most
+    budget: of the grids that hold the samples drawn (`_holding_grid`) and draw at most
     ``room`` new ones, the one with the most samples; else a fresh even count, when it has at
     least 1.25x the samples drawn; None when neither fits."""
-    fitting = [g for g in _holding_grids(grid) if _draws(g, grid) <= room]
-    best = max(fitting, key=_samples, default=None)
+    best = _holding_grid(grid, most=room + _samples(grid), largest=True)
     fresh = 2 * int(min(room, MAX_SAMPLES) // 2)  # a fresh render draws all its samples
     if fresh >= 1.25 * _samples(grid) and fresh > (_samples(best) if best else 0):
         return (fresh, False)
