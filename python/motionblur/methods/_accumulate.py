@@ -142,8 +142,11 @@ def composited_difference(a: np.ndarray, b: np.ndarray, background) -> np.ndarra
     over straight RGBA ``background`` (4,) (compositing is linear in the frame)."""
     bg = np.asarray(background, np.float64)
     pre = np.concatenate([bg[:3] * bg[3], bg[3:]])
-    d = a.astype(np.float64) - b
-    return d - d[..., 3:4] * pre
+    d = np.subtract(a, b, dtype=np.float64)
+    alpha = d[..., 3].copy()
+    for k in range(4):  # a channel at a time: numpy broadcasts over a last axis of 4 slowly
+        d[..., k] -= alpha * pre[k]
+    return d
 
 
 def accumulate(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> Frame:
@@ -251,9 +254,19 @@ class HalfSums:
         return tuple(f(v[i] for v in wins) // self.aa for i, f in enumerate((min, min, max, max)))
 
     def _half(self, j: int, rows: slice, cols: slice) -> tuple[float, np.ndarray]:
+        """Half ``j``'s mass and its weighted mean over the window (float64): each part's mean
+        times its mass, summed in the parts' order from 0, over the mass. In place, in one
+        buffer: the arithmetic (and the bits) of ``sum(m * rgba.astype(float64)) / mass``
+        without a temporary array per part."""
         sel = [(float(w.sum()), f.rgba[rows, cols]) for h, _, w, f in self.parts if h == j]
         mass = sum(m for m, _ in sel)
-        return mass, sum(m * r.astype(np.float64) for m, r in sel) / mass
+        out = np.zeros(sel[0][1].shape, np.float64)
+        term = np.empty_like(out)
+        for m, r in sel:
+            np.multiply(r, m, out=term, dtype=np.float64)
+            out += term
+        out /= mass
+        return mass, out
 
     def frame(self) -> Frame:
         ref_t = self.scene.reference_t
@@ -263,8 +276,12 @@ class HalfSums:
         if win is not None:  # the halves' sums over the window only (the same arithmetic)
             rows, cols = slice(win[1], win[3]), slice(win[0], win[2])
             (ma, a), (mb, b) = self._half(0, rows, cols), self._half(1, rows, cols)
-            rgba[rows, cols] = ((ma * a + mb * b) / (ma + mb)).astype(np.float32)
             square_sum = float(np.sum(np.square(composited_difference(a, b, self.scene.background))))
+            a *= ma  # then the frame, (ma a + mb b) / (ma + mb), in a's buffer
+            b *= mb
+            a += b
+            a /= ma + mb
+            rgba[rows, cols] = a
             m = (ma * mb) ** 0.5 / (ma + mb)
         frame = Frame(rgba, nearest.depth, nearest.ids, None)
         calls = [p[3].stats for p in self.parts]
