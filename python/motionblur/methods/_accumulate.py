@@ -11,13 +11,14 @@ rendering again.
 from __future__ import annotations
 
 from functools import lru_cache
+from typing import NamedTuple
 
 import numpy as np
 
 from .._validate import as_int
 from ..raster import Frame
 from ..scene import Scene, Trapezoid, shutter_cdf
-from ._layers import Layer, object_draw, paste, raster_layer, resolve, static_layer, supersampled
+from ._layers import Layer, object_draw, raster_layer, resolve_arrays, static_layer, supersampled
 from ._painter import painter_for
 
 __all__ = [
@@ -149,9 +150,50 @@ def composited_difference(a: np.ndarray, b: np.ndarray, background) -> np.ndarra
     return d
 
 
+class Piece(NamedTuple):
+    """One accumulation before it is pasted into a frame (`accumulate_piece`): ``base``
+    (rgba, depth, ids) the pixels outside ``window`` (read-only: the static layer's, or the
+    whole frame with a moving camera), ``window`` (x0, y0, x1, y1) the pixels drawn (None when
+    nothing was) and ``drawn`` (rgba, depth, ids) there, ``stats`` the kernel call's."""
+
+    base: tuple[np.ndarray, np.ndarray, np.ndarray]
+    window: tuple[int, int, int, int] | None
+    drawn: tuple[np.ndarray, np.ndarray, np.ndarray] | None
+    stats: dict
+    owned: bool = False  # ``base`` is this piece's own (a moving camera's whole frame)
+
+    def frame(self, keep: bool = False) -> Frame:
+        """The full frame: the base with the drawn pixels pasted in, in fresh arrays (an owned
+        base is handed over as it is unless ``keep``: the piece is used again)."""
+        rgba, depth, ids = self.base if self.owned and not keep else (a.copy() for a in self.base)
+        if self.window is not None:
+            x0, y0, x1, y1 = self.window
+            rgba[y0:y1, x0:x1], depth[y0:y1, x0:x1], ids[y0:y1, x0:x1] = self.drawn
+        frame = Frame(rgba, depth, ids, np.zeros((*rgba.shape[:2], 2), np.float32))
+        frame.stats.update(self.stats)
+        return frame
+
+    def times_weight(self, m: float, rows: slice, cols: slice, out: np.ndarray) -> np.ndarray:
+        """``m`` x the frame's RGBA over ``rows``, ``cols`` (a window holding ``window``) into
+        ``out`` (float64): the products of `frame` ``.rgba[rows, cols].astype(float64) * m``,
+        without pasting a frame."""
+        np.multiply(self.base[0][rows, cols], m, out=out, dtype=np.float64)
+        if self.window is not None:
+            x0, y0, x1, y1 = self.window
+            inner = out[y0 - rows.start : y1 - rows.start, x0 - cols.start : x1 - cols.start]
+            np.multiply(self.drawn[0], m, out=inner, dtype=np.float64)
+        return out
+
+
 def accumulate(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> Frame:
     """The accumulation buffer of ``times`` with ``weights`` (summing to 1), depth and ids of
     sample ``ref``; the method's body (see `accumulation`)."""
+    return accumulate_piece(scene, times, weights, ref, dim, aa).frame()
+
+
+def accumulate_piece(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> Piece:
+    """`accumulate` before its pixels are pasted into a frame (`Piece`): `HalfSums` sums many
+    such over their window without copying a frame for each."""
     stats = {"samples": len(times), "draw_calls": 0, "static_draws": 0, "window": None}
     everything = list(enumerate(scene.objects))
 
@@ -169,9 +211,8 @@ def accumulate(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> F
             cam = supersampled(scene.camera_at(scene.reference_t), aa)
             static = [(o, object_draw(o, scene.reference_t, k)) for k, o in everything if not o.is_moving]
             rgba = (1.0 - dim) * raster_layer(cam, scene, static).rgba + dim * rgba
-        frame = resolve(Layer(rgba.astype(np.float32), depth, ids), aa)
-        frame.stats.update(stats)
-        return frame
+        whole = resolve_arrays(Layer(rgba.astype(np.float32), depth, ids), aa)
+        return Piece(whole, None, None, stats, owned=True)
 
     cam = supersampled(scene.camera, aa)
     static_objs = [(k, o) for k, o in everything if not o.is_moving]
@@ -192,20 +233,16 @@ def accumulate(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> F
          "width": cam.width, "height": cam.height, "aa": aa},
         Layer(c(layer.rgba), c(layer.depth), c(layer.ids)), static.opaque,
     )  # fmt: skip
+    base = (static.rgba, static.depth, static.ids)
     if out is None:
-        frame = Frame(
-            static.rgba.copy(), static.depth.copy(), static.ids.copy(), np.zeros((*static.ids.shape, 2))
-        )
-        frame.stats.update(stats)
-        return frame
+        return Piece(base, None, None, stats)
     win, acc, depth, ids, stats["draw_calls"] = out
     stats["window"] = win
     x0, y0, x1, y1 = win
     if dim < 1.0:
         acc = (1.0 - dim) * layer.rgba[y0:y1, x0:x1] + dim * acc
-    frame = paste(static, win, Layer(acc, depth, ids), aa)
-    frame.stats.update(stats)
-    return frame
+    drawn = resolve_arrays(Layer(np.asarray(acc, np.float32), depth, ids), aa)
+    return Piece(base, tuple(v // aa for v in win), drawn, stats)
 
 
 class HalfSums:
@@ -219,14 +256,14 @@ class HalfSums:
 
     def __init__(self, scene: Scene, aa: int, sampling: str = "stratified") -> None:
         self.scene, self.aa, self.sampling = scene, aa, sampling
-        self.parts: list[tuple[int, np.ndarray, np.ndarray, Frame]] = []  # (half, times, weights, frame)
+        self.parts: list[tuple[int, np.ndarray, np.ndarray, Piece]] = []  # (half, times, weights, piece)
 
     def add(self, times, weights, half: int) -> None:
         times, weights = np.ascontiguousarray(times, np.float64), np.ascontiguousarray(weights, np.float64)
         mass = float(weights.sum())
         ref = _nearest(times, self.scene.reference_t)
         self.parts.append(
-            (half, times, weights, accumulate(self.scene, times, weights / mass, ref, 1.0, self.aa))
+            (half, times, weights, accumulate_piece(self.scene, times, weights / mass, ref, 1.0, self.aa))
         )
 
     def reweight(self, weight_of) -> None:
@@ -245,7 +282,7 @@ class HalfSums:
     def _window(self) -> tuple[int, int, int, int] | None:
         """The pixels (x0, y0, x1, y1) any part drew moving objects in (the whole image with a
         moving camera), None when none did: outside it every part is the same static layer."""
-        h, w = self.parts[0][3].rgba.shape[:2]
+        h, w = self.parts[0][3].base[0].shape[:2]
         if self.scene.camera_moves:
             return 0, 0, w, h
         wins = [p[3].stats["window"] for p in self.parts if p[3].stats["window"] is not None]
@@ -256,22 +293,21 @@ class HalfSums:
     def _half(self, j: int, rows: slice, cols: slice) -> tuple[float, np.ndarray]:
         """Half ``j``'s mass and its weighted mean over the window (float64): each part's mean
         times its mass, summed in the parts' order from 0, over the mass. In place, in one
-        buffer: the arithmetic (and the bits) of ``sum(m * rgba.astype(float64)) / mass``
-        without a temporary array per part."""
-        sel = [(float(w.sum()), f.rgba[rows, cols]) for h, _, w, f in self.parts if h == j]
+        buffer: the arithmetic (and the bits) of ``sum(m * frame.rgba.astype(float64)) / mass``
+        without pasting a frame or a temporary array per part (`Piece.times_weight`)."""
+        sel = [(float(w.sum()), piece) for h, _, w, piece in self.parts if h == j]
         mass = sum(m for m, _ in sel)
-        out = np.zeros(sel[0][1].shape, np.float64)
+        out = np.zeros((rows.stop - rows.start, cols.stop - cols.start, 4), np.float64)
         term = np.empty_like(out)
-        for m, r in sel:
-            np.multiply(r, m, out=term, dtype=np.float64)
-            out += term
+        for m, piece in sel:
+            out += piece.times_weight(m, rows, cols, term)
         out /= mass
         return mass, out
 
     def frame(self) -> Frame:
         ref_t = self.scene.reference_t
-        nearest = min(self.parts, key=lambda p: float(np.min(np.abs(p[1] - ref_t))))[3]
-        rgba, square_sum = nearest.rgba.copy(), 0.0
+        nearest = min(self.parts, key=lambda p: float(np.min(np.abs(p[1] - ref_t))))[3].frame(keep=True)
+        rgba, square_sum = nearest.rgba, 0.0
         win = self._window()
         if win is not None:  # the halves' sums over the window only (the same arithmetic)
             rows, cols = slice(win[1], win[3]), slice(win[0], win[2])
