@@ -483,7 +483,11 @@ def over_background(frame: Frame, background) -> Frame:
     if bg[3] == 0.0 and not bg[:3].any():
         return frame
     pre = np.concatenate([bg[:3] * bg[3], bg[3:]]).astype(np.float32)
-    rgba = frame.rgba + (1.0 - frame.rgba[..., 3:4]) * pre
+    rgba = np.empty_like(frame.rgba)
+    clear = np.float32(1.0) - frame.rgba[..., 3]
+    for k in range(4):  # a channel at a time: numpy broadcasts over a last axis of 4 slowly
+        np.multiply(clear, pre[k], out=rgba[..., k])
+        rgba[..., k] += frame.rgba[..., k]
     return Frame(rgba, frame.depth, frame.ids, frame.velocity, frame.stats)
 
 
