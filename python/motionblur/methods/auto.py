@@ -77,8 +77,10 @@ __all__ = [
 
 #: The default tolerance: RMSE against the exact time integral (premultiplied linear RGBA).
 DEFAULT_TOLERANCE = 0.01
-#: The share of the tolerance auto aims its estimate at (the estimate's own spread).
-SAFETY = 0.85
+#: The share of the tolerance auto aims its estimate at (the estimate's own spread: on the
+#: tuning scenes the 5th percentile of estimate / error is 0.89 at 8 stratified samples and
+#: 0.93-1.0 on the trapezoid grids auto refines to).
+SAFETY = 0.95
 #: Below this many samples the halves hold few samples each and their estimate spreads more:
 #: the aim shrinks as sqrt(N / SURE_SAMPLES) (chosen on the tuning scenes: from 8 samples up the
 #: 5th percentile of estimate / error there is 0.85, at 6 it is 0.69 and at 4 0.55).
