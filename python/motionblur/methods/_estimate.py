@@ -37,7 +37,7 @@ option set is estimated by a pilot (`pilot_estimate`), with no fitted factor:
   a frame of at most `ANALYTIC_OWN_PIXELS` (640x480) is its own pilot: the estimate is then
   its measured error against the reference, and the frame is the one ``render`` made (passed
   in), so that the estimate costs the reference alone, about twice the frame's time. Only a
-  larger frame (not calibrated) is carried from a pilot of `ANALYTIC_PILOT_PIXELS`
+  larger frame (less well calibrated: docs, validation.md) is carried from a pilot of `ANALYTIC_PILOT_PIXELS`
   (160x120): the typical MSE of random sixteenths and quarters of the pilot's pixels gives
   the growth ``n**beta`` (``beta`` 0 for a light tail, 1 at most, `_tail_trend`), and the
   pilot's MSE is carried to the frame's pixel count with half of it in log (as
@@ -119,7 +119,9 @@ ANALYTIC_LONGEST = 0.125
 #: through the floor) the crossing is off by up to a few thousandths of the shutter. A
 #: covering span that no cut of the reference falls in keeps that error exactly (spans are
 #: cut only at segment boundaries), so the reference must cut spans shorter than the frame's
-#: segments: the error left in an uncut span falls as the square of its length.
+#: segments: the error left in an uncut span falls as the square of its length. It costs more
+#: only where the frame's segments are longer than this (a deforming mesh whose normals the
+#: segment rule cuts for is cut finer already): up to about 5x the frame's render there, ~2x elsewhere.
 ANALYTIC_DEFORMING_LONGEST = 1 / 32
 #: The largest frame (pixels) the analytic method's pilot is the frame itself for (the frame
 #: ``render`` made, so that only its reference is rendered, about twice the frame's time): its
