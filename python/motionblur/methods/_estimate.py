@@ -34,10 +34,10 @@ option set is estimated by a pilot (`pilot_estimate`), with no fitted factor:
   over the edge's slow normal speed (up to a piece's length of the shutter), so a frame of more
   samples holds larger single errors, and its RMSE grows with its pixel count until the rare
   large ones are common. No smaller pilot predicts where a frame's few large errors fall, so
-  a frame of at most `ANALYTIC_OWN_PIXELS` (640x480) is its own pilot: the estimate is then
+  a frame of at most `ANALYTIC_OWN_PIXELS` (1920x1080) is its own pilot: the estimate is then
   its measured error against the reference, and the frame is the one ``render`` made (passed
   in), so that the estimate costs the reference alone, about twice the frame's time. Only a
-  larger frame (less well calibrated: docs, validation.md) is carried from a pilot of `ANALYTIC_PILOT_PIXELS`
+  larger frame (4K; not calibrated: docs, validation.md) is carried from a pilot of `ANALYTIC_PILOT_PIXELS`
   (160x120): the typical MSE of random sixteenths and quarters of the pilot's pixels gives
   the growth ``n**beta`` (``beta`` 0 for a light tail, 1 at most, `_tail_trend`), and the
   pilot's MSE is carried to the frame's pixel count with half of it in log (as
@@ -129,11 +129,15 @@ ANALYTIC_DEFORMING_LONGEST = 1 / 32
 #: no smaller pilot predicts (on tuning scenes at 192x144 and 320x240, pilots of 3072 to 19200
 #: pixels, carried to the frame's pixels or not, missed 0.5x-2x on 7-20% of frames, down to
 #: 0.2x; at 640x480, pilots of 3072 to 76800 pixels read 0.1-0.2x of a frame whose own read
-#: was 1.1x), and a pilot of a quarter of the frame's pixels costs about as much.
-ANALYTIC_OWN_PIXELS = 640 * 480
-#: The analytic method's pilot for a frame larger than `ANALYTIC_OWN_PIXELS`, its MSE carried to
-#: the frame's pixels (`_tail_trend`): on the 640x480 tuning frames the closest of the pilots
-#: of 3072, 19200 and 76800 pixels that cost less than the frame (about half of it).
+#: was 1.1x; at 960x540 the 160x120 pilot carried read 0.26x-3.1x where the frame's own read
+#: 1.03x-1.14x on tuning seeds), and a pilot of a quarter of the frame's pixels costs about as
+#: much. Up to 1080p, then: a user who renders many such frames and needs no estimate passes
+#: ``error_estimate=False``.
+ANALYTIC_OWN_PIXELS = 1920 * 1080
+#: The analytic method's pilot for a frame larger than `ANALYTIC_OWN_PIXELS` (4K), its MSE
+#: carried to the frame's pixels (`_tail_trend`): on the 640x480 tuning frames the closest of the
+#: pilots of 3072, 19200 and 76800 pixels that cost less than the frame (about half of it); a
+#: 4K frame's own reference would double a render that already takes most of the memory budget.
 ANALYTIC_PILOT_PIXELS = 160 * 120
 #: The exact limit the analytic estimate is against (`limit`): the analytic method at a chord
 #: tolerance of 2e-4 px and 4 Gauss points, each segment cut into 4 (whatever the segment cap)
