@@ -20,8 +20,9 @@ import re
 import textwrap
 import time
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -267,15 +268,34 @@ def _with_depth_of_field(frame: Frame, scene: Scene, aperture: float, focus: flo
     return out
 
 
-@functools.cache
-def _parameters(fn) -> dict[str, inspect.Parameter]:
-    """The options of a method function: its parameters after ``scene`` (read once a function:
-    ``inspect.signature`` took a tenth of a small frame's time)."""
+def _read_once(read):
+    """``read(fn)`` kept for each method function (``inspect.signature`` took a tenth of a small
+    frame's time): in a table keyed by the function, which holds it as the registry does; an
+    unhashable callable is read every time."""
+    table: dict = {}
+
+    def kept(fn):
+        try:
+            return table[fn]
+        except KeyError:
+            table[fn] = value = read(fn)
+            return value
+        except TypeError:  # unhashable: a callable object without __hash__
+            return read(fn)
+
+    return functools.wraps(read)(kept)
+
+
+@_read_once
+def _parameters(fn) -> Mapping[str, inspect.Parameter]:
+    """The options of a method function: its parameters after ``scene`` (read-only)."""
     params = list(inspect.signature(fn).parameters.values())[1:]
-    return {p.name: p for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
+    return MappingProxyType(
+        {p.name: p for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
+    )
 
 
-@functools.cache
+@_read_once
 def _takes_any_option(fn) -> bool:
     return any(p.kind == p.VAR_KEYWORD for p in inspect.signature(fn).parameters.values())
 

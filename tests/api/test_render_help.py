@@ -3,9 +3,11 @@ the methods' own docstrings, and asking for a method that does not apply to the 
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import pydoc
 import warnings
+from collections.abc import Mapping
 
 import pytest
 
@@ -13,7 +15,7 @@ import motionblur as mb
 from motionblur.render import METHODS, _options_paragraph, _parameters
 
 
-def _options(name: str) -> dict[str, inspect.Parameter]:
+def _options(name: str) -> Mapping[str, inspect.Parameter]:
     return _parameters(METHODS[name].fn)
 
 
@@ -50,6 +52,33 @@ def test_a_method_registered_later_appears_in_help():
         assert "``strength`` in [0, 1], unitless." in mb.render.__doc__
     finally:
         del METHODS["_test_only_method"]
+
+
+def test_a_callable_object_without_a_hash_registers_and_renders():
+    """A method may be any callable, a dataclass instance (``__eq__`` and no ``__hash__``) too:
+    its options are read from its signature every call where they cannot be kept by the
+    callable, and an unknown option is still refused by name."""
+
+    @dataclasses.dataclass
+    class Method:
+        samples: int = 1
+
+        def __call__(self, scene, strength: float = 0.5):
+            """A method of this test.
+
+            Options: ``strength`` in [0, 1], unitless."""
+            return mb.render(scene, "accumulation", samples=self.samples)
+
+    with pytest.raises(TypeError):
+        hash(Method())
+    mb.register("_test_unhashable")(Method())
+    try:
+        frame = mb.render(_still_scene(), "_test_unhashable", strength=0.3)
+        assert frame.rgba.shape == (24, 32, 4)
+        with pytest.raises(TypeError, match="colour"):
+            mb.render(_still_scene(), "_test_unhashable", colour=1)
+    finally:
+        del METHODS["_test_unhashable"]
 
 
 def _still_scene() -> mb.Scene:
