@@ -7,6 +7,8 @@ the reverse), so that the plan, not the machine's load, decides each assertion; 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -79,6 +81,7 @@ def test_each_budget_step_draws_no_more_samples_than_fit():
     it declines only where no grid or fresh render of 1.25x fits. A fresh render sized by the
     room plus the samples already drawn once overran 10 ms budgets by 1.2-1.6x."""
     grids = [
+        (2, False),
         (4, False),
         (8, False),
         (12, False),
@@ -90,7 +93,9 @@ def test_each_budget_step_draws_no_more_samples_than_fit():
     ]
     for grid in grids:
         have = auto_mod._samples(grid)
-        for room in [0.5, 1, 3, 7, 8, 9, 15, 21, 30, 47, 100, 333, 5000]:
+        # rooms a hair under a whole count too: room + drawn once rounded up past it
+        hairs = [math.nextafter(float(k), 0.0) for k in (4, 16, 49)]
+        for room in [0.5, 1, 3, 7, 8, 9, 15, 21, 30, 47, 100, 333, 5000, *hairs]:
             nxt = auto_mod._budget_grid(grid, room)
             if nxt is None:
                 least = grid[0] + (not grid[1])  # the fewest new samples a grid that holds them draws

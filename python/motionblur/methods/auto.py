@@ -82,8 +82,9 @@ DEFAULT_TOLERANCE = 0.01
 #: 0.93-1.0 on the trapezoid grids auto refines to).
 SAFETY = 0.95
 #: Below this many samples the halves hold few samples each and their estimate spreads more:
-#: the aim shrinks as sqrt(N / SURE_SAMPLES) (chosen on the tuning scenes: from 8 samples up the
-#: 5th percentile of estimate / error there is 0.85, at 6 it is 0.69 and at 4 0.55).
+#: the aim shrinks as sqrt(N / SURE_SAMPLES) (chosen on the tuning scenes: at 8 stratified samples
+#: the 5th percentile of estimate / error there is 0.85-0.89 (two sets of seeds), at 6 it is 0.69
+#: and at 4 0.55).
 SURE_SAMPLES = 8
 #: Fewest time samples of the first accumulation render (two halves of 2).
 FIRST_SAMPLES = 4
@@ -412,7 +413,9 @@ def _budget_grid(grid: tuple[int, bool], room: float) -> tuple[int, bool] | None
     budget: of the grids that hold the samples drawn (`_holding_grid`) and draw at most
     ``room`` new ones, the one with the most samples; else a fresh even count, when it has at
     least 1.25x the samples drawn; None when neither fits."""
-    best = _holding_grid(grid, most=room + _samples(grid), largest=True)
+    # draws are whole samples: at most floor(room), added to the drawn ones exactly
+    whole = math.floor(room) if math.isfinite(room) else MAX_SAMPLES
+    best = _holding_grid(grid, most=whole + _samples(grid), largest=True)
     fresh = 2 * int(min(room, MAX_SAMPLES) // 2)  # a fresh render draws all its samples
     if fresh >= 1.25 * _samples(grid) and fresh > (_samples(best) if best else 0):
         return (fresh, False)
