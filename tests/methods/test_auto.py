@@ -250,3 +250,39 @@ def test_refinement_keeps_the_drawn_samples_under_any_shutter(shutter):
     ref = mb.exact(scene).rgba
     err = [_rmse(mb.render(scene, "auto", tolerance=tol).rgba, ref) for tol in (0.01, 0.002)]
     assert err[1] <= 0.002 and err[0] <= 0.01 and err[1] < err[0], err
+
+
+@pytest.mark.parametrize("seed, aa", [(0, 1), (3, 2), (6, 1), (11, 4)])
+def test_accumulations_never_write_into_the_kept_static_layer_nor_share_a_frame(monkeypatch, seed, aa):
+    """Accumulation's pieces read the static layer kept across frames (read-only by contract)
+    and paste a frame only when one is returned: with that layer's arrays made read-only, plain
+    accumulation and auto's refinements render (a write would raise), their frames are
+    writeable, share no memory with the layer, and two frames of one refinement share none
+    with each other. Tuning seeds 0-11 hold still and moving cameras, static objects and not."""
+    from motionblur.methods import _accumulate, clear_static_cache
+
+    kept = []
+    layer_of = _accumulate.static_layer
+
+    def read_only(*args, **kwargs):
+        st = layer_of(*args, **kwargs)
+        for a in (st.rgba, st.depth, st.ids, st.layer.rgba, st.layer.depth, st.layer.ids):
+            a.flags.writeable = False
+            kept.append(a)
+        return st
+
+    clear_static_cache()
+    monkeypatch.setattr(_accumulate, "static_layer", read_only)
+    try:
+        scene = random_scene(seed, 48, 36)
+        frames = [mb.render(scene, "accumulation", samples=6, aa=aa)]
+        trials = auto_mod._Trials(scene, aa)
+        frames += [trials.accumulate(8), trials.accumulate(16, trapezoid=True)]
+        for f in frames:
+            for a in (f.rgba, f.depth, f.ids):
+                assert a.flags.writeable
+                assert not any(np.shares_memory(a, k) for k in kept)
+        for a, b in zip(*[(f.rgba, f.depth, f.ids) for f in frames[1:]], strict=True):
+            assert not np.shares_memory(a, b)
+    finally:
+        clear_static_cache()
