@@ -129,9 +129,9 @@ ANALYTIC_DEFORMING_LONGEST = 1 / 32
 #: no smaller pilot predicts (on tuning scenes at 192x144 and 320x240, pilots of 3072 to 19200
 #: pixels, carried to the frame's pixels or not, missed 0.5x-2x on 7-20% of frames, down to
 #: 0.2x; at 640x480, pilots of 3072 to 76800 pixels read 0.1-0.2x of a frame whose own read
-#: was 1.1x; at 960x540 the 160x120 pilot carried read 0.26x-3.1x where the frame's own read
-#: 1.03x-1.14x on tuning seeds), and a pilot of a quarter of the frame's pixels costs about as
-#: much. Up to 1080p, then: a user who renders many such frames and needs no estimate passes
+#: was 1.1x; at 960x540 the frame's own read 1.03x-1.14x on tuning seeds, where the 160x120
+#: pilot carried had read 0.26x-3.1x on measuring seeds), and a pilot of a quarter of the
+#: frame's pixels costs about as much. Up to 1080p, then: a user who renders many such frames and needs no estimate passes
 #: ``error_estimate=False``.
 ANALYTIC_OWN_PIXELS = 1920 * 1080
 #: The analytic method's pilot for a frame larger than `ANALYTIC_OWN_PIXELS` (4K), its MSE
