@@ -102,6 +102,12 @@ def _dataset_parser(sub) -> None:
     d.add_argument("--dask", metavar="local|ADDRESS",
                    help="render frames as Dask tasks: 'local' (a LocalCluster) or a scheduler's address")  # fmt: skip
     d.add_argument("--no-progress", action="store_true", help="no progress bar")
+    d.add_argument(
+        "--no-error-estimate",
+        action="store_true",
+        help="no error estimate in each frame's JSON (the analytic method's costs about "
+        "twice the frame's time)",
+    )
     d.add_argument("--preview", choices=("gif", "mp4", "none"), default="gif",
                    help="the sequence's preview: preview.gif (default), preview.mp4 (H.264; needs "
                    "motionblur[video]) or none")  # fmt: skip
@@ -156,6 +162,7 @@ def _dataset(args) -> int:
             method=args.method, options=options, outputs=[o.strip() for o in args.outputs.split(",") if o.strip()],
             shake=args.shake, seed=args.seed, rolling=args.rolling, width=args.width, height=args.height, client=client,
             progress=not args.no_progress, preview=args.preview, kernels=kernels,
+            error_estimate=not args.no_error_estimate,
         )  # fmt: skip
     except (ValueError, TypeError, FileNotFoundError) as exc:
         print(f"motionblur dataset: {exc}", file=sys.stderr)

@@ -88,6 +88,7 @@ def test_bad_arguments_name_themselves_before_writing(tmp_path):
         (dict(kernels=(0, 3)), "kernels"),
         (dict(kernels="4x3"), "kernels"),
         (dict(kernels=(4, 3), rolling=0.5, method="analytic"), "kernels"),
+        (dict(error_estimate="no"), "error_estimate"),
     ]
     for kw, name in cases:
         with pytest.raises((ValueError, TypeError), match=name):
@@ -139,6 +140,29 @@ def test_the_command_line(tmp_path):
     assert meta["options"] == {"samples": 4} and meta["fps"] == 12.0
     bad = subprocess.run([*cmd[:5], "--frames", "3"], capture_output=True, text=True, env=env, timeout=120)
     assert bad.returncode != 0 and "--frames" in bad.stderr
+
+
+def test_frames_without_their_error_estimate_are_the_same_frames(tmp_path):
+    """``error_estimate=False`` (``--no-error-estimate``) skips the estimate, which for the
+    analytic method is a second, finer render: each JSON holds None there, and the frames are the
+    same bits as with it (the estimate only reads the frame)."""
+    kw = dict(frames=(0, 2), width=48, height=36, method="analytic", progress=False, preview="none")
+    make_dataset("curved", tmp_path / "with", **kw)
+    run = make_dataset("curved", tmp_path / "without", error_estimate=False, **kw)
+    assert run["error_estimate"] is False
+    for k in (0, 1):
+        with_ = json.loads((tmp_path / "with" / f"frame_{k:06d}.json").read_text())
+        without = json.loads((tmp_path / "without" / f"frame_{k:06d}.json").read_text())
+        assert with_["error_estimate"] > 0.0 and without["error_estimate"] is None
+        for name, a in _arrays(tmp_path / "with", k).items():
+            np.testing.assert_array_equal(a, _arrays(tmp_path / "without", k)[name], err_msg=name)
+    env = {**os.environ, "PYTHONPATH": str(Path(mb.__file__).parents[1])}
+    cmd = [sys.executable, "-m", "motionblur", "dataset", "curved", "--frames", "0:1", "--method", "analytic",
+           "--width", "48", "--height", "36", "--preview", "none", "--no-progress", "--no-error-estimate",
+           "--out", str(tmp_path / "cli")]  # fmt: skip
+    done = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert json.loads((tmp_path / "cli" / "frame_000000.json").read_text())["error_estimate"] is None
 
 
 @pytest.mark.dask
