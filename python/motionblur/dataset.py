@@ -429,7 +429,7 @@ def make_dataset(
         raise TypeError(f"error_estimate: expected True or False, got {type(error_estimate).__name__}")
     from .render import METHODS, _unknown_options
 
-    bad = _unknown_options(METHODS[method].fn, options)
+    bad = _unknown_options(METHODS[method], options)
     if bad:
         raise TypeError(f"options: method {method!r} has no option {', '.join(map(repr, bad))}")
     if not isinstance(preview, str) or preview not in PREVIEWS:

@@ -14,7 +14,6 @@ module knows none of them. The layers the methods share are in `motionblur.metho
 
 from __future__ import annotations
 
-import functools
 import inspect
 import re
 import textwrap
@@ -69,7 +68,9 @@ class MethodNotApplicableWarning(UserWarning):
 class MethodSpec:
     """A registered method: its function ``fn(scene, **options) -> Frame``, the option sets
     ``sweep`` the benchmark runs, ``applies(scene) -> bool``, what the method ``needs`` of a scene
-    (words, for the warning when it does not apply) and a one-line description."""
+    (words, for the warning when it does not apply) and a one-line description; ``options``
+    (read-only) and ``any_option`` are read from ``fn``'s signature once, when it is registered
+    (``inspect.signature`` on every call took a tenth of a small frame's time)."""
 
     name: str
     fn: Callable[..., Frame]
@@ -77,6 +78,12 @@ class MethodSpec:
     applies: Callable[[Scene], bool] = lambda scene: True
     doc: str = ""
     needs: str = ""
+    options: Mapping[str, inspect.Parameter] = field(init=False)
+    any_option: bool = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.options = MappingProxyType(_parameters(self.fn))
+        self.any_option = any(p.kind == p.VAR_KEYWORD for p in inspect.signature(self.fn).parameters.values())
 
 
 #: Every rendering method, by name (filled by ``@register`` when `motionblur.methods` loads).
@@ -170,11 +177,11 @@ def render(
             MethodNotApplicableWarning,
             stacklevel=2,
         )
-    bad = _unknown_options(spec.fn, options)
+    bad = _unknown_options(spec, options)
     if bad:
         raise TypeError(
             f"options: method {method!r} has no option {', '.join(map(repr, bad))}; "
-            f"its options: {', '.join(_parameters(spec.fn)) or 'none'} (help(motionblur.render))"
+            f"its options: {', '.join(spec.options) or 'none'} (help(motionblur.render))"
         )
     lens = _lens(aperture, focus_distance)
     if outputs:
@@ -268,42 +275,17 @@ def _with_depth_of_field(frame: Frame, scene: Scene, aperture: float, focus: flo
     return out
 
 
-def _read_once(read):
-    """``read(fn)`` kept for each method function (``inspect.signature`` took a tenth of a small
-    frame's time): in a table keyed by the function, which holds it as the registry does; an
-    unhashable callable is read every time."""
-    table: dict = {}
-
-    def kept(fn):
-        try:
-            return table[fn]
-        except KeyError:
-            table[fn] = value = read(fn)
-            return value
-        except TypeError:  # unhashable: a callable object without __hash__
-            return read(fn)
-
-    return functools.wraps(read)(kept)
-
-
-@_read_once
-def _parameters(fn) -> Mapping[str, inspect.Parameter]:
-    """The options of a method function: its parameters after ``scene`` (read-only)."""
+def _parameters(fn) -> dict[str, inspect.Parameter]:
+    """The options of a method function: its parameters after ``scene``."""
     params = list(inspect.signature(fn).parameters.values())[1:]
-    return MappingProxyType(
-        {p.name: p for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
-    )
+    return {p.name: p for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
 
 
-@_read_once
-def _takes_any_option(fn) -> bool:
-    return any(p.kind == p.VAR_KEYWORD for p in inspect.signature(fn).parameters.values())
-
-
-def _unknown_options(fn, options: dict) -> list[str]:
-    if _takes_any_option(fn):
+def _unknown_options(spec: MethodSpec, options: dict) -> list[str]:
+    """The names in ``options`` that method ``spec`` has no option of."""
+    if spec.any_option:
         return []
-    return [k for k in options if k not in _parameters(fn)]
+    return [k for k in options if k not in spec.options]
 
 
 def _options_paragraph(doc: str) -> str:
@@ -325,8 +307,7 @@ def _methods_doc() -> str:
     for name in sorted(METHODS):
         spec = METHODS[name]
         sig = ", ".join(
-            f"{p.name}={p.default!r}" if p.default is not p.empty else p.name
-            for p in _parameters(spec.fn).values()
+            f"{p.name}={p.default!r}" if p.default is not p.empty else p.name for p in spec.options.values()
         )
         lines.append(f"    ``{name}`` ({sig}): {spec.doc}")
         if spec.needs:

@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._validate import as_int
-from ..raster import Frame
+from ..raster import Frame, add_times_color
 from ..scene import Scene, Trapezoid, shutter_cdf
 from ._layers import Layer, object_draw, raster_layer, resolve_arrays, static_layer, supersampled
 from ._painter import painter_for
@@ -144,10 +144,7 @@ def composited_difference(a: np.ndarray, b: np.ndarray, background) -> np.ndarra
     bg = np.asarray(background, np.float64)
     pre = np.concatenate([bg[:3] * bg[3], bg[3:]])
     d = np.subtract(a, b, dtype=np.float64)
-    alpha = d[..., 3].copy()
-    for k in range(4):  # a channel at a time: numpy broadcasts over a last axis of 4 slowly
-        d[..., k] -= alpha * pre[k]
-    return d
+    return add_times_color(d, -d[..., 3], pre)  # -alpha: a fresh array, d's alpha is read first
 
 
 class Piece(NamedTuple):
@@ -162,13 +159,19 @@ class Piece(NamedTuple):
     stats: dict
     owned: bool = False  # ``base`` is this piece's own (a moving camera's whole frame)
 
-    def frame(self, keep: bool = False) -> Frame:
-        """The full frame: the base with the drawn pixels pasted in, in fresh arrays (an owned
-        base is handed over as it is unless ``keep``: the piece is used again)."""
+    def pasted(self, keep: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(rgba, depth, ids) of the full frame: the base with the drawn pixels pasted in, in
+        fresh arrays (an owned base is handed over as it is unless ``keep``: the piece is used
+        again)."""
         rgba, depth, ids = self.base if self.owned and not keep else (a.copy() for a in self.base)
         if self.window is not None:
             x0, y0, x1, y1 = self.window
             rgba[y0:y1, x0:x1], depth[y0:y1, x0:x1], ids[y0:y1, x0:x1] = self.drawn
+        return rgba, depth, ids
+
+    def frame(self) -> Frame:
+        """The full frame (`pasted`), with a zero velocity."""
+        rgba, depth, ids = self.pasted()
         frame = Frame(rgba, depth, ids, np.zeros((*rgba.shape[:2], 2), np.float32))
         frame.stats.update(self.stats)
         return frame
@@ -306,8 +309,8 @@ class HalfSums:
 
     def frame(self) -> Frame:
         ref_t = self.scene.reference_t
-        nearest = min(self.parts, key=lambda p: float(np.min(np.abs(p[1] - ref_t))))[3].frame(keep=True)
-        rgba, square_sum = nearest.rgba, 0.0
+        nearest = min(self.parts, key=lambda p: float(np.min(np.abs(p[1] - ref_t))))[3]
+        (rgba, depth, ids), square_sum = nearest.pasted(keep=True), 0.0
         win = self._window()
         if win is not None:  # the halves' sums over the window only (the same arithmetic)
             rows, cols = slice(win[1], win[3]), slice(win[0], win[2])
@@ -319,7 +322,7 @@ class HalfSums:
             a /= ma + mb
             rgba[rows, cols] = a
             m = (ma * mb) ** 0.5 / (ma + mb)
-        frame = Frame(rgba, nearest.depth, nearest.ids, None)
+        frame = Frame(rgba, depth, ids, None)
         calls = [p[3].stats for p in self.parts]
         wins = [c["window"] for c in calls if c["window"] is not None]
         frame.stats.update(
