@@ -216,27 +216,25 @@ class _Trials:
 
     def _trapezoid(self, m: int, keep: bool) -> None:
         """The trapezoid grid of ``m`` strata of the shutter's mass: times ``W^-1(k / m)``, k = 0..m,
-        weights 1/m but 1/(2m) at the two ends; its halves are the even and the odd k (the
+        weights 1/m but 1/(2m) at the two ends (a node at a gap closed mid-shutter is a sample
+        at each end of the gap, `_trapezoid_nodes`); its halves are the even and the odd k (the
         trapezoid and the midpoint rules of m / 2 strata). It holds any midpoint grid of
         ``m / (2 q)`` strata and trapezoid grid of ``m / q``, so a refinement may go to any
         multiple (the stratified grids only to odd ones)."""
         assert self.sums is not None
         self.sums.sampling = "trapezoid"
-        k = np.arange(m + 1)
-        times = shutter_quantiles(self.scene.shutter, k / m)
-        weights = np.full(m + 1, 1.0 / m)
-        weights[[0, -1]] = 0.5 / m
-        new = np.ones(m + 1, bool)
+        times, weights, k = _trapezoid_nodes(self.scene.shutter, m)
+        new = np.ones(len(times), bool)
         if keep:
 
             def weight_of(t):
                 at = _position(times, t)
                 new[at] = False
-                return weights[at], int(at[0]) % 2
+                return weights[at], int(k[at[0]]) % 2
 
             self.sums.reweight(weight_of)
         for half in (0, 1):
-            sel = k[new & (k % 2 == half)]
+            sel = np.flatnonzero(new & (k % 2 == half))
             if len(sel):
                 self.sums.add(times[sel], weights[sel], half)
 
@@ -274,6 +272,31 @@ class _Trials:
             + c[3] * math.log(segments + 1) + c[4] * math.log(triangles) + c[5] * other
             + c[6] * scene.camera_moves
         )  # fmt: skip
+
+
+def _trapezoid_nodes(shutter, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(times, weights, node) of the trapezoid grid of ``m`` strata of the shutter's mass (see
+    `_Trials._trapezoid`), times increasing: node ``k`` at ``W^-1(k / m)``, weight 1/m (1/(2m) at
+    the two ends). Where the mass ``k / m`` is reached at the start of a closed gap in the middle
+    of the shutter (a weights shutter with zeros inside), the time integral jumps there, and the
+    node is two samples, one at each end of the gap, each half its weight (the trapezoid rule of
+    each side; one end alone would count its side twice)."""
+    k = np.arange(m + 1)
+    u = k / m
+    left = shutter_quantiles(shutter, u)
+    right = left
+    if isinstance(shutter, np.ndarray):  # only a weights shutter closes inside: W's last u-time
+        right = 1.0 - shutter_quantiles(np.ascontiguousarray(shutter[::-1]), 1.0 - u)
+    weights = np.full(m + 1, 1.0 / m)
+    weights[[0, -1]] = 0.5 / m
+    gap = np.zeros(m + 1, bool)
+    gap[1:-1] = right[1:-1] > left[1:-1] + 1e-12
+    times = np.concatenate([left, right[gap]])
+    node = np.concatenate([k, k[gap]])
+    w = np.where(gap, 0.5 * weights, weights)
+    weights = np.concatenate([w, w[gap]])
+    order = np.argsort(times, kind="stable")
+    return times[order], weights[order], node[order]
 
 
 def _samples(grid: tuple[int, bool]) -> int:
