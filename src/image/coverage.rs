@@ -40,7 +40,10 @@ pub fn coverage_composite(
         return Err(Error::shape("back", format!("expected ({h},{w},4) values")));
     }
     if back_depth.len() != w * h {
-        return Err(Error::shape("back_depth", format!("expected ({h},{w}) values")));
+        return Err(Error::shape(
+            "back_depth",
+            format!("expected ({h},{w}) values"),
+        ));
     }
     if !(y0 < y1 && y1 <= h && x0 < x1 && x1 <= w) {
         return Err(Error::value(

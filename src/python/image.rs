@@ -553,7 +553,7 @@ fn _coverage_composite<'py>(
     let (d, dw, dh) = img3(&depth, "depth", 4)?;
     same_size("depth", (dh, dw), (bh, bw))?;
     let (out, front) = detached_in_pool(py, || {
-        crate::image::coverage_composite((b, z), (w, h), window, (bl, d), layers)
+        crate::coverage_composite((b, z), (w, h), window, (bl, d), layers)
     })?;
     Ok((shaped(py, out, [bh, bw, 4])?, front))
 }
