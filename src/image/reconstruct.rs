@@ -476,7 +476,7 @@ fn gather8(
     (x, y): (usize, usize),
     (n, rn): ([f32; 2], f32),
 ) -> Option<[[f32; 4]; 8]> {
-    if !(rn >= 0.5) {
+    if rn.is_nan() || rn < 0.5 {
         return None;
     }
     #[cfg(target_arch = "x86_64")]

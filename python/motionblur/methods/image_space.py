@@ -102,7 +102,7 @@ def _sharp_over(scene: Scene, t: float, aa: int, velocity: str | None, static: S
         if velocity == "shutter":
             prev = v - (o.world_vertices(1.0) - o.world_vertices(0.0))
         draws.append(Draw(v, o.mesh.faces, o.rgba, object_id=k, previous_vertices=prev))
-        points.append(v[np.unique(o.mesh.faces)] if len(o.mesh.faces) else v[:0])
+        points.append(_drawn_vertices(o.mesh, v))
     depth, ids = static.depth.copy(), static.ids.copy()
     vel = np.zeros((*ids.shape, 2), np.float32)
     win = _window(cam, np.concatenate(points) if points else np.zeros((0, 3)))
@@ -123,6 +123,17 @@ def _sharp_over(scene: Scene, t: float, aa: int, velocity: str | None, static: S
         if part[3] is not None:  # (no velocity buffer when no draw has previous vertices)
             vel[y0:y1, x0:x1] = part[3]
     return Frame(static.rgba, depth, ids, vel), pasted
+
+
+def _drawn_vertices(mesh, v: np.ndarray) -> np.ndarray:
+    """The rows of ``v`` (a mesh's vertices placed in the world) that its faces use: all of them
+    when the mesh has no unreferenced vertex (its stats, counted once and kept), as `_window`
+    needs only their set (no sort of the faces each frame: 7 ms for 70,000 faces)."""
+    if len(mesh.faces) == 0:
+        return v[:0]
+    if mesh.stats["unreferenced_vertices"] == 0:
+        return v
+    return v[np.unique(mesh.faces)]
 
 
 def _masked_window_rgba(frame: Frame, pasted, window, m: np.ndarray) -> np.ndarray:
