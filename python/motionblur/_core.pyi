@@ -191,6 +191,7 @@ __all__ = [
     "_analytic",
     "_glow",
     "_box_blur",
+    "_coverage_composite",
     "_splat_paths",
     "_scatter_pieces",
     "_pixel_bounds",
@@ -400,6 +401,19 @@ def _glow(alpha: np.ndarray, direction: tuple[float, float], width: float) -> np
 
 def _box_blur(rgba: np.ndarray, direction: tuple[float, float], length: float) -> np.ndarray:
     """Box blur of rgba (H,W,4) f32 over length pixels along direction. Returns (H,W,4) f32."""
+
+def _coverage_composite(
+    back: np.ndarray,
+    back_depth: np.ndarray,
+    window: tuple[int, int, int, int],
+    blurred: np.ndarray,
+    depth: np.ndarray,
+    layers: bool,
+) -> tuple[np.ndarray, int]:
+    """The coverage glow's composite of ``opaque_image`` over window (y0, y1, x0, x1) of the static
+    colour back (H,W,4) f32 and depth back_depth (H,W) f32; blurred and depth (the blurred
+    (z m, 0, 0, m)) are (y1 - y0, x1 - x0, 4) f32. Returns (the window's colour, pixels kept in
+    front). Releases the GIL; the same bits for any thread count."""
 
 def _splat_paths(colors: np.ndarray, paths: np.ndarray, width: int, height: int) -> np.ndarray:
     """Time average of sources moving along image paths: colors (N,4) f32 premultiplied, paths

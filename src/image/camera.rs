@@ -250,8 +250,9 @@ impl Taps {
 
     /// Writes every pixel of output row `y` (`(w, 4)`, uninitialised) of the `(w, h)` image
     /// `rgba` blurred along `velocity(x)`, the velocity of pixel `x` of the row (called once a
-    /// pixel, in order). With `simd` (AVX2 detected), two neighbouring pixels whose taps are all
-    /// inside run side by side in one vector ([`Taps::blur_pair`]): the same bits as [`Taps::blur`].
+    /// pixel, in order). With `simd` (AVX2 detected), the pixels whose taps are all inside run
+    /// two by two in one vector, tap by tap along the row ([`Taps::row_avx`]): the same bits as
+    /// [`Taps::blur`].
     #[inline]
     pub fn blur_row(
         &self,
@@ -262,54 +263,108 @@ impl Taps {
         simd: bool,
         mut velocity: impl FnMut(usize) -> [f32; 2],
     ) {
-        let mut x = 0;
-        while x < w {
-            let v0 = velocity(x);
-            if simd && x + 1 < w {
-                let v1 = velocity(x + 1);
-                let pair = match self.blur_pair(rgba, (w, h), (x, y), [v0, v1]) {
-                    Some(p) => p,
-                    None => [
-                        self.blur(rgba, (w, h), (x, y), v0),
-                        self.blur(rgba, (w, h), (x + 1, y), v1),
-                    ],
-                };
-                put4(row, x, pair[0]);
-                put4(row, x + 1, pair[1]);
-                x += 2;
-            } else {
-                put4(row, x, self.blur(rgba, (w, h), (x, y), v0));
-                x += 1;
-            }
+        #[cfg(target_arch = "x86_64")]
+        if simd && !self.t.is_empty() && rgba.len() == w * h * 4 && crate::simd::simd_enabled() {
+            // SAFETY: AVX2 was detected and `rgba` holds the (h, w) image whole.
+            unsafe { self.row_avx(rgba, (w, h), y, row, &mut velocity) };
+            return;
+        }
+        for x in 0..w {
+            put4(row, x, self.blur(rgba, (w, h), (x, y), velocity(x)));
         }
     }
 
-    /// Pixels `(x, y)` and `(x + 1, y)` blurred along `v[0]` and `v[1]` as [`Taps::blur`] does,
-    /// side by side in the eight lanes of an AVX2 register (the same IEEE operations in the same
-    /// order, lane for lane); `None` when one of them is not a plain case (one sample, a zero
-    /// velocity, a tap near the edge) or the CPU has no AVX2. The caller checked `x + 1 < w`.
-    #[inline(always)]
-    pub fn blur_pair(
+    /// [`Taps::blur_row`] with AVX2, tap by tap: the row is taken [`CHUNK`] pixels at a time,
+    /// the pixels whose taps are all inside two by two ([`tap_pair`]),
+    /// the others one by one ([`Taps::blur`]). Each pair's sum runs over the taps in their
+    /// order, lane for lane the IEEE operations of [`Taps::blur`] (the same bits), but every pair of the chunk takes its
+    /// first tap before any takes its second: neighbouring pixels' taps read neighbouring
+    /// texels, so the chunk's reads run along two rows of the image per tap instead of jumping
+    /// between `2 * samples` rows per pixel (the blur was waiting on those loads).
+    ///
+    /// # Safety
+    /// AVX2 is present; `rgba` holds `w * h * 4` values; `self.t` is not empty.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn row_avx(
         &self,
         rgba: &[f32],
         (w, h): (usize, usize),
-        (x, y): (usize, usize),
-        v: [[f32; 2]; 2],
-    ) -> Option<[[f32; 4]; 2]> {
-        let plain = |k: usize| {
-            let [vx, vy] = v[k];
-            !(vx == 0.0 && vy == 0.0) && Self::inside((w, h), (x + k, y), v[k])
-        };
-        if self.t.is_empty() || !plain(0) || !plain(1) || rgba.len() != w * h * 4 {
-            return None;
+        y: usize,
+        row: &mut [std::mem::MaybeUninit<f32>],
+        velocity: &mut impl FnMut(usize) -> [f32; 2],
+    ) {
+        use std::arch::x86_64::*;
+        let mut vs = [[0.0f32; 2]; CHUNK];
+        let mut origin = [_mm_setzero_ps(); CHUNK / 2];
+        let mut vel = [_mm_setzero_ps(); CHUNK / 2];
+        let mut first = [0usize; CHUNK / 2];
+        let yf = y as f32;
+        let mut x0 = 0;
+        while x0 < w {
+            let n = (w - x0).min(CHUNK);
+            for (k, v) in vs[..n].iter_mut().enumerate() {
+                *v = velocity(x0 + k);
+            }
+            // 1: every tap inside, 2: a finite velocity with taps to clamp, 0: the pixel as it
+            // is or a NaN (`Taps::blur`)
+            let kind = |k: usize| {
+                let [vx, vy] = vs[k];
+                if (vx == 0.0 && vy == 0.0) || !(vx.is_finite() && vy.is_finite()) {
+                    0
+                } else if Self::inside((w, h), (x0 + k, y), vs[k]) {
+                    1
+                } else {
+                    2
+                }
+            };
+            // pairs of the same kind, those inside first, those clamped from the end
+            let (mut inner, mut outer) = (0, CHUNK / 2);
+            let mut k = 0;
+            while k < n {
+                let a = kind(k);
+                if a != 0 && k + 1 < n && kind(k + 1) == a {
+                    let q = if a == 1 {
+                        inner += 1;
+                        inner - 1
+                    } else {
+                        outer -= 1;
+                        outer
+                    };
+                    let x = x0 + k;
+                    origin[q] = _mm_setr_ps(x as f32, (x + 1) as f32, yf, yf);
+                    vel[q] = _mm_setr_ps(vs[k][0], vs[k + 1][0], vs[k][1], vs[k + 1][1]);
+                    first[q] = x;
+                    k += 2;
+                } else {
+                    put4(row, x0 + k, self.blur(rgba, (w, h), (x0 + k, y), vs[k]));
+                    k += 1;
+                }
+            }
+            let mut acc = [_mm256_setzero_ps(); CHUNK / 2];
+            let (wm, hm) = (w as i32 - 1, h as i32 - 1);
+            let edge = _mm_setr_epi32(wm, wm, hm, hm);
+            for &t in &self.t {
+                for q in 0..inner {
+                    // SAFETY: both pixels of the pair are inside (kind 1): their taps' texels
+                    // lie in `rgba`
+                    acc[q] = _mm256_add_ps(acc[q], tap_pair(rgba, w, origin[q], vel[q], t));
+                }
+                for q in outer..CHUNK / 2 {
+                    // (kind 2: finite velocities, every texel clamped into the image)
+                    let tap = tap_pair_clamped(rgba, w, edge, origin[q], vel[q], t);
+                    acc[q] = _mm256_add_ps(acc[q], tap);
+                }
+            }
+            let inv = _mm256_set1_ps(self.inv);
+            for q in (0..inner).chain(outer..CHUNK / 2) {
+                let mut out = [0.0f32; 8];
+                _mm256_storeu_ps(out.as_mut_ptr(), _mm256_mul_ps(acc[q], inv));
+                put4(row, first[q], [out[0], out[1], out[2], out[3]]);
+                put4(row, first[q] + 1, [out[4], out[5], out[6], out[7]]);
+            }
+            x0 += n;
         }
-        #[cfg(target_arch = "x86_64")]
-        if crate::simd::simd_enabled() {
-            // SAFETY: AVX2 was detected; both pixels' taps and the texels right of and below
-            // them are inside the image (`inside`), which `rgba` holds whole.
-            return Some(unsafe { pair_avx(&self.t, self.inv, rgba, w, (x, y), v) });
-        }
-        None
     }
 
     /// Pixel `(x, y)` of the `(w, h)` image `rgba` blurred along `v` (module docs of
@@ -369,79 +424,125 @@ impl Taps {
     }
 }
 
-/// [`Taps::blur_pair`] in AVX2: lanes 0-3 are the four channels of pixel `(x, y)`, lanes 4-7
-/// those of `(x + 1, y)`. Per tap, the two pixels' positions `x + vx t`, `y + vy t` in one
-/// 128-bit register, `floorf` of them (truncation, then one less where that rose), the
-/// fractions, the four texels of each pixel as two pairs of 256-bit loads, and [`Taps::blur`]'s
-/// interpolation `top = a + fx (b - a)`, `bot = c + fx (d - c)`, `acc += top + fy (bot - top)`.
+/// Pixels per chunk of [`Taps::row_avx`] (pairs of them in registers' worth of sums).
+#[cfg(target_arch = "x86_64")]
+const CHUNK: usize = 128;
+
+/// One tap `t` of the pixel pair at `origin` (`(x, x + 1, y, y)`) with velocities `vel`
+/// (`(vx0, vx1, vy0, vy1)`): the bilinear samples of both pixels side by side (lanes 0-3 and
+/// 4-7), [`Taps::blur`]'s operations in its order: the position `x + vx t`, `y + vy t`, its
+/// floor (truncation, then one less where that rose), the fractions, the four texels as two
+/// pairs of 256-bit loads, and `top = a + fx (b - a)`, `bot = c + fx (d - c)`, `top + fy (bot -
+/// top)`.
 ///
 /// # Safety
-/// AVX2 is present, `x + 1 < w`, and for both pixels every tap's texels (two by two, at the
-/// floored position and one right, one down) lie inside `rgba`, a `(h, w, 4)` image.
+/// AVX2 is present; the tap's texels of both pixels (at the floored position, one right and
+/// one down) lie inside `rgba`, an `(h, w, 4)` image.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn pair_avx(
-    t: &[f32],
-    inv: f32,
+#[inline]
+unsafe fn tap_pair(
     rgba: &[f32],
     w: usize,
-    (x, y): (usize, usize),
-    v: [[f32; 2]; 2],
-) -> [[f32; 4]; 2] {
+    origin: std::arch::x86_64::__m128,
+    vel: std::arch::x86_64::__m128,
+    t: f32,
+) -> std::arch::x86_64::__m256 {
     use std::arch::x86_64::*;
-    let (xf, yf) = (x as f32, y as f32);
-    let origin = _mm_setr_ps(xf, (x + 1) as f32, yf, yf);
-    let vel = _mm_setr_ps(v[0][0], v[1][0], v[0][1], v[1][1]);
     let one = _mm_set1_ps(1.0);
     let p = rgba.as_ptr();
     let below = w * 4;
-    let mut acc = _mm256_setzero_ps();
-    for &t in t {
-        let pos = _mm_add_ps(origin, _mm_mul_ps(vel, _mm_set1_ps(t)));
-        let trunc = _mm_cvtepi32_ps(_mm_cvttps_epi32(pos));
-        let fl = _mm_sub_ps(trunc, _mm_and_ps(_mm_cmpgt_ps(trunc, pos), one));
-        let frac = _mm_sub_ps(pos, fl);
-        let i = _mm_cvttps_epi32(fl);
-        let (x0, x1) = (
-            _mm_cvtsi128_si32(i) as usize,
-            _mm_extract_epi32::<1>(i) as usize,
-        );
-        let (y0, y1) = (
-            _mm_extract_epi32::<2>(i) as usize,
-            _mm_extract_epi32::<3>(i) as usize,
-        );
-        let (t0, t1) = ((y0 * w + x0) * 4, (y1 * w + x1) * 4);
-        debug_assert!(t0.max(t1) + below + 8 <= rgba.len());
-        let (ab0, ab1) = (_mm256_loadu_ps(p.add(t0)), _mm256_loadu_ps(p.add(t1)));
-        let (cd0, cd1) = (
-            _mm256_loadu_ps(p.add(t0 + below)),
-            _mm256_loadu_ps(p.add(t1 + below)),
-        );
-        let a = _mm256_permute2f128_ps::<0x20>(ab0, ab1);
-        let b = _mm256_permute2f128_ps::<0x31>(ab0, ab1);
-        let c = _mm256_permute2f128_ps::<0x20>(cd0, cd1);
-        let d = _mm256_permute2f128_ps::<0x31>(cd0, cd1);
-        let fx = _mm256_set_m128(
-            _mm_shuffle_ps::<0x55>(frac, frac),
-            _mm_shuffle_ps::<0x00>(frac, frac),
-        );
-        let fy = _mm256_set_m128(
-            _mm_shuffle_ps::<0xff>(frac, frac),
-            _mm_shuffle_ps::<0xaa>(frac, frac),
-        );
-        let top = _mm256_add_ps(a, _mm256_mul_ps(fx, _mm256_sub_ps(b, a)));
-        let bot = _mm256_add_ps(c, _mm256_mul_ps(fx, _mm256_sub_ps(d, c)));
-        acc = _mm256_add_ps(
-            acc,
-            _mm256_add_ps(top, _mm256_mul_ps(fy, _mm256_sub_ps(bot, top))),
-        );
-    }
-    let mut out = [0.0f32; 8];
-    _mm256_storeu_ps(out.as_mut_ptr(), _mm256_mul_ps(acc, _mm256_set1_ps(inv)));
-    [
-        [out[0], out[1], out[2], out[3]],
-        [out[4], out[5], out[6], out[7]],
-    ]
+    let pos = _mm_add_ps(origin, _mm_mul_ps(vel, _mm_set1_ps(t)));
+    let trunc = _mm_cvtepi32_ps(_mm_cvttps_epi32(pos));
+    let fl = _mm_sub_ps(trunc, _mm_and_ps(_mm_cmpgt_ps(trunc, pos), one));
+    let frac = _mm_sub_ps(pos, fl);
+    let i = _mm_cvttps_epi32(fl);
+    let (x0, x1) = (
+        _mm_cvtsi128_si32(i) as usize,
+        _mm_extract_epi32::<1>(i) as usize,
+    );
+    let (y0, y1) = (
+        _mm_extract_epi32::<2>(i) as usize,
+        _mm_extract_epi32::<3>(i) as usize,
+    );
+    let (t0, t1) = ((y0 * w + x0) * 4, (y1 * w + x1) * 4);
+    debug_assert!(t0.max(t1) + below + 8 <= rgba.len());
+    let (ab0, ab1) = (_mm256_loadu_ps(p.add(t0)), _mm256_loadu_ps(p.add(t1)));
+    let (cd0, cd1) = (
+        _mm256_loadu_ps(p.add(t0 + below)),
+        _mm256_loadu_ps(p.add(t1 + below)),
+    );
+    let a = _mm256_permute2f128_ps::<0x20>(ab0, ab1);
+    let b = _mm256_permute2f128_ps::<0x31>(ab0, ab1);
+    let c = _mm256_permute2f128_ps::<0x20>(cd0, cd1);
+    let d = _mm256_permute2f128_ps::<0x31>(cd0, cd1);
+    let fx = _mm256_set_m128(
+        _mm_shuffle_ps::<0x55>(frac, frac),
+        _mm_shuffle_ps::<0x00>(frac, frac),
+    );
+    let fy = _mm256_set_m128(
+        _mm_shuffle_ps::<0xff>(frac, frac),
+        _mm_shuffle_ps::<0xaa>(frac, frac),
+    );
+    let top = _mm256_add_ps(a, _mm256_mul_ps(fx, _mm256_sub_ps(b, a)));
+    let bot = _mm256_add_ps(c, _mm256_mul_ps(fx, _mm256_sub_ps(d, c)));
+    _mm256_add_ps(top, _mm256_mul_ps(fy, _mm256_sub_ps(bot, top)))
+}
+
+/// [`tap_pair`] with every texel clamped to the image, as [`Taps::blur`] fetches them near the
+/// edges: the floored position's texel and those right of and below it each clamped to `[0, w -
+/// 1] x [0, h - 1]` (`edge`: `(w - 1, w - 1, h - 1, h - 1)`), read four floats at a time; the
+/// interpolation from the unclamped fractions, in [`tap_pair`]'s order.
+///
+/// # Safety
+/// AVX2 is present; `rgba` is an `(h, w, 4)` image; the velocities are finite and the position
+/// within `+-2^31` (every velocity is within `MAX_VELOCITY`).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn tap_pair_clamped(
+    rgba: &[f32],
+    w: usize,
+    edge: std::arch::x86_64::__m128i,
+    origin: std::arch::x86_64::__m128,
+    vel: std::arch::x86_64::__m128,
+    t: f32,
+) -> std::arch::x86_64::__m256 {
+    use std::arch::x86_64::*;
+    let one = _mm_set1_ps(1.0);
+    let p = rgba.as_ptr();
+    let pos = _mm_add_ps(origin, _mm_mul_ps(vel, _mm_set1_ps(t)));
+    let trunc = _mm_cvtepi32_ps(_mm_cvttps_epi32(pos));
+    let fl = _mm_sub_ps(trunc, _mm_and_ps(_mm_cmpgt_ps(trunc, pos), one));
+    let frac = _mm_sub_ps(pos, fl);
+    let i = _mm_cvttps_epi32(fl);
+    let zero = _mm_setzero_si128();
+    let lo = _mm_min_epi32(_mm_max_epi32(i, zero), edge);
+    let hi = _mm_min_epi32(
+        _mm_max_epi32(_mm_add_epi32(i, _mm_set1_epi32(1)), zero),
+        edge,
+    );
+    let (lo, hi) = (
+        std::mem::transmute::<__m128i, [i32; 4]>(lo),
+        std::mem::transmute::<__m128i, [i32; 4]>(hi),
+    );
+    // texel (x, y) of pixel k (0 or 1): lanes k of x and 2 + k of y
+    let texel = |x: i32, y: i32| _mm_loadu_ps(p.add((y as usize * w + x as usize) * 4));
+    let a = _mm256_set_m128(texel(lo[1], lo[3]), texel(lo[0], lo[2]));
+    let b = _mm256_set_m128(texel(hi[1], lo[3]), texel(hi[0], lo[2]));
+    let c = _mm256_set_m128(texel(lo[1], hi[3]), texel(lo[0], hi[2]));
+    let d = _mm256_set_m128(texel(hi[1], hi[3]), texel(hi[0], hi[2]));
+    let fx = _mm256_set_m128(
+        _mm_shuffle_ps::<0x55>(frac, frac),
+        _mm_shuffle_ps::<0x00>(frac, frac),
+    );
+    let fy = _mm256_set_m128(
+        _mm_shuffle_ps::<0xff>(frac, frac),
+        _mm_shuffle_ps::<0xaa>(frac, frac),
+    );
+    let top = _mm256_add_ps(a, _mm256_mul_ps(fx, _mm256_sub_ps(b, a)));
+    let bot = _mm256_add_ps(c, _mm256_mul_ps(fx, _mm256_sub_ps(d, c)));
+    _mm256_add_ps(top, _mm256_mul_ps(fy, _mm256_sub_ps(bot, top)))
 }
 
 /// What [`camera_frame_blur`] reads of a rendered frame besides its colour and depth: the
@@ -617,8 +718,14 @@ mod tests {
 
     #[test]
     fn taps_inside_the_image_read_what_the_clamped_taps_read() {
-        // velocities from sub-pixel to longer than the image, pixels at and near every edge
-        let (w, h) = (53, 31);
+        // velocities from sub-pixel to longer than the image, pixels at and near every edge;
+        // rows of one chunk of the vector form and of several
+        for (w, h) in [(53, 31), (301, 23)] {
+            check_against_clamped(w, h);
+        }
+    }
+
+    fn check_against_clamped(w: usize, h: usize) {
         let rgba: Vec<f32> = (0..w * h * 4)
             .map(|i| ((i * 37) % 101) as f32 / 101.0)
             .collect();
@@ -639,7 +746,8 @@ mod tests {
 
     #[test]
     fn camera_frame_blur_same_on_one_thread() {
-        let (w, h) = (40, 30);
+        // (rows of several chunks of the vector form)
+        let (w, h) = (300, 30);
         let rgba: Vec<f32> = (0..w * h * 4).map(|i| (i % 7) as f32 / 7.0).collect();
         let depth: Vec<f32> = (0..w * h).map(|i| 1.0 + (i % 5) as f32).collect();
         let velocity: Vec<f32> = (0..w * h * 2).map(|i| (i % 9) as f32 - 4.0).collect();

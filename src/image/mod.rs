@@ -15,6 +15,7 @@
 mod boxblur;
 mod camera;
 mod colors;
+mod coverage;
 mod dof;
 mod glow;
 mod lens;
@@ -36,6 +37,7 @@ pub use camera::{
     CameraMatrices, FrameMotion, MAX_FPS_RATIO, MAX_SAMPLES, MAX_VELOCITY,
 };
 pub use colors::{colored, pixel_bounds, sample_colors, MIN_ALPHA};
+pub use coverage::coverage_composite;
 pub use dof::{depth_of_field, DofParams, MAX_LAYERS};
 pub use glow::glow;
 pub use lens::{lens_blur, LensParams, MAX_LENS_LEVELS};

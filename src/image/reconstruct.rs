@@ -241,6 +241,8 @@ pub fn reconstruct(
         reach: &reach,
     };
     let mut finite = true;
+    // (the vector gather indexes the images with 32-bit lanes)
+    let simd = super::simd() && w * h * 4 < i32::MAX as usize && w < (1 << 24) && h < (1 << 24);
     let out = filled(w * h * 4, |out| {
         finite = out
             .par_chunks_mut(w * 4)
@@ -252,8 +254,21 @@ pub fn reconstruct(
                 for (k, xs) in (0..w).step_by(params.tile).enumerate() {
                     let n = tiles[k];
                     let rn = len2(n).sqrt();
-                    for x in xs..(xs + params.tile).min(w) {
+                    let end = (xs + params.tile).min(w);
+                    let mut x = xs;
+                    while x < end {
+                        // eight still pixels side by side (the same bits as one by one)
+                        if simd && x + 8 <= end {
+                            if let Some(px) = gather8(&g, (x, y), (n, rn)) {
+                                for (l, p) in px.into_iter().enumerate() {
+                                    super::put4(row, x + l, p);
+                                }
+                                x += 8;
+                                continue;
+                            }
+                        }
                         super::put4(row, x, gather(&g, (x, y), (n, rn)));
+                        x += 1;
                     }
                 }
                 let src = &rgba[y * w * 4..(y + 1) * w * 4];
@@ -321,6 +336,7 @@ fn weightless_from(speed: f32) -> f32 {
 }
 
 /// The taps' sums of one pixel: foreground and background colours, their weights, the taps.
+#[derive(Clone, Copy)]
 struct Sums {
     fg: [f32; 4],
     bg: [f32; 4],
@@ -426,25 +442,262 @@ fn gather(g: &Gather<'_>, (x, y): (usize, usize), (n, rn): ([f32; 2], f32)) -> [
             }
         }
     }
+    finish(&sums, &rgba[i * 4..i * 4 + 4])
+}
+
+/// The pixel's colour from its taps' sums (module docs); `own` its sharp colour.
+#[inline(always)]
+fn finish(sums: &Sums, own: &[f32]) -> [f32; 4] {
     let Sums {
         fg,
         bg,
         wf,
         wb,
         taps,
-    } = sums;
+    } = *sums;
     let fill = (1.0 - (wf + wb) / taps).clamp(0.0, 1.0);
     let inv = 1.0 / taps;
     let mut out = [0.0f32; 4];
     for k in 0..4 {
-        let back = if wb > 0.0 {
-            bg[k] / wb
-        } else {
-            rgba[i * 4 + k]
-        };
+        let back = if wb > 0.0 { bg[k] / wb } else { own[k] };
         out[k] = (fg[k] + bg[k]) * inv + back * fill;
     }
     out
+}
+
+/// [`gather`] of the eight pixels `(x..x + 8, y)` of one tile (neighbour max `n`, its length
+/// `rn`) at once, in AVX2, when the neighbourhood moves (`rn >= 0.5`); None otherwise (or
+/// without AVX2). Lane `l` performs [`gather`]'s IEEE operations for pixel `x + l` in its
+/// order (a moving pixel's taps alternate between `n` and its own half velocity, a still
+/// pixel's run along `n`): the same bits.
+#[inline]
+fn gather8(
+    g: &Gather<'_>,
+    (x, y): (usize, usize),
+    (n, rn): ([f32; 2], f32),
+) -> Option<[[f32; 4]; 8]> {
+    if rn.is_nan() || rn < 0.5 {
+        return None;
+    }
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::simd_enabled() {
+        // SAFETY: AVX2 was detected; x + 8 <= w (the caller's tile), the images hold w * h
+        // pixels with w * h * 4 < 2^31 (the caller's `simd`), and every lane reads only pixels
+        // it checked to be inside the image.
+        return Some(unsafe { gather8_avx(g, (x, y), (n, rn)) });
+    }
+    None
+}
+
+/// [`gather8`] in AVX2 (its docs).
+///
+/// # Safety
+/// AVX2 is present, `x + 8 <= w`, `w * h * 4 < 2^31`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn gather8_avx(
+    g: &Gather<'_>,
+    (x, y): (usize, usize),
+    (n, rn): ([f32; 2], f32),
+) -> [[f32; 4]; 8] {
+    use std::arch::x86_64::*;
+    let Gather {
+        rgba,
+        depth,
+        speed,
+        w,
+        h,
+        params,
+        reach,
+        ..
+    } = *g;
+    let i0 = y * w + x;
+    let lanes: [usize; 8] = std::array::from_fn(|l| x + l);
+    let xf = _mm256_loadu_ps(lanes.map(|v| v as f32).as_ptr());
+    let yf = _mm256_set1_ps(y as f32);
+    let rc = _mm256_loadu_ps(speed.as_ptr().add(i0));
+    let c0 = _mm256_loadu_ps(std::array::from_fn::<f32, 8, _>(|l| g.half[i0 + l][0]).as_ptr());
+    let c1 = _mm256_loadu_ps(std::array::from_fn::<f32, 8, _>(|l| g.half[i0 + l][1]).as_ptr());
+    let zx = _mm256_loadu_ps(depth.as_ptr().add(i0));
+    let j = _mm256_loadu_ps(lanes.map(|v| jitter(v, y)).as_ptr());
+    // stop = weightless_from(reach of the pixel's cell .max(rc)) + 1, per lane
+    let cells = _mm256_loadu_ps(lanes.map(|v| reach.reach[reach.index(v, y)]).as_ptr());
+    let (zero, one, half) = (
+        _mm256_setzero_ps(),
+        _mm256_set1_ps(1.0),
+        _mm256_set1_ps(0.5),
+    );
+    let two = _mm256_set1_ps(2.0);
+    // a moving pixel (`both`: its own and the neighbourhood's direction) never stops early
+    let both = _mm256_cmp_ps::<_CMP_GE_OQ>(rc, half);
+    let stop = _mm256_blendv_ps(
+        _mm256_add_ps(_mm256_add_ps(_mm256_max_ps(cells, rc), two), one),
+        _mm256_set1_ps(f32::INFINITY),
+        both,
+    );
+    let soft = _mm256_set1_ps(params.soft_depth);
+    let clamp01 = |v: __m256| _mm256_max_ps(_mm256_min_ps(v, one), zero);
+    let mut fg = [zero; 4];
+    let mut bg = [zero; 4];
+    let base = _mm256_set1_epi32(i0 as i32);
+    let own = _mm256_add_epi32(base, _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    // one tap per lane at pixel index `yi` and distance `d`, where `real` (the others add
+    // exact zeros, which change no sum: none of them is -0 after the +0 start)
+    // the centre tap (d = 0): zy = zx, so f = 0.5, and rc + 1 >= 1 makes both weights 0.5
+    let own4 = _mm256_slli_epi32::<2>(own);
+    let mine: [__m256; 4] = std::array::from_fn(|k| {
+        _mm256_i32gather_ps::<4>(
+            rgba.as_ptr(),
+            _mm256_add_epi32(own4, _mm256_set1_epi32(k as i32)),
+        )
+    });
+    for k in 0..4 {
+        fg[k] = _mm256_add_ps(zero, _mm256_mul_ps(half, mine[k]));
+        bg[k] = _mm256_add_ps(zero, _mm256_mul_ps(half, mine[k]));
+    }
+    let (mut wf, mut wb) = (_mm256_add_ps(zero, half), _mm256_add_ps(zero, half));
+    let mut taps = one;
+    let mut tap = |yi: __m256i, d: __m256, real: __m256| {
+        let yi = _mm256_blendv_epi8(own, yi, _mm256_castps_si256(real));
+        let zy = _mm256_i32gather_ps::<4>(depth.as_ptr(), yi);
+        let near = _mm256_min_ps(zx, zy);
+        let q = _mm256_div_ps(_mm256_sub_ps(zy, zx), _mm256_mul_ps(soft, near));
+        let f = _mm256_blendv_ps(
+            clamp01(_mm256_sub_ps(half, q)),
+            half,
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(zx, zy),
+        );
+        let sy = _mm256_i32gather_ps::<4>(speed.as_ptr(), yi);
+        let a = _mm256_mul_ps(f, clamp01(_mm256_add_ps(_mm256_sub_ps(sy, d), one)));
+        let b = _mm256_mul_ps(
+            _mm256_sub_ps(one, f),
+            clamp01(_mm256_add_ps(_mm256_sub_ps(rc, d), one)),
+        );
+        let (a, b) = (_mm256_and_ps(a, real), _mm256_and_ps(b, real));
+        let c4 = _mm256_slli_epi32::<2>(yi);
+        for k in 0..4 {
+            let c = _mm256_i32gather_ps::<4>(
+                rgba.as_ptr(),
+                _mm256_add_epi32(c4, _mm256_set1_epi32(k as i32)),
+            );
+            fg[k] = _mm256_add_ps(fg[k], _mm256_mul_ps(a, c));
+            bg[k] = _mm256_add_ps(bg[k], _mm256_mul_ps(b, c));
+        }
+        wf = _mm256_add_ps(wf, a);
+        wb = _mm256_add_ps(wb, b);
+    };
+    let pairs = params.samples / 2;
+    let (n0, n1, rnv) = (
+        _mm256_set1_ps(n[0]),
+        _mm256_set1_ps(n[1]),
+        _mm256_set1_ps(rn),
+    );
+    let (xc, yc) = (_mm256_add_ps(xf, half), _mm256_add_ps(yf, half));
+    let (wl, hl) = (_mm256_set1_ps(w as f32), _mm256_set1_ps(h as f32));
+    let (wi, cw) = (
+        _mm256_set1_epi32(w as i32),
+        _mm256_set1_epi32(reach.cw as i32),
+    );
+    let mut alive = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+    let mut counted = [0.0f32; 8];
+    for p in 0..pairs {
+        // (dir, r, q, m) of `gather`: a moving lane's odd pairs along its own velocity
+        let odd = p % 2 == 1;
+        let (d0, d1, r) = if odd {
+            (
+                _mm256_blendv_ps(n0, c0, both),
+                _mm256_blendv_ps(n1, c1, both),
+                _mm256_blendv_ps(rnv, rc, both),
+            )
+        } else {
+            (n0, n1, rnv)
+        };
+        let mb = if odd { pairs / 2 } else { pairs - pairs / 2 };
+        let q = _mm256_blendv_ps(
+            _mm256_set1_ps(p as f32),
+            _mm256_set1_ps((p / 2) as f32),
+            both,
+        );
+        let m = _mm256_blendv_ps(
+            _mm256_set1_ps(pairs.max(1) as f32),
+            _mm256_set1_ps(mb.max(1) as f32),
+            both,
+        );
+        let t = _mm256_div_ps(_mm256_add_ps(q, j), m);
+        let tr = _mm256_mul_ps(t, r);
+        let ends = _mm256_and_ps(alive, _mm256_cmp_ps::<_CMP_GE_OQ>(tr, stop));
+        let ended = _mm256_movemask_ps(ends);
+        if ended != 0 {
+            for (l, c) in counted.iter_mut().enumerate() {
+                if ended & (1 << l) != 0 {
+                    *c = count_taps(g, (x + l, y), n, (p, pairs), pairs);
+                }
+            }
+            alive = _mm256_andnot_ps(ends, alive);
+            if _mm256_movemask_ps(alive) == 0 {
+                break;
+            }
+        }
+        for s in [-1.0f32, 1.0] {
+            let st = _mm256_mul_ps(_mm256_set1_ps(s), t);
+            let px = _mm256_add_ps(xc, _mm256_mul_ps(st, d0));
+            let py = _mm256_add_ps(yc, _mm256_mul_ps(st, d1));
+            let inside = _mm256_and_ps(
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_GE_OQ>(px, zero),
+                    _mm256_cmp_ps::<_CMP_GE_OQ>(py, zero),
+                ),
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_LT_OQ>(px, wl),
+                    _mm256_cmp_ps::<_CMP_LT_OQ>(py, hl),
+                ),
+            );
+            let inside = _mm256_and_ps(inside, alive);
+            if _mm256_movemask_ps(inside) == 0 {
+                continue;
+            }
+            let sx = _mm256_cvttps_epi32(px);
+            let sy = _mm256_cvttps_epi32(py);
+            let dx = _mm256_sub_ps(_mm256_cvtepi32_ps(sx), xf);
+            let dy = _mm256_sub_ps(_mm256_cvtepi32_ps(sy), yf);
+            let d2 = _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy));
+            let d = _mm256_min_ps(_mm256_sqrt_ps(d2), tr);
+            let ins = _mm256_castps_si256(inside);
+            let cidx = _mm256_and_si256(
+                _mm256_add_epi32(
+                    _mm256_mullo_epi32(_mm256_srli_epi32::<4>(sy), cw),
+                    _mm256_srli_epi32::<4>(sx),
+                ),
+                ins,
+            );
+            let cell = _mm256_i32gather_ps::<4>(reach.cell.as_ptr(), cidx);
+            let from = _mm256_add_ps(_mm256_max_ps(cell, rc), two);
+            let real = _mm256_andnot_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(d, from), inside);
+            taps = _mm256_add_ps(taps, _mm256_and_ps(inside, one));
+            if _mm256_movemask_ps(real) != 0 {
+                let yi = _mm256_add_epi32(_mm256_mullo_epi32(sy, wi), sx);
+                tap(yi, d, real);
+            }
+        }
+    }
+    // `finish`, lane by lane
+    let taps = _mm256_add_ps(taps, _mm256_loadu_ps(counted.as_ptr()));
+    let fill = clamp01(_mm256_sub_ps(
+        one,
+        _mm256_div_ps(_mm256_add_ps(wf, wb), taps),
+    ));
+    let inv = _mm256_div_ps(one, taps);
+    let some = _mm256_cmp_ps::<_CMP_GT_OQ>(wb, zero);
+    let mut out = [[0.0f32; 8]; 4];
+    for k in 0..4 {
+        let back = _mm256_blendv_ps(mine[k], _mm256_div_ps(bg[k], wb), some);
+        let o = _mm256_add_ps(
+            _mm256_mul_ps(_mm256_add_ps(fg[k], bg[k]), inv),
+            _mm256_mul_ps(back, fill),
+        );
+        _mm256_storeu_ps(out[k].as_mut_ptr(), o);
+    }
+    std::array::from_fn(|l| [out[0][l], out[1][l], out[2][l], out[3][l]])
 }
 
 /// The taps of pairs `p0..pairs` along `dir` (`m` pairs a direction: `t = (p + j) / m`) of
@@ -684,6 +937,69 @@ mod tests {
                 assert!(same, "samples {samples} tile {tile}");
             }
         }
+    }
+
+    #[test]
+    fn vector_gather_gives_the_plain_bits_on_any_thread_count() {
+        // moving blocks of every direction and several speeds (moving lanes, still lanes and
+        // mixes in one group of eight), a sky (inf depth), slow motion under half a pixel,
+        // taps off every edge; tiles that are not multiples of 8 (scalar tails), odd pair
+        // counts (a moving pixel's directions alternate unevenly)
+        let (w, h) = (203, 97);
+        let rgba: Vec<f32> = (0..w * h * 4)
+            .map(|i| ((i * 7919) % 1000) as f32 / 1000.0)
+            .collect();
+        let mut depth: Vec<f32> = (0..w * h).map(|i| 4.0 + (i % 17) as f32 * 0.05).collect();
+        let mut vel = vec![0.0f32; w * h * 2];
+        let blocks = [
+            (3, 40, 2, 30, [45.0f32, 3.0], 2.0f32),
+            (90, 97, 40, 80, [-11.0, 27.0], 3.0),
+            (150, 200, 60, 95, [0.7, -0.4], 1.5),
+            (60, 70, 85, 97, [-60.0, -70.0], 4.5),
+            (120, 125, 0, 12, [8.0, 0.0], 20.0),
+        ];
+        for &(x0, x1, y0, y1, v, z) in &blocks {
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    let i = y * w + x;
+                    // velocities vary along the block, so that lanes differ
+                    let k = 1.0 + (x % 5) as f32 * 0.1;
+                    vel[i * 2..i * 2 + 2].copy_from_slice(&[v[0] * k, v[1] * k]);
+                    depth[i] = z;
+                }
+            }
+        }
+        for d in depth[..3 * w].iter_mut() {
+            *d = f32::INFINITY;
+        }
+        let run = || {
+            let mut all = Vec::new();
+            for samples in [2, 6, 16, 32] {
+                for tile in [7, 8, 13, 40, 100] {
+                    let p = ReconstructParams {
+                        samples,
+                        tile,
+                        soft_depth: 0.02,
+                    };
+                    all.extend(reconstruct(&rgba, &depth, &vel, w, h, p).unwrap());
+                }
+            }
+            all
+        };
+        let _guard = crate::simd::SWITCH
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        let before = crate::simd::set_simd(true);
+        let vector = run();
+        let one = crate::on_threads(1, run);
+        let two = crate::on_threads(2, run);
+        crate::simd::set_simd(false);
+        let plain = run();
+        crate::simd::set_simd(before);
+        let same = |a: &[f32], b: &[f32]| a.iter().zip(b).all(|(p, q)| p.to_bits() == q.to_bits());
+        assert_eq!(vector.len(), plain.len());
+        assert!(same(&vector, &plain), "vector against plain");
+        assert!(same(&one, &plain) && same(&two, &plain), "thread counts");
     }
 
     #[test]

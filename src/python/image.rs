@@ -533,10 +533,36 @@ fn _camera_frame_blur<'py>(
     shaped(py, out, [h, w, 4])
 }
 
+/// The coverage glow's composite of the `opaque_image` method over a window (y0, y1, x0, x1)
+/// of the static colour back (H,W,4) f32 and depth back_depth (H,W) f32: blurred and depth
+/// (y1 - y0, x1 - x0, 4) f32. Returns (the window's colour, pixels kept in front).
+#[pyfunction]
+fn _coverage_composite<'py>(
+    py: Python<'py>,
+    back: PyReadonlyArray3<'py, f32>,
+    back_depth: PyReadonlyArray2<'py, f32>,
+    window: (usize, usize, usize, usize),
+    blurred: PyReadonlyArray3<'py, f32>,
+    depth: PyReadonlyArray3<'py, f32>,
+    layers: bool,
+) -> PyResult<(Bound<'py, PyAny>, u64)> {
+    let (b, w, h) = img3(&back, "back", 4)?;
+    let (z, zw, zh) = img2(&back_depth, "back_depth")?;
+    same_size("back_depth", (zh, zw), (h, w))?;
+    let (bl, bw, bh) = img3(&blurred, "blurred", 4)?;
+    let (d, dw, dh) = img3(&depth, "depth", 4)?;
+    same_size("depth", (dh, dw), (bh, bw))?;
+    let (out, front) = detached_in_pool(py, || {
+        crate::coverage_composite((b, z), (w, h), window, (bl, d), layers)
+    })?;
+    Ok((shaped(py, out, [bh, bw, 4])?, front))
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_reconstruct, m)?)?;
     m.add_function(wrap_pyfunction!(_max_speed, m)?)?;
     m.add_function(wrap_pyfunction!(_camera_frame_blur, m)?)?;
+    m.add_function(wrap_pyfunction!(_coverage_composite, m)?)?;
     m.add_function(wrap_pyfunction!(_glow, m)?)?;
     m.add_function(wrap_pyfunction!(_box_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_splat_paths, m)?)?;
