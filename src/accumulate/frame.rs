@@ -349,9 +349,13 @@ pub fn accumulate_moving(
     };
     for (i, layer) in (0..samples.times.len()).map(|i| (i, draw(i))) {
         let w = samples.weights[i] as f32;
-        let layer = layer?;
+        let mut layer = layer?;
         if i == 0 {
-            acc = layer.rgba.iter().map(|x| x * w).collect();
+            // The first layer's colour becomes the sum in place (the reference keeps only its
+            // depth and ids): a fresh frame-sized buffer is page-faulted in 4 KiB pages when
+            // it is above glibc's largest mmap threshold (32 MiB; a 4K frame's colour: 127 MiB).
+            acc = std::mem::take(&mut layer.rgba);
+            acc.iter_mut().for_each(|x| *x *= w);
         } else {
             let rows = Rect {
                 x0: 0,

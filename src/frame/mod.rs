@@ -14,7 +14,7 @@
 //! stage says), `rgba` 4 floats an entry.
 //!
 //! This module depends on no stage, so every stage may use it.
-use crate::budget::{try_reserve, try_vec, Need};
+use crate::budget::{advise_huge_pages, try_reserve, try_vec, Need};
 use crate::error::{Error, Result};
 
 /// An owned image of surfaces: row-major buffers of `height` x `width` entries.
@@ -106,8 +106,9 @@ impl Frame {
 
     /// A frame of the given size whose buffers have room for every entry but length 0, to be
     /// written in place (through their spare capacity) and then given their length: a render
-    /// that writes every entry need not fill them first. An allocation the system refuses is
-    /// an error naming `width`.
+    /// that writes every entry need not fill them first. Buffers of 4 MiB and more are backed
+    /// by huge pages where Linux allows ([`advise_huge_pages`]). An allocation the system
+    /// refuses is an error naming `width`.
     pub fn with_capacity(width: u32, height: u32, velocity: bool) -> Result<Self> {
         let n = width as usize * height as usize;
         let mut frame = Frame {
@@ -121,6 +122,12 @@ impl Frame {
         try_reserve(&mut frame.ids, n, "width")?;
         if let Some(v) = &mut frame.velocity {
             try_reserve(v, 2 * n, "width")?;
+        }
+        advise_huge_pages(&frame.rgba);
+        advise_huge_pages(&frame.depth);
+        advise_huge_pages(&frame.ids);
+        if let Some(v) = &frame.velocity {
+            advise_huge_pages(v);
         }
         Ok(frame)
     }
@@ -239,5 +246,62 @@ mod tests {
         assert!(e.contains("backdrop"), "{e}");
         let wide = Layer { width: 4, ..l };
         assert!(wide.check_lengths("layer").is_err());
+    }
+
+    /// The VmFlags of the mapping holding `addr` in /proc/self/smaps.
+    #[cfg(target_os = "linux")]
+    fn vm_flags(addr: usize) -> Option<String> {
+        let smaps = std::fs::read_to_string("/proc/self/smaps").ok()?;
+        let mut inside = false;
+        for line in smaps.lines() {
+            let range = line
+                .split_whitespace()
+                .next()
+                .and_then(|r| r.split_once('-'));
+            if let Some((a, b)) = range.filter(|(a, _)| !a.ends_with(':')) {
+                let hex = |x: &str| usize::from_str_radix(x, 16).ok();
+                if let (Some(a), Some(b)) = (hex(a), hex(b)) {
+                    inside = a <= addr && addr < b;
+                    continue;
+                }
+            }
+            if inside {
+                if let Some(flags) = line.strip_prefix("VmFlags:") {
+                    return Some(flags.to_string());
+                }
+            }
+        }
+        None
+    }
+
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn a_large_frame_is_advised_huge_pages() {
+        // Without transparent huge pages in the kernel (or set to never) the advice is declined.
+        let thp = std::fs::read_to_string("/sys/kernel/mm/transparent_hugepage/enabled");
+        if thp.map_or(true, |s| s.contains("[never]")) {
+            return;
+        }
+        // 3840x2160: colour 127 MiB (above glibc's largest mmap threshold: a mapping of its
+        // own), depth and ids 31.6 MiB each (a mapping or the heap, split where advised).
+        let f = Frame::with_capacity(3840, 2160, true).unwrap();
+        let middle = |p: *const u8, bytes: usize| p as usize + bytes / 2;
+        let n = f.len();
+        let buffers = [
+            ("rgba", middle(f.rgba.as_ptr().cast(), 16 * n)),
+            ("depth", middle(f.depth.as_ptr().cast(), 4 * n)),
+            ("ids", middle(f.ids.as_ptr().cast(), 4 * n)),
+            (
+                "velocity",
+                middle(f.velocity.as_ref().unwrap().as_ptr().cast(), 8 * n),
+            ),
+        ];
+        for (name, addr) in buffers {
+            let flags = vm_flags(addr).expect("the buffer is mapped");
+            assert!(
+                flags.split_whitespace().any(|f| f == "hg"),
+                "{name}: {flags}"
+            );
+        }
     }
 }

@@ -214,7 +214,8 @@ def accumulate_piece(scene: Scene, times, weights, ref: int, dim: float, aa: int
             cam = supersampled(scene.camera_at(scene.reference_t), aa)
             static = [(o, object_draw(o, scene.reference_t, k)) for k, o in everything if not o.is_moving]
             rgba = (1.0 - dim) * raster_layer(cam, scene, static).rgba + dim * rgba
-        whole = resolve_arrays(Layer(rgba.astype(np.float32), depth, ids), aa)
+        # The core's float32 sum as it is: astype would copy the whole frame (a dim < 1 blend is float64)
+        whole = resolve_arrays(Layer(np.asarray(rgba, np.float32), depth, ids), aa)
         return Piece(whole, None, None, stats, owned=True)
 
     cam = supersampled(scene.camera, aa)
