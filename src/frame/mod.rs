@@ -280,6 +280,7 @@ mod tests {
         // Without transparent huge pages in the kernel (or set to never) the advice is declined.
         let thp = std::fs::read_to_string("/sys/kernel/mm/transparent_hugepage/enabled");
         if thp.map_or(true, |s| s.contains("[never]")) {
+            eprintln!("a_large_frame_is_advised_huge_pages: not checked, this kernel has no transparent huge pages");
             return;
         }
         // 3840x2160: colour 127 MiB (above glibc's largest mmap threshold: a mapping of its

@@ -190,13 +190,13 @@ pub(crate) fn filled(n: usize, fill: impl FnOnce(&mut [std::mem::MaybeUninit<f32
 }
 
 /// [`filled`] for any plain type `T` (floats, pairs of floats). A large buffer is backed by
-/// huge pages ([`pool::advise_huge`]) before `fill` first touches it.
+/// huge pages ([`crate::budget::advise_huge_pages`]) before `fill` first touches it.
 pub(crate) fn filled_with<T: Copy>(
     n: usize,
     fill: impl FnOnce(&mut [std::mem::MaybeUninit<T>]),
 ) -> Vec<T> {
     let mut v: Vec<std::mem::MaybeUninit<T>> = Vec::with_capacity(n);
-    pool::advise_huge(&v);
+    crate::budget::advise_huge_pages(&v);
     // SAFETY: MaybeUninit needs no initialisation.
     unsafe { v.set_len(n) };
     fill(&mut v);

@@ -3,6 +3,8 @@
 //! Buffers come back with stale contents: users write every element before reading it.
 use std::sync::Mutex;
 
+use crate::budget::advise_huge_pages;
+
 static POOL: Mutex<Vec<Vec<f32>>> = Mutex::new(Vec::new());
 
 /// Keeps at most this many buffers, holding at most `MAX_FLOATS` floats in all (64 MB).
@@ -25,41 +27,10 @@ pub(crate) fn try_take(n: usize) -> Option<Vec<f32>> {
         v.truncate(n);
     } else {
         v.try_reserve_exact(n - v.len()).ok()?;
-        advise_huge(&v);
+        advise_huge_pages(&v);
         v.resize(n, 0.0);
     }
     Some(v)
-}
-
-/// Asks Linux to back the allocation of `v` (its whole capacity) with transparent huge pages,
-/// as numpy does for its arrays, when it holds at least 4 MiB: a fresh image the size of a 4K
-/// frame (133 MB) then takes about 60 page faults of 2 MiB instead of 32,000 of 4 KiB, which
-/// cost more than the kernel that fills it. Call it before the first write. Only advice: a
-/// kernel that declines it (huge pages off, or the range too small) changes nothing, and the
-/// contents are never touched. Elsewhere than on Linux it does nothing.
-pub(crate) fn advise_huge<T>(v: &Vec<T>) {
-    #[cfg(target_os = "linux")]
-    {
-        const MIN: usize = 4 << 20;
-        const PAGE: usize = 4096;
-        const MADV_HUGEPAGE: i32 = 14;
-        extern "C" {
-            fn madvise(addr: *mut std::ffi::c_void, len: usize, advice: i32) -> i32;
-        }
-        let bytes = v.capacity() * std::mem::size_of::<T>();
-        if bytes < MIN {
-            return;
-        }
-        let start = (v.as_ptr() as usize).next_multiple_of(PAGE);
-        let end = (v.as_ptr() as usize + bytes) / PAGE * PAGE;
-        if end > start {
-            // SAFETY: [start, end) lies within the allocation of `v` (whole pages of it);
-            // MADV_HUGEPAGE is advice about how to back it and never changes its contents.
-            unsafe { madvise(start as *mut std::ffi::c_void, end - start, MADV_HUGEPAGE) };
-        }
-    }
-    #[cfg(not(target_os = "linux"))]
-    let _ = v;
 }
 
 /// Returns a buffer to the pool.
