@@ -400,6 +400,9 @@ pub fn resolve(
     // its layers front to back in `merged`
     let mut pending = (0.0f64, 0.0f64, 0u8);
     let split = sc.split;
+    // pieces of the same layers join below (unless split), and nothing is noted per piece
+    // unless for the exposure: the sweep may give such pieces joined
+    sc.sweep.joined = !split && !exposure;
     let mut merged = std::mem::take(&mut sc.merged);
     merged.clear();
     let mut opaque = std::mem::take(&mut sc.opaque);

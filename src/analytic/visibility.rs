@@ -71,6 +71,10 @@ pub struct Sweep {
     /// Per fragment: whether its every depth lies in front of the backdrop ([`AHEAD`]), not
     /// ([`BEHIND`]), or not yet known (0).
     ahead: Vec<u8>,
+    /// Whether a stretch of one fragment alone in front of the backdrop (whose order cannot
+    /// change) is given as one piece, not one per link of its chain: for a caller that joins
+    /// touching pieces of the same layers anyway and notes nothing per piece (off by default).
+    pub joined: bool,
     /// Most depth crossings the layers present together over one stretch of time may have
     /// (unlimited by default).
     pub max_cuts: usize,
@@ -86,6 +90,7 @@ impl Default for Sweep {
             lines: Vec::new(),
             cursor: Vec::new(),
             ahead: Vec::new(),
+            joined: false,
             max_cuts: usize::MAX,
         }
     }
@@ -373,6 +378,15 @@ pub fn sweep(
         } else {
             None
         };
+        if let (Some(i), true) = (alone, sc.joined) {
+            sc.order.clear();
+            sc.order.push((0.0, i));
+            if !opaque[i] {
+                sc.order.push((f64::from(bg.depth), BACKDROP));
+            }
+            piece(u, v, &sc.order, frags);
+            continue;
+        }
         // Chains change triangle (and depth slope) at their links: cut there first, so that
         // every layer's depth is one straight piece on each sub-interval.
         sc.link_cuts(frags, links, u, v);
@@ -523,8 +537,8 @@ mod tests {
     fn a_chain_alone_over_the_backdrop_is_cut_at_its_links_or_where_it_crosses_it() {
         // A chain of two links, depth 1 -> 3 over [0, 0.5] and 3 -> 1 over [0.5, 1], alone over
         // the backdrop. Backdrop at depth 5: in front throughout (the short path, no depth
-        // tests), one piece per link. Backdrop at depth 2: the chain crosses it at 0.25 and 0.75
-        // (the general path), and is behind over [0.25, 0.75].
+        // tests), one piece per link, or one in all when joined. Backdrop at depth 2: the chain
+        // crosses it at 0.25 and 0.75 (the general path), and is behind over [0.25, 0.75].
         let links = [
             Link {
                 t0: 0.0,
@@ -548,7 +562,7 @@ mod tests {
             chain: 0,
             n: 2,
         };
-        let run = |z: f32, opaque: bool| {
+        let run = |z: f32, opaque: bool, joined: bool| {
             let bg = StaticSample {
                 rgba: [0.0; 4],
                 depth: z,
@@ -561,7 +575,10 @@ mod tests {
                 &bg,
                 &[opaque],
                 &[],
-                &mut Sweep::default(),
+                &mut Sweep {
+                    joined,
+                    ..Sweep::default()
+                },
                 |a, b, o, _| pieces.push((a, b, o.iter().map(|x| x.1).collect::<Vec<_>>())),
             )
             .unwrap();
@@ -570,16 +587,21 @@ mod tests {
         let front = vec![0];
         let both = vec![0, BACKDROP];
         assert_eq!(
-            run(5.0, true),
+            run(5.0, true, false),
             vec![(0.0, 0.5, front.clone()), (0.5, 1.0, front.clone())]
         );
         assert_eq!(
-            run(5.0, false),
+            run(5.0, false, false),
             vec![(0.0, 0.5, both.clone()), (0.5, 1.0, both.clone())]
         );
+        // joined: the stretch as one piece of the same layers
+        assert_eq!(run(5.0, true, true), vec![(0.0, 1.0, front.clone())]);
+        assert_eq!(run(5.0, false, true), vec![(0.0, 1.0, both)]);
         let back = vec![BACKDROP];
+        // crossing the backdrop: cut at the crossings, joined or not
+        assert_eq!(run(2.0, true, true), run(2.0, true, false));
         assert_eq!(
-            run(2.0, true),
+            run(2.0, true, false),
             vec![
                 (0.0, 0.25, front.clone()),
                 (0.25, 0.5, back.clone()),
