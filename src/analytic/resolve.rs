@@ -14,7 +14,7 @@
 //! skip the quadrature.
 use super::quadrature::{gauss, Quadrature};
 use super::visibility::{
-    depth_at, sort, sweep, Frag, Link, Overflow, StaticSample, Sweep, BACKDROP, NONE,
+    depth_at, sort, sort_times, sweep, Frag, Link, Overflow, StaticSample, Sweep, BACKDROP, NONE,
 };
 use crate::shutter::Shutter;
 
@@ -230,7 +230,7 @@ impl<L: Layers> Integral<'_, L> {
         // each layer's cuts come ascending; several layers' cuts interleave
         if chained > 1 {
             let n = cuts.len();
-            cuts[1..n - 1].sort_unstable_by(f64::total_cmp);
+            sort_times(&mut cuts[1..n - 1]);
         }
         for c in 0..cuts.len() - 1 {
             let (u, v) = (cuts[c], cuts[c + 1]);
@@ -276,7 +276,7 @@ impl<L: Layers> Integral<'_, L> {
         // Lambert's clamp bends the shading where a light grazes a surface: the quadrature is
         // exact only for smooth shading, so the piece is cut there too.
         if self.kinks.len() > 1 {
-            self.kinks.sort_unstable_by(f64::total_cmp);
+            sort_times(&mut self.kinks);
         }
         let mut lo = u;
         for k in 0..=self.kinks.len() {
@@ -400,6 +400,9 @@ pub fn resolve(
     // its layers front to back in `merged`
     let mut pending = (0.0f64, 0.0f64, 0u8);
     let split = sc.split;
+    // pieces of the same layers join below (unless split), and nothing is noted per piece
+    // unless for the exposure: the sweep may give such pieces joined
+    sc.sweep.joined = !split && !exposure;
     let mut merged = std::mem::take(&mut sc.merged);
     merged.clear();
     let mut opaque = std::mem::take(&mut sc.opaque);

@@ -280,7 +280,9 @@ fn prefetch(tp: &TilePrim) {
 /// local time.
 #[inline]
 fn barycentric_at(tp: &TilePrim, q: &SampleEdges, t: f64) -> ([f64; 3], f64) {
-    let tau = ((t - tp.t0) / tp.dt).clamp(0.0, 1.0);
+    // dividing by 1 (one segment over the whole shutter) changes nothing: skip it
+    let d = t - tp.t0;
+    let tau = if tp.dt == 1.0 { d } else { d / tp.dt }.clamp(0.0, 1.0);
     (tp.edges.barycentric(q, tau), tau)
 }
 

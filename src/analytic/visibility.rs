@@ -68,6 +68,13 @@ pub struct Sweep {
     sub: Vec<f64>,
     lines: Vec<(usize, [f64; 4])>,
     cursor: Vec<u32>,
+    /// Per fragment: whether its every depth lies in front of the backdrop ([`AHEAD`]), not
+    /// ([`BEHIND`]), or not yet known (0).
+    ahead: Vec<u8>,
+    /// Whether a stretch of one fragment alone in front of the backdrop (whose order cannot
+    /// change) is given as one piece, not one per link of its chain: for a caller that joins
+    /// touching pieces of the same layers anyway and notes nothing per piece (off by default).
+    pub joined: bool,
     /// Most depth crossings the layers present together over one stretch of time may have
     /// (unlimited by default).
     pub max_cuts: usize,
@@ -82,6 +89,8 @@ impl Default for Sweep {
             sub: Vec::new(),
             lines: Vec::new(),
             cursor: Vec::new(),
+            ahead: Vec::new(),
+            joined: false,
             max_cuts: usize::MAX,
         }
     }
@@ -111,7 +120,7 @@ impl Sweep {
         }
         self.sub.push(v);
         if self.sub.len() > 3 {
-            self.sub[1..].sort_unstable_by(f64::total_cmp);
+            sort_times(&mut self.sub[1..]);
         }
     }
 
@@ -139,7 +148,7 @@ impl Sweep {
         }
         self.cuts.push(q);
         if self.cuts.len() > 3 {
-            self.cuts[1..].sort_unstable_by(f64::total_cmp);
+            sort_times(&mut self.cuts[1..]);
         }
         Ok(())
     }
@@ -149,9 +158,41 @@ impl Sweep {
 #[inline(always)]
 fn line_at(l: &[f64; 4], t: f64) -> f64 {
     if l[2] > l[0] {
-        l[1] + (l[3] - l[1]) * ((t - l[0]) / (l[2] - l[0])).clamp(0.0, 1.0)
+        // at its ends the fraction is exactly 0 (`0 / x`) or 1 (`x / x`): no division there
+        let f = if t == l[0] {
+            0.0
+        } else if t == l[2] {
+            1.0
+        } else {
+            ((t - l[0]) / (l[2] - l[0])).clamp(0.0, 1.0)
+        };
+        l[1] + (l[3] - l[1]) * f
     } else {
         l[1]
+    }
+}
+
+/// [`Sweep::ahead`]: a fragment in front of the backdrop throughout, or not.
+const AHEAD: u8 = 1;
+const BEHIND: u8 = 2;
+
+/// Whether every depth of fragment `f`'s chain (its ends and each link's start) lies in front
+/// of depth `z`: then so does its depth at any time (linear between them per link; the depths
+/// are single precision, so the gap to `z` is far wider than the rounding of `line_at`).
+fn chain_ahead(f: &Frag, links: &[Link], z: f32) -> bool {
+    if !(f.z0 < z && f.z1 < z) {
+        return false;
+    }
+    let mut c = f.chain;
+    loop {
+        let l = &links[c as usize];
+        if !(l.z0 < z) {
+            return false;
+        }
+        if l.next == NONE {
+            return true;
+        }
+        c = l.next;
     }
 }
 
@@ -192,6 +233,41 @@ pub fn depth_at(f: &Frag, links: &[Link], t: f64) -> f64 {
     } else {
         l[1]
     }
+}
+
+/// Sorts `v` ascending by `less`, a strict order under which no two different items are equal
+/// (so any sort gives the same result): by insertion for the few items a sample's lists hold
+/// (the library's sort costs more in set-up than these lists take to sort), else the library's.
+#[inline(always)]
+pub fn sort_small<T: Copy>(v: &mut [T], less: impl Fn(&T, &T) -> bool) {
+    if v.len() > 16 {
+        v.sort_unstable_by(|a, b| {
+            if less(a, b) {
+                std::cmp::Ordering::Less
+            } else if less(b, a) {
+                std::cmp::Ordering::Greater
+            } else {
+                std::cmp::Ordering::Equal
+            }
+        });
+        return;
+    }
+    for i in 1..v.len() {
+        let x = v[i];
+        let mut j = i;
+        while j > 0 && less(&x, &v[j - 1]) {
+            v[j] = v[j - 1];
+            j -= 1;
+        }
+        v[j] = x;
+    }
+}
+
+/// Sorts instants ascending by [`f64::total_cmp`] (items it finds equal have the same bits, so
+/// any sort gives the same result).
+#[inline(always)]
+pub fn sort_times(v: &mut [f64]) {
+    sort_small(v, |a, b| a.total_cmp(b).is_lt());
 }
 
 /// Sorts fragments by start time (then triangle: a unique key, so the order is the same
@@ -238,6 +314,8 @@ pub fn sweep(
     sc.active.clear();
     sc.cursor.clear();
     sc.cursor.extend(frags.iter().map(|f| f.chain));
+    sc.ahead.clear();
+    sc.ahead.resize(frags.len(), 0);
     let (mut next, mut bi) = (0, 0);
     let mut u = 0.0f64;
     while u < 1.0 {
@@ -285,6 +363,30 @@ pub fn sweep(
             piece(u, v, &sc.order, frags);
             continue;
         }
+        // One fragment in front of the backdrop throughout: no crossing to look for, the
+        // order is known (what the general steps below find, without their depth tests).
+        let alone = if n == 2 && has_bg {
+            let i = sc.active[0];
+            if sc.ahead[i] == 0 {
+                sc.ahead[i] = if chain_ahead(&frags[i], links, bg.depth) {
+                    AHEAD
+                } else {
+                    BEHIND
+                };
+            }
+            (sc.ahead[i] == AHEAD).then_some(i)
+        } else {
+            None
+        };
+        if let (Some(i), true) = (alone, sc.joined) {
+            sc.order.clear();
+            sc.order.push((0.0, i));
+            if !opaque[i] {
+                sc.order.push((f64::from(bg.depth), BACKDROP));
+            }
+            piece(u, v, &sc.order, frags);
+            continue;
+        }
         // Chains change triangle (and depth slope) at their links: cut there first, so that
         // every layer's depth is one straight piece on each sub-interval.
         sc.link_cuts(frags, links, u, v);
@@ -294,6 +396,16 @@ pub fn sweep(
                 continue;
             }
             let mid = 0.5 * (p + q);
+            if let Some(i) = alone {
+                let l = element_line(frags, links, &mut sc.cursor, i, mid);
+                sc.order.clear();
+                sc.order.push((line_at(&l, mid), i));
+                if !opaque[i] {
+                    sc.order.push((f64::from(bg.depth), BACKDROP));
+                }
+                piece(p, q, &sc.order, frags);
+                continue;
+            }
             // each layer's straight depth on [p, q]
             sc.lines.clear();
             for &i in &sc.active {
@@ -316,8 +428,9 @@ pub fn sweep(
                 for (i, l) in &sc.lines {
                     sc.order.push((line_at(l, m), *i));
                 }
-                sc.order
-                    .sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+                sort_small(&mut sc.order, |x, y| {
+                    x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)).is_lt()
+                });
                 if let Some(p) = sc
                     .order
                     .iter()
@@ -418,6 +531,84 @@ mod tests {
             ]
         );
         assert!(pieces.iter().all(|p| p.3 == 1));
+    }
+
+    #[test]
+    fn a_chain_alone_over_the_backdrop_is_cut_at_its_links_or_where_it_crosses_it() {
+        // A chain of two links, depth 1 -> 3 over [0, 0.5] and 3 -> 1 over [0.5, 1], alone over
+        // the backdrop. Backdrop at depth 5: in front throughout (the short path, no depth
+        // tests), one piece per link, or one in all when joined. Backdrop at depth 2: the chain
+        // crosses it at 0.25 and 0.75 (the general path), and is behind over [0.25, 0.75].
+        let links = [
+            Link {
+                t0: 0.0,
+                z0: 1.0,
+                prim: 0,
+                next: 1,
+            },
+            Link {
+                t0: 0.5,
+                z0: 3.0,
+                prim: 1,
+                next: NONE,
+            },
+        ];
+        let chain = Frag {
+            t0: 0.0,
+            t1: 1.0,
+            z0: 1.0,
+            z1: 1.0,
+            prim: 0,
+            chain: 0,
+            n: 2,
+        };
+        let run = |z: f32, opaque: bool, joined: bool| {
+            let bg = StaticSample {
+                rgba: [0.0; 4],
+                depth: z,
+                id: 7,
+            };
+            let mut pieces = Vec::new();
+            sweep(
+                &[chain],
+                &links,
+                &bg,
+                &[opaque],
+                &[],
+                &mut Sweep {
+                    joined,
+                    ..Sweep::default()
+                },
+                |a, b, o, _| pieces.push((a, b, o.iter().map(|x| x.1).collect::<Vec<_>>())),
+            )
+            .unwrap();
+            pieces
+        };
+        let front = vec![0];
+        let both = vec![0, BACKDROP];
+        assert_eq!(
+            run(5.0, true, false),
+            vec![(0.0, 0.5, front.clone()), (0.5, 1.0, front.clone())]
+        );
+        assert_eq!(
+            run(5.0, false, false),
+            vec![(0.0, 0.5, both.clone()), (0.5, 1.0, both.clone())]
+        );
+        // joined: the stretch as one piece of the same layers
+        assert_eq!(run(5.0, true, true), vec![(0.0, 1.0, front.clone())]);
+        assert_eq!(run(5.0, false, true), vec![(0.0, 1.0, both)]);
+        let back = vec![BACKDROP];
+        // crossing the backdrop: cut at the crossings, joined or not
+        assert_eq!(run(2.0, true, true), run(2.0, true, false));
+        assert_eq!(
+            run(2.0, true, false),
+            vec![
+                (0.0, 0.25, front.clone()),
+                (0.25, 0.5, back.clone()),
+                (0.5, 0.75, back),
+                (0.75, 1.0, front)
+            ]
+        );
     }
 
     #[test]
