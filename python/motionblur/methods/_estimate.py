@@ -33,16 +33,18 @@ option set is estimated by a pilot (`pilot_estimate`), with no fitted factor:
   heavy-tailed: a sample an edge crosses nearly along itself is off by the chord's distance
   over the edge's slow normal speed (up to a piece's length of the shutter), so a frame of more
   samples holds larger single errors, and its RMSE grows with its pixel count until the rare
-  large ones are common. No smaller pilot predicts where a frame's few large errors fall, so
-  a frame of at most `ANALYTIC_OWN_PIXELS` (1920x1080) is its own pilot: the estimate is then
-  its measured error against the reference, and the frame is the one ``render`` made (passed
-  in), so that the estimate costs the reference alone, about twice the frame's time. Only a
-  larger frame (4K; not calibrated: docs, validation.md) is carried from a pilot of `ANALYTIC_PILOT_PIXELS`
-  (160x120): the typical MSE of random sixteenths and quarters of the pilot's pixels gives
-  the growth ``n**beta`` (``beta`` 0 for a light tail, 1 at most, `_tail_trend`), and the
-  pilot's MSE is carried to the frame's pixel count with half of it in log (as
-  `_extrapolated` takes half its trend: two subset sizes of one pilot are a noisy read of the
-  slope).
+  large ones are common. No much smaller pilot predicts where a frame's few large errors
+  fall, so a frame of at most `ANALYTIC_OWN_PIXELS` (1920x1080) is its own pilot: the
+  estimate is then its measured error against the reference, and the frame is the one
+  ``render`` made (passed in), so that the estimate costs the reference alone, about twice
+  the frame's time. A larger frame (1440p, 4K) has for its pilot the largest image of the
+  same field of view within `ANALYTIC_OWN_PIXELS` (`analytic_pilot_size`: 1920x1080 for
+  both), and the pilot's estimate is the frame's, not carried to the frame's pixel count: a
+  pilot of a quarter of the frame's pixels or more holds its own rare large errors about as
+  often per pixel as the frame does (on tuning scenes it read 0.78x-1.17x of 4K and 1440p
+  frames, and carrying its tail did not help; `ANALYTIC_OWN_PIXELS`), and with its
+  reference it costs about what the 4K render does, where the frame's own reference would
+  cost twice that, and the memory of a second 4K frame.
 
 The rules were chosen on the tuning scenes of
 [`motionblur.evaluation.random_scenes`][motionblur.evaluation.random_scenes] only (but the
@@ -78,9 +80,8 @@ __all__ = [
     "ANALYTIC_LONGEST",
     "ANALYTIC_DEFORMING_LONGEST",
     "ANALYTIC_OWN_PIXELS",
-    "ANALYTIC_PILOT_PIXELS",
+    "analytic_pilot_size",
     "LIMIT_OPTIONS",
-    "TAIL_PERMUTATIONS",
     "limit",
     "pilot_errors",
     "pilot_scene",
@@ -126,29 +127,26 @@ ANALYTIC_DEFORMING_LONGEST = 1 / 32
 #: The largest frame (pixels) the analytic method's pilot is the frame itself for (the frame
 #: ``render`` made, so that only its reference is rendered, about twice the frame's time): its
 #: error is heavy-tailed (one to three pixels may hold most of a frame's MSE), where they fall
-#: no smaller pilot predicts (on tuning scenes at 192x144 and 320x240, pilots of 3072 to 19200
+#: no much smaller pilot predicts (on tuning scenes at 192x144 and 320x240, pilots of 3072 to 19200
 #: pixels, carried to the frame's pixels or not, missed 0.5x-2x on 7-20% of frames, down to
 #: 0.2x; at 640x480, pilots of 3072 to 76800 pixels read 0.1-0.2x of a frame whose own read
 #: was 1.1x; at 960x540 the frame's own read 1.03x-1.14x on tuning seeds, where the 160x120
-#: pilot carried had read 0.26x-3.1x on measuring seeds), and a pilot of a quarter of the
-#: frame's pixels costs about as much. Up to 1080p, then: a user who renders many such frames and needs no estimate passes
-#: ``error_estimate=False``.
+#: pilot carried had read 0.26x-3.1x on measuring seeds). A larger frame's pilot is the largest
+#: image of its field of view within these pixels (`analytic_pilot_size`), its estimate taken
+#: as the frame's: on tuning seeds 301-307 at 3840x2160 and 2560x1440 the 1920x1080 pilot read
+#: 0.78x-1.17x on the 7 frames with an error of at least 1e-6 (0.97x-1.78x on the 5 with less),
+#: and carrying its tail to the frame's pixels (`n**beta`, half the trend) moved the low one
+#: to 0.80x and raised the rest (to 2.44x where one pilot pixel held 37% of its MSE). At 4K it
+#: costs about what the render does; at 1440p the frame's own pilot (0.97x-1.12x on its 4
+#: frames) would cost about a sixth more. A user who renders many
+#: frames and needs no estimate passes ``error_estimate=False``.
 ANALYTIC_OWN_PIXELS = 1920 * 1080
-#: The analytic method's pilot for a frame larger than `ANALYTIC_OWN_PIXELS` (4K), its MSE
-#: carried to the frame's pixels (`_tail_trend`): on the 640x480 tuning frames the closest of the
-#: pilots of 3072, 19200 and 76800 pixels that cost less than the frame (about half of it); a
-#: 4K frame's own reference would double a render that already takes most of the memory budget.
-ANALYTIC_PILOT_PIXELS = 160 * 120
 #: The exact limit the analytic estimate is against (`limit`): the analytic method at a chord
 #: tolerance of 2e-4 px and 4 Gauss points, each segment cut into 4 (whatever the segment cap)
 #: and none longer than 1/64 of the shutter; cutting each into 8, or none longer than 1/128,
 #: moves it by under a tenth of the analytic default's error on the tuning scenes (docs:
 #: validation.md).
 LIMIT_OPTIONS = {"tolerance": 0.0002, "gauss": 4, "split": 4, "longest": 1 / 64}
-#: Random orders of the analytic pilot's pixels, each cut into sixteenths and quarters, whose
-#: typical MSE gives the growth of a frame's MSE with its pixel count (`_tail_trend`): 128 give
-#: 2048 sixteenths and 512 quarters, in about 30 ms at 64x48.
-TAIL_PERMUTATIONS = 128
 #: Measured error over pilot RMSE, by method (chosen on the tuning scenes; none is needed).
 PILOT_FACTOR: dict[str, float] = {}
 _DEFAULT_FACTOR = 1.0
@@ -176,16 +174,46 @@ def limit(scene: Scene, aa: int = 1) -> Frame:
     return over_background(frame, scene.background)
 
 
-def pilot_scene(scene: Scene, pixels: int = PILOT_PIXELS) -> tuple[Scene, float]:
+def pilot_scene(
+    scene: Scene, pixels: int = PILOT_PIXELS, size: tuple[int, int] | None = None
+) -> tuple[Scene, float]:
     """``(scene seen by a smaller camera, scale)``: the camera's image scaled by ``scale`` <= 1
-    so that it has about ``pixels`` pixels (the field of view unchanged)."""
+    so that it has about ``pixels`` pixels, or is ``size`` (width, height) when given (the
+    field of view unchanged; ``scale`` the pilot's width over the frame's)."""
     cam = scene.camera
-    scale = min(1.0, math.sqrt(pixels / (cam.width * cam.height)))
-    if scale >= 1.0:
-        return scene, 1.0
-    w, h = max(2, round(cam.width * scale)), max(2, round(cam.height * scale))
+    if size is not None:
+        w, h = int(size[0]), int(size[1])
+        if not (2 <= w <= cam.width and 2 <= h <= cam.height):
+            raise ValueError(f"size: expected 2x2 to the frame's {cam.width}x{cam.height}, got {w}x{h}")
+        if (w, h) == (cam.width, cam.height):
+            return scene, 1.0
+    else:
+        scale = min(1.0, math.sqrt(pixels / (cam.width * cam.height)))
+        if scale >= 1.0:
+            return scene, 1.0
+        w, h = max(2, round(cam.width * scale)), max(2, round(cam.height * scale))
     small = Camera(cam.pose, cam.yfov, w, h, cam.znear, cam.zfar)
     return scene.with_(camera=small), w / cam.width
+
+
+def analytic_pilot_size(width: int, height: int, own_pixels: int = ANALYTIC_OWN_PIXELS) -> tuple[int, int]:
+    """``(width, height)`` of the analytic method's pilot for a frame of ``width`` x ``height``:
+    the frame itself up to ``own_pixels`` pixels, else the largest image of the same field of
+    view of at most ``own_pixels`` (the frame's sides scaled by one factor, each rounded down:
+    1920x1080 for 3840x2160 and for 2560x1440 at the default)."""
+    if own_pixels < 4:
+        raise ValueError(f"own_pixels: expected at least 4 (a 2x2 pilot), got {own_pixels}")
+    if width * height <= own_pixels:
+        return width, height
+    scale = math.sqrt(own_pixels / (width * height))
+    w = max(2, math.floor(width * scale + 1e-9))  # 0.5 * 3840 is 1920, not 1919.9999
+    h = max(2, math.floor(height * scale + 1e-9))
+    while w * h > own_pixels:  # the 1e-9 above, or the 2-pixel floor of a thin frame
+        if w > 2 and (h <= 2 or w * height > h * width):
+            w -= 1
+        else:
+            h -= 1
+    return w, h
 
 
 def _aa(method: str, options: dict) -> int:
@@ -256,15 +284,21 @@ def _reference(small: Scene, options: dict, method: str, aa: int, rgba: np.ndarr
 
 
 def pilot_errors(
-    scene: Scene, method: str, options: dict, pixels: int = PILOT_PIXELS, rgba: np.ndarray | None = None
+    scene: Scene,
+    method: str,
+    options: dict,
+    pixels: int = PILOT_PIXELS,
+    rgba: np.ndarray | None = None,
+    size: tuple[int, int] | None = None,
 ) -> dict:
     """The pilot at about ``pixels`` pixels: ``{"rmse", "pixel_mse", "unblurred", "scale",
     "size"}``, the RMSE of ``method`` and of the sharp mid-shutter frame against the pilot's
     reference (see `REFERENCE_SAMPLES`) at that size, ``pixel_mse`` (h,w) float64 the method's
     squared error per pixel (mean over RGBA), ``scale`` the pilot's width over the frame's.
     ``rgba``: the analytic frame itself (H,W,4, over the background), when the pilot is the
-    frame (``pixels`` at least the frame's): used instead of rendering it again."""
-    small, scale = pilot_scene(scene, pixels)
+    frame (``pixels`` at least the frame's): used instead of rendering it again. ``size``:
+    the pilot's (width, height) instead of ``pixels`` (`pilot_scene`)."""
+    small, scale = pilot_scene(scene, pixels, size)
     aa = _aa(method, options)
     if rgba is not None and method == "analytic" and scale >= 1.0:
         if rgba.shape != (scene.camera.height, scene.camera.width, 4):
@@ -298,13 +332,22 @@ def _extrapolated(fine: dict, coarse: dict) -> float:
     return math.sqrt(fine["rmse"] * fitted)
 
 
-def pilot_estimate(scene: Scene, method: str, options: dict, frame: Frame | None = None) -> dict:
+def pilot_estimate(
+    scene: Scene,
+    method: str,
+    options: dict,
+    frame: Frame | None = None,
+    *,
+    own_pixels: int = ANALYTIC_OWN_PIXELS,
+) -> dict:
     """``{"error_estimate", "error_estimate_how", "estimate_ms", "unblurred_estimate"}`` of
     ``method`` with ``options`` on ``scene`` from a pilot render (see the module docs);
     ``unblurred_estimate`` is the same measure of the sharp frame at mid-shutter, so that a blur
     worse than none is seen ([`PoorBlurWarning`][motionblur.PoorBlurWarning]). ``frame``: the
     frame ``render`` made (over the background, no lens), which an analytic frame that is its
-    own pilot uses instead of rendering itself again."""
+    own pilot uses instead of rendering itself again. ``own_pixels``: the analytic method's
+    largest frame that is its own pilot (`analytic_pilot_size`; ``render`` uses
+    `ANALYTIC_OWN_PIXELS`)."""
     t0 = time.perf_counter()
     if is_exact(method, options):
         return {
@@ -313,7 +356,7 @@ def pilot_estimate(scene: Scene, method: str, options: dict, frame: Frame | None
             "estimate_ms": 0.0,
         }
     if method == "analytic":
-        return _analytic_estimate(scene, options, frame, t0)
+        return _analytic_estimate(scene, options, frame, t0, own_pixels)
     p = pilot_errors(scene, method, options)
     est, how = p["rmse"], f"pilot: the method against the exact integral at {p['size']}"
     if p["scale"] < 1.0 and est > 0.0:
@@ -323,21 +366,17 @@ def pilot_estimate(scene: Scene, method: str, options: dict, frame: Frame | None
     return _estimate_stats(PILOT_FACTOR.get(method, _DEFAULT_FACTOR) * est, how, p, t0)
 
 
-def _analytic_estimate(scene: Scene, options: dict, frame: Frame | None, t0: float) -> dict:
+def _analytic_estimate(scene: Scene, options: dict, frame: Frame | None, t0: float, own_pixels: int) -> dict:
     """`pilot_estimate` of the analytic method: the frame itself (``frame`` when given) up to
-    `ANALYTIC_OWN_PIXELS`, else a pilot of `ANALYTIC_PILOT_PIXELS` with its tail carried to the
-    frame's pixels (`_tail_trend`), against its refined segments and taken to the limit."""
+    ``own_pixels``, else the largest pilot of the same field of view within them
+    (`analytic_pilot_size`), against its refined segments and taken to the limit."""
     cam = scene.camera
-    own = cam.width * cam.height <= ANALYTIC_OWN_PIXELS
+    size = analytic_pilot_size(cam.width, cam.height, own_pixels)
+    own = size == (cam.width, cam.height)
     rgba = frame.rgba if frame is not None and own else None
-    pixels = cam.width * cam.height if own else ANALYTIC_PILOT_PIXELS
-    p = pilot_errors(scene, "analytic", options, pixels, rgba)
+    p = pilot_errors(scene, "analytic", options, rgba=rgba, size=size)
     est = p["rmse"] * (ANALYTIC_SPLIT**2 / (ANALYTIC_SPLIT**2 - 1))
     how = f"pilot: the method against its segments cut in {ANALYTIC_SPLIT} at {p['size']}, taken to the exact limit"
-    if p["scale"] < 1.0 and est > 0.0:
-        beta = _tail_trend(p["pixel_mse"])
-        est *= (cam.width * cam.height / p["pixel_mse"].size) ** (beta / 4)  # half the trend, in RMSE
-        how += f", its tail carried to the frame's pixels (MSE x n**{beta / 2:.2f})"
     return _estimate_stats(PILOT_FACTOR.get("analytic", _DEFAULT_FACTOR) * est, how, p, t0)
 
 
@@ -348,32 +387,6 @@ def _estimate_stats(est: float, how: str, pilot: dict, t0: float) -> dict:
         "estimate_ms": (time.perf_counter() - t0) * 1e3,
         "unblurred_estimate": pilot["unblurred"],
     }
-
-
-def _tail_trend(pixel_mse: np.ndarray) -> float:
-    """``beta`` in [0, 1]: the typical MSE of ``n`` of these pixels grows as ``n**beta``, read
-    from random sixteenths and quarters of them: `TAIL_PERMUTATIONS` random orders (a fixed
-    seed), each cut into 16 and into 4 disjoint parts, and the typical MSE of a part is the mean
-    of the middle half of the parts' MSEs (a median of few parts jumps with the whole count of
-    rare errors a part holds; this read moves by about 0.03 between seeds where that one moved
-    by 0.16). 0 where every pixel is about as far off (or none is); 1, the steepest, where the
-    squared errors are so heavy-tailed that a sixteenth typically holds none of them; a Pareto
-    tail of index ``a`` in (1/2, 1) gives about ``1/a - 1``."""
-    e2 = pixel_mse.ravel()
-    n = e2.size
-    order = np.random.default_rng(0).random((TAIL_PERMUTATIONS, n)).argsort(axis=1)
-    typical = []
-    for k in (16, 4):
-        part = max(1, n // k)
-        mse = np.sort(e2[order[:, : k * part]].reshape(-1, part).mean(axis=1))
-        q = mse.size // 4
-        typical.append(float(mse[q : mse.size - q].mean()))
-    m16, m4 = typical
-    if not m4 > 0.0:
-        return 1.0 if e2.max() > 0.0 else 0.0
-    if not m16 > 0.0:
-        return 1.0
-    return min(max(math.log(m4 / m16) / math.log(4.0), 0.0), 1.0)
 
 
 def _rmse(a: np.ndarray, b: np.ndarray) -> float:
