@@ -412,7 +412,8 @@ def make_dataset(
     where a deforming object is seen at a grid pixel raises its ValueError. ``error_estimate``:
     each frame's estimated RMSE against the exact time integral in its JSON (True, the default;
     the analytic method measures it against a second, finer render, about twice the frame's time
-    up to 1080p) or None there (False: ``render(..., error_estimate=False)``).
+    up to 1080p, and from a 1080p pilot above, about 0.8x a 4K frame's time) or None there
+    (False: ``render(..., error_estimate=False)``).
 
     Returns the run's metadata (also in ``out/dataset.json``) with ``rendered`` and ``skipped``,
     the frame numbers rendered now and those already on disk. Bad arguments raise ValueError or
