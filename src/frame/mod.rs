@@ -107,7 +107,7 @@ impl Frame {
     /// A frame of the given size whose buffers have room for every entry but length 0, to be
     /// written in place (through their spare capacity) and then given their length: a render
     /// that writes every entry need not fill them first. Buffers of 4 MiB and more are backed
-    /// by huge pages where Linux allows ([`advise_huge_pages`]). An allocation the system
+    /// by huge pages where Linux allows (`budget::advise_huge_pages`). An allocation the system
     /// refuses is an error naming `width`.
     pub fn with_capacity(width: u32, height: u32, velocity: bool) -> Result<Self> {
         let n = width as usize * height as usize;
