@@ -41,18 +41,11 @@ def _tail_trend(pixel_mse: np.ndarray) -> float:
     e2 = pixel_mse.ravel()
     n = e2.size
     order = np.random.default_rng(0).random((128, n)).argsort(axis=1)
-    typical = []
+    parts = {}
     for k in (16, 4):
         part = max(1, n // k)
-        mse = np.sort(e2[order[:, : k * part]].reshape(-1, part).mean(axis=1))
-        q = mse.size // 4
-        typical.append(float(mse[q : mse.size - q].mean()))
-    m16, m4 = typical
-    if not m4 > 0.0:
-        return 1.0 if e2.max() > 0.0 else 0.0
-    if not m16 > 0.0:
-        return 1.0
-    return min(max(math.log(m4 / m16) / math.log(4.0), 0.0), 1.0)
+        parts[k] = e2[order[:, : k * part]].reshape(-1, part).mean(axis=1)
+    return _beta(e2, parts)
 
 
 def tail_trend(pixel_mse, permutations=16) -> float:
@@ -66,9 +59,15 @@ def tail_trend(pixel_mse, permutations=16) -> float:
         for k in (16, 4):
             part = max(1, n // k)
             parts[k].append(e2[order[: k * part]].reshape(-1, part).mean(axis=1))
+    return _beta(e2, {k: np.concatenate(v) for k, v in parts.items()})
+
+
+def _beta(e2: np.ndarray, parts: dict) -> float:
+    """``beta`` from the MSEs of the sixteenths (``parts[16]``) and quarters (``parts[4]``) of
+    the pixels ``e2``: the typical MSE of each, the mean of the middle half of the sorted parts."""
     typical = []
     for k in (16, 4):
-        mse = np.sort(np.concatenate(parts[k]))
+        mse = np.sort(parts[k])
         q = mse.size // 4
         typical.append(float(mse[q : mse.size - q].mean()))
     m16, m4 = typical
@@ -91,7 +90,7 @@ def main() -> None:
     n = w * h
     for name, pixels in (("p1080", 1920 * 1080), ("p160", 160 * 120)) + ((("own", n),) if own else ()):
         t = time.perf_counter()
-        p = E.pilot_errors(scene, "analytic", {}, pixels, f.rgba if name == "own" else None)
+        p = E.pilot_errors(scene, "analytic", {}, pixels, f.rgba if name == "own" else None, per_pixel=True)
         row[name + "_s"] = time.perf_counter() - t
         t2 = time.perf_counter()
         beta = (

@@ -449,14 +449,9 @@ unsafe fn tap_pair(
     t: f32,
 ) -> std::arch::x86_64::__m256 {
     use std::arch::x86_64::*;
-    let one = _mm_set1_ps(1.0);
     let p = rgba.as_ptr();
     let below = w * 4;
-    let pos = _mm_add_ps(origin, _mm_mul_ps(vel, _mm_set1_ps(t)));
-    let trunc = _mm_cvtepi32_ps(_mm_cvttps_epi32(pos));
-    let fl = _mm_sub_ps(trunc, _mm_and_ps(_mm_cmpgt_ps(trunc, pos), one));
-    let frac = _mm_sub_ps(pos, fl);
-    let i = _mm_cvttps_epi32(fl);
+    let (i, frac) = floor_frac(origin, vel, t);
     let (x0, x1) = (
         _mm_cvtsi128_si32(i) as usize,
         _mm_extract_epi32::<1>(i) as usize,
@@ -476,17 +471,7 @@ unsafe fn tap_pair(
     let b = _mm256_permute2f128_ps::<0x31>(ab0, ab1);
     let c = _mm256_permute2f128_ps::<0x20>(cd0, cd1);
     let d = _mm256_permute2f128_ps::<0x31>(cd0, cd1);
-    let fx = _mm256_set_m128(
-        _mm_shuffle_ps::<0x55>(frac, frac),
-        _mm_shuffle_ps::<0x00>(frac, frac),
-    );
-    let fy = _mm256_set_m128(
-        _mm_shuffle_ps::<0xff>(frac, frac),
-        _mm_shuffle_ps::<0xaa>(frac, frac),
-    );
-    let top = _mm256_add_ps(a, _mm256_mul_ps(fx, _mm256_sub_ps(b, a)));
-    let bot = _mm256_add_ps(c, _mm256_mul_ps(fx, _mm256_sub_ps(d, c)));
-    _mm256_add_ps(top, _mm256_mul_ps(fy, _mm256_sub_ps(bot, top)))
+    bilerp([a, b, c, d], frac)
 }
 
 /// [`tap_pair`] with every texel clamped to the image, as [`Taps::blur`] fetches them near the
@@ -509,13 +494,8 @@ unsafe fn tap_pair_clamped(
     t: f32,
 ) -> std::arch::x86_64::__m256 {
     use std::arch::x86_64::*;
-    let one = _mm_set1_ps(1.0);
     let p = rgba.as_ptr();
-    let pos = _mm_add_ps(origin, _mm_mul_ps(vel, _mm_set1_ps(t)));
-    let trunc = _mm_cvtepi32_ps(_mm_cvttps_epi32(pos));
-    let fl = _mm_sub_ps(trunc, _mm_and_ps(_mm_cmpgt_ps(trunc, pos), one));
-    let frac = _mm_sub_ps(pos, fl);
-    let i = _mm_cvttps_epi32(fl);
+    let (i, frac) = floor_frac(origin, vel, t);
     let zero = _mm_setzero_si128();
     let lo = _mm_min_epi32(_mm_max_epi32(i, zero), edge);
     let hi = _mm_min_epi32(
@@ -532,6 +512,47 @@ unsafe fn tap_pair_clamped(
     let b = _mm256_set_m128(texel(hi[1], lo[3]), texel(hi[0], lo[2]));
     let c = _mm256_set_m128(texel(lo[1], hi[3]), texel(lo[0], hi[2]));
     let d = _mm256_set_m128(texel(hi[1], hi[3]), texel(hi[0], hi[2]));
+    bilerp([a, b, c, d], frac)
+}
+
+/// The tap's position `origin + vel t` of a pixel pair, floored (truncation, then one less
+/// where that rose) as integers, and its fractions: [`Taps::blur`]'s operations in its order.
+///
+/// # Safety
+/// AVX2 is present.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn floor_frac(
+    origin: std::arch::x86_64::__m128,
+    vel: std::arch::x86_64::__m128,
+    t: f32,
+) -> (std::arch::x86_64::__m128i, std::arch::x86_64::__m128) {
+    use std::arch::x86_64::*;
+    let pos = _mm_add_ps(origin, _mm_mul_ps(vel, _mm_set1_ps(t)));
+    let trunc = _mm_cvtepi32_ps(_mm_cvttps_epi32(pos));
+    let fl = _mm_sub_ps(
+        trunc,
+        _mm_and_ps(_mm_cmpgt_ps(trunc, pos), _mm_set1_ps(1.0)),
+    );
+    (_mm_cvttps_epi32(fl), _mm_sub_ps(pos, fl))
+}
+
+/// The bilinear samples of a pixel pair from its four texels `[a, b, c, d]` (each pixel's in
+/// lanes 0-3 and 4-7: at the floored position, right of it, below it, below right) and its
+/// fractions `frac` (`(fx0, fx1, fy0, fy1)`): `top = a + fx (b - a)`, `bot = c + fx (d - c)`,
+/// `top + fy (bot - top)`, [`Taps::blur`]'s order.
+///
+/// # Safety
+/// AVX2 is present.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn bilerp(
+    [a, b, c, d]: [std::arch::x86_64::__m256; 4],
+    frac: std::arch::x86_64::__m128,
+) -> std::arch::x86_64::__m256 {
+    use std::arch::x86_64::*;
     let fx = _mm256_set_m128(
         _mm_shuffle_ps::<0x55>(frac, frac),
         _mm_shuffle_ps::<0x00>(frac, frac),

@@ -290,11 +290,13 @@ def pilot_errors(
     pixels: int = PILOT_PIXELS,
     rgba: np.ndarray | None = None,
     size: tuple[int, int] | None = None,
+    per_pixel: bool = False,
 ) -> dict:
-    """The pilot at about ``pixels`` pixels: ``{"rmse", "pixel_mse", "unblurred", "scale",
-    "size"}``, the RMSE of ``method`` and of the sharp mid-shutter frame against the pilot's
-    reference (see `REFERENCE_SAMPLES`) at that size, ``pixel_mse`` (h,w) float64 the method's
-    squared error per pixel (mean over RGBA), ``scale`` the pilot's width over the frame's.
+    """The pilot at about ``pixels`` pixels: ``{"rmse", "unblurred", "scale", "size"}``, the
+    RMSE of ``method`` and of the sharp mid-shutter frame against the pilot's reference (see
+    `REFERENCE_SAMPLES`) at that size, ``scale`` the pilot's width over the frame's; with
+    ``per_pixel`` also ``"pixel_mse"`` (h,w) float64, the method's squared error per pixel (mean
+    over RGBA; a study of where the error lies, not used by the estimate).
     ``rgba``: the analytic frame itself (H,W,4, over the background), when the pilot is the
     frame (``pixels`` at least the frame's): used instead of rendering it again. ``size``:
     the pilot's (width, height) instead of ``pixels`` (`pilot_scene`)."""
@@ -308,13 +310,15 @@ def pilot_errors(
         rgba = over_background(frame, small.background).rgba
     ref = _reference(small, _pilot_options(method, options, scale), method, aa, rgba)
     sharp = METHODS["accumulation"].fn(small.with_(shutter="box"), samples=1, aa=aa)
-    return {
+    out = {
         "rmse": _rmse(rgba, ref),
-        "pixel_mse": np.mean(np.square(rgba.astype(np.float64) - ref), axis=-1),
         "unblurred": _rmse(over_background(sharp, small.background).rgba, ref),
         "scale": scale,
         "size": f"{small.camera.width}x{small.camera.height}",
     }
+    if per_pixel:
+        out["pixel_mse"] = np.mean(np.square(rgba.astype(np.float64) - ref), axis=-1)
+    return out
 
 
 def _extrapolated(fine: dict, coarse: dict) -> float:
