@@ -197,56 +197,91 @@ def accumulate(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> F
 def accumulate_piece(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> Piece:
     """`accumulate` before its pixels are pasted into a frame (`Piece`): `HalfSums` sums many
     such over their window without copying a frame for each."""
-    stats = {"samples": len(times), "draw_calls": 0, "static_draws": 0, "window": None}
-    everything = list(enumerate(scene.objects))
+    return PieceMaker(scene, aa)(times, weights, ref, dim)
 
-    if scene.camera_moves:
-        # Everything moves on screen: whole frames at every sample, one view each.
-        cam = supersampled(scene.camera, aa)
-        views = np.linalg.inv(scene.camera_poses_at(times))  # each sample's camera_at(t).view
-        painter = painter_for(scene, everything)
-        rgba, depth, ids = painter.core.accumulate_moving(
-            {"times": times, "weights": weights, "reference": ref}, views,
-            np.ascontiguousarray(cam.projection), cam.width, cam.height,
-        )  # fmt: skip
-        stats["draw_calls"] = len(times)
-        if dim < 1.0:
-            cam = supersampled(scene.camera_at(scene.reference_t), aa)
-            static = [(o, object_draw(o, scene.reference_t, k)) for k, o in everything if not o.is_moving]
-            rgba = (1.0 - dim) * raster_layer(cam, scene, static).rgba + dim * rgba
-        # The core's float32 sum as it is: astype would copy the whole frame (a dim < 1 blend is float64)
-        whole = resolve_arrays(Layer(np.asarray(rgba, np.float32), depth, ids), aa)
-        return Piece(whole, None, None, stats, owned=True)
 
-    cam = supersampled(scene.camera, aa)
-    static_objs = [(k, o) for k, o in everything if not o.is_moving]
-    moving = [(k, o) for k, o in everything if o.is_moving]
-    if dim >= 1.0 and static_objs and any(o.is_transparent for o in scene.objects):
+class _StillParts:
+    """A still camera's split of the objects: the static layer of ``static_objs`` and the painter
+    of ``moving`` (drawn at every sample), with the core's camera options and layer arrays."""
+
+    def __init__(self, scene: Scene, cam, static_objs, moving, aa: int) -> None:
+        c = np.ascontiguousarray
+        self.static = static_layer(scene, cam, static_objs, aa)
+        self.static_draws = 0 if (self.static.cached or not static_objs) else 1
+        self.painter = painter_for(scene, moving, eye=cam.pose[:3, 3])
+        self.camera = {
+            "view": c(cam.view), "projection": c(cam.projection), "view_projection": c(cam.view_projection),
+            "width": cam.width, "height": cam.height, "aa": aa,
+        }  # fmt: skip
+        layer = self.static.layer
+        self.layer = Layer(c(layer.rgba), c(layer.depth), c(layer.ids))
+
+
+class PieceMaker:
+    """What every `accumulate_piece` of one scene sets up once (the camera, the static layer, the
+    painter of the objects drawn at every sample), called with ``(times, weights, ref, dim)``
+    for each piece: `HalfSums` draws all its parts with one."""
+
+    def __init__(self, scene: Scene, aa: int) -> None:
+        self.scene, self.aa = scene, aa
+        self.cam = supersampled(scene.camera, aa)
+        self._still: dict[bool, _StillParts] = {}
+        self._painter = None
+
+    def _parts(self, dim: float) -> _StillParts:
+        """The still camera's split (`_StillParts`) for a piece of dimming ``dim``."""
+        everything = list(enumerate(self.scene.objects))
+        static_objs = [(k, o) for k, o in everything if not o.is_moving]
+        moving = [(k, o) for k, o in everything if o.is_moving]
         # A transparent surface between two others cannot be composited with one depth a pixel
         # per layer: every object is drawn at every sample, sorted together (exact).
-        static_objs, moving = [], everything
-    static = static_layer(scene, cam, static_objs, aa)
-    stats["static_draws"] = 0 if (static.cached or not static_objs) else 1
-    stats["static_cached"] = static.cached
-    painter = painter_for(scene, moving, eye=cam.pose[:3, 3])
-    c = np.ascontiguousarray
-    layer = static.layer
-    out = painter.core.accumulate_still(
-        {"times": times, "weights": weights, "reference": ref},
-        {"view": c(cam.view), "projection": c(cam.projection), "view_projection": c(cam.view_projection),
-         "width": cam.width, "height": cam.height, "aa": aa},
-        Layer(c(layer.rgba), c(layer.depth), c(layer.ids)), static.opaque,
-    )  # fmt: skip
-    base = (static.rgba, static.depth, static.ids)
-    if out is None:
-        return Piece(base, None, None, stats)
-    win, acc, depth, ids, stats["draw_calls"] = out
-    stats["window"] = win
-    x0, y0, x1, y1 = win
-    if dim < 1.0:
-        acc = (1.0 - dim) * layer.rgba[y0:y1, x0:x1] + dim * acc
-    drawn = resolve_arrays(Layer(np.asarray(acc, np.float32), depth, ids), aa)
-    return Piece(base, tuple(v // aa for v in win), drawn, stats)
+        together = dim >= 1.0 and bool(static_objs) and any(o.is_transparent for o in self.scene.objects)
+        if together not in self._still:
+            split = ([], everything) if together else (static_objs, moving)
+            self._still[together] = _StillParts(self.scene, self.cam, *split, self.aa)
+        return self._still[together]
+
+    def __call__(self, times, weights, ref: int, dim: float) -> Piece:
+        scene, aa, cam = self.scene, self.aa, self.cam
+        stats = {"samples": len(times), "draw_calls": 0, "static_draws": 0, "window": None}
+        if scene.camera_moves:
+            # Everything moves on screen: whole frames at every sample, one view each.
+            if self._painter is None:
+                self._painter = painter_for(scene, list(enumerate(scene.objects)))
+            views = np.linalg.inv(scene.camera_poses_at(times))  # each sample's camera_at(t).view
+            rgba, depth, ids = self._painter.core.accumulate_moving(
+                {"times": times, "weights": weights, "reference": ref}, views,
+                np.ascontiguousarray(cam.projection), cam.width, cam.height,
+            )  # fmt: skip
+            stats["draw_calls"] = len(times)
+            if dim < 1.0:
+                cam = supersampled(scene.camera_at(scene.reference_t), aa)
+                static = [
+                    (o, object_draw(o, scene.reference_t, k))
+                    for k, o in enumerate(scene.objects)
+                    if not o.is_moving
+                ]
+                rgba = (1.0 - dim) * raster_layer(cam, scene, static).rgba + dim * rgba
+            # The core's float32 sum as it is: astype would copy the whole frame (a dim < 1 blend is float64)
+            whole = resolve_arrays(Layer(np.asarray(rgba, np.float32), depth, ids), aa)
+            return Piece(whole, None, None, stats, owned=True)
+        parts = self._parts(dim)
+        static = parts.static
+        stats["static_draws"] = parts.static_draws
+        stats["static_cached"] = static.cached
+        out = parts.painter.core.accumulate_still(
+            {"times": times, "weights": weights, "reference": ref}, parts.camera, parts.layer, static.opaque
+        )
+        base = (static.rgba, static.depth, static.ids)
+        if out is None:
+            return Piece(base, None, None, stats)
+        win, acc, depth, ids, stats["draw_calls"] = out
+        stats["window"] = win
+        x0, y0, x1, y1 = win
+        if dim < 1.0:
+            acc = (1.0 - dim) * parts.layer.rgba[y0:y1, x0:x1] + dim * acc
+        drawn = resolve_arrays(Layer(np.asarray(acc, np.float32), depth, ids), aa)
+        return Piece(base, tuple(v // aa for v in win), drawn, stats)
 
 
 class HalfSums:
@@ -261,14 +296,13 @@ class HalfSums:
     def __init__(self, scene: Scene, aa: int, sampling: str = "stratified") -> None:
         self.scene, self.aa, self.sampling = scene, aa, sampling
         self.parts: list[tuple[int, np.ndarray, np.ndarray, Piece]] = []  # (half, times, weights, piece)
+        self.maker = PieceMaker(scene, aa)
 
     def add(self, times, weights, half: int) -> None:
         times, weights = np.ascontiguousarray(times, np.float64), np.ascontiguousarray(weights, np.float64)
         mass = float(weights.sum())
         ref = _nearest(times, self.scene.reference_t)
-        self.parts.append(
-            (half, times, weights, accumulate_piece(self.scene, times, weights / mass, ref, 1.0, self.aa))
-        )
+        self.parts.append((half, times, weights, self.maker(times, weights / mass, ref, 1.0)))
 
     def reweight(self, weight_of) -> None:
         """Every part's weights replaced by ``weight_of(times) -> weights`` and moved to the half
