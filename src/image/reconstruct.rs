@@ -490,7 +490,8 @@ fn still8(
     (n, rn): ([f32; 2], f32),
 ) -> Option<[[f32; 4]; 8]> {
     let reach = g.reach;
-    if !(rn >= 0.5)
+    if rn.is_nan()
+        || rn < 0.5
         || reach.reach[reach.index(x, y)] != 0.0
         || reach.reach[reach.index(x + 7, y)] != 0.0
     {
@@ -516,7 +517,8 @@ fn still8(
     Some(std::array::from_fn(|l| {
         // the first pair's distance, as `gather` places it: t = (0 + j) / pairs along n
         let first = (0.0 + jitter(x + l, y)) / pairs.max(1) as f32;
-        if !(first * rn >= stop) {
+        let past = first * rn >= stop;
+        if !past {
             return gather(g, (x + l, y), (n, rn));
         }
         let i = (y * g.w + x + l) * 4;
