@@ -15,6 +15,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .. import _core
 from .._validate import as_int
 from ..raster import Frame, add_times_color
 from ..scene import Scene, Trapezoid, shutter_cdf
@@ -176,17 +177,6 @@ class Piece(NamedTuple):
         frame.stats.update(self.stats)
         return frame
 
-    def times_weight(self, m: float, rows: slice, cols: slice, out: np.ndarray) -> np.ndarray:
-        """``m`` x the frame's RGBA over ``rows``, ``cols`` (a window holding ``window``) into
-        ``out`` (float64): the products of `frame` ``.rgba[rows, cols].astype(float64) * m``,
-        without pasting a frame."""
-        np.multiply(self.base[0][rows, cols], m, out=out, dtype=np.float64)
-        if self.window is not None:
-            x0, y0, x1, y1 = self.window
-            inner = out[y0 - rows.start : y1 - rows.start, x0 - cols.start : x1 - cols.start]
-            np.multiply(self.drawn[0], m, out=inner, dtype=np.float64)
-        return out
-
 
 def accumulate(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> Frame:
     """The accumulation buffer of ``times`` with ``weights`` (summing to 1), depth and ids of
@@ -328,34 +318,34 @@ class HalfSums:
             return None
         return tuple(f(v[i] for v in wins) // self.aa for i, f in enumerate((min, min, max, max)))
 
-    def _half(self, j: int, rows: slice, cols: slice) -> tuple[float, np.ndarray]:
-        """Half ``j``'s mass and its weighted mean over the window (float64): each part's mean
-        times its mass, summed in the parts' order from 0, over the mass. In place, in one
-        buffer: the arithmetic (and the bits) of ``sum(m * frame.rgba.astype(float64)) / mass``
-        without pasting a frame or a temporary array per part (`Piece.times_weight`)."""
-        sel = [(float(w.sum()), piece) for h, _, w, piece in self.parts if h == j]
-        mass = sum(m for m, _ in sel)
-        out = np.zeros((rows.stop - rows.start, cols.stop - cols.start, 4), np.float64)
-        term = np.empty_like(out)
-        for m, piece in sel:
-            out += piece.times_weight(m, rows, cols, term)
-        out /= mass
-        return mass, out
+    def halves(self, win: tuple[int, int, int, int]) -> tuple[np.ndarray, np.ndarray, tuple[float, float]]:
+        """Over ``win`` (x0, y0, x1, y1): the halves' difference composited over the scene's
+        background (float64), the frame (float32) and the halves' masses, in one core pass
+        (`motionblur._core._halves`): each half the mean of its parts by their masses, the
+        frame both halves by theirs."""
+        c = np.ascontiguousarray
+        parts = [
+            (
+                h,
+                float(w.sum()),
+                c(piece.base[0]),
+                piece.window,
+                None if piece.window is None else c(piece.drawn[0]),
+            )
+            for h, _, w, piece in self.parts
+        ]
+        bg = np.asarray(self.scene.background, np.float64)
+        pre = (float(bg[0] * bg[3]), float(bg[1] * bg[3]), float(bg[2] * bg[3]), float(bg[3]))
+        return _core._halves(parts, win, pre)
 
     def frame(self) -> Frame:
         ref_t = self.scene.reference_t
         nearest = min(self.parts, key=lambda p: float(np.min(np.abs(p[1] - ref_t))))[3]
         (rgba, depth, ids), square_sum = nearest.pasted(keep=True), 0.0
         win = self._window()
-        if win is not None:  # the halves' sums over the window only (the same arithmetic)
-            rows, cols = slice(win[1], win[3]), slice(win[0], win[2])
-            (ma, a), (mb, b) = self._half(0, rows, cols), self._half(1, rows, cols)
-            square_sum = float(np.sum(np.square(composited_difference(a, b, self.scene.background))))
-            a *= ma  # then the frame, (ma a + mb b) / (ma + mb), in a's buffer
-            b *= mb
-            a += b
-            a /= ma + mb
-            rgba[rows, cols] = a
+        if win is not None:  # the halves' sums over the window only
+            difference, rgba[win[1] : win[3], win[0] : win[2]], (ma, mb) = self.halves(win)
+            square_sum = float(np.sum(np.square(difference)))
             m = (ma * mb) ** 0.5 / (ma + mb)
         frame = Frame(rgba, depth, ids, None)
         calls = [p[3].stats for p in self.parts]
