@@ -707,6 +707,16 @@ class _Painter:
         C-contiguous) and its opacity: None when the objects are off the image, else the window
         (x0, y0, x1, y1), its rgba (h,w,4) f32 (static layer composited), depth, ids and the
         number of rasterizer passes. Releases the GIL."""
+    def accumulate_still_parts(
+        self,
+        parts: list[_Samples],
+        camera: _StillCamera,
+        background: _LayerLike,
+        opaque: bool,
+    ) -> list[tuple[tuple[int, int, int, int], np.ndarray, np.ndarray, np.ndarray, int] | None]:
+        """`accumulate_still` of each of ``parts`` (its samples) with the same camera, static
+        layer and opacity, in one call (one hand-off to the thread pool): the same frames, in
+        order. Releases the GIL."""
     def accumulate_moving(
         self,
         samples: _Samples,

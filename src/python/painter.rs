@@ -141,6 +141,23 @@ type StillFrame<'py> = (
     usize,
 );
 
+/// A still-camera accumulation as Python values ([`StillFrame`]), None when nothing was drawn.
+fn still_frame(py: Python<'_>, out: Option<Accumulated>) -> PyResult<Option<StillFrame<'_>>> {
+    let Some(Accumulated {
+        frame: Frame {
+            rgba, depth, ids, ..
+        },
+        window: w,
+        draw_calls,
+    }) = out
+    else {
+        return Ok(None);
+    };
+    let win = (w[0], w[1], w[2], w[3]).into_pyobject(py)?.into_any();
+    let (r, d, i) = arrays(py, rgba, depth, ids, w[2] - w[0], w[3] - w[1])?;
+    Ok(Some((win, r, d, i, draw_calls)))
+}
+
 /// Objects drawn at any shutter time (see `src/accumulate/painter.rs`).
 #[pyclass(name = "_Painter", module = "motionblur._core")]
 pub struct PyPainter {
@@ -201,19 +218,36 @@ impl PyPainter {
         let samples = samples.samples()?;
         let inner = &self.inner;
         let out = detached_in_pool(py, || accumulate_still(inner, &camera, samples, bg, opaque))?;
-        let Some(Accumulated {
-            frame: Frame {
-                rgba, depth, ids, ..
-            },
-            window: w,
-            draw_calls,
-        }) = out
-        else {
-            return Ok(None);
-        };
-        let win = (w[0], w[1], w[2], w[3]).into_pyobject(py)?.into_any();
-        let (r, d, i) = arrays(py, rgba, depth, ids, w[2] - w[0], w[3] - w[1])?;
-        Ok(Some((win, r, d, i, draw_calls)))
+        still_frame(py, out)
+    }
+
+    /// [`Self::accumulate_still`] of each of `parts` (each a [`SamplesArg`]) in one call: the
+    /// same frames, one hand-off to the pool for all of them (an accumulation's two halves).
+    fn accumulate_still_parts<'py>(
+        &self,
+        py: Python<'py>,
+        parts: Vec<SamplesArg<'_>>,
+        camera: StillCameraArg<'_>,
+        background: LayerArg<'_>,
+        opaque: bool,
+    ) -> PyResult<Vec<Option<StillFrame<'py>>>> {
+        let camera = camera.camera()?;
+        if background.size("background")? != [camera.height, camera.width] {
+            return Err(Error::shape("background", "rgba must be (height, width, 4)").into());
+        }
+        let bg = background.layer("background")?;
+        let samples = parts
+            .iter()
+            .map(SamplesArg::samples)
+            .collect::<Result<Vec<_>, _>>()?;
+        let inner = &self.inner;
+        let outs = detached_in_pool(py, || {
+            samples
+                .into_iter()
+                .map(|s| accumulate_still(inner, &camera, s, bg, opaque))
+                .collect::<Result<Vec<_>, _>>()
+        })?;
+        outs.into_iter().map(|o| still_frame(py, o)).collect()
     }
 
     /// The moving-camera accumulation frame of `samples` ([`SamplesArg`]): one view (N,4,4)

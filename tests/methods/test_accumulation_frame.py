@@ -325,3 +325,36 @@ def test_the_halves_kernel_names_bad_parts():
         _core._halves([(0, 1.0, base, None, None)], (0, 0, 7, 4), (0.0, 0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="base"):
         _core._halves([(0, 1.0, base, None, None), (1, 1.0, base[:3], None, None)], (0, 0, 6, 4), (0.0,) * 4)
+
+
+@pytest.mark.parametrize("alpha", [1.0, 0.5])
+def test_the_parts_call_gives_each_parts_own_frame(alpha):
+    # accumulate_still_parts (an accumulation's halves in one hand-off to the pool) against one
+    # accumulate_still call per part: the same windows and bits, in order; a bad part named
+    sc = _scene(alpha)
+    cam = supersampled(sc.camera, 1)
+    moving = [(k, o) for k, o in enumerate(sc.objects) if o.is_moving]
+    static = static_layer(sc, cam, [(k, o) for k, o in enumerate(sc.objects) if not o.is_moving], 1)
+    painter = Painter(sc, moving, eye=cam.pose[:3, 3])
+    c = np.ascontiguousarray
+    layer = Layer(c(static.layer.rgba), c(static.layer.depth), c(static.layer.ids))
+    camera = dict(view=c(cam.view), projection=c(cam.projection), view_projection=c(cam.view_projection),
+                  width=cam.width, height=cam.height, aa=1)  # fmt: skip
+    times, weights = sample_times(sc, 9)
+    parts = [
+        dict(times=times[j::2].copy(), weights=weights[j::2] / weights[j::2].sum(), reference=0)
+        for j in (0, 1)
+    ]
+    parts.append(dict(times=times[:3].copy(), weights=np.full(3, 1 / 3), reference=2))
+    together = painter.core.accumulate_still_parts(parts, camera, layer, static.opaque)
+    assert len(together) == len(parts)
+    for got, p in zip(together, parts):
+        want = painter.core.accumulate_still(p, camera, layer, static.opaque)
+        assert got[0] == want[0] and got[4] == want[4]
+        for a, b in zip(got[1:4], want[1:4]):
+            assert a.dtype == b.dtype and np.array_equal(a.view(np.uint8), b.view(np.uint8))
+    assert not np.array_equal(together[0][1], together[1][1])  # the halves differ
+    with pytest.raises(ValueError, match="times"):
+        painter.core.accumulate_still_parts(
+            [parts[0], dict(parts[1], times=parts[1]["times"] + 2.0)], camera, layer, True
+        )

@@ -231,6 +231,34 @@ class PieceMaker:
             self._still[together] = _StillParts(self.scene, self.cam, *split, self.aa)
         return self._still[together]
 
+    def pieces(self, parts: list[tuple[np.ndarray, np.ndarray, int]], dim: float) -> list[Piece]:
+        """``self(times, weights, ref, dim)`` of each of ``parts``: a still camera's in one core
+        call (`motionblur._core._Painter.accumulate_still_parts`), the same pieces."""
+        if self.scene.camera_moves:
+            return [self(t, w, ref, dim) for t, w, ref in parts]
+        split = self._parts(dim)
+        outs = split.painter.core.accumulate_still_parts(
+            [{"times": t, "weights": w, "reference": ref} for t, w, ref in parts],
+            split.camera, split.layer, split.static.opaque,
+        )  # fmt: skip
+        return [self._still_piece(split, len(t), out, dim) for (t, _, _), out in zip(parts, outs)]
+
+    def _still_piece(self, parts: _StillParts, samples: int, out, dim: float) -> Piece:
+        """The `Piece` of a still-camera core call's ``out`` over ``samples`` samples."""
+        static = parts.static
+        stats = {"samples": samples, "draw_calls": 0, "static_draws": parts.static_draws, "window": None}
+        stats["static_cached"] = static.cached
+        base = (static.rgba, static.depth, static.ids)
+        if out is None:
+            return Piece(base, None, None, stats)
+        win, acc, depth, ids, stats["draw_calls"] = out
+        stats["window"] = win
+        x0, y0, x1, y1 = win
+        if dim < 1.0:
+            acc = (1.0 - dim) * parts.layer.rgba[y0:y1, x0:x1] + dim * acc
+        drawn = resolve_arrays(Layer(np.asarray(acc, np.float32), depth, ids), self.aa)
+        return Piece(base, tuple(v // self.aa for v in win), drawn, stats)
+
     def __call__(self, times, weights, ref: int, dim: float) -> Piece:
         scene, aa, cam = self.scene, self.aa, self.cam
         stats = {"samples": len(times), "draw_calls": 0, "static_draws": 0, "window": None}
@@ -256,22 +284,13 @@ class PieceMaker:
             whole = resolve_arrays(Layer(np.asarray(rgba, np.float32), depth, ids), aa)
             return Piece(whole, None, None, stats, owned=True)
         parts = self._parts(dim)
-        static = parts.static
-        stats["static_draws"] = parts.static_draws
-        stats["static_cached"] = static.cached
         out = parts.painter.core.accumulate_still(
-            {"times": times, "weights": weights, "reference": ref}, parts.camera, parts.layer, static.opaque
+            {"times": times, "weights": weights, "reference": ref},
+            parts.camera,
+            parts.layer,
+            parts.static.opaque,
         )
-        base = (static.rgba, static.depth, static.ids)
-        if out is None:
-            return Piece(base, None, None, stats)
-        win, acc, depth, ids, stats["draw_calls"] = out
-        stats["window"] = win
-        x0, y0, x1, y1 = win
-        if dim < 1.0:
-            acc = (1.0 - dim) * parts.layer.rgba[y0:y1, x0:x1] + dim * acc
-        drawn = resolve_arrays(Layer(np.asarray(acc, np.float32), depth, ids), aa)
-        return Piece(base, tuple(v // aa for v in win), drawn, stats)
+        return self._still_piece(parts, len(times), out, dim)
 
 
 class HalfSums:
@@ -289,10 +308,19 @@ class HalfSums:
         self.maker = PieceMaker(scene, aa)
 
     def add(self, times, weights, half: int) -> None:
-        times, weights = np.ascontiguousarray(times, np.float64), np.ascontiguousarray(weights, np.float64)
-        mass = float(weights.sum())
-        ref = _nearest(times, self.scene.reference_t)
-        self.parts.append((half, times, weights, self.maker(times, weights / mass, ref, 1.0)))
+        self.add_all([(times, weights, half)])
+
+    def add_all(self, parts) -> None:
+        """`add` of each ``(times, weights, half)`` of ``parts``, drawn in one core call."""
+        got = []
+        for times, weights, half in parts:
+            times, weights = (
+                np.ascontiguousarray(times, np.float64),
+                np.ascontiguousarray(weights, np.float64),
+            )
+            got.append((half, times, weights, _nearest(times, self.scene.reference_t)))
+        pieces = self.maker.pieces([(t, w / float(w.sum()), ref) for _, t, w, ref in got], 1.0)
+        self.parts.extend((h, t, w, p) for (h, t, w, _), p in zip(got, pieces))
 
     def reweight(self, weight_of) -> None:
         """Every part's weights replaced by ``weight_of(times) -> weights`` and moved to the half
