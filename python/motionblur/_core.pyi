@@ -192,6 +192,7 @@ __all__ = [
     "_glow",
     "_box_blur",
     "_coverage_composite",
+    "_coverage_blur",
     "_splat_paths",
     "_scatter_pieces",
     "_pixel_bounds",
@@ -414,6 +415,24 @@ def _coverage_composite(
     colour back (H,W,4) f32 and depth back_depth (H,W) f32; blurred and depth (the blurred
     (z m, 0, 0, m)) are (y1 - y0, x1 - x0, 4) f32. Returns (the window's colour, pixels kept in
     front). Releases the GIL; the same bits for any thread count."""
+
+def _coverage_blur(
+    out: np.ndarray,
+    back_depth: np.ndarray,
+    rgba: np.ndarray,
+    pasted: tuple[tuple[int, int, int, int], np.ndarray] | None,
+    depth: np.ndarray,
+    object: tuple[tuple[int, int, int, int], np.ndarray],
+    parts: list[tuple[tuple[int, int, int, int], tuple[float, float], float, bool]],
+    layers: bool,
+) -> int:
+    """The coverage glow of ``opaque_image`` for one moving object, in place on out (H,W,4) f32
+    (the colour so far) over the static depth back_depth (H,W) f32: each velocity group's layer
+    cut from the sharp frame rgba (H,W,4) f32 (with pasted = (window, colour there) laid over it)
+    and depth (H,W) f32, object = (window (y0, y1, x0, x1), labels (h,w) i32 there: each pixel's
+    group, -1 outside the object), parts = [(window, direction, length, blur)] box-blurred,
+    summed and composited. Returns the pixels kept in front. Releases the GIL; the same bits for
+    any thread count."""
 
 def _splat_paths(colors: np.ndarray, paths: np.ndarray, width: int, height: int) -> np.ndarray:
     """Time average of sources moving along image paths: colors (N,4) f32 premultiplied, paths

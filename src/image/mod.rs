@@ -16,6 +16,7 @@ mod boxblur;
 mod camera;
 mod colors;
 mod coverage;
+mod coverage_blur;
 mod dof;
 mod glow;
 mod lens;
@@ -38,6 +39,7 @@ pub use camera::{
 };
 pub use colors::{colored, pixel_bounds, sample_colors, MIN_ALPHA};
 pub use coverage::coverage_composite;
+pub use coverage_blur::{coverage_blur, CoverageObject, CoveragePart, CoverageSource};
 pub use dof::{depth_of_field, DofParams, MAX_LAYERS};
 pub use glow::glow;
 pub use lens::{lens_blur, LensParams, MAX_LENS_LEVELS};

@@ -3,17 +3,21 @@
 //! dtypes and checks parameters first; these checks are the second line.
 use glam::DMat4;
 use numpy::{
-    PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArray4, PyUntypedArrayMethods,
+    PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArray4, PyReadwriteArray3,
+    PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 
-use super::convert::{c_slice, detached_in_pool, rows, shaped};
+use super::convert::{c_slice, c_slice_mut, detached_in_pool, rows, shaped};
 use crate::{
-    CameraBlur, CameraMatrices, Composite, DofParams, Error, Layer, LensParams, Piece,
-    ReconstructParams,
+    CameraBlur, CameraMatrices, Composite, CoverageObject, CoveragePart, CoverageSource, DofParams,
+    Error, Layer, LensParams, Piece, ReconstructParams,
 };
 
 type PyOut<'py> = PyResult<Bound<'py, PyAny>>;
+
+/// A window (y0, y1, x0, x1) of an image.
+type Window = (usize, usize, usize, usize);
 
 /// `(h, w, channels)` float32 C-contiguous image: its data, width and height.
 fn img3<'a>(
@@ -558,11 +562,70 @@ fn _coverage_composite<'py>(
     Ok((shaped(py, out, [bh, bw, 4])?, front))
 }
 
+/// The `opaque_image` method's coverage glow of one moving object, in place on out (H,W,4) f32
+/// (the colour so far) over the static depth back_depth (H,W) f32: layers cut from the sharp
+/// frame rgba (H,W,4) f32 with pasted = (window, colour there) or None laid over it and depth
+/// (H,W) f32, object = (window, labels (h,w) i32 there), parts = [(window, direction, length,
+/// blur)]. Returns the pixels kept in front.
+#[pyfunction]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+fn _coverage_blur(
+    py: Python<'_>,
+    mut out: PyReadwriteArray3<'_, f32>,
+    back_depth: PyReadonlyArray2<'_, f32>,
+    rgba: PyReadonlyArray3<'_, f32>,
+    pasted: Option<(Window, PyReadonlyArray3<'_, f32>)>,
+    depth: PyReadonlyArray2<'_, f32>,
+    object: (Window, PyReadonlyArray2<'_, i32>),
+    parts: Vec<(Window, [f32; 2], f32, bool)>,
+    layers: bool,
+) -> PyResult<u64> {
+    let (w, h) = (out.shape()[1], out.shape()[0]);
+    if out.shape()[2] != 4 {
+        return Err(Error::shape("out", "expected shape (H,W,4)").into());
+    }
+    let (r, rw, rh) = img3(&rgba, "rgba", 4)?;
+    same_size("rgba", (rh, rw), (h, w))?;
+    let (z, zw, zh) = img2(&back_depth, "back_depth")?;
+    same_size("back_depth", (zh, zw), (h, w))?;
+    let (d, dw, dh) = img2(&depth, "depth")?;
+    same_size("depth", (dh, dw), (h, w))?;
+    let pasted = match &pasted {
+        Some((win, a)) => Some((*win, img3(a, "pasted", 4)?.0)),
+        None => None,
+    };
+    let labels = c_slice(&object.1, "labels")?;
+    let parts: Vec<CoveragePart> = parts
+        .into_iter()
+        .map(|(window, direction, length, blur)| CoveragePart {
+            window,
+            direction,
+            length,
+            blur,
+        })
+        .collect();
+    let source = CoverageSource {
+        rgba: r,
+        pasted,
+        depth: d,
+    };
+    let object = CoverageObject {
+        window: object.0,
+        labels,
+        parts: &parts,
+    };
+    let o = c_slice_mut(&mut out, "out")?;
+    Ok(detached_in_pool(py, || {
+        crate::coverage_blur(o, z, (w, h), &source, &object, layers)
+    })?)
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_reconstruct, m)?)?;
     m.add_function(wrap_pyfunction!(_max_speed, m)?)?;
     m.add_function(wrap_pyfunction!(_camera_frame_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_coverage_composite, m)?)?;
+    m.add_function(wrap_pyfunction!(_coverage_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_glow, m)?)?;
     m.add_function(wrap_pyfunction!(_box_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_splat_paths, m)?)?;

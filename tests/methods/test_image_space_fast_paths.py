@@ -7,6 +7,9 @@
   (`motionblur.image.camera_velocity`, the moving objects' velocities, the float32 scale and
   clamp in numpy, `motionblur.image.velocity_blur`);
 * the longest velocity in the core against numpy's float64 formula;
+* ``opaque_image``'s coverage glow in one call of the core per object (``_core._coverage_blur``)
+  and its velocity groups against the method's former numpy steps
+  (``tests/_helpers/opaque_image_twin.py``), every option;
 * the reconstruction filter's skipped taps (a big still frame around a small mover) against the
   same frame with the mover's motion removed where it cannot reach: the pixels out of reach do
   not change.
@@ -21,14 +24,15 @@ import warnings
 
 import numpy as np
 import pytest
-from _helpers import threads
+from _helpers import opaque_image_twin, threads
 
 import motionblur as mb
 from motionblur import _core, image
-from motionblur.evaluation.random_scenes import MEASURING_SEEDS, random_scene
+from motionblur.evaluation.random_scenes import MEASURING_SEEDS, TUNING_SEEDS, random_scene
 from motionblur.methods import image_space as ims
 from motionblur.methods._layers import clear_static_cache
 from motionblur.methods._sharp import require_box_shutter, sharp_frame, shutter_centroid
+from motionblur.scenes_real import REAL_SCENES
 
 
 def _same(a: mb.Frame, b: mb.Frame) -> bool:
@@ -161,6 +165,49 @@ def test_reconstruction_out_of_reach_ignores_the_mover():
     assert not np.array_equal(a[gathered & ~near], rgba[gathered & ~near])
 
 
+@pytest.mark.parametrize(
+    "options",
+    [
+        {},
+        {"groups": False},
+        {"layers": False},
+        {"aa": 2},
+        {"glow": "opaque"},
+        {"glow": "opaque", "groups": False},
+    ],
+)
+def test_opaque_image_is_its_former_numpy_steps(options):
+    # built-in scenes (a turning and a bending object: several velocity groups, oblique blurs),
+    # the bunny over its floor (one group along a row: the core's row-by-row path) and random
+    # scenes of tuning seeds; every frame array and the stats the same, bit for bit
+    scenes = [mb.SCENES[n](width=72, height=54) for n in ("cube", "curved", "airplane", "bending_arm")]
+    scenes += [REAL_SCENES["bunny_translate"](160, 96)]
+    scenes += [random_scene(s, 64, 48) for s in list(TUNING_SEEDS)[:16]]
+    seen = {"groups": 0, "front": 0, "scenes": 0}
+    for scene in scenes:
+        if not scene.moving_objects or scene.camera_moves:
+            continue
+        try:
+            require_box_shutter(scene, "opaque_image")
+        except ValueError:
+            continue
+        seen["scenes"] += 1
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            got = ims.opaque_image(scene, **options)  # (before render's background)
+            want = opaque_image_twin.opaque_image(scene, **options)
+        assert _same(got, want)
+        for key in ("blurred", "masks", "front_pixels", "lengths"):
+            assert got.stats[key] == want.stats[key], key
+        seen["groups"] += got.stats["masks"] > got.stats["blurred"]
+        seen["front"] += got.stats["front_pixels"] > 0
+    assert seen["scenes"] >= 10, seen
+    if options.get("groups", True):
+        assert seen["groups"] >= 2, seen  # (the checks reached the several-group path)
+    if options.get("layers", True):
+        assert seen["front"] >= 1, seen
+
+
 def test_fast_paths_same_for_any_thread_count():
     script = (
         "import hashlib, numpy as np, motionblur as mb\n"
@@ -169,6 +216,7 @@ def test_fast_paths_same_for_any_thread_count():
         "sc = REAL_SCENES['bunny_translate'](400, 240)\n"
         "for m in ('velocity', 'opaque_image'):\n"
         "    h.update(mb.render(sc, m, error_estimate=False).rgba.tobytes())\n"
+        "h.update(mb.render(mb.SCENES['bending_arm'](200, 150), 'opaque_image', error_estimate=False).rgba.tobytes())\n"
         "h.update(mb.render(mb.SCENES['pan'](320, 240), 'camera_velocity', error_estimate=False).rgba.tobytes())\n"
         "print(h.hexdigest())\n"
     )
