@@ -193,6 +193,7 @@ __all__ = [
     "_box_blur",
     "_coverage_composite",
     "_coverage_blur",
+    "_object_pixels",
     "_splat_paths",
     "_scatter_pieces",
     "_pixel_bounds",
@@ -433,6 +434,14 @@ def _coverage_blur(
     group, -1 outside the object), parts = [(window, direction, length, blur)] box-blurred,
     summed and composited. Returns the pixels kept in front. Releases the GIL; the same bits for
     any thread count."""
+
+def _object_pixels(
+    ids: np.ndarray, velocity: np.ndarray, depth: np.ndarray, window: tuple[int, int, int, int], k: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[float]]:
+    """The pixels of object k in window (y0, y1, x0, x1) of a frame: ids (H,W) i32, velocity
+    (H,W,2) f32, depth (H,W) f32. Returns (mask (h,w) bool: ids == k there, the velocities (N,2)
+    f64 and depths (N,) f32 of its pixels in row order, their mean velocity as numpy's
+    ``vs.mean(axis=0)`` gives it). Releases the GIL."""
 
 def _splat_paths(colors: np.ndarray, paths: np.ndarray, width: int, height: int) -> np.ndarray:
     """Time average of sources moving along image paths: colors (N,4) f32 premultiplied, paths

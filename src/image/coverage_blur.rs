@@ -25,7 +25,6 @@ use std::mem::MaybeUninit;
 
 use rayon::prelude::*;
 
-use super::boxblur::box_row_each;
 use super::coverage::{composite_pixel, Window};
 use super::lines::plan;
 use super::{box_blur, check_direction, filled, pool, put4};
@@ -286,46 +285,62 @@ fn rows(
         .skip(y0)
         .take(y1 - y0)
         .map_init(
-            || {
-                (
-                    vec![0.0f32; cols * 4],
-                    vec![0.0f32; cols * 4],
-                    vec![0.0f32; cols * 4],
-                )
-            },
-            |(layer, zl, blurred), (y, row)| {
+            || vec![0.0f32; cols * 6],
+            |cut, (y, row)| {
+                // the layer and the depth layer's two live channels, six values a pixel
                 let (labels, pasted) = (label_row(object, y), pasted_row(source, y));
                 let mut finite = true;
-                for c in 0..cols {
+                for (c, v) in cut.chunks_exact_mut(6).enumerate() {
                     let (l, z) = cut_pixel(source, labels, pasted, 0, (y, x0 + c, w));
-                    finite &= l.iter().chain(&z).all(|v| v.is_finite());
-                    layer[c * 4..c * 4 + 4].copy_from_slice(&l);
-                    zl[c * 4..c * 4 + 4].copy_from_slice(&z);
+                    v.copy_from_slice(&[l[0], l[1], l[2], l[3], z[0], z[3]]);
+                    finite &= v.iter().all(|v| v.is_finite());
                 }
+                let zb = &back_depth[y * w + x0..y * w + x1];
+                let row = &mut row[x0 * 4..x1 * 4];
                 let mut front = 0u64;
-                let mut put = |c: usize, b: [f32; 4], z: [f32; 4]| {
+                let mut put = |c: usize, v: [f32; 6]| {
                     // (the sum from zero: 0 + v, the bits of numpy's `+=` into zeros)
-                    let b = b.map(|v| v + 0.0);
-                    let x = x0 + c;
-                    let s: [f32; 4] = row[x * 4..x * 4 + 4].try_into().expect("four channels");
-                    let z = layers.then(|| (z[0] + 0.0, z[3] + 0.0, back_depth[y * w + x]));
-                    let (o, near) = composite_pixel(b, s, z);
+                    let v = v.map(|v| v + 0.0);
+                    let s: [f32; 4] = row[c * 4..c * 4 + 4].try_into().expect("four channels");
+                    let z = layers.then(|| (v[4], v[5], zb[c]));
+                    let (o, near) = composite_pixel([v[0], v[1], v[2], v[3]], s, z);
                     front += near as u64;
-                    row[x * 4..x * 4 + 4].copy_from_slice(&o);
+                    row[c * 4..c * 4 + 4].copy_from_slice(&o);
                 };
                 match radius {
+                    // box_row_each's running sums (f64, the same order), six channels at once
                     Some(r) => {
-                        box_row_each(layer, cols, r, |c, m| {
-                            blurred[c * 4..c * 4 + 4].copy_from_slice(&m)
-                        });
-                        box_row_each(zl, cols, r, |c, z| {
-                            put(c, blurred[c * 4..c * 4 + 4].try_into().expect("four"), z)
-                        });
+                        let inv = 1.0 / (2 * r + 1) as f64;
+                        let px = |i: usize| -> [f64; 6] {
+                            let p = &cut[i * 6..i * 6 + 6];
+                            std::array::from_fn(|k| p[k] as f64)
+                        };
+                        let mut s = [0.0f64; 6];
+                        for i in 0..=r.min(cols - 1) {
+                            let p = px(i);
+                            for k in 0..6 {
+                                s[k] += p[k];
+                            }
+                        }
+                        for c in 0..cols {
+                            put(c, s.map(|v| (v * inv) as f32));
+                            if c + r + 1 < cols {
+                                let p = px(c + r + 1);
+                                for k in 0..6 {
+                                    s[k] += p[k];
+                                }
+                            }
+                            if c >= r {
+                                let p = px(c - r);
+                                for k in 0..6 {
+                                    s[k] -= p[k];
+                                }
+                            }
+                        }
                     }
                     None => {
                         for c in 0..cols {
-                            let b = layer[c * 4..c * 4 + 4].try_into().expect("four");
-                            put(c, b, zl[c * 4..c * 4 + 4].try_into().expect("four"));
+                            put(c, cut[c * 6..c * 6 + 6].try_into().expect("six"));
                         }
                     }
                 }

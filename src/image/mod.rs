@@ -21,6 +21,7 @@ mod dof;
 mod glow;
 mod lens;
 mod lines;
+mod object_pixels;
 mod opaque;
 mod opaque_row;
 mod pool;
@@ -43,6 +44,7 @@ pub use coverage_blur::{coverage_blur, CoverageObject, CoveragePart, CoverageSou
 pub use dof::{depth_of_field, DofParams, MAX_LAYERS};
 pub use glow::glow;
 pub use lens::{lens_blur, LensParams, MAX_LENS_LEVELS};
+pub use object_pixels::{object_pixels, ObjectPixels};
 pub use opaque::{opaque_blur, opaque_motion_blur};
 pub use opaque_row::Composite;
 pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};

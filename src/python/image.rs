@@ -620,12 +620,51 @@ fn _coverage_blur(
     })?)
 }
 
+/// `_object_pixels`' mask, velocities, depths and mean velocity.
+type ObjectOut<'py> = (
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    [f64; 2],
+);
+
+/// The pixels of object k in window (y0, y1, x0, x1) of a frame: ids (H,W) i32, velocity
+/// (H,W,2) f32, depth (H,W) f32. Returns (mask (h,w) bool, velocities (N,2) f64 and depths (N,)
+/// f32 of its pixels in row order, their mean velocity (2,) f64).
+#[pyfunction]
+fn _object_pixels<'py>(
+    py: Python<'py>,
+    ids: PyReadonlyArray2<'py, i32>,
+    velocity: PyReadonlyArray3<'py, f32>,
+    depth: PyReadonlyArray2<'py, f32>,
+    window: Window,
+    k: i32,
+) -> PyResult<ObjectOut<'py>> {
+    let (d, w, h) = img2(&depth, "depth")?;
+    let (v, vw, vh) = img3(&velocity, "velocity", 2)?;
+    same_size("velocity", (vh, vw), (h, w))?;
+    if ids.shape() != [h, w] {
+        return Err(Error::shape("ids", format!("expected shape ({h},{w})")).into());
+    }
+    let ids = c_slice(&ids, "ids")?;
+    let got = detached_in_pool(py, || crate::object_pixels(ids, v, d, (w, h), window, k))?;
+    let n = got.depth.len();
+    let (y0, y1, x0, x1) = window;
+    Ok((
+        shaped(py, got.mask, [y1 - y0, x1 - x0])?,
+        shaped(py, got.velocity, [n, 2])?,
+        shaped(py, got.depth, [n])?,
+        got.mean,
+    ))
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_reconstruct, m)?)?;
     m.add_function(wrap_pyfunction!(_max_speed, m)?)?;
     m.add_function(wrap_pyfunction!(_camera_frame_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_coverage_composite, m)?)?;
     m.add_function(wrap_pyfunction!(_coverage_blur, m)?)?;
+    m.add_function(wrap_pyfunction!(_object_pixels, m)?)?;
     m.add_function(wrap_pyfunction!(_glow, m)?)?;
     m.add_function(wrap_pyfunction!(_box_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_splat_paths, m)?)?;

@@ -208,6 +208,26 @@ def test_opaque_image_is_its_former_numpy_steps(options):
         assert seen["front"] >= 1, seen
 
 
+def test_object_pixels_are_numpys_mask_gathers_and_mean():
+    # the mean along the first axis as numpy sums it (float64, pixel after pixel): random
+    # velocities of every magnitude, windows of up to 250,000 pixels, objects of every share of
+    # them; bit for bit
+    rng = np.random.default_rng(5)
+    for h, w in ((7, 9), (300, 420), (500, 500)):
+        ids = rng.integers(-1, 3, (h, w)).astype(np.int32)
+        vel = (rng.standard_normal((h, w, 2)) * rng.uniform(0.1, 900, (h, w, 1))).astype(np.float32)
+        depth = rng.uniform(0.5, 40.0, (h, w)).astype(np.float32)
+        for k in (-1, 0, 2):
+            ids2 = np.where(rng.random((h, w)) < rng.random(), k, ids).astype(np.int32)
+            y0, y1, x0, x1 = 1, h - 2, 2, w - 1
+            mask, vs, zs, mean = _core._object_pixels(ids2, vel, depth, (y0, y1, x0, x1), k)
+            want = ids2[y0:y1, x0:x1] == k
+            assert mask.dtype == bool and np.array_equal(mask, want)
+            assert vs.dtype == np.float64 and np.array_equal(vs, vel[y0:y1, x0:x1][want].astype(np.float64))
+            assert np.array_equal(zs, depth[y0:y1, x0:x1][want])
+            assert np.array_equal(np.array(mean), vs.mean(axis=0))
+
+
 def test_fast_paths_same_for_any_thread_count():
     script = (
         "import hashlib, numpy as np, motionblur as mb\n"

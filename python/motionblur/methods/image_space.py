@@ -200,11 +200,13 @@ def opaque_image(
     else:
         frame, pasted = _sharp(scene, tc, aa, "shutter", static), None
     order = []  # (depth, object, mean velocity (2,), (its pixels' window, mask there))
-    for k, (y0, y1, x0, x1) in _moving_windows(scene, frame.ids, drawn):
-        mask = frame.ids[y0:y1, x0:x1] == k
-        vs = frame.velocity[y0:y1, x0:x1][mask].astype(np.float64)  # (its pixels in row order)
-        v = vs.mean(axis=0)
-        order.append((float(np.mean(frame.depth[y0:y1, x0:x1][mask])), k, v, ((y0, y1, x0, x1), mask, vs)))
+    c = np.ascontiguousarray
+    ids, vel, depth = c(frame.ids, np.int32), c(frame.velocity, np.float32), c(frame.depth, np.float32)
+    for k, win in _moving_windows(scene, frame.ids, drawn):
+        # ids[win] == k, velocity[win][mask] as float64 and depth[win][mask] (its pixels in row
+        # order) and the mean velocity, numpy's vs.mean(axis=0), in one pass of the core
+        mask, vs, zs, v = _core._object_pixels(ids, vel, depth, win, k)
+        order.append((float(np.mean(zs)), k, np.array(v, np.float64), (win, mask, vs)))
     order.sort(key=lambda e: -e[0])
     lengths = {k: float(np.hypot(v[0], v[1])) for _, k, v, _ in order}
     if glow == "coverage":
