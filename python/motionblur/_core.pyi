@@ -194,6 +194,7 @@ __all__ = [
     "_coverage_composite",
     "_coverage_blur",
     "_object_pixels",
+    "_one_velocity_group",
     "_splat_paths",
     "_scatter_pieces",
     "_pixel_bounds",
@@ -442,6 +443,12 @@ def _object_pixels(
     (H,W,2) f32, depth (H,W) f32. Returns (mask (h,w) bool: ids == k there, the velocities (N,2)
     f64 and depths (N,) f32 of its pixels in row order, their mean velocity as numpy's
     ``vs.mean(axis=0)`` gives it). Releases the GIL."""
+
+def _one_velocity_group(velocities: np.ndarray, sectors: int, ratio: float) -> bool:
+    """Whether the velocities (N,2) f64 of an object's pixels certainly all have one key of
+    ``opaque_image``'s split (``sectors`` directions, lengths in bins ``ratio`` apart, numpy's
+    floor of atan2 and log): each at least 1e-9 from its bins' edges (or exactly along +x).
+    False: not certain."""
 
 def _splat_paths(colors: np.ndarray, paths: np.ndarray, width: int, height: int) -> np.ndarray:
     """Time average of sources moving along image paths: colors (N,4) f32 premultiplied, paths

@@ -32,6 +32,7 @@ mod scatter;
 mod sheared_finish;
 mod sheared_row;
 mod splat;
+mod velocity_groups;
 
 pub use boxblur::box_blur;
 pub use camera::{
@@ -51,6 +52,7 @@ pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};
 pub use reconstruct::{max_speed, reconstruct, ReconstructParams, MAX_TAPS};
 pub use scatter::{scatter_pieces, Piece};
 pub use splat::splat_paths;
+pub use velocity_groups::one_velocity_group;
 
 use crate::budget::Need;
 use crate::error::{Error, Result};

@@ -658,6 +658,19 @@ fn _object_pixels<'py>(
     ))
 }
 
+/// Whether the velocities (N,2) f64 of an object's pixels certainly form one group of
+/// `opaque_image`'s split into `sectors` directions and lengths `ratio` apart (the core's
+/// `one_velocity_group`); false: not certain.
+#[pyfunction]
+fn _one_velocity_group(
+    velocities: PyReadonlyArray2<'_, f64>,
+    sectors: u32,
+    ratio: f64,
+) -> PyResult<bool> {
+    let v = rows::<f64, 2>(&velocities, "velocities")?;
+    Ok(crate::one_velocity_group(v, sectors, ratio))
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_reconstruct, m)?)?;
     m.add_function(wrap_pyfunction!(_max_speed, m)?)?;
@@ -665,6 +678,7 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_coverage_composite, m)?)?;
     m.add_function(wrap_pyfunction!(_coverage_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_object_pixels, m)?)?;
+    m.add_function(wrap_pyfunction!(_one_velocity_group, m)?)?;
     m.add_function(wrap_pyfunction!(_glow, m)?)?;
     m.add_function(wrap_pyfunction!(_box_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_splat_paths, m)?)?;

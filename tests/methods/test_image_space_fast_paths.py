@@ -228,6 +228,51 @@ def test_object_pixels_are_numpys_mask_gathers_and_mean():
             assert np.array_equal(np.array(mean), vs.mean(axis=0))
 
 
+def _numpy_keys(v: np.ndarray) -> np.ndarray:
+    # the keys of ims._velocity_groups, as it computes them
+    sector = np.floor((np.arctan2(v[:, 1], v[:, 0]) + np.pi) / (2 * np.pi) * ims.VELOCITY_SECTORS)
+    size = np.floor(np.log(np.maximum(np.hypot(v[:, 0], v[:, 1]), 1.0)) / np.log(ims.VELOCITY_RATIO))
+    return (sector.astype(np.int64) % ims.VELOCITY_SECTORS) * (1 << 20) + size.astype(np.int64)
+
+
+def test_one_velocity_group_only_when_numpys_keys_agree():
+    # translations, turns of every spread, velocities a hair from a sector's edge or a size
+    # bin's edge, along the axes, zero: whenever the core says one group, numpy's keys (its
+    # own atan2 and log) are all one
+    rng = np.random.default_rng(11)
+    edges = -np.pi + np.arange(16) * np.pi / 8
+    certain = 0
+    for t in range(3000):
+        n = int(rng.integers(1, 3000))
+        a = rng.uniform(-np.pi, np.pi) + rng.standard_normal(n) * rng.uniform(0, 0.3) ** 3
+        r = rng.uniform(0.2, 1200) * (1 + rng.standard_normal(n) * rng.uniform(0, 0.2) ** 2)
+        kind = t % 5
+        if kind == 1:
+            a = np.full(n, edges[t % 16]) + rng.standard_normal(n) * 1e-13
+        elif kind == 2:
+            r = np.full(n, 1.5 ** (t % 12)) * (1 + rng.standard_normal(n) * 1e-14)
+        v = np.stack([r * np.cos(a), r * np.sin(a)], -1)
+        if kind == 3:
+            v[:, 1] = 0.0
+            v[:, 0] = np.abs(v[:, 0])
+        elif kind == 4:
+            v[:, rng.integers(0, 2)] = 0.0
+        v = np.ascontiguousarray(v)
+        if _core._one_velocity_group(v, ims.VELOCITY_SECTORS, ims.VELOCITY_RATIO):
+            certain += 1
+            k = _numpy_keys(v)
+            assert k.min() == k.max(), (t, v[:4])
+    assert certain > 600, certain  # (it does spare the keys often)
+    # the bunny's translation at 1080p (lengths 517 to 611 pixels, one size bin): certain, so
+    # the method skips the keys on it; at 320x180 its lengths straddle a bin: two groups
+    for (w, h), masks in (((1920, 1080), 1), ((320, 180), 2)):
+        sc = REAL_SCENES["bunny_translate"](w, h)
+        f = ims._sharp(sc, 0.5, 1, "shutter", None)
+        vs = f.velocity[f.ids == sc.objects.index(sc.moving_objects[0])].astype(np.float64)
+        assert _core._one_velocity_group(vs, ims.VELOCITY_SECTORS, ims.VELOCITY_RATIO) == (masks == 1)
+        assert ims.opaque_image(sc).stats["masks"] == masks
+
+
 def test_fast_paths_same_for_any_thread_count():
     script = (
         "import hashlib, numpy as np, motionblur as mb\n"

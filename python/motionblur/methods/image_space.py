@@ -265,7 +265,8 @@ def _velocity_groups(frame: Frame, mask, mean, groups: bool):
     if v is None:
         v = frame.velocity[oy:oy1, ox:ox1][mask].astype(np.float64)
     parts, inverse = [None], None  # (every pixel, the object's own window and mask)
-    if groups:
+    # (the core says when every pixel certainly has one key, whose computation it skips)
+    if groups and not _core._one_velocity_group(np.ascontiguousarray(v), VELOCITY_SECTORS, VELOCITY_RATIO):
         sector = np.floor((np.arctan2(v[:, 1], v[:, 0]) + np.pi) / (2 * np.pi) * VELOCITY_SECTORS)
         size = np.floor(np.log(np.maximum(np.hypot(v[:, 0], v[:, 1]), 1.0)) / np.log(VELOCITY_RATIO))
         key = (sector.astype(np.int64) % VELOCITY_SECTORS) * (1 << 20) + size.astype(np.int64)
