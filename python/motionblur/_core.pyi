@@ -427,14 +427,16 @@ def _coverage_blur(
     object: tuple[tuple[int, int, int, int], np.ndarray],
     parts: list[tuple[tuple[int, int, int, int], tuple[float, float], float, bool]],
     layers: bool,
+    back: np.ndarray | None,
 ) -> int:
     """The coverage glow of ``opaque_image`` for one moving object, in place on out (H,W,4) f32
     (the colour so far) over the static depth back_depth (H,W) f32: each velocity group's layer
     cut from the sharp frame rgba (H,W,4) f32 (with pasted = (window, colour there) laid over it)
     and depth (H,W) f32, object = (window (y0, y1, x0, x1), labels (h,w) i32 there: each pixel's
     group, -1 outside the object), parts = [(window, direction, length, blur)] box-blurred,
-    summed and composited. Returns the pixels kept in front. Releases the GIL; the same bits for
-    any thread count."""
+    summed and composited. back: None, or the colour so far (H,W,4) f32, which out (then holding
+    nothing yet) receives outside the object's windows. Returns the pixels kept in front.
+    Releases the GIL; the same bits for any thread count."""
 
 def _object_pixels(
     ids: np.ndarray, velocity: np.ndarray, depth: np.ndarray, window: tuple[int, int, int, int], k: int

@@ -99,7 +99,7 @@ fn union(parts: &[CoveragePart]) -> Window {
 /// colour so far; `back_depth` `(h, w)` the static depth). Returns the number of pixels kept
 /// in front (0 without `layers`).
 pub fn coverage_blur(
-    out: &mut [f32],
+    (out, back): (&mut [f32], Option<&[f32]>),
     back_depth: &[f32],
     (w, h): (usize, usize),
     source: &CoverageSource,
@@ -107,6 +107,9 @@ pub fn coverage_blur(
     layers: bool,
 ) -> Result<u64> {
     check_len("out", out, w * h * 4, format!("({h},{w},4)"))?;
+    if let Some(b) = back {
+        check_len("back", b, w * h * 4, format!("({h},{w},4)"))?;
+    }
     check_len("back_depth", back_depth, w * h, format!("({h},{w})"))?;
     check_len("rgba", source.rgba, w * h * 4, format!("({h},{w},4)"))?;
     check_len("depth", source.depth, w * h, format!("({h},{w})"))?;
@@ -148,8 +151,10 @@ pub fn coverage_blur(
             None
         };
         match radius {
-            Some((false, r)) => return rows(out, back_depth, w, source, object, Some(r), layers),
-            None => return rows(out, back_depth, w, source, object, None, layers),
+            Some((false, r)) => {
+                return rows((out, back), back_depth, w, source, object, Some(r), layers)
+            }
+            None => return rows((out, back), back_depth, w, source, object, None, layers),
             Some((true, _)) => {}
         }
     }
@@ -184,30 +189,68 @@ pub fn coverage_blur(
         });
     }
     let (acc, acc_z) = acc.expect("at least one part");
-    let front = out
-        .par_chunks_mut(w * 4)
-        .enumerate()
-        .skip(uy0)
-        .take(uy1 - uy0)
-        .map(|(y, row)| {
+    let front = over_rows(
+        (out, back),
+        w,
+        uw,
+        || (),
+        |_, y, row, back_row| {
             let r = y - uy0;
             let mut front = 0u64;
             for c in 0..ucols {
                 let i = (r * ucols + c) * 4;
                 let x = ux0 + c;
                 let b: [f32; 4] = acc[i..i + 4].try_into().expect("four channels");
-                let s: [f32; 4] = row[x * 4..x * 4 + 4].try_into().expect("four channels");
+                let s = back_row.unwrap_or(row)[c * 4..c * 4 + 4]
+                    .try_into()
+                    .expect("four");
                 let z = layers.then(|| (acc_z[i], acc_z[i + 3], back_depth[y * w + x]));
                 let (o, near) = composite_pixel(b, s, z);
                 front += near as u64;
-                row[x * 4..x * 4 + 4].copy_from_slice(&o);
+                row[c * 4..c * 4 + 4].copy_from_slice(&o);
             }
             front
-        })
-        .sum();
+        },
+        |a, b| a + b,
+    );
     pool::give(acc);
     pool::give(acc_z);
     Ok(front)
+}
+
+/// `f(scratch, y, out row's columns x0 .. x1, back row's columns x0 .. x1)` on every row `y`
+/// of `window` in parallel, the results combined by `add`. With `back` (the colour so far:
+/// `out` then holds nothing yet), every pixel of `out` outside the window is copied from it
+/// and `f` reads the colour so far from the back row; without, from `out`'s own row.
+fn over_rows<S, T: Default + Send>(
+    (out, back): (&mut [f32], Option<&[f32]>),
+    w: usize,
+    (y0, y1, x0, x1): Window,
+    init: impl Fn() -> S + Sync + Send,
+    f: impl Fn(&mut S, usize, &mut [f32], Option<&[f32]>) -> T + Sync + Send,
+    add: impl Fn(T, T) -> T + Sync + Send,
+) -> T {
+    out.par_chunks_mut(w * 4)
+        .enumerate()
+        .skip(if back.is_some() { 0 } else { y0 })
+        .take(if back.is_some() { usize::MAX } else { y1 - y0 })
+        .map_init(init, |s, (y, row)| {
+            let inside = (y0..y1).contains(&y);
+            match back {
+                Some(b) => {
+                    let b = &b[y * w * 4..(y + 1) * w * 4];
+                    if !inside {
+                        row.copy_from_slice(b);
+                        return T::default();
+                    }
+                    row[..x0 * 4].copy_from_slice(&b[..x0 * 4]);
+                    row[x1 * 4..].copy_from_slice(&b[x1 * 4..]);
+                    f(s, y, &mut row[x0 * 4..x1 * 4], Some(&b[x0 * 4..x1 * 4]))
+                }
+                None => f(s, y, &mut row[x0 * 4..x1 * 4], None),
+            }
+        })
+        .reduce(T::default, add)
 }
 
 /// One pixel of the layer and of the depth layer `(zw zm, 0, 0, zm)` of group `label` (module
@@ -269,7 +312,7 @@ fn pasted_row<'a>(source: &CoverageSource<'a>, y: usize) -> Option<(usize, usize
 /// `box_blur`'s rows are (`box_row_each`), summed from zero and composited in place. Fails as
 /// `box_blur` does when a blurred layer holds NaN or infinity (after compositing).
 fn rows(
-    out: &mut [f32],
+    (out, back): (&mut [f32], Option<&[f32]>),
     back_depth: &[f32],
     w: usize,
     source: &CoverageSource,
@@ -277,78 +320,77 @@ fn rows(
     radius: Option<usize>,
     layers: bool,
 ) -> Result<u64> {
-    let (y0, y1, x0, x1) = object.parts[0].window;
+    let (_, _, x0, x1) = object.parts[0].window;
     let cols = x1 - x0;
-    let (front, finite) = out
-        .par_chunks_mut(w * 4)
-        .enumerate()
-        .skip(y0)
-        .take(y1 - y0)
-        .map_init(
-            || vec![0.0f32; cols * 6],
-            |cut, (y, row)| {
-                // the layer and the depth layer's two live channels, six values a pixel
-                let (labels, pasted) = (label_row(object, y), pasted_row(source, y));
-                let mut finite = true;
-                for (c, v) in cut.chunks_exact_mut(6).enumerate() {
-                    let (l, z) = cut_pixel(source, labels, pasted, 0, (y, x0 + c, w));
-                    v.copy_from_slice(&[l[0], l[1], l[2], l[3], z[0], z[3]]);
-                    finite &= v.iter().all(|v| v.is_finite());
-                }
-                let zb = &back_depth[y * w + x0..y * w + x1];
-                let row = &mut row[x0 * 4..x1 * 4];
-                let mut front = 0u64;
-                let mut put = |c: usize, v: [f32; 6]| {
-                    // (the sum from zero: 0 + v, the bits of numpy's `+=` into zeros)
-                    let v = v.map(|v| v + 0.0);
-                    let s: [f32; 4] = row[c * 4..c * 4 + 4].try_into().expect("four channels");
-                    let z = layers.then(|| (v[4], v[5], zb[c]));
-                    let (o, near) = composite_pixel([v[0], v[1], v[2], v[3]], s, z);
-                    front += near as u64;
-                    row[c * 4..c * 4 + 4].copy_from_slice(&o);
-                };
-                match radius {
-                    // box_row_each's running sums (f64, the same order), six channels at once
-                    Some(r) => {
-                        let inv = 1.0 / (2 * r + 1) as f64;
-                        let px = |i: usize| -> [f64; 6] {
-                            let p = &cut[i * 6..i * 6 + 6];
-                            std::array::from_fn(|k| p[k] as f64)
-                        };
-                        let mut s = [0.0f64; 6];
-                        for i in 0..=r.min(cols - 1) {
-                            let p = px(i);
+    let (front, infinite) = over_rows(
+        (out, back),
+        w,
+        object.parts[0].window,
+        || vec![0.0f32; cols * 6],
+        |cut, y, row, back_row| {
+            // the layer and the depth layer's two live channels, six values a pixel
+            let (labels, pasted) = (label_row(object, y), pasted_row(source, y));
+            let mut finite = true;
+            for (c, v) in cut.chunks_exact_mut(6).enumerate() {
+                let (l, z) = cut_pixel(source, labels, pasted, 0, (y, x0 + c, w));
+                v.copy_from_slice(&[l[0], l[1], l[2], l[3], z[0], z[3]]);
+                finite &= v.iter().all(|v| v.is_finite());
+            }
+            let zb = &back_depth[y * w + x0..y * w + x1];
+            let mut front = 0u64;
+            let mut put = |c: usize, v: [f32; 6]| {
+                // (the sum from zero: 0 + v, the bits of numpy's `+=` into zeros)
+                let v = v.map(|v| v + 0.0);
+                let s = back_row.unwrap_or(row)[c * 4..c * 4 + 4]
+                    .try_into()
+                    .expect("four");
+                let z = layers.then(|| (v[4], v[5], zb[c]));
+                let (o, near) = composite_pixel([v[0], v[1], v[2], v[3]], s, z);
+                front += near as u64;
+                row[c * 4..c * 4 + 4].copy_from_slice(&o);
+            };
+            match radius {
+                // box_row_each's running sums (f64, the same order), six channels at once
+                Some(r) => {
+                    let inv = 1.0 / (2 * r + 1) as f64;
+                    let px = |i: usize| -> [f64; 6] {
+                        let p = &cut[i * 6..i * 6 + 6];
+                        std::array::from_fn(|k| p[k] as f64)
+                    };
+                    let mut s = [0.0f64; 6];
+                    for i in 0..=r.min(cols - 1) {
+                        let p = px(i);
+                        for k in 0..6 {
+                            s[k] += p[k];
+                        }
+                    }
+                    for c in 0..cols {
+                        put(c, s.map(|v| (v * inv) as f32));
+                        if c + r + 1 < cols {
+                            let p = px(c + r + 1);
                             for k in 0..6 {
                                 s[k] += p[k];
                             }
                         }
-                        for c in 0..cols {
-                            put(c, s.map(|v| (v * inv) as f32));
-                            if c + r + 1 < cols {
-                                let p = px(c + r + 1);
-                                for k in 0..6 {
-                                    s[k] += p[k];
-                                }
+                        if c >= r {
+                            let p = px(c - r);
+                            for k in 0..6 {
+                                s[k] -= p[k];
                             }
-                            if c >= r {
-                                let p = px(c - r);
-                                for k in 0..6 {
-                                    s[k] -= p[k];
-                                }
-                            }
-                        }
-                    }
-                    None => {
-                        for c in 0..cols {
-                            put(c, cut[c * 6..c * 6 + 6].try_into().expect("six"));
                         }
                     }
                 }
-                (front, finite || !object.parts[0].blur)
-            },
-        )
-        .reduce(|| (0, true), |a, b| (a.0 + b.0, a.1 && b.1));
-    if !finite {
+                None => {
+                    for c in 0..cols {
+                        put(c, cut[c * 6..c * 6 + 6].try_into().expect("six"));
+                    }
+                }
+            }
+            (front, !finite && object.parts[0].blur)
+        },
+        |a, b| (a.0 + b.0, a.1 || b.1),
+    );
+    if infinite {
         return Err(Error::value("rgba", "contains NaN or inf"));
     }
     Ok(front)
@@ -580,10 +622,23 @@ mod tests {
             };
             for layers in [false, true] {
                 let (want, wf) = serial(&out0, &back_depth, (w, h), &source, &object, layers);
-                for threads in [1, 2] {
-                    let mut got = out0.clone();
+                // in place on the colour so far, and into an output of garbage from it
+                for (threads, fresh) in [(1, false), (2, false), (1, true), (2, true)] {
+                    let mut got = if fresh {
+                        vec![f32::NAN; out0.len()]
+                    } else {
+                        out0.clone()
+                    };
+                    let back = fresh.then_some(&out0[..]);
                     let f = crate::on_threads(threads, || {
-                        coverage_blur(&mut got, &back_depth, (w, h), &source, &object, layers)
+                        coverage_blur(
+                            (&mut got, back),
+                            &back_depth,
+                            (w, h),
+                            &source,
+                            &object,
+                            layers,
+                        )
                     })
                     .unwrap();
                     assert_eq!(f, wf);
@@ -627,7 +682,7 @@ mod tests {
                 parts: &parts,
             };
             let mut out = vec![0.0f32; w * h * 4];
-            let got = coverage_blur(&mut out, &depth, (w, h), &source, &object, true);
+            let got = coverage_blur((&mut out, None), &depth, (w, h), &source, &object, true);
             assert_eq!(got.is_err(), fails, "{direction:?} {blur}");
             if fails {
                 assert!(got.unwrap_err().to_string().contains("NaN"));
@@ -658,7 +713,7 @@ mod tests {
                 labels,
                 parts,
             };
-            coverage_blur(&mut out, &depth, (w, h), &source, &object, true)
+            coverage_blur((&mut out, None), &depth, (w, h), &source, &object, true)
         };
         assert!(run((1, 3, 2, 4), &[part((0, 4, 0, 6))], &labels).is_ok());
         let e = run((1, 3, 2, 7), &[part((0, 4, 0, 6))], &labels).unwrap_err();

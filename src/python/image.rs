@@ -566,7 +566,8 @@ fn _coverage_composite<'py>(
 /// (the colour so far) over the static depth back_depth (H,W) f32: layers cut from the sharp
 /// frame rgba (H,W,4) f32 with pasted = (window, colour there) or None laid over it and depth
 /// (H,W) f32, object = (window, labels (h,w) i32 there), parts = [(window, direction, length,
-/// blur)]. Returns the pixels kept in front.
+/// blur)]. back: None, or the colour so far (H,W,4) f32, which out (then holding nothing yet)
+/// receives outside the object's windows. Returns the pixels kept in front.
 #[pyfunction]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn _coverage_blur(
@@ -579,6 +580,7 @@ fn _coverage_blur(
     object: (Window, PyReadonlyArray2<'_, i32>),
     parts: Vec<(Window, [f32; 2], f32, bool)>,
     layers: bool,
+    back: Option<PyReadonlyArray3<'_, f32>>,
 ) -> PyResult<u64> {
     let (w, h) = (out.shape()[1], out.shape()[0]);
     if out.shape()[2] != 4 {
@@ -614,9 +616,17 @@ fn _coverage_blur(
         labels,
         parts: &parts,
     };
+    let back = match &back {
+        Some(b) => {
+            let (b, bw, bh) = img3(b, "back", 4)?;
+            same_size("back", (bh, bw), (h, w))?;
+            Some(b)
+        }
+        None => None,
+    };
     let o = c_slice_mut(&mut out, "out")?;
     Ok(detached_in_pool(py, || {
-        crate::coverage_blur(o, z, (w, h), &source, &object, layers)
+        crate::coverage_blur((o, back), z, (w, h), &source, &object, layers)
     })?)
 }
 

@@ -379,8 +379,11 @@ def _coverage_blur(
         back_rgba, back_depth = back.rgba, back.depth
     else:  # the same pixels (ids aside, which are not read)
         back_rgba, back_depth = static.rgba, static.depth
-    rgba = back_rgba.copy()
     c = np.ascontiguousarray
+    back_rgba = c(back_rgba, np.float32)
+    # (the first object's call fills the new frame: the static colour outside its windows)
+    rgba = np.empty_like(back_rgba) if order else back_rgba.copy()
+    fill = back_rgba
     back_depth, depth = c(back_depth, np.float32), c(frame.depth, np.float32)
     if pasted is not None:
         pasted = (pasted[0], c(pasted[1], np.float32))
@@ -398,8 +401,9 @@ def _coverage_blur(
         # each group's masked colour and (z m, 0, 0, m) box-blurred, summed (opacity capped at
         # 1) and composited over rgba in place (the module docs of src/image/coverage_blur.rs)
         front_pixels += _core._coverage_blur(
-            rgba, back_depth, c(frame.rgba, np.float32), pasted, depth, (window, labels), blurs, layers
+            rgba, back_depth, c(frame.rgba, np.float32), pasted, depth, (window, labels), blurs, layers, fill
         )
+        fill = None
     return rgba, masks, front_pixels
 
 
