@@ -143,25 +143,25 @@ pub fn coverage_blur(
     if let [part] = object.parts {
         // One group blurred along a row (or not blurred): cut, blur and composite row by row,
         // with no window-sized image in between
-        let radius = if part.blur {
-            check_direction(part.direction, part.length, "length")?;
-            plan(part.direction, part.length * 0.5)
-                .map(|p| (p.transpose || p.slope != 0.0, p.radius))
-        } else {
-            None
-        };
-        match radius {
-            Some((false, r)) => {
-                return rows((out, back), back_depth, w, source, object, Some(r), layers)
-            }
-            None => return rows((out, back), back_depth, w, source, object, None, layers),
-            Some((true, _)) => {}
+        if let Some(radius) = along_rows(part)? {
+            return rows((out, back), back_depth, w, source, object, radius, layers);
         }
     }
     let uw @ (uy0, uy1, ux0, ux1) = union(object.parts);
     let (un, ucols) = ((uy1 - uy0) * (ux1 - ux0), ux1 - ux0);
-    let mut acc: Option<(Vec<f32>, Vec<f32>)> = None;
+    // the sums from zero (0 + v: the bits of numpy's `+=` into zeros, -0 included)
+    let zeros = || -> Vec<f32> {
+        let mut v = pool::try_take(un * 4).unwrap_or_default();
+        v.resize(un * 4, 0.0);
+        v.par_chunks_mut(1 << 14).for_each(|c| c.fill(0.0));
+        v
+    };
+    let (mut acc, mut acc_z) = (zeros(), zeros());
     for (i, part) in object.parts.iter().enumerate() {
+        if let Some(radius) = along_rows(part)? {
+            add_rows((&mut acc, &mut acc_z), uw, source, object, i, radius, w)?;
+            continue;
+        }
         let (mut layer, mut zl) = cut(source, object, i as i32, part.window, w);
         if part.blur {
             let (py0, py1, px0, px1) = part.window;
@@ -171,24 +171,11 @@ pub fn coverage_blur(
             let b = box_blur(&zl, pw, ph, part.direction, part.length)?;
             pool::give(std::mem::replace(&mut zl, b));
         }
-        acc = Some(match acc {
-            None if part.window == uw => {
-                // the sum from zero (0 + v: the bits of numpy's `+=` into zeros, -0 included)
-                layer.par_iter_mut().for_each(|v| *v += 0.0);
-                zl.par_iter_mut().for_each(|v| *v += 0.0);
-                (layer, zl)
-            }
-            acc => {
-                let (mut a, mut az) = acc.unwrap_or_else(|| (vec![0.0; un * 4], vec![0.0; un * 4]));
-                add_window(&mut a, uw, &layer, part.window);
-                add_window(&mut az, uw, &zl, part.window);
-                pool::give(layer);
-                pool::give(zl);
-                (a, az)
-            }
-        });
+        add_window(&mut acc, uw, &layer, part.window);
+        add_window(&mut acc_z, uw, &zl, part.window);
+        pool::give(layer);
+        pool::give(zl);
     }
-    let (acc, acc_z) = acc.expect("at least one part");
     let front = over_rows(
         (out, back),
         w,
@@ -308,9 +295,9 @@ fn pasted_row<'a>(source: &CoverageSource<'a>, y: usize) -> Option<(usize, usize
 }
 
 /// `coverage_blur` of one group blurred along rows with `radius` taps each side (`None`: not
-/// blurred), row by row: each row of the group's window cut, box-filtered as
-/// `box_blur`'s rows are (`box_row_each`), summed from zero and composited in place. Fails as
-/// `box_blur` does when a blurred layer holds NaN or infinity (after compositing).
+/// blurred), row by row: each row of the group's window cut, box-filtered as `box_blur`'s rows
+/// are, summed from zero and composited in place. Fails as `box_blur` does when a blurred
+/// layer holds NaN or infinity (after compositing).
 fn rows(
     (out, back): (&mut [f32], Option<&[f32]>),
     back_depth: &[f32],
@@ -320,25 +307,17 @@ fn rows(
     radius: Option<usize>,
     layers: bool,
 ) -> Result<u64> {
-    let (_, _, x0, x1) = object.parts[0].window;
-    let cols = x1 - x0;
+    let part = &object.parts[0];
+    let (_, _, x0, x1) = part.window;
     let (front, infinite) = over_rows(
         (out, back),
         w,
-        object.parts[0].window,
-        || vec![0.0f32; cols * 6],
+        part.window,
+        || vec![0.0f32; (x1 - x0) * 6],
         |cut, y, row, back_row| {
-            // the layer and the depth layer's two live channels, six values a pixel
-            let (labels, pasted) = (label_row(object, y), pasted_row(source, y));
-            let mut finite = true;
-            for (c, v) in cut.chunks_exact_mut(6).enumerate() {
-                let (l, z) = cut_pixel(source, labels, pasted, 0, (y, x0 + c, w));
-                v.copy_from_slice(&[l[0], l[1], l[2], l[3], z[0], z[3]]);
-                finite &= v.iter().all(|v| v.is_finite());
-            }
             let zb = &back_depth[y * w + x0..y * w + x1];
             let mut front = 0u64;
-            let mut put = |c: usize, v: [f32; 6]| {
+            let finite = blur_row(cut, (source, object, 0), (y, x0, w), radius, |c, v| {
                 // (the sum from zero: 0 + v, the bits of numpy's `+=` into zeros)
                 let v = v.map(|v| v + 0.0);
                 let s = back_row.unwrap_or(row)[c * 4..c * 4 + 4]
@@ -348,45 +327,8 @@ fn rows(
                 let (o, near) = composite_pixel([v[0], v[1], v[2], v[3]], s, z);
                 front += near as u64;
                 row[c * 4..c * 4 + 4].copy_from_slice(&o);
-            };
-            match radius {
-                // box_row_each's running sums (f64, the same order), six channels at once
-                Some(r) => {
-                    let inv = 1.0 / (2 * r + 1) as f64;
-                    let px = |i: usize| -> [f64; 6] {
-                        let p = &cut[i * 6..i * 6 + 6];
-                        std::array::from_fn(|k| p[k] as f64)
-                    };
-                    let mut s = [0.0f64; 6];
-                    for i in 0..=r.min(cols - 1) {
-                        let p = px(i);
-                        for k in 0..6 {
-                            s[k] += p[k];
-                        }
-                    }
-                    for c in 0..cols {
-                        put(c, s.map(|v| (v * inv) as f32));
-                        if c + r + 1 < cols {
-                            let p = px(c + r + 1);
-                            for k in 0..6 {
-                                s[k] += p[k];
-                            }
-                        }
-                        if c >= r {
-                            let p = px(c - r);
-                            for k in 0..6 {
-                                s[k] -= p[k];
-                            }
-                        }
-                    }
-                }
-                None => {
-                    for c in 0..cols {
-                        put(c, cut[c * 6..c * 6 + 6].try_into().expect("six"));
-                    }
-                }
-            }
-            (front, !finite && object.parts[0].blur)
+            });
+            (front, !finite && part.blur)
         },
         |a, b| (a.0 + b.0, a.1 || b.1),
     );
@@ -394,6 +336,128 @@ fn rows(
         return Err(Error::value("rgba", "contains NaN or inf"));
     }
     Ok(front)
+}
+
+/// `Some(radius)` when `part` is filtered along rows as `box_blur` filters it (its plan's
+/// direction is along x: taps `radius` pixels each side), or not at all (`Some(None)`: not
+/// blurred, or a box of one tap); `None` for a sheared or transposed blur. Fails as `box_blur`
+/// does on a bad direction or length.
+fn along_rows(part: &CoveragePart) -> Result<Option<Option<usize>>> {
+    if !part.blur {
+        return Ok(Some(None));
+    }
+    check_direction(part.direction, part.length, "length")?;
+    Ok(match plan(part.direction, part.length * 0.5) {
+        None => Some(None),
+        Some(p) if !p.transpose && p.slope == 0.0 => Some(Some(p.radius)),
+        Some(_) => None,
+    })
+}
+
+/// Row `y` of group `label`'s blurred layer over its window's columns `x0 ..` (`cut.len() / 6`
+/// of them): the layer and the depth layer's two live channels cut into `cut` (six values a
+/// pixel), then `emit(column, six values)` for each column, filtered with `radius` taps each
+/// side as `box_blur`'s rows are (`box_row_each`'s running sums: f64, the same order), or as
+/// cut (`None`). Returns whether every cut value is finite.
+fn blur_row(
+    cut: &mut [f32],
+    (source, object, label): (&CoverageSource, &CoverageObject, i32),
+    (y, x0, w): (usize, usize, usize),
+    radius: Option<usize>,
+    mut emit: impl FnMut(usize, [f32; 6]),
+) -> bool {
+    let cols = cut.len() / 6;
+    let (labels, pasted) = (label_row(object, y), pasted_row(source, y));
+    let mut finite = true;
+    for (c, v) in cut.chunks_exact_mut(6).enumerate() {
+        let (l, z) = cut_pixel(source, labels, pasted, label, (y, x0 + c, w));
+        v.copy_from_slice(&[l[0], l[1], l[2], l[3], z[0], z[3]]);
+        finite &= v.iter().all(|v| v.is_finite());
+    }
+    let Some(r) = radius else {
+        for c in 0..cols {
+            emit(c, cut[c * 6..c * 6 + 6].try_into().expect("six"));
+        }
+        return finite;
+    };
+    let inv = 1.0 / (2 * r + 1) as f64;
+    let px = |i: usize| -> [f64; 6] {
+        let p = &cut[i * 6..i * 6 + 6];
+        std::array::from_fn(|k| p[k] as f64)
+    };
+    let mut s = [0.0f64; 6];
+    for i in 0..=r.min(cols - 1) {
+        let p = px(i);
+        for k in 0..6 {
+            s[k] += p[k];
+        }
+    }
+    for c in 0..cols {
+        emit(c, s.map(|v| (v * inv) as f32));
+        if c + r + 1 < cols {
+            let p = px(c + r + 1);
+            for k in 0..6 {
+                s[k] += p[k];
+            }
+        }
+        if c >= r {
+            let p = px(c - r);
+            for k in 0..6 {
+                s[k] -= p[k];
+            }
+        }
+    }
+    finite
+}
+
+/// Group `label`'s blurred layer and depth layer (`blur_row`, row by row) added into `acc`
+/// and `acc_z` (`(y1 - y0, x1 - x0, 4)` over window `aw`; of the depth layer only channels 0
+/// and 3, the others being zero and never read). Fails as `box_blur` does when the blurred
+/// layer holds NaN or infinity.
+fn add_rows(
+    (acc, acc_z): (&mut [f32], &mut [f32]),
+    aw: Window,
+    source: &CoverageSource,
+    object: &CoverageObject,
+    label: usize,
+    radius: Option<usize>,
+    w: usize,
+) -> Result<()> {
+    let part = &object.parts[label];
+    let (py0, py1, px0, px1) = part.window;
+    let acols = aw.3 - aw.2;
+    let infinite = acc
+        .par_chunks_mut(acols * 4)
+        .zip(acc_z.par_chunks_mut(acols * 4))
+        .enumerate()
+        .skip(py0 - aw.0)
+        .take(py1 - py0)
+        .map_init(
+            || vec![0.0f32; (px1 - px0) * 6],
+            |cut, (r, (a, az))| {
+                let (a, az) = (&mut a[(px0 - aw.2) * 4..], &mut az[(px0 - aw.2) * 4..]);
+                let lab = label as i32;
+                let finite = blur_row(
+                    cut,
+                    (source, object, lab),
+                    (aw.0 + r, px0, w),
+                    radius,
+                    |c, v| {
+                        for k in 0..4 {
+                            a[c * 4 + k] += v[k];
+                        }
+                        az[c * 4] += v[4];
+                        az[c * 4 + 3] += v[5];
+                    },
+                );
+                !finite && part.blur
+            },
+        )
+        .reduce(|| false, |a, b| a || b);
+    if infinite {
+        return Err(Error::value("rgba", "contains NaN or inf"));
+    }
+    Ok(())
 }
 
 /// The layer and the depth layer `(zw zm, 0, 0, zm)` of group `label` over `window` (module
@@ -600,7 +664,26 @@ mod tests {
         let (row, short) = (along([-9.0, 0.0], 17.0, true), along([3.0, 0.0], 1.5, true));
         let (vertical, still) = (along([0.0, 5.0], 11.0, true), along([0.3, 0.0], 0.3, false));
         let pasted = Some((pasted_win, &pasted[..]));
+        // several groups, some along rows (summed row by row), one a box of one tap
+        let mixed = [
+            CoveragePart {
+                window: (6, 36, 2, 55),
+                direction: [12.0, -0.0],
+                length: 21.0,
+                blur: true,
+            },
+            parts[0],
+            CoveragePart {
+                window: (9, 31, 10, 44),
+                direction: [1.0, 0.0],
+                length: 1.2,
+                blur: true,
+            },
+            parts[2],
+        ];
         for (pasted, parts) in [
+            (pasted, &mixed[..]),
+            (None, &mixed[..]),
             (pasted, &parts[..]),
             (None, &parts[..]),
             (None, &parts[..1]),
@@ -665,21 +748,25 @@ mod tests {
             depth: &depth,
         };
         let labels = vec![0i32; 3 * 3];
-        for (direction, blur, fails) in [
-            ([2.0, 0.0], true, true),
-            ([2.0, 1.0], true, true),
-            ([2.0, 0.0], false, false),
+        for (direction, blur, fails, groups) in [
+            ([2.0, 0.0], true, true, 1),
+            ([2.0, 1.0], true, true, 1),
+            ([2.0, 0.0], false, false, 1),
+            ([2.0, 0.0], true, true, 2),
+            ([2.0, 1.0], true, true, 2),
+            ([2.0, 0.0], false, false, 2),
         ] {
-            let parts = [CoveragePart {
+            let part = CoveragePart {
                 window: (0, 5, 0, 9),
                 direction,
                 length: 4.0,
                 blur,
-            }];
+            };
+            let parts = [part, part];
             let object = CoverageObject {
                 window: (1, 4, 3, 6),
                 labels: &labels,
-                parts: &parts,
+                parts: &parts[..groups],
             };
             let mut out = vec![0.0f32; w * h * 4];
             let got = coverage_blur((&mut out, None), &depth, (w, h), &source, &object, true);
