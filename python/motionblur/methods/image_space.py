@@ -269,12 +269,22 @@ def _velocity_groups(frame: Frame, mask, mean, groups: bool):
     if groups and not _core._one_velocity_group(np.ascontiguousarray(v), VELOCITY_SECTORS, VELOCITY_RATIO):
         sector = np.floor((np.arctan2(v[:, 1], v[:, 0]) + np.pi) / (2 * np.pi) * VELOCITY_SECTORS)
         size = np.floor(np.log(np.maximum(np.hypot(v[:, 0], v[:, 1]), 1.0)) / np.log(VELOCITY_RATIO))
-        key = (sector.astype(np.int64) % VELOCITY_SECTORS) * (1 << 20) + size.astype(np.int64)
+        sector, size = sector.astype(np.int64) % VELOCITY_SECTORS, size.astype(np.int64)
+        key = sector * (1 << 20) + size
         if not (len(key) and key.min() == key.max()):  # (one group, a translation: no sort)
-            keys, inverse = np.unique(key, return_inverse=True)
+            if size.min() >= 0 and size.max() < 64:
+                # np.unique(key, return_inverse=True) without its sort: the keys' order is that
+                # of sector * 64 + size, a small range counted in bins
+                counts = np.bincount(sector * 64 + size, minlength=VELOCITY_SECTORS * 64)
+                present = np.flatnonzero(counts)
+                index = np.zeros(len(counts), np.intp)
+                index[present] = np.arange(len(present))
+                inverse = index[sector * 64 + size]
+            else:
+                inverse = np.unique(key, return_inverse=True)[1]
             # each group's pixels in row order, as np.flatnonzero(inverse == i) gives them
             rank = np.argsort(inverse, kind="stable")
-            parts = np.split(rank, np.cumsum(np.bincount(inverse, minlength=len(keys)))[:-1])
+            parts = np.split(rank, np.cumsum(np.bincount(inverse))[:-1])
     out = []
     h, w = frame.ids.shape
     if inverse is None:
