@@ -296,9 +296,10 @@ def _velocity_groups(frame: Frame, mask, mean, groups: bool):
     else:
         ys, xs = np.nonzero(mask)
         ys, xs = ys + oy, xs + ox
+        pixels = [(ys[sel], xs[sel]) for sel in parts]
         parts = [
-            ((int(ys[sel].min()), int(ys[sel].max()), int(xs[sel].min()), int(xs[sel].max())), v[sel].mean(axis=0), (ys[sel], xs[sel]))
-            for sel in parts
+            ((int(py.min()), int(py.max()), int(px.min()), int(px.max())), v[sel].mean(axis=0), (py, px))
+            for sel, (py, px) in zip(parts, pixels)
         ]  # fmt: skip
         labels = np.full(mask.shape, -1, np.int32)
         labels[mask] = inverse
