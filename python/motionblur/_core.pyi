@@ -192,6 +192,9 @@ __all__ = [
     "_glow",
     "_box_blur",
     "_coverage_composite",
+    "_coverage_blur",
+    "_object_pixels",
+    "_one_velocity_group",
     "_splat_paths",
     "_scatter_pieces",
     "_pixel_bounds",
@@ -415,6 +418,40 @@ def _coverage_composite(
     colour back (H,W,4) f32 and depth back_depth (H,W) f32; blurred and depth (the blurred
     (z m, 0, 0, m)) are (y1 - y0, x1 - x0, 4) f32. Returns (the window's colour, pixels kept in
     front). Releases the GIL; the same bits for any thread count."""
+
+def _coverage_blur(
+    out: np.ndarray,
+    back_depth: np.ndarray,
+    rgba: np.ndarray,
+    pasted: tuple[tuple[int, int, int, int], np.ndarray] | None,
+    depth: np.ndarray,
+    object: tuple[tuple[int, int, int, int], np.ndarray],
+    parts: list[tuple[tuple[int, int, int, int], tuple[float, float], float, bool]],
+    layers: bool,
+    back: np.ndarray | None,
+) -> int:
+    """The coverage glow of ``opaque_image`` for one moving object, in place on out (H,W,4) f32
+    (the colour so far) over the static depth back_depth (H,W) f32: each velocity group's layer
+    cut from the sharp frame rgba (H,W,4) f32 (with pasted = (window, colour there) laid over it)
+    and depth (H,W) f32, object = (window (y0, y1, x0, x1), labels (h,w) i32 there: each pixel's
+    group, -1 outside the object), parts = [(window, direction, length, blur)] box-blurred,
+    summed and composited. back: None, or the colour so far (H,W,4) f32, which out (then holding
+    nothing yet) receives outside the object's windows. Returns the pixels kept in front.
+    Releases the GIL; the same bits for any thread count."""
+
+def _object_pixels(
+    ids: np.ndarray, velocity: np.ndarray, depth: np.ndarray, window: tuple[int, int, int, int], k: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[float]]:
+    """The pixels of object k in window (y0, y1, x0, x1) of a frame: ids (H,W) i32, velocity
+    (H,W,2) f32, depth (H,W) f32. Returns (mask (h,w) bool: ids == k there, the velocities (N,2)
+    f64 and depths (N,) f32 of its pixels in row order, their mean velocity as numpy's
+    ``vs.mean(axis=0)`` gives it). Releases the GIL."""
+
+def _one_velocity_group(velocities: np.ndarray, sectors: int, ratio: float) -> bool:
+    """Whether the velocities (N,2) f64 of an object's pixels certainly all have one key of
+    ``opaque_image``'s split (``sectors`` directions, lengths in bins ``ratio`` apart, numpy's
+    floor of atan2 and log): each at least 1e-9 from its bins' edges (or exactly along +x).
+    False: not certain."""
 
 def _splat_paths(colors: np.ndarray, paths: np.ndarray, width: int, height: int) -> np.ndarray:
     """Time average of sources moving along image paths: colors (N,4) f32 premultiplied, paths
