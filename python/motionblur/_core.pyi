@@ -489,9 +489,16 @@ def _opaque_blur(rgba: np.ndarray, direction: tuple[float, float], length: float
     """Box blur, eq. 10 glow and eq. 7 rescale of premultiplied rgba (H,W,4) f32. Returns (H,W,4) f32."""
 
 def _opaque_motion_blur(
-    rgba: np.ndarray, base: np.ndarray | None, direction: tuple[float, float], length: float, mode: str
+    rgba: np.ndarray,
+    base: np.ndarray | None,
+    direction: tuple[float, float],
+    length: float,
+    mode: str,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
-    """_opaque_blur composited 'over' or 'under' base (H,W,4) f32 (None: rgba). Returns (H,W,4) f32."""
+    """_opaque_blur composited 'over' or 'under' base (H,W,4) f32 (None: rgba). Returns (H,W,4) f32:
+    ``out`` itself when given ((H,W,4) f32, C-contiguous, writable, sharing no memory with rgba
+    or base; every element overwritten), else a new array."""
 
 def _pyramid_blur(rgba: np.ndarray, levels: int) -> np.ndarray:
     """4x4-box analysis, biquadratic B-spline synthesis over levels levels. (H,W,4) f32 in and out."""

@@ -46,7 +46,7 @@ pub use dof::{depth_of_field, DofParams, MAX_LAYERS};
 pub use glow::glow;
 pub use lens::{lens_blur, LensParams, MAX_LENS_LEVELS};
 pub use object_pixels::{object_pixels, ObjectPixels};
-pub use opaque::{opaque_blur, opaque_motion_blur};
+pub use opaque::{opaque_blur, opaque_motion_blur, opaque_motion_blur_into};
 pub use opaque_row::Composite;
 pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};
 pub use reconstruct::{max_speed, reconstruct, ReconstructParams, MAX_TAPS};

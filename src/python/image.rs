@@ -3,8 +3,8 @@
 //! dtypes and checks parameters first; these checks are the second line.
 use glam::DMat4;
 use numpy::{
-    PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArray4, PyReadwriteArray3,
-    PyUntypedArrayMethods,
+    PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
+    PyReadonlyArray4, PyReadwriteArray3, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 
@@ -296,9 +296,10 @@ fn _opaque_blur<'py>(
     shaped(py, out, [h, w, 4])
 }
 
-/// Opaque motion blur of rgba (H,W,4) f32 composited `mode` base (H,W,4) f32 or rgba itself.
+/// Opaque motion blur of rgba (H,W,4) f32 composited `mode` base (H,W,4) f32 or rgba itself;
+/// written into `out` (H,W,4) f32 and returned as it when given, else a new array.
 #[pyfunction]
-#[pyo3(signature = (rgba, base, direction, length, mode))]
+#[pyo3(signature = (rgba, base, direction, length, mode, out=None))]
 fn _opaque_motion_blur<'py>(
     py: Python<'py>,
     rgba: PyReadonlyArray3<'py, f32>,
@@ -306,6 +307,7 @@ fn _opaque_motion_blur<'py>(
     direction: [f32; 2],
     length: f32,
     mode: &str,
+    out: Option<Bound<'py, PyArray3<f32>>>,
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
     let mode = Composite::parse(mode)?;
@@ -317,10 +319,33 @@ fn _opaque_motion_blur<'py>(
         }
         None => None,
     };
-    let out = detached_in_pool(py, || {
-        crate::opaque_motion_blur(a, b, w, h, direction, length, mode)
+    let Some(out) = out else {
+        let out = detached_in_pool(py, || {
+            crate::opaque_motion_blur(a, b, w, h, direction, length, mode)
+        })?;
+        return shaped(py, out, [h, w, 4]);
+    };
+    // a read-write borrow: numpy's borrow checker refuses an `out` that shares memory with
+    // rgba or base (borrowed read-only above)
+    let mut o = out.try_readwrite().map_err(|_| {
+        Error::value(
+            "out",
+            "must be a writable array sharing no memory with rgba or base",
+        )
     })?;
-    shaped(py, out, [h, w, 4])
+    if o.shape() != [h, w, 4] {
+        return Err(Error::shape(
+            "out",
+            format!("expected shape ({h}, {w}, 4), got {:?}", o.shape()),
+        )
+        .into());
+    }
+    let dst = c_slice_mut(&mut o, "out")?;
+    detached_in_pool(py, || {
+        crate::opaque_motion_blur_into(a, b, w, h, direction, length, mode, dst)
+    })?;
+    drop(o);
+    Ok(out.into_any())
 }
 
 /// Pyramid blur of rgba (H,W,4) f32 over `levels` levels.
