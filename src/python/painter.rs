@@ -8,8 +8,8 @@ use super::args::{LayerArg, LightArg};
 use super::convert::{c_slice, detached_in_pool, face_indices_u32, rows, shaped};
 use super::motion::PyKeyframes;
 use crate::{
-    accumulate_moving, accumulate_still, Accumulated, Error, Frame, Mat4, PaintObject, Painter,
-    Samples, Shading, StillCamera,
+    accumulate_moving, accumulate_still, Accumulated, Error, Frame, Layer, Mat4, PaintObject,
+    Painter, Samples, Shading, StillCamera,
 };
 
 /// One object, the items of a dict: `id`, `shading` name, `vertices` f64 (V,3), `faces` i64
@@ -141,6 +141,22 @@ type StillFrame<'py> = (
     usize,
 );
 
+/// The still camera and its static layer of the camera's size, checked (errors name
+/// `background` and the camera's matrices).
+fn still_inputs<'a>(
+    camera: &StillCameraArg<'_>,
+    background: &'a LayerArg<'_>,
+) -> Result<(StillCamera, Layer<'a>), Error> {
+    let camera = camera.camera()?;
+    if background.size("background")? != [camera.height, camera.width] {
+        return Err(Error::shape(
+            "background",
+            "rgba must be (height, width, 4)",
+        ));
+    }
+    Ok((camera, background.layer("background")?))
+}
+
 /// A still-camera accumulation as Python values ([`StillFrame`]), None when nothing was drawn.
 fn still_frame(py: Python<'_>, out: Option<Accumulated>) -> PyResult<Option<StillFrame<'_>>> {
     let Some(Accumulated {
@@ -210,11 +226,7 @@ impl PyPainter {
         background: LayerArg<'_>,
         opaque: bool,
     ) -> PyResult<Option<StillFrame<'py>>> {
-        let camera = camera.camera()?;
-        if background.size("background")? != [camera.height, camera.width] {
-            return Err(Error::shape("background", "rgba must be (height, width, 4)").into());
-        }
-        let bg = background.layer("background")?;
+        let (camera, bg) = still_inputs(&camera, &background)?;
         let samples = samples.samples()?;
         let inner = &self.inner;
         let out = detached_in_pool(py, || accumulate_still(inner, &camera, samples, bg, opaque))?;
@@ -231,11 +243,7 @@ impl PyPainter {
         background: LayerArg<'_>,
         opaque: bool,
     ) -> PyResult<Vec<Option<StillFrame<'py>>>> {
-        let camera = camera.camera()?;
-        if background.size("background")? != [camera.height, camera.width] {
-            return Err(Error::shape("background", "rgba must be (height, width, 4)").into());
-        }
-        let bg = background.layer("background")?;
+        let (camera, bg) = still_inputs(&camera, &background)?;
         let samples = parts
             .iter()
             .map(SamplesArg::samples)

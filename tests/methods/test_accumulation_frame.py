@@ -15,6 +15,7 @@ from motionblur import _core, meshes
 from motionblur.methods._layers import Layer, composite, static_layer, supersampled, window_projection
 from motionblur.methods._painter import Painter, box_corners
 from motionblur.methods.accumulation import sample_times
+from motionblur.raster import add_times_color
 from motionblur.scene import rotate, translate
 
 
@@ -243,8 +244,6 @@ def numpy_halves(sums, win):
     """`HalfSums.halves` in numpy, the arithmetic it replaces (the serial twin of
     ``_core._halves``): each half ``sum(m * part) / sum(m)`` in float64 from 0 in the parts'
     order, the difference composited over the background, the frame by the halves' masses."""
-    from motionblur.methods._accumulate import composited_difference
-
     x0, y0, x1, y1 = win
     rows, cols = slice(y0, y1), slice(x0, x1)
     means = []
@@ -263,7 +262,10 @@ def numpy_halves(sums, win):
         out /= mass
         means.append((mass, out))
     (ma, a), (mb_, b) = means
-    diff = composited_difference(a, b, sums.scene.background)
+    bg = np.asarray(sums.scene.background, np.float64)
+    pre = np.concatenate([bg[:3] * bg[3], bg[3:]])
+    diff = np.subtract(a, b, dtype=np.float64)
+    add_times_color(diff, -diff[..., 3], pre)  # -alpha: a fresh array, read before the writes
     frame = ((a * ma + b * mb_) / (ma + mb_)).astype(np.float32)
     return diff, frame, (ma, mb_)
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from .. import _core
 from .._validate import as_int
-from ..raster import Frame, add_times_color
+from ..raster import Frame
 from ..scene import Scene, Trapezoid, shutter_cdf
 from ._layers import Layer, object_draw, raster_layer, resolve_arrays, static_layer, supersampled
 from ._painter import painter_for
@@ -29,7 +29,6 @@ __all__ = [
     "uniform_times",
     "QUANTILE_KNOTS",
     "HalfSums",
-    "composited_difference",
     "HALVES_FACTOR",
     "MAX_TIME_SAMPLES",
 ]
@@ -139,15 +138,6 @@ def uniform_times(n: int, sampling: str = "stratified", seed: int = 0) -> np.nda
     return _strata(n, sampling, seed)
 
 
-def composited_difference(a: np.ndarray, b: np.ndarray, background) -> np.ndarray:
-    """(H,W,4) float64 difference of premultiplied frames ``a`` and ``b`` once each is composited
-    over straight RGBA ``background`` (4,) (compositing is linear in the frame)."""
-    bg = np.asarray(background, np.float64)
-    pre = np.concatenate([bg[:3] * bg[3], bg[3:]])
-    d = np.subtract(a, b, dtype=np.float64)
-    return add_times_color(d, -d[..., 3], pre)  # -alpha: a fresh array, d's alpha is read first
-
-
 class Piece(NamedTuple):
     """One accumulation before it is pasted into a frame (`accumulate_piece`): ``base``
     (rgba, depth, ids) the pixels outside ``window`` (read-only: the static layer's, or the
@@ -215,19 +205,20 @@ class PieceMaker:
     def __init__(self, scene: Scene, aa: int) -> None:
         self.scene, self.aa = scene, aa
         self.cam = supersampled(scene.camera, aa)
+        self._everything = list(enumerate(scene.objects))
+        self._static_objs = [(k, o) for k, o in self._everything if not o.is_moving]
+        self._moving = [(k, o) for k, o in self._everything if o.is_moving]
+        self._transparent = any(o.is_transparent for o in scene.objects)
         self._still: dict[bool, _StillParts] = {}
         self._painter = None
 
     def _parts(self, dim: float) -> _StillParts:
         """The still camera's split (`_StillParts`) for a piece of dimming ``dim``."""
-        everything = list(enumerate(self.scene.objects))
-        static_objs = [(k, o) for k, o in everything if not o.is_moving]
-        moving = [(k, o) for k, o in everything if o.is_moving]
         # A transparent surface between two others cannot be composited with one depth a pixel
         # per layer: every object is drawn at every sample, sorted together (exact).
-        together = dim >= 1.0 and bool(static_objs) and any(o.is_transparent for o in self.scene.objects)
+        together = dim >= 1.0 and bool(self._static_objs) and self._transparent
         if together not in self._still:
-            split = ([], everything) if together else (static_objs, moving)
+            split = ([], self._everything) if together else (self._static_objs, self._moving)
             self._still[together] = _StillParts(self.scene, self.cam, *split, self.aa)
         return self._still[together]
 
@@ -235,7 +226,7 @@ class PieceMaker:
         """``self(times, weights, ref, dim)`` of each of ``parts``: a still camera's in one core
         call (`motionblur._core._Painter.accumulate_still_parts`), the same pieces."""
         if self.scene.camera_moves:
-            return [self(t, w, ref, dim) for t, w, ref in parts]
+            return [self._moving_piece(t, w, ref, dim) for t, w, ref in parts]
         split = self._parts(dim)
         outs = split.painter.core.accumulate_still_parts(
             [{"times": t, "weights": w, "reference": ref} for t, w, ref in parts],
@@ -260,37 +251,26 @@ class PieceMaker:
         return Piece(base, tuple(v // self.aa for v in win), drawn, stats)
 
     def __call__(self, times, weights, ref: int, dim: float) -> Piece:
+        return self.pieces([(times, weights, ref)], dim)[0]
+
+    def _moving_piece(self, times, weights, ref: int, dim: float) -> Piece:
+        """A moving camera's piece: whole frames at every sample, one view each."""
         scene, aa, cam = self.scene, self.aa, self.cam
-        stats = {"samples": len(times), "draw_calls": 0, "static_draws": 0, "window": None}
-        if scene.camera_moves:
-            # Everything moves on screen: whole frames at every sample, one view each.
-            if self._painter is None:
-                self._painter = painter_for(scene, list(enumerate(scene.objects)))
-            views = np.linalg.inv(scene.camera_poses_at(times))  # each sample's camera_at(t).view
-            rgba, depth, ids = self._painter.core.accumulate_moving(
-                {"times": times, "weights": weights, "reference": ref}, views,
-                np.ascontiguousarray(cam.projection), cam.width, cam.height,
-            )  # fmt: skip
-            stats["draw_calls"] = len(times)
-            if dim < 1.0:
-                cam = supersampled(scene.camera_at(scene.reference_t), aa)
-                static = [
-                    (o, object_draw(o, scene.reference_t, k))
-                    for k, o in enumerate(scene.objects)
-                    if not o.is_moving
-                ]
-                rgba = (1.0 - dim) * raster_layer(cam, scene, static).rgba + dim * rgba
-            # The core's float32 sum as it is: astype would copy the whole frame (a dim < 1 blend is float64)
-            whole = resolve_arrays(Layer(np.asarray(rgba, np.float32), depth, ids), aa)
-            return Piece(whole, None, None, stats, owned=True)
-        parts = self._parts(dim)
-        out = parts.painter.core.accumulate_still(
-            {"times": times, "weights": weights, "reference": ref},
-            parts.camera,
-            parts.layer,
-            parts.static.opaque,
-        )
-        return self._still_piece(parts, len(times), out, dim)
+        stats = {"samples": len(times), "draw_calls": len(times), "static_draws": 0, "window": None}
+        if self._painter is None:
+            self._painter = painter_for(scene, self._everything)
+        views = np.linalg.inv(scene.camera_poses_at(times))  # each sample's camera_at(t).view
+        rgba, depth, ids = self._painter.core.accumulate_moving(
+            {"times": times, "weights": weights, "reference": ref}, views,
+            np.ascontiguousarray(cam.projection), cam.width, cam.height,
+        )  # fmt: skip
+        if dim < 1.0:
+            cam = supersampled(scene.camera_at(scene.reference_t), aa)
+            static = [(o, object_draw(o, scene.reference_t, k)) for k, o in self._static_objs]
+            rgba = (1.0 - dim) * raster_layer(cam, scene, static).rgba + dim * rgba
+        # The core's float32 sum as it is: astype would copy the whole frame (a dim < 1 blend is float64)
+        whole = resolve_arrays(Layer(np.asarray(rgba, np.float32), depth, ids), aa)
+        return Piece(whole, None, None, stats, owned=True)
 
 
 class HalfSums:
