@@ -3,7 +3,9 @@ dense mesh against accumulation with 256 samples in the same run, its peak memor
 time against resolution and face count.
 
 Mesh: the shipped Stanford bunny (5,998 faces) subdivided by trimesh (midpoint subdivision, each
-level x4 faces: the same surface, more triangles): ``--level 2`` gives 95,968 faces. Motions,
+level x4 faces: the same surface, more triangles): ``--level 2`` gives 95,968 faces; the faces
+table runs from ``--min-level`` (-1: coarsened by vertex clustering to 1,481 faces) to
+``--max-level`` (4: 1,535,488 faces). Motions,
 each over a box shutter, over the static floor of the real-mesh scenes, lambert-lit:
 ``translate`` (across the view, 1.2 scene units) and ``turn`` (1.2 rad about the vertical while
 moving 0.8 units across, five keyframes).
@@ -27,7 +29,7 @@ beside accumulation with 256 samples and accumulation at the analytic frame's ow
 sample count extrapolated from its errors at 64 and 256 samples, its time taken as linear in
 the count), errors against the exact integral at the same size.
 
-Usage: python benches/bench_production.py [--quick] [--repeat 2] [--level 2] [--sections target,memory,scaling,motion]
+Usage: python benches/bench_production.py [--quick] [--repeat 2] [--level 2] [--sections target,memory,scaling,motion] (scaling = resolution,faces)
 Writes out/bench/production.md, production_resolution.png, production_faces.png and
 production_motion.png.
 """
@@ -59,14 +61,45 @@ SIZES = [(320, 240), (640, 360), (960, 540), (1920, 1080), (3840, 2160)]
 
 
 def bunny(level: int) -> tuple[np.ndarray, np.ndarray]:
-    """The shipped bunny, normalised, subdivided ``level`` times (x4 faces each)."""
+    """The shipped bunny (5,998 faces), normalised, subdivided ``level`` times (x4 faces each);
+    a negative ``level`` coarsens it instead (`_clustered`: about 1/4 the faces a level)."""
     import trimesh
 
     v, f = real_mesh("bunny")
+    if level < 0:
+        return _clustered(np.asarray(v, np.float64), np.asarray(f), len(f) >> (-2 * level))
     m = trimesh.Trimesh(np.array(v), np.array(f), process=False)
     for _ in range(level):
         m = m.subdivide()
     return np.asarray(m.vertices), np.asarray(m.faces)
+
+
+def _clustered(v: np.ndarray, f: np.ndarray, want: int) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh coarsened by vertex clustering to about ``want`` faces: vertices merged per cell
+    of a cubic grid (their mean), faces that collapse or repeat dropped; the cell size is
+    bisected on the face count (no quadric decimator is a dependency)."""
+    lo_cell, hi_cell = 1e-4, 1.0
+    best = (v, f)
+    for _ in range(30):
+        cell = (lo_cell * hi_cell) ** 0.5
+        keys = np.floor((v - v.min(0)) / cell).astype(np.int64)
+        _, rep, inv = np.unique(keys, axis=0, return_index=True, return_inverse=True)
+        inv = inv.ravel()
+        g = inv[f]
+        g = g[(g[:, 0] != g[:, 1]) & (g[:, 1] != g[:, 2]) & (g[:, 0] != g[:, 2])]
+        g = np.unique(g, axis=0)
+        if len(g) > want:
+            lo_cell = cell
+        else:
+            hi_cell, best = cell, (inv, g)
+        if abs(len(g) - want) <= want // 50:
+            best = (inv, g)
+            break
+    inv, g = best
+    centres = np.zeros((inv.max() + 1, 3))
+    np.add.at(centres, inv, v)
+    centres /= np.bincount(inv)[:, None]
+    return centres, g
 
 
 def motion(kind: str, angle: float = 1.2, length: float = 1.2) -> Motion:
@@ -218,7 +251,18 @@ def memory(a, lines: list[str]) -> None:
     lines.append("")
 
 
-def scaling(mesh, a, lines: list[str]) -> dict:
+def scaling(mesh, a, lines: list[str], tables=("size", "faces")) -> dict:
+    """The time-against-resolution (``size``) and time-against-faces (``faces``) tables."""
+    res = {}
+    if "size" in tables:
+        res["size"] = _against_size(mesh, a, lines)
+    if "faces" in tables:
+        res["faces"] = _against_faces(a, lines)
+    lines.append("")
+    return res
+
+
+def _against_size(mesh, a, lines: list[str]) -> list:
     sizes = SIZES[:-1] if a.quick else SIZES
     lines += [
         f"## Time against resolution: translate, {len(mesh[1]):,} faces (load {load()})",
@@ -226,7 +270,7 @@ def scaling(mesh, a, lines: list[str]) -> dict:
         "| size | analytic s | accumulation-256 s | ratio |",
         "|---|---:|---:|---:|",
     ]
-    res = {"size": [], "faces": []}
+    pts = []
     for w, h in sizes:
         s = scene(mesh, "translate", w, h)
         rep = 1 if w * h > 3e6 else a.repeat
@@ -234,18 +278,22 @@ def scaling(mesh, a, lines: list[str]) -> dict:
         row = f"| {w}x{h} | {t['analytic']:.2f} | {t['acc256']:.2f} | {t['analytic'] / t['acc256']:.2f} |"
         print(row, flush=True)
         lines.append(row)
-        res["size"].append((w * h, t["analytic"], t["acc256"]))
+        pts.append((w * h, t["analytic"], t["acc256"]))
+    lines.append("")
+    return pts
+
+
+def _against_faces(a, lines: list[str]) -> list:
     fw, fh = (int(v) for v in a.faces_size.split("x"))
-    levels = range(0, a.max_level + 1)
     lines += [
-        "",
-        f"## Time against faces: translate at {fw}x{fh} (load {load()}); the bunny subdivided 0 to "
-        f"{a.max_level} times (the largest mesh timed: {a.max_level} subdivisions)",
+        f"## Time against faces: translate at {fw}x{fh} (load {load()}); the bunny from {a.min_level} "
+        f"to {a.max_level} subdivisions (negative: coarsened by vertex clustering)",
         "",
         "| faces | analytic s | accumulation-256 s | ratio | shaded pieces |",
         "|---:|---:|---:|---:|---:|",
     ]
-    for lv in levels:
+    pts = []
+    for lv in range(a.min_level, a.max_level + 1):
         m = bunny(lv)
         s = scene(m, "translate", fw, fh)
         t, out = paired(
@@ -257,9 +305,8 @@ def scaling(mesh, a, lines: list[str]) -> dict:
         )
         print(row, flush=True)
         lines.append(row)
-        res["faces"].append((len(m[1]), t["analytic"], t["acc256"]))
-    lines.append("")
-    return res
+        pts.append((len(m[1]), t["analytic"], t["acc256"]))
+    return pts
 
 
 LENGTHS = (0.15, 0.3, 0.6, 1.2)  # scene units across the view (about 110 px a unit at 960x540)
@@ -354,6 +401,8 @@ def plots(res: dict, out: Path) -> None:
         print("matplotlib missing: no plots")
         return
     for axis, label in (("size", "pixels"), ("faces", "faces")):
+        if axis not in res:
+            continue
         pts = np.array(res[axis])
         fig, ax = plt.subplots(figsize=(5, 3.5))
         ax.loglog(pts[:, 0], pts[:, 1], "o-", label="analytic")
@@ -375,10 +424,13 @@ def main() -> None:
         "--level", type=int, default=2, help="subdivisions of the target's bunny (2: 95,968 faces)"
     )
     ap.add_argument("--max-level", type=int, default=None, help="most subdivisions in the faces table")
+    ap.add_argument("--min-level", type=int, default=-1, help="fewest (negative: coarsened, -1: 1,481 faces)")
     ap.add_argument("--faces-size", default="960x540")
     ap.add_argument("--error-size", default="480x270")
     ap.add_argument(
-        "--sections", default="target,memory,scaling,motion", help="which tables, comma-separated"
+        "--sections",
+        default="target,memory,scaling,motion",
+        help="which tables, comma-separated (scaling: resolution and faces)",
     )
     a = ap.parse_args()
     if a.max_level is None:
@@ -393,8 +445,9 @@ def main() -> None:
         memory(a, lines)
     out = Path("out/bench")
     out.mkdir(parents=True, exist_ok=True)
-    if "scaling" in sections:
-        plots(scaling(mesh, a, lines), out)
+    tables = [k for k, name in (("size", "resolution"), ("faces", "faces")) if {name, "scaling"} & sections]
+    if tables:
+        plots(scaling(mesh, a, lines, tables), out)
     if "motion" in sections:
         motion_plot(motions(mesh, a, lines), out)
     lines.append(f"Load average at the end: {load()}")
