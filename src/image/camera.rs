@@ -76,6 +76,10 @@ pub(crate) struct PixelMotion {
     p12: f64,
     wf: f64,
     hf: f64,
+    /// `q` of [`PixelMotion::at`] as `base + x dx + y dy + m.w_axis / d` ([`PixelMotion::at_affine`]).
+    base: DVec4,
+    dx: DVec4,
+    dy: DVec4,
     /// Whether the cameras are the same (exactly no motion).
     pub still: bool,
 }
@@ -84,14 +88,22 @@ impl PixelMotion {
     /// The motion of a `w` x `h` image seen by `cur` that was seen by `prev`.
     pub fn new(cur: &CameraMatrices, prev: &CameraMatrices, w: usize, h: usize) -> Self {
         let p = &cur.projection;
+        let m = prev.projection * prev.view * cur.view.inverse();
+        let (wf, hf) = (w as f64, h as f64);
+        let (p00, p11, p02, p12) = (p.x_axis.x, p.y_axis.y, p.z_axis.x, p.z_axis.y);
         PixelMotion {
-            m: prev.projection * prev.view * cur.view.inverse(),
-            p00: p.x_axis.x,
-            p11: p.y_axis.y,
-            p02: p.z_axis.x,
-            p12: p.z_axis.y,
-            wf: w as f64,
-            hf: h as f64,
+            m,
+            p00,
+            p11,
+            p02,
+            p12,
+            wf,
+            hf,
+            base: m.x_axis * ((1.0 / wf - 1.0 + p02) / p00)
+                + m.y_axis * ((1.0 - 1.0 / hf + p12) / p11)
+                - m.z_axis,
+            dx: m.x_axis * (2.0 / (wf * p00)),
+            dy: m.y_axis * (-2.0 / (hf * p11)),
             // A static camera: exactly no motion (the matrix product would leave ~1e-13 pixels).
             still: cur.view == prev.view && cur.projection == prev.projection,
         }
@@ -119,6 +131,28 @@ impl PixelMotion {
         }
         let px = (q.x / q.w + 1.0) * 0.5 * self.wf;
         let py = (1.0 - q.y / q.w) * 0.5 * self.hf;
+        [
+            ((x as f64 + 0.5 - px) * scale) as f32,
+            ((y as f64 + 0.5 - py) * scale) as f32,
+        ]
+    }
+
+    /// [`PixelMotion::at`] with `q` as an affine function of `x`, `y` and `1 / d` (a few
+    /// multiply-adds instead of a 4x4 product; the same velocity to rounding, not the same bits).
+    #[inline(always)]
+    pub fn at_affine(&self, x: usize, y: usize, d: f32, scale: f64) -> [f32; 2] {
+        if self.still {
+            return [0.0, 0.0];
+        }
+        let (xf, yf, r) = (x as f64, y as f64, 1.0 / d as f64);
+        let (b, dx, dy, dd) = (self.base, self.dx, self.dy, self.m.w_axis);
+        let qw = b.w + dx.w * xf + dy.w * yf + dd.w * r;
+        if qw <= 0.0 {
+            return [0.0, 0.0];
+        }
+        let inv = 1.0 / qw;
+        let px = ((b.x + dx.x * xf + dy.x * yf + dd.x * r) * inv + 1.0) * 0.5 * self.wf;
+        let py = (1.0 - (b.y + dx.y * xf + dy.y * yf + dd.y * r) * inv) * 0.5 * self.hf;
         [
             ((x as f64 + 0.5 - px) * scale) as f32,
             ((y as f64 + 0.5 - py) * scale) as f32,
@@ -579,30 +613,39 @@ pub struct FrameMotion<'a> {
     pub moving: &'a [bool],
 }
 
+/// Taps of the blur where [`camera_frame_blur`]'s line integral does not fit.
+pub const LINE_FALLBACK_SAMPLES: usize = 16;
+
 /// The blur of the `camera_velocity` method in one pass: each pixel's velocity is its moving
 /// object's from the velocity buffer, else the camera's ([`camera_velocity`] from `depth`),
 /// times `scale` (float32), clamped to `+-MAX_VELOCITY`, and the pixel is blurred along it as
-/// [`velocity_blur`] does with `samples` taps; no velocity image is made. Errors name `rgba`
-/// (not finite), `depth` (NaN or <= 0) or `velocity` (NaN after the scaling).
+/// [`velocity_blur`] does with `samples` taps (`Some(n)`), or, with `None`, as the line
+/// integral along its streak where it fits (the `camera_line` module: the camera's pixels,
+/// their velocities from the same matrices in fewer operations) and with 16 taps
+/// (`LINE_FALLBACK_SAMPLES`) elsewhere; no velocity image is made. Returns the image and
+/// the number of pixels blurred as a line integral. Errors name `rgba` (not finite), `depth`
+/// (NaN or <= 0), `samples` (out of `[1, MAX_SAMPLES]`) or `velocity` (NaN after the scaling).
 pub fn camera_frame_blur(
     rgba: &[f32],
     depth: &[f32],
     (w, h): (usize, usize),
     frame: FrameMotion<'_>,
     cameras: (&CameraMatrices, &CameraMatrices),
-    (scale, samples): (f32, usize),
-) -> Result<Vec<f32>> {
+    (scale, samples): (f32, Option<usize>),
+) -> Result<(Vec<f32>, usize)> {
     check_image("rgba", rgba, w, h, 4)?;
     check_image("depth", depth, w, h, 1)?;
     check_image("velocity", frame.velocity, w, h, 2)?;
     if frame.ids.len() != w * h {
         return Err(Error::shape("ids", format!("expected ({h},{w}) values")));
     }
-    if samples == 0 || samples > MAX_SAMPLES {
-        return Err(Error::value(
-            "samples",
-            format!("must be in [1, {MAX_SAMPLES}], got {samples}"),
-        ));
+    if let Some(samples) = samples {
+        if samples == 0 || samples > MAX_SAMPLES {
+            return Err(Error::value(
+                "samples",
+                format!("must be in [1, {MAX_SAMPLES}], got {samples}"),
+            ));
+        }
     }
     super::check_finite("rgba", rgba)?;
     if depth.par_iter().any(|d| d.is_nan() || *d <= 0.0) {
@@ -611,9 +654,93 @@ pub fn camera_frame_blur(
             "contains NaN or values <= 0 (use +inf for background)",
         ));
     }
-    let motion = PixelMotion::new(cameras.0, cameras.1, w, h);
-    let taps = Taps::new(samples);
-    let moves = |id: i32| id >= 0 && frame.moving.get(id as usize).copied().unwrap_or(false);
+    let field = CameraField {
+        motion: PixelMotion::new(cameras.0, cameras.1, w, h),
+        depth,
+        frame,
+        scale,
+        w,
+        h,
+        taps: Taps::new(samples.unwrap_or(LINE_FALLBACK_SAMPLES)),
+    };
+    let (out, bad, lines) = match samples {
+        Some(_) => {
+            let (out, bad) = taps_frame_blur(rgba, (w, h), &field);
+            (out, bad, 0)
+        }
+        None => {
+            let (out, stats) = super::camera_line::line_blur(rgba, (w, h), &field);
+            (out, stats.nan, stats.line_pixels)
+        }
+    };
+    if bad {
+        return Err(Error::value(
+            "velocity",
+            "is NaN (a camera or depth too extreme)",
+        ));
+    }
+    Ok((out, lines))
+}
+
+/// The velocities [`camera_frame_blur`] blurs along.
+struct CameraField<'a> {
+    motion: PixelMotion,
+    depth: &'a [f32],
+    frame: FrameMotion<'a>,
+    scale: f32,
+    w: usize,
+    h: usize,
+    /// The taps where the line integral does not fit.
+    taps: Taps,
+}
+
+impl CameraField<'_> {
+    /// The velocity the taps blur pixel `(x, y)` along (the bits the method always had).
+    #[inline(always)]
+    fn tap_velocity(&self, x: usize, y: usize) -> [f32; 2] {
+        let i = y * self.w + x;
+        let v = if self.moves(i) {
+            [self.frame.velocity[2 * i], self.frame.velocity[2 * i + 1]]
+        } else {
+            self.motion.at(x, y, self.depth[i], 1.0)
+        };
+        v.map(|c| (c * self.scale).clamp(-MAX_VELOCITY, MAX_VELOCITY))
+    }
+
+    #[inline(always)]
+    fn moves(&self, i: usize) -> bool {
+        let id = self.frame.ids[i];
+        id >= 0 && self.frame.moving.get(id as usize).copied().unwrap_or(false)
+    }
+}
+
+impl super::camera_line::LineField for CameraField<'_> {
+    #[inline(always)]
+    fn line(&self, x: usize, y: usize) -> Option<[f32; 2]> {
+        let i = y * self.w + x;
+        if self.moves(i) {
+            return None;
+        }
+        let v = self.motion.at_affine(x, y, self.depth[i], 1.0);
+        Some(v.map(|c| (c * self.scale).clamp(-MAX_VELOCITY, MAX_VELOCITY)))
+    }
+
+    #[inline]
+    fn taps(&self, rgba: &[f32], x: usize, y: usize) -> ([f32; 4], bool) {
+        let v = self.tap_velocity(x, y);
+        let out = self.taps.blur(rgba, (self.w, self.h), (x, y), v);
+        (out, v[0].is_nan() || v[1].is_nan())
+    }
+}
+
+/// [`camera_frame_blur`] with the field's taps at every pixel: the image and whether a velocity
+/// was NaN.
+fn taps_frame_blur(
+    rgba: &[f32],
+    (w, h): (usize, usize),
+    field: &CameraField<'_>,
+) -> (Vec<f32>, bool) {
+    let taps = &field.taps;
     let simd = super::simd();
     let mut bad = false;
     let out = filled(w * h * 4, |out| {
@@ -623,13 +750,7 @@ pub fn camera_frame_blur(
             .map(|(y, row)| {
                 let mut bad = false;
                 taps.blur_row(rgba, (w, h), y, row, simd, |x| {
-                    let i = y * w + x;
-                    let v = if moves(frame.ids[i]) {
-                        [frame.velocity[2 * i], frame.velocity[2 * i + 1]]
-                    } else {
-                        motion.at(x, y, depth[i], 1.0)
-                    };
-                    let v = v.map(|c| (c * scale).clamp(-MAX_VELOCITY, MAX_VELOCITY));
+                    let v = field.tap_velocity(x, y);
                     bad |= v[0].is_nan() || v[1].is_nan();
                     v
                 });
@@ -637,13 +758,7 @@ pub fn camera_frame_blur(
             })
             .reduce(|| false, |a, b| a | b);
     });
-    if bad {
-        return Err(Error::value(
-            "velocity",
-            "is NaN (a camera or depth too extreme)",
-        ));
-    }
-    Ok(out)
+    (out, bad)
 }
 
 /// The parameters of [`camera_motion_blur`]: the two cameras, the taps and the velocity's scale.
@@ -787,10 +902,13 @@ mod tests {
             ids: &ids,
             moving: &[true, false],
         };
-        let run = || camera_frame_blur(&rgba, &depth, (w, h), frame, (&cur, &prev), (2.0, 16));
-        let a = run().unwrap();
-        let b = crate::on_threads(1, run).unwrap();
-        assert_eq!(a, b);
-        assert_ne!(a, rgba);
+        for samples in [Some(16), None] {
+            let run =
+                || camera_frame_blur(&rgba, &depth, (w, h), frame, (&cur, &prev), (2.0, samples));
+            let a = run().unwrap();
+            let b = crate::on_threads(1, run).unwrap();
+            assert_eq!(a, b);
+            assert_ne!(a.0, rgba);
+        }
     }
 }
