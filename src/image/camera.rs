@@ -722,7 +722,8 @@ impl super::camera_line::LineField for CameraField<'_> {
             return None;
         }
         let v = self.motion.at_affine(x, y, self.depth[i], 1.0);
-        Some(v.map(|c| (c * self.scale).clamp(-MAX_VELOCITY, MAX_VELOCITY)))
+        let c = |c: f32| (c * self.scale).clamp(-MAX_VELOCITY, MAX_VELOCITY);
+        Some([c(v[0]), c(v[1])])
     }
 
     #[inline]

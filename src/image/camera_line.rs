@@ -38,12 +38,12 @@ use std::mem::MaybeUninit;
 use rayon::prelude::*;
 
 /// Columns (rows, for vertical streaks) of a strip.
-pub const STRIP: usize = 512;
+pub const STRIP: usize = 256;
 /// Curves of a band.
 pub const BAND: usize = 32;
 /// Largest distance (pixels) between a pixel's streak and the curve it is read along, at the
 /// ends of the streak (the slopes' difference times the half-streak).
-pub const LINE_TOLERANCE: f64 = 1.0;
+pub const LINE_TOLERANCE: f64 = 2.0;
 /// Shortest streak (pixels along the major axis) blurred as a line integral: shorter ones take
 /// the taps, which are then at most a pixel apart.
 pub const MIN_STREAK: f32 = 16.0;
@@ -449,8 +449,9 @@ fn strip(
 }
 
 /// Samples curves `k0 .. k0 + count` at the integer major coordinates `u_lo .. u_lo + len`
-/// and sums each into `lines` (`count * len` running sums: entry `i` the integral from `u_lo`
-/// to `u_lo + i` of the samples joined by straight lines).
+/// and sums each into `lines` (`len * count` running sums, entry `i * count + l` curve `l`'s
+/// integral from `u_lo` to `u_lo + i` of its samples joined by straight lines: the curves side
+/// by side, so that a pixel's four lookups and the sums' writes stay within a few pages).
 #[inline(always)]
 fn build(
     rgba: &[f32],
@@ -470,31 +471,78 @@ fn build(
     } else {
         (axes.w, 1)
     };
-    let texel = |i: usize| -> [f32; 4] { rgba[i * 4..i * 4 + 4].try_into().unwrap() };
+    let at = Sampler {
+        rgba,
+        c,
+        k0,
+        u_lo,
+        mlen,
+        nlen,
+        nmax,
+        sm,
+        sn,
+    };
     // the curves side by side, one major coordinate at a time: at each, their texels lie in
     // neighbouring minor rows of one column (a few cache lines), where curve by curve the
     // reads would run diagonally across the image
     let mut acc = vec![[0.0f64; 4]; count];
-    let mut prev = vec![[0.0f64; 4]; count];
-    for i in 0..len {
-        let u = u_lo + i as i64;
-        let d = u as f64 - c;
-        let m = u.clamp(0, mlen - 1) as usize * sm;
-        for (l, &(s, q)) in params.iter().enumerate() {
-            let y = ((k0 + l as i64) as f64 + d * (s + 0.5 * q * d)).clamp(0.0, nmax);
-            let r0 = y as usize; // (y >= 0: the floor)
-            let f = (y - r0 as f64) as f32;
-            let r1 = (r0 + 1).min(nlen - 1);
-            let (a, b) = (texel(m + r0 * sn), texel(m + r1 * sn));
-            let g = [0, 1, 2, 3].map(|c| (a[c] + f * (b[c] - a[c])) as f64);
-            if i > 0 {
-                for c in 0..4 {
-                    acc[l][c] += 0.5 * (prev[l][c] + g[c]);
-                }
-            }
-            lines[l * len + i] = acc[l].map(|v| v as f32);
+    let mut prev: Vec<[f64; 4]> = params
+        .iter()
+        .enumerate()
+        .map(|(l, &p)| at.sample(0, l, p))
+        .collect();
+    lines[..count].fill([0.0; 4]);
+    for i in 1..len {
+        for (l, &p) in params.iter().enumerate() {
+            let g = at.sample(i, l, p);
+            // (whole arrays in and out, no `map`, no call: one vector each)
+            let (a, b) = (acc[l], prev[l]);
+            let sum = [
+                a[0] + 0.5 * (b[0] + g[0]),
+                a[1] + 0.5 * (b[1] + g[1]),
+                a[2] + 0.5 * (b[2] + g[2]),
+                a[3] + 0.5 * (b[3] + g[3]),
+            ];
+            acc[l] = sum;
             prev[l] = g;
+            lines[i * count + l] = [sum[0] as f32, sum[1] as f32, sum[2] as f32, sum[3] as f32];
         }
+    }
+}
+
+/// What [`build`] samples the image with.
+struct Sampler<'a> {
+    rgba: &'a [f32],
+    c: f64,
+    k0: i64,
+    u_lo: i64,
+    mlen: i64,
+    nlen: usize,
+    nmax: f64,
+    sm: usize,
+    sn: usize,
+}
+
+impl Sampler<'_> {
+    /// Sample `i` of curve `l` (parameters `(s, q)`): the image at major coordinate
+    /// `u_lo + i` (clamped), linearly interpolated across between the rows about the curve.
+    #[inline(always)]
+    fn sample(&self, i: usize, l: usize, (s, q): (f64, f64)) -> [f64; 4] {
+        let u = self.u_lo + i as i64;
+        let d = u as f64 - self.c;
+        let m = u.clamp(0, self.mlen - 1) as usize * self.sm;
+        let y = ((self.k0 + l as i64) as f64 + d * (s + 0.5 * q * d)).clamp(0.0, self.nmax);
+        let r0 = y as usize; // (y >= 0: the floor)
+        let f = (y - r0 as f64) as f32;
+        let r1 = (r0 + 1).min(self.nlen - 1);
+        let (t0, t1) = ((m + r0 * self.sn) * 4, (m + r1 * self.sn) * 4);
+        let (a, b) = (&self.rgba[t0..t0 + 4], &self.rgba[t1..t1 + 4]);
+        [
+            (a[0] + f * (b[0] - a[0])) as f64,
+            (a[1] + f * (b[1] - a[1])) as f64,
+            (a[2] + f * (b[2] - a[2])) as f64,
+            (a[3] + f * (b[3] - a[3])) as f64,
+        ]
     }
 }
 
@@ -566,9 +614,10 @@ fn read(
     let (i0, i1) = (lo as usize, hi as usize);
     let (t0, t1) = (lo - i0 as f64, hi - i1 as f64);
     debug_assert!(i1 + 1 < len);
+    let count = ys.len();
     let (m0, m1) = (
-        span(lines, l * len, (i0, t0), (i1, t1)),
-        span(lines, (l + 1) * len, (i0, t0), (i1, t1)),
+        span(lines, (l, count), (i0, t0), (i1, t1)),
+        span(lines, (l + 1, count), (i0, t0), (i1, t1)),
     );
     let inv = 1.0 / (2.0 * half);
     let mut out = [0.0f32; 4];
@@ -578,16 +627,17 @@ fn read(
     Some(out)
 }
 
-/// The running sum of the curve starting at `lines[at]` between positions `i0 + t0` and
-/// `i1 + t1` (entries and fractions), each linearly interpolated.
+/// The running sum of curve `l` of `count` between positions `i0 + t0` and `i1 + t1` (entries
+/// and fractions), each linearly interpolated.
 #[inline(always)]
-fn span(lines: &[[f32; 4]], at: usize, (i0, t0): (usize, f64), (i1, t1): (usize, f64)) -> [f64; 4] {
-    let (p0, p1, q0, q1) = (
-        lines[at + i0],
-        lines[at + i0 + 1],
-        lines[at + i1],
-        lines[at + i1 + 1],
-    );
+fn span(
+    lines: &[[f32; 4]],
+    (l, count): (usize, usize),
+    (i0, t0): (usize, f64),
+    (i1, t1): (usize, f64),
+) -> [f64; 4] {
+    let at = |i: usize| lines[i * count + l];
+    let (p0, p1, q0, q1) = (at(i0), at(i0 + 1), at(i1), at(i1 + 1));
     let mut out = [0.0f64; 4];
     for c in 0..4 {
         let (p0, p1, q0, q1) = (p0[c] as f64, p1[c] as f64, q0[c] as f64, q1[c] as f64);
@@ -821,7 +871,9 @@ mod tests {
                 assert_eq!(&out[i * 4..i * 4 + 4], &taps[i * 4..i * 4 + 4], "pixel {i}");
             }
         }
-        // most of the constant half runs as a line integral, most of the random half not
+        // most of the constant part runs as a line integral, most of the random part not (a
+        // random direction passes when its slope is within LINE_TOLERANCE / 17.5 of the
+        // field's, 25 of 360 degrees either way: ~7%; 12% measured)
         let left = (0..w * h)
             .filter(|&i| i % w < 40 && i / w < 44 && mask[i])
             .count();
@@ -829,7 +881,7 @@ mod tests {
             .filter(|&i| i % w >= 65 && i / w < 44 && mask[i])
             .count();
         assert!(left > 40 * 44 * 8 / 10, "left {left}");
-        assert!(right < 25 * 44 / 10, "right {right}");
+        assert!(right < 25 * 44 / 5, "right {right}");
         assert!(fell > 0);
     }
 
