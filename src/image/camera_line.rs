@@ -7,7 +7,7 @@
 //! streak crossed at constant speed along `u` (as the taps `x + vx t`, `t` in `[-1/2, 1/2]`).
 //! Mostly vertical velocities run the same code with the axes swapped.
 //!
-//! The image is cut into strips [`STRIP`] columns wide. In a strip, curve `k` (any integer, also
+//! The image is cut into strips [`strip_width`] columns wide. In a strip, curve `k` (any integer, also
 //! outside the image) is `Y_k(u) = k + s (u - c) + q (u - c)^2 / 2`, where `c` is the strip's
 //! middle column and `s`, `q` are the slope `vy / vx` of the velocity field at `(c, k)` and its
 //! change along the field between the strip's quarter columns (row `k` clamped into the image):
@@ -37,8 +37,16 @@ use std::mem::MaybeUninit;
 
 use rayon::prelude::*;
 
-/// Columns (rows, for vertical streaks) of a strip.
+/// Columns (rows, for vertical streaks) of a strip in images up to 1920 pixels along the
+/// major axis.
 pub const STRIP: usize = 256;
+
+/// Columns (rows) of a strip along a major axis `len` pixels long: [`STRIP`], wider in the same
+/// proportion past 1920 pixels (a camera's field changes over a fixed fraction of the image, and
+/// the streaks, the sums' overhang, grow with it: 512 at 3840).
+pub fn strip_width(len: usize) -> usize {
+    STRIP.max(len * STRIP / 1920)
+}
 /// Curves of a band.
 pub const BAND: usize = 32;
 /// Largest distance (pixels) between a pixel's streak and the curve it is read along, at the
@@ -191,7 +199,7 @@ fn line_blur_masked(
                 break;
             }
             let axes = Axes { x_major, w, h };
-            let strips = axes.major_len().div_ceil(STRIP);
+            let strips = axes.major_len().div_ceil(strip_width(axes.major_len()));
             let (s, v) = (0..strips)
                 .into_par_iter()
                 .map(|j| {
@@ -340,8 +348,9 @@ fn strip(
     out: Out,
 ) -> (LineStats, bool) {
     let (w, h) = (axes.w, axes.h);
-    let m0 = j * STRIP;
-    let m1 = (m0 + STRIP).min(axes.major_len());
+    let width = strip_width(axes.major_len());
+    let m0 = j * width;
+    let m1 = (m0 + width).min(axes.major_len());
     let n = axes.minor_len();
     let curves = Curves::new(axes, (m0, m1), field);
     // the curves' labels at the strip's first and last minor rows, over its columns
