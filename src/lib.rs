@@ -41,9 +41,9 @@ mod volume;
 mod python;
 
 pub use accumulate::{
-    accumulate, accumulate_moving, accumulate_still, composite, facing_faces, over, pixel_rect,
-    resolve, sample_rects, window_projection, Accumulated, BuffersMut, PaintObject, Painter, Rect,
-    Samples, StillCamera,
+    accumulate, accumulate_moving, accumulate_still, composite, facing_faces, halves, over,
+    pixel_rect, resolve, sample_rects, window_projection, Accumulated, BuffersMut, HalfPart,
+    Halves, PaintObject, Painter, Rect, Samples, StillCamera, SERIAL_PIXELS,
 };
 pub use analytic::{
     render as render_analytic, segment_times, Input as AnalyticInput, MovingDraw, Quadrature,
@@ -61,12 +61,14 @@ pub use contour::{
 pub use error::{Error, Result};
 pub use frame::{Exposure, Frame, Layer};
 pub use image::{
-    box_blur, camera_frame_blur, camera_motion_blur, camera_velocity, colored, coverage_composite,
-    depth_of_field, glow, lens_blur, max_speed, opaque_blur, opaque_motion_blur, pixel_bounds,
+    box_blur, camera_frame_blur, camera_motion_blur, camera_velocity, colored, coverage_blur,
+    coverage_composite, depth_of_field, glow, lens_blur, max_speed, object_pixels,
+    one_velocity_group, opaque_blur, opaque_motion_blur, opaque_motion_blur_into, pixel_bounds,
     pyramid_blur, pyramid_glow, pyramid_opaque_blur, reconstruct, sample_colors, scatter_pieces,
-    splat_paths, velocity_blur, CameraBlur, CameraMatrices, Composite, DofParams, FrameMotion,
-    LensParams, Piece, ReconstructParams, MAX_FPS_RATIO, MAX_LAYERS, MAX_LENGTH, MAX_LENS_LEVELS,
-    MAX_LEVELS, MAX_SAMPLES, MAX_TAPS, MAX_VELOCITY, MIN_ALPHA,
+    splat_paths, velocity_blur, CameraBlur, CameraMatrices, Composite, CoverageObject,
+    CoveragePart, CoverageSource, DofParams, FrameMotion, LensParams, ObjectPixels, Piece,
+    ReconstructParams, MAX_FPS_RATIO, MAX_LAYERS, MAX_LENGTH, MAX_LENS_LEVELS, MAX_LEVELS,
+    MAX_SAMPLES, MAX_TAPS, MAX_VELOCITY, MIN_ALPHA,
 };
 pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats, MAX_COORD};
 pub use motion::{

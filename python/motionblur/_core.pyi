@@ -192,6 +192,9 @@ __all__ = [
     "_glow",
     "_box_blur",
     "_coverage_composite",
+    "_coverage_blur",
+    "_object_pixels",
+    "_one_velocity_group",
     "_splat_paths",
     "_scatter_pieces",
     "_pixel_bounds",
@@ -217,6 +220,7 @@ __all__ = [
     "_accumulate",
     "_over",
     "_facing_faces",
+    "_halves",
     "_Painter",
 ]
 
@@ -415,6 +419,40 @@ def _coverage_composite(
     (z m, 0, 0, m)) are (y1 - y0, x1 - x0, 4) f32. Returns (the window's colour, pixels kept in
     front). Releases the GIL; the same bits for any thread count."""
 
+def _coverage_blur(
+    out: np.ndarray,
+    back_depth: np.ndarray,
+    rgba: np.ndarray,
+    pasted: tuple[tuple[int, int, int, int], np.ndarray] | None,
+    depth: np.ndarray,
+    object: tuple[tuple[int, int, int, int], np.ndarray],
+    parts: list[tuple[tuple[int, int, int, int], tuple[float, float], float, bool]],
+    layers: bool,
+    back: np.ndarray | None,
+) -> int:
+    """The coverage glow of ``opaque_image`` for one moving object, in place on out (H,W,4) f32
+    (the colour so far) over the static depth back_depth (H,W) f32: each velocity group's layer
+    cut from the sharp frame rgba (H,W,4) f32 (with pasted = (window, colour there) laid over it)
+    and depth (H,W) f32, object = (window (y0, y1, x0, x1), labels (h,w) i32 there: each pixel's
+    group, -1 outside the object), parts = [(window, direction, length, blur)] box-blurred,
+    summed and composited. back: None, or the colour so far (H,W,4) f32, which out (then holding
+    nothing yet) receives outside the object's windows. Returns the pixels kept in front.
+    Releases the GIL; the same bits for any thread count."""
+
+def _object_pixels(
+    ids: np.ndarray, velocity: np.ndarray, depth: np.ndarray, window: tuple[int, int, int, int], k: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[float]]:
+    """The pixels of object k in window (y0, y1, x0, x1) of a frame: ids (H,W) i32, velocity
+    (H,W,2) f32, depth (H,W) f32. Returns (mask (h,w) bool: ids == k there, the velocities (N,2)
+    f64 and depths (N,) f32 of its pixels in row order, their mean velocity as numpy's
+    ``vs.mean(axis=0)`` gives it). Releases the GIL."""
+
+def _one_velocity_group(velocities: np.ndarray, sectors: int, ratio: float) -> bool:
+    """Whether the velocities (N,2) f64 of an object's pixels certainly all have one key of
+    ``opaque_image``'s split (``sectors`` directions, lengths in bins ``ratio`` apart, numpy's
+    floor of atan2 and log): each at least 1e-9 from its bins' edges (or exactly along +x).
+    False: not certain."""
+
 def _splat_paths(colors: np.ndarray, paths: np.ndarray, width: int, height: int) -> np.ndarray:
     """Time average of sources moving along image paths: colors (N,4) f32 premultiplied, paths
     (N,P,2) f32 pixel coordinates (centres at +0.5), the shutter split equally among the P - 1
@@ -451,9 +489,16 @@ def _opaque_blur(rgba: np.ndarray, direction: tuple[float, float], length: float
     """Box blur, eq. 10 glow and eq. 7 rescale of premultiplied rgba (H,W,4) f32. Returns (H,W,4) f32."""
 
 def _opaque_motion_blur(
-    rgba: np.ndarray, base: np.ndarray | None, direction: tuple[float, float], length: float, mode: str
+    rgba: np.ndarray,
+    base: np.ndarray | None,
+    direction: tuple[float, float],
+    length: float,
+    mode: str,
+    out: np.ndarray | None = None,
 ) -> np.ndarray:
-    """_opaque_blur composited 'over' or 'under' base (H,W,4) f32 (None: rgba). Returns (H,W,4) f32."""
+    """_opaque_blur composited 'over' or 'under' base (H,W,4) f32 (None: rgba). Returns (H,W,4) f32:
+    ``out`` itself when given ((H,W,4) f32, C-contiguous, writable, sharing no memory with rgba
+    or base; every element overwritten), else a new array."""
 
 def _pyramid_blur(rgba: np.ndarray, levels: int) -> np.ndarray:
     """4x4-box analysis, biquadratic B-spline synthesis over levels levels. (H,W,4) f32 in and out."""
@@ -654,6 +699,20 @@ def _resolve(layer: _LayerLike, samples: int, out: _LayerLike, origin: tuple[int
 
 # --- acc-frame (accumulation's per-frame kernels)
 
+def _halves(
+    parts: list[tuple[int, float, np.ndarray, tuple[int, int, int, int] | None, np.ndarray | None]],
+    window: tuple[int, int, int, int],
+    pre: tuple[float, float, float, float],
+) -> tuple[np.ndarray, np.ndarray, tuple[float, float]]:
+    """The two halves of an accumulation over ``window`` (x0, y0, x1, y1) of its (H,W) image.
+    ``parts``: each (half 0 or 1, its mass (shutter weight), base (H,W,4) f32 premultiplied, its
+    own window (x0, y0, x1, y1) or None, that window's drawn pixels (h,w,4) f32 or None), all
+    C-contiguous. Per pixel, in float64: each half's mass-weighted mean ``a``, ``b`` of its parts
+    (the drawn pixels inside a part's window, its base outside); returns (``a - b`` composited
+    over the premultiplied RGBA ``pre`` (h,w,4) f64, the frame ``(a M_a + b M_b) / (M_a + M_b)``
+    (h,w,4) f32, (M_a, M_b)). ValueError naming ``parts``, ``base``, ``window`` or ``drawn``.
+    Releases the GIL."""
+
 def _facing_faces(vertices: np.ndarray, faces: np.ndarray, eyes: np.ndarray) -> np.ndarray:
     """The faces (F',3) int64, in order, of the mesh vertices (V,3) float64 / faces (F,3) int64
     (object space) that face one of the object-space eye positions eyes (K,3) float64, K >= 1:
@@ -694,6 +753,16 @@ class _Painter:
         C-contiguous) and its opacity: None when the objects are off the image, else the window
         (x0, y0, x1, y1), its rgba (h,w,4) f32 (static layer composited), depth, ids and the
         number of rasterizer passes. Releases the GIL."""
+    def accumulate_still_parts(
+        self,
+        parts: list[_Samples],
+        camera: _StillCamera,
+        background: _LayerLike,
+        opaque: bool,
+    ) -> list[tuple[tuple[int, int, int, int], np.ndarray, np.ndarray, np.ndarray, int] | None]:
+        """`accumulate_still` of each of ``parts`` (its samples) with the same camera, static
+        layer and opacity, in one call (one hand-off to the thread pool): the same frames, in
+        order. Releases the GIL."""
     def accumulate_moving(
         self,
         samples: _Samples,

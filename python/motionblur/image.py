@@ -122,7 +122,7 @@ def opaque_blur(rgba, direction, length) -> np.ndarray:
     return _core._opaque_blur(_rgba(rgba), _direction(direction), _length(length))
 
 
-def opaque_motion_blur(rgba, direction, length, mode="over", base=None) -> np.ndarray:
+def opaque_motion_blur(rgba, direction, length, mode="over", base=None, out=None) -> np.ndarray:
     """Image-based opaque motion blur (Kraus section 4.1, figures 6 and 7).
 
     ``rgba`` (H,W,4) float32 premultiplied is the layer that moves (the masked object for
@@ -130,7 +130,11 @@ def opaque_motion_blur(rgba, direction, length, mode="over", base=None) -> np.nd
     ``direction`` (2,) over ``length`` pixels and is composited with ``base`` (H,W,4) float32
     premultiplied (default: ``rgba`` itself): ``"over"`` gives ``sub + (1 - A_sub) base`` (a
     moving foreground over the sharp image), ``"under"`` gives ``base + (1 - A_base) sub`` (a
-    moving background under the sharp foreground). Returns (H,W,4) float32 premultiplied.
+    moving background under the sharp foreground). Returns (H,W,4) float32 premultiplied: a new
+    array, or ``out`` when given (an (H,W,4) float32 C-contiguous writable array sharing no
+    memory with ``rgba`` or ``base``, every element overwritten; reusing one across frames saves
+    the new image's allocation). If the inputs are refused after the blur started (an image
+    not premultiplied), ``out``'s contents are unspecified.
     """
     if not isinstance(mode, str):
         raise TypeError(f"mode: expected a string, got {type(mode).__name__}")
@@ -138,7 +142,23 @@ def opaque_motion_blur(rgba, direction, length, mode="over", base=None) -> np.nd
         raise ValueError(f"mode: expected 'over' or 'under', got {mode!r}")
     a = _rgba(rgba)
     b = None if base is None else _rgba(base, "base", a.shape[:2])
-    return _core._opaque_motion_blur(a, b, _direction(direction), _length(length), mode)
+    if out is not None:
+        _check_out(out, a, b)
+    return _core._opaque_motion_blur(a, b, _direction(direction), _length(length), mode, out)
+
+
+def _check_out(out, *inputs) -> None:
+    """``out`` is a writable C-contiguous float32 array of the first input's shape that shares no
+    memory with any input; else TypeError or ValueError naming ``out``."""
+    if not isinstance(out, np.ndarray):
+        raise TypeError(f"out: expected a numpy array, got {type(out).__name__}")
+    want = inputs[0].shape
+    if out.dtype != np.float32 or out.shape != want:
+        raise ValueError(f"out: expected a float32 array of shape {want}, got {out.dtype} {out.shape}")
+    if not (out.flags.c_contiguous and out.flags.writeable):
+        raise ValueError("out: must be C-contiguous and writable")
+    if any(x is not None and np.shares_memory(out, x) for x in inputs):
+        raise ValueError("out: must not share memory with rgba or base")
 
 
 def _levels(levels) -> int:

@@ -1,9 +1,10 @@
 //! The accumulation buffer: its kernels (the weighted, depth-tested sum of a moving layer, the
 //! composite and resolve of layers), the conservative back-face selection of a translating
-//! mesh, the painter that draws objects at any shutter time, and the whole frame's samples in
-//! one call.
+//! mesh, the painter that draws objects at any shutter time, the whole frame's samples in
+//! one call, and the frame and error difference of its two halves.
 mod facing;
 mod frame;
+mod halves;
 mod kernels;
 mod painter;
 
@@ -12,5 +13,6 @@ pub use frame::{
     accumulate_moving, accumulate_still, pixel_rect, sample_rects, window_projection, Accumulated,
     Samples, StillCamera,
 };
+pub use halves::{halves, HalfPart, Halves, SERIAL_PIXELS};
 pub use kernels::{accumulate, composite, over, resolve, BuffersMut, Rect};
 pub use painter::{PaintObject, Painter};

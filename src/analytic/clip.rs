@@ -80,13 +80,16 @@ impl ClipTable {
         }
     }
 
-    /// Point `i`, which must be marked.
+    /// Point `i`, None when it is not marked (or past the table).
     #[inline]
-    pub fn get(&self, i: usize) -> [f64; 4] {
+    pub fn get(&self, i: usize) -> Option<[f64; 4]> {
         let w = i >> 6;
-        let below = self.words[w] & ((1u64 << (i & 63)) - 1);
-        debug_assert!(self.words[w] >> (i & 63) & 1 == 1, "point {i} not marked");
-        self.points[(self.ranks[w] + u64::from(below.count_ones())) as usize]
+        let word = *self.words.get(w)?;
+        if word >> (i & 63) & 1 == 0 {
+            return None;
+        }
+        let below = word & ((1u64 << (i & 63)) - 1);
+        Some(self.points[(self.ranks[w] + u64::from(below.count_ones())) as usize])
     }
 }
 
@@ -120,8 +123,10 @@ mod tests {
         picked.iter().for_each(|&i| marks.mark(i)); // twice: still once
         let t = ClipTable::new(marks, value);
         assert_eq!(t.points.len(), picked.len());
-        for &i in &picked {
-            assert_eq!(t.get(i), value(i));
+        for i in 0..n + 200 {
+            // a marked point's value; None for the others and past the table
+            let want = picked.contains(&i).then(|| value(i));
+            assert_eq!(t.get(i), want, "point {i}");
         }
     }
 }

@@ -355,7 +355,9 @@ impl Prepared<'_> {
         let i = k * self.nv + v;
         match &self.clip {
             Clip::Dense(c) => c[i],
-            Clip::Table(t) => t.get(i),
+            // every point a strip's triangles use is in its table; one that were not is
+            // computed here, the same value, rather than read from a neighbour's place
+            Clip::Table(t) => t.get(i).unwrap_or_else(|| self.compute(k, i)),
             Clip::Direct => self.compute(k, i),
         }
     }

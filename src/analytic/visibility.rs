@@ -449,12 +449,9 @@ pub fn sweep(
 mod tests {
     use super::*;
 
-    #[test]
-    fn a_chain_is_ordered_by_each_link_depth_not_by_its_ends() {
-        // A chain of two triangles: depth 1 -> 3 over [0, 0.5], then 3 -> 1 over [0.5, 1].
-        // Its ends are both at depth 1, so a straight line between them would keep it in front
-        // of the flat fragment at depth 2 throughout; per link it is behind over (0.25, 0.75).
-        let links = [
+    /// Two chained links: depth 1 -> 3 over [0, 0.5] (prim 0), then 3 -> 1 over [0.5, 1] (prim 1).
+    fn rising_then_falling() -> [Link; 2] {
+        [
             Link {
                 t0: 0.0,
                 z0: 1.0,
@@ -467,14 +464,12 @@ mod tests {
                 prim: 1,
                 next: NONE,
             },
-            Link {
-                t0: 0.0,
-                z0: 2.0,
-                prim: 2,
-                next: NONE,
-            },
-        ];
-        let chain = Frag {
+        ]
+    }
+
+    /// The fragment of [`rising_then_falling`]'s chain over the whole shutter.
+    fn chain_of_two() -> Frag {
+        Frag {
             t0: 0.0,
             t1: 1.0,
             z0: 1.0,
@@ -482,7 +477,26 @@ mod tests {
             prim: 0,
             chain: 0,
             n: 2,
-        };
+        }
+    }
+
+    #[test]
+    fn a_chain_is_ordered_by_each_link_depth_not_by_its_ends() {
+        // A chain of two triangles: depth 1 -> 3 over [0, 0.5], then 3 -> 1 over [0.5, 1].
+        // Its ends are both at depth 1, so a straight line between them would keep it in front
+        // of the flat fragment at depth 2 throughout; per link it is behind over (0.25, 0.75).
+        let [l0, l1] = rising_then_falling();
+        let links = [
+            l0,
+            l1,
+            Link {
+                t0: 0.0,
+                z0: 2.0,
+                prim: 2,
+                next: NONE,
+            },
+        ];
+        let chain = chain_of_two();
         let flat = Frag {
             t0: 0.0,
             t1: 1.0,
@@ -539,29 +553,8 @@ mod tests {
         // the backdrop. Backdrop at depth 5: in front throughout (the short path, no depth
         // tests), one piece per link, or one in all when joined. Backdrop at depth 2: the chain
         // crosses it at 0.25 and 0.75 (the general path), and is behind over [0.25, 0.75].
-        let links = [
-            Link {
-                t0: 0.0,
-                z0: 1.0,
-                prim: 0,
-                next: 1,
-            },
-            Link {
-                t0: 0.5,
-                z0: 3.0,
-                prim: 1,
-                next: NONE,
-            },
-        ];
-        let chain = Frag {
-            t0: 0.0,
-            t1: 1.0,
-            z0: 1.0,
-            z1: 1.0,
-            prim: 0,
-            chain: 0,
-            n: 2,
-        };
+        let links = rising_then_falling();
+        let chain = chain_of_two();
         let run = |z: f32, opaque: bool, joined: bool| {
             let bg = StaticSample {
                 rgba: [0.0; 4],

@@ -24,6 +24,39 @@ use crate::error::{Error, Result};
 /// A window `(y0, y1, x0, x1)` of an image: rows `y0..y1`, columns `x0..x1`.
 pub type Window = (usize, usize, usize, usize);
 
+/// One pixel of the composite of the module docs: the blurred colour `b`, the static colour
+/// `s` and, with layers, `(zm, m, z)` (the blurred depth-times-mask and mask, the static
+/// depth). Returns the pixel and whether the static pixel was kept in front.
+#[inline(always)]
+pub(crate) fn composite_pixel(
+    mut b: [f32; 4],
+    s: [f32; 4],
+    layers: Option<(f32, f32, f32)>,
+) -> ([f32; 4], bool) {
+    if b[3] > 1.0 {
+        let r = 1.0 / b[3];
+        b = b.map(|v| v * r);
+    }
+    let mut o = [0.0f32; 4];
+    for k in 0..4 {
+        o[k] = (1.0 - b[3]) * s[k] + b[k];
+    }
+    if let Some((zm, m, z)) = layers {
+        // (m > 1e-6 is false for NaN, as numpy's; then m is no NaN and the max below is
+        // numpy's maximum)
+        if m > 1e-6 {
+            let zbar = zm / if m > 1e-30 { m } else { 1e-30 };
+            if z < zbar {
+                for k in 0..4 {
+                    o[k] = s[k] + (1.0 - s[3]) * b[k];
+                }
+                return (o, true);
+            }
+        }
+    }
+    (o, false)
+}
+
 /// The composite of the module docs over `window` of the `w` x `h` static colour `back`
 /// (`(h, w, 4)`) and depth `back_depth` (`(h, w)`): `blurred` and `depth` are `(y1 - y0, x1 -
 /// x0, 4)`. Returns the window's colour and the number of pixels kept in front (0 without
@@ -68,30 +101,11 @@ pub fn coverage_composite(
                 for c in 0..ww {
                     let i = (r * ww + c) * 4;
                     let j = y * w + x0 + c;
-                    let mut b: [f32; 4] = blurred[i..i + 4].try_into().expect("four channels");
-                    if b[3] > 1.0 {
-                        let s = 1.0 / b[3];
-                        b = b.map(|v| v * s);
-                    }
+                    let b: [f32; 4] = blurred[i..i + 4].try_into().expect("four channels");
                     let s: [f32; 4] = back[j * 4..j * 4 + 4].try_into().expect("four channels");
-                    let mut o = [0.0f32; 4];
-                    for k in 0..4 {
-                        o[k] = (1.0 - b[3]) * s[k] + b[k];
-                    }
-                    if layers {
-                        let (zm, m) = (depth[i], depth[i + 3]);
-                        // (m > 1e-6 is false for NaN, as numpy's; then m is no NaN and the
-                        // max below is numpy's maximum)
-                        if m > 1e-6 {
-                            let zbar = zm / if m > 1e-30 { m } else { 1e-30 };
-                            if back_depth[j] < zbar {
-                                front += 1;
-                                for k in 0..4 {
-                                    o[k] = s[k] + (1.0 - s[3]) * b[k];
-                                }
-                            }
-                        }
-                    }
+                    let z = layers.then(|| (depth[i], depth[i + 3], back_depth[j]));
+                    let (o, near) = composite_pixel(b, s, z);
+                    front += near as u64;
                     put4(row, c, o);
                 }
                 front

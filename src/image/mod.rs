@@ -17,10 +17,12 @@ mod camera;
 mod camera_line;
 mod colors;
 mod coverage;
+mod coverage_blur;
 mod dof;
 mod glow;
 mod lens;
 mod lines;
+mod object_pixels;
 mod opaque;
 mod opaque_row;
 mod pool;
@@ -31,6 +33,7 @@ mod scatter;
 mod sheared_finish;
 mod sheared_row;
 mod splat;
+mod velocity_groups;
 
 pub use boxblur::box_blur;
 pub use camera::{
@@ -39,15 +42,18 @@ pub use camera::{
 };
 pub use colors::{colored, pixel_bounds, sample_colors, MIN_ALPHA};
 pub use coverage::coverage_composite;
+pub use coverage_blur::{coverage_blur, CoverageObject, CoveragePart, CoverageSource};
 pub use dof::{depth_of_field, DofParams, MAX_LAYERS};
 pub use glow::glow;
 pub use lens::{lens_blur, LensParams, MAX_LENS_LEVELS};
-pub use opaque::{opaque_blur, opaque_motion_blur};
+pub use object_pixels::{object_pixels, ObjectPixels};
+pub use opaque::{opaque_blur, opaque_motion_blur, opaque_motion_blur_into};
 pub use opaque_row::Composite;
 pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};
 pub use reconstruct::{max_speed, reconstruct, ReconstructParams, MAX_TAPS};
 pub use scatter::{scatter_pieces, Piece};
 pub use splat::splat_paths;
+pub use velocity_groups::one_velocity_group;
 
 use crate::budget::Need;
 use crate::error::{Error, Result};

@@ -17,7 +17,7 @@ use super::opaque_row::{
 use super::sheared_finish::{finish_row, Unshear};
 use super::sheared_row::{filter_row, FilterScratch};
 use super::{check_direction, check_image, check_premultiplied, filled, put4, simd, write_copy};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use std::mem::MaybeUninit;
 
 /// From this many output floats (16 MiB, a 1280x720 frame and up) the rows are written with
@@ -272,36 +272,70 @@ fn opaque_impl(
     length: f32,
     comp: Option<Composite>,
 ) -> Result<Vec<f32>> {
+    check_inputs(rgba, base, w, h, direction, length)?;
+    let mut ok = Ok(());
+    let out = filled(w * h * 4, |out| {
+        ok = opaque_write(rgba, base, w, h, direction, length, comp, out)
+    });
+    ok.map(|()| out)
+}
+
+/// The image and direction checks every opaque blur makes before it allocates.
+fn check_inputs(
+    rgba: &[f32],
+    base: Option<&[f32]>,
+    w: usize,
+    h: usize,
+    direction: [f32; 2],
+    length: f32,
+) -> Result<()> {
     check_image("rgba", rgba, w, h, 4)?;
     if let Some(b) = base {
         check_image("base", b, w, h, 4)?;
     }
-    check_direction(direction, length, "length")?;
+    check_direction(direction, length, "length")
+}
+
+/// The opaque blur of `rgba` composited `comp` its base (`rgba` itself when `base` is `None`),
+/// written into every element of `out` (`(h, w, 4)`); the inputs checked ([`check_inputs`]).
+/// On an error (an image not premultiplied) `out`'s contents are unspecified.
+#[allow(clippy::too_many_arguments)]
+fn opaque_write(
+    rgba: &[f32],
+    base: Option<&[f32]>,
+    w: usize,
+    h: usize,
+    direction: [f32; 2],
+    length: f32,
+    comp: Option<Composite>,
+    out: &mut [MaybeUninit<f32>],
+) -> Result<()> {
     let base_img = base.unwrap_or(rgba);
     let p = plan(direction, length * 0.5);
     if p.is_none() {
         check_premultiplied("rgba", rgba, 4)?;
         check_premultiplied("base", base_img, 4)?;
     }
-    let mut ok = Ok(true);
-    let out = filled(w * h * 4, |out| match p {
+    let ok = match p {
         Some(p) if !p.transpose && p.slope == 0.0 => {
-            ok = Ok(rows_path(rgba, base_img, w, p.radius, comp, out));
+            rows_path(rgba, base_img, w, p.radius, comp, out)
         }
-        Some(p) => ok = crop_path(rgba, base_img, w, h, &p, comp, out),
-        None => out
-            .par_chunks_mut(4)
-            .zip(rgba.par_chunks(4))
-            .zip(base_img.par_chunks(4))
-            .for_each(|((o, px), b)| {
-                put4(o, 0, finish([px[0], px[1], px[2], px[3]], px[3], b, comp))
-            }),
-    });
-    if !ok? {
+        Some(p) => crop_path(rgba, base_img, w, h, &p, comp, out)?,
+        None => {
+            out.par_chunks_mut(4)
+                .zip(rgba.par_chunks(4))
+                .zip(base_img.par_chunks(4))
+                .for_each(|((o, px), b)| {
+                    put4(o, 0, finish([px[0], px[1], px[2], px[3]], px[3], b, comp))
+                });
+            true
+        }
+    };
+    if !ok {
         check_premultiplied("rgba", rgba, 4)?;
         check_premultiplied("base", base_img, 4)?;
     }
-    Ok(out)
+    Ok(())
 }
 
 /// Opaque image blur of a `(h, w, 4)` premultiplied image along `direction` over `length` pixels:
@@ -328,4 +362,27 @@ pub fn opaque_motion_blur(
     mode: Composite,
 ) -> Result<Vec<f32>> {
     opaque_impl(rgba, base, w, h, direction, length, Some(mode))
+}
+
+/// [`opaque_motion_blur`] written into `out` (`(h, w, 4)`, every element overwritten): the same
+/// values, without a new image (and, for a frame-sized one, without the fresh pages the system
+/// must clear first). On an error `out`'s contents are unspecified.
+#[allow(clippy::too_many_arguments)]
+pub fn opaque_motion_blur_into(
+    rgba: &[f32],
+    base: Option<&[f32]>,
+    w: usize,
+    h: usize,
+    direction: [f32; 2],
+    length: f32,
+    mode: Composite,
+    out: &mut [f32],
+) -> Result<()> {
+    check_inputs(rgba, base, w, h, direction, length)?;
+    if out.len() != w * h * 4 {
+        return Err(Error::shape("out", "must be (H, W, 4) like rgba"));
+    }
+    // SAFETY: MaybeUninit<f32> has f32's layout, and the writer only stores initialised values.
+    let out = unsafe { &mut *(out as *mut [f32] as *mut [MaybeUninit<f32>]) };
+    opaque_write(rgba, base, w, h, direction, length, Some(mode), out)
 }

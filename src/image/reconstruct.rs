@@ -259,7 +259,9 @@ pub fn reconstruct(
                     while x < end {
                         // eight still pixels side by side (the same bits as one by one)
                         if simd && x + 8 <= end {
-                            if let Some(px) = gather8(&g, (x, y), (n, rn)) {
+                            if let Some(px) =
+                                still8(&g, (x, y), (n, rn)).or_else(|| gather8(&g, (x, y), (n, rn)))
+                            {
                                 for (l, p) in px.into_iter().enumerate() {
                                     super::put4(row, x + l, p);
                                 }
@@ -267,7 +269,16 @@ pub fn reconstruct(
                                 continue;
                             }
                         }
-                        super::put4(row, x, gather(&g, (x, y), (n, rn)));
+                        let i = y * w + x;
+                        if rn.max(speed[i]) < 0.5 {
+                            // `gather`'s copy of a still pixel in a still neighbourhood, inline
+                            row[x * 4..x * 4 + 4]
+                                .iter_mut()
+                                .zip(&rgba[i * 4..i * 4 + 4])
+                                .for_each(|(d, s)| _ = d.write(*s));
+                        } else {
+                            super::put4(row, x, gather(&g, (x, y), (n, rn)));
+                        }
                         x += 1;
                     }
                 }
@@ -463,6 +474,137 @@ fn finish(sums: &Sums, own: &[f32]) -> [f32; 4] {
         out[k] = (fg[k] + bg[k]) * inv + back * fill;
     }
     out
+}
+
+/// [`gather`] of the eight pixels `(x..x + 8, y)` of one tile (neighbour max `n`, its length
+/// `rn >= 0.5`) when nothing moves within reach of any of them: the reach grid is 0 at both
+/// ends of the run, so every pixel's half speed is 0 and its stop is `weightless_from(0) + 1`.
+/// A pixel whose first tap (`j / pairs * rn`) already lies past that stop is its centre tap
+/// and the count of its other taps, which [`gather`] computes for it with the same operations;
+/// the others are gathered one by one. The same bits, without the vector taps' set-up (most
+/// of a frame whose movers are small). None otherwise.
+#[inline]
+fn still8(
+    g: &Gather<'_>,
+    (x, y): (usize, usize),
+    (n, rn): ([f32; 2], f32),
+) -> Option<[[f32; 4]; 8]> {
+    let reach = g.reach;
+    if rn.is_nan()
+        || rn < 0.5
+        || reach.reach[reach.index(x, y)] != 0.0
+        || reach.reach[reach.index(x + 7, y)] != 0.0
+    {
+        return None;
+    }
+    #[cfg(test)]
+    tests::STILL_RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let pairs = g.params.samples / 2;
+    let stop = weightless_from(0.0) + 1.0;
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::simd_enabled() {
+        // SAFETY: AVX2 was detected; x + 8 <= w (the caller's tile), so the run's 32 values
+        // lie inside `rgba`.
+        if let Some((mut px, past)) = unsafe { still8_avx(g, (x, y), (n, rn), stop) } {
+            for (l, p) in px.iter_mut().enumerate() {
+                if past & (1 << l) == 0 {
+                    *p = gather(g, (x + l, y), (n, rn));
+                }
+            }
+            return Some(px);
+        }
+    }
+    Some(std::array::from_fn(|l| {
+        // the first pair's distance, as `gather` places it: t = (0 + j) / pairs along n
+        let first = (0.0 + jitter(x + l, y)) / pairs.max(1) as f32;
+        let past = first * rn >= stop;
+        if !past {
+            return gather(g, (x + l, y), (n, rn));
+        }
+        let i = (y * g.w + x + l) * 4;
+        let c = &g.rgba[i..i + 4];
+        let half = std::array::from_fn(|k| 0.0 + 0.5 * c[k]);
+        let sums = Sums {
+            fg: half,
+            bg: half,
+            wf: 0.0 + 0.5,
+            wb: 0.0 + 0.5,
+            taps: 1.0 + count_taps(g, (x + l, y), n, (0, pairs), pairs),
+        };
+        finish(&sums, c)
+    }))
+}
+
+/// [`still8`]'s run when all its pixels' taps fall inside the image (so each counts
+/// `1 + 2 pairs` taps), in AVX2, and the lanes (bit `l` for pixel `x + l`) whose first tap lies
+/// past `stop`: there each pixel's colour `c` becomes `(h + h) / N + (h / 0.5) (1 - 1 / N)`
+/// with `h = 0 + 0.5 c`, [`finish`]'s operations on the centre tap's sums (`h / 0.5` as
+/// `2 h`: scaling by a power of two is exact either way); the other lanes are to be gathered.
+/// The jitter is [`jitter`]'s integer hash lane by lane. None when a tap can leave the image.
+///
+/// # Safety
+/// AVX2 is present and `x + 8 <= w`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn still8_avx(
+    g: &Gather<'_>,
+    (x, y): (usize, usize),
+    (n, rn): ([f32; 2], f32),
+    stop: f32,
+) -> Option<([[f32; 4]; 8], i32)> {
+    use std::arch::x86_64::*;
+    let pairs = g.params.samples / 2;
+    // count_taps' closed form: every tap within |n| + 1 of the first and last pixel centres
+    let (ax, ay) = (n[0].abs() + 1.0, n[1].abs() + 1.0);
+    let (x0, x7, yf) = (x as f32 + 0.5, (x + 7) as f32 + 0.5, y as f32 + 0.5);
+    if !(x0 - ax >= 0.0 && yf - ay >= 0.0 && x7 + ax < g.w as f32 && yf + ay < g.h as f32) {
+        return None;
+    }
+    let xs = _mm256_add_epi32(
+        _mm256_set1_epi32(x as i32),
+        _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7),
+    );
+    let mut hash = _mm256_xor_si256(
+        _mm256_mullo_epi32(xs, _mm256_set1_epi32(0x8da6_b343_u32 as i32)),
+        _mm256_set1_epi32((y as u32).wrapping_mul(0xd816_3841) as i32),
+    );
+    hash = _mm256_xor_si256(hash, _mm256_srli_epi32::<13>(hash));
+    hash = _mm256_mullo_epi32(hash, _mm256_set1_epi32(0x5bd1_e995_u32 as i32));
+    hash = _mm256_xor_si256(hash, _mm256_srli_epi32::<15>(hash));
+    let j = _mm256_div_ps(
+        _mm256_cvtepi32_ps(_mm256_srli_epi32::<8>(hash)),
+        _mm256_set1_ps((1u32 << 24) as f32),
+    );
+    let zero = _mm256_setzero_ps();
+    let first = _mm256_div_ps(_mm256_add_ps(zero, j), _mm256_set1_ps(pairs.max(1) as f32));
+    let past = _mm256_cmp_ps::<_CMP_GE_OQ>(
+        _mm256_mul_ps(first, _mm256_set1_ps(rn)),
+        _mm256_set1_ps(stop),
+    );
+    let past = _mm256_movemask_ps(past);
+    let taps = 1.0 + (2 * pairs) as f32;
+    let inv = 1.0 / taps;
+    let fill = (1.0 - (0.5f32 + 0.5) / taps).clamp(0.0, 1.0);
+    let (inv, fill, half, two) = (
+        _mm256_set1_ps(inv),
+        _mm256_set1_ps(fill),
+        _mm256_set1_ps(0.5),
+        _mm256_set1_ps(2.0),
+    );
+    #[cfg(test)]
+    tests::STILL_VECTOR_RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let mut out = [[0.0f32; 4]; 8];
+    let src = g.rgba.as_ptr().add((y * g.w + x) * 4);
+    let dst = out.as_mut_ptr().cast::<f32>();
+    for r in 0..4 {
+        let h = _mm256_add_ps(zero, _mm256_mul_ps(half, _mm256_loadu_ps(src.add(8 * r))));
+        let o = _mm256_add_ps(
+            _mm256_mul_ps(_mm256_add_ps(h, h), inv),
+            _mm256_mul_ps(_mm256_mul_ps(h, two), fill),
+        );
+        _mm256_storeu_ps(dst.add(8 * r), o);
+    }
+    Some((out, past))
 }
 
 /// [`gather`] of the eight pixels `(x..x + 8, y)` of one tile (neighbour max `n`, its length
@@ -1000,6 +1142,71 @@ mod tests {
         assert_eq!(vector.len(), plain.len());
         assert!(same(&vector, &plain), "vector against plain");
         assert!(same(&one, &plain) && same(&two, &plain), "thread counts");
+    }
+
+    /// Runs of eight pixels `still8` gave (any test's).
+    pub(super) static STILL_RUNS: std::sync::atomic::AtomicUsize =
+        std::sync::atomic::AtomicUsize::new(0);
+    /// Of those, the runs `still8_avx` gave.
+    pub(super) static STILL_VECTOR_RUNS: std::sync::atomic::AtomicUsize =
+        std::sync::atomic::AtomicUsize::new(0);
+
+    #[test]
+    fn still_runs_give_the_gathers_bits() {
+        // one small fast mover near the left edge, the rest of a wide image still: beyond the
+        // mover's reach the runs of eight are their centre tap and a count (`still8`, in AVX2
+        // where every first tap is past its stop and every tap inside the image), near it and
+        // at the image's edges (taps off the image) they are gathered; tiles that cover the
+        // whole image and tiles that do not (still tiles copied); subnormal colours
+        let (w, h) = (1003, 40);
+        let rgba: Vec<f32> = (0..w * h * 4)
+            .map(|i| ((i * 7919) % 1000) as f32 / 1000.0 + if i % 97 == 0 { 1e-39 } else { 0.0 })
+            .map(|v| if v > 0.999 { 3e-39 } else { v })
+            .collect();
+        let mut depth: Vec<f32> = (0..w * h).map(|i| 4.0 + (i % 13) as f32 * 0.05).collect();
+        depth[w * 20..w * 22].fill(f32::INFINITY);
+        let mut vel = vec![0.0f32; w * h * 2];
+        for y in 10..20 {
+            for x in 0..12 {
+                vel[(y * w + x) * 2] = 600.0 - x as f32;
+                vel[(y * w + x) * 2 + 1] = 3.0;
+            }
+        }
+        let cases = [(16, 200), (16, 31), (6, 150), (32, 700), (2, 90)];
+        let run = |(samples, tile)| {
+            let p = ReconstructParams {
+                samples,
+                tile,
+                soft_depth: 0.02,
+            };
+            (reconstruct(&rgba, &depth, &vel, w, h, p).unwrap(), p)
+        };
+        let _guard = crate::simd::SWITCH
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        let before = crate::simd::set_simd(true);
+        let count =
+            |c: &std::sync::atomic::AtomicUsize| c.load(std::sync::atomic::Ordering::Relaxed);
+        let (runs, vector_runs) = (count(&STILL_RUNS), count(&STILL_VECTOR_RUNS));
+        let vector: Vec<_> = cases.into_iter().map(run).collect();
+        let (runs, vector_runs) = (
+            count(&STILL_RUNS) - runs,
+            count(&STILL_VECTOR_RUNS) - vector_runs,
+        );
+        crate::simd::set_simd(false);
+        let plain: Vec<_> = cases.into_iter().map(|c| run(c).0).collect();
+        crate::simd::set_simd(before);
+        if crate::simd::simd_enabled() {
+            assert!(runs > 5000, "still8 ran on {runs} runs");
+            assert!(vector_runs > 1000, "still8_avx ran on {vector_runs} runs");
+        }
+        for ((v, p), q) in vector.iter().zip(&plain) {
+            let oracle = unskipped(&rgba, &depth, &vel, (w, h), *p);
+            let same =
+                |a: &[f32], b: &[f32]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+            assert!(same(v, q), "vector against plain, {p:?}");
+            assert!(same(v, &oracle), "vector against every tap, {p:?}");
+        }
     }
 
     #[test]

@@ -6,8 +6,11 @@ use numpy::{
 use pyo3::prelude::*;
 
 use super::args::{LayerArg, LayerMutArg};
-use super::convert::{c_slice, c_slice_mut, detached_in_pool, flat_rows_array, rows};
-use crate::{accumulate, composite, facing_faces, over, resolve, BuffersMut, Error, Rect};
+use super::convert::{c_slice, c_slice_mut, detached_in_pool, flat_rows_array, rows, shaped};
+use crate::{
+    accumulate, composite, facing_faces, halves, over, resolve, BuffersMut, Error, HalfPart, Rect,
+    SERIAL_PIXELS,
+};
 
 /// acc[y0:y0+h, x0:x0+w] (H,W,4) f32 += weight * rgba (h,w,4) f32 where depth (h,w) <
 /// limit[y0:y0+h, x0:x0+w] (limit (H,W), or everywhere when None), `origin` = (x0, y0). In
@@ -157,7 +160,68 @@ fn _facing_faces<'py>(
     Ok(flat_rows_array(py, kept, 3))
 }
 
+/// One part of [`_halves`]: (half 0 or 1, its mass, base (H,W,4) f32, its window
+/// (x0, y0, x1, y1) or None, the window's drawn pixels (h,w,4) f32 or None).
+type HalfPartArg<'py> = (
+    usize,
+    f64,
+    PyReadonlyArray3<'py, f32>,
+    Option<[usize; 4]>,
+    Option<PyReadonlyArray3<'py, f32>>,
+);
+
+/// [`_halves`]' result: (difference, frame, (mass of half 0, mass of half 1)).
+type HalvesOut<'py> = (Bound<'py, PyAny>, Bound<'py, PyAny>, (f64, f64));
+
+/// The halves of an accumulation over `window` (x0, y0, x1, y1) of its image (`parts`: each a
+/// [`HalfPartArg`]), their difference composited over `pre` (premultiplied RGBA): (difference
+/// (h,w,4) f64, frame (h,w,4) f32, (mass of half 0, mass of half 1)). A window under
+/// `SERIAL_PIXELS` pixels is made on the calling thread; releases the GIL.
+#[pyfunction]
+fn _halves<'py>(
+    py: Python<'py>,
+    parts: Vec<HalfPartArg<'py>>,
+    window: [usize; 4],
+    pre: [f64; 4],
+) -> PyResult<HalvesOut<'py>> {
+    let Some(first) = parts.first() else {
+        return Err(Error::value("parts", "at least one part expected").into());
+    };
+    let (h, w) = (first.2.shape()[0], first.2.shape()[1]);
+    let mut views = Vec::with_capacity(parts.len());
+    for (half, mass, base, win, drawn) in &parts {
+        if base.shape() != [h, w, 4] {
+            return Err(Error::shape("base", "every part's base must be (H, W, 4)").into());
+        }
+        let drawn = match (win, drawn) {
+            (Some(r), Some(d)) => Some((*r, c_slice(d, "drawn")?)),
+            (None, None) => None,
+            _ => return Err(Error::value("window", "a window goes with its drawn pixels").into()),
+        };
+        views.push(HalfPart {
+            half: *half,
+            mass: *mass,
+            base: c_slice(base, "base")?,
+            window: drawn,
+        });
+    }
+    let [x0, y0, x1, y1] = window;
+    let run = || halves(&views, (w, h), window, pre);
+    let out = if (x1.saturating_sub(x0)) * (y1.saturating_sub(y0)) < SERIAL_PIXELS {
+        py.detach(run)?
+    } else {
+        detached_in_pool(py, run)?
+    };
+    let dims = [y1 - y0, x1 - x0, 4];
+    Ok((
+        shaped(py, out.difference, dims)?,
+        shaped(py, out.frame, dims)?,
+        (out.masses[0], out.masses[1]),
+    ))
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(_halves, m)?)?;
     m.add_function(wrap_pyfunction!(_resolve, m)?)?;
     m.add_function(wrap_pyfunction!(_composite, m)?)?;
     m.add_function(wrap_pyfunction!(_accumulate, m)?)?;

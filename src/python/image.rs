@@ -3,17 +3,21 @@
 //! dtypes and checks parameters first; these checks are the second line.
 use glam::DMat4;
 use numpy::{
-    PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArray4, PyUntypedArrayMethods,
+    PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
+    PyReadonlyArray4, PyReadwriteArray3, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 
-use super::convert::{c_slice, detached_in_pool, rows, shaped};
+use super::convert::{c_slice, c_slice_mut, detached_in_pool, rows, shaped};
 use crate::{
-    CameraBlur, CameraMatrices, Composite, DofParams, Error, Layer, LensParams, Piece,
-    ReconstructParams,
+    CameraBlur, CameraMatrices, Composite, CoverageObject, CoveragePart, CoverageSource, DofParams,
+    Error, Layer, LensParams, Piece, ReconstructParams,
 };
 
 type PyOut<'py> = PyResult<Bound<'py, PyAny>>;
+
+/// A window (y0, y1, x0, x1) of an image.
+type Window = (usize, usize, usize, usize);
 
 /// `(h, w, channels)` float32 C-contiguous image: its data, width and height.
 fn img3<'a>(
@@ -292,9 +296,10 @@ fn _opaque_blur<'py>(
     shaped(py, out, [h, w, 4])
 }
 
-/// Opaque motion blur of rgba (H,W,4) f32 composited `mode` base (H,W,4) f32 or rgba itself.
+/// Opaque motion blur of rgba (H,W,4) f32 composited `mode` base (H,W,4) f32 or rgba itself;
+/// written into `out` (H,W,4) f32 and returned as it when given, else a new array.
 #[pyfunction]
-#[pyo3(signature = (rgba, base, direction, length, mode))]
+#[pyo3(signature = (rgba, base, direction, length, mode, out=None))]
 fn _opaque_motion_blur<'py>(
     py: Python<'py>,
     rgba: PyReadonlyArray3<'py, f32>,
@@ -302,6 +307,7 @@ fn _opaque_motion_blur<'py>(
     direction: [f32; 2],
     length: f32,
     mode: &str,
+    out: Option<Bound<'py, PyArray3<f32>>>,
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
     let mode = Composite::parse(mode)?;
@@ -313,10 +319,33 @@ fn _opaque_motion_blur<'py>(
         }
         None => None,
     };
-    let out = detached_in_pool(py, || {
-        crate::opaque_motion_blur(a, b, w, h, direction, length, mode)
+    let Some(out) = out else {
+        let out = detached_in_pool(py, || {
+            crate::opaque_motion_blur(a, b, w, h, direction, length, mode)
+        })?;
+        return shaped(py, out, [h, w, 4]);
+    };
+    // a read-write borrow: numpy's borrow checker refuses an `out` that shares memory with
+    // rgba or base (borrowed read-only above)
+    let mut o = out.try_readwrite().map_err(|_| {
+        Error::value(
+            "out",
+            "must be a writable array sharing no memory with rgba or base",
+        )
     })?;
-    shaped(py, out, [h, w, 4])
+    if o.shape() != [h, w, 4] {
+        return Err(Error::shape(
+            "out",
+            format!("expected shape ({h}, {w}, 4), got {:?}", o.shape()),
+        )
+        .into());
+    }
+    let dst = c_slice_mut(&mut o, "out")?;
+    detached_in_pool(py, || {
+        crate::opaque_motion_blur_into(a, b, w, h, direction, length, mode, dst)
+    })?;
+    drop(o);
+    Ok(out.into_any())
 }
 
 /// Pyramid blur of rgba (H,W,4) f32 over `levels` levels.
@@ -559,11 +588,133 @@ fn _coverage_composite<'py>(
     Ok((shaped(py, out, [bh, bw, 4])?, front))
 }
 
+/// The `opaque_image` method's coverage glow of one moving object, in place on out (H,W,4) f32
+/// (the colour so far) over the static depth back_depth (H,W) f32: layers cut from the sharp
+/// frame rgba (H,W,4) f32 with pasted = (window, colour there) or None laid over it and depth
+/// (H,W) f32, object = (window, labels (h,w) i32 there), parts = [(window, direction, length,
+/// blur)]. back: None, or the colour so far (H,W,4) f32, which out (then holding nothing yet)
+/// receives outside the object's windows. Returns the pixels kept in front.
+#[pyfunction]
+#[allow(clippy::too_many_arguments, clippy::type_complexity)]
+fn _coverage_blur(
+    py: Python<'_>,
+    mut out: PyReadwriteArray3<'_, f32>,
+    back_depth: PyReadonlyArray2<'_, f32>,
+    rgba: PyReadonlyArray3<'_, f32>,
+    pasted: Option<(Window, PyReadonlyArray3<'_, f32>)>,
+    depth: PyReadonlyArray2<'_, f32>,
+    object: (Window, PyReadonlyArray2<'_, i32>),
+    parts: Vec<(Window, [f32; 2], f32, bool)>,
+    layers: bool,
+    back: Option<PyReadonlyArray3<'_, f32>>,
+) -> PyResult<u64> {
+    let (w, h) = (out.shape()[1], out.shape()[0]);
+    if out.shape()[2] != 4 {
+        return Err(Error::shape("out", "expected shape (H,W,4)").into());
+    }
+    let (r, rw, rh) = img3(&rgba, "rgba", 4)?;
+    same_size("rgba", (rh, rw), (h, w))?;
+    let (z, zw, zh) = img2(&back_depth, "back_depth")?;
+    same_size("back_depth", (zh, zw), (h, w))?;
+    let (d, dw, dh) = img2(&depth, "depth")?;
+    same_size("depth", (dh, dw), (h, w))?;
+    let pasted = match &pasted {
+        Some((win, a)) => Some((*win, img3(a, "pasted", 4)?.0)),
+        None => None,
+    };
+    let labels = c_slice(&object.1, "labels")?;
+    let parts: Vec<CoveragePart> = parts
+        .into_iter()
+        .map(|(window, direction, length, blur)| CoveragePart {
+            window,
+            direction,
+            length,
+            blur,
+        })
+        .collect();
+    let source = CoverageSource {
+        rgba: r,
+        pasted,
+        depth: d,
+    };
+    let object = CoverageObject {
+        window: object.0,
+        labels,
+        parts: &parts,
+    };
+    let back = match &back {
+        Some(b) => {
+            let (b, bw, bh) = img3(b, "back", 4)?;
+            same_size("back", (bh, bw), (h, w))?;
+            Some(b)
+        }
+        None => None,
+    };
+    let o = c_slice_mut(&mut out, "out")?;
+    Ok(detached_in_pool(py, || {
+        crate::coverage_blur((o, back), z, (w, h), &source, &object, layers)
+    })?)
+}
+
+/// `_object_pixels`' mask, velocities, depths and mean velocity.
+type ObjectOut<'py> = (
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    [f64; 2],
+);
+
+/// The pixels of object k in window (y0, y1, x0, x1) of a frame: ids (H,W) i32, velocity
+/// (H,W,2) f32, depth (H,W) f32. Returns (mask (h,w) bool, velocities (N,2) f64 and depths (N,)
+/// f32 of its pixels in row order, their mean velocity (2,) f64).
+#[pyfunction]
+fn _object_pixels<'py>(
+    py: Python<'py>,
+    ids: PyReadonlyArray2<'py, i32>,
+    velocity: PyReadonlyArray3<'py, f32>,
+    depth: PyReadonlyArray2<'py, f32>,
+    window: Window,
+    k: i32,
+) -> PyResult<ObjectOut<'py>> {
+    let (d, w, h) = img2(&depth, "depth")?;
+    let (v, vw, vh) = img3(&velocity, "velocity", 2)?;
+    same_size("velocity", (vh, vw), (h, w))?;
+    if ids.shape() != [h, w] {
+        return Err(Error::shape("ids", format!("expected shape ({h},{w})")).into());
+    }
+    let ids = c_slice(&ids, "ids")?;
+    let got = detached_in_pool(py, || crate::object_pixels(ids, v, d, (w, h), window, k))?;
+    let n = got.depth.len();
+    let (y0, y1, x0, x1) = window;
+    Ok((
+        shaped(py, got.mask, [y1 - y0, x1 - x0])?,
+        shaped(py, got.velocity, [n, 2])?,
+        shaped(py, got.depth, [n])?,
+        got.mean,
+    ))
+}
+
+/// Whether the velocities (N,2) f64 of an object's pixels certainly form one group of
+/// `opaque_image`'s split into `sectors` directions and lengths `ratio` apart (the core's
+/// `one_velocity_group`); false: not certain.
+#[pyfunction]
+fn _one_velocity_group(
+    velocities: PyReadonlyArray2<'_, f64>,
+    sectors: u32,
+    ratio: f64,
+) -> PyResult<bool> {
+    let v = rows::<f64, 2>(&velocities, "velocities")?;
+    Ok(crate::one_velocity_group(v, sectors, ratio))
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_reconstruct, m)?)?;
     m.add_function(wrap_pyfunction!(_max_speed, m)?)?;
     m.add_function(wrap_pyfunction!(_camera_frame_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_coverage_composite, m)?)?;
+    m.add_function(wrap_pyfunction!(_coverage_blur, m)?)?;
+    m.add_function(wrap_pyfunction!(_object_pixels, m)?)?;
+    m.add_function(wrap_pyfunction!(_one_velocity_group, m)?)?;
     m.add_function(wrap_pyfunction!(_glow, m)?)?;
     m.add_function(wrap_pyfunction!(_box_blur, m)?)?;
     m.add_function(wrap_pyfunction!(_splat_paths, m)?)?;

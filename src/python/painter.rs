@@ -8,8 +8,8 @@ use super::args::{LayerArg, LightArg};
 use super::convert::{c_slice, detached_in_pool, face_indices_u32, rows, shaped};
 use super::motion::PyKeyframes;
 use crate::{
-    accumulate_moving, accumulate_still, Accumulated, Error, Frame, Mat4, PaintObject, Painter,
-    Samples, Shading, StillCamera,
+    accumulate_moving, accumulate_still, Accumulated, Error, Frame, Layer, Mat4, PaintObject,
+    Painter, Samples, Shading, StillCamera,
 };
 
 /// One object, the items of a dict: `id`, `shading` name, `vertices` f64 (V,3), `faces` i64
@@ -141,6 +141,39 @@ type StillFrame<'py> = (
     usize,
 );
 
+/// The still camera and its static layer of the camera's size, checked (errors name
+/// `background` and the camera's matrices).
+fn still_inputs<'a>(
+    camera: &StillCameraArg<'_>,
+    background: &'a LayerArg<'_>,
+) -> Result<(StillCamera, Layer<'a>), Error> {
+    let camera = camera.camera()?;
+    if background.size("background")? != [camera.height, camera.width] {
+        return Err(Error::shape(
+            "background",
+            "rgba must be (height, width, 4)",
+        ));
+    }
+    Ok((camera, background.layer("background")?))
+}
+
+/// A still-camera accumulation as Python values ([`StillFrame`]), None when nothing was drawn.
+fn still_frame(py: Python<'_>, out: Option<Accumulated>) -> PyResult<Option<StillFrame<'_>>> {
+    let Some(Accumulated {
+        frame: Frame {
+            rgba, depth, ids, ..
+        },
+        window: w,
+        draw_calls,
+    }) = out
+    else {
+        return Ok(None);
+    };
+    let win = (w[0], w[1], w[2], w[3]).into_pyobject(py)?.into_any();
+    let (r, d, i) = arrays(py, rgba, depth, ids, w[2] - w[0], w[3] - w[1])?;
+    Ok(Some((win, r, d, i, draw_calls)))
+}
+
 /// Objects drawn at any shutter time (see `src/accumulate/painter.rs`).
 #[pyclass(name = "_Painter", module = "motionblur._core")]
 pub struct PyPainter {
@@ -193,27 +226,36 @@ impl PyPainter {
         background: LayerArg<'_>,
         opaque: bool,
     ) -> PyResult<Option<StillFrame<'py>>> {
-        let camera = camera.camera()?;
-        if background.size("background")? != [camera.height, camera.width] {
-            return Err(Error::shape("background", "rgba must be (height, width, 4)").into());
-        }
-        let bg = background.layer("background")?;
+        let (camera, bg) = still_inputs(&camera, &background)?;
         let samples = samples.samples()?;
         let inner = &self.inner;
         let out = detached_in_pool(py, || accumulate_still(inner, &camera, samples, bg, opaque))?;
-        let Some(Accumulated {
-            frame: Frame {
-                rgba, depth, ids, ..
-            },
-            window: w,
-            draw_calls,
-        }) = out
-        else {
-            return Ok(None);
-        };
-        let win = (w[0], w[1], w[2], w[3]).into_pyobject(py)?.into_any();
-        let (r, d, i) = arrays(py, rgba, depth, ids, w[2] - w[0], w[3] - w[1])?;
-        Ok(Some((win, r, d, i, draw_calls)))
+        still_frame(py, out)
+    }
+
+    /// [`Self::accumulate_still`] of each of `parts` (each a [`SamplesArg`]) in one call: the
+    /// same frames, one hand-off to the pool for all of them (an accumulation's two halves).
+    fn accumulate_still_parts<'py>(
+        &self,
+        py: Python<'py>,
+        parts: Vec<SamplesArg<'_>>,
+        camera: StillCameraArg<'_>,
+        background: LayerArg<'_>,
+        opaque: bool,
+    ) -> PyResult<Vec<Option<StillFrame<'py>>>> {
+        let (camera, bg) = still_inputs(&camera, &background)?;
+        let samples = parts
+            .iter()
+            .map(SamplesArg::samples)
+            .collect::<Result<Vec<_>, _>>()?;
+        let inner = &self.inner;
+        let outs = detached_in_pool(py, || {
+            samples
+                .into_iter()
+                .map(|s| accumulate_still(inner, &camera, s, bg, opaque))
+                .collect::<Result<Vec<_>, _>>()
+        })?;
+        outs.into_iter().map(|o| still_frame(py, o)).collect()
     }
 
     /// The moving-camera accumulation frame of `samples` ([`SamplesArg`]): one view (N,4,4)

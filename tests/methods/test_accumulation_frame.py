@@ -15,6 +15,7 @@ from motionblur import _core, meshes
 from motionblur.methods._layers import Layer, composite, static_layer, supersampled, window_projection
 from motionblur.methods._painter import Painter, box_corners
 from motionblur.methods.accumulation import sample_times
+from motionblur.raster import add_times_color
 from motionblur.scene import rotate, translate
 
 
@@ -237,3 +238,125 @@ def test_the_painter_is_kept_across_frames_while_its_objects_stay_the_same():
     fresh.objects[0].motion = a.motion
     np.testing.assert_array_equal(moved, mb.render(fresh, "accumulation", samples=6).rgba)
     assert not np.array_equal(first, moved)
+
+
+def numpy_halves(sums, win):
+    """`HalfSums.halves` in numpy, the arithmetic it replaces (the serial twin of
+    ``_core._halves``): each half ``sum(m * part) / sum(m)`` in float64 from 0 in the parts'
+    order, the difference composited over the background, the frame by the halves' masses."""
+    x0, y0, x1, y1 = win
+    rows, cols = slice(y0, y1), slice(x0, x1)
+    means = []
+    for j in (0, 1):
+        sel = [(float(w.sum()), piece) for h, _, w, piece in sums.parts if h == j]
+        mass = sum(m for m, _ in sel)
+        out = np.zeros((y1 - y0, x1 - x0, 4), np.float64)
+        for m, piece in sel:
+            term = np.multiply(piece.base[0][rows, cols], m, dtype=np.float64)
+            if piece.window is not None:
+                wx0, wy0, wx1, wy1 = piece.window
+                term[wy0 - y0 : wy1 - y0, wx0 - x0 : wx1 - x0] = np.multiply(
+                    piece.drawn[0], m, dtype=np.float64
+                )
+            out += term
+        out /= mass
+        means.append((mass, out))
+    (ma, a), (mb_, b) = means
+    bg = np.asarray(sums.scene.background, np.float64)
+    pre = np.concatenate([bg[:3] * bg[3], bg[3:]])
+    diff = np.subtract(a, b, dtype=np.float64)
+    add_times_color(diff, -diff[..., 3], pre)  # -alpha: a fresh array, read before the writes
+    frame = ((a * ma + b * mb_) / (ma + mb_)).astype(np.float32)
+    return diff, frame, (ma, mb_)
+
+
+@pytest.mark.parametrize(
+    "case", ["opaque", "translucent wall", "aa 2", "moving camera", "background", "uneven halves"]
+)
+def test_the_halves_kernel_gives_the_numpy_arithmetics_bits(case):
+    # The frame and the error estimate's difference of both halves from one core pass
+    # (_core._halves) against the numpy arithmetic they replace: bit for bit (each pixel's
+    # float64 operations in the same order), on a still camera over an opaque or a
+    # translucent static layer, supersampled, a moving camera (every part its own whole
+    # frame), a coloured background and halves of unequal mass (auto's reweighted parts).
+    from motionblur.methods._accumulate import HalfSums
+
+    scene = _scene(alpha=0.6 if case == "translucent wall" else 1.0)
+    aa = 2 if case == "aa 2" else 1
+    if case == "moving camera":
+        scene = mb.Scene(
+            scene.objects,
+            scene.camera,
+            scene.lights,
+            camera_motion=mb.Motion.linear(np.eye(4), translate((0.3, 0.1, 0))),
+        )
+    if case == "background":
+        scene = mb.Scene(scene.objects, scene.camera, scene.lights, background=(0.2, 0.4, 0.9, 0.7))
+    sums = HalfSums(scene, aa)
+    times, weights = sample_times(scene, 12)
+    for j, sel in enumerate((np.arange(12)[0::2], np.arange(12)[1::2])):
+        if case == "uneven halves":
+            sel = sel[: 2 + 2 * j]
+        for part in np.array_split(sel, 2):  # two parts a half, as a refinement leaves them
+            sums.add(times[part], weights[part], j)
+    win = sums._window()
+    assert win is not None
+    got = sums.halves(win)
+    want = numpy_halves(sums, win)
+    assert got[0].dtype == np.float64 and got[1].dtype == np.float32
+    assert got[0].shape == want[0].shape == (win[3] - win[1], win[2] - win[0], 4)
+    assert np.array_equal(got[0].view(np.uint64), want[0].view(np.uint64)), "difference"
+    assert np.array_equal(got[1].view(np.uint32), want[1].view(np.uint32)), "frame"
+    assert got[2] == want[2]
+    # a half whose parts differ shows in the difference (the kernel is not all zeros)
+    assert np.abs(got[0]).max() > 1e-3
+
+
+def test_the_halves_kernel_names_bad_parts():
+    base = np.zeros((4, 6, 4), np.float32)
+    drawn = np.zeros((2, 2, 4), np.float32)
+    with pytest.raises(ValueError, match="parts"):
+        _core._halves([], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="half"):
+        _core._halves([(2, 1.0, base, None, None)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="drawn"):
+        _core._halves([(0, 1.0, base, (0, 0, 3, 2), drawn)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="window"):
+        _core._halves([(0, 1.0, base, (0, 0, 2, 2), None)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="window"):
+        _core._halves([(0, 1.0, base, None, None)], (0, 0, 7, 4), (0.0, 0.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="base"):
+        _core._halves([(0, 1.0, base, None, None), (1, 1.0, base[:3], None, None)], (0, 0, 6, 4), (0.0,) * 4)
+
+
+@pytest.mark.parametrize("alpha", [1.0, 0.5])
+def test_the_parts_call_gives_each_parts_own_frame(alpha):
+    # accumulate_still_parts (an accumulation's halves in one hand-off to the pool) against one
+    # accumulate_still call per part: the same windows and bits, in order; a bad part named
+    sc = _scene(alpha)
+    cam = supersampled(sc.camera, 1)
+    moving = [(k, o) for k, o in enumerate(sc.objects) if o.is_moving]
+    static = static_layer(sc, cam, [(k, o) for k, o in enumerate(sc.objects) if not o.is_moving], 1)
+    painter = Painter(sc, moving, eye=cam.pose[:3, 3])
+    c = np.ascontiguousarray
+    layer = Layer(c(static.layer.rgba), c(static.layer.depth), c(static.layer.ids))
+    camera = dict(view=c(cam.view), projection=c(cam.projection), view_projection=c(cam.view_projection),
+                  width=cam.width, height=cam.height, aa=1)  # fmt: skip
+    times, weights = sample_times(sc, 9)
+    parts = [
+        dict(times=times[j::2].copy(), weights=weights[j::2] / weights[j::2].sum(), reference=0)
+        for j in (0, 1)
+    ]
+    parts.append(dict(times=times[:3].copy(), weights=np.full(3, 1 / 3), reference=2))
+    together = painter.core.accumulate_still_parts(parts, camera, layer, static.opaque)
+    assert len(together) == len(parts)
+    for got, p in zip(together, parts):
+        want = painter.core.accumulate_still(p, camera, layer, static.opaque)
+        assert got[0] == want[0] and got[4] == want[4]
+        for a, b in zip(got[1:4], want[1:4]):
+            assert a.dtype == b.dtype and np.array_equal(a.view(np.uint8), b.view(np.uint8))
+    assert not np.array_equal(together[0][1], together[1][1])  # the halves differ
+    with pytest.raises(ValueError, match="times"):
+        painter.core.accumulate_still_parts(
+            [parts[0], dict(parts[1], times=parts[1]["times"] + 2.0)], camera, layer, True
+        )

@@ -7,6 +7,9 @@
   (`motionblur.image.camera_velocity`, the moving objects' velocities, the float32 scale and
   clamp in numpy, `motionblur.image.velocity_blur`);
 * the longest velocity in the core against numpy's float64 formula;
+* ``opaque_image``'s coverage glow in one call of the core per object (``_core._coverage_blur``)
+  and its velocity groups against the method's former numpy steps
+  (``tests/_helpers/opaque_image_twin.py``), every option;
 * the reconstruction filter's skipped taps (a big still frame around a small mover) against the
   same frame with the mover's motion removed where it cannot reach: the pixels out of reach do
   not change.
@@ -21,14 +24,15 @@ import warnings
 
 import numpy as np
 import pytest
-from _helpers import threads
+from _helpers import opaque_image_twin, threads
 
 import motionblur as mb
 from motionblur import _core, image
-from motionblur.evaluation.random_scenes import MEASURING_SEEDS, random_scene
+from motionblur.evaluation.random_scenes import MEASURING_SEEDS, TUNING_SEEDS, random_scene
 from motionblur.methods import image_space as ims
 from motionblur.methods._layers import clear_static_cache
 from motionblur.methods._sharp import require_box_shutter, sharp_frame, shutter_centroid
+from motionblur.scenes_real import REAL_SCENES
 
 
 def _same(a: mb.Frame, b: mb.Frame) -> bool:
@@ -161,6 +165,114 @@ def test_reconstruction_out_of_reach_ignores_the_mover():
     assert not np.array_equal(a[gathered & ~near], rgba[gathered & ~near])
 
 
+@pytest.mark.parametrize(
+    "options",
+    [
+        {},
+        {"groups": False},
+        {"layers": False},
+        {"aa": 2},
+        {"glow": "opaque"},
+        {"glow": "opaque", "groups": False},
+    ],
+)
+def test_opaque_image_is_its_former_numpy_steps(options):
+    # built-in scenes (a turning and a bending object: several velocity groups, oblique blurs),
+    # the bunny over its floor (one group along a row: the core's row-by-row path) and random
+    # scenes of tuning seeds; every frame array and the stats the same, bit for bit
+    scenes = [mb.SCENES[n](width=72, height=54) for n in ("cube", "curved", "airplane", "bending_arm")]
+    scenes += [REAL_SCENES["bunny_translate"](160, 96)]
+    scenes += [random_scene(s, 64, 48) for s in list(TUNING_SEEDS)[:16]]
+    seen = {"groups": 0, "front": 0, "scenes": 0}
+    for scene in scenes:
+        if not scene.moving_objects or scene.camera_moves:
+            continue
+        try:
+            require_box_shutter(scene, "opaque_image")
+        except ValueError:
+            continue
+        seen["scenes"] += 1
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            got = ims.opaque_image(scene, **options)  # (before render's background)
+            want = opaque_image_twin.opaque_image(scene, **options)
+        assert _same(got, want)
+        for key in ("blurred", "masks", "front_pixels", "lengths"):
+            assert got.stats[key] == want.stats[key], key
+        seen["groups"] += got.stats["masks"] > got.stats["blurred"]
+        seen["front"] += got.stats["front_pixels"] > 0
+    assert seen["scenes"] >= 10, seen
+    if options.get("groups", True):
+        assert seen["groups"] >= 2, seen  # (the checks reached the several-group path)
+    if options.get("layers", True):
+        assert seen["front"] >= 1, seen
+
+
+def test_object_pixels_are_numpys_mask_gathers_and_mean():
+    # the mean along the first axis as numpy sums it (float64, pixel after pixel): random
+    # velocities of every magnitude, windows of up to 250,000 pixels, objects of every share of
+    # them; bit for bit
+    rng = np.random.default_rng(5)
+    for h, w in ((7, 9), (300, 420), (500, 500)):
+        ids = rng.integers(-1, 3, (h, w)).astype(np.int32)
+        vel = (rng.standard_normal((h, w, 2)) * rng.uniform(0.1, 900, (h, w, 1))).astype(np.float32)
+        depth = rng.uniform(0.5, 40.0, (h, w)).astype(np.float32)
+        for k in (-1, 0, 2):
+            ids2 = np.where(rng.random((h, w)) < rng.random(), k, ids).astype(np.int32)
+            y0, y1, x0, x1 = 1, h - 2, 2, w - 1
+            mask, vs, zs, mean = _core._object_pixels(ids2, vel, depth, (y0, y1, x0, x1), k)
+            want = ids2[y0:y1, x0:x1] == k
+            assert mask.dtype == bool and np.array_equal(mask, want)
+            assert vs.dtype == np.float64 and np.array_equal(vs, vel[y0:y1, x0:x1][want].astype(np.float64))
+            assert np.array_equal(zs, depth[y0:y1, x0:x1][want])
+            assert np.array_equal(np.array(mean), vs.mean(axis=0))
+
+
+def _numpy_keys(v: np.ndarray) -> np.ndarray:
+    # the keys of ims._velocity_groups, as it computes them
+    sector = np.floor((np.arctan2(v[:, 1], v[:, 0]) + np.pi) / (2 * np.pi) * ims.VELOCITY_SECTORS)
+    size = np.floor(np.log(np.maximum(np.hypot(v[:, 0], v[:, 1]), 1.0)) / np.log(ims.VELOCITY_RATIO))
+    return (sector.astype(np.int64) % ims.VELOCITY_SECTORS) * (1 << 20) + size.astype(np.int64)
+
+
+def test_one_velocity_group_only_when_numpys_keys_agree():
+    # translations, turns of every spread, velocities a hair from a sector's edge or a size
+    # bin's edge, along the axes, zero: whenever the core says one group, numpy's keys (its
+    # own atan2 and log) are all one
+    rng = np.random.default_rng(11)
+    edges = -np.pi + np.arange(16) * np.pi / 8
+    certain = 0
+    for t in range(3000):
+        n = int(rng.integers(1, 3000))
+        a = rng.uniform(-np.pi, np.pi) + rng.standard_normal(n) * rng.uniform(0, 0.3) ** 3
+        r = rng.uniform(0.2, 1200) * (1 + rng.standard_normal(n) * rng.uniform(0, 0.2) ** 2)
+        kind = t % 5
+        if kind == 1:
+            a = np.full(n, edges[t % 16]) + rng.standard_normal(n) * 1e-13
+        elif kind == 2:
+            r = np.full(n, 1.5 ** (t % 12)) * (1 + rng.standard_normal(n) * 1e-14)
+        v = np.stack([r * np.cos(a), r * np.sin(a)], -1)
+        if kind == 3:
+            v[:, 1] = 0.0
+            v[:, 0] = np.abs(v[:, 0])
+        elif kind == 4:
+            v[:, rng.integers(0, 2)] = 0.0
+        v = np.ascontiguousarray(v)
+        if _core._one_velocity_group(v, ims.VELOCITY_SECTORS, ims.VELOCITY_RATIO):
+            certain += 1
+            k = _numpy_keys(v)
+            assert k.min() == k.max(), (t, v[:4])
+    assert certain > 600, certain  # (it does spare the keys often)
+    # the bunny's translation at 1080p (lengths 517 to 611 pixels, one size bin): certain, so
+    # the method skips the keys on it; at 320x180 its lengths straddle a bin: two groups
+    for (w, h), masks in (((1920, 1080), 1), ((320, 180), 2)):
+        sc = REAL_SCENES["bunny_translate"](w, h)
+        f = ims._sharp(sc, 0.5, 1, "shutter", None)
+        vs = f.velocity[f.ids == sc.objects.index(sc.moving_objects[0])].astype(np.float64)
+        assert _core._one_velocity_group(vs, ims.VELOCITY_SECTORS, ims.VELOCITY_RATIO) == (masks == 1)
+        assert ims.opaque_image(sc).stats["masks"] == masks
+
+
 def test_fast_paths_same_for_any_thread_count():
     script = (
         "import hashlib, numpy as np, motionblur as mb\n"
@@ -169,6 +281,7 @@ def test_fast_paths_same_for_any_thread_count():
         "sc = REAL_SCENES['bunny_translate'](400, 240)\n"
         "for m in ('velocity', 'opaque_image'):\n"
         "    h.update(mb.render(sc, m, error_estimate=False).rgba.tobytes())\n"
+        "h.update(mb.render(mb.SCENES['bending_arm'](200, 150), 'opaque_image', error_estimate=False).rgba.tobytes())\n"
         "h.update(mb.render(mb.SCENES['pan'](320, 240), 'camera_velocity', error_estimate=False).rgba.tobytes())\n"
         "print(h.hexdigest())\n"
     )

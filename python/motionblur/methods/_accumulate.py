@@ -15,8 +15,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .. import _core
 from .._validate import as_int
-from ..raster import Frame, add_times_color
+from ..raster import Frame
 from ..scene import Scene, Trapezoid, shutter_cdf
 from ._layers import Layer, object_draw, raster_layer, resolve_arrays, static_layer, supersampled
 from ._painter import painter_for
@@ -28,7 +29,6 @@ __all__ = [
     "uniform_times",
     "QUANTILE_KNOTS",
     "HalfSums",
-    "composited_difference",
     "HALVES_FACTOR",
     "MAX_TIME_SAMPLES",
 ]
@@ -138,15 +138,6 @@ def uniform_times(n: int, sampling: str = "stratified", seed: int = 0) -> np.nda
     return _strata(n, sampling, seed)
 
 
-def composited_difference(a: np.ndarray, b: np.ndarray, background) -> np.ndarray:
-    """(H,W,4) float64 difference of premultiplied frames ``a`` and ``b`` once each is composited
-    over straight RGBA ``background`` (4,) (compositing is linear in the frame)."""
-    bg = np.asarray(background, np.float64)
-    pre = np.concatenate([bg[:3] * bg[3], bg[3:]])
-    d = np.subtract(a, b, dtype=np.float64)
-    return add_times_color(d, -d[..., 3], pre)  # -alpha: a fresh array, d's alpha is read first
-
-
 class Piece(NamedTuple):
     """One accumulation before it is pasted into a frame (`accumulate_piece`): ``base``
     (rgba, depth, ids) the pixels outside ``window`` (read-only: the static layer's, or the
@@ -176,17 +167,6 @@ class Piece(NamedTuple):
         frame.stats.update(self.stats)
         return frame
 
-    def times_weight(self, m: float, rows: slice, cols: slice, out: np.ndarray) -> np.ndarray:
-        """``m`` x the frame's RGBA over ``rows``, ``cols`` (a window holding ``window``) into
-        ``out`` (float64): the products of `frame` ``.rgba[rows, cols].astype(float64) * m``,
-        without pasting a frame."""
-        np.multiply(self.base[0][rows, cols], m, out=out, dtype=np.float64)
-        if self.window is not None:
-            x0, y0, x1, y1 = self.window
-            inner = out[y0 - rows.start : y1 - rows.start, x0 - cols.start : x1 - cols.start]
-            np.multiply(self.drawn[0], m, out=inner, dtype=np.float64)
-        return out
-
 
 def accumulate(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> Frame:
     """The accumulation buffer of ``times`` with ``weights`` (summing to 1), depth and ids of
@@ -197,56 +177,100 @@ def accumulate(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> F
 def accumulate_piece(scene: Scene, times, weights, ref: int, dim: float, aa: int) -> Piece:
     """`accumulate` before its pixels are pasted into a frame (`Piece`): `HalfSums` sums many
     such over their window without copying a frame for each."""
-    stats = {"samples": len(times), "draw_calls": 0, "static_draws": 0, "window": None}
-    everything = list(enumerate(scene.objects))
+    return PieceMaker(scene, aa)(times, weights, ref, dim)
 
-    if scene.camera_moves:
-        # Everything moves on screen: whole frames at every sample, one view each.
-        cam = supersampled(scene.camera, aa)
+
+class _StillParts:
+    """A still camera's split of the objects: the static layer of ``static_objs`` and the painter
+    of ``moving`` (drawn at every sample), with the core's camera options and layer arrays."""
+
+    def __init__(self, scene: Scene, cam, static_objs, moving, aa: int) -> None:
+        c = np.ascontiguousarray
+        self.static = static_layer(scene, cam, static_objs, aa)
+        self.static_draws = 0 if (self.static.cached or not static_objs) else 1
+        self.painter = painter_for(scene, moving, eye=cam.pose[:3, 3])
+        self.camera = {
+            "view": c(cam.view), "projection": c(cam.projection), "view_projection": c(cam.view_projection),
+            "width": cam.width, "height": cam.height, "aa": aa,
+        }  # fmt: skip
+        layer = self.static.layer
+        self.layer = Layer(c(layer.rgba), c(layer.depth), c(layer.ids))
+
+
+class PieceMaker:
+    """What every `accumulate_piece` of one scene sets up once (the camera, the static layer, the
+    painter of the objects drawn at every sample), called with ``(times, weights, ref, dim)``
+    for each piece: `HalfSums` draws all its parts with one."""
+
+    def __init__(self, scene: Scene, aa: int) -> None:
+        self.scene, self.aa = scene, aa
+        self.cam = supersampled(scene.camera, aa)
+        self._everything = list(enumerate(scene.objects))
+        self._static_objs = [(k, o) for k, o in self._everything if not o.is_moving]
+        self._moving = [(k, o) for k, o in self._everything if o.is_moving]
+        self._transparent = any(o.is_transparent for o in scene.objects)
+        self._still: dict[bool, _StillParts] = {}
+        self._painter = None
+
+    def _parts(self, dim: float) -> _StillParts:
+        """The still camera's split (`_StillParts`) for a piece of dimming ``dim``."""
+        # A transparent surface between two others cannot be composited with one depth a pixel
+        # per layer: every object is drawn at every sample, sorted together (exact).
+        together = dim >= 1.0 and bool(self._static_objs) and self._transparent
+        if together not in self._still:
+            split = ([], self._everything) if together else (self._static_objs, self._moving)
+            self._still[together] = _StillParts(self.scene, self.cam, *split, self.aa)
+        return self._still[together]
+
+    def pieces(self, parts: list[tuple[np.ndarray, np.ndarray, int]], dim: float) -> list[Piece]:
+        """``self(times, weights, ref, dim)`` of each of ``parts``: a still camera's in one core
+        call (`motionblur._core._Painter.accumulate_still_parts`), the same pieces."""
+        if self.scene.camera_moves:
+            return [self._moving_piece(t, w, ref, dim) for t, w, ref in parts]
+        split = self._parts(dim)
+        outs = split.painter.core.accumulate_still_parts(
+            [{"times": t, "weights": w, "reference": ref} for t, w, ref in parts],
+            split.camera, split.layer, split.static.opaque,
+        )  # fmt: skip
+        return [self._still_piece(split, len(t), out, dim) for (t, _, _), out in zip(parts, outs)]
+
+    def _still_piece(self, parts: _StillParts, samples: int, out, dim: float) -> Piece:
+        """The `Piece` of a still-camera core call's ``out`` over ``samples`` samples."""
+        static = parts.static
+        stats = {"samples": samples, "draw_calls": 0, "static_draws": parts.static_draws, "window": None}
+        stats["static_cached"] = static.cached
+        base = (static.rgba, static.depth, static.ids)
+        if out is None:
+            return Piece(base, None, None, stats)
+        win, acc, depth, ids, stats["draw_calls"] = out
+        stats["window"] = win
+        x0, y0, x1, y1 = win
+        if dim < 1.0:
+            acc = (1.0 - dim) * parts.layer.rgba[y0:y1, x0:x1] + dim * acc
+        drawn = resolve_arrays(Layer(np.asarray(acc, np.float32), depth, ids), self.aa)
+        return Piece(base, tuple(v // self.aa for v in win), drawn, stats)
+
+    def __call__(self, times, weights, ref: int, dim: float) -> Piece:
+        return self.pieces([(times, weights, ref)], dim)[0]
+
+    def _moving_piece(self, times, weights, ref: int, dim: float) -> Piece:
+        """A moving camera's piece: whole frames at every sample, one view each."""
+        scene, aa, cam = self.scene, self.aa, self.cam
+        stats = {"samples": len(times), "draw_calls": len(times), "static_draws": 0, "window": None}
+        if self._painter is None:
+            self._painter = painter_for(scene, self._everything)
         views = np.linalg.inv(scene.camera_poses_at(times))  # each sample's camera_at(t).view
-        painter = painter_for(scene, everything)
-        rgba, depth, ids = painter.core.accumulate_moving(
+        rgba, depth, ids = self._painter.core.accumulate_moving(
             {"times": times, "weights": weights, "reference": ref}, views,
             np.ascontiguousarray(cam.projection), cam.width, cam.height,
         )  # fmt: skip
-        stats["draw_calls"] = len(times)
         if dim < 1.0:
             cam = supersampled(scene.camera_at(scene.reference_t), aa)
-            static = [(o, object_draw(o, scene.reference_t, k)) for k, o in everything if not o.is_moving]
+            static = [(o, object_draw(o, scene.reference_t, k)) for k, o in self._static_objs]
             rgba = (1.0 - dim) * raster_layer(cam, scene, static).rgba + dim * rgba
         # The core's float32 sum as it is: astype would copy the whole frame (a dim < 1 blend is float64)
         whole = resolve_arrays(Layer(np.asarray(rgba, np.float32), depth, ids), aa)
         return Piece(whole, None, None, stats, owned=True)
-
-    cam = supersampled(scene.camera, aa)
-    static_objs = [(k, o) for k, o in everything if not o.is_moving]
-    moving = [(k, o) for k, o in everything if o.is_moving]
-    if dim >= 1.0 and static_objs and any(o.is_transparent for o in scene.objects):
-        # A transparent surface between two others cannot be composited with one depth a pixel
-        # per layer: every object is drawn at every sample, sorted together (exact).
-        static_objs, moving = [], everything
-    static = static_layer(scene, cam, static_objs, aa)
-    stats["static_draws"] = 0 if (static.cached or not static_objs) else 1
-    stats["static_cached"] = static.cached
-    painter = painter_for(scene, moving, eye=cam.pose[:3, 3])
-    c = np.ascontiguousarray
-    layer = static.layer
-    out = painter.core.accumulate_still(
-        {"times": times, "weights": weights, "reference": ref},
-        {"view": c(cam.view), "projection": c(cam.projection), "view_projection": c(cam.view_projection),
-         "width": cam.width, "height": cam.height, "aa": aa},
-        Layer(c(layer.rgba), c(layer.depth), c(layer.ids)), static.opaque,
-    )  # fmt: skip
-    base = (static.rgba, static.depth, static.ids)
-    if out is None:
-        return Piece(base, None, None, stats)
-    win, acc, depth, ids, stats["draw_calls"] = out
-    stats["window"] = win
-    x0, y0, x1, y1 = win
-    if dim < 1.0:
-        acc = (1.0 - dim) * layer.rgba[y0:y1, x0:x1] + dim * acc
-    drawn = resolve_arrays(Layer(np.asarray(acc, np.float32), depth, ids), aa)
-    return Piece(base, tuple(v // aa for v in win), drawn, stats)
 
 
 class HalfSums:
@@ -261,14 +285,22 @@ class HalfSums:
     def __init__(self, scene: Scene, aa: int, sampling: str = "stratified") -> None:
         self.scene, self.aa, self.sampling = scene, aa, sampling
         self.parts: list[tuple[int, np.ndarray, np.ndarray, Piece]] = []  # (half, times, weights, piece)
+        self.maker = PieceMaker(scene, aa)
 
     def add(self, times, weights, half: int) -> None:
-        times, weights = np.ascontiguousarray(times, np.float64), np.ascontiguousarray(weights, np.float64)
-        mass = float(weights.sum())
-        ref = _nearest(times, self.scene.reference_t)
-        self.parts.append(
-            (half, times, weights, accumulate_piece(self.scene, times, weights / mass, ref, 1.0, self.aa))
-        )
+        self.add_all([(times, weights, half)])
+
+    def add_all(self, parts) -> None:
+        """`add` of each ``(times, weights, half)`` of ``parts``, drawn in one core call."""
+        got = []
+        for times, weights, half in parts:
+            times, weights = (
+                np.ascontiguousarray(times, np.float64),
+                np.ascontiguousarray(weights, np.float64),
+            )
+            got.append((half, times, weights, _nearest(times, self.scene.reference_t)))
+        pieces = self.maker.pieces([(t, w / float(w.sum()), ref) for _, t, w, ref in got], 1.0)
+        self.parts.extend((h, t, w, p) for (h, t, w, _), p in zip(got, pieces))
 
     def reweight(self, weight_of) -> None:
         """Every part's weights replaced by ``weight_of(times) -> weights`` and moved to the half
@@ -294,34 +326,34 @@ class HalfSums:
             return None
         return tuple(f(v[i] for v in wins) // self.aa for i, f in enumerate((min, min, max, max)))
 
-    def _half(self, j: int, rows: slice, cols: slice) -> tuple[float, np.ndarray]:
-        """Half ``j``'s mass and its weighted mean over the window (float64): each part's mean
-        times its mass, summed in the parts' order from 0, over the mass. In place, in one
-        buffer: the arithmetic (and the bits) of ``sum(m * frame.rgba.astype(float64)) / mass``
-        without pasting a frame or a temporary array per part (`Piece.times_weight`)."""
-        sel = [(float(w.sum()), piece) for h, _, w, piece in self.parts if h == j]
-        mass = sum(m for m, _ in sel)
-        out = np.zeros((rows.stop - rows.start, cols.stop - cols.start, 4), np.float64)
-        term = np.empty_like(out)
-        for m, piece in sel:
-            out += piece.times_weight(m, rows, cols, term)
-        out /= mass
-        return mass, out
+    def halves(self, win: tuple[int, int, int, int]) -> tuple[np.ndarray, np.ndarray, tuple[float, float]]:
+        """Over ``win`` (x0, y0, x1, y1): the halves' difference composited over the scene's
+        background (float64), the frame (float32) and the halves' masses, in one core pass
+        (`motionblur._core._halves`): each half the mean of its parts by their masses, the
+        frame both halves by theirs."""
+        c = np.ascontiguousarray
+        parts = [
+            (
+                h,
+                float(w.sum()),
+                c(piece.base[0]),
+                piece.window,
+                None if piece.window is None else c(piece.drawn[0]),
+            )
+            for h, _, w, piece in self.parts
+        ]
+        bg = np.asarray(self.scene.background, np.float64)
+        pre = (float(bg[0] * bg[3]), float(bg[1] * bg[3]), float(bg[2] * bg[3]), float(bg[3]))
+        return _core._halves(parts, win, pre)
 
     def frame(self) -> Frame:
         ref_t = self.scene.reference_t
         nearest = min(self.parts, key=lambda p: float(np.min(np.abs(p[1] - ref_t))))[3]
         (rgba, depth, ids), square_sum = nearest.pasted(keep=True), 0.0
         win = self._window()
-        if win is not None:  # the halves' sums over the window only (the same arithmetic)
-            rows, cols = slice(win[1], win[3]), slice(win[0], win[2])
-            (ma, a), (mb, b) = self._half(0, rows, cols), self._half(1, rows, cols)
-            square_sum = float(np.sum(np.square(composited_difference(a, b, self.scene.background))))
-            a *= ma  # then the frame, (ma a + mb b) / (ma + mb), in a's buffer
-            b *= mb
-            a += b
-            a /= ma + mb
-            rgba[rows, cols] = a
+        if win is not None:  # the halves' sums over the window only
+            difference, rgba[win[1] : win[3], win[0] : win[2]], (ma, mb) = self.halves(win)
+            square_sum = float(np.sum(np.square(difference)))
             m = (ma * mb) ** 0.5 / (ma + mb)
         frame = Frame(rgba, depth, ids, None)
         calls = [p[3].stats for p in self.parts]

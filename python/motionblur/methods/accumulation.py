@@ -57,8 +57,8 @@ def accumulation(
     ``stats``: ``samples``, ``draw_calls`` (rasterizer passes over moving geometry),
     ``static_draws`` (0 or 1) and ``window`` (the pixel rectangle redrawn per sample).
 
-    The even and the odd samples are drawn and summed by the compiled core in one call each
-    (``_core._Painter.accumulate_still`` / ``accumulate_moving``, ``src/accumulate/frame.rs``);
+    The even and the odd samples are drawn and summed apart by the compiled core
+    (``_core._Painter.accumulate_still_parts`` / ``accumulate_moving``, ``src/accumulate/frame.rs``);
     their difference is the frame's ``stats["error_estimate"]`` (`_accumulate`).
 
     A rolling shutter (``Scene(rolling=R)``): see `rolling_accumulation` (about N renders per
@@ -78,8 +78,7 @@ def accumulation(
         # estimates the error with its pilot.
         return accumulate(scene, times, weights, ref, dim, aa)
     sums = HalfSums(scene, aa, sampling)
-    for j, h in enumerate(halves):
-        sums.add(times[h], weights[h], j)
+    sums.add_all([(times[h], weights[h], j) for j, h in enumerate(halves)])
     return sums.frame()
 
 

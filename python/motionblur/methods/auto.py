@@ -209,10 +209,8 @@ class _Trials:
             step = n // self.grid[0]
             self.sums.reweight(lambda t: (np.full(len(t), 1.0 / n), _position(times, t[0]) % 2))
             j = j[(j % step) != step // 2]  # the new times only
-        for half in (0, 1):
-            sel = j[j % 2 == half]
-            if len(sel):
-                self.sums.add(times[sel], weights[sel], half)
+        sels = [(half, j[j % 2 == half]) for half in (0, 1)]
+        self.sums.add_all([(times[sel], weights[sel], half) for half, sel in sels if len(sel)])
 
     def _trapezoid(self, m: int, keep: bool) -> None:
         """The trapezoid grid of ``m`` strata of the shutter's mass: times ``W^-1(k / m)``, k = 0..m,
@@ -233,10 +231,8 @@ class _Trials:
                 return weights[at], int(k[at[0]]) % 2
 
             self.sums.reweight(weight_of)
-        for half in (0, 1):
-            sel = np.flatnonzero(new & (k % 2 == half))
-            if len(sel):
-                self.sums.add(times[sel], weights[sel], half)
+        sels = [(half, np.flatnonzero(new & (k % 2 == half))) for half in (0, 1)]
+        self.sums.add_all([(times[sel], weights[sel], half) for half, sel in sels if len(sel)])
 
     @property
     def last(self) -> dict:

@@ -92,7 +92,7 @@ def _sharp_over(scene: Scene, t: float, aa: int, velocity: str | None, static: S
     the static layer's own array, not to be written, with the depth, ids and velocity of the
     sharp frame; ``((y0, y1, x0, x1), rgba there)``, the window the moving objects were drawn
     in, or None). The sharp frame's colour is the static colour with that window pasted in:
-    `_masked_window_rgba` reads a window of it without making the whole image."""
+    `_coverage_blur` reads it so, without making the whole image."""
     cam = scene.camera_at(t)
     draws, points = [], []
     for k, o in enumerate(scene.objects):
@@ -134,24 +134,6 @@ def _drawn_vertices(mesh, v: np.ndarray) -> np.ndarray:
     if mesh.stats["unreferenced_vertices"] == 0:
         return v
     return v[np.unique(mesh.faces)]
-
-
-def _masked_window_rgba(frame: Frame, pasted, window, m: np.ndarray) -> np.ndarray:
-    """The sharp frame's colour over ``window`` (y0, y1, x0, x1) times the mask ``m`` there, a
-    new array: ``frame.rgba`` with the ``pasted`` window of `_sharp_over` (or None) laid over it,
-    each pixel multiplied where it lies (no copy of the window first)."""
-    y0, y1, x0, x1 = window
-    out = frame.rgba[y0:y1, x0:x1] * m[..., None]
-    if pasted is not None:
-        (py0, py1, px0, px1), part = pasted
-        a0, a1, b0, b1 = max(y0, py0), min(y1, py1), max(x0, px0), min(x1, px1)
-        if a0 < a1 and b0 < b1:
-            np.multiply(
-                part[a0 - py0 : a1 - py0, b0 - px0 : b1 - px0],
-                m[a0 - y0 : a1 - y0, b0 - x0 : b1 - x0, None],
-                out=out[a0 - y0 : a1 - y0, b0 - x0 : b1 - x0],
-            )
-    return out
 
 
 def _window(cam, points: np.ndarray):
@@ -211,16 +193,20 @@ def opaque_image(
     require_box_shutter(scene, "opaque_image")
     tc = shutter_centroid(scene)
     static = _static_part(scene, aa)
+    drawn = None  # (the window the moving objects were drawn in over the static layer)
     if glow == "coverage" and static is not None:  # (its colour read by windows: no full copy)
         frame, pasted = _sharp_over(scene, tc, aa, "shutter", static)
+        drawn = (0, 0, 0, 0) if pasted is None else pasted[0]
     else:
         frame, pasted = _sharp(scene, tc, aa, "shutter", static), None
     order = []  # (depth, object, mean velocity (2,), (its pixels' window, mask there))
-    for k, (y0, y1, x0, x1) in _moving_windows(scene, frame.ids):
-        mask = frame.ids[y0:y1, x0:x1] == k
-        vs = frame.velocity[y0:y1, x0:x1][mask].astype(np.float64)  # (its pixels in row order)
-        v = vs.mean(axis=0)
-        order.append((float(np.mean(frame.depth[y0:y1, x0:x1][mask])), k, v, ((y0, y1, x0, x1), mask, vs)))
+    c = np.ascontiguousarray
+    ids, vel, depth = c(frame.ids, np.int32), c(frame.velocity, np.float32), c(frame.depth, np.float32)
+    for k, win in _moving_windows(scene, frame.ids, drawn):
+        # ids[win] == k, velocity[win][mask] as float64 and depth[win][mask] (its pixels in row
+        # order) and the mean velocity, numpy's vs.mean(axis=0), in one pass of the core
+        mask, vs, zs, v = _core._object_pixels(ids, vel, depth, win, k)
+        order.append((float(np.mean(zs)), k, np.array(v, np.float64), (win, mask, vs)))
     order.sort(key=lambda e: -e[0])
     lengths = {k: float(np.hypot(v[0], v[1])) for _, k, v, _ in order}
     if glow == "coverage":
@@ -235,10 +221,14 @@ def opaque_image(
     return out
 
 
-def _moving_windows(scene: Scene, ids: np.ndarray):
+def _moving_windows(scene: Scene, ids: np.ndarray, within=None):
     """[(k, (y0, y1, x0, x1))]: each moving object ``k`` seen in the frame, with the rows and
-    columns that hold its pixels (``ids == k``), in object order."""
+    columns that hold its pixels (``ids == k``), in object order. ``within`` (y0, y1, x0, x1):
+    a window that holds every moving object's pixels (the one `_sharp_over` drew them in; None:
+    the whole frame), the only pixels read."""
     out = []
+    wy0, _, wx0, _ = within = within or (0, *ids.shape[:1], 0, *ids.shape[1:])
+    ids = ids[within[0] : within[1], within[2] : within[3]]
     for k, o in enumerate(scene.objects):
         if not o.is_moving:
             continue
@@ -248,7 +238,7 @@ def _moving_windows(scene: Scene, ids: np.ndarray):
             continue
         y0, y1 = int(rows[0]), int(rows[-1]) + 1
         cols = np.flatnonzero(mask[y0:y1].any(axis=0))
-        out.append((k, (y0, y1, int(cols[0]), int(cols[-1]) + 1)))
+        out.append((k, (wy0 + y0, wy0 + y1, wx0 + int(cols[0]), wx0 + int(cols[-1]) + 1)))
     return out
 
 
@@ -260,50 +250,83 @@ def _full_mask(shape, window, mask: np.ndarray) -> np.ndarray:
     return full
 
 
-def _velocity_masks(frame: Frame, mask, mean, groups: bool):
-    """[(window (y0, y1, x0, x1), its mask, velocity (2,))]: the pixels of ``mask`` (an (H,W)
-    bool, or (window, mask there, the velocities of its pixels in row order (N, 2) float64)) in
-    each velocity group (``groups``) with the group's mean velocity, or all of them with
-    ``mean``; windows in frame pixels."""
+def _velocity_groups(frame: Frame, mask, mean, groups: bool):
+    """(labels, [(window (y0, y1, x0, x1), velocity (2,), pixels)]): the pixels of ``mask`` (an
+    (H,W) bool, or (window, mask there, the velocities of its pixels in row order (N, 2)
+    float64)) in each velocity group (``groups``) with the group's mean velocity, or all of them
+    with ``mean``; windows in frame pixels, each holding its group's pixels and the reach of its
+    blur. ``labels``: None for one group (every pixel of the mask), else the index of each
+    pixel's group in the mask's window (int32, -1 outside the mask); ``pixels``: None for one
+    group, else the (rows, columns) of the group's pixels in the frame."""
     if isinstance(mask, tuple):
         (oy, oy1, ox, ox1), mask, v = mask
     else:
         (oy, oy1, ox, ox1), v = (0, *mask.shape[:1], 0, *mask.shape[1:]), None
-    ys, xs = np.nonzero(mask)
     if v is None:
         v = frame.velocity[oy:oy1, ox:ox1][mask].astype(np.float64)
-    ys, xs = ys + oy, xs + ox
-    whole = [None]  # (every pixel, the object's own window and mask)
-    if groups:
+    parts, inverse = [None], None  # (every pixel, the object's own window and mask)
+    # (the core says when every pixel certainly has one key, whose computation it skips)
+    if groups and not _core._one_velocity_group(np.ascontiguousarray(v), VELOCITY_SECTORS, VELOCITY_RATIO):
         sector = np.floor((np.arctan2(v[:, 1], v[:, 0]) + np.pi) / (2 * np.pi) * VELOCITY_SECTORS)
         size = np.floor(np.log(np.maximum(np.hypot(v[:, 0], v[:, 1]), 1.0)) / np.log(VELOCITY_RATIO))
-        key = (sector.astype(np.int64) % VELOCITY_SECTORS) * (1 << 20) + size.astype(np.int64)
-        if len(key) and key.min() == key.max():
-            parts = whole  # one group (a translation): no sort
-        else:
-            keys, inverse = np.unique(key, return_inverse=True)
+        sector, size = sector.astype(np.int64) % VELOCITY_SECTORS, size.astype(np.int64)
+        key = sector * (1 << 20) + size
+        if not (len(key) and key.min() == key.max()):  # (one group, a translation: no sort)
+            if size.min() >= 0 and size.max() < 64:
+                # np.unique(key, return_inverse=True) without its sort: the keys' order is that
+                # of sector * 64 + size, a small range counted in bins
+                counts = np.bincount(sector * 64 + size, minlength=VELOCITY_SECTORS * 64)
+                present = np.flatnonzero(counts)
+                index = np.zeros(len(counts), np.intp)
+                index[present] = np.arange(len(present))
+                inverse = index[sector * 64 + size]
+            else:
+                inverse = np.unique(key, return_inverse=True)[1]
             # each group's pixels in row order, as np.flatnonzero(inverse == i) gives them
             rank = np.argsort(inverse, kind="stable")
-            parts = np.split(rank, np.cumsum(np.bincount(inverse, minlength=len(keys)))[:-1])
-    else:
-        parts = whole
+            parts = np.split(rank, np.cumsum(np.bincount(inverse))[:-1])
     out = []
     h, w = frame.ids.shape
-    for sel in parts:
-        if sel is None:
-            vel = v.mean(axis=0) if groups else np.asarray(mean, np.float64)
-            py, px = ys, xs
-        else:
-            vel = v[sel].mean(axis=0) if groups else np.asarray(mean, np.float64)
-            py, px = ys[sel], xs[sel]
+    if inverse is None:
+        rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
+        box = (oy + int(rows[0]), oy + int(rows[-1]), ox + int(cols[0]), ox + int(cols[-1]))
+        # (one group: every pixel, whose mean is the object's own, ``mean``)
+        parts = [(box, np.asarray(mean, np.float64), None)]
+        labels = None
+    else:
+        ys, xs = np.nonzero(mask)
+        ys, xs = ys + oy, xs + ox
+        pixels = [(ys[sel], xs[sel]) for sel in parts]
+        parts = [
+            ((int(py.min()), int(py.max()), int(px.min()), int(px.max())), v[sel].mean(axis=0), (py, px))
+            for sel, (py, px) in zip(parts, pixels)
+        ]  # fmt: skip
+        labels = np.full(mask.shape, -1, np.int32)
+        labels[mask] = inverse
+    for (py0, py1, px0, px1), vel, pixels in parts:
         ry, rx = _reach(vel)
-        y0, y1 = max(0, int(py.min()) - ry), min(h, int(py.max()) + ry + 1)
-        x0, x1 = max(0, int(px.min()) - rx), min(w, int(px.max()) + rx + 1)
+        y0, y1 = max(0, py0 - ry), min(h, py1 + ry + 1)
+        x0, x1 = max(0, px0 - rx), min(w, px1 + rx + 1)
+        out.append(((y0, y1, x0, x1), vel, pixels))
+    return labels, out
+
+
+def _velocity_masks(frame: Frame, mask, mean, groups: bool):
+    """[(window (y0, y1, x0, x1), its mask, velocity (2,))]: `_velocity_groups` with each
+    group's mask over its window."""
+    labels, parts = _velocity_groups(frame, mask, mean, groups)
+    if isinstance(mask, tuple):
+        (oy, oy1, ox, ox1), mask, _ = mask
+    else:
+        (oy, oy1, ox, ox1) = (0, *mask.shape[:1], 0, *mask.shape[1:])
+    out = []
+    for (y0, y1, x0, x1), vel, pixels in parts:
         m = np.zeros((y1 - y0, x1 - x0), bool)
-        if sel is None:  # the mask itself in the window (which holds every pixel of it)
+        if pixels is None:  # the mask itself in the window (which holds every pixel of it)
             a0, a1, b0, b1 = max(oy, y0), min(oy1, y1), max(ox, x0), min(ox1, x1)
             m[a0 - y0 : a1 - y0, b0 - x0 : b1 - x0] = mask[a0 - oy : a1 - oy, b0 - ox : b1 - ox]
         else:
+            py, px = pixels
             m[py - y0, px - x0] = True
         out.append(((y0, y1, x0, x1), m, vel))
     return out
@@ -367,40 +390,31 @@ def _coverage_blur(
         back_rgba, back_depth = back.rgba, back.depth
     else:  # the same pixels (ids aside, which are not read)
         back_rgba, back_depth = static.rgba, static.depth
-    rgba = back_rgba.copy()
-    back_depth = np.ascontiguousarray(back_depth, np.float32)
+    c = np.ascontiguousarray
+    back_rgba = c(back_rgba, np.float32)
+    # (the first object's call fills the new frame: the static colour outside its windows)
+    rgba = np.empty_like(back_rgba) if order else back_rgba.copy()
+    fill = back_rgba
+    back_depth, depth = c(back_depth, np.float32), c(frame.depth, np.float32)
+    if pasted is not None:
+        pasted = (pasted[0], c(pasted[1], np.float32))
     masks = front_pixels = 0
     for _, _, v, mask in order:
-        parts = _velocity_masks(frame, mask, v, groups)
-        wy0, wx0 = min(p[0][0] for p in parts), min(p[0][2] for p in parts)
-        wy1, wx1 = max(p[0][1] for p in parts), max(p[0][3] for p in parts)
-        sub = rgba[wy0:wy1, wx0:wx1]
-        blurred = np.zeros_like(sub)
-        depth = np.zeros((*sub.shape[:2], 4), np.float32)  # (z m, 0, 0, m) blurred alike
-        (oy0, oy1, ox0, ox1), m0, _ = mask
-        z = np.zeros(sub.shape[:2], np.float32)
-        zs = z[oy0 - wy0 : oy1 - wy0, ox0 - wx0 : ox1 - wx0]
-        zs[...] = np.where(m0, frame.depth[oy0:oy1, ox0:ox1], 0.0)
-        for (y0, y1, x0, x1), m, vel in parts:
-            layer = np.ascontiguousarray(_masked_window_rgba(frame, pasted, (y0, y1, x0, x1), m))
-            zm = m.astype(np.float32)
-            zw = z[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0]
-            zl = np.zeros((*zm.shape, 4), np.float32)  # (z m, 0, 0, m)
-            zl[..., 0], zl[..., 3] = zw * zm, zm
+        window, m0, _ = mask
+        labels, parts = _velocity_groups(frame, mask, v, groups)
+        if labels is None:
+            labels = m0.astype(np.int32) - 1  # (0: the one group)
+        blurs = []
+        for win, vel, _ in parts:
             length = float(np.hypot(vel[0], vel[1]))
-            if length >= 1.0:
-                masks += 1
-                layer = image.box_blur(layer, (vel[0], vel[1]), length)
-                zl = image.box_blur(zl, (vel[0], vel[1]), length)
-            blurred[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0] += layer
-            depth[y0 - wy0 : y1 - wy0, x0 - wx0 : x1 - wx0] += zl
-        # the blurred colour (opacity capped at 1) over the static pixels and, with layers, the
-        # static pixels nearer than the blurred depth there in front instead: one pass
-        over, front = _core._coverage_composite(
-            rgba, back_depth, (wy0, wy1, wx0, wx1), blurred, np.ascontiguousarray(depth), layers
+            masks += length >= 1.0
+            blurs.append((win, (float(vel[0]), float(vel[1])), length, length >= 1.0))
+        # each group's masked colour and (z m, 0, 0, m) box-blurred, summed (opacity capped at
+        # 1) and composited over rgba in place (the module docs of src/image/coverage_blur.rs)
+        front_pixels += _core._coverage_blur(
+            rgba, back_depth, c(frame.rgba, np.float32), pasted, depth, (window, labels), blurs, layers, fill
         )
-        front_pixels += front
-        sub[...] = over  # (a view of rgba)
+        fill = None
     return rgba, masks, front_pixels
 
 
