@@ -63,12 +63,34 @@ const CURVE_JUMP: f64 = 1e-3;
 
 /// What the line blur reads of a pixel's motion.
 pub(crate) trait LineField: Sync {
-    /// The velocity `(vx, vy)` (pixels over the shutter) of pixel `(x, y)` if its blur may run
-    /// along a curve, None if it takes the taps (a moving object's pixel).
-    fn line(&self, x: usize, y: usize) -> Option<[f32; 2]>;
-    /// Pixel `(x, y)` blurred by the taps along its own velocity, and whether that velocity
-    /// is NaN.
-    fn taps(&self, rgba: &[f32], x: usize, y: usize) -> ([f32; 4], bool);
+    /// Writes into `line` (`(w,)`) whether each pixel of row `y` may be blurred along a curve
+    /// (1) or keeps the taps (0: a moving object's pixel), and into `v` the velocity `(vx, vy)`
+    /// (pixels over the shutter) of each that may (any value for the others).
+    fn row(&self, y: usize, v: &mut [[f32; 2]], line: &mut [u8]);
+    /// Writes the pixels of output row `y` (`(w, 4)`) that `skip` (`(w,)`) does not mark, each
+    /// blurred by the taps along its own velocity (which may differ from [`LineField::row`]'s
+    /// by rounding); returns whether such a velocity was NaN.
+    fn taps_row(&self, rgba: &[f32], y: usize, row: &mut [MaybeUninit<f32>], skip: &[bool])
+        -> bool;
+}
+
+/// The velocities of every pixel ([`LineField::row`]) and their classes (0: taps, 1: a line
+/// along x may do, 2: along y).
+struct Field {
+    v: Vec<[f32; 2]>,
+    class: Vec<u8>,
+    w: usize,
+    /// [`line_blur_masked`]'s `saved`.
+    saved: f64,
+}
+
+impl Field {
+    /// Pixel `(x, y)`'s velocity if its class is a line along x (`x_major`) or y.
+    #[inline(always)]
+    fn line(&self, x: usize, y: usize, x_major: bool) -> Option<[f32; 2]> {
+        let i = y * self.w + x;
+        (self.class[i] == if x_major { 1 } else { 2 }).then(|| self.v[i])
+    }
 }
 
 /// What [`line_blur`] did.
@@ -88,10 +110,7 @@ enum Class {
     Line(bool),
 }
 
-fn class(v: Option<[f32; 2]>, (w, h): (usize, usize)) -> Class {
-    let Some([vx, vy]) = v else {
-        return Class::Taps;
-    };
+fn class([vx, vy]: [f32; 2], (w, h): (usize, usize)) -> Class {
     if !(vx.is_finite() && vy.is_finite()) {
         return Class::Taps;
     }
@@ -102,6 +121,28 @@ fn class(v: Option<[f32; 2]>, (w, h): (usize, usize)) -> Class {
         return Class::Taps;
     }
     Class::Line(ax >= ay)
+}
+
+/// Turns a row's `line` flags ([`LineField::row`]) into classes (0: taps, 1: a line along x
+/// may do, 2: along y) from its velocities `v`; returns whether a velocity is NaN and whether a
+/// class is 2.
+fn classify(c: &mut [u8], v: &[[f32; 2]], dims: (usize, usize)) -> (bool, bool) {
+    let (mut nan, mut vertical) = (false, false);
+    for (c, &v) in c.iter_mut().zip(v) {
+        if *c == 0 {
+            continue;
+        }
+        nan |= v[0].is_nan() || v[1].is_nan();
+        *c = match (*c, class(v, dims)) {
+            (1, Class::Line(true)) => 1,
+            (1, Class::Line(false)) => {
+                vertical = true;
+                2
+            }
+            _ => 0,
+        };
+    }
+    (nan, vertical)
 }
 
 /// The image's axes seen from one major axis: `(m, n)` are the major and minor coordinates.
@@ -146,8 +187,8 @@ impl Axes {
     }
 }
 
-/// The output image, written pixel by pixel from several threads (each pixel once), and where
-/// not null a mask of the pixels blurred as a line integral (the tests').
+/// The output image, written pixel by pixel from several threads (each pixel once), and the
+/// mask of the pixels blurred as a line integral.
 #[derive(Clone, Copy)]
 struct Out(*mut MaybeUninit<f32>, *mut bool);
 // SAFETY: the threads write disjoint pixels (module docs: each pixel belongs to one band).
@@ -158,73 +199,87 @@ impl Out {
     /// # Safety
     /// `i` is a pixel of the image and no other thread writes it.
     #[inline(always)]
-    unsafe fn put(self, i: usize, v: [f32; 4], line: bool) {
+    unsafe fn put(self, i: usize, v: [f32; 4]) {
         for (k, c) in v.into_iter().enumerate() {
             (*self.0.add(i * 4 + k)).write(c);
         }
-        if !self.1.is_null() {
-            *self.1.add(i) = line;
-        }
+        *self.1.add(i) = true;
     }
 }
 
 /// The `(h, w, 4)` image `rgba` blurred along each pixel's velocity (module docs): a line
-/// integral where it fits, `taps` elsewhere. `rgba` is finite.
+/// integral where it fits, the field's taps elsewhere. `rgba` is finite.
 pub(crate) fn line_blur(
     rgba: &[f32],
     (w, h): (usize, usize),
     field: &impl LineField,
 ) -> (Vec<f32>, LineStats) {
-    line_blur_masked(rgba, (w, h), field, None)
+    line_blur_masked(rgba, (w, h), field, SAMPLES_PER_PIXEL, None)
 }
 
-/// [`line_blur`], marking in `mask` (`(h, w)`, when given) the pixels blurred as a line
-/// integral.
+/// [`line_blur`] with `saved` samples of the curves a pixel's taps cost beyond its line
+/// integral ([`SAMPLES_PER_PIXEL`]; infinite: every pixel the curves fit is a line), copying
+/// into `mask` (`(h, w)`, when given) the mask of the pixels blurred as a line integral.
 fn line_blur_masked(
     rgba: &[f32],
     (w, h): (usize, usize),
     field: &impl LineField,
+    saved: f64,
     mask: Option<&mut [bool]>,
 ) -> (Vec<f32>, LineStats) {
     let mut stats = LineStats::default();
-    let mask = mask.map_or(std::ptr::null_mut(), |m| {
-        assert_eq!(m.len(), w * h);
-        m.as_mut_ptr()
-    });
+    // every pixel's velocity and class, once
+    let mut classes = vec![0u8; w * h];
+    let mut v = vec![[0.0f32; 2]; w * h];
+    let flags = v
+        .par_chunks_mut(w)
+        .zip(classes.par_chunks_mut(w))
+        .enumerate()
+        .map(|(y, (v, c))| {
+            field.row(y, v, c);
+            classify(c, v, (w, h))
+        })
+        .reduce(|| (false, false), |a, b| (a.0 | b.0, a.1 | b.1));
+    let (nan, vertical) = flags;
+    stats.nan = nan;
+    let field_v = Field {
+        v,
+        class: classes,
+        w,
+        saved,
+    };
+    let mut lines = vec![false; w * h];
     let out = super::filled(w * h * 4, |out| {
-        let out = Out(out.as_mut_ptr(), mask);
-        let mut vertical = false;
+        let put = Out(out.as_mut_ptr(), lines.as_mut_ptr());
         for x_major in [true, false] {
             if !x_major && !vertical {
                 break;
             }
             let axes = Axes { x_major, w, h };
             let strips = axes.major_len().div_ceil(strip_width(axes.major_len()));
-            let (s, v) = (0..strips)
+            stats.line_pixels += (0..strips)
                 .into_par_iter()
                 .map(|j| {
                     #[cfg(target_arch = "x86_64")]
                     if super::simd() {
                         // SAFETY: AVX2 was detected
-                        return unsafe { strip_avx(rgba, axes, j, field, out) };
+                        return unsafe { strip_avx(rgba, axes, j, &field_v, put) };
                     }
-                    strip(rgba, axes, j, field, out)
+                    strip(rgba, axes, j, &field_v, put)
                 })
-                .reduce(
-                    || (LineStats::default(), false),
-                    |(a, va), (b, vb)| {
-                        let s = LineStats {
-                            line_pixels: a.line_pixels + b.line_pixels,
-                            nan: a.nan | b.nan,
-                        };
-                        (s, va | vb)
-                    },
-                );
-            stats.line_pixels += s.line_pixels;
-            stats.nan |= s.nan;
-            vertical |= v;
+                .sum::<usize>();
         }
+        // every other pixel: the taps, row by row (the vector taps along runs of such pixels)
+        stats.nan |= out
+            .par_chunks_mut(w * 4)
+            .zip(lines.par_chunks(w))
+            .enumerate()
+            .map(|(y, (row, skip))| field.taps_row(rgba, y, row, skip))
+            .reduce(|| false, |a, b| a | b);
     });
+    if let Some(m) = mask {
+        m.copy_from_slice(&lines);
+    }
     (out, stats)
 }
 
@@ -240,17 +295,12 @@ impl Curves {
     /// differences [`DIFF`] pixels wide (a row whose five pixels are not all lines along this
     /// axis, or whose differences on either side disagree by more than [`CURVE_JUMP`]: a depth
     /// edge, takes the nearest such row's curve).
-    fn new(axes: Axes, (m0, m1): (usize, usize), field: &impl LineField) -> Self {
+    fn new(axes: Axes, (m0, m1): (usize, usize), field: &Field) -> Self {
         let n = axes.minor_len();
         let cm = (m0 + m1 - 1) / 2;
-        let dims = (axes.w, axes.h);
         let slope = |m: usize, r: usize| {
             let (x, y) = axes.xy(m, r);
-            let v = field.line(x, y);
-            if class(v, dims) != Class::Line(axes.x_major) {
-                return None;
-            }
-            let (a, b) = axes.split(v.unwrap_or_default());
+            let (a, b) = axes.split(field.line(x, y, axes.x_major)?);
             Some(b as f64 / a as f64)
         };
         // the differences' steps, shorter in a narrow strip or image
@@ -326,28 +376,16 @@ impl Curves {
 /// AVX2 is present.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn strip_avx(
-    rgba: &[f32],
-    axes: Axes,
-    j: usize,
-    field: &impl LineField,
-    out: Out,
-) -> (LineStats, bool) {
+unsafe fn strip_avx(rgba: &[f32], axes: Axes, j: usize, field: &Field, out: Out) -> usize {
     strip(rgba, axes, j, field, out)
 }
 
-/// Blurs the pixels of strip `j` of `axes` whose class is a line along its major axis, and
-/// (along x) those that take the taps; returns the stats and whether any pixel is a line
-/// along the other axis.
+/// Blurs as a line integral the pixels of strip `j` of `axes` whose class is a line along its
+/// major axis and whose curves fit them, band by band where that is cheaper than their taps
+/// ([`worth_it`]); returns how many.
 #[inline(always)]
-fn strip(
-    rgba: &[f32],
-    axes: Axes,
-    j: usize,
-    field: &impl LineField,
-    out: Out,
-) -> (LineStats, bool) {
-    let (w, h) = (axes.w, axes.h);
+fn strip(rgba: &[f32], axes: Axes, j: usize, field: &Field, out: Out) -> usize {
+    let w = axes.w;
     let width = strip_width(axes.major_len());
     let m0 = j * width;
     let m1 = (m0 + width).min(axes.major_len());
@@ -361,17 +399,21 @@ fn strip(
         let last = (n - 1) as i64;
         k_hi = k_hi.max((last as f64 + (last as f64 - curves.y(last, u))).ceil() as i64);
     }
-    let mut next = vec![0usize; m1 - m0];
-    let mut stats = LineStats::default();
-    let mut other = false;
-    let mut pixels: Vec<(usize, usize, f32, f32)> = Vec::new();
-    let mut lines: Vec<[f32; 4]> = Vec::new();
-    let mut params: Vec<(f64, f64)> = Vec::new();
-    let mut col = Column {
-        u: 0.0,
-        ys: Vec::new(),
-        slopes: Vec::new(),
-    };
+    // (the thread's buffers of the last strip, taken and given back: no allocation a strip)
+    let mut scratch = SCRATCH.with(|s| s.take());
+    let Scratch {
+        next,
+        pixels,
+        fits,
+        lines,
+        params,
+        acc,
+        prev,
+        col,
+    } = &mut scratch;
+    next.clear();
+    next.resize(m1 - m0, 0);
+    let mut count_lines = 0;
     let mut kb = k_lo - 1;
     loop {
         let last = kb + BAND as i64 > k_hi + 1;
@@ -389,64 +431,52 @@ fn strip(
             };
             for r in *start..end {
                 let (x, y) = axes.xy(m, r);
-                let v = field.line(x, y);
-                match class(v, (w, h)) {
-                    Class::Line(xm) if xm == axes.x_major => {
-                        let (a, b) = axes.split(v.unwrap_or_default());
-                        reach = reach.max(a.abs());
-                        pixels.push((m, r, a, b));
-                    }
-                    Class::Line(_) => other = true,
-                    Class::Taps if axes.x_major => {
-                        let (v, nan) = field.taps(rgba, x, y);
-                        stats.nan |= nan;
-                        // SAFETY: pixel (x, y) belongs to this band alone
-                        unsafe { out.put(y * w + x, v, false) };
-                    }
-                    Class::Taps => {}
+                if let Some(v) = field.line(x, y, axes.x_major) {
+                    let (a, b) = axes.split(v);
+                    reach = reach.max(a.abs());
+                    pixels.push((m, r, a, b));
                 }
             }
             *start = end;
         }
-        if !pixels.is_empty() {
-            let reach = (0.5 * reach).ceil() as i64 + 2;
-            let u_lo = m0 as i64 - reach;
-            let len = (m1 - m0) + 2 * reach as usize;
-            let (k0, count) = (kb - 1, BAND + 3);
+        let (k0, count) = (kb - 1, BAND + 3);
+        // (not even if every pixel fitted: no need to try them)
+        if worth_it(pixels.len(), count * sums_len(m1 - m0, reach), field.saved) {
             params.clear();
             params.extend((0..count).map(|l| curves.params(k0 + l as i64)));
-            build(rgba, axes, &params, (curves.c, k0), (u_lo, len), &mut lines);
+            // the pixels the curves fit
+            fits.clear();
+            let mut reach = 0.0f32;
             let mut at = usize::MAX;
             let mut l = 0;
-            for &(m, r, a, b) in &pixels {
+            for &(m, r, a, b) in pixels.iter() {
                 if m != at {
                     col.at(&curves, &params, k0, m as f64);
                     (at, l) = (m, 0);
                 }
-                let (x, y) = axes.xy(m, r);
-                let got = read(
-                    &col,
-                    &params,
-                    curves.c,
-                    &lines,
+                if let Some((l, f)) = fit(&col, &params, curves.c, r as f64, (a, b), &mut l) {
+                    reach = reach.max(a.abs());
+                    fits.push(Fit { m, r, l, f, a });
+                }
+            }
+            let len = sums_len(m1 - m0, reach);
+            let u_lo = m0 as i64 - (len - (m1 - m0)) as i64 / 2;
+            if worth_it(fits.len(), count * len, field.saved) {
+                build(
+                    rgba,
+                    axes,
+                    params,
+                    (curves.c, k0),
                     (u_lo, len),
-                    r as f64,
-                    (a, b),
-                    &mut l,
+                    (lines, acc, prev),
                 );
-                let (v, line) = match got {
-                    Some(v) => {
-                        stats.line_pixels += 1;
-                        (v, true)
-                    }
-                    None => {
-                        let (v, nan) = field.taps(rgba, x, y);
-                        stats.nan |= nan;
-                        (v, false)
-                    }
-                };
-                // SAFETY: pixel (x, y) belongs to this band alone
-                unsafe { out.put(y * w + x, v, line) };
+                for p in fits.iter() {
+                    let v = value(lines, (count, u_lo, len), p);
+                    let (x, y) = axes.xy(p.m, p.r);
+                    // SAFETY: pixel (x, y) belongs to this band alone
+                    unsafe { out.put(y * w + x, v) };
+                }
+                count_lines += fits.len();
             }
         }
         if last {
@@ -454,7 +484,54 @@ fn strip(
         }
         kb += BAND as i64;
     }
-    (stats, other)
+    SCRATCH.with(|s| s.replace(scratch));
+    count_lines
+}
+
+/// The buffers of a strip, kept by each thread from one strip to the next.
+#[derive(Default)]
+struct Scratch {
+    next: Vec<usize>,
+    pixels: Vec<(usize, usize, f32, f32)>,
+    fits: Vec<Fit>,
+    lines: Vec<[f32; 4]>,
+    params: Vec<(f64, f64)>,
+    acc: Vec<[f64; 4]>,
+    prev: Vec<[f64; 4]>,
+    col: Column,
+}
+
+thread_local! {
+    static SCRATCH: std::cell::Cell<Scratch> = std::cell::Cell::default();
+}
+
+/// Entries of a band's running sums over a strip `width` pixels wide whose pixels' streaks are
+/// at most `reach` pixels long: the strip widened by half a streak and two pixels each side.
+#[inline(always)]
+fn sums_len(width: usize, reach: f32) -> usize {
+    width + 2 * ((0.5 * reach).ceil() as usize + 2)
+}
+
+/// Whether a band is blurred as a line integral: its `fits` pixels' taps would cost more than
+/// sampling its curves `samples` times and reading the pixels from the sums (cost measured in
+/// samples: a pixel's 16 taps save [`SAMPLES_PER_PIXEL`] samples over its line integral).
+#[inline(always)]
+fn worth_it(fits: usize, samples: usize, saved: f64) -> bool {
+    fits as f64 * saved > samples as f64
+}
+
+/// Samples of the curves that cost what a pixel's 16 taps cost beyond its line integral's
+/// lookups (measured, module docs).
+pub const SAMPLES_PER_PIXEL: f64 = 6.0;
+
+/// A pixel the band's curves fit: major and minor coordinates `m`, `r`, the curve `l` below it,
+/// its fraction `f` of the way to curve `l + 1`, its velocity's major component `a`.
+struct Fit {
+    m: usize,
+    r: usize,
+    l: usize,
+    f: f64,
+    a: f32,
 }
 
 /// Samples curves `k0 .. k0 + count` at the integer major coordinates `u_lo .. u_lo + len`
@@ -468,7 +545,7 @@ fn build(
     params: &[(f64, f64)],
     (c, k0): (f64, i64),
     (u_lo, len): (i64, usize),
-    lines: &mut Vec<[f32; 4]>,
+    (lines, acc, prev): (&mut Vec<[f32; 4]>, &mut Vec<[f64; 4]>, &mut Vec<[f64; 4]>),
 ) {
     let count = params.len();
     // (every entry is written below: no clearing)
@@ -494,12 +571,10 @@ fn build(
     // the curves side by side, one major coordinate at a time: at each, their texels lie in
     // neighbouring minor rows of one column (a few cache lines), where curve by curve the
     // reads would run diagonally across the image
-    let mut acc = vec![[0.0f64; 4]; count];
-    let mut prev: Vec<[f64; 4]> = params
-        .iter()
-        .enumerate()
-        .map(|(l, &p)| at.sample(0, l, p))
-        .collect();
+    acc.clear();
+    acc.resize(count, [0.0f64; 4]);
+    prev.clear();
+    prev.extend(params.iter().enumerate().map(|(l, &p)| at.sample(0, l, p)));
     lines[..count].fill([0.0; 4]);
     for i in 1..len {
         for (l, &p) in params.iter().enumerate() {
@@ -557,6 +632,7 @@ impl Sampler<'_> {
 
 /// The band's curves `k0 .. k0 + count` at one major coordinate `u`: their minor coordinates
 /// and slopes there, and their parameters `(s, q)`.
+#[derive(Default)]
 struct Column {
     u: f64,
     ys: Vec<f64>,
@@ -577,22 +653,19 @@ impl Column {
     }
 }
 
-/// The line integral at minor coordinate `y` of the band's column `col` for a pixel with
-/// velocity components `(a, b)` (major, minor), from the running sums `lines` (`len` entries a
-/// curve from major coordinate `u_lo`); `l` is a curve at or below the last pixel's in the column
-/// (updated). None when the curves do not fit the pixel (module docs).
+/// Whether the band's curves fit the pixel at minor coordinate `y` of the band's column `col`
+/// with velocity components `(a, b)` (major, minor) (module docs): the curve below it and its
+/// fraction of the way to the next; `l` is a curve at or below the last pixel's in the column
+/// (updated).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn read(
+fn fit(
     col: &Column,
     params: &[(f64, f64)],
     c: f64,
-    lines: &[[f32; 4]],
-    (u_lo, len): (i64, usize),
     y: f64,
     (a, b): (f32, f32),
     l: &mut usize,
-) -> Option<[f32; 4]> {
+) -> Option<(usize, f64)> {
     let ys = &col.ys;
     let last = ys.len() - 1;
     while *l + 1 < last && ys[*l + 1] <= y {
@@ -619,21 +692,28 @@ fn read(
             return None;
         }
     }
-    let (lo, hi) = (col.u - half - u_lo as f64, col.u + half - u_lo as f64);
+    Some((l, f))
+}
+
+/// The line integral of pixel `p` from the running sums `lines` of `count` curves (`len`
+/// entries a curve from major coordinate `u_lo`).
+#[inline(always)]
+fn value(lines: &[[f32; 4]], (count, u_lo, len): (usize, i64, usize), p: &Fit) -> [f32; 4] {
+    let (u, half) = (p.m as f64, 0.5 * (p.a as f64).abs());
+    let (lo, hi) = (u - half - u_lo as f64, u + half - u_lo as f64);
     let (i0, i1) = (lo as usize, hi as usize);
     let (t0, t1) = (lo - i0 as f64, hi - i1 as f64);
     debug_assert!(i1 + 1 < len);
-    let count = ys.len();
     let (m0, m1) = (
-        span(lines, (l, count), (i0, t0), (i1, t1)),
-        span(lines, (l + 1, count), (i0, t0), (i1, t1)),
+        span(lines, (p.l, count), (i0, t0), (i1, t1)),
+        span(lines, (p.l + 1, count), (i0, t0), (i1, t1)),
     );
     let inv = 1.0 / (2.0 * half);
     let mut out = [0.0f32; 4];
     for c in 0..4 {
-        out[c] = ((m0[c] + f * (m1[c] - m0[c])) * inv) as f32;
+        out[c] = ((m0[c] + p.f * (m1[c] - m0[c])) * inv) as f32;
     }
-    Some(out)
+    out
 }
 
 /// The running sum of curve `l` of `count` between positions `i0 + t0` and `i1 + t1` (entries
@@ -678,13 +758,29 @@ mod tests {
     }
 
     impl LineField for Image<'_> {
-        fn line(&self, x: usize, y: usize) -> Option<[f32; 2]> {
-            (!self.moving[y * self.w + x]).then(|| self.at(x, y))
+        fn row(&self, y: usize, v: &mut [[f32; 2]], line: &mut [u8]) {
+            for x in 0..self.w {
+                v[x] = self.at(x, y);
+                line[x] = u8::from(!self.moving[y * self.w + x]);
+            }
         }
-        fn taps(&self, rgba: &[f32], x: usize, y: usize) -> ([f32; 4], bool) {
-            let v = self.at(x, y);
-            let out = self.taps.blur(rgba, (self.w, self.h), (x, y), v);
-            (out, v[0].is_nan() || v[1].is_nan())
+        fn taps_row(
+            &self,
+            rgba: &[f32],
+            y: usize,
+            row: &mut [MaybeUninit<f32>],
+            skip: &[bool],
+        ) -> bool {
+            let mut nan = false;
+            let simd = crate::image::simd();
+            let dims = (self.w, self.h);
+            self.taps
+                .blur_row_skipping(rgba, dims, y, row, simd, Some(skip), |x| {
+                    let v = self.at(x, y);
+                    nan |= v[0].is_nan() || v[1].is_nan();
+                    v
+                });
+            nan
         }
     }
 
@@ -743,6 +839,7 @@ mod tests {
         v: &[f32],
         (w, h): (usize, usize),
         moving: &[bool],
+        saved: f64,
     ) -> (Vec<f32>, Vec<bool>) {
         let taps = Taps::new(16);
         let field = Image {
@@ -753,7 +850,7 @@ mod tests {
             taps,
         };
         let mut mask = vec![false; w * h];
-        let (out, stats) = line_blur_masked(rgba, (w, h), &field, Some(&mut mask));
+        let (out, stats) = line_blur_masked(rgba, (w, h), &field, saved, Some(&mut mask));
         assert_eq!(stats.line_pixels, mask.iter().filter(|m| **m).count());
         (out, mask)
     }
@@ -761,7 +858,7 @@ mod tests {
     /// The largest difference from the dense-tap oracle over the pixels blurred as a line
     /// integral, and how many there are.
     fn worst(rgba: &[f32], v: &[f32], (w, h): (usize, usize)) -> (f64, usize) {
-        let (out, mask) = run(rgba, v, (w, h), &vec![false; w * h]);
+        let (out, mask) = run(rgba, v, (w, h), &vec![false; w * h], f64::INFINITY);
         let mut worst = 0.0f64;
         for y in 0..h {
             for x in 0..w {
@@ -868,7 +965,7 @@ mod tests {
         let moving: Vec<bool> = (0..w * h)
             .map(|i| (20..30).contains(&(i / w)) && (i % w) % 3 == 0)
             .collect();
-        let (out, mask) = run(&rgba, &vel, (w, h), &moving);
+        let (out, mask) = run(&rgba, &vel, (w, h), &moving, f64::INFINITY);
         let taps = super::super::camera::velocity_blur(&rgba, &vel, w, h, 16).unwrap();
         let mut fell = 0;
         for i in 0..w * h {
@@ -895,6 +992,32 @@ mod tests {
     }
 
     #[test]
+    fn a_band_with_few_fitting_pixels_takes_the_taps() {
+        // one row in 8 may be lines (the others' pixels are moving): a band's 4 such rows of
+        // 256 pixels save 1024 * SAMPLES_PER_PIXEL (6144) samples, under the 35 curves times
+        // 300 samples (10500) it would build (and in the 44-pixel strip at the right): every
+        // pixel takes the taps, the taps' bits; with the rule off (every fitting pixel a
+        // line) those rows are lines
+        let (w, h) = (300, 64);
+        let rgba = smooth(w, h);
+        let vel: Vec<f32> = (0..w * h).flat_map(|_| [40.0f32, 5.0]).collect();
+        let moving: Vec<bool> = (0..w * h).map(|i| (i / w) % 8 != 0).collect();
+        let (out, mask) = run(&rgba, &vel, (w, h), &moving, SAMPLES_PER_PIXEL);
+        assert!(mask.iter().all(|m| !m));
+        let taps = super::super::camera::velocity_blur(&rgba, &vel, w, h, 16).unwrap();
+        assert!(out
+            .iter()
+            .zip(&taps)
+            .all(|(a, b)| a.to_bits() == b.to_bits()));
+        let (_, mask) = run(&rgba, &vel, (w, h), &moving, f64::INFINITY);
+        let lines = mask.iter().filter(|m| **m).count();
+        assert!(lines > w * h / 20, "{lines}");
+        // all pixels may be lines: the bands are worth their curves
+        let (_, mask) = run(&rgba, &vel, (w, h), &vec![false; w * h], SAMPLES_PER_PIXEL);
+        assert!(mask.iter().filter(|m| **m).count() > w * h * 8 / 10);
+    }
+
+    #[test]
     fn same_on_one_thread() {
         let (w, h) = (700, 90);
         let rgba = smooth(w, h);
@@ -910,8 +1033,8 @@ mod tests {
             })
             .collect();
         let moving = vec![false; w * h];
-        let a = run(&rgba, &vel, (w, h), &moving);
-        let b = crate::on_threads(1, || run(&rgba, &vel, (w, h), &moving));
+        let a = run(&rgba, &vel, (w, h), &moving, SAMPLES_PER_PIXEL);
+        let b = crate::on_threads(1, || run(&rgba, &vel, (w, h), &moving, SAMPLES_PER_PIXEL));
         assert!(a
             .0
             .iter()
