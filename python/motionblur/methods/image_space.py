@@ -445,7 +445,8 @@ def camera_velocity(scene: Scene, samples: int | None = None, aa: int = 1) -> Fr
     from running sums along curves that follow the velocity field, so a pixel costs the same
     whatever its streak's length; the continuous limit of the taps, without their ghost
     copies); pixels where the curves do not fit the field (moving objects, depth edges, a fan
-    of directions, streaks under 16 pixels) take the 16-tap blur instead. N: the centred N-tap
+    of directions, streaks under 16 pixels), or where too few fit for the curves to cost less
+    than the taps, take the 16-tap blur instead (its bits). N: the centred N-tap
     blur of [`motionblur.image.velocity_blur`][motionblur.image.velocity_blur] at every pixel
     (the method's bits before the line integral, with ``samples=16``). ``aa`` 1, 2 or 4 spatial
     samples per pixel along each axis for the sharp frame. The velocity from the camera at
