@@ -135,7 +135,7 @@ def stages(scene: Scene, method: str, rounds: int) -> dict[str, float]:
                 c(frame.ids),
                 c(frame.velocity),
                 moving,
-                {"camera": cam, "previous_camera": start, "scale": scale, "samples": 16},
+                {"camera": cam, "previous_camera": start, "scale": scale, "samples": None},
             ),
             rounds,
         )

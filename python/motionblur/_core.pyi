@@ -106,7 +106,7 @@ class _CameraFrameOptions(TypedDict):
     camera: _CameraLike
     previous_camera: _CameraLike
     scale: float
-    samples: int
+    samples: int | None
 
 class _ShellOptions(TypedDict):
     subdivisions: int
@@ -551,12 +551,14 @@ def _camera_frame_blur(
     velocity: np.ndarray,
     moving: list[bool],
     options: _CameraFrameOptions,
-) -> np.ndarray:
+) -> tuple[np.ndarray, int]:
     """The camera_velocity method's blur: each pixel's velocity its moving object's (ids (H,W) i32,
     velocity (H,W,2) f32, moving[id]) or the camera's from depth (H,W) f32, times the f32
     ``options["scale"]``, clamped to MAX_VELOCITY, then the centred ``options["samples"]``-tap
-    blur of rgba (H,W,4) f32; ``options["camera"]`` and ``options["previous_camera"]`` are the
-    two cameras."""
+    blur of rgba (H,W,4) f32, or with ``samples`` None the line integral along each pixel's
+    streak where it fits (16 taps elsewhere); ``options["camera"]`` and
+    ``options["previous_camera"]`` are the two cameras. Returns (the blurred rgba (H,W,4) f32,
+    pixels blurred as a line integral)."""
 
 def _reconstruct(
     rgba: np.ndarray, depth: np.ndarray, velocity: np.ndarray, samples: int, tile: int, soft_depth: float

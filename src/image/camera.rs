@@ -76,6 +76,10 @@ pub(crate) struct PixelMotion {
     p12: f64,
     wf: f64,
     hf: f64,
+    /// `q` of [`PixelMotion::at`] as `base + x dx + y dy + m.w_axis / d` ([`PixelMotion::at_affine`]).
+    base: DVec4,
+    dx: DVec4,
+    dy: DVec4,
     /// Whether the cameras are the same (exactly no motion).
     pub still: bool,
 }
@@ -84,14 +88,22 @@ impl PixelMotion {
     /// The motion of a `w` x `h` image seen by `cur` that was seen by `prev`.
     pub fn new(cur: &CameraMatrices, prev: &CameraMatrices, w: usize, h: usize) -> Self {
         let p = &cur.projection;
+        let m = prev.projection * prev.view * cur.view.inverse();
+        let (wf, hf) = (w as f64, h as f64);
+        let (p00, p11, p02, p12) = (p.x_axis.x, p.y_axis.y, p.z_axis.x, p.z_axis.y);
         PixelMotion {
-            m: prev.projection * prev.view * cur.view.inverse(),
-            p00: p.x_axis.x,
-            p11: p.y_axis.y,
-            p02: p.z_axis.x,
-            p12: p.z_axis.y,
-            wf: w as f64,
-            hf: h as f64,
+            m,
+            p00,
+            p11,
+            p02,
+            p12,
+            wf,
+            hf,
+            base: m.x_axis * ((1.0 / wf - 1.0 + p02) / p00)
+                + m.y_axis * ((1.0 - 1.0 / hf + p12) / p11)
+                - m.z_axis,
+            dx: m.x_axis * (2.0 / (wf * p00)),
+            dy: m.y_axis * (-2.0 / (hf * p11)),
             // A static camera: exactly no motion (the matrix product would leave ~1e-13 pixels).
             still: cur.view == prev.view && cur.projection == prev.projection,
         }
@@ -123,6 +135,32 @@ impl PixelMotion {
             ((x as f64 + 0.5 - px) * scale) as f32,
             ((y as f64 + 0.5 - py) * scale) as f32,
         ]
+    }
+
+    /// [`PixelMotion::at`] (scale 1) of each pixel of row `y` with depths `depth` into `out`,
+    /// `q` as an affine function of `x`, `y` and `1 / d` (a few multiply-adds instead of a 4x4
+    /// product, in a loop the compiler vectorises: the same velocity to rounding, not the same
+    /// bits).
+    #[inline(always)]
+    pub fn row_affine(&self, y: usize, depth: &[f32], out: &mut [[f32; 2]]) {
+        if self.still {
+            out.fill([0.0, 0.0]);
+            return;
+        }
+        let yf = y as f64;
+        let (b, dx, dy, dd) = (self.base, self.dx, self.dy, self.m.w_axis);
+        let (cx, cy, cw) = (b.x + dy.x * yf, b.y + dy.y * yf, b.w + dy.w * yf);
+        let (sx, sy) = (0.5 * self.wf, 0.5 * self.hf);
+        let ry = yf + 0.5;
+        for (x, (o, &d)) in out.iter_mut().zip(depth).enumerate() {
+            let (xf, r) = (x as f64, 1.0 / d as f64);
+            let qw = cw + dx.w * xf + dd.w * r;
+            let inv = 1.0 / qw;
+            let px = ((cx + dx.x * xf + dd.x * r) * inv + 1.0) * sx;
+            let py = (1.0 - (cy + dx.y * xf + dd.y * r) * inv) * sy;
+            let v = [(xf + 0.5 - px) as f32, (ry - py) as f32];
+            *o = if qw > 0.0 { v } else { [0.0, 0.0] };
+        }
     }
 }
 
@@ -261,22 +299,46 @@ impl Taps {
         y: usize,
         row: &mut [std::mem::MaybeUninit<f32>],
         simd: bool,
+        velocity: impl FnMut(usize) -> [f32; 2],
+    ) {
+        self.blur_row_skipping(rgba, (w, h), y, row, simd, None, velocity);
+    }
+
+    /// [`Taps::blur_row`] leaving out the pixels `skip` marks (`(w,)` when given): they are
+    /// neither written nor asked their velocity; the others get the same bits.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    pub fn blur_row_skipping(
+        &self,
+        rgba: &[f32],
+        (w, h): (usize, usize),
+        y: usize,
+        row: &mut [std::mem::MaybeUninit<f32>],
+        simd: bool,
+        skip: Option<&[bool]>,
         mut velocity: impl FnMut(usize) -> [f32; 2],
     ) {
+        if let Some(s) = skip {
+            assert_eq!(s.len(), w);
+        }
         #[cfg(target_arch = "x86_64")]
         if simd && !self.t.is_empty() && rgba.len() == w * h * 4 && crate::simd::simd_enabled() {
             // SAFETY: AVX2 was detected and `rgba` holds the (h, w) image whole.
-            unsafe { self.row_avx(rgba, (w, h), y, row, &mut velocity) };
+            unsafe { self.row_avx(rgba, (w, h), y, row, skip, &mut velocity) };
             return;
         }
         for x in 0..w {
+            if skip.is_some_and(|s| s[x]) {
+                continue;
+            }
             put4(row, x, self.blur(rgba, (w, h), (x, y), velocity(x)));
         }
     }
 
-    /// [`Taps::blur_row`] with AVX2, tap by tap: the row is taken [`CHUNK`] pixels at a time,
-    /// the pixels whose taps are all inside two by two ([`tap_pair`]),
-    /// the others one by one ([`Taps::blur`]). Each pair's sum runs over the taps in their
+    /// [`Taps::blur_row_skipping`] with AVX2, tap by tap: the row is taken [`CHUNK`] pixels at
+    /// a time, the pixels whose taps are all inside two by two ([`tap_pair`]; each with the next
+    /// such pixel not skipped), those with clamped taps likewise ([`tap_pair_clamped`]), a
+    /// pixel left without a partner or with a zero or NaN velocity alone ([`Taps::blur`]). Each pair's sum runs over the taps in their
     /// order, lane for lane the IEEE operations of [`Taps::blur`] (the same bits), but every pair of the chunk takes its
     /// first tap before any takes its second: neighbouring pixels' taps read neighbouring
     /// texels, so the chunk's reads run along two rows of the image per tap instead of jumping
@@ -292,25 +354,31 @@ impl Taps {
         (w, h): (usize, usize),
         y: usize,
         row: &mut [std::mem::MaybeUninit<f32>],
+        skip: Option<&[bool]>,
         velocity: &mut impl FnMut(usize) -> [f32; 2],
     ) {
         use std::arch::x86_64::*;
         let mut vs = [[0.0f32; 2]; CHUNK];
         let mut origin = [_mm_setzero_ps(); CHUNK / 2];
         let mut vel = [_mm_setzero_ps(); CHUNK / 2];
-        let mut first = [0usize; CHUNK / 2];
+        let mut pair = [(0usize, 0usize); CHUNK / 2];
         let yf = y as f32;
         let mut x0 = 0;
         while x0 < w {
             let n = (w - x0).min(CHUNK);
+            let skipped = skip.map(|s| &s[x0..x0 + n]);
             for (k, v) in vs[..n].iter_mut().enumerate() {
-                *v = velocity(x0 + k);
+                if !skipped.is_some_and(|s| s[k]) {
+                    *v = velocity(x0 + k);
+                }
             }
             // 1: every tap inside, 2: a finite velocity with taps to clamp, 0: the pixel as it
-            // is or a NaN (`Taps::blur`)
+            // is or a NaN (`Taps::blur`), 3: skipped
             let kind = |k: usize| {
                 let [vx, vy] = vs[k];
-                if (vx == 0.0 && vy == 0.0) || !(vx.is_finite() && vy.is_finite()) {
+                if skipped.is_some_and(|s| s[k]) {
+                    3
+                } else if (vx == 0.0 && vy == 0.0) || !(vx.is_finite() && vy.is_finite()) {
                     0
                 } else if Self::inside((w, h), (x0 + k, y), vs[k]) {
                     1
@@ -318,27 +386,41 @@ impl Taps {
                     2
                 }
             };
-            // pairs of the same kind, those inside first, those clamped from the end
+            // pairs of the same kind (each pixel with the next of its kind, neighbours unless
+            // a skipped pixel or one of the other kind lies between), those inside first,
+            // those clamped from the end
             let (mut inner, mut outer) = (0, CHUNK / 2);
-            let mut k = 0;
-            while k < n {
+            let mut pending = [usize::MAX; 3];
+            for k in 0..n {
                 let a = kind(k);
-                if a != 0 && k + 1 < n && kind(k + 1) == a {
-                    let q = if a == 1 {
-                        inner += 1;
-                        inner - 1
-                    } else {
-                        outer -= 1;
-                        outer
-                    };
-                    let x = x0 + k;
-                    origin[q] = _mm_setr_ps(x as f32, (x + 1) as f32, yf, yf);
-                    vel[q] = _mm_setr_ps(vs[k][0], vs[k + 1][0], vs[k][1], vs[k + 1][1]);
-                    first[q] = x;
-                    k += 2;
-                } else {
+                if a == 3 {
+                    continue;
+                }
+                if a == 0 {
                     put4(row, x0 + k, self.blur(rgba, (w, h), (x0 + k, y), vs[k]));
-                    k += 1;
+                    continue;
+                }
+                let p = pending[a];
+                if p == usize::MAX {
+                    pending[a] = k;
+                    continue;
+                }
+                pending[a] = usize::MAX;
+                let q = if a == 1 {
+                    inner += 1;
+                    inner - 1
+                } else {
+                    outer -= 1;
+                    outer
+                };
+                let (xa, xb) = (x0 + p, x0 + k);
+                origin[q] = _mm_setr_ps(xa as f32, xb as f32, yf, yf);
+                vel[q] = _mm_setr_ps(vs[p][0], vs[k][0], vs[p][1], vs[k][1]);
+                pair[q] = (xa, xb);
+            }
+            for &p in &pending[1..] {
+                if p != usize::MAX {
+                    put4(row, x0 + p, self.blur(rgba, (w, h), (x0 + p, y), vs[p]));
                 }
             }
             let mut acc = [_mm256_setzero_ps(); CHUNK / 2];
@@ -360,8 +442,8 @@ impl Taps {
             for q in (0..inner).chain(outer..CHUNK / 2) {
                 let mut out = [0.0f32; 8];
                 _mm256_storeu_ps(out.as_mut_ptr(), _mm256_mul_ps(acc[q], inv));
-                put4(row, first[q], [out[0], out[1], out[2], out[3]]);
-                put4(row, first[q] + 1, [out[4], out[5], out[6], out[7]]);
+                put4(row, pair[q].0, [out[0], out[1], out[2], out[3]]);
+                put4(row, pair[q].1, [out[4], out[5], out[6], out[7]]);
             }
             x0 += n;
         }
@@ -428,7 +510,7 @@ impl Taps {
 #[cfg(target_arch = "x86_64")]
 const CHUNK: usize = 128;
 
-/// One tap `t` of the pixel pair at `origin` (`(x, x + 1, y, y)`) with velocities `vel`
+/// One tap `t` of the pixel pair at `origin` (`(xa, xb, y, y)`) with velocities `vel`
 /// (`(vx0, vx1, vy0, vy1)`): the bilinear samples of both pixels side by side (lanes 0-3 and
 /// 4-7), [`Taps::blur`]'s operations in its order: the position `x + vx t`, `y + vy t`, its
 /// floor (truncation, then one less where that rose), the fractions, the four texels as two
@@ -579,30 +661,39 @@ pub struct FrameMotion<'a> {
     pub moving: &'a [bool],
 }
 
+/// Taps of the blur where [`camera_frame_blur`]'s line integral does not fit.
+pub const LINE_FALLBACK_SAMPLES: usize = 16;
+
 /// The blur of the `camera_velocity` method in one pass: each pixel's velocity is its moving
 /// object's from the velocity buffer, else the camera's ([`camera_velocity`] from `depth`),
 /// times `scale` (float32), clamped to `+-MAX_VELOCITY`, and the pixel is blurred along it as
-/// [`velocity_blur`] does with `samples` taps; no velocity image is made. Errors name `rgba`
-/// (not finite), `depth` (NaN or <= 0) or `velocity` (NaN after the scaling).
+/// [`velocity_blur`] does with `samples` taps (`Some(n)`), or, with `None`, as the line
+/// integral along its streak where it fits (the `camera_line` module: the camera's pixels,
+/// their velocities from the same matrices in fewer operations) and with 16 taps
+/// (`LINE_FALLBACK_SAMPLES`) elsewhere; no velocity image is made. Returns the image and
+/// the number of pixels blurred as a line integral. Errors name `rgba` (not finite), `depth`
+/// (NaN or <= 0), `samples` (out of `[1, MAX_SAMPLES]`) or `velocity` (NaN after the scaling).
 pub fn camera_frame_blur(
     rgba: &[f32],
     depth: &[f32],
     (w, h): (usize, usize),
     frame: FrameMotion<'_>,
     cameras: (&CameraMatrices, &CameraMatrices),
-    (scale, samples): (f32, usize),
-) -> Result<Vec<f32>> {
+    (scale, samples): (f32, Option<usize>),
+) -> Result<(Vec<f32>, usize)> {
     check_image("rgba", rgba, w, h, 4)?;
     check_image("depth", depth, w, h, 1)?;
     check_image("velocity", frame.velocity, w, h, 2)?;
     if frame.ids.len() != w * h {
         return Err(Error::shape("ids", format!("expected ({h},{w}) values")));
     }
-    if samples == 0 || samples > MAX_SAMPLES {
-        return Err(Error::value(
-            "samples",
-            format!("must be in [1, {MAX_SAMPLES}], got {samples}"),
-        ));
+    if let Some(samples) = samples {
+        if samples == 0 || samples > MAX_SAMPLES {
+            return Err(Error::value(
+                "samples",
+                format!("must be in [1, {MAX_SAMPLES}], got {samples}"),
+            ));
+        }
     }
     super::check_finite("rgba", rgba)?;
     if depth.par_iter().any(|d| d.is_nan() || *d <= 0.0) {
@@ -611,9 +702,132 @@ pub fn camera_frame_blur(
             "contains NaN or values <= 0 (use +inf for background)",
         ));
     }
-    let motion = PixelMotion::new(cameras.0, cameras.1, w, h);
-    let taps = Taps::new(samples);
-    let moves = |id: i32| id >= 0 && frame.moving.get(id as usize).copied().unwrap_or(false);
+    let field = CameraField {
+        motion: PixelMotion::new(cameras.0, cameras.1, w, h),
+        depth,
+        frame,
+        scale,
+        w,
+        h,
+        taps: Taps::new(samples.unwrap_or(LINE_FALLBACK_SAMPLES)),
+    };
+    let (out, bad, lines) = match samples {
+        Some(_) => {
+            let (out, bad) = taps_frame_blur(rgba, (w, h), &field);
+            (out, bad, 0)
+        }
+        None => {
+            let (out, stats) = super::camera_line::line_blur(rgba, (w, h), &field);
+            (out, stats.nan, stats.line_pixels)
+        }
+    };
+    if bad {
+        return Err(Error::value(
+            "velocity",
+            "is NaN (a camera or depth too extreme)",
+        ));
+    }
+    Ok((out, lines))
+}
+
+/// The velocities [`camera_frame_blur`] blurs along.
+struct CameraField<'a> {
+    motion: PixelMotion,
+    depth: &'a [f32],
+    frame: FrameMotion<'a>,
+    scale: f32,
+    w: usize,
+    h: usize,
+    /// The taps where the line integral does not fit.
+    taps: Taps,
+}
+
+impl CameraField<'_> {
+    /// The velocity the taps blur pixel `(x, y)` along (the bits the method always had).
+    #[inline(always)]
+    fn tap_velocity(&self, x: usize, y: usize) -> [f32; 2] {
+        let i = y * self.w + x;
+        let v = if self.moves(i) {
+            [self.frame.velocity[2 * i], self.frame.velocity[2 * i + 1]]
+        } else {
+            self.motion.at(x, y, self.depth[i], 1.0)
+        };
+        v.map(|c| (c * self.scale).clamp(-MAX_VELOCITY, MAX_VELOCITY))
+    }
+
+    /// [`LineField::row`](super::camera_line::LineField::row) compiled for AVX2.
+    ///
+    /// # Safety
+    /// AVX2 is present.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn row_avx(&self, y: usize, v: &mut [[f32; 2]], line: &mut [u8]) {
+        self.row_plain(y, v, line);
+    }
+
+    /// [`LineField::row`](super::camera_line::LineField::row): the camera's velocity from
+    /// [`PixelMotion::row_affine`] times the scale, clamped, at every pixel (not read at a
+    /// moving object's).
+    #[inline(always)]
+    fn row_plain(&self, y: usize, v: &mut [[f32; 2]], line: &mut [u8]) {
+        let i = y * self.w;
+        for (x, line) in line.iter_mut().enumerate() {
+            *line = u8::from(!self.moves(i + x));
+        }
+        self.motion.row_affine(y, &self.depth[i..i + self.w], v);
+        let scale = self.scale;
+        for v in v.iter_mut() {
+            *v = v.map(|c| (c * scale).clamp(-MAX_VELOCITY, MAX_VELOCITY));
+        }
+    }
+
+    #[inline(always)]
+    fn moves(&self, i: usize) -> bool {
+        let id = self.frame.ids[i];
+        id >= 0 && self.frame.moving.get(id as usize).copied().unwrap_or(false)
+    }
+}
+
+impl super::camera_line::LineField for CameraField<'_> {
+    #[inline]
+    fn row(&self, y: usize, v: &mut [[f32; 2]], line: &mut [u8]) {
+        #[cfg(target_arch = "x86_64")]
+        if super::simd() {
+            // SAFETY: AVX2 was detected
+            unsafe { self.row_avx(y, v, line) };
+            return;
+        }
+        self.row_plain(y, v, line);
+    }
+
+    #[inline]
+    fn taps_row(
+        &self,
+        rgba: &[f32],
+        y: usize,
+        row: &mut [std::mem::MaybeUninit<f32>],
+        skip: &[bool],
+    ) -> bool {
+        let mut nan = false;
+        let (dims, simd) = ((self.w, self.h), super::simd());
+        self.taps
+            .blur_row_skipping(rgba, dims, y, row, simd, Some(skip), |x| {
+                let v = self.tap_velocity(x, y);
+                nan |= v[0].is_nan() || v[1].is_nan();
+                v
+            });
+        nan
+    }
+}
+
+/// [`camera_frame_blur`] with the field's taps at every pixel: the image and whether a velocity
+/// was NaN.
+fn taps_frame_blur(
+    rgba: &[f32],
+    (w, h): (usize, usize),
+    field: &CameraField<'_>,
+) -> (Vec<f32>, bool) {
+    let taps = &field.taps;
     let simd = super::simd();
     let mut bad = false;
     let out = filled(w * h * 4, |out| {
@@ -623,13 +837,7 @@ pub fn camera_frame_blur(
             .map(|(y, row)| {
                 let mut bad = false;
                 taps.blur_row(rgba, (w, h), y, row, simd, |x| {
-                    let i = y * w + x;
-                    let v = if moves(frame.ids[i]) {
-                        [frame.velocity[2 * i], frame.velocity[2 * i + 1]]
-                    } else {
-                        motion.at(x, y, depth[i], 1.0)
-                    };
-                    let v = v.map(|c| (c * scale).clamp(-MAX_VELOCITY, MAX_VELOCITY));
+                    let v = field.tap_velocity(x, y);
                     bad |= v[0].is_nan() || v[1].is_nan();
                     v
                 });
@@ -637,13 +845,7 @@ pub fn camera_frame_blur(
             })
             .reduce(|| false, |a, b| a | b);
     });
-    if bad {
-        return Err(Error::value(
-            "velocity",
-            "is NaN (a camera or depth too extreme)",
-        ));
-    }
-    Ok(out)
+    (out, bad)
 }
 
 /// The parameters of [`camera_motion_blur`]: the two cameras, the taps and the velocity's scale.
@@ -787,10 +989,54 @@ mod tests {
             ids: &ids,
             moving: &[true, false],
         };
-        let run = || camera_frame_blur(&rgba, &depth, (w, h), frame, (&cur, &prev), (2.0, 16));
-        let a = run().unwrap();
-        let b = crate::on_threads(1, run).unwrap();
-        assert_eq!(a, b);
-        assert_ne!(a, rgba);
+        for samples in [Some(16), None] {
+            let run =
+                || camera_frame_blur(&rgba, &depth, (w, h), frame, (&cur, &prev), (2.0, samples));
+            let a = run().unwrap();
+            let b = crate::on_threads(1, run).unwrap();
+            assert_eq!(a, b);
+            assert_ne!(a.0, rgba);
+        }
+    }
+
+    #[test]
+    fn camera_frame_line_blur_keeps_the_taps_bits_where_it_takes_them() {
+        // a camera panning over a plane (every camera pixel may be a line) and a moving
+        // object's block (its pixels take the taps along the velocity buffer's velocity)
+        let (w, h) = (320, 96);
+        let rgba: Vec<f32> = (0..w * h * 4)
+            .map(|i| ((i / 4) % w) as f32 * 0.01 + ((i / 4) / w) as f32 * 0.02 + (i % 4) as f32)
+            .collect();
+        let depth = vec![5.0f32; w * h];
+        let velocity: Vec<f32> = (0..w * h * 2).map(|i| (i % 2) as f32 * 6.0 - 3.0).collect();
+        let ids: Vec<i32> = (0..w * h)
+            .map(|i| i32::from((40..60).contains(&(i / w)) && (100..150).contains(&(i % w))) - 1)
+            .map(|id| if id == 0 { 0 } else { -1 })
+            .collect();
+        let eye = |x: f64| {
+            let mut v = glam::DMat4::IDENTITY;
+            v.w_axis.x = x;
+            v.w_axis.z = -4.0;
+            v
+        };
+        let proj = glam::DMat4::perspective_rh_gl(0.8, w as f64 / h as f64, 0.1, 50.0);
+        let cur = CameraMatrices::new(eye(0.0), proj, "camera").unwrap();
+        let prev = CameraMatrices::new(eye(1.5), proj, "previous_camera").unwrap();
+        let frame = FrameMotion {
+            velocity: &velocity,
+            ids: &ids,
+            moving: &[true],
+        };
+        let run = |samples| {
+            camera_frame_blur(&rgba, &depth, (w, h), frame, (&cur, &prev), (1.0, samples)).unwrap()
+        };
+        let ((taps, _), (line, lines)) = (run(Some(16)), run(None));
+        let same =
+            |i: usize| (0..4).all(|c| taps[i * 4 + c].to_bits() == line[i * 4 + c].to_bits());
+        // the moving block's pixels are the taps'; every pixel not a line too (at most
+        // `lines` pixels differ)
+        assert!((0..w * h).filter(|&i| ids[i] == 0).all(same));
+        let differ = (0..w * h).filter(|&i| !same(i)).count();
+        assert!(lines > w * h / 2 && differ <= lines, "{lines} {differ}");
     }
 }

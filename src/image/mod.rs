@@ -14,6 +14,7 @@
 
 mod boxblur;
 mod camera;
+mod camera_line;
 mod colors;
 mod coverage;
 mod coverage_blur;

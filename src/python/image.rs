@@ -517,18 +517,19 @@ fn _max_speed(py: Python<'_>, velocity: PyReadonlyArray3<'_, f32>) -> PyResult<f
 }
 
 /// The options of `_camera_frame_blur`, the items of a dict: the two cameras
-/// ([`CameraArg`]), the f32 velocity `scale` and the `samples` taps.
+/// ([`CameraArg`]), the f32 velocity `scale` and the `samples` taps (None: the line integral).
 #[derive(FromPyObject)]
 #[pyo3(from_item_all)]
 struct CameraFrameArgs<'py> {
     camera: CameraArg<'py>,
     previous_camera: CameraArg<'py>,
     scale: f32,
-    samples: usize,
+    samples: Option<usize>,
 }
 
 /// The `camera_velocity` method's blur of a frame: rgba (H,W,4) f32, depth (H,W) f32, ids
 /// (H,W) i32, velocity (H,W,2) f32, `moving[id]` and the options ([`CameraFrameArgs`]).
+/// Returns (the blurred rgba (H,W,4) f32, pixels blurred as a line integral).
 #[pyfunction]
 fn _camera_frame_blur<'py>(
     py: Python<'py>,
@@ -538,7 +539,7 @@ fn _camera_frame_blur<'py>(
     velocity: PyReadonlyArray3<'py, f32>,
     moving: Vec<bool>,
     options: CameraFrameArgs<'py>,
-) -> PyOut<'py> {
+) -> PyResult<(Bound<'py, PyAny>, usize)> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
     let (d, dw, dh) = img2(&depth, "depth")?;
     same_size("depth", (dh, dw), (h, w))?;
@@ -556,10 +557,10 @@ fn _camera_frame_blur<'py>(
         moving: &moving,
     };
     let taps = (options.scale, options.samples);
-    let out = detached_in_pool(py, || {
+    let (out, lines) = detached_in_pool(py, || {
         crate::camera_frame_blur(a, d, (w, h), frame, (&cur, &prev), taps)
     })?;
-    shaped(py, out, [h, w, 4])
+    Ok((shaped(py, out, [h, w, 4])?, lines))
 }
 
 /// The coverage glow's composite of the `opaque_image` method over a window (y0, y1, x0, x1)

@@ -433,41 +433,52 @@ def _front_of(frame: Frame, mask: np.ndarray, k: int, direction, length: float) 
 
 @register(
     "camera_velocity",
-    sweep=[{"samples": n} for n in (4, 8, 16, 32)],
+    sweep=[{"samples": None}] + [{"samples": n} for n in (4, 8, 16, 32)],
     applies=lambda scene: scene.camera_moves,
     needs="a moving camera (Scene(camera_motion=...))",
 )
-def camera_velocity(scene: Scene, samples: int = 16, aa: int = 1) -> Frame:
+def camera_velocity(scene: Scene, samples: int | None = None, aa: int = 1) -> Frame:
     """Chapman's camera motion blur from the frame's depth and the camera's motion (module docs).
 
-    Options: ``samples`` N in [1, 1024] blur taps per pixel; ``aa`` 1, 2 or 4 spatial samples per
-    pixel along each axis for the sharp frame. The velocity from the camera at ``t_c`` back to the
-    camera at the shutter's start is scaled by ``1 / t_c`` to span the whole shutter and clamped
-    to ``MAX_VELOCITY`` pixels (as [`motionblur.image.camera_motion_blur`][motionblur.image.camera_motion_blur]). Pixels of
+    Options: ``samples`` None (default) or N in [1, 1024]: how each pixel is blurred along its
+    velocity. None: the mean of the image along the pixel's whole streak (a line integral, read
+    from running sums along curves that follow the velocity field, so a pixel costs the same
+    whatever its streak's length; the continuous limit of the taps, without their ghost
+    copies); pixels where the curves do not fit the field (moving objects, depth edges, a fan
+    of directions, streaks under 16 pixels), or where too few fit for the curves to cost less
+    than the taps, take the 16-tap blur instead (its bits). N: the centred N-tap
+    blur of [`motionblur.image.velocity_blur`][motionblur.image.velocity_blur] at every pixel
+    (the method's bits before the line integral, with ``samples=16``). ``aa`` 1, 2 or 4 spatial
+    samples per pixel along each axis for the sharp frame. The velocity from the camera at
+    ``t_c`` back to the camera at the shutter's start is scaled by ``1 / t_c`` to span the whole
+    shutter and clamped to ``MAX_VELOCITY`` pixels (as
+    [`motionblur.image.camera_motion_blur`][motionblur.image.camera_motion_blur]). Pixels of
     moving objects take the rasterizer's velocity of the object with the camera's motion folded
     in instead (Chapman's static-scene velocity would blur an object the camera follows).
-    ``stats``: ``t``, ``samples``.
+    ``stats``: ``t``, ``samples`` (None for the line integral), ``line_pixels`` (pixels blurred
+    as a line integral; 0 with taps).
     """
-    samples = as_int(samples, "samples", minimum=1, maximum=image.MAX_SAMPLES)
+    if samples is not None:
+        samples = as_int(samples, "samples", minimum=1, maximum=image.MAX_SAMPLES)
     aa = check_aa(aa)
     require_box_shutter(scene, "camera_velocity")
     tc = shutter_centroid(scene)
     frame = _sharp(scene, tc, aa, "since_open", _static_part(scene, aa))
-    rgba = frame.rgba
+    rgba, lines = frame.rgba, 0
     if scene.camera_moves and tc > 0.0:
         cam, start = scene.camera_at(tc), scene.camera_at(0.0)
         # one pass in the core: per pixel, the moving object's velocity or the camera's from the
         # depth (image.camera_velocity), times 1 / tc in float32, clamped as camera_motion_blur
         # clamps (a streak past MAX_VELOCITY pixels crosses the image anyway: a very narrow
-        # field of view, a point near the previous camera plane), blurred as image.velocity_blur
+        # field of view, a point near the previous camera plane), blurred along it
         c = np.ascontiguousarray
         moving = [o.is_moving for o in scene.objects]
-        rgba = _core._camera_frame_blur(
+        rgba, lines = _core._camera_frame_blur(
             c(rgba), c(frame.depth), c(frame.ids), c(frame.velocity), moving,
             {"camera": cam, "previous_camera": start, "scale": float(np.float32(1.0 / tc)), "samples": samples},
         )  # fmt: skip
     out = Frame(rgba, frame.depth, frame.ids, frame.velocity)
-    out.stats.update(t=tc, samples=samples)
+    out.stats.update(t=tc, samples=samples, line_pixels=lines)
     return out
 
 
