@@ -44,7 +44,7 @@
 //! any thread count.
 use rayon::prelude::*;
 
-use super::reach::Reach;
+use super::reach::{Reach, CELL};
 use super::{check_finite, check_image, filled, filled_with};
 use crate::error::{Error, Result};
 
@@ -113,6 +113,7 @@ pub fn max_speed(velocity: &[f32]) -> f64 {
 }
 
 /// The largest squared length of `v` (0 for none), over 8 lanes.
+#[cfg(test)]
 fn max_len2(v: &[[f32; 2]]) -> f32 {
     let mut lanes = [0.0f32; 8];
     let mut chunks = v.chunks_exact(8);
@@ -129,7 +130,8 @@ fn max_len2(v: &[[f32; 2]]) -> f32 {
 }
 
 /// Half velocities clamped to `tile` pixels and their lengths, per pixel; None when a
-/// velocity is not finite. Both buffers are written once, never zeroed first.
+/// velocity is not finite (the every-tap oracle's; [`halves`] is the filter's).
+#[cfg(test)]
 fn half_velocities(velocity: &[f32], tile: f32) -> Option<(Vec<[f32; 2]>, Vec<f32>)> {
     const BLOCK: usize = 1 << 14;
     let n = velocity.len() / 2;
@@ -164,7 +166,9 @@ fn half_velocities(velocity: &[f32], tile: f32) -> Option<(Vec<[f32; 2]>, Vec<f3
 }
 
 /// The tile max of `half` over `tile x tile` blocks, then the 3x3 neighbour max of tiles:
-/// `(tiles_x, tiles_y, neighbour max per tile)`.
+/// `(tiles_x, neighbour max per tile)` (the every-tap oracle's; [`tile_max`] is the
+/// filter's).
+#[cfg(test)]
 fn neighbour_max(half: &[[f32; 2]], w: usize, h: usize, tile: usize) -> (usize, Vec<[f32; 2]>) {
     let (tx, ty) = (w.div_ceil(tile), h.div_ceil(tile));
     let longest = |a: [f32; 2], b: [f32; 2]| if len2(b) > len2(a) { b } else { a };
@@ -187,7 +191,13 @@ fn neighbour_max(half: &[[f32; 2]], w: usize, h: usize, tile: usize) -> (usize, 
             }
         })
         .collect();
-    let nmax = (0..tx * ty)
+    (tx, neighbours(&tiles, tx, ty))
+}
+
+/// The 3x3 neighbour max of a `tx` x `ty` grid of tile maxima.
+fn neighbours(tiles: &[[f32; 2]], tx: usize, ty: usize) -> Vec<[f32; 2]> {
+    let longest = |a: [f32; 2], b: [f32; 2]| if len2(b) > len2(a) { b } else { a };
+    (0..tx * ty)
         .into_par_iter()
         .map(|t| {
             let (bx, by) = ((t % tx) as i64, (t / tx) as i64);
@@ -202,8 +212,138 @@ fn neighbour_max(half: &[[f32; 2]], w: usize, h: usize, tile: usize) -> (usize, 
             }
             m
         })
+        .collect()
+}
+
+/// The first pass over the velocities ([`halves`]).
+struct Halves {
+    /// Half velocities clamped to `tile` pixels.
+    half: Vec<[f32; 2]>,
+    /// Their lengths.
+    speed: Vec<f32>,
+    /// Per row, the largest squared length of `half` over each tile's part of the row (`tx` a
+    /// row).
+    tile_rows: Vec<f32>,
+    /// Per row, the largest `speed` over each reach cell's part of the row (`cw` a row).
+    cell_rows: Vec<f32>,
+}
+
+/// Half velocities clamped to `tile` pixels and their lengths, per pixel, with the maxima per
+/// row that the tile max and the reach cells need, in one pass that also checks the depths:
+/// (None when a velocity is not finite, whether every depth is > 0 or inf). `half` and `speed`
+/// are written once, never zeroed first.
+fn halves(
+    velocity: &[f32],
+    depth: &[f32],
+    (w, h): (usize, usize),
+    tile: usize,
+) -> (Option<Halves>, bool) {
+    let (tx, cw) = (w.div_ceil(tile), w.div_ceil(CELL));
+    let rows = (1usize << 14).div_ceil(w);
+    let mut tile_rows = vec![0.0f32; h * tx];
+    let mut cell_rows = vec![0.0f32; h * cw];
+    let (mut finite, mut deep) = (true, true);
+    let mut speed = Vec::new();
+    let tl = tile as f32;
+    let half = filled_with(w * h, |half| {
+        speed = filled_with(w * h, |speed| {
+            (finite, deep) = half
+                .par_chunks_mut(rows * w)
+                .zip(speed.par_chunks_mut(rows * w))
+                .zip(velocity.par_chunks(2 * rows * w))
+                .zip(depth.par_chunks(rows * w))
+                .zip(tile_rows.par_chunks_mut(rows * tx))
+                .zip(cell_rows.par_chunks_mut(rows * cw))
+                .map(|(((((hs, ss), vs), ds), ts), cs)| {
+                    let mut ok = true;
+                    // the row's squared lengths and lengths
+                    let (mut l2, mut sp) = (vec![0.0f32; w], vec![0.0f32; w]);
+                    let rows = hs
+                        .chunks_mut(w)
+                        .zip(ss.chunks_mut(w))
+                        .zip(vs.chunks(2 * w))
+                        .zip(ts.chunks_mut(tx).zip(cs.chunks_mut(cw)));
+                    for (((hr, sr), vr), (tr, cr)) in rows {
+                        let (hr, sr, vr) = (&mut hr[..w], &mut sr[..w], &vr[..2 * w]);
+                        for x in 0..w {
+                            let v = [vr[2 * x], vr[2 * x + 1]];
+                            ok &= v[0].is_finite() & v[1].is_finite();
+                            let hv = [0.5 * v[0], 0.5 * v[1]];
+                            let l = len2(hv).sqrt();
+                            let c = if l > tl {
+                                [hv[0] * tl / l, hv[1] * tl / l]
+                            } else {
+                                hv
+                            };
+                            hr[x].write(c);
+                            l2[x] = len2(c);
+                            sp[x] = l2[x].sqrt();
+                            sr[x].write(sp[x]);
+                        }
+                        for (t, seg) in tr.iter_mut().zip(l2.chunks(tile)) {
+                            *t = max_lanes(seg);
+                        }
+                        for (c, seg) in cr.iter_mut().zip(sp.chunks(CELL)) {
+                            *c = seg.iter().fold(0.0f32, |m, s| m.max(*s));
+                        }
+                    }
+                    let deep = ds.iter().fold(true, |k, d| k & !(d.is_nan() || *d <= 0.0));
+                    (ok, deep)
+                })
+                .reduce(|| (true, true), |a, b| (a.0 & b.0, a.1 & b.1));
+        });
+    });
+    let out = Halves {
+        half,
+        speed,
+        tile_rows,
+        cell_rows,
+    };
+    (finite.then_some(out), deep)
+}
+
+/// The largest of `v` (0 for none, every value >= 0), over 8 lanes.
+fn max_lanes(v: &[f32]) -> f32 {
+    let mut lanes = [0.0f32; 8];
+    let mut chunks = v.chunks_exact(8);
+    for c in &mut chunks {
+        for k in 0..8 {
+            lanes[k] = lanes[k].max(c[k]);
+        }
+    }
+    let rest = chunks.remainder().iter().fold(0.0f32, |m, v| m.max(*v));
+    lanes.iter().fold(rest, |m, l| m.max(*l))
+}
+
+/// The tile max of [`halves`]' half velocities over `tile x tile` blocks (per tile, the first
+/// pixel in row order of the largest squared length, `[0, 0]` when all are 0), then the 3x3
+/// neighbour max of tiles: `(tiles_x, neighbour max per tile)`.
+fn tile_max(hv: &Halves, w: usize, h: usize, tile: usize) -> (usize, Vec<[f32; 2]>) {
+    let (tx, ty) = (w.div_ceil(tile), h.div_ceil(tile));
+    let tiles: Vec<[f32; 2]> = (0..tx * ty)
+        .into_par_iter()
+        .map(|t| {
+            let (bx, by) = (t % tx, t / tx);
+            let ys = by * tile..((by + 1) * tile).min(h);
+            let most = ys
+                .clone()
+                .fold(0.0f32, |m, y| m.max(hv.tile_rows[y * tx + bx]));
+            if most > 0.0 {
+                // the first row that reaches it, then its first pixel that does
+                let y = ys
+                    .into_iter()
+                    .find(|y| hv.tile_rows[y * tx + bx] == most)
+                    .expect("the maximum is some row's");
+                let row = &hv.half[y * w + bx * tile..y * w + ((bx + 1) * tile).min(w)];
+                *row.iter()
+                    .find(|v| len2(**v) == most)
+                    .expect("the maximum is some pixel's")
+            } else {
+                [0.0; 2]
+            }
+        })
         .collect();
-    (tx, nmax)
+    (tx, neighbours(&tiles, tx, ty))
 }
 
 /// The reconstruction filter (module docs): returns `(h, w, 4)` premultiplied RGBA.
@@ -224,22 +364,23 @@ pub fn reconstruct(
     let first_error =
         |e: Error| -> Error { check_inputs(rgba, depth, velocity).err().unwrap_or(e) };
     check_params(params).map_err(first_error)?;
-    let (half, speed) = half_velocities(velocity, params.tile as f32)
-        .ok_or_else(|| first_error(Error::value("velocity", "contains NaN or inf")))?;
-    if depth.par_iter().any(|d| d.is_nan() || *d <= 0.0) {
+    let (hv, deep) = halves(velocity, depth, (w, h), params.tile);
+    let hv = hv.ok_or_else(|| first_error(Error::value("velocity", "contains NaN or inf")))?;
+    if !deep {
         return Err(first_error(depth_error()));
     }
-    let (tx, nmax) = neighbour_max(&half, w, h, params.tile);
+    let (tx, nmax) = tile_max(&hv, w, h, params.tile);
     // every tap lies within |n| (plus the rounding to a pixel) of its pixel along each axis
     let (nx, ny) = nmax.iter().fold((0.0f32, 0.0f32), |(a, b), n| {
         (a.max(n[0].abs()), b.max(n[1].abs()))
     });
-    let reach = Reach::new(&speed, w, h, nx, ny);
+    let reach = Reach::from_rows(&hv.cell_rows, w, h, nx, ny);
+    let (half, speed) = (&hv.half, &hv.speed);
     let g = Gather {
         rgba,
         depth,
-        half: &half,
-        speed: &speed,
+        half,
+        speed,
         w,
         h,
         params,
@@ -847,12 +988,12 @@ unsafe fn gather8_avx(
                     let dx = (base - x as i64) as f32;
                     let dy = sy as f32 - y as f32;
                     let d = _mm256_set1_ps((dx * dx + dy * dy).sqrt().min(t * rn));
-                    let row = (sy / super::reach::CELL) * reach.cw;
+                    let row = (sy / CELL) * reach.cw;
                     let cell = if whole {
                         // the run's eight pixels lie in at most two cells
                         let b = base as usize;
-                        let (lo, hi) = (b / super::reach::CELL, (b + 7) / super::reach::CELL);
-                        let split = (lo + 1) * super::reach::CELL - b;
+                        let (lo, hi) = (b / CELL, (b + 7) / CELL);
+                        let split = (lo + 1) * CELL - b;
                         _mm256_blendv_ps(
                             _mm256_set1_ps(reach.cell[row + hi]),
                             _mm256_set1_ps(reach.cell[row + lo]),
