@@ -42,6 +42,8 @@
 //!
 //! Rows are gathered in parallel and read only the inputs, so the result is bit-identical for
 //! any thread count.
+use std::mem::MaybeUninit;
+
 use rayon::prelude::*;
 
 use super::reach::{Reach, CELL};
@@ -264,22 +266,7 @@ fn halves(
                         .zip(vs.chunks(2 * w))
                         .zip(ts.chunks_mut(tx).zip(cs.chunks_mut(cw)));
                     for (((hr, sr), vr), (tr, cr)) in rows {
-                        let (hr, sr, vr) = (&mut hr[..w], &mut sr[..w], &vr[..2 * w]);
-                        for x in 0..w {
-                            let v = [vr[2 * x], vr[2 * x + 1]];
-                            ok &= v[0].is_finite() & v[1].is_finite();
-                            let hv = [0.5 * v[0], 0.5 * v[1]];
-                            let l = len2(hv).sqrt();
-                            let c = if l > tl {
-                                [hv[0] * tl / l, hv[1] * tl / l]
-                            } else {
-                                hv
-                            };
-                            hr[x].write(c);
-                            l2[x] = len2(c);
-                            sp[x] = l2[x].sqrt();
-                            sr[x].write(sp[x]);
-                        }
+                        ok &= half_row(vr, tl, (hr, sr), (&mut l2, &mut sp));
                         for (t, seg) in tr.iter_mut().zip(l2.chunks(tile)) {
                             *t = max_lanes(seg);
                         }
@@ -300,6 +287,77 @@ fn halves(
         cell_rows,
     };
     (finite.then_some(out), deep)
+}
+
+/// One row of [`halves`]: the half velocities `hr` and their lengths `sr` of the velocities
+/// `vr`, the squared lengths in `l2` and the lengths in `sp` too; whether all are finite. In
+/// AVX2 when present (the same IEEE operations, so the same bits).
+fn half_row(
+    vr: &[f32],
+    tl: f32,
+    (hr, sr): (&mut [MaybeUninit<[f32; 2]>], &mut [MaybeUninit<f32>]),
+    (l2, sp): (&mut [f32], &mut [f32]),
+) -> bool {
+    #[inline(always)]
+    fn run(
+        vr: &[f32],
+        tl: f32,
+        (hr, sr): (&mut [MaybeUninit<[f32; 2]>], &mut [MaybeUninit<f32>]),
+        (l2, sp): (&mut [f32], &mut [f32]),
+    ) -> bool {
+        let w = hr.len();
+        let (sr, vr, l2, sp) = (&mut sr[..w], &vr[..2 * w], &mut l2[..w], &mut sp[..w]);
+        let mut ok = true;
+        for x in 0..w {
+            let v = [vr[2 * x], vr[2 * x + 1]];
+            ok &= v[0].is_finite() & v[1].is_finite();
+            let hv = [0.5 * v[0], 0.5 * v[1]];
+            let l = len2(hv).sqrt();
+            let c = if l > tl {
+                [hv[0] * tl / l, hv[1] * tl / l]
+            } else {
+                hv
+            };
+            hr[x].write(c);
+            l2[x] = len2(c);
+            sp[x] = l2[x].sqrt();
+            sr[x].write(sp[x]);
+        }
+        ok
+    }
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::simd_enabled() {
+        #[target_feature(enable = "avx2")]
+        unsafe fn avx(
+            vr: &[f32],
+            tl: f32,
+            out: (&mut [MaybeUninit<[f32; 2]>], &mut [MaybeUninit<f32>]),
+            rows: (&mut [f32], &mut [f32]),
+        ) -> bool {
+            run(vr, tl, out, rows)
+        }
+        // SAFETY: AVX2 was detected.
+        return unsafe { avx(vr, tl, (hr, sr), (l2, sp)) };
+    }
+    run(vr, tl, (hr, sr), (l2, sp))
+}
+
+/// Whether every value of `v` is finite (in AVX2 when present).
+fn all_finite(v: &[f32]) -> bool {
+    #[inline(always)]
+    fn run(v: &[f32]) -> bool {
+        v.iter().fold(true, |ok, v| ok & v.is_finite())
+    }
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::simd_enabled() {
+        #[target_feature(enable = "avx2")]
+        unsafe fn avx(v: &[f32]) -> bool {
+            run(v)
+        }
+        // SAFETY: AVX2 was detected.
+        return unsafe { avx(v) };
+    }
+    run(v)
 }
 
 /// The largest of `v` (0 for none, every value >= 0), over 8 lanes.
@@ -430,8 +488,7 @@ pub fn reconstruct(
                         }
                     }
                 }
-                let src = &rgba[y * w * 4..(y + 1) * w * 4];
-                src.iter().fold(true, |ok, v| ok & v.is_finite())
+                all_finite(&rgba[y * w * 4..(y + 1) * w * 4])
             })
             .reduce(|| true, |a, b| a & b);
     });
