@@ -897,14 +897,22 @@ unsafe fn gather8_avx(
     let xf = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(x as i32), iota));
     let yf = _mm256_set1_ps(y as f32);
     let rc = _mm256_loadu_ps(speed.as_ptr().add(i0));
-    let c0 = _mm256_loadu_ps(std::array::from_fn::<f32, 8, _>(|l| g.half[i0 + l][0]).as_ptr());
-    let c1 = _mm256_loadu_ps(std::array::from_fn::<f32, 8, _>(|l| g.half[i0 + l][1]).as_ptr());
     let zx = _mm256_loadu_ps(depth.as_ptr().add(i0));
     let j = jitter(x, y);
-    // stop = weightless_from(reach of the pixel's cell .max(rc)) + 1, per lane
-    let cells = _mm256_loadu_ps(
-        std::array::from_fn::<f32, 8, _>(|l| reach.reach[reach.index(x + l, y)]).as_ptr(),
-    );
+    // stop = weightless_from(reach of the pixel's cell .max(rc)) + 1, per lane; the run's
+    // eight pixels lie in at most two cells
+    let in_cells = |grid: &[f32], row: usize, b: usize| {
+        let (lo, hi) = (b / CELL, (b + 7) / CELL);
+        _mm256_blendv_ps(
+            _mm256_set1_ps(grid[row + hi]),
+            _mm256_set1_ps(grid[row + lo]),
+            _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+                _mm256_set1_epi32(((lo + 1) * CELL - b) as i32),
+                iota,
+            )),
+        )
+    };
+    let cells = in_cells(&reach.reach, (y / CELL) * reach.cw, x);
     let (zero, one, half) = (
         _mm256_setzero_ps(),
         _mm256_set1_ps(1.0),
@@ -979,18 +987,80 @@ unsafe fn gather8_avx(
     let mut still = _mm256_andnot_ps(moving, live);
     let movers = _mm256_and_ps(moving, live);
     let any = |m: __m256| _mm256_movemask_ps(m) != 0;
+    // the moving lanes' own half velocities
+    let (c0, c1) = if any(movers) {
+        let c: [[f32; 2]; 8] = std::array::from_fn(|l| g.half[i0 + l]);
+        (
+            _mm256_loadu_ps(c.map(|v| v[0]).as_ptr()),
+            _mm256_loadu_ps(c.map(|v| v[1]).as_ptr()),
+        )
+    } else {
+        (zero, zero)
+    };
+    // the still lanes' taps of eight pairs at a time, computed eight at a time: `t`, `t rn`,
+    // and for each sign (`8 s` + pair) the run's first pixel's tap column `base`, its row
+    // (-1 off the image) and its distance
+    let mut tab = StillTaps {
+        t: [0.0; 8],
+        tr: [0.0; 8],
+        base: [0; 16],
+        row: [0; 16],
+        d: [0.0; 16],
+    };
+    let fill = |p0: usize, tab: &mut StillTaps| {
+        let pv = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(p0 as i32), iota));
+        let t = _mm256_div_ps(
+            _mm256_add_ps(pv, _mm256_set1_ps(j)),
+            _mm256_set1_ps(pairs.max(1) as f32),
+        );
+        let tr = _mm256_mul_ps(t, _mm256_set1_ps(rn));
+        _mm256_storeu_ps(tab.t.as_mut_ptr(), t);
+        _mm256_storeu_ps(tab.tr.as_mut_ptr(), tr);
+        for (k, s) in [-1.0f32, 1.0].into_iter().enumerate() {
+            let st = _mm256_mul_ps(_mm256_set1_ps(s), t);
+            let px = _mm256_add_ps(
+                _mm256_set1_ps(x as f32 + 0.5),
+                _mm256_mul_ps(st, _mm256_set1_ps(n[0])),
+            );
+            let py = _mm256_add_ps(
+                _mm256_set1_ps(y as f32 + 0.5),
+                _mm256_mul_ps(st, _mm256_set1_ps(n[1])),
+            );
+            let on = _mm256_castps_si256(_mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GE_OQ>(py, zero),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(py, hl),
+            ));
+            let base = _mm256_cvtps_epi32(_mm256_floor_ps(px));
+            let sy = _mm256_cvttps_epi32(py);
+            let dx = _mm256_cvtepi32_ps(_mm256_sub_epi32(base, _mm256_set1_epi32(x as i32)));
+            let dy = _mm256_sub_ps(_mm256_cvtepi32_ps(sy), yf);
+            let d2 = _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy));
+            let d = _mm256_min_ps(_mm256_sqrt_ps(d2), tr);
+            let row = _mm256_or_si256(
+                _mm256_and_si256(on, sy),
+                _mm256_andnot_si256(on, _mm256_set1_epi32(-1)),
+            );
+            _mm256_storeu_si256(tab.base.as_mut_ptr().add(8 * k).cast(), base);
+            _mm256_storeu_si256(tab.row.as_mut_ptr().add(8 * k).cast(), row);
+            _mm256_storeu_ps(tab.d.as_mut_ptr().add(8 * k), d);
+        }
+    };
     let mut counted = [0.0f32; 8];
     for p in 0..pairs {
         // the still lanes' pair along n at t = (p + j) / pairs, the moving lanes' along n
         // (even pairs) or their own velocity (odd pairs) at t = (p / 2 + j) / m: each lane
         // takes one of them, in `gather`'s order
-        let mut jobs = [(0.0f32, false, zero); 2];
+        let mut jobs = [(0.0f32, false, zero, None); 2];
         let mut count = 0;
         if any(still) {
-            let t = (p as f32 + j) / pairs.max(1) as f32;
+            let q = p % 8;
+            if q == 0 {
+                fill(p, &mut tab);
+            }
+            let t = tab.t[q];
             let ends = _mm256_and_ps(
                 still,
-                _mm256_cmp_ps::<_CMP_GE_OQ>(_mm256_set1_ps(t * rn), stop),
+                _mm256_cmp_ps::<_CMP_GE_OQ>(_mm256_set1_ps(tab.tr[q]), stop),
             );
             let ended = _mm256_movemask_ps(ends);
             if ended != 0 {
@@ -1002,7 +1072,7 @@ unsafe fn gather8_avx(
                 still = _mm256_andnot_ps(ends, still);
             }
             if any(still) {
-                jobs[count] = (t, true, still);
+                jobs[count] = (t, true, still, Some(q));
                 count += 1;
             }
         }
@@ -1010,23 +1080,34 @@ unsafe fn gather8_avx(
             let odd = p % 2 == 1;
             let m = if odd { pairs / 2 } else { pairs - pairs / 2 };
             let t = ((p / 2) as f32 + j) / m.max(1) as f32;
-            jobs[count] = (t, !odd, movers);
+            jobs[count] = (t, !odd, movers, None);
             count += 1;
         }
         if count == 0 {
             break;
         }
-        for &(t, along_n, mask) in &jobs[..count] {
-            for s in [-1.0f32, 1.0] {
+        for &(t, along_n, mask, pre) in &jobs[..count] {
+            for (k, s) in [-1.0f32, 1.0].into_iter().enumerate() {
                 let st = s * t;
                 if along_n {
                     // the run's first pixel's tap, moved along the row lane by lane
-                    let px = x as f32 + 0.5 + st * n[0];
-                    let py = y as f32 + 0.5 + st * n[1];
-                    if !(py >= 0.0 && py < h as f32) {
-                        continue;
-                    }
-                    let (base, sy) = (px.floor() as i64, py as usize);
+                    let (base, sy, d) = if let Some(q) = pre {
+                        let i = 8 * k + q;
+                        if tab.row[i] < 0 {
+                            continue;
+                        }
+                        (tab.base[i] as i64, tab.row[i] as usize, tab.d[i])
+                    } else {
+                        let px = x as f32 + 0.5 + st * n[0];
+                        let py = y as f32 + 0.5 + st * n[1];
+                        if !(py >= 0.0 && py < h as f32) {
+                            continue;
+                        }
+                        let (base, sy) = (px.floor() as i64, py as usize);
+                        let dx = (base - x as i64) as f32;
+                        let dy = sy as f32 - y as f32;
+                        (base, sy, (dx * dx + dy * dy).sqrt().min(t * rn))
+                    };
                     let whole = base >= 0 && base + 8 <= w as i64;
                     let bl = _mm256_add_epi32(_mm256_set1_epi32(base as i32), iota);
                     let inside = if whole {
@@ -1042,23 +1123,10 @@ unsafe fn gather8_avx(
                         continue;
                     }
                     taps = _mm256_add_ps(taps, _mm256_and_ps(inside, one));
-                    let dx = (base - x as i64) as f32;
-                    let dy = sy as f32 - y as f32;
-                    let d = _mm256_set1_ps((dx * dx + dy * dy).sqrt().min(t * rn));
+                    let d = _mm256_set1_ps(d);
                     let row = (sy / CELL) * reach.cw;
                     let cell = if whole {
-                        // the run's eight pixels lie in at most two cells
-                        let b = base as usize;
-                        let (lo, hi) = (b / CELL, (b + 7) / CELL);
-                        let split = (lo + 1) * CELL - b;
-                        _mm256_blendv_ps(
-                            _mm256_set1_ps(reach.cell[row + hi]),
-                            _mm256_set1_ps(reach.cell[row + lo]),
-                            _mm256_castsi256_ps(_mm256_cmpgt_epi32(
-                                _mm256_set1_epi32(split as i32),
-                                iota,
-                            )),
-                        )
+                        in_cells(&reach.cell, row, base as usize)
                     } else {
                         let cidx = _mm256_and_si256(
                             _mm256_add_epi32(
@@ -1152,6 +1220,21 @@ unsafe fn gather8_avx(
         _mm256_storeu_ps(out[k].as_mut_ptr(), o);
     }
     std::array::from_fn(|l| [out[0][l], out[1][l], out[2][l], out[3][l]])
+}
+
+/// Eight pairs of taps of a run's still pixels along `n` ([`gather8_avx`]).
+#[cfg(target_arch = "x86_64")]
+struct StillTaps {
+    /// `t` of each pair.
+    t: [f32; 8],
+    /// `t |n|`.
+    tr: [f32; 8],
+    /// For each sign (`8 s` + pair), the column of the run's first pixel's tap.
+    base: [i32; 16],
+    /// Its row, -1 off the image.
+    row: [i32; 16],
+    /// Its distance.
+    d: [f32; 16],
 }
 
 /// The taps of pairs `p0..pairs` along `dir` (`m` pairs a direction: `t = (p + j) / m`, `j`
