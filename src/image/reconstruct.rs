@@ -173,7 +173,6 @@ fn half_velocities(velocity: &[f32], tile: f32) -> Option<(Vec<[f32; 2]>, Vec<f3
 #[cfg(test)]
 fn neighbour_max(half: &[[f32; 2]], w: usize, h: usize, tile: usize) -> (usize, Vec<[f32; 2]>) {
     let (tx, ty) = (w.div_ceil(tile), h.div_ceil(tile));
-    let longest = |a: [f32; 2], b: [f32; 2]| if len2(b) > len2(a) { b } else { a };
     // per tile, the first pixel (in row order) of the largest squared length, [0, 0] when all
     // are 0: what folding `longest` over the pixels from [0, 0] gives, found in two passes (a
     // maximum over lanes, then the first pixel that reaches it)
@@ -465,12 +464,10 @@ pub fn reconstruct(
                         // eight pixels side by side (the same bits as one by one); a shorter
                         // run reads eight and keeps its own
                         if simd && x0 + 8 <= w {
-                            if let Some(px) = still8(&g, (x0, y), (n, rn), lanes)
-                                .or_else(|| gather8(&g, (x0, y), (n, rn), lanes))
+                            let out = &mut row[x0 * 4..(x0 + lanes) * 4];
+                            if still8(&g, (x0, y), (n, rn), out)
+                                || gather8(&g, (x0, y), (n, rn), out)
                             {
-                                for (l, p) in px.into_iter().take(lanes).enumerate() {
-                                    super::put4(row, x0 + l, p);
-                                }
                                 continue;
                             }
                         }
@@ -716,21 +713,22 @@ fn finish(sums: &Sums, own: &[f32]) -> [f32; 4] {
 /// (`j / pairs * rn`, the run's jitter `j`) already lies past that stop, each pixel is its
 /// centre tap and the count of its other taps, which [`gather`] computes for it with the same
 /// operations: the same bits, without the taps' set-up (most of a frame whose movers are
-/// small). None otherwise. Pixels past `lanes` hold no meaning.
+/// small), written to `out` (the `lanes` pixels' RGBA); false (nothing written) otherwise.
 #[inline]
 fn still8(
     g: &Gather<'_>,
     (x, y): (usize, usize),
     (n, rn): ([f32; 2], f32),
-    lanes: usize,
-) -> Option<[[f32; 4]; 8]> {
+    out: &mut [MaybeUninit<f32>],
+) -> bool {
+    let lanes = out.len() / 4;
     let reach = g.reach;
     if rn.is_nan()
         || rn < 0.5
         || reach.reach[reach.index(x, y)] != 0.0
         || reach.reach[reach.index(x + lanes - 1, y)] != 0.0
     {
-        return None;
+        return false;
     }
     let pairs = g.params.samples / 2;
     let stop = weightless_from(0.0) + 1.0;
@@ -738,18 +736,18 @@ fn still8(
     let j = jitter(x, y);
     let first = (0.0 + j) / pairs.max(1) as f32;
     if !(first * rn >= stop) {
-        return None;
+        return false;
     }
     #[cfg(test)]
     tests::STILL_RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     #[cfg(target_arch = "x86_64")]
     if crate::simd::simd_enabled() {
         // SAFETY: AVX2 was detected; x + 8 <= w, so the run's 32 values lie inside `rgba`.
-        if let Some(px) = unsafe { still8_avx(g, (x, y), n, pairs) } {
-            return Some(px);
+        if unsafe { still8_avx(g, (x, y), n, pairs, out) } {
+            return true;
         }
     }
-    Some(std::array::from_fn(|l| {
+    for l in 0..lanes {
         let i = (y * g.w + x + l) * 4;
         let c = &g.rgba[i..i + 4];
         let half = std::array::from_fn(|k| 0.0 + 0.5 * c[k]);
@@ -760,18 +758,19 @@ fn still8(
             wb: 0.0 + 0.5,
             taps: 1.0 + count_taps(g, (x, x + l, y), j, n, (0, pairs), pairs),
         };
-        finish(&sums, c)
-    }))
+        super::put4(out, l, finish(&sums, c));
+    }
+    true
 }
 
 /// [`still8`]'s run when all its pixels' taps fall inside the image (so each counts
 /// `1 + 2 pairs` taps), in AVX2: each pixel's colour `c` becomes `(h + h) / N + (h / 0.5)
 /// (1 - 1 / N)` with `h = 0 + 0.5 c`, [`finish`]'s operations on the centre tap's sums
-/// (`h / 0.5` as `2 h`: scaling by a power of two is exact either way). None when a tap can
-/// leave the image.
+/// (`h / 0.5` as `2 h`: scaling by a power of two is exact either way), written to `out`;
+/// false (nothing written) when a tap can leave the image.
 ///
 /// # Safety
-/// AVX2 is present and `x + 8 <= w`.
+/// AVX2 is present, `x + 8 <= w` and `out` holds 4 to 32 values.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn still8_avx(
@@ -779,13 +778,14 @@ unsafe fn still8_avx(
     (x, y): (usize, usize),
     n: [f32; 2],
     pairs: usize,
-) -> Option<[[f32; 4]; 8]> {
+    out: &mut [MaybeUninit<f32>],
+) -> bool {
     use std::arch::x86_64::*;
     // count_taps' closed form: every tap within |n| + 1 of the first and last pixel centres
     let (ax, ay) = (n[0].abs() + 1.0, n[1].abs() + 1.0);
     let (x0, x7, yf) = (x as f32 + 0.5, (x + 7) as f32 + 0.5, y as f32 + 0.5);
     if !(x0 - ax >= 0.0 && yf - ay >= 0.0 && x7 + ax < g.w as f32 && yf + ay < g.h as f32) {
-        return None;
+        return false;
     }
     let zero = _mm256_setzero_ps();
     let taps = 1.0 + (2 * pairs) as f32;
@@ -799,43 +799,50 @@ unsafe fn still8_avx(
     );
     #[cfg(test)]
     tests::STILL_VECTOR_RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let mut out = [[0.0f32; 4]; 8];
+    let mut px = [0.0f32; 32];
     let src = g.rgba.as_ptr().add((y * g.w + x) * 4);
-    let dst = out.as_mut_ptr().cast::<f32>();
     for r in 0..4 {
         let h = _mm256_add_ps(zero, _mm256_mul_ps(half, _mm256_loadu_ps(src.add(8 * r))));
         let o = _mm256_add_ps(
             _mm256_mul_ps(_mm256_add_ps(h, h), inv),
             _mm256_mul_ps(_mm256_mul_ps(h, two), fill),
         );
-        _mm256_storeu_ps(dst.add(8 * r), o);
+        if out.len() == 32 {
+            _mm256_storeu_ps(out.as_mut_ptr().add(8 * r).cast(), o);
+        } else {
+            _mm256_storeu_ps(px.as_mut_ptr().add(8 * r), o);
+        }
     }
-    Some(out)
+    if out.len() < 32 {
+        super::write_copy(out, &px[..out.len()]);
+    }
+    true
 }
 
 /// [`gather`] of the first `lanes` (1 to 8) pixels of the run of eight `(x..x + 8, y)` (`x`
 /// its first pixel, `x + 8 <= w`; neighbour max `n`, its length `rn`) at once, in AVX2, when
 /// the neighbourhood moves (`rn >= 0.5`); None otherwise (or without AVX2). Lane `l` performs
-/// [`gather`]'s IEEE operations for pixel `x + l` in its order: the same bits. Pixels past
-/// `lanes` hold no meaning.
+/// [`gather`]'s IEEE operations for pixel `x + l` in its order: the same bits, written to
+/// `out` (the `lanes` pixels' RGBA); false (nothing written) otherwise.
 #[inline]
 fn gather8(
     g: &Gather<'_>,
     (x, y): (usize, usize),
     (n, rn): ([f32; 2], f32),
-    lanes: usize,
-) -> Option<[[f32; 4]; 8]> {
+    out: &mut [MaybeUninit<f32>],
+) -> bool {
     if rn.is_nan() || rn < 0.5 {
-        return None;
+        return false;
     }
     #[cfg(target_arch = "x86_64")]
     if crate::simd::simd_enabled() {
         // SAFETY: AVX2 was detected; x + 8 <= w (the caller's run), the images hold w * h
         // pixels with w * h * 4 < 2^31 (the caller's `simd`), and every lane reads only pixels
         // it checked to be inside the image.
-        return Some(unsafe { gather8_avx(g, (x, y), (n, rn), lanes) });
+        unsafe { gather8_avx(g, (x, y), (n, rn), out) };
+        return true;
     }
-    None
+    false
 }
 
 /// The colours of the eight pixels at `p` (premultiplied RGBA, 32 values) as four vectors of
@@ -866,22 +873,69 @@ unsafe fn load_rgba8(p: *const f32) -> [std::arch::x86_64::__m256; 4] {
     ]
 }
 
+/// Writes four vectors of the red, green, blue and alpha of eight pixels as the pixels' RGBA
+/// (32 values, [`load_rgba8`] backwards) to `out`, or its first `out.len()` values.
+///
+/// # Safety
+/// AVX2 is present and `out` holds at most 32 values.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn store_rgba8(c: [std::arch::x86_64::__m256; 4], out: &mut [MaybeUninit<f32>]) {
+    use std::arch::x86_64::*;
+    let (a, b) = (
+        _mm256_unpacklo_ps(c[0], c[1]),
+        _mm256_unpackhi_ps(c[0], c[1]),
+    );
+    let (e, f) = (
+        _mm256_unpacklo_ps(c[2], c[3]),
+        _mm256_unpackhi_ps(c[2], c[3]),
+    );
+    // pixels (0 | 4), (1 | 5), (2 | 6), (3 | 7)
+    let (p0, p1) = (
+        _mm256_shuffle_ps::<0x44>(a, e),
+        _mm256_shuffle_ps::<0xEE>(a, e),
+    );
+    let (p2, p3) = (
+        _mm256_shuffle_ps::<0x44>(b, f),
+        _mm256_shuffle_ps::<0xEE>(b, f),
+    );
+    let rows = [
+        _mm256_permute2f128_ps::<0x20>(p0, p1),
+        _mm256_permute2f128_ps::<0x20>(p2, p3),
+        _mm256_permute2f128_ps::<0x31>(p0, p1),
+        _mm256_permute2f128_ps::<0x31>(p2, p3),
+    ];
+    if out.len() == 32 {
+        for (r, v) in rows.into_iter().enumerate() {
+            _mm256_storeu_ps(out.as_mut_ptr().add(8 * r).cast(), v);
+        }
+    } else {
+        let mut px = [0.0f32; 32];
+        for (r, v) in rows.into_iter().enumerate() {
+            _mm256_storeu_ps(px.as_mut_ptr().add(8 * r), v);
+        }
+        super::write_copy(out, &px[..out.len()]);
+    }
+}
+
 /// [`gather8`] in AVX2 (its docs). The still lanes' taps and the moving lanes' taps along `n`
 /// lie on eight neighbouring pixels of a row (module docs): one load each, a gather only at the
 /// image's left and right edges; the moving lanes' taps along their own velocities are
 /// gathered.
 ///
 /// # Safety
-/// AVX2 is present, `x + 8 <= w`, `w * h * 4 < 2^31`.
+/// AVX2 is present, `x + 8 <= w`, `w * h * 4 < 2^31`, `out` holds 4 to 32 values.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn gather8_avx(
     g: &Gather<'_>,
     (x, y): (usize, usize),
     (n, rn): ([f32; 2], f32),
-    lanes: usize,
-) -> [[f32; 4]; 8] {
+    out: &mut [MaybeUninit<f32>],
+) {
     use std::arch::x86_64::*;
+    let lanes = out.len() / 4;
     let Gather {
         rgba,
         depth,
@@ -1210,16 +1264,14 @@ unsafe fn gather8_avx(
     ));
     let inv = _mm256_div_ps(one, taps);
     let some = _mm256_cmp_ps::<_CMP_GT_OQ>(wb, zero);
-    let mut out = [[0.0f32; 8]; 4];
-    for k in 0..4 {
+    let colours = std::array::from_fn(|k| {
         let back = _mm256_blendv_ps(mine[k], _mm256_div_ps(bg[k], wb), some);
-        let o = _mm256_add_ps(
+        _mm256_add_ps(
             _mm256_mul_ps(_mm256_add_ps(fg[k], bg[k]), inv),
             _mm256_mul_ps(back, fill),
-        );
-        _mm256_storeu_ps(out[k].as_mut_ptr(), o);
-    }
-    std::array::from_fn(|l| [out[0][l], out[1][l], out[2][l], out[3][l]])
+        )
+    });
+    store_rgba8(colours, out);
 }
 
 /// Eight pairs of taps of a run's still pixels along `n` ([`gather8_avx`]).
