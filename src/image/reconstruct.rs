@@ -464,6 +464,7 @@ pub fn reconstruct(
                         // eight pixels side by side (the same bits as one by one); a shorter
                         // run reads eight and keeps its own
                         if simd && x0 + 8 <= w {
+                            prefetch(&g, y * w + x0 + AHEAD);
                             let out = &mut row[x0 * 4..(x0 + lanes) * 4];
                             if still8(&g, (x0, y), (n, rn), out)
                                 || gather8(&g, (x0, y), (n, rn), out)
@@ -493,6 +494,28 @@ pub fn reconstruct(
         return Err(Error::value("rgba", "contains NaN or inf"));
     }
     Ok(out)
+}
+
+/// How many pixels ahead along a row the vector runs ask for their inputs.
+const AHEAD: usize = 64;
+
+/// Asks for pixel `i`'s depth, half speed, half velocity and colour (and the next 7 pixels'
+/// colours) to be brought into the cache: the vector runs read each row's inputs in order, with
+/// the taps' reads between them.
+#[inline(always)]
+fn prefetch(g: &Gather<'_>, i: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if i < g.w * g.h {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        // SAFETY: prefetching reads nothing and cannot fault; the addresses lie in the images.
+        unsafe {
+            _mm_prefetch::<_MM_HINT_T0>(g.depth.as_ptr().add(i).cast());
+            _mm_prefetch::<_MM_HINT_T0>(g.speed.as_ptr().add(i).cast());
+            _mm_prefetch::<_MM_HINT_T0>(g.half.as_ptr().add(i).cast());
+            _mm_prefetch::<_MM_HINT_T0>(g.rgba.as_ptr().add(4 * i).cast());
+            _mm_prefetch::<_MM_HINT_T0>(g.rgba.as_ptr().add(4 * i + 16).cast());
+        }
+    }
 }
 
 /// The images' checks in their order: finite rgba and velocity, depth > 0 or inf.
