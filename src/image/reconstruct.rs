@@ -1077,18 +1077,21 @@ unsafe fn gather8_avx(
     // the still lanes' taps of eight pairs at a time, computed eight at a time: `t`, `t rn`,
     // and for each sign (`8 s` + pair) the run's first pixel's tap column `base`, its row
     // (-1 off the image) and its distance
-    let mut tab = StillTaps {
+    let empty = RunTaps {
         t: [0.0; 8],
         tr: [0.0; 8],
         base: [0; 16],
         row: [0; 16],
         d: [0.0; 16],
     };
-    let fill = |p0: usize, tab: &mut StillTaps| {
+    // the still lanes' (`tab`: t = (p + j) / pairs) and the moving lanes' along n (`mtab`:
+    // t = (p / 2 + j) / m, even pairs)
+    let (mut tab, mut mtab) = (empty, empty);
+    let fill = |p0: usize, m: usize, tab: &mut RunTaps| {
         let pv = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(p0 as i32), iota));
         let t = _mm256_div_ps(
             _mm256_add_ps(pv, _mm256_set1_ps(j)),
-            _mm256_set1_ps(pairs.max(1) as f32),
+            _mm256_set1_ps(m.max(1) as f32),
         );
         let tr = _mm256_mul_ps(t, _mm256_set1_ps(rn));
         _mm256_storeu_ps(tab.t.as_mut_ptr(), t);
@@ -1126,13 +1129,14 @@ unsafe fn gather8_avx(
     for p in 0..pairs {
         // the still lanes' pair along n at t = (p + j) / pairs, the moving lanes' along n
         // (even pairs) or their own velocity (odd pairs) at t = (p / 2 + j) / m: each lane
-        // takes one of them, in `gather`'s order
-        let mut jobs = [(0.0f32, false, zero, None); 2];
+        // takes one of them, in `gather`'s order. A job: its t, its lanes, and along n the
+        // table (`mtab` or not) and pair of its taps
+        let mut jobs = [(0.0f32, zero, None); 2];
         let mut count = 0;
         if any(still) {
             let q = p % 8;
             if q == 0 {
-                fill(p, &mut tab);
+                fill(p, pairs, &mut tab);
             }
             let t = tab.t[q];
             let ends = _mm256_and_ps(
@@ -1149,42 +1153,38 @@ unsafe fn gather8_avx(
                 still = _mm256_andnot_ps(ends, still);
             }
             if any(still) {
-                jobs[count] = (t, true, still, Some(q));
+                jobs[count] = (t, still, Some((false, q)));
                 count += 1;
             }
         }
         if any(movers) {
             let odd = p % 2 == 1;
             let m = if odd { pairs / 2 } else { pairs - pairs / 2 };
-            let t = ((p / 2) as f32 + j) / m.max(1) as f32;
-            jobs[count] = (t, !odd, movers, None);
+            if odd {
+                let t = ((p / 2) as f32 + j) / m.max(1) as f32;
+                jobs[count] = (t, movers, None);
+            } else {
+                let q = (p / 2) % 8;
+                if q == 0 {
+                    fill(p / 2, m, &mut mtab);
+                }
+                jobs[count] = (mtab.t[q], movers, Some((true, q)));
+            }
             count += 1;
         }
         if count == 0 {
             break;
         }
-        for &(t, along_n, mask, pre) in &jobs[..count] {
+        for &(t, mask, along_n) in &jobs[..count] {
             for (k, s) in [-1.0f32, 1.0].into_iter().enumerate() {
-                let st = s * t;
-                if along_n {
+                if let Some((mover, q)) = along_n {
                     // the run's first pixel's tap, moved along the row lane by lane
-                    let (base, sy, d) = if let Some(q) = pre {
-                        let i = 8 * k + q;
-                        if tab.row[i] < 0 {
-                            continue;
-                        }
-                        (tab.base[i] as i64, tab.row[i] as usize, tab.d[i])
-                    } else {
-                        let px = x as f32 + 0.5 + st * n[0];
-                        let py = y as f32 + 0.5 + st * n[1];
-                        if !(py >= 0.0 && py < h as f32) {
-                            continue;
-                        }
-                        let (base, sy) = (px.floor() as i64, py as usize);
-                        let dx = (base - x as i64) as f32;
-                        let dy = sy as f32 - y as f32;
-                        (base, sy, (dx * dx + dy * dy).sqrt().min(t * rn))
-                    };
+                    let tab = if mover { &mtab } else { &tab };
+                    let i = 8 * k + q;
+                    if tab.row[i] < 0 {
+                        continue;
+                    }
+                    let (base, sy, d) = (tab.base[i] as i64, tab.row[i] as usize, tab.d[i]);
                     let whole = base >= 0 && base + 8 <= w as i64;
                     let bl = _mm256_add_epi32(_mm256_set1_epi32(base as i32), iota);
                     let inside = if whole {
@@ -1235,7 +1235,7 @@ unsafe fn gather8_avx(
                 } else {
                     // each lane's own tap along its own velocity
                     let tr = _mm256_mul_ps(_mm256_set1_ps(t), rc);
-                    let stv = _mm256_set1_ps(st);
+                    let stv = _mm256_set1_ps(s * t);
                     let px = _mm256_add_ps(xc, _mm256_mul_ps(stv, c0));
                     let py = _mm256_add_ps(yc, _mm256_mul_ps(stv, c1));
                     let inside = _mm256_and_ps(
@@ -1297,9 +1297,10 @@ unsafe fn gather8_avx(
     store_rgba8(colours, out);
 }
 
-/// Eight pairs of taps of a run's still pixels along `n` ([`gather8_avx`]).
+/// Eight pairs of taps of a run's still (or moving) pixels along `n` ([`gather8_avx`]).
 #[cfg(target_arch = "x86_64")]
-struct StillTaps {
+#[derive(Clone, Copy)]
+struct RunTaps {
     /// `t` of each pair.
     t: [f32; 8],
     /// `t |n|`.
