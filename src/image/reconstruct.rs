@@ -758,7 +758,7 @@ fn still8(
     // the first pair's distance, as `gather` places it: t = (0 + j) / pairs along n
     let j = jitter(x, y);
     let first = (0.0 + j) / pairs.max(1) as f32;
-    if !(first * rn >= stop) {
+    if first * rn < stop {
         return false;
     }
     #[cfg(test)]
