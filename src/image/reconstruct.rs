@@ -458,6 +458,16 @@ pub fn reconstruct(
                     let n = tiles[k];
                     let rn = len2(n).sqrt();
                     let end = (xs + params.tile).min(w);
+                    if rn < 0.5 {
+                        // no pixel of a still neighbourhood moves (|c| <= |n|): `gather`'s
+                        // copies, as one
+                        let i = y * w;
+                        super::write_copy(
+                            &mut row[xs * 4..end * 4],
+                            &rgba[(i + xs) * 4..(i + end) * 4],
+                        );
+                        continue;
+                    }
                     // the tile's runs of eight pixels (the last may be shorter)
                     for x0 in (xs..end).step_by(8) {
                         let lanes = (end - x0).min(8);
