@@ -218,9 +218,7 @@ fn neighbours(tiles: &[[f32; 2]], tx: usize, ty: usize) -> Vec<[f32; 2]> {
 
 /// The first pass over the velocities ([`halves`]).
 struct Halves {
-    /// Half velocities clamped to `tile` pixels.
-    half: Vec<[f32; 2]>,
-    /// Their lengths.
+    /// The lengths of the half velocities clamped to `tile` pixels ([`half_at`]).
     speed: Vec<f32>,
     /// Per row, the largest squared length of `half` over each tile's part of the row (`tx` a
     /// row).
@@ -229,10 +227,11 @@ struct Halves {
     cell_rows: Vec<f32>,
 }
 
-/// Half velocities clamped to `tile` pixels and their lengths, per pixel, with the maxima per
+/// The lengths of the half velocities clamped to `tile` pixels, per pixel, with the maxima per
 /// row that the tile max and the reach cells need, in one pass that also checks the depths:
-/// (None when a velocity is not finite, whether every depth is > 0 or inf). `half` and `speed`
-/// are written once, never zeroed first.
+/// (None when a velocity is not finite, whether every depth is > 0 or inf). `speed` is
+/// written once, never zeroed first; the half velocities themselves are not kept
+/// ([`half_at`] gives them again where needed).
 fn halves(
     velocity: &[f32],
     depth: &[f32],
@@ -244,43 +243,37 @@ fn halves(
     let mut tile_rows = vec![0.0f32; h * tx];
     let mut cell_rows = vec![0.0f32; h * cw];
     let (mut finite, mut deep) = (true, true);
-    let mut speed = Vec::new();
     let tl = tile as f32;
-    let half = filled_with(w * h, |half| {
-        speed = filled_with(w * h, |speed| {
-            (finite, deep) = half
-                .par_chunks_mut(rows * w)
-                .zip(speed.par_chunks_mut(rows * w))
-                .zip(velocity.par_chunks(2 * rows * w))
-                .zip(depth.par_chunks(rows * w))
-                .zip(tile_rows.par_chunks_mut(rows * tx))
-                .zip(cell_rows.par_chunks_mut(rows * cw))
-                .map(|(((((hs, ss), vs), ds), ts), cs)| {
-                    let mut ok = true;
-                    // the row's squared lengths and lengths
-                    let (mut l2, mut sp) = (vec![0.0f32; w], vec![0.0f32; w]);
-                    let rows = hs
-                        .chunks_mut(w)
-                        .zip(ss.chunks_mut(w))
-                        .zip(vs.chunks(2 * w))
-                        .zip(ts.chunks_mut(tx).zip(cs.chunks_mut(cw)));
-                    for (((hr, sr), vr), (tr, cr)) in rows {
-                        ok &= half_row(vr, tl, (hr, sr), (&mut l2, &mut sp));
-                        for (t, seg) in tr.iter_mut().zip(l2.chunks(tile)) {
-                            *t = max_lanes(seg);
-                        }
-                        for (c, seg) in cr.iter_mut().zip(sp.chunks(CELL)) {
-                            *c = seg.iter().fold(0.0f32, |m, s| m.max(*s));
-                        }
+    let speed = filled_with(w * h, |speed| {
+        (finite, deep) = speed
+            .par_chunks_mut(rows * w)
+            .zip(velocity.par_chunks(2 * rows * w))
+            .zip(depth.par_chunks(rows * w))
+            .zip(tile_rows.par_chunks_mut(rows * tx))
+            .zip(cell_rows.par_chunks_mut(rows * cw))
+            .map(|((((ss, vs), ds), ts), cs)| {
+                let mut ok = true;
+                // the row's squared lengths and lengths
+                let (mut l2, mut sp) = (vec![0.0f32; w], vec![0.0f32; w]);
+                let rows = ss
+                    .chunks_mut(w)
+                    .zip(vs.chunks(2 * w))
+                    .zip(ts.chunks_mut(tx).zip(cs.chunks_mut(cw)));
+                for ((sr, vr), (tr, cr)) in rows {
+                    ok &= half_row(vr, tl, sr, (&mut l2, &mut sp));
+                    for (t, seg) in tr.iter_mut().zip(l2.chunks(tile)) {
+                        *t = max_lanes(seg);
                     }
-                    let deep = ds.iter().fold(true, |k, d| k & !(d.is_nan() || *d <= 0.0));
-                    (ok, deep)
-                })
-                .reduce(|| (true, true), |a, b| (a.0 & b.0, a.1 & b.1));
-        });
+                    for (c, seg) in cr.iter_mut().zip(sp.chunks(CELL)) {
+                        *c = seg.iter().fold(0.0f32, |m, s| m.max(*s));
+                    }
+                }
+                let deep = ds.iter().fold(true, |k, d| k & !(d.is_nan() || *d <= 0.0));
+                (ok, deep)
+            })
+            .reduce(|| (true, true), |a, b| (a.0 & b.0, a.1 & b.1));
     });
     let out = Halves {
-        half,
         speed,
         tile_rows,
         cell_rows,
@@ -288,36 +281,47 @@ fn halves(
     (finite.then_some(out), deep)
 }
 
-/// One row of [`halves`]: the half velocities `hr` and their lengths `sr` of the velocities
+/// The velocity `v`'s half, clamped to `tl` pixels.
+#[inline(always)]
+fn clamped_half(v: [f32; 2], tl: f32) -> [f32; 2] {
+    let hv = [0.5 * v[0], 0.5 * v[1]];
+    let l = len2(hv).sqrt();
+    if l > tl {
+        [hv[0] * tl / l, hv[1] * tl / l]
+    } else {
+        hv
+    }
+}
+
+/// Pixel `i`'s half velocity clamped to `tl` pixels, as [`halves`] computes it.
+#[inline(always)]
+fn half_at(velocity: &[f32], i: usize, tl: f32) -> [f32; 2] {
+    clamped_half([velocity[2 * i], velocity[2 * i + 1]], tl)
+}
+
+/// One row of [`halves`]: the lengths `sr` of the clamped half velocities of the velocities
 /// `vr`, the squared lengths in `l2` and the lengths in `sp` too; whether all are finite. In
 /// AVX2 when present (the same IEEE operations, so the same bits).
 fn half_row(
     vr: &[f32],
     tl: f32,
-    (hr, sr): (&mut [MaybeUninit<[f32; 2]>], &mut [MaybeUninit<f32>]),
+    sr: &mut [MaybeUninit<f32>],
     (l2, sp): (&mut [f32], &mut [f32]),
 ) -> bool {
     #[inline(always)]
     fn run(
         vr: &[f32],
         tl: f32,
-        (hr, sr): (&mut [MaybeUninit<[f32; 2]>], &mut [MaybeUninit<f32>]),
+        sr: &mut [MaybeUninit<f32>],
         (l2, sp): (&mut [f32], &mut [f32]),
     ) -> bool {
-        let w = hr.len();
-        let (sr, vr, l2, sp) = (&mut sr[..w], &vr[..2 * w], &mut l2[..w], &mut sp[..w]);
+        let w = sr.len();
+        let (vr, l2, sp) = (&vr[..2 * w], &mut l2[..w], &mut sp[..w]);
         let mut ok = true;
         for x in 0..w {
             let v = [vr[2 * x], vr[2 * x + 1]];
             ok &= v[0].is_finite() & v[1].is_finite();
-            let hv = [0.5 * v[0], 0.5 * v[1]];
-            let l = len2(hv).sqrt();
-            let c = if l > tl {
-                [hv[0] * tl / l, hv[1] * tl / l]
-            } else {
-                hv
-            };
-            hr[x].write(c);
+            let c = clamped_half(v, tl);
             l2[x] = len2(c);
             sp[x] = l2[x].sqrt();
             sr[x].write(sp[x]);
@@ -330,15 +334,15 @@ fn half_row(
         unsafe fn avx(
             vr: &[f32],
             tl: f32,
-            out: (&mut [MaybeUninit<[f32; 2]>], &mut [MaybeUninit<f32>]),
+            sr: &mut [MaybeUninit<f32>],
             rows: (&mut [f32], &mut [f32]),
         ) -> bool {
-            run(vr, tl, out, rows)
+            run(vr, tl, sr, rows)
         }
         // SAFETY: AVX2 was detected.
-        return unsafe { avx(vr, tl, (hr, sr), (l2, sp)) };
+        return unsafe { avx(vr, tl, sr, (l2, sp)) };
     }
-    run(vr, tl, (hr, sr), (l2, sp))
+    run(vr, tl, sr, (l2, sp))
 }
 
 /// Whether every value of `v` is finite (in AVX2 when present).
@@ -375,7 +379,12 @@ fn max_lanes(v: &[f32]) -> f32 {
 /// The tile max of [`halves`]' half velocities over `tile x tile` blocks (per tile, the first
 /// pixel in row order of the largest squared length, `[0, 0]` when all are 0), then the 3x3
 /// neighbour max of tiles: `(tiles_x, neighbour max per tile)`.
-fn tile_max(hv: &Halves, w: usize, h: usize, tile: usize) -> (usize, Vec<[f32; 2]>) {
+fn tile_max(
+    hv: &Halves,
+    velocity: &[f32],
+    (w, h): (usize, usize),
+    tile: usize,
+) -> (usize, Vec<[f32; 2]>) {
     let (tx, ty) = (w.div_ceil(tile), h.div_ceil(tile));
     let tiles: Vec<[f32; 2]> = (0..tx * ty)
         .into_par_iter()
@@ -391,9 +400,9 @@ fn tile_max(hv: &Halves, w: usize, h: usize, tile: usize) -> (usize, Vec<[f32; 2
                     .into_iter()
                     .find(|y| hv.tile_rows[y * tx + bx] == most)
                     .expect("the maximum is some row's");
-                let row = &hv.half[y * w + bx * tile..y * w + ((bx + 1) * tile).min(w)];
-                *row.iter()
-                    .find(|v| len2(**v) == most)
+                (y * w + bx * tile..y * w + ((bx + 1) * tile).min(w))
+                    .map(|i| half_at(velocity, i, tile as f32))
+                    .find(|v| len2(*v) == most)
                     .expect("the maximum is some pixel's")
             } else {
                 [0.0; 2]
@@ -426,17 +435,17 @@ pub fn reconstruct(
     if !deep {
         return Err(first_error(depth_error()));
     }
-    let (tx, nmax) = tile_max(&hv, w, h, params.tile);
+    let (tx, nmax) = tile_max(&hv, velocity, (w, h), params.tile);
     // every tap lies within |n| (plus the rounding to a pixel) of its pixel along each axis
     let (nx, ny) = nmax.iter().fold((0.0f32, 0.0f32), |(a, b), n| {
         (a.max(n[0].abs()), b.max(n[1].abs()))
     });
     let reach = Reach::from_rows(&hv.cell_rows, w, h, nx, ny);
-    let (half, speed) = (&hv.half, &hv.speed);
+    let speed = &hv.speed;
     let g = Gather {
         rgba,
         depth,
-        half,
+        velocity,
         speed,
         w,
         h,
@@ -509,7 +518,7 @@ pub fn reconstruct(
 /// How many pixels ahead along a row the vector runs ask for their inputs.
 const AHEAD: usize = 64;
 
-/// Asks for pixel `i`'s depth, half speed, half velocity and colour (and the next 7 pixels'
+/// Asks for pixel `i`'s depth, half speed, velocity and colour (and the next 7 pixels'
 /// colours) to be brought into the cache: the vector runs read each row's inputs in order, with
 /// the taps' reads between them.
 #[inline(always)]
@@ -521,7 +530,7 @@ fn prefetch(g: &Gather<'_>, i: usize) {
         unsafe {
             _mm_prefetch::<_MM_HINT_T0>(g.depth.as_ptr().add(i).cast());
             _mm_prefetch::<_MM_HINT_T0>(g.speed.as_ptr().add(i).cast());
-            _mm_prefetch::<_MM_HINT_T0>(g.half.as_ptr().add(i).cast());
+            _mm_prefetch::<_MM_HINT_T0>(g.velocity.as_ptr().add(2 * i).cast());
             _mm_prefetch::<_MM_HINT_T0>(g.rgba.as_ptr().add(4 * i).cast());
             _mm_prefetch::<_MM_HINT_T0>(g.rgba.as_ptr().add(4 * i + 16).cast());
         }
@@ -559,13 +568,14 @@ fn check_params(params: ReconstructParams) -> Result<()> {
 }
 
 /// What every pixel's gather reads besides its tile's neighbour max: the image and its depth,
-/// the half velocities, the size `w` x `h`, the parameters and the cells' speeds.
+/// the velocities, the size `w` x `h`, the parameters and the cells' speeds.
 #[derive(Clone, Copy)]
 struct Gather<'a> {
     rgba: &'a [f32],
     depth: &'a [f32],
-    half: &'a [[f32; 2]],
-    /// `|half|` per pixel.
+    /// The velocities (the half velocities are [`half_at`] of them).
+    velocity: &'a [f32],
+    /// The half velocities' lengths per pixel.
     speed: &'a [f32],
     w: usize,
     h: usize,
@@ -629,16 +639,15 @@ fn gather(g: &Gather<'_>, (x, y): (usize, usize), x0: usize, (n, rn): ([f32; 2],
     let Gather {
         rgba,
         depth,
-        half,
+        velocity,
         speed,
         w,
         h,
         params,
         reach,
-        ..
     } = *g;
     let i = y * w + x;
-    let c = half[i];
+    let c = half_at(velocity, i, params.tile as f32);
     let rc = speed[i];
     if rn.max(rc) < 0.5 {
         return [
@@ -1076,7 +1085,8 @@ unsafe fn gather8_avx(
     let any = |m: __m256| _mm256_movemask_ps(m) != 0;
     // the moving lanes' own half velocities
     let (c0, c1) = if any(movers) {
-        let c: [[f32; 2]; 8] = std::array::from_fn(|l| g.half[i0 + l]);
+        let c: [[f32; 2]; 8] =
+            std::array::from_fn(|l| half_at(g.velocity, i0 + l, params.tile as f32));
         (
             _mm256_loadu_ps(c.map(|v| v[0]).as_ptr()),
             _mm256_loadu_ps(c.map(|v| v[1]).as_ptr()),
