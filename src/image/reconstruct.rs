@@ -259,14 +259,8 @@ fn halves(
                     .chunks_mut(w)
                     .zip(vs.chunks(2 * w))
                     .zip(ts.chunks_mut(tx).zip(cs.chunks_mut(cw)));
-                for ((sr, vr), (tr, cr)) in rows {
-                    ok &= half_row(vr, tl, sr, (&mut l2, &mut sp));
-                    for (t, seg) in tr.iter_mut().zip(l2.chunks(tile)) {
-                        *t = max_lanes(seg);
-                    }
-                    for (c, seg) in cr.iter_mut().zip(sp.chunks(CELL)) {
-                        *c = seg.iter().fold(0.0f32, |m, s| m.max(*s));
-                    }
+                for ((sr, vr), maxima) in rows {
+                    ok &= half_row(vr, (tl, tile), sr, (&mut l2, &mut sp), maxima);
                 }
                 let deep = ds.iter().fold(true, |k, d| k & !(d.is_nan() || *d <= 0.0));
                 (ok, deep)
@@ -299,21 +293,25 @@ fn half_at(velocity: &[f32], i: usize, tl: f32) -> [f32; 2] {
     clamped_half([velocity[2 * i], velocity[2 * i + 1]], tl)
 }
 
-/// One row of [`halves`]: the lengths `sr` of the clamped half velocities of the velocities
-/// `vr`, the squared lengths in `l2` and the lengths in `sp` too; whether all are finite. In
-/// AVX2 when present (the same IEEE operations, so the same bits).
+/// One row of [`halves`]: the lengths `sr` of the half velocities of the velocities `vr`
+/// clamped to `tl` pixels (`tile`), the largest squared length over each tile's part of the
+/// row and the largest length over each cell's part (`maxima`), with the squared lengths and
+/// the lengths in `l2` and `sp` on the way; whether all are finite. In AVX2 when present (the
+/// same IEEE operations, so the same bits; maxima of values >= 0 in any order).
 fn half_row(
     vr: &[f32],
-    tl: f32,
+    (tl, tile): (f32, usize),
     sr: &mut [MaybeUninit<f32>],
     (l2, sp): (&mut [f32], &mut [f32]),
+    maxima: (&mut [f32], &mut [f32]),
 ) -> bool {
     #[inline(always)]
     fn run(
         vr: &[f32],
-        tl: f32,
+        (tl, tile): (f32, usize),
         sr: &mut [MaybeUninit<f32>],
         (l2, sp): (&mut [f32], &mut [f32]),
+        (tr, cr): (&mut [f32], &mut [f32]),
     ) -> bool {
         let w = sr.len();
         let (vr, l2, sp) = (&vr[..2 * w], &mut l2[..w], &mut sp[..w]);
@@ -326,6 +324,12 @@ fn half_row(
             sp[x] = l2[x].sqrt();
             sr[x].write(sp[x]);
         }
+        for (t, seg) in tr.iter_mut().zip(l2.chunks(tile)) {
+            *t = max_lanes(seg);
+        }
+        for (c, seg) in cr.iter_mut().zip(sp.chunks(CELL)) {
+            *c = max_lanes(seg);
+        }
         ok
     }
     #[cfg(target_arch = "x86_64")]
@@ -333,16 +337,17 @@ fn half_row(
         #[target_feature(enable = "avx2")]
         unsafe fn avx(
             vr: &[f32],
-            tl: f32,
+            tile: (f32, usize),
             sr: &mut [MaybeUninit<f32>],
             rows: (&mut [f32], &mut [f32]),
+            maxima: (&mut [f32], &mut [f32]),
         ) -> bool {
-            run(vr, tl, sr, rows)
+            run(vr, tile, sr, rows, maxima)
         }
         // SAFETY: AVX2 was detected.
-        return unsafe { avx(vr, tl, sr, (l2, sp)) };
+        return unsafe { avx(vr, (tl, tile), sr, (l2, sp), maxima) };
     }
-    run(vr, tl, sr, (l2, sp))
+    run(vr, (tl, tile), sr, (l2, sp), maxima)
 }
 
 /// Whether every value of `v` is finite (in AVX2 when present).
@@ -364,6 +369,7 @@ fn all_finite(v: &[f32]) -> bool {
 }
 
 /// The largest of `v` (0 for none, every value >= 0), over 8 lanes.
+#[inline(always)]
 fn max_lanes(v: &[f32]) -> f32 {
     let mut lanes = [0.0f32; 8];
     let mut chunks = v.chunks_exact(8);
