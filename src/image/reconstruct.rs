@@ -532,13 +532,14 @@ fn prefetch(g: &Gather<'_>, i: usize) {
     #[cfg(target_arch = "x86_64")]
     if i < g.w * g.h {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        // SAFETY: prefetching reads nothing and cannot fault; the addresses lie in the images.
+        // SAFETY: SSE is x86_64's baseline; a prefetch reads nothing and cannot fault (the last pixel's
+        // next colours may lie past the image: the addresses are formed with wrapping_add).
         unsafe {
-            _mm_prefetch::<_MM_HINT_T0>(g.depth.as_ptr().add(i).cast());
-            _mm_prefetch::<_MM_HINT_T0>(g.speed.as_ptr().add(i).cast());
-            _mm_prefetch::<_MM_HINT_T0>(g.velocity.as_ptr().add(2 * i).cast());
-            _mm_prefetch::<_MM_HINT_T0>(g.rgba.as_ptr().add(4 * i).cast());
-            _mm_prefetch::<_MM_HINT_T0>(g.rgba.as_ptr().add(4 * i + 16).cast());
+            _mm_prefetch::<_MM_HINT_T0>(g.depth.as_ptr().wrapping_add(i).cast());
+            _mm_prefetch::<_MM_HINT_T0>(g.speed.as_ptr().wrapping_add(i).cast());
+            _mm_prefetch::<_MM_HINT_T0>(g.velocity.as_ptr().wrapping_add(2 * i).cast());
+            _mm_prefetch::<_MM_HINT_T0>(g.rgba.as_ptr().wrapping_add(4 * i).cast());
+            _mm_prefetch::<_MM_HINT_T0>(g.rgba.as_ptr().wrapping_add(4 * i + 16).cast());
         }
     }
 }
