@@ -532,8 +532,8 @@ fn prefetch(g: &Gather<'_>, i: usize) {
     #[cfg(target_arch = "x86_64")]
     if i < g.w * g.h {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        // SAFETY: SSE is x86_64's baseline; a prefetch reads nothing and cannot fault (the last pixel's
-        // next colours may lie past the image: the addresses are formed with wrapping_add).
+        // SAFETY: SSE is x86_64's baseline; a prefetch reads nothing and cannot fault (the last
+        // pixel's next colours may lie past the image: the addresses use wrapping_add).
         unsafe {
             _mm_prefetch::<_MM_HINT_T0>(g.depth.as_ptr().wrapping_add(i).cast());
             _mm_prefetch::<_MM_HINT_T0>(g.speed.as_ptr().wrapping_add(i).cast());
