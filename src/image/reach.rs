@@ -26,6 +26,7 @@ pub(crate) struct Reach {
 impl Reach {
     /// The grid of `speed` (the half speed of each pixel, >= 0) over a `w` x `h` image whose
     /// taps reach at most `nx`, `ny` pixels (plus one) from their pixel along x and y.
+    #[cfg(test)]
     pub fn new(speed: &[f32], w: usize, h: usize, nx: f32, ny: f32) -> Reach {
         let (cw, ch) = (w.div_ceil(CELL), h.div_ceil(CELL));
         let cell: Vec<f32> = (0..cw * ch)
@@ -40,6 +41,26 @@ impl Reach {
                 })
             })
             .collect();
+        Reach::from_cells(cell, cw, ch, nx, ny)
+    }
+
+    /// [`Reach::new`] from the largest half speed of each cell's part of each row
+    /// (`cell_rows`, `w.div_ceil(CELL)` a row, `h` rows): the same grid.
+    pub fn from_rows(cell_rows: &[f32], w: usize, h: usize, nx: f32, ny: f32) -> Reach {
+        let (cw, ch) = (w.div_ceil(CELL), h.div_ceil(CELL));
+        let cell: Vec<f32> = (0..cw * ch)
+            .into_par_iter()
+            .map(|c| {
+                let (cx, cy) = (c % cw, c / cw);
+                (cy * CELL..((cy + 1) * CELL).min(h))
+                    .fold(0.0f32, |m, y| m.max(cell_rows[y * cw + cx]))
+            })
+            .collect();
+        Reach::from_cells(cell, cw, ch, nx, ny)
+    }
+
+    /// The grid of the cells' largest half speeds `cell` (`cw` x `ch`).
+    fn from_cells(cell: Vec<f32>, cw: usize, ch: usize, nx: f32, ny: f32) -> Reach {
         // cells within ceil((n + 1) / CELL) of a cell hold every pixel its pixels' taps reach
         let radius = |n: f32, cells: usize| (((n + 1.0) / CELL as f32).ceil() as usize).min(cells);
         let (rx, ry) = (radius(nx, cw), radius(ny, ch));
@@ -101,5 +122,17 @@ mod tests {
         assert_eq!(r.reach[r.index(99, 20)], 0.0);
         assert_eq!(r.reach[r.index(40, 49)], 0.0);
         assert_eq!(r.reach[r.index(0, 16)], 3.0);
+        // the grid from the rows' maxima is the same
+        let cw = w.div_ceil(CELL);
+        let rows: Vec<f32> = (0..h * cw)
+            .map(|k| {
+                let (y, cx) = (k / cw, k % cw);
+                speed[y * w + cx * CELL..y * w + ((cx + 1) * CELL).min(w)]
+                    .iter()
+                    .fold(0.0f32, |m, s| m.max(*s))
+            })
+            .collect();
+        let q = Reach::from_rows(&rows, w, h, 20.0, 0.0);
+        assert_eq!((q.cw, &q.cell, &q.reach), (r.cw, &r.cell, &r.reach));
     }
 }

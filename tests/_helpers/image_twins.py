@@ -429,22 +429,25 @@ def reconstruct_twin(rgba, depth, velocity, samples=16, tile=8, soft_depth=0.02)
             tap(y, x, 0.0)
             pairs = samples // 2
             both = rc >= 0.5 and rn >= 0.5
-            j = _jitter(x, y)
+            # one jitter a run of eight pixels of a row (from the tile's left edge); along n a
+            # tap is the run's first pixel's, moved along the row
+            x0 = x - (x % tile) % 8
+            j = _jitter(x0, y)
             for p in range(pairs):
                 if both and p % 2 == 1:
-                    dvec, r, q, m = c, rc, p // 2, pairs // 2
+                    dvec, r, q, m, a = c, rc, p // 2, pairs // 2, x
                 elif both:
-                    dvec, r, q, m = n, rn, p // 2, pairs - pairs // 2
+                    dvec, r, q, m, a = n, rn, p // 2, pairs - pairs // 2, x0
                 elif rn >= 0.5:
-                    dvec, r, q, m = n, rn, p, pairs
+                    dvec, r, q, m, a = n, rn, p, pairs, x0
                 else:
-                    dvec, r, q, m = c, rc, p, pairs
+                    dvec, r, q, m, a = c, rc, p, pairs, x
                 t = (q + j) / max(m, 1)
                 for s in (-1.0, 1.0):
-                    px, py = x + 0.5 + s * t * dvec[0], y + 0.5 + s * t * dvec[1]
-                    if px < 0 or py < 0 or px >= w or py >= h:
+                    px, py = a + 0.5 + s * t * dvec[0], y + 0.5 + s * t * dvec[1]
+                    sx, sy = int(np.floor(px)) + x - a, int(np.floor(py))
+                    if sx < 0 or sy < 0 or sx >= w or sy >= h:
                         continue
-                    sx, sy = int(px), int(py)
                     d = min(np.hypot(sx - x, sy - y), t * r)
                     tap(sy, sx, d)
             wf, wb, taps = acc
