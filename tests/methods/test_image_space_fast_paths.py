@@ -138,6 +138,27 @@ def test_max_speed_is_numpys_float64_formula():
     assert np.isnan(_core._max_speed(v))
 
 
+def test_velocity_reads_its_longest_velocity_in_the_drawn_window_only():
+    # velocity takes the longest velocity (its default tile and stats["max_velocity"]) from the
+    # window the moving objects were drawn in over the static layer: it must be the whole
+    # frame's, on scenes drawn that way, whole, and with the mover off screen (nothing drawn)
+    seen = set()
+    off = mb.SCENES["cube"](width=72, height=54)
+    off.objects[0].motion = mb.Motion.linear(mb.translate((40.0, 0.0, 0.0)), mb.translate((41.0, 0.0, 0.0)))
+    for scene in [*_still_scenes(), off]:
+        box = isinstance(scene.shutter, str) and scene.shutter == "box"
+        if scene.camera_moves or not scene.moving_objects or not box:
+            continue
+        tc = shutter_centroid(scene)
+        frame = ims._sharp(scene, tc, 1, "shutter", ims._static_part(scene, 1))
+        drawn = frame.stats.get("drawn", ...)
+        seen.add("whole" if drawn is ... else "none" if drawn is None else "window")
+        whole = _core._max_speed(np.ascontiguousarray(frame.velocity, np.float32))
+        assert ims._max_speed(np.ascontiguousarray(frame.velocity, np.float32), drawn) == whole
+        assert mb.render(scene, "velocity", error_estimate=False).stats["max_velocity"] == whole
+    assert {"window", "none"} <= seen, seen
+
+
 def test_reconstruction_out_of_reach_ignores_the_mover():
     # a 600x400 textured wall with a small block moving 40 pixels right: recolouring the block
     # leaves every pixel beyond its reach (its half velocity + 1 along the tap lines, a margin

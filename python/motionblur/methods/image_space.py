@@ -84,7 +84,10 @@ def _sharp(scene: Scene, t: float, aa: int, velocity: str | None, static: Static
     if pasted is not None:
         (y0, y1, x0, x1), part = pasted
         rgba[y0:y1, x0:x1] = part
-    return Frame(rgba, frame.depth, frame.ids, frame.velocity)
+    out = Frame(rgba, frame.depth, frame.ids, frame.velocity)
+    # the only pixels whose velocity can be nonzero (y0, y1, x0, x1), None when nothing was drawn
+    out.stats["drawn"] = None if pasted is None else pasted[0]
+    return out
 
 
 def _sharp_over(scene: Scene, t: float, aa: int, velocity: str | None, static: Static):
@@ -482,6 +485,19 @@ def camera_velocity(scene: Scene, samples: int | None = None, aa: int = 1) -> Fr
     return out
 
 
+def _max_speed(vel: np.ndarray, drawn) -> float:
+    """The longest velocity of ``vel`` (H,W,2) float32 (`motionblur._core._max_speed`), read
+    only in the window ``drawn`` (y0, y1, x0, x1) that `_sharp` drew the moving objects in when
+    it says so (outside it every velocity is 0: the same value), 0 when it drew nothing; the
+    whole image when ``drawn`` is ``...`` (a frame drawn whole)."""
+    if drawn is ...:
+        return _core._max_speed(vel)
+    if drawn is None:
+        return 0.0
+    y0, y1, x0, x1 = drawn
+    return _core._max_speed(np.ascontiguousarray(vel[y0:y1, x0:x1]))
+
+
 @register(
     "velocity",
     sweep=[{"samples": n} for n in (8, 16, 32)],
@@ -517,7 +533,7 @@ def velocity(scene: Scene, samples: int = 16, aa: int = 1, tile=None, soft_depth
     tc = shutter_centroid(scene)
     frame = _sharp(scene, tc, aa, "shutter", _static_part(scene, aa))
     vel = np.ascontiguousarray(frame.velocity, dtype=np.float32)
-    vmax = _core._max_speed(vel)
+    vmax = _max_speed(vel, frame.stats.get("drawn", ...))
     if tile is None:
         tile = max(8, int(np.ceil(0.5 * vmax)))
     # the frame is the rasterizer's (finite, depth > 0): the core checks it once more
