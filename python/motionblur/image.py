@@ -316,7 +316,7 @@ def velocity_blur(rgba, velocity, samples=16) -> np.ndarray:
 def reconstruction_blur(rgba, depth, velocity, samples=16, tile=None, soft_depth=0.02) -> np.ndarray:
     """The velocity-buffer motion blur of game engines (McGuire et al. 2012's reconstruction
     filter with Guertin et al. 2014's tile max, neighbour max and foreground/background gather;
-    ``src/image/reconstruct.rs`` has the formulas) of one sharp frame taken at mid-shutter.
+    ``src/image/reconstruct/mod.rs`` has the formulas) of one sharp frame taken at mid-shutter.
 
     ``rgba``: (H,W,4) float32 premultiplied; ``depth``: (H,W) float32 view-axis depth (> 0,
     ``inf`` where nothing is hit); ``velocity``: (H,W,2) float32, each pixel's screen motion over

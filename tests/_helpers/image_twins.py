@@ -373,7 +373,7 @@ def _jitter(x: int, y: int) -> float:
 
 
 def reconstruct_twin(rgba, depth, velocity, samples=16, tile=8, soft_depth=0.02):
-    """Plain-Python twin of ``src/image/reconstruct.rs`` (McGuire 2012 / Guertin 2014 gather,
+    """Plain-Python twin of ``src/image/reconstruct/`` (McGuire 2012 / Guertin 2014 gather,
     the formulas of its module docs), float64; for small images."""
     h, w = depth.shape
     half = 0.5 * velocity.astype(np.float64)

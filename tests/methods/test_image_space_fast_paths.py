@@ -15,7 +15,7 @@
   not change.
 
 The reconstruction filter's skipping is also checked against its serial, unskipped twin in the
-core's own tests (``src/image/reconstruct.rs``, ``skipped_taps_give_the_bits_of_every_tap``).
+core's own tests (``src/image/reconstruct/tests.rs``, ``skipped_taps_give_the_bits_of_every_tap``).
 """
 
 from __future__ import annotations
