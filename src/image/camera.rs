@@ -967,14 +967,9 @@ mod tests {
         }
     }
 
-    #[test]
-    fn camera_frame_blur_same_on_one_thread() {
-        // (rows of several chunks of the vector form)
-        let (w, h) = (300, 30);
-        let rgba: Vec<f32> = (0..w * h * 4).map(|i| (i % 7) as f32 / 7.0).collect();
-        let depth: Vec<f32> = (0..w * h).map(|i| 1.0 + (i % 5) as f32).collect();
-        let velocity: Vec<f32> = (0..w * h * 2).map(|i| (i % 9) as f32 - 4.0).collect();
-        let ids: Vec<i32> = (0..w * h).map(|i| (i % 3) as i32 - 1).collect();
+    /// A camera 4 units from the origin looking down -z, and the previous one moved `dx` along
+    /// x: a pan over a plane in front of it.
+    fn panning_cameras((w, h): (usize, usize), dx: f64) -> (CameraMatrices, CameraMatrices) {
         let eye = |x: f64| {
             let mut v = glam::DMat4::IDENTITY;
             v.w_axis.x = x;
@@ -983,7 +978,21 @@ mod tests {
         };
         let proj = glam::DMat4::perspective_rh_gl(0.8, w as f64 / h as f64, 0.1, 50.0);
         let cur = CameraMatrices::new(eye(0.0), proj, "camera").unwrap();
-        let prev = CameraMatrices::new(eye(0.2), proj, "previous_camera").unwrap();
+        (
+            cur,
+            CameraMatrices::new(eye(dx), proj, "previous_camera").unwrap(),
+        )
+    }
+
+    #[test]
+    fn camera_frame_blur_same_on_one_thread() {
+        // (rows of several chunks of the vector form)
+        let (w, h) = (300, 30);
+        let rgba: Vec<f32> = (0..w * h * 4).map(|i| (i % 7) as f32 / 7.0).collect();
+        let depth: Vec<f32> = (0..w * h).map(|i| 1.0 + (i % 5) as f32).collect();
+        let velocity: Vec<f32> = (0..w * h * 2).map(|i| (i % 9) as f32 - 4.0).collect();
+        let ids: Vec<i32> = (0..w * h).map(|i| (i % 3) as i32 - 1).collect();
+        let (cur, prev) = panning_cameras((w, h), 0.2);
         let frame = FrameMotion {
             velocity: &velocity,
             ids: &ids,
@@ -1013,15 +1022,7 @@ mod tests {
             .map(|i| i32::from((40..60).contains(&(i / w)) && (100..150).contains(&(i % w))) - 1)
             .map(|id| if id == 0 { 0 } else { -1 })
             .collect();
-        let eye = |x: f64| {
-            let mut v = glam::DMat4::IDENTITY;
-            v.w_axis.x = x;
-            v.w_axis.z = -4.0;
-            v
-        };
-        let proj = glam::DMat4::perspective_rh_gl(0.8, w as f64 / h as f64, 0.1, 50.0);
-        let cur = CameraMatrices::new(eye(0.0), proj, "camera").unwrap();
-        let prev = CameraMatrices::new(eye(1.5), proj, "previous_camera").unwrap();
+        let (cur, prev) = panning_cameras((w, h), 1.5);
         let frame = FrameMotion {
             velocity: &velocity,
             ids: &ids,

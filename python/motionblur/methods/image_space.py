@@ -76,16 +76,19 @@ def _sharp(scene: Scene, t: float, aa: int, velocity: str | None, static: Static
     `_static_part` when there is one: the rasterizer runs on the window of pixels their
     vertices project to (the camera's projection narrowed to it, the layer read from the
     window's first sample) and the static pixels are copied around it, the bits of drawing
-    everything (tests/methods/test_image_space_fast_paths.py)."""
+    everything (tests/methods/test_image_space_fast_paths.py). ``stats["drawn"]``: (y0, y1, x0,
+    x1) the pixels drawn (the whole image when drawn whole), None when nothing was; elsewhere
+    every velocity is 0."""
     if static is None or velocity == "since_open":
-        return sharp_frame(scene, t, aa, velocity=velocity)
+        frame = sharp_frame(scene, t, aa, velocity=velocity)
+        frame.stats["drawn"] = (0, frame.rgba.shape[0], 0, frame.rgba.shape[1])
+        return frame
     frame, pasted = _sharp_over(scene, t, aa, velocity, static)
     rgba = static.rgba.copy()
     if pasted is not None:
         (y0, y1, x0, x1), part = pasted
         rgba[y0:y1, x0:x1] = part
     out = Frame(rgba, frame.depth, frame.ids, frame.velocity)
-    # the only pixels whose velocity can be nonzero (y0, y1, x0, x1), None when nothing was drawn
     out.stats["drawn"] = None if pasted is None else pasted[0]
     return out
 
@@ -487,11 +490,8 @@ def camera_velocity(scene: Scene, samples: int | None = None, aa: int = 1) -> Fr
 
 def _max_speed(vel: np.ndarray, drawn) -> float:
     """The longest velocity of ``vel`` (H,W,2) float32 (`motionblur._core._max_speed`), read
-    only in the window ``drawn`` (y0, y1, x0, x1) that `_sharp` drew the moving objects in when
-    it says so (outside it every velocity is 0: the same value), 0 when it drew nothing; the
-    whole image when ``drawn`` is ``...`` (a frame drawn whole)."""
-    if drawn is ...:
-        return _core._max_speed(vel)
+    only in the window ``drawn`` (y0, y1, x0, x1) that `_sharp` drew in (``stats["drawn"]``;
+    outside it every velocity is 0: the same value), 0 when it drew nothing (None)."""
     if drawn is None:
         return 0.0
     y0, y1, x0, x1 = drawn
@@ -533,7 +533,7 @@ def velocity(scene: Scene, samples: int = 16, aa: int = 1, tile=None, soft_depth
     tc = shutter_centroid(scene)
     frame = _sharp(scene, tc, aa, "shutter", _static_part(scene, aa))
     vel = np.ascontiguousarray(frame.velocity, dtype=np.float32)
-    vmax = _max_speed(vel, frame.stats.get("drawn", ...))
+    vmax = _max_speed(vel, frame.stats["drawn"])
     if tile is None:
         tile = max(8, int(np.ceil(0.5 * vmax)))
     # the frame is the rasterizer's (finite, depth > 0): the core checks it once more

@@ -870,9 +870,9 @@ unsafe fn still8_avx(
 
 /// [`gather`] of the first `lanes` (1 to 8) pixels of the run of eight `(x..x + 8, y)` (`x`
 /// its first pixel, `x + 8 <= w`; neighbour max `n`, its length `rn`) at once, in AVX2, when
-/// the neighbourhood moves (`rn >= 0.5`); None otherwise (or without AVX2). Lane `l` performs
-/// [`gather`]'s IEEE operations for pixel `x + l` in its order: the same bits, written to
-/// `out` (the `lanes` pixels' RGBA); false (nothing written) otherwise.
+/// the neighbourhood moves (`rn >= 0.5`). Lane `l` performs [`gather`]'s IEEE operations for
+/// pixel `x + l` in its order: the same bits, written to `out` (the `lanes` pixels' RGBA);
+/// false (nothing written) when the neighbourhood is still or without AVX2.
 #[inline]
 fn gather8(
     g: &Gather<'_>,
