@@ -114,6 +114,49 @@ fn rows_path(
         .reduce(|| true, |a, b| a & b)
 }
 
+/// An alpha's bounding box in pixels: columns `x0..=x1`, rows `y0..=y1`.
+type BBox = (usize, usize, usize, usize);
+
+/// One streaming pass over the image (and the base when `composite`, unless it is the image):
+/// whether every value is finite with alphas in [0, 1], and the box of the non-zero alphas
+/// (`None`: none).
+fn scan(rgba: &[f32], base: &[f32], w: usize, composite: bool) -> (bool, Option<BBox>) {
+    let simd = simd();
+    let check_base = composite && !std::ptr::eq(rgba, base);
+    let join = |a: (bool, Option<BBox>), b: (bool, Option<BBox>)| {
+        let bbox = match (a.1, b.1) {
+            (Some(a), Some(b)) => Some((a.0.min(b.0), a.1.max(b.1), a.2.min(b.2), a.3.max(b.3))),
+            (a, b) => a.or(b),
+        };
+        (a.0 & b.0, bbox)
+    };
+    rgba.par_chunks(w * 4)
+        .zip(base.par_chunks(w * 4))
+        .enumerate()
+        .map(|(y, (src, b))| {
+            let ok = premultiplied(src, simd) && (!check_base || premultiplied(b, simd));
+            (ok, alpha_span(src, simd).map(|(lo, hi)| (lo, hi, y, y)))
+        })
+        .reduce(|| (true, None), join)
+}
+
+/// The crop `(cx0, cx1, cy0, cy1)` (half-open) that can receive non-zero alpha from `bbox`:
+/// the box grown by two filter reaches along the blur (`p.radius`) and across it (the shear),
+/// clamped to the `w` x `h` image.
+fn crop_box(bbox: BBox, p: &LinePlan, w: usize, h: usize) -> BBox {
+    let (x0, x1, y0, y1) = bbox;
+    let major = 2 * p.radius + 2;
+    let minor = (2.0 * p.radius as f64 * p.slope.abs()).ceil() as usize + 2;
+    let (mx, my) = if p.transpose {
+        (minor, major)
+    } else {
+        (major, minor)
+    };
+    let (cx0, cx1) = (x0.saturating_sub(mx), (x1 + 1 + mx).min(w));
+    let (cy0, cy1) = (y0.saturating_sub(my), (y1 + 1 + my).min(h));
+    (cx0, cx1, cy0, cy1)
+}
+
 /// Any other direction: the filter runs on the crop that can receive non-zero alpha (the
 /// alpha's bounding box grown by two filter reaches), transposed and/or sheared; then each
 /// output row is written once: the empty result (the base, or 0) outside the crop, eq. 7 and
@@ -129,25 +172,7 @@ fn crop_path(
     out: &mut [MaybeUninit<f32>],
 ) -> Result<bool> {
     let simd = simd();
-    let same = std::ptr::eq(rgba, base);
-    // One streaming pass: finiteness, the alphas' range and the alpha's box.
-    type Scan = (bool, Option<(usize, usize, usize, usize)>);
-    let join = |a: Scan, b: Scan| -> Scan {
-        let bbox = match (a.1, b.1) {
-            (Some(a), Some(b)) => Some((a.0.min(b.0), a.1.max(b.1), a.2.min(b.2), a.3.max(b.3))),
-            (a, b) => a.or(b),
-        };
-        (a.0 & b.0, bbox)
-    };
-    let (ok, bbox) = rgba
-        .par_chunks(w * 4)
-        .zip(base.par_chunks(w * 4))
-        .enumerate()
-        .map(|(y, (src, b))| {
-            let ok = premultiplied(src, simd) && (comp.is_none() || same || premultiplied(b, simd));
-            (ok, alpha_span(src, simd).map(|(lo, hi)| (lo, hi, y, y)))
-        })
-        .reduce(|| (true, None), join);
+    let (ok, bbox) = scan(rgba, base, w, comp.is_some());
     if !ok {
         out.par_chunks_mut(w * 4)
             .for_each(|o| o.fill(MaybeUninit::new(0.0)));
@@ -168,15 +193,7 @@ fn crop_path(
         return Ok(true);
     };
     let r = p.radius;
-    let major = 2 * r + 2;
-    let minor = (2.0 * r as f64 * p.slope.abs()).ceil() as usize + 2;
-    let (mx, my) = if p.transpose {
-        (minor, major)
-    } else {
-        (major, minor)
-    };
-    let (cx0, cx1) = (x0.saturating_sub(mx), (x1 + 1 + mx).min(w));
-    let (cy0, cy1) = (y0.saturating_sub(my), (y1 + 1 + my).min(h));
+    let (cx0, cx1, cy0, cy1) = crop_box((x0, x1, y0, y1), p, w, h);
     let (cw, ch) = (cx1 - cx0, cy1 - cy0);
     // The crop, copied unless it is the whole image.
     let mut copy = None;
@@ -263,79 +280,70 @@ fn crop_path(
     Ok(true)
 }
 
-fn opaque_impl(
-    rgba: &[f32],
-    base: Option<&[f32]>,
+/// One opaque blur's inputs: the `(h, w, 4)` image, the base it is composited with (`rgba`
+/// itself when `None`), the direction and length of the blur in pixels, and the composite
+/// (`None`: no compositing).
+#[derive(Clone, Copy)]
+struct Blur<'a> {
+    rgba: &'a [f32],
+    base: Option<&'a [f32]>,
     w: usize,
     h: usize,
     direction: [f32; 2],
     length: f32,
     comp: Option<Composite>,
-) -> Result<Vec<f32>> {
-    check_inputs(rgba, base, w, h, direction, length)?;
-    let mut ok = Ok(());
-    let out = filled(w * h * 4, |out| {
-        ok = opaque_write(rgba, base, w, h, direction, length, comp, out)
-    });
-    ok.map(|()| out)
 }
 
-/// The image and direction checks every opaque blur makes before it allocates.
-fn check_inputs(
-    rgba: &[f32],
-    base: Option<&[f32]>,
-    w: usize,
-    h: usize,
-    direction: [f32; 2],
-    length: f32,
-) -> Result<()> {
-    check_image("rgba", rgba, w, h, 4)?;
-    if let Some(b) = base {
-        check_image("base", b, w, h, 4)?;
+impl Blur<'_> {
+    /// The image and direction checks every opaque blur makes before it allocates.
+    fn check(&self) -> Result<()> {
+        check_image("rgba", self.rgba, self.w, self.h, 4)?;
+        if let Some(b) = self.base {
+            check_image("base", b, self.w, self.h, 4)?;
+        }
+        check_direction(self.direction, self.length, "length")
     }
-    check_direction(direction, length, "length")
-}
 
-/// The opaque blur of `rgba` composited `comp` its base (`rgba` itself when `base` is `None`),
-/// written into every element of `out` (`(h, w, 4)`); the inputs checked ([`check_inputs`]).
-/// On an error (an image not premultiplied) `out`'s contents are unspecified.
-#[allow(clippy::too_many_arguments)]
-fn opaque_write(
-    rgba: &[f32],
-    base: Option<&[f32]>,
-    w: usize,
-    h: usize,
-    direction: [f32; 2],
-    length: f32,
-    comp: Option<Composite>,
-    out: &mut [MaybeUninit<f32>],
-) -> Result<()> {
-    let base_img = base.unwrap_or(rgba);
-    let p = plan(direction, length * 0.5);
-    if p.is_none() {
-        check_premultiplied("rgba", rgba, 4)?;
-        check_premultiplied("base", base_img, 4)?;
+    /// The blur in a new image, the inputs checked first ([`Blur::check`]).
+    fn new_image(&self) -> Result<Vec<f32>> {
+        self.check()?;
+        let mut ok = Ok(());
+        let out = filled(self.w * self.h * 4, |out| ok = self.write(out));
+        ok.map(|()| out)
     }
-    let ok = match p {
-        Some(p) if !p.transpose && p.slope == 0.0 => {
-            rows_path(rgba, base_img, w, p.radius, comp, out)
+
+    /// The blur written into every element of `out` (`(h, w, 4)`); the inputs already checked
+    /// ([`Blur::check`]). On an error (an image not premultiplied) `out`'s contents are
+    /// unspecified.
+    fn write(&self, out: &mut [MaybeUninit<f32>]) -> Result<()> {
+        let (rgba, w, comp) = (self.rgba, self.w, self.comp);
+        let base = self.base.unwrap_or(rgba);
+        let p = plan(self.direction, self.length * 0.5);
+        if p.is_none() {
+            check_premultiplied("rgba", rgba, 4)?;
+            check_premultiplied("base", base, 4)?;
         }
-        Some(p) => crop_path(rgba, base_img, w, h, &p, comp, out)?,
-        None => {
-            out.par_chunks_mut(4)
-                .zip(rgba.par_chunks(4))
-                .zip(base_img.par_chunks(4))
-                .for_each(|((o, px), b)| {
-                    put4(o, 0, finish([px[0], px[1], px[2], px[3]], px[3], b, comp))
-                });
-            true
+        let ok = match p {
+            Some(p) if !p.transpose && p.slope == 0.0 => {
+                rows_path(rgba, base, w, p.radius, comp, out)
+            }
+            Some(p) => crop_path(rgba, base, w, self.h, &p, comp, out)?,
+            None => {
+                out.par_chunks_mut(4)
+                    .zip(rgba.par_chunks(4))
+                    .zip(base.par_chunks(4))
+                    .for_each(|((o, px), b)| {
+                        put4(o, 0, finish([px[0], px[1], px[2], px[3]], px[3], b, comp))
+                    });
+                true
+            }
+        };
+        if !ok {
+            check_premultiplied("rgba", rgba, 4)?;
+            check_premultiplied("base", base, 4)?;
         }
-    };
-    if !ok {
-        check_premultiplied("rgba", rgba, 4)?;
-        check_premultiplied("base", base_img, 4)?;
+        Ok(())
     }
-    Ok(())
 }
 
 /// Opaque image blur of a `(h, w, 4)` premultiplied image along `direction` over `length` pixels:
@@ -347,7 +355,16 @@ pub fn opaque_blur(
     direction: [f32; 2],
     length: f32,
 ) -> Result<Vec<f32>> {
-    opaque_impl(rgba, None, w, h, direction, length, None)
+    Blur {
+        rgba,
+        base: None,
+        w,
+        h,
+        direction,
+        length,
+        comp: None,
+    }
+    .new_image()
 }
 
 /// Opaque motion blur (figures 6 and 7): `opaque_blur(rgba)` composited `mode` the base image
@@ -361,7 +378,16 @@ pub fn opaque_motion_blur(
     length: f32,
     mode: Composite,
 ) -> Result<Vec<f32>> {
-    opaque_impl(rgba, base, w, h, direction, length, Some(mode))
+    Blur {
+        rgba,
+        base,
+        w,
+        h,
+        direction,
+        length,
+        comp: Some(mode),
+    }
+    .new_image()
 }
 
 /// [`opaque_motion_blur`] written into `out` (`(h, w, 4)`, every element overwritten): the same
@@ -378,11 +404,20 @@ pub fn opaque_motion_blur_into(
     mode: Composite,
     out: &mut [f32],
 ) -> Result<()> {
-    check_inputs(rgba, base, w, h, direction, length)?;
+    let blur = Blur {
+        rgba,
+        base,
+        w,
+        h,
+        direction,
+        length,
+        comp: Some(mode),
+    };
+    blur.check()?;
     if out.len() != w * h * 4 {
         return Err(Error::shape("out", "must be (H, W, 4) like rgba"));
     }
     // SAFETY: MaybeUninit<f32> has f32's layout, and the writer only stores initialised values.
     let out = unsafe { &mut *(out as *mut [f32] as *mut [MaybeUninit<f32>]) };
-    opaque_write(rgba, base, w, h, direction, length, Some(mode), out)
+    blur.write(out)
 }
