@@ -27,141 +27,154 @@ impl BlurShell {
                 return check_rows(nr, self.n_vertices, "normals", self.parallel());
             }
         }
-        let s = self.opts.subdivisions as usize;
-        let nf = self.faces.len();
-        let n = self.updates;
-        let slot = (n % s as u64) as usize;
-        // Pass A: float32 positions (and given normals) into the spare buffers, checking
-        // finiteness on the way. The caller's rows are read in order and scattered to their
-        // internal slots (stores do not stall on cache misses as gathered loads do).
         let spare = self.spare;
-        let par = self.parallel();
-        if scatter_f32(
-            vertices,
-            &self.loc.inv,
-            &mut self.pos_bufs[spare],
-            MAX_COORD,
-            par,
-        ) {
-            return check_rows(vertices, self.n_vertices, "vertices", self.parallel());
+        if let Some(bad) = self.scatter_inputs(vertices, normals, spare) {
+            return bad;
         }
-        if let Some(nr) = normals {
-            if scatter_f32(
-                nr,
-                &self.loc.inv,
-                &mut self.nrm_bufs[spare],
-                MAX_NORMAL,
-                par,
-            ) {
-                return check_rows(nr, self.n_vertices, "normals", self.parallel());
-            }
-        }
-        let cur = &self.pos_bufs[spare];
-        // Pass B: face normals (unless given).
         if normals.is_none() {
-            if par {
-                face_normals_into(cur, &self.loc.bfaces, &mut self.face_n);
-            } else {
-                for (o, f) in self.face_n.iter_mut().zip(&self.loc.bfaces) {
-                    *o = face_normal(cur, f);
-                }
-            }
+            self.face_normals(spare);
         }
-        // Pass C: vertex normals and facing against the previous update's positions.
-        {
-            let prev =
-                (n > 0).then(|| &self.pos_bufs[self.buf_of_slot[((n - 1) % s as u64) as usize]]);
-            let (face_n, vf) = (&self.face_n, &self.loc.vf);
-            let given = normals.is_some();
-            let nb = &mut self.nrm_bufs[spare];
-            let pass_c = |(c, (fa, nb)): (usize, (&mut [i8], &mut [[f32; 3]]))| {
-                let base = c * CHUNK;
-                for (i, (out, nb)) in fa.iter_mut().zip(nb).enumerate() {
-                    let v = base + i;
-                    let nrm = if given {
-                        *nb
-                    } else {
-                        let n = vf.normal(v, face_n);
-                        *nb = n;
-                        n
-                    };
-                    *out = match prev {
-                        Some(pr) => facing(nrm, cur[v], pr[v]),
-                        None => NEUTRAL,
-                    };
-                }
-            };
-            if par {
-                self.facing
-                    .par_chunks_mut(CHUNK)
-                    .zip(nb.par_chunks_mut(CHUNK))
-                    .enumerate()
-                    .for_each(pass_c);
-            } else {
-                self.facing
-                    .chunks_mut(CHUNK)
-                    .zip(nb.chunks_mut(CHUNK))
-                    .enumerate()
-                    .for_each(pass_c);
-            }
-        }
+        self.vertex_facing(spare, normals.is_some());
+        let slot = (self.updates % self.opts.subdivisions as u64) as usize;
         self.spare = std::mem::replace(&mut self.buf_of_slot[slot], spare);
-        // Pass D: silhouette edge, state, ring element (and the birth element at n - 1).
-        {
-            let (row, prev_row): (&mut [u8], &mut [u8]) = if s == 1 {
-                (&mut self.ring[..], &mut self.scratch_row)
-            } else {
-                let pslot = (slot + s - 1) % s;
-                let (lo_slot, hi_slot) = (slot.min(pslot), slot.max(pslot));
-                let (a, b) = self.ring.split_at_mut(hi_slot * nf);
-                let (lo_row, hi_row) = (&mut a[lo_slot * nf..(lo_slot + 1) * nf], &mut b[..nf]);
-                if slot > pslot {
-                    (hi_row, lo_row)
-                } else {
-                    (lo_row, hi_row)
-                }
-            };
-            let (facing_v, faces, mask) = (&self.facing, &self.loc.ifaces, self.mask.as_deref());
-            let h = self.opts.hysteresis;
-            let n = n as u32;
-            type Rows<'a> = (((&'a mut [u8], &'a mut [Hot]), &'a mut [u8]), &'a mut [u8]);
-            let pass_d = |(c, (((fades, hots), row), prow)): (usize, Rows<'_>)| {
-                let base = c * CHUNK;
-                for i in 0..fades.len() {
-                    let f = base + i;
-                    let on = mask.is_none_or(|m| m[f]);
-                    let code = if on {
-                        face_edge(facing_v, &faces[f])
-                    } else {
-                        NO_EDGE
-                    };
-                    if code == NO_EDGE && fades[i] as usize >= s {
-                        continue; // no strip and no edge: nothing changes
-                    }
-                    let step = Step { code, s, h, n };
-                    step.apply(&mut fades[i], &mut hots[i], &mut row[i], &mut prow[i]);
-                }
-            };
-            if par {
-                self.fade
-                    .par_chunks_mut(CHUNK)
-                    .zip(self.hot.par_chunks_mut(CHUNK))
-                    .zip(row.par_chunks_mut(CHUNK))
-                    .zip(prev_row.par_chunks_mut(CHUNK))
-                    .enumerate()
-                    .for_each(pass_d);
-            } else {
-                self.fade
-                    .chunks_mut(CHUNK)
-                    .zip(self.hot.chunks_mut(CHUNK))
-                    .zip(row.chunks_mut(CHUNK))
-                    .zip(prev_row.chunks_mut(CHUNK))
-                    .enumerate()
-                    .for_each(pass_d);
-            }
-        }
+        self.step_faces(slot);
         self.updates += 1;
         Ok(())
+    }
+
+    /// Pass A: float32 positions (and given normals) into the spare buffers, checking
+    /// finiteness on the way. The caller's rows are read in order and scattered to their
+    /// internal slots (stores do not stall on cache misses as gathered loads do). `Some`: the
+    /// error naming the argument with a bad value (the state is unchanged but for the spare
+    /// buffers).
+    fn scatter_inputs(
+        &mut self,
+        vertices: &[[f64; 3]],
+        normals: Option<&[[f64; 3]]>,
+        spare: usize,
+    ) -> Option<Result<()>> {
+        let par = self.parallel();
+        let inv = &self.loc.inv;
+        if scatter_f32(vertices, inv, &mut self.pos_bufs[spare], MAX_COORD, par) {
+            return Some(check_rows(vertices, self.n_vertices, "vertices", par));
+        }
+        let nr = normals?;
+        if scatter_f32(nr, inv, &mut self.nrm_bufs[spare], MAX_NORMAL, par) {
+            return Some(check_rows(nr, self.n_vertices, "normals", par));
+        }
+        None
+    }
+
+    /// Pass B: the face normals of the positions in buffer `spare`.
+    fn face_normals(&mut self, spare: usize) {
+        let cur = &self.pos_bufs[spare];
+        if self.parallel() {
+            face_normals_into(cur, &self.loc.bfaces, &mut self.face_n);
+        } else {
+            for (o, f) in self.face_n.iter_mut().zip(&self.loc.bfaces) {
+                *o = face_normal(cur, f);
+            }
+        }
+    }
+
+    /// Pass C: vertex normals (unless `given`) and each vertex's facing against the previous
+    /// update's positions (neutral at the first update).
+    fn vertex_facing(&mut self, spare: usize, given: bool) {
+        let par = self.parallel();
+        let (n, s) = (self.updates, self.opts.subdivisions as u64);
+        let prev = (n > 0).then(|| &self.pos_bufs[self.buf_of_slot[((n - 1) % s) as usize]]);
+        let cur = &self.pos_bufs[spare];
+        let (face_n, vf) = (&self.face_n, &self.loc.vf);
+        let nb = &mut self.nrm_bufs[spare];
+        let pass_c = |(c, (fa, nb)): (usize, (&mut [i8], &mut [[f32; 3]]))| {
+            let base = c * CHUNK;
+            for (i, (out, nb)) in fa.iter_mut().zip(nb).enumerate() {
+                let v = base + i;
+                let nrm = if given {
+                    *nb
+                } else {
+                    let n = vf.normal(v, face_n);
+                    *nb = n;
+                    n
+                };
+                *out = match prev {
+                    Some(pr) => facing(nrm, cur[v], pr[v]),
+                    None => NEUTRAL,
+                };
+            }
+        };
+        if par {
+            self.facing
+                .par_chunks_mut(CHUNK)
+                .zip(nb.par_chunks_mut(CHUNK))
+                .enumerate()
+                .for_each(pass_c);
+        } else {
+            self.facing
+                .chunks_mut(CHUNK)
+                .zip(nb.chunks_mut(CHUNK))
+                .enumerate()
+                .for_each(pass_c);
+        }
+    }
+
+    /// Pass D: each face's silhouette edge, state, ring element in row `slot` (and the birth
+    /// element in the previous row).
+    fn step_faces(&mut self, slot: usize) {
+        let s = self.opts.subdivisions as usize;
+        let nf = self.faces.len();
+        let par = self.parallel();
+        let (row, prev_row): (&mut [u8], &mut [u8]) = if s == 1 {
+            (&mut self.ring[..], &mut self.scratch_row)
+        } else {
+            let pslot = (slot + s - 1) % s;
+            let (lo_slot, hi_slot) = (slot.min(pslot), slot.max(pslot));
+            let (a, b) = self.ring.split_at_mut(hi_slot * nf);
+            let (lo_row, hi_row) = (&mut a[lo_slot * nf..(lo_slot + 1) * nf], &mut b[..nf]);
+            if slot > pslot {
+                (hi_row, lo_row)
+            } else {
+                (lo_row, hi_row)
+            }
+        };
+        let (facing_v, faces, mask) = (&self.facing, &self.loc.ifaces, self.mask.as_deref());
+        let h = self.opts.hysteresis;
+        let n = self.updates as u32;
+        type Rows<'a> = (((&'a mut [u8], &'a mut [Hot]), &'a mut [u8]), &'a mut [u8]);
+        let pass_d = |(c, (((fades, hots), row), prow)): (usize, Rows<'_>)| {
+            let base = c * CHUNK;
+            for i in 0..fades.len() {
+                let f = base + i;
+                let on = mask.is_none_or(|m| m[f]);
+                let code = if on {
+                    face_edge(facing_v, &faces[f])
+                } else {
+                    NO_EDGE
+                };
+                if code == NO_EDGE && fades[i] as usize >= s {
+                    continue; // no strip and no edge: nothing changes
+                }
+                let step = Step { code, s, h, n };
+                step.apply(&mut fades[i], &mut hots[i], &mut row[i], &mut prow[i]);
+            }
+        };
+        if par {
+            self.fade
+                .par_chunks_mut(CHUNK)
+                .zip(self.hot.par_chunks_mut(CHUNK))
+                .zip(row.par_chunks_mut(CHUNK))
+                .zip(prev_row.par_chunks_mut(CHUNK))
+                .enumerate()
+                .for_each(pass_d);
+        } else {
+            self.fade
+                .chunks_mut(CHUNK)
+                .zip(self.hot.chunks_mut(CHUNK))
+                .zip(row.chunks_mut(CHUNK))
+                .zip(prev_row.chunks_mut(CHUNK))
+                .enumerate()
+                .for_each(pass_d);
+        }
     }
 }
 
