@@ -98,16 +98,7 @@ fn rotation(w: [f64; 3], beta: f64, c: [f64; 3], t: [f64; 3]) -> Keyframe {
 /// those of [`motion_volume`].
 pub fn spin_volume(mesh: &Mesh, spin: &Spin, opts: &VolumeOptions) -> Result<MotionVolume> {
     check_options(mesh, opts)?;
-    check_vector(spin.axis, "axis")?;
-    check_vector(spin.center, "center")?;
-    check_vector(spin.translation, "translation")?;
-    if !spin.angle.is_finite() {
-        return Err(Error::value("angle", "is NaN or inf"));
-    }
-    let w = normalize(spin.axis);
-    if w == [0.0; 3] {
-        return Err(Error::value("axis", "is zero; a spin needs an axis"));
-    }
+    let w = checked_axis(spin)?;
     let sweep = spin.angle.abs().min(TAU);
     let n = match spin.segments {
         Some(s) => {
@@ -116,21 +107,7 @@ pub fn spin_volume(mesh: &Mesh, spin: &Spin, opts: &VolumeOptions) -> Result<Mot
         }
         None => ((sweep / (std::f64::consts::PI / 12.0)).ceil() as usize).max(1),
     };
-    let sign = if spin.angle < 0.0 { -1.0 } else { 1.0 };
-    let start = spin.angle - sign * sweep;
-    let t = spin.translation;
-    let frames: Vec<Keyframe> = (0..=n)
-        .map(|i| {
-            let u = i as f64 / n as f64;
-            rotation(
-                w,
-                start + sign * sweep * u,
-                spin.center,
-                [t[0] * u, t[1] * u, t[2] * u],
-            )
-        })
-        .collect();
-    let path = Path::from_frames(&frames)?;
+    let path = Path::from_frames(&spin_frames(spin, w, sweep, n))?;
     if sweep == 0.0 {
         // No spin: the paper's motion volume of the translation (the mesh itself if none).
         return motion_volume(mesh, &path, opts);
@@ -143,54 +120,9 @@ pub fn spin_volume(mesh: &Mesh, spin: &Spin, opts: &VolumeOptions) -> Result<Mot
         .collect();
     let (rmax, bins) = polar_occupancy(mesh, &facing_axis, spin.center, w);
     let dr = rmax / RADII as f64;
-    let a_bin: Vec<f64> = bins
-        .iter()
-        .map(|&(theta, arcs)| {
-            if theta >= TAU * (1.0 - 0.5 / ANGLES as f64) {
-                1.0
-            } else if arcs == 0 {
-                0.0
-            } else {
-                // Where the swept sectors overlap (k = B phi / 2 pi layers on average), the
-                // layer alpha is chosen so that k layers composite to k times the linear one.
-                let linear = theta / (theta + arcs as f64 * sweep);
-                let k = (arcs as f64 * sweep / TAU).max(1.0);
-                1.0 - (1.0 - (k * linear).min(1.0)).powf(1.0 / k)
-            }
-        })
-        .collect();
-    // Seen from the side the sectors are edge-on and the object's own faces carry the image:
-    // with a camera, alpha moves linearly to opaque as the view turns from 60 degrees off the
-    // axis to side-on (`f = min(1, 2 |cos|)` of the angle between view and axis).
-    let along_view = opts.camera.map_or(1.0, |eye| {
-        let d = normalize([
-            spin.center[0] - eye[0],
-            spin.center[1] - eye[1],
-            spin.center[2] - eye[2],
-        ]);
-        (2.0 * dot(d, w).abs()).min(1.0)
-    });
-    let axis_alpha = |p: &[f64; 3]| -> f64 {
-        if dr <= 0.0 {
-            return 1.0;
-        }
-        let d = [
-            p[0] - spin.center[0],
-            p[1] - spin.center[1],
-            p[2] - spin.center[2],
-        ];
-        let along = dot(d, w);
-        let r = (dot(d, d) - along * along).max(0.0).sqrt();
-        // Linear between bin centres; next to an empty bin (a rim) take the covered one.
-        let g = (r / dr - 0.5).clamp(0.0, (RADII - 1) as f64);
-        let k = (g.floor() as usize).min(RADII - 2);
-        let (a0, a1) = (a_bin[k], a_bin[k + 1]);
-        let (a0, a1) = (
-            if a0 > 0.0 { a0 } else { a1 },
-            if a1 > 0.0 { a1 } else { a0 },
-        );
-        a0 + (a1 - a0) * (g - k as f64)
-    };
+    let a_bin = bin_alphas(&bins, sweep);
+    let along_view = view_factor(opts, spin.center, w);
+    let axis_alpha = |p: &[f64; 3]| radial_alpha(p, spin.center, w, dr, &a_bin);
     // A coarse mesh (a box blade) is cut so that alphas can follow theta(r) ~ 1 / r.
     let parts = subdivision_for_edge(mesh, &path, rmax / 12.0);
     let sub = (parts > 1)
@@ -230,6 +162,92 @@ pub fn spin_volume(mesh: &Mesh, spin: &Spin, opts: &VolumeOptions) -> Result<Mot
     };
     let alpha = AlphaMode::PerVertex(per_vertex, weights);
     assemble(sweep, false, &alpha, opts, None)
+}
+
+/// The spin's unit axis, every input checked first (errors name `axis`, `center`,
+/// `translation` or `angle`).
+fn checked_axis(spin: &Spin) -> Result<[f64; 3]> {
+    check_vector(spin.axis, "axis")?;
+    check_vector(spin.center, "center")?;
+    check_vector(spin.translation, "translation")?;
+    if !spin.angle.is_finite() {
+        return Err(Error::value("angle", "is NaN or inf"));
+    }
+    let w = normalize(spin.axis);
+    if w == [0.0; 3] {
+        return Err(Error::value("axis", "is zero; a spin needs an axis"));
+    }
+    Ok(w)
+}
+
+/// `n + 1` keyframes of the spin about unit axis `w`: the last `sweep` radians of the turn
+/// (at most a full turn), ending at `spin.angle`, with the translation in proportion.
+fn spin_frames(spin: &Spin, w: [f64; 3], sweep: f64, n: usize) -> Vec<Keyframe> {
+    let sign = if spin.angle < 0.0 { -1.0 } else { 1.0 };
+    let start = spin.angle - sign * sweep;
+    let t = spin.translation;
+    (0..=n)
+        .map(|i| {
+            let u = i as f64 / n as f64;
+            rotation(
+                w,
+                start + sign * sweep * u,
+                spin.center,
+                [t[0] * u, t[1] * u, t[2] * u],
+            )
+        })
+        .collect()
+}
+
+/// Each radial bin's layer alpha from its `(theta, arcs)` occupancy (`polar_occupancy`) under a
+/// turn of `sweep` radians: 1 for a full ring, 0 for an empty bin, else the coverage of the
+/// sectors, with overlapping sectors (k = B phi / 2 pi layers on average) given the alpha at
+/// which k layers composite to k times the linear one.
+fn bin_alphas(bins: &[(f64, usize)], sweep: f64) -> Vec<f64> {
+    bins.iter()
+        .map(|&(theta, arcs)| {
+            if theta >= TAU * (1.0 - 0.5 / ANGLES as f64) {
+                1.0
+            } else if arcs == 0 {
+                0.0
+            } else {
+                let linear = theta / (theta + arcs as f64 * sweep);
+                let k = (arcs as f64 * sweep / TAU).max(1.0);
+                1.0 - (1.0 - (k * linear).min(1.0)).powf(1.0 / k)
+            }
+        })
+        .collect()
+}
+
+/// How much of the sectors' transparency shows: seen from the side the sectors are edge-on and
+/// the object's own faces carry the image, so with a camera the factor falls linearly to 0
+/// (opaque) as the view turns from 60 degrees off the axis `w` to side-on (`min(1, 2 |cos|)`
+/// of the angle between view and axis); 1 without a camera.
+fn view_factor(opts: &VolumeOptions, center: [f64; 3], w: [f64; 3]) -> f64 {
+    opts.camera.map_or(1.0, |eye| {
+        let d = normalize([center[0] - eye[0], center[1] - eye[1], center[2] - eye[2]]);
+        (2.0 * dot(d, w).abs()).min(1.0)
+    })
+}
+
+/// The layer alpha at point `p` from the bins' alphas by its distance from the axis (`w`
+/// through `center`; bins `dr` wide): linear between bin centres, and next to an empty bin
+/// (a rim) the covered one's. 1 when the bins have no width.
+fn radial_alpha(p: &[f64; 3], center: [f64; 3], w: [f64; 3], dr: f64, a_bin: &[f64]) -> f64 {
+    if dr <= 0.0 {
+        return 1.0;
+    }
+    let d = [p[0] - center[0], p[1] - center[1], p[2] - center[2]];
+    let along = dot(d, w);
+    let r = (dot(d, d) - along * along).max(0.0).sqrt();
+    let g = (r / dr - 0.5).clamp(0.0, (RADII - 1) as f64);
+    let k = (g.floor() as usize).min(RADII - 2);
+    let (a0, a1) = (a_bin[k], a_bin[k + 1]);
+    let (a0, a1) = (
+        if a0 > 0.0 { a0 } else { a1 },
+        if a1 > 0.0 { a1 } else { a0 },
+    );
+    a0 + (a1 - a0) * (g - k as f64)
 }
 
 /// Front (`true`) per face: its raw normal has `n . (w x (centroid - c)) >= 0`.
