@@ -147,20 +147,8 @@ fn finite3(p: &[f64; 3]) -> bool {
 /// Checks the input; errors name the argument.
 pub fn validate(input: &Input) -> Result<()> {
     check_size(input.width, input.height, input.samples)?;
-    let t = input.times;
-    if t.len() < 2 {
-        return Err(Error::shape(
-            "times",
-            "needs at least 2 boundaries (0 and 1)",
-        ));
-    }
-    if t[0] != 0.0 || t[t.len() - 1] != 1.0 {
-        return Err(Error::value("times", "must start at 0 and end at 1"));
-    }
-    if t.windows(2).any(|w| !(w[1] > w[0])) {
-        return Err(Error::value("times", "must be strictly increasing"));
-    }
-    let k1 = t.len();
+    validate_times(input.times)?;
+    let k1 = input.times.len();
     let nvp = input.view_projections.len();
     if nvp != 1 && nvp != k1 {
         return Err(Error::shape(
@@ -190,81 +178,109 @@ pub fn validate(input: &Input) -> Result<()> {
         return Err(Error::value("ambient", "must be finite and >= 0"));
     }
     for d in input.draws {
-        let n = d.positions.len();
-        if n == 0 || n % k1 != 0 {
-            return Err(Error::shape(
-                "positions",
-                format!("expected (K+1)*V = {k1}*V points, got {n}"),
-            ));
-        }
-        let nv = n / k1;
-        if !d.positions.iter().all(finite3) {
-            return Err(Error::value("positions", "must be finite"));
-        }
-        if d.positions.iter().flatten().any(|x| x.abs() > 1e15) {
-            return Err(Error::value(
-                "positions",
-                "must lie within 1e15 of the origin",
-            ));
-        }
-        if d.faces.iter().flatten().any(|&i| i as usize >= nv) {
-            return Err(Error::value(
-                "faces",
-                format!("indices must be below the {nv} vertices"),
-            ));
-        }
-        if d.rgba.len() != 1 && d.rgba.len() != nv {
-            return Err(Error::shape(
-                "rgba",
-                format!("expected 1 or {nv} colours, got {}", d.rgba.len()),
-            ));
-        }
-        if d.rgba
-            .iter()
-            .any(|c| !c.iter().all(|x| x.is_finite()) || c[..3].iter().any(|x| *x < 0.0))
-            || d.rgba.iter().any(|c| !(0.0..=1.0).contains(&c[3]))
-        {
-            return Err(Error::value(
-                "rgba",
-                "colours must be finite and >= 0, alpha in [0, 1]",
-            ));
-        }
-        if let Some(nm) = d.normals {
-            if nm.len() != n {
-                return Err(Error::shape(
-                    "normals",
-                    format!("expected {n} normals (one per position), got {}", nm.len()),
-                ));
-            }
-            if !nm.iter().flatten().all(|x| x.is_finite()) {
-                return Err(Error::value("normals", "must be finite"));
-            }
-        }
+        validate_draw(d, k1)?;
     }
     if input.tile_budget == 0 {
         return Err(Error::value("tile_budget", "must be at least 1 byte"));
     }
     validate_exposure(input)?;
     if let Some(b) = &input.backdrop {
-        let ws = (input.width * input.samples) as usize;
-        let hs = (input.height * input.samples) as usize;
-        if (b.width, b.height) != (ws, hs) {
+        validate_backdrop(b, input)?;
+    }
+    Ok(())
+}
+
+/// The segment boundaries: at least two, from 0 to 1, strictly increasing.
+fn validate_times(t: &[f64]) -> Result<()> {
+    if t.len() < 2 {
+        return Err(Error::shape(
+            "times",
+            "needs at least 2 boundaries (0 and 1)",
+        ));
+    }
+    if t[0] != 0.0 || t[t.len() - 1] != 1.0 {
+        return Err(Error::value("times", "must start at 0 and end at 1"));
+    }
+    if t.windows(2).any(|w| !(w[1] > w[0])) {
+        return Err(Error::value("times", "must be strictly increasing"));
+    }
+    Ok(())
+}
+
+/// One draw's positions (`k1` boundaries of V vertices each), faces, colours and normals.
+fn validate_draw(d: &MovingDraw, k1: usize) -> Result<()> {
+    let n = d.positions.len();
+    if n == 0 || n % k1 != 0 {
+        return Err(Error::shape(
+            "positions",
+            format!("expected (K+1)*V = {k1}*V points, got {n}"),
+        ));
+    }
+    let nv = n / k1;
+    if !d.positions.iter().all(finite3) {
+        return Err(Error::value("positions", "must be finite"));
+    }
+    if d.positions.iter().flatten().any(|x| x.abs() > 1e15) {
+        return Err(Error::value(
+            "positions",
+            "must lie within 1e15 of the origin",
+        ));
+    }
+    if d.faces.iter().flatten().any(|&i| i as usize >= nv) {
+        return Err(Error::value(
+            "faces",
+            format!("indices must be below the {nv} vertices"),
+        ));
+    }
+    if d.rgba.len() != 1 && d.rgba.len() != nv {
+        return Err(Error::shape(
+            "rgba",
+            format!("expected 1 or {nv} colours, got {}", d.rgba.len()),
+        ));
+    }
+    if d.rgba
+        .iter()
+        .any(|c| !c.iter().all(|x| x.is_finite()) || c[..3].iter().any(|x| *x < 0.0))
+        || d.rgba.iter().any(|c| !(0.0..=1.0).contains(&c[3]))
+    {
+        return Err(Error::value(
+            "rgba",
+            "colours must be finite and >= 0, alpha in [0, 1]",
+        ));
+    }
+    if let Some(nm) = d.normals {
+        if nm.len() != n {
             return Err(Error::shape(
-                "backdrop",
-                format!(
-                    "expected one entry per sample ({hs}x{ws}), got {}x{}",
-                    b.height, b.width
-                ),
+                "normals",
+                format!("expected {n} normals (one per position), got {}", nm.len()),
             ));
         }
-        b.check_lengths("backdrop")?;
-        if b.depth.iter().any(|z| z.is_nan() || *z <= 0.0) || !b.rgba.iter().all(|x| x.is_finite())
-        {
-            return Err(Error::value(
-                "backdrop",
-                "depth must be > 0 (inf where empty) and colours finite",
-            ));
+        if !nm.iter().flatten().all(|x| x.is_finite()) {
+            return Err(Error::value("normals", "must be finite"));
         }
+    }
+    Ok(())
+}
+
+/// The backdrop: one entry per sample of the `input`'s image, depths > 0, colours finite.
+fn validate_backdrop(b: &Layer, input: &Input) -> Result<()> {
+    let ws = (input.width * input.samples) as usize;
+    let hs = (input.height * input.samples) as usize;
+    if (b.width, b.height) != (ws, hs) {
+        return Err(Error::shape(
+            "backdrop",
+            format!(
+                "expected one entry per sample ({hs}x{ws}), got {}x{}",
+                b.height, b.width
+            ),
+        ));
+    }
+    b.check_lengths("backdrop")?;
+    if b.depth.iter().any(|z| z.is_nan() || *z <= 0.0) || !b.rgba.iter().all(|x| x.is_finite()) {
+        return Err(Error::value(
+            "backdrop",
+            "depth must be > 0 (inf where empty) and colours finite",
+        ));
     }
     Ok(())
 }
