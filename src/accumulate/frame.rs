@@ -201,38 +201,12 @@ pub fn accumulate_still(
     background: Layer<'_>,
     opaque: bool,
 ) -> Result<Option<Accumulated>> {
-    samples.check()?;
+    check_still(camera, &samples, &background)?;
     let (iw, ih) = (camera.width, camera.height);
-    if (background.width, background.height) != (iw, ih) {
-        return Err(Error::shape(
-            "background",
-            "one entry per sample of the image expected",
-        ));
-    }
-    background.check_lengths("background")?;
-    if camera.aa == 0 {
-        return Err(Error::value("aa", "must be >= 1"));
-    }
     let rects = sample_rects(painter, camera, samples.times);
-    let mut found = rects.iter().flatten();
-    let Some(first) = found.next() else {
+    let Some(win) = union_window(&rects, camera) else {
         return Ok(None);
     };
-    let mut win = found.fold(*first, |a, r| {
-        [
-            a[0].min(r[0]),
-            a[1].min(r[1]),
-            a[2].max(r[2]),
-            a[3].max(r[3]),
-        ]
-    });
-    let aa = camera.aa;
-    win = [
-        win[0] / aa * aa,
-        win[1] / aa * aa,
-        iw.min(win[2].div_ceil(aa) * aa),
-        ih.min(win[3].div_ceil(aa) * aa),
-    ];
     let (ww, wh) = (win[2] - win[0], win[3] - win[1]);
     // The window's sum, the static layer's crop and the reference sample's depth and ids, and
     // a sample's layer (the rasterizer checks its own frame), before any is allocated.
@@ -315,6 +289,45 @@ pub fn accumulate_still(
         window: win,
         draw_calls,
     }))
+}
+
+/// The checks of [`accumulate_still`]'s inputs (errors name `times`/`weights`, `background`
+/// or `aa`).
+fn check_still(camera: &StillCamera, samples: &Samples<'_>, background: &Layer<'_>) -> Result<()> {
+    samples.check()?;
+    if (background.width, background.height) != (camera.width, camera.height) {
+        return Err(Error::shape(
+            "background",
+            "one entry per sample of the image expected",
+        ));
+    }
+    background.check_lengths("background")?;
+    if camera.aa == 0 {
+        return Err(Error::value("aa", "must be >= 1"));
+    }
+    Ok(())
+}
+
+/// The union of the samples' drawn rectangles `[x0, y0, x1, y1]` (sample units), grown to
+/// whole pixels of `camera.aa` samples and clamped to the image; `None` when no sample drew.
+fn union_window(rects: &[Option<[usize; 4]>], camera: &StillCamera) -> Option<[usize; 4]> {
+    let mut found = rects.iter().flatten();
+    let first = *found.next()?;
+    let win = found.fold(first, |a, r| {
+        [
+            a[0].min(r[0]),
+            a[1].min(r[1]),
+            a[2].max(r[2]),
+            a[3].max(r[3]),
+        ]
+    });
+    let aa = camera.aa;
+    Some([
+        win[0] / aa * aa,
+        win[1] / aa * aa,
+        camera.width.min(win[2].div_ceil(aa) * aa),
+        camera.height.min(win[3].div_ceil(aa) * aa),
+    ])
 }
 
 /// The moving-camera frame (see the module doc): the painter's objects at every sample, seen
