@@ -157,42 +157,16 @@ def rasterize_motion(
     """
     t = as_array(times, "times", np.float64, (None,))
     vps, w, h = _view_projections(cameras, len(t))
-    draws = list(draws)
-    for i, d in enumerate(draws):
-        if not isinstance(d, MovingDraw):
-            raise TypeError(f"draws: item {i} is a {type(d).__name__}, not a motionblur.MovingDraw")
-        if d.positions.shape[0] != len(t):
-            raise ValueError(
-                f"draws: item {i} has {d.positions.shape[0]} boundaries of positions, times has {len(t)}"
-            )
+    draws = _checked_draws(draws, len(t))
     samples = as_int(samples, "samples")
     if isinstance(gauss, str):
         if gauss != "auto":
             raise ValueError(f"gauss: expected 'auto' or 1 to 4, got {gauss!r}")
     else:
         gauss = as_int(gauss, "gauss")  # its range is the core's to check
-    light_args = []
-    for i, li in enumerate(lights):
-        try:
-            d, k = li
-        except (TypeError, ValueError):
-            raise TypeError(f"lights: item {i} must be a pair (direction, intensity)") from None
-        dv = as_array(d, "lights", np.float64, (3,))
-        kv = np.asarray(k, dtype=np.float64)
-        kv = as_array(np.broadcast_to(kv, (3,)) if kv.ndim == 0 else kv, "lights", np.float64, (3,))
-        light_args.append((tuple(map(float, dv)), tuple(map(float, kv))))
-    amb = np.asarray(ambient, dtype=np.float64)
-    amb = as_array(np.broadcast_to(amb, (3,)) if amb.ndim == 0 else amb, "ambient", np.float64, (3,))
-    bd = None
-    if background is not None:
-        try:
-            rgba, depth, ids = background
-        except (TypeError, ValueError):
-            raise TypeError("background: expected a triple (rgba, depth, ids)") from None
-        c = np.ascontiguousarray
-        bd = SimpleNamespace(
-            rgba=c(rgba, dtype=np.float32), depth=c(depth, dtype=np.float32), ids=c(ids, dtype=np.int32)
-        )
+    light_args = _light_args(lights)
+    amb = _rgb(ambient, "ambient")
+    bd = None if background is None else _background_arg(background)
     if not isinstance(shade, (bool, np.bool_)):
         raise TypeError(f"shade: expected a bool, got {type(shade).__name__}")
     if exposure is not None:
@@ -224,6 +198,50 @@ def rasterize_motion(
     if planes is not None:
         frame.stats["exposure"] = dict(zip(("fraction", "first", "last"), planes))
     return frame
+
+
+def _checked_draws(draws, boundaries: int) -> list:
+    """``draws`` as a list, each a `MovingDraw` with positions at ``boundaries`` boundaries."""
+    draws = list(draws)
+    for i, d in enumerate(draws):
+        if not isinstance(d, MovingDraw):
+            raise TypeError(f"draws: item {i} is a {type(d).__name__}, not a motionblur.MovingDraw")
+        if d.positions.shape[0] != boundaries:
+            raise ValueError(
+                f"draws: item {i} has {d.positions.shape[0]} boundaries of positions, times has {boundaries}"
+            )
+    return draws
+
+
+def _rgb(value, name: str) -> np.ndarray:
+    """A float or 3 floats as (3,) float64 (errors name ``name``)."""
+    v = np.asarray(value, dtype=np.float64)
+    return as_array(np.broadcast_to(v, (3,)) if v.ndim == 0 else v, name, np.float64, (3,))
+
+
+def _light_args(lights) -> list[tuple[tuple[float, ...], tuple[float, ...]]]:
+    """The core's lights: each pair (direction (3,), intensity float or (3,)) as two 3-tuples."""
+    out = []
+    for i, li in enumerate(lights):
+        try:
+            d, k = li
+        except (TypeError, ValueError):
+            raise TypeError(f"lights: item {i} must be a pair (direction, intensity)") from None
+        dv = as_array(d, "lights", np.float64, (3,))
+        out.append((tuple(map(float, dv)), tuple(map(float, _rgb(k, "lights")))))
+    return out
+
+
+def _background_arg(background) -> SimpleNamespace:
+    """The core's backdrop from the triple (rgba, depth, ids), each contiguous in its dtype."""
+    try:
+        rgba, depth, ids = background
+    except (TypeError, ValueError):
+        raise TypeError("background: expected a triple (rgba, depth, ids)") from None
+    c = np.ascontiguousarray
+    return SimpleNamespace(
+        rgba=c(rgba, dtype=np.float32), depth=c(depth, dtype=np.float32), ids=c(ids, dtype=np.int32)
+    )
 
 
 def coverage(cameras, draws: Sequence[MovingDraw], times, samples: int = 1, shutter="box") -> np.ndarray:
