@@ -575,7 +575,7 @@ MAX_HYSTERESIS: int
 @final
 class _BlurShell:
     """Rust blur shell (see motionblur.BlurShell). faces i64 (F,3); mask bool (F,) | None; color
-    f32 (1,3) | (V,3) | None (white)."""
+    f32 (1,4) | (V,4) RGBA (the alpha scales the strips') | None (white, alpha 1)."""
 
     def __new__(
         cls,

@@ -164,6 +164,22 @@ class ShellMesh:
         )
 
 
+def _rgba_rows(color) -> np.ndarray:
+    """``color`` (3,), (4,), (N,3) or (N,4) as (1,4) or (N,4) float32 RGBA (alpha 1 for RGB);
+    RGB >= 0 and alpha in [0, 1] (errors name ``color``)."""
+    c = np.asarray(color)
+    width = c.shape[-1] if c.ndim in (1, 2) and c.shape[-1] in (3, 4) else 3
+    shape = (width,) if c.ndim == 1 else (None, width)
+    c = as_array(c, "color", np.float32, shape).reshape(-1, width)
+    if (c < 0).any():
+        raise ValueError("color: must be >= 0")
+    if width == 3:
+        return np.concatenate([c, np.ones((len(c), 1), np.float32)], axis=1)
+    if (c[:, 3] > 1).any():
+        raise ValueError("color: alpha must be in [0, 1]")
+    return np.ascontiguousarray(c)
+
+
 class BlurShell:
     """The stateful blur shell of one mesh (Jones and Keyser, section 3); rules in the module docs.
 
@@ -176,8 +192,10 @@ class BlurShell:
             after losing its edge.
         initial_alpha: float in (0, 1]: alpha of the base pair.
         mask: optional (F,) bool: False polygons never get a strip (selective blurring).
-        color: optional RGB, (3,) for every strip (speed lines) or (V,3) per mesh vertex (e.g.
-            the mesh's own colours); default white. Linear, >= 0.
+        color: optional RGB or RGBA, (3,)/(4,) for every strip (speed lines) or (V,3)/(V,4) per
+            mesh vertex (e.g. the mesh's own colours); default white. Linear, >= 0; an alpha, in
+            [0, 1], scales the strip's own (a translucent object's trail is as translucent as the
+            object); RGB is alpha 1.
         n_vertices: optional int V; default: the length of the first ``update``'s vertices.
 
     ``update(vertices, normals=None)`` feeds world positions (V,3) at one update;
@@ -214,16 +232,7 @@ class BlurShell:
                 raise ValueError(f"mask: expected shape ({nf},), got {m.shape}")
             mask = np.ascontiguousarray(m)
         self._mask = mask
-        if color is not None:
-            c = np.asarray(color)
-            if c.ndim == 1:
-                c = as_array(c, "color", np.float32, (3,))[None, :]
-            else:
-                c = as_array(c, "color", np.float32, (None, 3))
-            if (c < 0).any():
-                raise ValueError("color: must be >= 0")
-            color = c
-        self._color = color
+        self._color = None if color is None else _rgba_rows(color)
         self._core = None
         self._lock = threading.Lock()
         if n_vertices is not None:
@@ -233,7 +242,7 @@ class BlurShell:
         if self._faces.max() >= nv:
             raise ValueError(f"faces: indices must be < the vertex count {nv}, got {self._faces.max()}")
         if self._color is not None and len(self._color) not in (1, nv):
-            raise ValueError(f"color: expected (3,) or ({nv},3), got {self._color.shape}")
+            raise ValueError(f"color: expected one colour or {nv} (one per vertex), got {len(self._color)}")
         options = {
             "subdivisions": self.subdivisions,
             "hysteresis": self.hysteresis,

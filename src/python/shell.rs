@@ -173,21 +173,21 @@ impl PyBlurShell {
         let f = self::faces(&faces, n_vertices)?;
         let mask = mask.map(|m| m.as_array().to_vec());
         let color = match color {
-            None => ShellColor::Uniform([1.0; 3]),
+            None => ShellColor::Uniform([1.0; 4]),
             Some(c) => {
                 let view = c.as_array();
-                if view.ncols() != 3 {
+                if view.ncols() != 4 {
                     let shape = view.shape().to_vec();
                     return Err(Error::shape(
                         "color",
-                        format!("expected (3,) or (V,3), got {shape:?}"),
+                        format!("expected (1,4) or (V,4) RGBA, got {shape:?}"),
                     )
                     .into());
                 }
-                let rows: Vec<[f32; 3]> = view
+                let rows: Vec<[f32; 4]> = view
                     .rows()
                     .into_iter()
-                    .map(|r| [r[0], r[1], r[2]])
+                    .map(|r| [r[0], r[1], r[2], r[3]])
                     .collect();
                 if rows.len() == 1 {
                     ShellColor::Uniform(rows[0])

@@ -39,13 +39,15 @@ impl Default for ShellOptions {
     }
 }
 
-/// The shell's colour: one RGB for every strip, or the RGB of each mesh vertex.
+/// The shell's colour: one RGBA for every strip, or the RGBA of each mesh vertex. The alpha
+/// (in [0, 1]) scales the strip's own (`initial_alpha` fading along the strip): a translucent
+/// object's trail is as translucent as the object.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ShellColor {
-    /// One RGB for every strip.
-    Uniform([f32; 3]),
-    /// One RGB per mesh vertex.
-    PerVertex(Vec<[f32; 3]>),
+    /// One RGBA for every strip.
+    Uniform([f32; 4]),
+    /// One RGBA per mesh vertex.
+    PerVertex(Vec<[f32; 4]>),
 }
 
 /// Per-polygon state as reported by [`BlurShell::state`].
@@ -194,19 +196,28 @@ impl BlurShell {
                 ));
             }
         }
-        let bad_rgb = |c: &[f32; 3]| c.iter().any(|x| !x.is_finite() || *x < 0.0);
+        let bad_rgba = |c: &[f32; 4]| c.iter().any(|x| !x.is_finite() || *x < 0.0) || c[3] > 1.0;
         match &color {
-            ShellColor::Uniform(c) if bad_rgb(c) => {
-                return Err(Error::value("color", "must be finite and >= 0"));
+            ShellColor::Uniform(c) if bad_rgba(c) => {
+                return Err(Error::value(
+                    "color",
+                    "must be finite and >= 0, alpha in [0, 1]",
+                ));
             }
             ShellColor::PerVertex(v) if v.len() != n_vertices => {
                 return Err(Error::shape(
                     "color",
-                    format!("expected (3,) or ({n_vertices},3), got {} rows", v.len()),
+                    format!(
+                        "expected one colour or {n_vertices} (one per vertex), got {}",
+                        v.len()
+                    ),
                 ));
             }
-            ShellColor::PerVertex(v) if v.iter().any(bad_rgb) => {
-                return Err(Error::value("color", "must be finite and >= 0"));
+            ShellColor::PerVertex(v) if v.iter().any(bad_rgba) => {
+                return Err(Error::value(
+                    "color",
+                    "must be finite and >= 0, alpha in [0, 1]",
+                ));
             }
             _ => {}
         }

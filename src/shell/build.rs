@@ -254,11 +254,11 @@ impl BlurShell {
                         }
                         _ => units[side],
                     };
-                    let rgb = match &self.color {
+                    let c = match &self.color {
                         ShellColor::Uniform(c) => *c,
                         ShellColor::PerVertex(c) => c[vtx],
                     };
-                    o.rgba[w] = [rgb[0], rgb[1], rgb[2], alpha];
+                    o.rgba[w] = [c[0], c[1], c[2], alpha * c[3]];
                     o.face[w] = J::from(f as u32);
                     o.step[w] = K::from(j as u8);
                 }

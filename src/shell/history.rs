@@ -177,7 +177,7 @@ mod tests {
             hysteresis: 1,
             initial_alpha: 1.0,
         };
-        BlurShell::new(faces, 4, opts, None, ShellColor::Uniform([1.0; 3])).unwrap()
+        BlurShell::new(faces, 4, opts, None, ShellColor::Uniform([1.0; 4])).unwrap()
     }
 
     fn tetra(x: f64) -> Vec<[f64; 3]> {
@@ -222,7 +222,7 @@ mod tests {
             3,
             ShellOptions::default(),
             None,
-            ShellColor::Uniform([1.0; 3]),
+            ShellColor::Uniform([1.0; 4]),
         )
         .unwrap();
         assert!(other.restore(&h).is_err());

@@ -23,7 +23,7 @@ fn shell(f: &[[u32; 3]], nv: usize, s: u32, h: u32) -> BlurShell {
         nv,
         opts,
         None,
-        ShellColor::Uniform([1.0, 0.5, 0.25]),
+        ShellColor::Uniform([1.0, 0.5, 0.25, 1.0]),
     )
     .unwrap()
 }
@@ -217,7 +217,7 @@ fn mask_removes_exactly_the_masked_strips() {
         v.len(),
         opts,
         None,
-        ShellColor::Uniform([1.0; 3]),
+        ShellColor::Uniform([1.0; 4]),
     )
     .unwrap();
     let mut b = BlurShell::new(
@@ -225,7 +225,7 @@ fn mask_removes_exactly_the_masked_strips() {
         v.len(),
         opts,
         Some(mask.clone()),
-        ShellColor::Uniform([1.0; 3]),
+        ShellColor::Uniform([1.0; 4]),
     )
     .unwrap();
     for i in 0..6 {
@@ -293,7 +293,7 @@ fn bad_input_names_the_argument() {
         hysteresis: 0,
         initial_alpha: a,
     };
-    let c = ShellColor::Uniform([1.0; 3]);
+    let c = ShellColor::Uniform([1.0; 4]);
     let new = |opts, mask, color| BlurShell::new(f.clone(), v.len(), opts, mask, color);
     assert!(new(o(0, 1.0), None, c.clone())
         .unwrap_err()
@@ -308,7 +308,7 @@ fn bad_input_names_the_argument() {
         .unwrap_err()
         .to_string()
         .starts_with("mask"));
-    let e = new(o(3, 1.0), None, ShellColor::Uniform([-1.0, 0.0, 0.0])).unwrap_err();
+    let e = new(o(3, 1.0), None, ShellColor::Uniform([-1.0, 0.0, 0.0, 1.0])).unwrap_err();
     assert!(e.to_string().starts_with("color"));
     let e = BlurShell::new(vec![[0, 1, 99]], 3, o(3, 1.0), None, c).unwrap_err();
     assert!(e.to_string().starts_with("faces"));
@@ -385,4 +385,61 @@ fn paired_unit_normals_equal_normalize_bit_for_bit() {
             assert_eq!(g.map(f32::to_bits), one(n).map(f32::to_bits), "{n:?}");
         }
     }
+}
+
+#[test]
+fn a_colour_alpha_scales_every_strip_alpha_and_keeps_the_geometry() {
+    // A translucent object's trail: the colour's alpha multiplies the strip's own alpha (the
+    // fraction of the shutter a point is covered), per mesh vertex; alpha 1 is the plain shell.
+    let (v, f) = sphere(10, 20);
+    let opts = ShellOptions {
+        subdivisions: 5,
+        hysteresis: 1,
+        initial_alpha: 0.8,
+    };
+    let per_vertex: Vec<[f32; 4]> = (0..v.len())
+        .map(|i| [0.5, 0.5, 0.5, (i % 7) as f32 / 6.0])
+        .collect();
+    let colours = [
+        ShellColor::Uniform([0.5, 0.5, 0.5, 1.0]),
+        ShellColor::Uniform([0.5, 0.5, 0.5, 0.3]),
+        ShellColor::PerVertex(per_vertex.clone()),
+    ];
+    let built: Vec<ShellMesh> = colours
+        .into_iter()
+        .map(|c| {
+            let mut sh = BlurShell::new(f.clone(), v.len(), opts, None, c).unwrap();
+            for i in 0..6 {
+                sh.update(&moved(&v, [0.08 * i as f64, 0.02 * i as f64, 0.0]), None)
+                    .unwrap();
+            }
+            sh.build(None, None).unwrap()
+        })
+        .collect();
+    let (plain, third, each) = (&built[0], &built[1], &built[2]);
+    assert!(!plain.faces.is_empty());
+    for m in [third, each] {
+        assert_eq!(m.faces, plain.faces);
+        assert_eq!(m.vertices, plain.vertices);
+        assert_eq!(m.step, plain.step);
+    }
+    for (w, p) in plain.rgba.iter().enumerate() {
+        assert_eq!(third.rgba[w][3], p[3] * 0.3);
+        // The strip vertex's mesh vertex: the base pair is on the mesh, so its alpha is one of
+        // the per-vertex alphas times the strip's; every vertex of a strip pair keeps its own.
+        let a = each.rgba[w][3];
+        assert!(
+            per_vertex.iter().any(|c| a == p[3] * c[3]),
+            "{a} is not the strip alpha {} times a vertex alpha",
+            p[3]
+        );
+    }
+    let e = BlurShell::new(
+        f.clone(),
+        v.len(),
+        opts,
+        None,
+        ShellColor::Uniform([1.0, 1.0, 1.0, 1.5]),
+    );
+    assert!(e.unwrap_err().to_string().starts_with("color"));
 }

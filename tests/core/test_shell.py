@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import pickle
 import subprocess
 import sys
 import textwrap
@@ -255,6 +256,37 @@ def test_shell_colour_overrides_and_per_vertex_colours():
     m = shell.build()
     corner = [f[fi][list(f[fi]).index(v)] for fi, v in zip(m.face, _mesh_vertex(m, f, shell))]
     np.testing.assert_array_equal(m.rgba[:, :3], per[corner].astype(np.float32))
+
+
+def test_an_rgba_colours_alpha_scales_each_strips_alpha():
+    """The colour's alpha multiplies the strip's own (a translucent object's trail), per mesh
+    vertex; the geometry and RGB stay those of the RGB colour, and alpha 1 is the RGB shell."""
+    pos, f = arm(5)
+    alphas = np.random.default_rng(3).random(len(pos[0]))
+    rgb = np.full((len(pos[0]), 3), 0.5)
+    shells = {
+        "rgb": mb.BlurShell(f, subdivisions=4, color=(0.5, 0.5, 0.5)),
+        "one": mb.BlurShell(f, subdivisions=4, color=(0.5, 0.5, 0.5, 1.0)),
+        "quarter": mb.BlurShell(f, subdivisions=4, color=(0.5, 0.5, 0.5, 0.25)),
+        "each": mb.BlurShell(f, subdivisions=4, color=np.column_stack([rgb, alphas])),
+    }
+    for p in pos:
+        for shell in shells.values():
+            shell.update(p)
+    m = {k: sh.build() for k, sh in shells.items()}
+    plain = m["rgb"]
+    assert len(plain.faces) and (plain.rgba[:, 3] > 0).any()
+    for k in ("one", "quarter", "each"):
+        np.testing.assert_array_equal(m[k].vertices, plain.vertices)
+        np.testing.assert_array_equal(m[k].rgba[:, :3], plain.rgba[:, :3])
+    np.testing.assert_array_equal(m["one"].rgba, plain.rgba)
+    np.testing.assert_array_equal(m["quarter"].rgba[:, 3], plain.rgba[:, 3] * np.float32(0.25))
+    corner = [f[fi][list(f[fi]).index(v)] for fi, v in zip(plain.face, _mesh_vertex(plain, f, shells["rgb"]))]
+    np.testing.assert_array_equal(m["each"].rgba[:, 3], plain.rgba[:, 3] * alphas[corner].astype(np.float32))
+    copy = pickle.loads(pickle.dumps(shells["quarter"]))
+    np.testing.assert_array_equal(copy.build().rgba, m["quarter"].rgba)
+    with pytest.raises(ValueError, match="^color"):
+        mb.BlurShell(f, color=(1.0, 1.0, 1.0, 1.5))
 
 
 def _mesh_vertex(m, f, shell):

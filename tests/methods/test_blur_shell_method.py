@@ -88,6 +88,32 @@ def test_exact_and_nearest_blends_and_speed_line_colour():
     assert (red.rgba[trail][:, 1] <= 1e-6).all()  # green: the arm's colour is gone from the trail
 
 
+def test_a_translucent_objects_trails_carry_its_alpha():
+    """Off the sharp mesh the frame is the nearest shell surface alone, whose alpha is the
+    covered fraction times the object's: an object of alpha 0.4 leaves trails 0.4x as opaque as
+    the same object opaque (float32 products: 1e-6). Before, they were as opaque, and a
+    translucent object's blur shell had up to three times the exact frame's alpha mass."""
+    base = mb.SCENES["curved"](width=W, height=H).with_(background=(0.0, 0.0, 0.0, 0.0))
+
+    def with_alpha(a):
+        objs = [
+            mb.Object(
+                o.mesh, (*np.asarray(o.color)[:3], a if o.is_moving else 1.0), o.shading, o.motion, o.name
+            )
+            for o in base.objects
+        ]
+        return base.with_(objects=objs)
+
+    opaque, clear = (mb.render(with_alpha(a), "blur_shell", error_estimate=False) for a in (1.0, 0.4))
+    still = sharp(with_alpha(1.0), opaque.stats["t"])
+    trail = (still.coverage == 0) & (opaque.coverage > 0.01)
+    assert trail.sum() > 50
+    np.testing.assert_allclose(clear.coverage[trail], 0.4 * opaque.coverage[trail], rtol=1e-5, atol=1e-6)
+    exact = mb.exact(with_alpha(0.4))
+    off = abs(clear.coverage.sum() - exact.coverage.sum()) / exact.coverage.sum()
+    assert off <= 1.0, off  # the method's stated alpha-mass bound
+
+
 def test_shell_times_follow_the_shutter_filter():
     scene = mb.SCENES["bending_arm"](width=W, height=H)
     np.testing.assert_allclose(shell_times(scene, 4), [0.0, 0.25, 0.5, 0.75, 1.0])

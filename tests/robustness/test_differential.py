@@ -13,7 +13,11 @@ than no blur must come with a :class:`motionblur.PoorBlurWarning`. ``auto`` must
 its tolerance on every scene (and meets it on at least 95%: the README's measured table). ``make test`` runs a few examples (profile ``ci``), ``make fuzz`` many.
 
 The bounds were read off the tuning seeds 0..29 at 64x48 (the worst seen, rounded up), except
-the motion volume's: tuning showed 0.75 and 3% of alpha mass, but measuring seeds found 1.6x the
+the blur shell's alpha mass and the motion volume's bounds. The blur shell draws the object
+opaque at mid-shutter with its two trails, so where the motion is much longer than the object
+it adds about a quarter of the swept area beyond it: measuring seed 1,025,577 found +63% (with a
+translucent object, whose trails then ignored its alpha), and tuning seeds 0..299 show up to
++95% with the trails fixed, so its mass bound is 100%. The motion volume's: tuning showed 0.75 and 3% of alpha mass, but measuring seeds found 1.6x the
 unblurred frame's error under the paper's ramp shutter (with its PoorBlurWarning) and +22% mass
 on a concave gear under camera motion (the convex outline), so it keeps the issue's general
 bound. The README lists them beside each method.
@@ -25,7 +29,7 @@ import warnings
 
 import numpy as np
 import pytest
-from hypothesis import given
+from hypothesis import example, given
 from hypothesis import strategies as st
 
 import motionblur as mb
@@ -41,7 +45,7 @@ BOUNDS = {
     "velocity": (1.3, 0.3),
     "opaque_image": (1.3, 0.3),
     "camera_velocity": (1.0, 0.1),
-    "blur_shell": (2.0, 0.6),
+    "blur_shell": (2.0, 1.0),
     "motion_volume": (2.0, 0.6),
 }
 #: A frame this many times farther from the exact one than the unblurred frame must come with a
@@ -61,6 +65,7 @@ def test_every_registered_method_has_a_bound():
 
 
 @given(seed=st.integers(MEASURING_SEEDS.start, MEASURING_SEEDS.stop - 1))
+@example(seed=1_025_577)  # a translucent cylinder's blur shell: trails as opaque as an opaque one's
 def test_every_method_against_the_exact_integral_on_random_scenes(seed):
     scene = random_scene(seed, W, H)
     exact = mb.exact(scene).rgba.astype(np.float64)

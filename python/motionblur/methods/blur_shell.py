@@ -52,20 +52,29 @@ __all__ = ["blur_shell", "shell_times", "apparent_vertices"]
 
 @contextmanager
 def _shell_for(
-    mesh, nv: int, s: int, h: int, a: float, rgb: np.ndarray, side: str = "past"
+    mesh, nv: int, s: int, h: int, a: float, rgba: np.ndarray, side: str = "past"
 ) -> Iterator[BlurShell]:
-    key = (id(mesh), nv, s, h, a, rgb.shape, rgb.tobytes(), side)
+    key = (id(mesh), nv, s, h, a, rgba.shape, rgba.tobytes(), side)
     kept = current_renderer().shells
     hit = kept.take(key)
     if hit is not None and hit[0] is mesh:
         shell = hit[1]
         shell.reset()
     else:  # none kept, or another thread's render has it now
-        shell = BlurShell(mesh.faces, s, h, a, color=rgb, n_vertices=nv)
+        shell = BlurShell(mesh.faces, s, h, a, color=rgba, n_vertices=nv)
     try:
         yield shell
     finally:
         kept.put(key, (mesh, shell))
+
+
+def _shell_rgba(obj: Object, color: np.ndarray | None) -> np.ndarray:
+    """(1,4) or (V,4) float32: the shell colour of ``obj``, ``color`` (3,) or the object's own
+    RGB, with the object's alpha: a strip's alpha is the fraction of the shutter a point is
+    covered, times the object's, so a translucent object's trail is as translucent as it."""
+    a = obj.rgba
+    rgb = a[..., :3] if color is None else np.broadcast_to(color, a[..., :3].shape)
+    return np.ascontiguousarray(np.concatenate([rgb, a[..., 3:]], axis=-1).reshape(-1, 4), np.float32)
 
 
 def _applies(scene: Scene) -> bool:
@@ -136,8 +145,8 @@ def blur_shell(
 
     Options: ``subdivisions`` S in 1..``_core.MAX_SUBDIVISIONS`` (strips of S quads, the motion sampled at S + 1
     times); ``hysteresis`` updates a polygon keeps its strip after losing its silhouette edge;
-    ``initial_alpha`` in (0, 1] the alpha at the mesh; ``color`` RGB (3,) for every shell
-    (speed lines), default each object's own colour; ``blend``: ``"nearest"`` (default) draws
+    ``initial_alpha`` in (0, 1] the alpha at the mesh (times the object's own alpha); ``color``
+    RGB (3,) for every shell (speed lines), default each object's own colour; ``blend``: ``"nearest"`` (default) draws
     the shells into a buffer of their own with depth testing, so each sample takes the nearest
     shell surface's colour and alpha, then composites that buffer over the sharp meshes by depth
     (the paper's section 3.4 proposal, which stops the front and back sheets of a shell and
@@ -149,11 +158,9 @@ def blur_shell(
     open to ``t_m`` (the paper's trail into the past) and one fed them from shutter close back to
     ``t_m`` (the same construction run backwards: a trail into the future), each starting at
     ``initial_alpha / 2``, the shutter's weight on its side. A trail's ramp is the coverage of a
-    point a long object left at that time; drawn from shutter close with one trail from alpha 1
-    (False: the paper's frame, the object opaque at its last place) it over-covers every motion
-    longer than the object, and on the deforming scenes it measured worse than the sharp frame
-    at mid-shutter (RMSE against 256-sample accumulation, bending arm 0.089 against 0.064,
-    deforming propeller 0.124 against 0.077; centred: 0.057 and 0.058). Returns a Frame;
+    point a long object left at that time; ``centred=False`` is the paper's frame, the object
+    opaque at its last place with one trail from ``initial_alpha``, which over-covers every
+    motion longer than the object. Returns a Frame;
     ``stats`` has ``shells``, ``shell_triangles``, ``ms_shell`` (shell updates and builds) and
     ``t`` (the time of the sharp meshes).
     """
@@ -186,12 +193,12 @@ def blur_shell(
         draws.append((obj, Draw(current, obj.mesh.faces, obj.rgba, object_id=k)))
         if not moving:
             continue
-        rgb = np.ascontiguousarray(color if color is not None else obj.rgba[..., :3], np.float32)
+        rgba = _shell_rgba(obj, color)
         for side, times, alpha in sides:
             if times[0] == times[-1]:
                 continue  # no time on this side of the frame
             t0 = time.perf_counter()
-            with _shell_for(obj.mesh, len(current), s_side, h, alpha, rgb, side) as shell:
+            with _shell_for(obj.mesh, len(current), s_side, h, alpha, rgba, side) as shell:
                 for t in times[:-1]:
                     shell.update(apparent_vertices(scene, obj, float(t), tr))
                 mesh = shell.build(current)
