@@ -17,7 +17,7 @@ from ..analytic import MovingDraw, rasterize_motion
 from ..ground_truth import _renders_exposure
 from ..raster import Frame
 from ..render import register
-from ..scene import Object, Scene
+from ..scene import Camera, Object, Scene
 from ._layers import static_layer, supersampled
 from ._segments import MAX_SEGMENTS, MIN_PIECE, NORMAL_TOLERANCE, segment_times
 
@@ -108,8 +108,41 @@ def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
     return pos
 
 
-def _draw(scene: Scene, obj: Object, k: int, times: np.ndarray) -> MovingDraw:
+#: Sub-sample bits of the rasterizer's fixed-point screen coordinates (src/raster/coverage.rs).
+_SUBPIXEL = 256.0
+
+
+def on_sample_grid(points: np.ndarray, camera: Camera, aa: int) -> np.ndarray:
+    """(V,3) float64 world points moved, at their clip depth, onto the rasterizer's fixed-point
+    screen grid (1/256 of a sample of ``camera`` at ``aa`` samples a pixel side), where the
+    rasterizer snaps them: a still surface's edges then fall where accumulation's do, so no
+    sample within that snap of an edge is inside for one and outside for the other (a whole
+    pixel's difference that no number of time samples removes). Points behind the camera or
+    outside the rasterizer's range are left as they are."""
+    vp = np.asarray(camera.view_projection, np.float64)
+    h = points @ vp[:3, :3].T + vp[:3, 3]
+    w = points @ vp[3, :3] + vp[3, 3]
+    ws, hs = float(camera.width * aa), float(camera.height * aa)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = (h[:, 0] / w + 1.0) * 0.5 * ws
+        y = (1.0 - h[:, 1] / w) * 0.5 * hs
+    ok = (w > 0) & (np.abs(x) < 2.0**15) & (np.abs(y) < 2.0**15)
+    clip = np.stack([(_snap(x) / ws * 2.0 - 1.0) * w, (1.0 - _snap(y) / hs * 2.0) * w, h[:, 2], w], axis=1)
+    back = clip[ok] @ np.linalg.inv(vp).T
+    out = points.copy()
+    out[ok] = back[:, :3] / back[:, 3:4]
+    return out
+
+
+def _snap(v: np.ndarray) -> np.ndarray:
+    """Samples to the nearest 1/256 of a sample, halves away from zero (Rust's ``f64::round``)."""
+    return np.copysign(np.floor(np.abs(v) * _SUBPIXEL + 0.5), v) / _SUBPIXEL
+
+
+def _draw(scene: Scene, obj: Object, k: int, times: np.ndarray, aa: int = 1) -> MovingDraw:
     pos = straddled(scene, obj, times)
+    if not obj.is_moving and not scene.camera_moves:  # still on screen: the rasterizer's edges
+        pos[:] = on_sample_grid(pos[0], scene.camera, aa)
     normals = None
     if obj.shading == "lambert" and not (obj.motion is not None and obj.motion.is_deforming):
         n0 = obj.mesh.vertex_normals()
@@ -223,7 +256,7 @@ def _analytic(
         parts = np.maximum(1, np.ceil(np.diff(times) / longest - 1e-9)).astype(int)
         pieces = [a + (b - a) * np.arange(k) / k for a, b, k in zip(times[:-1], times[1:], parts)]
         times = np.append(np.concatenate(pieces), 1.0)
-    draws = [_draw(scene, o, k, times) for k, o in moving]
+    draws = [_draw(scene, o, k, times, aa) for k, o in moving]
     cams = [scene.camera_at(t) for t in times] if scene.camera_moves else scene.camera
     background = None
     if static is not None:
