@@ -49,13 +49,19 @@ ROLLING_METHODS = frozenset({"analytic", "accumulation", "auto"})
 #: Estimates under this RMSE are below what the pilot can tell apart (the exact reference's own
 #: distance from the limit is of the order of 1e-5): a PoorBlurWarning needs an estimate above it.
 POOR_BLUR_FLOOR = 1e-5
+#: A frame whose alpha mass its pilot puts this share or more away from the exact frame's
+#: (``stats["alpha_mass_estimate"]``: +0.5 is half as much coverage again) comes with a
+#: PoorBlurWarning: its coverage, not only its colour, is wrong.
+POOR_MASS = 0.5
 
 
 class PoorBlurWarning(UserWarning):
     """The frame's error estimate is larger than the unblurred frame's (the sharp frame at
     mid-shutter, measured by the same pilot): on this scene the method blurs worse than not
-    blurring at all. ``accumulation`` and ``analytic`` (or ``auto``) give the exact integral's
-    approximation that converges."""
+    blurring at all; or its pilot puts the frame's alpha mass `POOR_MASS` or more away from the
+    exact frame's (a method that over- or under-covers: a motion volume filling a knot's holes).
+    ``accumulation`` and ``analytic`` (or ``auto``) give the exact integral's approximation
+    that converges."""
 
 
 class MethodNotApplicableWarning(UserWarning):
@@ -200,20 +206,35 @@ def render(
     frame.stats["ms"] = (time.perf_counter() - t0) * 1e3
     if error_estimate and "error_estimate" not in frame.stats and ESTIMATOR:
         frame.stats.update(ESTIMATOR[0](scene, method, options, blurred))
-        est = frame.stats.get("error_estimate", 0.0)
-        if est > max(frame.stats.get("unblurred_estimate", float("inf")), POOR_BLUR_FLOOR):
-            warnings.warn(
-                f"method {method!r}: estimated RMSE {frame.stats['error_estimate']:.3g} against the exact "
-                f"integral is above the unblurred frame's {frame.stats['unblurred_estimate']:.3g} on this "
-                "scene (its blur is worse than none); 'accumulation', 'analytic' or 'auto' converge to it",
-                PoorBlurWarning,
-                stacklevel=2,
-            )
+        _warn_if_poor(method, frame.stats)
     if lens is not None and "error_estimate" in frame.stats:
         frame.stats["error_estimate_how"] += " (of the motion blur before the lens)"
     if outputs:
         _add_outputs(frame, scene, method, outputs, output_times)
     return frame
+
+
+def _warn_if_poor(method: str, stats: dict) -> None:
+    """A PoorBlurWarning when the frame's estimates say its blur is worse than none or its alpha
+    mass is `POOR_MASS` off the exact frame's."""
+    converge = "'accumulation', 'analytic' or 'auto' converge to it"
+    est = stats.get("error_estimate", 0.0)
+    if est > max(stats.get("unblurred_estimate", float("inf")), POOR_BLUR_FLOOR):
+        warnings.warn(
+            f"method {method!r}: estimated RMSE {est:.3g} against the exact integral is above the "
+            f"unblurred frame's {stats['unblurred_estimate']:.3g} on this scene (its blur is worse "
+            f"than none); {converge}",
+            PoorBlurWarning,
+            stacklevel=3,
+        )
+    mass = stats.get("alpha_mass_estimate", 0.0)
+    if abs(mass) >= POOR_MASS:
+        warnings.warn(
+            f"method {method!r}: estimated alpha mass {mass:+.0%} off the exact integral's on this "
+            f"scene (it {'over' if mass > 0 else 'under'}-covers); {converge}",
+            PoorBlurWarning,
+            stacklevel=3,
+        )
 
 
 def _add_outputs(frame: Frame, scene: Scene, method: str, names, times) -> None:

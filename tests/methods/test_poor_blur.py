@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import motionblur as mb
+from motionblur.render import POOR_MASS
 
 
 def _rmse(a, b) -> float:
@@ -40,3 +41,26 @@ def test_no_estimate_no_pilot_no_warning():
         warnings.simplefilter("error", mb.PoorBlurWarning)
         frame = mb.render(scene, "blur_shell", error_estimate=False)
     assert "error_estimate" not in frame.stats
+
+
+def test_a_frame_that_over_covers_says_so_even_below_no_blurs_error():
+    """Tuning seed 126 at 64x48: a short object on a long path, whose blur shell (opaque at
+    mid-shutter, trails from half its alpha) has 1.94x the exact frame's alpha mass while its
+    RMSE is under the unblurred frame's: the pilot's alpha-mass estimate (at this size of the
+    frame itself) warns, naming the mass, and not the error."""
+    from motionblur.evaluation.random_scenes import random_scene
+
+    scene = random_scene(126, 64, 48)
+    exact = mb.exact(scene).rgba
+    sharp = mb.render(scene, "accumulation", samples=1, error_estimate=False).rgba
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        frame = mb.render(scene, "blur_shell")
+    said = [str(w.message) for w in caught if issubclass(w.category, mb.PoorBlurWarning)]
+    assert len(said) == 1 and "alpha mass" in said[0], said
+    assert _rmse(frame.rgba, exact) < _rmse(sharp, exact)  # the error alone would not warn
+    off = frame.rgba[..., 3].sum() / exact[..., 3].sum() - 1.0
+    assert off >= POOR_MASS
+    # the pilot's reference is accumulation at the pilot's size (its own estimate under a
+    # quarter of the pilot's RMSE), not mb.exact: 0.006 apart here
+    assert abs(frame.stats["alpha_mass_estimate"] - off) < 0.02

@@ -292,9 +292,10 @@ def pilot_errors(
     size: tuple[int, int] | None = None,
     per_pixel: bool = False,
 ) -> dict:
-    """The pilot at about ``pixels`` pixels: ``{"rmse", "unblurred", "scale", "size"}``, the
-    RMSE of ``method`` and of the sharp mid-shutter frame against the pilot's reference (see
-    `REFERENCE_SAMPLES`) at that size, ``scale`` the pilot's width over the frame's; with
+    """The pilot at about ``pixels`` pixels: ``{"rmse", "unblurred", "mass", "scale", "size"}``,
+    the RMSE of ``method`` and of the sharp mid-shutter frame against the pilot's reference (see
+    `REFERENCE_SAMPLES`) at that size, ``mass`` the method's alpha mass over the reference's less
+    1 (`alpha_mass_error`), ``scale`` the pilot's width over the frame's; with
     ``per_pixel`` also ``"pixel_mse"`` (h,w) float64, the method's squared error per pixel (mean
     over RGBA; a study of where the error lies, not used by the estimate).
     ``rgba``: the analytic frame itself (H,W,4, over the background), when the pilot is the
@@ -313,6 +314,7 @@ def pilot_errors(
     out = {
         "rmse": _rmse(rgba, ref),
         "unblurred": _rmse(over_background(sharp, small.background).rgba, ref),
+        "mass": alpha_mass_error(rgba, ref),
         "scale": scale,
         "size": f"{small.camera.width}x{small.camera.height}",
     }
@@ -390,7 +392,17 @@ def _estimate_stats(est: float, how: str, pilot: dict, t0: float) -> dict:
         "error_estimate_how": how,
         "estimate_ms": (time.perf_counter() - t0) * 1e3,
         "unblurred_estimate": pilot["unblurred"],
+        "alpha_mass_estimate": pilot["mass"],
     }
+
+
+def alpha_mass_error(rgba: np.ndarray, ref: np.ndarray) -> float:
+    """The alpha mass of ``rgba`` (H,W,4) over that of ``ref`` (H,W,4), less 1 (+0.5: half as
+    much coverage again as the exact frame's), the reference's mass taken as at least 1% of the
+    pixels (so that a nearly empty frame does not divide by nearly 0)."""
+    exact = float(np.sum(ref[..., 3], dtype=np.float64))
+    ours = float(np.sum(rgba[..., 3], dtype=np.float64))
+    return (ours - exact) / max(exact, 0.01 * ref.shape[0] * ref.shape[1])
 
 
 def _rmse(a: np.ndarray, b: np.ndarray) -> float:
