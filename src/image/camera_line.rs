@@ -235,12 +235,12 @@ fn line_blur_masked(
     mask: Option<&mut [bool]>,
 ) -> (Vec<f32>, LineStats) {
     let mut stats = LineStats::default();
-    // every pixel's velocity and class, once
-    let mut classes = vec![0u8; w * h];
-    let mut v = vec![[0.0f32; 2]; w * h];
-    let flags = v
+    // every pixel's velocity and class, once (into the last call's buffers)
+    let mut bufs = FrameBuffers::take(w * h);
+    let flags = bufs
+        .v
         .par_chunks_mut(w)
-        .zip(classes.par_chunks_mut(w))
+        .zip(bufs.class.par_chunks_mut(w))
         .enumerate()
         .map(|(y, (v, c))| {
             field.row(y, v, c);
@@ -249,13 +249,13 @@ fn line_blur_masked(
         .reduce(|| (false, false), |a, b| (a.0 | b.0, a.1 | b.1));
     let (nan, vertical) = flags;
     stats.nan = nan;
+    let FrameBuffers { v, class, lines } = &mut bufs;
     let field_v = Field {
-        v,
-        class: classes,
+        v: std::mem::take(v),
+        class: std::mem::take(class),
         w,
         saved,
     };
-    let mut lines = vec![false; w * h];
     let out = super::filled(w * h * 4, |out| {
         let put = Out(out.as_mut_ptr(), lines.as_mut_ptr());
         for x_major in [true, false] {
@@ -285,9 +285,45 @@ fn line_blur_masked(
             .reduce(|| false, |a, b| a | b);
     });
     if let Some(m) = mask {
-        m.copy_from_slice(&lines);
+        m.copy_from_slice(lines);
     }
+    (bufs.v, bufs.class) = (field_v.v, field_v.class);
+    bufs.give_back();
     (out, stats)
+}
+
+/// [`line_blur`]'s frame-sized buffers: every pixel's velocity and class ([`Field`]) and the
+/// mask of the pixels blurred as a line integral. The last call's are kept for the next
+/// (taken by one call at a time; a call that finds none allocates): a frame's fresh buffers
+/// cost the kernel's zeroing of their pages on first touch, a few milliseconds at 1080p.
+#[derive(Default)]
+struct FrameBuffers {
+    v: Vec<[f32; 2]>,
+    class: Vec<u8>,
+    lines: Vec<bool>,
+}
+
+static FRAME_BUFFERS: std::sync::Mutex<Option<FrameBuffers>> = std::sync::Mutex::new(None);
+
+impl FrameBuffers {
+    /// Buffers for `n` pixels: `v` and `class` of any contents (each call writes every
+    /// pixel's, [`LineField::row`]), `lines` all false.
+    fn take(n: usize) -> Self {
+        let kept = FRAME_BUFFERS.lock().ok().and_then(|mut b| b.take());
+        let mut b = kept.unwrap_or_default();
+        b.v.resize(n, [0.0; 2]);
+        b.class.resize(n, 0);
+        b.lines.clear();
+        b.lines.resize(n, false);
+        b
+    }
+
+    /// Keeps the buffers for the next call.
+    fn give_back(self) {
+        if let Ok(mut b) = FRAME_BUFFERS.lock() {
+            *b = Some(self);
+        }
+    }
 }
 
 /// The curves of a strip: `(s, q)` of each minor row (module docs), about major coordinate `c`.
@@ -374,6 +410,19 @@ impl Curves {
         let d = u - self.c;
         k as f64 + d * (s + 0.5 * q * d)
     }
+
+    /// The labels of the curves at the strip's first and last of `n` minor rows, over its
+    /// major coordinates `span`: the lowest and the highest.
+    fn labels(&self, (m0, m1): (usize, usize), n: usize) -> (i64, i64) {
+        let (mut k_lo, mut k_hi) = (i64::MAX, i64::MIN);
+        let last = (n - 1) as i64;
+        for m in m0..m1 {
+            let u = m as f64;
+            k_lo = k_lo.min((-self.y(0, u)).floor() as i64);
+            k_hi = k_hi.max((last as f64 + (last as f64 - self.y(last, u))).ceil() as i64);
+        }
+        (k_lo, k_hi)
+    }
 }
 
 /// [`strip`] compiled for AVX2 (its four channels in one vector): the same operations, no
@@ -392,100 +441,21 @@ unsafe fn strip_avx(rgba: &[f32], axes: Axes, j: usize, field: &Field, out: Out)
 /// ([`worth_it`]); returns how many.
 #[inline(always)]
 fn strip(rgba: &[f32], axes: Axes, j: usize, field: &Field, out: Out) -> usize {
-    let w = axes.w;
     let width = strip_width(axes.major_len());
     let m0 = j * width;
-    let m1 = (m0 + width).min(axes.major_len());
-    let n = axes.minor_len();
-    let curves = Curves::new(axes, (m0, m1), field);
-    // the curves' labels at the strip's first and last minor rows, over its columns
-    let (mut k_lo, mut k_hi) = (i64::MAX, i64::MIN);
-    for m in m0..m1 {
-        let u = m as f64;
-        k_lo = k_lo.min((-curves.y(0, u)).floor() as i64);
-        let last = (n - 1) as i64;
-        k_hi = k_hi.max((last as f64 + (last as f64 - curves.y(last, u))).ceil() as i64);
-    }
+    let span = (m0, (m0 + width).min(axes.major_len()));
+    let curves = Curves::new(axes, span, field);
+    let (k_lo, k_hi) = curves.labels(span, axes.minor_len());
     // (the thread's buffers of the last strip, taken and given back: no allocation a strip)
     let mut scratch = SCRATCH.with(|s| s.take());
-    let Scratch {
-        next,
-        pixels,
-        fits,
-        lines,
-        params,
-        acc,
-        prev,
-        col,
-    } = &mut scratch;
-    next.clear();
-    next.resize(m1 - m0, 0);
+    scratch.next.clear();
+    scratch.next.resize(span.1 - span.0, 0);
     let mut count_lines = 0;
     let mut kb = k_lo - 1;
     loop {
         let last = kb + BAND as i64 > k_hi + 1;
-        pixels.clear();
-        let mut reach = 0.0f32;
-        for (m, start) in (m0..m1).zip(next.iter_mut()) {
-            let end = if last {
-                n
-            } else {
-                // (the ceiling, without a libm call)
-                let e = curves.y(kb + BAND as i64, m as f64);
-                let t = e as i64;
-                let e = if (t as f64) < e { t + 1 } else { t };
-                (e.max(*start as i64) as usize).min(n)
-            };
-            for r in *start..end {
-                let (x, y) = axes.xy(m, r);
-                if let Some(v) = field.line(x, y, axes.x_major) {
-                    let (a, b) = axes.split(v);
-                    reach = reach.max(a.abs());
-                    pixels.push((m, r, a, b));
-                }
-            }
-            *start = end;
-        }
-        let (k0, count) = (kb - 1, BAND + 3);
-        // (not even if every pixel fitted: no need to try them)
-        if worth_it(pixels.len(), count * sums_len(m1 - m0, reach), field.saved) {
-            params.clear();
-            params.extend((0..count).map(|l| curves.params(k0 + l as i64)));
-            // the pixels the curves fit
-            fits.clear();
-            let mut reach = 0.0f32;
-            let mut at = usize::MAX;
-            let mut l = 0;
-            for &(m, r, a, b) in pixels.iter() {
-                if m != at {
-                    col.at(&curves, params, k0, m as f64);
-                    (at, l) = (m, 0);
-                }
-                if let Some((l, f)) = fit(col, params, curves.c, r as f64, (a, b), &mut l) {
-                    reach = reach.max(a.abs());
-                    fits.push(Fit { m, r, l, f, a });
-                }
-            }
-            let len = sums_len(m1 - m0, reach);
-            let u_lo = m0 as i64 - (len - (m1 - m0)) as i64 / 2;
-            if worth_it(fits.len(), count * len, field.saved) {
-                build(
-                    rgba,
-                    axes,
-                    params,
-                    (curves.c, k0),
-                    (u_lo, len),
-                    (lines, acc, prev),
-                );
-                for p in fits.iter() {
-                    let v = value(lines, (count, u_lo, len), p);
-                    let (x, y) = axes.xy(p.m, p.r);
-                    // SAFETY: pixel (x, y) belongs to this band alone
-                    unsafe { out.put(y * w + x, v) };
-                }
-                count_lines += fits.len();
-            }
-        }
+        let band = Band { kb, last, span };
+        count_lines += band.blur(rgba, axes, &curves, field, out, &mut scratch);
         if last {
             break;
         }
@@ -495,11 +465,129 @@ fn strip(rgba: &[f32], axes: Axes, j: usize, field: &Field, out: Out) -> usize {
     count_lines
 }
 
+/// A band of a strip: the pixels between its curves `kb` and `kb + BAND` (to the strip's last
+/// minor row if `last`) over the strip's major coordinates `span`.
+#[derive(Clone, Copy)]
+struct Band {
+    kb: i64,
+    last: bool,
+    span: (usize, usize),
+}
+
+/// What [`Band::fits`] found: the band's pixels whose class is a line along the major axis,
+/// the longest of their velocities' major components, and that of the pixels the curves fit.
+#[derive(Default)]
+struct Found {
+    pixels: usize,
+    reach: f32,
+    fit_reach: f32,
+}
+
+impl Band {
+    /// Blurs the band's pixels its curves fit if that is cheaper than their taps (its
+    /// line pixels first, then those that fit; [`worth_it`]); returns how many.
+    #[inline(always)]
+    fn blur(
+        self,
+        rgba: &[f32],
+        axes: Axes,
+        curves: &Curves,
+        field: &Field,
+        out: Out,
+        s: &mut Scratch,
+    ) -> usize {
+        let (k0, count) = (self.kb - 1, BAND + 3);
+        let width = self.span.1 - self.span.0;
+        s.params.clear();
+        s.params
+            .extend((0..count).map(|l| curves.params(k0 + l as i64)));
+        let found = self.fits(axes, curves, field, s);
+        // (not even if every pixel fitted: the fits are not used)
+        if !worth_it(
+            found.pixels,
+            count * sums_len(width, found.reach),
+            field.saved,
+        ) {
+            return 0;
+        }
+        let len = sums_len(width, found.fit_reach);
+        let u_lo = self.span.0 as i64 - (len - width) as i64 / 2;
+        if !worth_it(s.fits.len(), count * len, field.saved) {
+            return 0;
+        }
+        build(
+            rgba,
+            axes,
+            &s.params,
+            (curves.c, k0),
+            (u_lo, len),
+            (&mut s.lines, &mut s.acc, &mut s.prev),
+        );
+        for p in s.fits.iter() {
+            let v = value(&s.lines, (count, u_lo, len), p);
+            let (x, y) = axes.xy(p.m as usize, p.r as usize);
+            // SAFETY: pixel (x, y) belongs to this band alone
+            unsafe { out.put(y * axes.w + x, v) };
+        }
+        s.fits.len()
+    }
+
+    /// Walks the band column by column (advancing `s.next`, each column's first minor row
+    /// not yet taken by a band): counts its line pixels and puts those the curves
+    /// `s.params` fit into `s.fits`.
+    #[inline(always)]
+    fn fits(self, axes: Axes, curves: &Curves, field: &Field, s: &mut Scratch) -> Found {
+        let Scratch {
+            next,
+            fits,
+            params,
+            col,
+            ..
+        } = s;
+        let n = axes.minor_len();
+        let k0 = self.kb - 1;
+        fits.clear();
+        let mut found = Found::default();
+        for (m, start) in (self.span.0..self.span.1).zip(next.iter_mut()) {
+            let end = if self.last {
+                n
+            } else {
+                // (the ceiling, without a libm call)
+                let e = curves.y(self.kb + BAND as i64, m as f64);
+                let t = e as i64;
+                let e = if (t as f64) < e { t + 1 } else { t };
+                (e.max(*start as i64) as usize).min(n)
+            };
+            // the curve at or below the column's last pixel; None until the column's
+            // curves are laid out (at its first line pixel)
+            let mut below: Option<usize> = None;
+            for r in *start..end {
+                let (x, y) = axes.xy(m, r);
+                let Some(v) = field.line(x, y, axes.x_major) else {
+                    continue;
+                };
+                let (a, b) = axes.split(v);
+                found.pixels += 1;
+                found.reach = found.reach.max(a.abs());
+                let l = below.get_or_insert_with(|| {
+                    col.at(curves, params, k0, m as f64);
+                    0
+                });
+                if let Some((l, f)) = fit(col, params, curves.c, r as f64, (a, b), l) {
+                    found.fit_reach = found.fit_reach.max(a.abs());
+                    fits.push(Fit::new(m, r, l, f, a));
+                }
+            }
+            *start = end;
+        }
+        found
+    }
+}
+
 /// The buffers of a strip, kept by each thread from one strip to the next.
 #[derive(Default)]
 struct Scratch {
     next: Vec<usize>,
-    pixels: Vec<(usize, usize, f32, f32)>,
     fits: Vec<Fit>,
     lines: Vec<[f32; 4]>,
     params: Vec<(f64, f64)>,
@@ -535,11 +623,25 @@ pub const SAMPLES_PER_PIXEL: f64 = 6.0;
 /// A pixel the band's curves fit: major and minor coordinates `m`, `r`, the curve `l` below it,
 /// its fraction `f` of the way to curve `l + 1`, its velocity's major component `a`.
 struct Fit {
-    m: usize,
-    r: usize,
-    l: usize,
-    f: f64,
+    m: u32,
+    r: u32,
+    l: u32,
     a: f32,
+    f: f64,
+}
+
+impl Fit {
+    /// (sides are at most 16384 pixels: the coordinates and curves fit in 32 bits)
+    #[inline(always)]
+    fn new(m: usize, r: usize, l: usize, f: f64, a: f32) -> Self {
+        Fit {
+            m: m as u32,
+            r: r as u32,
+            l: l as u32,
+            a,
+            f,
+        }
+    }
 }
 
 /// Samples curves `k0 .. k0 + count` at the integer major coordinates `u_lo .. u_lo + len`
@@ -582,22 +684,29 @@ fn build(
     acc.clear();
     acc.resize(count, [0.0f64; 4]);
     prev.clear();
-    prev.extend(params.iter().enumerate().map(|(l, &p)| at.sample(0, l, p)));
+    let first = at.column(0);
+    prev.extend(
+        params
+            .iter()
+            .enumerate()
+            .map(|(l, &p)| at.sample(first, l, p)),
+    );
     lines[..count].fill([0.0; 4]);
-    for i in 1..len {
-        for (l, &p) in params.iter().enumerate() {
-            let g = at.sample(i, l, p);
+    for (i, sums) in lines.chunks_exact_mut(count).enumerate().skip(1) {
+        let column = at.column(i);
+        let curves = params.iter().zip(acc.iter_mut().zip(prev.iter_mut()));
+        for (l, ((&p, (a, b)), out)) in curves.zip(sums.iter_mut()).enumerate() {
+            let g = at.sample(column, l, p);
             // (whole arrays in and out, no `map`, no call: one vector each)
-            let (a, b) = (acc[l], prev[l]);
             let sum = [
                 a[0] + 0.5 * (b[0] + g[0]),
                 a[1] + 0.5 * (b[1] + g[1]),
                 a[2] + 0.5 * (b[2] + g[2]),
                 a[3] + 0.5 * (b[3] + g[3]),
             ];
-            acc[l] = sum;
-            prev[l] = g;
-            lines[i * count + l] = [sum[0] as f32, sum[1] as f32, sum[2] as f32, sum[3] as f32];
+            *a = sum;
+            *b = g;
+            *out = [sum[0] as f32, sum[1] as f32, sum[2] as f32, sum[3] as f32];
         }
     }
 }
@@ -623,16 +732,35 @@ struct Sampler<'a> {
 }
 
 impl Sampler<'_> {
-    /// Sample `i` of curve `l` (parameters `(s, q)`): the image at major coordinate
-    /// `u_lo + i` (clamped), linearly interpolated across between the rows about the curve.
+    /// What the samples at major coordinate `u_lo + i` share: `u - c` and the offset of the
+    /// image's column `u` (clamped).
     #[inline(always)]
-    fn sample(&self, i: usize, l: usize, (s, q): (f64, f64)) -> [f64; 4] {
+    fn column(&self, i: usize) -> (f64, usize) {
         let u = self.u_lo + i as i64;
-        let d = u as f64 - self.c;
-        let m = u.clamp(0, self.mlen - 1) as usize * self.sm;
-        let y = ((self.k0 + l as i64) as f64 + d * (s + 0.5 * q * d)).clamp(0.0, self.nmax);
-        let r0 = y as usize; // (y >= 0: the floor)
+        (
+            u as f64 - self.c,
+            u.clamp(0, self.mlen - 1) as usize * self.sm,
+        )
+    }
+
+    /// Sample `i` of curve `l` (parameters `(s, q)`, `(d, m)` from [`Sampler::column`] of
+    /// `i`): the image at major coordinate `u_lo + i` (clamped), linearly interpolated across
+    /// between the rows about the curve.
+    #[inline(always)]
+    fn sample(&self, (d, m): (f64, usize), l: usize, (s, q): (f64, f64)) -> [f64; 4] {
+        let y = (self.k0 + l as i64) as f64 + d * (s + 0.5 * q * d);
+        // (`clamp` to [0, nmax] without its check of the bounds: not NaN, params are finite)
+        let y = if y < 0.0 {
+            0.0
+        } else if y > self.nmax {
+            self.nmax
+        } else {
+            y
+        };
+        // (y >= 0: the floor; through i64, a cheaper conversion than to usize's)
+        let r0 = y as i64;
         let f = (y - r0 as f64) as f32;
+        let r0 = r0 as usize;
         let r1 = (r0 + 1).min(self.nlen - 1);
         let (t0, t1) = ((m + r0 * self.sn) * 4, (m + r1 * self.sn) * 4);
         let (a, b) = (&self.rgba[t0..t0 + 4], &self.rgba[t1..t1 + 4]);
@@ -714,14 +842,16 @@ fn fit(
 /// entries a curve from major coordinate `u_lo`).
 #[inline(always)]
 fn value(lines: &[[f32; 4]], (count, u_lo, len): (usize, i64, usize), p: &Fit) -> [f32; 4] {
-    let (u, half) = (p.m as f64, 0.5 * (p.a as f64).abs());
+    let (u, half, l) = (p.m as f64, 0.5 * (p.a as f64).abs(), p.l as usize);
     let (lo, hi) = (u - half - u_lo as f64, u + half - u_lo as f64);
-    let (i0, i1) = (lo as usize, hi as usize);
+    // (lo > 0: the floors; through i64, cheaper conversions than usize's)
+    let (i0, i1) = (lo as i64, hi as i64);
     let (t0, t1) = (lo - i0 as f64, hi - i1 as f64);
-    debug_assert!(i1 + 1 < len);
+    let (i0, i1) = (i0 as usize, i1 as usize);
+    debug_assert!(lo > 0.0 && i1 + 1 < len);
     let (m0, m1) = (
-        span(lines, (p.l, count), (i0, t0), (i1, t1)),
-        span(lines, (p.l + 1, count), (i0, t0), (i1, t1)),
+        span(lines, (l, count), (i0, t0), (i1, t1)),
+        span(lines, (l + 1, count), (i0, t0), (i1, t1)),
     );
     let inv = 1.0 / (2.0 * half);
     let mut out = [0.0f32; 4];
