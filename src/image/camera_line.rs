@@ -692,7 +692,13 @@ fn build(
             .map(|(l, &p)| at.sample(first, l, p)),
     );
     lines[..count].fill([0.0; 4]);
+    // (a cache line holds 4 texels: one a row every 4 columns when the major axis is x, the
+    // next row's when it is y)
+    let (every, ahead) = if axes.x_major { (4, 8) } else { (1, 2) };
     for (i, sums) in lines.chunks_exact_mut(count).enumerate().skip(1) {
+        if i % every == 0 && i + ahead < len {
+            at.prefetch(i + ahead, params);
+        }
         let column = at.column(i);
         let curves = params.iter().zip(acc.iter_mut().zip(prev.iter_mut()));
         for (l, ((&p, (a, b)), out)) in curves.zip(sums.iter_mut()).enumerate() {
@@ -741,6 +747,32 @@ impl Sampler<'_> {
             u as f64 - self.c,
             u.clamp(0, self.mlen - 1) as usize * self.sm,
         )
+    }
+
+    /// Asks the cache for the texels the curves `params` read at major coordinate `u_lo + i`
+    /// (from the row under the first curve to the row over the last): the image's rows there
+    /// are read a few texels at a time, too many at once for the hardware's prefetcher to
+    /// follow (the samples were waiting on those loads).
+    #[inline(always)]
+    fn prefetch(&self, i: usize, params: &[(f64, f64)]) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let (d, m) = self.column(i);
+            let y = |l: usize| {
+                let (s, q) = params[l];
+                (self.k0 + l as i64) as f64 + d * (s + 0.5 * q * d)
+            };
+            let lo = (y(0) - 1.0).max(0.0).min(self.nmax) as usize;
+            let hi = (y(params.len() - 1) + 2.0).max(0.0).min(self.nmax) as usize;
+            // (along x, a row's cache line holds the texels of 4 minor coordinates)
+            let step = if self.sn == 1 { 4 } else { 1 };
+            for r in (lo..=hi + step - 1).step_by(step) {
+                let t = (m + r.min(self.nlen - 1) * self.sn) * 4;
+                let p = self.rgba[t..].as_ptr() as *const i8;
+                // SAFETY: a hint, `p` points into the image
+                unsafe { std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p) };
+            }
+        }
     }
 
     /// Sample `i` of curve `l` (parameters `(s, q)`, `(d, m)` from [`Sampler::column`] of
