@@ -109,14 +109,16 @@ pub(crate) struct LineStats {
     pub nan: bool,
 }
 
-/// How a pixel is blurred.
-#[derive(Clone, Copy, PartialEq, Eq)]
+/// How a pixel is blurred (the rule [`classify`] applies, kept as the tests' oracle).
+#[cfg(test)]
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
 enum Class {
     Taps,
     /// a line integral along x (true) or y (false) may do
     Line(bool),
 }
 
+#[cfg(test)]
 fn class([vx, vy]: [f32; 2], (w, h): (usize, usize)) -> Class {
     if !(vx.is_finite() && vy.is_finite()) {
         return Class::Taps;
@@ -132,22 +134,26 @@ fn class([vx, vy]: [f32; 2], (w, h): (usize, usize)) -> Class {
 
 /// Turns a row's `line` flags ([`LineField::row`]) into classes (0: taps, 1: a line along x
 /// may do, 2: along y) from its velocities `v`; returns whether a velocity is NaN and whether a
-/// class is 2.
-fn classify(c: &mut [u8], v: &[[f32; 2]], dims: (usize, usize)) -> (bool, bool) {
+/// class is 2. A pixel flagged 1 is a line when both components are finite and the longer's
+/// length is in `[MIN_STREAK, 2 (w + h)]` (a streak longer than twice the image's sides only
+/// adds clamped texels: the taps), along x when `|vx| >= |vy|`. (Without branches, so that
+/// the loop runs in vectors.)
+fn classify(c: &mut [u8], v: &[[f32; 2]], (w, h): (usize, usize)) -> (bool, bool) {
     let (mut nan, mut vertical) = (false, false);
-    for (c, &v) in c.iter_mut().zip(v) {
-        if *c == 0 {
-            continue;
-        }
-        nan |= v[0].is_nan() || v[1].is_nan();
-        *c = match (*c, class(v, dims)) {
-            (1, Class::Line(true)) => 1,
-            (1, Class::Line(false)) => {
-                vertical = true;
-                2
-            }
-            _ => 0,
-        };
+    let longest = 2.0 * (w + h) as f32;
+    for (c, &[vx, vy]) in c.iter_mut().zip(v) {
+        let flagged = *c != 0;
+        nan |= flagged & (vx.is_nan() | vy.is_nan());
+        let (ax, ay) = (vx.abs(), vy.abs());
+        let along_x = ax >= ay;
+        let major = if along_x { ax } else { ay };
+        // (a NaN or an infinity fails the length's bounds or the finite test)
+        let line = flagged
+            & (vx.is_finite() & vy.is_finite())
+            & (major >= MIN_STREAK)
+            & (major <= longest);
+        vertical |= line & !along_x;
+        *c = u8::from(line) * (2 - u8::from(along_x));
     }
     (nan, vertical)
 }
@@ -235,12 +241,12 @@ fn line_blur_masked(
     mask: Option<&mut [bool]>,
 ) -> (Vec<f32>, LineStats) {
     let mut stats = LineStats::default();
-    // every pixel's velocity and class, once (into the last call's buffers)
-    let mut bufs = FrameBuffers::take(w * h);
-    let flags = bufs
-        .v
+    // every pixel's velocity and class, once
+    let mut classes = vec![0u8; w * h];
+    let mut v = vec![[0.0f32; 2]; w * h];
+    let flags = v
         .par_chunks_mut(w)
-        .zip(bufs.class.par_chunks_mut(w))
+        .zip(classes.par_chunks_mut(w))
         .enumerate()
         .map(|(y, (v, c))| {
             field.row(y, v, c);
@@ -249,13 +255,13 @@ fn line_blur_masked(
         .reduce(|| (false, false), |a, b| (a.0 | b.0, a.1 | b.1));
     let (nan, vertical) = flags;
     stats.nan = nan;
-    let FrameBuffers { v, class, lines } = &mut bufs;
     let field_v = Field {
-        v: std::mem::take(v),
-        class: std::mem::take(class),
+        v,
+        class: classes,
         w,
         saved,
     };
+    let mut lines = vec![false; w * h];
     let out = super::filled(w * h * 4, |out| {
         let put = Out(out.as_mut_ptr(), lines.as_mut_ptr());
         for x_major in [true, false] {
@@ -285,45 +291,9 @@ fn line_blur_masked(
             .reduce(|| false, |a, b| a | b);
     });
     if let Some(m) = mask {
-        m.copy_from_slice(lines);
+        m.copy_from_slice(&lines);
     }
-    (bufs.v, bufs.class) = (field_v.v, field_v.class);
-    bufs.give_back();
     (out, stats)
-}
-
-/// [`line_blur`]'s frame-sized buffers: every pixel's velocity and class ([`Field`]) and the
-/// mask of the pixels blurred as a line integral. The last call's are kept for the next
-/// (taken by one call at a time; a call that finds none allocates): a frame's fresh buffers
-/// cost the kernel's zeroing of their pages on first touch, a few milliseconds at 1080p.
-#[derive(Default)]
-struct FrameBuffers {
-    v: Vec<[f32; 2]>,
-    class: Vec<u8>,
-    lines: Vec<bool>,
-}
-
-static FRAME_BUFFERS: std::sync::Mutex<Option<FrameBuffers>> = std::sync::Mutex::new(None);
-
-impl FrameBuffers {
-    /// Buffers for `n` pixels: `v` and `class` of any contents (each call writes every
-    /// pixel's, [`LineField::row`]), `lines` all false.
-    fn take(n: usize) -> Self {
-        let kept = FRAME_BUFFERS.lock().ok().and_then(|mut b| b.take());
-        let mut b = kept.unwrap_or_default();
-        b.v.resize(n, [0.0; 2]);
-        b.class.resize(n, 0);
-        b.lines.clear();
-        b.lines.resize(n, false);
-        b
-    }
-
-    /// Keeps the buffers for the next call.
-    fn give_back(self) {
-        if let Ok(mut b) = FRAME_BUFFERS.lock() {
-            *b = Some(self);
-        }
-    }
 }
 
 /// The curves of a strip: `(s, q)` of each minor row (module docs), about major coordinate `c`.
@@ -821,10 +791,11 @@ impl Column {
         let d = u - curves.c;
         self.ys.clear();
         self.slopes.clear();
-        for (l, &(s, q)) in params.iter().enumerate() {
-            self.ys.push((k0 + l as i64) as f64 + d * (s + 0.5 * q * d));
-            self.slopes.push(s + q * d);
-        }
+        // (two passes that run in vectors)
+        let ys = params.iter().enumerate();
+        self.ys
+            .extend(ys.map(|(l, &(s, q))| (k0 + l as i64) as f64 + d * (s + 0.5 * q * d)));
+        self.slopes.extend(params.iter().map(|&(s, q)| s + q * d));
     }
 }
 
@@ -1192,6 +1163,49 @@ mod tests {
         // all pixels may be lines: the bands are worth their curves
         let (_, mask) = run(&rgba, &vel, (w, h), &vec![false; w * h], SAMPLES_PER_PIXEL);
         assert!(mask.iter().filter(|m| **m).count() > w * h * 8 / 10);
+    }
+
+    #[test]
+    fn classify_applies_the_class_rule() {
+        // the rule's edges: NaN and infinite components, lengths about MIN_STREAK and the
+        // longest streak 2 (w + h), ties |vx| = |vy|, signed zeros; flags 0 and 1
+        let dims = (40, 30);
+        let longest = 2.0 * 70.0f32;
+        let edges = [
+            0.0f32,
+            -0.0,
+            1.0,
+            MIN_STREAK.next_down(),
+            MIN_STREAK,
+            -MIN_STREAK,
+            20.0,
+            -20.0,
+            longest,
+            longest.next_up(),
+            -longest,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        let v: Vec<[f32; 2]> = edges
+            .iter()
+            .flat_map(|&a| edges.iter().map(move |&b| [a, b]))
+            .collect();
+        for flag in [0u8, 1] {
+            let mut c = vec![flag; v.len()];
+            let (nan, vertical) = classify(&mut c, &v, dims);
+            let want: Vec<u8> = v
+                .iter()
+                .map(|&p| match (flag, class(p, dims)) {
+                    (1, Class::Line(true)) => 1,
+                    (1, Class::Line(false)) => 2,
+                    _ => 0,
+                })
+                .collect();
+            assert_eq!(c, want, "flag {flag}");
+            assert_eq!(nan, flag == 1, "flag {flag}");
+            assert_eq!(vertical, flag == 1, "flag {flag}");
+        }
     }
 
     #[test]
