@@ -92,6 +92,24 @@ struct Field {
 }
 
 impl Field {
+    /// Asks the cache for the velocities and classes of pixels `(x, rows)` (a column of a band
+    /// whose major axis is x: one row's cache line for each, the rows too many at once for
+    /// the hardware's prefetcher to follow).
+    #[inline(always)]
+    fn prefetch_column(&self, x: usize, rows: std::ops::Range<usize>) {
+        #[cfg(target_arch = "x86_64")]
+        for y in rows {
+            let i = y * self.w + x;
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            let (v, c) = (self.v[i..].as_ptr() as *const i8, self.class[i..].as_ptr());
+            // SAFETY: hints, both point into the buffers
+            unsafe {
+                _mm_prefetch::<_MM_HINT_T0>(v);
+                _mm_prefetch::<_MM_HINT_T0>(c as *const i8);
+            }
+        }
+    }
+
     /// Pixel `(x, y)`'s velocity if its class is a line along x (`x_major`) or y.
     #[inline(always)]
     fn line(&self, x: usize, y: usize, x_major: bool) -> Option<[f32; 2]> {
@@ -509,6 +527,12 @@ impl Band {
         s.params.clear();
         s.params
             .extend((0..count).map(|l| curves.params(k0 + l as i64)));
+        s.pairs.clear();
+        let steps = s
+            .params
+            .windows(2)
+            .map(|p| (p[1].0 - p[0].0, 0.5 * (p[1].1 - p[0].1)));
+        s.pairs.extend(steps);
         let found = self.fits(axes, curves, field, s);
         // (not even if every pixel fitted: the fits are not used)
         if !worth_it(
@@ -549,6 +573,7 @@ impl Band {
             next,
             fits,
             params,
+            pairs,
             col,
             ..
         } = s;
@@ -566,6 +591,11 @@ impl Band {
                 let e = if (t as f64) < e { t + 1 } else { t };
                 (e.max(*start as i64) as usize).min(n)
             };
+            // (a cache line holds 8 velocities: the rows' next ones, two lines ahead)
+            let ahead = m + 2 * PREFETCH_COLUMNS;
+            if axes.x_major && (m - self.span.0) % PREFETCH_COLUMNS == 0 && ahead < self.span.1 {
+                field.prefetch_column(ahead, *start..end);
+            }
             // the curve at or below the column's last pixel; None until the column's
             // curves are laid out (at its first line pixel)
             let mut below: Option<usize> = None;
@@ -581,7 +611,7 @@ impl Band {
                     col.at(curves, params, k0, m as f64);
                     0
                 });
-                if let Some((l, f)) = fit(col, params, curves.c, r as f64, (a, b), l) {
+                if let Some((l, f)) = fit(col, pairs, curves.c, r as f64, (a, b), l) {
                     found.fit_reach = found.fit_reach.max(a.abs());
                     fits.push(Fit::new(m, r, l, f, a));
                 }
@@ -592,6 +622,9 @@ impl Band {
     }
 }
 
+/// Columns of [`Field`]'s velocities in a cache line.
+const PREFETCH_COLUMNS: usize = 8;
+
 /// The buffers of a strip, kept by each thread from one strip to the next.
 #[derive(Default)]
 struct Scratch {
@@ -599,6 +632,8 @@ struct Scratch {
     fits: Vec<Fit>,
     lines: Vec<[f32; 4]>,
     params: Vec<(f64, f64)>,
+    /// `(s1 - s0, (q1 - q0) / 2)` of each curve `0` and the next `1` of `params`.
+    pairs: Vec<(f64, f64)>,
     acc: Vec<[f64; 4]>,
     prev: Vec<[f64; 4]>,
     col: Column,
@@ -844,7 +879,7 @@ impl Column {
 #[inline(always)]
 fn fit(
     col: &Column,
-    params: &[(f64, f64)],
+    pairs: &[(f64, f64)],
     c: f64,
     y: f64,
     (a, b): (f32, f32),
@@ -869,9 +904,9 @@ fn fit(
         return None;
     }
     // the gap between the two curves at both ends of the streak
-    let ((s0, q0), (s1, q1)) = (params[l], params[l + 1]);
+    let (ds, dq) = pairs[l];
     for d in [col.u - half - c, col.u + half - c] {
-        let g = 1.0 + d * ((s1 - s0) + 0.5 * (q1 - q0) * d);
+        let g = 1.0 + d * (ds + dq * d);
         if !(0.25..=2.0).contains(&g) {
             return None;
         }
