@@ -259,12 +259,12 @@ fn line_blur_masked(
     mask: Option<&mut [bool]>,
 ) -> (Vec<f32>, LineStats) {
     let mut stats = LineStats::default();
-    // every pixel's velocity and class, once (into the last call's buffers)
-    let mut bufs = FrameBuffers::take(w * h);
-    let flags = bufs
-        .v
+    // every pixel's velocity and class, once
+    let mut classes = vec![0u8; w * h];
+    let mut v = vec![[0.0f32; 2]; w * h];
+    let flags = v
         .par_chunks_mut(w)
-        .zip(bufs.class.par_chunks_mut(w))
+        .zip(classes.par_chunks_mut(w))
         .enumerate()
         .map(|(y, (v, c))| {
             field.row(y, v, c);
@@ -273,13 +273,13 @@ fn line_blur_masked(
         .reduce(|| (false, false), |a, b| (a.0 | b.0, a.1 | b.1));
     let (nan, vertical) = flags;
     stats.nan = nan;
-    let FrameBuffers { v, class, lines } = &mut bufs;
     let field_v = Field {
-        v: std::mem::take(v),
-        class: std::mem::take(class),
+        v,
+        class: classes,
         w,
         saved,
     };
+    let mut lines = vec![false; w * h];
     let out = super::filled(w * h * 4, |out| {
         let put = Out(out.as_mut_ptr(), lines.as_mut_ptr());
         for x_major in [true, false] {
@@ -309,47 +309,9 @@ fn line_blur_masked(
             .reduce(|| false, |a, b| a | b);
     });
     if let Some(m) = mask {
-        m.copy_from_slice(lines);
+        m.copy_from_slice(&lines);
     }
-    (bufs.v, bufs.class) = (field_v.v, field_v.class);
-    bufs.give_back();
     (out, stats)
-}
-
-/// [`line_blur`]'s frame-sized buffers: every pixel's velocity and class ([`Field`]) and the
-/// mask of the pixels blurred as a line integral. The last call's are kept for the next
-/// (taken by one call at a time; a call that finds none allocates), 10 bytes a pixel (83 MB
-/// at 3840x2160): fresh buffers that large are new pages from the system, which the kernel
-/// zeroes on first touch (~10-50 ms a call at 4K on the shared machine; at 1080p glibc reuses
-/// its heap and they cost nothing measurable).
-#[derive(Default)]
-struct FrameBuffers {
-    v: Vec<[f32; 2]>,
-    class: Vec<u8>,
-    lines: Vec<bool>,
-}
-
-static FRAME_BUFFERS: std::sync::Mutex<Option<FrameBuffers>> = std::sync::Mutex::new(None);
-
-impl FrameBuffers {
-    /// Buffers for `n` pixels: `v` and `class` of any contents (each call writes every
-    /// pixel's, [`LineField::row`]), `lines` all false.
-    fn take(n: usize) -> Self {
-        let kept = FRAME_BUFFERS.lock().ok().and_then(|mut b| b.take());
-        let mut b = kept.unwrap_or_default();
-        b.v.resize(n, [0.0; 2]);
-        b.class.resize(n, 0);
-        b.lines.clear();
-        b.lines.resize(n, false);
-        b
-    }
-
-    /// Keeps the buffers for the next call.
-    fn give_back(self) {
-        if let Ok(mut b) = FRAME_BUFFERS.lock() {
-            *b = Some(self);
-        }
-    }
 }
 
 /// The curves of a strip: `(s, q)` of each minor row (module docs), about major coordinate `c`.
