@@ -92,6 +92,24 @@ struct Field {
 }
 
 impl Field {
+    /// Asks the cache for the velocities and classes of pixels `(x, rows)` (a column of a band
+    /// whose major axis is x: one row's cache line for each, the rows too many at once for
+    /// the hardware's prefetcher to follow).
+    #[inline(always)]
+    fn prefetch_column(&self, x: usize, rows: std::ops::Range<usize>) {
+        #[cfg(target_arch = "x86_64")]
+        for y in rows {
+            let i = y * self.w + x;
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            let (v, c) = (self.v[i..].as_ptr() as *const i8, self.class[i..].as_ptr());
+            // SAFETY: hints, both point into the buffers
+            unsafe {
+                _mm_prefetch::<_MM_HINT_T0>(v);
+                _mm_prefetch::<_MM_HINT_T0>(c as *const i8);
+            }
+        }
+    }
+
     /// Pixel `(x, y)`'s velocity if its class is a line along x (`x_major`) or y.
     #[inline(always)]
     fn line(&self, x: usize, y: usize, x_major: bool) -> Option<[f32; 2]> {
@@ -109,14 +127,16 @@ pub(crate) struct LineStats {
     pub nan: bool,
 }
 
-/// How a pixel is blurred.
-#[derive(Clone, Copy, PartialEq, Eq)]
+/// How a pixel is blurred (the rule [`classify`] applies, kept as the tests' oracle).
+#[cfg(test)]
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
 enum Class {
     Taps,
     /// a line integral along x (true) or y (false) may do
     Line(bool),
 }
 
+#[cfg(test)]
 fn class([vx, vy]: [f32; 2], (w, h): (usize, usize)) -> Class {
     if !(vx.is_finite() && vy.is_finite()) {
         return Class::Taps;
@@ -132,22 +152,26 @@ fn class([vx, vy]: [f32; 2], (w, h): (usize, usize)) -> Class {
 
 /// Turns a row's `line` flags ([`LineField::row`]) into classes (0: taps, 1: a line along x
 /// may do, 2: along y) from its velocities `v`; returns whether a velocity is NaN and whether a
-/// class is 2.
-fn classify(c: &mut [u8], v: &[[f32; 2]], dims: (usize, usize)) -> (bool, bool) {
+/// class is 2. A pixel flagged 1 is a line when both components are finite and the longer's
+/// length is in `[MIN_STREAK, 2 (w + h)]` (a streak longer than twice the image's sides only
+/// adds clamped texels: the taps), along x when `|vx| >= |vy|`. (Without branches, so that
+/// the loop runs in vectors.)
+fn classify(c: &mut [u8], v: &[[f32; 2]], (w, h): (usize, usize)) -> (bool, bool) {
     let (mut nan, mut vertical) = (false, false);
-    for (c, &v) in c.iter_mut().zip(v) {
-        if *c == 0 {
-            continue;
-        }
-        nan |= v[0].is_nan() || v[1].is_nan();
-        *c = match (*c, class(v, dims)) {
-            (1, Class::Line(true)) => 1,
-            (1, Class::Line(false)) => {
-                vertical = true;
-                2
-            }
-            _ => 0,
-        };
+    let longest = 2.0 * (w + h) as f32;
+    for (c, &[vx, vy]) in c.iter_mut().zip(v) {
+        let flagged = *c != 0;
+        nan |= flagged & (vx.is_nan() | vy.is_nan());
+        let (ax, ay) = (vx.abs(), vy.abs());
+        let along_x = ax >= ay;
+        let major = if along_x { ax } else { ay };
+        // (a NaN or an infinity fails the length's bounds or the finite test)
+        let line = flagged
+            & (vx.is_finite() & vy.is_finite())
+            & (major >= MIN_STREAK)
+            & (major <= longest);
+        vertical |= line & !along_x;
+        *c = u8::from(line) * (2 - u8::from(along_x));
     }
     (nan, vertical)
 }
@@ -374,6 +398,19 @@ impl Curves {
         let d = u - self.c;
         k as f64 + d * (s + 0.5 * q * d)
     }
+
+    /// The labels of the curves at the strip's first and last of `n` minor rows, over its
+    /// major coordinates `span`: the lowest and the highest.
+    fn labels(&self, (m0, m1): (usize, usize), n: usize) -> (i64, i64) {
+        let (mut k_lo, mut k_hi) = (i64::MAX, i64::MIN);
+        let last = (n - 1) as i64;
+        for m in m0..m1 {
+            let u = m as f64;
+            k_lo = k_lo.min((-self.y(0, u)).floor() as i64);
+            k_hi = k_hi.max((last as f64 + (last as f64 - self.y(last, u))).ceil() as i64);
+        }
+        (k_lo, k_hi)
+    }
 }
 
 /// [`strip`] compiled for AVX2 (its four channels in one vector): the same operations, no
@@ -392,100 +429,21 @@ unsafe fn strip_avx(rgba: &[f32], axes: Axes, j: usize, field: &Field, out: Out)
 /// ([`worth_it`]); returns how many.
 #[inline(always)]
 fn strip(rgba: &[f32], axes: Axes, j: usize, field: &Field, out: Out) -> usize {
-    let w = axes.w;
     let width = strip_width(axes.major_len());
     let m0 = j * width;
-    let m1 = (m0 + width).min(axes.major_len());
-    let n = axes.minor_len();
-    let curves = Curves::new(axes, (m0, m1), field);
-    // the curves' labels at the strip's first and last minor rows, over its columns
-    let (mut k_lo, mut k_hi) = (i64::MAX, i64::MIN);
-    for m in m0..m1 {
-        let u = m as f64;
-        k_lo = k_lo.min((-curves.y(0, u)).floor() as i64);
-        let last = (n - 1) as i64;
-        k_hi = k_hi.max((last as f64 + (last as f64 - curves.y(last, u))).ceil() as i64);
-    }
+    let span = (m0, (m0 + width).min(axes.major_len()));
+    let curves = Curves::new(axes, span, field);
+    let (k_lo, k_hi) = curves.labels(span, axes.minor_len());
     // (the thread's buffers of the last strip, taken and given back: no allocation a strip)
     let mut scratch = SCRATCH.with(|s| s.take());
-    let Scratch {
-        next,
-        pixels,
-        fits,
-        lines,
-        params,
-        acc,
-        prev,
-        col,
-    } = &mut scratch;
-    next.clear();
-    next.resize(m1 - m0, 0);
+    scratch.next.clear();
+    scratch.next.resize(span.1 - span.0, 0);
     let mut count_lines = 0;
     let mut kb = k_lo - 1;
     loop {
         let last = kb + BAND as i64 > k_hi + 1;
-        pixels.clear();
-        let mut reach = 0.0f32;
-        for (m, start) in (m0..m1).zip(next.iter_mut()) {
-            let end = if last {
-                n
-            } else {
-                // (the ceiling, without a libm call)
-                let e = curves.y(kb + BAND as i64, m as f64);
-                let t = e as i64;
-                let e = if (t as f64) < e { t + 1 } else { t };
-                (e.max(*start as i64) as usize).min(n)
-            };
-            for r in *start..end {
-                let (x, y) = axes.xy(m, r);
-                if let Some(v) = field.line(x, y, axes.x_major) {
-                    let (a, b) = axes.split(v);
-                    reach = reach.max(a.abs());
-                    pixels.push((m, r, a, b));
-                }
-            }
-            *start = end;
-        }
-        let (k0, count) = (kb - 1, BAND + 3);
-        // (not even if every pixel fitted: no need to try them)
-        if worth_it(pixels.len(), count * sums_len(m1 - m0, reach), field.saved) {
-            params.clear();
-            params.extend((0..count).map(|l| curves.params(k0 + l as i64)));
-            // the pixels the curves fit
-            fits.clear();
-            let mut reach = 0.0f32;
-            let mut at = usize::MAX;
-            let mut l = 0;
-            for &(m, r, a, b) in pixels.iter() {
-                if m != at {
-                    col.at(&curves, params, k0, m as f64);
-                    (at, l) = (m, 0);
-                }
-                if let Some((l, f)) = fit(col, params, curves.c, r as f64, (a, b), &mut l) {
-                    reach = reach.max(a.abs());
-                    fits.push(Fit { m, r, l, f, a });
-                }
-            }
-            let len = sums_len(m1 - m0, reach);
-            let u_lo = m0 as i64 - (len - (m1 - m0)) as i64 / 2;
-            if worth_it(fits.len(), count * len, field.saved) {
-                build(
-                    rgba,
-                    axes,
-                    params,
-                    (curves.c, k0),
-                    (u_lo, len),
-                    (lines, acc, prev),
-                );
-                for p in fits.iter() {
-                    let v = value(lines, (count, u_lo, len), p);
-                    let (x, y) = axes.xy(p.m, p.r);
-                    // SAFETY: pixel (x, y) belongs to this band alone
-                    unsafe { out.put(y * w + x, v) };
-                }
-                count_lines += fits.len();
-            }
-        }
+        let band = Band { kb, last, span };
+        count_lines += band.blur(rgba, axes, &curves, field, out, &mut scratch);
         if last {
             break;
         }
@@ -495,14 +453,149 @@ fn strip(rgba: &[f32], axes: Axes, j: usize, field: &Field, out: Out) -> usize {
     count_lines
 }
 
+/// A band of a strip: the pixels between its curves `kb` and `kb + BAND` (to the strip's last
+/// minor row if `last`) over the strip's major coordinates `span`.
+#[derive(Clone, Copy)]
+struct Band {
+    kb: i64,
+    last: bool,
+    span: (usize, usize),
+}
+
+/// What [`Band::fits`] found: the band's pixels whose class is a line along the major axis,
+/// the longest of their velocities' major components, and that of the pixels the curves fit.
+#[derive(Default)]
+struct Found {
+    pixels: usize,
+    reach: f32,
+    fit_reach: f32,
+}
+
+impl Band {
+    /// Blurs the band's pixels its curves fit if that is cheaper than their taps (its
+    /// line pixels first, then those that fit; [`worth_it`]); returns how many.
+    #[inline(always)]
+    fn blur(
+        self,
+        rgba: &[f32],
+        axes: Axes,
+        curves: &Curves,
+        field: &Field,
+        out: Out,
+        s: &mut Scratch,
+    ) -> usize {
+        let (k0, count) = (self.kb - 1, BAND + 3);
+        let width = self.span.1 - self.span.0;
+        s.params.clear();
+        s.params
+            .extend((0..count).map(|l| curves.params(k0 + l as i64)));
+        s.pairs.clear();
+        let steps = s
+            .params
+            .windows(2)
+            .map(|p| (p[1].0 - p[0].0, 0.5 * (p[1].1 - p[0].1)));
+        s.pairs.extend(steps);
+        let found = self.fits(axes, curves, field, s);
+        // (not even if every pixel fitted: the fits are not used)
+        if !worth_it(
+            found.pixels,
+            count * sums_len(width, found.reach),
+            field.saved,
+        ) {
+            return 0;
+        }
+        let len = sums_len(width, found.fit_reach);
+        let u_lo = self.span.0 as i64 - (len - width) as i64 / 2;
+        if !worth_it(s.fits.len(), count * len, field.saved) {
+            return 0;
+        }
+        build(
+            rgba,
+            axes,
+            &s.params,
+            (curves.c, k0),
+            (u_lo, len),
+            (&mut s.lines, &mut s.acc, &mut s.prev),
+        );
+        for p in s.fits.iter() {
+            let v = value(&s.lines, (count, u_lo, len), p);
+            let (x, y) = axes.xy(p.m as usize, p.r as usize);
+            // SAFETY: pixel (x, y) belongs to this band alone
+            unsafe { out.put(y * axes.w + x, v) };
+        }
+        s.fits.len()
+    }
+
+    /// Walks the band column by column (advancing `s.next`, each column's first minor row
+    /// not yet taken by a band): counts its line pixels and puts those the curves
+    /// `s.params` fit into `s.fits`.
+    #[inline(always)]
+    fn fits(self, axes: Axes, curves: &Curves, field: &Field, s: &mut Scratch) -> Found {
+        let Scratch {
+            next,
+            fits,
+            params,
+            pairs,
+            col,
+            ..
+        } = s;
+        let n = axes.minor_len();
+        let k0 = self.kb - 1;
+        fits.clear();
+        let mut found = Found::default();
+        for (m, start) in (self.span.0..self.span.1).zip(next.iter_mut()) {
+            let end = if self.last {
+                n
+            } else {
+                // (the ceiling, without a libm call)
+                let e = curves.y(self.kb + BAND as i64, m as f64);
+                let t = e as i64;
+                let e = if (t as f64) < e { t + 1 } else { t };
+                (e.max(*start as i64) as usize).min(n)
+            };
+            // (a cache line holds 8 velocities: the rows' next ones, two lines ahead)
+            let ahead = m + 2 * PREFETCH_COLUMNS;
+            if axes.x_major && (m - self.span.0) % PREFETCH_COLUMNS == 0 && ahead < self.span.1 {
+                field.prefetch_column(ahead, *start..end);
+            }
+            // the curve at or below the column's last pixel; None until the column's
+            // curves are laid out (at its first line pixel)
+            let mut below: Option<usize> = None;
+            for r in *start..end {
+                let (x, y) = axes.xy(m, r);
+                let Some(v) = field.line(x, y, axes.x_major) else {
+                    continue;
+                };
+                let (a, b) = axes.split(v);
+                found.pixels += 1;
+                found.reach = found.reach.max(a.abs());
+                let l = below.get_or_insert_with(|| {
+                    col.at(curves, params, k0, m as f64);
+                    0
+                });
+                if let Some((l, f)) = fit(col, pairs, curves.c, r as f64, (a, b), l) {
+                    found.fit_reach = found.fit_reach.max(a.abs());
+                    fits.push(Fit::new(m, r, l, f, a));
+                }
+            }
+            *start = end;
+        }
+        found
+    }
+}
+
+/// Columns of [`Field`]'s velocities in a cache line.
+const PREFETCH_COLUMNS: usize = 8;
+
 /// The buffers of a strip, kept by each thread from one strip to the next.
 #[derive(Default)]
 struct Scratch {
     next: Vec<usize>,
-    pixels: Vec<(usize, usize, f32, f32)>,
     fits: Vec<Fit>,
     lines: Vec<[f32; 4]>,
     params: Vec<(f64, f64)>,
+    /// `(s1 - s0, (q1 - q0) / 2)` of each curve `0` and the next `1` of `params`.
+    pairs: Vec<(f64, f64)>,
     acc: Vec<[f64; 4]>,
     prev: Vec<[f64; 4]>,
     col: Column,
@@ -535,11 +628,25 @@ pub const SAMPLES_PER_PIXEL: f64 = 6.0;
 /// A pixel the band's curves fit: major and minor coordinates `m`, `r`, the curve `l` below it,
 /// its fraction `f` of the way to curve `l + 1`, its velocity's major component `a`.
 struct Fit {
-    m: usize,
-    r: usize,
-    l: usize,
-    f: f64,
+    m: u32,
+    r: u32,
+    l: u32,
     a: f32,
+    f: f64,
+}
+
+impl Fit {
+    /// (sides are at most 16384 pixels: the coordinates and curves fit in 32 bits)
+    #[inline(always)]
+    fn new(m: usize, r: usize, l: usize, f: f64, a: f32) -> Self {
+        Fit {
+            m: m as u32,
+            r: r as u32,
+            l: l as u32,
+            a,
+            f,
+        }
+    }
 }
 
 /// Samples curves `k0 .. k0 + count` at the integer major coordinates `u_lo .. u_lo + len`
@@ -582,22 +689,35 @@ fn build(
     acc.clear();
     acc.resize(count, [0.0f64; 4]);
     prev.clear();
-    prev.extend(params.iter().enumerate().map(|(l, &p)| at.sample(0, l, p)));
+    let first = at.column(0);
+    prev.extend(
+        params
+            .iter()
+            .enumerate()
+            .map(|(l, &p)| at.sample(first, l, p)),
+    );
     lines[..count].fill([0.0; 4]);
-    for i in 1..len {
-        for (l, &p) in params.iter().enumerate() {
-            let g = at.sample(i, l, p);
+    // (a cache line holds 4 texels: one a row every 4 columns when the major axis is x, the
+    // next row's when it is y)
+    let (every, ahead) = if axes.x_major { (4, 8) } else { (1, 2) };
+    for (i, sums) in lines.chunks_exact_mut(count).enumerate().skip(1) {
+        if i % every == 0 && i + ahead < len {
+            at.prefetch(i + ahead, params);
+        }
+        let column = at.column(i);
+        let curves = params.iter().zip(acc.iter_mut().zip(prev.iter_mut()));
+        for (l, ((&p, (a, b)), out)) in curves.zip(sums.iter_mut()).enumerate() {
+            let g = at.sample(column, l, p);
             // (whole arrays in and out, no `map`, no call: one vector each)
-            let (a, b) = (acc[l], prev[l]);
             let sum = [
                 a[0] + 0.5 * (b[0] + g[0]),
                 a[1] + 0.5 * (b[1] + g[1]),
                 a[2] + 0.5 * (b[2] + g[2]),
                 a[3] + 0.5 * (b[3] + g[3]),
             ];
-            acc[l] = sum;
-            prev[l] = g;
-            lines[i * count + l] = [sum[0] as f32, sum[1] as f32, sum[2] as f32, sum[3] as f32];
+            *a = sum;
+            *b = g;
+            *out = [sum[0] as f32, sum[1] as f32, sum[2] as f32, sum[3] as f32];
         }
     }
 }
@@ -623,16 +743,61 @@ struct Sampler<'a> {
 }
 
 impl Sampler<'_> {
-    /// Sample `i` of curve `l` (parameters `(s, q)`): the image at major coordinate
-    /// `u_lo + i` (clamped), linearly interpolated across between the rows about the curve.
+    /// What the samples at major coordinate `u_lo + i` share: `u - c` and the offset of the
+    /// image's column `u` (clamped).
     #[inline(always)]
-    fn sample(&self, i: usize, l: usize, (s, q): (f64, f64)) -> [f64; 4] {
+    fn column(&self, i: usize) -> (f64, usize) {
         let u = self.u_lo + i as i64;
-        let d = u as f64 - self.c;
-        let m = u.clamp(0, self.mlen - 1) as usize * self.sm;
-        let y = ((self.k0 + l as i64) as f64 + d * (s + 0.5 * q * d)).clamp(0.0, self.nmax);
-        let r0 = y as usize; // (y >= 0: the floor)
+        (
+            u as f64 - self.c,
+            u.clamp(0, self.mlen - 1) as usize * self.sm,
+        )
+    }
+
+    /// Asks the cache for the texels the curves `params` read at major coordinate `u_lo + i`
+    /// (from the row under the first curve to the row over the last): the image's rows there
+    /// are read a few texels at a time, too many at once for the hardware's prefetcher to
+    /// follow (the samples were waiting on those loads).
+    #[inline(always)]
+    fn prefetch(&self, i: usize, params: &[(f64, f64)]) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            let (d, m) = self.column(i);
+            let y = |l: usize| {
+                let (s, q) = params[l];
+                (self.k0 + l as i64) as f64 + d * (s + 0.5 * q * d)
+            };
+            let lo = (y(0) - 1.0).max(0.0).min(self.nmax) as usize;
+            let hi = (y(params.len() - 1) + 2.0).max(0.0).min(self.nmax) as usize;
+            // (along x, a row's cache line holds the texels of 4 minor coordinates)
+            let step = if self.sn == 1 { 4 } else { 1 };
+            for r in (lo..=hi + step - 1).step_by(step) {
+                let t = (m + r.min(self.nlen - 1) * self.sn) * 4;
+                let p = self.rgba[t..].as_ptr() as *const i8;
+                // SAFETY: a hint, `p` points into the image
+                unsafe { std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p) };
+            }
+        }
+    }
+
+    /// Sample `i` of curve `l` (parameters `(s, q)`, `(d, m)` from [`Sampler::column`] of
+    /// `i`): the image at major coordinate `u_lo + i` (clamped), linearly interpolated across
+    /// between the rows about the curve.
+    #[inline(always)]
+    fn sample(&self, (d, m): (f64, usize), l: usize, (s, q): (f64, f64)) -> [f64; 4] {
+        let y = (self.k0 + l as i64) as f64 + d * (s + 0.5 * q * d);
+        // (`clamp` to [0, nmax] without its check of the bounds: not NaN, params are finite)
+        let y = if y < 0.0 {
+            0.0
+        } else if y > self.nmax {
+            self.nmax
+        } else {
+            y
+        };
+        // (y >= 0: the floor; through i64, a cheaper conversion than to usize's)
+        let r0 = y as i64;
         let f = (y - r0 as f64) as f32;
+        let r0 = r0 as usize;
         let r1 = (r0 + 1).min(self.nlen - 1);
         let (t0, t1) = ((m + r0 * self.sn) * 4, (m + r1 * self.sn) * 4);
         let (a, b) = (&self.rgba[t0..t0 + 4], &self.rgba[t1..t1 + 4]);
@@ -661,10 +826,11 @@ impl Column {
         let d = u - curves.c;
         self.ys.clear();
         self.slopes.clear();
-        for (l, &(s, q)) in params.iter().enumerate() {
-            self.ys.push((k0 + l as i64) as f64 + d * (s + 0.5 * q * d));
-            self.slopes.push(s + q * d);
-        }
+        // (two passes that run in vectors)
+        let ys = params.iter().enumerate();
+        self.ys
+            .extend(ys.map(|(l, &(s, q))| (k0 + l as i64) as f64 + d * (s + 0.5 * q * d)));
+        self.slopes.extend(params.iter().map(|&(s, q)| s + q * d));
     }
 }
 
@@ -675,7 +841,7 @@ impl Column {
 #[inline(always)]
 fn fit(
     col: &Column,
-    params: &[(f64, f64)],
+    pairs: &[(f64, f64)],
     c: f64,
     y: f64,
     (a, b): (f32, f32),
@@ -700,9 +866,9 @@ fn fit(
         return None;
     }
     // the gap between the two curves at both ends of the streak
-    let ((s0, q0), (s1, q1)) = (params[l], params[l + 1]);
+    let (ds, dq) = pairs[l];
     for d in [col.u - half - c, col.u + half - c] {
-        let g = 1.0 + d * ((s1 - s0) + 0.5 * (q1 - q0) * d);
+        let g = 1.0 + d * (ds + dq * d);
         if !(0.25..=2.0).contains(&g) {
             return None;
         }
@@ -714,14 +880,16 @@ fn fit(
 /// entries a curve from major coordinate `u_lo`).
 #[inline(always)]
 fn value(lines: &[[f32; 4]], (count, u_lo, len): (usize, i64, usize), p: &Fit) -> [f32; 4] {
-    let (u, half) = (p.m as f64, 0.5 * (p.a as f64).abs());
+    let (u, half, l) = (p.m as f64, 0.5 * (p.a as f64).abs(), p.l as usize);
     let (lo, hi) = (u - half - u_lo as f64, u + half - u_lo as f64);
-    let (i0, i1) = (lo as usize, hi as usize);
+    // (lo > 0: the floors; through i64, cheaper conversions than usize's)
+    let (i0, i1) = (lo as i64, hi as i64);
     let (t0, t1) = (lo - i0 as f64, hi - i1 as f64);
-    debug_assert!(i1 + 1 < len);
+    let (i0, i1) = (i0 as usize, i1 as usize);
+    debug_assert!(lo > 0.0 && i1 + 1 < len);
     let (m0, m1) = (
-        span(lines, (p.l, count), (i0, t0), (i1, t1)),
-        span(lines, (p.l + 1, count), (i0, t0), (i1, t1)),
+        span(lines, (l, count), (i0, t0), (i1, t1)),
+        span(lines, (l + 1, count), (i0, t0), (i1, t1)),
     );
     let inv = 1.0 / (2.0 * half);
     let mut out = [0.0f32; 4];
@@ -1030,6 +1198,49 @@ mod tests {
         // all pixels may be lines: the bands are worth their curves
         let (_, mask) = run(&rgba, &vel, (w, h), &vec![false; w * h], SAMPLES_PER_PIXEL);
         assert!(mask.iter().filter(|m| **m).count() > w * h * 8 / 10);
+    }
+
+    #[test]
+    fn classify_applies_the_class_rule() {
+        // the rule's edges: NaN and infinite components, lengths about MIN_STREAK and the
+        // longest streak 2 (w + h), ties |vx| = |vy|, signed zeros; flags 0 and 1
+        let dims = (40, 30);
+        let longest = 2.0 * 70.0f32;
+        let edges = [
+            0.0f32,
+            -0.0,
+            1.0,
+            MIN_STREAK.next_down(),
+            MIN_STREAK,
+            -MIN_STREAK,
+            20.0,
+            -20.0,
+            longest,
+            longest.next_up(),
+            -longest,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        let v: Vec<[f32; 2]> = edges
+            .iter()
+            .flat_map(|&a| edges.iter().map(move |&b| [a, b]))
+            .collect();
+        for flag in [0u8, 1] {
+            let mut c = vec![flag; v.len()];
+            let (nan, vertical) = classify(&mut c, &v, dims);
+            let want: Vec<u8> = v
+                .iter()
+                .map(|&p| match (flag, class(p, dims)) {
+                    (1, Class::Line(true)) => 1,
+                    (1, Class::Line(false)) => 2,
+                    _ => 0,
+                })
+                .collect();
+            assert_eq!(c, want, "flag {flag}");
+            assert_eq!(nan, flag == 1, "flag {flag}");
+            assert_eq!(vertical, flag == 1, "flag {flag}");
+        }
     }
 
     #[test]
