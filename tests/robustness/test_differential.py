@@ -19,7 +19,7 @@ rounded up (first read off seeds 0..29, which ``make fuzz`` showed too few: meas
 1,025,577 put a translucent cylinder's blur shell at +63% alpha mass, and on seeds 0..399
 ``camera_velocity`` reached 0.49 of alpha mass and ``velocity`` 0.38 without a warning). Frames
 that warned went beyond them: ``velocity`` 4.1x the unblurred frame's error (a translucent
-sphere), ``blur_shell`` 2.4x (a turn under a hand-held camera), the motion volume +117% mass (a
+sphere), ``blur_shell`` 2.4x (a large floor under a hand-held camera, whose far edges' strips span the view), the motion volume +117% mass (a
 knot's holes filled). The README lists the bounds beside each method.
 """
 
