@@ -561,9 +561,17 @@ def _camera_frame_blur(
     pixels blurred as a line integral)."""
 
 def _reconstruct(
-    rgba: np.ndarray, depth: np.ndarray, velocity: np.ndarray, samples: int, tile: int, soft_depth: float
+    rgba: np.ndarray,
+    depth: np.ndarray,
+    velocity: np.ndarray,
+    samples: int,
+    tile: int,
+    soft_depth: float,
+    moving: tuple[int, int, int, int] | None = None,
 ) -> np.ndarray:
-    """McGuire/Guertin reconstruction filter: rgba (H,W,4), depth (H,W), velocity (H,W,2) f32 -> (H,W,4) f32."""
+    """McGuire/Guertin reconstruction filter: rgba (H,W,4), depth (H,W), velocity (H,W,2) f32 -> (H,W,4) f32.
+    ``moving`` (y0, y1, x0, x1): the window outside which every velocity is 0 (the caller's
+    promise, not checked; only its velocities are read), None for the whole image."""
 
 # --- end image
 

@@ -484,8 +484,11 @@ fn _camera_motion_blur<'py>(
 }
 
 /// McGuire/Guertin reconstruction filter of rgba (H,W,4) f32 with depth (H,W) f32 and
-/// velocity (H,W,2) f32.
+/// velocity (H,W,2) f32; `moving` (y0, y1, x0, x1): the window outside which every velocity
+/// is 0 (the caller's promise), None for the whole image.
 #[pyfunction]
+#[pyo3(signature = (rgba, depth, velocity, samples, tile, soft_depth, moving = None))]
+#[allow(clippy::too_many_arguments)] // (the Python signature's)
 fn _reconstruct<'py>(
     py: Python<'py>,
     rgba: PyReadonlyArray3<'py, f32>,
@@ -494,6 +497,7 @@ fn _reconstruct<'py>(
     samples: usize,
     tile: usize,
     soft_depth: f32,
+    moving: Option<(usize, usize, usize, usize)>,
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
     let (d, dw, dh) = img2(&depth, "depth")?;
@@ -505,7 +509,10 @@ fn _reconstruct<'py>(
         tile,
         soft_depth,
     };
-    let out = detached_in_pool(py, || crate::reconstruct(a, d, v, w, h, params))?;
+    let moving = moving.unwrap_or((0, h, 0, w));
+    let out = detached_in_pool(py, || {
+        crate::reconstruct_moving(a, d, v, (w, h), params, moving)
+    })?;
     shaped(py, out, [h, w, 4])
 }
 

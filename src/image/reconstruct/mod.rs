@@ -227,52 +227,109 @@ struct Halves {
     cell_rows: Vec<f32>,
 }
 
+/// The pixels `(y0, y1, x0, x1)` (rows `y0..y1`, columns `x0..x1`) outside which every velocity
+/// is 0, as the caller knows it (the window a sharp frame drew its moving objects in).
+pub type Window = (usize, usize, usize, usize);
+
 /// The lengths of the half velocities clamped to `tile` pixels, per pixel, with the maxima per
 /// row that the tile max and the reach cells need, in one pass that also checks the depths:
-/// (None when a velocity is not finite, whether every depth is > 0 or inf). `speed` is
-/// written once, never zeroed first; the half velocities themselves are not kept
-/// ([`half_at`] gives them again where needed).
+/// (None when a velocity is not finite, whether every depth is > 0 or inf). The half velocities
+/// themselves are not kept ([`half_at`] gives them again where needed). With `moving` a window
+/// smaller than the image, only its velocities are read (every other is 0, the caller's
+/// promise, so the speeds and maxima are the same); `speed` is then zeroed memory written in
+/// the window only, else written once, never zeroed first.
 fn halves(
     velocity: &[f32],
     depth: &[f32],
     (w, h): (usize, usize),
     tile: usize,
+    moving: Window,
 ) -> (Option<Halves>, bool) {
     let (tx, cw) = (w.div_ceil(tile), w.div_ceil(CELL));
-    let rows = (1usize << 14).div_ceil(w);
     let mut tile_rows = vec![0.0f32; h * tx];
     let mut cell_rows = vec![0.0f32; h * cw];
-    let (mut finite, mut deep) = (true, true);
+    let (y0, y1, x0, x1) = moving;
     let tl = tile as f32;
-    let speed = filled_with(w * h, |speed| {
-        (finite, deep) = speed
+    if (y0, y1, x0, x1) == (0, h, 0, w) {
+        let rows = (1usize << 14).div_ceil(w);
+        let (mut finite, mut deep) = (true, true);
+        let speed = filled_with(w * h, |speed| {
+            (finite, deep) = speed
+                .par_chunks_mut(rows * w)
+                .zip(velocity.par_chunks(2 * rows * w))
+                .zip(depth.par_chunks(rows * w))
+                .zip(tile_rows.par_chunks_mut(rows * tx))
+                .zip(cell_rows.par_chunks_mut(rows * cw))
+                .map(|((((ss, vs), ds), ts), cs)| {
+                    let ok = half_rows(vs, (ss, w), (0, w), (tl, tile), (ts, cs));
+                    (ok, deep_enough(ds))
+                })
+                .reduce(|| (true, true), |a, b| (a.0 & b.0, a.1 & b.1));
+        });
+        let out = Halves {
+            speed,
+            tile_rows,
+            cell_rows,
+        };
+        return (finite.then_some(out), deep);
+    }
+    // zeroed memory: pages the window's rows do not write stay the system's zero pages
+    let mut speed = vec![0.0f32; w * h];
+    let finite = if y0 < y1 && x0 < x1 {
+        let rows = (1usize << 14).div_ceil(x1 - x0);
+        // SAFETY: MaybeUninit<f32> has f32's layout; every value is initialised (zeros).
+        let sp: &mut [MaybeUninit<f32>] =
+            unsafe { std::slice::from_raw_parts_mut(speed.as_mut_ptr().cast(), speed.len()) };
+        sp[y0 * w..y1 * w]
             .par_chunks_mut(rows * w)
-            .zip(velocity.par_chunks(2 * rows * w))
-            .zip(depth.par_chunks(rows * w))
-            .zip(tile_rows.par_chunks_mut(rows * tx))
-            .zip(cell_rows.par_chunks_mut(rows * cw))
-            .map(|((((ss, vs), ds), ts), cs)| {
-                let mut ok = true;
-                // the row's squared lengths and lengths
-                let (mut l2, mut sp) = (vec![0.0f32; w], vec![0.0f32; w]);
-                let rows = ss
-                    .chunks_mut(w)
-                    .zip(vs.chunks(2 * w))
-                    .zip(ts.chunks_mut(tx).zip(cs.chunks_mut(cw)));
-                for ((sr, vr), maxima) in rows {
-                    ok &= half_row(vr, (tl, tile), sr, (&mut l2, &mut sp), maxima);
-                }
-                let deep = ds.iter().fold(true, |k, d| k & !(d.is_nan() || *d <= 0.0));
-                (ok, deep)
-            })
-            .reduce(|| (true, true), |a, b| (a.0 & b.0, a.1 & b.1));
-    });
+            .zip(velocity[2 * y0 * w..2 * y1 * w].par_chunks(2 * rows * w))
+            .zip(tile_rows[y0 * tx..y1 * tx].par_chunks_mut(rows * tx))
+            .zip(cell_rows[y0 * cw..y1 * cw].par_chunks_mut(rows * cw))
+            .map(|(((ss, vs), ts), cs)| half_rows(vs, (ss, w), (x0, x1), (tl, tile), (ts, cs)))
+            .reduce(|| true, |a, b| a & b)
+    } else {
+        true
+    };
+    let deep = depth
+        .par_chunks(1 << 14)
+        .map(deep_enough)
+        .reduce(|| true, |a, b| a & b);
     let out = Halves {
         speed,
         tile_rows,
         cell_rows,
     };
     (finite.then_some(out), deep)
+}
+
+/// Whether every depth of `d` is > 0 or inf (not NaN).
+fn deep_enough(d: &[f32]) -> bool {
+    d.iter().fold(true, |k, d| k & !(d.is_nan() || *d <= 0.0))
+}
+
+/// [`half_row`] of each row of `vs` (velocities, `2 w` a row) into the rows of `ss` (speeds,
+/// `w` a row) and of the maxima `ts` (`tx` a row) and `cs` (`cw` a row), over the columns
+/// `x0..x1` of each row; whether all are finite.
+fn half_rows(
+    vs: &[f32],
+    (ss, w): (&mut [MaybeUninit<f32>], usize),
+    (x0, x1): (usize, usize),
+    (tl, tile): (f32, usize),
+    (ts, cs): (&mut [f32], &mut [f32]),
+) -> bool {
+    let (tx, cw) = (w.div_ceil(tile), w.div_ceil(CELL));
+    // the row's squared lengths and lengths
+    let (mut l2, mut sp) = (vec![0.0f32; x1 - x0], vec![0.0f32; x1 - x0]);
+    let mut ok = true;
+    let rows = ss
+        .chunks_mut(w)
+        .zip(vs.chunks(2 * w))
+        .zip(ts.chunks_mut(tx).zip(cs.chunks_mut(cw)));
+    for ((sr, vr), maxima) in rows {
+        let (vr, sr) = (&vr[2 * x0..2 * x1], &mut sr[x0..x1]);
+        ok &= half_row(vr, (tl, tile), (sr, x0), (&mut l2, &mut sp), maxima);
+    }
+    ok
 }
 
 /// The velocity `v`'s half, clamped to `tl` pixels.
@@ -294,14 +351,15 @@ fn half_at(velocity: &[f32], i: usize, tl: f32) -> [f32; 2] {
 }
 
 /// One row of [`halves`]: the lengths `sr` of the half velocities of the velocities `vr`
-/// clamped to `tl` pixels (`tile`), the largest squared length over each tile's part of the
-/// row and the largest length over each cell's part (`maxima`), with the squared lengths and
-/// the lengths in `l2` and `sp` on the way; whether all are finite. In AVX2 when present (the
-/// same IEEE operations, so the same bits; maxima of values >= 0 in any order).
+/// clamped to `tl` pixels (`tile`), the row's columns from `x0` on, the largest squared length
+/// over each tile's part of them and the largest length over each cell's part (`maxima`, the
+/// whole row's: tiles and cells from column 0), with the squared lengths and the lengths in
+/// `l2` and `sp` on the way; whether all are finite. In AVX2 when present (the same IEEE
+/// operations, so the same bits; maxima of values >= 0 in any order).
 fn half_row(
     vr: &[f32],
     (tl, tile): (f32, usize),
-    sr: &mut [MaybeUninit<f32>],
+    (sr, x0): (&mut [MaybeUninit<f32>], usize),
     (l2, sp): (&mut [f32], &mut [f32]),
     maxima: (&mut [f32], &mut [f32]),
 ) -> bool {
@@ -309,7 +367,7 @@ fn half_row(
     fn run(
         vr: &[f32],
         (tl, tile): (f32, usize),
-        sr: &mut [MaybeUninit<f32>],
+        (sr, x0): (&mut [MaybeUninit<f32>], usize),
         (l2, sp): (&mut [f32], &mut [f32]),
         (tr, cr): (&mut [f32], &mut [f32]),
     ) -> bool {
@@ -324,12 +382,18 @@ fn half_row(
             sp[x] = l2[x].sqrt();
             sr[x].write(sp[x]);
         }
-        for (t, seg) in tr.iter_mut().zip(l2.chunks(tile)) {
-            *t = max_lanes(seg);
-        }
-        for (c, seg) in cr.iter_mut().zip(sp.chunks(CELL)) {
-            *c = max_lanes(seg);
-        }
+        // the parts of the columns x0..x0 + w in each block of `size` columns from column 0
+        let blocks = |size: usize, v: &[f32], m: &mut [f32]| {
+            let mut a = 0;
+            while a < w {
+                let k = (x0 + a) / size;
+                let b = ((k + 1) * size - x0).min(w);
+                m[k] = max_lanes(&v[a..b]);
+                a = b;
+            }
+        };
+        blocks(tile, l2, tr);
+        blocks(CELL, sp, cr);
         ok
     }
     #[cfg(target_arch = "x86_64")]
@@ -338,16 +402,16 @@ fn half_row(
         unsafe fn avx(
             vr: &[f32],
             tile: (f32, usize),
-            sr: &mut [MaybeUninit<f32>],
+            sr: (&mut [MaybeUninit<f32>], usize),
             rows: (&mut [f32], &mut [f32]),
             maxima: (&mut [f32], &mut [f32]),
         ) -> bool {
             run(vr, tile, sr, rows, maxima)
         }
         // SAFETY: AVX2 was detected.
-        return unsafe { avx(vr, (tl, tile), sr, (l2, sp), maxima) };
+        return unsafe { avx(vr, (tl, tile), (sr, x0), (l2, sp), maxima) };
     }
-    run(vr, (tl, tile), sr, (l2, sp), maxima)
+    run(vr, (tl, tile), (sr, x0), (l2, sp), maxima)
 }
 
 /// Whether every value of `v` is finite (in AVX2 when present).
@@ -427,6 +491,27 @@ pub fn reconstruct(
     h: usize,
     params: ReconstructParams,
 ) -> Result<Vec<f32>> {
+    reconstruct_moving(rgba, depth, velocity, (w, h), params, (0, h, 0, w))
+}
+
+/// [`reconstruct`] of a frame whose velocities are 0 outside the window `moving` (`(y0, y1,
+/// x0, x1)`, the caller's promise, not checked: the velocity method's sharp frame, drawn over
+/// a still layer in that window): only the window's velocities are read, for the same bits.
+pub fn reconstruct_moving(
+    rgba: &[f32],
+    depth: &[f32],
+    velocity: &[f32],
+    (w, h): (usize, usize),
+    params: ReconstructParams,
+    moving: Window,
+) -> Result<Vec<f32>> {
+    let (y0, y1, x0, x1) = moving;
+    if !(y0 <= y1 && y1 <= h && x0 <= x1 && x1 <= w) {
+        return Err(Error::value(
+            "moving",
+            format!("({y0}, {y1}, {x0}, {x1}) is not a window of the ({h}, {w}) image"),
+        ));
+    }
     check_image("rgba", rgba, w, h, 4)?;
     check_image("depth", depth, w, h, 1)?;
     check_image("velocity", velocity, w, h, 2)?;
@@ -436,7 +521,7 @@ pub fn reconstruct(
     let first_error =
         |e: Error| -> Error { check_inputs(rgba, depth, velocity).err().unwrap_or(e) };
     check_params(params).map_err(first_error)?;
-    let (hv, deep) = halves(velocity, depth, (w, h), params.tile);
+    let (hv, deep) = halves(velocity, depth, (w, h), params.tile, moving);
     let hv = hv.ok_or_else(|| first_error(Error::value("velocity", "contains NaN or inf")))?;
     if !deep {
         return Err(first_error(depth_error()));
