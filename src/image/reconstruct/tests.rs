@@ -81,6 +81,54 @@ fn same_result_on_one_thread() {
     assert_eq!(a, b);
 }
 
+#[test]
+fn a_moving_window_gives_the_whole_frames_bits() {
+    // velocities 0 outside a window: reading only the window's gives the bits of reading them
+    // all, for windows inside, at the edges, one row, empty, tiles not multiples of the cells
+    // (the tile and cell maxima are taken by absolute boundaries), on any thread count; a
+    // window outside the image is refused
+    let (w, h) = (70, 45);
+    let rgba: Vec<f32> = (0..w * h * 4)
+        .map(|i| (i * 37 % 101) as f32 / 101.0)
+        .collect();
+    let depth: Vec<f32> = (0..w * h)
+        .map(|i| 1.0 + (i * 13 % 17) as f32 * 0.3)
+        .collect();
+    let windows = [
+        (10, 30, 20, 50),
+        (0, 45, 0, 9),
+        (20, 45, 61, 70),
+        (7, 8, 0, 70),
+        (5, 5, 3, 3),
+    ];
+    for (y0, y1, x0, x1) in windows {
+        let mut vel = vec![0.0f32; w * h * 2];
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let i = y * w + x;
+                vel[2 * i] = ((i * 7 % 23) as f32 - 11.0) * 1.3;
+                vel[2 * i + 1] = ((i * 5 % 19) as f32 - 9.0) * 0.7;
+            }
+        }
+        for tile in [6, 8, 21] {
+            let p = ReconstructParams { tile, ..params() };
+            let whole = reconstruct(&rgba, &depth, &vel, w, h, p).unwrap();
+            let win = (y0, y1, x0, x1);
+            let part = reconstruct_moving(&rgba, &depth, &vel, (w, h), p, win).unwrap();
+            assert_eq!(whole, part, "{win:?} {tile}");
+            let one = crate::on_threads(1, || {
+                reconstruct_moving(&rgba, &depth, &vel, (w, h), p, win).unwrap()
+            });
+            assert_eq!(whole, one, "{win:?} {tile}");
+        }
+    }
+    let vel = vec![0.0f32; w * h * 2];
+    for win in [(0, 46, 0, 10), (3, 2, 0, 10), (0, 10, 0, 71)] {
+        let e = reconstruct_moving(&rgba, &depth, &vel, (w, h), params(), win).unwrap_err();
+        assert!(e.to_string().contains("moving"), "{e}");
+    }
+}
+
 /// The gather of every tap of every pixel, serial: the filter as the module docs define it,
 /// without the cells' skipping (the oracle of the skipping).
 fn unskipped(
