@@ -62,7 +62,7 @@ pub use error::{Error, Result};
 pub use frame::{Exposure, Frame, Layer};
 pub use image::{
     box_blur, camera_frame_blur, camera_motion_blur, camera_velocity, colored, coverage_blur,
-    coverage_composite, depth_of_field, glow, lens_blur, max_speed, object_pixels,
+    coverage_composite, depth_of_field, glow, lens_blur, max_speed, max_speed_in, object_pixels,
     one_velocity_group, opaque_blur, opaque_motion_blur, opaque_motion_blur_into, pixel_bounds,
     pyramid_blur, pyramid_glow, pyramid_opaque_blur, reconstruct, reconstruct_moving,
     sample_colors, scatter_pieces, splat_paths, velocity_blur, CameraBlur, CameraMatrices,

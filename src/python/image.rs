@@ -516,11 +516,27 @@ fn _reconstruct<'py>(
     shaped(py, out, [h, w, 4])
 }
 
-/// The longest velocity (float64 pixels) of a velocity buffer (H,W,2) f32.
+/// The longest velocity (float64 pixels) of a velocity buffer (H,W,2) f32, or of its window
+/// `within` (y0, y1, x0, x1), read in place.
 #[pyfunction]
-fn _max_speed(py: Python<'_>, velocity: PyReadonlyArray3<'_, f32>) -> PyResult<f64> {
-    let (v, _, _) = img3(&velocity, "velocity", 2)?;
-    Ok(py.detach(|| crate::max_speed(v)))
+#[pyo3(signature = (velocity, within = None))]
+fn _max_speed(
+    py: Python<'_>,
+    velocity: PyReadonlyArray3<'_, f32>,
+    within: Option<(usize, usize, usize, usize)>,
+) -> PyResult<f64> {
+    let (v, w, h) = img3(&velocity, "velocity", 2)?;
+    match within {
+        None => Ok(py.detach(|| crate::max_speed(v))),
+        Some((y0, y1, x0, x1)) => {
+            if !(y0 <= y1 && y1 <= h && x0 <= x1 && x1 <= w) {
+                let msg =
+                    format!("({y0}, {y1}, {x0}, {x1}) is not a window of the ({h}, {w}) image");
+                return Err(Error::value("within", msg).into());
+            }
+            Ok(py.detach(|| crate::max_speed_in(v, w, (y0, y1, x0, x1))))
+        }
+    }
 }
 
 /// The options of `_camera_frame_blur`, the items of a dict: the two cameras

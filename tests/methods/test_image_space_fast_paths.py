@@ -137,8 +137,16 @@ def test_max_speed_is_numpys_float64_formula():
         v = (rng.standard_normal(shape) * rng.choice([1e-3, 1.0, 300.0, 1e6])).astype(np.float32)
         want = float(np.sqrt((v.astype(np.float64) ** 2).sum(axis=-1)).max())
         assert _core._max_speed(v) == want
+    # a window read in place: the value of its copy, NaN only when the NaN is inside it
+    for win in ((0, 300, 0, 401), (17, 230, 3, 9), (299, 300, 0, 401), (40, 40, 5, 50), (0, 9, 395, 401)):
+        y0, y1, x0, x1 = win
+        assert _core._max_speed(v, win) == _core._max_speed(np.ascontiguousarray(v[y0:y1, x0:x1]))
+    with pytest.raises(ValueError, match="within"):
+        _core._max_speed(v, (0, 301, 0, 10))
     v[5, 7, 1] = np.nan
     assert np.isnan(_core._max_speed(v))
+    assert np.isnan(_core._max_speed(v, (5, 6, 7, 8)))
+    assert not np.isnan(_core._max_speed(v, (6, 300, 0, 401)))
 
 
 def test_velocity_reads_its_longest_velocity_in_the_drawn_window_only():

@@ -494,8 +494,7 @@ def _max_speed(vel: np.ndarray, drawn) -> float:
     outside it every velocity is 0: the same value), 0 when it drew nothing (None)."""
     if drawn is None:
         return 0.0
-    y0, y1, x0, x1 = drawn
-    return _core._max_speed(np.ascontiguousarray(vel[y0:y1, x0:x1]))
+    return _core._max_speed(np.ascontiguousarray(vel), tuple(drawn))
 
 
 @register(

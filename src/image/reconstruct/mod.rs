@@ -82,36 +82,56 @@ fn len2(v: [f32; 2]) -> f32 {
 /// any thread count (a maximum does not depend on the order).
 pub fn max_speed(velocity: &[f32]) -> f64 {
     // sqrt is correctly rounded and non-decreasing, so the longest length is the square root of
-    // the largest squared length: one root for the image, not one a pixel. Lanes of 8 pixels
-    // keep the largest squared length and whether one is NaN apart, so that the loop vectorises.
+    // the largest squared length: one root for the image, not one a pixel.
     let (most, nan) = velocity
         .par_chunks(2 << 12)
-        .map(|c| {
-            let mut lanes = [0.0f64; 8];
-            let mut nan = false;
-            let mut pixels = c.chunks_exact(16);
-            for p in &mut pixels {
-                for k in 0..8 {
-                    let (x, y) = (p[2 * k] as f64, p[2 * k + 1] as f64);
-                    let l = x * x + y * y;
-                    nan |= l.is_nan();
-                    lanes[k] = lanes[k].max(l);
-                }
-            }
-            for v in pixels.remainder().chunks_exact(2) {
-                let (x, y) = (v[0] as f64, v[1] as f64);
-                let l = x * x + y * y;
-                nan |= l.is_nan();
-                lanes[0] = lanes[0].max(l);
-            }
-            (lanes.iter().fold(0.0f64, |m, l| m.max(*l)), nan)
-        })
+        .map(longest2)
         .reduce(|| (0.0, false), |a, b| (a.0.max(b.0), a.1 | b.1));
     if nan {
         f64::NAN
     } else {
         most.sqrt()
     }
+}
+
+/// [`max_speed`] of the window `(y0, y1, x0, x1)` of a `w` pixels wide velocity buffer, read
+/// in place (the same value as of a copy of the window: a maximum does not depend on the
+/// order).
+pub fn max_speed_in(velocity: &[f32], w: usize, (y0, y1, x0, x1): Window) -> f64 {
+    let rows = (y0..y1)
+        .into_par_iter()
+        .with_min_len((1usize << 13).div_ceil((x1 - x0).max(1)));
+    let (most, nan) = rows
+        .map(|y| longest2(&velocity[2 * (y * w + x0)..2 * (y * w + x1)]))
+        .reduce(|| (0.0, false), |a, b| (a.0.max(b.0), a.1 | b.1));
+    if nan {
+        f64::NAN
+    } else {
+        most.sqrt()
+    }
+}
+
+/// The largest squared length (float64) of the velocities `c` (pairs), and whether one is NaN.
+/// Lanes of 8 pixels keep them apart, so that the loop vectorises.
+fn longest2(c: &[f32]) -> (f64, bool) {
+    let mut lanes = [0.0f64; 8];
+    let mut nan = false;
+    let mut pixels = c.chunks_exact(16);
+    for p in &mut pixels {
+        for k in 0..8 {
+            let (x, y) = (p[2 * k] as f64, p[2 * k + 1] as f64);
+            let l = x * x + y * y;
+            nan |= l.is_nan();
+            lanes[k] = lanes[k].max(l);
+        }
+    }
+    for v in pixels.remainder().chunks_exact(2) {
+        let (x, y) = (v[0] as f64, v[1] as f64);
+        let l = x * x + y * y;
+        nan |= l.is_nan();
+        lanes[0] = lanes[0].max(l);
+    }
+    (lanes.iter().fold(0.0f64, |m, l| m.max(*l)), nan)
 }
 
 /// The largest squared length of `v` (0 for none), over 8 lanes.
