@@ -69,6 +69,39 @@ fn max_speed_is_the_longest_length() {
 }
 
 #[test]
+fn max_speed_in_a_window_is_its_copys() {
+    // the window read in place against a copy of it: inside, at the edges, one row, empty,
+    // a NaN inside and outside the window
+    let (w, h) = (45, 31);
+    let mut v: Vec<f32> = (0..2 * w * h)
+        .map(|i| ((i * 7919 % 1013) as f32 - 506.0) * 0.37)
+        .collect();
+    let copy = |v: &[f32], (y0, y1, x0, x1): Window| -> Vec<f32> {
+        (y0..y1)
+            .flat_map(|y| v[2 * (y * w + x0)..2 * (y * w + x1)].to_vec())
+            .collect()
+    };
+    let windows = [
+        (0, 31, 0, 45),
+        (3, 20, 5, 17),
+        (30, 31, 0, 45),
+        (4, 4, 2, 9),
+        (0, 5, 44, 45),
+    ];
+    for win in windows {
+        let want = max_speed(&copy(&v, win));
+        assert_eq!(
+            max_speed_in(&v, w, win).to_bits(),
+            want.to_bits(),
+            "{win:?}"
+        );
+    }
+    v[2 * (6 * w + 9) + 1] = f32::NAN;
+    assert!(max_speed_in(&v, w, (6, 7, 9, 10)).is_nan());
+    assert!(!max_speed_in(&v, w, (7, 31, 0, 45)).is_nan());
+}
+
+#[test]
 fn same_result_on_one_thread() {
     let (w, h) = (40, 30);
     let rgba: Vec<f32> = (0..w * h * 4).map(|i| (i % 7) as f32 / 7.0).collect();
