@@ -14,15 +14,17 @@
 //! 2. **Neighbour max**: the largest of the 3x3 tiles around each tile.
 //! 3. **Gather** at pixel `X` (half velocity `c`, neighbour max `n`): when `|n| < 0.5` the pixel
 //!    is copied. Otherwise `samples` taps are placed symmetrically at `X +- t n` (and, when
-//!    `|c| >= 0.5`, half of them at `X +- t c`, Guertin's second direction, which recovers a
-//!    pixel whose motion differs from its neighbourhood's), `t = (i + j) / m` with a jitter `j`
+//!    `|c| >= 0.5`, half of them at `X +- t c_r`, Guertin's second direction, which recovers a
+//!    pixel whose motion differs from its neighbourhood's; `c_r` is the half velocity of the
+//!    first moving pixel of the pixel's run of eight, below), `t = (i + j) / m` with a jitter `j`
 //!    in `[0, 1)` shared by a run of eight pixels of a row (a hash of the run's first pixel, so
 //!    the result is deterministic; a tile's rows are cut into runs from its left edge, the last
 //!    one shorter when the tile is not a multiple of 8 wide), each taken at the nearest pixel
-//!    `Y` (taps outside the image are dropped). Along `n`, a pixel's tap is the run's first
-//!    pixel's nearest pixel moved along the row by the pixel's place in the run (the nearest
-//!    pixel of its own tap up to rounding), so the run's taps are eight neighbouring pixels at
-//!    one distance: one load each rather than a gather. A tap at distance `d` is split by depth
+//!    `Y` (taps outside the image are dropped). Along `n` and along `c_r`, a pixel's tap is the
+//!    run's first pixel's nearest pixel moved along the row by the pixel's place in the run (the
+//!    nearest pixel of its own tap up to rounding), so the run's taps are eight neighbouring
+//!    pixels at one distance: one load each rather than a gather (the moving pixels of a run
+//!    share one direction as they share one jitter). A tap at distance `d` is split by depth
 //!    into a foreground part `f = clamp(0.5 - (z_Y - z_X) / (s z), 0, 1)` and a background
 //!    part `1 - f` (`s` the relative `soft_depth`, `z` the nearer depth): the foreground part
 //!    counts when the tap's own motion reaches `X` (`clamp(|v_Y / 2| - d + 1, 0, 1)`), the
@@ -800,6 +802,11 @@ fn gather(g: &Gather<'_>, (x, y): (usize, usize), x0: usize, (n, rn): ([f32; 2],
     let pairs = params.samples / 2;
     let both = rc >= 0.5 && rn >= 0.5;
     let j = jitter(x0, y);
+    // a moving pixel's own direction is its run's: the half velocity of the run's first moving
+    // pixel (the run: from x0 to the tile's right edge, eight pixels at most)
+    let end = ((x0 / params.tile + 1) * params.tile).min(w).min(x0 + 8);
+    let first = (x0..end).find(|&k| speed[y * w + k] >= 0.5).unwrap_or(x);
+    let cr = half_at(velocity, y * w + first, params.tile as f32);
     // a still pixel's taps run along n at increasing distance t rn: from the first one past
     // every speed they can meet (the tap's pixel is within 0.71 of t n: one pixel more), the
     // rest weigh nothing and only count
@@ -810,9 +817,9 @@ fn gather(g: &Gather<'_>, (x, y): (usize, usize), x0: usize, (n, rn): ([f32; 2],
     };
     for p in 0..pairs {
         // (direction, its length, the pair's place along it, pairs along it, the pixel whose
-        // tap is moved to this one: the run's first along n)
+        // tap is moved to this one: the run's first along n and along the run's own direction)
         let (dir, r, q, m, a) = if both && p % 2 == 1 {
-            (c, rc, p / 2, pairs / 2, x)
+            (cr, len2(cr).sqrt(), p / 2, pairs / 2, x0)
         } else if both {
             (n, rn, p / 2, pairs - pairs / 2, x0)
         } else if rn >= 0.5 {
@@ -1073,10 +1080,9 @@ unsafe fn store_rgba8(c: [std::arch::x86_64::__m256; 4], out: &mut [MaybeUninit<
     }
 }
 
-/// [`gather8`] in AVX2 (its docs). The still lanes' taps and the moving lanes' taps along `n`
-/// lie on eight neighbouring pixels of a row (module docs): one load each, a gather only at the
-/// image's left and right edges; the moving lanes' taps along their own velocities are
-/// gathered.
+/// [`gather8`] in AVX2 (its docs). Every tap of the run lies on eight neighbouring pixels of a
+/// row (module docs: along `n`, and the moving lanes' along the run's own direction): one load
+/// each, a gather only at the image's left and right edges.
 ///
 /// # Safety
 /// AVX2 is present, `x + 8 <= w`, `w * h * 4 < 2^31`, `out` holds 4 to 32 values.
@@ -1102,7 +1108,6 @@ unsafe fn gather8_avx(
     } = *g;
     let i0 = y * w + x;
     let iota = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-    let xf = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(x as i32), iota));
     let yf = _mm256_set1_ps(y as f32);
     let rc = _mm256_loadu_ps(speed.as_ptr().add(i0));
     let zx = _mm256_loadu_ps(depth.as_ptr().add(i0));
@@ -1186,25 +1191,19 @@ unsafe fn gather8_avx(
         (zy, sy, col)
     };
     let pairs = params.samples / 2;
-    let (wl, hl) = (_mm256_set1_ps(w as f32), _mm256_set1_ps(h as f32));
-    let (wi, cw) = (
-        _mm256_set1_epi32(w as i32),
-        _mm256_set1_epi32(reach.cw as i32),
-    );
-    let (xc, yc) = (_mm256_add_ps(xf, half), _mm256_add_ps(yf, half));
+    let hl = _mm256_set1_ps(h as f32);
+    let wi = _mm256_set1_epi32(w as i32);
     let mut still = _mm256_andnot_ps(moving, live);
     let movers = _mm256_and_ps(moving, live);
     let any = |m: __m256| _mm256_movemask_ps(m) != 0;
-    // the moving lanes' own half velocities
-    let (c0, c1) = if any(movers) {
-        let c: [[f32; 2]; 8] =
-            std::array::from_fn(|l| half_at(g.velocity, i0 + l, params.tile as f32));
-        (
-            _mm256_loadu_ps(c.map(|v| v[0]).as_ptr()),
-            _mm256_loadu_ps(c.map(|v| v[1]).as_ptr()),
-        )
+    // the moving lanes' own direction: the half velocity of the run's first moving pixel, and
+    // its length
+    let (cr, rr) = if any(movers) {
+        let first = _mm256_movemask_ps(movers).trailing_zeros() as usize;
+        let c = half_at(g.velocity, i0 + first, params.tile as f32);
+        (c, len2(c).sqrt())
     } else {
-        (zero, zero)
+        ([0.0; 2], 0.0)
     };
     // the still lanes' taps of eight pairs at a time, computed eight at a time: `t`, `t rn`,
     // and for each sign (`8 s` + pair) the run's first pixel's tap column `base`, its row
@@ -1216,10 +1215,11 @@ unsafe fn gather8_avx(
         row: [0; 16],
         d: [0.0; 16],
     };
-    // the still lanes' (`tab`: t = (p + j) / pairs) and the moving lanes' along n (`mtab`:
-    // t = (p / 2 + j) / m, even pairs)
-    let (mut tab, mut mtab) = (empty, empty);
-    let fill = |p0: usize, m: usize, tab: &mut RunTaps| {
+    // the still lanes' along n (`tabs[0]`: t = (p + j) / pairs), the moving lanes' along n
+    // (`tabs[1]`: t = (p / 2 + j) / m, even pairs) and along their own direction (`tabs[2]`,
+    // odd pairs)
+    let mut tabs = [empty; 3];
+    let fill = |p0: usize, m: usize, (n, rn): ([f32; 2], f32), tab: &mut RunTaps| {
         let pv = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(p0 as i32), iota));
         let t = _mm256_div_ps(
             _mm256_add_ps(pv, _mm256_set1_ps(j)),
@@ -1260,20 +1260,18 @@ unsafe fn gather8_avx(
     let mut counted = [0.0f32; 8];
     for p in 0..pairs {
         // the still lanes' pair along n at t = (p + j) / pairs, the moving lanes' along n
-        // (even pairs) or their own velocity (odd pairs) at t = (p / 2 + j) / m: each lane
-        // takes one of them, in `gather`'s order. A job: its t, its lanes, and along n the
-        // table (`mtab` or not) and pair of its taps
-        let mut jobs = [(0.0f32, zero, None); 2];
+        // (even pairs) or their own direction (odd pairs) at t = (p / 2 + j) / m: each lane
+        // takes one of them, in `gather`'s order. A job: its lanes, its table and pair
+        let mut jobs = [(zero, 0, 0); 2];
         let mut count = 0;
         if any(still) {
             let q = p % 8;
             if q == 0 {
-                fill(p, pairs, &mut tab);
+                fill(p, pairs, (n, rn), &mut tabs[0]);
             }
-            let t = tab.t[q];
             let ends = _mm256_and_ps(
                 still,
-                _mm256_cmp_ps::<_CMP_GE_OQ>(_mm256_set1_ps(tab.tr[q]), stop),
+                _mm256_cmp_ps::<_CMP_GE_OQ>(_mm256_set1_ps(tabs[0].tr[q]), stop),
             );
             let ended = _mm256_movemask_ps(ends);
             if ended != 0 {
@@ -1285,128 +1283,76 @@ unsafe fn gather8_avx(
                 still = _mm256_andnot_ps(ends, still);
             }
             if any(still) {
-                jobs[count] = (t, still, Some((false, q)));
+                jobs[count] = (still, 0, q);
                 count += 1;
             }
         }
         if any(movers) {
             let odd = p % 2 == 1;
             let m = if odd { pairs / 2 } else { pairs - pairs / 2 };
-            if odd {
-                let t = ((p / 2) as f32 + j) / m.max(1) as f32;
-                jobs[count] = (t, movers, None);
-            } else {
-                let q = (p / 2) % 8;
-                if q == 0 {
-                    fill(p / 2, m, &mut mtab);
-                }
-                jobs[count] = (mtab.t[q], movers, Some((true, q)));
+            let (which, dir) = if odd { (2, (cr, rr)) } else { (1, (n, rn)) };
+            let q = (p / 2) % 8;
+            if q == 0 {
+                fill(p / 2, m, dir, &mut tabs[which]);
             }
+            jobs[count] = (movers, which, q);
             count += 1;
         }
         if count == 0 {
             break;
         }
-        for &(t, mask, along_n) in &jobs[..count] {
-            for (k, s) in [-1.0f32, 1.0].into_iter().enumerate() {
-                if let Some((mover, q)) = along_n {
-                    // the run's first pixel's tap, moved along the row lane by lane
-                    let tab = if mover { &mtab } else { &tab };
-                    let i = 8 * k + q;
-                    if tab.row[i] < 0 {
-                        continue;
-                    }
-                    let (base, sy, d) = (tab.base[i] as i64, tab.row[i] as usize, tab.d[i]);
-                    let whole = base >= 0 && base + 8 <= w as i64;
-                    let bl = _mm256_add_epi32(_mm256_set1_epi32(base as i32), iota);
-                    let inside = if whole {
-                        mask
-                    } else {
-                        let ins = _mm256_and_si256(
-                            _mm256_cmpgt_epi32(bl, _mm256_set1_epi32(-1)),
-                            _mm256_cmpgt_epi32(wi, bl),
-                        );
-                        _mm256_and_ps(_mm256_castsi256_ps(ins), mask)
-                    };
-                    if !any(inside) {
-                        continue;
-                    }
-                    taps = _mm256_add_ps(taps, _mm256_and_ps(inside, one));
-                    let d = _mm256_set1_ps(d);
-                    let row = (sy / CELL) * reach.cw;
-                    let cell = if whole {
-                        in_cells(&reach.cell, row, base as usize)
-                    } else {
-                        let cidx = _mm256_and_si256(
-                            _mm256_add_epi32(
-                                _mm256_set1_epi32(row as i32),
-                                _mm256_srai_epi32::<4>(bl),
-                            ),
-                            _mm256_castps_si256(inside),
-                        );
-                        _mm256_i32gather_ps::<4>(reach.cell.as_ptr(), cidx)
-                    };
-                    let from = _mm256_add_ps(_mm256_max_ps(cell, rc), two);
-                    let real = _mm256_andnot_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(d, from), inside);
-                    if !any(real) {
-                        continue;
-                    }
-                    let k = sy * w + base as usize;
-                    if whole {
-                        let zy = _mm256_loadu_ps(depth.as_ptr().add(k));
-                        let sp = _mm256_loadu_ps(speed.as_ptr().add(k));
-                        add(
-                            weights(zy, sp, d, real),
-                            load_rgba8(rgba.as_ptr().add(4 * k)),
-                        );
-                    } else {
-                        let yi = _mm256_add_epi32(_mm256_set1_epi32((sy * w) as i32), bl);
-                        let (zy, sp, col) = gathered(yi, real);
-                        add(weights(zy, sp, d, real), col);
-                    }
+        for &(mask, which, q) in &jobs[..count] {
+            // the run's first pixel's tap, moved along the row lane by lane
+            let tab = &tabs[which];
+            for k in 0..2 {
+                let i = 8 * k + q;
+                if tab.row[i] < 0 {
+                    continue;
+                }
+                let (base, sy, d) = (tab.base[i] as i64, tab.row[i] as usize, tab.d[i]);
+                let whole = base >= 0 && base + 8 <= w as i64;
+                let bl = _mm256_add_epi32(_mm256_set1_epi32(base as i32), iota);
+                let inside = if whole {
+                    mask
                 } else {
-                    // each lane's own tap along its own velocity
-                    let tr = _mm256_mul_ps(_mm256_set1_ps(t), rc);
-                    let stv = _mm256_set1_ps(s * t);
-                    let px = _mm256_add_ps(xc, _mm256_mul_ps(stv, c0));
-                    let py = _mm256_add_ps(yc, _mm256_mul_ps(stv, c1));
-                    let inside = _mm256_and_ps(
-                        _mm256_and_ps(
-                            _mm256_cmp_ps::<_CMP_GE_OQ>(px, zero),
-                            _mm256_cmp_ps::<_CMP_GE_OQ>(py, zero),
-                        ),
-                        _mm256_and_ps(
-                            _mm256_cmp_ps::<_CMP_LT_OQ>(px, wl),
-                            _mm256_cmp_ps::<_CMP_LT_OQ>(py, hl),
-                        ),
+                    let ins = _mm256_and_si256(
+                        _mm256_cmpgt_epi32(bl, _mm256_set1_epi32(-1)),
+                        _mm256_cmpgt_epi32(wi, bl),
                     );
-                    let inside = _mm256_and_ps(inside, mask);
-                    if !any(inside) {
-                        continue;
-                    }
-                    let sx = _mm256_cvttps_epi32(px);
-                    let sy = _mm256_cvttps_epi32(py);
-                    let dx = _mm256_sub_ps(_mm256_cvtepi32_ps(sx), xf);
-                    let dy = _mm256_sub_ps(_mm256_cvtepi32_ps(sy), yf);
-                    let d2 = _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy));
-                    let d = _mm256_min_ps(_mm256_sqrt_ps(d2), tr);
-                    let ins = _mm256_castps_si256(inside);
+                    _mm256_and_ps(_mm256_castsi256_ps(ins), mask)
+                };
+                if !any(inside) {
+                    continue;
+                }
+                taps = _mm256_add_ps(taps, _mm256_and_ps(inside, one));
+                let d = _mm256_set1_ps(d);
+                let row = (sy / CELL) * reach.cw;
+                let cell = if whole {
+                    in_cells(&reach.cell, row, base as usize)
+                } else {
                     let cidx = _mm256_and_si256(
-                        _mm256_add_epi32(
-                            _mm256_mullo_epi32(_mm256_srli_epi32::<4>(sy), cw),
-                            _mm256_srli_epi32::<4>(sx),
-                        ),
-                        ins,
+                        _mm256_add_epi32(_mm256_set1_epi32(row as i32), _mm256_srai_epi32::<4>(bl)),
+                        _mm256_castps_si256(inside),
                     );
-                    let cell = _mm256_i32gather_ps::<4>(reach.cell.as_ptr(), cidx);
-                    let from = _mm256_add_ps(_mm256_max_ps(cell, rc), two);
-                    let real = _mm256_andnot_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(d, from), inside);
-                    taps = _mm256_add_ps(taps, _mm256_and_ps(inside, one));
-                    if any(real) {
-                        let yi = _mm256_add_epi32(_mm256_mullo_epi32(sy, wi), sx);
-                        let (zy, sp, col) = gathered(yi, real);
-                        add(weights(zy, sp, d, real), col);
-                    }
+                    _mm256_i32gather_ps::<4>(reach.cell.as_ptr(), cidx)
+                };
+                let from = _mm256_add_ps(_mm256_max_ps(cell, rc), two);
+                let real = _mm256_andnot_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(d, from), inside);
+                if !any(real) {
+                    continue;
+                }
+                let k = sy * w + base as usize;
+                if whole {
+                    let zy = _mm256_loadu_ps(depth.as_ptr().add(k));
+                    let sp = _mm256_loadu_ps(speed.as_ptr().add(k));
+                    add(
+                        weights(zy, sp, d, real),
+                        load_rgba8(rgba.as_ptr().add(4 * k)),
+                    );
+                } else {
+                    let yi = _mm256_add_epi32(_mm256_set1_epi32((sy * w) as i32), bl);
+                    let (zy, sp, col) = gathered(yi, real);
+                    add(weights(zy, sp, d, real), col);
                 }
             }
         }

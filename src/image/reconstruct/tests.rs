@@ -210,10 +210,14 @@ fn unskipped(
             // the pixel's run of eight: from its tile's left edge, eight pixels at a time
             let x0 = x - (x % p.tile) % 8;
             let j = jitter(x0, y);
+            // a moving pixel's own direction: its run's first moving pixel's half velocity
+            let end = ((x0 / p.tile + 1) * p.tile).min(w).min(x0 + 8);
+            let first = (x0..end).find(|&k| len2(half[y * w + k]).sqrt() >= 0.5);
+            let cr = half[y * w + first.unwrap_or(x)];
             for q in 0..pairs {
-                // along n, the tap of the run's first pixel moved along the row
+                // the tap of the run's first pixel moved along the row
                 let (dir, r, k, m, a) = if both && q % 2 == 1 {
-                    (c, rc, q / 2, pairs / 2, x)
+                    (cr, len2(cr).sqrt(), q / 2, pairs / 2, x0)
                 } else if both {
                     (n, rn, q / 2, pairs - pairs / 2, x0)
                 } else {
