@@ -143,6 +143,21 @@ def stages(scene: Scene, method: str, rounds: int) -> dict[str, float]:
             "sharp frame": best(lambda: ims._sharp(scene, tc, 1, "since_open", static), rounds),
             "blur": blur,
         }
+    if method == "velocity" and static is not None and hasattr(static, "pasted"):
+        # the method's own steps: the sharp frame over the static layer (its colour the layer's
+        # kept copy with the moving window pasted in), the longest velocity and the
+        # reconstruction read in the drawn window
+        frame, pasted = ims._sharp_over(scene, tc, 1, "shutter", static)
+        out = {"sharp frame": best(lambda: ims._sharp_over(scene, tc, 1, "shutter", static), rounds)}
+        vel, drawn = c(frame.velocity), pasted[0]
+        tile = max(8, int(np.ceil(0.5 * _core._max_speed(vel, drawn))))
+        out["max speed"] = best(lambda: _core._max_speed(vel, drawn), rounds)
+        with static.pasted(*pasted) as sharp:
+            out["reconstruct"] = best(
+                lambda: _core._reconstruct(sharp, c(frame.depth), vel, 16, tile, 0.02, drawn), rounds
+            )
+        out["moving pixels %"] = 100.0 * float(np.mean(np.hypot(vel[..., 0], vel[..., 1]) > 0))
+        return out
     frame = ims._sharp(scene, tc, 1, "shutter", static)
     out = {"sharp frame": best(lambda: ims._sharp(scene, tc, 1, "shutter", static), rounds)}
     if method == "velocity":

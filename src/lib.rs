@@ -62,13 +62,13 @@ pub use error::{Error, Result};
 pub use frame::{Exposure, Frame, Layer};
 pub use image::{
     box_blur, camera_frame_blur, camera_motion_blur, camera_velocity, colored, coverage_blur,
-    coverage_composite, depth_of_field, glow, lens_blur, max_speed, object_pixels,
+    coverage_composite, depth_of_field, glow, lens_blur, max_speed, max_speed_in, object_pixels,
     one_velocity_group, opaque_blur, opaque_motion_blur, opaque_motion_blur_into, pixel_bounds,
-    pyramid_blur, pyramid_glow, pyramid_opaque_blur, reconstruct, sample_colors, scatter_pieces,
-    splat_paths, velocity_blur, CameraBlur, CameraMatrices, Composite, CoverageObject,
-    CoveragePart, CoverageSource, DofParams, FrameMotion, LensParams, ObjectPixels, Piece,
-    ReconstructParams, MAX_FPS_RATIO, MAX_LAYERS, MAX_LENGTH, MAX_LENS_LEVELS, MAX_LEVELS,
-    MAX_SAMPLES, MAX_TAPS, MAX_VELOCITY, MIN_ALPHA,
+    pyramid_blur, pyramid_glow, pyramid_opaque_blur, reconstruct, reconstruct_moving,
+    sample_colors, scatter_pieces, splat_paths, velocity_blur, CameraBlur, CameraMatrices,
+    Composite, CoverageObject, CoveragePart, CoverageSource, DofParams, FrameMotion, LensParams,
+    ObjectPixels, Piece, ReconstructParams, MAX_FPS_RATIO, MAX_LAYERS, MAX_LENGTH, MAX_LENS_LEVELS,
+    MAX_LEVELS, MAX_SAMPLES, MAX_TAPS, MAX_VELOCITY, MIN_ALPHA,
 };
 pub use mesh::{Adjacency, FaceNeighbors, Mesh, MeshStats, MAX_COORD};
 pub use motion::{

@@ -541,8 +541,9 @@ def _camera_motion_blur(
 ) -> np.ndarray:
     """Chapman's camera blur: _camera_velocity times scale, then _velocity_blur. (H,W,4) f32."""
 
-def _max_speed(velocity: np.ndarray) -> float:
-    """The longest velocity, max sqrt(vx^2 + vy^2) in float64, of velocity (H,W,2) f32 (NaN if any is)."""
+def _max_speed(velocity: np.ndarray, within: tuple[int, int, int, int] | None = None) -> float:
+    """The longest velocity, max sqrt(vx^2 + vy^2) in float64, of velocity (H,W,2) f32 (NaN if any is),
+    or of its window ``within`` (y0, y1, x0, x1), read in place."""
 
 def _camera_frame_blur(
     rgba: np.ndarray,
@@ -561,9 +562,17 @@ def _camera_frame_blur(
     pixels blurred as a line integral)."""
 
 def _reconstruct(
-    rgba: np.ndarray, depth: np.ndarray, velocity: np.ndarray, samples: int, tile: int, soft_depth: float
+    rgba: np.ndarray,
+    depth: np.ndarray,
+    velocity: np.ndarray,
+    samples: int,
+    tile: int,
+    soft_depth: float,
+    moving: tuple[int, int, int, int] | None = None,
 ) -> np.ndarray:
-    """McGuire/Guertin reconstruction filter: rgba (H,W,4), depth (H,W), velocity (H,W,2) f32 -> (H,W,4) f32."""
+    """McGuire/Guertin reconstruction filter: rgba (H,W,4), depth (H,W), velocity (H,W,2) f32 -> (H,W,4) f32.
+    ``moving`` (y0, y1, x0, x1): the window outside which every velocity is 0 (the caller's
+    promise, not checked; only its velocities are read), None for the whole image."""
 
 # --- end image
 

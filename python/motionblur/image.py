@@ -325,8 +325,9 @@ def reconstruction_blur(rgba, depth, velocity, samples=16, tile=None, soft_depth
     [2, 256]; ``tile``: tile size in pixels (default: half the longest velocity, at least 8, so
     no motion is shortened; a smaller tile clamps half velocities to it); ``soft_depth``: depth
     difference, relative to depth, over which a tap goes from foreground to background (> 0).
-    Deterministic (a hash of each run of eight pixels of a row jitters its taps), the same for
-    any thread count.
+    Deterministic (a hash of each run of eight pixels of a row jitters its taps, and the run's
+    moving pixels take their second direction from its first moving pixel), the same for any
+    thread count.
     Returns (H,W,4) float32 premultiplied.
     """
     a = _rgba(rgba)

@@ -78,7 +78,8 @@ class Renderer:
     What is kept, and for how long:
 
     - ``static_layers``: the static layer of a still camera (the last 4 fingerprints of
-      objects, colours, placement, camera, lights and ``aa``);
+      objects, colours, placement, camera, lights and ``aa``), and once the ``velocity`` method
+      has used it, a copy of its colour that method pastes each frame's moving objects into;
     - ``painters``: the compiled painters of accumulation and the colour renders (the last 4
       object sets);
     - ``mesh_constants``: per-mesh arrays (normals, box corners, centroids), each dropped with

@@ -50,7 +50,9 @@ pub use object_pixels::{object_pixels, ObjectPixels};
 pub use opaque::{opaque_blur, opaque_motion_blur, opaque_motion_blur_into};
 pub use opaque_row::Composite;
 pub use pyramid::{pyramid_blur, pyramid_glow, pyramid_opaque_blur, MAX_LEVELS};
-pub use reconstruct::{max_speed, reconstruct, ReconstructParams, MAX_TAPS};
+pub use reconstruct::{
+    max_speed, max_speed_in, reconstruct, reconstruct_moving, ReconstructParams, MAX_TAPS,
+};
 pub use scatter::{scatter_pieces, Piece};
 pub use splat::splat_paths;
 pub use velocity_groups::one_velocity_group;

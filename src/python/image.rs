@@ -484,8 +484,11 @@ fn _camera_motion_blur<'py>(
 }
 
 /// McGuire/Guertin reconstruction filter of rgba (H,W,4) f32 with depth (H,W) f32 and
-/// velocity (H,W,2) f32.
+/// velocity (H,W,2) f32; `moving` (y0, y1, x0, x1): the window outside which every velocity
+/// is 0 (the caller's promise), None for the whole image.
 #[pyfunction]
+#[pyo3(signature = (rgba, depth, velocity, samples, tile, soft_depth, moving = None))]
+#[allow(clippy::too_many_arguments)] // (the Python signature's)
 fn _reconstruct<'py>(
     py: Python<'py>,
     rgba: PyReadonlyArray3<'py, f32>,
@@ -494,6 +497,7 @@ fn _reconstruct<'py>(
     samples: usize,
     tile: usize,
     soft_depth: f32,
+    moving: Option<(usize, usize, usize, usize)>,
 ) -> PyOut<'py> {
     let (a, w, h) = img3(&rgba, "rgba", 4)?;
     let (d, dw, dh) = img2(&depth, "depth")?;
@@ -505,15 +509,34 @@ fn _reconstruct<'py>(
         tile,
         soft_depth,
     };
-    let out = detached_in_pool(py, || crate::reconstruct(a, d, v, w, h, params))?;
+    let moving = moving.unwrap_or((0, h, 0, w));
+    let out = detached_in_pool(py, || {
+        crate::reconstruct_moving(a, d, v, (w, h), params, moving)
+    })?;
     shaped(py, out, [h, w, 4])
 }
 
-/// The longest velocity (float64 pixels) of a velocity buffer (H,W,2) f32.
+/// The longest velocity (float64 pixels) of a velocity buffer (H,W,2) f32, or of its window
+/// `within` (y0, y1, x0, x1), read in place.
 #[pyfunction]
-fn _max_speed(py: Python<'_>, velocity: PyReadonlyArray3<'_, f32>) -> PyResult<f64> {
-    let (v, _, _) = img3(&velocity, "velocity", 2)?;
-    Ok(py.detach(|| crate::max_speed(v)))
+#[pyo3(signature = (velocity, within = None))]
+fn _max_speed(
+    py: Python<'_>,
+    velocity: PyReadonlyArray3<'_, f32>,
+    within: Option<(usize, usize, usize, usize)>,
+) -> PyResult<f64> {
+    let (v, w, h) = img3(&velocity, "velocity", 2)?;
+    match within {
+        None => Ok(py.detach(|| crate::max_speed(v))),
+        Some((y0, y1, x0, x1)) => {
+            if !(y0 <= y1 && y1 <= h && x0 <= x1 && x1 <= w) {
+                let msg =
+                    format!("({y0}, {y1}, {x0}, {x1}) is not a window of the ({h}, {w}) image");
+                return Err(Error::value("within", msg).into());
+            }
+            Ok(py.detach(|| crate::max_speed_in(v, w, (y0, y1, x0, x1))))
+        }
+    }
 }
 
 /// The options of `_camera_frame_blur`, the items of a dict: the two cameras

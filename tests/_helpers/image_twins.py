@@ -433,9 +433,15 @@ def reconstruct_twin(rgba, depth, velocity, samples=16, tile=8, soft_depth=0.02)
             # tap is the run's first pixel's, moved along the row
             x0 = x - (x % tile) % 8
             j = _jitter(x0, y)
+            # a moving pixel's own direction is its run's: the run's first moving pixel's half
+            # velocity (the run ends at the tile's right edge, eight pixels at most); along it
+            # too a tap is the run's first pixel's, moved along the row
+            end = min((x0 // tile + 1) * tile, w, x0 + 8)
+            first = next((k for k in range(x0, end) if ln[y, k] >= 0.5), x)
+            cr = half[y, first]
             for p in range(pairs):
                 if both and p % 2 == 1:
-                    dvec, r, q, m, a = c, rc, p // 2, pairs // 2, x
+                    dvec, r, q, m, a = cr, float(np.hypot(*cr)), p // 2, pairs // 2, x0
                 elif both:
                     dvec, r, q, m, a = n, rn, p // 2, pairs - pairs // 2, x0
                 elif rn >= 0.5:

@@ -7,6 +7,9 @@
   (`motionblur.image.camera_velocity`, the moving objects' velocities, the float32 scale and
   clamp in numpy, `motionblur.image.velocity_blur`);
 * the longest velocity in the core against numpy's float64 formula;
+* ``velocity`` over the static layer's kept colour (the moving objects' window pasted in, the
+  previous one put back) against the method's steps on the sharp frame drawn whole, and the
+  core's reconstruction told the window where velocities are not 0 against it reading them all;
 * ``opaque_image``'s coverage glow in one call of the core per object (``_core._coverage_blur``)
   and its velocity groups against the method's former numpy steps
   (``tests/_helpers/opaque_image_twin.py``), every option;
@@ -134,8 +137,16 @@ def test_max_speed_is_numpys_float64_formula():
         v = (rng.standard_normal(shape) * rng.choice([1e-3, 1.0, 300.0, 1e6])).astype(np.float32)
         want = float(np.sqrt((v.astype(np.float64) ** 2).sum(axis=-1)).max())
         assert _core._max_speed(v) == want
+    # a window read in place: the value of its copy, NaN only when the NaN is inside it
+    for win in ((0, 300, 0, 401), (17, 230, 3, 9), (299, 300, 0, 401), (40, 40, 5, 50), (0, 9, 395, 401)):
+        y0, y1, x0, x1 = win
+        assert _core._max_speed(v, win) == _core._max_speed(np.ascontiguousarray(v[y0:y1, x0:x1]))
+    with pytest.raises(ValueError, match="within"):
+        _core._max_speed(v, (0, 301, 0, 10))
     v[5, 7, 1] = np.nan
     assert np.isnan(_core._max_speed(v))
+    assert np.isnan(_core._max_speed(v, (5, 6, 7, 8)))
+    assert not np.isnan(_core._max_speed(v, (6, 300, 0, 401)))
 
 
 def test_velocity_reads_its_longest_velocity_in_the_drawn_window_only():
@@ -158,6 +169,68 @@ def test_velocity_reads_its_longest_velocity_in_the_drawn_window_only():
         assert ims._max_speed(np.ascontiguousarray(frame.velocity, np.float32), drawn) == whole
         assert mb.render(scene, "velocity", error_estimate=False).stats["max_velocity"] == whole
     assert {"window", "none"} <= seen, seen
+
+
+def _velocity_oracle(scene: mb.Scene) -> np.ndarray:
+    # the velocity method's steps on the sharp frame drawn whole (no static layer, no window)
+    c = np.ascontiguousarray
+    frame = sharp_frame(scene, shutter_centroid(scene), 1, velocity="shutter")
+    vel = c(frame.velocity, np.float32)
+    tile = max(8, int(np.ceil(0.5 * _core._max_speed(vel))))
+    return _core._reconstruct(c(frame.rgba), c(frame.depth), vel, 16, tile, 0.02)
+
+
+def test_velocity_over_the_kept_pasted_colour_is_the_sharp_frames():
+    # velocity reads the sharp colour from the static layer's kept copy with the moving
+    # objects' window pasted in, the previous frame's window put back first, and the core
+    # reads the velocities in that window only: frames one after another over the same static
+    # layer (the mover in other places, then off screen: nothing drawn, then back), and one
+    # while another thread holds the kept copy (a fresh copy then), give the oracle's bits
+    clear_static_cache()
+    scene = mb.SCENES["cube"](width=72, height=54)
+    mover = scene.objects[0]
+    m = mover.motion
+    statics = set()
+    for dx in (0.0, 0.6, -0.8, 40.0, 0.3, 0.0):
+        shift = mb.translate((dx, 0.0, 0.0))
+        mover.motion = mb.Motion.linear(shift @ m.transform_at(0.0), shift @ m.transform_at(1.0))
+        frame = mb.render(scene, "velocity", error_estimate=False)
+        np.testing.assert_array_equal(frame.rgba, _velocity_oracle(scene))
+        static = ims._static_part(scene, 1)
+        statics.add(id(static))
+    assert len(statics) == 1  # one static layer, kept: the windows followed each other in it
+    with static._lock:
+        np.testing.assert_array_equal(
+            mb.render(scene, "velocity", error_estimate=False).rgba, _velocity_oracle(scene)
+        )
+    # the kept copy is the static colour again outside the last window
+    y0, y1, x0, x1 = static._window
+    kept = static._pasted.copy()
+    kept[y0:y1, x0:x1] = static.rgba[y0:y1, x0:x1]
+    np.testing.assert_array_equal(kept, static.rgba)
+
+
+def test_reconstruction_of_a_moving_window_is_the_whole_frames():
+    # the core told that every velocity outside a window is 0 reads only the window's and
+    # gives the bits of reading them all: windows tight around the motion, loose, at the
+    # edges, and empty (no motion); a window that is not inside the image is refused
+    rng = np.random.default_rng(8)
+    h, w = 90, 130
+    rgba = rng.random((h, w, 4), dtype=np.float32)
+    depth = (rng.random((h, w)) * 5 + 1).astype(np.float32)
+    for win in ((30, 50, 40, 70), (0, 90, 0, 9), (20, 90, 100, 130), (0, 1, 0, 130), (10, 10, 5, 5)):
+        y0, y1, x0, x1 = win
+        vel = np.zeros((h, w, 2), np.float32)
+        vel[y0:y1, x0:x1] = (rng.standard_normal((y1 - y0, x1 - x0, 2)) * 12).astype(np.float32)
+        for samples, tile in ((16, 10), (8, 7)):
+            want = _core._reconstruct(rgba, depth, vel, samples, tile, 0.02)
+            np.testing.assert_array_equal(
+                _core._reconstruct(rgba, depth, vel, samples, tile, 0.02, win), want
+            )
+    with pytest.raises(ValueError, match="moving"):
+        _core._reconstruct(rgba, depth, vel, 16, 10, 0.02, (0, 91, 0, 10))
+    with pytest.raises(ValueError, match="moving"):
+        _core._reconstruct(rgba, depth, vel, 16, 10, 0.02, (5, 4, 0, 10))
 
 
 def test_reconstruction_out_of_reach_ignores_the_mover():

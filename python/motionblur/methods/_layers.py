@@ -11,6 +11,8 @@ at a time into layers through one rasterizer call per shading mode (`raster_laye
 from __future__ import annotations
 
 import copy
+import threading
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -315,6 +317,35 @@ class Static:
         self.rgba, self.depth, self.ids = resolve_arrays(layer, aa)
         self.opaque = True
         self.cached = cached
+        # `pasted`'s colour, kept with the layer, and the window pasted in it last
+        self._pasted: np.ndarray | None = None
+        self._window = None
+        self._lock = threading.Lock()
+
+    @contextmanager
+    def pasted(self, window, part: np.ndarray):
+        """The static colour with ``part`` pasted in ``window`` (y0, y1, x0, x1), to be read
+        (not written, not kept) while the context lasts: a copy of the colour kept with the
+        layer (one more frame of memory), whose previous window is put back before the new one
+        is pasted, so a frame costs its window's copies instead of a frame-sized copy into
+        fresh pages. A fresh copy when another thread holds the kept one."""
+        y0, y1, x0, x1 = window
+        if not self._lock.acquire(blocking=False):
+            rgba = self.rgba.copy()
+            rgba[y0:y1, x0:x1] = part
+            yield rgba
+            return
+        try:
+            if self._pasted is None:
+                self._pasted = self.rgba.copy()
+            elif self._window is not None:
+                b0, b1, a0, a1 = self._window
+                self._pasted[b0:b1, a0:a1] = self.rgba[b0:b1, a0:a1]
+            self._window = window
+            self._pasted[y0:y1, x0:x1] = part
+            yield self._pasted
+        finally:
+            self._lock.release()
 
 
 def static_layer(scene: Scene, camera: Camera, objects, aa: int) -> Static:

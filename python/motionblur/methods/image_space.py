@@ -494,8 +494,7 @@ def _max_speed(vel: np.ndarray, drawn) -> float:
     outside it every velocity is 0: the same value), 0 when it drew nothing (None)."""
     if drawn is None:
         return 0.0
-    y0, y1, x0, x1 = drawn
-    return _core._max_speed(np.ascontiguousarray(vel[y0:y1, x0:x1]))
+    return _core._max_speed(np.ascontiguousarray(vel), tuple(drawn))
 
 
 @register(
@@ -531,14 +530,29 @@ def velocity(scene: Scene, samples: int = 16, aa: int = 1, tile=None, soft_depth
             "this camera moves (use camera_velocity, accumulation or motion_volume)"
         )
     tc = shutter_centroid(scene)
-    frame = _sharp(scene, tc, aa, "shutter", _static_part(scene, aa))
+    static = _static_part(scene, aa)
+    if static is None:
+        frame = _sharp(scene, tc, aa, "shutter", None)
+        drawn, pasted = frame.stats["drawn"], None
+    else:
+        # the sharp colour is only read here: the static layer's kept copy with the moving
+        # objects' window pasted in (Static.pasted), not a new frame-sized copy
+        frame, pasted = _sharp_over(scene, tc, aa, "shutter", static)
+        drawn = None if pasted is None else pasted[0]
     vel = np.ascontiguousarray(frame.velocity, dtype=np.float32)
-    vmax = _max_speed(vel, frame.stats["drawn"])
+    vmax = _max_speed(vel, drawn)
     if tile is None:
         tile = max(8, int(np.ceil(0.5 * vmax)))
-    # the frame is the rasterizer's (finite, depth > 0): the core checks it once more
+    # the frame is the rasterizer's (finite, depth > 0): the core checks it once more, and
+    # reads the velocities only where it drew (every other is 0)
     c = np.ascontiguousarray
-    rgba = _core._reconstruct(c(frame.rgba), c(frame.depth), vel, samples, tile, soft_depth)
+    moving = drawn if drawn is not None else (0, 0, 0, 0)
+    args = (c(frame.depth), vel, samples, tile, soft_depth, moving)
+    if pasted is None:
+        rgba = _core._reconstruct(c(frame.rgba), *args)
+    else:
+        with static.pasted(*pasted) as sharp:
+            rgba = _core._reconstruct(sharp, *args)
     out = Frame(rgba, frame.depth, frame.ids, frame.velocity)
     out.stats.update(t=tc, samples=samples, tile=tile, max_velocity=vmax)
     return out

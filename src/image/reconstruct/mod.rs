@@ -14,15 +14,17 @@
 //! 2. **Neighbour max**: the largest of the 3x3 tiles around each tile.
 //! 3. **Gather** at pixel `X` (half velocity `c`, neighbour max `n`): when `|n| < 0.5` the pixel
 //!    is copied. Otherwise `samples` taps are placed symmetrically at `X +- t n` (and, when
-//!    `|c| >= 0.5`, half of them at `X +- t c`, Guertin's second direction, which recovers a
-//!    pixel whose motion differs from its neighbourhood's), `t = (i + j) / m` with a jitter `j`
+//!    `|c| >= 0.5`, half of them at `X +- t c_r`, Guertin's second direction, which recovers a
+//!    pixel whose motion differs from its neighbourhood's; `c_r` is the half velocity of the
+//!    first moving pixel of the pixel's run of eight, below), `t = (i + j) / m` with a jitter `j`
 //!    in `[0, 1)` shared by a run of eight pixels of a row (a hash of the run's first pixel, so
 //!    the result is deterministic; a tile's rows are cut into runs from its left edge, the last
 //!    one shorter when the tile is not a multiple of 8 wide), each taken at the nearest pixel
-//!    `Y` (taps outside the image are dropped). Along `n`, a pixel's tap is the run's first
-//!    pixel's nearest pixel moved along the row by the pixel's place in the run (the nearest
-//!    pixel of its own tap up to rounding), so the run's taps are eight neighbouring pixels at
-//!    one distance: one load each rather than a gather. A tap at distance `d` is split by depth
+//!    `Y` (taps outside the image are dropped). Along `n` and along `c_r`, a pixel's tap is the
+//!    run's first pixel's nearest pixel moved along the row by the pixel's place in the run (the
+//!    nearest pixel of its own tap up to rounding), so the run's taps are eight neighbouring
+//!    pixels at one distance: one load each rather than a gather (the moving pixels of a run
+//!    share one direction as they share one jitter). A tap at distance `d` is split by depth
 //!    into a foreground part `f = clamp(0.5 - (z_Y - z_X) / (s z), 0, 1)` and a background
 //!    part `1 - f` (`s` the relative `soft_depth`, `z` the nearer depth): the foreground part
 //!    counts when the tap's own motion reaches `X` (`clamp(|v_Y / 2| - d + 1, 0, 1)`), the
@@ -82,36 +84,56 @@ fn len2(v: [f32; 2]) -> f32 {
 /// any thread count (a maximum does not depend on the order).
 pub fn max_speed(velocity: &[f32]) -> f64 {
     // sqrt is correctly rounded and non-decreasing, so the longest length is the square root of
-    // the largest squared length: one root for the image, not one a pixel. Lanes of 8 pixels
-    // keep the largest squared length and whether one is NaN apart, so that the loop vectorises.
+    // the largest squared length: one root for the image, not one a pixel.
     let (most, nan) = velocity
         .par_chunks(2 << 12)
-        .map(|c| {
-            let mut lanes = [0.0f64; 8];
-            let mut nan = false;
-            let mut pixels = c.chunks_exact(16);
-            for p in &mut pixels {
-                for k in 0..8 {
-                    let (x, y) = (p[2 * k] as f64, p[2 * k + 1] as f64);
-                    let l = x * x + y * y;
-                    nan |= l.is_nan();
-                    lanes[k] = lanes[k].max(l);
-                }
-            }
-            for v in pixels.remainder().chunks_exact(2) {
-                let (x, y) = (v[0] as f64, v[1] as f64);
-                let l = x * x + y * y;
-                nan |= l.is_nan();
-                lanes[0] = lanes[0].max(l);
-            }
-            (lanes.iter().fold(0.0f64, |m, l| m.max(*l)), nan)
-        })
+        .map(longest2)
         .reduce(|| (0.0, false), |a, b| (a.0.max(b.0), a.1 | b.1));
     if nan {
         f64::NAN
     } else {
         most.sqrt()
     }
+}
+
+/// [`max_speed`] of the window `(y0, y1, x0, x1)` of a `w` pixels wide velocity buffer, read
+/// in place (the same value as of a copy of the window: a maximum does not depend on the
+/// order).
+pub fn max_speed_in(velocity: &[f32], w: usize, (y0, y1, x0, x1): Window) -> f64 {
+    let rows = (y0..y1)
+        .into_par_iter()
+        .with_min_len((1usize << 13).div_ceil((x1 - x0).max(1)));
+    let (most, nan) = rows
+        .map(|y| longest2(&velocity[2 * (y * w + x0)..2 * (y * w + x1)]))
+        .reduce(|| (0.0, false), |a, b| (a.0.max(b.0), a.1 | b.1));
+    if nan {
+        f64::NAN
+    } else {
+        most.sqrt()
+    }
+}
+
+/// The largest squared length (float64) of the velocities `c` (pairs), and whether one is NaN.
+/// Lanes of 8 pixels keep them apart, so that the loop vectorises.
+fn longest2(c: &[f32]) -> (f64, bool) {
+    let mut lanes = [0.0f64; 8];
+    let mut nan = false;
+    let mut pixels = c.chunks_exact(16);
+    for p in &mut pixels {
+        for k in 0..8 {
+            let (x, y) = (p[2 * k] as f64, p[2 * k + 1] as f64);
+            let l = x * x + y * y;
+            nan |= l.is_nan();
+            lanes[k] = lanes[k].max(l);
+        }
+    }
+    for v in pixels.remainder().chunks_exact(2) {
+        let (x, y) = (v[0] as f64, v[1] as f64);
+        let l = x * x + y * y;
+        nan |= l.is_nan();
+        lanes[0] = lanes[0].max(l);
+    }
+    (lanes.iter().fold(0.0f64, |m, l| m.max(*l)), nan)
 }
 
 /// The largest squared length of `v` (0 for none), over 8 lanes.
@@ -227,52 +249,109 @@ struct Halves {
     cell_rows: Vec<f32>,
 }
 
+/// The pixels `(y0, y1, x0, x1)` (rows `y0..y1`, columns `x0..x1`) outside which every velocity
+/// is 0, as the caller knows it (the window a sharp frame drew its moving objects in).
+pub type Window = (usize, usize, usize, usize);
+
 /// The lengths of the half velocities clamped to `tile` pixels, per pixel, with the maxima per
 /// row that the tile max and the reach cells need, in one pass that also checks the depths:
-/// (None when a velocity is not finite, whether every depth is > 0 or inf). `speed` is
-/// written once, never zeroed first; the half velocities themselves are not kept
-/// ([`half_at`] gives them again where needed).
+/// (None when a velocity is not finite, whether every depth is > 0 or inf). The half velocities
+/// themselves are not kept ([`half_at`] gives them again where needed). With `moving` a window
+/// smaller than the image, only its velocities are read (every other is 0, the caller's
+/// promise, so the speeds and maxima are the same); `speed` is then zeroed memory written in
+/// the window only, else written once, never zeroed first.
 fn halves(
     velocity: &[f32],
     depth: &[f32],
     (w, h): (usize, usize),
     tile: usize,
+    moving: Window,
 ) -> (Option<Halves>, bool) {
     let (tx, cw) = (w.div_ceil(tile), w.div_ceil(CELL));
-    let rows = (1usize << 14).div_ceil(w);
     let mut tile_rows = vec![0.0f32; h * tx];
     let mut cell_rows = vec![0.0f32; h * cw];
-    let (mut finite, mut deep) = (true, true);
+    let (y0, y1, x0, x1) = moving;
     let tl = tile as f32;
-    let speed = filled_with(w * h, |speed| {
-        (finite, deep) = speed
+    if (y0, y1, x0, x1) == (0, h, 0, w) {
+        let rows = (1usize << 14).div_ceil(w);
+        let (mut finite, mut deep) = (true, true);
+        let speed = filled_with(w * h, |speed| {
+            (finite, deep) = speed
+                .par_chunks_mut(rows * w)
+                .zip(velocity.par_chunks(2 * rows * w))
+                .zip(depth.par_chunks(rows * w))
+                .zip(tile_rows.par_chunks_mut(rows * tx))
+                .zip(cell_rows.par_chunks_mut(rows * cw))
+                .map(|((((ss, vs), ds), ts), cs)| {
+                    let ok = half_rows(vs, (ss, w), (0, w), (tl, tile), (ts, cs));
+                    (ok, deep_enough(ds))
+                })
+                .reduce(|| (true, true), |a, b| (a.0 & b.0, a.1 & b.1));
+        });
+        let out = Halves {
+            speed,
+            tile_rows,
+            cell_rows,
+        };
+        return (finite.then_some(out), deep);
+    }
+    // zeroed memory: pages the window's rows do not write stay the system's zero pages
+    let mut speed = vec![0.0f32; w * h];
+    let finite = if y0 < y1 && x0 < x1 {
+        let rows = (1usize << 14).div_ceil(x1 - x0);
+        // SAFETY: MaybeUninit<f32> has f32's layout; every value is initialised (zeros).
+        let sp: &mut [MaybeUninit<f32>] =
+            unsafe { std::slice::from_raw_parts_mut(speed.as_mut_ptr().cast(), speed.len()) };
+        sp[y0 * w..y1 * w]
             .par_chunks_mut(rows * w)
-            .zip(velocity.par_chunks(2 * rows * w))
-            .zip(depth.par_chunks(rows * w))
-            .zip(tile_rows.par_chunks_mut(rows * tx))
-            .zip(cell_rows.par_chunks_mut(rows * cw))
-            .map(|((((ss, vs), ds), ts), cs)| {
-                let mut ok = true;
-                // the row's squared lengths and lengths
-                let (mut l2, mut sp) = (vec![0.0f32; w], vec![0.0f32; w]);
-                let rows = ss
-                    .chunks_mut(w)
-                    .zip(vs.chunks(2 * w))
-                    .zip(ts.chunks_mut(tx).zip(cs.chunks_mut(cw)));
-                for ((sr, vr), maxima) in rows {
-                    ok &= half_row(vr, (tl, tile), sr, (&mut l2, &mut sp), maxima);
-                }
-                let deep = ds.iter().fold(true, |k, d| k & !(d.is_nan() || *d <= 0.0));
-                (ok, deep)
-            })
-            .reduce(|| (true, true), |a, b| (a.0 & b.0, a.1 & b.1));
-    });
+            .zip(velocity[2 * y0 * w..2 * y1 * w].par_chunks(2 * rows * w))
+            .zip(tile_rows[y0 * tx..y1 * tx].par_chunks_mut(rows * tx))
+            .zip(cell_rows[y0 * cw..y1 * cw].par_chunks_mut(rows * cw))
+            .map(|(((ss, vs), ts), cs)| half_rows(vs, (ss, w), (x0, x1), (tl, tile), (ts, cs)))
+            .reduce(|| true, |a, b| a & b)
+    } else {
+        true
+    };
+    let deep = depth
+        .par_chunks(1 << 14)
+        .map(deep_enough)
+        .reduce(|| true, |a, b| a & b);
     let out = Halves {
         speed,
         tile_rows,
         cell_rows,
     };
     (finite.then_some(out), deep)
+}
+
+/// Whether every depth of `d` is > 0 or inf (not NaN).
+fn deep_enough(d: &[f32]) -> bool {
+    d.iter().fold(true, |k, d| k & !(d.is_nan() || *d <= 0.0))
+}
+
+/// [`half_row`] of each row of `vs` (velocities, `2 w` a row) into the rows of `ss` (speeds,
+/// `w` a row) and of the maxima `ts` (`tx` a row) and `cs` (`cw` a row), over the columns
+/// `x0..x1` of each row; whether all are finite.
+fn half_rows(
+    vs: &[f32],
+    (ss, w): (&mut [MaybeUninit<f32>], usize),
+    (x0, x1): (usize, usize),
+    (tl, tile): (f32, usize),
+    (ts, cs): (&mut [f32], &mut [f32]),
+) -> bool {
+    let (tx, cw) = (w.div_ceil(tile), w.div_ceil(CELL));
+    // the row's squared lengths and lengths
+    let (mut l2, mut sp) = (vec![0.0f32; x1 - x0], vec![0.0f32; x1 - x0]);
+    let mut ok = true;
+    let rows = ss
+        .chunks_mut(w)
+        .zip(vs.chunks(2 * w))
+        .zip(ts.chunks_mut(tx).zip(cs.chunks_mut(cw)));
+    for ((sr, vr), maxima) in rows {
+        let (vr, sr) = (&vr[2 * x0..2 * x1], &mut sr[x0..x1]);
+        ok &= half_row(vr, (tl, tile), (sr, x0), (&mut l2, &mut sp), maxima);
+    }
+    ok
 }
 
 /// The velocity `v`'s half, clamped to `tl` pixels.
@@ -294,14 +373,15 @@ fn half_at(velocity: &[f32], i: usize, tl: f32) -> [f32; 2] {
 }
 
 /// One row of [`halves`]: the lengths `sr` of the half velocities of the velocities `vr`
-/// clamped to `tl` pixels (`tile`), the largest squared length over each tile's part of the
-/// row and the largest length over each cell's part (`maxima`), with the squared lengths and
-/// the lengths in `l2` and `sp` on the way; whether all are finite. In AVX2 when present (the
-/// same IEEE operations, so the same bits; maxima of values >= 0 in any order).
+/// clamped to `tl` pixels (`tile`), the row's columns from `x0` on, the largest squared length
+/// over each tile's part of them and the largest length over each cell's part (`maxima`, the
+/// whole row's: tiles and cells from column 0), with the squared lengths and the lengths in
+/// `l2` and `sp` on the way; whether all are finite. In AVX2 when present (the same IEEE
+/// operations, so the same bits; maxima of values >= 0 in any order).
 fn half_row(
     vr: &[f32],
     (tl, tile): (f32, usize),
-    sr: &mut [MaybeUninit<f32>],
+    (sr, x0): (&mut [MaybeUninit<f32>], usize),
     (l2, sp): (&mut [f32], &mut [f32]),
     maxima: (&mut [f32], &mut [f32]),
 ) -> bool {
@@ -309,7 +389,7 @@ fn half_row(
     fn run(
         vr: &[f32],
         (tl, tile): (f32, usize),
-        sr: &mut [MaybeUninit<f32>],
+        (sr, x0): (&mut [MaybeUninit<f32>], usize),
         (l2, sp): (&mut [f32], &mut [f32]),
         (tr, cr): (&mut [f32], &mut [f32]),
     ) -> bool {
@@ -324,12 +404,18 @@ fn half_row(
             sp[x] = l2[x].sqrt();
             sr[x].write(sp[x]);
         }
-        for (t, seg) in tr.iter_mut().zip(l2.chunks(tile)) {
-            *t = max_lanes(seg);
-        }
-        for (c, seg) in cr.iter_mut().zip(sp.chunks(CELL)) {
-            *c = max_lanes(seg);
-        }
+        // the parts of the columns x0..x0 + w in each block of `size` columns from column 0
+        let blocks = |size: usize, v: &[f32], m: &mut [f32]| {
+            let mut a = 0;
+            while a < w {
+                let k = (x0 + a) / size;
+                let b = ((k + 1) * size - x0).min(w);
+                m[k] = max_lanes(&v[a..b]);
+                a = b;
+            }
+        };
+        blocks(tile, l2, tr);
+        blocks(CELL, sp, cr);
         ok
     }
     #[cfg(target_arch = "x86_64")]
@@ -338,16 +424,16 @@ fn half_row(
         unsafe fn avx(
             vr: &[f32],
             tile: (f32, usize),
-            sr: &mut [MaybeUninit<f32>],
+            sr: (&mut [MaybeUninit<f32>], usize),
             rows: (&mut [f32], &mut [f32]),
             maxima: (&mut [f32], &mut [f32]),
         ) -> bool {
             run(vr, tile, sr, rows, maxima)
         }
         // SAFETY: AVX2 was detected.
-        return unsafe { avx(vr, (tl, tile), sr, (l2, sp), maxima) };
+        return unsafe { avx(vr, (tl, tile), (sr, x0), (l2, sp), maxima) };
     }
-    run(vr, (tl, tile), sr, (l2, sp), maxima)
+    run(vr, (tl, tile), (sr, x0), (l2, sp), maxima)
 }
 
 /// Whether every value of `v` is finite (in AVX2 when present).
@@ -427,6 +513,27 @@ pub fn reconstruct(
     h: usize,
     params: ReconstructParams,
 ) -> Result<Vec<f32>> {
+    reconstruct_moving(rgba, depth, velocity, (w, h), params, (0, h, 0, w))
+}
+
+/// [`reconstruct`] of a frame whose velocities are 0 outside the window `moving` (`(y0, y1,
+/// x0, x1)`, the caller's promise, not checked: the velocity method's sharp frame, drawn over
+/// a still layer in that window): only the window's velocities are read, for the same bits.
+pub fn reconstruct_moving(
+    rgba: &[f32],
+    depth: &[f32],
+    velocity: &[f32],
+    (w, h): (usize, usize),
+    params: ReconstructParams,
+    moving: Window,
+) -> Result<Vec<f32>> {
+    let (y0, y1, x0, x1) = moving;
+    if !(y0 <= y1 && y1 <= h && x0 <= x1 && x1 <= w) {
+        return Err(Error::value(
+            "moving",
+            format!("({y0}, {y1}, {x0}, {x1}) is not a window of the ({h}, {w}) image"),
+        ));
+    }
     check_image("rgba", rgba, w, h, 4)?;
     check_image("depth", depth, w, h, 1)?;
     check_image("velocity", velocity, w, h, 2)?;
@@ -436,7 +543,7 @@ pub fn reconstruct(
     let first_error =
         |e: Error| -> Error { check_inputs(rgba, depth, velocity).err().unwrap_or(e) };
     check_params(params).map_err(first_error)?;
-    let (hv, deep) = halves(velocity, depth, (w, h), params.tile);
+    let (hv, deep) = halves(velocity, depth, (w, h), params.tile, moving);
     let hv = hv.ok_or_else(|| first_error(Error::value("velocity", "contains NaN or inf")))?;
     if !deep {
         return Err(first_error(depth_error()));
@@ -695,6 +802,11 @@ fn gather(g: &Gather<'_>, (x, y): (usize, usize), x0: usize, (n, rn): ([f32; 2],
     let pairs = params.samples / 2;
     let both = rc >= 0.5 && rn >= 0.5;
     let j = jitter(x0, y);
+    // a moving pixel's own direction is its run's: the half velocity of the run's first moving
+    // pixel (the run: from x0 to the tile's right edge, eight pixels at most)
+    let end = ((x0 / params.tile + 1) * params.tile).min(w).min(x0 + 8);
+    let first = (x0..end).find(|&k| speed[y * w + k] >= 0.5).unwrap_or(x);
+    let cr = half_at(velocity, y * w + first, params.tile as f32);
     // a still pixel's taps run along n at increasing distance t rn: from the first one past
     // every speed they can meet (the tap's pixel is within 0.71 of t n: one pixel more), the
     // rest weigh nothing and only count
@@ -705,9 +817,9 @@ fn gather(g: &Gather<'_>, (x, y): (usize, usize), x0: usize, (n, rn): ([f32; 2],
     };
     for p in 0..pairs {
         // (direction, its length, the pair's place along it, pairs along it, the pixel whose
-        // tap is moved to this one: the run's first along n)
+        // tap is moved to this one: the run's first along n and along the run's own direction)
         let (dir, r, q, m, a) = if both && p % 2 == 1 {
-            (c, rc, p / 2, pairs / 2, x)
+            (cr, len2(cr).sqrt(), p / 2, pairs / 2, x0)
         } else if both {
             (n, rn, p / 2, pairs - pairs / 2, x0)
         } else if rn >= 0.5 {
@@ -968,10 +1080,9 @@ unsafe fn store_rgba8(c: [std::arch::x86_64::__m256; 4], out: &mut [MaybeUninit<
     }
 }
 
-/// [`gather8`] in AVX2 (its docs). The still lanes' taps and the moving lanes' taps along `n`
-/// lie on eight neighbouring pixels of a row (module docs): one load each, a gather only at the
-/// image's left and right edges; the moving lanes' taps along their own velocities are
-/// gathered.
+/// [`gather8`] in AVX2 (its docs). Every tap of the run lies on eight neighbouring pixels of a
+/// row (module docs: along `n`, and the moving lanes' along the run's own direction): one load
+/// each, a gather only at the image's left and right edges.
 ///
 /// # Safety
 /// AVX2 is present, `x + 8 <= w`, `w * h * 4 < 2^31`, `out` holds 4 to 32 values.
@@ -997,7 +1108,6 @@ unsafe fn gather8_avx(
     } = *g;
     let i0 = y * w + x;
     let iota = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-    let xf = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(x as i32), iota));
     let yf = _mm256_set1_ps(y as f32);
     let rc = _mm256_loadu_ps(speed.as_ptr().add(i0));
     let zx = _mm256_loadu_ps(depth.as_ptr().add(i0));
@@ -1081,25 +1191,19 @@ unsafe fn gather8_avx(
         (zy, sy, col)
     };
     let pairs = params.samples / 2;
-    let (wl, hl) = (_mm256_set1_ps(w as f32), _mm256_set1_ps(h as f32));
-    let (wi, cw) = (
-        _mm256_set1_epi32(w as i32),
-        _mm256_set1_epi32(reach.cw as i32),
-    );
-    let (xc, yc) = (_mm256_add_ps(xf, half), _mm256_add_ps(yf, half));
+    let hl = _mm256_set1_ps(h as f32);
+    let wi = _mm256_set1_epi32(w as i32);
     let mut still = _mm256_andnot_ps(moving, live);
     let movers = _mm256_and_ps(moving, live);
     let any = |m: __m256| _mm256_movemask_ps(m) != 0;
-    // the moving lanes' own half velocities
-    let (c0, c1) = if any(movers) {
-        let c: [[f32; 2]; 8] =
-            std::array::from_fn(|l| half_at(g.velocity, i0 + l, params.tile as f32));
-        (
-            _mm256_loadu_ps(c.map(|v| v[0]).as_ptr()),
-            _mm256_loadu_ps(c.map(|v| v[1]).as_ptr()),
-        )
+    // the moving lanes' own direction: the half velocity of the run's first moving pixel, and
+    // its length
+    let (cr, rr) = if any(movers) {
+        let first = _mm256_movemask_ps(movers).trailing_zeros() as usize;
+        let c = half_at(g.velocity, i0 + first, params.tile as f32);
+        (c, len2(c).sqrt())
     } else {
-        (zero, zero)
+        ([0.0; 2], 0.0)
     };
     // the still lanes' taps of eight pairs at a time, computed eight at a time: `t`, `t rn`,
     // and for each sign (`8 s` + pair) the run's first pixel's tap column `base`, its row
@@ -1111,10 +1215,11 @@ unsafe fn gather8_avx(
         row: [0; 16],
         d: [0.0; 16],
     };
-    // the still lanes' (`tab`: t = (p + j) / pairs) and the moving lanes' along n (`mtab`:
-    // t = (p / 2 + j) / m, even pairs)
-    let (mut tab, mut mtab) = (empty, empty);
-    let fill = |p0: usize, m: usize, tab: &mut RunTaps| {
+    // the still lanes' along n (`tabs[0]`: t = (p + j) / pairs), the moving lanes' along n
+    // (`tabs[1]`: t = (p / 2 + j) / m, even pairs) and along their own direction (`tabs[2]`,
+    // odd pairs)
+    let mut tabs = [empty; 3];
+    let fill = |p0: usize, m: usize, (n, rn): ([f32; 2], f32), tab: &mut RunTaps| {
         let pv = _mm256_cvtepi32_ps(_mm256_add_epi32(_mm256_set1_epi32(p0 as i32), iota));
         let t = _mm256_div_ps(
             _mm256_add_ps(pv, _mm256_set1_ps(j)),
@@ -1155,20 +1260,18 @@ unsafe fn gather8_avx(
     let mut counted = [0.0f32; 8];
     for p in 0..pairs {
         // the still lanes' pair along n at t = (p + j) / pairs, the moving lanes' along n
-        // (even pairs) or their own velocity (odd pairs) at t = (p / 2 + j) / m: each lane
-        // takes one of them, in `gather`'s order. A job: its t, its lanes, and along n the
-        // table (`mtab` or not) and pair of its taps
-        let mut jobs = [(0.0f32, zero, None); 2];
+        // (even pairs) or their own direction (odd pairs) at t = (p / 2 + j) / m: each lane
+        // takes one of them, in `gather`'s order. A job: its lanes, its table and pair
+        let mut jobs = [(zero, 0, 0); 2];
         let mut count = 0;
         if any(still) {
             let q = p % 8;
             if q == 0 {
-                fill(p, pairs, &mut tab);
+                fill(p, pairs, (n, rn), &mut tabs[0]);
             }
-            let t = tab.t[q];
             let ends = _mm256_and_ps(
                 still,
-                _mm256_cmp_ps::<_CMP_GE_OQ>(_mm256_set1_ps(tab.tr[q]), stop),
+                _mm256_cmp_ps::<_CMP_GE_OQ>(_mm256_set1_ps(tabs[0].tr[q]), stop),
             );
             let ended = _mm256_movemask_ps(ends);
             if ended != 0 {
@@ -1180,128 +1283,76 @@ unsafe fn gather8_avx(
                 still = _mm256_andnot_ps(ends, still);
             }
             if any(still) {
-                jobs[count] = (t, still, Some((false, q)));
+                jobs[count] = (still, 0, q);
                 count += 1;
             }
         }
         if any(movers) {
             let odd = p % 2 == 1;
             let m = if odd { pairs / 2 } else { pairs - pairs / 2 };
-            if odd {
-                let t = ((p / 2) as f32 + j) / m.max(1) as f32;
-                jobs[count] = (t, movers, None);
-            } else {
-                let q = (p / 2) % 8;
-                if q == 0 {
-                    fill(p / 2, m, &mut mtab);
-                }
-                jobs[count] = (mtab.t[q], movers, Some((true, q)));
+            let (which, dir) = if odd { (2, (cr, rr)) } else { (1, (n, rn)) };
+            let q = (p / 2) % 8;
+            if q == 0 {
+                fill(p / 2, m, dir, &mut tabs[which]);
             }
+            jobs[count] = (movers, which, q);
             count += 1;
         }
         if count == 0 {
             break;
         }
-        for &(t, mask, along_n) in &jobs[..count] {
-            for (k, s) in [-1.0f32, 1.0].into_iter().enumerate() {
-                if let Some((mover, q)) = along_n {
-                    // the run's first pixel's tap, moved along the row lane by lane
-                    let tab = if mover { &mtab } else { &tab };
-                    let i = 8 * k + q;
-                    if tab.row[i] < 0 {
-                        continue;
-                    }
-                    let (base, sy, d) = (tab.base[i] as i64, tab.row[i] as usize, tab.d[i]);
-                    let whole = base >= 0 && base + 8 <= w as i64;
-                    let bl = _mm256_add_epi32(_mm256_set1_epi32(base as i32), iota);
-                    let inside = if whole {
-                        mask
-                    } else {
-                        let ins = _mm256_and_si256(
-                            _mm256_cmpgt_epi32(bl, _mm256_set1_epi32(-1)),
-                            _mm256_cmpgt_epi32(wi, bl),
-                        );
-                        _mm256_and_ps(_mm256_castsi256_ps(ins), mask)
-                    };
-                    if !any(inside) {
-                        continue;
-                    }
-                    taps = _mm256_add_ps(taps, _mm256_and_ps(inside, one));
-                    let d = _mm256_set1_ps(d);
-                    let row = (sy / CELL) * reach.cw;
-                    let cell = if whole {
-                        in_cells(&reach.cell, row, base as usize)
-                    } else {
-                        let cidx = _mm256_and_si256(
-                            _mm256_add_epi32(
-                                _mm256_set1_epi32(row as i32),
-                                _mm256_srai_epi32::<4>(bl),
-                            ),
-                            _mm256_castps_si256(inside),
-                        );
-                        _mm256_i32gather_ps::<4>(reach.cell.as_ptr(), cidx)
-                    };
-                    let from = _mm256_add_ps(_mm256_max_ps(cell, rc), two);
-                    let real = _mm256_andnot_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(d, from), inside);
-                    if !any(real) {
-                        continue;
-                    }
-                    let k = sy * w + base as usize;
-                    if whole {
-                        let zy = _mm256_loadu_ps(depth.as_ptr().add(k));
-                        let sp = _mm256_loadu_ps(speed.as_ptr().add(k));
-                        add(
-                            weights(zy, sp, d, real),
-                            load_rgba8(rgba.as_ptr().add(4 * k)),
-                        );
-                    } else {
-                        let yi = _mm256_add_epi32(_mm256_set1_epi32((sy * w) as i32), bl);
-                        let (zy, sp, col) = gathered(yi, real);
-                        add(weights(zy, sp, d, real), col);
-                    }
+        for &(mask, which, q) in &jobs[..count] {
+            // the run's first pixel's tap, moved along the row lane by lane
+            let tab = &tabs[which];
+            for k in 0..2 {
+                let i = 8 * k + q;
+                if tab.row[i] < 0 {
+                    continue;
+                }
+                let (base, sy, d) = (tab.base[i] as i64, tab.row[i] as usize, tab.d[i]);
+                let whole = base >= 0 && base + 8 <= w as i64;
+                let bl = _mm256_add_epi32(_mm256_set1_epi32(base as i32), iota);
+                let inside = if whole {
+                    mask
                 } else {
-                    // each lane's own tap along its own velocity
-                    let tr = _mm256_mul_ps(_mm256_set1_ps(t), rc);
-                    let stv = _mm256_set1_ps(s * t);
-                    let px = _mm256_add_ps(xc, _mm256_mul_ps(stv, c0));
-                    let py = _mm256_add_ps(yc, _mm256_mul_ps(stv, c1));
-                    let inside = _mm256_and_ps(
-                        _mm256_and_ps(
-                            _mm256_cmp_ps::<_CMP_GE_OQ>(px, zero),
-                            _mm256_cmp_ps::<_CMP_GE_OQ>(py, zero),
-                        ),
-                        _mm256_and_ps(
-                            _mm256_cmp_ps::<_CMP_LT_OQ>(px, wl),
-                            _mm256_cmp_ps::<_CMP_LT_OQ>(py, hl),
-                        ),
+                    let ins = _mm256_and_si256(
+                        _mm256_cmpgt_epi32(bl, _mm256_set1_epi32(-1)),
+                        _mm256_cmpgt_epi32(wi, bl),
                     );
-                    let inside = _mm256_and_ps(inside, mask);
-                    if !any(inside) {
-                        continue;
-                    }
-                    let sx = _mm256_cvttps_epi32(px);
-                    let sy = _mm256_cvttps_epi32(py);
-                    let dx = _mm256_sub_ps(_mm256_cvtepi32_ps(sx), xf);
-                    let dy = _mm256_sub_ps(_mm256_cvtepi32_ps(sy), yf);
-                    let d2 = _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy));
-                    let d = _mm256_min_ps(_mm256_sqrt_ps(d2), tr);
-                    let ins = _mm256_castps_si256(inside);
+                    _mm256_and_ps(_mm256_castsi256_ps(ins), mask)
+                };
+                if !any(inside) {
+                    continue;
+                }
+                taps = _mm256_add_ps(taps, _mm256_and_ps(inside, one));
+                let d = _mm256_set1_ps(d);
+                let row = (sy / CELL) * reach.cw;
+                let cell = if whole {
+                    in_cells(&reach.cell, row, base as usize)
+                } else {
                     let cidx = _mm256_and_si256(
-                        _mm256_add_epi32(
-                            _mm256_mullo_epi32(_mm256_srli_epi32::<4>(sy), cw),
-                            _mm256_srli_epi32::<4>(sx),
-                        ),
-                        ins,
+                        _mm256_add_epi32(_mm256_set1_epi32(row as i32), _mm256_srai_epi32::<4>(bl)),
+                        _mm256_castps_si256(inside),
                     );
-                    let cell = _mm256_i32gather_ps::<4>(reach.cell.as_ptr(), cidx);
-                    let from = _mm256_add_ps(_mm256_max_ps(cell, rc), two);
-                    let real = _mm256_andnot_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(d, from), inside);
-                    taps = _mm256_add_ps(taps, _mm256_and_ps(inside, one));
-                    if any(real) {
-                        let yi = _mm256_add_epi32(_mm256_mullo_epi32(sy, wi), sx);
-                        let (zy, sp, col) = gathered(yi, real);
-                        add(weights(zy, sp, d, real), col);
-                    }
+                    _mm256_i32gather_ps::<4>(reach.cell.as_ptr(), cidx)
+                };
+                let from = _mm256_add_ps(_mm256_max_ps(cell, rc), two);
+                let real = _mm256_andnot_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(d, from), inside);
+                if !any(real) {
+                    continue;
+                }
+                let k = sy * w + base as usize;
+                if whole {
+                    let zy = _mm256_loadu_ps(depth.as_ptr().add(k));
+                    let sp = _mm256_loadu_ps(speed.as_ptr().add(k));
+                    add(
+                        weights(zy, sp, d, real),
+                        load_rgba8(rgba.as_ptr().add(4 * k)),
+                    );
+                } else {
+                    let yi = _mm256_add_epi32(_mm256_set1_epi32((sy * w) as i32), bl);
+                    let (zy, sp, col) = gathered(yi, real);
+                    add(weights(zy, sp, d, real), col);
                 }
             }
         }

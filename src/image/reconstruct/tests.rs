@@ -69,6 +69,39 @@ fn max_speed_is_the_longest_length() {
 }
 
 #[test]
+fn max_speed_in_a_window_is_its_copys() {
+    // the window read in place against a copy of it: inside, at the edges, one row, empty,
+    // a NaN inside and outside the window
+    let (w, h) = (45, 31);
+    let mut v: Vec<f32> = (0..2 * w * h)
+        .map(|i| ((i * 7919 % 1013) as f32 - 506.0) * 0.37)
+        .collect();
+    let copy = |v: &[f32], (y0, y1, x0, x1): Window| -> Vec<f32> {
+        (y0..y1)
+            .flat_map(|y| v[2 * (y * w + x0)..2 * (y * w + x1)].to_vec())
+            .collect()
+    };
+    let windows = [
+        (0, 31, 0, 45),
+        (3, 20, 5, 17),
+        (30, 31, 0, 45),
+        (4, 4, 2, 9),
+        (0, 5, 44, 45),
+    ];
+    for win in windows {
+        let want = max_speed(&copy(&v, win));
+        assert_eq!(
+            max_speed_in(&v, w, win).to_bits(),
+            want.to_bits(),
+            "{win:?}"
+        );
+    }
+    v[2 * (6 * w + 9) + 1] = f32::NAN;
+    assert!(max_speed_in(&v, w, (6, 7, 9, 10)).is_nan());
+    assert!(!max_speed_in(&v, w, (7, 31, 0, 45)).is_nan());
+}
+
+#[test]
 fn same_result_on_one_thread() {
     let (w, h) = (40, 30);
     let rgba: Vec<f32> = (0..w * h * 4).map(|i| (i % 7) as f32 / 7.0).collect();
@@ -79,6 +112,54 @@ fn same_result_on_one_thread() {
         reconstruct(&rgba, &depth, &vel, w, h, params()).unwrap()
     });
     assert_eq!(a, b);
+}
+
+#[test]
+fn a_moving_window_gives_the_whole_frames_bits() {
+    // velocities 0 outside a window: reading only the window's gives the bits of reading them
+    // all, for windows inside, at the edges, one row, empty, tiles not multiples of the cells
+    // (the tile and cell maxima are taken by absolute boundaries), on any thread count; a
+    // window outside the image is refused
+    let (w, h) = (70, 45);
+    let rgba: Vec<f32> = (0..w * h * 4)
+        .map(|i| (i * 37 % 101) as f32 / 101.0)
+        .collect();
+    let depth: Vec<f32> = (0..w * h)
+        .map(|i| 1.0 + (i * 13 % 17) as f32 * 0.3)
+        .collect();
+    let windows = [
+        (10, 30, 20, 50),
+        (0, 45, 0, 9),
+        (20, 45, 61, 70),
+        (7, 8, 0, 70),
+        (5, 5, 3, 3),
+    ];
+    for (y0, y1, x0, x1) in windows {
+        let mut vel = vec![0.0f32; w * h * 2];
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let i = y * w + x;
+                vel[2 * i] = ((i * 7 % 23) as f32 - 11.0) * 1.3;
+                vel[2 * i + 1] = ((i * 5 % 19) as f32 - 9.0) * 0.7;
+            }
+        }
+        for tile in [6, 8, 21] {
+            let p = ReconstructParams { tile, ..params() };
+            let whole = reconstruct(&rgba, &depth, &vel, w, h, p).unwrap();
+            let win = (y0, y1, x0, x1);
+            let part = reconstruct_moving(&rgba, &depth, &vel, (w, h), p, win).unwrap();
+            assert_eq!(whole, part, "{win:?} {tile}");
+            let one = crate::on_threads(1, || {
+                reconstruct_moving(&rgba, &depth, &vel, (w, h), p, win).unwrap()
+            });
+            assert_eq!(whole, one, "{win:?} {tile}");
+        }
+    }
+    let vel = vec![0.0f32; w * h * 2];
+    for win in [(0, 46, 0, 10), (3, 2, 0, 10), (0, 10, 0, 71)] {
+        let e = reconstruct_moving(&rgba, &depth, &vel, (w, h), params(), win).unwrap_err();
+        assert!(e.to_string().contains("moving"), "{e}");
+    }
 }
 
 /// The gather of every tap of every pixel, serial: the filter as the module docs define it,
@@ -129,10 +210,14 @@ fn unskipped(
             // the pixel's run of eight: from its tile's left edge, eight pixels at a time
             let x0 = x - (x % p.tile) % 8;
             let j = jitter(x0, y);
+            // a moving pixel's own direction: its run's first moving pixel's half velocity
+            let end = ((x0 / p.tile + 1) * p.tile).min(w).min(x0 + 8);
+            let first = (x0..end).find(|&k| len2(half[y * w + k]).sqrt() >= 0.5);
+            let cr = half[y * w + first.unwrap_or(x)];
             for q in 0..pairs {
-                // along n, the tap of the run's first pixel moved along the row
+                // the tap of the run's first pixel moved along the row
                 let (dir, r, k, m, a) = if both && q % 2 == 1 {
-                    (c, rc, q / 2, pairs / 2, x)
+                    (cr, len2(cr).sqrt(), q / 2, pairs / 2, x0)
                 } else if both {
                     (n, rn, q / 2, pairs - pairs / 2, x0)
                 } else {
