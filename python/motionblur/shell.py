@@ -221,8 +221,10 @@ class BlurShell:
         self.subdivisions = as_int(subdivisions, "subdivisions", minimum=1, maximum=_core.MAX_SUBDIVISIONS)
         self.hysteresis = as_int(hysteresis, "hysteresis", minimum=0, maximum=_core.MAX_HYSTERESIS)
         self.initial_alpha = as_float(initial_alpha, "initial_alpha")
-        if not 0.0 < self.initial_alpha <= 1.0:
-            raise ValueError(f"initial_alpha: must be in (0, 1], got {self.initial_alpha}")
+        # the core keeps it in float32: a positive value that rounds to 0 there is refused here,
+        # not at the first update
+        if not (0.0 < self.initial_alpha <= 1.0 and np.float32(self.initial_alpha) > 0):
+            raise ValueError(f"initial_alpha: must be in (0, 1] (in float32), got {self.initial_alpha}")
         nf = len(self._faces)
         if mask is not None:
             m = np.asarray(mask)

@@ -414,6 +414,7 @@ def test_a_mesh_that_changes_vertex_count_is_a_clear_error():
         ({"subdivisions": 2.5}, TypeError, "subdivisions"),
         ({"hysteresis": -1}, ValueError, "hysteresis"),
         ({"initial_alpha": 0.0}, ValueError, "initial_alpha"),
+        ({"initial_alpha": 1e-50}, ValueError, "initial_alpha"),  # 0 in the core's float32
         ({"initial_alpha": 1.5}, ValueError, "initial_alpha"),
         ({"initial_alpha": float("nan")}, ValueError, "initial_alpha"),
         ({"mask": np.ones(3, bool)}, ValueError, "mask"),

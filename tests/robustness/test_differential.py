@@ -17,7 +17,10 @@ test`` runs a few examples (profile ``ci``), ``make fuzz`` many.
 The bounds are the worst seen on tuning seeds 0..399 at 64x48 among frames that did not warn,
 rounded up (first read off seeds 0..29, which ``make fuzz`` showed too few: measuring seed
 1,025,577 put a translucent cylinder's blur shell at +63% alpha mass, and on seeds 0..399
-``camera_velocity`` reached 0.49 of alpha mass and ``velocity`` 0.38 without a warning). Frames
+``camera_velocity`` reached 0.49 of alpha mass and ``velocity`` 0.38 without a warning; the
+alpha mass bound of every method a pilot estimates is the warning's own 50%: the worst unwarned
+on seeds 0..399 was 35-49%, and measuring seed 1,026,678 put ``velocity`` at 47%, over the 40%
+first read off them). Frames
 that warned went beyond them: ``velocity`` 4.1x the unblurred frame's error (a translucent
 sphere), ``blur_shell`` 2.4x (a large floor under a hand-held camera, whose far edges' strips span the view), the motion volume +117% mass (a
 knot's holes filled). The README lists the bounds beside each method.
@@ -42,11 +45,11 @@ pytestmark = pytest.mark.robustness
 BOUNDS = {
     "accumulation": (0.5, 0.05),
     "analytic": (0.1, 0.01),
-    "velocity": (1.3, 0.4),
-    "opaque_image": (1.3, 0.4),
+    "velocity": (1.3, 0.5),
+    "opaque_image": (1.3, 0.5),
     "camera_velocity": (1.0, 0.5),
-    "blur_shell": (2.0, 0.6),
-    "motion_volume": (2.0, 0.6),
+    "blur_shell": (2.0, 0.5),
+    "motion_volume": (2.0, 0.5),
 }
 #: A frame this many times farther from the exact one than the unblurred frame must come with a
 #: PoorBlurWarning (the estimates it is judged by are within 2x; 1.5 leaves room for that).
