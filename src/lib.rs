@@ -76,9 +76,9 @@ pub use motion::{
     uniform_times, Keyframe, Keyframes, Keys, Mat3, Mat4, Path, Similarity, IDENTITY4,
 };
 pub use raster::{
-    faces_from_i64, rasterize, rasterize_over, Background, Blend, Camera, Draw, Light,
-    Options as RasterOptions, Shading, Stats as RasterStats, FRAGMENT_CAP, MAX_INTERNAL_SIDE,
-    MAX_PIXELS, MAX_SIDE, SAMPLES,
+    faces_from_i64, on_sample_grid, rasterize, rasterize_over, Background, Blend, Camera, Draw,
+    Light, Options as RasterOptions, Shading, Stats as RasterStats, FRAGMENT_CAP,
+    MAX_INTERNAL_SIDE, MAX_PIXELS, MAX_SIDE, SAMPLES,
 };
 pub use shell::{
     BlurShell, BuildPlan, FaceState, ShellColor, ShellMesh, ShellOptions, ShellOut, MAX_HYSTERESIS,

@@ -188,6 +188,7 @@ __all__ = [
     "TRAILING",
     "JOINING",
     "_rasterize",
+    "_on_sample_grid",
     "_analytic",
     "_glow",
     "_box_blur",
@@ -658,6 +659,13 @@ def _analytic(
     a stats dict, and with ``exposure`` N (object ids -1..N-1) the exposure channel's fraction,
     first and last (H,W,N+1) f32 (plane N for id -1), else None. ``tile_budget`` bytes per tile
     pass; ``MemoryError`` where one sample alone needs more. The GIL is released."""
+
+def _on_sample_grid(
+    points: np.ndarray, view: np.ndarray, projection: np.ndarray, width: int, height: int, samples: int
+) -> np.ndarray:
+    """World points (V,3) f64 moved, at their clip depth, onto the rasterizer's fixed-point grid
+    (1/256 of a sample) of the camera (view, projection (4,4) f64, width x height pixels) at
+    samples (1, 2 or 4) a pixel side. (V,3) f64."""
 
 def _rasterize(
     draws: list[_DrawLike],

@@ -151,8 +151,37 @@ fn _rasterize<'py>(
     ))
 }
 
+/// World points (V,3) f64 moved, at their clip depth, onto the fixed-point grid the rasterizer
+/// snaps corners to for the camera (`view`, `projection` (4,4) f64, `width` x `height` pixels)
+/// at `samples` a pixel side ([`crate::on_sample_grid`]); returns (V,3) f64.
+#[pyfunction]
+fn _on_sample_grid<'py>(
+    py: Python<'py>,
+    points: PyReadonlyArray2<'py, f64>,
+    view: PyReadonlyArray2<'py, f64>,
+    projection: PyReadonlyArray2<'py, f64>,
+    width: u32,
+    height: u32,
+    samples: u32,
+) -> PyResult<Bound<'py, PyAny>> {
+    let camera = Camera::from_matrices(
+        matrix(&view, "view")?,
+        matrix(&projection, "projection")?,
+        width,
+        height,
+    )?;
+    if !SAMPLES.contains(&samples) {
+        return Err(Error::value("samples", format!("must be one of {SAMPLES:?}")).into());
+    }
+    let pts = rows::<f64, 3>(&points, "points")?;
+    let out = py.detach(|| crate::on_sample_grid(&camera, samples, pts));
+    let n = out.len();
+    shaped(py, out.into_iter().flatten().collect::<Vec<f64>>(), [n, 3])
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_rasterize, m)?)?;
+    m.add_function(wrap_pyfunction!(_on_sample_grid, m)?)?;
     m.add("MAX_SIDE", MAX_SIDE)?;
     m.add("MAX_PIXELS", MAX_PIXELS)?;
     m.add("FRAGMENT_CAP", FRAGMENT_CAP)?;

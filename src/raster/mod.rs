@@ -49,6 +49,7 @@ use crate::error::{Error, Result};
 use crate::frame::Frame;
 use bins::TILE;
 use rayon::prelude::*;
+pub use setup::on_sample_grid;
 use setup::{Chunk, Screen, Viewport};
 use shade::{homogeneous_pixel, Prepared, Shader};
 use std::cell::RefCell;

@@ -11,6 +11,7 @@
 //! the clip-space positions. A triangle whose box holds at most `TIGHT_MAX` samples gets
 //! the box of the samples it covers, or is dropped when it covers none: small triangles then
 //! reach fewer tiles, and a box of one sample needs no edge test in the tiles (`ONE_SAMPLE`).
+use super::camera::Camera;
 use super::clip::{outcode, ClipVertex, ClipVolume, MAX_POLY};
 use super::coverage::{Edges, HALF, ONE};
 use super::draw::Draw;
@@ -84,8 +85,7 @@ impl Viewport {
     /// Fixed-point position and the residual (exact minus snapped, in samples).
     #[inline]
     fn snap(&self, p: &[f64; 4]) -> Corner {
-        let x = (p[0] / p[3] + 1.0) * 0.5 * f64::from(self.ws);
-        let y = (1.0 - p[1] / p[3]) * 0.5 * f64::from(self.hs);
+        let [x, y] = screen(p, self.ws, self.hs);
         let (fx, fy) = ((x * ONE as f64).round(), (y * ONE as f64).round());
         Corner {
             x: fx as i32,
@@ -157,6 +157,46 @@ fn prefetch<T>(items: &[T], face: [u32; 3]) {
 #[inline]
 fn floor_div(a: i64, b: i64) -> i64 {
     a.div_euclid(b)
+}
+
+/// Screen position in samples (x right, y down) of clip-space point `p` on a `ws` x `hs`
+/// sample image.
+#[inline]
+fn screen(p: &[f64; 4], ws: u32, hs: u32) -> [f64; 2] {
+    [
+        (p[0] / p[3] + 1.0) * 0.5 * f64::from(ws),
+        (1.0 - p[1] / p[3]) * 0.5 * f64::from(hs),
+    ]
+}
+
+/// World points moved, at their clip depth, onto the fixed-point grid the set-up snaps corners
+/// to (1/256 of a sample of `camera` at `samples` samples a pixel side): a surface drawn
+/// elsewhere (the analytic kernel, which does not snap) then has its edges where this
+/// rasterizer puts them. Points behind the camera (w <= 0), beyond 2^15 samples, or when the
+/// camera's view-projection has no inverse, are returned as they are.
+pub fn on_sample_grid(camera: &Camera, samples: u32, points: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let m = &camera.view_projection();
+    let (ws, hs) = (camera.width * samples, camera.height * samples);
+    let inv = m.inverse();
+    if !inv.is_finite() {
+        return points.to_vec();
+    }
+    let (fw, fh, one) = (f64::from(ws), f64::from(hs), ONE as f64);
+    let range = f64::from(1u32 << 15);
+    points
+        .iter()
+        .map(|p| {
+            let c = clip_position(m, p);
+            let [x, y] = screen(&c, ws, hs);
+            if !(c[3] > 0.0 && x.abs() < range && y.abs() < range) {
+                return *p;
+            }
+            let (sx, sy) = ((x * one).round() / one, (y * one).round() / one);
+            let (w, z) = (c[3], c[2]);
+            let q = inv * DVec4::new((sx / fw * 2.0 - 1.0) * w, (1.0 - sy / fh * 2.0) * w, z, w);
+            [q.x / q.w, q.y / q.w, q.z / q.w]
+        })
+        .collect()
 }
 
 /// The clip-space position of world point `p` under the view-projection matrix `m`.

@@ -289,3 +289,45 @@ fn a_bad_background_value_anywhere_in_the_window_is_an_error() {
     assert_eq!(same.rgba, good.rgba);
     assert_eq!(same.ids, good.ids);
 }
+
+#[test]
+fn points_on_the_sample_grid_project_to_the_snapped_corners() {
+    // Every point in front of the camera lands on the 1/256-sample grid at its own clip depth
+    // (within float64 rounding), moved at most half a grid step; a point behind the camera
+    // stays where it is.
+    let cam = camera(40, 30);
+    let (pts, _) = grid(9, 0.37);
+    let mut pts: Vec<[f64; 3]> = pts.iter().map(|p| [p[0], p[1], p[2] - 1.5]).collect();
+    pts.push([0.0, 0.0, 50.0]);
+    for samples in SAMPLES {
+        let out = on_sample_grid(&cam, samples, &pts);
+        let m = cam.view_projection();
+        let (ws, hs) = (f64::from(40 * samples), f64::from(30 * samples));
+        for (p, q) in pts.iter().zip(&out) {
+            let (c, d) = (setup_clip(&m, p), setup_clip(&m, q));
+            if c[3] <= 0.0 {
+                assert_eq!(p, q);
+                continue;
+            }
+            assert!(
+                (d[3] - c[3]).abs() < 1e-9 * c[3] && (d[2] - c[2]).abs() < 1e-9 * c[3].max(1.0)
+            );
+            for (v, size, flip) in [(d[0] / d[3], ws, false), (d[1] / d[3], hs, true)] {
+                let s = if flip {
+                    (1.0 - v) * 0.5 * size
+                } else {
+                    (v + 1.0) * 0.5 * size
+                } * 256.0;
+                assert!((s - s.round()).abs() < 1e-6, "{s} is not on the grid");
+            }
+            let moved =
+                [(0, ws), (1, hs)].map(|(k, size)| (d[k] / d[3] - c[k] / c[3]).abs() * 0.5 * size);
+            assert!(moved.iter().all(|m| *m <= 0.5 / 256.0 + 1e-9), "{moved:?}");
+        }
+    }
+}
+
+fn setup_clip(m: &DMat4, p: &[f64; 3]) -> [f64; 4] {
+    let c = *m * glam::DVec4::new(p[0], p[1], p[2], 1.0);
+    [c.x, c.y, c.z, c.w]
+}

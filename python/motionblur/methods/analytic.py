@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import _core
 from .._validate import as_float, as_int
 from ..analytic import MovingDraw, rasterize_motion
 from ..ground_truth import _renders_exposure
@@ -108,35 +109,19 @@ def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
     return pos
 
 
-#: Sub-sample bits of the rasterizer's fixed-point screen coordinates (src/raster/coverage.rs).
-_SUBPIXEL = 256.0
-
-
 def on_sample_grid(points: np.ndarray, camera: Camera, aa: int) -> np.ndarray:
     """(V,3) float64 world points moved, at their clip depth, onto the rasterizer's fixed-point
     screen grid (1/256 of a sample of ``camera`` at ``aa`` samples a pixel side), where the
-    rasterizer snaps them: a still surface's edges then fall where accumulation's do, so no
-    sample within that snap of an edge is inside for one and outside for the other (a whole
-    pixel's difference that no number of time samples removes). Points behind the camera or
-    outside the rasterizer's range are left as they are."""
-    vp = np.asarray(camera.view_projection, np.float64)
-    h = points @ vp[:3, :3].T + vp[:3, 3]
-    w = points @ vp[3, :3] + vp[3, 3]
-    ws, hs = float(camera.width * aa), float(camera.height * aa)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x = (h[:, 0] / w + 1.0) * 0.5 * ws
-        y = (1.0 - h[:, 1] / w) * 0.5 * hs
-    ok = (w > 0) & (np.abs(x) < 2.0**15) & (np.abs(y) < 2.0**15)
-    clip = np.stack([(_snap(x) / ws * 2.0 - 1.0) * w, (1.0 - _snap(y) / hs * 2.0) * w, h[:, 2], w], axis=1)
-    back = clip[ok] @ np.linalg.inv(vp).T
-    out = points.copy()
-    out[ok] = back[:, :3] / back[:, 3:4]
-    return out
-
-
-def _snap(v: np.ndarray) -> np.ndarray:
-    """Samples to the nearest 1/256 of a sample, halves away from zero (Rust's ``f64::round``)."""
-    return np.copysign(np.floor(np.abs(v) * _SUBPIXEL + 0.5), v) / _SUBPIXEL
+    rasterizer snaps them (`motionblur._core._on_sample_grid`, the rasterizer's own snap): a
+    still surface's edges then fall where accumulation's do, so no sample within that snap of
+    an edge is inside for one and outside for the other (a whole pixel's difference that no
+    number of time samples removes). Points behind the camera or outside the rasterizer's range
+    are left as they are."""
+    c = np.ascontiguousarray
+    return _core._on_sample_grid(
+        c(points, np.float64), c(camera.view, np.float64), c(camera.projection, np.float64),
+        camera.width, camera.height, aa,
+    )  # fmt: skip
 
 
 def _draw(scene: Scene, obj: Object, k: int, times: np.ndarray, aa: int = 1) -> MovingDraw:
