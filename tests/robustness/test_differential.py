@@ -22,8 +22,12 @@ alpha mass bound of every method a pilot estimates is the warning's own 50%: the
 on seeds 0..399 was 35-49%, and measuring seed 1,026,678 put ``velocity`` at 47%, over the 40%
 first read off them). Frames
 that warned went beyond them: ``velocity`` 4.1x the unblurred frame's error (a translucent
-sphere), ``blur_shell`` 2.4x (a large floor under a hand-held camera, moving toward it (under the camera's motion the corners of the floor's two large top triangles face their motion differently, so the silhouette-of-motion rule gives those triangles strips, drawn with the box's shared corner normals: a darker wedge inside the floor)), the motion volume +117% mass (a
-knot's holes filled). The README lists the bounds beside each method.
+sphere turning in place: the exact frame barely changes, while the image-space blur smears its
+rim along the surface's velocity), ``blur_shell`` 2.4x (a large floor under a hand-held camera
+moving toward it: the corners of the floor's two large top triangles face the camera's motion
+differently, so the silhouette-of-motion rule gives them strips, drawn with the box's shared
+corner normals, a darker wedge inside the floor), the motion volume +117% mass (a knot's holes
+filled). The README lists the bounds beside each method.
 """
 
 from __future__ import annotations

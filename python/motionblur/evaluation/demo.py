@@ -3,7 +3,8 @@
 Renders three built-in scenes at 320x240 -- the translating cube of the motion-volume paper, a
 camera pan, and a bending arm (a deforming mesh) -- with every method that applies to each:
 accumulation (N = 1, 4, 16, 64), motion volumes (1 and 4 segments, box and ramp filters), blur
-shells, Kraus's opaque image blur and Chapman's camera blur. Each image is measured against a
+shells, Kraus's opaque image blur, Chapman's camera blur, the McGuire/Guertin velocity filter,
+the analytic method and ``auto`` at its default tolerance. Each image is measured against a
 Mitsuba reference (K = 64 shutter times, cached), and ``out`` receives every image and the
 references as PNGs (``images/``), a labelled side-by-side sheet per scene (``sheet_<scene>.png``:
 the references and each method with its options, ms and two RMSEs: against Mitsuba, then against
@@ -25,6 +26,7 @@ SWEEPS = {
     "blur_shell": [{"subdivisions": s} for s in (4, 16)],
     "opaque_image": [{"aa": 2}],
     "camera_velocity": [{"samples": 8}, {"samples": None}],  # None: the line integral (default)
+    "velocity": [{}],
     "analytic": [{"tolerance": 0.01}],
 }
 
@@ -43,7 +45,7 @@ def run(out="out/demo", scenes=SCENES) -> int:
         times=64,
         spp=4,
         repeat=2,
-        methods=list(SWEEPS),
+        methods=[*SWEEPS, "auto"],
         sweeps=SWEEPS,
         pyrender_peer=False,
         save_images=True,
