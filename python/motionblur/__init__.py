@@ -29,7 +29,7 @@ from ._optional import MissingDependencyError
 from .budget import memory_budget, set_memory_budget
 from .geometry import *  # noqa: F403
 from .raster import *  # noqa: F403
-from .render import METHODS, MethodNotApplicableWarning, PoorBlurWarning, register, render
+from .render import METHODS, MethodNotApplicableWarning, PoorBlurWarning, methods_for, register, render
 from .renderer import Renderer
 from .scene import *  # noqa: F403
 from .shell import *  # noqa: F403
@@ -107,6 +107,7 @@ __all__ += [
     "coverage",
     *_scene.__all__,
     "render",
+    "methods_for",
     "Renderer",
     "exact",
     "register",

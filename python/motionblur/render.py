@@ -121,7 +121,8 @@ def register(name: str, sweep=(), applies: Callable[[Scene], bool] | None = None
 
 
 def methods_for(scene: Scene) -> list[str]:
-    """Names of the registered methods that apply to ``scene``."""
+    """Names of the registered methods that apply to ``scene`` (``motionblur.methods_for``), in
+    registration order; ``render`` warns (`MethodNotApplicableWarning`) for any other."""
     return [n for n, m in METHODS.items() if m.applies(scene)]
 
 
