@@ -97,6 +97,17 @@ def test_a_method_that_does_not_apply_warns_and_says_why():
         mb.render(pan, "opaque_image")
 
 
+def test_methods_for_names_the_methods_render_runs_without_a_warning():
+    # mb.methods_for (the methods page's call) is the registry's own applies test: on a still
+    # camera it names the object-space methods and not camera_velocity; on the pan the reverse
+    still, pan = _still_scene(), mb.SCENES["pan"](32, 24)
+    assert mb.methods_for is mb.render.__globals__["methods_for"]
+    assert {"velocity", "opaque_image", "motion_volume"} <= set(mb.methods_for(still))
+    assert "camera_velocity" not in mb.methods_for(still)
+    assert "camera_velocity" in mb.methods_for(pan) and "velocity" not in mb.methods_for(pan)
+    assert mb.methods_for(still) == [n for n in mb.METHODS if mb.METHODS[n].applies(still)]
+
+
 @pytest.mark.parametrize("method", ["accumulation", "motion_volume", "opaque_image", "blur_shell"])
 def test_methods_that_apply_do_not_warn(method):
     with warnings.catch_warnings():
