@@ -222,15 +222,19 @@ class PieceMaker:
             self._still[together] = _StillParts(self.scene, self.cam, *split, self.aa)
         return self._still[together]
 
-    def pieces(self, parts: list[tuple[np.ndarray, np.ndarray, int]], dim: float) -> list[Piece]:
+    def pieces(
+        self, parts: list[tuple[np.ndarray, np.ndarray, int]], dim: float, keep: int | None = None
+    ) -> list[Piece]:
         """``self(times, weights, ref, dim)`` of each of ``parts``: a still camera's in one core
-        call (`motionblur._core._Painter.accumulate_still_parts`), the same pieces."""
+        call (`motionblur._core._Painter.accumulate_still_parts`), the same pieces. With
+        ``keep`` a part's index, only that piece gets depth and ids (the others' ``drawn`` are
+        (rgba, None, None): they cannot be `Piece.pasted`), without supersampling only."""
         if self.scene.camera_moves:
             return [self._moving_piece(t, w, ref, dim) for t, w, ref in parts]
         split = self._parts(dim)
         outs = split.painter.core.accumulate_still_parts(
             [{"times": t, "weights": w, "reference": ref} for t, w, ref in parts],
-            split.camera, split.layer, split.static.opaque,
+            split.camera, split.layer, split.static.opaque, keep if self.aa == 1 else None,
         )  # fmt: skip
         return [self._still_piece(split, len(t), out, dim) for (t, _, _), out in zip(parts, outs)]
 
@@ -247,7 +251,8 @@ class PieceMaker:
         x0, y0, x1, y1 = win
         if dim < 1.0:
             acc = (1.0 - dim) * parts.layer.rgba[y0:y1, x0:x1] + dim * acc
-        drawn = resolve_arrays(Layer(np.asarray(acc, np.float32), depth, ids), self.aa)
+        acc = np.asarray(acc, np.float32)
+        drawn = (acc, None, None) if depth is None else resolve_arrays(Layer(acc, depth, ids), self.aa)
         return Piece(base, tuple(v // self.aa for v in win), drawn, stats)
 
     def __call__(self, times, weights, ref: int, dim: float) -> Piece:
@@ -299,7 +304,11 @@ class HalfSums:
                 np.ascontiguousarray(weights, np.float64),
             )
             got.append((half, times, weights, _nearest(times, self.scene.reference_t)))
-        pieces = self.maker.pieces([(t, w / float(w.sum()), ref) for _, t, w, ref in got], 1.0)
+        # the one part `frame` may paste: the first holding the time nearest the reference (the
+        # first of all calls' parts is the first of its own call's)
+        ref_t = self.scene.reference_t
+        keep = min(range(len(got)), key=lambda k: float(np.min(np.abs(got[k][1] - ref_t))))
+        pieces = self.maker.pieces([(t, w / float(w.sum()), ref) for _, t, w, ref in got], 1.0, keep)
         self.parts.extend((h, t, w, p) for (h, t, w, _), p in zip(got, pieces))
 
     def reweight(self, weight_of) -> None:
