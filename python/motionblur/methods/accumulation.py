@@ -28,7 +28,7 @@ from ..budget import need
 from ..raster import Frame
 from ..render import register
 from ..scene import Scene
-from ._accumulate import MAX_TIME_SAMPLES, HalfSums, accumulate, sample_times, uniform_times
+from ._accumulate import MAX_TIME_SAMPLES, HalfSums, accumulate, grid_parts, sample_times, uniform_times
 
 __all__ = [
     "accumulation",
@@ -78,7 +78,7 @@ def accumulation(
         # estimates the error with its pilot.
         return accumulate(scene, times, weights, ref, dim, aa)
     sums = HalfSums(scene, aa, sampling)
-    sums.add_all([(times[h], weights[h], j) for j, h in enumerate(halves)])
+    sums.add_all([(times[k], weights[k], half, q) for k, half, q in grid_parts(len(times), sampling)])
     return sums.frame()
 
 
