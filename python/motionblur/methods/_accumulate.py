@@ -57,7 +57,7 @@ HALVES_FACTOR = {"stratified": 0.25, "jittered": 0.38, "trapezoid": 0.31}
 #: object turning fast) has halves whose errors are independent rather than opposed, and
 #: `HALVES_FACTOR` alone read half its error. From 16 samples up the halves alone were within
 #: 0.73-2 of the error on the tuning scenes.
-QUARTERS_MAX = 0
+QUARTERS_MAX = 8
 
 
 def grid_parts(n: int, sampling: str = "stratified") -> list[tuple[np.ndarray, int, int | None]]:
