@@ -780,10 +780,13 @@ class _Painter:
         camera: _StillCamera,
         background: _LayerLike,
         opaque: bool,
-    ) -> list[tuple[tuple[int, int, int, int], np.ndarray, np.ndarray, np.ndarray, int] | None]:
+        keep: int | None = None,
+    ) -> list[tuple[tuple[int, int, int, int], np.ndarray, np.ndarray | None, np.ndarray | None, int] | None]:
         """`accumulate_still` of each of ``parts`` (its samples) with the same camera, static
         layer and opacity, in one call (one hand-off to the thread pool): the same frames, in
-        order. Releases the GIL."""
+        order, the static layer cropped once for all. With ``keep`` a part's index, only that
+        part has its reference sample's depth and ids (the others' are None). ValueError
+        naming ``keep`` when it indexes no part. Releases the GIL."""
     def accumulate_moving(
         self,
         samples: _Samples,

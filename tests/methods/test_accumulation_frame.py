@@ -366,8 +366,10 @@ def test_the_halves_kernel_names_bad_parts():
 
 @pytest.mark.parametrize("alpha", [1.0, 0.5])
 def test_the_parts_call_gives_each_parts_own_frame(alpha):
-    # accumulate_still_parts (an accumulation's halves in one hand-off to the pool) against one
-    # accumulate_still call per part: the same windows and bits, in order; a bad part named
+    # accumulate_still_parts (an accumulation's halves in one hand-off to the pool, the static
+    # layer cropped once for the union of their windows) against one accumulate_still call per
+    # part: the same windows and bits, in order; with keep, depth and ids of that part only; a
+    # bad part or keep named
     sc = _scene(alpha)
     cam = supersampled(sc.camera, 1)
     moving = [(k, o) for k, o in enumerate(sc.objects) if o.is_moving]
@@ -391,6 +393,19 @@ def test_the_parts_call_gives_each_parts_own_frame(alpha):
         for a, b in zip(got[1:4], want[1:4]):
             assert a.dtype == b.dtype and np.array_equal(a.view(np.uint8), b.view(np.uint8))
     assert not np.array_equal(together[0][1], together[1][1])  # the halves differ
+    # the third part's window is smaller than the union the static layer is cropped to
+    assert together[2][0] != together[0][0]
+    # keep: one part's depth and ids (the one HalfSums pastes), the others' None, colour the same
+    kept = painter.core.accumulate_still_parts(parts, camera, layer, static.opaque, 1)
+    for k, (got, want) in enumerate(zip(kept, together)):
+        assert got[0] == want[0] and got[4] == want[4]
+        assert np.array_equal(got[1].view(np.uint32), want[1].view(np.uint32))
+        if k == 1:
+            assert np.array_equal(got[2], want[2]) and np.array_equal(got[3], want[3])
+        else:
+            assert got[2] is None and got[3] is None
+    with pytest.raises(ValueError, match="keep"):
+        painter.core.accumulate_still_parts(parts, camera, layer, static.opaque, 3)
     with pytest.raises(ValueError, match="times"):
         painter.core.accumulate_still_parts(
             [parts[0], dict(parts[1], times=parts[1]["times"] + 2.0)], camera, layer, True

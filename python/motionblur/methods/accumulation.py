@@ -59,7 +59,9 @@ def accumulation(
 
     The even and the odd samples are drawn and summed apart by the compiled core
     (``_core._Painter.accumulate_still_parts`` / ``accumulate_moving``, ``src/accumulate/frame.rs``);
-    their difference is the frame's ``stats["error_estimate"]`` (`_accumulate`).
+    their difference is the frame's ``stats["error_estimate"]`` (`_accumulate`). A stratified
+    grid of 4 or 8 samples is drawn in quarters, whose differences within each half tell how
+    fast the error falls (`_accumulate.rate_factor`).
 
     A rolling shutter (``Scene(rolling=R)``): see `rolling_accumulation` (about N renders per
     row, each row weighing every render by its own window's filter).
