@@ -41,9 +41,9 @@ mod volume;
 mod python;
 
 pub use accumulate::{
-    accumulate, accumulate_moving, accumulate_still, composite, facing_faces, halves, over,
-    pixel_rect, resolve, sample_rects, window_projection, Accumulated, BuffersMut, HalfPart,
-    Halves, PaintObject, Painter, Rect, Samples, StillCamera, SERIAL_PIXELS,
+    accumulate, accumulate_moving, accumulate_still, accumulate_still_parts, composite,
+    facing_faces, halves, over, pixel_rect, resolve, sample_rects, window_projection, Accumulated,
+    BuffersMut, HalfPart, Halves, PaintObject, Painter, Rect, Samples, StillCamera, SERIAL_PIXELS,
 };
 pub use analytic::{
     render as render_analytic, segment_times, Input as AnalyticInput, MovingDraw, Quadrature,

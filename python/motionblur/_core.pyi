@@ -717,18 +717,22 @@ def _resolve(layer: _LayerLike, samples: int, out: _LayerLike, origin: tuple[int
 # --- acc-frame (accumulation's per-frame kernels)
 
 def _halves(
-    parts: list[tuple[int, float, np.ndarray, tuple[int, int, int, int] | None, np.ndarray | None]],
+    parts: list[
+        tuple[int, float, np.ndarray, tuple[int, int, int, int] | None, np.ndarray | None, int | None]
+    ],
     window: tuple[int, int, int, int],
     pre: tuple[float, float, float, float],
-) -> tuple[np.ndarray, np.ndarray, tuple[float, float]]:
+) -> tuple[tuple[float, float | None], np.ndarray, tuple[float, float]]:
     """The two halves of an accumulation over ``window`` (x0, y0, x1, y1) of its (H,W) image.
     ``parts``: each (half 0 or 1, its mass (shutter weight), base (H,W,4) f32 premultiplied, its
-    own window (x0, y0, x1, y1) or None, that window's drawn pixels (h,w,4) f32 or None), all
-    C-contiguous. Per pixel, in float64: each half's mass-weighted mean ``a``, ``b`` of its parts
-    (the drawn pixels inside a part's window, its base outside); returns (``a - b`` composited
-    over the premultiplied RGBA ``pre`` (h,w,4) f64, the frame ``(a M_a + b M_b) / (M_a + M_b)``
-    (h,w,4) f32, (M_a, M_b)). ValueError naming ``parts``, ``base``, ``window`` or ``drawn``.
-    Releases the GIL."""
+    own window (x0, y0, x1, y1) or None, that window's drawn pixels (h,w,4) f32 or None, its
+    sub-half 0 or 1 within its half or None), all C-contiguous. Per pixel, in float64: each
+    half's mass-weighted mean ``a``, ``b`` of its parts (the drawn pixels inside a part's
+    window, its base outside); returns ((the sum of the squares of ``a - b`` composited over the
+    premultiplied RGBA ``pre``, summed along each row and then over the rows; the same of each
+    half's two sub-halves, summed over both halves, when every part has a sub-half, else None),
+    the frame ``(a M_a + b M_b) / (M_a + M_b)`` (h,w,4) f32, (M_a, M_b)). ValueError naming
+    ``parts``, ``base``, ``window``, ``drawn`` or ``sub``. Releases the GIL."""
 
 def _facing_faces(vertices: np.ndarray, faces: np.ndarray, eyes: np.ndarray) -> np.ndarray:
     """The faces (F',3) int64, in order, of the mesh vertices (V,3) float64 / faces (F,3) int64
@@ -776,10 +780,13 @@ class _Painter:
         camera: _StillCamera,
         background: _LayerLike,
         opaque: bool,
-    ) -> list[tuple[tuple[int, int, int, int], np.ndarray, np.ndarray, np.ndarray, int] | None]:
+        keep: int | None = None,
+    ) -> list[tuple[tuple[int, int, int, int], np.ndarray, np.ndarray | None, np.ndarray | None, int] | None]:
         """`accumulate_still` of each of ``parts`` (its samples) with the same camera, static
         layer and opacity, in one call (one hand-off to the thread pool): the same frames, in
-        order. Releases the GIL."""
+        order, the static layer cropped once for all. With ``keep`` a part's index, only that
+        part has its reference sample's depth and ids (the others' are None). ValueError
+        naming ``keep`` when it indexes no part. Releases the GIL."""
     def accumulate_moving(
         self,
         samples: _Samples,

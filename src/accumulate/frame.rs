@@ -21,7 +21,7 @@
 //! order (see [`crate::motion`]'s fixed-order arithmetic; the loop is the tests' serial twin),
 //! and the sums are the kernels of `kernels.rs` in sample order, so the frame is the same bit
 //! for bit, for any thread count.
-use super::kernels::{accumulate, composite, over, Rect};
+use super::kernels::{accumulate, accumulate_limited, composite, over, Limit, Rect};
 use super::painter::Painter;
 use crate::budget::Need;
 use crate::error::{Error, Result};
@@ -201,94 +201,196 @@ pub fn accumulate_still(
     background: Layer<'_>,
     opaque: bool,
 ) -> Result<Option<Accumulated>> {
-    check_still(camera, &samples, &background)?;
+    let mut out = accumulate_still_parts(painter, camera, &[samples], background, opaque, None)?;
+    Ok(out.pop().flatten())
+}
+
+/// [`accumulate_still`] of each of `parts` (an accumulation's halves or quarters), the same
+/// frames bit for bit, sharing what they can: the static layer is cropped once for the union
+/// of the parts' windows, and only part `keep` (every part when None) gets the reference
+/// sample's depth and ids; the others' `depth` and `ids` are empty. Each part's frame covers
+/// its own window, and whether its window holds a static surface is decided there.
+pub fn accumulate_still_parts(
+    painter: &Painter,
+    camera: &StillCamera,
+    parts: &[Samples<'_>],
+    background: Layer<'_>,
+    opaque: bool,
+    keep: Option<usize>,
+) -> Result<Vec<Option<Accumulated>>> {
+    for samples in parts {
+        check_still(camera, samples, &background)?;
+    }
     let (iw, ih) = (camera.width, camera.height);
-    let rects = sample_rects(painter, camera, samples.times);
-    let Some(win) = union_window(&rects, camera) else {
-        return Ok(None);
+    let rects: Vec<_> = parts
+        .iter()
+        .map(|s| sample_rects(painter, camera, s.times))
+        .collect();
+    let wins: Vec<_> = rects.iter().map(|r| union_window(r, camera)).collect();
+    let Some(all) = union_window(&wins, camera) else {
+        return Ok(parts.iter().map(|_| None).collect());
     };
-    let (ww, wh) = (win[2] - win[0], win[3] - win[1]);
-    // The window's sum, the static layer's crop and the reference sample's depth and ids, and
-    // a sample's layer (the rasterizer checks its own frame), before any is allocated.
+    let (uw, uh) = (all[2] - all[0], all[3] - all[1]);
+    // The union's crop of the static layer (20 bytes a sample), each part's sum (16), the
+    // reference sample's depth and ids (8) and a sample's layer (24; the rasterizer checks its
+    // own frame), before any is allocated.
     Need::new("accumulation")
         .add(
-            &[("window width", ww as u64), ("window height", wh as u64)],
-            96,
+            &[("window width", uw as u64), ("window height", uh as u64)],
+            52 + 16 * parts.len() as u64,
         )?
         .check()?;
-    let base_rgba = crop(background.rgba, iw, 4, win);
-    let base_depth = crop(background.depth, iw, 1, win);
-    let base_ids = crop(background.ids, iw, 1, win);
-    let has_static = base_depth.iter().any(|d| d.is_finite());
-    let exact_sum = !has_static || opaque;
-    let mut acc = vec![0.0f32; 4 * ww * wh];
-    let mut keep_depth = base_depth.clone();
-    let mut keep_ids = base_ids.clone();
-    let mut draw_calls = 0;
-    let draw = |i: usize| -> Result<Option<Frame>> {
-        let Some(r) = rects[i] else { return Ok(None) };
-        let proj = window_projection(&camera.projection, iw, ih, r);
-        let (w, h) = ((r[2] - r[0]) as u32, (r[3] - r[1]) as u32);
-        painter
-            .layer(samples.times[i], &camera.view, &proj, w, h)
-            .map(Some)
-    };
-    for (i, layer) in (0..samples.times.len()).map(|i| (i, draw(i))) {
-        let w = samples.weights[i] as f32;
-        let (Some(layer), Some(r)) = (layer?, rects[i]) else {
-            if !exact_sum {
-                add_weighted(&mut acc, &base_rgba, w);
-            }
+    let base_rgba = crop(background.rgba, iw, 4, all);
+    let base_depth = crop(background.depth, iw, 1, all);
+    let mut out = Vec::with_capacity(parts.len());
+    for (p, samples) in parts.iter().enumerate() {
+        let Some(win) = wins[p] else {
+            out.push(None);
             continue;
         };
-        let sub = Rect {
-            x0: r[0] - win[0],
-            y0: r[1] - win[1],
-            width: r[2] - r[0],
-            height: r[3] - r[1],
-            stride: ww,
+        let (ww, wh) = (win[2] - win[0], win[3] - win[1]);
+        // the part's window inside the union's crop
+        let inside = Rect {
+            x0: win[0] - all[0],
+            y0: win[1] - all[1],
+            width: ww,
+            height: wh,
+            stride: uw,
         };
-        draw_calls += 1;
-        let over_base = |depth: &mut Vec<f32>, ids: &mut Vec<i32>| -> Result<Vec<f32>> {
-            let mut rgba = base_rgba.clone();
-            composite(
-                &layer.rgba,
-                &layer.depth,
-                &layer.ids,
-                &mut rgba,
-                depth,
-                ids,
-                sub,
-            )?;
-            Ok(rgba)
-        };
-        if i == samples.reference {
-            over_base(&mut keep_depth, &mut keep_ids)?;
-        }
-        if exact_sum {
-            let limit = has_static.then_some(&base_depth[..]);
-            accumulate(&mut acc, &layer.rgba, &layer.depth, limit, w, sub)?;
+        let has_static = rows_in(&base_depth, 1, inside).any(|r| r.iter().any(|d| d.is_finite()));
+        let exact_sum = !has_static || opaque;
+        let kept = keep.is_none_or(|k| k == p);
+        let mut acc = vec![0.0f32; 4 * ww * wh];
+        let (mut keep_depth, mut keep_ids) = if kept {
+            (
+                crop(background.depth, iw, 1, win),
+                crop(background.ids, iw, 1, win),
+            )
         } else {
-            let full = over_base(&mut base_depth.clone(), &mut base_ids.clone())?;
-            add_weighted(&mut acc, &full, w);
+            (Vec::new(), Vec::new())
+        };
+        // the part's own crops, for a transparent static layer only (a sample composited
+        // with it before it is summed)
+        let own = (!exact_sum).then(|| {
+            (
+                crop(background.rgba, iw, 4, win),
+                crop(background.depth, iw, 1, win),
+                crop(background.ids, iw, 1, win),
+            )
+        });
+        let limit = has_static.then_some(Limit {
+            data: &base_depth,
+            stride: uw,
+            x0: inside.x0,
+            y0: inside.y0,
+        });
+        let rects = &rects[p];
+        let mut draw_calls = 0;
+        let draw = |i: usize| -> Result<Option<Frame>> {
+            let Some(r) = rects[i] else { return Ok(None) };
+            let proj = window_projection(&camera.projection, iw, ih, r);
+            let (w, h) = ((r[2] - r[0]) as u32, (r[3] - r[1]) as u32);
+            painter
+                .layer(samples.times[i], &camera.view, &proj, w, h)
+                .map(Some)
+        };
+        for (i, layer) in (0..samples.times.len()).map(|i| (i, draw(i))) {
+            let w = samples.weights[i] as f32;
+            let (Some(layer), Some(r)) = (layer?, rects[i]) else {
+                if let Some((rgba, _, _)) = &own {
+                    add_weighted(&mut acc, rgba, w);
+                }
+                continue;
+            };
+            let sub = Rect {
+                x0: r[0] - win[0],
+                y0: r[1] - win[1],
+                width: r[2] - r[0],
+                height: r[3] - r[1],
+                stride: ww,
+            };
+            draw_calls += 1;
+            if i == samples.reference && kept {
+                composite_depth_ids(
+                    &layer.depth,
+                    &layer.ids,
+                    &mut keep_depth,
+                    &mut keep_ids,
+                    sub,
+                );
+            }
+            match &own {
+                None => accumulate_limited(&mut acc, &layer.rgba, &layer.depth, limit, w, sub)?,
+                Some((rgba, depth, ids)) => {
+                    let mut full = rgba.clone();
+                    let (mut depth, mut ids) = (depth.clone(), ids.clone());
+                    composite(
+                        &layer.rgba,
+                        &layer.depth,
+                        &layer.ids,
+                        &mut full,
+                        &mut depth,
+                        &mut ids,
+                        sub,
+                    )?;
+                    add_weighted(&mut acc, &full, w);
+                }
+            }
+        }
+        if has_static && opaque {
+            // `over` of the window's crop, row by row
+            for (a, u) in acc
+                .chunks_exact_mut(4 * ww)
+                .zip(rows_in(&base_rgba, 4, inside))
+            {
+                over(a, u)?;
+            }
+        }
+        out.push(Some(Accumulated {
+            frame: Frame {
+                width: ww as u32,
+                height: wh as u32,
+                rgba: acc,
+                depth: keep_depth,
+                ids: keep_ids,
+                velocity: None,
+                exposure: None,
+            },
+            window: win,
+            draw_calls,
+        }));
+    }
+    Ok(out)
+}
+
+/// The rows of `rect` in `data` (`rect.stride` samples of `c` values a row).
+fn rows_in(data: &[f32], c: usize, rect: Rect) -> impl Iterator<Item = &[f32]> {
+    (0..rect.height).map(move |y| {
+        let at = ((rect.y0 + y) * rect.stride + rect.x0) * c;
+        &data[at..at + rect.width * c]
+    })
+}
+
+/// The depth and ids of [`composite`] alone: where layer `a` (covering `rect`) has a surface
+/// no farther than `b`'s, its depth and id.
+fn composite_depth_ids(
+    a_depth: &[f32],
+    a_ids: &[i32],
+    depth: &mut [f32],
+    ids: &mut [i32],
+    rect: Rect,
+) {
+    for ry in 0..rect.height {
+        let row = (rect.y0 + ry) * rect.stride + rect.x0;
+        for i in 0..rect.width {
+            let (s, d) = (ry * rect.width + i, row + i);
+            let ad = a_depth[s];
+            if ad != f32::INFINITY && ad <= depth[d] {
+                depth[d] = ad;
+                ids[d] = a_ids[s];
+            }
         }
     }
-    if has_static && opaque {
-        over(&mut acc, &base_rgba)?;
-    }
-    Ok(Some(Accumulated {
-        frame: Frame {
-            width: ww as u32,
-            height: wh as u32,
-            rgba: acc,
-            depth: keep_depth,
-            ids: keep_ids,
-            velocity: None,
-            exposure: None,
-        },
-        window: win,
-        draw_calls,
-    }))
 }
 
 /// The checks of [`accumulate_still`]'s inputs (errors name `times`/`weights`, `background`

@@ -1,6 +1,6 @@
 //! The two halves of an accumulation (its even and its odd time samples, each summed apart)
-//! made into the frame and the difference its error estimate reads, over the window the
-//! samples drew in, in one pass.
+//! made into the frame and the sum of squares of their difference, which its error estimate
+//! reads, over the window the samples drew in, in one pass.
 //!
 //! Each part is a weighted mean of some samples (`mass`, the shutter weight they carry): its
 //! pixels are a `base` image (the static layer, or a whole frame) with the `drawn` pixels of
@@ -8,8 +8,12 @@
 //! `(0 + m_1 v_1 + m_2 v_2 + ...) / M` (`v_i` its parts' values in order, `M` their masses
 //! summed from 0 in order); the difference `d = a - b` composited over a background `pre`
 //! (premultiplied) is `d_k + (-d_alpha) pre_k`; the frame is `(a M_a + b M_b) / (M_a + M_b)`
-//! rounded to float32. These are numpy's operations in `HalfSums.frame`'s order, so the bits
-//! are those of that numpy code (tests/methods/test_accumulation_frame.py compares them).
+//! rounded to float32. The squares `d_k * d_k` are summed from 0 along each row (pixels in
+//! order, channels in order), and the rows' sums from 0 in row order, whatever the threads.
+//! When every part names its `sub` half (0 or 1 within its half: the quarters of a grid), each
+//! half's two sub-halves are compared the same way and their squares summed over both halves.
+//! These are numpy's operations in `HalfSums.frame`'s order, so the bits are those of that
+//! numpy code (tests/methods/test_accumulation_frame.py compares them).
 use crate::error::{Error, Result};
 
 /// One part of a half: its samples' weighted mean over the image.
@@ -23,13 +27,20 @@ pub struct HalfPart<'a> {
     pub base: &'a [f32],
     /// `(x0, y0, x1, y1)` of the image the part drew in, with its `drawn` pixels.
     pub window: Option<([usize; 4], &'a [f32])>,
+    /// Its half within its half (0 or 1), when the grid is drawn in quarters.
+    pub sub: Option<usize>,
 }
 
-/// The frame's window and the halves' composited difference there (see the module docs).
+/// The frame's window and the squares of the halves' composited difference there (see the
+/// module docs).
 #[derive(Clone, Debug)]
 pub struct Halves {
-    /// `(h, w, 4)` float64: `a - b` composited over the background.
-    pub difference: Vec<f64>,
+    /// The sum over the window's pixels and channels of `(a - b)^2`, composited over the
+    /// background.
+    pub square_sum: f64,
+    /// The same of each half's two sub-halves, summed over both halves, when every part has a
+    /// `sub`.
+    pub sub_square_sum: Option<f64>,
     /// `(h, w, 4)` float32: the frame, both halves by their masses.
     pub frame: Vec<f32>,
     /// The masses of the even and the odd half.
@@ -55,32 +66,93 @@ pub fn halves(
         check_part(p, (width, height))?;
     }
     let mut masses = [0.0f64; 2];
+    let mut sub_masses = [[0.0f64; 2]; 2];
     for p in parts {
         masses[p.half] += p.mass;
+        if let Some(sub) = p.sub {
+            sub_masses[p.half][sub] += p.mass;
+        }
     }
+    // sub-halves compared when every part names one and each of the four has a mass
+    let subs = !parts.is_empty()
+        && parts.iter().all(|p| p.sub.is_some())
+        && sub_masses.iter().flatten().all(|m| *m > 0.0);
     let (w, h) = (x1 - x0, y1 - y0);
-    let mut difference = vec![0.0f64; w * h * 4];
     let mut frame = vec![0.0f32; w * h * 4];
-    let row = |(y, (diff, out)): (usize, (&mut [f64], &mut [f32]))| {
-        for (i, x) in (x0..x1).enumerate() {
-            let (d, f) = pixel(parts, masses, pre, width, (x, y0 + y));
-            diff[i * 4..i * 4 + 4].copy_from_slice(&d);
-            out[i * 4..i * 4 + 4].copy_from_slice(&f);
+    let mut sums = vec![[0.0f64; 2]; h];
+    // A grid drawn in quarters, in order: part j of half j % 2, sub-half j / 2. Each half's
+    // sum `(0 + m v) + m' v'` is its two sub-halves' sums added (the same bits), each value
+    // multiplied and added once.
+    let quarters = subs
+        && parts.len() == 4
+        && parts
+            .iter()
+            .enumerate()
+            .all(|(j, p)| p.half == j % 2 && p.sub == Some(j / 2));
+    let pass = Pass {
+        parts,
+        masses,
+        sub_masses: subs.then_some(sub_masses),
+        pre,
+        quarters,
+    };
+    let row = |(y, (out, sum)): (usize, (&mut [f32], &mut [f64; 2]))| {
+        let y = y0 + y;
+        // the row cut where a part's window starts or ends: between two cuts every part
+        // reads one slice (its drawn row or its base's), no per-pixel window test
+        let mut cuts = vec![x0, x1];
+        for p in parts {
+            if let Some(([wx0, wy0, wx1, wy1], _)) = p.window {
+                if (wy0..wy1).contains(&y) {
+                    cuts.extend([wx0, wx1].into_iter().filter(|c| (x0 + 1..x1).contains(c)));
+                }
+            }
+        }
+        cuts.sort_unstable();
+        cuts.dedup();
+        let mut srcs: Vec<&[f32]> = Vec::with_capacity(parts.len());
+        for seg in cuts.windows(2) {
+            let (s0, s1) = (seg[0], seg[1]);
+            srcs.clear();
+            srcs.extend(parts.iter().map(|p| row_slice(p, width, y, s0, s1)));
+            for x in s0..s1 {
+                let k = (x - s0) * 4;
+                let (f, d, e) = if pass.quarters {
+                    pass.pixel_quarters([0, 1, 2, 3].map(|j| &srcs[j][k..k + 4]))
+                } else {
+                    pass.pixel(|j| &srcs[j][k..k + 4])
+                };
+                let i = (x - x0) * 4;
+                out[i..i + 4].copy_from_slice(&f);
+                for v in d {
+                    sum[0] += v * v;
+                }
+                if let Some(e) = e {
+                    for v in e.iter().flatten() {
+                        sum[1] += v * v;
+                    }
+                }
+            }
         }
     };
-    let rows = difference.chunks_mut(w * 4).zip(frame.chunks_mut(w * 4));
     if w * h < SERIAL_PIXELS {
-        rows.enumerate().for_each(row);
+        frame
+            .chunks_mut(w * 4)
+            .zip(sums.iter_mut())
+            .enumerate()
+            .for_each(row);
     } else {
         use rayon::prelude::*;
-        difference
+        frame
             .par_chunks_mut(w * 4)
-            .zip(frame.par_chunks_mut(w * 4))
+            .zip(sums.par_iter_mut())
             .enumerate()
             .for_each(row);
     }
+    let total = |j: usize| sums.iter().fold(0.0f64, |t, s| t + s[j]);
     Ok(Halves {
-        difference,
+        square_sum: total(0),
+        sub_square_sum: subs.then(|| total(1)),
         frame,
         masses,
     })
@@ -91,44 +163,92 @@ pub fn halves(
 /// is its own).
 pub const SERIAL_PIXELS: usize = 1 << 16;
 
-/// Pixel `(x, y)`'s composited difference and frame value (the module docs' operations).
-#[inline]
-fn pixel(
-    parts: &[HalfPart<'_>],
+/// What every pixel of one [`halves`] pass reads.
+struct Pass<'p, 'a> {
+    parts: &'p [HalfPart<'a>],
     masses: [f64; 2],
+    sub_masses: Option<[[f64; 2]; 2]>,
     pre: [f64; 4],
-    width: usize,
-    (x, y): (usize, usize),
-) -> ([f64; 4], [f32; 4]) {
-    let mut sums = [[0.0f64; 4]; 2];
-    for p in parts {
-        let v = value(p, width, (x, y));
-        for (s, v) in sums[p.half].iter_mut().zip(v) {
-            *s += f64::from(*v) * p.mass;
-        }
-    }
-    let a = sums[0].map(|s| s / masses[0]);
-    let b = sums[1].map(|s| s / masses[1]);
-    let d: [f64; 4] = std::array::from_fn(|k| a[k] - b[k]);
-    let scale = -d[3];
-    let total = masses[0] + masses[1];
-    (
-        std::array::from_fn(|k| d[k] + scale * pre[k]),
-        std::array::from_fn(|k| ((a[k] * masses[0] + b[k] * masses[1]) / total) as f32),
-    )
+    /// Four parts, part `j` of half `j % 2` and sub-half `j / 2` (see [`halves`]).
+    quarters: bool,
 }
 
-/// Pixel `(x, y)` of a part: its drawn value inside its window, its base's outside.
+impl Pass<'_, '_> {
+    /// A pixel's frame value, the halves' composited difference and each half's two
+    /// sub-halves' composited difference (None without subs), part `j`'s value `value(j)`.
+    #[inline]
+    fn pixel<'v>(
+        &self,
+        value: impl Fn(usize) -> &'v [f32],
+    ) -> ([f32; 4], [f64; 4], Option<[[f64; 4]; 2]>) {
+        let mut sums = [[0.0f64; 4]; 2];
+        let mut subs = [[[0.0f64; 4]; 2]; 2];
+        for (j, p) in self.parts.iter().enumerate() {
+            let v = value(j);
+            for (s, v) in sums[p.half].iter_mut().zip(v) {
+                *s += f64::from(*v) * p.mass;
+            }
+            if let (Some(sub), Some(_)) = (p.sub, self.sub_masses) {
+                for (s, v) in subs[p.half][sub].iter_mut().zip(v) {
+                    *s += f64::from(*v) * p.mass;
+                }
+            }
+        }
+        let m = self.masses;
+        let a = sums[0].map(|s| s / m[0]);
+        let b = sums[1].map(|s| s / m[1]);
+        let total = m[0] + m[1];
+        let frame = std::array::from_fn(|k| ((a[k] * m[0] + b[k] * m[1]) / total) as f32);
+        let e = self
+            .sub_masses
+            .map(|sm| [0, 1].map(|half| self.composited(subs[half][0], subs[half][1], sm[half])));
+        (frame, self.composited(sums[0], sums[1], m), e)
+    }
+
+    /// [`Self::pixel`] of four parts, part `j` of half `j % 2` and sub-half `j / 2`: each
+    /// sub-half `0 + m v`, each half its two sub-halves added (the same bits).
+    #[inline]
+    fn pixel_quarters(&self, v: [&[f32]; 4]) -> ([f32; 4], [f64; 4], Option<[[f64; 4]; 2]>) {
+        let p = self.parts;
+        let q: [[f64; 4]; 4] =
+            std::array::from_fn(|j| std::array::from_fn(|k| 0.0 + f64::from(v[j][k]) * p[j].mass));
+        // q[0], q[2]: half 0's sub-halves; q[1], q[3]: half 1's
+        let a0: [f64; 4] = std::array::from_fn(|k| q[0][k] + q[2][k]);
+        let b0: [f64; 4] = std::array::from_fn(|k| q[1][k] + q[3][k]);
+        let m = self.masses;
+        let a = a0.map(|s| s / m[0]);
+        let b = b0.map(|s| s / m[1]);
+        let total = m[0] + m[1];
+        let frame = std::array::from_fn(|k| ((a[k] * m[0] + b[k] * m[1]) / total) as f32);
+        let sm = self.sub_masses.expect("quarters compare their sub-halves");
+        let e = [
+            self.composited(q[0], q[2], sm[0]),
+            self.composited(q[1], q[3], sm[1]),
+        ];
+        (frame, self.composited(a0, b0, m), Some(e))
+    }
+
+    /// `a / ma - b / mb` composited over the background (the module docs' operations).
+    #[inline]
+    fn composited(&self, a: [f64; 4], b: [f64; 4], [ma, mb]: [f64; 2]) -> [f64; 4] {
+        let d: [f64; 4] = std::array::from_fn(|k| a[k] / ma - b[k] / mb);
+        let scale = -d[3];
+        std::array::from_fn(|k| d[k] + scale * self.pre[k])
+    }
+}
+
+/// Pixels `x0..x1` of row `y` of a part, all inside its window or all outside it: its drawn
+/// values inside, its base's outside.
 #[inline]
-fn value<'a>(p: &HalfPart<'a>, width: usize, (x, y): (usize, usize)) -> &'a [f32] {
+fn row_slice<'a>(p: &HalfPart<'a>, width: usize, y: usize, x0: usize, x1: usize) -> &'a [f32] {
     if let Some(([wx0, wy0, wx1, wy1], drawn)) = p.window {
-        if (wx0..wx1).contains(&x) && (wy0..wy1).contains(&y) {
-            let i = ((y - wy0) * (wx1 - wx0) + (x - wx0)) * 4;
-            return &drawn[i..i + 4];
+        if (wx0..wx1).contains(&x0) && (wy0..wy1).contains(&y) {
+            let i = ((y - wy0) * (wx1 - wx0) + (x0 - wx0)) * 4;
+            return &drawn[i..i + (x1 - x0) * 4];
         }
     }
-    let i = (y * width + x) * 4;
-    &p.base[i..i + 4]
+    let i = (y * width + x0) * 4;
+    &p.base[i..i + (x1 - x0) * 4]
 }
 
 /// A part's half is 0 or 1, its base the image's size, its window inside the image and its
@@ -136,6 +256,9 @@ fn value<'a>(p: &HalfPart<'a>, width: usize, (x, y): (usize, usize)) -> &'a [f32
 fn check_part(p: &HalfPart<'_>, (width, height): (usize, usize)) -> Result<()> {
     if p.half > 1 {
         return Err(Error::value("half", "must be 0 or 1"));
+    }
+    if p.sub.is_some_and(|s| s > 1) {
+        return Err(Error::value("sub", "must be 0 or 1"));
     }
     if p.base.len() != width * height * 4 {
         return Err(Error::shape("base", "must be (H, W, 4) of the image"));
@@ -168,23 +291,28 @@ mod tests {
                 mass: 0.5,
                 base: &base,
                 window: Some(([1, 0, 2, 1], &d0)),
+                sub: None,
             },
             HalfPart {
                 half: 1,
                 mass: 0.25,
                 base: &base,
                 window: None,
+                sub: None,
             },
             HalfPart {
                 half: 1,
                 mass: 0.25,
                 base: &base,
                 window: Some(([2, 1, 3, 2], &d1)),
+                sub: None,
             },
         ];
         let pre = [0.1, 0.2, 0.3, 1.0];
         let out = halves(&parts, (3, 2), [0, 0, 3, 2], pre).unwrap();
         assert_eq!(out.masses, [0.5, 0.5]);
+        assert!(out.sub_square_sum.is_none());
+        let mut squares = 0.0;
         for y in 0..2 {
             for x in 0..3 {
                 let i = (y * 3 + x) * 4;
@@ -206,12 +334,65 @@ mod tests {
                 });
                 for k in 0..4 {
                     let d = a[k] - b[k] - (a[3] - b[3]) * pre[k];
-                    assert!((out.difference[i + k] - d).abs() < 1e-12, "({x}, {y}) {k}");
+                    squares += d * d;
                     let f = ((a[k] + b[k]) / 2.0) as f32;
                     assert!((out.frame[i + k] - f).abs() <= 1e-6, "({x}, {y}) {k}");
                 }
             }
         }
+        assert!((out.square_sum - squares).abs() < 1e-12 && squares > 0.1);
+    }
+
+    #[test]
+    fn sub_halves_compare_the_quarters_within_each_half() {
+        // a 1 x 1 image, four parts of mass 0.25 with values q0..q3 (premultiplied, opaque);
+        // half 0 is q0, q2 and half 1 q1, q3: the sub-halves' squares are
+        // (q0 - q2)^2 + (q1 - q3)^2 over the channels, and none without every part's sub
+        let q = [
+            [0.1f32, 0.2, 0.3, 1.0],
+            [0.4, 0.1, 0.0, 1.0],
+            [0.3, 0.3, 0.1, 1.0],
+            [0.0, 0.5, 0.2, 1.0],
+        ];
+        let parts: Vec<HalfPart<'_>> = q
+            .iter()
+            .enumerate()
+            .map(|(j, v)| HalfPart {
+                half: j % 2,
+                mass: 0.25,
+                base: v,
+                window: None,
+                sub: Some(j / 2),
+            })
+            .collect();
+        let out = halves(&parts, (1, 1), [0, 0, 1, 1], [0.0; 4]).unwrap();
+        let d = |a: usize, b: usize, k: usize| f64::from(q[a][k]) - f64::from(q[b][k]);
+        let want: f64 = (0..4)
+            .map(|k| d(0, 2, k).powi(2) + d(1, 3, k).powi(2))
+            .sum();
+        assert!((out.sub_square_sum.unwrap() - want).abs() < 1e-12);
+        let halves_want: f64 = (0..4)
+            .map(|k| {
+                let a = (f64::from(q[0][k]) + f64::from(q[2][k])) / 2.0;
+                let b = (f64::from(q[1][k]) + f64::from(q[3][k])) / 2.0;
+                (a - b).powi(2)
+            })
+            .sum();
+        assert!((out.square_sum - halves_want).abs() < 1e-12);
+        // the same parts in another order (half 0's first: no longer the quarters' order) go
+        // through the general per-part sums: the same bits, each half's parts in the same order
+        let reordered = [parts[0], parts[2], parts[1], parts[3]];
+        let general = halves(&reordered, (1, 1), [0, 0, 1, 1], [0.0; 4]).unwrap();
+        assert_eq!(general.square_sum.to_bits(), out.square_sum.to_bits());
+        assert_eq!(
+            general.sub_square_sum.unwrap().to_bits(),
+            out.sub_square_sum.unwrap().to_bits()
+        );
+        assert_eq!(general.frame, out.frame);
+        let mut partial = parts.clone();
+        partial[3].sub = None;
+        let out = halves(&partial, (1, 1), [0, 0, 1, 1], [0.0; 4]).unwrap();
+        assert!(out.sub_square_sum.is_none());
     }
 
     #[test]
@@ -223,6 +404,7 @@ mod tests {
             mass: 1.0,
             base: &base,
             window,
+            sub: None,
         };
         let err = |parts: &[HalfPart<'_>], win| {
             halves(parts, (3, 2), win, [0.0; 4])
@@ -239,6 +421,7 @@ mod tests {
             mass: 1.0,
             base: &short,
             window: None,
+            sub: None,
         };
         assert!(err(&[p], [0, 0, 3, 2]).contains("base"));
     }

@@ -54,6 +54,48 @@ pub fn accumulate(
     weight: f32,
     rect: Rect,
 ) -> Result<()> {
+    let whole_rows = rect.stride > 0 && acc.len() % (4 * rect.stride) == 0;
+    if let (Some(l), true) = (limit, whole_rows) {
+        let rows = acc.len() / (4 * rect.stride);
+        if l.len() != rows * rect.stride {
+            return Err(Error::shape(
+                "limit",
+                "must have one depth per sample of acc",
+            ));
+        }
+    }
+    let limit = limit.map(|data| Limit {
+        data,
+        stride: rect.stride,
+        x0: 0,
+        y0: 0,
+    });
+    accumulate_limited(acc, rgba, depth, limit, weight, rect)
+}
+
+/// A depth buffer read at an offset: sample `(x, y)` of `acc` is `data[(y0 + y) * stride + x0 + x]`
+/// (a window's limit inside a larger crop).
+#[derive(Clone, Copy, Debug)]
+pub struct Limit<'a> {
+    /// The depths, `stride` a row.
+    pub data: &'a [f32],
+    /// Samples per row of `data`.
+    pub stride: usize,
+    /// Column of `data` under `acc`'s first column.
+    pub x0: usize,
+    /// Row of `data` under `acc`'s first row.
+    pub y0: usize,
+}
+
+/// [`accumulate`] with the limit read through a [`Limit`] view.
+pub fn accumulate_limited(
+    acc: &mut [f32],
+    rgba: &[f32],
+    depth: &[f32],
+    limit: Option<Limit<'_>>,
+    weight: f32,
+    rect: Rect,
+) -> Result<()> {
     let n = rect.width * rect.height;
     if rgba.len() != 4 * n || depth.len() != n {
         return Err(Error::shape(
@@ -69,7 +111,7 @@ pub fn accumulate(
         return Err(Error::shape("acc", "the rectangle must lie inside acc"));
     }
     if let Some(l) = limit {
-        if l.len() != rows * rect.stride {
+        if l.x0 + rect.stride > l.stride || (l.y0 + rows) * l.stride > l.data.len() {
             return Err(Error::shape(
                 "limit",
                 "must have one depth per sample of acc",
@@ -82,8 +124,7 @@ pub fn accumulate(
     if n == 0 {
         return Ok(());
     }
-    let stride = rect.stride;
-    acc.par_chunks_mut(4 * stride)
+    acc.par_chunks_mut(4 * rect.stride)
         .enumerate()
         .skip(rect.y0)
         .take(rect.height)
@@ -99,7 +140,8 @@ pub fn accumulate(
                 return;
             };
             let dep = &depth[ry * rect.width..(ry + 1) * rect.width];
-            let lim = &l[y * stride + rect.x0..y * stride + rect.x0 + rect.width];
+            let at = (l.y0 + y) * l.stride + l.x0 + rect.x0;
+            let lim = &l.data[at..at + rect.width];
             for ((a4, r4), (d, m)) in dst
                 .chunks_exact_mut(4)
                 .zip(src.chunks_exact(4))

@@ -10,8 +10,8 @@ mod painter;
 
 pub use facing::facing_faces;
 pub use frame::{
-    accumulate_moving, accumulate_still, pixel_rect, sample_rects, window_projection, Accumulated,
-    Samples, StillCamera,
+    accumulate_moving, accumulate_still, accumulate_still_parts, pixel_rect, sample_rects,
+    window_projection, Accumulated, Samples, StillCamera,
 };
 pub use halves::{halves, HalfPart, Halves, SERIAL_PIXELS};
 pub use kernels::{accumulate, composite, over, resolve, BuffersMut, Rect};

@@ -161,21 +161,25 @@ fn _facing_faces<'py>(
 }
 
 /// One part of [`_halves`]: (half 0 or 1, its mass, base (H,W,4) f32, its window
-/// (x0, y0, x1, y1) or None, the window's drawn pixels (h,w,4) f32 or None).
+/// (x0, y0, x1, y1) or None, the window's drawn pixels (h,w,4) f32 or None, its sub-half 0 or
+/// 1 within its half or None).
 type HalfPartArg<'py> = (
     usize,
     f64,
     PyReadonlyArray3<'py, f32>,
     Option<[usize; 4]>,
     Option<PyReadonlyArray3<'py, f32>>,
+    Option<usize>,
 );
 
-/// [`_halves`]' result: (difference, frame, (mass of half 0, mass of half 1)).
-type HalvesOut<'py> = (Bound<'py, PyAny>, Bound<'py, PyAny>, (f64, f64));
+/// [`_halves`]' result: ((sum of the difference's squares, the sub-halves' or None), frame,
+/// (mass of half 0, mass of half 1)).
+type HalvesOut<'py> = ((f64, Option<f64>), Bound<'py, PyAny>, (f64, f64));
 
 /// The halves of an accumulation over `window` (x0, y0, x1, y1) of its image (`parts`: each a
-/// [`HalfPartArg`]), their difference composited over `pre` (premultiplied RGBA): (difference
-/// (h,w,4) f64, frame (h,w,4) f32, (mass of half 0, mass of half 1)). A window under
+/// [`HalfPartArg`]), their difference composited over `pre` (premultiplied RGBA): ((the sum of
+/// its squares, the same of the sub-halves within each half when every part has one, else
+/// None), frame (h,w,4) f32, (mass of half 0, mass of half 1)). A window under
 /// `SERIAL_PIXELS` pixels is made on the calling thread; releases the GIL.
 #[pyfunction]
 fn _halves<'py>(
@@ -189,7 +193,7 @@ fn _halves<'py>(
     };
     let (h, w) = (first.2.shape()[0], first.2.shape()[1]);
     let mut views = Vec::with_capacity(parts.len());
-    for (half, mass, base, win, drawn) in &parts {
+    for (half, mass, base, win, drawn, sub) in &parts {
         if base.shape() != [h, w, 4] {
             return Err(Error::shape("base", "every part's base must be (H, W, 4)").into());
         }
@@ -203,6 +207,7 @@ fn _halves<'py>(
             mass: *mass,
             base: c_slice(base, "base")?,
             window: drawn,
+            sub: *sub,
         });
     }
     let [x0, y0, x1, y1] = window;
@@ -214,7 +219,7 @@ fn _halves<'py>(
     };
     let dims = [y1 - y0, x1 - x0, 4];
     Ok((
-        shaped(py, out.difference, dims)?,
+        (out.square_sum, out.sub_square_sum),
         shaped(py, out.frame, dims)?,
         (out.masses[0], out.masses[1]),
     ))

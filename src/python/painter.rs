@@ -8,8 +8,8 @@ use super::args::{LayerArg, LightArg};
 use super::convert::{c_slice, detached_in_pool, face_indices_u32, rows, shaped};
 use super::motion::PyKeyframes;
 use crate::{
-    accumulate_moving, accumulate_still, Accumulated, Error, Frame, Layer, Mat4, PaintObject,
-    Painter, Samples, Shading, StillCamera,
+    accumulate_moving, accumulate_still, accumulate_still_parts, Accumulated, Error, Frame, Layer,
+    Mat4, PaintObject, Painter, Samples, Shading, StillCamera,
 };
 
 /// One object, the items of a dict: `id`, `shading` name, `vertices` f64 (V,3), `faces` i64
@@ -174,6 +174,37 @@ fn still_frame(py: Python<'_>, out: Option<Accumulated>) -> PyResult<Option<Stil
     Ok(Some((win, r, d, i, draw_calls)))
 }
 
+/// A part of a still frame: [`StillFrame`] with depth and ids None when not kept.
+type PartFrame<'py> = (
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Option<Bound<'py, PyAny>>,
+    Option<Bound<'py, PyAny>>,
+    usize,
+);
+
+/// A part's frame as Python values ([`PartFrame`]): depth and ids only when `kept`.
+fn part_frame(
+    py: Python<'_>,
+    out: Option<Accumulated>,
+    kept: bool,
+) -> PyResult<Option<PartFrame<'_>>> {
+    if kept {
+        return Ok(still_frame(py, out)?.map(|(w, r, d, i, n)| (w, r, Some(d), Some(i), n)));
+    }
+    let Some(Accumulated {
+        frame: Frame { rgba, .. },
+        window: w,
+        draw_calls,
+    }) = out
+    else {
+        return Ok(None);
+    };
+    let win = (w[0], w[1], w[2], w[3]).into_pyobject(py)?.into_any();
+    let r = shaped(py, rgba, [w[3] - w[1], w[2] - w[0], 4])?;
+    Ok(Some((win, r, None, None, draw_calls)))
+}
+
 /// Objects drawn at any shutter time (see `src/accumulate/painter.rs`).
 #[pyclass(name = "_Painter", module = "motionblur._core")]
 pub struct PyPainter {
@@ -234,7 +265,10 @@ impl PyPainter {
     }
 
     /// [`Self::accumulate_still`] of each of `parts` (each a [`SamplesArg`]) in one call: the
-    /// same frames, one hand-off to the pool for all of them (an accumulation's two halves).
+    /// same frames, one hand-off to the pool for all of them (an accumulation's halves), the
+    /// static layer cropped once for all. With `keep` an index, only that part gets its
+    /// reference sample's depth and ids (the others' are None).
+    #[pyo3(signature = (parts, camera, background, opaque, keep=None))]
     fn accumulate_still_parts<'py>(
         &self,
         py: Python<'py>,
@@ -242,20 +276,24 @@ impl PyPainter {
         camera: StillCameraArg<'_>,
         background: LayerArg<'_>,
         opaque: bool,
-    ) -> PyResult<Vec<Option<StillFrame<'py>>>> {
+        keep: Option<usize>,
+    ) -> PyResult<Vec<Option<PartFrame<'py>>>> {
         let (camera, bg) = still_inputs(&camera, &background)?;
         let samples = parts
             .iter()
             .map(SamplesArg::samples)
             .collect::<Result<Vec<_>, _>>()?;
+        if keep.is_some_and(|k| k >= samples.len()) {
+            return Err(Error::value("keep", "must index one of the parts").into());
+        }
         let inner = &self.inner;
         let outs = detached_in_pool(py, || {
-            samples
-                .into_iter()
-                .map(|s| accumulate_still(inner, &camera, s, bg, opaque))
-                .collect::<Result<Vec<_>, _>>()
+            accumulate_still_parts(inner, &camera, &samples, bg, opaque, keep)
         })?;
-        outs.into_iter().map(|o| still_frame(py, o)).collect()
+        outs.into_iter()
+            .enumerate()
+            .map(|(p, o)| part_frame(py, o, keep.is_none_or(|k| k == p)))
+            .collect()
     }
 
     /// The moving-camera accumulation frame of `samples` ([`SamplesArg`]): one view (N,4,4)

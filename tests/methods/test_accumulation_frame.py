@@ -240,18 +240,27 @@ def test_the_painter_is_kept_across_frames_while_its_objects_stay_the_same():
     assert not np.array_equal(first, moved)
 
 
-def numpy_halves(sums, win):
+def row_order_sum(squares):
+    """The squares (h, ...) summed from 0 along each row in order, then the rows' sums from 0 in
+    row order (``np.cumsum`` adds in order; ``np.sum`` pairwise would not be ``_halves``' bits)."""
+    rows = np.cumsum(squares.reshape(squares.shape[0], -1), axis=1)[:, -1]
+    return float(np.cumsum(rows)[-1])
+
+
+def numpy_halves(sums, win, quartered=False):
     """`HalfSums.halves` in numpy, the arithmetic it replaces (the serial twin of
-    ``_core._halves``): each half ``sum(m * part) / sum(m)`` in float64 from 0 in the parts'
-    order, the difference composited over the background, the frame by the halves' masses."""
+    ``_core._halves``): each half (and, ``quartered``, each of its two quarters) ``sum(m *
+    part) / sum(m)`` in float64 from 0 in the parts' order, the difference of the halves (and of
+    each half's quarters) composited over the background and its squares summed in row order,
+    the frame by the halves' masses."""
     x0, y0, x1, y1 = win
     rows, cols = slice(y0, y1), slice(x0, x1)
-    means = []
-    for j in (0, 1):
-        sel = [(float(w.sum()), piece) for h, _, w, piece in sums.parts if h == j]
-        mass = sum(m for m, _ in sel)
+
+    def mean(sel):
+        mass = sum(float(p.weights.sum()) for p in sel)
         out = np.zeros((y1 - y0, x1 - x0, 4), np.float64)
-        for m, piece in sel:
+        for p in sel:
+            m, piece = float(p.weights.sum()), p.piece
             term = np.multiply(piece.base[0][rows, cols], m, dtype=np.float64)
             if piece.window is not None:
                 wx0, wy0, wx1, wy1 = piece.window
@@ -260,25 +269,42 @@ def numpy_halves(sums, win):
                 )
             out += term
         out /= mass
-        means.append((mass, out))
-    (ma, a), (mb_, b) = means
+        return mass, out
+
     bg = np.asarray(sums.scene.background, np.float64)
     pre = np.concatenate([bg[:3] * bg[3], bg[3:]])
-    diff = np.subtract(a, b, dtype=np.float64)
-    add_times_color(diff, -diff[..., 3], pre)  # -alpha: a fresh array, read before the writes
+
+    def composited(a, b):
+        diff = np.subtract(a, b, dtype=np.float64)
+        add_times_color(diff, -diff[..., 3], pre)  # -alpha: a fresh array, read before the writes
+        return diff
+
+    (ma, a), (mb_, b) = (mean([p for p in sums.parts if p.half == j]) for j in (0, 1))
     frame = ((a * ma + b * mb_) / (ma + mb_)).astype(np.float32)
-    return diff, frame, (ma, mb_)
+    square_sum = row_order_sum(np.square(composited(a, b)))
+    sub_sum = None
+    if quartered:
+        # per pixel: half 0's quarters' difference, then half 1's, each channel in order
+        subs = []
+        for j in (0, 1):
+            (_, qa), (_, qb) = (
+                mean([p for p in sums.parts if p.half == j and p.quarter // 2 == s]) for s in (0, 1)
+            )
+            subs.append(composited(qa, qb))
+        sub_sum = row_order_sum(np.square(np.stack(subs, axis=2)))
+    return (square_sum, sub_sum), frame, (ma, mb_)
 
 
 @pytest.mark.parametrize(
-    "case", ["opaque", "translucent wall", "aa 2", "moving camera", "background", "uneven halves"]
+    "case", ["opaque", "translucent wall", "aa 2", "moving camera", "background", "uneven halves", "quarters"]
 )
 def test_the_halves_kernel_gives_the_numpy_arithmetics_bits(case):
-    # The frame and the error estimate's difference of both halves from one core pass
-    # (_core._halves) against the numpy arithmetic they replace: bit for bit (each pixel's
-    # float64 operations in the same order), on a still camera over an opaque or a
-    # translucent static layer, supersampled, a moving camera (every part its own whole
-    # frame), a coloured background and halves of unequal mass (auto's reweighted parts).
+    # The frame and the error estimate's sum of squares of both halves' difference (and of
+    # each half's quarters) from one core pass (_core._halves) against the numpy arithmetic
+    # they replace: bit for bit (each pixel's float64 operations and the squares' sums in the
+    # same order), on a still camera over an opaque or a translucent static layer,
+    # supersampled, a moving camera (every part its own whole frame), a coloured background,
+    # halves of unequal mass (auto's reweighted parts) and a grid drawn in quarters.
     from motionblur.methods._accumulate import HalfSums
 
     scene = _scene(alpha=0.6 if case == "translucent wall" else 1.0)
@@ -294,7 +320,11 @@ def test_the_halves_kernel_gives_the_numpy_arithmetics_bits(case):
         scene = mb.Scene(scene.objects, scene.camera, scene.lights, background=(0.2, 0.4, 0.9, 0.7))
     sums = HalfSums(scene, aa)
     times, weights = sample_times(scene, 12)
+    if case == "quarters":
+        sums.add_all([(times[q::4], weights[q::4], q % 2, q) for q in range(4)])
     for j, sel in enumerate((np.arange(12)[0::2], np.arange(12)[1::2])):
+        if case == "quarters":
+            break
         if case == "uneven halves":
             sel = sel[: 2 + 2 * j]
         for part in np.array_split(sel, 2):  # two parts a half, as a refinement leaves them
@@ -302,14 +332,15 @@ def test_the_halves_kernel_gives_the_numpy_arithmetics_bits(case):
     win = sums._window()
     assert win is not None
     got = sums.halves(win)
-    want = numpy_halves(sums, win)
-    assert got[0].dtype == np.float64 and got[1].dtype == np.float32
-    assert got[0].shape == want[0].shape == (win[3] - win[1], win[2] - win[0], 4)
-    assert np.array_equal(got[0].view(np.uint64), want[0].view(np.uint64)), "difference"
+    want = numpy_halves(sums, win, quartered=case == "quarters")
+    assert got[1].dtype == np.float32 and got[1].shape == (win[3] - win[1], win[2] - win[0], 4)
+    assert got[0][0] == want[0][0], "square sum"
+    assert got[0][1] == want[0][1], "quarters' square sum"
+    assert (got[0][1] is None) == (case != "quarters")
     assert np.array_equal(got[1].view(np.uint32), want[1].view(np.uint32)), "frame"
     assert got[2] == want[2]
     # a half whose parts differ shows in the difference (the kernel is not all zeros)
-    assert np.abs(got[0]).max() > 1e-3
+    assert got[0][0] > 1e-6 and (got[0][1] is None or got[0][1] > 1e-6)
 
 
 def test_the_halves_kernel_names_bad_parts():
@@ -318,21 +349,27 @@ def test_the_halves_kernel_names_bad_parts():
     with pytest.raises(ValueError, match="parts"):
         _core._halves([], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="half"):
-        _core._halves([(2, 1.0, base, None, None)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
+        _core._halves([(2, 1.0, base, None, None, None)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="sub"):
+        _core._halves([(0, 1.0, base, None, None, 2)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="drawn"):
-        _core._halves([(0, 1.0, base, (0, 0, 3, 2), drawn)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
+        _core._halves([(0, 1.0, base, (0, 0, 3, 2), drawn, None)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="window"):
-        _core._halves([(0, 1.0, base, (0, 0, 2, 2), None)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
+        _core._halves([(0, 1.0, base, (0, 0, 2, 2), None, None)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="window"):
-        _core._halves([(0, 1.0, base, None, None)], (0, 0, 7, 4), (0.0, 0.0, 0.0, 0.0))
+        _core._halves([(0, 1.0, base, None, None, None)], (0, 0, 7, 4), (0.0, 0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="base"):
-        _core._halves([(0, 1.0, base, None, None), (1, 1.0, base[:3], None, None)], (0, 0, 6, 4), (0.0,) * 4)
+        _core._halves(
+            [(0, 1.0, base, None, None, None), (1, 1.0, base[:3], None, None, None)], (0, 0, 6, 4), (0.0,) * 4
+        )
 
 
 @pytest.mark.parametrize("alpha", [1.0, 0.5])
 def test_the_parts_call_gives_each_parts_own_frame(alpha):
-    # accumulate_still_parts (an accumulation's halves in one hand-off to the pool) against one
-    # accumulate_still call per part: the same windows and bits, in order; a bad part named
+    # accumulate_still_parts (an accumulation's halves in one hand-off to the pool, the static
+    # layer cropped once for the union of their windows) against one accumulate_still call per
+    # part: the same windows and bits, in order; with keep, depth and ids of that part only; a
+    # bad part or keep named
     sc = _scene(alpha)
     cam = supersampled(sc.camera, 1)
     moving = [(k, o) for k, o in enumerate(sc.objects) if o.is_moving]
@@ -356,6 +393,19 @@ def test_the_parts_call_gives_each_parts_own_frame(alpha):
         for a, b in zip(got[1:4], want[1:4]):
             assert a.dtype == b.dtype and np.array_equal(a.view(np.uint8), b.view(np.uint8))
     assert not np.array_equal(together[0][1], together[1][1])  # the halves differ
+    # the third part's window is smaller than the union the static layer is cropped to
+    assert together[2][0] != together[0][0]
+    # keep: one part's depth and ids (the one HalfSums pastes), the others' None, colour the same
+    kept = painter.core.accumulate_still_parts(parts, camera, layer, static.opaque, 1)
+    for k, (got, want) in enumerate(zip(kept, together)):
+        assert got[0] == want[0] and got[4] == want[4]
+        assert np.array_equal(got[1].view(np.uint32), want[1].view(np.uint32))
+        if k == 1:
+            assert np.array_equal(got[2], want[2]) and np.array_equal(got[3], want[3])
+        else:
+            assert got[2] is None and got[3] is None
+    with pytest.raises(ValueError, match="keep"):
+        painter.core.accumulate_still_parts(parts, camera, layer, static.opaque, 3)
     with pytest.raises(ValueError, match="times"):
         painter.core.accumulate_still_parts(
             [parts[0], dict(parts[1], times=parts[1]["times"] + 2.0)], camera, layer, True

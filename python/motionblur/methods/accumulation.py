@@ -28,7 +28,7 @@ from ..budget import need
 from ..raster import Frame
 from ..render import register
 from ..scene import Scene
-from ._accumulate import MAX_TIME_SAMPLES, HalfSums, accumulate, sample_times, uniform_times
+from ._accumulate import MAX_TIME_SAMPLES, HalfSums, accumulate, grid_parts, sample_times, uniform_times
 
 __all__ = [
     "accumulation",
@@ -59,7 +59,9 @@ def accumulation(
 
     The even and the odd samples are drawn and summed apart by the compiled core
     (``_core._Painter.accumulate_still_parts`` / ``accumulate_moving``, ``src/accumulate/frame.rs``);
-    their difference is the frame's ``stats["error_estimate"]`` (`_accumulate`).
+    their difference is the frame's ``stats["error_estimate"]`` (`_accumulate`). A stratified
+    grid of 4 or 8 samples is drawn in quarters, whose differences within each half tell how
+    fast the error falls (`_accumulate.rate_factor`).
 
     A rolling shutter (``Scene(rolling=R)``): see `rolling_accumulation` (about N renders per
     row, each row weighing every render by its own window's filter).
@@ -78,7 +80,7 @@ def accumulation(
         # estimates the error with its pilot.
         return accumulate(scene, times, weights, ref, dim, aa)
     sums = HalfSums(scene, aa, sampling)
-    sums.add_all([(times[h], weights[h], j) for j, h in enumerate(halves)])
+    sums.add_all([(times[k], weights[k], half, q) for k, half, q in grid_parts(len(times), sampling)])
     return sums.frame()
 
 

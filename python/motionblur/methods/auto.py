@@ -49,7 +49,7 @@ from .._validate import as_float, as_int
 from ..raster import Frame
 from ..render import METHODS, register
 from ..scene import Scene
-from ._accumulate import HalfSums, sample_times, shutter_quantiles
+from ._accumulate import HalfSums, grid_parts, sample_times, shutter_quantiles
 from ._estimate import EXACT_OPTIONS
 from ._segments import segment_times
 
@@ -204,11 +204,13 @@ class _Trials:
     def _stratified(self, n: int, keep: bool) -> None:
         """Accumulation's own ``n`` samples, the drawn ones (an ``n / last``-th of them) kept."""
         times, weights = sample_times(self.scene, n)
+        if not keep:  # a fresh grid: in halves, or in quarters (`grid_parts`)
+            self.sums.add_all([(times[k], weights[k], half, q) for k, half, q in grid_parts(n)])
+            return
+        step = n // self.grid[0]
+        self.sums.reweight(lambda t: (np.full(len(t), 1.0 / n), _position(times, t[0]) % 2))
         j = np.arange(n)
-        if keep:
-            step = n // self.grid[0]
-            self.sums.reweight(lambda t: (np.full(len(t), 1.0 / n), _position(times, t[0]) % 2))
-            j = j[(j % step) != step // 2]  # the new times only
+        j = j[(j % step) != step // 2]  # the new times only
         sels = [(half, j[j % 2 == half]) for half in (0, 1)]
         self.sums.add_all([(times[sel], weights[sel], half) for half, sel in sels if len(sel)])
 
