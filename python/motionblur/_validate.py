@@ -164,9 +164,14 @@ def check_coords(arr: np.ndarray, name: str) -> None:
         )
 
 
+#: The largest finite float32: values the core holds in float32 must not exceed it.
+F32_MAX = float(np.finfo(np.float32).max)
+
+
 def as_rgb(value, name: str) -> np.ndarray:
-    """A float or an RGB triple as a (3,) float64 array, finite and >= 0 (light intensities,
-    ambient light). TypeError for strings, complex numbers and other non-numbers."""
+    """A float or an RGB triple as a (3,) float64 array, >= 0 and finite in float32, as the
+    core shades with it (light intensities, ambient light). TypeError for strings, complex
+    numbers and other non-numbers."""
     if isinstance(value, (str, bytes)) or value is None:
         raise TypeError(f"{name}: expected a float or an RGB triple, got {type(value).__name__}")
     if np.ndim(value) == 0:
@@ -179,6 +184,8 @@ def as_rgb(value, name: str) -> np.ndarray:
             raise ValueError(f"{name}: expected a float or an RGB triple, got shape {arr.shape}")
     if (arr < 0).any():
         raise ValueError(f"{name}: must be >= 0, got {arr.tolist()}")
+    if (arr > F32_MAX).any():  # the core shades in float32: it would be inf there
+        raise ValueError(f"{name}: must be at most {F32_MAX!r} (float32), got {arr.tolist()}")
     return arr
 
 
