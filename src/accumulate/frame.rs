@@ -221,7 +221,6 @@ pub fn accumulate_still_parts(
     for samples in parts {
         check_still(camera, samples, &background)?;
     }
-    let (iw, ih) = (camera.width, camera.height);
     let rects: Vec<_> = parts
         .iter()
         .map(|s| sample_rects(painter, camera, s.times))
@@ -240,127 +239,202 @@ pub fn accumulate_still_parts(
             52 + 16 * parts.len() as u64,
         )?
         .check()?;
-    let base_rgba = crop(background.rgba, iw, 4, all);
-    let base_depth = crop(background.depth, iw, 1, all);
+    let shared = Shared {
+        painter,
+        camera,
+        background,
+        opaque,
+        all,
+        base_rgba: crop(background.rgba, camera.width, 4, all),
+        base_depth: crop(background.depth, camera.width, 1, all),
+    };
     let mut out = Vec::with_capacity(parts.len());
     for (p, samples) in parts.iter().enumerate() {
-        let Some(win) = wins[p] else {
-            out.push(None);
-            continue;
-        };
-        let (ww, wh) = (win[2] - win[0], win[3] - win[1]);
-        // the part's window inside the union's crop
-        let inside = Rect {
-            x0: win[0] - all[0],
-            y0: win[1] - all[1],
-            width: ww,
-            height: wh,
-            stride: uw,
-        };
-        let has_static = rows_in(&base_depth, 1, inside).any(|r| r.iter().any(|d| d.is_finite()));
-        let exact_sum = !has_static || opaque;
-        let kept = keep.is_none_or(|k| k == p);
-        let mut acc = vec![0.0f32; 4 * ww * wh];
-        let (mut keep_depth, mut keep_ids) = if kept {
-            (
-                crop(background.depth, iw, 1, win),
-                crop(background.ids, iw, 1, win),
-            )
-        } else {
-            (Vec::new(), Vec::new())
-        };
-        // the part's own crops, for a transparent static layer only (a sample composited
-        // with it before it is summed)
-        let own = (!exact_sum).then(|| {
-            (
-                crop(background.rgba, iw, 4, win),
-                crop(background.depth, iw, 1, win),
-                crop(background.ids, iw, 1, win),
-            )
-        });
-        let limit = has_static.then_some(Limit {
-            data: &base_depth,
-            stride: uw,
-            x0: inside.x0,
-            y0: inside.y0,
-        });
-        let rects = &rects[p];
-        let mut draw_calls = 0;
-        let draw = |i: usize| -> Result<Option<Frame>> {
-            let Some(r) = rects[i] else { return Ok(None) };
-            let proj = window_projection(&camera.projection, iw, ih, r);
-            let (w, h) = ((r[2] - r[0]) as u32, (r[3] - r[1]) as u32);
-            painter
-                .layer(samples.times[i], &camera.view, &proj, w, h)
-                .map(Some)
-        };
-        for (i, layer) in (0..samples.times.len()).map(|i| (i, draw(i))) {
-            let w = samples.weights[i] as f32;
-            let (Some(layer), Some(r)) = (layer?, rects[i]) else {
-                if let Some((rgba, _, _)) = &own {
-                    add_weighted(&mut acc, rgba, w);
-                }
-                continue;
-            };
-            let sub = Rect {
-                x0: r[0] - win[0],
-                y0: r[1] - win[1],
-                width: r[2] - r[0],
-                height: r[3] - r[1],
-                stride: ww,
-            };
-            draw_calls += 1;
-            if i == samples.reference && kept {
-                composite_depth_ids(
-                    &layer.depth,
-                    &layer.ids,
-                    &mut keep_depth,
-                    &mut keep_ids,
-                    sub,
-                );
+        out.push(match wins[p] {
+            None => None,
+            Some(win) => {
+                let kept = keep.is_none_or(|k| k == p);
+                Some(shared.part(samples, &rects[p], win, kept)?)
             }
-            match &own {
-                None => accumulate_limited(&mut acc, &layer.rgba, &layer.depth, limit, w, sub)?,
-                Some((rgba, depth, ids)) => {
-                    let mut full = rgba.clone();
-                    let (mut depth, mut ids) = (depth.clone(), ids.clone());
-                    composite(
-                        &layer.rgba,
-                        &layer.depth,
-                        &layer.ids,
-                        &mut full,
-                        &mut depth,
-                        &mut ids,
-                        sub,
-                    )?;
-                    add_weighted(&mut acc, &full, w);
-                }
-            }
+        });
+    }
+    Ok(out)
+}
+
+/// What the parts of [`accumulate_still_parts`] share: the painter and camera, the static
+/// layer and its crop to the union `all` of the parts' windows.
+struct Shared<'a> {
+    painter: &'a Painter,
+    camera: &'a StillCamera,
+    background: Layer<'a>,
+    opaque: bool,
+    all: [usize; 4],
+    base_rgba: Vec<f32>,
+    base_depth: Vec<f32>,
+}
+
+/// One part's sum as it is made: its window's accumulator, the reference sample's depth and
+/// ids (when `kept`), and its own crops of a transparent static layer.
+struct PartSum<'s> {
+    win: [usize; 4],
+    acc: Vec<f32>,
+    kept: bool,
+    keep_depth: Vec<f32>,
+    keep_ids: Vec<i32>,
+    own: Option<(Vec<f32>, Vec<f32>, Vec<i32>)>,
+    limit: Option<Limit<'s>>,
+}
+
+impl Shared<'_> {
+    /// The part's window inside the union's crop.
+    fn inside(&self, win: [usize; 4]) -> Rect {
+        Rect {
+            x0: win[0] - self.all[0],
+            y0: win[1] - self.all[1],
+            width: win[2] - win[0],
+            height: win[3] - win[1],
+            stride: self.all[2] - self.all[0],
         }
-        if has_static && opaque {
+    }
+
+    /// One part's frame over its window `win`: its `samples` (drawn at `rects`) summed, the
+    /// static layer composited once after the last when it is opaque.
+    fn part(
+        &self,
+        samples: &Samples<'_>,
+        rects: &[Option<[usize; 4]>],
+        win: [usize; 4],
+        kept: bool,
+    ) -> Result<Accumulated> {
+        let inside = self.inside(win);
+        let has_static =
+            rows_in(&self.base_depth, 1, inside).any(|r| r.iter().any(|d| d.is_finite()));
+        let mut sum = self.part_sum(win, kept, has_static);
+        let mut draw_calls = 0;
+        for (i, rect) in rects.iter().enumerate() {
+            draw_calls += usize::from(self.add_sample(&mut sum, samples, i, *rect)?);
+        }
+        if has_static && self.opaque {
             // `over` of the window's crop, row by row
-            for (a, u) in acc
+            let ww = win[2] - win[0];
+            for (a, u) in sum
+                .acc
                 .chunks_exact_mut(4 * ww)
-                .zip(rows_in(&base_rgba, 4, inside))
+                .zip(rows_in(&self.base_rgba, 4, inside))
             {
                 over(a, u)?;
             }
         }
-        out.push(Some(Accumulated {
+        Ok(Accumulated {
             frame: Frame {
-                width: ww as u32,
-                height: wh as u32,
-                rgba: acc,
-                depth: keep_depth,
-                ids: keep_ids,
+                width: (win[2] - win[0]) as u32,
+                height: (win[3] - win[1]) as u32,
+                rgba: sum.acc,
+                depth: sum.keep_depth,
+                ids: sum.keep_ids,
                 velocity: None,
                 exposure: None,
             },
             window: win,
             draw_calls,
-        }));
+        })
     }
-    Ok(out)
+
+    /// A part's empty sum: its accumulator, the reference's depth and ids (when `kept`), the
+    /// own crops of a transparent static layer (a sample is composited with it before it is
+    /// summed) and the depth limit of an opaque one.
+    fn part_sum(&self, win: [usize; 4], kept: bool, has_static: bool) -> PartSum<'_> {
+        let (iw, bg) = (self.camera.width, &self.background);
+        let exact_sum = !has_static || self.opaque;
+        let (ww, wh) = (win[2] - win[0], win[3] - win[1]);
+        let (keep_depth, keep_ids) = if kept {
+            (crop(bg.depth, iw, 1, win), crop(bg.ids, iw, 1, win))
+        } else {
+            (Vec::new(), Vec::new())
+        };
+        let own = (!exact_sum).then(|| {
+            (
+                crop(bg.rgba, iw, 4, win),
+                crop(bg.depth, iw, 1, win),
+                crop(bg.ids, iw, 1, win),
+            )
+        });
+        let inside = self.inside(win);
+        let limit = has_static.then_some(Limit {
+            data: &self.base_depth,
+            stride: inside.stride,
+            x0: inside.x0,
+            y0: inside.y0,
+        });
+        PartSum {
+            win,
+            acc: vec![0.0f32; 4 * ww * wh],
+            kept,
+            keep_depth,
+            keep_ids,
+            own,
+            limit,
+        }
+    }
+
+    /// Sample `i` of `samples` (drawn at `rect`, None when off the image) added to `sum` with
+    /// its weight; whether it was drawn.
+    fn add_sample(
+        &self,
+        sum: &mut PartSum<'_>,
+        samples: &Samples<'_>,
+        i: usize,
+        rect: Option<[usize; 4]>,
+    ) -> Result<bool> {
+        let w = samples.weights[i] as f32;
+        let Some(r) = rect else {
+            if let Some((rgba, _, _)) = &sum.own {
+                add_weighted(&mut sum.acc, rgba, w);
+            }
+            return Ok(false);
+        };
+        let (iw, ih) = (self.camera.width, self.camera.height);
+        let proj = window_projection(&self.camera.projection, iw, ih, r);
+        let (lw, lh) = ((r[2] - r[0]) as u32, (r[3] - r[1]) as u32);
+        let layer = self
+            .painter
+            .layer(samples.times[i], &self.camera.view, &proj, lw, lh)?;
+        let win = sum.win;
+        let sub = Rect {
+            x0: r[0] - win[0],
+            y0: r[1] - win[1],
+            width: r[2] - r[0],
+            height: r[3] - r[1],
+            stride: win[2] - win[0],
+        };
+        if i == samples.reference && sum.kept {
+            composite_depth_ids(
+                &layer.depth,
+                &layer.ids,
+                &mut sum.keep_depth,
+                &mut sum.keep_ids,
+                sub,
+            );
+        }
+        match &sum.own {
+            None => accumulate_limited(&mut sum.acc, &layer.rgba, &layer.depth, sum.limit, w, sub)?,
+            Some((rgba, depth, ids)) => {
+                let mut full = rgba.clone();
+                let (mut depth, mut ids) = (depth.clone(), ids.clone());
+                composite(
+                    &layer.rgba,
+                    &layer.depth,
+                    &layer.ids,
+                    &mut full,
+                    &mut depth,
+                    &mut ids,
+                    sub,
+                )?;
+                add_weighted(&mut sum.acc, &full, w);
+            }
+        }
+        Ok(true)
+    }
 }
 
 /// The rows of `rect` in `data` (`rect.stride` samples of `c` values a row).

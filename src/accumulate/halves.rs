@@ -65,76 +65,20 @@ pub fn halves(
     for p in parts {
         check_part(p, (width, height))?;
     }
-    let mut masses = [0.0f64; 2];
-    let mut sub_masses = [[0.0f64; 2]; 2];
-    for p in parts {
-        masses[p.half] += p.mass;
-        if let Some(sub) = p.sub {
-            sub_masses[p.half][sub] += p.mass;
-        }
-    }
-    // sub-halves compared when every part names one and each of the four has a mass
-    let subs = !parts.is_empty()
-        && parts.iter().all(|p| p.sub.is_some())
-        && sub_masses.iter().flatten().all(|m| *m > 0.0);
+    let (masses, sub_masses, subs) = part_masses(parts);
     let (w, h) = (x1 - x0, y1 - y0);
     let mut frame = vec![0.0f32; w * h * 4];
     let mut sums = vec![[0.0f64; 2]; h];
-    // A grid drawn in quarters, in order: part j of half j % 2, sub-half j / 2. Each half's
-    // sum `(0 + m v) + m' v'` is its two sub-halves' sums added (the same bits), each value
-    // multiplied and added once.
-    let quarters = subs
-        && parts.len() == 4
-        && parts
-            .iter()
-            .enumerate()
-            .all(|(j, p)| p.half == j % 2 && p.sub == Some(j / 2));
     let pass = Pass {
         parts,
         masses,
         sub_masses: subs.then_some(sub_masses),
         pre,
-        quarters,
+        quarters: subs && in_quarter_order(parts),
+        width,
+        cols: (x0, x1),
     };
-    let row = |(y, (out, sum)): (usize, (&mut [f32], &mut [f64; 2]))| {
-        let y = y0 + y;
-        // the row cut where a part's window starts or ends: between two cuts every part
-        // reads one slice (its drawn row or its base's), no per-pixel window test
-        let mut cuts = vec![x0, x1];
-        for p in parts {
-            if let Some(([wx0, wy0, wx1, wy1], _)) = p.window {
-                if (wy0..wy1).contains(&y) {
-                    cuts.extend([wx0, wx1].into_iter().filter(|c| (x0 + 1..x1).contains(c)));
-                }
-            }
-        }
-        cuts.sort_unstable();
-        cuts.dedup();
-        let mut srcs: Vec<&[f32]> = Vec::with_capacity(parts.len());
-        for seg in cuts.windows(2) {
-            let (s0, s1) = (seg[0], seg[1]);
-            srcs.clear();
-            srcs.extend(parts.iter().map(|p| row_slice(p, width, y, s0, s1)));
-            for x in s0..s1 {
-                let k = (x - s0) * 4;
-                let (f, d, e) = if pass.quarters {
-                    pass.pixel_quarters([0, 1, 2, 3].map(|j| &srcs[j][k..k + 4]))
-                } else {
-                    pass.pixel(|j| &srcs[j][k..k + 4])
-                };
-                let i = (x - x0) * 4;
-                out[i..i + 4].copy_from_slice(&f);
-                for v in d {
-                    sum[0] += v * v;
-                }
-                if let Some(e) = e {
-                    for v in e.iter().flatten() {
-                        sum[1] += v * v;
-                    }
-                }
-            }
-        }
-    };
+    let row = |(y, (out, sum)): (usize, (&mut [f32], &mut [f64; 2]))| pass.row(y0 + y, out, sum);
     if w * h < SERIAL_PIXELS {
         frame
             .chunks_mut(w * 4)
@@ -158,6 +102,34 @@ pub fn halves(
     })
 }
 
+/// The halves' masses, the four sub-halves' and whether the sub-halves are compared: when
+/// every part names one and each of the four has a mass.
+fn part_masses(parts: &[HalfPart<'_>]) -> ([f64; 2], [[f64; 2]; 2], bool) {
+    let mut masses = [0.0f64; 2];
+    let mut sub_masses = [[0.0f64; 2]; 2];
+    for p in parts {
+        masses[p.half] += p.mass;
+        if let Some(sub) = p.sub {
+            sub_masses[p.half][sub] += p.mass;
+        }
+    }
+    let subs = !parts.is_empty()
+        && parts.iter().all(|p| p.sub.is_some())
+        && sub_masses.iter().flatten().all(|m| *m > 0.0);
+    (masses, sub_masses, subs)
+}
+
+/// A grid drawn in quarters, in order: part `j` of half `j % 2`, sub-half `j / 2`. Each half's
+/// sum `(0 + m v) + m' v'` is then its two sub-halves' sums added (the same bits), each value
+/// multiplied and added once.
+fn in_quarter_order(parts: &[HalfPart<'_>]) -> bool {
+    parts.len() == 4
+        && parts
+            .iter()
+            .enumerate()
+            .all(|(j, p)| p.half == j % 2 && p.sub == Some(j / 2))
+}
+
 /// Windows of fewer pixels are made on the calling thread (no pool: a hand-off to it costs
 /// more than such a window); larger ones row by row in parallel (the same bits: each pixel
 /// is its own).
@@ -169,11 +141,56 @@ struct Pass<'p, 'a> {
     masses: [f64; 2],
     sub_masses: Option<[[f64; 2]; 2]>,
     pre: [f64; 4],
-    /// Four parts, part `j` of half `j % 2` and sub-half `j / 2` (see [`halves`]).
+    /// Four parts, part `j` of half `j % 2` and sub-half `j / 2` (`in_quarter_order`).
     quarters: bool,
+    /// The image's width and the window's columns `x0..x1`.
+    width: usize,
+    cols: (usize, usize),
 }
 
 impl Pass<'_, '_> {
+    /// Row `y` of the window: its frame values into `out` and the squares into `sum`
+    /// (the halves', the sub-halves').
+    fn row(&self, y: usize, out: &mut [f32], sum: &mut [f64; 2]) {
+        let (parts, width, (x0, x1)) = (self.parts, self.width, self.cols);
+        // the row cut where a part's window starts or ends: between two cuts every part
+        // reads one slice (its drawn row or its base's), no per-pixel window test
+        let mut cuts = vec![x0, x1];
+        for p in parts {
+            if let Some(([wx0, wy0, wx1, wy1], _)) = p.window {
+                if (wy0..wy1).contains(&y) {
+                    cuts.extend([wx0, wx1].into_iter().filter(|c| (x0 + 1..x1).contains(c)));
+                }
+            }
+        }
+        cuts.sort_unstable();
+        cuts.dedup();
+        let mut srcs: Vec<&[f32]> = Vec::with_capacity(parts.len());
+        for seg in cuts.windows(2) {
+            let (s0, s1) = (seg[0], seg[1]);
+            srcs.clear();
+            srcs.extend(parts.iter().map(|p| row_slice(p, width, y, s0, s1)));
+            for x in s0..s1 {
+                let k = (x - s0) * 4;
+                let (f, d, e) = if self.quarters {
+                    self.pixel_quarters([0, 1, 2, 3].map(|j| &srcs[j][k..k + 4]))
+                } else {
+                    self.pixel(|j| &srcs[j][k..k + 4])
+                };
+                let i = (x - x0) * 4;
+                out[i..i + 4].copy_from_slice(&f);
+                for v in d {
+                    sum[0] += v * v;
+                }
+                if let Some(e) = e {
+                    for v in e.iter().flatten() {
+                        sum[1] += v * v;
+                    }
+                }
+            }
+        }
+    }
+
     /// A pixel's frame value, the halves' composited difference and each half's two
     /// sub-halves' composited difference (None without subs), part `j`'s value `value(j)`.
     #[inline]
