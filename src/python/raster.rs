@@ -1,11 +1,11 @@
 //! Bindings for the raster stage: numpy in, owned Rust data, GIL released, numpy out.
 use glam::DMat4;
-use numpy::PyReadonlyArray2;
+use numpy::{PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
 use super::args::{lights, LayerArg, LightArg};
-use super::convert::{detached_in_pool, face_indices_u32, rows, shaped, ToDict};
+use super::convert::{detached_in_pool, face_indices_u32, rows, rows_array, shaped, ToDict};
 use crate::{
     rasterize_over, Background, Blend, Camera, Draw, Error, RasterOptions, Shading, FRAGMENT_CAP,
     MAX_INTERNAL_SIDE, MAX_PIXELS, MAX_SIDE, SAMPLES,
@@ -163,7 +163,7 @@ fn _on_sample_grid<'py>(
     width: u32,
     height: u32,
     samples: u32,
-) -> PyResult<Bound<'py, PyAny>> {
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let camera = Camera::from_matrices(
         matrix(&view, "view")?,
         matrix(&projection, "projection")?,
@@ -175,8 +175,7 @@ fn _on_sample_grid<'py>(
     }
     let pts = rows::<f64, 3>(&points, "points")?;
     let out = py.detach(|| crate::on_sample_grid(&camera, samples, pts));
-    let n = out.len();
-    shaped(py, out.into_iter().flatten().collect::<Vec<f64>>(), [n, 3])
+    Ok(rows_array(py, out))
 }
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
