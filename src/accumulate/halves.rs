@@ -11,7 +11,9 @@
 //! rounded to float32. The squares `d_k * d_k` are summed from 0 along each row (pixels in
 //! order, channels in order), and the rows' sums from 0 in row order, whatever the threads.
 //! When every part names its `sub` half (0 or 1 within its half: the quarters of a grid), each
-//! half's two sub-halves are compared the same way and their squares summed over both halves.
+//! half's two sub-halves are compared the same way (each sub-half's sum times its mass's
+//! reciprocal: only these squares are kept, so a product serves for a division) and their
+//! squares summed over both halves.
 //! These are numpy's operations in `HalfSums.frame`'s order, so the bits are those of that
 //! numpy code (tests/methods/test_accumulation_frame.py compares them).
 use crate::error::{Error, Result};
@@ -72,7 +74,7 @@ pub fn halves(
     let pass = Pass {
         parts,
         masses,
-        sub_masses: subs.then_some(sub_masses),
+        inv_sub_masses: subs.then(|| sub_masses.map(|m| m.map(|x| 1.0 / x))),
         pre,
         quarters: subs && in_quarter_order(parts),
         width,
@@ -139,7 +141,8 @@ pub const SERIAL_PIXELS: usize = 1 << 16;
 struct Pass<'p, 'a> {
     parts: &'p [HalfPart<'a>],
     masses: [f64; 2],
-    sub_masses: Option<[[f64; 2]; 2]>,
+    /// Each half's two sub-halves' reciprocal masses, when they are compared.
+    inv_sub_masses: Option<[[f64; 2]; 2]>,
     pre: [f64; 4],
     /// Four parts, part `j` of half `j % 2` and sub-half `j / 2` (`in_quarter_order`).
     quarters: bool,
@@ -166,6 +169,9 @@ impl Pass<'_, '_> {
         cuts.sort_unstable();
         cuts.dedup();
         let mut srcs: Vec<&[f32]> = Vec::with_capacity(parts.len());
+        // the running sums in locals (kept in registers; through `sum` they went to memory at
+        // every add), added in the same order
+        let (mut squares, mut sub_squares) = (sum[0], sum[1]);
         for seg in cuts.windows(2) {
             let (s0, s1) = (seg[0], seg[1]);
             srcs.clear();
@@ -180,15 +186,18 @@ impl Pass<'_, '_> {
                 let i = (x - x0) * 4;
                 out[i..i + 4].copy_from_slice(&f);
                 for v in d {
-                    sum[0] += v * v;
+                    squares += v * v;
                 }
                 if let Some(e) = e {
-                    for v in e.iter().flatten() {
-                        sum[1] += v * v;
+                    for half in e {
+                        for v in half {
+                            sub_squares += v * v;
+                        }
                     }
                 }
             }
         }
+        *sum = [squares, sub_squares];
     }
 
     /// A pixel's frame value, the halves' composited difference and each half's two
@@ -205,21 +214,32 @@ impl Pass<'_, '_> {
             for (s, v) in sums[p.half].iter_mut().zip(v) {
                 *s += f64::from(*v) * p.mass;
             }
-            if let (Some(sub), Some(_)) = (p.sub, self.sub_masses) {
+            if let (Some(sub), Some(_)) = (p.sub, self.inv_sub_masses) {
                 for (s, v) in subs[p.half][sub].iter_mut().zip(v) {
                     *s += f64::from(*v) * p.mass;
                 }
             }
         }
+        let (frame, d) = self.frame_and_difference(sums[0], sums[1]);
+        let e = self
+            .inv_sub_masses
+            .map(|im| [0, 1].map(|half| self.composited(subs[half][0], subs[half][1], im[half])));
+        (frame, d, e)
+    }
+
+    /// The frame value of a pixel whose halves' weighted sums are `a0` and `b0`, and their
+    /// means' difference composited over the background: each mean divided once, serving both.
+    #[inline]
+    fn frame_and_difference(&self, a0: [f64; 4], b0: [f64; 4]) -> ([f32; 4], [f64; 4]) {
         let m = self.masses;
-        let a = sums[0].map(|s| s / m[0]);
-        let b = sums[1].map(|s| s / m[1]);
+        let a = a0.map(|s| s / m[0]);
+        let b = b0.map(|s| s / m[1]);
         let total = m[0] + m[1];
         let frame = std::array::from_fn(|k| ((a[k] * m[0] + b[k] * m[1]) / total) as f32);
-        let e = self
-            .sub_masses
-            .map(|sm| [0, 1].map(|half| self.composited(subs[half][0], subs[half][1], sm[half])));
-        (frame, self.composited(sums[0], sums[1], m), e)
+        (
+            frame,
+            self.over_background(std::array::from_fn(|k| a[k] - b[k])),
+        )
     }
 
     /// [`Self::pixel`] of four parts, part `j` of half `j % 2` and sub-half `j / 2`: each
@@ -232,23 +252,27 @@ impl Pass<'_, '_> {
         // q[0], q[2]: half 0's sub-halves; q[1], q[3]: half 1's
         let a0: [f64; 4] = std::array::from_fn(|k| q[0][k] + q[2][k]);
         let b0: [f64; 4] = std::array::from_fn(|k| q[1][k] + q[3][k]);
-        let m = self.masses;
-        let a = a0.map(|s| s / m[0]);
-        let b = b0.map(|s| s / m[1]);
-        let total = m[0] + m[1];
-        let frame = std::array::from_fn(|k| ((a[k] * m[0] + b[k] * m[1]) / total) as f32);
-        let sm = self.sub_masses.expect("quarters compare their sub-halves");
+        let (frame, d) = self.frame_and_difference(a0, b0);
+        let im = self
+            .inv_sub_masses
+            .expect("quarters compare their sub-halves");
         let e = [
-            self.composited(q[0], q[2], sm[0]),
-            self.composited(q[1], q[3], sm[1]),
+            self.composited(q[0], q[2], im[0]),
+            self.composited(q[1], q[3], im[1]),
         ];
-        (frame, self.composited(a0, b0, m), Some(e))
+        (frame, d, Some(e))
     }
 
-    /// `a / ma - b / mb` composited over the background (the module docs' operations).
+    /// `a (1 / ma) - b (1 / mb)` composited over the background, given the reciprocals (the
+    /// sub-halves' difference: only its squares are kept, so a product serves for a division).
     #[inline]
-    fn composited(&self, a: [f64; 4], b: [f64; 4], [ma, mb]: [f64; 2]) -> [f64; 4] {
-        let d: [f64; 4] = std::array::from_fn(|k| a[k] / ma - b[k] / mb);
+    fn composited(&self, a: [f64; 4], b: [f64; 4], [ia, ib]: [f64; 2]) -> [f64; 4] {
+        self.over_background(std::array::from_fn(|k| a[k] * ia - b[k] * ib))
+    }
+
+    /// A difference `d` (premultiplied) composited over the background: `d + (-d_alpha) pre`.
+    #[inline]
+    fn over_background(&self, d: [f64; 4]) -> [f64; 4] {
         let scale = -d[3];
         std::array::from_fn(|k| d[k] + scale * self.pre[k])
     }

@@ -249,14 +249,14 @@ def row_order_sum(squares):
 
 def numpy_halves(sums, win, quartered=False):
     """`HalfSums.halves` in numpy, the arithmetic it replaces (the serial twin of
-    ``_core._halves``): each half (and, ``quartered``, each of its two quarters) ``sum(m *
-    part) / sum(m)`` in float64 from 0 in the parts' order, the difference of the halves (and of
-    each half's quarters) composited over the background and its squares summed in row order,
-    the frame by the halves' masses."""
+    ``_core._halves``): each half ``sum(m * part) / sum(m)`` (and, ``quartered``, each of its
+    two quarters ``sum(m * part) * (1 / sum(m))``) in float64 from 0 in the parts' order, the
+    difference of the halves (and of each half's quarters) composited over the background and
+    its squares summed in row order, the frame by the halves' masses."""
     x0, y0, x1, y1 = win
     rows, cols = slice(y0, y1), slice(x0, x1)
 
-    def mean(sel):
+    def mean(sel, reciprocal=False):
         mass = sum(float(p.weights.sum()) for p in sel)
         out = np.zeros((y1 - y0, x1 - x0, 4), np.float64)
         for p in sel:
@@ -268,7 +268,10 @@ def numpy_halves(sums, win, quartered=False):
                     piece.drawn[0], m, dtype=np.float64
                 )
             out += term
-        out /= mass
+        if reciprocal:  # the sub-halves: only their difference's squares are kept
+            out *= 1.0 / mass
+        else:
+            out /= mass
         return mass, out
 
     bg = np.asarray(sums.scene.background, np.float64)
@@ -288,7 +291,8 @@ def numpy_halves(sums, win, quartered=False):
         subs = []
         for j in (0, 1):
             (_, qa), (_, qb) = (
-                mean([p for p in sums.parts if p.half == j and p.quarter // 2 == s]) for s in (0, 1)
+                mean([p for p in sums.parts if p.half == j and p.quarter // 2 == s], reciprocal=True)
+                for s in (0, 1)
             )
             subs.append(composited(qa, qb))
         sub_sum = row_order_sum(np.square(np.stack(subs, axis=2)))
