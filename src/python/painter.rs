@@ -183,16 +183,18 @@ type PartFrame<'py> = (
     usize,
 );
 
-/// A part's frame as Python values ([`PartFrame`]): depth and ids only when `kept`.
+/// A part's frame as Python values ([`PartFrame`]): [`still_frame`]'s when `kept`, else its
+/// rgba alone (depth and ids None).
 fn part_frame(
     py: Python<'_>,
     out: Option<Accumulated>,
     kept: bool,
 ) -> PyResult<Option<PartFrame<'_>>> {
+    if kept {
+        return Ok(still_frame(py, out)?.map(|(w, r, d, i, n)| (w, r, Some(d), Some(i), n)));
+    }
     let Some(Accumulated {
-        frame: Frame {
-            rgba, depth, ids, ..
-        },
+        frame: Frame { rgba, .. },
         window: w,
         draw_calls,
     }) = out
@@ -200,13 +202,8 @@ fn part_frame(
         return Ok(None);
     };
     let win = (w[0], w[1], w[2], w[3]).into_pyobject(py)?.into_any();
-    let (width, height) = (w[2] - w[0], w[3] - w[1]);
-    if !kept {
-        let r = shaped(py, rgba, [height, width, 4])?;
-        return Ok(Some((win, r, None, None, draw_calls)));
-    }
-    let (r, d, i) = arrays(py, rgba, depth, ids, width, height)?;
-    Ok(Some((win, r, Some(d), Some(i), draw_calls)))
+    let r = shaped(py, rgba, [w[3] - w[1], w[2] - w[0], 4])?;
+    Ok(Some((win, r, None, None, draw_calls)))
 }
 
 /// Objects drawn at any shutter time (see `src/accumulate/painter.rs`).

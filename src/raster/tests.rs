@@ -304,7 +304,7 @@ fn points_on_the_sample_grid_project_to_the_snapped_corners() {
         let m = cam.view_projection();
         let (ws, hs) = (f64::from(40 * samples), f64::from(30 * samples));
         for (p, q) in pts.iter().zip(&out) {
-            let (c, d) = (setup_clip(&m, p), setup_clip(&m, q));
+            let (c, d) = (setup::clip_position(&m, p), setup::clip_position(&m, q));
             if c[3] <= 0.0 {
                 assert_eq!(p, q);
                 continue;
@@ -325,9 +325,4 @@ fn points_on_the_sample_grid_project_to_the_snapped_corners() {
             assert!(moved.iter().all(|m| *m <= 0.5 / 256.0 + 1e-9), "{moved:?}");
         }
     }
-}
-
-fn setup_clip(m: &DMat4, p: &[f64; 3]) -> [f64; 4] {
-    let c = *m * glam::DVec4::new(p[0], p[1], p[2], 1.0);
-    [c.x, c.y, c.z, c.w]
 }

@@ -91,6 +91,12 @@ def rate_factor(halves_sq: float, quarters_sq: float) -> float:
     return max(1.0, f(r) / f(1.0))
 
 
+def _nearest_part(times: list[np.ndarray], target: float) -> int:
+    """The first of the parts (each its ``times``) holding the time nearest ``target``: the
+    part `HalfSums` keeps depth and ids for, and pastes."""
+    return min(range(len(times)), key=lambda k: float(np.min(np.abs(times[k] - target))))
+
+
 def _nearest(values: np.ndarray, target: float) -> int:
     """The position in ``values`` of the value nearest ``target``."""
     return int(np.argmin(np.abs(values - target)))
@@ -363,8 +369,7 @@ class HalfSums:
             got.append((half, times, weights, _nearest(times, self.scene.reference_t), *quarter))
         # the one part `frame` may paste: the first holding the time nearest the reference (the
         # first of all calls' parts is the first of its own call's)
-        ref_t = self.scene.reference_t
-        keep = min(range(len(got)), key=lambda k: float(np.min(np.abs(got[k][1] - ref_t))))
+        keep = _nearest_part([g[1] for g in got], self.scene.reference_t)
         pieces = self.maker.pieces([(g[1], g[2] / float(g[2].sum()), g[3]) for g in got], 1.0, keep)
         self.parts.extend(Part(g[0], g[1], g[2], p, *g[4:]) for g, p in zip(got, pieces))
 
@@ -423,8 +428,7 @@ class HalfSums:
         return _core._halves(parts, win, pre)
 
     def frame(self) -> Frame:
-        ref_t = self.scene.reference_t
-        nearest = min(self.parts, key=lambda p: float(np.min(np.abs(p.times - ref_t)))).piece
+        nearest = self.parts[_nearest_part([p.times for p in self.parts], self.scene.reference_t)].piece
         (rgba, depth, ids), square_sum, factor = nearest.pasted(keep=True), 0.0, 1.0
         win = self._window()
         if win is not None:  # the halves' sums over the window only
