@@ -2,7 +2,7 @@
 ``auto`` at several tolerances, on seeded random scenes against the exact time integral.
 
     python benches/bench_error_control.py [--set measuring|tuning] [--scenes 40] [--sizes 96x72,192x144]
-        [--first-seed 1000120] [--repeat 5] [--timer cpu|wall] [--no-calibration]
+        [--first-seed 1000120] [--repeat 5] [--timer cpu|wall] [--no-calibration] [--aa 2]
 
 For each scene of :func:`motionblur.evaluation.random_scenes.random_scene` (the measuring set by
 default: seeds and meshes never tuned on) and each size:
@@ -19,6 +19,9 @@ default: seeds and meshes never tuned on) and each size:
   best-of-``--repeat`` in the same run, the wall clock or, with ``--timer cpu``, the process's
   CPU time: steadier on a loaded machine with ``MOTIONBLUR_NUM_THREADS=1``), and auto's time over
   that one's. Each render of the search is timed once a scene and serves every tolerance.
+
+``--aa`` renders every frame, the reference and auto's with that many samples per pixel along
+each axis (the estimates are of the error at the same ``aa``).
 
 Writes ``results.md`` and ``rows.json`` to ``out/bench/error_control/<set>``.
 """
@@ -61,20 +64,21 @@ def best_ms(fn, repeat: int | None = None) -> tuple[float, object]:
     return best, out
 
 
-def reference(scene, seed: int, size: str, kind: str = "exact") -> np.ndarray:
+def reference(scene, seed: int, size: str, kind: str = "exact", aa: int = 1) -> np.ndarray:
     # keyed by the build as well: a change to the kernel or the segment rule changes the reference
     build = b"".join(Path(m.__file__).read_bytes() for m in (mb._core, _segments, random_scenes))
-    key = hashlib.sha1(f"{mb.__version__}{seed}{size}".encode() + build).hexdigest()[:12]
+    sampled = f"{size}" if aa == 1 else f"{size}aa{aa}"
+    key = hashlib.sha1(f"{mb.__version__}{seed}{sampled}".encode() + build).hexdigest()[:12]
     path = OUT / "refs" / f"{seed}_{size}_{key}{'' if kind == 'exact' else '_' + kind}.npy"
     if path.exists():
         return np.load(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    ref = (mb.exact if kind == "exact" else _estimate.limit)(scene).rgba.astype(np.float64)
+    ref = (mb.exact if kind == "exact" else _estimate.limit)(scene, aa=aa).rgba.astype(np.float64)
     np.save(path, ref)
     return ref
 
 
-def calibration_rows(scene, ref, seed, size, methods=None) -> list[dict]:
+def calibration_rows(scene, ref, seed, size, methods=None, aa: int = 1) -> list[dict]:
     rows = []
     runs = [("accumulation", {"samples": 4}), ("accumulation", {}), ("accumulation", {"samples": 64})]
     runs += [
@@ -86,14 +90,14 @@ def calibration_rows(scene, ref, seed, size, methods=None) -> list[dict]:
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                f = mb.render(scene, method, **opts)
+                f = mb.render(scene, method, **opts, aa=aa)
         except ValueError as exc:  # a method that refuses the motion says so
             rows.append(
                 {"seed": seed, "size": size, "method": method, "options": opts, "refused": str(exc)[:120]}
             )
             continue
         limit = "limit" + hashlib.sha1(repr(_estimate.LIMIT_OPTIONS).encode()).hexdigest()[:6]
-        measured = rmse(f.rgba, reference(scene, seed, size, limit) if method == "analytic" else ref)
+        measured = rmse(f.rgba, reference(scene, seed, size, limit, aa) if method == "analytic" else ref)
         rows.append(
             {
                 "seed": seed, "size": size, "method": method, "options": opts, "measured": measured,
@@ -108,14 +112,16 @@ class Cheapest:
     """The renders that may meet a tolerance on one scene, each timed once (lazily) for all
     tolerances: accumulation on `ACC_GRID` and every other method's default."""
 
-    def __init__(self, scene, ref) -> None:
-        self.scene, self.ref = scene, ref
+    def __init__(self, scene, ref, aa: int = 1) -> None:
+        self.scene, self.ref, self.aa = scene, ref, aa
         self.acc: dict[int, tuple[float, float]] = {}  # n -> (ms, rmse)
         self.others: list[tuple[str, float, float]] | None = None
 
     def _acc(self, n: int) -> tuple[float, float]:
         if n not in self.acc:
-            ms, f = best_ms(lambda: mb.render(self.scene, "accumulation", samples=n, error_estimate=False))
+            ms, f = best_ms(
+                lambda: mb.render(self.scene, "accumulation", samples=n, error_estimate=False, aa=self.aa)
+            )
             self.acc[n] = (ms, rmse(f.rgba, self.ref))
         return self.acc[n]
 
@@ -126,7 +132,7 @@ class Cheapest:
                 if m in ("accumulation", "auto") or not mb.METHODS[m].applies(self.scene):
                     continue
                 try:
-                    ms, f = best_ms(lambda m=m: mb.render(self.scene, m, error_estimate=False))
+                    ms, f = best_ms(lambda m=m: mb.render(self.scene, m, error_estimate=False, aa=self.aa))
                 except ValueError:
                     continue
                 self.others.append((m, ms, rmse(f.rgba, self.ref)))
@@ -144,11 +150,11 @@ class Cheapest:
         return min(found, key=lambda x: x[1]) if found else ("none", float("nan"))
 
 
-def auto_rows(scene, ref, seed, size) -> list[dict]:
+def auto_rows(scene, ref, seed, size, aa: int = 1) -> list[dict]:
     rows = []
-    cheapest = Cheapest(scene, ref)
+    cheapest = Cheapest(scene, ref, aa)
     for tol in TOLERANCES:
-        ms, f = best_ms(lambda tol=tol: mb.render(scene, "auto", tolerance=tol))
+        ms, f = best_ms(lambda tol=tol: mb.render(scene, "auto", tolerance=tol, aa=aa))
         label, cms = cheapest(tol)
         kept = f.stats["plan"]["kept"]
         rows.append(
@@ -212,6 +218,7 @@ def main() -> None:
     p.add_argument("--timer", choices=("wall", "cpu"), default="wall")
     p.add_argument("--no-calibration", action="store_true", help="auto's rows only")
     p.add_argument("--methods", default="", help="only these (comma-separated; auto: its rows)")
+    p.add_argument("--aa", type=int, default=1, choices=(1, 2, 4), help="samples per pixel along each axis")
     args = p.parse_args()
     TIMING.update(repeat=args.repeat, clock=time.process_time if args.timer == "cpu" else time.perf_counter)
     pool = MEASURING_SEEDS if args.set == "measuring" else TUNING_SEEDS
@@ -226,15 +233,15 @@ def main() -> None:
         for seed in seeds:
             scene = random_scene(seed, w, h)
             t0 = time.perf_counter()
-            ref = reference(scene, seed, size)
+            ref = reference(scene, seed, size, aa=args.aa)
             if not args.no_calibration:
-                cal += calibration_rows(scene, ref, seed, size, methods)
+                cal += calibration_rows(scene, ref, seed, size, methods, args.aa)
             if methods is None or "auto" in methods:
-                aut += auto_rows(scene, ref, seed, size)
+                aut += auto_rows(scene, ref, seed, size, args.aa)
             print(f"{size} seed {seed}: {time.perf_counter() - t0:.1f} s", flush=True)
     (out / "rows.json").write_text(json.dumps({"calibration": cal, "auto": aut}, indent=1, default=str))
     text = summarise(cal, aut)
-    head = f"# {args.set} set, seeds {seeds.start}..{seeds.stop - 1}, {args.timer} time best of {args.repeat}\n\n"
+    head = f"# {args.set} set, seeds {seeds.start}..{seeds.stop - 1}, aa={args.aa}, {args.timer} time best of {args.repeat}\n\n"
     (out / "results.md").write_text(head + text)
     print(text)
 

@@ -718,7 +718,7 @@ def _resolve(layer: _LayerLike, samples: int, out: _LayerLike, origin: tuple[int
 
 def _halves(
     parts: list[
-        tuple[int, float, np.ndarray, tuple[int, int, int, int] | None, np.ndarray | None, int | None]
+        tuple[int, float, np.ndarray, tuple[int, int, int, int] | None, np.ndarray | None, int | None, float]
     ],
     window: tuple[int, int, int, int],
     pre: tuple[float, float, float, float],
@@ -726,13 +726,16 @@ def _halves(
     """The two halves of an accumulation over ``window`` (x0, y0, x1, y1) of its (H,W) image.
     ``parts``: each (half 0 or 1, its mass (shutter weight), base (H,W,4) f32 premultiplied, its
     own window (x0, y0, x1, y1) or None, that window's drawn pixels (h,w,4) f32 or None, its
-    sub-half 0 or 1 within its half or None), all C-contiguous. Per pixel, in float64: each
-    half's mass-weighted mean ``a``, ``b`` of its parts (the drawn pixels inside a part's
-    window, its base outside); returns ((the sum of the squares of ``a - b`` composited over the
+    sub-half 0 or 1 within its half or None, its end coefficient: -m for a stratified grid's
+    first sample, +m for its last, m its share of the mass, else 0), all C-contiguous. Per pixel,
+    in float64: each half's mass-weighted mean ``a``, ``b`` of its parts (the drawn pixels inside
+    a part's window, its base outside) and ``e``, the parts' values times their end
+    coefficients; returns ((the sum of the squares of ``a - b + e`` composited over the
     premultiplied RGBA ``pre``, summed along each row and then over the rows; the same of each
-    half's two sub-halves, summed over both halves, when every part has a sub-half, else None),
+    half's two sub-halves plus ``2 e``, summed over both halves, when every part has a sub-half,
+    else None),
     the frame ``(a M_a + b M_b) / (M_a + M_b)`` (h,w,4) f32, (M_a, M_b)). ValueError naming
-    ``parts``, ``base``, ``window``, ``drawn`` or ``sub``. Releases the GIL."""
+    ``parts``, ``base``, ``window``, ``drawn``, ``sub`` or ``end``. Releases the GIL."""
 
 def _facing_faces(vertices: np.ndarray, faces: np.ndarray, eyes: np.ndarray) -> np.ndarray:
     """The faces (F',3) int64, in order, of the mesh vertices (V,3) float64 / faces (F,3) int64

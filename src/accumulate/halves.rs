@@ -14,6 +14,14 @@
 //! half's two sub-halves are compared the same way (each sub-half's sum times its mass's
 //! reciprocal: only these squares are kept, so a product serves for a division) and their
 //! squares summed over both halves.
+//! A part may carry an `end` coefficient (a stratified grid's first sample `-m`, its last `+m`,
+//! `m` its share of the total mass: every other part 0): the pixel's `e = sum(end v)` (from 0
+//! in order) is added to the halves' difference before it is composited, and `2 e` to each
+//! sub-halves' difference. The two halves of a stratified grid are the grid shifted a quarter
+//! of their strata either way (the sub-halves an eighth and three eighths), and a shifted rule
+//! is off by the shift times the pixel's change from the shutter's opening to its close; the
+//! frame (the unshifted midpoint rule) is not, and `e`, that change over the grid's samples,
+//! takes the term out of the differences.
 //! These are numpy's operations in `HalfSums.frame`'s order, so the bits are those of that
 //! numpy code (tests/methods/test_accumulation_frame.py compares them).
 use crate::error::{Error, Result};
@@ -31,6 +39,8 @@ pub struct HalfPart<'a> {
     pub window: Option<([usize; 4], &'a [f32])>,
     /// Its half within its half (0 or 1), when the grid is drawn in quarters.
     pub sub: Option<usize>,
+    /// Its coefficient in the differences' end term (see the module docs; 0 for most parts).
+    pub end: f64,
 }
 
 /// The frame's window and the squares of the halves' composited difference there (see the
@@ -76,7 +86,8 @@ pub fn halves(
         masses,
         inv_sub_masses: subs.then(|| sub_masses.map(|m| m.map(|x| 1.0 / x))),
         pre,
-        quarters: subs && in_quarter_order(parts),
+        quarters: subs && in_quarter_order(parts) && parts.iter().all(|p| p.end == 0.0),
+        ends: parts.iter().any(|p| p.end != 0.0),
         width,
         cols: (x0, x1),
     };
@@ -144,8 +155,11 @@ struct Pass<'p, 'a> {
     /// Each half's two sub-halves' reciprocal masses, when they are compared.
     inv_sub_masses: Option<[[f64; 2]; 2]>,
     pre: [f64; 4],
-    /// Four parts, part `j` of half `j % 2` and sub-half `j / 2` (`in_quarter_order`).
+    /// Four parts, part `j` of half `j % 2` and sub-half `j / 2` (`in_quarter_order`), none
+    /// with an end coefficient.
     quarters: bool,
+    /// Whether a part has an end coefficient.
+    ends: bool,
     /// The image's width and the window's columns `x0..x1`.
     width: usize,
     cols: (usize, usize),
@@ -209,6 +223,7 @@ impl Pass<'_, '_> {
     ) -> ([f32; 4], [f64; 4], Option<[[f64; 4]; 2]>) {
         let mut sums = [[0.0f64; 4]; 2];
         let mut subs = [[[0.0f64; 4]; 2]; 2];
+        let mut end = [0.0f64; 4];
         for (j, p) in self.parts.iter().enumerate() {
             let v = value(j);
             for (s, v) in sums[p.half].iter_mut().zip(v) {
@@ -219,27 +234,45 @@ impl Pass<'_, '_> {
                     *s += f64::from(*v) * p.mass;
                 }
             }
+            if self.ends && p.end != 0.0 {
+                for (e, v) in end.iter_mut().zip(v) {
+                    *e += f64::from(*v) * p.end;
+                }
+            }
         }
-        let (frame, d) = self.frame_and_difference(sums[0], sums[1]);
-        let e = self
-            .inv_sub_masses
-            .map(|im| [0, 1].map(|half| self.composited(subs[half][0], subs[half][1], im[half])));
+        let (frame, d) = self.frame_and_difference(sums[0], sums[1], end);
+        let e = self.inv_sub_masses.map(|im| {
+            [0, 1].map(|half| {
+                let d = std::array::from_fn(|k| {
+                    subs[half][0][k] * im[half][0] - subs[half][1][k] * im[half][1] + 2.0 * end[k]
+                });
+                self.over_background(d)
+            })
+        });
         (frame, d, e)
     }
 
     /// The frame value of a pixel whose halves' weighted sums are `a0` and `b0`, and their
-    /// means' difference composited over the background: each mean divided once, serving both.
+    /// means' difference plus `end` composited over the background: each mean divided once,
+    /// serving both.
     #[inline]
-    fn frame_and_difference(&self, a0: [f64; 4], b0: [f64; 4]) -> ([f32; 4], [f64; 4]) {
+    fn frame_and_difference(
+        &self,
+        a0: [f64; 4],
+        b0: [f64; 4],
+        end: [f64; 4],
+    ) -> ([f32; 4], [f64; 4]) {
         let m = self.masses;
         let a = a0.map(|s| s / m[0]);
         let b = b0.map(|s| s / m[1]);
         let total = m[0] + m[1];
         let frame = std::array::from_fn(|k| ((a[k] * m[0] + b[k] * m[1]) / total) as f32);
-        (
-            frame,
-            self.over_background(std::array::from_fn(|k| a[k] - b[k])),
-        )
+        let d = if self.ends {
+            std::array::from_fn(|k| a[k] - b[k] + end[k])
+        } else {
+            std::array::from_fn(|k| a[k] - b[k])
+        };
+        (frame, self.over_background(d))
     }
 
     /// [`Self::pixel`] of four parts, part `j` of half `j % 2` and sub-half `j / 2`: each
@@ -252,7 +285,7 @@ impl Pass<'_, '_> {
         // q[0], q[2]: half 0's sub-halves; q[1], q[3]: half 1's
         let a0: [f64; 4] = std::array::from_fn(|k| q[0][k] + q[2][k]);
         let b0: [f64; 4] = std::array::from_fn(|k| q[1][k] + q[3][k]);
-        let (frame, d) = self.frame_and_difference(a0, b0);
+        let (frame, d) = self.frame_and_difference(a0, b0, [0.0; 4]);
         let im = self
             .inv_sub_masses
             .expect("quarters compare their sub-halves");
@@ -301,6 +334,9 @@ fn check_part(p: &HalfPart<'_>, (width, height): (usize, usize)) -> Result<()> {
     if p.sub.is_some_and(|s| s > 1) {
         return Err(Error::value("sub", "must be 0 or 1"));
     }
+    if !p.end.is_finite() {
+        return Err(Error::value("end", "must be finite"));
+    }
     if p.base.len() != width * height * 4 {
         return Err(Error::shape("base", "must be (H, W, 4) of the image"));
     }
@@ -333,6 +369,7 @@ mod tests {
                 base: &base,
                 window: Some(([1, 0, 2, 1], &d0)),
                 sub: None,
+                end: 0.0,
             },
             HalfPart {
                 half: 1,
@@ -340,6 +377,7 @@ mod tests {
                 base: &base,
                 window: None,
                 sub: None,
+                end: 0.0,
             },
             HalfPart {
                 half: 1,
@@ -347,6 +385,7 @@ mod tests {
                 base: &base,
                 window: Some(([2, 1, 3, 2], &d1)),
                 sub: None,
+                end: 0.0,
             },
         ];
         let pre = [0.1, 0.2, 0.3, 1.0];
@@ -404,6 +443,7 @@ mod tests {
                 base: v,
                 window: None,
                 sub: Some(j / 2),
+                end: 0.0,
             })
             .collect();
         let out = halves(&parts, (1, 1), [0, 0, 1, 1], [0.0; 4]).unwrap();
@@ -446,6 +486,7 @@ mod tests {
             base: &base,
             window,
             sub: None,
+            end: 0.0,
         };
         let err = |parts: &[HalfPart<'_>], win| {
             halves(parts, (3, 2), win, [0.0; 4])
@@ -463,7 +504,53 @@ mod tests {
             base: &short,
             window: None,
             sub: None,
+            end: 0.0,
         };
         assert!(err(&[p], [0, 0, 3, 2]).contains("base"));
+        let p = HalfPart {
+            end: f64::NAN,
+            ..part(0, None)
+        };
+        assert!(err(&[p], [0, 0, 3, 2]).contains("end"));
+    }
+
+    #[test]
+    fn end_coefficients_add_the_end_term_to_the_differences() {
+        // a 1 x 1 image, four samples of mass 0.25 with values v0..v3 (premultiplied, opaque),
+        // each its own quarter: the first with end -0.25, the last +0.25; e = (v3 - v0) / 4 is
+        // added to the halves' difference and 2 e to each sub-halves' one; the frame is the
+        // samples' mean, the bits of the parts without ends (which take the quarters' path)
+        let v = [
+            [0.1f32, 0.2, 0.3, 1.0],
+            [0.4, 0.1, 0.0, 1.0],
+            [0.3, 0.3, 0.1, 1.0],
+            [0.0, 0.5, 0.2, 1.0],
+        ];
+        let part = |j: usize, end: f64| HalfPart {
+            half: j % 2,
+            mass: 0.25,
+            base: &v[j],
+            window: None,
+            sub: Some(j / 2),
+            end,
+        };
+        let ends = [part(0, -0.25), part(1, 0.0), part(2, 0.0), part(3, 0.25)];
+        let plain = ends.map(|p| HalfPart { end: 0.0, ..p });
+        let out = halves(&ends, (1, 1), [0, 0, 1, 1], [0.0; 4]).unwrap();
+        let flat = halves(&plain, (1, 1), [0, 0, 1, 1], [0.0; 4]).unwrap();
+        let x = |j: usize, k: usize| f64::from(v[j][k]);
+        let e = |k: usize| (x(3, k) - x(0, k)) / 4.0;
+        let halves_want: f64 = (0..4)
+            .map(|k| ((x(0, k) + x(2, k)) / 2.0 - (x(1, k) + x(3, k)) / 2.0 + e(k)).powi(2))
+            .sum();
+        let subs_want: f64 = (0..4)
+            .map(|k| {
+                (x(0, k) - x(2, k) + 2.0 * e(k)).powi(2) + (x(1, k) - x(3, k) + 2.0 * e(k)).powi(2)
+            })
+            .sum();
+        assert!((out.square_sum - halves_want).abs() < 1e-12);
+        assert!((out.sub_square_sum.unwrap() - subs_want).abs() < 1e-12);
+        assert!((out.square_sum - flat.square_sum).abs() > 1e-3);
+        assert_eq!(out.frame, flat.frame);
     }
 }

@@ -162,7 +162,7 @@ fn _facing_faces<'py>(
 
 /// One part of [`_halves`]: (half 0 or 1, its mass, base (H,W,4) f32, its window
 /// (x0, y0, x1, y1) or None, the window's drawn pixels (h,w,4) f32 or None, its sub-half 0 or
-/// 1 within its half or None).
+/// 1 within its half or None, its end coefficient).
 type HalfPartArg<'py> = (
     usize,
     f64,
@@ -170,6 +170,7 @@ type HalfPartArg<'py> = (
     Option<[usize; 4]>,
     Option<PyReadonlyArray3<'py, f32>>,
     Option<usize>,
+    f64,
 );
 
 /// [`_halves`]' result: ((sum of the difference's squares, the sub-halves' or None), frame,
@@ -193,7 +194,7 @@ fn _halves<'py>(
     };
     let (h, w) = (first.2.shape()[0], first.2.shape()[1]);
     let mut views = Vec::with_capacity(parts.len());
-    for (half, mass, base, win, drawn, sub) in &parts {
+    for (half, mass, base, win, drawn, sub, end) in &parts {
         if base.shape() != [h, w, 4] {
             return Err(Error::shape("base", "every part's base must be (H, W, 4)").into());
         }
@@ -208,6 +209,7 @@ fn _halves<'py>(
             base: c_slice(base, "base")?,
             window: drawn,
             sub: *sub,
+            end: *end,
         });
     }
     let [x0, y0, x1, y1] = window;

@@ -250,9 +250,11 @@ def row_order_sum(squares):
 def numpy_halves(sums, win, quartered=False):
     """`HalfSums.halves` in numpy, the arithmetic it replaces (the serial twin of
     ``_core._halves``): each half ``sum(m * part) / sum(m)`` (and, ``quartered``, each of its
-    two quarters ``sum(m * part) * (1 / sum(m))``) in float64 from 0 in the parts' order, the
-    difference of the halves (and of each half's quarters) composited over the background and
-    its squares summed in row order, the frame by the halves' masses."""
+    two quarters ``sum(m * part) * (1 / sum(m))``) in float64 from 0 in the parts' order, and
+    the end term ``e = sum(end * part)`` of the parts with an end (coefficient ``end * m /
+    total mass``), the difference of the halves plus ``e`` (and of each half's quarters plus
+    ``2 e``) composited over the background and its squares summed in row order, the frame by
+    the halves' masses."""
     x0, y0, x1, y1 = win
     rows, cols = slice(y0, y1), slice(x0, x1)
 
@@ -284,7 +286,21 @@ def numpy_halves(sums, win, quartered=False):
 
     (ma, a), (mb_, b) = (mean([p for p in sums.parts if p.half == j]) for j in (0, 1))
     frame = ((a * ma + b * mb_) / (ma + mb_)).astype(np.float32)
-    square_sum = row_order_sum(np.square(composited(a, b)))
+    total = sum(float(p.weights.sum()) for p in sums.parts)
+    end = np.zeros_like(a)
+    for p in sums.parts:
+        if p.end:
+            c = p.end * float(p.weights.sum()) / total
+            term = np.multiply(p.piece.base[0][rows, cols], c, dtype=np.float64)
+            if p.piece.window is not None:
+                wx0, wy0, wx1, wy1 = p.piece.window
+                term[wy0 - y0 : wy1 - y0, wx0 - x0 : wx1 - x0] = np.multiply(
+                    p.piece.drawn[0], c, dtype=np.float64
+                )
+            end += term
+    ends = any(p.end for p in sums.parts)
+    diff = np.subtract(a, b, dtype=np.float64)
+    square_sum = row_order_sum(np.square(composited(diff + end if ends else diff, 0.0)))
     sub_sum = None
     if quartered:
         # per pixel: half 0's quarters' difference, then half 1's, each channel in order
@@ -294,13 +310,24 @@ def numpy_halves(sums, win, quartered=False):
                 mean([p for p in sums.parts if p.half == j and p.quarter // 2 == s], reciprocal=True)
                 for s in (0, 1)
             )
-            subs.append(composited(qa, qb))
+            subs.append(composited(qa - qb + 2.0 * end if ends else qa - qb, 0.0))
         sub_sum = row_order_sum(np.square(np.stack(subs, axis=2)))
     return (square_sum, sub_sum), frame, (ma, mb_)
 
 
 @pytest.mark.parametrize(
-    "case", ["opaque", "translucent wall", "aa 2", "moving camera", "background", "uneven halves", "quarters"]
+    "case",
+    [
+        "opaque",
+        "translucent wall",
+        "aa 2",
+        "moving camera",
+        "background",
+        "uneven halves",
+        "quarters",
+        "ends",
+        "ends in quarters",
+    ],
 )
 def test_the_halves_kernel_gives_the_numpy_arithmetics_bits(case):
     # The frame and the error estimate's sum of squares of both halves' difference (and of
@@ -308,8 +335,10 @@ def test_the_halves_kernel_gives_the_numpy_arithmetics_bits(case):
     # they replace: bit for bit (each pixel's float64 operations and the squares' sums in the
     # same order), on a still camera over an opaque or a translucent static layer,
     # supersampled, a moving camera (every part its own whole frame), a coloured background,
-    # halves of unequal mass (auto's reweighted parts) and a grid drawn in quarters.
-    from motionblur.methods._accumulate import HalfSums
+    # halves of unequal mass (auto's reweighted parts), a grid drawn in quarters, and the
+    # parts grid_parts makes with ends (aa 2, 4) of 12 and of 8 samples (their first and last sample apart, with
+    # the end term; 8 in quarters).
+    from motionblur.methods._accumulate import HalfSums, grid_parts
 
     scene = _scene(alpha=0.6 if case == "translucent wall" else 1.0)
     aa = 2 if case == "aa 2" else 1
@@ -323,11 +352,15 @@ def test_the_halves_kernel_gives_the_numpy_arithmetics_bits(case):
     if case == "background":
         scene = mb.Scene(scene.objects, scene.camera, scene.lights, background=(0.2, 0.4, 0.9, 0.7))
     sums = HalfSums(scene, aa)
-    times, weights = sample_times(scene, 12)
+    n = 8 if case == "ends in quarters" else 12
+    times, weights = sample_times(scene, n)
     if case == "quarters":
         sums.add_all([(times[q::4], weights[q::4], q % 2, q) for q in range(4)])
+    if case.startswith("ends"):
+        sums.add_all([(times[k], weights[k], *rest) for k, *rest in grid_parts(n, ends=True)])
+        assert {p.end for p in sums.parts} == {-1, 0, 1}
     for j, sel in enumerate((np.arange(12)[0::2], np.arange(12)[1::2])):
-        if case == "quarters":
+        if case == "quarters" or case.startswith("ends"):
             break
         if case == "uneven halves":
             sel = sel[: 2 + 2 * j]
@@ -336,11 +369,12 @@ def test_the_halves_kernel_gives_the_numpy_arithmetics_bits(case):
     win = sums._window()
     assert win is not None
     got = sums.halves(win)
-    want = numpy_halves(sums, win, quartered=case == "quarters")
+    quartered = case in ("quarters", "ends in quarters")
+    want = numpy_halves(sums, win, quartered=quartered)
     assert got[1].dtype == np.float32 and got[1].shape == (win[3] - win[1], win[2] - win[0], 4)
     assert got[0][0] == want[0][0], "square sum"
     assert got[0][1] == want[0][1], "quarters' square sum"
-    assert (got[0][1] is None) == (case != "quarters")
+    assert (got[0][1] is None) == (not quartered)
     assert np.array_equal(got[1].view(np.uint32), want[1].view(np.uint32)), "frame"
     assert got[2] == want[2]
     # a half whose parts differ shows in the difference (the kernel is not all zeros)
@@ -353,18 +387,22 @@ def test_the_halves_kernel_names_bad_parts():
     with pytest.raises(ValueError, match="parts"):
         _core._halves([], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="half"):
-        _core._halves([(2, 1.0, base, None, None, None)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
+        _core._halves([(2, 1.0, base, None, None, None, 0.0)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="sub"):
-        _core._halves([(0, 1.0, base, None, None, 2)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
+        _core._halves([(0, 1.0, base, None, None, 2, 0.0)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="drawn"):
-        _core._halves([(0, 1.0, base, (0, 0, 3, 2), drawn, None)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
+        _core._halves([(0, 1.0, base, (0, 0, 3, 2), drawn, None, 0.0)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="window"):
-        _core._halves([(0, 1.0, base, (0, 0, 2, 2), None, None)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
+        _core._halves([(0, 1.0, base, (0, 0, 2, 2), None, None, 0.0)], (0, 0, 6, 4), (0.0, 0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="window"):
-        _core._halves([(0, 1.0, base, None, None, None)], (0, 0, 7, 4), (0.0, 0.0, 0.0, 0.0))
+        _core._halves([(0, 1.0, base, None, None, None, 0.0)], (0, 0, 7, 4), (0.0, 0.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="end"):
+        _core._halves([(0, 1.0, base, None, None, None, float("nan"))], (0, 0, 6, 4), (0.0,) * 4)
     with pytest.raises(ValueError, match="base"):
         _core._halves(
-            [(0, 1.0, base, None, None, None), (1, 1.0, base[:3], None, None, None)], (0, 0, 6, 4), (0.0,) * 4
+            [(0, 1.0, base, None, None, None, 0.0), (1, 1.0, base[:3], None, None, None, 0.0)],
+            (0, 0, 6, 4),
+            (0.0,) * 4,
         )
 
 

@@ -59,9 +59,10 @@ def accumulation(
 
     The even and the odd samples are drawn and summed apart by the compiled core
     (``_core._Painter.accumulate_still_parts`` / ``accumulate_moving``, ``src/accumulate/frame.rs``);
-    their difference is the frame's ``stats["error_estimate"]`` (`_accumulate`). A stratified
-    grid of 4 or 8 samples is drawn in quarters, whose differences within each half tell how
-    fast the error falls (`_accumulate.rate_factor`).
+    their difference is the frame's ``stats["error_estimate"]`` (`_accumulate`), with ``aa`` 2
+    or 4 and a stratified grid of an even count with an end term (`_accumulate.ends_factor`). A stratified grid of 4 or
+    8 samples is drawn in quarters, whose differences within each half tell how fast the error
+    falls (`_accumulate.rate_factor`).
 
     A rolling shutter (``Scene(rolling=R)``): see `rolling_accumulation` (about N renders per
     row, each row weighing every render by its own window's filter).
@@ -80,7 +81,9 @@ def accumulation(
         # estimates the error with its pilot.
         return accumulate(scene, times, weights, ref, dim, aa)
     sums = HalfSums(scene, aa, sampling)
-    sums.add_all([(times[k], weights[k], half, q) for k, half, q in grid_parts(len(times), sampling)])
+    sums.add_all(
+        [(times[k], weights[k], *rest) for k, *rest in grid_parts(len(times), sampling, ends=aa > 1)]
+    )
     return sums.frame()
 
 

@@ -202,17 +202,18 @@ class _Trials:
         return self._record("accumulation", options, frame, ms, frame.stats["error_estimate"])
 
     def _stratified(self, n: int, keep: bool) -> None:
-        """Accumulation's own ``n`` samples, the drawn ones (an ``n / last``-th of them) kept."""
+        """Accumulation's own ``n`` samples, the drawn ones (an ``n / last``-th of them) kept;
+        parts by `grid_parts`."""
         times, weights = sample_times(self.scene, n)
-        if not keep:  # a fresh grid: in halves, or in quarters (`grid_parts`)
-            self.sums.add_all([(times[k], weights[k], half, q) for k, half, q in grid_parts(n)])
-            return
-        step = n // self.grid[0]
-        self.sums.reweight(lambda t: (np.full(len(t), 1.0 / n), _position(times, t[0]) % 2))
-        j = np.arange(n)
-        j = j[(j % step) != step // 2]  # the new times only
-        sels = [(half, j[j % 2 == half]) for half in (0, 1)]
-        self.sums.add_all([(times[sel], weights[sel], half) for half, sel in sels if len(sel)])
+        new = None  # a fresh grid: all of it, in halves or in quarters (`grid_parts`)
+        if keep:  # the kept samples' new weights and halves (never the new grid's ends)
+            step = n // self.grid[0]
+            self.sums.reweight(lambda t: (np.full(len(t), 1.0 / n), _position(times, t[0]) % 2))
+            new = np.arange(n)
+            new = new[(new % step) != step // 2]  # the new times only
+        self.sums.add_all(
+            [(times[k], weights[k], *rest) for k, *rest in grid_parts(n, drawn=new, ends=self.aa > 1)]
+        )
 
     def _trapezoid(self, m: int, keep: bool) -> None:
         """The trapezoid grid of ``m`` strata of the shutter's mass: times ``W^-1(k / m)``, k = 0..m,
