@@ -84,7 +84,7 @@ def ends_factor(n: int) -> float:
 
 
 def grid_parts(
-    n: int, sampling: str = "stratified", drawn=None, ends: bool = False
+    n: int, sampling: str = "stratified", drawn: np.ndarray | None = None, ends: bool = False
 ) -> list[tuple[np.ndarray, int, int | None, int]]:
     """How samples ``drawn`` (indices into a grid of N; default all) are drawn in `HalfSums`:
     ``(indices, half, quarter, end)`` parts, the even and the odd samples, or the four quarters
