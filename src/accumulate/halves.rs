@@ -87,7 +87,6 @@ pub fn halves(
         inv_sub_masses: subs.then(|| sub_masses.map(|m| m.map(|x| 1.0 / x))),
         pre,
         quarters: subs && in_quarter_order(parts) && parts.iter().all(|p| p.end == 0.0),
-        ends: parts.iter().any(|p| p.end != 0.0),
         width,
         cols: (x0, x1),
     };
@@ -158,8 +157,6 @@ struct Pass<'p, 'a> {
     /// Four parts, part `j` of half `j % 2` and sub-half `j / 2` (`in_quarter_order`), none
     /// with an end coefficient.
     quarters: bool,
-    /// Whether a part has an end coefficient.
-    ends: bool,
     /// The image's width and the window's columns `x0..x1`.
     width: usize,
     cols: (usize, usize),
@@ -234,27 +231,23 @@ impl Pass<'_, '_> {
                     *s += f64::from(*v) * p.mass;
                 }
             }
-            if self.ends && p.end != 0.0 {
+            if p.end != 0.0 {
                 for (e, v) in end.iter_mut().zip(v) {
                     *e += f64::from(*v) * p.end;
                 }
             }
         }
         let (frame, d) = self.frame_and_difference(sums[0], sums[1], end);
+        let twice = end.map(|e| 2.0 * e);
         let e = self.inv_sub_masses.map(|im| {
-            [0, 1].map(|half| {
-                let d = std::array::from_fn(|k| {
-                    subs[half][0][k] * im[half][0] - subs[half][1][k] * im[half][1] + 2.0 * end[k]
-                });
-                self.over_background(d)
-            })
+            [0, 1].map(|half| self.composited(subs[half][0], subs[half][1], im[half], twice))
         });
         (frame, d, e)
     }
 
     /// The frame value of a pixel whose halves' weighted sums are `a0` and `b0`, and their
     /// means' difference plus `end` composited over the background: each mean divided once,
-    /// serving both.
+    /// serving both (an end of zeros leaves the difference's squares as they were).
     #[inline]
     fn frame_and_difference(
         &self,
@@ -267,12 +260,10 @@ impl Pass<'_, '_> {
         let b = b0.map(|s| s / m[1]);
         let total = m[0] + m[1];
         let frame = std::array::from_fn(|k| ((a[k] * m[0] + b[k] * m[1]) / total) as f32);
-        let d = if self.ends {
-            std::array::from_fn(|k| a[k] - b[k] + end[k])
-        } else {
-            std::array::from_fn(|k| a[k] - b[k])
-        };
-        (frame, self.over_background(d))
+        (
+            frame,
+            self.over_background(std::array::from_fn(|k| a[k] - b[k] + end[k])),
+        )
     }
 
     /// [`Self::pixel`] of four parts, part `j` of half `j % 2` and sub-half `j / 2`: each
@@ -290,17 +281,18 @@ impl Pass<'_, '_> {
             .inv_sub_masses
             .expect("quarters compare their sub-halves");
         let e = [
-            self.composited(q[0], q[2], im[0]),
-            self.composited(q[1], q[3], im[1]),
+            self.composited(q[0], q[2], im[0], [0.0; 4]),
+            self.composited(q[1], q[3], im[1], [0.0; 4]),
         ];
         (frame, d, Some(e))
     }
 
-    /// `a (1 / ma) - b (1 / mb)` composited over the background, given the reciprocals (the
-    /// sub-halves' difference: only its squares are kept, so a product serves for a division).
+    /// `a (1 / ma) - b (1 / mb) + end` composited over the background, given the reciprocals
+    /// (the sub-halves' difference: only its squares are kept, so a product serves for a
+    /// division).
     #[inline]
-    fn composited(&self, a: [f64; 4], b: [f64; 4], [ia, ib]: [f64; 2]) -> [f64; 4] {
-        self.over_background(std::array::from_fn(|k| a[k] * ia - b[k] * ib))
+    fn composited(&self, a: [f64; 4], b: [f64; 4], [ia, ib]: [f64; 2], end: [f64; 4]) -> [f64; 4] {
+        self.over_background(std::array::from_fn(|k| a[k] * ia - b[k] * ib + end[k]))
     }
 
     /// A difference `d` (premultiplied) composited over the background: `d + (-d_alpha) pre`.
@@ -423,17 +415,20 @@ mod tests {
         assert!((out.square_sum - squares).abs() < 1e-12 && squares > 0.1);
     }
 
+    /// Four pixel values (premultiplied, opaque) of 1 x 1 images.
+    const FOUR: [[f32; 4]; 4] = [
+        [0.1, 0.2, 0.3, 1.0],
+        [0.4, 0.1, 0.0, 1.0],
+        [0.3, 0.3, 0.1, 1.0],
+        [0.0, 0.5, 0.2, 1.0],
+    ];
+
     #[test]
     fn sub_halves_compare_the_quarters_within_each_half() {
         // a 1 x 1 image, four parts of mass 0.25 with values q0..q3 (premultiplied, opaque);
         // half 0 is q0, q2 and half 1 q1, q3: the sub-halves' squares are
         // (q0 - q2)^2 + (q1 - q3)^2 over the channels, and none without every part's sub
-        let q = [
-            [0.1f32, 0.2, 0.3, 1.0],
-            [0.4, 0.1, 0.0, 1.0],
-            [0.3, 0.3, 0.1, 1.0],
-            [0.0, 0.5, 0.2, 1.0],
-        ];
+        let q = FOUR;
         let parts: Vec<HalfPart<'_>> = q
             .iter()
             .enumerate()
@@ -520,12 +515,7 @@ mod tests {
         // each its own quarter: the first with end -0.25, the last +0.25; e = (v3 - v0) / 4 is
         // added to the halves' difference and 2 e to each sub-halves' one; the frame is the
         // samples' mean, the bits of the parts without ends (which take the quarters' path)
-        let v = [
-            [0.1f32, 0.2, 0.3, 1.0],
-            [0.4, 0.1, 0.0, 1.0],
-            [0.3, 0.3, 0.1, 1.0],
-            [0.0, 0.5, 0.2, 1.0],
-        ];
+        let v = FOUR;
         let part = |j: usize, end: f64| HalfPart {
             half: j % 2,
             mass: 0.25,

@@ -157,12 +157,14 @@ fn still_inputs<'a>(
     Ok((camera, background.layer("background")?))
 }
 
-/// A still-camera accumulation as Python values ([`StillFrame`]), None when nothing was drawn.
-fn still_frame(py: Python<'_>, out: Option<Accumulated>) -> PyResult<Option<StillFrame<'_>>> {
+/// An accumulation taken apart: its window (x0, y0, x1, y1) as a Python tuple, its frame,
+/// the window's width and height and the draw calls; None when nothing was drawn.
+type Taken<'py> = (Bound<'py, PyAny>, Frame, [usize; 2], usize);
+
+/// [`Taken`] of `out`.
+fn taken(py: Python<'_>, out: Option<Accumulated>) -> PyResult<Option<Taken<'_>>> {
     let Some(Accumulated {
-        frame: Frame {
-            rgba, depth, ids, ..
-        },
+        frame,
         window: w,
         draw_calls,
     }) = out
@@ -170,7 +172,15 @@ fn still_frame(py: Python<'_>, out: Option<Accumulated>) -> PyResult<Option<Stil
         return Ok(None);
     };
     let win = (w[0], w[1], w[2], w[3]).into_pyobject(py)?.into_any();
-    let (r, d, i) = arrays(py, rgba, depth, ids, w[2] - w[0], w[3] - w[1])?;
+    Ok(Some((win, frame, [w[2] - w[0], w[3] - w[1]], draw_calls)))
+}
+
+/// A still-camera accumulation as Python values ([`StillFrame`]), None when nothing was drawn.
+fn still_frame(py: Python<'_>, out: Option<Accumulated>) -> PyResult<Option<StillFrame<'_>>> {
+    let Some((win, f, [w, h], draw_calls)) = taken(py, out)? else {
+        return Ok(None);
+    };
+    let (r, d, i) = arrays(py, f.rgba, f.depth, f.ids, w, h)?;
     Ok(Some((win, r, d, i, draw_calls)))
 }
 
@@ -193,17 +203,16 @@ fn part_frame(
     if kept {
         return Ok(still_frame(py, out)?.map(|(w, r, d, i, n)| (w, r, Some(d), Some(i), n)));
     }
-    let Some(Accumulated {
-        frame: Frame { rgba, .. },
-        window: w,
-        draw_calls,
-    }) = out
-    else {
+    let Some((win, f, [w, h], draw_calls)) = taken(py, out)? else {
         return Ok(None);
     };
-    let win = (w[0], w[1], w[2], w[3]).into_pyobject(py)?.into_any();
-    let r = shaped(py, rgba, [w[3] - w[1], w[2] - w[0], 4])?;
-    Ok(Some((win, r, None, None, draw_calls)))
+    Ok(Some((
+        win,
+        shaped(py, f.rgba, [h, w, 4])?,
+        None,
+        None,
+        draw_calls,
+    )))
 }
 
 /// Objects drawn at any shutter time (see `src/accumulate/painter.rs`).

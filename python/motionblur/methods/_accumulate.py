@@ -399,6 +399,13 @@ class HalfSums:
     def add(self, times, weights, half: int) -> None:
         self.add_all([(times, weights, half)])
 
+    def add_grid(self, times: np.ndarray, weights: np.ndarray, drawn: np.ndarray | None = None) -> None:
+        """`add_all` of the samples ``drawn`` (indices; default all) of the grid of ``times`` and
+        ``weights`` (N,), in `grid_parts`' parts for this sampling, with the end term when ``aa``
+        is above 1."""
+        parts = grid_parts(len(times), self.sampling, drawn, ends=self.aa > 1)
+        self.add_all([(times[k], weights[k], *rest) for k, *rest in parts])
+
     def add_all(self, parts) -> None:
         """`add` of each ``(times, weights, half)`` or ``(times, weights, half, quarter, end)`` of
         ``parts``, drawn in one core call."""
@@ -456,18 +463,19 @@ class HalfSums:
         masses, the frame both halves by theirs."""
         c = np.ascontiguousarray
         quartered = self._quartered()
-        total = sum(float(p.weights.sum()) for p in self.parts)
+        masses = [float(p.weights.sum()) for p in self.parts]
+        total = sum(masses)
         parts = [
             (
                 p.half,
-                float(p.weights.sum()),
+                m,
                 c(p.piece.base[0]),
                 p.piece.window,
                 None if p.piece.window is None else c(p.piece.drawn[0]),
                 p.quarter // 2 if quartered else None,
-                p.end * float(p.weights.sum()) / total,
+                p.end * m / total,
             )
-            for p in self.parts
+            for p, m in zip(self.parts, masses)
         ]
         bg = np.asarray(self.scene.background, np.float64)
         pre = (float(bg[0] * bg[3]), float(bg[1] * bg[3]), float(bg[2] * bg[3]), float(bg[3]))

@@ -28,7 +28,7 @@ from ..budget import need
 from ..raster import Frame
 from ..render import register
 from ..scene import Scene
-from ._accumulate import MAX_TIME_SAMPLES, HalfSums, accumulate, grid_parts, sample_times, uniform_times
+from ._accumulate import MAX_TIME_SAMPLES, HalfSums, accumulate, sample_times, uniform_times
 
 __all__ = [
     "accumulation",
@@ -81,9 +81,7 @@ def accumulation(
         # estimates the error with its pilot.
         return accumulate(scene, times, weights, ref, dim, aa)
     sums = HalfSums(scene, aa, sampling)
-    sums.add_all(
-        [(times[k], weights[k], *rest) for k, *rest in grid_parts(len(times), sampling, ends=aa > 1)]
-    )
+    sums.add_grid(times, weights)
     return sums.frame()
 
 

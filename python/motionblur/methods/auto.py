@@ -49,7 +49,7 @@ from .._validate import as_float, as_int
 from ..raster import Frame
 from ..render import METHODS, register
 from ..scene import Scene
-from ._accumulate import HalfSums, grid_parts, sample_times, shutter_quantiles
+from ._accumulate import HalfSums, sample_times, shutter_quantiles
 from ._estimate import EXACT_OPTIONS
 from ._segments import segment_times
 
@@ -203,17 +203,15 @@ class _Trials:
 
     def _stratified(self, n: int, keep: bool) -> None:
         """Accumulation's own ``n`` samples, the drawn ones (an ``n / last``-th of them) kept;
-        parts by `grid_parts`."""
+        the new ones added by `HalfSums.add_grid`."""
         times, weights = sample_times(self.scene, n)
-        new = None  # a fresh grid: all of it, in halves or in quarters (`grid_parts`)
+        new = None  # a fresh grid: all of it, in halves or in quarters (`add_grid`)
         if keep:  # the kept samples' new weights and halves (never the new grid's ends)
             step = n // self.grid[0]
             self.sums.reweight(lambda t: (np.full(len(t), 1.0 / n), _position(times, t[0]) % 2))
             new = np.arange(n)
             new = new[(new % step) != step // 2]  # the new times only
-        self.sums.add_all(
-            [(times[k], weights[k], *rest) for k, *rest in grid_parts(n, drawn=new, ends=self.aa > 1)]
-        )
+        self.sums.add_grid(times, weights, new)
 
     def _trapezoid(self, m: int, keep: bool) -> None:
         """The trapezoid grid of ``m`` strata of the shutter's mass: times ``W^-1(k / m)``, k = 0..m,
