@@ -281,8 +281,16 @@ struct PartSum<'s> {
     kept: bool,
     keep_depth: Vec<f32>,
     keep_ids: Vec<i32>,
-    own: Option<(Vec<f32>, Vec<f32>, Vec<i32>)>,
+    own: Option<Own>,
     limit: Option<Limit<'s>>,
+}
+
+/// A part's own crops of a transparent static layer (rgba, depth, ids) and the buffers each
+/// sample is composited with them in, refilled from the crops for every sample (one
+/// allocation a part, not three a sample).
+struct Own {
+    crop: (Vec<f32>, Vec<f32>, Vec<i32>),
+    scratch: (Vec<f32>, Vec<f32>, Vec<i32>),
 }
 
 impl Shared<'_> {
@@ -353,11 +361,15 @@ impl Shared<'_> {
             (Vec::new(), Vec::new())
         };
         let own = (!exact_sum).then(|| {
-            (
+            let crop = (
                 crop(bg.rgba, iw, 4, win),
                 crop(bg.depth, iw, 1, win),
                 crop(bg.ids, iw, 1, win),
-            )
+            );
+            Own {
+                scratch: crop.clone(),
+                crop,
+            }
         });
         let inside = self.inside(win);
         let limit = has_static.then_some(Limit {
@@ -388,8 +400,8 @@ impl Shared<'_> {
     ) -> Result<bool> {
         let w = samples.weights[i] as f32;
         let Some(r) = rect else {
-            if let Some((rgba, _, _)) = &sum.own {
-                add_weighted(&mut sum.acc, rgba, w);
+            if let Some(own) = &sum.own {
+                add_weighted(&mut sum.acc, &own.crop.0, w);
             }
             return Ok(false);
         };
@@ -416,21 +428,15 @@ impl Shared<'_> {
                 sub,
             );
         }
-        match &sum.own {
+        match &mut sum.own {
             None => accumulate_limited(&mut sum.acc, &layer.rgba, &layer.depth, sum.limit, w, sub)?,
-            Some((rgba, depth, ids)) => {
-                let mut full = rgba.clone();
-                let (mut depth, mut ids) = (depth.clone(), ids.clone());
-                composite(
-                    &layer.rgba,
-                    &layer.depth,
-                    &layer.ids,
-                    &mut full,
-                    &mut depth,
-                    &mut ids,
-                    sub,
-                )?;
-                add_weighted(&mut sum.acc, &full, w);
+            Some(Own { crop, scratch }) => {
+                let (full, depth, ids) = scratch;
+                full.copy_from_slice(&crop.0);
+                depth.copy_from_slice(&crop.1);
+                ids.copy_from_slice(&crop.2);
+                composite(&layer.rgba, &layer.depth, &layer.ids, full, depth, ids, sub)?;
+                add_weighted(&mut sum.acc, full, w);
             }
         }
         Ok(true)
