@@ -23,3 +23,16 @@ def test_metrics_against_numpy(rng):
         metrics.rmse(a, b[:8])
     with pytest.raises(ValueError, match="NaN"):
         metrics.rmse(a, np.full_like(a, np.nan))
+
+
+@pytest.mark.parametrize("scale", [1e200, 1e307])
+def test_rmse_of_huge_finite_images_is_finite_and_exact(scale):
+    """Finite inputs whose squares (1e200) or even difference (1e307 - -1e307) overflow float64
+    give the RMSE, not inf (the fuzz's metrics property met it as an overflow warning): the
+    closed form, and the same images scaled to 1 carried back (relative 1e-12: a few roundings)."""
+    a = np.zeros((4, 5, 4))
+    a[0, 0, 0], a[1, 2, 3] = scale, -scale
+    e = metrics.rmse(a, -a)
+    assert np.isfinite(e)
+    assert e == pytest.approx(2 * scale * np.sqrt(2 / a.size), rel=1e-12)
+    assert e == pytest.approx(scale * metrics.rmse(a / scale, -a / scale), rel=1e-12)

@@ -51,7 +51,14 @@ def _pair(image, reference) -> tuple[np.ndarray, np.ndarray]:
 def rmse(image, reference) -> float:
     """Root mean square difference over every pixel and channel (linear units)."""
     a, b = _pair(image, reference)
-    return float(np.sqrt(np.mean((a - b) ** 2)))
+    with np.errstate(over="ignore"):
+        e = float(np.sqrt(np.mean((a - b) ** 2)))
+    if np.isfinite(e):
+        return e
+    # finite inputs whose squares (or difference) overflow float64: the same mean, rescaled
+    d = 0.5 * a - 0.5 * b
+    m = float(np.max(np.abs(d)))
+    return 2.0 * m * float(np.sqrt(np.mean((d / m) ** 2)))
 
 
 def psnr(image, reference, peak: float = 1.0) -> float:
