@@ -46,8 +46,8 @@ pub use accumulate::{
     BuffersMut, HalfPart, Halves, PaintObject, Painter, Rect, Samples, StillCamera, SERIAL_PIXELS,
 };
 pub use analytic::{
-    render as render_analytic, segment_times, Input as AnalyticInput, MovingDraw, Quadrature,
-    Rolling, SegmentCamera, SegmentObject, Stats as AnalyticStats,
+    render as render_analytic, segment_times, transform_points, Input as AnalyticInput, MovingDraw,
+    Quadrature, Rolling, SegmentCamera, SegmentObject, Stats as AnalyticStats,
     DEFAULT_TILE_BUDGET as ANALYTIC_TILE_BUDGET, DEFORMING_POINTS as ANALYTIC_DEFORMING_POINTS,
     MAX_SEGMENTS as ANALYTIC_MAX_SEGMENTS, MIN_PIECE as ANALYTIC_MIN_PIECE,
     NORMAL_TOLERANCE as ANALYTIC_NORMAL_TOLERANCE,

@@ -190,6 +190,7 @@ __all__ = [
     "_rasterize",
     "_on_sample_grid",
     "_analytic",
+    "_transform_points",
     "_glow",
     "_box_blur",
     "_coverage_composite",
@@ -659,6 +660,11 @@ def _analytic(
     a stats dict, and with ``exposure`` N (object ids -1..N-1) the exposure channel's fraction,
     first and last (H,W,N+1) f32 (plane N for id -1), else None. ``tile_budget`` bytes per tile
     pass; ``MemoryError`` where one sample alone needs more. The GIL is released."""
+
+def _transform_points(m: np.ndarray, points: np.ndarray, out: np.ndarray) -> None:
+    """Points (V,3) (w = 1) or (V,4) f64 under the matrix m (4,4) f64 (row-major), written into
+    out (V,4) f64 (C-contiguous, writable), each component summed as (x m0 + z m2) + (y m1 + w m3)
+    (the analytic method's straddle). The GIL is released."""
 
 def _on_sample_grid(
     points: np.ndarray, view: np.ndarray, projection: np.ndarray, width: int, height: int, samples: int

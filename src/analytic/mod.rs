@@ -46,6 +46,7 @@ mod segments;
 mod shade;
 mod strips;
 mod tiles;
+mod transform;
 mod visibility;
 
 #[cfg(test)]
@@ -58,3 +59,4 @@ pub use segments::{
     segment_times, SegmentCamera, SegmentObject, DEFORMING_POINTS, MAX_SEGMENTS, MIN_PIECE,
     NORMAL_TOLERANCE,
 };
+pub use transform::transform_points;

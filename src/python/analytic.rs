@@ -1,14 +1,18 @@
 //! Bindings for the analytic method: numpy in, the frame out, GIL released.
 use glam::DMat4;
-use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
+use numpy::{
+    PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3, PyReadwriteArray2, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use super::args::{lights, LayerArg, LightArg};
-use super::convert::{c_slice, detached_in_pool, face_indices_u32, rows, shaped, ToDict};
+use super::convert::{
+    c_slice, c_slice_mut, detached_in_pool, face_indices_u32, matrix, rows, shaped, ToDict,
+};
 use crate::{
-    render_analytic, AnalyticInput, AnalyticStats, Error, MovingDraw, Quadrature, Rolling, Shading,
-    Shutter,
+    render_analytic, transform_points, AnalyticInput, AnalyticStats, Error, MovingDraw, Quadrature,
+    Rolling, Shading, Shutter,
 };
 
 /// One moving draw, read off the attributes of a `motionblur.MovingDraw`: `positions` f64
@@ -275,7 +279,40 @@ impl ToDict for AnalyticStats {
     }
 }
 
+/// `points` (V,3) or (V,4) f64 (3 columns: w = 1) under the matrix `m` (4,4) f64, written into
+/// `out` (V,4) f64 in the straddle's order of sums ([`transform_points`]). The GIL is released.
+#[pyfunction]
+fn _transform_points(
+    py: Python<'_>,
+    m: PyReadonlyArray2<'_, f64>,
+    points: PyReadonlyArray2<'_, f64>,
+    mut out: PyReadwriteArray2<'_, f64>,
+) -> PyResult<()> {
+    let m = matrix(&m, "m")?;
+    let [v, dim] = [points.shape()[0], points.shape()[1]];
+    if dim != 3 && dim != 4 {
+        let got = points.shape().to_vec();
+        return Err(Error::shape(
+            "points",
+            format!("expected shape (V,3) or (V,4), got {got:?}"),
+        )
+        .into());
+    }
+    if out.shape() != [v, 4] {
+        let got = out.shape().to_vec();
+        return Err(Error::shape("out", format!("expected shape ({v}, 4), got {got:?}")).into());
+    }
+    let p = c_slice(&points, "points")?;
+    let o = c_slice_mut(&mut out, "out")?;
+    detached_in_pool(py, || {
+        transform_points(&m, p, dim, o);
+        Ok(())
+    })?;
+    Ok(())
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(_analytic, m)?)?;
+    m.add_function(wrap_pyfunction!(_transform_points, m)?)?;
     Ok(())
 }

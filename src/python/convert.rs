@@ -1,6 +1,7 @@
 //! The binding toolkit: numpy arrays in (checked, named after the Python argument), numpy
 //! arrays and dicts out, the core's errors as Python exceptions, and the GIL released around
 //! the kernels.
+use glam::DMat4;
 use std::borrow::Cow;
 
 use numpy::ndarray::{Array2, Dimension, IntoDimension};
@@ -99,6 +100,16 @@ pub(crate) fn rows<'a, T: Element, const K: usize>(
     // SAFETY: `[T; K]` has the size of K values of `T` and the alignment of one; `flat` holds
     // exactly `shape[0] * K` values, so the rows cover it and nothing more.
     Ok(unsafe { std::slice::from_raw_parts(flat.as_ptr().cast::<[T; K]>(), shape[0]) })
+}
+
+/// A (4,4) f64 numpy matrix (row-major) as glam's, or an error naming the argument.
+pub(crate) fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> Result<DMat4, Error> {
+    let m = rows::<f64, 4>(a, name)?;
+    if m.len() != 4 {
+        return Err(Error::shape(name, "expected shape (4,4)"));
+    }
+    // numpy rows -> glam columns.
+    Ok(DMat4::from_cols_array_2d(&[m[0], m[1], m[2], m[3]]).transpose())
 }
 
 /// The rows of an (N,K) array of any memory layout: borrowed when C-contiguous, else copied

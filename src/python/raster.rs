@@ -1,11 +1,12 @@
 //! Bindings for the raster stage: numpy in, owned Rust data, GIL released, numpy out.
-use glam::DMat4;
 use numpy::{PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
 use super::args::{lights, LayerArg, LightArg};
-use super::convert::{detached_in_pool, face_indices_u32, rows, rows_array, shaped, ToDict};
+use super::convert::{
+    detached_in_pool, face_indices_u32, matrix, rows, rows_array, shaped, ToDict,
+};
 use crate::{
     rasterize_over, Background, Blend, Camera, Draw, Error, RasterOptions, Shading, FRAGMENT_CAP,
     MAX_INTERNAL_SIDE, MAX_PIXELS, MAX_SIDE, SAMPLES,
@@ -45,15 +46,6 @@ struct RasterArgs<'py> {
     lights: Vec<LightArg>,
     ambient: [f64; 3],
     origin: [usize; 2],
-}
-
-fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> Result<DMat4, Error> {
-    let m = rows::<f64, 4>(a, name)?;
-    if m.len() != 4 {
-        return Err(Error::shape(name, "expected shape (4,4)"));
-    }
-    // numpy rows -> glam columns.
-    Ok(DMat4::from_cols_array_2d(&[m[0], m[1], m[2], m[3]]).transpose())
 }
 
 /// The core's draw, owned (the GIL is released while it renders). Face indices are converted

@@ -175,3 +175,36 @@ def test_a_deforming_lambert_mesh_is_cut_until_its_normals_bend_linearly():
     keyframes = mb.render(lit, "analytic", aa=2, segments=2)
     got = mb.render(lit, "analytic", aa=2)
     assert _rmse(got, ref) < 0.5 * _rmse(keyframes, ref)
+
+
+def _numpy_transform(m, p):
+    """The straddle's transform as numpy array steps (its former body): the oracle of its bits."""
+    out = p[:, 0:1] * m[None, :, 0]
+    out += p[:, 2:3] * m[None, :, 2]
+    odd = p[:, 1:2] * m[None, :, 1]
+    odd += p[:, 3:4] * m[None, :, 3] if p.shape[-1] == 4 else m[None, :, 3]
+    out += odd
+    return out
+
+
+@pytest.mark.parametrize("dim", [3, 4])
+def test_the_straddle_transform_has_the_numpy_steps_bits(rng, dim):
+    """`_core._transform_points` (threads, the GIL released) against the numpy steps the
+    straddle used before, bit for bit, on points over many magnitudes (the boundaries' bits,
+    and every analytic frame of a turning object, depend on it); bad shapes name the argument."""
+    from motionblur import _core
+    from motionblur.methods.analytic import _transform
+
+    m = rng.normal(size=(4, 4)) * np.array([1.0, 1e-3, 10.0, 1e2])
+    p = rng.normal(size=(10_001, dim)) * 10.0 ** rng.integers(-4, 5, size=(10_001, 1))
+    out = np.full((len(p), 4), np.nan)
+    p_before = p.copy()
+    _transform(m, p, out)
+    assert np.array_equal(out.view(np.uint64), _numpy_transform(m, p).view(np.uint64))
+    assert np.array_equal(p, p_before)
+    with pytest.raises(ValueError, match="points"):
+        _core._transform_points(m, np.zeros((5, 2)), np.zeros((5, 4)))
+    with pytest.raises(ValueError, match="out"):
+        _core._transform_points(m, p, np.zeros((len(p) + 1, 4)))
+    with pytest.raises(ValueError, match="m"):
+        _core._transform_points(np.eye(3), p, out)

@@ -25,30 +25,14 @@ from ._segments import MAX_SEGMENTS, MIN_PIECE, NORMAL_TOLERANCE, segment_times
 __all__ = ["analytic", "refined", "segment_times", "MAX_SEGMENTS", "MIN_PIECE", "NORMAL_TOLERANCE"]
 
 
-class _Transform:
-    """Points transformed by 4x4 matrices: the sums in numpy's einsum order for four terms (even
-    and odd terms first), into an output given, with two temporaries of one boundary's size that
-    stay in cache."""
-
-    def __init__(self, v: int):
-        self.tmp = np.empty((v, 4))
-        self.odd = np.empty((v, 4))
-
-    def __call__(self, m: np.ndarray, p: np.ndarray, out: np.ndarray) -> np.ndarray:
-        """(V,4) points ``p`` (or (V,3): w = 1, which multiplies exactly, so they give the bits of
-        their homogeneous form) transformed by the 4x4 matrix ``m`` into ``out`` (V,4)."""
-        tmp, odd = self.tmp, self.odd
-        np.multiply(p[:, 0:1], m[None, :, 0], out=out)
-        np.multiply(p[:, 2:3], m[None, :, 2], out=tmp)
-        out += tmp
-        np.multiply(p[:, 1:2], m[None, :, 1], out=odd)
-        if p.shape[-1] == 4:
-            np.multiply(p[:, 3:4], m[None, :, 3], out=tmp)
-            odd += tmp
-        else:
-            odd += m[None, :, 3]
-        out += odd
-        return out
+def _transform(m: np.ndarray, p: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """(V,4) points ``p`` (or (V,3): w = 1) transformed by the 4x4 matrix ``m`` into ``out``
+    (V,4), each component summed as ``(x m0 + z m2) + (y m1 + w m3)`` (numpy's einsum order
+    for four terms, which this straddle has always used: its bits), in the core
+    (`motionblur._core._transform_points`, threads, the GIL released)."""
+    c = np.ascontiguousarray
+    _core._transform_points(c(m, np.float64), c(p, np.float64), out)
+    return out
 
 
 def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
@@ -71,16 +55,15 @@ def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
     mids = 0.5 * (times[1:] + times[:-1])
     vp = np.stack([scene.camera_at(t).view_projection for t in times])
     vpm = np.stack([scene.camera_at(t).view_projection for t in mids])
-    transform = _Transform(v)
     bow = np.empty((k, v, 4))  # chord middle to the true middle
     clip = (np.empty((v, 4)), np.empty((v, 4)))  # the clip positions at boundaries i and i + 1
     chord = np.empty((v, 4))
     big_bow = big_clip = 0.0
-    transform(vp[0], pos[0], clip[0])
+    _transform(vp[0], pos[0], clip[0])
     for i in range(k):
         c0, c1 = clip[i % 2], clip[(i + 1) % 2]
-        transform(vp[i + 1], pos[i + 1], c1)
-        transform(vpm[i], obj.world_vertices(mids[i]), bow[i])
+        _transform(vp[i + 1], pos[i + 1], c1)
+        _transform(vpm[i], obj.world_vertices(mids[i]), bow[i])
         np.add(c1, c0, out=chord)
         chord *= 0.5
         bow[i] -= chord
@@ -103,8 +86,8 @@ def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
         if 0 < i < k:
             shift *= 0.5
         shift *= 0.5
-        shift += transform(vp[i], pos[i], half)
-        transform(inv[i], shift, moved)
+        shift += _transform(vp[i], pos[i], half)
+        _transform(inv[i], shift, moved)
         np.divide(moved[:, :3], moved[:, 3:4], out=pos[i])
     return pos
 
