@@ -7,8 +7,9 @@ analytic method's: against the exact limit, `limit`). A method that can measure 
 so (accumulation compares the halves of its samples, `accumulation`); every other method and
 option set is estimated by a pilot (`pilot_estimate`), with no fitted factor:
 
-- **the pilot**: the method on the scene seen by a smaller camera (about `PILOT_PIXELS`
-  pixels, the field of view unchanged) at the full frame's time structure: the motion volume
+- **the pilot**: the method on the scene seen by a smaller camera (`pilot_pixels`: a sixth of
+  the frame's pixels, at least `PILOT_PIXELS` (64x48) and at most `PILOT_MAX_PIXELS` (128x96),
+  the field of view unchanged) at the full frame's time structure: the motion volume
   is cut at the full frame's pieces, the analytic method's chord tolerance (pixels) is scaled
   with the image, so that both cut the shutter where the full frame does;
 - **its reference**: accumulation at the pilot's size with the first of `REFERENCE_SAMPLES`
@@ -73,6 +74,9 @@ __all__ = [
     "EXACT_OPTIONS",
     "pilot_estimate",
     "PILOT_PIXELS",
+    "PILOT_SHARE",
+    "PILOT_MAX_PIXELS",
+    "pilot_pixels",
     "PILOT_FACTOR",
     "REFERENCE_SAMPLES",
     "REFERENCE_SHARE",
@@ -90,9 +94,16 @@ __all__ = [
 #: The analytic method's options for the exact time integral (chord tolerance in pixels, Gauss
 #: points per piece): its distance from the true integral is stated in the docs (validation.md).
 EXACT_OPTIONS = {"tolerance": 0.002, "gauss": 4}
-#: Pixels of the pilot render (the image is scaled down to about this many, never up); a frame
-#: larger than the pilot gets a second, coarse pilot of a quarter of these pixels.
+#: Fewest pixels of the pilot render (the image is scaled down to about `pilot_pixels`, never
+#: up); a frame larger than the pilot gets a second, coarse pilot of a quarter of its pixels.
 PILOT_PIXELS = 64 * 48
+#: The pilot's share of the frame's pixels, between `PILOT_PIXELS` and `PILOT_MAX_PIXELS`
+#: (`pilot_pixels`): a pilot of 4% of a 320x240 frame's pixels read its error at 0.29x-3.8x on
+#: tuning seeds 0-59 (181 frames, one under 0.5x), one of 16% at 0.76x-2.15x; an error held by
+#: a few edges depends on where they fall on a small pilot's pixels.
+PILOT_SHARE = 1.0 / 6.0
+#: Most pixels of the pilot render (128x96 at 4:3): its cost, with its reference, grows with them.
+PILOT_MAX_PIXELS = 128 * 96
 #: The pilot's reference for every method but ``analytic``: accumulation with the first of these
 #: sample counts whose own (halves) estimate is at most `REFERENCE_SHARE` of the method's pilot
 #: RMSE (a count the last one's error says is too few, at 1/N, is skipped), else
@@ -172,6 +183,12 @@ def limit(scene: Scene, aa: int = 1) -> Frame:
     costs about 16x ``exact`` (used to calibrate, not by ``render``)."""
     frame = refined(scene, aa, **LIMIT_OPTIONS)
     return over_background(frame, scene.background)
+
+
+def pilot_pixels(width: int, height: int) -> int:
+    """The pilot's pixels for a frame of ``width`` x ``height``: `PILOT_SHARE` of the frame's,
+    at least `PILOT_PIXELS` and at most `PILOT_MAX_PIXELS` (never more than the frame's)."""
+    return int(min(width * height, PILOT_MAX_PIXELS, max(PILOT_PIXELS, round(width * height * PILOT_SHARE))))
 
 
 def pilot_scene(
@@ -363,10 +380,11 @@ def pilot_estimate(
         }
     if method == "analytic":
         return _analytic_estimate(scene, options, frame, t0, own_pixels)
-    p = pilot_errors(scene, method, options)
+    pixels = pilot_pixels(scene.camera.width, scene.camera.height)
+    p = pilot_errors(scene, method, options, pixels)
     est, how = p["rmse"], f"pilot: the method against the exact integral at {p['size']}"
     if p["scale"] < 1.0 and est > 0.0:
-        coarse = pilot_errors(scene, method, options, PILOT_PIXELS // 4)
+        coarse = pilot_errors(scene, method, options, pixels // 4)
         est = _extrapolated(p, coarse)
         how += f" and {coarse['size']}, extrapolated to the frame's size"
     return _estimate_stats(PILOT_FACTOR.get(method, _DEFAULT_FACTOR) * est, how, p, t0)
