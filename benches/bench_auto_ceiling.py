@@ -39,6 +39,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 import time
 from pathlib import Path
 
@@ -51,8 +52,10 @@ from motionblur.methods._segments import segment_times
 from motionblur.raster import over_background
 from motionblur.threads import set_num_threads
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_error_control import ACC_GRID, other_renders, rmse  # noqa: E402  (the bench beside this one)
+
 OUT = Path("out/bench/auto_ceiling")
-ACC_GRID = sorted({int(v) for k in range(13) for v in (2**k, 1.5 * 2**k) if v <= 4096})
 TIMED = (1, 2, 4, 8, 16, 32, 64, 128, 256)
 FORESIGHT = 0.7  # "perfect first": the first render's measured error at most this x the tolerance
 
@@ -64,10 +67,6 @@ def cpu_ms(fn, repeat: int = 3):
         out = fn()
         best = min(best, (time.process_time() - t0) * 1e3)
     return best, out
-
-
-def rmse(a, b) -> float:
-    return float(np.sqrt(np.mean(np.square(np.asarray(a, np.float64) - b))))
 
 
 class Recorded:
@@ -85,6 +84,7 @@ class Recorded:
         with_estimate = cpu_ms(lambda: A._Trials(scene, aa).accumulate(8))[0]
         self.overhead = max(0.0, with_estimate - self.ms(8))
         self._analytic = None
+        self._others: list[tuple[str, float, float]] | None = None
 
     def ms(self, n: int) -> float:
         """Accumulation of ``n`` samples, interpolated (extrapolated past the last timed)."""
@@ -118,20 +118,16 @@ class Recorded:
         return self._analytic
 
     def others(self) -> list[tuple[str, float, float]]:
-        if not hasattr(self, "_others"):
-            self._others = []
-            for m in mb.METHODS:
-                if m in ("accumulation", "auto", "analytic") or not mb.METHODS[m].applies(self.scene):
-                    continue
-                try:
-                    ms, f = cpu_ms(lambda m=m: mb.render(self.scene, m, error_estimate=False, aa=self.aa))
-                except ValueError:
-                    continue
-                self._others.append((m, ms, rmse(f.rgba, self.ref)))
+        """Every other method's default (the analytic frame apart: `analytic`)."""
+        if self._others is None:
+            skip = ("accumulation", "auto", "analytic")
+            self._others = other_renders(self.scene, self.ref, self.aa, cpu_ms, skip)
         return self._others
 
     def cheapest(self, tol: float) -> tuple[str, float]:
-        found = [(f"accumulation-{n}", self.ms(n)) for n in ACC_GRID if self.grid(n, False)[1] <= tol][:1]
+        # the fewest samples that meet it: the grids past it are never rendered
+        n = next((n for n in ACC_GRID if self.grid(n, False)[1] <= tol), None)
+        found = [] if n is None else [(f"accumulation-{n}", self.ms(n))]
         an = self.analytic()
         if an["err"] <= tol:
             found.append(("analytic", an["ms"]))

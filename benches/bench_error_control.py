@@ -108,6 +108,24 @@ def calibration_rows(scene, ref, seed, size, methods=None, aa: int = 1) -> list[
     return rows
 
 
+def other_renders(
+    scene, ref, aa: int, timed, skip=("accumulation", "auto")
+) -> list[tuple[str, float, float]]:
+    """``(method, ms, RMSE against ref)`` of every method not in ``skip`` that applies to
+    ``scene``, at its defaults without an estimate, timed by ``timed(fn) -> (ms, frame)``; a
+    method that refuses the motion (ValueError) is left out."""
+    out = []
+    for m in mb.METHODS:
+        if m in skip or not mb.METHODS[m].applies(scene):
+            continue
+        try:
+            ms, f = timed(lambda m=m: mb.render(scene, m, error_estimate=False, aa=aa))
+        except ValueError:
+            continue
+        out.append((m, ms, rmse(f.rgba, ref)))
+    return out
+
+
 class Cheapest:
     """The renders that may meet a tolerance on one scene, each timed once (lazily) for all
     tolerances: accumulation on `ACC_GRID` and every other method's default."""
@@ -127,15 +145,7 @@ class Cheapest:
 
     def _others(self) -> list[tuple[str, float, float]]:
         if self.others is None:
-            self.others = []
-            for m in mb.METHODS:
-                if m in ("accumulation", "auto") or not mb.METHODS[m].applies(self.scene):
-                    continue
-                try:
-                    ms, f = best_ms(lambda m=m: mb.render(self.scene, m, error_estimate=False, aa=self.aa))
-                except ValueError:
-                    continue
-                self.others.append((m, ms, rmse(f.rgba, self.ref)))
+            self.others = other_renders(self.scene, self.ref, self.aa, best_ms)
         return self.others
 
     def __call__(self, tol: float) -> tuple[str, float]:

@@ -104,10 +104,10 @@ pub(crate) fn rows<'a, T: Element, const K: usize>(
 
 /// A (4,4) f64 numpy matrix (row-major) as glam's, or an error naming the argument.
 pub(crate) fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> Result<DMat4, Error> {
-    let m = rows::<f64, 4>(a, name)?;
-    if m.len() != 4 {
+    if a.shape() != [4, 4] {
         return Err(Error::shape(name, "expected shape (4,4)"));
     }
+    let m = rows::<f64, 4>(a, name)?;
     // numpy rows -> glam columns.
     Ok(DMat4::from_cols_array_2d(&[m[0], m[1], m[2], m[3]]).transpose())
 }

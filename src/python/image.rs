@@ -1,14 +1,13 @@
 //! Bindings for the image stage: shape and contiguity checks naming the argument, the GIL
 //! released around every kernel, numpy out. The Python layer (`motionblur.image`) converts
 //! dtypes and checks parameters first; these checks are the second line.
-use glam::DMat4;
 use numpy::{
     PyArray3, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3,
     PyReadonlyArray4, PyReadwriteArray3, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
 
-use super::convert::{c_slice, c_slice_mut, detached_in_pool, rows, shaped};
+use super::convert::{c_slice, c_slice_mut, detached_in_pool, matrix, rows, shaped};
 use crate::{
     CameraBlur, CameraMatrices, Composite, CoverageObject, CoveragePart, CoverageSource, DofParams,
     Error, Layer, LensParams, Piece, ReconstructParams,
@@ -66,11 +65,6 @@ fn map16(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<[f64; 16
     let mut m = [0.0f64; 16];
     m.copy_from_slice(c_slice(a, name)?);
     Ok(m)
-}
-
-/// A (4,4) f64 matrix as glam's (numpy rows -> glam columns).
-fn matrix(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<DMat4> {
-    Ok(DMat4::from_cols_array(&map16(a, name)?).transpose())
 }
 
 /// A camera, read off the attributes `view` and `projection` (4,4) f64 of a

@@ -46,8 +46,9 @@ def straddled(scene: Scene, obj: Object, times: np.ndarray) -> np.ndarray:
     errors on either side cancel. Straight motion (translation, vertex keyframes between their
     times, a still camera) is left exactly as it is.
 
-    Computed one boundary at a time (the arithmetic of whole-array numpy, element for element),
-    the result written over the unmoved positions: besides them only the bows are held."""
+    Computed one boundary at a time, the transforms in the core (`_transform`: the arithmetic
+    the numpy passes had, element for element), the result written over the unmoved positions:
+    besides them only the bows are held."""
     pos = np.stack([obj.world_vertices(t) for t in times])
     if len(times) < 2:
         return pos
