@@ -1,6 +1,6 @@
 """Production scale of the exact method (issue 27, section 1): the analytic frame at 1080p on a
 dense mesh against accumulation with 256 samples in the same run, its peak memory at 4K, and its
-time against resolution and face count.
+time against resolution and face count, beside accumulation at the analytic frame's own error.
 
 Mesh: the shipped Stanford bunny (5,998 faces) subdivided by trimesh (midpoint subdivision, each
 level x4 faces: the same surface, more triangles): ``--level 2`` gives 95,968 faces; the faces
@@ -24,10 +24,11 @@ Also printed: the analytic kernel's profile (thread time finding covered spans a
 samples, prim set-up, the Python side: segment rule and the straddled positions), and where a
 target is missed, why.
 
-``motion``: time against the translation's length and the turn's angle at ``--faces-size``,
-beside accumulation with 256 samples and accumulation at the analytic frame's own error (its
-sample count extrapolated from its errors at 64 and 256 samples, its time taken as linear in
-the count), errors against the exact integral at the same size.
+``scaling`` (time against resolution and faces) and ``motion`` (time against the translation's
+length and the turn's angle at ``--faces-size``): beside accumulation with 256 samples,
+accumulation at the analytic frame's own error (its sample count extrapolated from its errors at
+64 and 256 samples, its time taken as linear in the count), errors against the exact integral at
+the same size.
 
 Usage: python benches/bench_production.py [--quick] [--repeat 2] [--level 2] [--sections target,memory,scaling,motion] (scaling = resolution,faces)
 Writes out/bench/production.md, production_resolution.png, production_faces.png and
@@ -265,20 +266,25 @@ def scaling(mesh, a, lines: list[str], tables=("size", "faces")) -> dict:
 def _against_size(mesh, a, lines: list[str]) -> list:
     sizes = SIZES[:-1] if a.quick else SIZES
     lines += [
-        f"## Time against resolution: translate, {len(mesh[1]):,} faces (load {load()})",
+        f"## Time against resolution: translate, {len(mesh[1]):,} faces (load {load()}); errors "
+        "against the exact integral at each size; accumulation at the analytic frame's error "
+        "extrapolated from its errors at 64 and 256 samples",
         "",
-        "| size | analytic s | accumulation-256 s | ratio |",
-        "|---|---:|---:|---:|",
+        f"| size | analytic s | accumulation-256 s | ratio | {_EQUAL_HEAD} |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     pts = []
     for w, h in sizes:
         s = scene(mesh, "translate", w, h)
         rep = 1 if w * h > 3e6 else a.repeat
-        t, _ = paired({"analytic": lambda s=s: analytic(s), "acc256": lambda s=s: accumulation(256)(s)}, rep)
-        row = f"| {w}x{h} | {t['analytic']:.2f} | {t['acc256']:.2f} | {t['analytic'] / t['acc256']:.2f} |"
+        t, out = paired(
+            {"analytic": lambda s=s: analytic(s), "acc256": lambda s=s: accumulation(256)(s)}, rep
+        )
+        eq = at_equal_error(s, t, out)
+        row = f"| {w}x{h} | {t['analytic']:.2f} | {t['acc256']:.2f} | {t['analytic'] / t['acc256']:.2f} | {eq['cells']} |"
         print(row, flush=True)
         lines.append(row)
-        pts.append((w * h, t["analytic"], t["acc256"]))
+        pts.append((w * h, t["analytic"], t["acc256"], eq["t_eq"]))
     lines.append("")
     return pts
 
@@ -287,10 +293,11 @@ def _against_faces(a, lines: list[str]) -> list:
     fw, fh = (int(v) for v in a.faces_size.split("x"))
     lines += [
         f"## Time against faces: translate at {fw}x{fh} (load {load()}); the bunny from {a.min_level} "
-        f"to {a.max_level} subdivisions (negative: coarsened by vertex clustering)",
+        f"to {a.max_level} subdivisions (negative: coarsened by vertex clustering); errors and "
+        "accumulation at equal error as above",
         "",
-        "| faces | analytic s | accumulation-256 s | ratio | shaded pieces |",
-        "|---:|---:|---:|---:|---:|",
+        f"| faces | analytic s | accumulation-256 s | ratio | shaded pieces | {_EQUAL_HEAD} |",
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     pts = []
     for lv in range(a.min_level, a.max_level + 1):
@@ -299,13 +306,14 @@ def _against_faces(a, lines: list[str]) -> list:
         t, out = paired(
             {"analytic": lambda s=s: analytic(s), "acc256": lambda s=s: accumulation(256)(s)}, a.repeat
         )
+        eq = at_equal_error(s, t, out)
         row = (
             f"| {len(m[1]):,} | {t['analytic']:.2f} | {t['acc256']:.2f} | {t['analytic'] / t['acc256']:.2f} | "
-            f"{out['analytic'].stats['pieces']:,} |"
+            f"{out['analytic'].stats['pieces']:,} | {eq['cells']} |"
         )
         print(row, flush=True)
         lines.append(row)
-        pts.append((len(m[1]), t["analytic"], t["acc256"]))
+        pts.append((len(m[1]), t["analytic"], t["acc256"], eq["t_eq"]))
     return pts
 
 
@@ -320,6 +328,23 @@ def equal_error(e64: float, e256: float, ea: float, t256: float) -> tuple[float,
     rate = min(1.5, max(0.5, math.log(e64 / e256) / math.log(4.0))) if e64 > e256 > 0 else 1.0
     n = 256.0 * (e256 / ea) ** (1.0 / rate) if ea > 0 else math.inf
     return n, t256 * n / 256.0
+
+
+# The columns `at_equal_error` fills.
+_EQUAL_HEAD = "analytic RMSE | acc-256 RMSE | acc at equal error: samples, s | analytic / that"
+
+
+def at_equal_error(s: Scene, t: dict, out: dict) -> dict:
+    """Errors against the exact integral of one paired analytic / accumulation-256 run on ``s``
+    (times ``t``, frames ``out``) and accumulation at the analytic frame's error (`equal_error`,
+    from accumulation-64's error too): ``ea``, ``e256``, ``n_eq``, ``t_eq`` and the table
+    ``cells`` of `_EQUAL_HEAD`."""
+    ref = exact(s).rgba
+    ea, e256 = rmse(out["analytic"].rgba, ref), rmse(out["acc256"].rgba, ref)
+    e64 = rmse(accumulation(64)(s).rgba, ref)
+    n_eq, t_eq = equal_error(e64, e256, ea, t["acc256"])
+    cells = f"{ea:.1e} | {e256:.1e} | {n_eq:,.0f}, {t_eq:.1f} | {t['analytic'] / t_eq:.3f}"
+    return {"ea": ea, "e256": e256, "n_eq": n_eq, "t_eq": t_eq, "cells": cells}
 
 
 def _streak_px(s: Scene) -> float:
@@ -342,8 +367,7 @@ def motions(mesh, a, lines: list[str]) -> dict:
         "the exact integral at the same size; accumulation at the analytic frame's error "
         "extrapolated from its errors at 64 and 256 samples",
         "",
-        "| motion | streak px | segments | analytic s | acc-256 s | ratio | analytic RMSE | "
-        "acc-256 RMSE | acc at equal error: samples, s | analytic / that |",
+        f"| motion | streak px | segments | analytic s | acc-256 s | ratio | {_EQUAL_HEAD} |",
         "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     res = {"length": [], "angle": []}
@@ -351,23 +375,19 @@ def motions(mesh, a, lines: list[str]) -> dict:
     for kind, shape in cases:
         s = scene(mesh, kind, w, h, **shape)
         t, out = paired({"analytic": lambda s=s: analytic(s), "acc256": lambda s=s: accumulation(256)(s)}, 1)
-        ref = exact(s).rgba
-        ea, e256 = rmse(out["analytic"].rgba, ref), rmse(out["acc256"].rgba, ref)
-        e64 = rmse(accumulation(64)(s).rgba, ref)
-        n_eq, t_eq = equal_error(e64, e256, ea, t["acc256"])
+        eq = at_equal_error(s, t, out)
         label = (
             f"{kind} {shape.get('length', shape.get('angle'))}{' units' if kind == 'translate' else ' rad'}"
         )
         px = _streak_px(s)
         row = (
             f"| {label} | {px:.0f} | {out['analytic'].stats['segments']} | {t['analytic']:.2f} | "
-            f"{t['acc256']:.2f} | {t['analytic'] / t['acc256']:.2f} | {ea:.1e} | {e256:.1e} | "
-            f"{n_eq:,.0f}, {t_eq:.1f} | {t['analytic'] / t_eq:.3f} |"
+            f"{t['acc256']:.2f} | {t['analytic'] / t['acc256']:.2f} | {eq['cells']} |"
         )
         print(row, flush=True)
         lines.append(row)
         res["length" if kind == "translate" else "angle"].append(
-            (shape.get("length", shape.get("angle")), t["analytic"], t["acc256"], t_eq)
+            (shape.get("length", shape.get("angle")), t["analytic"], t["acc256"], eq["t_eq"])
         )
     lines.append("")
     return res
@@ -407,6 +427,7 @@ def plots(res: dict, out: Path) -> None:
         fig, ax = plt.subplots(figsize=(5, 3.5))
         ax.loglog(pts[:, 0], pts[:, 1], "o-", label="analytic")
         ax.loglog(pts[:, 0], pts[:, 2], "s-", label="accumulation-256")
+        ax.loglog(pts[:, 0], pts[:, 3], "^--", label="accumulation at the analytic's error")
         ax.set_xlabel(label)
         ax.set_ylabel("seconds")
         ax.set_title(f"bunny translating: time against {label}")
