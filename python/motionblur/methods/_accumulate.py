@@ -4,8 +4,8 @@
 and sums them in one call). `HalfSums` keeps an accumulation as two interleaved halves of
 its time samples (even and odd strata), each a weighted mean with its weight: the frame is their
 sum, and their RMS difference measures the frame's own error against the exact time integral
-(see `HALVES_FACTOR`). ``auto`` adds samples to the halves it already has instead of
-rendering again.
+(see `HALVES_FACTOR`). ``auto`` and the pilot estimate's reference add samples to the halves
+they already have instead of rendering again (`add_stratified`).
 """
 
 from __future__ import annotations
@@ -36,6 +36,8 @@ __all__ = [
     "rate_factor",
     "grid_parts",
     "Part",
+    "time_index",
+    "add_stratified",
     "MAX_TIME_SAMPLES",
 ]
 
@@ -505,3 +507,32 @@ class HalfSums:
         frame.stats["error_estimate"] = float(scale * np.sqrt(square_sum / rgba.size))
         frame.stats["error_estimate_how"] = "halves: the even and the odd time samples compared"
         return frame
+
+
+def time_index(times: np.ndarray, t) -> np.ndarray | int:
+    """The index in ``times`` (increasing) of the time nearest each of ``t`` (or of the scalar)."""
+    x = np.asarray(t, np.float64)
+    if len(times) == 1:
+        k = np.zeros(x.shape, np.int64)
+    else:
+        k = np.clip(np.searchsorted(times, x), 1, len(times) - 1)
+        k = np.where(x - times[k - 1] < times[k] - x, k - 1, k)
+    return int(k) if k.ndim == 0 else k
+
+
+def add_stratified(sums: HalfSums, scene: Scene, n: int, kept: int = 0) -> None:
+    """Accumulation's own ``n`` stratified samples of ``scene`` (`sample_times`) added to
+    ``sums``. With ``kept``, the count of the stratified grid ``sums`` already holds (``n`` an odd
+    multiple of it, so that its times are among the new ones under any shutter, whose strata are
+    of the shutter's mass): those samples are kept, each weighted 1/n and moved to the half of
+    its new position, and only the others are drawn."""
+    times, weights = sample_times(scene, n)
+    new = None  # a fresh grid: all of it, in halves or in quarters (`HalfSums.add_grid`)
+    if kept:
+        step = n // kept
+        if step * kept != n or step % 2 == 0:
+            raise ValueError(f"n: expected an odd multiple of kept={kept}, got {n}")
+        sums.reweight(lambda t: (np.full(len(t), 1.0 / n), time_index(times, t[0]) % 2))
+        new = np.arange(n)
+        new = new[(new % step) != step // 2]  # the new times only (never the new grid's ends)
+    sums.add_grid(times, weights, new)

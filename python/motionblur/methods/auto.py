@@ -49,7 +49,7 @@ from .._validate import as_float, as_int
 from ..raster import Frame
 from ..render import METHODS, register
 from ..scene import Scene
-from ._accumulate import HalfSums, sample_times, shutter_quantiles
+from ._accumulate import HalfSums, add_stratified, shutter_quantiles, time_index
 from ._estimate import EXACT_OPTIONS
 from ._segments import segment_times
 
@@ -182,7 +182,7 @@ class _Trials:
         return self._record(method, options, frame, ms, est)
 
     def accumulate(self, n: int, trapezoid: bool = False) -> Frame:
-        """Accumulation with ``n`` samples of equal weight (`sample_times`), or with the
+        """Accumulation with ``n`` samples of equal weight (`_accumulate.sample_times`), or with the
         ``n + 1`` of the trapezoid grid of ``n`` strata (``trapezoid``: see `_trapezoid`). The
         samples already drawn are kept when the new grid holds them (`_holds`: their times are
         among the new ones under any shutter, whose strata are of the shutter's mass) and only
@@ -202,16 +202,10 @@ class _Trials:
         return self._record("accumulation", options, frame, ms, frame.stats["error_estimate"])
 
     def _stratified(self, n: int, keep: bool) -> None:
-        """Accumulation's own ``n`` samples, the drawn ones (an ``n / last``-th of them) kept;
-        the new ones added by `HalfSums.add_grid`."""
-        times, weights = sample_times(self.scene, n)
-        new = None  # a fresh grid: all of it, in halves or in quarters (`add_grid`)
-        if keep:  # the kept samples' new weights and halves (never the new grid's ends)
-            step = n // self.grid[0]
-            self.sums.reweight(lambda t: (np.full(len(t), 1.0 / n), _position(times, t[0]) % 2))
-            new = np.arange(n)
-            new = new[(new % step) != step // 2]  # the new times only
-        self.sums.add_grid(times, weights, new)
+        """Accumulation's own ``n`` samples, the drawn ones (an ``n / last``-th of them) kept
+        (`add_stratified`)."""
+        assert self.sums is not None
+        add_stratified(self.sums, self.scene, n, self.grid[0] if keep and self.grid else 0)
 
     def _trapezoid(self, m: int, keep: bool) -> None:
         """The trapezoid grid of ``m`` strata of the shutter's mass: times ``W^-1(k / m)``, k = 0..m,
@@ -227,7 +221,7 @@ class _Trials:
         if keep:
 
             def weight_of(t):
-                at = _position(times, t)
+                at = time_index(times, t)
                 new[at] = False
                 return weights[at], int(k[at[0]]) % 2
 
@@ -344,17 +338,6 @@ def _holding_grid(grid: tuple[int, bool], least: float = 0.0, most: float = math
         return None
     pick = max if largest else min
     return pick(found, key=lambda g: (_samples(g), -g[1] if largest else g[1]))
-
-
-def _position(times: np.ndarray, t) -> np.ndarray | int:
-    """The index in ``times`` (increasing) of the time nearest each of ``t`` (or of the scalar)."""
-    x = np.asarray(t, np.float64)
-    if len(times) == 1:
-        k = np.zeros(x.shape, np.int64)
-    else:
-        k = np.clip(np.searchsorted(times, x), 1, len(times) - 1)
-        k = np.where(x - times[k - 1] < times[k] - x, k - 1, k)
-    return int(k) if k.ndim == 0 else k
 
 
 def _next_grid(grid: tuple[int, bool], want: float) -> tuple[int, bool]:
