@@ -281,6 +281,9 @@ def _reference(small: Scene, options: dict, method: str, aa: int, rgba: np.ndarr
     analytic method's is its pilot's segments (``options``, the pilot's) each cut into
     `ANALYTIC_SPLIT` at 4 Gauss points, none longer than `ANALYTIC_LONGEST` (than
     `ANALYTIC_DEFORMING_LONGEST` where a moving object deforms)."""
+    if method != "analytic" and small.rolling > 0.0:
+        # under a rolling shutter accumulation has no halves: the exact frame, which models it
+        return exact(small, aa).rgba.astype(np.float64)
     if method != "analytic":
         wanted = 0.0  # sample count the last reference's own error asks for (it falls as 1/N)
         for n in REFERENCE_SAMPLES:
