@@ -13,6 +13,7 @@ import pytest
 import motionblur as mb
 from motionblur.evaluation.random_scenes import MEASURING_SEEDS, random_scene
 from motionblur.methods import _estimate
+from motionblur.raster import over_background
 from motionblur.methods.motion_volume import piece_bounds, pieces_frame
 
 # (method, measuring seed, width, height): the lowest estimate / measured ratios seen per method
@@ -105,3 +106,51 @@ def test_motion_volume_pieces_split_renders_the_same_frame():
     assert len(bounds) > 2
     split = mb.raster.over_background(pieces_frame(scene, bounds, opts), scene.background)
     np.testing.assert_array_equal(split.rgba, whole.rgba)
+
+
+def test_the_pilot_reference_grows_keeping_its_samples_until_a_quarter_of_the_pilots_error():
+    """`_accumulated_reference`: from `REFERENCE_FIRST` samples to odd multiples of the count (the
+    drawn ones kept), until its own estimate is at most `REFERENCE_SHARE` of the method's pilot
+    RMSE against it; the reference is then as far from `mb.exact` as its estimate says (within
+    0.5-2x, the calibration bound) and adds under 4% to the pilot's RMSE (a quarter, in
+    quadrature: 3%)."""
+    scene = random_scene(1_000_007, 192, 144)  # 16 samples, then 48
+    small, _ = _estimate.pilot_scene(scene, _estimate.pilot_pixels(192, 144))
+    rgba = over_background(mb.render(small, "opaque_image", error_estimate=False), small.background).rgba
+    drawn = []
+    add = _estimate.add_stratified
+
+    def spy(sums, sc, n, kept=0):
+        drawn.append((n, kept))
+        add(sums, sc, n, kept)
+
+    _estimate.add_stratified = spy
+    try:
+        ref = _estimate._accumulated_reference(small, 1, rgba)
+    finally:
+        _estimate.add_stratified = add
+    assert ref is not None and drawn[0] == (_estimate.REFERENCE_FIRST, 0) and len(drawn) >= 2, drawn
+    for (n0, _), (n1, kept) in zip(drawn, drawn[1:]):
+        assert kept == n0 and n1 % n0 == 0 and (n1 // n0) % 2 == 1
+    exact = mb.exact(small).rgba.astype(np.float64)
+    ours, true = _rmse(rgba, ref), _rmse(rgba, exact)
+    assert _rmse(ref, exact) <= 2.0 * _estimate.REFERENCE_SHARE * ours
+    assert 0.98 * true <= ours <= 1.04 * true, (ours, true, drawn)
+
+
+def test_a_grown_grid_is_the_fresh_grid_of_its_count():
+    """`add_stratified` with ``kept``: 16 samples grown to 48 and 240 render the frames (and the
+    estimates) of accumulation with 48 and 240 samples, to float32 rounding (the sums' order
+    differs); a count that is no odd multiple of the kept one is refused."""
+    from motionblur.methods._accumulate import HalfSums, add_stratified
+
+    scene = random_scene(1_000_007, 96, 72)
+    sums, kept = HalfSums(scene, 1), 0
+    for n in (16, 48, 240):
+        add_stratified(sums, scene, n, kept)
+        grown, fresh = sums.frame(), mb.render(scene, "accumulation", samples=n, error_estimate=False)
+        np.testing.assert_allclose(grown.rgba, fresh.rgba, rtol=0, atol=2e-6)
+        assert grown.stats["error_estimate"] == pytest.approx(fresh.stats["error_estimate"], rel=1e-4)
+        kept = n
+    with pytest.raises(ValueError, match="n: expected an odd multiple"):
+        add_stratified(sums, scene, 480, 240)

@@ -12,8 +12,9 @@ option set is estimated by a pilot (`pilot_estimate`), with no fitted factor:
   the field of view unchanged) at the full frame's time structure: the motion volume
   is cut at the full frame's pieces, the analytic method's chord tolerance (pixels) is scaled
   with the image, so that both cut the shutter where the full frame does;
-- **its reference**: accumulation at the pilot's size with the first of `REFERENCE_SAMPLES`
-  whose own estimate is at most `REFERENCE_SHARE` of the method's pilot RMSE, else
+- **its reference**: accumulation at the pilot's size, grown from `REFERENCE_FIRST` samples
+  (keeping those drawn) until its own estimate is at most `REFERENCE_SHARE` of the method's
+  pilot RMSE, else (and under a rolling shutter)
   [`exact`][motionblur.methods._estimate.exact]: a reference a quarter as far off adds at most
   3% to the estimate, at a fraction of the exact integral's cost. The analytic method's pilot
   is held to its own segments each cut into `ANALYTIC_SPLIT` (`refined`, 4 Gauss points): a
@@ -66,6 +67,7 @@ import numpy as np
 from ..raster import Camera, Frame, over_background
 from ..render import ESTIMATOR, METHODS
 from ..scene import Scene
+from ._accumulate import HalfSums, add_stratified
 from .analytic import refined
 from .motion_volume import piece_bounds, pieces_frame
 
@@ -78,7 +80,8 @@ __all__ = [
     "PILOT_MAX_PIXELS",
     "pilot_pixels",
     "PILOT_FACTOR",
-    "REFERENCE_SAMPLES",
+    "REFERENCE_FIRST",
+    "REFERENCE_MAX",
     "REFERENCE_SHARE",
     "ANALYTIC_SPLIT",
     "ANALYTIC_LONGEST",
@@ -104,11 +107,15 @@ PILOT_PIXELS = 64 * 48
 PILOT_SHARE = 1.0 / 6.0
 #: Most pixels of the pilot render (128x96 at 4:3): its cost, with its reference, grows with them.
 PILOT_MAX_PIXELS = 128 * 96
-#: The pilot's reference for every method but ``analytic``: accumulation with the first of these
-#: sample counts whose own (halves) estimate is at most `REFERENCE_SHARE` of the method's pilot
-#: RMSE (a count the last one's error says is too few, at 1/N, is skipped), else
-#: [`exact`][motionblur.methods._estimate.exact] at the pilot's size.
-REFERENCE_SAMPLES = (64, 256, 1024)
+#: The pilot's reference for every method but ``analytic``: accumulation at the pilot's size
+#: with this many samples first (two halves of 8, the fewest whose estimate `auto` trusts), grown
+#: while its own (halves) estimate is over `REFERENCE_SHARE` of the method's pilot RMSE: to the
+#: least odd multiple of its samples (which keeps those drawn) that reaches the count its error
+#: asks for at 1/N; where that count is over `REFERENCE_MAX`,
+#: [`exact`][motionblur.methods._estimate.exact] at the pilot's size instead.
+REFERENCE_FIRST = 16
+#: Most samples of the pilot's accumulated reference (`REFERENCE_FIRST`).
+REFERENCE_MAX = 1024
 #: The pilot reference's largest own error, as a share of the method's pilot RMSE (it adds at
 #: most 3% to the estimate in quadrature).
 REFERENCE_SHARE = 0.25
@@ -277,30 +284,44 @@ def _pilot_frame(scene: Scene, small: Scene, scale: float, method: str, options:
 
 
 def _reference(small: Scene, options: dict, method: str, aa: int, rgba: np.ndarray) -> np.ndarray:
-    """The pilot's reference RGBA (float64, over the background): see `REFERENCE_SAMPLES`; the
+    """The pilot's reference RGBA (float64, over the background): see `REFERENCE_FIRST`; the
     analytic method's is its pilot's segments (``options``, the pilot's) each cut into
     `ANALYTIC_SPLIT` at 4 Gauss points, none longer than `ANALYTIC_LONGEST` (than
     `ANALYTIC_DEFORMING_LONGEST` where a moving object deforms)."""
-    if method != "analytic" and small.rolling > 0.0:
-        # under a rolling shutter accumulation has no halves: the exact frame, which models it
-        return exact(small, aa).rgba.astype(np.float64)
     if method != "analytic":
-        wanted = 0.0  # sample count the last reference's own error asks for (it falls as 1/N)
-        for n in REFERENCE_SAMPLES:
-            if n < wanted:
-                continue
-            acc = METHODS["accumulation"].fn(small, samples=n, aa=aa)
-            ref = over_background(acc, small.background).rgba.astype(np.float64)
-            share = REFERENCE_SHARE * _rmse(rgba, ref)
-            if acc.stats["error_estimate"] <= share:
-                return ref
-            wanted = n * acc.stats["error_estimate"] / share if share > 0.0 else math.inf
-        return exact(small, aa).rgba.astype(np.float64)
+        # under a rolling shutter accumulation has no halves: the exact frame, which models it
+        ref = None if small.rolling > 0.0 else _accumulated_reference(small, aa, rgba)
+        return exact(small, aa).rgba.astype(np.float64) if ref is None else ref
     cuts = {k: options[k] for k in ("tolerance", "segments") if k in options}
     deforms = any(o.is_moving and o.motion.is_deforming for o in small.objects)
     longest = ANALYTIC_DEFORMING_LONGEST if deforms else ANALYTIC_LONGEST
     ref = refined(small, aa, gauss=4, split=ANALYTIC_SPLIT, longest=longest, **cuts)
     return over_background(ref, small.background).rgba.astype(np.float64)
+
+
+def _accumulated_reference(small: Scene, aa: int, rgba: np.ndarray) -> np.ndarray | None:
+    """Accumulation on ``small`` grown from `REFERENCE_FIRST` samples until its own estimate is
+    at most `REFERENCE_SHARE` of the RMSE of ``rgba`` against it (RGBA float64, over the
+    background), or None when the count its error asks for is over `REFERENCE_MAX`."""
+    sums, n, drawn = HalfSums(small, aa), REFERENCE_FIRST, 0
+    while True:
+        add_stratified(sums, small, n, drawn)
+        acc = sums.frame()
+        ref = over_background(acc, small.background).rgba.astype(np.float64)
+        share = REFERENCE_SHARE * _rmse(rgba, ref)
+        est = acc.stats["error_estimate"]
+        if est <= share:
+            return ref
+        wanted = n * est / share if share > 0.0 else math.inf
+        if wanted > REFERENCE_MAX:
+            return None
+        drawn, n = n, n * _odd_at_least(wanted / n)
+
+
+def _odd_at_least(x: float) -> int:
+    """The least odd integer of at least ``max(x, 3)``."""
+    k = max(3, math.ceil(x))
+    return k + 1 - k % 2
 
 
 def pilot_errors(
@@ -314,7 +335,7 @@ def pilot_errors(
 ) -> dict:
     """The pilot at about ``pixels`` pixels: ``{"rmse", "unblurred", "mass", "scale", "size"}``,
     the RMSE of ``method`` and of the sharp mid-shutter frame against the pilot's reference (see
-    `REFERENCE_SAMPLES`) at that size, ``mass`` the method's alpha mass over the reference's less
+    `REFERENCE_FIRST`) at that size, ``mass`` the method's alpha mass over the reference's less
     1 (`alpha_mass_error`), ``scale`` the pilot's width over the frame's; with
     ``per_pixel`` also ``"pixel_mse"`` (h,w) float64, the method's squared error per pixel (mean
     over RGBA; a study of where the error lies, not used by the estimate).
