@@ -13,8 +13,8 @@ import pytest
 import motionblur as mb
 from motionblur.evaluation.random_scenes import MEASURING_SEEDS, random_scene
 from motionblur.methods import _estimate
-from motionblur.raster import over_background
 from motionblur.methods.motion_volume import piece_bounds, pieces_frame
+from motionblur.raster import over_background
 
 # (method, measuring seed, width, height): the lowest estimate / measured ratios seen per method
 # in the calibration run on seeds 1,000,000-1,000,059 (each 0.67-0.84 there), and the motion
