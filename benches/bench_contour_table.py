@@ -62,7 +62,9 @@ def measure(scene: mb.Scene, k: int, repeat: int):
     opts = {"filter": "box", "segments": 2}
 
     def frame(use):
-        return mb.render(scene, "motion_volume", contour_table=tables if use else False, **opts)
+        return mb.render(
+            scene, "motion_volume", contour_table=tables if use else False, error_estimate=False, **opts
+        )
 
     (w0, w1), (c0, c1) = best_ms([lambda: frame(False), lambda: frame(True)], repeat)
     # the volume build alone (every moving object), without and with the table

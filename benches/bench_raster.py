@@ -129,10 +129,12 @@ def motion_volume_rows(quick: bool) -> list[str]:
     for name in ("cube", "curved", "sphere80k", "airplane"):
         sc = mb.SCENES[name](width=320, height=240)
         repeat = (5 if quick else 15) if name == "sphere80k" else (15 if quick else 60)
-        acc = best_ms(lambda s=sc: mb.render(s, "accumulation", samples=1, aa=2), repeat)
-        mv = best_ms(lambda s=sc: mb.render(s, "motion_volume", **opts), repeat)
+        acc = best_ms(
+            lambda s=sc: mb.render(s, "accumulation", samples=1, aa=2, error_estimate=False), repeat
+        )
+        mv = best_ms(lambda s=sc: mb.render(s, "motion_volume", error_estimate=False, **opts), repeat)
         with previous_path():
-            old = best_ms(lambda s=sc: mb.render(s, "motion_volume", **opts), repeat)
+            old = best_ms(lambda s=sc: mb.render(s, "motion_volume", error_estimate=False, **opts), repeat)
         print(
             f"{name:<10} accumulation 1 sample {acc:6.2f} ms  motion_volume {mv:7.2f} ms ({mv / acc:5.2f}x)"
             f"  previous path {old:7.2f} ms ({old / acc:5.2f}x)"
@@ -142,8 +144,8 @@ def motion_volume_rows(quick: bool) -> list[str]:
         "",
         "## motion_volume frame against one accumulation sample",
         "",
-        "320x240, `render(scene, 'motion_volume', segments=1, filter='box', aa=2)` against "
-        "`render(scene, 'accumulation', samples=1, aa=2)`, best of 15-60 runs after a warm-up, same run. "
+        "320x240, `render(scene, 'motion_volume', segments=1, filter='box', aa=2, error_estimate=False)` against "
+        "`render(scene, 'accumulation', samples=1, aa=2, error_estimate=False)`, best of 15-60 runs after a warm-up, same run. "
         "'previous path': `motionblur.methods.motion_volume.ONE_PASS = False`, the still-camera path "
         "before the rasterizer took a background (static objects rasterized again with the volumes at "
         "sample resolution, resolved apart); the rasterizer speed-ups (span coverage, per-triangle "

@@ -8,7 +8,7 @@ falls on all methods alike), and drawn as one line of the axis's plot:
   transparent (alpha 0.5, exact order); the image kernels on an RGBA float32 frame whose every
   pixel is opaque (opaque motion blur over 101 px, horizontal and at 30 degrees, and the
   horizontal box blur), with a copy of the frame as the memory-bandwidth floor; and the scene
-  methods on the 82k-face icosphere moving across the view (``render(scene, method)``:
+  methods on the 82k-face icosphere moving across the view (``render(scene, method, error_estimate=False)``,
   accumulation with 8 samples, ``opaque_image`` (a sharp frame blurred by the image kernels),
   and the analytic method when it is registered);
 - triangles (``TRIANGLES``, 1.3k to 1.3M faces, icospheres of 3 to 8 subdivisions) at
@@ -161,12 +161,12 @@ def _scene_method(render_method: str, label: str, **options):
     @method("size", f"{label}, 82k faces", needs=render_method)
     def by_size(width, height):
         scene = _moving_sphere(width, height, *_sphere(6))
-        return lambda: mb.render(scene, render_method, **options)
+        return lambda: mb.render(scene, render_method, error_estimate=False, **options)
 
     @method("triangles", label, needs=render_method)
     def by_triangles(v, f):
         scene = _moving_sphere(*RASTER_SIZE, v, f)
-        return lambda: mb.render(scene, render_method, **options)
+        return lambda: mb.render(scene, render_method, error_estimate=False, **options)
 
 
 @method("triangles", "rasterize opaque")

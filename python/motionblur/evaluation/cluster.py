@@ -121,16 +121,17 @@ TIMING_BUDGET_S = 1.5
 
 def timed_task(scene: Scene, method: str, options: dict, repeat: int) -> tuple[float, np.ndarray, dict]:
     """``(ms, rgba (H,W,4) float32, plan)``: one warm-up render of ``method`` with ``options``
-    (caches, first-call costs), then the best wall time of ``repeat`` renders, stopping early
+    (caches, first-call costs), then the best wall time of ``repeat`` renders (the method's own
+    cost: without the pilot error estimate ``render`` adds by default), stopping early
     once the timed renders add up to `TIMING_BUDGET_S` (a render of over 0.75 s is timed
     once or twice: the load's share of its time is the smaller); ``plan`` is the frame's
     ``stats["plan"]`` (auto) or ``{}``."""
     scene = _scene(scene)
-    render(scene, method, **options)
+    render(scene, method, error_estimate=False, **options)
     best, frame, spent = float("inf"), None, 0.0
     for _ in range(max(1, int(repeat))):
         t0 = time.perf_counter()
-        frame = render(scene, method, **options)
+        frame = render(scene, method, error_estimate=False, **options)
         dt = time.perf_counter() - t0
         best, spent = min(best, dt), spent + dt
         if spent > TIMING_BUDGET_S:

@@ -235,7 +235,8 @@ def _markdown(
 ) -> str:
     lines = ["# Speed against error", ""]
     lines.append(
-        f"Machine: {_machine()} (shared with other jobs: timings are best of {settings['repeat']}). "
+        f"Machine: {_machine()} (shared with other jobs: timings are best of {settings['repeat']}, each the "
+        "render's own cost, without the error estimate `render` adds by default). "
         f"Images {settings['width']}x{settings['height']}, methods at aa = {settings['aa']} (spatial samples per pixel per axis); reference: Mitsuba {settings['variant']}, "
         f"K = {settings['times']} shutter times x {settings['spp']} spp; second reference: each method's own limit, "
         f"{limit_label(settings)} on our rasterizer (no shadows: the blur "

@@ -124,7 +124,7 @@ def paired_factor(scene, rows, metric="rmse", rounds=7, burst=3):
             # so a frame that follows another method's (cold caches) is not its steady cost
             for _ in range(burst):
                 t0 = time.perf_counter()
-                render(scene, method, **r["_opts"])
+                render(scene, method, error_estimate=False, **r["_opts"])
                 best[j] = min(best[j], (time.perf_counter() - t0) * 1e3)
     t_mv = best[0]
     times = dict(zip([id(r) for _, r in jobs[1:]], best[1:]))
@@ -152,15 +152,16 @@ def paired_factor(scene, rows, metric="rmse", rounds=7, burst=3):
 def paired_times(scene, jobs, rounds: int = 5, burst: int = 3) -> list[float]:
     """Best ms of each ``(method, options)`` of ``jobs`` on ``scene``, timed round-robin
     (``rounds`` rounds of ``burst`` consecutive frames of each, after one warm-up frame each), so
-    that every job sees the same machine load, each in its steady state."""
+    that every job sees the same machine load, each in its steady state; each render's own cost,
+    without the pilot error estimate ``render`` adds by default."""
     for method, opts in jobs:
-        render(scene, method, **opts)
+        render(scene, method, error_estimate=False, **opts)
     best = [float("inf")] * len(jobs)
     for _ in range(rounds):
         for j, (method, opts) in enumerate(jobs):
             for _ in range(burst):
                 t0 = time.perf_counter()
-                render(scene, method, **opts)
+                render(scene, method, error_estimate=False, **opts)
                 best[j] = min(best[j], (time.perf_counter() - t0) * 1e3)
     return best
 
@@ -173,7 +174,7 @@ def pyrender_comparison(name, scene, ref, repeat):
 
     def ours_once():  # the static layer drawn once per frame, not kept from the frame before
         clear_static_cache()
-        return render(scene, "accumulation", samples=16)
+        return render(scene, "accumulation", samples=16, error_estimate=False)
 
     ours_ms, ours = _best_ms(ours_once, repeat)
     return {
