@@ -13,7 +13,9 @@ Scenes, each at 1920x1080 and 3840x2160:
 For each: one sharp frame (``accumulation`` with ``samples=1``), each method's time, the ratio
 method / sharp against the target (at most 2x: the method's own sharp frame included) and each
 method's RMSE against the analytic frame (``motionblur.exact``) at 1080p; at 4K the analytic frame
-is not rendered (tens of seconds) and the 1080p error stands for it. Times are wall-clock
+is not rendered (tens of seconds) and the 1080p error stands for it; with the errors, each
+method's time against accumulation's at the same error at 1080p (does the blur pay for
+itself?). Times are wall-clock
 milliseconds of ``render(..., error_estimate=False)``, best of several rounds, the method and its
 sharp frame alternating call by call (paired), warm: with a still camera both reuse the static
 layer kept across frames (``accumulation`` keeps it, and so do the image-space methods), as a
@@ -36,6 +38,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import os
 import platform
 import sys
@@ -190,17 +193,52 @@ def stages(scene: Scene, method: str, rounds: int) -> dict[str, float]:
     return out
 
 
-def errors(name: str) -> dict[str, float]:
-    """RMSE of the sharp frame and of each method against the analytic frame at 1080p."""
+#: Accumulation's sample counts `errors` times and measures at 1080p, to read its time at each
+#: method's error.
+ACC_COUNTS = (1, 2, 4, 8, 16, 32, 64, 128)
+
+
+def errors(name: str) -> dict:
+    """RMSE of the sharp frame and of each method against the analytic frame at 1080p, and each
+    method's time against accumulation's at the same error (``"equal"``: method -> (method ms,
+    accumulation ms at its RMSE, log-log between the two of `ACC_COUNTS` that bracket it, or
+    NaN outside them); the times best of 3 after a warm-up, in this process, one after another)."""
     build, methods = SCENES[name]
     scene = build(1920, 1080)
     t0 = time.perf_counter()
     ref = mb.exact(scene).rgba
     out = {"analytic s": time.perf_counter() - t0}
     out["sharp"] = rmse(mb.render(scene, "accumulation", samples=1, error_estimate=False).rgba, ref)
+    acc = []
+    for n in ACC_COUNTS:
+        ms, f = _best_frame(lambda n=n: mb.render(scene, "accumulation", samples=n, error_estimate=False))
+        acc.append((ms, rmse(f.rgba, ref)))
+    out["equal"] = {}
     for m in methods:
-        out[m] = rmse(mb.render(scene, m, error_estimate=False).rgba, ref)
+        ms, f = _best_frame(lambda m=m: mb.render(scene, m, error_estimate=False))
+        out[m] = rmse(f.rgba, ref)
+        out["equal"][m] = (ms, _time_at(acc, out[m]))
     return out
+
+
+def _best_frame(fn, rounds: int = 3) -> tuple[float, object]:
+    fn()
+    best, frame = float("inf"), None
+    for _ in range(rounds):
+        t0 = CLOCK()
+        frame = fn()
+        best = min(best, (CLOCK() - t0) * 1e3)
+    return best, frame
+
+
+def _time_at(acc: list[tuple[float, float]], err: float) -> float:
+    """Accumulation's ms at RMSE ``err`` from its (ms, RMSE) at increasing sample counts: log-log
+    between the two that bracket it; NaN outside them."""
+    for (t0, e0), (t1, e1) in zip(acc, acc[1:]):
+        if e0 >= err >= e1 and e0 > e1 > 0.0:
+            u = math.log(e0 / err) / math.log(e0 / e1)
+            return math.exp(math.log(t0) + u * math.log(t1 / t0))
+    return float("nan")
 
 
 def opaque_vs_copy(w: int, h: int, rounds: int) -> tuple[float, float]:
@@ -268,6 +306,11 @@ def main() -> None:
             f"{name}: analytic reference at 1920x1080 took {e['analytic s']:.1f} s; RMSE sharp frame {e['sharp']:.2e}, "
             + ", ".join(f"{m} {e[m]:.2e}" for m in SCENES[name][1])
         )
+        for m, (ms, acc_ms) in e["equal"].items():
+            print(
+                f"  {m} at 1920x1080: {ms:.1f} ms; accumulation at its RMSE {acc_ms:.1f} ms: "
+                f"{acc_ms / ms:.2f}x the method's time (above 1: the blur pays for itself)"
+            )
     print()
     for w, h in sizes:
         for name, (build, methods) in SCENES.items():
