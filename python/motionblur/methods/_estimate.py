@@ -114,7 +114,8 @@ PILOT_MAX_PIXELS = 128 * 96
 #: asks for at 1/N; where that count is over `REFERENCE_MAX`,
 #: [`exact`][motionblur.methods._estimate.exact] at the pilot's size instead.
 REFERENCE_FIRST = 16
-#: Most samples of the pilot's accumulated reference (`REFERENCE_FIRST`).
+#: The most samples the pilot's accumulated reference's error may ask for (`REFERENCE_FIRST`);
+#: the odd multiple it grows to may pass it (at most 3x: 432 samples grow to 1296).
 REFERENCE_MAX = 1024
 #: The pilot reference's largest own error, as a share of the method's pilot RMSE (it adds at
 #: most 3% to the estimate in quadrature).
