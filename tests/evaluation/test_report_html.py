@@ -30,6 +30,10 @@ def test_the_html_report_renders_in_headless_chromium(tmp_path):
     page = res["paths"]["html"]
     md = res["paths"]["md"].read_text()
     assert "## auto against the Pareto front" in md and "| torus_turn | " in md.split("## auto against")[1]
+    # the plan column names the render auto kept (it read "static" for every scene once auto's
+    # plan stopped listing per-object choices)
+    row = next(x for x in md.split("## auto against")[1].splitlines() if x.startswith("| torus_turn |"))
+    assert row.split("|")[2].strip().startswith(("accumulation samples=", "analytic")), row
     assert set(res["auto"]) == {"cube", "torus_turn"} and all(
         x["meets"] in (True, False) for x in res["auto"].values()
     )

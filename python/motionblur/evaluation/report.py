@@ -149,6 +149,18 @@ def _ratio(landing: dict) -> float:
     return landing.get("paired_ratio", landing["ratio"])
 
 
+def _plan_label(plan: dict) -> str:
+    """The render ``auto`` kept (its ``stats["plan"]["kept"]``) and how many it made (timing
+    pilots left out), e.g. ``accumulation samples=8 (1 render)``; ``?`` without a plan."""
+    kept = plan.get("kept")
+    if not kept:
+        return "?"
+    renders = sum(1 for t in plan.get("tried", []) if "pilot" not in t.get("options", {}))
+    opts = _label(kept.get("options", {}))
+    label = kept["method"] if opts in ("", "-") else f"{kept['method']} {opts}"
+    return f"{label} ({renders} render{'s' if renders != 1 else ''})"
+
+
 def _auto_markdown(landings: dict, loo: dict, rows, settings) -> str:
     if not landings:
         return ""
@@ -158,8 +170,8 @@ def _auto_markdown(landings: dict, loo: dict, rows, settings) -> str:
         f"`auto` at its default tolerance (RMSE {tol} against the own limit). The front at auto's error = the "
         "fastest swept run at least as accurate (own-limit RMSE) as auto's frame; ratio = auto's ms / its ms "
         "(target <= 1.25), from the sweep's timings and re-timed in pairs (auto and that run round-robin, "
-        "5 rounds of 3 frames each, best of all, both under the same load: the headline). The plan is auto's "
-        "choice for the scene's moving objects.",
+        "5 rounds of 3 frames each, best of all, both under the same load: the headline). The plan is the "
+        "render auto kept, and how many renders it made.",
         "",
         "| scene | plan | auto ms | own-limit RMSE | RMSE vs Mitsuba | front run at that error | its ms | ratio | "
         "in pairs: auto / front ms | ratio | meets tolerance |",
@@ -169,11 +181,9 @@ def _auto_markdown(landings: dict, loo: dict, rows, settings) -> str:
         lg = landings.get(r["scene"])
         if lg is None:
             continue
-        chosen = sorted({f"{p.get('method')} {_label(p.get('options', {}))}".strip()
-                         for p in r.get("_plan", {}).get("objects", {}).values() if p.get("method") != "static"})  # fmt: skip
         pa, pf = lg.get("paired_auto_ms", float("nan")), lg.get("paired_front_ms", float("nan"))
         lines.append(
-            f"| {r['scene']} | {'; '.join(chosen) or 'static'} | {r['ms']:.2f} | {r['rmse_limit']:.5f} | {r['rmse']:.5f} | "
+            f"| {r['scene']} | {_plan_label(r.get('_plan', {}))} | {r['ms']:.2f} | {r['rmse_limit']:.5f} | {r['rmse']:.5f} | "
             f"{lg.get('front', '')} | {lg['front_ms']:.2f} | {lg['ratio']:.2f} | {pa:.2f} / {pf:.2f} | {_ratio(lg):.2f} | "
             f"{'yes' if lg['meets'] else 'no'} |"
         )
