@@ -40,7 +40,6 @@ def write(
     frames=None,
     references=None,
     landings=None,
-    loo=None,
     save_images=False,
     images=None,
 ) -> dict:
@@ -71,7 +70,7 @@ def write(
             wr.writerow({**{k: r[k] for k in keys if k in r}, "pareto": int(f), "pareto_limit": int(g)})
     paths["md"].write_text(
         _markdown(rows, fronts, comparisons, pyrender_rows, settings, flip_comparisons, paired, equal_times)
-        + _auto_markdown(landings or {}, loo or {}, rows, settings)
+        + _auto_markdown(landings or {}, rows, settings)
     )
     (out / "settings.json").write_text(json.dumps({**settings, "machine": _machine()}, indent=1))
     if frames and save_images:
@@ -161,7 +160,7 @@ def _plan_label(plan: dict) -> str:
     return f"{label} ({renders} render{'s' if renders != 1 else ''})"
 
 
-def _auto_markdown(landings: dict, loo: dict, rows, settings) -> str:
+def _auto_markdown(landings: dict, rows, settings) -> str:
     if not landings:
         return ""
     tol = settings.get("tolerance")
@@ -195,23 +194,6 @@ def _auto_markdown(landings: dict, loo: dict, rows, settings) -> str:
         f"Within 1.25x of the front (re-timed in pairs): {within} of {n} scenes; tolerance met: {meets} of {n}.",
         "",
     ]
-    if loo:
-        w2 = sum(1 for x in loo.values() if x["ratio"] <= 1.25)
-        m2 = sum(1 for x in loo.values() if x["meets"])
-        lines += [
-            "Leave one scene out (the model refitted without the scene, the planner's choice read from the "
-            "scene's measured rows, nothing re-rendered): "
-            f"within 1.25x of the front on {w2} of {len(loo)} scenes, tolerance met on {m2} of {len(loo)}.",
-            "",
-            "| scene | choice | ms | own-limit RMSE | front ms | ratio | meets |",
-            "|---|---|---:|---:|---:|---:|:-:|",
-        ]
-        for s, x in loo.items():
-            lines.append(
-                f"| {s} | {x['method']} {_label(x['options'])} | {x['ms']:.2f} | {x['error']:.5f} | "
-                f"{x['front_ms']:.2f} | {x['ratio']:.2f} | {'yes' if x['meets'] else 'no'} |"
-            )
-        lines.append("")
     return "\n".join(lines) + "\n"
 
 
