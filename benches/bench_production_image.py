@@ -38,7 +38,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import math
 import os
 import platform
 import sys
@@ -51,6 +50,7 @@ import numpy as np
 import motionblur as mb
 import motionblur.image as mi
 from motionblur import _core
+from motionblur.evaluation.compare import equal_error
 from motionblur.evaluation.metrics import rmse
 from motionblur.methods import image_space as ims
 from motionblur.methods._layers import clear_static_cache
@@ -102,14 +102,7 @@ def with_estimate_ms(scene: Scene, method: str, rounds: int) -> float:
     """Best time (ms) of the method as ``render`` runs it by default: with its error estimate
     (a pilot at about 128x96 against an accumulated reference; not part of the 2x target, which
     is the blur's own cost)."""
-
-    def once() -> float:
-        t0 = CLOCK()
-        mb.render(scene, method)
-        return (CLOCK() - t0) * 1e3
-
-    once()
-    return min(once() for _ in range(rounds))
+    return best(lambda: mb.render(scene, method), rounds)
 
 
 def paired(fns, rounds: int) -> list[float]:
@@ -125,13 +118,19 @@ def paired(fns, rounds: int) -> list[float]:
 
 
 def best(fn, rounds: int) -> float:
+    """Best time (ms) of ``fn`` over ``rounds`` calls after a warm-up (`best_frame`)."""
+    return best_frame(fn, rounds)[0]
+
+
+def best_frame(fn, rounds: int = 3) -> tuple[float, object]:
+    """``(best ms, last result)`` of ``fn`` over ``rounds`` calls after one warm-up call."""
     fn()
-    out = []
+    ms, out = float("inf"), None
     for _ in range(rounds):
         t0 = CLOCK()
-        fn()
-        out.append((CLOCK() - t0) * 1e3)
-    return min(out)
+        out = fn()
+        ms = min(ms, (CLOCK() - t0) * 1e3)
+    return ms, out
 
 
 def stages(scene: Scene, method: str, rounds: int) -> dict[str, float]:
@@ -201,44 +200,26 @@ ACC_COUNTS = (1, 2, 4, 8, 16, 32, 64, 128)
 def errors(name: str) -> dict:
     """RMSE of the sharp frame and of each method against the analytic frame at 1080p, and each
     method's time against accumulation's at the same error (``"equal"``: method -> (method ms,
-    accumulation ms at its RMSE, log-log between the two of `ACC_COUNTS` that bracket it, or
-    NaN outside them); the times best of 3 after a warm-up, in this process, one after another)."""
+    accumulation ms at its RMSE, bound): `motionblur.evaluation.compare.equal_error` over
+    `ACC_COUNTS`, log-log between the two counts that bracket it, or the nearest one's time with
+    bound ``<=`` / ``>=``; the times best of 3 after a warm-up, one after another)."""
     build, methods = SCENES[name]
     scene = build(1920, 1080)
     t0 = time.perf_counter()
     ref = mb.exact(scene).rgba
     out = {"analytic s": time.perf_counter() - t0}
     out["sharp"] = rmse(mb.render(scene, "accumulation", samples=1, error_estimate=False).rgba, ref)
-    acc = []
+    rows = []
     for n in ACC_COUNTS:
-        ms, f = _best_frame(lambda n=n: mb.render(scene, "accumulation", samples=n, error_estimate=False))
-        acc.append((ms, rmse(f.rgba, ref)))
+        ms, f = best_frame(lambda n=n: mb.render(scene, "accumulation", samples=n, error_estimate=False))
+        rows.append({"method": "accumulation", "ms": ms, "rmse": rmse(f.rgba, ref)})
     out["equal"] = {}
     for m in methods:
-        ms, f = _best_frame(lambda m=m: mb.render(scene, m, error_estimate=False))
+        ms, f = best_frame(lambda m=m: mb.render(scene, m, error_estimate=False))
         out[m] = rmse(f.rgba, ref)
-        out["equal"][m] = (ms, _time_at(acc, out[m]))
+        [(_, acc_ms, bound, _)] = equal_error([*rows, {"method": m, "ms": ms, "rmse": out[m]}], method=m)
+        out["equal"][m] = (ms, acc_ms, bound)
     return out
-
-
-def _best_frame(fn, rounds: int = 3) -> tuple[float, object]:
-    fn()
-    best, frame = float("inf"), None
-    for _ in range(rounds):
-        t0 = CLOCK()
-        frame = fn()
-        best = min(best, (CLOCK() - t0) * 1e3)
-    return best, frame
-
-
-def _time_at(acc: list[tuple[float, float]], err: float) -> float:
-    """Accumulation's ms at RMSE ``err`` from its (ms, RMSE) at increasing sample counts: log-log
-    between the two that bracket it; NaN outside them."""
-    for (t0, e0), (t1, e1) in zip(acc, acc[1:]):
-        if e0 >= err >= e1 and e0 > e1 > 0.0:
-            u = math.log(e0 / err) / math.log(e0 / e1)
-            return math.exp(math.log(t0) + u * math.log(t1 / t0))
-    return float("nan")
 
 
 def opaque_vs_copy(w: int, h: int, rounds: int) -> tuple[float, float]:
@@ -306,10 +287,10 @@ def main() -> None:
             f"{name}: analytic reference at 1920x1080 took {e['analytic s']:.1f} s; RMSE sharp frame {e['sharp']:.2e}, "
             + ", ".join(f"{m} {e[m]:.2e}" for m in SCENES[name][1])
         )
-        for m, (ms, acc_ms) in e["equal"].items():
+        for m, (ms, acc_ms, bound) in e["equal"].items():
             print(
-                f"  {m} at 1920x1080: {ms:.1f} ms; accumulation at its RMSE {acc_ms:.1f} ms: "
-                f"{acc_ms / ms:.2f}x the method's time (above 1: the blur pays for itself)"
+                f"  {m} at 1920x1080: {ms:.1f} ms; accumulation at its RMSE {bound}{acc_ms:.1f} ms: "
+                f"{bound}{acc_ms / ms:.2f}x the method's time (above 1: the blur pays for itself)"
             )
     print()
     for w, h in sizes:
