@@ -49,6 +49,7 @@ import motionblur as mb
 from motionblur.evaluation.random_scenes import MEASURING_SEEDS, TUNING_SEEDS, random_scene
 from motionblur.methods import auto as A
 from motionblur.methods._segments import segment_times
+from motionblur.methods._sweep import sweep_scale
 from motionblur.raster import over_background
 from motionblur.threads import set_num_threads
 
@@ -82,6 +83,7 @@ class Recorded:
             for n in TIMED
         ]
         with_estimate = cpu_ms(lambda: A._Trials(scene, aa).accumulate(8))[0]
+        self.sweep_ms, self.sweep = cpu_ms(lambda: sweep_scale(scene))
         self.overhead = max(0.0, with_estimate - self.ms(8))
         self._analytic = None
         self._others: list[tuple[str, float, float]] | None = None
@@ -161,6 +163,16 @@ class Replay(A._Trials):
             method, options, an["exact_ms" if exact else "ms"], est, an["exact_err" if exact else "err"]
         )
 
+    def first_samples(self, tol: float) -> int:
+        """auto's first count, its forecast's pilot charged its recorded time (at ``aa`` 1)."""
+        if self.aa != 1:
+            return A.first_samples(tol)
+        n = A.first_samples(tol, self.rec.sweep)
+        self.tried.append(
+            {"method": "accumulation", "options": {"pilot": "forecast"}, "ms": self.rec.sweep_ms}
+        )
+        return n
+
     def analytic_ms(self, segments: int | None = None) -> float:
         if segments is None and self.segments is None:  # the pilot's recorded time, once
             an = self.rec.analytic()
@@ -180,10 +192,18 @@ def plan_auto(rec: Recorded, tol: float) -> tuple[float, float]:
     return outcome(trials)
 
 
+def plan_fixed_first(rec: Recorded, tol: float) -> tuple[float, float]:
+    trials = Replay(rec)
+    trials.first_samples = A.first_samples  # the count without the forecast (and its pilot)
+    A._for_tolerance(trials, tol)
+    return outcome(trials)
+
+
 def plan_perfect_next(rec: Recorded, tol: float) -> tuple[float, float]:
-    first = A.first_samples(tol)
+    trials = Replay(rec)
+    first = trials.first_samples(tol)
     est, err = rec.grid(first, False)
-    start = rec.ms(first) + rec.overhead
+    start = rec.ms(first) + rec.overhead + sum(t["ms"] for t in trials.tried)
     if err <= tol:
         return err, start
     best = (math.nan, math.inf)
@@ -206,16 +226,17 @@ def plan_perfect_next(rec: Recorded, tol: float) -> tuple[float, float]:
 def plan_perfect_first(rec: Recorded, tol: float) -> tuple[float, float]:
     need = next((n for n in range(2, A.MAX_SAMPLES + 1, 2) if rec.grid(n, False)[1] <= FORESIGHT * tol), None)
     trials = Replay(rec)
-    saved = A.first_samples
-    A.first_samples = lambda _tol: need if need is not None else A.MAX_SAMPLES
-    try:
-        A._for_tolerance(trials, tol)
-    finally:
-        A.first_samples = saved
+    trials.first_samples = lambda _tol: need if need is not None else A.MAX_SAMPLES
+    A._for_tolerance(trials, tol)
     return outcome(trials)
 
 
-PLANNERS = {"auto": plan_auto, "perfect next": plan_perfect_next, "perfect first": plan_perfect_first}
+PLANNERS = {
+    "auto": plan_auto,
+    "fixed first": plan_fixed_first,
+    "perfect next": plan_perfect_next,
+    "perfect first": plan_perfect_first,
+}
 
 
 def summarise(rows: list[dict]) -> str:

@@ -846,3 +846,36 @@ def _segment_times(options: _SegmentOptions) -> np.ndarray:
     by camera_motion when given); tolerance pixels > 0. Releases the GIL."""
 
 # --- end segments
+
+__all__ += [
+    "SWEEP_TIMES",
+    "SWEEP_POINTS",
+    "SWEEP_SHADE",
+    "_sweep_scale",
+]
+
+SWEEP_TIMES: int
+SWEEP_POINTS: int
+SWEEP_SHADE: float
+
+class _SweepObject(TypedDict):
+    mesh: _Mesh
+    motion: _Keyframes | None
+    rgba: np.ndarray
+
+class _SweepOptions(TypedDict):
+    objects: list[_SweepObject]
+    width: int
+    height: int
+    projection: np.ndarray
+    pose: np.ndarray
+    camera_motion: _Keyframes | None
+    background: np.ndarray
+
+def _sweep_scale(options: _SweepOptions) -> float:
+    """The planner's forecast: the screen sweep (pixels) of the objects (mesh, rigid or deforming
+    keyframes or None, straight rgba (4,) f64) seen in a width x height image through the
+    projection and pose (4,4) f64 (moved by camera_motion when given), over the straight
+    background (4,) f64; 0.0 when none is seen."""
+
+# --- end sweep

@@ -18,6 +18,7 @@ mod painter;
 mod raster;
 mod segments;
 mod shell;
+mod sweep;
 
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -32,5 +33,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     painter::register(m)?;
     analytic::register(m)?;
     segments::register(m)?;
+    sweep::register(m)?;
     Ok(())
 }

@@ -40,7 +40,7 @@ struct SegmentArgs<'py> {
 }
 
 /// A (4,4) float64 matrix of any layout, rows first; errors name `name`.
-fn mat4(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> Result<Mat4, Error> {
+pub(super) fn mat4(a: &PyReadonlyArray2<'_, f64>, name: &'static str) -> Result<Mat4, Error> {
     if a.shape() != [4, 4] {
         return Err(Error::shape(
             name,

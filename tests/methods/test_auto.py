@@ -15,6 +15,7 @@ import pytest
 import motionblur as mb
 from motionblur.evaluation.random_scenes import random_scene
 from motionblur.methods import auto as auto_mod
+from motionblur.methods._sweep import sweep_scale
 
 W, H = 64, 48
 
@@ -60,8 +61,11 @@ def test_the_plan_lists_every_render_and_why_the_last_was_kept():
     f = mb.render(scene, "auto", tolerance=0.002)
     plan = f.stats["plan"]
     assert plan["goal"] == "tolerance" and plan["tolerance"] == 0.002
-    first = {"samples": auto_mod.first_samples(0.002)}
-    assert plan["tried"][0] == {**plan["tried"][0], "method": "accumulation", "options": first}
+    sweep = sweep_scale(scene)
+    first = auto_mod.first_samples(0.002, sweep)
+    forecast = {"pilot": f"forecast: sweep {sweep:.3g}, {first} samples"}
+    assert plan["tried"][0] == {**plan["tried"][0], "method": "accumulation", "options": forecast}
+    assert plan["tried"][1] == {**plan["tried"][1], "method": "accumulation", "options": {"samples": first}}
     assert plan["kept"]["method"] == plan["tried"][-1]["method"]
     assert plan["why"] and f.stats["error_estimate"] == plan["tried"][-1]["error_estimate"]
     assert all(t["ms"] >= 0 for t in plan["tried"])
@@ -273,8 +277,34 @@ def test_auto_under_a_shutter_closed_in_the_middle_meets_its_tolerance(seed):
     assert err[0.001] < err[0.004], err
 
 
-def test_the_first_render_is_sized_by_the_tolerance():
+def test_without_a_forecast_the_first_render_is_sized_by_the_tolerance():
+    """At ``aa`` 2 and 4 (where the forecast was not fitted) the count follows the tolerance."""
     assert [auto_mod.first_samples(t) for t in (0.03, 0.0133, 0.01, 0.004, 0.001)] == [4, 6, 8, 8, 8]
+
+
+@pytest.mark.parametrize("sweep", [0.0, 1e-3, 0.05, 0.4, 3.0, 1e3])
+def test_the_forecast_picks_the_fewest_samples_it_expects_to_meet_its_aim(sweep):
+    """The count is the fewest even one whose forecast error is at most FIRST_AIM x the tolerance
+    (2 to FIRST_MOST), and never falls as the tolerance tightens or the sweep grows."""
+    c0, c1, c2 = auto_mod.FIRST_FIT
+
+    def forecast(n):
+        return np.exp(c0) * sweep**c1 * n**c2
+
+    last = 0
+    for tol in (0.03, 0.01, 0.004, 0.001, 1e-4):
+        n = auto_mod.first_samples(tol, sweep)
+        assert n % 2 == 0 and 2 <= n <= auto_mod.FIRST_MOST and n >= last, (tol, n)
+        if 2 < n < auto_mod.FIRST_MOST:
+            assert forecast(n) <= auto_mod.FIRST_AIM * tol < forecast(n - 2), (tol, n)
+        last = n
+    assert auto_mod.first_samples(0.004, sweep) <= auto_mod.first_samples(0.004, 2 * sweep + 1e-3)
+
+
+def test_auto_at_aa_2_uses_no_forecast():
+    scene = random_scene(5, W, H)
+    plan = mb.render(scene, "auto", tolerance=0.004, aa=2).stats["plan"]
+    assert plan["tried"][0]["options"] == {"samples": auto_mod.first_samples(0.004)}
 
 
 @pytest.mark.parametrize(

@@ -11,8 +11,11 @@ analytic method, exact to about `ANALYTIC_ERROR` at its defaults and to 1e-5 at
 With ``tolerance`` (RMSE against the exact integral, premultiplied linear RGBA):
 
 1. a scene where nothing moves on screen is one sharp frame (its error is 0);
-2. accumulation with [`first_samples`][motionblur.methods.auto.first_samples] samples (what the
-   easier tuning scenes need at that tolerance, 4 to 8) measures the scene's error at that N;
+2. accumulation with [`first_samples`][motionblur.methods.auto.first_samples] samples measures
+   the scene's error at that N: as many as a forecast from the scene's geometry
+   (`motionblur.methods._sweep`: how far the moving outlines travel on screen, against what
+   colour) says bring the error to `FIRST_AIM` x ``tolerance``, so that the first render is
+   often the last; the forecast only picks N, the render's halves certify it;
 3. since the error falls about as 1/N (`RATE`), the N that brings the estimate under
    ``tolerance`` x `SAFETY` is predicted and rendered, keeping the samples drawn (`_next_grid`):
    accumulation's samples cut the shutter's mass into equal strata under any shutter, so an
@@ -52,6 +55,7 @@ from ..scene import Scene
 from ._accumulate import HalfSums, add_stratified, shutter_quantiles, time_index
 from ._estimate import EXACT_OPTIONS
 from ._segments import segment_times
+from ._sweep import sweep_scale
 
 __all__ = [
     "auto",
@@ -62,6 +66,9 @@ __all__ = [
     "FIRST_SAMPLES",
     "FIRST_SCALE",
     "FIRST_MAX",
+    "FIRST_FIT",
+    "FIRST_AIM",
+    "FIRST_MOST",
     "first_samples",
     "MAX_SAMPLES",
     "RATE",
@@ -96,6 +103,17 @@ FIRST_SCALE = 0.08
 #: refinement to 17 or 33 keeps them; on tuning seeds 0-39 at 0.004 and 0.001 auto drew 0.89-0.97x
 #: the samples of 12 first, mean over scenes).
 FIRST_MAX = 8
+#: The forecast of accumulation's error before anything renders: RMSE of ``n`` stratified samples
+#: about ``exp(c[0]) * sweep^c[1] * n^c[2]``, ``sweep`` the scene's `_sweep.sweep_scale`. Least
+#: squares on log RMSE over tuning scenes (seeds 0-119 at 96x72, 0-79 at 192x144; 2 to 32
+#: samples, `aa` 1): fitted on the odd seeds and tried on the even ones and back, 80% of the
+#: measured errors lie within 0.51-1.53x the forecast.
+FIRST_FIT = (-1.858, 0.730, -1.022)
+#: The share of the tolerance the first render's forecast error is aimed at (chosen on tuning
+#: seeds 0-79 at 96x72 and 192x144 among 0.5 to 0.85: the least time over the cheapest render).
+FIRST_AIM = 0.7
+#: Most time samples of a first render the forecast picks.
+FIRST_MOST = 256
 #: The rate auto first assumes the error falls at, as N^-RATE (1 for an edge's coverage at one
 #: point; slower where a pixel sees many edges), until two renders show their own.
 RATE = 1.0
@@ -230,14 +248,37 @@ class _Trials:
         self.sums.add_all([(times[sel], weights[sel], half) for half, sel in sels if len(sel)])
 
     @property
+    def renders(self) -> list[dict]:
+        """The renders of the frame itself, in order (``tried`` without the pilots)."""
+        return [t for t in self.tried if "pilot" not in t["options"]]
+
+    @property
     def last(self) -> dict:
-        """The last render of the frame itself (not a timing pilot)."""
-        return [t for t in self.tried if "pilot" not in t["options"]][-1]
+        """The last render of the frame itself (not a pilot)."""
+        return self.renders[-1]
+
+    def first_samples(self, tol: float) -> int:
+        """The first accumulation render's samples at tolerance ``tol`` (`first_samples`); at ``aa``
+        1 from the scene's forecast, which is listed in ``tried`` as a pilot (its sweep, ms)."""
+        if self.aa != 1:
+            return first_samples(tol)
+        t0 = time.perf_counter()
+        sweep = sweep_scale(self.scene)
+        n = first_samples(tol, sweep)
+        ms = (time.perf_counter() - t0) * 1e3
+        self.tried.append(
+            {
+                "method": "accumulation",
+                "options": {"pilot": f"forecast: sweep {sweep:.3g}, {n} samples"},
+                "ms": round(ms, 3),
+            }
+        )
+        return n
 
     @property
     def first_ms_per_sample(self) -> float:
         """The first accumulation render's milliseconds per sample (its fixed costs included)."""
-        first = self.tried[0]
+        first = self.renders[0]
         return max(first["ms"], 1e-3) / first["options"]["samples"]
 
     def analytic_ms(self, segments: int | None = None) -> float:
@@ -254,7 +295,7 @@ class _Trials:
                 {"method": "analytic", "options": {"pilot": f"{self.segments} segments"}, "ms": round(ms, 3)}
             )
         segments = self.segments if segments is None else segments
-        n = self.tried[0]["options"]["samples"]
+        n = self.renders[0]["options"]["samples"]
         triangles = max(1, sum(len(o.mesh.faces) for o in moving))
         other = not (isinstance(scene.shutter, str) and scene.shutter == "box")
         c = ANALYTIC_FIT
@@ -353,10 +394,19 @@ def _next_grid(grid: tuple[int, bool], want: float) -> tuple[int, bool]:
     return (fresh, False)
 
 
-def first_samples(tol: float) -> int:
-    """The time samples of auto's first accumulation render at tolerance ``tol`` (see
-    `FIRST_SCALE`, `FIRST_MAX`): 4 at 0.02 and above, 6 at 0.0133, 8 at 0.01 and below."""
-    return int(min(FIRST_MAX, max(FIRST_SAMPLES, 2 * round(FIRST_SCALE / tol / 2))))
+def first_samples(tol: float, sweep: float | None = None) -> int:
+    """The time samples of auto's first accumulation render at tolerance ``tol``. With the scene's
+    ``sweep`` (`_sweep.sweep_scale`; auto passes it at ``aa`` 1, the sampling it was fitted at):
+    the fewest even count whose forecast error (`FIRST_FIT`) is at most `FIRST_AIM` x ``tol``,
+    2 to `FIRST_MOST`. Without it (``aa`` 2 or 4): ``FIRST_SCALE / tol`` rounded to even,
+    `FIRST_SAMPLES` to `FIRST_MAX` (4 at 0.02 and above, 6 at 0.0133, 8 at 0.01 and below)."""
+    if sweep is None:
+        return int(min(FIRST_MAX, max(FIRST_SAMPLES, 2 * round(FIRST_SCALE / tol / 2))))
+    c0, c1, c2 = FIRST_FIT
+    if not sweep > 0.0:
+        return 2
+    need = (FIRST_AIM * tol / (math.exp(c0) * sweep**c1)) ** (1.0 / c2)
+    return int(min(FIRST_MOST, max(2, 2 * math.ceil(need / 2))))
 
 
 def _analytic_instead(trials: _Trials, draws: int) -> str | None:
@@ -382,7 +432,7 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
         trials.run("analytic", **EXACT_OPTIONS)
         return f"tolerance {tol:g} < 2 x {ANALYTIC_ERROR:g}: the exact integral"
     aim = tol * SAFETY
-    trials.accumulate(first_samples(tol))
+    trials.accumulate(trials.first_samples(tol))
     rate = RATE
     for _ in range(MAX_STEPS + 1):
         est, n = trials.last["error_estimate"], trials.last["options"]["samples"]
@@ -390,7 +440,7 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
             return f"accumulation-{n} estimates {est:.3g} <= {SAFETY} x tolerance"
         measured = [
             (t["options"]["samples"], t["error_estimate"])
-            for t in trials.tried
+            for t in trials.renders
             if t["method"] == "accumulation"
         ]
         if len(measured) >= 2 and measured[-2][1] > est > 0:  # the rate these two renders show

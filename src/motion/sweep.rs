@@ -1,0 +1,330 @@
+//! The screen sweep: a forecast of accumulation's error from the scene's geometry alone
+//! ([`sweep_scale`]), read by the planner (`auto`) to choose its first render's samples. The
+//! render's own halves certify the frame; this only picks where to start.
+//!
+//! With one sample a pixel, a pixel an outline passes over changes its colour once during the
+//! shutter, and N stratified time samples place that step to within half a stratum (an error
+//! of about the contrast over N sqrt 12). The pixels that step are about those an object's
+//! outline sweeps: its screen perimeter times the distance its surface travels on screen. So
+//!
+//! ```text
+//! sweep_scale^2 = sum over objects of perimeter x path x contrast^2 / pixels
+//! ```
+//!
+//! `perimeter`: twice the sum of the sides (pixels, clipped to the image) of the bounding box at
+//! mid-shutter of the object's [`SWEEP_POINTS`] surface points seen at some time, plus one;
+//! `path`: their mean screen path over [`SWEEP_TIMES`] evenly spaced shutter times (pixels;
+//! a step with either end behind the eye counts 0); `contrast^2`: the mean over RGBA of the
+//! squared difference the object's premultiplied colour at [`SWEEP_SHADE`] makes over the
+//! background.
+use glam::DMat4;
+
+use crate::mesh::Mesh;
+use crate::motion::{linear_part, mat4_mul, place, translation_part, Keyframes, Keys, Mat4};
+
+/// Shutter times the surface points are followed at (evenly spaced, both ends included).
+pub const SWEEP_TIMES: usize = 5;
+/// Surface points followed per object (at most four a face).
+pub const SWEEP_POINTS: usize = 64;
+/// The shading factor of an object's colour in its contrast (a typical lambert shade).
+pub const SWEEP_SHADE: f64 = 0.6;
+
+/// One object of the forecast: its mesh (object space, or a deforming motion's rest pose), its
+/// motion (None: still) and its straight RGBA colour.
+#[derive(Clone, Copy)]
+pub struct SweepObject<'a> {
+    /// The object's mesh.
+    pub mesh: &'a Mesh,
+    /// Rigid or deforming keyframes, or None.
+    pub motion: Option<&'a Keyframes>,
+    /// Straight RGBA colour.
+    pub rgba: [f64; 4],
+}
+
+/// The view of the forecast: the image size, the projection, the camera-to-world pose at rest
+/// and the camera's motion (`pose(t) = motion(t) @ pose`). Matrices row-major.
+#[derive(Clone, Copy)]
+pub struct SweepCamera<'a> {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// The projection.
+    pub projection: Mat4,
+    /// Camera-to-world pose at rest.
+    pub pose: Mat4,
+    /// The camera's rigid motion, or None.
+    pub motion: Option<&'a Keyframes>,
+}
+
+/// The scene's screen sweep (see the module): 0 when no object is seen. `background` is
+/// straight RGBA. The objects are those that move on screen (all of them under camera motion).
+pub fn sweep_scale(
+    objects: &[SweepObject<'_>],
+    camera: &SweepCamera<'_>,
+    background: [f64; 4],
+) -> f64 {
+    let times: [f64; SWEEP_TIMES] = std::array::from_fn(|k| k as f64 / (SWEEP_TIMES - 1) as f64);
+    let views: Vec<Mat4> = times.iter().map(|&t| view_projection(camera, t)).collect();
+    let size = [f64::from(camera.width), f64::from(camera.height)];
+    let under = [
+        background[0] * background[3],
+        background[1] * background[3],
+        background[2] * background[3],
+        background[3],
+    ];
+    let total: f64 = objects
+        .iter()
+        .map(|o| {
+            let track = Track::follow(o, &times, &views, size);
+            track.perimeter * track.path * contrast2(o.rgba, under)
+        })
+        .sum();
+    (total / (size[0] * size[1])).sqrt()
+}
+
+/// The view-projection at `t`: `projection @ inverse(motion(t) @ pose)`.
+fn view_projection(camera: &SweepCamera<'_>, t: f64) -> Mat4 {
+    let pose = match camera.motion {
+        Some(m) => mat4_mul(&m.transform_at(t), &camera.pose),
+        None => camera.pose,
+    };
+    // Rows of the inverse: glam's matrices are column-major.
+    let view = DMat4::from_cols_array_2d(&pose)
+        .transpose()
+        .inverse()
+        .transpose()
+        .to_cols_array_2d();
+    mat4_mul(&camera.projection, &view)
+}
+
+/// One object's surface points followed on screen: their mean path and their perimeter
+/// (both 0 when none is seen).
+struct Track {
+    path: f64,
+    perimeter: f64,
+}
+
+impl Track {
+    fn follow(o: &SweepObject<'_>, times: &[f64], views: &[Mat4], size: [f64; 2]) -> Self {
+        let points = surface_points(o.mesh);
+        let (mut path, mut seen_count) = (0.0, 0usize);
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        let mid = times.len() / 2;
+        let screens: Vec<Vec<Option<[f64; 2]>>> = times
+            .iter()
+            .zip(views)
+            .map(|(&t, vp)| {
+                world_at(o, &points, t)
+                    .iter()
+                    .map(|p| screen(vp, p, size))
+                    .collect()
+            })
+            .collect();
+        for i in 0..points.len() {
+            let seen = screens
+                .iter()
+                .any(|s| s[i].is_some_and(|q| inside(q, size)));
+            if !seen {
+                continue;
+            }
+            seen_count += 1;
+            path += screens
+                .windows(2)
+                .map(|w| match (w[0][i], w[1][i]) {
+                    (Some(a), Some(b)) => (a[0] - b[0]).hypot(a[1] - b[1]),
+                    _ => 0.0,
+                })
+                .sum::<f64>();
+            if let Some(q) = screens[mid][i] {
+                for k in 0..2 {
+                    let c = q[k].clamp(0.0, size[k]);
+                    lo[k] = lo[k].min(c);
+                    hi[k] = hi[k].max(c);
+                }
+            }
+        }
+        if seen_count == 0 {
+            return Self {
+                path: 0.0,
+                perimeter: 0.0,
+            };
+        }
+        let extent: f64 = (0..2)
+            .map(|k| if hi[k] >= lo[k] { hi[k] - lo[k] } else { 0.0 })
+            .sum();
+        Self {
+            path: path / seen_count as f64,
+            perimeter: 2.0 * extent + 1.0,
+        }
+    }
+}
+
+/// The surface points of a mesh: up to [`SWEEP_POINTS`] (four a face at most), point `m` on
+/// face `m F / M` at a low-discrepancy barycentric position; as (face, barycentric weights).
+fn surface_points(mesh: &Mesh) -> Vec<(usize, [f64; 3])> {
+    let faces = mesh.faces().len();
+    let count = SWEEP_POINTS.min(4 * faces);
+    (0..count)
+        .map(|m| {
+            let x = m as f64;
+            let (mut u, mut v) = (
+                (x * 0.618_033_988_749_894_9) % 1.0,
+                (x * 0.754_877_666_246_692_7 + 0.5) % 1.0,
+            );
+            if u + v > 1.0 {
+                (u, v) = (1.0 - u, 1.0 - v);
+            }
+            (m * faces / count, [1.0 - u - v, u, v])
+        })
+        .collect()
+}
+
+/// The world positions at `t` of the surface points (placed by a rigid motion, or on the
+/// deforming motion's vertices at `t`).
+fn world_at(o: &SweepObject<'_>, points: &[(usize, [f64; 3])], t: f64) -> Vec<[f64; 3]> {
+    let faces = o.mesh.faces();
+    let on = |verts: &[[f64; 3]], &(f, w): &(usize, [f64; 3])| -> [f64; 3] {
+        let [a, b, c] = faces[f].map(|i| verts[i as usize]);
+        std::array::from_fn(|k| w[0] * a[k] + w[1] * b[k] + w[2] * c[k])
+    };
+    match o.motion {
+        Some(k) if matches!(k.keys(), Keys::Deforming { .. }) => {
+            let verts = k.vertices_at(t).unwrap_or_default();
+            if verts.len() != o.mesh.vertices().len() {
+                return Vec::new();
+            }
+            points.iter().map(|p| on(&verts, p)).collect()
+        }
+        motion => {
+            let m = motion.map(|k| k.transform_at(t));
+            let rest = points.iter().map(|p| on(o.mesh.vertices(), p));
+            match m {
+                Some(m) => {
+                    let (l, tr) = (linear_part(&m), translation_part(&m));
+                    rest.map(|p| place(&l, &tr, &p)).collect()
+                }
+                None => rest.collect(),
+            }
+        }
+    }
+}
+
+/// The image position of world point `p` under view-projection `vp` (None behind the eye).
+fn screen(vp: &Mat4, p: &[f64; 3], size: [f64; 2]) -> Option<[f64; 2]> {
+    let row = |r: usize| vp[r][0] * p[0] + vp[r][1] * p[1] + vp[r][2] * p[2] + vp[r][3];
+    let w = row(3);
+    (w > 1e-9).then(|| {
+        [
+            (row(0) / w * 0.5 + 0.5) * size[0],
+            (-row(1) / w * 0.5 + 0.5) * size[1],
+        ]
+    })
+}
+
+fn inside(q: [f64; 2], size: [f64; 2]) -> bool {
+    (0.0..=size[0]).contains(&q[0]) && (0.0..=size[1]).contains(&q[1])
+}
+
+/// The mean over RGBA of the squared difference straight `rgba` at [`SWEEP_SHADE`] makes over
+/// premultiplied `under`.
+fn contrast2(rgba: [f64; 4], under: [f64; 4]) -> f64 {
+    let a = rgba[3];
+    let d = [
+        (rgba[0] * SWEEP_SHADE - under[0]) * a,
+        (rgba[1] * SWEEP_SHADE - under[1]) * a,
+        (rgba[2] * SWEEP_SHADE - under[2]) * a,
+        (1.0 - under[3]) * a,
+    ];
+    d.iter().map(|x| x * x).sum::<f64>() / 4.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::IDENTITY4;
+
+    fn shift(x: f64, z: f64) -> Mat4 {
+        let mut m = IDENTITY4;
+        m[0][3] = x;
+        m[2][3] = z;
+        m
+    }
+
+    fn square() -> Mesh {
+        let v = vec![
+            [-0.5, -0.5, 0.0],
+            [0.5, -0.5, 0.0],
+            [0.5, 0.5, 0.0],
+            [-0.5, 0.5, 0.0],
+        ];
+        Mesh::new(v, vec![[0, 1, 2], [0, 2, 3]]).unwrap()
+    }
+
+    /// A 90-degree camera 5 units back looking down -z at a `w` x `w` image.
+    fn camera(w: u32) -> SweepCamera<'static> {
+        let (n, f) = (0.1, 100.0);
+        let mut p = [[0.0; 4]; 4];
+        p[0][0] = 1.0;
+        p[1][1] = 1.0;
+        p[2][2] = (f + n) / (n - f);
+        p[2][3] = 2.0 * f * n / (n - f);
+        p[3][2] = -1.0;
+        SweepCamera {
+            width: w,
+            height: w,
+            projection: p,
+            pose: shift(0.0, 5.0),
+            motion: None,
+        }
+    }
+
+    fn scale(moves: f64, rgba: [f64; 4], background: [f64; 4]) -> f64 {
+        let mesh = square();
+        let keys =
+            Keyframes::rigid(vec![0.0, 1.0], &[shift(0.0, 0.0), shift(moves, 0.0)], "m").unwrap();
+        let o = SweepObject {
+            mesh: &mesh,
+            motion: Some(&keys),
+            rgba,
+        };
+        sweep_scale(&[o], &camera(100), background)
+    }
+
+    #[test]
+    fn the_scale_grows_as_the_square_root_of_the_path_and_is_zero_for_no_contrast() {
+        let white = [1.0, 1.0, 1.0, 1.0];
+        let clear = [0.0; 4];
+        let (a, b) = (scale(0.5, white, clear), scale(2.0, white, clear));
+        // a unit square at distance 5 under a 90-degree view of 100 px: 10 px a unit
+        assert!((b / a - 2.0).abs() < 1e-9, "{a} {b}");
+        // every point moves 5 px; the points lie inside the 10 x 10 px square, most of its extent
+        let most = ((2.0 * 20.0 + 1.0) * 5.0 * contrast2(white, clear) / 1e4).sqrt();
+        assert!(a <= most && a > 0.9 * most, "{a} {most}");
+        // the same colour as an opaque background: nothing to see
+        let grey = [0.6, 0.6, 0.6, 1.0];
+        assert_eq!(scale(2.0, [1.0, 1.0, 1.0, 1.0], grey), 0.0);
+    }
+
+    #[test]
+    fn an_object_out_of_view_or_behind_the_eye_adds_nothing() {
+        let mesh = square();
+        let keys =
+            Keyframes::rigid(vec![0.0, 1.0], &[shift(50.0, 0.0), shift(51.0, 0.0)], "m").unwrap();
+        let o = SweepObject {
+            mesh: &mesh,
+            motion: Some(&keys),
+            rgba: [1.0; 4],
+        };
+        assert_eq!(sweep_scale(&[o], &camera(64), [0.0; 4]), 0.0);
+        let behind =
+            Keyframes::rigid(vec![0.0, 1.0], &[shift(0.0, 9.0), shift(1.0, 9.0)], "m").unwrap();
+        let o = SweepObject {
+            mesh: &mesh,
+            motion: Some(&behind),
+            rgba: [1.0; 4],
+        };
+        assert_eq!(sweep_scale(&[o], &camera(64), [0.0; 4]), 0.0);
+        assert_eq!(sweep_scale(&[], &camera(64), [0.0; 4]), 0.0);
+    }
+}
