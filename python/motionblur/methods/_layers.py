@@ -1,8 +1,8 @@
 """The layers every rendering method shares.
 
 A `Layer` is one sample per pixel: colour, depth and object id. The methods draw objects
-at a time into layers through one rasterizer call per shading mode (`raster_layer`, or
-`raw_layer` for the bare compiled call), composite layers per sample by depth
+at a time into layers through one rasterizer call (`raster_layer`, each object with its own
+shading mode, or `raw_layer` for the bare compiled call), composite layers per sample by depth
 (`composite`), supersample by rendering at ``samples`` times the size and resolving down
 (`supersampled`, `resolve`), and keep the static objects' layer across frames
 (`static_layer`), pasting what they redraw into it (`paste`).
@@ -87,34 +87,29 @@ def raster_layer(
     samples: int = 1,
     background_origin=(0, 0),
 ) -> Layer:
-    """Rasterize ``draws`` (pairs of the object and its Draw), one rasterizer call per shading
-    mode, composited by depth. ``view``/``projection`` (4,4) override the camera's (the image
+    """Rasterize ``draws`` (pairs of the object and its Draw) in one rasterizer call, each draw
+    with its object's shading mode. ``view``/``projection`` (4,4) override the camera's (the image
     size stays the camera's). ``samples`` (1, 2 or 4) per pixel along each axis, box-resolved
     by the rasterizer (depth and id of each pixel's nearest sample). ``background``: an opaque
     Layer, one entry per sample, the draws are rasterized over (the rasterizer's
     ``background``: exact per-sample depth test and transparency): the camera's size times
     ``samples``, or a larger Layer whose sample ``background_origin`` (x0, y0) lies under the
-    frame's first sample (a window of a kept layer, read without a copy). With several shading
-    modes the first group is drawn over it and the others are composited by depth (per resolved
-    pixel when ``samples`` > 1: use one shading mode, or ``samples=1`` on a supersampled camera,
-    where exactness per sample matters). When a draw is transparent the modes are one call
-    instead (each flat draw with its own shading), since compositing by one depth a pixel would
-    hide a transparent surface lying between two of the other mode's. Returns a Layer of the
+    frame's first sample (a window of a kept layer, read without a copy). Returns a Layer of the
     camera's size."""
-    groups = _shading_groups(draws)
+    call = _one_call(draws)
     out = None
-    for shading, ds in groups.items():
-        under = background if out is None else None
+    if call is not None:
+        shading, ds = call
         if view is None and projection is None:
-            if under is not None and tuple(background_origin) != (0, 0):
+            if background is not None and tuple(background_origin) != (0, 0):
                 raise ValueError("background_origin: needs view or projection (the raw rasterizer call)")
             f = rasterize(
                 camera, ds, samples=samples, shading=shading, lights=scene.lights, ambient=scene.ambient,
-                background=under,
+                background=background,
             )  # fmt: skip
-            layer = Layer(f.rgba, f.depth, f.ids)
+            out = Layer(f.rgba, f.depth, f.ids)
         else:
-            layer = raw_layer(
+            out = raw_layer(
                 camera.width,
                 camera.height,
                 camera.view if view is None else view,
@@ -123,11 +118,10 @@ def raster_layer(
                 shading,
                 _lights(scene, None),
                 scene.ambient,
-                background=under,
+                background=background,
                 samples=samples,
                 background_origin=background_origin,
             )
-        out = layer if out is None else composite(out, layer)
     if out is None:
         if background is None:
             out = Layer.empty(camera.height, camera.width)
@@ -142,17 +136,16 @@ def raster_layer(
     return out
 
 
-def _shading_groups(draws: list[tuple[Object, Draw]]) -> dict[str, list[Draw]]:
-    """The draws by shading mode, one rasterizer call each; or, when there are two modes and a
-    draw is transparent, all of them in one "lambert" call, the flat ones marked flat."""
-    groups: dict[str, list[Draw]] = {}
-    for obj, d in draws:
-        groups.setdefault(obj.shading, []).append(d)
-    if len(groups) > 1 and any(obj.is_transparent for obj, _ in draws):
-        return {
-            "lambert": [d if obj.shading == "lambert" else _with_shading(d, obj.shading) for obj, d in draws]
-        }
-    return groups
+def _one_call(draws: list[tuple[Object, Draw]]) -> tuple[str, list[Draw]] | None:
+    """The draws as one rasterizer call (its shading mode, its draws), None when there are none:
+    of their one shading mode, or, with two, a "lambert" call with the flat ones marked flat
+    (so that the depth test and the transparent sort are per sample, whatever the modes)."""
+    modes = {obj.shading for obj, _ in draws}
+    if not modes:
+        return None
+    if len(modes) == 1:
+        return modes.pop(), [d for _, d in draws]
+    return "lambert", [d if obj.shading == "lambert" else _with_shading(d, obj.shading) for obj, d in draws]
 
 
 def _with_shading(draw: Draw, shading: str) -> Draw:

@@ -65,10 +65,11 @@ def sharp_frame(scene: Scene, t: float, aa: int = 1, velocity: str | None = "shu
     motion over the whole shutter seen by that camera (``previous_vertices = x(t) - (x(1) -
     x(0))``), or (``"since_open"``) its apparent motion since the shutter opened, the camera's
     own motion folded in (``previous_vertices = P(t) P(0)^-1 x(0)``, P the camera pose), or
-    (None) nothing. One rasterizer call per shading mode, merged per pixel by depth."""
+    (None) nothing. One rasterizer call, each object with its own shading mode, so that its
+    depth test and its transparency are per sample whatever the modes."""
     cam = scene.camera_at(t)
     fold = scene.camera_pose_at(t) @ np.linalg.inv(scene.camera_pose_at(0.0))
-    groups: dict[str, list[Draw]] = {}
+    draws: list[Draw] = []
     for k, o in enumerate(scene.objects):
         v = o.world_vertices(t)
         prev = None
@@ -76,29 +77,13 @@ def sharp_frame(scene: Scene, t: float, aa: int = 1, velocity: str | None = "shu
             prev = v - (o.world_vertices(1.0) - o.world_vertices(0.0))
         elif velocity == "since_open" and o.is_moving:
             prev = o.world_vertices(0.0) @ fold[:3, :3].T + fold[:3, 3]
-        draw = Draw(v, o.mesh.faces, o.rgba, object_id=k, previous_vertices=prev)
-        groups.setdefault(o.shading, []).append(draw)
-    out = None
-    for shading, draws in groups.items():
-        f = rasterize(cam, draws, samples=aa, shading=shading, lights=scene.lights, ambient=scene.ambient)
-        if out is None:
-            out = f
-            continue
-        front = f.depth < out.depth
-        near = np.where(front[..., None], f.rgba, out.rgba)
-        far = np.where(front[..., None], out.rgba, f.rgba)
-        out = Frame(
-            near + (1.0 - near[..., 3:4]) * far,
-            np.minimum(f.depth, out.depth),
-            np.where(front, f.ids, out.ids),
-            np.where(front[..., None], f.velocity, out.velocity),
-        )
-    if out is None:
+        draws.append(Draw(v, o.mesh.faces, o.rgba, object_id=k, previous_vertices=prev, shading=o.shading))
+    if not draws:
         h, w = cam.height, cam.width
-        out = Frame(
+        return Frame(
             np.zeros((h, w, 4), np.float32),
             np.full((h, w), np.inf, np.float32),
             np.full((h, w), -1, np.int32),
             np.zeros((h, w, 2), np.float32),
         )
-    return out
+    return rasterize(cam, draws, samples=aa, shading="flat", lights=scene.lights, ambient=scene.ambient)

@@ -60,10 +60,9 @@ VELOCITY_RATIO = 1.5
 
 def _static_part(scene: Scene, aa: int) -> Static | None:
     """The still camera's static layer (kept across frames, as ``accumulation`` keeps it), when
-    drawing the moving objects over it gives the bits of `sharp_frame`: one shading mode for
-    every object and opaque static objects (a sample of the layer hides what is behind it);
-    None otherwise."""
-    if scene.camera_moves or len({o.shading for o in scene.objects}) != 1:
+    drawing the moving objects over it gives the bits of `sharp_frame`: opaque static objects
+    (a sample of the layer hides what is behind it); None otherwise."""
+    if scene.camera_moves:
         return None
     statics = [(k, o) for k, o in enumerate(scene.objects) if not o.is_moving]
     if any(o.is_transparent for _, o in statics):
@@ -107,7 +106,7 @@ def _sharp_over(scene: Scene, t: float, aa: int, velocity: str | None, static: S
         v, prev = o.world_vertices(t), None  # the previous vertices exactly as sharp_frame's
         if velocity == "shutter":
             prev = v - (o.world_vertices(1.0) - o.world_vertices(0.0))
-        draws.append(Draw(v, o.mesh.faces, o.rgba, object_id=k, previous_vertices=prev))
+        draws.append(Draw(v, o.mesh.faces, o.rgba, object_id=k, previous_vertices=prev, shading=o.shading))
         points.append(_drawn_vertices(o.mesh, v))
     depth, ids = static.depth.copy(), static.ids.copy()
     vel = np.zeros((*ids.shape, 2), np.float32)
