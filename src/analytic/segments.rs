@@ -19,12 +19,10 @@
 use std::cmp::Ordering;
 use std::collections::{BTreeSet, BinaryHeap, HashMap};
 
-use glam::DMat4;
-
 use crate::error::{Error, Result};
 use crate::mesh::Mesh;
-use crate::motion::{linear_part, mat4_mul, place, row_times, translation_part};
-use crate::motion::{Keyframes, Keys, Mat4, IDENTITY4};
+use crate::motion::{linear_part, place, row_times, translation_part};
+use crate::motion::{Keyframes, Keys, Mat4, MovingCamera, IDENTITY4};
 
 /// Most segments the rule makes.
 pub const MAX_SEGMENTS: usize = 256;
@@ -51,25 +49,17 @@ pub struct SegmentObject<'a> {
     pub lambert: bool,
 }
 
-/// The camera the rule measures in: the image size and near plane of the image, the scene
-/// camera's view-projection when still, and its projection, camera-to-world pose and motion
-/// (`pose(t) = motion(t) @ pose`) when it moves. Matrices row-major.
+/// The camera the rule measures in: the image's size, projection, pose and motion (`view`), its
+/// near plane, and the scene camera's view-projection when still (as given, so that a still
+/// camera's boundaries keep their bits). Matrices row-major.
 #[derive(Clone, Copy)]
 pub struct SegmentCamera<'a> {
-    /// Image width in pixels.
-    pub width: u32,
-    /// Image height in pixels.
-    pub height: u32,
+    /// The image and the camera's motion.
+    pub view: MovingCamera<'a>,
     /// The near plane's distance (scene units).
     pub znear: f64,
     /// `projection @ inverse(pose)` of the still camera.
     pub view_projection: Mat4,
-    /// The projection.
-    pub projection: Mat4,
-    /// Camera-to-world pose at rest.
-    pub pose: Mat4,
-    /// The camera's rigid motion, or None.
-    pub motion: Option<&'a Keyframes>,
 }
 
 /// (K+1,) segment boundaries from 0 to 1 for `objects` seen by `camera` (see the module).
@@ -90,7 +80,10 @@ pub fn segment_times(
         return Ok(vec![0.0, 1.0]);
     }
     let mut rule = Rule::new(objects, camera, tolerance)?;
-    let motions = objects.iter().filter_map(|o| o.motion).chain(camera.motion);
+    let motions = objects
+        .iter()
+        .filter_map(|o| o.motion)
+        .chain(camera.view.motion);
     let mut done: BTreeSet<u64> = [0.0f64, 1.0].iter().map(|t| t.to_bits()).collect();
     for m in motions {
         done.extend(
@@ -249,17 +242,10 @@ impl<'a> Rule<'a> {
     /// The camera's view-projection at `t`.
     fn view_projection(&self, t: f64) -> Mat4 {
         let c = &self.camera;
-        let Some(motion) = c.motion else {
-            return c.view_projection;
-        };
-        let pose = mat4_mul(&motion.transform_at(t), &c.pose);
-        // Rows of the inverse: glam's matrices are column-major.
-        let view = DMat4::from_cols_array_2d(&pose)
-            .transpose()
-            .inverse()
-            .transpose()
-            .to_cols_array_2d();
-        mat4_mul(&c.projection, &view)
+        match c.view.motion {
+            None => c.view_projection,
+            Some(_) => c.view.view_projection_at(t),
+        }
     }
 
     /// Clip-space positions of every test point at `t`.
@@ -433,7 +419,10 @@ fn on_image(q: f64) -> f64 {
 /// the difference, `p` the NDC position clamped to [-1, 1], `w_l` the chord's w, at least the
 /// near plane's). NaN when any is NaN.
 fn pixel_error(a: &Clip, b: &Clip, m: &Clip, camera: &SegmentCamera<'_>) -> f64 {
-    let (half_w, half_h) = (0.5 * camera.width as f64, 0.5 * camera.height as f64);
+    let (half_w, half_h) = (
+        0.5 * camera.view.width as f64,
+        0.5 * camera.view.height as f64,
+    );
     let mut worst = 0.0f64;
     for i in 0..m.w.len() {
         let (pa, pb, pm) = (a.xyz[i], b.xyz[i], m.xyz[i]);
@@ -489,7 +478,9 @@ mod tests {
     use super::*;
     use crate::mesh::{grid_faces, uv_sphere};
     use crate::motion::axis_angle;
+    use crate::motion::mat4_mul;
     use crate::raster::Camera;
+    use glam::DMat4;
 
     fn shift(x: f64, z: f64) -> Mat4 {
         let mut m = IDENTITY4;
@@ -511,13 +502,15 @@ mod tests {
         .unwrap();
         let rows = |m: DMat4| m.transpose().to_cols_array_2d();
         SegmentCamera {
-            width: 64,
-            height: 48,
+            view: MovingCamera {
+                width: 64,
+                height: 48,
+                projection: rows(cam.projection),
+                pose: IDENTITY4,
+                motion: None,
+            },
             znear: 0.05,
             view_projection: rows(cam.projection * cam.view),
-            projection: rows(cam.projection),
-            pose: IDENTITY4,
-            motion: None,
         }
     }
 

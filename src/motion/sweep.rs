@@ -17,10 +17,8 @@
 //! a step with either end behind the eye counts 0); `contrast^2`: the mean over RGBA of the
 //! squared difference the object's premultiplied colour at [`SWEEP_SHADE`] makes over the
 //! background.
-use glam::DMat4;
-
 use crate::mesh::Mesh;
-use crate::motion::{linear_part, mat4_mul, place, translation_part, Keyframes, Keys, Mat4};
+use crate::motion::{linear_part, place, translation_part, Keyframes, Keys, Mat4, MovingCamera};
 
 /// Shutter times the surface points are followed at (evenly spaced, both ends included).
 pub const SWEEP_TIMES: usize = 5;
@@ -41,31 +39,18 @@ pub struct SweepObject<'a> {
     pub rgba: [f64; 4],
 }
 
-/// The view of the forecast: the image size, the projection, the camera-to-world pose at rest
-/// and the camera's motion (`pose(t) = motion(t) @ pose`). Matrices row-major.
-#[derive(Clone, Copy)]
-pub struct SweepCamera<'a> {
-    /// Image width in pixels.
-    pub width: u32,
-    /// Image height in pixels.
-    pub height: u32,
-    /// The projection.
-    pub projection: Mat4,
-    /// Camera-to-world pose at rest.
-    pub pose: Mat4,
-    /// The camera's rigid motion, or None.
-    pub motion: Option<&'a Keyframes>,
-}
-
 /// The scene's screen sweep (see the module): 0 when no object is seen. `background` is
 /// straight RGBA. The objects are those that move on screen (all of them under camera motion).
 pub fn sweep_scale(
     objects: &[SweepObject<'_>],
-    camera: &SweepCamera<'_>,
+    camera: &MovingCamera<'_>,
     background: [f64; 4],
 ) -> f64 {
     let times: [f64; SWEEP_TIMES] = std::array::from_fn(|k| k as f64 / (SWEEP_TIMES - 1) as f64);
-    let views: Vec<Mat4> = times.iter().map(|&t| view_projection(camera, t)).collect();
+    let views: Vec<Mat4> = times
+        .iter()
+        .map(|&t| camera.view_projection_at(t))
+        .collect();
     let size = [f64::from(camera.width), f64::from(camera.height)];
     let under = [
         background[0] * background[3],
@@ -81,21 +66,6 @@ pub fn sweep_scale(
         })
         .sum();
     (total / (size[0] * size[1])).sqrt()
-}
-
-/// The view-projection at `t`: `projection @ inverse(motion(t) @ pose)`.
-fn view_projection(camera: &SweepCamera<'_>, t: f64) -> Mat4 {
-    let pose = match camera.motion {
-        Some(m) => mat4_mul(&m.transform_at(t), &camera.pose),
-        None => camera.pose,
-    };
-    // Rows of the inverse: glam's matrices are column-major.
-    let view = DMat4::from_cols_array_2d(&pose)
-        .transpose()
-        .inverse()
-        .transpose()
-        .to_cols_array_2d();
-    mat4_mul(&camera.projection, &view)
 }
 
 /// One object's surface points followed on screen: their mean path and their perimeter
@@ -262,7 +232,7 @@ mod tests {
     }
 
     /// A 90-degree camera 5 units back looking down -z at a `w` x `w` image.
-    fn camera(w: u32) -> SweepCamera<'static> {
+    fn camera(w: u32) -> MovingCamera<'static> {
         let (n, f) = (0.1, 100.0);
         let mut p = [[0.0; 4]; 4];
         p[0][0] = 1.0;
@@ -270,7 +240,7 @@ mod tests {
         p[2][2] = (f + n) / (n - f);
         p[2][3] = 2.0 * f * n / (n - f);
         p[3][2] = -1.0;
-        SweepCamera {
+        MovingCamera {
             width: w,
             height: w,
             projection: p,

@@ -7,7 +7,7 @@ use super::convert::detached_in_pool;
 use super::geometry::PyMesh;
 use super::motion::PyKeyframes;
 use crate::{
-    segment_times, Error, Mat4, SegmentCamera, SegmentObject, ANALYTIC_MAX_SEGMENTS,
+    segment_times, Error, Mat4, MovingCamera, SegmentCamera, SegmentObject, ANALYTIC_MAX_SEGMENTS,
     ANALYTIC_MIN_PIECE, ANALYTIC_NORMAL_TOLERANCE,
 };
 
@@ -70,13 +70,15 @@ fn _segment_times<'py>(
         })
         .collect();
     let camera = SegmentCamera {
-        width: o.width,
-        height: o.height,
+        view: MovingCamera {
+            width: o.width,
+            height: o.height,
+            projection: mat4(&o.projection, "projection")?,
+            pose: mat4(&o.pose, "pose")?,
+            motion: o.camera_motion.as_ref().map(|k| &*k.get().inner),
+        },
         znear: o.znear,
         view_projection: mat4(&o.view_projection, "view_projection")?,
-        projection: mat4(&o.projection, "projection")?,
-        pose: mat4(&o.pose, "pose")?,
-        motion: o.camera_motion.as_ref().map(|k| &*k.get().inner),
     };
     let tolerance = o.tolerance;
     let times = detached_in_pool(py, || segment_times(&objects, &camera, tolerance))?;

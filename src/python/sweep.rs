@@ -6,7 +6,9 @@ use pyo3::prelude::*;
 use super::geometry::PyMesh;
 use super::motion::PyKeyframes;
 use super::segments::mat4;
-use crate::{sweep_scale, Error, SweepCamera, SweepObject, SWEEP_POINTS, SWEEP_SHADE, SWEEP_TIMES};
+use crate::{
+    sweep_scale, Error, MovingCamera, SweepObject, SWEEP_POINTS, SWEEP_SHADE, SWEEP_TIMES,
+};
 
 /// One object, the items of a dict: `mesh` (a `_Mesh`, object space), `motion` (its
 /// `_Keyframes`, rigid or deforming, or None) and `rgba` (4,) float64 straight colour.
@@ -60,7 +62,7 @@ fn _sweep_scale(options: SweepArgs<'_>) -> PyResult<f64> {
             })
         })
         .collect::<Result<Vec<_>, Error>>()?;
-    let camera = SweepCamera {
+    let camera = MovingCamera {
         width: o.width,
         height: o.height,
         projection: mat4(&o.projection, "projection")?,
