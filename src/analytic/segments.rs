@@ -268,7 +268,11 @@ impl<'a> Rule<'a> {
                     let (ml, mt) = (linear_part(&m), translation_part(&m));
                     c.iter().for_each(|p| add(place(&ml, &mt, p)));
                 }
-                Points::Rows(k, rows) => rows_at(k, t, rows).into_iter().for_each(&mut add),
+                Points::Rows(k, rows) => k
+                    .rows_at(t, rows)
+                    .unwrap_or_default()
+                    .into_iter()
+                    .for_each(&mut add),
             }
         }
         out
@@ -354,7 +358,7 @@ impl<'a> Probe<'a> {
     fn normals(&self, t: f64) -> Result<Vec<[f64; 3]>> {
         let n = self
             .local
-            .with_vertices(rows_at(self.motion, t, &self.verts))?
+            .with_vertices(self.motion.rows_at(t, &self.verts).unwrap_or_default())?
             .vertex_normals();
         Ok(self.rows.iter().map(|&r| n[r]).collect())
     }
@@ -386,23 +390,6 @@ fn corners(v: &[[f64; 3]]) -> [[f64; 3]; 8] {
     );
     let pick = |bit: usize, k: usize| if bit == 0 { lo[k] } else { hi[k] };
     std::array::from_fn(|i| [pick(i >> 2 & 1, 0), pick(i >> 1 & 1, 1), pick(i & 1, 2)])
-}
-
-/// The positions at `t` of the vertices `rows` of a deforming motion: those of
-/// [`Keyframes::vertices_at`], for these rows only.
-fn rows_at(k: &Keyframes, t: f64, rows: &[usize]) -> Vec<[f64; 3]> {
-    let Keys::Deforming { vertices, count } = k.keys() else {
-        return Vec::new();
-    };
-    let (i, j, u) = k.segment(t);
-    let (a, b) = (&vertices[i * count..], &vertices[j * count..]);
-    let v = 1.0 - u;
-    rows.iter()
-        .map(|&r| match u == 0.0 {
-            true => a[r],
-            false => std::array::from_fn(|c| v * a[r][c] + u * b[r][c]),
-        })
-        .collect()
 }
 
 /// `clamp(q, -1, 1)`, NaN as 0: the image position a point's error is measured at.
@@ -596,7 +583,7 @@ mod tests {
         let k = Keyframes::deforming(vec![0.2, 0.7], v).unwrap();
         for t in [0.0, 0.3, 0.45, 0.7, 1.0] {
             let all = k.vertices_at(t).unwrap();
-            assert_eq!(rows_at(&k, t, &[0, 2]), [all[0], all[2]]);
+            assert_eq!(k.rows_at(t, &[0, 2]).unwrap(), [all[0], all[2]]);
         }
     }
 }

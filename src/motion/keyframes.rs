@@ -219,6 +219,26 @@ impl Keyframes {
         )
     }
 
+    /// The positions at shutter time `t` of the vertices `rows` of a deforming motion: those of
+    /// [`Keyframes::vertices_at`], for these rows only (None for a rigid motion). Every row must
+    /// be under the motion's vertex count.
+    pub fn rows_at(&self, t: f64, rows: &[usize]) -> Option<Vec<[f64; 3]>> {
+        let Keys::Deforming { vertices, count } = &self.keys else {
+            return None;
+        };
+        let (i, j, u) = self.segment(t);
+        let (a, b) = (&vertices[i * count..], &vertices[j * count..]);
+        let v = 1.0 - u;
+        Some(
+            rows.iter()
+                .map(|&r| match u == 0.0 {
+                    true => a[r],
+                    false => std::array::from_fn(|c| v * a[r][c] + u * b[r][c]),
+                })
+                .collect(),
+        )
+    }
+
     /// The rigid keyframes at the `n + 1` times `i / n` ([`uniform_times`]), interpolated from
     /// the parts of these (None for a deforming motion).
     pub fn resampled(&self, n: usize) -> Option<Keyframes> {

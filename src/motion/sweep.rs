@@ -81,16 +81,17 @@ impl Track {
         let (mut path, mut seen_count) = (0.0, 0usize);
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         let mid = times.len() / 2;
-        let screens: Vec<Vec<Option<[f64; 2]>>> = times
-            .iter()
-            .zip(views)
-            .map(|(&t, vp)| {
-                world_at(o, &points, t)
-                    .iter()
-                    .map(|p| screen(vp, p, size))
-                    .collect()
-            })
-            .collect();
+        let nothing = Self {
+            path: 0.0,
+            perimeter: 0.0,
+        };
+        let mut screens: Vec<Vec<Option<[f64; 2]>>> = Vec::with_capacity(times.len());
+        for (&t, vp) in times.iter().zip(views) {
+            let Some(world) = world_at(o, &points, t) else {
+                return nothing; // a deforming motion of another vertex count: nothing known
+            };
+            screens.push(world.iter().map(|p| screen(vp, p, size)).collect());
+        }
         for i in 0..points.len() {
             let seen = screens
                 .iter()
@@ -115,10 +116,7 @@ impl Track {
             }
         }
         if seen_count == 0 {
-            return Self {
-                path: 0.0,
-                perimeter: 0.0,
-            };
+            return nothing;
         }
         let extent: f64 = (0..2)
             .map(|k| if hi[k] >= lo[k] { hi[k] - lo[k] } else { 0.0 })
@@ -150,34 +148,42 @@ fn surface_points(mesh: &Mesh) -> Vec<(usize, [f64; 3])> {
         .collect()
 }
 
-/// The world positions at `t` of the surface points (placed by a rigid motion, or on the
-/// deforming motion's vertices at `t`).
-fn world_at(o: &SweepObject<'_>, points: &[(usize, [f64; 3])], t: f64) -> Vec<[f64; 3]> {
+/// The world positions at `t` of the surface points: placed by a rigid motion, or on the
+/// positions at `t` of their faces' corners under a deforming one (only those rows, not the
+/// whole mesh); None when a deforming motion's vertex count is not the mesh's.
+fn world_at(o: &SweepObject<'_>, points: &[(usize, [f64; 3])], t: f64) -> Option<Vec<[f64; 3]>> {
     let faces = o.mesh.faces();
-    let on = |verts: &[[f64; 3]], &(f, w): &(usize, [f64; 3])| -> [f64; 3] {
-        let [a, b, c] = faces[f].map(|i| verts[i as usize]);
+    let on = |[a, b, c]: [[f64; 3]; 3], w: [f64; 3]| -> [f64; 3] {
         std::array::from_fn(|k| w[0] * a[k] + w[1] * b[k] + w[2] * c[k])
     };
-    match o.motion {
-        Some(k) if matches!(k.keys(), Keys::Deforming { .. }) => {
-            let verts = k.vertices_at(t).unwrap_or_default();
-            if verts.len() != o.mesh.vertices().len() {
-                return Vec::new();
-            }
-            points.iter().map(|p| on(&verts, p)).collect()
+    if let Some(k) = o.motion.filter(|k| k.is_deforming()) {
+        if !matches!(k.keys(), Keys::Deforming { count, .. } if *count == o.mesh.vertices().len()) {
+            return None;
         }
-        motion => {
-            let m = motion.map(|k| k.transform_at(t));
-            let rest = points.iter().map(|p| on(o.mesh.vertices(), p));
-            match m {
-                Some(m) => {
-                    let (l, tr) = (linear_part(&m), translation_part(&m));
-                    rest.map(|p| place(&l, &tr, &p)).collect()
-                }
-                None => rest.collect(),
-            }
-        }
+        let rows: Vec<usize> = points
+            .iter()
+            .flat_map(|&(f, _)| faces[f].map(|i| i as usize))
+            .collect();
+        let at = k.rows_at(t, &rows)?;
+        return Some(
+            points
+                .iter()
+                .zip(at.chunks_exact(3))
+                .map(|(&(_, w), c)| on([c[0], c[1], c[2]], w))
+                .collect(),
+        );
     }
+    let verts = o.mesh.vertices();
+    let rest = points
+        .iter()
+        .map(|&(f, w)| on(faces[f].map(|i| verts[i as usize]), w));
+    Some(match o.motion.map(|k| k.transform_at(t)) {
+        Some(m) => {
+            let (l, tr) = (linear_part(&m), translation_part(&m));
+            rest.map(|p| place(&l, &tr, &p)).collect()
+        }
+        None => rest.collect(),
+    })
 }
 
 /// The image position of world point `p` under view-projection `vp` (None behind the eye).
@@ -212,13 +218,10 @@ fn contrast2(rgba: [f64; 4], under: [f64; 4]) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::IDENTITY4;
+    use crate::motion::Similarity;
 
     fn shift(x: f64, z: f64) -> Mat4 {
-        let mut m = IDENTITY4;
-        m[0][3] = x;
-        m[2][3] = z;
-        m
+        Similarity::translate([x, 0.0, z]).matrix
     }
 
     fn square() -> Mesh {
@@ -249,16 +252,31 @@ mod tests {
         }
     }
 
-    fn scale(moves: f64, rgba: [f64; 4], background: [f64; 4]) -> f64 {
+    /// The sweep of the square moved from `from` to `to` (x, z) in a `w` x `w` image.
+    fn sweep_of(
+        from: (f64, f64),
+        to: (f64, f64),
+        w: u32,
+        rgba: [f64; 4],
+        background: [f64; 4],
+    ) -> f64 {
         let mesh = square();
-        let keys =
-            Keyframes::rigid(vec![0.0, 1.0], &[shift(0.0, 0.0), shift(moves, 0.0)], "m").unwrap();
+        let keys = Keyframes::rigid(
+            vec![0.0, 1.0],
+            &[shift(from.0, from.1), shift(to.0, to.1)],
+            "m",
+        )
+        .unwrap();
         let o = SweepObject {
             mesh: &mesh,
             motion: Some(&keys),
             rgba,
         };
-        sweep_scale(&[o], &camera(100), background)
+        sweep_scale(&[o], &camera(w), background)
+    }
+
+    fn scale(moves: f64, rgba: [f64; 4], background: [f64; 4]) -> f64 {
+        sweep_of((0.0, 0.0), (moves, 0.0), 100, rgba, background)
     }
 
     #[test]
@@ -278,23 +296,21 @@ mod tests {
 
     #[test]
     fn an_object_out_of_view_or_behind_the_eye_adds_nothing() {
+        let (white, clear) = ([1.0; 4], [0.0; 4]);
+        assert_eq!(sweep_of((50.0, 0.0), (51.0, 0.0), 64, white, clear), 0.0);
+        assert_eq!(sweep_of((0.0, 9.0), (1.0, 9.0), 64, white, clear), 0.0);
+        assert_eq!(sweep_scale(&[], &camera(64), clear), 0.0);
+    }
+
+    #[test]
+    fn a_deforming_motion_of_another_vertex_count_adds_nothing() {
         let mesh = square();
-        let keys =
-            Keyframes::rigid(vec![0.0, 1.0], &[shift(50.0, 0.0), shift(51.0, 0.0)], "m").unwrap();
+        let keys = Keyframes::deforming(vec![0.0, 1.0], vec![[0.0; 3]; 6]).unwrap();
         let o = SweepObject {
             mesh: &mesh,
             motion: Some(&keys),
             rgba: [1.0; 4],
         };
         assert_eq!(sweep_scale(&[o], &camera(64), [0.0; 4]), 0.0);
-        let behind =
-            Keyframes::rigid(vec![0.0, 1.0], &[shift(0.0, 9.0), shift(1.0, 9.0)], "m").unwrap();
-        let o = SweepObject {
-            mesh: &mesh,
-            motion: Some(&behind),
-            rgba: [1.0; 4],
-        };
-        assert_eq!(sweep_scale(&[o], &camera(64), [0.0; 4]), 0.0);
-        assert_eq!(sweep_scale(&[], &camera(64), [0.0; 4]), 0.0);
     }
 }
