@@ -164,10 +164,8 @@ class Replay(A._Trials):
         )
 
     def first_samples(self, tol: float) -> int:
-        """auto's first count, its forecast's pilot charged its recorded time (at ``aa`` 1)."""
-        if self.aa != 1:
-            return A.first_samples(tol)
-        n = A.first_samples(tol, self.rec.sweep)
+        """auto's first count, its forecast's pilot charged its recorded time."""
+        n = A.first_samples(tol, self.rec.sweep, self.aa)
         self.tried.append(
             {"method": "accumulation", "options": {"pilot": "forecast"}, "ms": self.rec.sweep_ms}
         )

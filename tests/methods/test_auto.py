@@ -278,33 +278,37 @@ def test_auto_under_a_shutter_closed_in_the_middle_meets_its_tolerance(seed):
 
 
 def test_without_a_forecast_the_first_render_is_sized_by_the_tolerance():
-    """At ``aa`` 2 and 4 (where the forecast was not fitted) the count follows the tolerance."""
+    """The rule before the forecast (kept for comparison in the benches) follows the tolerance."""
     assert [auto_mod.first_samples(t) for t in (0.03, 0.0133, 0.01, 0.004, 0.001)] == [4, 6, 8, 8, 8]
 
 
+@pytest.mark.parametrize("aa", [1, 2, 4])
 @pytest.mark.parametrize("sweep", [0.0, 1e-3, 0.05, 0.4, 3.0, 1e3])
-def test_the_forecast_picks_the_fewest_samples_it_expects_to_meet_its_aim(sweep):
-    """The count is the fewest even one whose forecast error is at most FIRST_AIM x the tolerance
-    (2 to FIRST_MOST), and never falls as the tolerance tightens or the sweep grows."""
-    c0, c1, c2 = auto_mod.FIRST_FIT
+def test_the_forecast_picks_the_fewest_samples_it_expects_to_meet_its_aim(sweep, aa):
+    """The count is the fewest even one whose forecast error at ``aa`` is at most FIRST_AIM x the
+    tolerance (2 to FIRST_MOST), and never falls as the tolerance tightens or the sweep grows."""
+    c0, c1, c2 = auto_mod.FIRST_FIT[aa]
 
     def forecast(n):
         return np.exp(c0) * sweep**c1 * n**c2
 
     last = 0
     for tol in (0.03, 0.01, 0.004, 0.001, 1e-4):
-        n = auto_mod.first_samples(tol, sweep)
+        n = auto_mod.first_samples(tol, sweep, aa)
         assert n % 2 == 0 and 2 <= n <= auto_mod.FIRST_MOST and n >= last, (tol, n)
         if 2 < n < auto_mod.FIRST_MOST:
             assert forecast(n) <= auto_mod.FIRST_AIM * tol < forecast(n - 2), (tol, n)
         last = n
-    assert auto_mod.first_samples(0.004, sweep) <= auto_mod.first_samples(0.004, 2 * sweep + 1e-3)
+    assert auto_mod.first_samples(0.004, sweep, aa) <= auto_mod.first_samples(0.004, 2 * sweep + 1e-3, aa)
 
 
-def test_auto_at_aa_2_uses_no_forecast():
+@pytest.mark.parametrize("aa", [2, 4])
+def test_auto_at_aa_2_and_4_sizes_its_first_render_from_the_forecast_at_that_aa(aa):
     scene = random_scene(5, W, H)
-    plan = mb.render(scene, "auto", tolerance=0.004, aa=2).stats["plan"]
-    assert plan["tried"][0]["options"] == {"samples": auto_mod.first_samples(0.004)}
+    plan = mb.render(scene, "auto", tolerance=0.004, aa=aa).stats["plan"]
+    first = auto_mod.first_samples(0.004, sweep_scale(scene), aa)
+    assert plan["tried"][0]["options"]["pilot"].endswith(f", {first} samples")
+    assert plan["tried"][1]["options"] == {"samples": first}
 
 
 @pytest.mark.parametrize(

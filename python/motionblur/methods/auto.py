@@ -103,13 +103,21 @@ FIRST_SCALE = 0.08
 #: refinement to 17 or 33 keeps them; on tuning seeds 0-39 at 0.004 and 0.001 auto drew 0.89-0.97x
 #: the samples of 12 first, mean over scenes).
 FIRST_MAX = 8
-#: The forecast of accumulation's error before anything renders: RMSE of ``n`` stratified samples
-#: about ``exp(c[0]) * sweep^c[1] * n^c[2]``, ``sweep`` the scene's `_sweep.sweep_scale`. Least
-#: squares on log RMSE over tuning scenes (seeds 0-119 at 96x72, 0-79 at 192x144; 2 to 32
-#: samples, `aa` 1): fitted on the odd seeds and tried on the even ones and back, 80% of the
-#: measured errors lie within 0.51-1.53x the forecast (on seeds 120-299 at 96x72, not fitted
-#: on: 0.65-1.74x, median 1.08).
-FIRST_FIT = (-1.858, 0.730, -1.022)
+#: The forecast of accumulation's error before anything renders, per ``aa``: RMSE of ``n``
+#: stratified samples about ``exp(c[0]) * sweep^c[1] * n^c[2]``, ``sweep`` the scene's
+#: `_sweep.sweep_scale`. Least squares on log RMSE over tuning scenes (seeds 0-119 at 96x72,
+#: 0-79 at 192x144; 2 to 32 samples). At ``aa`` 1, fitted on the odd seeds and tried on the even
+#: ones and back, 80% of the measured errors lie within 0.51-1.53x the forecast (on seeds
+#: 120-299 at 96x72, not fitted on: 0.65-1.74x, median 1.08). At ``aa`` 2 and 4 the fit is to the
+#: error estimate, which certifies the frame (at ``aa`` 4 it over-reads the error where N is
+#: near the screen path in pixels): 80% within 0.51-1.86x (``aa`` 2) and 0.43-2.20x (``aa`` 4),
+#: cross-fitted the same way. More spatial samples a pixel smooth each outline's step, so the
+#: error falls faster with N (exponents -1.15 and -1.29 against -1.02).
+FIRST_FIT = {
+    1: (-1.858, 0.730, -1.022),
+    2: (-1.810, 0.784, -1.153),
+    4: (-1.550, 0.847, -1.286),
+}
 #: The share of the tolerance the first render's forecast error is aimed at (chosen on tuning
 #: seeds 0-79 at 96x72 and 192x144 among 0.5 to 0.85: the least time over the cheapest render).
 FIRST_AIM = 0.7
@@ -259,13 +267,12 @@ class _Trials:
         return self.renders[-1]
 
     def first_samples(self, tol: float) -> int:
-        """The first accumulation render's samples at tolerance ``tol`` (`first_samples`); at ``aa``
-        1 from the scene's forecast, which is listed in ``tried`` as a pilot (its sweep, ms)."""
-        if self.aa != 1:
-            return first_samples(tol)
+        """The first accumulation render's samples at tolerance ``tol`` (`first_samples`), from
+        the scene's forecast at its ``aa``, which is listed in ``tried`` as a pilot (its sweep,
+        ms)."""
         t0 = time.perf_counter()
         sweep = sweep_scale(self.scene)
-        n = first_samples(tol, sweep)
+        n = first_samples(tol, sweep, self.aa)
         ms = (time.perf_counter() - t0) * 1e3
         self.tried.append(
             {
@@ -395,15 +402,16 @@ def _next_grid(grid: tuple[int, bool], want: float) -> tuple[int, bool]:
     return (fresh, False)
 
 
-def first_samples(tol: float, sweep: float | None = None) -> int:
+def first_samples(tol: float, sweep: float | None = None, aa: int = 1) -> int:
     """The time samples of auto's first accumulation render at tolerance ``tol``. With the scene's
-    ``sweep`` (`_sweep.sweep_scale`; auto passes it at ``aa`` 1, the sampling it was fitted at):
-    the fewest even count whose forecast error (`FIRST_FIT`) is at most `FIRST_AIM` x ``tol``,
-    2 to `FIRST_MOST`. Without it (``aa`` 2 or 4): ``FIRST_SCALE / tol`` rounded to even,
-    `FIRST_SAMPLES` to `FIRST_MAX` (4 at 0.02 and above, 6 at 0.0133, 8 at 0.01 and below)."""
+    ``sweep`` (`_sweep.sweep_scale`; auto always passes it): the fewest even count whose
+    forecast error at ``aa`` (1, 2 or 4 spatial samples per pixel along each axis; `FIRST_FIT`)
+    is at most `FIRST_AIM` x ``tol``, 2 to `FIRST_MOST`. Without it (the rule before the
+    forecast, kept for comparison): ``FIRST_SCALE / tol`` rounded to even, `FIRST_SAMPLES` to
+    `FIRST_MAX` (4 at 0.02 and above, 6 at 0.0133, 8 at 0.01 and below)."""
     if sweep is None:
         return int(min(FIRST_MAX, max(FIRST_SAMPLES, 2 * round(FIRST_SCALE / tol / 2))))
-    c0, c1, c2 = FIRST_FIT
+    c0, c1, c2 = FIRST_FIT[aa]
     if not sweep > 0.0:
         return 2
     need = (FIRST_AIM * tol / (math.exp(c0) * sweep**c1)) ** (1.0 / c2)
