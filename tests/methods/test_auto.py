@@ -366,3 +366,12 @@ def test_accumulations_never_write_into_the_kept_static_layer_nor_share_a_frame(
             assert not np.shares_memory(a, b)
     finally:
         clear_static_cache()
+
+
+@pytest.mark.parametrize("aa", [0, 3, 8])
+def test_auto_names_aa_when_it_is_not_1_2_or_4(aa):
+    """``aa`` is checked before the forecast reads its fit (a KeyError there, unchecked)."""
+    scene = random_scene(5, W, H)
+    for goal in ({"tolerance": 0.01}, {"budget_ms": 50.0}):
+        with pytest.raises(ValueError, match="aa"):
+            mb.render(scene, "auto", aa=aa, **goal)

@@ -48,13 +48,14 @@ import time
 
 import numpy as np
 
-from .._validate import as_float, as_int
+from .._validate import as_float
 from ..raster import Frame
 from ..render import METHODS, register
 from ..scene import Scene
 from ._accumulate import HalfSums, add_stratified, shutter_quantiles, time_index
 from ._estimate import EXACT_OPTIONS
 from ._segments import segment_times
+from ._sharp import check_aa
 from ._sweep import sweep_scale
 
 __all__ = [
@@ -525,7 +526,7 @@ def auto(scene: Scene, tolerance=None, budget_ms=None, aa: int = 1) -> Frame:
     ``tried`` (every render: method, options, ms, error estimate), ``kept`` (the method and
     options of the frame returned) and ``why`` (see [`motionblur.methods.auto`][motionblur.methods.auto]).
     """
-    aa = as_int(aa, "aa")
+    aa = check_aa(aa)
     if tolerance is not None and budget_ms is not None:
         raise ValueError("tolerance, budget_ms: give one of them, not both")
     tol = DEFAULT_TOLERANCE if tolerance is None else as_float(tolerance, "tolerance")
