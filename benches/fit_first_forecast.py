@@ -71,6 +71,17 @@ def fit(rows: list[dict], aa: int) -> dict:
             "cross_fitted_ratio": {"p10": p10, "median": p50, "p90": p90}}  # fmt: skip
 
 
+def scene_specs(sizes: str, first_seed: int) -> list[tuple[int, int, int]]:
+    """``(seed, width, height)`` for ``sizes`` ``"WxH:scenes,..."``: that many seeds from
+    ``first_seed`` at each size, in order."""
+    out = []
+    for spec in sizes.split(","):
+        size, count = spec.split(":")
+        w, h = map(int, size.split("x"))
+        out += [(seed, w, h) for seed in range(first_seed, first_seed + int(count))]
+    return out
+
+
 def main(argv: list[str] | None = None) -> dict:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--aa", type=int, default=1, choices=(1, 2, 4))
@@ -79,12 +90,11 @@ def main(argv: list[str] | None = None) -> dict:
     p.add_argument("--out", default=None, help="output folder (default out/bench/first_fit/aa<aa>)")
     args = p.parse_args(argv)
     set_num_threads(1)
-    rows = []
-    for spec in args.sizes.split(","):
-        size, count = spec.split(":")
-        w, h = map(int, size.split("x"))
-        for seed in range(args.first_seed, args.first_seed + int(count)):
-            rows += scene_rows(seed, w, h, args.aa)
+    rows = [
+        row
+        for seed, w, h in scene_specs(args.sizes, args.first_seed)
+        for row in scene_rows(seed, w, h, args.aa)
+    ]
     result = fit(rows, args.aa)
     out = Path(args.out) if args.out else OUT / f"aa{args.aa}"
     out.mkdir(parents=True, exist_ok=True)

@@ -39,6 +39,9 @@ from motionblur.methods._accumulate import HalfSums, shutter_quantiles
 from motionblur.raster import over_background
 from motionblur.threads import set_num_threads
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from fit_first_forecast import scene_specs  # noqa: E402  (the script beside this one)
+
 OUT = Path("out/bench/refined_grids")
 COUNTS = (8, 12, 16, 24, 32)
 #: Each family's first boundary within four strata and the half it joins.
@@ -48,9 +51,10 @@ GRIDS = {"S": (), "A": ("A",), "AB": ("A", "B")}
 
 def refined(scene, n: int, families) -> tuple[float, float, int]:
     """(estimate at a halves factor of 1, frame, samples) of ``n`` strata (4 divides n) refined
-    by the boundary ``families``, every sample weighted by its nearest-time cell."""
-    _accumulate.HALVES_FACTOR["study"] = 1.0
-    sums = HalfSums(scene, 1, sampling="study")
+    by the boundary ``families``, every sample weighted by its nearest-time cell. (The parts
+    carry no quarters, so the estimate is the stratified factor times the halves' difference:
+    divided out.)"""
+    sums = HalfSums(scene, 1)
     first = {FAMILIES[f][0] for f in families}
 
     def present(b: int) -> bool:
@@ -69,7 +73,8 @@ def refined(scene, n: int, families) -> tuple[float, float, int]:
         parts.append((shutter_quantiles(scene.shutter, b / n), np.full(len(b), 0.5 / n), half))
     sums.add_all(parts)
     frame = sums.frame()
-    return frame.stats["error_estimate"], frame, sum(len(p[0]) for p in parts)
+    raw = frame.stats["error_estimate"] / _accumulate.HALVES_FACTOR["stratified"]
+    return raw, frame, sum(len(p[0]) for p in parts)
 
 
 def scene_rows(seed: int, w: int, h: int) -> list[dict]:
@@ -117,12 +122,7 @@ def main(argv: list[str] | None = None) -> list[str]:
     p.add_argument("--first-seed", type=int, default=0)
     args = p.parse_args(argv)
     set_num_threads(1)
-    rows = []
-    for spec in args.sizes.split(","):
-        size, count = spec.split(":")
-        w, h = map(int, size.split("x"))
-        for seed in range(args.first_seed, args.first_seed + int(count)):
-            rows += scene_rows(seed, w, h)
+    rows = [row for seed, w, h in scene_specs(args.sizes, args.first_seed) for row in scene_rows(seed, w, h)]
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "rows.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
     lines = summary(rows)

@@ -375,3 +375,5 @@ def test_auto_names_aa_when_it_is_not_1_2_or_4(aa):
     for goal in ({"tolerance": 0.01}, {"budget_ms": 50.0}):
         with pytest.raises(ValueError, match="aa"):
             mb.render(scene, "auto", aa=aa, **goal)
+    with pytest.raises(ValueError, match="aa"):
+        auto_mod.first_samples(0.01, 0.1, aa)

@@ -412,7 +412,7 @@ def first_samples(tol: float, sweep: float | None = None, aa: int = 1) -> int:
     `FIRST_MAX` (4 at 0.02 and above, 6 at 0.0133, 8 at 0.01 and below)."""
     if sweep is None:
         return int(min(FIRST_MAX, max(FIRST_SAMPLES, 2 * round(FIRST_SCALE / tol / 2))))
-    c0, c1, c2 = FIRST_FIT[aa]
+    c0, c1, c2 = FIRST_FIT[check_aa(aa)]
     if not sweep > 0.0:
         return 2
     need = (FIRST_AIM * tol / (math.exp(c0) * sweep**c1)) ** (1.0 / c2)
