@@ -7,9 +7,10 @@ by accumulation's own estimate could pay, on seeded random scenes against the ex
 Times are the process's CPU time at one thread (it sets one). For each scene where
 something moves (no rolling shutter), against :func:`motionblur.exact` at the same ``aa``:
 
-- every accumulation grid a planner asks for (stratified of N samples, or auto's trapezoid grid of
-  M strata) is rendered once, afresh, through auto's own trials (`_Trials.accumulate`): its error
-  estimate and its measured RMSE are kept; the analytic frame (default and exact options) and
+- every accumulation grid a planner asks for (stratified of N samples, auto's trapezoid grid of
+  M strata, or N samples refined by a quarter or a half of their strata's boundaries) is
+  rendered once, afresh (a refined grid after its stratified one), through auto's own trials
+  (`_Trials.accumulate`): its error estimate and its measured RMSE are kept; the analytic frame (default and exact options) and
   the segment pilot too;
 - time: accumulation at 1 to 256 samples (best of 3); a render that draws k new samples is
   charged the time of k interpolated, plus the estimate's overhead measured at 8 samples; the
@@ -17,6 +18,9 @@ something moves (no rolling shutter), against :func:`motionblur.exact` at the sa
 - three planners read the same renders:
   * **auto**: `motionblur.methods.auto._for_tolerance` itself, on the recorded estimates (the
     plan auto takes; its cost here is the model's, its error the measured one);
+  * **doubling only**: the same without the refined grids (`_Trials.refines` off), as auto
+    was before them;
+  * **fixed first**: the same with the fixed first count (4 to 8) instead of the forecast;
   * **perfect next**: auto's first render, then the one next grid (holding the drawn samples or
     afresh, as `_next_grid` may choose) or the analytic frame that meets the tolerance, by the
     measured error, at the least time: any planner that starts as auto does and then knows every
@@ -77,7 +81,7 @@ class Recorded:
     def __init__(self, scene, aa: int) -> None:
         self.scene, self.aa = scene, aa
         self.ref = mb.exact(scene, aa=aa).rgba.astype(np.float64)
-        self.grids: dict[tuple[int, bool], tuple[float, float]] = {}
+        self.grids: dict[tuple[int, str], tuple[float, float]] = {}
         self.times = [
             cpu_ms(lambda n=n: mb.render(scene, "accumulation", samples=n, error_estimate=False, aa=aa))[0]
             for n in TIMED
@@ -95,11 +99,14 @@ class Recorded:
             return ts[-1] + (n - ns[-1]) * (ts[-1] - ts[-2]) / (ns[-1] - ns[-2])
         return float(np.interp(n, ns, ts))
 
-    def grid(self, m: int, trapezoid: bool) -> tuple[float, float]:
-        """(estimate, measured RMSE) of auto's grid of ``m`` (strata, trapezoid or not)."""
-        key = (m, trapezoid)
+    def grid(self, m: int, kind: str) -> tuple[float, float]:
+        """(estimate, measured RMSE) of auto's grid of ``m`` strata of ``kind``."""
+        key = (m, kind)
         if key not in self.grids:
-            frame = A._Trials(self.scene, self.aa).accumulate(m, trapezoid)
+            trials = A._Trials(self.scene, self.aa)
+            if kind in A.KINDS:  # refined: after the stratified grid it holds
+                trials.accumulate(m)
+            frame = trials.accumulate(m, kind)
             err = rmse(over_background(frame, self.scene.background).rgba, self.ref)
             self.grids[key] = (frame.stats["error_estimate"], err)
         return self.grids[key]
@@ -128,7 +135,7 @@ class Recorded:
 
     def cheapest(self, tol: float) -> tuple[str, float]:
         # the fewest samples that meet it: the grids past it are never rendered
-        n = next((n for n in ACC_GRID if self.grid(n, False)[1] <= tol), None)
+        n = next((n for n in ACC_GRID if self.grid(n, A.STRATIFIED)[1] <= tol), None)
         found = [] if n is None else [(f"accumulation-{n}", self.ms(n))]
         an = self.analytic()
         if an["err"] <= tol:
@@ -140,19 +147,21 @@ class Recorded:
 class Replay(A._Trials):
     """auto's trials on a `Recorded` scene: the same decisions, each render looked up."""
 
-    def __init__(self, rec: Recorded) -> None:
+    def __init__(self, rec: Recorded, refines: bool = True) -> None:
         super().__init__(rec.scene, rec.aa)
         self.rec = rec
+        self.refines = self.refines and refines
 
     def _log(self, method: str, options: dict, ms: float, est: float, err: float) -> None:
         self.tried.append({"method": method, "options": options, "ms": ms, "error_estimate": est, "err": err})
 
-    def accumulate(self, n: int, trapezoid: bool = False) -> None:
-        grid = (n, trapezoid)
+    def accumulate(self, n: int, kind: str = A.STRATIFIED) -> None:
+        grid = (n, kind)
         draws = A._samples(grid) if self.grid is None else A._draws(grid, self.grid)
-        est, err = self.rec.grid(n, trapezoid)
+        est, err = self.rec.grid(n, kind)
         self.grid = grid
-        options = {"samples": A._samples(grid), **({"grid": "trapezoid"} if trapezoid else {})}
+        self.effective.append((A._effective(grid), est))
+        options = {"samples": A._samples(grid), **({"grid": kind} if kind != A.STRATIFIED else {})}
         self._log("accumulation", options, self.rec.ms(draws) + self.rec.overhead, est, err)
 
     def run(self, method: str, **options) -> None:
@@ -190,6 +199,12 @@ def plan_auto(rec: Recorded, tol: float) -> tuple[float, float]:
     return outcome(trials)
 
 
+def plan_doubling(rec: Recorded, tol: float) -> tuple[float, float]:
+    trials = Replay(rec, refines=False)
+    A._for_tolerance(trials, tol)
+    return outcome(trials)
+
+
 def plan_fixed_first(rec: Recorded, tol: float) -> tuple[float, float]:
     trials = Replay(rec)
     trials.first_samples = A.first_samples  # the count without the forecast (and its pilot)
@@ -200,7 +215,7 @@ def plan_fixed_first(rec: Recorded, tol: float) -> tuple[float, float]:
 def plan_perfect_next(rec: Recorded, tol: float) -> tuple[float, float]:
     trials = Replay(rec)
     first = trials.first_samples(tol)
-    est, err = rec.grid(first, False)
+    est, err = rec.grid(first, A.STRATIFIED)
     start = rec.ms(first) + rec.overhead + sum(t["ms"] for t in trials.tried)
     if err <= tol:
         return err, start
@@ -209,11 +224,13 @@ def plan_perfect_next(rec: Recorded, tol: float) -> tuple[float, float]:
     for key, ms in (("err", an["ms"]), ("exact_err", an["exact_ms"])):
         if an[key] <= tol and start + ms < best[1]:
             best = (an[key], start + ms)
-    fresh = [(n, False) for n in range(first + 2, A.MAX_SAMPLES + 1, 2)]
-    held = [(first * k, False) for k in range(3, A.MAX_SAMPLES // first + 1, 2)]
-    held += [(first * k, True) for k in range(2, A.MAX_SAMPLES // first, 2)]
-    for grid in sorted(fresh + held, key=lambda g: A._draws(g, (first, False))):
-        cost = start + rec.ms(A._draws(grid, (first, False))) + rec.overhead
+    start_grid = (first, A.STRATIFIED)
+    fresh = [(n, A.STRATIFIED) for n in range(first + 2, A.MAX_SAMPLES + 1, 2)]
+    held = [(first * k, A.STRATIFIED) for k in range(3, A.MAX_SAMPLES // first + 1, 2)]
+    held += [(first * k, A.TRAPEZOID) for k in range(2, A.MAX_SAMPLES // first, 2)]
+    held += A._refinements(start_grid) if trials.refines else []
+    for grid in sorted(fresh + held, key=lambda g: A._draws(g, start_grid)):
+        cost = start + rec.ms(A._draws(grid, start_grid)) + rec.overhead
         if cost >= best[1]:
             break  # sorted by draws: every later grid costs more
         if rec.grid(*grid)[1] <= tol:
@@ -222,7 +239,9 @@ def plan_perfect_next(rec: Recorded, tol: float) -> tuple[float, float]:
 
 
 def plan_perfect_first(rec: Recorded, tol: float) -> tuple[float, float]:
-    need = next((n for n in range(2, A.MAX_SAMPLES + 1, 2) if rec.grid(n, False)[1] <= FORESIGHT * tol), None)
+    need = next(
+        (n for n in range(2, A.MAX_SAMPLES + 1, 2) if rec.grid(n, A.STRATIFIED)[1] <= FORESIGHT * tol), None
+    )
     trials = Replay(rec)
     trials.first_samples = lambda _tol: need if need is not None else A.MAX_SAMPLES
     A._for_tolerance(trials, tol)
@@ -231,6 +250,7 @@ def plan_perfect_first(rec: Recorded, tol: float) -> tuple[float, float]:
 
 PLANNERS = {
     "auto": plan_auto,
+    "doubling only": plan_doubling,
     "fixed first": plan_fixed_first,
     "perfect next": plan_perfect_next,
     "perfect first": plan_perfect_first,

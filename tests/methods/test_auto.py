@@ -153,22 +153,36 @@ def test_translucent_layered_scenes_keep_accumulation_and_meet_the_tolerance(see
 
 @pytest.mark.parametrize(
     "grid",
-    [(1, False), (2, False), (6, False), (8, False), (12, True), (17, True), (96, False), (2047, True)],
+    [
+        (1, "stratified"),
+        (2, "stratified"),
+        (6, "stratified"),
+        (8, "stratified"),
+        (12, "trapezoid"),
+        (17, "trapezoid"),
+        (96, "stratified"),
+        (2047, "trapezoid"),
+    ],
 )
 def test_the_holding_grid_is_the_one_a_search_of_every_grid_finds(grid):
     """`_holding_grid` picks in closed form; a search of every grid of at most `MAX_SAMPLES`
     samples by `_holds` (the definition of keeping the drawn samples) finds the same one, for
     needs and rooms around the family boundaries (the search once took 0.7 ms a step)."""
     most = auto_mod.MAX_SAMPLES
-    every = [(m, t) for m in range(1, most + 1) for t in (False, True) if auto_mod._samples((m, t)) <= most]
+    every = [
+        (m, t)
+        for m in range(1, most + 1)
+        for t in ("stratified", "trapezoid")
+        if auto_mod._samples((m, t)) <= most
+    ]
     holding = [
         g for g in every if auto_mod._holds(g, grid) and auto_mod._samples(g) > auto_mod._samples(grid)
     ]
     for bound in [0, 1, 2.5, 3, 9.4, 13, 17, 24.5, 25, 97, 1000, 4095, 4096, 5000]:
         enough = [g for g in holding if auto_mod._samples(g) >= bound]
         fits = [g for g in holding if auto_mod._samples(g) <= bound]
-        want = min(enough, key=lambda g: (auto_mod._samples(g), g[1]), default=None)
-        room = max(fits, key=lambda g: (auto_mod._samples(g), not g[1]), default=None)
+        want = min(enough, key=lambda g: (auto_mod._samples(g), g[1] == "trapezoid"), default=None)
+        room = max(fits, key=lambda g: (auto_mod._samples(g), g[1] != "trapezoid"), default=None)
         assert auto_mod._holding_grid(grid, least=bound) == want, bound
         assert auto_mod._holding_grid(grid, most=bound, largest=True) == room, bound
 
@@ -178,14 +192,21 @@ def test_refinement_draws_only_the_new_samples():
     12 more, not 14 afresh plus the 6 thrown away; the frame is accumulation's with 18 samples
     (to float32 rounding of the sums) and so is its estimate. Where the trapezoid grid draws
     fewer (12 -> 49 for 40: 37 new, not 48 for 60), it is taken, and it refines to any multiple."""
-    assert auto_mod._next_grid((6, False), 14.0) == (18, False)
-    assert auto_mod._next_grid((12, False), 26.0) == (36, False)  # 24 new; the trapezoid's 49, 37
-    assert auto_mod._next_grid((12, False), 40.0) == (48, True)
-    assert auto_mod._next_grid((12, False), 13.0) == (24, True)  # 13 new, not 24
-    assert auto_mod._next_grid((24, True), 30.0) == (48, True)
-    assert auto_mod._next_grid((24, True), 80.0) == (96, True)
-    assert auto_mod._holds((48, True), (12, False)) and auto_mod._holds((72, True), (24, True))
-    assert not auto_mod._holds((36, True), (12, False)) and not auto_mod._holds((36, False), (12, True))
+    assert auto_mod._next_grid((6, "stratified"), 14.0) == (18, "stratified")
+    assert auto_mod._next_grid((12, "stratified"), 26.0) == (
+        36,
+        "stratified",
+    )  # 24 new; the trapezoid's 49, 37
+    assert auto_mod._next_grid((12, "stratified"), 40.0) == (48, "trapezoid")
+    assert auto_mod._next_grid((12, "stratified"), 13.0) == (24, "trapezoid")  # 13 new, not 24
+    assert auto_mod._next_grid((24, "trapezoid"), 30.0) == (48, "trapezoid")
+    assert auto_mod._next_grid((24, "trapezoid"), 80.0) == (96, "trapezoid")
+    assert auto_mod._holds((48, "trapezoid"), (12, "stratified")) and auto_mod._holds(
+        (72, "trapezoid"), (24, "trapezoid")
+    )
+    assert not auto_mod._holds((36, "trapezoid"), (12, "stratified")) and not auto_mod._holds(
+        (36, "stratified"), (12, "trapezoid")
+    )
     scene = random_scene(1, W, H)
     trials = auto_mod._Trials(scene, 1)
     trials.accumulate(6)
@@ -207,12 +228,12 @@ def test_the_trapezoid_grid_keeps_the_drawn_samples_and_is_the_trapezoid_rule(sh
     scene = random_scene(1, W, H).with_(shutter=shutter)
     trials = auto_mod._Trials(scene, 1)
     trials.accumulate(12)
-    mid = trials.accumulate(24, trapezoid=True)
+    mid = trials.accumulate(24, "trapezoid")
     assert mid.stats["draw_calls"] == 25 and trials.tried[-1]["options"] == {
         "samples": 25,
         "grid": "trapezoid",
     }
-    kept = trials.accumulate(72, trapezoid=True)
+    kept = trials.accumulate(72, "trapezoid")
     assert kept.stats["draw_calls"] == 73 and kept.stats["samples"] == 73
     k = np.arange(73)
     times, weights = shutter_quantiles(scene.shutter, k / 72), np.full(73, 1 / 72)
@@ -357,7 +378,7 @@ def test_accumulations_never_write_into_the_kept_static_layer_nor_share_a_frame(
         scene = random_scene(seed, 48, 36)
         frames = [mb.render(scene, "accumulation", samples=6, aa=aa)]
         trials = auto_mod._Trials(scene, aa)
-        frames += [trials.accumulate(8), trials.accumulate(16, trapezoid=True)]
+        frames += [trials.accumulate(8), trials.accumulate(16, "trapezoid")]
         for f in frames:
             for a in (f.rgba, f.depth, f.ids):
                 assert a.flags.writeable

@@ -37,11 +37,11 @@ def test_a_budget_the_analytic_frame_fits_gets_the_analytic_frame():
     assert _rmse(f.rgba, ref) * 100 < _rmse(first.rgba, ref)
 
 
-def _grids(frame) -> list[tuple[int, bool]]:
+def _grids(frame) -> list[tuple[int, str]]:
     return [
         (
             t["options"]["samples"] - (t["options"].get("grid") == "trapezoid"),
-            t["options"].get("grid") == "trapezoid",
+            t["options"].get("grid", "stratified"),
         )
         for t in frame.stats["plan"]["tried"]
         if t["method"] == "accumulation"
@@ -60,9 +60,9 @@ def test_accumulation_grows_keeping_its_samples(monkeypatch):
         scene = random_scene(seed, 64, 48)
         f = mb.render(scene, "auto", budget_ms=400.0)
         grids = _grids(f)
-        assert grids[0] == (auto_mod.FIRST_SAMPLES, False) and len(grids) >= 2, f.stats["plan"]
+        assert grids[0] == (auto_mod.FIRST_SAMPLES, "stratified") and len(grids) >= 2, f.stats["plan"]
         for a, b in zip(grids, grids[1:], strict=False):
-            grown = auto_mod._holds(b, a) or (not b[1] and b[0] >= 1.25 * a[0])
+            grown = auto_mod._holds(b, a) or (b[1] == "stratified" and b[0] >= 1.25 * a[0])
             assert grown and b[0] > a[0], grids
         fresh = auto_mod._Trials(scene, 1).accumulate(*grids[-1])
         assert np.abs(f.rgba - fresh.rgba).max() < 1e-4
@@ -81,15 +81,15 @@ def test_each_budget_step_draws_no_more_samples_than_fit():
     it declines only where no grid or fresh render of 1.25x fits. A fresh render sized by the
     room plus the samples already drawn once overran 10 ms budgets by 1.2-1.6x."""
     grids = [
-        (2, False),
-        (4, False),
-        (8, False),
-        (12, False),
-        (32, True),
-        (24, True),
-        (20, False),
-        (2048, True),
-        (4000, False),
+        (2, "stratified"),
+        (4, "stratified"),
+        (8, "stratified"),
+        (12, "stratified"),
+        (32, "trapezoid"),
+        (24, "trapezoid"),
+        (20, "stratified"),
+        (2048, "trapezoid"),
+        (4000, "stratified"),
     ]
     for grid in grids:
         have = auto_mod._samples(grid)
@@ -98,7 +98,9 @@ def test_each_budget_step_draws_no_more_samples_than_fit():
         for room in [0.5, 1, 3, 7, 8, 9, 15, 21, 30, 47, 100, 333, 5000, *hairs]:
             nxt = auto_mod._budget_grid(grid, room)
             if nxt is None:
-                least = grid[0] + (not grid[1])  # the fewest new samples a grid that holds them draws
+                least = grid[0] + (
+                    grid[1] == "stratified"
+                )  # the fewest new samples a grid that holds them draws
                 most = auto_mod.MAX_SAMPLES
                 assert 2 * int(min(room, most) // 2) < 1.25 * have, (grid, room)
                 assert min(room, most - have) < least, (grid, room)

@@ -54,7 +54,18 @@ MAX_TIME_SAMPLES = 1 << 16
 #: ``"trapezoid"``: ``auto``'s trapezoid grid, whose halves are the trapezoid and the midpoint
 #: rules of half its strata: their difference read 0.80-0.83x that of a stratified grid of as
 #: many samples (median over tuning scenes, 8 to 96 samples) for the same error.
-HALVES_FACTOR = {"stratified": 0.25, "jittered": 0.38, "trapezoid": 0.31}
+#: ``"refined 1/4"`` and ``"refined 1/2"``: a stratified grid with a quarter or a half of its
+#: strata's boundaries added (`motionblur.methods._refine`), whose halves are the even cells
+#: with the boundaries ``4i + 1`` and the odd cells with ``4i + 3``: the factors that put the
+#: median estimate / error at 1.1 as the stratified grid's does (tuning scenes, 8 to 32 strata;
+#: ``benches/study_refined_grids.py``).
+HALVES_FACTOR = {
+    "stratified": 0.25,
+    "jittered": 0.38,
+    "trapezoid": 0.31,
+    "refined 1/4": 0.229,
+    "refined 1/2": 0.199,
+}
 
 #: A stratified frame of at most this many samples, a multiple of 4, is drawn in quarters (sample
 #: ``j`` in quarter ``j % 4``) so that its estimate can see how fast its error falls
@@ -86,21 +97,26 @@ def ends_factor(n: int) -> float:
 
 
 def grid_parts(
-    n: int, sampling: str = "stratified", drawn: np.ndarray | None = None, ends: bool = False
+    n: int,
+    sampling: str = "stratified",
+    drawn: np.ndarray | None = None,
+    ends: bool = False,
+    residues: bool = False,
 ) -> list[tuple[np.ndarray, int, int | None, int]]:
     """How samples ``drawn`` (indices into a grid of N; default all) are drawn in `HalfSums`:
     ``(indices, half, quarter, end)`` parts, the even and the odd samples, or the four quarters
     ``j % 4`` of a whole stratified grid of at most `QUARTERS_MAX` samples that 4 divides
-    (`rate_factor`); with ``ends`` (a frame of ``aa`` 2 or 4) a stratified grid of an even N has
+    (`rate_factor`); with ``residues`` a stratified grid's samples are drawn in the four parts
+    ``j % 4`` at any N (without a quarter beyond those: a grid that `_refine` may reweight
+    part by part); with ``ends`` (a frame of ``aa`` 2 or 4) a stratified grid of an even N has
     its first and its last sample apart, ``end`` -1 and +1 (`ends_factor`; 0 for the others).
     No part is empty."""
     j = np.arange(n) if drawn is None else np.asarray(drawn, np.int64)
     quarters = drawn is None and sampling == "stratified" and n % 4 == 0 and n <= QUARTERS_MAX
-    groups = (
-        [(j[j % 4 == q], q % 2, q) for q in range(4)]
-        if quarters
-        else [(j[j % 2 == h], h, None) for h in (0, 1)]
-    )
+    if quarters or (residues and sampling == "stratified"):
+        groups = [(j[j % 4 == q], q % 2, q if quarters else None) for q in range(4)]
+    else:
+        groups = [(j[j % 2 == h], h, None) for h in (0, 1)]
     if not ends or sampling != "stratified" or n % 2:
         return [(idx, half, q, 0) for idx, half, q in groups if len(idx)]
     parts = []
@@ -401,11 +417,13 @@ class HalfSums:
     def add(self, times, weights, half: int) -> None:
         self.add_all([(times, weights, half)])
 
-    def add_grid(self, times: np.ndarray, weights: np.ndarray, drawn: np.ndarray | None = None) -> None:
+    def add_grid(
+        self, times: np.ndarray, weights: np.ndarray, drawn: np.ndarray | None = None, residues: bool = False
+    ) -> None:
         """`add_all` of the samples ``drawn`` (indices; default all) of the grid of ``times`` and
-        ``weights`` (N,), in `grid_parts`' parts for this sampling, with the end term when ``aa``
-        is above 1."""
-        parts = grid_parts(len(times), self.sampling, drawn, ends=self.aa > 1)
+        ``weights`` (N,), in `grid_parts`' parts for this sampling (by ``j % 4`` with
+        ``residues``), with the end term when ``aa`` is above 1."""
+        parts = grid_parts(len(times), self.sampling, drawn, ends=self.aa > 1, residues=residues)
         self.add_all([(times[k], weights[k], *rest) for k, *rest in parts])
 
     def add_all(self, parts) -> None:
@@ -520,12 +538,15 @@ def time_index(times: np.ndarray, t) -> np.ndarray | int:
     return int(k) if k.ndim == 0 else k
 
 
-def add_stratified(sums: HalfSums, scene: Scene, n: int, kept: int = 0) -> None:
+def add_stratified(sums: HalfSums, scene: Scene, n: int, kept: int = 0, residues: bool = False) -> None:
     """Accumulation's own ``n`` stratified samples of ``scene`` (`sample_times`) added to
     ``sums``. With ``kept``, the count of the stratified grid ``sums`` already holds (``n`` an odd
     multiple of it, so that its times are among the new ones under any shutter, whose strata are
     of the shutter's mass): those samples are kept, each weighted 1/n and moved to the half of
-    its new position, and only the others are drawn."""
+    its new position, and only the others are drawn. With ``residues`` the samples drawn are in
+    parts by their position modulo 4 (`grid_parts`); a kept grid drawn so stays so, since sample
+    ``i`` of it is sample ``k i + (k - 1) / 2`` of the new one, whose residue depends on
+    ``i % 4`` alone for odd ``k``."""
     times, weights = sample_times(scene, n)
     new = None  # a fresh grid: all of it, in halves or in quarters (`HalfSums.add_grid`)
     if kept:
@@ -535,4 +556,4 @@ def add_stratified(sums: HalfSums, scene: Scene, n: int, kept: int = 0) -> None:
         sums.reweight(lambda t: (np.full(len(t), 1.0 / n), time_index(times, t[0]) % 2))
         new = np.arange(n)
         new = new[(new % step) != step // 2]  # the new times only (never the new grid's ends)
-    sums.add_grid(times, weights, new)
+    sums.add_grid(times, weights, new, residues)

@@ -22,7 +22,10 @@ With ``tolerance`` (RMSE against the exact integral, premultiplied linear RGBA):
    odd multiple of the count holds them, and so does the trapezoid grid (`_Trials._trapezoid`,
    the strata's ends instead of their middles, one sample more) of any even multiple, which
    then refines to any multiple of itself; a fresh render is taken when keeping them would
-   draw over `REUSE_DRAWS` x its new samples. With fewer than `SURE_SAMPLES` samples the aim
+   draw over `REUSE_DRAWS` x its new samples. A frame that missed narrowly adds a quarter or a
+   half of its strata's boundaries instead (`motionblur.methods._refine`, at ``aa`` 1: about
+   N / 4 or N / 2 samples more for 0.91x or 0.80x the error, where the trapezoid grid draws
+   N + 1). With fewer than `SURE_SAMPLES` samples the aim
    is lower: their halves spread more. Again while the estimate says it missed (each step
    predicted from the last two measurements, at most `MAX_STEPS` steps);
 4. where the analytic frame's predicted time (`ANALYTIC_FIT`, from the first render's time per
@@ -54,6 +57,8 @@ from ..render import METHODS, register
 from ..scene import Scene
 from ._accumulate import HalfSums, add_stratified, shutter_quantiles, time_index
 from ._estimate import EXACT_OPTIONS
+from ._refine import ERROR_RATIO, KINDS, LEAST_STRATA, refine
+from ._refine import samples as refined_samples
 from ._segments import segment_times
 from ._sharp import check_aa
 from ._sweep import sweep_scale
@@ -61,6 +66,8 @@ from ._sweep import sweep_scale
 __all__ = [
     "auto",
     "layered_translucency",
+    "STRATIFIED",
+    "TRAPEZOID",
     "renders_shutter",
     "DEFAULT_TOLERANCE",
     "SAFETY",
@@ -83,6 +90,9 @@ __all__ = [
     "BUDGET_SHARE",
 ]
 
+#: Accumulation's grid kinds besides the refined ones (`_refine.KINDS`): the stratified grid of
+#: N samples (``accumulation``'s own) and the trapezoid grid of N strata (N + 1 samples).
+STRATIFIED, TRAPEZOID = "stratified", "trapezoid"
 #: The default tolerance: RMSE against the exact time integral (premultiplied linear RGBA).
 DEFAULT_TOLERANCE = 0.01
 #: The share of the tolerance auto aims its estimate at (the estimate's own spread: on the
@@ -187,8 +197,12 @@ class _Trials:
     def __init__(self, scene: Scene, aa: int) -> None:
         self.scene, self.aa, self.tried, self.frames = scene, aa, [], []
         self.sums: HalfSums | None = None
-        self.grid: tuple[int, bool] | None = None  # the strata of the samples drawn, trapezoid or not
+        self.grid: tuple[int, str] | None = None  # the strata of the samples drawn and the grid's kind
         self.segments: int | None = None  # the analytic method's segments, once its pilot ran
+        # the stratified grids are drawn by residue so that they refine by boundaries
+        # (`_refine`); calibrated at aa 1 under shutters without a closed gap
+        self.refines = aa == 1 and not isinstance(scene.shutter, np.ndarray)
+        self.effective: list[tuple[float, float]] = []  # (effective samples, estimate) per grid
 
     def _record(self, method: str, options: dict, frame: Frame, ms: float, est: float) -> Frame:
         frame.stats["error_estimate"] = est
@@ -209,31 +223,37 @@ class _Trials:
             est = 0.0  # the one sharp frame of a scene where nothing moves
         return self._record(method, options, frame, ms, est)
 
-    def accumulate(self, n: int, trapezoid: bool = False) -> Frame:
-        """Accumulation with ``n`` samples of equal weight (`_accumulate.sample_times`), or with the
-        ``n + 1`` of the trapezoid grid of ``n`` strata (``trapezoid``: see `_trapezoid`). The
-        samples already drawn are kept when the new grid holds them (`_holds`: their times are
-        among the new ones under any shutter, whose strata are of the shutter's mass) and only
-        the others are drawn."""
+    def accumulate(self, n: int, kind: str = STRATIFIED) -> Frame:
+        """Accumulation with ``n`` samples of equal weight (`_accumulate.sample_times`), with the
+        ``n + 1`` of the trapezoid grid of ``n`` strata (`TRAPEZOID`: see `_trapezoid`), or with
+        ``n`` stratified samples and some of their strata's boundaries (a kind of
+        `_refine.KINDS`). The samples already drawn are kept when the new grid holds them
+        (`_holds`: their times are among the new ones under any shutter, whose strata are of
+        the shutter's mass) and only the others are drawn."""
         t0 = time.perf_counter()
-        keep = self.grid is not None and _holds((n, trapezoid), self.grid)
+        keep = self.grid is not None and _holds((n, kind), self.grid)
         if not keep:
             self.sums = HalfSums(self.scene, self.aa)
-        if trapezoid:
+        if kind == TRAPEZOID:
             self._trapezoid(n, keep)
-        else:
+        elif kind == STRATIFIED:
             self._stratified(n, keep)
-        self.grid = (n, trapezoid)
+        else:
+            assert self.sums is not None and keep
+            refine(self.sums, self.scene, n, kind)
+        self.grid = (n, kind)
         frame = self.sums.frame()
         ms = (time.perf_counter() - t0) * 1e3
-        options = {"samples": self.sums.samples, **({"grid": "trapezoid"} if trapezoid else {})}
+        options = {"samples": self.sums.samples, **({"grid": kind} if kind != STRATIFIED else {})}
+        self.effective.append((_effective(self.grid), frame.stats["error_estimate"]))
         return self._record("accumulation", options, frame, ms, frame.stats["error_estimate"])
 
     def _stratified(self, n: int, keep: bool) -> None:
         """Accumulation's own ``n`` samples, the drawn ones (an ``n / last``-th of them) kept
-        (`add_stratified`)."""
+        (`add_stratified`), drawn by residue where the grid may be refined."""
         assert self.sums is not None
-        add_stratified(self.sums, self.scene, n, self.grid[0] if keep and self.grid else 0)
+        kept = self.grid[0] if keep and self.grid else 0
+        add_stratified(self.sums, self.scene, n, kept, residues=self.refines)
 
     def _trapezoid(self, m: int, keep: bool) -> None:
         """The trapezoid grid of ``m`` strata of the shutter's mass: times ``W^-1(k / m)``, k = 0..m,
@@ -340,42 +360,60 @@ def _trapezoid_nodes(shutter, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return times[order], weights[order], node[order]
 
 
-def _samples(grid: tuple[int, bool]) -> int:
-    """The samples of a grid (m strata, trapezoid or not): m, or m + 1 for the trapezoid's."""
-    return grid[0] + grid[1]
+def _samples(grid: tuple[int, str]) -> int:
+    """The samples of a grid (m strata, its kind): m stratified, m + 1 for the trapezoid's, m and
+    the boundaries added for a refined one (`_refine.samples`)."""
+    m, kind = grid
+    if kind in KINDS:
+        return refined_samples(m, kind)
+    return m + (kind == TRAPEZOID)
 
 
-def _holds(new: tuple[int, bool], old: tuple[int, bool]) -> bool:
-    """Whether grid ``new`` holds every time of grid ``old`` (each (strata, trapezoid)): a
+def _effective(grid: tuple[int, str]) -> float:
+    """The stratified samples whose error a grid's is about (at an error falling as 1/N): its
+    samples, but a refined grid's ``m / ERROR_RATIO`` (`_refine.ERROR_RATIO`)."""
+    m, kind = grid
+    return m / ERROR_RATIO[kind] if kind in KINDS else float(_samples(grid))
+
+
+def _holds(new: tuple[int, str], old: tuple[int, str]) -> bool:
+    """Whether grid ``new`` holds every time of grid ``old`` (each (strata, kind)): a
     stratified grid holds one of ``m / q`` strata for odd q; a trapezoid grid holds a stratified
-    one of ``m / (2 q)`` strata and a trapezoid one of ``m / q``, any q."""
-    (m, trap), (m0, trap0) = new, old
-    if not trap:
-        return not trap0 and m % m0 == 0 and (m // m0) % 2 == 1
-    return m % m0 == 0 and (m // m0 > 1) and (trap0 or (m // m0) % 2 == 0)
+    or refined one of ``m / (2 q)`` strata and a trapezoid one of ``m / q``, any q; a refined
+    grid holds the stratified grid of its strata and the 1/2 grid the 1/4 grid (only when the
+    stratified grid was drawn by residue: `_Trials.refines`)."""
+    (m, kind), (m0, kind0) = new, old
+    if kind == STRATIFIED:
+        return kind0 == STRATIFIED and m % m0 == 0 and (m // m0) % 2 == 1
+    if kind == TRAPEZOID:
+        return m % m0 == 0 and (m // m0 > 1) and (kind0 == TRAPEZOID or (m // m0) % 2 == 0)
+    order = [STRATIFIED, *KINDS]
+    return m == m0 and kind0 in order and order.index(kind0) < order.index(kind)
 
 
-def _draws(new: tuple[int, bool], old: tuple[int, bool]) -> int:
+def _draws(new: tuple[int, str], old: tuple[int, str]) -> int:
     """The samples grid ``new`` draws after grid ``old``: all of them, less those of ``old`` it
     holds (`_holds`)."""
     return _samples(new) - (_samples(old) if _holds(new, old) else 0)
 
 
-def _holding_families(grid: tuple[int, bool]) -> list[tuple[bool, int, int, int]]:
-    """The grids that hold ``grid``'s samples and add to them (`_holds`), as families
-    ``(trapezoid, first, step, last)``: strata ``j * m0`` for j = first, first + step, ...,
-    last, of at most `MAX_SAMPLES` samples. Odd multiples of a stratified grid and trapezoid
-    grids of its even multiples; trapezoid grids of any multiple of a trapezoid grid."""
-    m0, trap0 = grid
-    families = [] if trap0 else [(False, 3, 2, MAX_SAMPLES // m0)]
-    families.append((True, 2, 1 if trap0 else 2, (MAX_SAMPLES - 1) // m0))
+def _holding_families(grid: tuple[int, str]) -> list[tuple[bool, int, int, int]]:
+    """The stratified and trapezoid grids that hold ``grid``'s samples and add to them
+    (`_holds`), as families ``(trapezoid, first, step, last)``: strata ``j * m0`` for j = first,
+    first + step, ..., last, of at most `MAX_SAMPLES` samples. Odd multiples of a stratified grid
+    and trapezoid grids of its (or a refined grid's) even multiples; trapezoid grids of any
+    multiple of a trapezoid grid."""
+    m0, kind0 = grid
+    families = [(False, 3, 2, MAX_SAMPLES // m0)] if kind0 == STRATIFIED else []
+    families.append((True, 2, 1 if kind0 == TRAPEZOID else 2, (MAX_SAMPLES - 1) // m0))
     return families
 
 
-def _holding_grid(grid: tuple[int, bool], least: float = 0.0, most: float = math.inf, largest: bool = False):
-    """Of the grids that hold ``grid``'s samples (`_holding_families`) with between ``least``
-    and ``most`` samples, the one with the fewest (the most, ``largest``); the stratified one
-    on a tie; None when there is none. In closed form: each family's samples rise with j."""
+def _holding_grid(grid: tuple[int, str], least: float = 0.0, most: float = math.inf, largest: bool = False):
+    """Of the stratified and trapezoid grids that hold ``grid``'s samples (`_holding_families`)
+    with between ``least`` and ``most`` samples, the one with the fewest (the most,
+    ``largest``); the stratified one on a tie; None when there is none. In closed form: each
+    family's samples rise with j."""
     m0, found = grid[0], []
     for trap, first, step, last in _holding_families(grid):
         lo = max(first, math.ceil((least - trap) / m0))
@@ -383,24 +421,38 @@ def _holding_grid(grid: tuple[int, bool], least: float = 0.0, most: float = math
         lo += (lo - first) % step  # onto the family's steps: up from the least
         hi -= (hi - first) % step  # and down from the most
         if lo <= hi:
-            found.append(((hi if largest else lo) * m0, trap))
+            found.append(((hi if largest else lo) * m0, TRAPEZOID if trap else STRATIFIED))
     if not found:
         return None
     pick = max if largest else min
-    return pick(found, key=lambda g: (_samples(g), -g[1] if largest else g[1]))
+    trap_last = (lambda g: -(g[1] == TRAPEZOID)) if largest else (lambda g: g[1] == TRAPEZOID)
+    return pick(found, key=lambda g: (_samples(g), trap_last(g)))
 
 
-def _next_grid(grid: tuple[int, bool], want: float) -> tuple[int, bool]:
-    """The grid (strata, trapezoid) after ``grid`` for an estimated need of ``want`` samples:
-    of the grids that hold the samples drawn (`_holding_grid`) with at least ``want`` samples,
-    the one that draws the fewest new samples (the stratified one on a tie), when it draws at
-    most `REUSE_DRAWS` x as many as ``want`` rounded up to even does afresh (a render saved
-    outweighs a few more samples, and the frame gets them too); else that even count, afresh."""
+def _refinements(grid: tuple[int, str]) -> list[tuple[int, str]]:
+    """The refined grids (`_refine.KINDS`) that hold ``grid``, of at least their
+    `_refine.LEAST_STRATA`: a grid drawn by residue only (`_Trials.refines`)."""
+    m = grid[0]
+    return [(m, k) for k in KINDS if m >= LEAST_STRATA[k] and _holds((m, k), grid)]
+
+
+def _next_grid(grid: tuple[int, str], want: float, refines: bool = False) -> tuple[int, str]:
+    """The grid (strata, kind) after ``grid`` for an estimated need of ``want`` samples
+    (stratified samples' worth: `_effective`): of the grids that hold the samples drawn
+    (`_holding_grid`, and with ``refines`` the refined grids of the same strata,
+    `_refinements`) and are worth at least ``want``, the one that draws the fewest new samples
+    (the stratified one on a tie), when it draws at most `REUSE_DRAWS` x as many as ``want``
+    rounded up to even does afresh (a render saved outweighs a few more samples, and the frame
+    gets them too); else that even count, afresh."""
     fresh = min(MAX_SAMPLES, 2 * math.ceil(want / 2))
+    found = [g for g in _refinements(grid) if _effective(g) >= want] if refines else []
     best = _holding_grid(grid, least=want)
-    if best is not None and _draws(best, grid) <= REUSE_DRAWS * fresh:
-        return best
-    return (fresh, False)
+    found += [best] if best is not None else []
+    if found:
+        best = min(found, key=lambda g: (_draws(g, grid), g[1] == TRAPEZOID))
+        if _draws(best, grid) <= REUSE_DRAWS * fresh:
+            return best
+    return (fresh, STRATIFIED)
 
 
 def first_samples(tol: float, sweep: float | None = None, aa: int = 1) -> int:
@@ -448,20 +500,17 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
         est, n = trials.last["error_estimate"], trials.last["options"]["samples"]
         if est <= aim * min(1.0, math.sqrt(n / SURE_SAMPLES)):
             return f"accumulation-{n} estimates {est:.3g} <= {SAFETY} x tolerance"
-        measured = [
-            (t["options"]["samples"], t["error_estimate"])
-            for t in trials.renders
-            if t["method"] == "accumulation"
-        ]
+        measured = trials.effective  # (stratified samples' worth, estimate) of each grid
         if len(measured) >= 2 and measured[-2][1] > est > 0:  # the rate these two renders show
             (n0, e0), (n1, e1) = measured[-2:]
             rate = min(1.2, max(0.5, math.log(e0 / e1) / math.log(n1 / n0)))
-        want = max(n * (est / aim) ** (1.0 / rate), n + 2)
+        worth = measured[-1][0]
+        want = max(worth * (est / aim) ** (1.0 / rate), worth + 1)
         if want > MAX_SAMPLES:
             trials.run("analytic")
             return f"accumulation would need {want:.0f} samples, over {MAX_SAMPLES}: the analytic frame"
         assert trials.grid is not None
-        nxt = _next_grid(trials.grid, want)
+        nxt = _next_grid(trials.grid, want, trials.refines)
         why = _analytic_instead(trials, _draws(nxt, trials.grid))
         if why is not None:
             trials.run("analytic")
@@ -471,8 +520,8 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
     return f"accumulation still estimated over the tolerance after {MAX_STEPS} steps: the analytic frame"
 
 
-def _budget_grid(grid: tuple[int, bool], room: float) -> tuple[int, bool] | None:
-    """The next accumulation grid (strata, trapezoid) when ``room`` more samples fit the
+def _budget_grid(grid: tuple[int, str], room: float) -> tuple[int, str] | None:
+    """The next accumulation grid (strata, kind) when ``room`` more samples fit the
     budget: of the grids that hold the samples drawn (`_holding_grid`) and draw at most
     ``room`` new ones, the one with the most samples; else a fresh even count, when it has at
     least 1.25x the samples drawn; None when neither fits."""
@@ -481,7 +530,7 @@ def _budget_grid(grid: tuple[int, bool], room: float) -> tuple[int, bool] | None
     best = _holding_grid(grid, most=whole + _samples(grid), largest=True)
     fresh = 2 * int(min(room, MAX_SAMPLES) // 2)  # a fresh render draws all its samples
     if fresh >= 1.25 * _samples(grid) and fresh > (_samples(best) if best else 0):
-        return (fresh, False)
+        return (fresh, STRATIFIED)
     return best
 
 
