@@ -12,7 +12,8 @@ samples, A and B 1.5 N; for a pixel stepping once at a uniformly random time the
 0.90x and 0.79x the N-sample grid's (fresh grids of 1.25 N and 1.5 N: 0.80x and 0.67x), and C
 and D (``(4i + 2) / N``, ``4i / N``) complete the trapezoid grid of 2N strata.
 
-For each tuning scene with a box shutter where something moves, at `aa` 1 and N = 8, 12, 16, 24,
+For each tuning scene where something moves under a shutter auto refines under (any but a
+weights shutter; ``--box`` the box shutter's only), at `aa` 1 and N = 8, 12, 16, 24,
 32: the N-sample grid (S), S refined by A and by A and B, each with its halves' estimate at a
 factor of 1 (the halves: the even and the odd cells, A's boundaries with the even, B's with the
 odd), and fresh stratified grids of 1.25 N and 1.5 N, each against `motionblur.exact`. Prints
@@ -48,6 +49,7 @@ COUNTS = (8, 12, 16, 24, 32)
 #: Each family's first boundary within four strata and the half it joins.
 FAMILIES = {"A": (1, 0), "B": (3, 1), "C": (2, 0), "D": (0, 1)}
 GRIDS = {"S": (), "A": ("A",), "AB": ("A", "B")}
+BOX_ONLY = [False]
 
 
 def refined(scene, n: int, families) -> tuple[float, float, int]:
@@ -81,12 +83,14 @@ def refined(scene, n: int, families) -> tuple[float, float, int]:
 def scene_rows(seed: int, w: int, h: int) -> list[dict]:
     scene = random_scene(seed, w, h)
     box = isinstance(scene.shutter, str) and scene.shutter == "box"
-    if not A._moves(scene) or scene.rolling > 0.0 or not box:
+    if not A._moves(scene) or scene.rolling > 0.0 or not A._Trials(scene, 1).refines:
+        return []
+    if BOX_ONLY[0] and not box:
         return []
     ref = mb.exact(scene).rgba.astype(np.float64)
     rows = []
     for n in COUNTS:
-        row: dict = {"seed": seed, "size": f"{w}x{h}", "n": n}
+        row: dict = {"seed": seed, "size": f"{w}x{h}", "n": n, "shutter": "box" if box else "other"}
         for name, families in GRIDS.items():
             est, frame, count = refined(scene, n, families)
             row[name] = (est, rmse(over_background(frame, scene.background).rgba, ref), count)
@@ -130,12 +134,16 @@ def main(argv: list[str] | None = None) -> list[str]:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--sizes", default="96x72:60,192x144:40", help="WxH:scenes, comma-separated")
     p.add_argument("--first-seed", type=int, default=0)
+    p.add_argument("--box", action="store_true", help="box-shutter scenes only")
     args = p.parse_args(argv)
+    BOX_ONLY[0] = args.box
     set_num_threads(1)
     rows = [row for seed, w, h in scene_specs(args.sizes, args.first_seed) for row in scene_rows(seed, w, h)]
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "rows.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
     lines = summary(rows)
+    for kind in ("box", "other"):
+        lines += [f"-- {kind} shutter:", *summary([r for r in rows if r.get("shutter") == kind])]
     print("\n".join(lines))
     return lines
 

@@ -23,10 +23,10 @@ With ``tolerance`` (RMSE against the exact integral, premultiplied linear RGBA):
    the strata's ends instead of their middles, one sample more) of any even multiple, which
    then refines to any multiple of itself; a fresh render is taken when keeping them would
    draw over `REUSE_DRAWS` x its new samples. A frame that missed narrowly adds a quarter or a
-   half of its strata's boundaries instead (`motionblur.methods._refine`, at ``aa`` 1: about
-   N / 4 or N / 2 samples more for 0.91x or 0.80x the error, where the trapezoid grid draws
-   N + 1). With fewer than `SURE_SAMPLES` samples the aim
-   is lower: their halves spread more. Again while the estimate says it missed (each step
+   half of its strata's boundaries instead (`motionblur.methods._refine`, at ``aa`` 1 under
+   the box shutter: about N / 4 or N / 2 samples more for 0.91x or 0.80x the error, where the
+   trapezoid grid draws N + 1). With fewer than `SURE_SAMPLES` samples the aim is lower: their
+   halves spread more. Again while the estimate says it missed (each step
    predicted from the last two measurements, at most `MAX_STEPS` steps);
 4. where the analytic frame's predicted time (`ANALYTIC_FIT`, from the first render's time per
    sample, the segments, the moving triangles, the shutter and the camera) x `ANALYTIC_MARGIN`
@@ -200,8 +200,8 @@ class _Trials:
         self.grid: tuple[int, str] | None = None  # the strata of the samples drawn and the grid's kind
         self.segments: int | None = None  # the analytic method's segments, once its pilot ran
         # the stratified grids are drawn by residue so that they refine by boundaries
-        # (`_refine`); calibrated at aa 1 under shutters without a closed gap
-        self.refines = aa == 1 and not isinstance(scene.shutter, np.ndarray)
+        # (`_refine`): at aa 1 under the box shutter, where their estimate is calibrated
+        self.refines = aa == 1 and isinstance(scene.shutter, str) and scene.shutter == "box"
         self.effective: list[tuple[float, float]] = []  # (effective samples, estimate) per grid
 
     def _record(self, method: str, options: dict, frame: Frame, ms: float, est: float) -> Frame:
