@@ -82,7 +82,6 @@ class Recorded:
         self.scene, self.aa = scene, aa
         self.ref = mb.exact(scene, aa=aa).rgba.astype(np.float64)
         self.grids: dict[tuple[int, str], tuple[float, float]] = {}
-        self.rates: dict[tuple[int, str], bool] = {}  # whether a grid's estimate read a rate
         self.times = [
             cpu_ms(lambda n=n: mb.render(scene, "accumulation", samples=n, error_estimate=False, aa=aa))[0]
             for n in TIMED
@@ -110,7 +109,6 @@ class Recorded:
             frame = trials.accumulate(m, kind)
             err = rmse(over_background(frame, self.scene.background).rgba, self.ref)
             self.grids[key] = (frame.stats["error_estimate"], err)
-            self.rates[key] = trials.reads_rate
         return self.grids[key]
 
     def analytic(self) -> dict:
@@ -163,7 +161,6 @@ class Replay(A._Trials):
         est, err = self.rec.grid(n, kind)
         self.grid = grid
         self.effective.append((A._effective(grid), est))
-        self.reads_rate = self.rec.rates[grid]
         options = {"samples": A._samples(grid), **({"grid": kind} if kind != A.STRATIFIED else {})}
         self._log("accumulation", options, self.rec.ms(draws) + self.rec.overhead, est, err)
 

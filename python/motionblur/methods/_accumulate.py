@@ -33,8 +33,6 @@ __all__ = [
     "HALVES_FACTOR",
     "ends_factor",
     "QUARTERS_MAX",
-    "FASTEST_RATE",
-    "quarters_max",
     "rate_factor",
     "grid_parts",
     "Part",
@@ -71,32 +69,13 @@ HALVES_FACTOR = {
     "refined 1/2": 0.213,
 }
 
-#: A stratified frame of at most this many samples, a multiple of 4, is drawn in quarters (at
-#: ``aa`` 4 one of any count: `quarters_max`; sample
+#: A stratified frame of at most this many samples, a multiple of 4, is drawn in quarters (sample
 #: ``j`` in quarter ``j % 4``) so that its estimate can see how fast its error falls
 #: (`rate_factor`): at 4 to 8 samples a frame whose samples are far apart in time (a detailed
 #: object turning fast) has halves whose errors are independent rather than opposed, and
 #: `HALVES_FACTOR` alone read half its error. From 16 samples up the halves alone were within
 #: 0.73-2 of the error on the tuning scenes.
 QUARTERS_MAX = 8
-
-#: The fastest rate `rate_factor` reads from the quarters, per ``aa``. At ``aa`` 4 a pixel's
-#: value changes in 16 small steps as an edge crosses it, smooth over the shutter where the
-#: frame samples that change a few times: its error falls faster than 1/N there, the halves'
-#: difference over-reads it (median 1.4x on the tuning scenes, 8 to 32 samples; 15% of frames
-#: over 2x), and the quarters show it. With rates up to 1.25 read (a factor down to 0.80), a
-#: grid of any count 4 divides drawn in quarters (`quarters_max`) was within 0.5x-2x of its
-#: error on 93-94% of those frames against 85%, the same 0.6% under 0.5x (tuning seeds 0-59 at
-#: 96x72, 0-39 at 192x144; median 1.18-1.21). At ``aa`` 2 the halves were within 0.5x-2x on
-#: 98% already and a faster rate read made more of them low (0.2% -> 0.8% under 0.5x), and at
-#: ``aa`` 1 the quarters are for the slow rates only: both read rates up to 1.
-FASTEST_RATE = {1: 1.0, 2: 1.0, 4: 1.25}
-
-
-def quarters_max(aa: int) -> int:
-    """The most samples a whole stratified grid of ``aa`` is drawn in quarters at (4 dividing
-    them): `QUARTERS_MAX`, or any count at ``aa`` 4 (`FASTEST_RATE`)."""
-    return MAX_TIME_SAMPLES if aa == 4 else QUARTERS_MAX
 
 
 def ends_factor(n: int) -> float:
@@ -125,18 +104,17 @@ def grid_parts(
     drawn: np.ndarray | None = None,
     ends: bool = False,
     residues: bool = False,
-    most_quartered: int = QUARTERS_MAX,
 ) -> list[tuple[np.ndarray, int, int | None, int]]:
     """How samples ``drawn`` (indices into a grid of N; default all) are drawn in `HalfSums`:
     ``(indices, half, quarter, end)`` parts, the even and the odd samples, or the four quarters
-    ``j % 4`` of a whole stratified grid of at most ``most_quartered`` samples (`quarters_max`)
-    that 4 divides (`rate_factor`); with ``residues`` a stratified grid's samples are drawn in the four parts
+    ``j % 4`` of a whole stratified grid of at most `QUARTERS_MAX` samples that 4 divides
+    (`rate_factor`); with ``residues`` a stratified grid's samples are drawn in the four parts
     ``j % 4`` at any N (without a quarter beyond those: a grid that `_refine` may reweight
     part by part); with ``ends`` (a frame of ``aa`` 2 or 4) a stratified grid of an even N has
     its first and its last sample apart, ``end`` -1 and +1 (`ends_factor`; 0 for the others).
     No part is empty."""
     j = np.arange(n) if drawn is None else np.asarray(drawn, np.int64)
-    quarters = drawn is None and sampling == "stratified" and n % 4 == 0 and n <= most_quartered
+    quarters = drawn is None and sampling == "stratified" and n % 4 == 0 and n <= QUARTERS_MAX
     if quarters or (residues and sampling == "stratified"):
         groups = [(j[j % 4 == q], q % 2, q if quarters else None) for q in range(4)]
     else:
@@ -150,8 +128,8 @@ def grid_parts(
     return [p for p in parts if len(p[0])]
 
 
-def rate_factor(halves_sq: float, quarters_sq: float, fastest: float = 1.0) -> float:
-    """The estimate's factor from the mean squared difference of the two halves
+def rate_factor(halves_sq: float, quarters_sq: float) -> float:
+    """The estimate's factor, at least 1, from the mean squared difference of the two halves
     (``halves_sq``) and of the two quarters within each half (``quarters_sq``, averaged over the
     halves). Their ratio rho = sqrt(quarters_sq / halves_sq) is 2^r for an error falling as
     N^-r. Two estimates of one integral whose errors have correlation c differ by
@@ -159,16 +137,16 @@ def rate_factor(halves_sq: float, quarters_sq: float, fastest: float = 1.0) -> f
     error falling as N^-r means (1 + c) / 2 = 4^-r, so the mean's error is
     f(r) = 2^-r / (2 sqrt(1 - 4^-r)) times the halves' difference. `HALVES_FACTOR` holds for the
     regular rate r = 1 (opposed halves); the factor is f(r) / f(1) for r = log2(rho) within
-    [0.5, ``fastest``] (0.5: independent halves, at most 1.73; with ``fastest`` 1, never below
-    1: a faster rate is left to `HALVES_FACTOR`'s measured value; `FASTEST_RATE`)."""
+    [0.5, 1] (0.5: independent halves, at most 1.73), never below 1 (a faster rate is left to
+    `HALVES_FACTOR`'s measured value)."""
     if not (halves_sq > 0.0 and quarters_sq > 0.0):
         return 1.0
-    r = min(fastest, max(0.5, 0.5 * float(np.log2(quarters_sq / halves_sq))))
+    r = min(1.0, max(0.5, 0.5 * float(np.log2(quarters_sq / halves_sq))))
 
     def f(r: float) -> float:
         return 2.0**-r / (2.0 * (1.0 - 4.0**-r) ** 0.5)
 
-    return f(r) / f(1.0)
+    return max(1.0, f(r) / f(1.0))
 
 
 def _nearest_part(times: list[np.ndarray], target: float) -> int:
@@ -447,8 +425,7 @@ class HalfSums:
         """`add_all` of the samples ``drawn`` (indices; default all) of the grid of ``times`` and
         ``weights`` (N,), in `grid_parts`' parts for this sampling (by ``j % 4`` with
         ``residues``), with the end term when ``aa`` is above 1."""
-        most = quarters_max(self.aa)
-        parts = grid_parts(len(times), self.sampling, drawn, self.aa > 1, residues, most)
+        parts = grid_parts(len(times), self.sampling, drawn, ends=self.aa > 1, residues=residues)
         self.add_all([(times[k], weights[k], *rest) for k, *rest in parts])
 
     def add_all(self, parts) -> None:
@@ -492,12 +469,6 @@ class HalfSums:
             return None
         return tuple(f(v[i] for v in wins) // self.aa for i, f in enumerate((min, min, max, max)))
 
-    @property
-    def reads_rate(self) -> bool:
-        """Whether `frame`'s estimate may read a rate faster than 1 from the quarters (a grid
-        drawn in quarters at an ``aa`` whose `FASTEST_RATE` is above 1)."""
-        return FASTEST_RATE[self.aa] > 1.0 and self._quartered()
-
     def _quartered(self) -> bool:
         """Whether the grid is stratified and drawn in four quarters of equal samples."""
         if self.sampling != "stratified" or any(p.quarter is None for p in self.parts):
@@ -540,7 +511,7 @@ class HalfSums:
             (square_sum, quarters_sq), rgba[win[1] : win[3], win[0] : win[2]], (ma, mb) = self.halves(win)
             m = (ma * mb) ** 0.5 / (ma + mb)
             if quarters_sq is not None:
-                factor = rate_factor(square_sum, quarters_sq / 2.0, FASTEST_RATE[self.aa])
+                factor = rate_factor(square_sum, quarters_sq / 2.0)
         frame = Frame(rgba, depth, ids, None)
         calls = [p.piece.stats for p in self.parts]
         wins = [c["window"] for c in calls if c["window"] is not None]

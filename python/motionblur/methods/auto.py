@@ -71,7 +71,6 @@ __all__ = [
     "renders_shutter",
     "DEFAULT_TOLERANCE",
     "SAFETY",
-    "FAST_RATE_SHARE",
     "FIRST_SAMPLES",
     "FIRST_SCALE",
     "FIRST_MAX",
@@ -100,11 +99,6 @@ DEFAULT_TOLERANCE = 0.01
 #: tuning scenes the 5th percentile of estimate / error is 0.89 at 8 stratified samples and
 #: 0.93-1.0 on the trapezoid grids auto refines to).
 SAFETY = 0.95
-#: The share of `SAFETY` aimed at when the estimate read a rate faster than 1 from its quarters
-#: (at ``aa`` 4, `_accumulate.FASTEST_RATE`): there its 5th percentile of estimate / error on the
-#: tuning scenes was 0.70, against 0.82 for the halves alone, so the aim falls as much and the
-#: margin stays what it was.
-FAST_RATE_SHARE = 0.85
 #: Below this many samples the halves hold few samples each and their estimate spreads more:
 #: the aim shrinks as sqrt(N / SURE_SAMPLES) (chosen on the tuning scenes: at 8 stratified samples
 #: the 5th percentile of estimate / error there is 0.85-0.89 (two sets of seeds), at 6 it is 0.69
@@ -209,7 +203,6 @@ class _Trials:
         # (`_refine`): at aa 1 under the box shutter, where their estimate is calibrated
         self.refines = aa == 1 and isinstance(scene.shutter, str) and scene.shutter == "box"
         self.effective: list[tuple[float, float]] = []  # (effective samples, estimate) per grid
-        self.reads_rate = False  # whether the last grid's estimate read a rate from its quarters
 
     def _record(self, method: str, options: dict, frame: Frame, ms: float, est: float) -> Frame:
         frame.stats["error_estimate"] = est
@@ -253,7 +246,6 @@ class _Trials:
         ms = (time.perf_counter() - t0) * 1e3
         options = {"samples": self.sums.samples, **({"grid": kind} if kind != STRATIFIED else {})}
         self.effective.append((_effective(self.grid), frame.stats["error_estimate"]))
-        self.reads_rate = self.sums.reads_rate
         return self._record("accumulation", options, frame, ms, frame.stats["error_estimate"])
 
     def _stratified(self, n: int, keep: bool) -> None:
@@ -501,14 +493,13 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
     if tol < 2 * ANALYTIC_ERROR:
         trials.run("analytic", **EXACT_OPTIONS)
         return f"tolerance {tol:g} < 2 x {ANALYTIC_ERROR:g}: the exact integral"
+    aim = tol * SAFETY
     trials.accumulate(trials.first_samples(tol))
     rate = RATE
     for _ in range(MAX_STEPS + 1):
         est, n = trials.last["error_estimate"], trials.last["options"]["samples"]
-        aim = tol * SAFETY * (FAST_RATE_SHARE if trials.reads_rate else 1.0)
         if est <= aim * min(1.0, math.sqrt(n / SURE_SAMPLES)):
-            share = aim * min(1.0, math.sqrt(n / SURE_SAMPLES)) / tol
-            return f"accumulation-{n} estimates {est:.3g} <= {share:.3g} x tolerance"
+            return f"accumulation-{n} estimates {est:.3g} <= {SAFETY} x tolerance"
         measured = trials.effective  # (stratified samples' worth, estimate) of each grid
         if len(measured) >= 2 and measured[-2][1] > est > 0:  # the rate these two renders show
             (n0, e0), (n1, e1) = measured[-2:]
