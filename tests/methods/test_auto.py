@@ -162,6 +162,8 @@ def test_translucent_layered_scenes_keep_accumulation_and_meet_the_tolerance(see
         (17, "trapezoid"),
         (96, "stratified"),
         (2047, "trapezoid"),
+        (16, "refined 1/4"),
+        (24, "refined 1/2"),
     ],
 )
 def test_the_holding_grid_is_the_one_a_search_of_every_grid_finds(grid):

@@ -72,7 +72,7 @@ def test_a_refined_frame_is_its_times_and_weights_rendered_at_once(n):
     trials = auto_mod._Trials(scene, 1)
     trials.accumulate(n)
     for kind in KINDS:
-        before = trials.sums.samples
+        before, parts = trials.sums.samples, len(trials.sums.parts)
         frame = trials.accumulate(n, kind)
         assert frame.stats["samples"] == _refine.samples(n, kind)
         assert trials.tried[-1]["options"] == {"samples": _refine.samples(n, kind), "grid": kind}
@@ -88,7 +88,11 @@ def test_a_refined_frame_is_its_times_and_weights_rendered_at_once(n):
         want = once.frame()
         np.testing.assert_allclose(frame.rgba, want.rgba, atol=2e-6)
         assert frame.stats["error_estimate"] == pytest.approx(want.stats["error_estimate"], rel=1e-4)
-        assert trials.sums.samples - before == _refine.samples(n, kind) - before
+        # only the boundaries the grid lacked were drawn: each new part's times are boundaries
+        drawn = np.concatenate([p.times for p in trials.sums.parts[parts:]])
+        assert len(drawn) == _refine.samples(n, kind) - before
+        bounds = shutter_quantiles(scene.shutter, np.arange(1, n) / n)
+        assert np.isin(drawn, bounds).all()
 
 
 def test_the_half_grid_completes_to_the_trapezoid_grid_of_twice_the_strata():
@@ -120,8 +124,10 @@ def test_the_planner_refines_a_near_miss_by_boundaries_and_doubles_a_far_one():
     """From 16 stratified samples (stratified samples' worth: 1/4 is 16 / 0.907 = 17.6, 1/2 is
     20.1): a need of 17 takes the 1/4 grid (4 new samples), 19 the 1/2 grid (8), 21 the
     trapezoid grid of 32 strata (17 new; a fresh 22 would draw 22). Without refinement (aa 2
-    and 4, a weights shutter) 17 goes to the trapezoid grid. Under 8 strata (12 for 1/2) the
-    refined grids' estimate spreads too much: not offered."""
+    and 4, a weights shutter) 17 goes to the trapezoid grid. Under 10 strata (12 for 1/2) the
+    refined grids are not offered (at 8 the 1/2 grid's estimate spreads too much and the 1/4
+    grid is worth less than auto's least next step), nor at an odd count (its last midpoint
+    would weigh unlike its residue class: `refine` refuses it)."""
     g = (16, "stratified")
     assert auto_mod._next_grid(g, 17.0, refines=True) == (16, "refined 1/4")
     assert auto_mod._next_grid(g, 19.0, refines=True) == (16, "refined 1/2")
@@ -129,7 +135,12 @@ def test_the_planner_refines_a_near_miss_by_boundaries_and_doubles_a_far_one():
     assert auto_mod._next_grid(g, 21.0, refines=True) == (32, "trapezoid")
     assert auto_mod._next_grid(g, 17.0, refines=False) == (32, "trapezoid")
     assert auto_mod._next_grid((8, "stratified"), 9.5, refines=True) == (16, "trapezoid")
-    assert auto_mod._refinements((8, "stratified")) == [(8, "refined 1/4")]
+    assert auto_mod._refinements((8, "stratified")) == []
+    assert auto_mod._refinements((10, "stratified")) == [(10, "refined 1/4")]
+    assert auto_mod._refinements((12, "stratified")) == [(12, "refined 1/4"), (12, "refined 1/2")]
+    assert auto_mod._refinements((13, "stratified")) == []
+    with pytest.raises(ValueError, match="even"):
+        _refine.refine(HalfSums(random_scene(1, W, H), 1), random_scene(1, W, H), 13, "refined 1/4")
     assert not auto_mod._holds((16, "refined 1/4"), (8, "stratified"))
     assert auto_mod._holds((32, "trapezoid"), (16, "refined 1/4"))
     assert not auto_mod._holds((48, "stratified"), (16, "refined 1/2"))

@@ -58,9 +58,10 @@ MAX_TIME_SAMPLES = 1 << 16
 #: strata's boundaries added (`motionblur.methods._refine`), whose halves are the even cells
 #: with the boundaries ``4i + 1`` and the odd cells with ``4i + 3``: the factors that give
 #: their estimate / error the stratified grid's 5th percentile, 0.93 (tuning scenes with the
-#: box shutter, the one auto refines under; 8 to 32 strata, ``benches/study_refined_grids.py``; medians 1.13 and 1.18, against 1.08). Set at a
-#: median of 1.1 (0.229, 0.199) their 5th percentiles were 0.90 and 0.86, and auto, which
-#: stops on the estimate, kept a 1/4 frame 1.04x over its tolerance on a fresh scene.
+#: box shutter, the one auto refines under; 8 to 32 strata; ``benches/study_refined_grids.py``;
+#: medians 1.13 and 1.18, against 1.08). The factors that would put their medians at 1.1,
+#: 0.229 and 0.199, left 5th percentiles of 0.90 and 0.86, and auto, which stops on the
+#: estimate, kept a 1/4 frame 1.04x over its tolerance on a fresh scene with them.
 HALVES_FACTOR = {
     "stratified": 0.25,
     "jittered": 0.38,

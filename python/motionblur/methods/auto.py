@@ -97,7 +97,7 @@ STRATIFIED, TRAPEZOID = "stratified", "trapezoid"
 DEFAULT_TOLERANCE = 0.01
 #: The share of the tolerance auto aims its estimate at (the estimate's own spread: on the
 #: tuning scenes the 5th percentile of estimate / error is 0.89 at 8 stratified samples and
-#: 0.93-1.0 on the trapezoid grids auto refines to).
+#: 0.93-1.0 on the trapezoid grids auto's doubling refines to).
 SAFETY = 0.95
 #: Below this many samples the halves hold few samples each and their estimate spreads more:
 #: the aim shrinks as sqrt(N / SURE_SAMPLES) (chosen on the tuning scenes: at 8 stratified samples
@@ -239,7 +239,8 @@ class _Trials:
         elif kind == STRATIFIED:
             self._stratified(n, keep)
         else:
-            assert self.sums is not None and keep
+            if self.sums is None or not keep:
+                raise ValueError(f"kind: {kind!r} refines the stratified grid of {n} drawn before it")
             refine(self.sums, self.scene, n, kind)
         self.grid = (n, kind)
         frame = self.sums.frame()
@@ -380,8 +381,9 @@ def _holds(new: tuple[int, str], old: tuple[int, str]) -> bool:
     """Whether grid ``new`` holds every time of grid ``old`` (each (strata, kind)): a
     stratified grid holds one of ``m / q`` strata for odd q; a trapezoid grid holds a stratified
     or refined one of ``m / (2 q)`` strata and a trapezoid one of ``m / q``, any q; a refined
-    grid holds the stratified grid of its strata and the 1/2 grid the 1/4 grid (only when the
-    stratified grid was drawn by residue: `_Trials.refines`)."""
+    grid holds the stratified grid of its strata and the 1/2 grid the 1/4 grid (which `refine`
+    can reweight only when the stratified grid was drawn by residue: auto offers them where
+    `_Trials.refines`)."""
     (m, kind), (m0, kind0) = new, old
     if kind == STRATIFIED:
         return kind0 == STRATIFIED and m % m0 == 0 and (m // m0) % 2 == 1
@@ -433,7 +435,7 @@ def _refinements(grid: tuple[int, str]) -> list[tuple[int, str]]:
     """The refined grids (`_refine.KINDS`) that hold ``grid``, of at least their
     `_refine.LEAST_STRATA`: a grid drawn by residue only (`_Trials.refines`)."""
     m = grid[0]
-    return [(m, k) for k in KINDS if m >= LEAST_STRATA[k] and _holds((m, k), grid)]
+    return [(m, k) for k in KINDS if m >= LEAST_STRATA[k] and m % 2 == 0 and _holds((m, k), grid)]
 
 
 def _next_grid(grid: tuple[int, str], want: float, refines: bool = False) -> tuple[int, str]:
@@ -441,7 +443,7 @@ def _next_grid(grid: tuple[int, str], want: float, refines: bool = False) -> tup
     (stratified samples' worth: `_effective`): of the grids that hold the samples drawn
     (`_holding_grid`, and with ``refines`` the refined grids of the same strata,
     `_refinements`) and are worth at least ``want``, the one that draws the fewest new samples
-    (the stratified one on a tie), when it draws at most `REUSE_DRAWS` x as many as ``want``
+    (not the trapezoid one on a tie), when it draws at most `REUSE_DRAWS` x as many as ``want``
     rounded up to even does afresh (a render saved outweighs a few more samples, and the frame
     gets them too); else that even count, afresh."""
     fresh = min(MAX_SAMPLES, 2 * math.ceil(want / 2))
