@@ -56,8 +56,9 @@ POOR_MASS = 0.5
 
 
 class PoorBlurWarning(UserWarning):
-    """The frame's error estimate is larger than the unblurred frame's (the sharp frame at
-    mid-shutter, measured by the same pilot): on this scene the method blurs worse than not
+    """The frame's error estimate is larger than the unblurred frame's (the sharp frame where the
+    shutter's weight reaches half, as ``accumulation`` with one sample renders it: mid-shutter
+    under the box; measured by the same pilot): on this scene the method blurs worse than not
     blurring at all; or its pilot puts the frame's alpha mass `POOR_MASS` or more away from the
     exact frame's (a method that over- or under-covers: a motion volume filling a knot's holes).
     ``accumulation`` and ``analytic`` (or ``auto``) give the exact integral's approximation

@@ -64,3 +64,22 @@ def test_a_frame_that_over_covers_says_so_even_below_no_blurs_error():
     # the pilot's reference is accumulation at the pilot's size (its own estimate under a
     # quarter of the pilot's RMSE), not mb.exact: 0.006 apart here
     assert abs(frame.stats["alpha_mass_estimate"] - off) < 0.02
+
+
+def test_the_unblurred_frame_is_the_one_sample_frame_of_the_scenes_shutter():
+    """Under a weighted shutter the unblurred frame the warning compares with is accumulation's
+    one sample (where the shutter's weight reaches half), as a user renders it. `make fuzz`
+    found a measuring scene (seed 1,067,387: a weights shutter [0.73, 0.56, 0.40, 1.03]) whose
+    blur shell was 1.96x that frame's error without a warning: the pilot had rendered the
+    box's middle instead, 2x farther off there. Now the pilot's unblurred estimate is within
+    1.2x of that frame's measured error and the blur shell warns."""
+    from motionblur.evaluation.random_scenes import random_scene
+
+    scene = random_scene(1_067_387, 64, 48)
+    assert isinstance(scene.shutter, np.ndarray)
+    exact = mb.exact(scene).rgba
+    sharp = mb.render(scene, "accumulation", samples=1, error_estimate=False).rgba
+    with pytest.warns(mb.PoorBlurWarning, match="blur_shell"):
+        frame = mb.render(scene, "blur_shell")
+    assert _rmse(frame.rgba, exact) > 1.5 * _rmse(sharp, exact)  # the warning is true
+    assert 1 / 1.2 <= frame.stats["unblurred_estimate"] / _rmse(sharp, exact) <= 1.2

@@ -352,7 +352,10 @@ def pilot_errors(
         frame = _pilot_frame(scene, small, scale, method, options)
         rgba = over_background(frame, small.background).rgba
     ref = _reference(small, _pilot_options(method, options, scale), method, aa, rgba)
-    sharp = METHODS["accumulation"].fn(small.with_(shutter="box"), samples=1, aa=aa)
+    # the unblurred frame as accumulation's one sample renders it: where the scene's shutter has
+    # half its weight (mid-shutter under the box; under a weighted shutter the box's middle can
+    # be far from it and read a blur worse than none as better)
+    sharp = METHODS["accumulation"].fn(small, samples=1, aa=aa)
     out = {
         "rmse": _rmse(rgba, ref),
         "unblurred": _rmse(over_background(sharp, small.background).rgba, ref),
@@ -390,7 +393,8 @@ def pilot_estimate(
 ) -> dict:
     """``{"error_estimate", "error_estimate_how", "estimate_ms", "unblurred_estimate"}`` of
     ``method`` with ``options`` on ``scene`` from a pilot render (see the module docs);
-    ``unblurred_estimate`` is the same measure of the sharp frame at mid-shutter, so that a blur
+    ``unblurred_estimate`` is the same measure of the unblurred frame (accumulation's one sample:
+    the sharp frame where the shutter's weight reaches half, mid-shutter under the box), so that a blur
     worse than none is seen ([`PoorBlurWarning`][motionblur.PoorBlurWarning]). ``frame``: the
     frame ``render`` made (over the background, no lens), which an analytic frame that is its
     own pilot uses instead of rendering itself again. ``own_pixels``: the analytic method's
