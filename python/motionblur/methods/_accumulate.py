@@ -406,8 +406,8 @@ class HalfSums:
     ``add(times, weights, half)`` renders ``times`` (weights: the shutter's mass of each one's
     stratum, on the frame's final grid) into half 0 or 1 (``add_all`` takes a ``quarter`` and
     an ``end`` too);
-    `reweight` gives every sample rendered so far a new weight (a box shutter's samples all
-    weigh 1/N, so a finer grid that keeps the old times only changes their weights); `frame` is
+    `regrid` moves every sample rendered so far onto a finer grid that holds its time, with that
+    grid's weight (each part keeping its samples' relative weights); `frame` is
     the sum with ``stats["error_estimate"]`` from the halves (`HALVES_FACTOR`, or `ends_factor`
     for a stratified grid of an even count, and for one drawn in quarters `rate_factor` from the
     quarters)."""
@@ -445,15 +445,27 @@ class HalfSums:
         pieces = self.maker.pieces([(g[1], g[2] / float(g[2].sum()), g[3]) for g in got], 1.0, keep)
         self.parts.extend(Part(g[0], g[1], g[2], p, *g[4:]) for g, p in zip(got, pieces))
 
-    def reweight(self, weight_of) -> None:
-        """Every part's weights replaced by ``weight_of(times) -> (weights, half)`` (or
-        ``(weights, half, quarter)``), and the part moved to that half (and quarter), no longer
-        an end (the new grid's ends are new samples)."""
-        out = []
+    def regrid(self, times: np.ndarray, weights: np.ndarray, half: np.ndarray) -> np.ndarray | None:
+        """Every sample drawn moved onto a new grid of nodes: ``times`` (K,) increasing, each
+        node's ``weights`` (the shutter's mass it stands for) and ``half`` (0 or 1). A sample
+        takes the weight and half of the node nearest its time; its part moves to that half, no
+        longer an end or a quarter (the new grid's ends are new samples). A part was summed with
+        its samples' relative weights, so it can move only when its new weights are positive,
+        proportional to its old ones and of one half: when a part cannot, nothing changes and
+        the result is None. Else (K,) bool: the nodes a drawn sample now stands for (the others
+        are the new grid's samples still to draw)."""
+        moved = []
         for part in self.parts:
-            w, half, *quarter = weight_of(part.times)
-            out.append(Part(half, part.times, np.asarray(w, np.float64), part.piece, *quarter))
-        self.parts = out
+            at = np.atleast_1d(time_index(times, part.times))
+            ratio = weights[at] / part.weights
+            if not (ratio > 0).all() or np.ptp(ratio) > 1e-9 * ratio.max() or np.ptp(half[at]):
+                return None
+            moved.append((at, Part(int(half[at[0]]), part.times, weights[at], part.piece)))
+        held = np.zeros(len(times), bool)
+        for at, _ in moved:
+            held[at] = True
+        self.parts = [p for _, p in moved]
+        return held
 
     @property
     def samples(self) -> int:
@@ -556,7 +568,8 @@ def add_stratified(sums: HalfSums, scene: Scene, n: int, kept: int = 0, residues
         step = n // kept
         if step * kept != n or step % 2 == 0:
             raise ValueError(f"n: expected an odd multiple of kept={kept}, got {n}")
-        sums.reweight(lambda t: (np.full(len(t), 1.0 / n), time_index(times, t[0]) % 2))
-        new = np.arange(n)
-        new = new[(new % step) != step // 2]  # the new times only (never the new grid's ends)
+        held = sums.regrid(times, np.full(n, 1.0 / n), np.arange(n) % 2)
+        if held is None:  # the kept grid's samples are on it, every one weighing 1/n
+            raise ValueError(f"kept: the grid sums holds is not the stratified grid of {kept}")
+        new = np.flatnonzero(~held)  # the new times only (never the new grid's ends)
     sums.add_grid(times, weights, new, residues)

@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..scene import Scene
-from ._accumulate import HalfSums, shutter_quantiles, time_index
+from ._accumulate import HalfSums, shutter_quantiles
 
 __all__ = ["KINDS", "ERROR_RATIO", "LEAST_STRATA", "boundaries", "samples", "refine"]
 
@@ -82,18 +82,11 @@ def refine(sums: HalfSums, scene: Scene, n: int, kind: str) -> None:
     only the boundaries it lacks drawn, each family as one part of its half."""
     if n % 2:
         raise ValueError(f"n: a refined grid needs an even number of strata, got {n}")
-    weights, half, present = _nodes(n, kind)
+    weights, half, _ = _nodes(n, kind)  # a node the grid lacks weighs 0: no sample moves there
     times = shutter_quantiles(scene.shutter, np.arange(2 * n + 1) / (2 * n))
-    have = np.zeros(2 * n + 1, bool)
-
-    def weight_of(t: np.ndarray):
-        at = np.atleast_1d(time_index(times, t))
-        if not present[at].all() or np.ptp(weights[at]) > 1e-12 * weights[at].max() or np.ptp(half[at]):
-            raise ValueError(f"sums: a part's samples are not one residue of {n} strata")
-        have[at] = True
-        return weights[at], int(half[at[0]])
-
-    sums.reweight(weight_of)
+    have = sums.regrid(times, weights, half)
+    if have is None:
+        raise ValueError(f"sums: a part's samples are not one residue of {n} strata")
     sums.sampling = kind
     new = []
     for residue, h in KINDS[kind]:

@@ -55,7 +55,7 @@ from .._validate import as_float
 from ..raster import Frame
 from ..render import METHODS, register
 from ..scene import Scene
-from ._accumulate import HalfSums, add_stratified, shutter_quantiles, time_index
+from ._accumulate import HalfSums, add_stratified, shutter_quantiles
 from ._estimate import EXACT_OPTIONS
 from ._refine import ERROR_RATIO, KINDS, LEAST_STRATA, refine
 from ._refine import samples as refined_samples
@@ -264,18 +264,16 @@ class _Trials:
         ``m / (2 q)`` strata and trapezoid grid of ``m / q``, so a refinement may go to any
         multiple (the stratified grids only to odd ones)."""
         assert self.sums is not None
-        self.sums.sampling = "trapezoid"
         times, weights, k = _trapezoid_nodes(self.scene.shutter, m)
-        new = np.ones(len(times), bool)
-        if keep:
-
-            def weight_of(t):
-                at = time_index(times, t)
-                new[at] = False
-                return weights[at], int(k[at[0]]) % 2
-
-            self.sums.reweight(weight_of)
-        sels = [(half, np.flatnonzero(new & (k % 2 == half))) for half in (0, 1)]
+        held = self.sums.regrid(times, weights, k % 2) if keep else None
+        if held is None:
+            # nothing kept; where keeping failed, a drawn sample sits on a node split at a closed
+            # gap (half its weight) among samples of full weight, which its part cannot hold
+            if keep:
+                self.sums = HalfSums(self.scene, self.aa)
+            held = np.zeros(len(times), bool)
+        self.sums.sampling = "trapezoid"
+        sels = [(half, np.flatnonzero(~held & (k % 2 == half))) for half in (0, 1)]
         self.sums.add_all([(times[sel], weights[sel], half) for half, sel in sels if len(sel)])
 
     @property
