@@ -728,7 +728,7 @@ def _halves(
     ],
     window: tuple[int, int, int, int],
     pre: tuple[float, float, float, float],
-) -> tuple[tuple[float, float | None], np.ndarray, tuple[float, float]]:
+) -> tuple[tuple[float, float | None, float | None], np.ndarray, tuple[float, float]]:
     """The two halves of an accumulation over ``window`` (x0, y0, x1, y1) of its (H,W) image.
     ``parts``: each (half 0 or 1, its mass (shutter weight), base (H,W,4) f32 premultiplied, its
     own window (x0, y0, x1, y1) or None, that window's drawn pixels (h,w,4) f32 or None, its
@@ -739,7 +739,8 @@ def _halves(
     coefficients; returns ((the sum of the squares of ``a - b + e`` composited over the
     premultiplied RGBA ``pre``, summed along each row and then over the rows; the same of each
     half's two sub-halves plus ``2 e``, summed over both halves, when every part has a sub-half,
-    else None),
+    else None; the same of ``a - b`` without ``e`` when a part's end coefficient is not 0, else
+    None),
     the frame ``(a M_a + b M_b) / (M_a + M_b)`` (h,w,4) f32, (M_a, M_b)). ValueError naming
     ``parts``, ``base``, ``window``, ``drawn``, ``sub`` or ``end``. Releases the GIL."""
 

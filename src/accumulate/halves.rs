@@ -21,7 +21,10 @@
 //! of their strata either way (the sub-halves an eighth and three eighths), and a shifted rule
 //! is off by the shift times the pixel's change from the shutter's opening to its close; the
 //! frame (the unshifted midpoint rule) is not, and `e`, that change over the grid's samples,
-//! takes the term out of the differences.
+//! takes the term out of the differences. When a part has an end coefficient the squares of
+//! the difference without it (the plain halves') are summed too: with several subsamples a
+//! pixel the term can cancel a difference it should not (see `HalfSums.frame`), and the plain
+//! sum bounds the estimate from below.
 //! These are numpy's operations in `HalfSums.frame`'s order, so the bits are those of that
 //! numpy code (tests/methods/test_accumulation_frame.py compares them).
 use crate::error::{Error, Result};
@@ -53,6 +56,8 @@ pub struct Halves {
     /// The same of each half's two sub-halves, summed over both halves, when every part has a
     /// `sub`.
     pub sub_square_sum: Option<f64>,
+    /// The same as `square_sum` without the end term, when a part has an end coefficient.
+    pub plain_square_sum: Option<f64>,
     /// `(h, w, 4)` float32: the frame, both halves by their masses.
     pub frame: Vec<f32>,
     /// The masses of the even and the odd half.
@@ -80,17 +85,19 @@ pub fn halves(
     let (masses, sub_masses, subs) = part_masses(parts);
     let (w, h) = (x1 - x0, y1 - y0);
     let mut frame = vec![0.0f32; w * h * 4];
-    let mut sums = vec![[0.0f64; 2]; h];
+    let mut sums = vec![[0.0f64; 3]; h];
+    let ends = parts.iter().any(|p| p.end != 0.0);
     let pass = Pass {
         parts,
         masses,
         inv_sub_masses: subs.then(|| sub_masses.map(|m| m.map(|x| 1.0 / x))),
         pre,
-        quarters: subs && in_quarter_order(parts) && parts.iter().all(|p| p.end == 0.0),
+        quarters: subs && in_quarter_order(parts) && !ends,
+        ends,
         width,
         cols: (x0, x1),
     };
-    let row = |(y, (out, sum)): (usize, (&mut [f32], &mut [f64; 2]))| pass.row(y0 + y, out, sum);
+    let row = |(y, (out, sum)): (usize, (&mut [f32], &mut [f64; 3]))| pass.row(y0 + y, out, sum);
     if w * h < SERIAL_PIXELS {
         frame
             .chunks_mut(w * 4)
@@ -109,6 +116,7 @@ pub fn halves(
     Ok(Halves {
         square_sum: total(0),
         sub_square_sum: subs.then(|| total(1)),
+        plain_square_sum: ends.then(|| total(2)),
         frame,
         masses,
     })
@@ -147,6 +155,18 @@ fn in_quarter_order(parts: &[HalfPart<'_>]) -> bool {
 /// is its own).
 pub const SERIAL_PIXELS: usize = 1 << 16;
 
+/// One pixel of a [`halves`] pass.
+struct Pixel {
+    /// Its frame value.
+    frame: [f32; 4],
+    /// The halves' difference plus the end term, composited over the background.
+    difference: [f64; 4],
+    /// Each half's two sub-halves' composited difference (plus twice the end term), with subs.
+    subs: Option<[[f64; 4]; 2]>,
+    /// The halves' composited difference without the end term, when a part has one.
+    plain: Option<[f64; 4]>,
+}
+
 /// What every pixel of one [`halves`] pass reads.
 struct Pass<'p, 'a> {
     parts: &'p [HalfPart<'a>],
@@ -157,6 +177,8 @@ struct Pass<'p, 'a> {
     /// Four parts, part `j` of half `j % 2` and sub-half `j / 2` (`in_quarter_order`), none
     /// with an end coefficient.
     quarters: bool,
+    /// Whether a part has an end coefficient (the plain difference's squares are summed too).
+    ends: bool,
     /// The image's width and the window's columns `x0..x1`.
     width: usize,
     cols: (usize, usize),
@@ -164,8 +186,8 @@ struct Pass<'p, 'a> {
 
 impl Pass<'_, '_> {
     /// Row `y` of the window: its frame values into `out` and the squares into `sum`
-    /// (the halves', the sub-halves').
-    fn row(&self, y: usize, out: &mut [f32], sum: &mut [f64; 2]) {
+    /// (the halves', the sub-halves', the plain halves').
+    fn row(&self, y: usize, out: &mut [f32], sum: &mut [f64; 3]) {
         let (parts, width, (x0, x1)) = (self.parts, self.width, self.cols);
         // the row cut where a part's window starts or ends: between two cuts every part
         // reads one slice (its drawn row or its base's), no per-pixel window test
@@ -182,24 +204,29 @@ impl Pass<'_, '_> {
         let mut srcs: Vec<&[f32]> = Vec::with_capacity(parts.len());
         // the running sums in locals (kept in registers; through `sum` they went to memory at
         // every add), added in the same order
-        let (mut squares, mut sub_squares) = (sum[0], sum[1]);
+        let [mut squares, mut sub_squares, mut plain_squares] = *sum;
         for seg in cuts.windows(2) {
             let (s0, s1) = (seg[0], seg[1]);
             srcs.clear();
             srcs.extend(parts.iter().map(|p| row_slice(p, width, y, s0, s1)));
             for x in s0..s1 {
                 let k = (x - s0) * 4;
-                let (f, d, e) = if self.quarters {
+                let px = if self.quarters {
                     self.pixel_quarters([0, 1, 2, 3].map(|j| &srcs[j][k..k + 4]))
                 } else {
                     self.pixel(|j| &srcs[j][k..k + 4])
                 };
                 let i = (x - x0) * 4;
-                out[i..i + 4].copy_from_slice(&f);
-                for v in d {
+                out[i..i + 4].copy_from_slice(&px.frame);
+                for v in px.difference {
                     squares += v * v;
                 }
-                if let Some(e) = e {
+                if let Some(d) = px.plain {
+                    for v in d {
+                        plain_squares += v * v;
+                    }
+                }
+                if let Some(e) = px.subs {
                     for half in e {
                         for v in half {
                             sub_squares += v * v;
@@ -208,16 +235,12 @@ impl Pass<'_, '_> {
                 }
             }
         }
-        *sum = [squares, sub_squares];
+        *sum = [squares, sub_squares, plain_squares];
     }
 
-    /// A pixel's frame value, the halves' composited difference and each half's two
-    /// sub-halves' composited difference (None without subs), part `j`'s value `value(j)`.
+    /// A pixel's [`Pixel`], part `j`'s value `value(j)`.
     #[inline]
-    fn pixel<'v>(
-        &self,
-        value: impl Fn(usize) -> &'v [f32],
-    ) -> ([f32; 4], [f64; 4], Option<[[f64; 4]; 2]>) {
+    fn pixel<'v>(&self, value: impl Fn(usize) -> &'v [f32]) -> Pixel {
         let mut sums = [[0.0f64; 4]; 2];
         let mut subs = [[[0.0f64; 4]; 2]; 2];
         let mut end = [0.0f64; 4];
@@ -237,54 +260,55 @@ impl Pass<'_, '_> {
                 }
             }
         }
-        let (frame, d) = self.frame_and_difference(sums[0], sums[1], end);
+        let (frame, d) = self.frame_and_difference(sums[0], sums[1]);
         let twice = end.map(|e| 2.0 * e);
-        let e = self.inv_sub_masses.map(|im| {
+        let subs = self.inv_sub_masses.map(|im| {
             [0, 1].map(|half| self.composited(subs[half][0], subs[half][1], im[half], twice))
         });
-        (frame, d, e)
+        Pixel {
+            frame,
+            difference: self.over_background(std::array::from_fn(|k| d[k] + end[k])),
+            subs,
+            plain: self.ends.then(|| self.over_background(d)),
+        }
     }
 
     /// The frame value of a pixel whose halves' weighted sums are `a0` and `b0`, and their
-    /// means' difference plus `end` composited over the background: each mean divided once,
-    /// serving both (an end of zeros leaves the difference's squares as they were).
+    /// means' difference `a - b` (not composited): each mean divided once, serving both.
     #[inline]
-    fn frame_and_difference(
-        &self,
-        a0: [f64; 4],
-        b0: [f64; 4],
-        end: [f64; 4],
-    ) -> ([f32; 4], [f64; 4]) {
+    fn frame_and_difference(&self, a0: [f64; 4], b0: [f64; 4]) -> ([f32; 4], [f64; 4]) {
         let m = self.masses;
         let a = a0.map(|s| s / m[0]);
         let b = b0.map(|s| s / m[1]);
         let total = m[0] + m[1];
         let frame = std::array::from_fn(|k| ((a[k] * m[0] + b[k] * m[1]) / total) as f32);
-        (
-            frame,
-            self.over_background(std::array::from_fn(|k| a[k] - b[k] + end[k])),
-        )
+        (frame, std::array::from_fn(|k| a[k] - b[k]))
     }
 
     /// [`Self::pixel`] of four parts, part `j` of half `j % 2` and sub-half `j / 2`: each
     /// sub-half `0 + m v`, each half its two sub-halves added (the same bits).
     #[inline]
-    fn pixel_quarters(&self, v: [&[f32]; 4]) -> ([f32; 4], [f64; 4], Option<[[f64; 4]; 2]>) {
+    fn pixel_quarters(&self, v: [&[f32]; 4]) -> Pixel {
         let p = self.parts;
         let q: [[f64; 4]; 4] =
             std::array::from_fn(|j| std::array::from_fn(|k| 0.0 + f64::from(v[j][k]) * p[j].mass));
         // q[0], q[2]: half 0's sub-halves; q[1], q[3]: half 1's
         let a0: [f64; 4] = std::array::from_fn(|k| q[0][k] + q[2][k]);
         let b0: [f64; 4] = std::array::from_fn(|k| q[1][k] + q[3][k]);
-        let (frame, d) = self.frame_and_difference(a0, b0, [0.0; 4]);
+        let (frame, d) = self.frame_and_difference(a0, b0);
         let im = self
             .inv_sub_masses
             .expect("quarters compare their sub-halves");
-        let e = [
+        let subs = [
             self.composited(q[0], q[2], im[0], [0.0; 4]),
             self.composited(q[1], q[3], im[1], [0.0; 4]),
         ];
-        (frame, d, Some(e))
+        Pixel {
+            frame,
+            difference: self.over_background(d),
+            subs: Some(subs),
+            plain: None,
+        }
     }
 
     /// `a (1 / ma) - b (1 / mb) + end` composited over the background, given the reciprocals
@@ -542,5 +566,12 @@ mod tests {
         assert!((out.sub_square_sum.unwrap() - subs_want).abs() < 1e-12);
         assert!((out.square_sum - flat.square_sum).abs() > 1e-3);
         assert_eq!(out.frame, flat.frame);
+        // the plain difference's squares ride along with the ends (the bits of the parts
+        // without them), and only with them
+        assert_eq!(
+            out.plain_square_sum.map(f64::to_bits),
+            Some(flat.square_sum.to_bits())
+        );
+        assert!(flat.plain_square_sum.is_none());
     }
 }

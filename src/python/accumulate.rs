@@ -173,14 +173,19 @@ type HalfPartArg<'py> = (
     f64,
 );
 
-/// [`_halves`]' result: ((sum of the difference's squares, the sub-halves' or None), frame,
-/// (mass of half 0, mass of half 1)).
-type HalvesOut<'py> = ((f64, Option<f64>), Bound<'py, PyAny>, (f64, f64));
+/// [`_halves`]' result: ((sum of the difference's squares, the sub-halves' or None, the plain
+/// difference's or None), frame, (mass of half 0, mass of half 1)).
+type HalvesOut<'py> = (
+    (f64, Option<f64>, Option<f64>),
+    Bound<'py, PyAny>,
+    (f64, f64),
+);
 
 /// The halves of an accumulation over `window` (x0, y0, x1, y1) of its image (`parts`: each a
 /// [`HalfPartArg`]), their difference composited over `pre` (premultiplied RGBA): ((the sum of
 /// its squares, the same of the sub-halves within each half when every part has one, else
-/// None), frame (h,w,4) f32, (mass of half 0, mass of half 1)). A window under
+/// None, the same without the end term when a part has an end coefficient, else None), frame
+/// (h,w,4) f32, (mass of half 0, mass of half 1)). A window under
 /// `SERIAL_PIXELS` pixels is made on the calling thread; releases the GIL.
 #[pyfunction]
 fn _halves<'py>(
@@ -221,7 +226,7 @@ fn _halves<'py>(
     };
     let dims = [y1 - y0, x1 - x0, 4];
     Ok((
-        (out.square_sum, out.sub_square_sum),
+        (out.square_sum, out.sub_square_sum, out.plain_square_sum),
         shaped(py, out.frame, dims)?,
         (out.masses[0], out.masses[1]),
     ))

@@ -231,3 +231,24 @@ def test_the_halves_estimate_holds_with_spatial_samples(seed, aa):
         f = mb.render(scene, "accumulation", samples=n, aa=aa)
         err = float(np.sqrt(np.mean(np.square(f.rgba - ref))))
         assert 0.5 <= f.stats["error_estimate"] / err <= 2.0, (n, f.stats["error_estimate"], err)
+
+
+def test_subsample_steps_an_odd_number_of_strata_apart_do_not_hide_the_error(monkeypatch):
+    # Tuning seed 82: an icosphere translating 8 pixels at 64x48. With aa 2 its outline crosses
+    # a pixel's two subsample columns 1/16 of the shutter apart, one stratum of 16 samples: the
+    # two steps fall in strata of opposite halves and cancel in the halves' difference with the
+    # end term, while they add in the frame's error (0.32x the error against the exact integral
+    # at the same aa). The estimate is at least PLAIN_SHARE of the plain halves' reading, which
+    # keeps each half's shift and does not cancel so: 0.5x-2x.
+    from motionblur.evaluation.random_scenes import random_scene
+    from motionblur.methods import _accumulate
+
+    scene = random_scene(82, 64, 48)
+    ref = mb.exact(scene, aa=2).rgba.astype(np.float64)
+    frame = mb.render(scene, "accumulation", samples=16, aa=2)
+    err = float(np.sqrt(np.mean(np.square(frame.rgba - ref))))
+    assert 0.5 <= frame.stats["error_estimate"] / err <= 2.0, (frame.stats["error_estimate"], err)
+    monkeypatch.setattr(_accumulate, "PLAIN_SHARE", {2: 0.0, 4: 0.0})
+    alone = mb.render(scene, "accumulation", samples=16, aa=2)
+    assert np.array_equal(alone.rgba, frame.rgba)
+    assert alone.stats["error_estimate"] / err < 0.5, "the end term alone reads this scene's error"

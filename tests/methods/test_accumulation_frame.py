@@ -253,8 +253,8 @@ def numpy_halves(sums, win, quartered=False):
     two quarters ``sum(m * part) * (1 / sum(m))``) in float64 from 0 in the parts' order, and
     the end term ``e = sum(end * part)`` of the parts with an end (coefficient ``end * m /
     total mass``), the difference of the halves plus ``e`` (and of each half's quarters plus
-    ``2 e``) composited over the background and its squares summed in row order, the frame by
-    the halves' masses."""
+    ``2 e``) composited over the background and its squares summed in row order (with an end
+    term, the difference's without it too), the frame by the halves' masses."""
     x0, y0, x1, y1 = win
     rows, cols = slice(y0, y1), slice(x0, x1)
 
@@ -301,6 +301,7 @@ def numpy_halves(sums, win, quartered=False):
     ends = any(p.end for p in sums.parts)
     diff = np.subtract(a, b, dtype=np.float64)
     square_sum = row_order_sum(np.square(composited(diff + end if ends else diff, 0.0)))
+    plain_sum = row_order_sum(np.square(composited(diff, 0.0))) if ends else None
     sub_sum = None
     if quartered:
         # per pixel: half 0's quarters' difference, then half 1's, each channel in order
@@ -312,7 +313,7 @@ def numpy_halves(sums, win, quartered=False):
             )
             subs.append(composited(qa - qb + 2.0 * end if ends else qa - qb, 0.0))
         sub_sum = row_order_sum(np.square(np.stack(subs, axis=2)))
-    return (square_sum, sub_sum), frame, (ma, mb_)
+    return (square_sum, sub_sum, plain_sum), frame, (ma, mb_)
 
 
 @pytest.mark.parametrize(
@@ -375,6 +376,8 @@ def test_the_halves_kernel_gives_the_numpy_arithmetics_bits(case):
     assert got[0][0] == want[0][0], "square sum"
     assert got[0][1] == want[0][1], "quarters' square sum"
     assert (got[0][1] is None) == (not quartered)
+    assert got[0][2] == want[0][2], "plain square sum"
+    assert (got[0][2] is None) == (not case.startswith("ends")), "the plain sum comes with the end term"
     assert np.array_equal(got[1].view(np.uint32), want[1].view(np.uint32)), "frame"
     assert got[2] == want[2]
     # a half whose parts differ shows in the difference (the kernel is not all zeros)
