@@ -51,7 +51,9 @@ import numpy as np
 
 import motionblur as mb
 from motionblur.evaluation.random_scenes import MEASURING_SEEDS, TUNING_SEEDS, random_scene
+from motionblur.methods import _grids as grids
 from motionblur.methods import auto as A
+from motionblur.methods._refine import KINDS as REFINED_KINDS
 from motionblur.methods._segments import segment_times
 from motionblur.methods._sweep import sweep_scale
 from motionblur.raster import over_background
@@ -104,7 +106,7 @@ class Recorded:
         key = (m, kind)
         if key not in self.grids:
             trials = A._Trials(self.scene, self.aa)
-            if kind in A.KINDS:  # refined: after the stratified grid it holds
+            if kind in REFINED_KINDS:  # refined: after the stratified grid it holds
                 trials.accumulate(m)
             frame = trials.accumulate(m, kind)
             err = rmse(over_background(frame, self.scene.background).rgba, self.ref)
@@ -135,7 +137,7 @@ class Recorded:
 
     def cheapest(self, tol: float) -> tuple[str, float]:
         # the fewest samples that meet it: the grids past it are never rendered
-        n = next((n for n in ACC_GRID if self.grid(n, A.STRATIFIED)[1] <= tol), None)
+        n = next((n for n in ACC_GRID if self.grid(n, grids.STRATIFIED)[1] <= tol), None)
         found = [] if n is None else [(f"accumulation-{n}", self.ms(n))]
         an = self.analytic()
         if an["err"] <= tol:
@@ -155,13 +157,13 @@ class Replay(A._Trials):
     def _log(self, method: str, options: dict, ms: float, est: float, err: float) -> None:
         self.tried.append({"method": method, "options": options, "ms": ms, "error_estimate": est, "err": err})
 
-    def accumulate(self, n: int, kind: str = A.STRATIFIED) -> None:
+    def accumulate(self, n: int, kind: str = grids.STRATIFIED) -> None:
         grid = (n, kind)
-        draws = A._samples(grid) if self.grid is None else A._draws(grid, self.grid)
+        draws = grids.samples(grid) if self.grid is None else grids.draws(grid, self.grid)
         est, err = self.rec.grid(n, kind)
         self.grid = grid
-        self.effective.append((A._effective(grid), est))
-        options = {"samples": A._samples(grid), **({"grid": kind} if kind != A.STRATIFIED else {})}
+        self.effective.append((grids.effective(grid), est))
+        options = {"samples": grids.samples(grid), **({"grid": kind} if kind != grids.STRATIFIED else {})}
         self._log("accumulation", options, self.rec.ms(draws) + self.rec.overhead, est, err)
 
     def run(self, method: str, **options) -> None:
@@ -215,7 +217,7 @@ def plan_fixed_first(rec: Recorded, tol: float) -> tuple[float, float]:
 def plan_perfect_next(rec: Recorded, tol: float) -> tuple[float, float]:
     trials = Replay(rec)
     first = trials.first_samples(tol)
-    est, err = rec.grid(first, A.STRATIFIED)
+    est, err = rec.grid(first, grids.STRATIFIED)
     start = rec.ms(first) + rec.overhead + sum(t["ms"] for t in trials.tried)
     if err <= tol:
         return err, start
@@ -224,13 +226,13 @@ def plan_perfect_next(rec: Recorded, tol: float) -> tuple[float, float]:
     for key, ms in (("err", an["ms"]), ("exact_err", an["exact_ms"])):
         if an[key] <= tol and start + ms < best[1]:
             best = (an[key], start + ms)
-    start_grid = (first, A.STRATIFIED)
-    fresh = [(n, A.STRATIFIED) for n in range(first + 2, A.MAX_SAMPLES + 1, 2)]
-    held = [(first * k, A.STRATIFIED) for k in range(3, A.MAX_SAMPLES // first + 1, 2)]
-    held += [(first * k, A.TRAPEZOID) for k in range(2, A.MAX_SAMPLES // first, 2)]
-    held += A._refinements(start_grid) if trials.refines else []
-    for grid in sorted(fresh + held, key=lambda g: A._draws(g, start_grid)):
-        cost = start + rec.ms(A._draws(grid, start_grid)) + rec.overhead
+    start_grid = (first, grids.STRATIFIED)
+    fresh = [(n, grids.STRATIFIED) for n in range(first + 2, grids.MAX_SAMPLES + 1, 2)]
+    held = [(first * k, grids.STRATIFIED) for k in range(3, grids.MAX_SAMPLES // first + 1, 2)]
+    held += [(first * k, grids.TRAPEZOID) for k in range(2, grids.MAX_SAMPLES // first, 2)]
+    held += grids.refinements(start_grid) if trials.refines else []
+    for grid in sorted(fresh + held, key=lambda g: grids.draws(g, start_grid)):
+        cost = start + rec.ms(grids.draws(grid, start_grid)) + rec.overhead
         if cost >= best[1]:
             break  # sorted by draws: every later grid costs more
         if rec.grid(*grid)[1] <= tol:
@@ -240,10 +242,15 @@ def plan_perfect_next(rec: Recorded, tol: float) -> tuple[float, float]:
 
 def plan_perfect_first(rec: Recorded, tol: float) -> tuple[float, float]:
     need = next(
-        (n for n in range(2, A.MAX_SAMPLES + 1, 2) if rec.grid(n, A.STRATIFIED)[1] <= FORESIGHT * tol), None
+        (
+            n
+            for n in range(2, grids.MAX_SAMPLES + 1, 2)
+            if rec.grid(n, grids.STRATIFIED)[1] <= FORESIGHT * tol
+        ),
+        None,
     )
     trials = Replay(rec)
-    trials.first_samples = lambda _tol: need if need is not None else A.MAX_SAMPLES
+    trials.first_samples = lambda _tol: need if need is not None else grids.MAX_SAMPLES
     A._for_tolerance(trials, tol)
     return outcome(trials)
 

@@ -151,64 +151,10 @@ def test_translucent_layered_scenes_keep_accumulation_and_meet_the_tolerance(see
         assert _rmse(f.rgba, ref) <= tol, (tol, f.stats["plan"])
 
 
-@pytest.mark.parametrize(
-    "grid",
-    [
-        (1, "stratified"),
-        (2, "stratified"),
-        (6, "stratified"),
-        (8, "stratified"),
-        (12, "trapezoid"),
-        (17, "trapezoid"),
-        (96, "stratified"),
-        (2047, "trapezoid"),
-        (16, "refined 1/4"),
-        (24, "refined 1/2"),
-    ],
-)
-def test_the_holding_grid_is_the_one_a_search_of_every_grid_finds(grid):
-    """`_holding_grid` picks in closed form; a search of every grid of at most `MAX_SAMPLES`
-    samples by `_holds` (the definition of keeping the drawn samples) finds the same one, for
-    needs and rooms around the family boundaries (the search once took 0.7 ms a step)."""
-    most = auto_mod.MAX_SAMPLES
-    every = [
-        (m, t)
-        for m in range(1, most + 1)
-        for t in ("stratified", "trapezoid")
-        if auto_mod._samples((m, t)) <= most
-    ]
-    holding = [
-        g for g in every if auto_mod._holds(g, grid) and auto_mod._samples(g) > auto_mod._samples(grid)
-    ]
-    for bound in [0, 1, 2.5, 3, 9.4, 13, 17, 24.5, 25, 97, 1000, 4095, 4096, 5000]:
-        enough = [g for g in holding if auto_mod._samples(g) >= bound]
-        fits = [g for g in holding if auto_mod._samples(g) <= bound]
-        want = min(enough, key=lambda g: (auto_mod._samples(g), g[1] == "trapezoid"), default=None)
-        room = max(fits, key=lambda g: (auto_mod._samples(g), g[1] != "trapezoid"), default=None)
-        assert auto_mod._holding_grid(grid, least=bound) == want, bound
-        assert auto_mod._holding_grid(grid, most=bound, largest=True) == room, bound
-
-
 def test_refinement_draws_only_the_new_samples():
-    """From 6 samples a need of 14 goes to 18 (an odd multiple: the 6 are on its grid), drawing
-    12 more, not 14 afresh plus the 6 thrown away; the frame is accumulation's with 18 samples
-    (to float32 rounding of the sums) and so is its estimate. Where the trapezoid grid draws
-    fewer (12 -> 49 for 40: 37 new, not 48 for 60), it is taken, and it refines to any multiple."""
-    assert auto_mod._next_grid((6, "stratified"), 14.0) == (18, "stratified")
-    assert auto_mod._next_grid((12, "stratified"), 26.0) == (
-        36,
-        "stratified",
-    )  # 24 new; the trapezoid's 49, 37
-    assert auto_mod._next_grid((12, "stratified"), 40.0) == (48, "trapezoid")
-    assert auto_mod._next_grid((12, "stratified"), 13.0) == (24, "trapezoid")  # 13 new, not 24
-    assert auto_mod._next_grid((24, "trapezoid"), 30.0) == (48, "trapezoid")
-    assert auto_mod._next_grid((24, "trapezoid"), 80.0) == (96, "trapezoid")
-    assert auto_mod._holds((48, "trapezoid"), (12, "stratified")) and auto_mod._holds(
-        (72, "trapezoid"), (24, "trapezoid")
-    )
-    assert not auto_mod._holds((36, "trapezoid"), (12, "stratified")) and not auto_mod._holds(
-        (36, "stratified"), (12, "trapezoid")
-    )
+    """From 6 samples to 18 (an odd multiple: the 6 are on its grid, `_grids.next_grid`), drawing
+    12 more: the frame is accumulation's with 18 samples (to float32 rounding of the sums) and
+    so is its estimate."""
     scene = random_scene(1, W, H)
     trials = auto_mod._Trials(scene, 1)
     trials.accumulate(6)
@@ -252,38 +198,6 @@ def test_the_trapezoid_grid_keeps_the_drawn_samples_and_is_the_trapezoid_rule(sh
     over = lambda f: f.rgba + (1 - f.rgba[..., 3:]) * np.r_[bg[:3] * bg[3], bg[3]]  # noqa: E731
     errs = [_rmse(over(f), ref) for f in (first, mid, kept)]
     assert errs[0] > errs[1] > errs[2], errs
-
-
-@pytest.mark.parametrize(
-    "weights", [[1.0, 0.0, 0.0, 1.0], [1.0, 2.0, 0.0, 1.0], [2.0, 0.0, 1.0, 0.0, 1.0]], ids=str
-)
-@pytest.mark.parametrize("m", [2, 4, 8, 12])
-def test_the_trapezoid_grid_splits_a_node_at_a_closed_gap(weights, m):
-    """Under a weights shutter closed in the middle, the time integral jumps where the shutter's
-    mass reaches the gap: a node there is two samples, one at each end, each half its weight.
-    Then the rule is the trapezoid rule of each open side: exact (to rounding) for an integrand
-    linear in time within every bin whenever every bin boundary's mass is a node (m a multiple
-    of the weights' common denominator), and within the rule's h^2 error otherwise. With one
-    end alone (the rule before), a node counted its side twice: ``t`` integrated to 0.375
-    instead of 0.5 under [1, 0, 0, 1] at m = 2."""
-    shutter = np.array(weights)
-    times, w, node = auto_mod._trapezoid_nodes(shutter, m)
-    assert np.all(np.diff(times) >= 0) and w.sum() == pytest.approx(1.0, abs=1e-15)
-    assert set(node.tolist()) == set(range(m + 1))
-    bins = np.linspace(0.0, 1.0, len(shutter) + 1)
-    dens = shutter / shutter.sum() * len(shutter)  # shutter density per unit time
-    closed = np.flatnonzero(shutter == 0)
-    for t in times:  # no sample strictly inside a closed bin
-        assert not any(bins[j] + 1e-12 < t < bins[j + 1] - 1e-12 for j in closed), t
-    for f in (lambda t: t, lambda t: (t - 0.3) * 2.0 + 1.0):
-        exact = sum(
-            dens[j] * (bins[j + 1] - bins[j]) * f(0.5 * (bins[j] + bins[j + 1])) for j in range(len(shutter))
-        )
-        cum = np.concatenate([[0.0], np.cumsum(shutter) / shutter.sum()])
-        on_nodes = np.allclose(np.round(cum * m), cum * m)
-        got = float(np.sum(w * f(times)))
-        tol = 1e-12 if on_nodes else 0.5 / m**2
-        assert got == pytest.approx(exact, abs=tol), (m, got, exact)
 
 
 @pytest.mark.parametrize("seed", [8, 11, 15])

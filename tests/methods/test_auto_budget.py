@@ -14,6 +14,7 @@ import pytest
 
 import motionblur as mb
 from motionblur.evaluation.random_scenes import random_scene
+from motionblur.methods import _grids as grids
 from motionblur.methods import auto as auto_mod
 
 
@@ -59,12 +60,12 @@ def test_accumulation_grows_keeping_its_samples(monkeypatch):
     for seed in (0, 2):
         scene = random_scene(seed, 64, 48)
         f = mb.render(scene, "auto", budget_ms=400.0)
-        grids = _grids(f)
-        assert grids[0] == (auto_mod.FIRST_SAMPLES, "stratified") and len(grids) >= 2, f.stats["plan"]
-        for a, b in zip(grids, grids[1:], strict=False):
-            grown = auto_mod._holds(b, a) or (b[1] == "stratified" and b[0] >= 1.25 * a[0])
-            assert grown and b[0] > a[0], grids
-        fresh = auto_mod._Trials(scene, 1).accumulate(*grids[-1])
+        steps = _grids(f)
+        assert steps[0] == (auto_mod.FIRST_SAMPLES, "stratified") and len(steps) >= 2, f.stats["plan"]
+        for a, b in zip(steps, steps[1:], strict=False):
+            grown = grids.holds(b, a) or (b[1] == "stratified" and b[0] >= 1.25 * a[0])
+            assert grown and b[0] > a[0], steps
+        fresh = auto_mod._Trials(scene, 1).accumulate(*steps[-1])
         assert np.abs(f.rgba - fresh.rgba).max() < 1e-4
 
 
@@ -80,7 +81,7 @@ def test_each_budget_step_draws_no_more_samples_than_fit():
     new ones of a grid that holds the drawn ones) are at most the room, it grows the frame, and
     it declines only where no grid or fresh render of 1.25x fits. A fresh render sized by the
     room plus the samples already drawn once overran 10 ms budgets by 1.2-1.6x."""
-    grids = [
+    cases = [
         (2, "stratified"),
         (4, "stratified"),
         (8, "stratified"),
@@ -91,8 +92,8 @@ def test_each_budget_step_draws_no_more_samples_than_fit():
         (2048, "trapezoid"),
         (4000, "stratified"),
     ]
-    for grid in grids:
-        have = auto_mod._samples(grid)
+    for grid in cases:
+        have = grids.samples(grid)
         # rooms a hair under a whole count too: room + drawn once rounded up past it
         hairs = [math.nextafter(float(k), 0.0) for k in (4, 16, 49)]
         for room in [0.5, 1, 3, 7, 8, 9, 15, 21, 30, 47, 100, 333, 5000, *hairs]:
@@ -101,14 +102,14 @@ def test_each_budget_step_draws_no_more_samples_than_fit():
                 least = grid[0] + (
                     grid[1] == "stratified"
                 )  # the fewest new samples a grid that holds them draws
-                most = auto_mod.MAX_SAMPLES
+                most = grids.MAX_SAMPLES
                 assert 2 * int(min(room, most) // 2) < 1.25 * have, (grid, room)
                 assert min(room, most - have) < least, (grid, room)
                 continue
-            kept = auto_mod._holds(nxt, grid)
-            drawn = auto_mod._samples(nxt) - (have if kept else 0)
-            assert drawn <= room and auto_mod._samples(nxt) > have, (grid, room, nxt)
-            assert auto_mod._samples(nxt) <= auto_mod.MAX_SAMPLES + 1
+            kept = grids.holds(nxt, grid)
+            drawn = grids.samples(nxt) - (have if kept else 0)
+            assert drawn <= room and grids.samples(nxt) > have, (grid, room, nxt)
+            assert grids.samples(nxt) <= grids.MAX_SAMPLES + 1
 
 
 def test_a_budget_under_a_rolling_shutter_raises_naming_budget_ms():

@@ -14,6 +14,7 @@ import pytest
 
 import motionblur as mb
 from motionblur.evaluation.random_scenes import random_scene
+from motionblur.methods import _grids as grids
 from motionblur.methods import auto as auto_mod
 
 BENCH = Path(__file__).resolve().parents[2] / "benches" / "bench_auto_ceiling.py"
@@ -40,7 +41,7 @@ def test_a_recorded_grid_is_the_render_auto_makes(recorded, seed):
     frame = mb.render(rec.scene, "auto", tolerance=0.01)
     first = [t for t in frame.stats["plan"]["tried"] if "pilot" not in t["options"]][0]
     n = first["options"]["samples"]
-    est, err = rec.grid(n, auto_mod.STRATIFIED)
+    est, err = rec.grid(n, grids.STRATIFIED)
     assert first["error_estimate"] == est
     acc = mb.render(rec.scene, "accumulation", samples=n)
     assert acc.stats["error_estimate"] == pytest.approx(est, rel=1e-5)
@@ -78,9 +79,7 @@ def test_perfect_next_finds_auto_last_grid_or_cheaper(bench, recorded):
             if last["method"] != "accumulation" or last["err"] > tol or len(trials.renders) == 1:
                 continue
             one_step = (
-                rec.ms(first)
-                + rec.ms(auto_mod._draws(trials.grid, (first, auto_mod.STRATIFIED)))
-                + 2 * rec.overhead
+                rec.ms(first) + rec.ms(grids.draws(trials.grid, (first, grids.STRATIFIED))) + 2 * rec.overhead
             )
             one_step += rec.sweep_ms  # the forecast's pilot, charged to both
             assert best_err <= tol, (seed, tol)

@@ -120,30 +120,10 @@ def test_a_grid_not_drawn_by_residue_refuses_to_be_refined():
         _refine.refine(sums, scene, 16, "refined 1/4")
 
 
-def test_the_planner_refines_a_near_miss_by_boundaries_and_doubles_a_far_one():
-    """From 16 stratified samples (stratified samples' worth: 1/4 is 16 / 0.907 = 17.6, 1/2 is
-    20.1): a need of 17 takes the 1/4 grid (4 new samples), 19 the 1/2 grid (8), 21 the
-    trapezoid grid of 32 strata (17 new; a fresh 22 would draw 22). Without refinement (aa 2
-    and 4, a weights shutter) 17 goes to the trapezoid grid. Under 10 strata (12 for 1/2) the
-    refined grids are not offered (at 8 the 1/2 grid's estimate spreads too much and the 1/4
-    grid is worth less than auto's least next step), nor at an odd count (its last midpoint
-    would weigh unlike its residue class: `refine` refuses it)."""
-    g = (16, "stratified")
-    assert auto_mod._next_grid(g, 17.0, refines=True) == (16, "refined 1/4")
-    assert auto_mod._next_grid(g, 19.0, refines=True) == (16, "refined 1/2")
-    assert auto_mod._next_grid((16, "refined 1/4"), 19.0, refines=True) == (16, "refined 1/2")
-    assert auto_mod._next_grid(g, 21.0, refines=True) == (32, "trapezoid")
-    assert auto_mod._next_grid(g, 17.0, refines=False) == (32, "trapezoid")
-    assert auto_mod._next_grid((8, "stratified"), 9.5, refines=True) == (16, "trapezoid")
-    assert auto_mod._refinements((8, "stratified")) == []
-    assert auto_mod._refinements((10, "stratified")) == [(10, "refined 1/4")]
-    assert auto_mod._refinements((12, "stratified")) == [(12, "refined 1/4"), (12, "refined 1/2")]
-    assert auto_mod._refinements((13, "stratified")) == []
+def test_an_odd_count_refuses_to_be_refined():
+    # its last midpoint would weigh unlike its residue class
     with pytest.raises(ValueError, match="even"):
         _refine.refine(HalfSums(random_scene(1, W, H), 1), random_scene(1, W, H), 13, "refined 1/4")
-    assert not auto_mod._holds((16, "refined 1/4"), (8, "stratified"))
-    assert auto_mod._holds((32, "trapezoid"), (16, "refined 1/4"))
-    assert not auto_mod._holds((48, "stratified"), (16, "refined 1/2"))
 
 
 def test_auto_refines_only_where_it_is_calibrated():

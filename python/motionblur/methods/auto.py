@@ -17,7 +17,7 @@ With ``tolerance`` (RMSE against the exact integral, premultiplied linear RGBA):
    colour) says bring the error to `FIRST_AIM` x ``tolerance``, so that the first render is
    often the last; the forecast only picks N, the render's halves certify it;
 3. since the error falls about as 1/N (`RATE`), the N that brings the estimate under
-   ``tolerance`` x `SAFETY` is predicted and rendered, keeping the samples drawn (`_next_grid`):
+   ``tolerance`` x `SAFETY` is predicted and rendered, keeping the samples drawn (`_grids.next_grid`):
    accumulation's samples cut the shutter's mass into equal strata under any shutter, so an
    odd multiple of the count holds them, and so does the trapezoid grid (`_Trials._trapezoid`,
    the strata's ends instead of their middles, one sample more) of any even multiple, which
@@ -37,7 +37,7 @@ With ``tolerance`` (RMSE against the exact integral, premultiplied linear RGBA):
 With ``budget_ms``: accumulation with 4 samples measures the time per sample; the analytic
 frame follows where its predicted time fits `BUDGET_SHARE` of the time left (it is more
 accurate than any accumulation that fits); else accumulation grows, keeping the samples drawn
-(`_holds`: an odd multiple, or a trapezoid grid), to the most that fit `BUDGET_SHARE` of the
+(`_grids.holds`: an odd multiple, or a trapezoid grid), to the most that fit `BUDGET_SHARE` of the
 time left at the time per sample its last render took, measured against the clock at every step.
 
 ``Frame.stats["plan"]`` lists every render tried (method, options, ms, error estimate) and why
@@ -55,10 +55,11 @@ from .._validate import as_float
 from ..raster import Frame
 from ..render import METHODS, register
 from ..scene import Scene
-from ._accumulate import HalfSums, add_stratified, shutter_quantiles
+from . import _grids
+from ._accumulate import HalfSums, add_stratified
 from ._estimate import EXACT_OPTIONS
-from ._refine import ERROR_RATIO, KINDS, LEAST_STRATA, refine
-from ._refine import samples as refined_samples
+from ._grids import MAX_SAMPLES, REUSE_DRAWS, STRATIFIED, TRAPEZOID
+from ._refine import refine
 from ._segments import segment_times
 from ._sharp import check_aa
 from ._sweep import sweep_scale
@@ -90,9 +91,6 @@ __all__ = [
     "BUDGET_SHARE",
 ]
 
-#: Accumulation's grid kinds besides the refined ones (`_refine.KINDS`): the stratified grid of
-#: N samples (``accumulation``'s own) and the trapezoid grid of N strata (N + 1 samples).
-STRATIFIED, TRAPEZOID = "stratified", "trapezoid"
 #: The default tolerance: RMSE against the exact time integral (premultiplied linear RGBA).
 DEFAULT_TOLERANCE = 0.01
 #: The share of the tolerance auto aims its estimate at (the estimate's own spread: on the
@@ -137,8 +135,6 @@ FIRST_MOST = 256
 #: The rate auto first assumes the error falls at, as N^-RATE (1 for an edge's coverage at one
 #: point; slower where a pixel sees many edges), until two renders show their own.
 RATE = 1.0
-#: Most time samples auto gives accumulation.
-MAX_SAMPLES = 1 << 12
 #: Most accumulation renders after the first.
 MAX_STEPS = 3
 #: The analytic frame's predicted time (ms): ``exp(c[0]) * ms^c[1] * n^c[2] * (segments + 1)^c[3]
@@ -156,9 +152,6 @@ MARGINAL_SAMPLE = 0.6
 #: predicted time of the samples accumulation still needs (chosen on the same tuning scenes:
 #: the lowest mean time over the cheaper of the two, simulated for 12 to 384 more samples).
 ANALYTIC_MARGIN = 1.2
-#: How many more new samples than a fresh render a refinement that keeps the drawn ones may
-#: draw (`_next_grid`; chosen on the tuning scenes).
-REUSE_DRAWS = 1.5
 #: The share of the budget's remaining time a render is planned to take (the rest is margin
 #: for the time per sample's spread).
 BUDGET_SHARE = 0.8
@@ -228,10 +221,10 @@ class _Trials:
         ``n + 1`` of the trapezoid grid of ``n`` strata (`TRAPEZOID`: see `_trapezoid`), or with
         ``n`` stratified samples and some of their strata's boundaries (a kind of
         `_refine.KINDS`). The samples already drawn are kept when the new grid holds them
-        (`_holds`: their times are among the new ones under any shutter, whose strata are of
+        (`_grids.holds`: their times are among the new ones under any shutter, whose strata are of
         the shutter's mass) and only the others are drawn."""
         t0 = time.perf_counter()
-        keep = self.grid is not None and _holds((n, kind), self.grid)
+        keep = self.grid is not None and _grids.holds((n, kind), self.grid)
         if not keep:
             self.sums = HalfSums(self.scene, self.aa)
         if kind == TRAPEZOID:
@@ -246,7 +239,7 @@ class _Trials:
         frame = self.sums.frame()
         ms = (time.perf_counter() - t0) * 1e3
         options = {"samples": self.sums.samples, **({"grid": kind} if kind != STRATIFIED else {})}
-        self.effective.append((_effective(self.grid), frame.stats["error_estimate"]))
+        self.effective.append((_grids.effective(self.grid), frame.stats["error_estimate"]))
         return self._record("accumulation", options, frame, ms, frame.stats["error_estimate"])
 
     def _stratified(self, n: int, keep: bool) -> None:
@@ -259,12 +252,12 @@ class _Trials:
     def _trapezoid(self, m: int, keep: bool) -> None:
         """The trapezoid grid of ``m`` strata of the shutter's mass: times ``W^-1(k / m)``, k = 0..m,
         weights 1/m but 1/(2m) at the two ends (a node at a gap closed mid-shutter is a sample
-        at each end of the gap, `_trapezoid_nodes`); its halves are the even and the odd k (the
+        at each end of the gap, `_grids.trapezoid_nodes`); its halves are the even and the odd k (the
         trapezoid and the midpoint rules of m / 2 strata). It holds any midpoint grid of
         ``m / (2 q)`` strata and trapezoid grid of ``m / q``, so a refinement may go to any
         multiple (the stratified grids only to odd ones)."""
         assert self.sums is not None
-        times, weights, k = _trapezoid_nodes(self.scene.shutter, m)
+        times, weights, k = _grids.trapezoid_nodes(self.scene.shutter, m)
         held = self.sums.regrid(times, weights, k % 2) if keep else None
         if held is None:
             # nothing kept; where keeping failed, a drawn sample sits on a node split at a closed
@@ -334,127 +327,6 @@ class _Trials:
         )  # fmt: skip
 
 
-def _trapezoid_nodes(shutter, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(times, weights, node) of the trapezoid grid of ``m`` strata of the shutter's mass (see
-    `_Trials._trapezoid`), times increasing: node ``k`` at ``W^-1(k / m)``, weight 1/m (1/(2m) at
-    the two ends). Where the mass ``k / m`` is reached at the start of a closed gap in the middle
-    of the shutter (a weights shutter with zeros inside), the time integral jumps there, and the
-    node is two samples, one at each end of the gap, each half its weight (the trapezoid rule of
-    each side; one end alone would count its side twice)."""
-    k = np.arange(m + 1)
-    u = k / m
-    left = shutter_quantiles(shutter, u)
-    right = left
-    if isinstance(shutter, np.ndarray):  # only a weights shutter closes inside: W's last u-time
-        right = 1.0 - shutter_quantiles(np.ascontiguousarray(shutter[::-1]), 1.0 - u)
-    weights = np.full(m + 1, 1.0 / m)
-    weights[[0, -1]] = 0.5 / m
-    gap = np.zeros(m + 1, bool)
-    gap[1:-1] = right[1:-1] > left[1:-1] + 1e-12
-    times = np.concatenate([left, right[gap]])
-    node = np.concatenate([k, k[gap]])
-    w = np.where(gap, 0.5 * weights, weights)
-    weights = np.concatenate([w, w[gap]])
-    order = np.argsort(times, kind="stable")
-    return times[order], weights[order], node[order]
-
-
-def _samples(grid: tuple[int, str]) -> int:
-    """The samples of a grid (m strata, its kind): m stratified, m + 1 for the trapezoid's, m and
-    the boundaries added for a refined one (`_refine.samples`)."""
-    m, kind = grid
-    if kind in KINDS:
-        return refined_samples(m, kind)
-    return m + (kind == TRAPEZOID)
-
-
-def _effective(grid: tuple[int, str]) -> float:
-    """The stratified samples whose error a grid's is about (at an error falling as 1/N): its
-    samples, but a refined grid's ``m / ERROR_RATIO`` (`_refine.ERROR_RATIO`)."""
-    m, kind = grid
-    return m / ERROR_RATIO[kind] if kind in KINDS else float(_samples(grid))
-
-
-def _holds(new: tuple[int, str], old: tuple[int, str]) -> bool:
-    """Whether grid ``new`` holds every time of grid ``old`` (each (strata, kind)): a
-    stratified grid holds one of ``m / q`` strata for odd q; a trapezoid grid holds a stratified
-    or refined one of ``m / (2 q)`` strata and a trapezoid one of ``m / q``, any q; a refined
-    grid holds the stratified grid of its strata and the 1/2 grid the 1/4 grid (which `refine`
-    can reweight only when the stratified grid was drawn by residue: auto offers them where
-    `_Trials.refines`)."""
-    (m, kind), (m0, kind0) = new, old
-    if kind == STRATIFIED:
-        return kind0 == STRATIFIED and m % m0 == 0 and (m // m0) % 2 == 1
-    if kind == TRAPEZOID:
-        return m % m0 == 0 and (m // m0 > 1) and (kind0 == TRAPEZOID or (m // m0) % 2 == 0)
-    order = [STRATIFIED, *KINDS]
-    return m == m0 and kind0 in order and order.index(kind0) < order.index(kind)
-
-
-def _draws(new: tuple[int, str], old: tuple[int, str]) -> int:
-    """The samples grid ``new`` draws after grid ``old``: all of them, less those of ``old`` it
-    holds (`_holds`)."""
-    return _samples(new) - (_samples(old) if _holds(new, old) else 0)
-
-
-def _holding_families(grid: tuple[int, str]) -> list[tuple[bool, int, int, int]]:
-    """The stratified and trapezoid grids that hold ``grid``'s samples and add to them
-    (`_holds`), as families ``(trapezoid, first, step, last)``: strata ``j * m0`` for j = first,
-    first + step, ..., last, of at most `MAX_SAMPLES` samples. Odd multiples of a stratified grid
-    and trapezoid grids of its (or a refined grid's) even multiples; trapezoid grids of any
-    multiple of a trapezoid grid."""
-    m0, kind0 = grid
-    families = [(False, 3, 2, MAX_SAMPLES // m0)] if kind0 == STRATIFIED else []
-    families.append((True, 2, 1 if kind0 == TRAPEZOID else 2, (MAX_SAMPLES - 1) // m0))
-    return families
-
-
-def _holding_grid(grid: tuple[int, str], least: float = 0.0, most: float = math.inf, largest: bool = False):
-    """Of the stratified and trapezoid grids that hold ``grid``'s samples (`_holding_families`)
-    with between ``least`` and ``most`` samples, the one with the fewest (the most,
-    ``largest``); the stratified one on a tie; None when there is none. In closed form: each
-    family's samples rise with j."""
-    m0, found = grid[0], []
-    for trap, first, step, last in _holding_families(grid):
-        lo = max(first, math.ceil((least - trap) / m0))
-        hi = min(last, math.floor((most - trap) / m0)) if math.isfinite(most) else last
-        lo += (lo - first) % step  # onto the family's steps: up from the least
-        hi -= (hi - first) % step  # and down from the most
-        if lo <= hi:
-            found.append(((hi if largest else lo) * m0, TRAPEZOID if trap else STRATIFIED))
-    if not found:
-        return None
-    pick = max if largest else min
-    trap_last = (lambda g: -(g[1] == TRAPEZOID)) if largest else (lambda g: g[1] == TRAPEZOID)
-    return pick(found, key=lambda g: (_samples(g), trap_last(g)))
-
-
-def _refinements(grid: tuple[int, str]) -> list[tuple[int, str]]:
-    """The refined grids (`_refine.KINDS`) that hold ``grid``, of at least their
-    `_refine.LEAST_STRATA`: a grid drawn by residue only (`_Trials.refines`)."""
-    m = grid[0]
-    return [(m, k) for k in KINDS if m >= LEAST_STRATA[k] and m % 2 == 0 and _holds((m, k), grid)]
-
-
-def _next_grid(grid: tuple[int, str], want: float, refines: bool = False) -> tuple[int, str]:
-    """The grid (strata, kind) after ``grid`` for an estimated need of ``want`` samples
-    (stratified samples' worth: `_effective`): of the grids that hold the samples drawn
-    (`_holding_grid`, and with ``refines`` the refined grids of the same strata,
-    `_refinements`) and are worth at least ``want``, the one that draws the fewest new samples
-    (not the trapezoid one on a tie), when it draws at most `REUSE_DRAWS` x as many as ``want``
-    rounded up to even does afresh (a render saved outweighs a few more samples, and the frame
-    gets them too); else that even count, afresh."""
-    fresh = min(MAX_SAMPLES, 2 * math.ceil(want / 2))
-    found = [g for g in _refinements(grid) if _effective(g) >= want] if refines else []
-    best = _holding_grid(grid, least=want)
-    found += [best] if best is not None else []
-    if found:
-        best = min(found, key=lambda g: (_draws(g, grid), g[1] == TRAPEZOID))
-        if _draws(best, grid) <= REUSE_DRAWS * fresh:
-            return best
-    return (fresh, STRATIFIED)
-
-
 def first_samples(tol: float, sweep: float | None = None, aa: int = 1) -> int:
     """The time samples of auto's first accumulation render at tolerance ``tol``. With the scene's
     ``sweep`` (`_sweep.sweep_scale`; auto always passes it): the fewest even count whose
@@ -510,8 +382,8 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
             trials.run("analytic")
             return f"accumulation would need {want:.0f} samples, over {MAX_SAMPLES}: the analytic frame"
         assert trials.grid is not None
-        nxt = _next_grid(trials.grid, want, trials.refines)
-        why = _analytic_instead(trials, _draws(nxt, trials.grid))
+        nxt = _grids.next_grid(trials.grid, want, trials.refines)
+        why = _analytic_instead(trials, _grids.draws(nxt, trials.grid))
         if why is not None:
             trials.run("analytic")
             return why
@@ -527,9 +399,9 @@ def _budget_grid(grid: tuple[int, str], room: float) -> tuple[int, str] | None:
     least 1.25x the samples drawn; None when neither fits."""
     # draws are whole samples: at most floor(room), added to the drawn ones exactly
     whole = math.floor(room) if math.isfinite(room) else MAX_SAMPLES
-    best = _holding_grid(grid, most=whole + _samples(grid), largest=True)
+    best = _grids.holding_grid(grid, most=whole + _grids.samples(grid), largest=True)
     fresh = 2 * int(min(room, MAX_SAMPLES) // 2)  # a fresh render draws all its samples
-    if fresh >= 1.25 * _samples(grid) and fresh > (_samples(best) if best else 0):
+    if fresh >= 1.25 * _grids.samples(grid) and fresh > (_grids.samples(best) if best else 0):
         return (fresh, STRATIFIED)
     return best
 
@@ -558,7 +430,7 @@ def _for_budget(trials: _Trials, budget: float) -> str:
         grid = _budget_grid(trials.grid, BUDGET_SHARE * left() / max(per, 1e-6))
         if grid is None:
             break
-        drawn = _draws(grid, trials.grid)
+        drawn = _grids.draws(grid, trials.grid)
         trials.accumulate(*grid)
     n = trials.last["options"]["samples"]
     return f"accumulation-{n}: the most samples that fit {budget:g} ms at the time per sample measured"
