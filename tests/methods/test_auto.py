@@ -231,18 +231,21 @@ def test_without_a_forecast_the_first_render_is_sized_by_the_tolerance():
 @pytest.mark.parametrize("sweep", [0.0, 1e-3, 0.05, 0.4, 3.0, 1e3])
 def test_the_forecast_picks_the_fewest_samples_it_expects_to_meet_its_aim(sweep, aa):
     """The count is the fewest even one whose forecast error at ``aa`` is at most FIRST_AIM x the
-    tolerance (2 to FIRST_MOST), and never falls as the tolerance tightens or the sweep grows."""
+    tolerance, times sqrt(N / SURE_SAMPLES) under SURE_SAMPLES (the share auto holds so few
+    samples' estimate to), 2 to FIRST_MOST, and never falls as the tolerance tightens or the
+    sweep grows."""
     c0, c1, c2 = auto_mod.FIRST_FIT[aa]
 
-    def forecast(n):
-        return np.exp(c0) * sweep**c1 * n**c2
+    def fits(n, tol):
+        aim = auto_mod.FIRST_AIM * tol * min(1.0, np.sqrt(n / auto_mod.SURE_SAMPLES))
+        return np.exp(c0) * sweep**c1 * n**c2 <= aim
 
     last = 0
     for tol in (0.03, 0.01, 0.004, 0.001, 1e-4):
         n = auto_mod.first_samples(tol, sweep, aa)
         assert n % 2 == 0 and 2 <= n <= auto_mod.FIRST_MOST and n >= last, (tol, n)
         if 2 < n < auto_mod.FIRST_MOST:
-            assert forecast(n) <= auto_mod.FIRST_AIM * tol < forecast(n - 2), (tol, n)
+            assert fits(n, tol) and not fits(n - 2, tol), (tol, n)
         last = n
     assert auto_mod.first_samples(0.004, sweep, aa) <= auto_mod.first_samples(0.004, 2 * sweep + 1e-3, aa)
 

@@ -334,7 +334,9 @@ def first_samples(tol: float, sweep: float | None = None, aa: int = 1) -> int:
     """The time samples of auto's first accumulation render at tolerance ``tol``. With the scene's
     ``sweep`` (`_sweep.sweep_scale`; auto always passes it): the fewest even count whose
     forecast error at ``aa`` (1, 2 or 4 spatial samples per pixel along each axis; `FIRST_FIT`)
-    is at most `FIRST_AIM` x ``tol``, 2 to `FIRST_MOST`. Without it (the rule before the
+    is at most `FIRST_AIM` x ``tol``, and under `SURE_SAMPLES` at most that times
+    ``sqrt(N / SURE_SAMPLES)``, the share auto holds so few samples' estimate to; 2 to
+    `FIRST_MOST`. Without it (the rule before the
     forecast, kept for comparison): ``FIRST_SCALE / tol`` rounded to even, `FIRST_SAMPLES` to
     `FIRST_MAX` (4 at 0.02 and above, 6 at 0.0133, 8 at 0.01 and below)."""
     if sweep is None:
@@ -342,8 +344,12 @@ def first_samples(tol: float, sweep: float | None = None, aa: int = 1) -> int:
     c0, c1, c2 = FIRST_FIT[check_aa(aa)]
     if not sweep > 0.0:
         return 2
-    need = (FIRST_AIM * tol / (math.exp(c0) * sweep**c1)) ** (1.0 / c2)
-    return int(min(FIRST_MOST, max(2, 2 * math.ceil(need / 2))))
+    scale = math.exp(c0) * sweep**c1
+    need = (FIRST_AIM * tol / scale) ** (1.0 / c2)
+    n = int(min(FIRST_MOST, max(2, 2 * math.ceil(need / 2))))
+    while n < SURE_SAMPLES and scale * n**c2 > FIRST_AIM * tol * math.sqrt(n / SURE_SAMPLES):
+        n += 2
+    return n
 
 
 def _analytic_instead(trials: _Trials, draws: int) -> str | None:
