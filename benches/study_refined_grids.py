@@ -49,7 +49,6 @@ COUNTS = (8, 12, 16, 24, 32)
 #: Each family's first boundary within four strata and the half it joins.
 FAMILIES = {"A": (1, 0), "B": (3, 1), "C": (2, 0), "D": (0, 1)}
 GRIDS = {"S": (), "A": ("A",), "AB": ("A", "B")}
-BOX_ONLY = [False]
 
 
 def refined(scene, n: int, families) -> tuple[float, float, int]:
@@ -80,14 +79,14 @@ def refined(scene, n: int, families) -> tuple[float, float, int]:
     return raw, frame, sum(len(p[0]) for p in parts)
 
 
-def scene_rows(seed: int, w: int, h: int) -> list[dict]:
+def scene_rows(seed: int, w: int, h: int, box_only: bool = False) -> list[dict]:
     scene = random_scene(seed, w, h)
     box = isinstance(scene.shutter, str) and scene.shutter == "box"
     # every shutter but a weights one (whose closed gaps the grids do not split); auto refines
     # under the box only, and the other shutters' rows say why
     if not A._moves(scene) or scene.rolling > 0.0 or isinstance(scene.shutter, np.ndarray):
         return []
-    if BOX_ONLY[0] and not box:
+    if box_only and not box:
         return []
     ref = mb.exact(scene).rgba.astype(np.float64)
     rows = []
@@ -138,9 +137,12 @@ def main(argv: list[str] | None = None) -> list[str]:
     p.add_argument("--first-seed", type=int, default=0)
     p.add_argument("--box", action="store_true", help="box-shutter scenes only")
     args = p.parse_args(argv)
-    BOX_ONLY[0] = args.box
     set_num_threads(1)
-    rows = [row for seed, w, h in scene_specs(args.sizes, args.first_seed) for row in scene_rows(seed, w, h)]
+    rows = [
+        row
+        for seed, w, h in scene_specs(args.sizes, args.first_seed)
+        for row in scene_rows(seed, w, h, args.box)
+    ]
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "rows.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
     lines = summary(rows)

@@ -57,22 +57,21 @@ def samples(n: int, kind: str) -> int:
     return n + sum(len(boundaries(n, r)) for r, _ in KINDS[kind])
 
 
-def _nodes(n: int, kind: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(weights, half, present) of the trapezoid grid's nodes ``k = 0..2n`` (``k / (2n)`` of the
+def _nodes(n: int, kind: str) -> tuple[np.ndarray, np.ndarray]:
+    """(weights, half) of the trapezoid grid's nodes ``k = 0..2n`` (``k / (2n)`` of the
     shutter's mass: midpoints at odd ``k``, boundary ``b`` at ``k = 2b``) in the grid of ``n``
-    strata refined as ``kind``: each sample's nearest-time cell, the half it belongs to, and
-    whether the grid has it."""
+    strata refined as ``kind``: each sample's nearest-time cell and the half it belongs to; a
+    node the grid lacks weighs 0."""
     weights, half = np.zeros(2 * n + 1), np.zeros(2 * n + 1, np.int64)
-    present = np.zeros(2 * n + 1, bool)
     added = np.zeros(n + 1, bool)
     for residue, h in KINDS[kind]:
         b = boundaries(n, residue)
         added[b] = True
-        weights[2 * b], half[2 * b], present[2 * b] = 0.5 / n, h, True
+        weights[2 * b], half[2 * b] = 0.5 / n, h
     i = np.arange(n)
     weights[2 * i + 1] = (1.0 - 0.25 * (added[i].astype(float) + added[i + 1])) / n
-    half[2 * i + 1], present[2 * i + 1] = i % 2, True
-    return weights, half, present
+    half[2 * i + 1] = i % 2
+    return weights, half
 
 
 def refine(sums: HalfSums, scene: Scene, n: int, kind: str) -> None:
@@ -82,7 +81,7 @@ def refine(sums: HalfSums, scene: Scene, n: int, kind: str) -> None:
     only the boundaries it lacks drawn, each family as one part of its half."""
     if n % 2:
         raise ValueError(f"n: a refined grid needs an even number of strata, got {n}")
-    weights, half, _ = _nodes(n, kind)  # a node the grid lacks weighs 0: no sample moves there
+    weights, half = _nodes(n, kind)  # a node the grid lacks weighs 0: no sample moves there
     times = shutter_quantiles(scene.shutter, np.arange(2 * n + 1) / (2 * n))
     have = sums.regrid(times, weights, half)
     if have is None:

@@ -347,9 +347,15 @@ def first_samples(tol: float, sweep: float | None = None, aa: int = 1) -> int:
     scale = math.exp(c0) * sweep**c1
     need = (FIRST_AIM * tol / scale) ** (1.0 / c2)
     n = int(min(FIRST_MOST, max(2, 2 * math.ceil(need / 2))))
-    while n < SURE_SAMPLES and scale * n**c2 > FIRST_AIM * tol * math.sqrt(n / SURE_SAMPLES):
+    while n < SURE_SAMPLES and scale * n**c2 > FIRST_AIM * tol * _sure_share(n):
         n += 2
     return n
+
+
+def _sure_share(n: int) -> float:
+    """The share of auto's aim a frame of ``n`` samples is held to: ``sqrt(n / SURE_SAMPLES)``
+    under `SURE_SAMPLES`, else 1 (few samples' halves spread more)."""
+    return min(1.0, math.sqrt(n / SURE_SAMPLES))
 
 
 def _analytic_instead(trials: _Trials, draws: int) -> str | None:
@@ -379,7 +385,7 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
     rate = RATE
     for _ in range(MAX_STEPS + 1):
         est, n = trials.last["error_estimate"], trials.last["options"]["samples"]
-        limit = aim * min(1.0, math.sqrt(n / SURE_SAMPLES))
+        limit = aim * _sure_share(n)
         if est <= limit:
             return f"accumulation-{n} estimates {est:.3g} <= {limit / tol:.2g} x tolerance"
         measured = trials.effective  # (stratified samples' worth, estimate) of each grid
