@@ -5,7 +5,7 @@
 //! has exactly `2r + 1 >= length` integer taps). Along an image axis the taps are whole pixels;
 //! along any other direction the image is sheared so the taps become a row (see `lines`).
 //! Outside the image the taps read transparent black.
-use super::lines::{directional, plan};
+use super::lines::{directional_at, plan, Live};
 use super::{check_direction, check_finite, check_image};
 use crate::error::Result;
 
@@ -74,13 +74,43 @@ pub fn box_blur(
     direction: [f32; 2],
     length: f32,
 ) -> Result<Vec<f32>> {
+    box_blur_where(rgba, w, h, direction, length, Live::All)
+}
+
+/// [`box_blur`] of an image that is zero wherever the fourth channel of `live` (`(h, w, 4)`,
+/// often the image itself) is: the same values, without building or filtering the sheared
+/// rows that read no live pixel (a sparse mask in a large window: most of them).
+pub(crate) fn box_blur_live(
+    rgba: &[f32],
+    w: usize,
+    h: usize,
+    direction: [f32; 2],
+    length: f32,
+    live: &[f32],
+) -> Result<Vec<f32>> {
+    check_image("live", live, w, h, 4)?;
+    let live = Live::Alpha {
+        alpha: live,
+        transposed: false,
+    };
+    box_blur_where(rgba, w, h, direction, length, live)
+}
+
+fn box_blur_where(
+    rgba: &[f32],
+    w: usize,
+    h: usize,
+    direction: [f32; 2],
+    length: f32,
+    live: Live<'_>,
+) -> Result<Vec<f32>> {
     check_image("rgba", rgba, w, h, 4)?;
     check_direction(direction, length, "length")?;
     check_finite("rgba", rgba)?;
     let Some(p) = plan(direction, length * 0.5) else {
         return Ok(rgba.to_vec());
     };
-    directional::<4, 4, ()>("rgba", rgba, w, h, &p, |src, n, out, _| {
+    directional_at::<4, 4, ()>("rgba", rgba, w, h, &p, 0.0, live, |src, n, out, _| {
         box_row_each(src, n, p.radius, |x, m| {
             out[x * 4..x * 4 + 4].copy_from_slice(&m)
         });

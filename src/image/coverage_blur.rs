@@ -25,9 +25,10 @@ use std::mem::MaybeUninit;
 
 use rayon::prelude::*;
 
+use super::boxblur::box_blur_live;
 use super::coverage::{composite_pixel, Window};
 use super::lines::plan;
-use super::{box_blur, check_direction, filled, pool, put4};
+use super::{check_direction, filled, pool, put4};
 use crate::error::{Error, Result};
 
 /// The sharp frame the layers are cut from: its `(h, w, 4)` colour with, optionally, a window
@@ -166,9 +167,10 @@ pub fn coverage_blur(
         if part.blur {
             let (py0, py1, px0, px1) = part.window;
             let (pw, ph) = (px1 - px0, py1 - py0);
-            let b = box_blur(&layer, pw, ph, part.direction, part.length)?;
+            // (both layers are zero off the group's pixels, where `zl`'s fourth channel is)
+            let b = box_blur_live(&layer, pw, ph, part.direction, part.length, &zl)?;
             pool::give(std::mem::replace(&mut layer, b));
-            let b = box_blur(&zl, pw, ph, part.direction, part.length)?;
+            let b = box_blur_live(&zl, pw, ph, part.direction, part.length, &zl)?;
             pool::give(std::mem::replace(&mut zl, b));
         }
         add_window(&mut acc, uw, &layer, part.window);
@@ -519,6 +521,7 @@ fn add_window(acc: &mut [f32], aw: Window, part: &[f32], pw: Window) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::image::box_blur;
 
     /// The module docs step by step, serial, on whole images: the oracle.
     fn serial(

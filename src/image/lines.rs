@@ -241,13 +241,26 @@ pub(crate) fn directional<const CI: usize, const CO: usize, S: Default + Send>(
     plan: &LinePlan,
     f: impl Fn(&[f32], usize, &mut [f32], &mut S) -> bool + Sync + Send,
 ) -> Result<Vec<f32>> {
-    directional_at::<CI, CO, S>(name, img, w, h, plan, 0.0, None, f)
+    directional_at::<CI, CO, S>(name, img, w, h, plan, 0.0, Live::All, f)
+}
+
+/// Where the image a row filter runs over can be non-zero: a sheared row that reads only zeros
+/// there is neither built nor filtered (a row filter gives zero on a zero row, and a skipped
+/// row reads as zero: the same values).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Live<'a> {
+    /// Anywhere.
+    All,
+    /// Only in the inclusive box `(x0, x1, y0, y1)`.
+    Box([usize; 4]),
+    /// Only at the pixels whose fourth channel is non-zero in this `(h, w, 4)` image (the
+    /// image's own size); `transposed`: the filter runs over the transposed image.
+    Alpha { alpha: &'a [f32], transposed: bool },
 }
 
 /// `directional` on a crop whose first major-axis pixel is pixel `major_offset` of the full
-/// image, so that the shear samples the same positions as on the full image. `live`: the
-/// inclusive box `(x0, x1, y0, y1)` outside of which `f` would see nothing (its rows are all
-/// zero): sheared rows that miss it are neither built nor filtered.
+/// image, so that the shear samples the same positions as on the full image. `live`: where the
+/// image can be non-zero (in the image's orientation).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send>(
     name: &'static str,
@@ -256,16 +269,17 @@ pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send
     h: usize,
     plan: &LinePlan,
     major_offset: f64,
-    live: Option<[usize; 4]>,
+    live: Live<'_>,
     f: impl Fn(&[f32], usize, &mut [f32], &mut S) -> bool + Sync + Send,
 ) -> Result<Vec<f32>> {
-    let live = live.map(|[x0, x1, y0, y1]| {
-        if plan.transpose {
-            [y0, y1, x0, x1]
-        } else {
-            [x0, x1, y0, y1]
-        }
-    });
+    let live = match live {
+        Live::Box([x0, x1, y0, y1]) if plan.transpose => Live::Box([y0, y1, x0, x1]),
+        Live::Alpha { alpha, .. } => Live::Alpha {
+            alpha,
+            transposed: plan.transpose,
+        },
+        other => other,
+    };
     let (src, w2, h2): (Cow<[f32]>, usize, usize) = if plan.transpose {
         (Cow::Owned(transpose::<CI>(img, w, h)), h, w)
     } else {
@@ -453,9 +467,41 @@ fn row_span(fwd: &Phase, t: f64, h: usize, j: i64) -> (usize, usize) {
     (a, b.saturating_sub(a))
 }
 
+/// Which of the sheared rows `j0 .. j0 + rows` (`fwd`: the shear's phase) read a live pixel of
+/// a `w x h` image (in the shear's orientation): row `j` reads rows `j + floor[x]` and the next
+/// of column `x`, so a live pixel `(x, y)` marks rows `y - floor[x]` and the one before. `alpha`
+/// is `(h, w, 4)` in the image's own orientation (`(w, h, 4)` when `transposed`).
+fn live_rows(
+    alpha: &[f32],
+    (w, h): (usize, usize),
+    transposed: bool,
+    fwd: &Phase,
+    (j0, rows): (i64, usize),
+) -> Vec<bool> {
+    let mut hit = vec![false; rows];
+    let mut mark = |j: i64| {
+        if let Some(k) = usize::try_from(j - j0).ok().filter(|&k| k < rows) {
+            hit[k] = true;
+        }
+    };
+    // (the image's own rows in order: `alpha` read once, front to back)
+    let (rw, rh) = if transposed { (h, w) } else { (w, h) };
+    for r in 0..rh {
+        for c in 0..rw {
+            if alpha[(r * rw + c) * 4 + 3] != 0.0 {
+                let (x, y) = if transposed { (r, c) } else { (c, r) };
+                let j = y as i64 - fwd.floor[x];
+                mark(j);
+                mark(j - 1);
+            }
+        }
+    }
+    hit
+}
+
 /// Shears a `(h, w, CI)` image with slope `t` (see the module docs; `major_offset` and `live` as
-/// in `directional_at`, `live` already in this orientation) and runs the row filter `f` on every
-/// sheared row that can meet the live box, over the columns where the row meets the image
+/// in `directional_at`, a box already in this orientation) and runs the row filter `f` on every
+/// sheared row that can meet what is live, over the columns where the row meets the image
 /// (the filters read zero outside their row, which is what the rest of the sheared row holds).
 /// Fails naming `name` if the buffer cannot be allocated.
 #[allow(clippy::too_many_arguments)]
@@ -466,7 +512,7 @@ pub(crate) fn build_sheared<const CI: usize, const CO: usize, S: Default + Send>
     h: usize,
     t: f64,
     major_offset: f64,
-    live: Option<[usize; 4]>,
+    live: Live<'_>,
     f: &(impl Fn(&[f32], usize, &mut [f32], &mut S) -> bool + Sync + Send),
 ) -> Result<Sheared<CO>> {
     let c0 = (major_offset * t).rem_euclid(1.0);
@@ -475,14 +521,20 @@ pub(crate) fn build_sheared<const CI: usize, const CO: usize, S: Default + Send>
     let back = Phase::new(w, t, c0, -1.0);
     // Sheared rows that can meet the live box: j + x t + c0 in (y0 - 1, y1 + 1), x in [x0, x1].
     let (jlo, jhi) = match live {
-        Some([x0, x1, y0, y1]) => {
+        Live::Box([x0, x1, y0, y1]) => {
             let (ua, ub) = (x0 as f64 * t + c0, x1 as f64 * t + c0);
             (
                 (y0 as f64 - 1.0 - ua.max(ub)).floor() as i64,
                 (y1 as f64 + 1.0 - ua.min(ub)).ceil() as i64,
             )
         }
-        None => (i64::MIN, i64::MAX),
+        _ => (i64::MIN, i64::MAX),
+    };
+    let hit = match live {
+        Live::Alpha { alpha, transposed } => {
+            Some(live_rows(alpha, (w, h), transposed, &fwd, (j0, rows)))
+        }
+        _ => None,
     };
     let mut spans = Vec::new();
     let mut offs = Vec::new();
@@ -498,7 +550,8 @@ pub(crate) fn build_sheared<const CI: usize, const CO: usize, S: Default + Send>
     let mut total = 0usize;
     for k in 0..rows {
         let j = j0 + k as i64;
-        let span = if j < jlo || j > jhi {
+        let dead = hit.as_ref().is_some_and(|hit| !hit[k]);
+        let span = if j < jlo || j > jhi || dead {
             (0, 0)
         } else {
             row_span(&fwd, t, h, j)

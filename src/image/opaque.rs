@@ -9,7 +9,7 @@
 use rayon::prelude::*;
 
 use super::glow::{glow_row, GlowScratch};
-use super::lines::{build_sheared, directional_at, plan, LinePlan};
+use super::lines::{build_sheared, directional_at, plan, LinePlan, Live};
 use super::opaque_row::{
     alpha_constant, alpha_range, alpha_span, box_finish, finish, premultiplied, Composite, Glow,
     RowJob,
@@ -235,7 +235,7 @@ fn crop_path(
             ch,
             p.slope,
             offset,
-            Some(live),
+            Live::Box(live),
             &filter,
         )?;
         let u = Unshear::new(&sh, cw, ch);
@@ -253,7 +253,7 @@ fn crop_path(
             ch,
             p,
             offset,
-            Some(live),
+            Live::Box(live),
             filter,
         )?;
         // Eq. 7 and the composite of crop row `k` (five values a pixel: blur RGBA and glow).

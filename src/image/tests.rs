@@ -177,9 +177,17 @@ fn sheared_buffer_is_bounded_by_the_image() {
     for (w, h) in [(100_000usize, 1usize), (20_000, 2), (300, 7), (5, 40)] {
         let img = vec![1.0f32; w * h];
         for t in [0.5, -0.5, 1.0, -0.999, 0.01] {
-            let sh =
-                super::lines::build_sheared::<1, 1, ()>("alpha", &img, w, h, t, 0.0, None, &copy)
-                    .unwrap();
+            let sh = super::lines::build_sheared::<1, 1, ()>(
+                "alpha",
+                &img,
+                w,
+                h,
+                t,
+                0.0,
+                super::lines::Live::All,
+                &copy,
+            )
+            .unwrap();
             assert!(
                 sh.data.len() <= w * (h + 1),
                 "{w}x{h} t={t}: {}",
@@ -307,6 +315,58 @@ fn row_check_of_premultiplied_colour_is_the_same_in_both_forms() {
                     && r.chunks(4).all(|p| !alpha_out_of_range(p[3].to_bits()));
                 assert_eq!(premultiplied(&r, false), want, "{n} {at} {v}");
                 assert_eq!(premultiplied(&r, simd), want, "{n} {at} {v}");
+            }
+        }
+    }
+}
+
+/// A box blur told which pixels can be non-zero (`boxblur::box_blur_live`) skips the sheared
+/// rows that read none of them and gives the plain blur's values: a sparse mask (a few
+/// scattered pixels, a thin diagonal band, one column, nothing) cut from a blob, along
+/// directions of either major axis and sign, short and longer than the image. A zero may come
+/// out as -0 where the plain blur has +0 (a skipped row is not added in as +0); added to a
+/// sum from +0, as `coverage_blur` adds each blurred layer, the bits are the same.
+#[test]
+fn box_blur_told_its_live_pixels_gives_the_same_bits() {
+    let (w, h) = (61, 37);
+    let blob = image(w, h, 11);
+    let masks: [&dyn Fn(usize, usize) -> bool; 4] = [
+        &|x, y| (x * 7 + y * 13) % 41 == 0,
+        &|x, y| (x as i64 - 2 * y as i64).abs() < 3,
+        &|x, _| x == w - 1,
+        &|_, _| false,
+    ];
+    for keep in masks {
+        let mut layer = blob.clone();
+        for y in 0..h {
+            for x in 0..w {
+                if !keep(x, y) {
+                    layer[(y * w + x) * 4..(y * w + x) * 4 + 4].fill(0.0);
+                }
+            }
+        }
+        for d in [
+            [1.0, 0.0],
+            [1.0, 0.577],
+            [1.0, -0.3],
+            [0.4, -1.0],
+            [-0.2, 1.0],
+            [0.0, 1.0],
+        ] {
+            for len in [3.0, 21.0, 150.0] {
+                let plain = box_blur(&layer, w, h, d, len).unwrap();
+                let live = boxblur::box_blur_live(&layer, w, h, d, len, &layer).unwrap();
+                let differ: Vec<usize> = (0..plain.len())
+                    .filter(|&i| (0.0 + plain[i]).to_bits() != (0.0 + live[i]).to_bits())
+                    .collect();
+                let first = differ
+                    .first()
+                    .map(|&i| (i / 4 % w, i / 4 / w, plain[i], live[i]));
+                assert!(
+                    differ.is_empty(),
+                    "direction {d:?}, length {len}: {} values differ, first (x, y, plain, live) {first:?}",
+                    differ.len()
+                );
             }
         }
     }
