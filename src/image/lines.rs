@@ -302,8 +302,15 @@ pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send
             .for_each(|(y, o)| sh.unshear_row(w2, y, o));
         super::pool::give(sh.data);
     }
+    // (the transposes' scratch back to the pool: a window-sized buffer each, whose fresh pages
+    // cost more than the copies)
+    if let Cow::Owned(v) = src {
+        super::pool::give(v);
+    }
     Ok(if plan.transpose {
-        transpose::<CO>(&out, w2, h2)
+        let back = transpose::<CO>(&out, w2, h2);
+        super::pool::give(out);
+        back
     } else {
         out
     })

@@ -198,6 +198,23 @@ pub(crate) fn filled(n: usize, fill: impl FnOnce(&mut [std::mem::MaybeUninit<f32
     filled_with(n, fill)
 }
 
+/// [`filled`] into a buffer from [`pool`] when it has one (its pages already in memory),
+/// else a new one.
+pub(crate) fn pooled(n: usize, fill: impl FnOnce(&mut [std::mem::MaybeUninit<f32>])) -> Vec<f32> {
+    match pool::reuse(n) {
+        Some(mut v) => {
+            // SAFETY: f32 and MaybeUninit<f32> share their layout; `fill` writes every element
+            // (its contract), over values that were initialised anyway.
+            let u = unsafe {
+                std::slice::from_raw_parts_mut(v.as_mut_ptr() as *mut std::mem::MaybeUninit<f32>, n)
+            };
+            fill(u);
+            v
+        }
+        None => filled(n, fill),
+    }
+}
+
 /// [`filled`] for any plain type `T` (floats, pairs of floats). A large buffer is backed by
 /// huge pages ([`crate::budget::advise_huge_pages`]) before `fill` first touches it.
 pub(crate) fn filled_with<T: Copy>(
@@ -236,7 +253,7 @@ pub(crate) fn put4(o: &mut [std::mem::MaybeUninit<f32>], x: usize, v: [f32; 4]) 
 pub(crate) fn transpose<const C: usize>(src: &[f32], w: usize, h: usize) -> Vec<f32> {
     use rayon::prelude::*;
     const B: usize = 32;
-    filled(src.len(), |out| {
+    pooled(src.len(), |out| {
         out.par_chunks_mut(B * h * C)
             .enumerate()
             .for_each(|(bx, block)| {

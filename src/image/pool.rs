@@ -14,22 +14,41 @@ const MAX_FLOATS: usize = 16 << 20;
 /// A buffer of exactly `n` floats with unspecified (but initialised) contents, or `None` when
 /// the memory cannot be allocated (instead of aborting the process).
 pub(crate) fn try_take(n: usize) -> Option<Vec<f32>> {
-    let mut pool = POOL.lock().unwrap_or_else(|e| e.into_inner());
-    let best = (0..pool.len())
-        .filter(|&i| pool[i].capacity() >= n)
-        .min_by_key(|&i| pool[i].capacity());
-    let mut v = match best {
-        Some(i) => pool.swap_remove(i),
-        None => Vec::new(),
-    };
-    drop(pool);
-    if v.len() >= n {
-        v.truncate(n);
-    } else {
-        v.try_reserve_exact(n - v.len()).ok()?;
-        advise_huge_pages(&v);
-        v.resize(n, 0.0);
+    reuse(n).or_else(|| zeroed(n))
+}
+
+/// A new buffer of `n` zeros, or `None` when it cannot be allocated. Asked of the allocator
+/// zeroed: a large one comes as fresh pages that are zero already, not written over once more
+/// before its user writes it.
+fn zeroed(n: usize) -> Option<Vec<f32>> {
+    if n == 0 {
+        return Some(Vec::new());
     }
+    let layout = std::alloc::Layout::array::<f32>(n).ok()?;
+    // SAFETY: the layout's size is not zero (n > 0).
+    let p = unsafe { std::alloc::alloc_zeroed(layout) } as *mut f32;
+    if p.is_null() {
+        return None;
+    }
+    // SAFETY: `p` was allocated by the global allocator with the layout of `n` f32, all of
+    // them initialised (zero bits are 0.0).
+    let v = unsafe { Vec::from_raw_parts(p, n, n) };
+    advise_huge_pages(&v);
+    Some(v)
+}
+
+/// A buffer of exactly `n` floats from the pool (unspecified but initialised contents), or
+/// `None` when none is large enough (a new one is then the caller's: written once, it need not
+/// be cleared first).
+pub(crate) fn reuse(n: usize) -> Option<Vec<f32>> {
+    let mut pool = POOL.lock().unwrap_or_else(|e| e.into_inner());
+    let i = (0..pool.len())
+        .filter(|&i| pool[i].capacity() >= n)
+        .min_by_key(|&i| pool[i].capacity())?;
+    let mut v = pool.swap_remove(i);
+    drop(pool);
+    // (within the capacity: no allocation)
+    v.resize(n, 0.0);
     Some(v)
 }
 
