@@ -77,25 +77,6 @@ pub fn box_blur(
     box_blur_where(rgba, w, h, direction, length, Live::All)
 }
 
-/// [`box_blur`] of an image that is zero wherever the fourth channel of `live` (`(h, w, 4)`,
-/// often the image itself) is: the same values, without building or filtering the sheared
-/// rows that read no live pixel (a sparse mask in a large window: most of them).
-pub(crate) fn box_blur_live(
-    rgba: &[f32],
-    w: usize,
-    h: usize,
-    direction: [f32; 2],
-    length: f32,
-    live: &[f32],
-) -> Result<Vec<f32>> {
-    check_image("live", live, w, h, 4)?;
-    let live = Live::Alpha {
-        alpha: live,
-        transposed: false,
-    };
-    box_blur_where(rgba, w, h, direction, length, live)
-}
-
 fn box_blur_where(
     rgba: &[f32],
     w: usize,
@@ -110,10 +91,18 @@ fn box_blur_where(
     let Some(p) = plan(direction, length * 0.5) else {
         return Ok(rgba.to_vec());
     };
-    directional_at::<4, 4, ()>("rgba", rgba, w, h, &p, 0.0, live, |src, n, out, _| {
-        box_row_each(src, n, p.radius, |x, m| {
+    directional_at::<4, 4, ()>("rgba", rgba, w, h, &p, 0.0, live, box_filter(p.radius))
+}
+
+/// The row filter of a box blur with `radius` taps each side (`box_row_each` into the output
+/// row), as the line filters take it.
+pub(crate) fn box_filter(
+    radius: usize,
+) -> impl Fn(&[f32], usize, &mut [f32], &mut ()) -> bool + Sync + Send {
+    move |src, n, out, _| {
+        box_row_each(src, n, radius, |x, m| {
             out[x * 4..x * 4 + 4].copy_from_slice(&m)
         });
         true
-    })
+    }
 }

@@ -25,10 +25,10 @@ use std::mem::MaybeUninit;
 
 use rayon::prelude::*;
 
-use super::boxblur::box_blur_live;
 use super::coverage::{composite_pixel, Window};
+use super::coverage_oblique::add_oblique;
 use super::lines::plan;
-use super::{check_direction, filled, pool, put4};
+use super::{box_blur, check_direction, filled, pool, put4};
 use crate::error::{Error, Result};
 
 /// The sharp frame the layers are cut from: its `(h, w, 4)` colour with, optionally, a window
@@ -163,14 +163,19 @@ pub fn coverage_blur(
             add_rows((&mut acc, &mut acc_z), uw, source, object, i, radius, w)?;
             continue;
         }
+        let oblique = plan(part.direction, part.length * 0.5).filter(|p| p.slope != 0.0);
+        if let Some(p) = oblique.filter(|_| part.blur) {
+            let sums = (&mut acc[..], &mut acc_z[..]);
+            add_oblique(sums, uw, (source, object, i as i32), part.window, &p, w)?;
+            continue;
+        }
         let (mut layer, mut zl) = cut(source, object, i as i32, part.window, w);
         if part.blur {
             let (py0, py1, px0, px1) = part.window;
             let (pw, ph) = (px1 - px0, py1 - py0);
-            // (both layers are zero off the group's pixels, where `zl`'s fourth channel is)
-            let b = box_blur_live(&layer, pw, ph, part.direction, part.length, &zl)?;
+            let b = box_blur(&layer, pw, ph, part.direction, part.length)?;
             pool::give(std::mem::replace(&mut layer, b));
-            let b = box_blur_live(&zl, pw, ph, part.direction, part.length, &zl)?;
+            let b = box_blur(&zl, pw, ph, part.direction, part.length)?;
             pool::give(std::mem::replace(&mut zl, b));
         }
         add_window(&mut acc, uw, &layer, part.window);
@@ -247,7 +252,7 @@ fn over_rows<S, T: Default + Send>(
 /// column `ox0`), `pasted` the pasted colour on row `y` (if it meets the window, from column
 /// `px0` to `px1`).
 #[inline(always)]
-fn cut_pixel(
+pub(super) fn cut_pixel(
     source: &CoverageSource,
     (labels, ox0): (Option<&[i32]>, usize),
     pasted: Option<(usize, usize, &[f32])>,
@@ -277,7 +282,7 @@ fn cut_pixel(
 }
 
 /// The object's labels on row `y` (from column `ox0`), if the row meets its window.
-fn label_row<'a>(object: &CoverageObject<'a>, y: usize) -> (Option<&'a [i32]>, usize) {
+pub(super) fn label_row<'a>(object: &CoverageObject<'a>, y: usize) -> (Option<&'a [i32]>, usize) {
     let (oy0, oy1, ox0, ox1) = object.window;
     let ocols = ox1 - ox0;
     let row = (oy0..oy1)
@@ -287,7 +292,10 @@ fn label_row<'a>(object: &CoverageObject<'a>, y: usize) -> (Option<&'a [i32]>, u
 }
 
 /// The pasted colour on row `y` (columns `px0 .. px1`), if the row meets its window.
-fn pasted_row<'a>(source: &CoverageSource<'a>, y: usize) -> Option<(usize, usize, &'a [f32])> {
+pub(super) fn pasted_row<'a>(
+    source: &CoverageSource<'a>,
+    y: usize,
+) -> Option<(usize, usize, &'a [f32])> {
     source.pasted.and_then(|((py0, py1, px0, px1), part)| {
         (py0..py1).contains(&y).then(|| {
             let pc = px1 - px0;
@@ -521,7 +529,6 @@ fn add_window(acc: &mut [f32], aw: Window, part: &[f32], pw: Window) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::image::box_blur;
 
     /// The module docs step by step, serial, on whole images: the oracle.
     fn serial(

@@ -430,28 +430,40 @@ impl<const CO: usize> Sheared<CO> {
     /// rows `floor(y - x t - c0)` and the next one at column `x` (zero where a row is zero).
     pub(crate) fn unshear_row(&self, w: usize, y: usize, out: &mut [f32]) {
         for x in 0..w {
-            let i = y as i64 + self.back.floor[x] - self.j0;
-            let f = self.back.frac[x];
             let o = &mut out[x * CO..x * CO + CO];
-            match (self.at(i, x), self.at(i + 1, x)) {
-                (Some(a), Some(b)) => {
-                    for c in 0..CO {
-                        o[c] = (1.0 - f) * a[c] + f * b[c];
-                    }
-                }
-                (Some(a), None) => {
-                    for c in 0..CO {
-                        o[c] = (1.0 - f) * a[c];
-                    }
-                }
-                (None, Some(b)) => {
-                    for c in 0..CO {
-                        o[c] = f * b[c];
-                    }
-                }
-                (None, None) => o.fill(0.0),
+            match self.value(x, y) {
+                Some(v) => o.copy_from_slice(&v),
+                None => o.fill(0.0),
             }
         }
+    }
+
+    /// Pixel `(x, y)` of the image the sheared rows came from (`unshear_row`'s), `None` where
+    /// both sheared rows it interpolates are zero there.
+    #[inline(always)]
+    pub(crate) fn value(&self, x: usize, y: usize) -> Option<[f32; CO]> {
+        let i = y as i64 + self.back.floor[x] - self.j0;
+        let f = self.back.frac[x];
+        let mut o = [0.0f32; CO];
+        match (self.at(i, x), self.at(i + 1, x)) {
+            (Some(a), Some(b)) => {
+                for c in 0..CO {
+                    o[c] = (1.0 - f) * a[c] + f * b[c];
+                }
+            }
+            (Some(a), None) => {
+                for c in 0..CO {
+                    o[c] = (1.0 - f) * a[c];
+                }
+            }
+            (None, Some(b)) => {
+                for c in 0..CO {
+                    o[c] = f * b[c];
+                }
+            }
+            (None, None) => return None,
+        }
+        Some(o)
     }
 }
 

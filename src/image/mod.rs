@@ -18,6 +18,7 @@ mod camera_line;
 mod colors;
 mod coverage;
 mod coverage_blur;
+mod coverage_oblique;
 mod dof;
 mod glow;
 mod lens;

@@ -320,14 +320,15 @@ fn row_check_of_premultiplied_colour_is_the_same_in_both_forms() {
     }
 }
 
-/// A box blur told which pixels can be non-zero (`boxblur::box_blur_live`) skips the sheared
-/// rows that read none of them and gives the plain blur's values: a sparse mask (a few
-/// scattered pixels, a thin diagonal band, one column, nothing) cut from a blob, along
-/// directions of either major axis and sign, short and longer than the image. A zero may come
-/// out as -0 where the plain blur has +0 (a skipped row is not added in as +0); added to a
-/// sum from +0, as `coverage_blur` adds each blurred layer, the bits are the same.
+/// A shear told which pixels can be non-zero (`lines::Live::Alpha`) skips the sheared rows that
+/// read none of them and gives, sheared back, the values of the shear that builds every row: a
+/// sparse mask (a few scattered pixels, a thin diagonal band, one column, nothing) cut from a
+/// blob, box-filtered along slopes of either sign, short and longer than the image. A zero may
+/// come out as -0 where every row gives +0 (a skipped row is not added in as +0); added to a sum
+/// from +0, as `coverage_blur` adds each blurred layer, the bits are the same.
 #[test]
-fn box_blur_told_its_live_pixels_gives_the_same_bits() {
+fn a_shear_told_its_live_pixels_gives_the_same_values() {
+    use super::lines::{build_sheared, Live};
     let (w, h) = (61, 37);
     let blob = image(w, h, 11);
     let masks: [&dyn Fn(usize, usize) -> bool; 4] = [
@@ -345,28 +346,26 @@ fn box_blur_told_its_live_pixels_gives_the_same_bits() {
                 }
             }
         }
-        for d in [
-            [1.0, 0.0],
-            [1.0, 0.577],
-            [1.0, -0.3],
-            [0.4, -1.0],
-            [-0.2, 1.0],
-            [0.0, 1.0],
-        ] {
-            for len in [3.0, 21.0, 150.0] {
-                let plain = box_blur(&layer, w, h, d, len).unwrap();
-                let live = boxblur::box_blur_live(&layer, w, h, d, len, &layer).unwrap();
-                let differ: Vec<usize> = (0..plain.len())
-                    .filter(|&i| (0.0 + plain[i]).to_bits() != (0.0 + live[i]).to_bits())
-                    .collect();
-                let first = differ
-                    .first()
-                    .map(|&i| (i / 4 % w, i / 4 / w, plain[i], live[i]));
-                assert!(
-                    differ.is_empty(),
-                    "direction {d:?}, length {len}: {} values differ, first (x, y, plain, live) {first:?}",
-                    differ.len()
-                );
+        for t in [0.577, -0.3, 0.05, -1.0] {
+            for radius in [1, 10, 75] {
+                let f = boxblur::box_filter(radius);
+                let all = build_sheared::<4, 4, ()>("rgba", &layer, w, h, t, 0.0, Live::All, &f);
+                let live = Live::Alpha {
+                    alpha: &layer,
+                    transposed: false,
+                };
+                let some = build_sheared::<4, 4, ()>("rgba", &layer, w, h, t, 0.0, live, &f);
+                let (all, some) = (all.unwrap(), some.unwrap());
+                for y in 0..h {
+                    for x in 0..w {
+                        let v = |s: &super::lines::Sheared<4>| {
+                            s.value(x, y)
+                                .unwrap_or([0.0; 4])
+                                .map(|v| (0.0 + v).to_bits())
+                        };
+                        assert_eq!(v(&all), v(&some), "slope {t}, radius {radius}, ({x}, {y})");
+                    }
+                }
             }
         }
     }
