@@ -26,7 +26,7 @@ use std::mem::MaybeUninit;
 use rayon::prelude::*;
 
 use super::coverage::{composite_pixel, Window};
-use super::coverage_oblique::add_oblique;
+use super::coverage_oblique::{add_oblique, finite};
 use super::lines::plan;
 use super::{box_blur, check_direction, filled, pool, put4};
 use crate::error::{Error, Result};
@@ -158,6 +158,7 @@ pub fn coverage_blur(
         v
     };
     let (mut acc, mut acc_z) = (zeros(), zeros());
+    let mut all_finite = None;
     for (i, part) in object.parts.iter().enumerate() {
         if let Some(radius) = along_rows(part)? {
             add_rows((&mut acc, &mut acc_z), uw, source, object, i, radius, w)?;
@@ -165,8 +166,11 @@ pub fn coverage_blur(
         }
         let oblique = plan(part.direction, part.length * 0.5).filter(|p| p.slope != 0.0);
         if let Some(p) = oblique.filter(|_| part.blur) {
+            // (once an object: the first oblique group's check serves the rest)
+            let finite = *all_finite.get_or_insert_with(|| finite(source, uw, w));
             let sums = (&mut acc[..], &mut acc_z[..]);
-            add_oblique(sums, uw, (source, object, i as i32), part.window, &p, w)?;
+            let group = (source, object, i as i32);
+            add_oblique(sums, uw, group, part.window, &p, w, finite)?;
             continue;
         }
         let (mut layer, mut zl) = cut(source, object, i as i32, part.window, w);
