@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 use super::boxblur::box_filter;
 use super::coverage::Window;
-use super::coverage_blur::{cut_pixel, label_row, pasted_row, CoverageObject, CoverageSource};
+use super::coverage_cut::{cut_pixel, label_row, pasted_row, CoverageObject, CoverageSource};
 use super::lines::{build_sheared, LinePlan, Live};
 use super::{check_finite, pool, pooled, put4};
 use crate::error::Result;
@@ -86,15 +86,17 @@ pub(super) fn add_oblique(
                 // (the window's pixel (r, c) in the shear's orientation)
                 let (x, y) = if plan.transpose { (r, c) } else { (c, r) };
                 let k = (x0 - ux0 + c) * 4;
-                if let Some(v) = sc.value(x, y) {
-                    for (s, v) in a[k..k + 4].iter_mut().zip(v) {
-                        *s += v;
-                    }
+                // (the two shears have the same rows and spans: where one reads only zero
+                // rows, so does the other)
+                let Some(v) = sc.value(x, y) else {
+                    continue;
+                };
+                for (s, v) in a[k..k + 4].iter_mut().zip(v) {
+                    *s += v;
                 }
-                if let Some(v) = sz.value(x, y) {
-                    for (s, v) in az[k..k + 4].iter_mut().zip(v) {
-                        *s += v;
-                    }
+                let v = sz.value(x, y).unwrap_or([0.0; 4]);
+                for (s, v) in az[k..k + 4].iter_mut().zip(v) {
+                    *s += v;
                 }
             }
         });

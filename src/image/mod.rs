@@ -18,6 +18,7 @@ mod camera_line;
 mod colors;
 mod coverage;
 mod coverage_blur;
+mod coverage_cut;
 mod coverage_oblique;
 mod dof;
 mod glow;
@@ -43,7 +44,8 @@ pub use camera::{
 };
 pub use colors::{colored, pixel_bounds, sample_colors, MIN_ALPHA};
 pub use coverage::coverage_composite;
-pub use coverage_blur::{coverage_blur, CoverageObject, CoveragePart, CoverageSource};
+pub use coverage_blur::coverage_blur;
+pub use coverage_cut::{CoverageObject, CoveragePart, CoverageSource};
 pub use dof::{depth_of_field, DofParams, MAX_LAYERS};
 pub use glow::glow;
 pub use lens::{lens_blur, LensParams, MAX_LENS_LEVELS};
