@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import motionblur as mb
-from motionblur.render import POOR_MASS
+from motionblur.render import MASS_MARGIN, POOR_MASS
 
 
 def _rmse(a, b) -> float:
@@ -83,3 +83,20 @@ def test_the_unblurred_frame_is_the_one_sample_frame_of_the_scenes_shutter():
         frame = mb.render(scene, "blur_shell")
     assert _rmse(frame.rgba, exact) > 1.5 * _rmse(sharp, exact)  # the warning is true
     assert 1 / 1.2 <= frame.stats["unblurred_estimate"] / _rmse(sharp, exact) <= 1.2
+
+
+def test_a_mass_estimate_within_the_margin_of_the_bound_warns():
+    """The pilot's mass is read against an accumulated reference, a few thousandths from the
+    exact frame's: a warning at `POOR_MASS` itself let a frame 50.2% over pass unwarned (its
+    pilot read 49.9%). Tuning seed 294's camera blur under-covers by 48.6%, its estimate the
+    same: inside the margin below the bound, so it warns."""
+    from motionblur.evaluation.random_scenes import random_scene
+
+    scene = random_scene(294, 64, 48)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        frame = mb.render(scene, "camera_velocity")
+    est = frame.stats["alpha_mass_estimate"]
+    assert POOR_MASS - MASS_MARGIN <= abs(est) < POOR_MASS, est
+    said = [str(w.message) for w in caught if issubclass(w.category, mb.PoorBlurWarning)]
+    assert any("alpha mass" in m for m in said), said
