@@ -55,8 +55,8 @@ POOR_BLUR_FLOOR = 1e-5
 POOR_MASS = 0.5
 #: The pilot's estimate of the alpha mass is measured against an accumulated reference, not the
 #: exact frame: near `POOR_MASS` it was within 0.009 of the frame's own on tuning scenes (seeds
-#: 0-299 at 64x48) and within 0.004 on the measuring scene where a warning at `POOR_MASS` itself
-#: let a blur shell 50.2% over pass without one. The warning fires this much before the bound.
+#: 0-299 at 64x48), and 0.004 off on a measuring scene where a warning at `POOR_MASS` itself let
+#: a blur shell 50.2% over pass without one. The warning fires this much before the bound.
 MASS_MARGIN = 0.02
 
 
