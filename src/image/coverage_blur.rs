@@ -21,17 +21,15 @@
 //! Python path, kept as the oracle of tests/methods/test_image_space_fast_paths.py). Rows run
 //! in parallel, each written from inputs only, so the result does not depend on the thread
 //! count.
-use std::mem::MaybeUninit;
-
 use rayon::prelude::*;
 
 use super::coverage::{composite_pixel, Window};
 use super::coverage_cut::{
-    cut_pixel, label_row, pasted_row, CoverageObject, CoveragePart, CoverageSource,
+    cut, cut_pixel, label_row, pasted_row, CoverageObject, CoveragePart, CoverageSource,
 };
 use super::coverage_oblique::{add_oblique, finite};
 use super::lines::plan;
-use super::{box_blur, check_direction, filled, pool, put4};
+use super::{box_blur, check_direction, pool};
 use crate::error::{Error, Result};
 
 fn check_window(name: &'static str, (y0, y1, x0, x1): Window, w: usize, h: usize) -> Result<()> {
@@ -136,7 +134,7 @@ pub fn coverage_blur(
             add_oblique(sums, uw, group, part.window, &p, w, finite)?;
             continue;
         }
-        let (mut layer, mut zl) = cut(source, object, i as i32, part.window, w);
+        let (mut layer, mut zl) = cut(source, object, i as i32, part.window, w, (false, None));
         if part.blur {
             let (py0, py1, px0, px1) = part.window;
             let (pw, ph) = (px1 - px0, py1 - py0);
@@ -378,43 +376,6 @@ fn add_rows(
         return Err(Error::value("rgba", "contains NaN or inf"));
     }
     Ok(())
-}
-
-/// The layer and the depth layer `(zw zm, 0, 0, zm)` of group `label` over `window` (module
-/// docs), each `(y1 - y0, x1 - x0, 4)`.
-fn cut(
-    source: &CoverageSource,
-    object: &CoverageObject,
-    label: i32,
-    (y0, y1, x0, x1): Window,
-    w: usize,
-) -> (Vec<f32>, Vec<f32>) {
-    let cols = x1 - x0;
-    let n = (y1 - y0) * cols * 4;
-    let fill = |out: &mut [MaybeUninit<f32>], depth_layer: bool| {
-        out.par_chunks_mut(cols * 4)
-            .enumerate()
-            .for_each(|(r, row)| {
-                let y = y0 + r;
-                let (labels, pasted) = (label_row(object, y), pasted_row(source, y));
-                for c in 0..cols {
-                    let (l, z) = cut_pixel(source, labels, pasted, label, (y, x0 + c, w));
-                    put4(row, c, if depth_layer { z } else { l });
-                }
-            })
-    };
-    let take = |depth_layer: bool| match pool::try_take(n) {
-        Some(mut v) => {
-            // SAFETY: f32 and MaybeUninit<f32> share their layout; `fill` writes every value.
-            let u = unsafe {
-                std::slice::from_raw_parts_mut(v.as_mut_ptr() as *mut MaybeUninit<f32>, n)
-            };
-            fill(u, depth_layer);
-            v
-        }
-        None => filled(n, |u| fill(u, depth_layer)),
-    };
-    (take(false), take(true))
 }
 
 /// `acc` (the `(y1 - y0, x1 - x0, 4)` image over window `aw`) += `part` over window `pw`

@@ -253,9 +253,10 @@ pub(crate) enum Live<'a> {
     All,
     /// Only in the inclusive box `(x0, x1, y0, y1)`.
     Box([usize; 4]),
-    /// Only at the pixels whose fourth channel is non-zero in this `(h, w, 4)` image (the
-    /// image's own size); `transposed`: the filter runs over the transposed image.
-    Alpha { alpha: &'a [f32], transposed: bool },
+    /// Only at the pixels whose fourth channel is non-zero in this `(h, w, 4)` image, of the
+    /// size and orientation the shear runs over (a transposed filter reads it as
+    /// [`Live::All`]).
+    Alpha(&'a [f32]),
 }
 
 /// `directional` on a crop whose first major-axis pixel is pixel `major_offset` of the full
@@ -274,10 +275,7 @@ pub(crate) fn directional_at<const CI: usize, const CO: usize, S: Default + Send
 ) -> Result<Vec<f32>> {
     let live = match live {
         Live::Box([x0, x1, y0, y1]) if plan.transpose => Live::Box([y0, y1, x0, x1]),
-        Live::Alpha { alpha, .. } => Live::Alpha {
-            alpha,
-            transposed: plan.transpose,
-        },
+        Live::Alpha(_) if plan.transpose => Live::All,
         other => other,
     };
     let (src, w2, h2): (Cow<[f32]>, usize, usize) = if plan.transpose {
@@ -486,33 +484,23 @@ fn row_span(fwd: &Phase, t: f64, h: usize, j: i64) -> (usize, usize) {
     (a, b.saturating_sub(a))
 }
 
-/// Which of the sheared rows `j0 .. j0 + rows` (`fwd`: the shear's phase) read a live pixel of
-/// a `w x h` image (in the shear's orientation): row `j` reads rows `j + floor[x]` and the next
-/// of column `x`, so a live pixel `(x, y)` marks rows `y - floor[x]` and the one before. `alpha`
-/// is `(h, w, 4)` in the image's own orientation (`(w, h, 4)` when `transposed`).
-fn live_rows(
-    alpha: &[f32],
-    (w, h): (usize, usize),
-    transposed: bool,
-    fwd: &Phase,
-    (j0, rows): (i64, usize),
-) -> Vec<bool> {
+/// Which of the sheared rows `j0 .. j0 + rows` (`fwd`: the shear's phase) read a live pixel
+/// (fourth channel non-zero) of the `(h, w, 4)` image `alpha`: row `j` reads rows `j + floor[x]`
+/// and the next of column `x`, so a live pixel `(x, y)` marks rows `y - floor[x]` and the one
+/// before.
+fn live_rows(alpha: &[f32], w: usize, fwd: &Phase, (j0, rows): (i64, usize)) -> Vec<bool> {
     let mut hit = vec![false; rows];
     let mut mark = |j: i64| {
         if let Some(k) = usize::try_from(j - j0).ok().filter(|&k| k < rows) {
             hit[k] = true;
         }
     };
-    // (the image's own rows in order: `alpha` read once, front to back)
-    let (rw, rh) = if transposed { (h, w) } else { (w, h) };
-    for r in 0..rh {
-        for c in 0..rw {
-            if alpha[(r * rw + c) * 4 + 3] != 0.0 {
-                let (x, y) = if transposed { (r, c) } else { (c, r) };
-                let j = y as i64 - fwd.floor[x];
-                mark(j);
-                mark(j - 1);
-            }
+    for (i, px) in alpha.chunks_exact(4).enumerate() {
+        if px[3] != 0.0 {
+            let (x, y) = (i % w, i / w);
+            let j = y as i64 - fwd.floor[x];
+            mark(j);
+            mark(j - 1);
         }
     }
     hit
@@ -550,9 +538,7 @@ pub(crate) fn build_sheared<const CI: usize, const CO: usize, S: Default + Send>
         _ => (i64::MIN, i64::MAX),
     };
     let hit = match live {
-        Live::Alpha { alpha, transposed } => {
-            Some(live_rows(alpha, (w, h), transposed, &fwd, (j0, rows)))
-        }
+        Live::Alpha(alpha) => Some(live_rows(alpha, w, &fwd, (j0, rows))),
         _ => None,
     };
     let mut spans = Vec::new();

@@ -350,10 +350,7 @@ fn a_shear_told_its_live_pixels_gives_the_same_values() {
             for radius in [1, 10, 75] {
                 let f = boxblur::box_filter(radius);
                 let all = build_sheared::<4, 4, ()>("rgba", &layer, w, h, t, 0.0, Live::All, &f);
-                let live = Live::Alpha {
-                    alpha: &layer,
-                    transposed: false,
-                };
+                let live = Live::Alpha(&layer);
                 let some = build_sheared::<4, 4, ()>("rgba", &layer, w, h, t, 0.0, live, &f);
                 let (all, some) = (all.unwrap(), some.unwrap());
                 for y in 0..h {
