@@ -852,7 +852,7 @@ __all__ += [
     "SWEEP_TIMES",
     "SWEEP_POINTS",
     "SWEEP_SHADE",
-    "_sweep_scale",
+    "_sweep",
 ]
 
 SWEEP_TIMES: int
@@ -873,10 +873,11 @@ class _SweepOptions(TypedDict):
     camera_motion: _Keyframes | None
     background: np.ndarray
 
-def _sweep_scale(options: _SweepOptions) -> float:
-    """The planner's forecast: the screen sweep (pixels) of the objects (mesh, rigid or deforming
-    keyframes or None, straight rgba (4,) f64) seen in a width x height image through the
-    projection and pose (4,4) f64 (moved by camera_motion when given), over the straight
-    background (4,) f64; 0.0 when none is seen."""
+def _sweep(options: _SweepOptions) -> tuple[float, float]:
+    """The planner's forecast: (scale, path), the screen sweep of the objects (mesh, rigid or
+    deforming keyframes or None, straight rgba (K,4) f64: one colour or one a vertex) seen in a width x height image through
+    the projection and pose (4,4) f64 (moved by camera_motion when given), over the straight
+    background (4,) f64, and their mean screen path (pixels) weighted by each one's share of
+    the sweep; (0.0, 0.0) when none is seen."""
 
 # --- end sweep

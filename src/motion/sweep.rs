@@ -16,7 +16,7 @@
 //! `path`: their mean screen path over [`SWEEP_TIMES`] evenly spaced shutter times (pixels;
 //! a step with either end behind the eye counts 0); `contrast^2`: the mean over RGBA of the
 //! squared difference the object's premultiplied colour at [`SWEEP_SHADE`] makes over the
-//! background.
+//! background (with a colour a vertex, the mean over the vertices too).
 use crate::mesh::Mesh;
 use crate::motion::{linear_part, place, translation_part, Keyframes, Keys, Mat4, MovingCamera};
 
@@ -28,15 +28,16 @@ pub const SWEEP_POINTS: usize = 64;
 pub const SWEEP_SHADE: f64 = 0.6;
 
 /// One object of the forecast: its mesh (object space, or a deforming motion's rest pose), its
-/// motion (None: still) and its straight RGBA colour.
+/// motion (None: still) and its straight RGBA colour or colours.
 #[derive(Clone, Copy)]
 pub struct SweepObject<'a> {
     /// The object's mesh.
     pub mesh: &'a Mesh,
     /// Rigid or deforming keyframes, or None.
     pub motion: Option<&'a Keyframes>,
-    /// Straight RGBA colour.
-    pub rgba: [f64; 4],
+    /// Straight RGBA: one colour, or one a vertex (the contrast is their mean, each vertex
+    /// standing for as much of the surface).
+    pub rgba: &'a [[f64; 4]],
 }
 
 /// The scene's screen sweep (see the module): 0 when no object is seen. `background` is
@@ -46,6 +47,27 @@ pub fn sweep_scale(
     camera: &MovingCamera<'_>,
     background: [f64; 4],
 ) -> f64 {
+    sweep(objects, camera, background).scale
+}
+
+/// The screen sweep of a scene and where it comes from ([`sweep`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sweep {
+    /// [`sweep_scale`].
+    pub scale: f64,
+    /// The objects' mean screen paths (pixels), each weighted by its share of `scale^2`
+    /// (perimeter x path x contrast^2): the path of the outlines the error comes from; 0 when
+    /// no object adds to the sweep.
+    pub path: f64,
+}
+
+/// The scene's screen sweep and the path its outlines travel ([`Sweep`]); arguments as
+/// [`sweep_scale`].
+pub fn sweep(
+    objects: &[SweepObject<'_>],
+    camera: &MovingCamera<'_>,
+    background: [f64; 4],
+) -> Sweep {
     let times: [f64; SWEEP_TIMES] = std::array::from_fn(|k| k as f64 / (SWEEP_TIMES - 1) as f64);
     let views: Vec<Mat4> = times
         .iter()
@@ -58,14 +80,17 @@ pub fn sweep_scale(
         background[2] * background[3],
         background[3],
     ];
-    let total: f64 = objects
-        .iter()
-        .map(|o| {
-            let track = Track::follow(o, &times, &views, size);
-            track.perimeter * track.path * contrast2(o.rgba, under)
-        })
-        .sum();
-    (total / (size[0] * size[1])).sqrt()
+    let (mut total, mut paths) = (0.0, 0.0);
+    for o in objects {
+        let track = Track::follow(o, &times, &views, size);
+        let share = track.perimeter * track.path * mean_contrast2(o.rgba, under);
+        total += share;
+        paths += share * track.path;
+    }
+    Sweep {
+        scale: (total / (size[0] * size[1])).sqrt(),
+        path: if total > 0.0 { paths / total } else { 0.0 },
+    }
 }
 
 /// One object's surface points followed on screen: their mean path and their perimeter
@@ -202,6 +227,14 @@ fn inside(q: [f64; 2], size: [f64; 2]) -> bool {
     (0.0..=size[0]).contains(&q[0]) && (0.0..=size[1]).contains(&q[1])
 }
 
+/// [`contrast2`] of each colour of `rgba`, their mean (0 for none).
+fn mean_contrast2(rgba: &[[f64; 4]], under: [f64; 4]) -> f64 {
+    if rgba.is_empty() {
+        return 0.0;
+    }
+    rgba.iter().map(|&c| contrast2(c, under)).sum::<f64>() / rgba.len() as f64
+}
+
 /// The mean over RGBA of the squared difference straight `rgba` at [`SWEEP_SHADE`] makes over
 /// premultiplied `under`.
 fn contrast2(rgba: [f64; 4], under: [f64; 4]) -> f64 {
@@ -270,7 +303,7 @@ mod tests {
         let o = SweepObject {
             mesh: &mesh,
             motion: Some(&keys),
-            rgba,
+            rgba: &[rgba],
         };
         sweep_scale(&[o], &camera(w), background)
     }
@@ -309,8 +342,74 @@ mod tests {
         let o = SweepObject {
             mesh: &mesh,
             motion: Some(&keys),
-            rgba: [1.0; 4],
+            rgba: &[[1.0; 4]],
         };
         assert_eq!(sweep_scale(&[o], &camera(64), [0.0; 4]), 0.0);
+    }
+
+    #[test]
+    fn the_path_is_the_screen_distance_of_the_objects_that_add_to_the_sweep() {
+        let mesh = square();
+        let rigid = |dx: f64| {
+            Keyframes::rigid(vec![0.0, 1.0], &[shift(0.0, 0.0), shift(dx, 0.0)], "m").unwrap()
+        };
+        let (near, far) = (rigid(0.5), rigid(2.0));
+        let (white, clear): (&[[f64; 4]], _) = (&[[1.0; 4]], [0.0; 4]);
+        let object = |keys, rgba| SweepObject {
+            mesh: &mesh,
+            motion: Some(keys),
+            rgba,
+        };
+        // 10 px a unit (above): every point travels 5 px, and 20 px
+        let one = sweep(&[object(&near, white)], &camera(100), clear);
+        assert!((one.path - 5.0).abs() < 1e-6, "{one:?}");
+        assert_eq!(
+            one.scale,
+            sweep_scale(&[object(&near, white)], &camera(100), clear)
+        );
+        // an object of the background's colour adds nothing, whatever it travels
+        let unseen: &[[f64; 4]] = &[[0.0; 4]];
+        let two = sweep(
+            &[object(&near, white), object(&far, unseen)],
+            &camera(100),
+            clear,
+        );
+        assert!((two.path - 5.0).abs() < 1e-6, "{two:?}");
+        // two seen: weighted by perimeter x path x contrast^2, the longer path weighs 4x
+        let both = sweep(
+            &[object(&near, white), object(&far, white)],
+            &camera(100),
+            clear,
+        );
+        assert!(
+            (both.path - (5.0 + 4.0 * 20.0) / 5.0).abs() < 1e-6,
+            "{both:?}"
+        );
+        assert_eq!(sweep(&[], &camera(64), clear).path, 0.0);
+    }
+
+    #[test]
+    fn per_vertex_colours_weigh_their_mean_contrast() {
+        let (white, clear) = ([1.0; 4], [0.0; 4]);
+        let half = [0.5, 0.5, 0.5, 1.0];
+        let mesh = square();
+        let keys =
+            Keyframes::rigid(vec![0.0, 1.0], &[shift(0.0, 0.0), shift(1.0, 0.0)], "m").unwrap();
+        let of = |rgba: &[[f64; 4]]| {
+            let o = SweepObject {
+                mesh: &mesh,
+                motion: Some(&keys),
+                rgba,
+            };
+            sweep_scale(&[o], &camera(100), clear)
+        };
+        let mixed = of(&[white, white, half, half]);
+        let mean = 0.5 * (contrast2(white, clear) + contrast2(half, clear));
+        let expected = of(&[white]) * (mean / contrast2(white, clear)).sqrt();
+        assert!(
+            (mixed - expected).abs() < 1e-12 * expected,
+            "{mixed} {expected}"
+        );
+        assert_eq!(of(&[]), 0.0);
     }
 }

@@ -16,6 +16,7 @@ import motionblur as mb
 from motionblur.evaluation.random_scenes import random_scene
 from motionblur.methods import auto as auto_mod
 from motionblur.methods._sweep import sweep_scale
+from motionblur.scene import rotate, translate
 
 W, H = 64, 48
 
@@ -342,3 +343,17 @@ def test_keeping_samples_at_a_closed_gap_gives_the_trapezoid_grid_rendered_afres
     fresh = auto_mod._Trials(scene, 1).accumulate(m, "trapezoid")
     np.testing.assert_allclose(kept.rgba, fresh.rgba, atol=2e-6)
     assert kept.stats["error_estimate"] == pytest.approx(fresh.stats["error_estimate"], rel=1e-4)
+
+
+def test_auto_renders_an_object_with_a_colour_a_vertex():
+    # the forecast's contrast reads one colour an object or one a vertex (it took one colour
+    # only, and auto raised a TypeError on per-vertex colours); the frame meets its tolerance
+    v, f = mb.meshes.icosphere(2)
+    v = np.asarray(v)
+    colours = np.c_[(v + 1) / 2, np.ones(len(v))].astype(np.float32)
+    motion = mb.Motion.linear(np.eye(4), rotate(0.6, (0, 1, 0)) @ translate((0.8, 0, 0)))
+    cam = mb.Camera(mb.look_at((0.0, 0.3, 5.0), (0.0, 0.0, 0.0)), 0.7, W, H, znear=0.5, zfar=30.0)
+    scene = mb.Scene([mb.Object(mb.Mesh(v * 0.6, f), color=colours, motion=motion)], cam)
+    for aa in (1, 4):
+        frame = mb.render(scene, "auto", tolerance=0.004, aa=aa)
+        assert _rmse(frame.rgba, mb.exact(scene, aa=aa).rgba) <= 0.004

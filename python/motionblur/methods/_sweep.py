@@ -14,7 +14,7 @@ of N samples scales as `sweep_scale` / N, where
 surface points (pixels, clipped to the image) plus one, ``path`` the mean screen distance those
 points travel over `TIMES` shutter times (pixels, the points seen at some time), ``contrast``
 the RMS over RGBA of the premultiplied difference the object's colour at `SHADE` makes over the
-background. Under camera motion every object moves. It runs in the compiled core
+background (with a colour a vertex, the RMS over the vertices too). Under camera motion every object moves. It runs in the compiled core
 (``src/motion/sweep.rs``) in microseconds.
 """
 
@@ -25,7 +25,7 @@ import numpy as np
 from .. import _core
 from ..scene import Scene
 
-__all__ = ["sweep_scale", "TIMES", "POINTS", "SHADE"]
+__all__ = ["sweep_scale", "sweep_path", "TIMES", "POINTS", "SHADE"]
 
 #: Shutter times the surface points are followed at (evenly spaced, both ends included).
 TIMES: int = int(_core.SWEEP_TIMES)
@@ -39,6 +39,18 @@ def sweep_scale(scene: Scene) -> float:
     """The scene's screen sweep (see the module docs), about ``sqrt(12)`` x the RMSE of one
     accumulation sample a pixel before `auto.FIRST_FIT` maps it to an error; 0.0 when nothing
     that moves is seen."""
+    return _sweep(scene)[0]
+
+
+def sweep_path(scene: Scene) -> float:
+    """The mean screen path (pixels over the shutter) of the moving outlines, each object's
+    ``path`` weighted by its share of `sweep_scale` squared: how far the outlines the error
+    comes from travel; 0.0 when nothing that moves is seen."""
+    return _sweep(scene)[1]
+
+
+def _sweep(scene: Scene) -> tuple[float, float]:
+    """(scale, path) of the compiled core's `motionblur._core._sweep` for ``scene``."""
     objects = scene.objects if scene.camera_moves else [o for o in scene.objects if o.is_moving]
     cam = scene.camera
     motion = scene.camera_motion
@@ -47,7 +59,7 @@ def sweep_scale(scene: Scene) -> float:
             {
                 "mesh": o.mesh._core,
                 "motion": None if o.motion is None else o.motion._keys,
-                "rgba": np.asarray(o.rgba, np.float64),
+                "rgba": np.ascontiguousarray(o.rgba, np.float64).reshape(-1, 4),
             }
             for o in objects
         ],
@@ -58,4 +70,5 @@ def sweep_scale(scene: Scene) -> float:
         "camera_motion": None if motion is None else motion._keys,
         "background": np.asarray(scene.background, np.float64),
     }
-    return float(_core._sweep_scale(options))
+    scale, path = _core._sweep(options)
+    return float(scale), float(path)
