@@ -102,7 +102,8 @@ class Recorded:
         return float(np.interp(n, ns, ts))
 
     def grid(self, m: int, kind: str) -> tuple[float, float]:
-        """(estimate, measured RMSE) of auto's grid of ``m`` strata of ``kind``."""
+        """(the halves' reading auto's plan reads, measured RMSE) of auto's grid of ``m`` strata
+        of ``kind``."""
         key = (m, kind)
         if key not in self.grids:
             trials = A._Trials(self.scene, self.aa)
@@ -110,7 +111,7 @@ class Recorded:
                 trials.accumulate(m)
             frame = trials.accumulate(m, kind)
             err = rmse(over_background(frame, self.scene.background).rgba, self.ref)
-            self.grids[key] = (frame.stats["error_estimate"], err)
+            self.grids[key] = (trials.tried[-1]["halves_reading"], err)
         return self.grids[key]
 
     def analytic(self) -> dict:
@@ -165,6 +166,7 @@ class Replay(A._Trials):
         self.effective.append((grids.effective(grid), est))
         options = {"samples": grids.samples(grid), **({"grid": kind} if kind != grids.STRATIFIED else {})}
         self._log("accumulation", options, self.rec.ms(draws) + self.rec.overhead, est, err)
+        self.tried[-1]["halves_reading"] = est
 
     def run(self, method: str, **options) -> None:
         an = self.rec.analytic()

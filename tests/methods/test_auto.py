@@ -260,6 +260,29 @@ def test_auto_at_aa_2_and_4_sizes_its_first_render_from_the_forecast_at_that_aa(
     assert plan["tried"][1]["options"] == {"samples": first}
 
 
+@pytest.mark.parametrize("tol", [0.01, 0.002])
+def test_at_aa_4_the_plan_certifies_by_the_halves_reading_and_the_frame_states_the_estimate(monkeypatch, tol):
+    # Tuning seed 9: outlines travelling about 8 pixels, where the reading at aa 4 over-reads
+    # (`_accumulate.RESONANCE`). auto's aims were chosen on the reading, so its plan is the one
+    # it makes without the resonance, and the frame carries the estimate, the reading over it.
+    from motionblur.methods import _accumulate
+    from motionblur.methods._sweep import sweep_path
+
+    scene = random_scene(9, W, H)
+    frame = mb.render(scene, "auto", tolerance=tol, aa=4)
+    tried = [t for t in frame.stats["plan"]["tried"] if "samples" in t["options"]]
+    for t in tried:
+        bump = _accumulate.resonance(t["options"]["samples"], sweep_path(scene), 4)
+        assert t["error_estimate"] == pytest.approx(t["halves_reading"] / bump, rel=1e-12)
+    assert frame.stats["error_estimate"] == tried[-1]["error_estimate"] < tried[-1]["halves_reading"]
+    monkeypatch.setattr(_accumulate, "RESONANCE", {})
+    read = mb.render(scene, "auto", tolerance=tol, aa=4)
+    assert [t["options"] for t in read.stats["plan"]["tried"]] == [
+        t["options"] for t in frame.stats["plan"]["tried"]
+    ]
+    assert np.array_equal(read.rgba, frame.rgba)
+
+
 @pytest.mark.parametrize(
     "shutter", ["triangle", "gaussian", np.array([0.0, 0.0, 1.0, 1.0]), mb.Trapezoid(0.3, 0.2)]
 )

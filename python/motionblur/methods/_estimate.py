@@ -310,7 +310,7 @@ def _accumulated_reference(small: Scene, aa: int, rgba: np.ndarray) -> np.ndarra
         acc = sums.frame()
         ref = over_background(acc, small.background).rgba.astype(np.float64)
         share = REFERENCE_SHARE * _rmse(rgba, ref)
-        est = acc.stats["error_estimate"]
+        est = sums.reading  # the halves' own reading: at aa 4 above the estimate near resonance
         if est <= share:
             return ref
         wanted = n * est / share if share > 0.0 else math.inf

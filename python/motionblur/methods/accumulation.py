@@ -60,7 +60,9 @@ def accumulation(
     The even and the odd samples are drawn and summed apart by the compiled core
     (``_core._Painter.accumulate_still_parts`` / ``accumulate_moving``, ``src/accumulate/frame.rs``);
     their difference is the frame's ``stats["error_estimate"]`` (`_accumulate`), with ``aa`` 2
-    or 4 and a stratified grid of an even count with an end term (`_accumulate.ends_factor`). A stratified grid of 4 or
+    or 4 and a stratified grid of an even count with an end term (`_accumulate.ends_factor`), at
+    ``aa`` 4 divided by its over-read where the samples are about as many as the pixels the
+    moving outlines travel (`_accumulate.resonance`). A stratified grid of 4 or
     8 samples is drawn in quarters, whose differences within each half tell how fast the error
     falls (`_accumulate.rate_factor`).
 

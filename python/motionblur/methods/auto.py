@@ -16,7 +16,8 @@ With ``tolerance`` (RMSE against the exact integral, premultiplied linear RGBA):
    (`motionblur.methods._sweep`: how far the moving outlines travel on screen, against what
    colour) says bring the error to `FIRST_AIM` x ``tolerance``, so that the first render is
    often the last; the forecast only picks N, the render's halves certify it;
-3. since the error falls about as 1/N (`RATE`), the N that brings the estimate under
+3. since the error falls about as 1/N (`RATE`), the N that brings the halves' reading (the
+   estimate, but at ``aa`` 4 before `_accumulate.resonance`, as the rules below were tuned) under
    ``tolerance`` x `SAFETY` (per ``aa``) is predicted and rendered, keeping the samples drawn (`_grids.next_grid`):
    accumulation's samples cut the shutter's mass into equal strata under any shutter, so an
    odd multiple of the count holds them, and so does the trapezoid grid (`_Trials._trapezoid`,
@@ -242,8 +243,11 @@ class _Trials:
         frame = self.sums.frame()
         ms = (time.perf_counter() - t0) * 1e3
         options = {"samples": self.sums.samples, **({"grid": kind} if kind != STRATIFIED else {})}
-        self.effective.append((_grids.effective(self.grid), frame.stats["error_estimate"]))
-        return self._record("accumulation", options, frame, ms, frame.stats["error_estimate"])
+        reading = self.sums.reading  # what the plan certifies by (`_accumulate.resonance` aside)
+        self.effective.append((_grids.effective(self.grid), reading))
+        self._record("accumulation", options, frame, ms, frame.stats["error_estimate"])
+        self.tried[-1]["halves_reading"] = reading
+        return frame
 
     def _stratified(self, n: int, keep: bool) -> None:
         """Accumulation's own ``n`` samples, the drawn ones (an ``n / last``-th of them) kept
@@ -384,10 +388,10 @@ def _for_tolerance(trials: _Trials, tol: float) -> str:
     trials.accumulate(trials.first_samples(tol))
     rate = RATE
     for _ in range(MAX_STEPS + 1):
-        est, n = trials.last["error_estimate"], trials.last["options"]["samples"]
+        est, n = trials.last["halves_reading"], trials.last["options"]["samples"]
         limit = aim * _sure_share(n)
         if est <= limit:
-            return f"accumulation-{n} estimates {est:.3g} <= {limit / tol:.2g} x tolerance"
+            return f"accumulation-{n}'s halves read {est:.3g} <= {limit / tol:.2g} x tolerance"
         measured = trials.effective  # (stratified samples' worth, estimate) of each grid
         if len(measured) >= 2 and measured[-2][1] > est > 0:  # the rate these two renders show
             (n0, e0), (n1, e1) = measured[-2:]
