@@ -12,8 +12,8 @@ pilot puts the error above the unblurred frame's, or the alpha mass 50% or more 
 clearly worse than no blur must always say so, and a method may refuse a motion it cannot model,
 with a ValueError that names the methods to use instead. ``auto`` must stay within 1.5x its
 tolerance on every scene (and meets it on at least 95%: the README's measured table). With
-spatial samples (``aa`` 2) accumulation and ``auto`` are checked against ``mb.exact`` at the same
-``aa``. ``make test`` runs a few examples (profile ``ci``), ``make fuzz`` many.
+spatial samples (``aa`` 2 and 4) accumulation and ``auto`` are checked against ``mb.exact`` at the
+same ``aa``. ``make test`` runs a few examples (profile ``ci``), ``make fuzz`` many.
 
 The bounds are the worst seen on tuning seeds 0..399 at 64x48 among frames that did not warn,
 rounded up (first read off seeds 0..29, which ``make fuzz`` showed too few: measuring seed
@@ -116,21 +116,23 @@ def test_every_method_against_the_exact_integral_on_random_scenes(seed):
         assert _rmse(frame.rgba, exact) <= tol * 1.5, (seed, tol, frame.stats["plan"])
 
 
+@pytest.mark.parametrize("aa", [2, 4])
 @given(seed=st.integers(MEASURING_SEEDS.start, MEASURING_SEEDS.stop - 1))
-def test_accumulation_and_auto_with_spatial_samples(seed):
-    # The same checks for the two methods that measure their own error, with aa 2 (the end term
-    # of accumulation's halves, `_accumulate.ends_factor`): against mb.exact at aa 2, the frame
-    # finite, its estimate finite and positive where the frame has an error, accumulation never
-    # worse than no blur (its bound), auto within 1.5x its tolerance.
+def test_accumulation_and_auto_with_spatial_samples(seed, aa):
+    # The same checks for the two methods that measure their own error, with aa 2 and 4 (the
+    # end term of accumulation's halves, `_accumulate.ends_factor`, and at 4 its resonance,
+    # `_accumulate.resonance`): against mb.exact at that aa, the frame finite, its estimate
+    # finite and positive where the frame has an error, accumulation never worse than no blur
+    # (its bound), auto within 1.5x its tolerance.
     scene = random_scene(seed, W, H)
-    exact = mb.exact(scene, aa=2).rgba.astype(np.float64)
-    sharp = mb.render(scene, "accumulation", samples=1, aa=2, error_estimate=False).rgba
+    exact = mb.exact(scene, aa=aa).rgba.astype(np.float64)
+    sharp = mb.render(scene, "accumulation", samples=1, aa=aa, error_estimate=False).rgba
     no_blur = _rmse(sharp, exact)
-    frame = mb.render(scene, "accumulation", aa=2)
+    frame = mb.render(scene, "accumulation", aa=aa)
     assert np.isfinite(frame.rgba).all() and np.isfinite(frame.stats["error_estimate"]), seed
     err = _rmse(frame.rgba, exact)
     assert err <= max(BOUNDS["accumulation"][0] * no_blur, FLOOR), (seed, err, no_blur)
     assert err < FLOOR or frame.stats["error_estimate"] > 0.0, (seed, err)
     for tol in (0.01, 0.003):
-        frame = mb.render(scene, "auto", tolerance=tol, aa=2)
-        assert _rmse(frame.rgba, exact) <= tol * 1.5, (seed, tol, frame.stats["plan"])
+        frame = mb.render(scene, "auto", tolerance=tol, aa=aa)
+        assert _rmse(frame.rgba, exact) <= tol * 1.5, (seed, aa, tol, frame.stats["plan"])

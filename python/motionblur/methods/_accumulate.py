@@ -128,9 +128,9 @@ PLAIN_SHARE = {2: 0.6, 4: 0.3}
 #: over 2 to 1.9 at N / path 0.7-1.5, where 60-65% of the frames were read within 0.5x-2x
 #: (``path``: `_sweep.sweep_path`). The estimate is the reading over ``1 + h exp(-ln(N / (x0
 #: path))^2 / (2 w^2))`` with ``(h, x0, w)`` = RESONANCE[aa]: of heights 0.2-1.2, centres
-#: 0.6-2 and widths 0.4-1.3 on those rows, the lowest of the few that kept every estimate
-#: under 0.5x where the reading was (3 of 1,720) while taking the share within 0.5x-2x from
-#: 88% to 96%-98% per size.
+#: 0.6-2 and widths 0.4-1.3 on those rows, the lowest height of those that left no more frames
+#: under 0.5x than the reading did (3 of 1,720), taking the share within 0.5x-2x from 88% to
+#: 96%-99% per size.
 RESONANCE = {4: (0.4, 1.0, 0.6)}
 
 
@@ -597,8 +597,9 @@ class HalfSums:
         return frame
 
     def _resonance(self) -> float:
-        """`resonance` of this frame's samples (the scene's path found once)."""
-        if self.aa not in RESONANCE:
+        """`resonance` of this frame's samples (the scene's path found once); 1 for a grid other
+        than the stratified one (jittered, trapezoid, refined: not measured so)."""
+        if self.aa not in RESONANCE or self.sampling != "stratified":
             return 1.0
         if self.path is None:
             self.path = sweep_path(self.scene)

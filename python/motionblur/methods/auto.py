@@ -41,8 +41,9 @@ accurate than any accumulation that fits); else accumulation grows, keeping the 
 (`_grids.holds`: an odd multiple, or a trapezoid grid), to the most that fit `BUDGET_SHARE` of the
 time left at the time per sample its last render took, measured against the clock at every step.
 
-``Frame.stats["plan"]`` lists every render tried (method, options, ms, error estimate) and why
-the last was kept; ``stats["error_estimate"]`` is the kept frame's own.
+``Frame.stats["plan"]`` lists every render tried (method, options, ms, error estimate, and for
+accumulation the halves' reading its step read) and why the last was kept;
+``stats["error_estimate"]`` is the kept frame's own.
 """
 
 from __future__ import annotations
@@ -464,8 +465,9 @@ def auto(scene: Scene, tolerance=None, budget_ms=None, aa: int = 1) -> Frame:
     premultiplied linear RGBA), default `DEFAULT_TOLERANCE` (0.01); ``budget_ms`` instead,
     milliseconds per frame measured on this machine as it renders; ``aa`` 1, 2 or 4 samples per
     pixel along each axis. ``stats["plan"]``: ``goal``, ``tolerance`` or ``budget_ms``,
-    ``tried`` (every render: method, options, ms, error estimate), ``kept`` (the method and
-    options of the frame returned) and ``why`` (see [`motionblur.methods.auto`][motionblur.methods.auto]).
+    ``tried`` (every render: method, options, ms, error estimate; accumulation's also
+    ``halves_reading``), ``kept`` (the method and options of the frame returned) and ``why``
+    (see [`motionblur.methods.auto`][motionblur.methods.auto]).
     """
     aa = check_aa(aa)
     if tolerance is not None and budget_ms is not None:
