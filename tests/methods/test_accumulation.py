@@ -240,18 +240,25 @@ def test_subsample_steps_an_odd_number_of_strata_apart_do_not_hide_the_error(mon
     # end term, while they add in the frame's error (0.32x the error against the exact integral
     # at the same aa). The estimate is at least PLAIN_SHARE of the plain halves' reading, which
     # keeps each half's shift and does not cancel so: 0.5x-2x.
-    from motionblur.evaluation.random_scenes import random_scene
     from motionblur.methods import _accumulate
 
-    scene = random_scene(82, 64, 48)
-    ref = mb.exact(scene, aa=2).rgba.astype(np.float64)
-    frame = mb.render(scene, "accumulation", samples=16, aa=2)
-    err = float(np.sqrt(np.mean(np.square(frame.rgba - ref))))
-    assert 0.5 <= frame.stats["error_estimate"] / err <= 2.0, (frame.stats["error_estimate"], err)
+    frame, ratio = _read_at_tuning_seed(82, 16, 2)
+    assert 0.5 <= ratio <= 2.0, ratio
     monkeypatch.setattr(_accumulate, "PLAIN_SHARE", {2: 0.0, 4: 0.0})
-    alone = mb.render(scene, "accumulation", samples=16, aa=2)
+    alone, ratio = _read_at_tuning_seed(82, 16, 2)
     assert np.array_equal(alone.rgba, frame.rgba)
-    assert alone.stats["error_estimate"] / err < 0.5, "the end term alone reads this scene's error"
+    assert ratio < 0.5, "the end term alone reads this scene's error"
+
+
+def _read_at_tuning_seed(seed: int, n: int, aa: int):
+    """Accumulation of ``n`` samples at ``aa`` on tuning seed ``seed`` at 64x48, and its estimate
+    over its RMSE against the exact integral at that ``aa``."""
+    from motionblur.evaluation.random_scenes import random_scene
+
+    scene = random_scene(seed, 64, 48)
+    ref = mb.exact(scene, aa=aa).rgba.astype(np.float64)
+    frame = mb.render(scene, "accumulation", samples=n, aa=aa)
+    return frame, frame.stats["error_estimate"] / float(np.sqrt(np.mean(np.square(frame.rgba - ref))))
 
 
 def test_the_resonance_bump_is_one_away_from_its_centre_and_at_other_aa():
@@ -273,15 +280,11 @@ def test_subsample_steps_a_quarter_stratum_apart_do_not_inflate_the_estimate(mon
     # a quarter of a stratum apart, the frame's errors cancel over the pixel and the halves'
     # reading is 2.1x the error against the exact integral at the same aa. The estimate divides
     # the reading by its resonance (`_accumulate.RESONANCE`): within 0.5x-2x, the frame the same.
-    from motionblur.evaluation.random_scenes import random_scene
     from motionblur.methods import _accumulate
 
-    scene = random_scene(9, 64, 48)
-    ref = mb.exact(scene, aa=4).rgba.astype(np.float64)
-    frame = mb.render(scene, "accumulation", samples=8, aa=4)
-    err = float(np.sqrt(np.mean(np.square(frame.rgba - ref))))
-    assert 0.5 <= frame.stats["error_estimate"] / err <= 2.0, (frame.stats["error_estimate"], err)
+    frame, ratio = _read_at_tuning_seed(9, 8, 4)
+    assert 0.5 <= ratio <= 2.0, ratio
     monkeypatch.setattr(_accumulate, "RESONANCE", {})
-    read = mb.render(scene, "accumulation", samples=8, aa=4)
+    read, ratio = _read_at_tuning_seed(9, 8, 4)
     assert np.array_equal(read.rgba, frame.rgba)
-    assert read.stats["error_estimate"] / err > 2.0, "the reading alone is within 2x here"
+    assert ratio > 2.0, "the reading alone is within 2x here"
