@@ -175,3 +175,22 @@ def test_translated_reference_moves_the_object():
     assert metrics.coverage(ref) == pytest.approx(
         0.5 * (metrics.coverage(left) + metrics.coverage(right)), rel=0.05
     )
+
+
+@pytest.mark.pyrender
+def test_pyrender_peer_draws_a_colour_a_vertex():
+    # per-vertex colours went to pyrender's base colour as one (a TypeError); now as its vertex
+    # colours, which it interpolates and rounds to 8 bits: the same frame away from the edges
+    v, f = meshes.icosphere(2)
+    v = np.asarray(v)
+    colours = np.c_[(v + 1) / 2, np.ones(len(v))].astype(np.float32)
+    motion = mb.Motion.linear(translate((-0.4, 0, 0)), translate((0.4, 0, 0)))
+    cam = mb.Camera(mb.look_at((0, 0, 5), (0, 0, 0)), 0.7, W, H, znear=0.5, zfar=30.0)
+    sc = mb.Scene([mb.Object(mb.Mesh(v * 0.8, f), color=colours, motion=motion)], cam)
+    theirs = reference.pyrender(sc, samples=16)
+    ours = mb.render(sc, "accumulation", samples=16)
+    inner = _interior(ours)
+    diff = np.abs(ours.rgba - theirs.rgba).max(axis=-1)[inner]
+    assert np.median(diff) <= 1.0 / 255 and metrics.rmse(ours, theirs) < 0.02
+    grey = reference.pyrender(mb.Scene([mb.Object(mb.Mesh(v * 0.8, f), (0.5, 0.5, 0.5), motion=motion)], cam))
+    assert not np.allclose(grey.rgba, theirs.rgba, atol=0.05), "the vertex colours did not show"

@@ -337,6 +337,19 @@ def _require_gl_platform() -> None:
     )
 
 
+def _pyrender_mesh(trimesh, obj, vertices):
+    """The trimesh pyrender draws of ``obj`` at ``vertices`` (V,3): with its colours as vertex
+    colours where it has one a vertex (pyrender keeps 8 bits of each; alpha 1, as the one colour
+    of an object is drawn opaque)."""
+    colours = None
+    if obj.rgba.ndim == 2:
+        colours = np.round(np.clip(np.asarray(obj.rgba, np.float64), 0.0, 1.0) * 255.0).astype(np.uint8)
+        colours[:, 3] = 255
+    return trimesh.Trimesh(
+        np.asarray(vertices), np.asarray(obj.mesh.faces), vertex_colors=colours, process=False
+    )
+
+
 def pyrender(scene: Scene, t: float | None = None, samples: int = 1) -> Frame:
     """pyrender (offscreen OSMesa, ``RenderFlags.FLAT``: unlit base colour) of ``scene``.
 
@@ -346,7 +359,8 @@ def pyrender(scene: Scene, t: float | None = None, samples: int = 1) -> Frame:
     ``t``: one shutter time (default the reference time) when ``samples`` is 1; otherwise the
     weighted mean of ``samples`` renders at the stratified shutter times (the classic
     accumulation buffer on an OpenGL peer, every object drawn at every pose). Lambert objects are
-    drawn flat too (pyrender's lighting is not lambert). Returns a Frame whose rgba is pyrender's
+    drawn flat too (pyrender's lighting is not lambert); colours a vertex are drawn as pyrender's
+    vertex colours (8 bits). Returns a Frame whose rgba is pyrender's
     RGB (over black) with alpha = coverage (depth > 0), averaged; depth is pyrender's of the last
     render (inf for background).
     """
@@ -367,10 +381,13 @@ def pyrender(scene: Scene, t: float | None = None, samples: int = 1) -> Frame:
     sc = pr.Scene(bg_color=[0.0, 0.0, 0.0, 0.0], ambient_light=[0.0, 0.0, 0.0])
     nodes = []
     for o in scene.objects:
-        mat = pr.MetallicRoughnessMaterial(baseColorFactor=[float(x) for x in o.rgba], alphaMode="OPAQUE")
+        # pyrender reads a mesh's vertex colours only without a material (it makes its own)
+        mat = None
+        if o.rgba.ndim == 1:
+            mat = pr.MetallicRoughnessMaterial(baseColorFactor=[float(x) for x in o.rgba], alphaMode="OPAQUE")
         deforming = o.motion is not None and o.motion.is_deforming
         base = o.world_vertices(0.0) if deforming else o.mesh.vertices
-        tm = trimesh.Trimesh(np.asarray(base), np.asarray(o.mesh.faces), process=False)
+        tm = _pyrender_mesh(trimesh, o, base)
         node = sc.add(pr.Mesh.from_trimesh(tm, material=mat, smooth=False))
         nodes.append((o, node, deforming, mat))
     camera_node = sc.add(cam.to_pyrender())
@@ -383,7 +400,7 @@ def pyrender(scene: Scene, t: float | None = None, samples: int = 1) -> Frame:
     for ti, wi in zip(ts, ws):
         for o, node, deforming, mat in nodes:
             if deforming:
-                tm = trimesh.Trimesh(o.world_vertices(ti), np.asarray(o.mesh.faces), process=False)
+                tm = _pyrender_mesh(trimesh, o, o.world_vertices(ti))
                 node.mesh = pr.Mesh.from_trimesh(tm, material=mat, smooth=False)
             else:
                 sc.set_pose(node, o.transform_at(ti))
