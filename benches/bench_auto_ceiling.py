@@ -10,7 +10,7 @@ something moves (no rolling shutter), against :func:`motionblur.exact` at the sa
 - every accumulation grid a planner asks for (stratified of N samples, auto's trapezoid grid of
   M strata, or N samples refined by a quarter or a half of their strata's boundaries) is
   rendered once, afresh (a refined grid after its stratified one), through auto's own trials
-  (`_Trials.accumulate`): its error estimate and its measured RMSE are kept; the analytic frame (default and exact options) and
+  (`_Trials.accumulate`): the halves' reading auto steers by (its estimate but at ``aa`` 4) and its measured RMSE are kept; the analytic frame (default and exact options) and
   the segment pilot too;
 - time: accumulation at 1 to 256 samples (best of 3); a render that draws k new samples is
   charged the time of k interpolated, plus the estimate's overhead measured at 8 samples; the
