@@ -75,9 +75,7 @@ pub use motion::{
     axis_angle, check_times, det3, dot, mat4_mul, norm, place, row_times, transpose_times, turn,
     uniform_times, Keyframe, Keyframes, Keys, Mat3, Mat4, Path, Similarity, IDENTITY4,
 };
-pub use motion::{
-    sweep, sweep_scale, MovingCamera, Sweep, SweepObject, SWEEP_POINTS, SWEEP_SHADE, SWEEP_TIMES,
-};
+pub use motion::{sweep, MovingCamera, Sweep, SweepObject, SWEEP_POINTS, SWEEP_SHADE, SWEEP_TIMES};
 pub use raster::{
     faces_from_i64, on_sample_grid, rasterize, rasterize_over, Background, Blend, Camera, Draw,
     Light, Options as RasterOptions, Shading, Stats as RasterStats, FRAGMENT_CAP,

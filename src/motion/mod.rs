@@ -25,4 +25,4 @@ pub use numeric::{
 pub(crate) use path::Placer;
 pub use path::{Keyframe, Path};
 pub use similarity::{axis_angle, Similarity};
-pub use sweep::{sweep, sweep_scale, Sweep, SweepObject, SWEEP_POINTS, SWEEP_SHADE, SWEEP_TIMES};
+pub use sweep::{sweep, Sweep, SweepObject, SWEEP_POINTS, SWEEP_SHADE, SWEEP_TIMES};

@@ -1,5 +1,5 @@
 //! The screen sweep: a forecast of accumulation's error from the scene's geometry alone
-//! ([`sweep_scale`]), read by the planner (`auto`) to choose its first render's samples. The
+//! ([`sweep`]'s `scale`), read by the planner (`auto`) to choose its first render's samples. The
 //! render's own halves certify the frame; this only picks where to start.
 //!
 //! With one sample a pixel, a pixel an outline passes over changes its colour once during the
@@ -40,20 +40,10 @@ pub struct SweepObject<'a> {
     pub rgba: &'a [[f64; 4]],
 }
 
-/// The scene's screen sweep (see the module): 0 when no object is seen. `background` is
-/// straight RGBA. The objects are those that move on screen (all of them under camera motion).
-pub fn sweep_scale(
-    objects: &[SweepObject<'_>],
-    camera: &MovingCamera<'_>,
-    background: [f64; 4],
-) -> f64 {
-    sweep(objects, camera, background).scale
-}
-
 /// The screen sweep of a scene and where it comes from ([`sweep`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sweep {
-    /// [`sweep_scale`].
+    /// `sweep_scale` of the module docs: 0 when no object is seen.
     pub scale: f64,
     /// The objects' mean screen paths (pixels), each weighted by its share of `scale^2`
     /// (perimeter x path x contrast^2): the path of the outlines the error comes from; 0 when
@@ -61,8 +51,9 @@ pub struct Sweep {
     pub path: f64,
 }
 
-/// The scene's screen sweep and the path its outlines travel ([`Sweep`]); arguments as
-/// [`sweep_scale`].
+/// The scene's screen sweep and the path its outlines travel ([`Sweep`]; see the module).
+/// `background` is straight RGBA. The objects are those that move on screen (all of them under
+/// camera motion).
 pub fn sweep(
     objects: &[SweepObject<'_>],
     camera: &MovingCamera<'_>,
@@ -305,7 +296,7 @@ mod tests {
             motion: Some(&keys),
             rgba: &[rgba],
         };
-        sweep_scale(&[o], &camera(w), background)
+        sweep(&[o], &camera(w), background).scale
     }
 
     fn scale(moves: f64, rgba: [f64; 4], background: [f64; 4]) -> f64 {
@@ -332,7 +323,7 @@ mod tests {
         let (white, clear) = ([1.0; 4], [0.0; 4]);
         assert_eq!(sweep_of((50.0, 0.0), (51.0, 0.0), 64, white, clear), 0.0);
         assert_eq!(sweep_of((0.0, 9.0), (1.0, 9.0), 64, white, clear), 0.0);
-        assert_eq!(sweep_scale(&[], &camera(64), clear), 0.0);
+        assert_eq!(sweep(&[], &camera(64), clear).scale, 0.0);
     }
 
     #[test]
@@ -344,7 +335,7 @@ mod tests {
             motion: Some(&keys),
             rgba: &[[1.0; 4]],
         };
-        assert_eq!(sweep_scale(&[o], &camera(64), [0.0; 4]), 0.0);
+        assert_eq!(sweep(&[o], &camera(64), [0.0; 4]).scale, 0.0);
     }
 
     #[test]
@@ -363,10 +354,8 @@ mod tests {
         // 10 px a unit (above): every point travels 5 px, and 20 px
         let one = sweep(&[object(&near, white)], &camera(100), clear);
         assert!((one.path - 5.0).abs() < 1e-6, "{one:?}");
-        assert_eq!(
-            one.scale,
-            sweep_scale(&[object(&near, white)], &camera(100), clear)
-        );
+        // the same object's scale as `scale` reads it (one call gives both)
+        assert_eq!(one.scale, scale(0.5, [1.0; 4], clear));
         // an object of the background's colour adds nothing, whatever it travels
         let unseen: &[[f64; 4]] = &[[0.0; 4]];
         let two = sweep(
@@ -401,7 +390,7 @@ mod tests {
                 motion: Some(&keys),
                 rgba,
             };
-            sweep_scale(&[o], &camera(100), clear)
+            sweep(&[o], &camera(100), clear).scale
         };
         let mixed = of(&[white, white, half, half]);
         let mean = 0.5 * (contrast2(white, clear) + contrast2(half, clear));

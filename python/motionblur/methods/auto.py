@@ -204,10 +204,10 @@ class _Trials:
         self.refines = aa == 1 and isinstance(scene.shutter, str) and scene.shutter == "box"
         self.effective: list[tuple[float, float]] = []  # (effective samples, estimate) per grid
 
-    def _record(self, method: str, options: dict, frame: Frame, ms: float, est: float) -> Frame:
+    def _record(self, method: str, options: dict, frame: Frame, ms: float, est: float, **more) -> Frame:
         frame.stats["error_estimate"] = est
         self.tried.append(
-            {"method": method, "options": dict(options), "ms": round(ms, 3), "error_estimate": est}
+            {"method": method, "options": dict(options), "ms": round(ms, 3), "error_estimate": est, **more}
         )
         self.frames.append(frame)
         return frame
@@ -248,9 +248,8 @@ class _Trials:
         options = {"samples": self.sums.samples, **({"grid": kind} if kind != STRATIFIED else {})}
         reading = self.sums.reading  # what the plan certifies by (`_accumulate.resonance` aside)
         self.effective.append((_grids.effective(self.grid), reading))
-        self._record("accumulation", options, frame, ms, frame.stats["error_estimate"])
-        self.tried[-1]["halves_reading"] = reading
-        return frame
+        est = frame.stats["error_estimate"]
+        return self._record("accumulation", options, frame, ms, est, halves_reading=reading)
 
     def _stratified(self, n: int, keep: bool) -> None:
         """Accumulation's own ``n`` samples, the drawn ones (an ``n / last``-th of them) kept
