@@ -106,20 +106,55 @@ def time_to(points: list[tuple[int, float, float]], target: float, floor: float 
     return f"~{tb + (need - nb) * per_sample:.0f}"
 
 
+def _mitsuba_kw(n: int) -> dict:
+    """Mitsuba at ``n`` samples per pixel in all: 256 shutter times, ``n / 256`` spp each."""
+    return {"times": 256, "spp": n // 256, "progress": False}
+
+
 def _split(frame: mb.Frame, exact: mb.Frame) -> tuple[float, float]:
     """RMSE of the coverage (alpha) and of the colour (RGB) alone."""
     d = frame.rgba.astype(np.float64) - exact.rgba
     return float(np.sqrt(np.mean(d[..., 3] ** 2))), float(np.sqrt(np.mean(d[..., :3] ** 2)))
 
 
-def sweep(name: str, sc: mb.Scene, exact: mb.Frame, settings, render, repeat: int, rows: list):
+#: The longest single run the sweeps grow to (seconds, predicted as twice the last run): past
+#: the listed settings a sweep doubles its samples per pixel while the RMSE is over 1e-4 and
+#: still falls as noise does (at least as n^-0.3 over the last two settings), so that it stops
+#: at a measured floor, at the target, or at this cap (then the time is extrapolated).
+GROW_MAX_S = 40.0
+
+
+def _falling(points: list[tuple[int, float, float]]) -> bool:
+    """Whether the RMSE of the sweep's last two settings still falls as noise does (slope in
+    log-log at most -0.3, where a floor gives about 0)."""
+    (na, _, ea), (nb, _, eb) = points[-2], points[-1]
+    return math.log(eb / ea) / math.log(nb / na) <= -0.3
+
+
+def sweep(name: str, sc: mb.Scene, exact: mb.Frame, settings, render, repeat: int, rows: list, grow=None):
+    """Times ``render(sc, **kwargs)`` at each of ``settings`` ((label, samples per pixel, kwargs),
+    cheapest first), adding each to ``rows``; with ``grow`` (a function of the doubled samples per
+    pixel returning such a setting), then doubles them while the RMSE is over `TARGETS`' last and
+    still falls (`_falling`) and the next run is predicted under `GROW_MAX_S`. Returns the
+    points (samples per pixel, seconds, RMSE)."""
     points = []
-    for label, n, kwargs in settings:
+
+    def run(label, n, kwargs):
         secs, frame = timed(lambda kw=kwargs: render(sc, **kw), repeat)
         err = metrics.rmse(frame, exact)
         points.append((n, secs, err))
         rows.append((name, label, secs, err, *_split(frame, exact)))
         print(f"  {label:28s} {secs:7.2f} s  rmse {err:.2e}", flush=True)
+
+    for setting in settings:
+        run(*setting)
+    while (
+        grow is not None
+        and points[-1][2] > TARGETS[-1]
+        and _falling(points)
+        and 2 * points[-1][1] <= GROW_MAX_S
+    ):
+        run(*grow(2 * points[-1][0]))
     return points
 
 
@@ -179,6 +214,7 @@ def main() -> None:
                 reference.mitsuba,
                 repeat,
                 rows,
+                grow=None if quick else lambda n: (f"mitsuba K=256 x {n // 256} spp", n, _mitsuba_kw(n)),
             ),
             "cycles box": sweep(
                 name,
@@ -197,18 +233,63 @@ def main() -> None:
                 reference.blender,
                 repeat,
                 rows,
+                grow=None if quick else lambda n: (f"cycles aa4 {n} spp", n, {"samples": n, "aa": 4}),
             ),
         }
         floors = {"mitsuba (K times x S spp)": floor, "cycles box": floor, "cycles aa4": 0.0}
         reach = {k: [time_to(p, t, floors[k]) for t in TARGETS] for k, p in tools.items()}
         summary.append((name, t_exact, t_fast, metrics.rmse(fast, exact), reach))
     load1 = os.getloadavg()
+    print("\n".join(["", *table(summary), "", *verdict(summary)]), flush=True)
     write(header, load1, summary, rows, quick, w, h)
+
+
+def table(summary) -> list[str]:
+    """The per-scene table: the exact method's time and each tool's time to `TARGETS`."""
+    tools = list(summary[0][-1]) if summary else []
+    lines = [
+        "| scene | exact aa=4 (s) | analytic aa=4 (s, RMSE) | "
+        + " | ".join(f"{t} @1e-3 | {t} @1e-4" for t in tools)
+        + " |",
+        "|---|---:|---:|" + "---:|---:|" * len(tools),
+    ]
+    for name, t_exact, t_fast, e_fast, reach in summary:
+        cells = " | ".join(f"{a} | {b}" for a, b in (reach[t] for t in tools))
+        lines.append(f"| {name} | {t_exact:.2f} | {t_fast:.2f} ({e_fast:.0e}) | {cells} |")
+    return lines
+
+
+def _seconds(cell: str) -> float | None:
+    """The seconds of a `time_to` cell, measured or extrapolated (``~``); None at a floor."""
+    try:
+        return float(cell.lstrip("~"))
+    except ValueError:
+        return None
+
+
+def verdict(summary) -> list[str]:
+    """Per tool and target, the tool's time over the exact frame's (the target of issue 27's
+    section 3: ground truth faster than the path tracers), across the scenes: the range where
+    the tool reaches the target, and on how many scenes a floor stops it."""
+    out = []
+    tools = list(summary[0][-1]) if summary else []
+    for k, target in enumerate(TARGETS):
+        for tool in tools:
+            ratios = [s / t_exact for _, t_exact, *_, reach in summary if (s := _seconds(reach[tool][k]))]
+            floors = sum(_seconds(reach[tool][k]) is None for *_, reach in summary)
+            said = f"{min(ratios):.1f}x to {max(ratios):.1f}x the exact frame's time" if ratios else "never"
+            faster = (
+                "the exact frame is faster" if all(r > 1 for r in ratios) else "the exact frame is NOT faster"
+            )
+            out.append(
+                f"RMSE {target:.0e}: {tool}: {said} ({len(ratios)} scenes; {floors} stopped at a floor) "
+                f"-> {faster} on every scene"
+            )
+    return out
 
 
 def write(header, load1, summary, rows, quick, w, h) -> None:
     OUT.mkdir(parents=True, exist_ok=True)
-    tools = list(summary[0][-1]) if summary else []
     lines = [
         "# Ground truth at equal error: the exact method, Mitsuba 3 and Blender Cycles",
         "",
@@ -223,14 +304,10 @@ def write(header, load1, summary, rows, quick, w, h) -> None:
         "analytic method at its default options is the exact method as `render` runs it, with "
         "its RMSE from `exact`.",
         "",
-        "| scene | exact aa=4 (s) | analytic aa=4 (s, RMSE) | "
-        + " | ".join(f"{t} @1e-3 | {t} @1e-4" for t in tools)
-        + " |",
-        "|---|---:|---:|" + "---:|---:|" * len(tools),
+        *table(summary),
+        "",
+        *verdict(summary),
     ]
-    for name, t_exact, t_fast, e_fast, reach in summary:
-        cells = " | ".join(f"{a} | {b}" for a, b in (reach[t] for t in tools))
-        lines.append(f"| {name} | {t_exact:.2f} | {t_fast:.2f} ({e_fast:.0e}) | {cells} |")
     lines += ["", "Every setting (best of 3 when a run is under 3 s):", ""]
     lines += [
         "| scene | setting | seconds | RMSE (RGBA) | alpha (coverage) | RGB (colour) |",
