@@ -173,6 +173,7 @@ def target(mesh, a, lines: list[str]) -> None:
         f"acc-256 RMSE | acc-4096 RMSE (errors at {ew}x{eh}) | error target |",
         "|---|---:|---:|---:|---:|---:|---:|---|",
     ]
+    print("\n".join(lines[-4:]), flush=True)
     notes = []
     for kind in ("translate", "turn"):
         s = scene(mesh, kind, w, h)
@@ -236,6 +237,7 @@ def memory(a, lines: list[str]) -> None:
         "| motion | segments | prims | strips | process peak MiB | of which the frame MiB | target < 1024 MiB | s |",
         "|---|---:|---:|---:|---:|---:|---|---:|",
     ]
+    print("\n".join(lines[-4:]), flush=True)
     for kind in ("translate", "turn"):
         out = subprocess.run(
             [sys.executable, "-c", _CHILD, str(Path(__file__).parent), str(a.level), str(w), str(h), kind],
@@ -273,6 +275,7 @@ def _against_size(mesh, a, lines: list[str]) -> list:
         f"| size | analytic s | accumulation-256 s | ratio | {_EQUAL_HEAD} |",
         "|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
+    print("\n".join(lines[-4:]), flush=True)
     pts = []
     for w, h in sizes:
         s = scene(mesh, "translate", w, h)
@@ -299,6 +302,7 @@ def _against_faces(a, lines: list[str]) -> list:
         f"| faces | analytic s | accumulation-256 s | ratio | shaded pieces | {_EQUAL_HEAD} |",
         "|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
+    print("\n".join(lines[-4:]), flush=True)
     pts = []
     for lv in range(a.min_level, a.max_level + 1):
         m = bunny(lv)
@@ -370,6 +374,7 @@ def motions(mesh, a, lines: list[str]) -> dict:
         f"| motion | streak px | segments | analytic s | acc-256 s | ratio | {_EQUAL_HEAD} |",
         "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
+    print("\n".join(lines[-4:]), flush=True)
     res = {"length": [], "angle": []}
     cases = [("translate", {"length": v}) for v in LENGTHS] + [("turn", {"angle": v}) for v in ANGLES]
     for kind, shape in cases:
