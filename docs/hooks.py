@@ -54,7 +54,7 @@ def bench_results(folder: Path, root: Path) -> str:
             '!!! info "No benchmark output in this build"\n'
             "    This page shows the tables of the last benchmark run when the site is built after one.\n"
             "    Run `make bench` (every script under `benches/` and the speed-against-error report,\n"
-            "    about 12 minutes on 2 cores; `python -m motionblur bench --quick` for the report\n"
+            "    about half an hour on 2 cores; `python -m motionblur bench --quick` for the report\n"
             "    alone) and then `make docs`: the tables in `out/bench/**/*.md` appear here.\n"
         )
     parts = [
