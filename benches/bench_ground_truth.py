@@ -108,7 +108,8 @@ def time_to(points: list[tuple[int, float, float]], target: float, floor: float 
     need = nb * (eb / target) ** 2  # samples per pixel at the noise rate n^-0.5
     per_sample = (tb - ta) / (nb - na)  # the marginal cost; the mean when load made it <= 0
     per_sample = per_sample if per_sample > 0 else tb / nb
-    return f"~{tb + (need - nb) * per_sample:.0f}"
+    secs = tb + (need - nb) * per_sample
+    return f"~{secs:.0f}" if secs >= 10 else f"~{secs:.2f}"  # (no ~0 for a fraction of a second)
 
 
 def _mitsuba_kw(n: int) -> dict:
