@@ -91,20 +91,20 @@ def timed(fn, repeat: int):
 def time_to(points: list[tuple[int, float, float]], target: float, floor: float = 0.0) -> str:
     """Seconds to reach RMSE ``target`` from sweep ``points`` (samples per pixel, seconds, rmse),
     cheapest first: measured (log-log interpolation between the settings around the target),
-    extrapolated (``~``) while the RMSE still falls as noise does, or the floor (``floor``: a
-    known difference of rendering, the box filter's, that no sample count removes)."""
+    extrapolated (``~``) while the RMSE still falls as noise does, or a floor: the one measured
+    where the RMSE stopped falling (`_falling`), else ``floor`` (a known difference of rendering,
+    the box filter's, that no sample count removes) when it is at or above the target."""
     for (_, t0, e0), (_, t1, e1) in zip([(0, math.nan, math.inf), *points], points):
         if e1 <= target:
             if not math.isfinite(e0) or e0 <= e1:
                 return f"{t1:.2f}"
             f = math.log(e0 / target) / math.log(e0 / e1)
             return f"{math.exp(math.log(t0) + f * math.log(t1 / t0)):.2f}"
+    (na, ta, _), (nb, tb, eb) = points[-2], points[-1]
+    if not _falling(points):  # the measured floor first (Mitsuba's shadows sit above the filter's)
+        return f"not reached (floor {eb:.1e})"
     if floor >= target:
         return f"not reached (filter floor {floor:.1e})"
-    (na, ta, ea), (nb, tb, eb) = points[-2], points[-1]
-    slope = math.log(eb / ea) / math.log(nb / na)  # -0.5 for noise, 0 at a floor
-    if slope > -0.3:
-        return f"not reached (floor {eb:.1e})"
     need = nb * (eb / target) ** 2  # samples per pixel at the noise rate n^-0.5
     per_sample = (tb - ta) / (nb - na)  # the marginal cost; the mean when load made it <= 0
     per_sample = per_sample if per_sample > 0 else tb / nb
@@ -126,7 +126,9 @@ def _split(frame: mb.Frame, exact: mb.Frame) -> tuple[float, float]:
 #: The longest single run the sweeps grow to (seconds, predicted as twice the last run): past
 #: the listed settings a sweep doubles its samples per pixel while the RMSE is over 1e-4 and
 #: still falls as noise does (at least as n^-0.3 over the last two settings), so that it stops
-#: at a measured floor, at the target, or at this cap (then the time is extrapolated).
+#: at a measured floor, at the target, or at this cap (then the time is extrapolated). A tool
+#: whose box filter keeps it above 1e-4 grows too, on purpose: where its noise stops falling is
+#: what is measured there.
 GROW_MAX_S = 40.0
 
 
@@ -134,6 +136,8 @@ def _falling(points: list[tuple[int, float, float]]) -> bool:
     """Whether the RMSE of the sweep's last two settings still falls as noise does (slope in
     log-log at most -0.3, where a floor gives about 0)."""
     (na, _, ea), (nb, _, eb) = points[-2], points[-1]
+    if not (ea > 0.0 and eb > 0.0):
+        return False  # (an RMSE of 0: nothing left to fall)
     return math.log(eb / ea) / math.log(nb / na) <= -0.3
 
 
@@ -287,12 +291,16 @@ def verdict(summary) -> list[str]:
                 if (s := _seconds(reach[tool][k])) is not None
             ]
             floors = sum(_seconds(reach[tool][k]) is None for *_, reach in summary)
-            said = f"{min(ratios):.1f}x to {max(ratios):.1f}x the exact frame's time" if ratios else "never"
+            said = "never"
+            if ratios:
+                span = f"{min(ratios):.1f}x" + (f" to {max(ratios):.1f}x" if len(ratios) > 1 else "")
+                said = f"{span} the exact frame's time"
             faster = (
                 "the exact frame is faster" if all(r > 1 for r in ratios) else "the exact frame is NOT faster"
             )
             out.append(
-                f"RMSE {target:.0e}: {tool}: {said} ({len(ratios)} scenes; {floors} stopped at a floor) "
+                f"RMSE {target:.0e}: {tool}: {said} (on {len(ratios)} of {len(summary)} scenes, measured or "
+                f"extrapolated; {floors} stopped at a floor) "
                 f"-> {faster} on every scene"
             )
     return out

@@ -40,8 +40,9 @@ def run(tmp_path_factory) -> tuple[str, str]:
 def test_the_table_has_a_row_a_scene_and_a_time_or_a_floor_in_every_cell(run):
     stdout, results = run
     for text in (stdout, results):
-        rows = [ln for ln in text.splitlines() if ln.startswith("| bunny") or ln.startswith("| ant")]
-        assert len(rows) >= 2, text[-2000:]
+        rows = [ln for ln in text.splitlines() if ln.startswith(("| bunny translating,", "| ant turning"))]
+        names = [row.split("|")[1].strip() for row in rows]
+        assert names[:2] == ["bunny translating, flat", "ant turning while moving, flat"], text[-2000:]
         for row in rows[:2]:
             cells = [c.strip() for c in row.strip("|").split("|")]
             assert len(cells) == 3 + 2 * len(TOOLS), row
@@ -59,13 +60,16 @@ def test_a_verdict_for_each_tool_and_target(run):
 
 def test_every_sweep_falls_with_its_samples(run):
     stdout, _ = run
-    sweeps = (
-        ("mitsuba", r"mitsuba K=\d+ x \d+ spp"),
-        ("cycles box", r"cycles box \d+ spp"),
-        ("cycles aa4", r"cycles aa4 \d+ spp"),
-    )
-    for name, pattern in sweeps:
-        errs = [float(m) for m in re.findall(pattern + r"\s+[\d.]+ s\s+rmse (\S+)", stdout)]
-        assert len(errs) >= 4, (name, stdout[-2000:])
-        for a, b in zip(errs[0::2], errs[1::2]):  # two settings a scene, the cheaper first
-            assert b < 0.7 * a, (name, errs)
+    sweeps = {
+        "mitsuba": r"mitsuba K=\d+ x \d+ spp",
+        "cycles box": r"cycles box \d+ spp",
+        "cycles aa4": r"cycles aa4 \d+ spp",
+    }
+    scenes = stdout.split("\n== ")[1:]  # each scene's block of settings, in order
+    assert len(scenes) == 2, stdout[-2000:]
+    for block in scenes:
+        for name, pattern in sweeps.items():
+            errs = [float(m) for m in re.findall(pattern + r"\s+[\d.]+ s\s+rmse (\S+)", block)]
+            assert len(errs) >= 2, (name, block)
+            for a, b in zip(errs, errs[1:]):  # the settings in order, each with 4x the samples
+                assert b < 0.7 * a, (name, errs)
