@@ -155,8 +155,10 @@ class Replay(A._Trials):
         self.rec = rec
         self.refines = self.refines and refines
 
-    def _log(self, method: str, options: dict, ms: float, est: float, err: float) -> None:
-        self.tried.append({"method": method, "options": options, "ms": ms, "error_estimate": est, "err": err})
+    def _log(self, method: str, options: dict, ms: float, est: float, err: float, **more) -> None:
+        self.tried.append(
+            {"method": method, "options": options, "ms": ms, "error_estimate": est, "err": err, **more}
+        )
 
     def accumulate(self, n: int, kind: str = grids.STRATIFIED) -> None:
         grid = (n, kind)
@@ -165,8 +167,8 @@ class Replay(A._Trials):
         self.grid = grid
         self.effective.append((grids.effective(grid), est))
         options = {"samples": grids.samples(grid), **({"grid": kind} if kind != grids.STRATIFIED else {})}
-        self._log("accumulation", options, self.rec.ms(draws) + self.rec.overhead, est, err)
-        self.tried[-1]["halves_reading"] = est
+        ms = self.rec.ms(draws) + self.rec.overhead
+        self._log("accumulation", options, ms, est, err, halves_reading=est)
 
     def run(self, method: str, **options) -> None:
         an = self.rec.analytic()

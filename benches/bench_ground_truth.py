@@ -46,6 +46,7 @@ import platform
 import sys
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -88,7 +89,14 @@ def timed(fn, repeat: int):
     return best, result
 
 
-def time_to(points: list[tuple[int, float, float]], target: float, floor: float = 0.0) -> str:
+class Reach(NamedTuple):
+    """The time a tool needs to reach a target: ``secs`` (None at a floor) and the table's cell."""
+
+    secs: float | None
+    text: str
+
+
+def time_to(points: list[tuple[int, float, float]], target: float, floor: float = 0.0) -> Reach:
     """Seconds to reach RMSE ``target`` from sweep ``points`` (samples per pixel, seconds, rmse),
     cheapest first: measured (log-log interpolation between the settings around the target),
     extrapolated (``~``) while the RMSE still falls as noise does, or a floor: the one measured
@@ -97,19 +105,20 @@ def time_to(points: list[tuple[int, float, float]], target: float, floor: float 
     for (_, t0, e0), (_, t1, e1) in zip([(0, math.nan, math.inf), *points], points):
         if e1 <= target:
             if not math.isfinite(e0) or e0 <= e1:
-                return f"{t1:.2f}"
+                return Reach(t1, f"{t1:.2f}")
             f = math.log(e0 / target) / math.log(e0 / e1)
-            return f"{math.exp(math.log(t0) + f * math.log(t1 / t0)):.2f}"
+            secs = math.exp(math.log(t0) + f * math.log(t1 / t0))
+            return Reach(secs, f"{secs:.2f}")
     (na, ta, _), (nb, tb, eb) = points[-2], points[-1]
     if not _falling(points):  # the measured floor first (Mitsuba's shadows sit above the filter's)
-        return f"not reached (floor {eb:.1e})"
+        return Reach(None, f"not reached (floor {eb:.1e})")
     if floor >= target:
-        return f"not reached (filter floor {floor:.1e})"
+        return Reach(None, f"not reached (filter floor {floor:.1e})")
     need = nb * (eb / target) ** 2  # samples per pixel at the noise rate n^-0.5
     per_sample = (tb - ta) / (nb - na)  # the marginal cost; the mean when load made it <= 0
     per_sample = per_sample if per_sample > 0 else tb / nb
     secs = tb + (need - nb) * per_sample
-    return f"~{secs:.0f}" if secs >= 10 else f"~{secs:.2f}"  # (no ~0 for a fraction of a second)
+    return Reach(secs, f"~{secs:.0f}" if secs >= 10 else f"~{secs:.2f}")  # (no ~0 under a second)
 
 
 def _mitsuba_kw(n: int) -> dict:
@@ -264,17 +273,9 @@ def table(summary) -> list[str]:
         "|---|---:|---:|" + "---:|---:|" * len(tools),
     ]
     for name, t_exact, t_fast, e_fast, reach in summary:
-        cells = " | ".join(f"{a} | {b}" for a, b in (reach[t] for t in tools))
+        cells = " | ".join(f"{a.text} | {b.text}" for a, b in (reach[t] for t in tools))
         lines.append(f"| {name} | {t_exact:.2f} | {t_fast:.2f} ({e_fast:.0e}) | {cells} |")
     return lines
-
-
-def _seconds(cell: str) -> float | None:
-    """The seconds of a `time_to` cell, measured or extrapolated (``~``); None at a floor."""
-    try:
-        return float(cell.lstrip("~"))
-    except ValueError:
-        return None
 
 
 def verdict(summary) -> list[str]:
@@ -286,11 +287,9 @@ def verdict(summary) -> list[str]:
     for k, target in enumerate(TARGETS):
         for tool in tools:
             ratios = [
-                s / t_exact
-                for _, t_exact, *_, reach in summary
-                if (s := _seconds(reach[tool][k])) is not None
+                s / t_exact for _, t_exact, *_, reach in summary if (s := reach[tool][k].secs) is not None
             ]
-            floors = sum(_seconds(reach[tool][k]) is None for *_, reach in summary)
+            floors = sum(reach[tool][k].secs is None for *_, reach in summary)
             said = "never"
             if ratios:
                 span = f"{min(ratios):.1f}x" + (f" to {max(ratios):.1f}x" if len(ratios) > 1 else "")
